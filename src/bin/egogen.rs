@@ -1,0 +1,196 @@
+//! `egogen`: tools around the pipeline (body model inspection, posing, previews).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{bail, Result};
+use clap::{Parser, Subcommand};
+
+use egogen::body::export::write_obj;
+use egogen::body::{BodyModel, BodyParams, CpfCalibration};
+use egogen::cli::resolve::{crate_root, DEFAULT_BODY_MODEL};
+use egogen::math::Vec3;
+use egogen::motion::scripted::WalkCycle;
+use egogen::motion::MotionSequence;
+use egogen::preview::MeshView;
+
+#[derive(Parser, Debug)]
+#[command(version, about = "egogen tools: body models, motion files, previews")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Body model tools.
+    #[command(subcommand)]
+    Body(BodyCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum BodyCommand {
+    /// Print a model's sizes, shape space and eye anchor.
+    Info {
+        /// SMPL-X `.npz` model (default: the shipped CC0 neutral model).
+        #[arg(long)]
+        model: Option<PathBuf>,
+    },
+    /// Pose a body from a motion file frame and write it as OBJ.
+    Pose {
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// AMASS- or SAMP-style `.npz`; without it, the scripted walk is used.
+        #[arg(long)]
+        motion: Option<PathBuf>,
+        /// Frame index in the motion.
+        #[arg(long, default_value_t = 0)]
+        frame: usize,
+        /// Output OBJ path (must not exist).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Render a PNG of the body in rest pose and in a walking pose (front and side).
+    Preview {
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// Shape coefficients, comma separated (e.g. `--betas 2,0,-1`).
+        #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+        betas: Vec<f64>,
+        /// Output PNG path.
+        #[arg(long)]
+        out: PathBuf,
+        /// Image height in pixels.
+        #[arg(long, default_value_t = 480)]
+        height_px: usize,
+    },
+}
+
+fn main() -> ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn model_path(p: Option<PathBuf>) -> PathBuf {
+    p.unwrap_or_else(|| crate_root().join(DEFAULT_BODY_MODEL))
+}
+
+fn refuse_existing(path: &Path) -> Result<()> {
+    if path.exists() {
+        bail!("{} already exists; not overwriting it", path.display());
+    }
+    Ok(())
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Body(BodyCommand::Info { model }) => {
+            let m = BodyModel::load(model_path(model))?;
+            let shaped = m.shape(&[], &[])?;
+            let cal = CpfCalibration::from_rest_joints(&shaped.rest_joints);
+            let (lo, hi) = shaped.v_shaped.iter().fold(
+                (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), v| (lo.min(*v), hi.max(*v)),
+            );
+            println!("model:            {}", m.source.display());
+            println!("vertices:         {}", m.num_vertices());
+            println!("triangles:        {}", m.faces.len());
+            println!("betas:            {}", m.num_betas());
+            println!("expression:       {}", m.num_expression());
+            println!(
+                "pose correctives: {}",
+                if m.has_pose_correctives() {
+                    "yes"
+                } else {
+                    "none (skipped)"
+                }
+            );
+            println!("stature (rest):   {:.3} m", hi.y - lo.y);
+            let eyes = (shaped.rest_joints[23] + shaped.rest_joints[24]) * 0.5;
+            println!(
+                "CPF at rest:      ({:.3}, {:.3}, {:.3}) m; eye-bone plane tilt removed: {:.1}°",
+                eyes.x,
+                eyes.y,
+                eyes.z,
+                cal.rest_tilt_down_rad().to_degrees()
+            );
+        }
+        Command::Body(BodyCommand::Pose {
+            model,
+            motion,
+            frame,
+            out,
+        }) => {
+            refuse_existing(&out)?;
+            let m = BodyModel::load(model_path(model))?;
+            let params = match motion {
+                Some(p) => {
+                    let seq = MotionSequence::read(&p)?;
+                    if frame >= seq.len() {
+                        bail!(
+                            "motion file {}: frame {frame} requested but it has {} frames",
+                            p.display(),
+                            seq.len()
+                        );
+                    }
+                    seq.frame(frame)
+                }
+                None => walk_params(&m, &[], frame as f64 / 40.0)?,
+            };
+            let body = m.pose(&params)?;
+            write_obj(&out, &body.vertices, &m.faces)?;
+            println!("wrote {}", out.display());
+        }
+        Command::Body(BodyCommand::Preview {
+            model,
+            betas,
+            out,
+            height_px,
+        }) => {
+            let m = BodyModel::load(model_path(model))?;
+            let rest = m.pose(&BodyParams {
+                betas: betas.clone(),
+                ..Default::default()
+            })?;
+            let walk = m.pose(&walk_params(&m, &betas, 0.2)?)?;
+            // The walk is in the z-up world; bring it back to the model's y-up frame for the picture.
+            let to_y_up = |v: &Vec3| Vec3::new(v.y, v.z, v.x);
+            let walk_y_up: Vec<Vec3> = walk.vertices.iter().map(to_y_up).collect();
+            let skin = [0.86, 0.72, 0.62];
+            let front = MeshView::looking_from(Vec3::Z, Vec3::Y);
+            let side = MeshView::looking_from(Vec3::X, Vec3::Y);
+            let w = height_px * 3 / 4;
+            let mut img = front.render(&[(&rest.vertices, &m.faces, skin)], w, height_px);
+            img = img.hconcat(
+                &side.render(&[(&rest.vertices, &m.faces, skin)], w / 2, height_px),
+                [245, 245, 240],
+            );
+            img = img.hconcat(
+                &front.render(&[(&walk_y_up, &m.faces, skin)], w / 2, height_px),
+                [245, 245, 240],
+            );
+            img = img.hconcat(
+                &side.render(&[(&walk_y_up, &m.faces, skin)], w / 2, height_px),
+                [245, 245, 240],
+            );
+            img.write_png(&out)?;
+            println!("wrote {}", out.display());
+        }
+    }
+    Ok(())
+}
+
+fn walk_params(m: &BodyModel, betas: &[f64], t_s: f64) -> Result<BodyParams> {
+    let shaped = m.shape(betas, &[])?;
+    let sole_y = shaped
+        .v_shaped
+        .iter()
+        .map(|v| v.y)
+        .fold(f64::INFINITY, f64::min);
+    Ok(WalkCycle::default().params_at(t_s, betas, shaped.rest_joints[0], sole_y))
+}

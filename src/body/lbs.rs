@@ -1,0 +1,403 @@
+//! Skinning: shape blend shapes, joint regression, pose correctives and linear blend
+//! skinning — the algorithm of `smplx/lbs.py`, in `f64`, with a joints-only fast path.
+//!
+//! Steps for one body (as in `smplx.lbs`):
+//! 1. `v_shaped = v_template + Σ betas·shape_dirs + Σ expression·expression_dirs`
+//! 2. `J = J_regressor · v_shaped` (rest joints follow shape)
+//! 3. `R_j = rodrigues(pose_j)`; pose correctives `v_posed = v_shaped + posedirs · vec(R_j − I)`
+//!    — skipped when the model's correctives are all zero (our default model)
+//! 4. rigid chain `world_from_joint_j = world_from_joint_parent · [R_j | J_j − J_parent]`
+//! 5. `v = Σ_j w_vj · world_from_joint_j · (v_posed − J_j) + transl`
+
+use rayon::prelude::*;
+
+use super::model::{BodyModel, POSE_FEATURES};
+use super::skeleton::{NUM_JOINTS, PARENTS, POSE_DIM};
+use crate::math::{axis_angle_to_matrix, Affine3, Mat3, Real, Vec3};
+
+/// Parameters of one posed body, in the `smplx` convention.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyParams {
+    /// Shape coefficients; fewer than the model has are padded with zeros.
+    pub betas: Vec<Real>,
+    /// Expression coefficients; fewer than the model has are padded with zeros.
+    pub expression: Vec<Real>,
+    /// Full pose, 55 joints × axis-angle (see `skeleton::pose_layout`).
+    pub pose: [Real; POSE_DIM],
+    /// Translation added after posing (metres).
+    pub transl: Vec3,
+}
+
+impl Default for BodyParams {
+    fn default() -> Self {
+        Self {
+            betas: Vec::new(),
+            expression: Vec::new(),
+            pose: [0.0; POSE_DIM],
+            transl: Vec3::ZERO,
+        }
+    }
+}
+
+impl BodyParams {
+    /// Axis-angle of joint `j`.
+    pub fn joint_axis_angle(&self, j: usize) -> Vec3 {
+        Vec3::new(self.pose[3 * j], self.pose[3 * j + 1], self.pose[3 * j + 2])
+    }
+    /// Sets the axis-angle of joint `j`.
+    pub fn set_joint_axis_angle(&mut self, j: usize, aa: Vec3) {
+        self.pose[3 * j..3 * j + 3].copy_from_slice(&aa.to_array());
+    }
+}
+
+/// What went wrong posing a body.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum PoseError {
+    #[error("{given} betas given but the model {model} has {available}")]
+    TooManyBetas {
+        given: usize,
+        available: usize,
+        model: String,
+    },
+    #[error("{given} expression coefficients given but the model {model} has {available}")]
+    TooManyExpression {
+        given: usize,
+        available: usize,
+        model: String,
+    },
+    #[error("non-finite {what} value at index {index}")]
+    NonFinite { what: &'static str, index: usize },
+}
+
+/// A body with its shape applied: shaped rest vertices and rest joints.
+///
+/// Reuse it for every frame of a sequence with the same betas.
+#[derive(Debug, Clone)]
+pub struct ShapedBody<'m> {
+    model: &'m BodyModel,
+    /// Rest vertices after shape and expression blend shapes.
+    pub v_shaped: Vec<Vec3>,
+    /// Rest joints regressed from `v_shaped`.
+    pub rest_joints: [Vec3; NUM_JOINTS],
+}
+
+/// A posed body: vertices, joints and each joint's world transform.
+#[derive(Debug, Clone)]
+pub struct PosedBody {
+    pub vertices: Vec<Vec3>,
+    pub joints: [Vec3; NUM_JOINTS],
+    /// `world_from_joint[j]` maps joint-local rest offsets to the posed world (rotation is the
+    /// joint's accumulated rotation; translation the posed joint position).
+    pub world_from_joint: [Affine3; NUM_JOINTS],
+}
+
+/// The kinematic result alone: joints and transforms, no vertices.
+#[derive(Debug, Clone)]
+pub struct PosedSkeleton {
+    pub joints: [Vec3; NUM_JOINTS],
+    pub world_from_joint: [Affine3; NUM_JOINTS],
+}
+
+impl BodyModel {
+    /// Applies betas and expression: the per-sequence part of skinning.
+    pub fn shape(&self, betas: &[Real], expression: &[Real]) -> Result<ShapedBody<'_>, PoseError> {
+        let coeffs = self.blend_coefficients(betas, expression)?;
+        let v_shaped: Vec<Vec3> = self
+            .v_template
+            .par_iter()
+            .enumerate()
+            .map(|(v, &t)| t + self.blend_offset(v, &coeffs))
+            .collect();
+        let rest_joints = regress_joints(&self.j_regressor, |v| v_shaped[v]);
+        Ok(ShapedBody {
+            model: self,
+            v_shaped,
+            rest_joints,
+        })
+    }
+
+    /// Rest joints for the given shape, computing blend shapes only at regressor vertices.
+    pub fn rest_joints(
+        &self,
+        betas: &[Real],
+        expression: &[Real],
+    ) -> Result<[Vec3; NUM_JOINTS], PoseError> {
+        let coeffs = self.blend_coefficients(betas, expression)?;
+        Ok(regress_joints(&self.j_regressor, |v| {
+            self.v_template[v] + self.blend_offset(v, &coeffs)
+        }))
+    }
+
+    /// Full skinning of one body (shape + pose), as `smplx` computes it.
+    pub fn pose(&self, params: &BodyParams) -> Result<PosedBody, PoseError> {
+        self.shape(&params.betas, &params.expression)?
+            .pose(&params.pose, params.transl)
+    }
+
+    /// Full skinning of many bodies in parallel.
+    pub fn pose_batch(&self, params: &[BodyParams]) -> Result<Vec<PosedBody>, PoseError> {
+        params.par_iter().map(|p| self.serial_pose(p)).collect()
+    }
+
+    /// Skinning of one body on the calling thread only (for batches, parallel across bodies).
+    fn serial_pose(&self, params: &BodyParams) -> Result<PosedBody, PoseError> {
+        let coeffs = self.blend_coefficients(&params.betas, &params.expression)?;
+        let v_shaped: Vec<Vec3> = self
+            .v_template
+            .iter()
+            .enumerate()
+            .map(|(v, &t)| t + self.blend_offset(v, &coeffs))
+            .collect();
+        let rest_joints = regress_joints(&self.j_regressor, |v| v_shaped[v]);
+        let shaped = ShapedBody {
+            model: self,
+            v_shaped,
+            rest_joints,
+        };
+        shaped.pose_with(&params.pose, params.transl, false)
+    }
+
+    /// Coefficients per column of `dirs` (betas and expression placed in their columns).
+    fn blend_coefficients(
+        &self,
+        betas: &[Real],
+        expression: &[Real],
+    ) -> Result<Vec<(usize, Real)>, PoseError> {
+        if betas.len() > self.num_betas() {
+            return Err(PoseError::TooManyBetas {
+                given: betas.len(),
+                available: self.num_betas(),
+                model: self.source.display().to_string(),
+            });
+        }
+        if expression.len() > self.num_expression() {
+            return Err(PoseError::TooManyExpression {
+                given: expression.len(),
+                available: self.num_expression(),
+                model: self.source.display().to_string(),
+            });
+        }
+        check_finite("betas", betas)?;
+        check_finite("expression", expression)?;
+        let shape = betas
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| (self.shape_cols.start + i, b));
+        let expr = expression
+            .iter()
+            .enumerate()
+            .map(|(i, &e)| (self.expression_cols.start + i, e));
+        Ok(shape.chain(expr).filter(|&(_, c)| c != 0.0).collect())
+    }
+
+    #[inline]
+    fn blend_offset(&self, v: usize, coeffs: &[(usize, Real)]) -> Vec3 {
+        if coeffs.is_empty() {
+            return Vec3::ZERO;
+        }
+        let d = self.num_dirs;
+        let base = v * 3 * d;
+        let (rx, ry, rz) = (
+            &self.dirs[base..base + d],
+            &self.dirs[base + d..base + 2 * d],
+            &self.dirs[base + 2 * d..base + 3 * d],
+        );
+        let mut o = Vec3::ZERO;
+        for &(c, w) in coeffs {
+            o += Vec3::new(rx[c], ry[c], rz[c]) * w;
+        }
+        o
+    }
+}
+
+impl ShapedBody<'_> {
+    /// Poses the shaped body: pose correctives (if any), rigid chain, LBS, translation.
+    pub fn pose(&self, pose: &[Real; POSE_DIM], transl: Vec3) -> Result<PosedBody, PoseError> {
+        self.pose_with(pose, transl, true)
+    }
+
+    /// Joints and transforms only, no vertices (the motion loop's fast path).
+    pub fn skeleton(
+        &self,
+        pose: &[Real; POSE_DIM],
+        transl: Vec3,
+    ) -> Result<PosedSkeleton, PoseError> {
+        posed_skeleton(&self.rest_joints, pose, transl)
+    }
+
+    /// Posed positions of selected vertices only (e.g. body markers).
+    pub fn pose_vertices(
+        &self,
+        skeleton: &PosedSkeleton,
+        pose: &[Real; POSE_DIM],
+        vertex_ids: &[u32],
+    ) -> Vec<Vec3> {
+        let rots = self.model.posedirs.as_ref().map(|_| joint_rotations(pose));
+        let skin = SkinTransforms::new(&skeleton.world_from_joint, &self.rest_joints);
+        vertex_ids
+            .iter()
+            .map(|&v| {
+                let v = v as usize;
+                let mut p = self.v_shaped[v];
+                if let (Some(pd), Some(r)) = (&self.model.posedirs, &rots) {
+                    p += corrective_offset(pd, v, &pose_feature(r));
+                }
+                skin.apply(&self.model.skin_weights[v], p)
+            })
+            .collect()
+    }
+
+    fn pose_with(
+        &self,
+        pose: &[Real; POSE_DIM],
+        transl: Vec3,
+        parallel: bool,
+    ) -> Result<PosedBody, PoseError> {
+        let skeleton = posed_skeleton(&self.rest_joints, pose, transl)?;
+        let feature = self
+            .model
+            .posedirs
+            .as_ref()
+            .map(|_| pose_feature(&joint_rotations(pose)));
+        let skin = SkinTransforms::new(&skeleton.world_from_joint, &self.rest_joints);
+        let model = self.model;
+        let vertex = |v: usize| {
+            let mut p = self.v_shaped[v];
+            if let (Some(pd), Some(f)) = (&model.posedirs, &feature) {
+                p += corrective_offset(pd, v, f);
+            }
+            skin.apply(&model.skin_weights[v], p)
+        };
+        let n = self.v_shaped.len();
+        let vertices: Vec<Vec3> = if parallel {
+            (0..n)
+                .into_par_iter()
+                .with_min_len(2048)
+                .map(vertex)
+                .collect()
+        } else {
+            (0..n).map(vertex).collect()
+        };
+        Ok(PosedBody {
+            vertices,
+            joints: skeleton.joints,
+            world_from_joint: skeleton.world_from_joint,
+        })
+    }
+}
+
+/// Per-joint skinning transforms `world_from_joint · translate(−J_rest)` (with `transl`).
+struct SkinTransforms {
+    mats: [Affine3; NUM_JOINTS],
+}
+
+impl SkinTransforms {
+    fn new(world_from_joint: &[Affine3; NUM_JOINTS], rest_joints: &[Vec3; NUM_JOINTS]) -> Self {
+        let mut mats = [Affine3::IDENTITY; NUM_JOINTS];
+        for j in 0..NUM_JOINTS {
+            let m = world_from_joint[j];
+            mats[j] = Affine3 {
+                matrix3: m.matrix3,
+                translation: m.translation - m.matrix3 * rest_joints[j],
+            };
+        }
+        Self { mats }
+    }
+
+    #[inline]
+    fn apply(&self, weights: &[(u32, Real)], p: Vec3) -> Vec3 {
+        // Blend the matrices, then transform once (as smplx does: T = W·A; v = T·v_posed).
+        let mut m = Mat3::ZERO;
+        let mut t = Vec3::ZERO;
+        for &(j, w) in weights {
+            let a = &self.mats[j as usize];
+            m += a.matrix3 * w;
+            t += a.translation * w;
+        }
+        m * p + t
+    }
+}
+
+/// Rigid kinematic chain from rest joints and a pose (smplx `batch_rigid_transform`).
+pub fn posed_skeleton(
+    rest_joints: &[Vec3; NUM_JOINTS],
+    pose: &[Real; POSE_DIM],
+    transl: Vec3,
+) -> Result<PosedSkeleton, PoseError> {
+    check_finite("pose", pose)?;
+    check_finite("transl", &transl.to_array())?;
+    let rots = joint_rotations(pose);
+    let mut world_from_joint = [Affine3::IDENTITY; NUM_JOINTS];
+    for j in 0..NUM_JOINTS {
+        let local = match PARENTS[j] {
+            None => Affine3 {
+                matrix3: rots[j],
+                translation: rest_joints[j],
+            },
+            Some(p) => Affine3 {
+                matrix3: rots[j],
+                translation: rest_joints[j] - rest_joints[p],
+            },
+        };
+        world_from_joint[j] = match PARENTS[j] {
+            None => local,
+            Some(p) => world_from_joint[p] * local,
+        };
+    }
+    for m in &mut world_from_joint {
+        m.translation += transl;
+    }
+    let joints = std::array::from_fn(|j| world_from_joint[j].translation);
+    Ok(PosedSkeleton {
+        joints,
+        world_from_joint,
+    })
+}
+
+fn joint_rotations(pose: &[Real; POSE_DIM]) -> [Mat3; NUM_JOINTS] {
+    std::array::from_fn(|j| {
+        axis_angle_to_matrix(Vec3::new(pose[3 * j], pose[3 * j + 1], pose[3 * j + 2]))
+    })
+}
+
+/// `vec(R_j − I)` for joints 1..55, row-major per matrix (the order `smplx` flattens in).
+fn pose_feature(rots: &[Mat3; NUM_JOINTS]) -> Vec<Real> {
+    let mut f = Vec::with_capacity(POSE_FEATURES);
+    for r in &rots[1..] {
+        let d = *r - Mat3::IDENTITY;
+        f.extend_from_slice(&d.transpose().to_cols_array());
+    }
+    f
+}
+
+#[inline]
+fn corrective_offset(posedirs: &[Real], v: usize, feature: &[Real]) -> Vec3 {
+    let row = |c: usize| {
+        let base = (v * 3 + c) * POSE_FEATURES;
+        posedirs[base..base + POSE_FEATURES]
+            .iter()
+            .zip(feature)
+            .map(|(a, b)| a * b)
+            .sum::<Real>()
+    };
+    Vec3::new(row(0), row(1), row(2))
+}
+
+fn regress_joints(
+    j_regressor: &[Vec<(u32, Real)>],
+    vertex: impl Fn(usize) -> Vec3,
+) -> [Vec3; NUM_JOINTS] {
+    std::array::from_fn(|j| {
+        j_regressor[j]
+            .iter()
+            .map(|&(v, w)| vertex(v as usize) * w)
+            .sum()
+    })
+}
+
+fn check_finite(what: &'static str, values: &[Real]) -> Result<(), PoseError> {
+    match values.iter().position(|v| !v.is_finite()) {
+        Some(index) => Err(PoseError::NonFinite { what, index }),
+        None => Ok(()),
+    }
+}

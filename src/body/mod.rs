@@ -1,0 +1,17 @@
+//! The body: SMPL-X skeleton, model files, skinning and the eye anchor (CPF).
+//!
+//! Owns the 55-joint skeleton, the rest mesh with its blend shapes and skin weights, LBS
+//! exactly as `smplx` computes it, and `world_from_cpf`. Timing and sequences belong to `motion`.
+
+pub mod cpf;
+pub mod export;
+pub mod lbs;
+pub mod model;
+pub mod model_file;
+pub mod skeleton;
+
+pub use cpf::CpfCalibration;
+pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody};
+pub use model::BodyModel;
+pub use model_file::ModelFileError;
+pub use skeleton::{joint, JOINT_NAMES, NUM_JOINTS, PARENTS, POSE_DIM};

@@ -1,0 +1,10 @@
+//! Command-line and configuration plumbing: clap arguments, TOML configs, resolved plans.
+//!
+//! No domain logic lives here: `config` only parses and checks values, `resolve` turns them
+//! into typed plans the stages consume.
+
+pub mod config;
+pub mod resolve;
+
+pub use config::{ConfigError, RawRun};
+pub use resolve::{resolve_run, MotionPlan, RunPlan};

@@ -1,0 +1,13 @@
+//! egogen: egocentric synthetic data for head-mounted cameras.
+//!
+//! Modules follow the data flow: `body` (SMPL-X skeleton, skinning, eye anchor) →
+//! `motion` (pose sequences and their files) → `synth` (posed sequences, CPF trajectories);
+//! `preview` draws PNG pictures for people;
+//! `cli` holds the command-line and config plumbing and no domain logic.
+
+pub mod body;
+pub mod cli;
+pub mod math;
+pub mod motion;
+pub mod preview;
+pub mod synth;

@@ -1,0 +1,24 @@
+//! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps.
+//!
+//! Conventions used across egogen:
+//! - Lengths are metres, angles radians, time seconds unless a name says otherwise.
+//! - A transform is named `a_from_b`: it maps points expressed in frame `b` into frame `a`
+//!   (`point_in_world = world_from_head * point_in_head`).
+//! - The SMPL-X body frame is y up, z forward (the body faces +z), x towards the body's left.
+//! - The world of a generated scene is z up (see `scene`); camera annotations use the OpenCV
+//!   camera frame (x right, y down, z forward).
+//! - Rotations are right-handed; axis-angle vectors have angle = norm, in radians.
+
+pub mod rotation;
+
+/// Scalar used for geometry. Body maths runs in `f64` so that long kinematic chains and
+/// large betas stay well inside the 1e-5 m tolerance of the `smplx` oracle.
+pub type Real = f64;
+/// 3-vector of [`Real`].
+pub type Vec3 = glam::DVec3;
+/// 3×3 matrix of [`Real`] (column-major, as glam stores it).
+pub type Mat3 = glam::DMat3;
+/// Rigid or affine 3D transform of [`Real`]: a [`Mat3`] plus a translation.
+pub type Affine3 = glam::DAffine3;
+
+pub use rotation::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d, rot6d_to_matrix};

@@ -1,0 +1,5 @@
+//! Pictures for people: a small software rasteriser for mesh previews, and PNG writing.
+
+pub mod raster;
+
+pub use raster::{MeshView, RgbImage};

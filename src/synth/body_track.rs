@@ -1,0 +1,41 @@
+//! Poses a body over a motion sequence: joints and `world_from_cpf` per frame.
+
+use rayon::prelude::*;
+
+use crate::body::{BodyModel, CpfCalibration, PoseError, NUM_JOINTS};
+use crate::math::{Affine3, Vec3};
+use crate::motion::MotionSequence;
+
+/// One frame of a tracked body.
+#[derive(Debug, Clone)]
+pub struct TrackFrame {
+    pub joints: [Vec3; NUM_JOINTS],
+    pub world_from_cpf: Affine3,
+}
+
+/// A body followed through a motion sequence.
+#[derive(Debug, Clone)]
+pub struct BodyTrack {
+    pub frame_rate_hz: f64,
+    pub frames: Vec<TrackFrame>,
+}
+
+/// Joints and CPF for every frame (joints-only fast path; no vertices).
+pub fn track_body(model: &BodyModel, motion: &MotionSequence) -> Result<BodyTrack, PoseError> {
+    let shaped = model.shape(&motion.betas, &[])?;
+    let calibration = CpfCalibration::from_rest_joints(&shaped.rest_joints);
+    let frames = (0..motion.len())
+        .into_par_iter()
+        .map(|i| {
+            let skeleton = shaped.skeleton(&motion.poses[i], motion.trans[i])?;
+            Ok(TrackFrame {
+                joints: skeleton.joints,
+                world_from_cpf: calibration.world_from_cpf(&skeleton),
+            })
+        })
+        .collect::<Result<Vec<_>, PoseError>>()?;
+    Ok(BodyTrack {
+        frame_rate_hz: motion.frame_rate_hz,
+        frames,
+    })
+}

@@ -1,0 +1,144 @@
+//! The folder a synthesized sequence is written to. Everything is written into
+//! `<dir>.partial/` first and renamed into place at the end, so a failed or killed run never
+//! leaves a half-written sequence under the final name.
+//!
+//! Layout: `motion.npz` (AMASS-style SMPL-X), `cpf_trajectory.json` (`world_from_cpf` per
+//! frame, row-major 4×4), `meshes/frame_NNNNN.obj` (every N frames), `preview.png`,
+//! `manifest.json` (files with sizes).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+
+use super::BodyTrack;
+use crate::body::export::write_obj;
+use crate::body::{BodyModel, PosedBody};
+use crate::math::Vec3;
+use crate::motion::MotionSequence;
+use crate::preview::{MeshView, RgbImage};
+
+/// What a finished sequence folder holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct SequenceOutputs {
+    pub dir: PathBuf,
+    pub frames: usize,
+    pub meshes: usize,
+    pub files: Vec<(String, u64)>,
+}
+
+#[derive(Serialize)]
+struct CpfFrame {
+    frame: usize,
+    time_s: f64,
+    /// Row-major 4×4 `world_from_cpf` (CPF axes: x left, y up, z forward).
+    world_from_cpf: [[f64; 4]; 4],
+}
+
+/// Writes a sequence folder; `dir` must not exist or be empty (nothing is overwritten).
+pub fn write_sequence_dir(
+    dir: &Path,
+    model: &BodyModel,
+    motion: &MotionSequence,
+    track: &BodyTrack,
+    meshes: &[(usize, PosedBody)],
+) -> Result<SequenceOutputs> {
+    if dir.exists()
+        && std::fs::read_dir(dir)
+            .map(|mut d| d.next().is_some())
+            .unwrap_or(true)
+    {
+        bail!("output folder {} already exists and is not empty; choose another `output.dir` (nothing was written)", dir.display());
+    }
+    let staging = PathBuf::from(format!("{}.partial", dir.display()));
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging)
+            .with_context(|| format!("removing stale {}", staging.display()))?;
+    }
+    std::fs::create_dir_all(staging.join("meshes"))
+        .with_context(|| format!("creating {}", staging.display()))?;
+
+    motion.write_amass(&staging.join("motion.npz"))?;
+    let cpf: Vec<CpfFrame> = track
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let m = glam::DMat4::from(f.world_from_cpf);
+            CpfFrame {
+                frame: i,
+                time_s: i as f64 / track.frame_rate_hz,
+                world_from_cpf: m.transpose().to_cols_array_2d(),
+            }
+        })
+        .collect();
+    std::fs::write(
+        staging.join("cpf_trajectory.json"),
+        serde_json::to_vec_pretty(&cpf)?,
+    )?;
+    for (i, body) in meshes {
+        write_obj(
+            &staging.join(format!("meshes/frame_{i:05}.obj")),
+            &body.vertices,
+            &model.faces,
+        )?;
+    }
+    side_view(model, meshes).write_png(&staging.join("preview.png"))?;
+
+    let mut files = Vec::new();
+    collect_files(&staging, &staging, &mut files)?;
+    files.sort();
+    let manifest = serde_json::json!({
+        "frames": motion.len(),
+        "frame_rate_hz": motion.frame_rate_hz,
+        "body_model": model.source,
+        "files": files.iter().map(|(p, s)| serde_json::json!({"path": p, "bytes": s})).collect::<Vec<_>>(),
+    });
+    std::fs::write(
+        staging.join("manifest.json"),
+        serde_json::to_vec_pretty(&manifest)?,
+    )?;
+    if dir.exists() {
+        std::fs::remove_dir(dir)?;
+    }
+    std::fs::rename(&staging, dir)
+        .with_context(|| format!("moving {} into place", staging.display()))?;
+    Ok(SequenceOutputs {
+        dir: dir.into(),
+        frames: motion.len(),
+        meshes: meshes.len(),
+        files,
+    })
+}
+
+/// Side view (from −y, z up) of the written meshes, overlaid.
+fn side_view(model: &BodyModel, meshes: &[(usize, PosedBody)]) -> RgbImage {
+    let parts: Vec<(&[Vec3], &[[u32; 3]], [f64; 3])> = meshes
+        .iter()
+        .map(|(_, b)| {
+            (
+                b.vertices.as_slice(),
+                model.faces.as_slice(),
+                [0.85, 0.7, 0.6],
+            )
+        })
+        .collect();
+    MeshView::looking_from(Vec3::new(0.0, -1.0, 0.0), Vec3::Z).render(&parts, 960, 360)
+}
+
+fn collect_files(root: &Path, dir: &Path, out: &mut Vec<(String, u64)>) -> Result<()> {
+    for entry in std::fs::read_dir(dir)? {
+        let entry = entry?;
+        let path = entry.path();
+        if path.is_dir() {
+            collect_files(root, &path, out)?;
+        } else {
+            let rel = path
+                .strip_prefix(root)?
+                .to_string_lossy()
+                .replace('\\', "/");
+            out.push((rel, entry.metadata()?.len()));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,189 @@
+//! Test helpers: the deterministic random SMPL-X-shaped model (same formula as
+//! `tools/random_smplx_model.py`), golden-file reading, npz writing.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use npyz::npz::{NpzArchive, NpzWriter};
+use npyz::WriterBuilder;
+
+pub const RANDOM_V: usize = 10475;
+pub const RANDOM_F: usize = 20908;
+pub const PARENTS: [i64; 55] = [
+    -1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 15, 15, 15, 20, 25,
+    26, 20, 28, 29, 20, 31, 32, 20, 34, 35, 20, 37, 38, 21, 40, 41, 21, 43, 44, 21, 46, 47, 21, 49,
+    50, 21, 52, 53,
+];
+
+pub fn repo_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+pub fn default_model_path() -> PathBuf {
+    repo_root().join("assets/body/SMPLX_NEUTRAL.npz")
+}
+
+fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// U(stream, i) in [0, 1), exactly as the Python side computes it.
+pub fn uniform(stream: u64, i: u64) -> f64 {
+    (splitmix64((stream << 40) + i) >> 11) as f64 * 2f64.powi(-53)
+}
+
+/// One named array to write.
+pub enum Arr {
+    F64(Vec<u64>, Vec<f64>),
+    I64(Vec<u64>, Vec<i64>),
+    U32(Vec<u64>, Vec<u32>),
+}
+
+/// Writes arrays to an uncompressed `.npz`.
+pub fn write_npz(path: &Path, arrays: &[(&str, Arr)]) {
+    let mut npz = NpzWriter::create(path).unwrap();
+    let opts = || {
+        npyz::zip::write::FileOptions::default()
+            .compression_method(npyz::zip::CompressionMethod::Stored)
+    };
+    for (name, arr) in arrays {
+        match arr {
+            Arr::F64(shape, data) => {
+                let mut w = npz
+                    .array::<f64>(name, opts())
+                    .unwrap()
+                    .default_dtype()
+                    .shape(shape)
+                    .begin_nd()
+                    .unwrap();
+                w.extend(data.iter().copied()).unwrap();
+                w.finish().unwrap();
+            }
+            Arr::I64(shape, data) => {
+                let mut w = npz
+                    .array::<i64>(name, opts())
+                    .unwrap()
+                    .default_dtype()
+                    .shape(shape)
+                    .begin_nd()
+                    .unwrap();
+                w.extend(data.iter().copied()).unwrap();
+                w.finish().unwrap();
+            }
+            Arr::U32(shape, data) => {
+                let mut w = npz
+                    .array::<u32>(name, opts())
+                    .unwrap()
+                    .default_dtype()
+                    .shape(shape)
+                    .begin_nd()
+                    .unwrap();
+                w.extend(data.iter().copied()).unwrap();
+                w.finish().unwrap();
+            }
+        }
+    }
+    npz.zip_writer().finish().unwrap();
+}
+
+/// All arrays of the random official-shaped model, by the shared formula.
+pub fn random_model_arrays() -> Vec<(&'static str, Arr)> {
+    let v = RANDOM_V;
+    let v_template: Vec<f64> = (0..v as u64 * 3).map(|i| uniform(1, i) - 0.5).collect();
+    let shapedirs: Vec<f64> = (0..(v * 3 * 400) as u64)
+        .map(|i| 0.02 * (uniform(2, i) - 0.5))
+        .collect();
+    let posedirs: Vec<f64> = (0..(v * 3 * 486) as u64)
+        .map(|i| 0.01 * (uniform(3, i) - 0.5))
+        .collect();
+    let mut j_reg = vec![0.0; 55 * v];
+    for j in 0..55u64 {
+        for m in 0..8u64 {
+            let vi = (uniform(4, 8 * j + m) * v as f64).floor() as usize;
+            j_reg[j as usize * v + vi] += 0.125;
+        }
+    }
+    let mut weights = vec![0.0; v * 55];
+    for vi in 0..v {
+        let idx = |m: usize| (4 * vi + m) as u64;
+        let joints: Vec<usize> = (0..4)
+            .map(|m| (uniform(5, idx(m)) * 55.0).floor() as usize)
+            .collect();
+        let raw: Vec<f64> = (0..4).map(|m| 0.1 + uniform(6, idx(m))).collect();
+        let total = ((raw[0] + raw[1]) + raw[2]) + raw[3];
+        for m in 0..4 {
+            weights[vi * 55 + joints[m]] += raw[m] / total;
+        }
+    }
+    let f: Vec<u32> = (0..RANDOM_F)
+        .flat_map(|i| [(i % v) as u32, ((i + 1) % v) as u32, ((i + 2) % v) as u32])
+        .collect();
+    let kintree: Vec<i64> = PARENTS.iter().copied().chain(0..55).collect();
+    let u = |x: usize| x as u64;
+    vec![
+        ("v_template", Arr::F64(vec![u(v), 3], v_template)),
+        ("f", Arr::U32(vec![u(RANDOM_F), 3], f)),
+        ("shapedirs", Arr::F64(vec![u(v), 3, 400], shapedirs)),
+        ("posedirs", Arr::F64(vec![u(v), 3, 486], posedirs)),
+        ("J_regressor", Arr::F64(vec![55, u(v)], j_reg)),
+        ("weights", Arr::F64(vec![u(v), 55], weights)),
+        ("kintree_table", Arr::I64(vec![2, 55], kintree)),
+    ]
+}
+
+/// Golden bodies and smplx's outputs, from `tools/make_skinning_golden.py`.
+pub struct Golden {
+    pub poses: Vec<f64>,
+    pub betas: Vec<f64>,
+    pub n_betas: usize,
+    pub expression: Vec<f64>,
+    pub n_expr: usize,
+    pub transl: Vec<f64>,
+    pub joints: Vec<f64>,
+    pub subset: Vec<i64>,
+    pub vertices_subset: Vec<f64>,
+    pub vertices_full: Vec<f32>,
+    pub n_full: usize,
+    pub n_bodies: usize,
+}
+
+pub fn read_golden(path: &Path) -> Golden {
+    let mut npz =
+        NpzArchive::open(path).unwrap_or_else(|e| panic!("golden {}: {e}", path.display()));
+    fn get<T: npyz::Deserialize>(
+        npz: &mut NpzArchive<std::io::BufReader<std::fs::File>>,
+        k: &str,
+    ) -> (Vec<u64>, Vec<T>) {
+        let f = npz
+            .by_name(k)
+            .unwrap()
+            .unwrap_or_else(|| panic!("golden lacks {k}"));
+        let shape = f.shape().to_vec();
+        (shape, f.into_vec::<T>().unwrap())
+    }
+    let (ps, poses) = get::<f64>(&mut npz, "poses");
+    let (bs, betas) = get::<f64>(&mut npz, "betas");
+    let (es, expression) = get::<f64>(&mut npz, "expression");
+    let transl = get::<f64>(&mut npz, "transl").1;
+    let joints = get::<f64>(&mut npz, "joints").1;
+    let subset = get::<i64>(&mut npz, "subset").1;
+    let vertices_subset = get::<f64>(&mut npz, "vertices_subset").1;
+    let (fs, vertices_full) = get::<f32>(&mut npz, "vertices_full");
+    Golden {
+        poses,
+        betas,
+        n_betas: bs[1] as usize,
+        expression,
+        n_expr: es[1] as usize,
+        transl,
+        joints,
+        subset,
+        vertices_subset,
+        vertices_full,
+        n_full: fs[0] as usize,
+        n_bodies: ps[0] as usize,
+    }
+}
