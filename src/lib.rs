@@ -9,5 +9,6 @@ pub mod body;
 pub mod cli;
 pub mod math;
 pub mod motion;
+pub mod npz;
 pub mod preview;
 pub mod synth;

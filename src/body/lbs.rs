@@ -48,6 +48,20 @@ impl BodyParams {
     pub fn set_joint_axis_angle(&mut self, j: usize, aa: Vec3) {
         self.pose[3 * j..3 * j + 3].copy_from_slice(&aa.to_array());
     }
+
+    /// The same body moved rigidly by `new_from_old`, expressed as SMPL-X parameters.
+    ///
+    /// LBS rotates about the rest pelvis `rest_pelvis` (which depends on betas), so the
+    /// translation is re-rooted: `transl' = R (transl + J0) − J0 + t` and
+    /// `global_orient' = R · global_orient`.
+    pub fn moved_rigidly(&self, new_from_old: Affine3, rest_pelvis: Vec3) -> BodyParams {
+        let r = new_from_old.matrix3;
+        let orient = r * axis_angle_to_matrix(self.joint_axis_angle(0));
+        let mut out = self.clone();
+        out.set_joint_axis_angle(0, crate::math::matrix_to_axis_angle(orient));
+        out.transl = r * (self.transl + rest_pelvis) - rest_pelvis + new_from_old.translation;
+        out
+    }
 }
 
 /// What went wrong posing a body.

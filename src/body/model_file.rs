@@ -5,7 +5,9 @@ use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
 
 use npyz::npz::NpzArchive;
-use npyz::{NpyFile, Order};
+use npyz::Order;
+
+use crate::npz::{fortran_to_c, read_as_f64, ReadError};
 
 /// What can go wrong reading a body model file.
 #[derive(Debug, thiserror::Error)]
@@ -168,87 +170,10 @@ impl<R: Read + Seek> ModelArchive<R> {
     }
 }
 
-enum ReadError {
-    Io(std::io::Error),
-    Dtype(String),
-}
-
-/// Reads any plain numeric npy array as `f64`; returns whether the source was floating point.
-fn read_as_f64<R: Read>(file: NpyFile<R>) -> Result<(Vec<f64>, bool), ReadError> {
-    let descr = match file.dtype() {
-        npyz::DType::Plain(ts) => ts.to_string(),
-        other => return Err(ReadError::Dtype(other.descr())),
-    };
-    let kind = descr.trim_start_matches(['<', '>', '|', '=']);
-    macro_rules! conv {
-        ($t:ty, $float:expr) => {
-            file.into_vec::<$t>()
-                .map(|v| (v.into_iter().map(|x| x as f64).collect(), $float))
-                .map_err(ReadError::Io)
-        };
-    }
-    match kind {
-        "f8" => file
-            .into_vec::<f64>()
-            .map(|v| (v, true))
-            .map_err(ReadError::Io),
-        "f4" => conv!(f32, true),
-        "i8" => conv!(i64, false),
-        "i4" => conv!(i32, false),
-        "i2" => conv!(i16, false),
-        "i1" => conv!(i8, false),
-        "u8" => conv!(u64, false),
-        "u4" => conv!(u32, false),
-        "u2" => conv!(u16, false),
-        "u1" => conv!(u8, false),
-        "b1" => file
-            .into_vec::<bool>()
-            .map(|v| (v.into_iter().map(|x| x as u8 as f64).collect(), false))
-            .map_err(ReadError::Io),
-        _ => Err(ReadError::Dtype(descr)),
-    }
-}
-
-fn fortran_to_c(data: &[f64], shape: &[u64]) -> Vec<f64> {
-    let dims: Vec<usize> = shape.iter().map(|&d| d as usize).collect();
-    let n = data.len();
-    let mut out = vec![0.0; n];
-    let mut idx = vec![0usize; dims.len()];
-    for (c_flat, slot) in out.iter_mut().enumerate() {
-        // Decompose the C index, then recompose as a Fortran index.
-        let mut rem = c_flat;
-        for k in (0..dims.len()).rev() {
-            idx[k] = rem % dims[k];
-            rem /= dims[k];
-        }
-        let mut f_flat = 0;
-        for k in (0..dims.len()).rev() {
-            f_flat = f_flat * dims[k] + idx[k];
-        }
-        *slot = data[f_flat];
-    }
-    out
-}
-
 fn describe_shape(expected: &[Option<u64>]) -> String {
     let parts: Vec<String> = expected
         .iter()
         .map(|e| e.map_or_else(|| "*".to_string(), |v| v.to_string()))
         .collect();
     format!("[{}]", parts.join(", "))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fortran_order_is_transposed_to_c() {
-        // 2×3 matrix [[0,1,2],[3,4,5]] stored column-major.
-        let f = [0.0, 3.0, 1.0, 4.0, 2.0, 5.0];
-        assert_eq!(
-            fortran_to_c(&f, &[2, 3]),
-            vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
-        );
-    }
 }

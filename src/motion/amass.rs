@@ -17,6 +17,7 @@ use npyz::WriterBuilder;
 
 use crate::body::{BodyParams, POSE_DIM};
 use crate::math::Vec3;
+use crate::npz::{fortran_to_c, read_as_f64, ReadError};
 
 /// A sequence of SMPL-X bodies sampled at a fixed rate.
 #[derive(Debug, Clone, PartialEq)]
@@ -252,27 +253,23 @@ impl<R: Read + Seek> KeyReader<'_, R> {
         let path = self.path.to_owned();
         let file = self.file(key)?;
         let shape = file.shape().to_vec();
-        let descr = file.dtype().descr();
-        let data = match descr.trim_start_matches(['<', '|', '=']) {
-            "f8" => file.into_vec::<f64>(),
-            "f4" => file
-                .into_vec::<f32>()
-                .map(|v| v.into_iter().map(f64::from).collect()),
-            "i8" => file
-                .into_vec::<i64>()
-                .map(|v| v.into_iter().map(|x| x as f64).collect()),
-            "i4" => file
-                .into_vec::<i32>()
-                .map(|v| v.into_iter().map(f64::from).collect()),
-            _ => {
-                return Err(MotionFileError::Invalid {
-                    path,
-                    key: key.into(),
-                    message: format!("dtype {descr}, expected float64/float32 (or integer)"),
-                })
-            }
-        }
-        .map_err(|source| MotionFileError::Io { path, source })?;
+        let order = file.order();
+        let (data, _) = read_as_f64(file).map_err(|e| match e {
+            ReadError::Io(source) => MotionFileError::Io {
+                path: path.clone(),
+                source,
+            },
+            ReadError::Dtype(found) => MotionFileError::Invalid {
+                path: path.clone(),
+                key: key.into(),
+                message: format!("dtype {found}, expected a numeric array"),
+            },
+        })?;
+        let data = if order == npyz::Order::Fortran {
+            fortran_to_c(&data, &shape)
+        } else {
+            data
+        };
         Ok((shape, data))
     }
 

@@ -187,3 +187,37 @@ pub fn read_golden(path: &Path) -> Golden {
         n_bodies: ps[0] as usize,
     }
 }
+
+/// A tiny valid SMPL-X-layout model (20 vertices, 10 + 10 dirs, zero correctives).
+pub fn tiny_model_arrays() -> Vec<(&'static str, Arr)> {
+    let v = 20usize;
+    let u = |x: usize| x as u64;
+    let v_template: Vec<f64> = (0..v as u64 * 3).map(|i| uniform(11, i) - 0.5).collect();
+    let shapedirs: Vec<f64> = (0..(v * 3 * 20) as u64)
+        .map(|i| 0.01 * (uniform(12, i) - 0.5))
+        .collect();
+    let mut j_reg = vec![0.0; 55 * v];
+    let mut weights = vec![0.0; v * 55];
+    for j in 0..55 {
+        j_reg[j * v + j % v] = 1.0;
+    }
+    for vi in 0..v {
+        weights[vi * 55 + vi] = 1.0;
+    }
+    let f: Vec<u32> = (0..v)
+        .flat_map(|i| [i as u32, ((i + 1) % v) as u32, ((i + 2) % v) as u32])
+        .collect();
+    let kintree: Vec<i64> = PARENTS.iter().copied().chain(0..55).collect();
+    vec![
+        ("v_template", Arr::F64(vec![u(v), 3], v_template)),
+        ("f", Arr::U32(vec![u(v), 3], f)),
+        ("shapedirs", Arr::F64(vec![u(v), 3, 20], shapedirs)),
+        (
+            "posedirs",
+            Arr::F64(vec![u(v), 3, 486], vec![0.0; v * 3 * 486]),
+        ),
+        ("J_regressor", Arr::F64(vec![55, u(v)], j_reg)),
+        ("weights", Arr::F64(vec![u(v), 55], weights)),
+        ("kintree_table", Arr::I64(vec![2, 55], kintree)),
+    ]
+}

@@ -1,0 +1,90 @@
+//! Numeric arrays in NumPy `.npy`/`.npz` files, read as `f64` whatever their stored type.
+//!
+//! Shared by the body model reader and the motion file reader; each adds its own typed errors.
+
+use std::io::Read;
+
+use npyz::NpyFile;
+
+/// Why an array could not be read.
+pub enum ReadError {
+    /// The archive or array could not be read.
+    Io(std::io::Error),
+    /// The dtype is not a plain number type (the descriptor found).
+    Dtype(String),
+}
+
+/// Reads any plain numeric npy array as `f64` in file order; returns whether it was floating point.
+pub fn read_as_f64<R: Read>(file: NpyFile<R>) -> Result<(Vec<f64>, bool), ReadError> {
+    let descr = match file.dtype() {
+        npyz::DType::Plain(ts) => ts.to_string(),
+        other => return Err(ReadError::Dtype(other.descr())),
+    };
+    let kind = descr
+        .trim_matches('\'')
+        .trim_start_matches(['<', '>', '|', '=']);
+    macro_rules! conv {
+        ($t:ty, $float:expr) => {
+            file.into_vec::<$t>()
+                .map(|v| (v.into_iter().map(|x| x as f64).collect(), $float))
+                .map_err(ReadError::Io)
+        };
+    }
+    match kind {
+        "f8" => file
+            .into_vec::<f64>()
+            .map(|v| (v, true))
+            .map_err(ReadError::Io),
+        "f4" => conv!(f32, true),
+        "i8" => conv!(i64, false),
+        "i4" => conv!(i32, false),
+        "i2" => conv!(i16, false),
+        "i1" => conv!(i8, false),
+        "u8" => conv!(u64, false),
+        "u4" => conv!(u32, false),
+        "u2" => conv!(u16, false),
+        "u1" => conv!(u8, false),
+        "b1" => file
+            .into_vec::<bool>()
+            .map(|v| (v.into_iter().map(|x| x as u8 as f64).collect(), false))
+            .map_err(ReadError::Io),
+        _ => Err(ReadError::Dtype(descr)),
+    }
+}
+
+/// Reorders a Fortran-order (column-major) array of `shape` into C (row-major) order.
+pub fn fortran_to_c(data: &[f64], shape: &[u64]) -> Vec<f64> {
+    let dims: Vec<usize> = shape.iter().map(|&d| d as usize).collect();
+    let n = data.len();
+    let mut out = vec![0.0; n];
+    let mut idx = vec![0usize; dims.len()];
+    for (c_flat, slot) in out.iter_mut().enumerate() {
+        // Decompose the C index, then recompose as a Fortran index.
+        let mut rem = c_flat;
+        for k in (0..dims.len()).rev() {
+            idx[k] = rem % dims[k];
+            rem /= dims[k];
+        }
+        let mut f_flat = 0;
+        for k in (0..dims.len()).rev() {
+            f_flat = f_flat * dims[k] + idx[k];
+        }
+        *slot = data[f_flat];
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fortran_order_is_transposed_to_c() {
+        // 2×3 matrix [[0,1,2],[3,4,5]] stored column-major.
+        let f = [0.0, 3.0, 1.0, 4.0, 2.0, 5.0];
+        assert_eq!(
+            fortran_to_c(&f, &[2, 3]),
+            vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0]
+        );
+    }
+}
