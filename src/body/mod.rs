@@ -6,12 +6,14 @@
 pub mod cpf;
 pub mod export;
 pub mod lbs;
+pub mod markers;
 pub mod model;
 pub mod model_file;
 pub mod skeleton;
 
 pub use cpf::CpfCalibration;
 pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody};
+pub use markers::{farthest_point_markers, MarkerFrame, NUM_MARKERS};
 pub use model::BodyModel;
 pub use model_file::ModelFileError;
 pub use skeleton::{joint, JOINT_NAMES, NUM_JOINTS, PARENTS, POSE_DIM};
