@@ -14,14 +14,17 @@ fn params(seed: usize) -> BodyParams {
     for (i, v) in p.pose.iter_mut().enumerate() {
         *v = (((seed * 165 + i) as f64 * 0.7548776662).fract() - 0.5) * 0.8;
     }
-    p.betas = (0..10).map(|i| (((seed * 10 + i) as f64 * 0.5698402910).fract() - 0.5) * 2.0).collect();
+    p.betas = (0..10)
+        .map(|i| (((seed * 10 + i) as f64 * 0.5698402910).fract() - 0.5) * 2.0)
+        .collect();
     p.transl = Vec3::new(0.1, 0.2, 0.3);
     p
 }
 
 fn bench(c: &mut Criterion) {
-    let path = std::env::var("EGOGEN_BENCH_MODEL")
-        .unwrap_or_else(|_| concat!(env!("CARGO_MANIFEST_DIR"), "/assets/body/SMPLX_NEUTRAL.npz").into());
+    let path = std::env::var("EGOGEN_BENCH_MODEL").unwrap_or_else(|_| {
+        concat!(env!("CARGO_MANIFEST_DIR"), "/assets/body/SMPLX_NEUTRAL.npz").into()
+    });
     let model = BodyModel::load(&path).expect("body model");
     let one = params(1);
     let batch: Vec<BodyParams> = (0..64).map(params).collect();
@@ -29,18 +32,26 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(1));
     g.bench_function("full_single", |b| b.iter(|| model.pose(&one).unwrap()));
     let shaped = model.shape(&one.betas, &[]).unwrap();
-    g.bench_function("pose_cached_shape", |b| b.iter(|| shaped.pose(&one.pose, one.transl).unwrap()));
-    g.bench_function("joints_only", |b| b.iter(|| shaped.skeleton(&one.pose, one.transl).unwrap()));
+    g.bench_function("pose_cached_shape", |b| {
+        b.iter(|| shaped.pose(&one.pose, one.transl).unwrap())
+    });
+    g.bench_function("joints_only", |b| {
+        b.iter(|| shaped.skeleton(&one.pose, one.transl).unwrap())
+    });
     let markers = egogen::body::farthest_point_markers(&model, egogen::body::NUM_MARKERS);
     g.bench_function("joints_markers_cpf", |b| {
         let cal = egogen::body::CpfCalibration::from_rest_joints(&shaped.rest_joints);
         b.iter(|| {
-            let f = shaped.marker_frame(&one.pose, one.transl, &markers).unwrap();
+            let f = shaped
+                .marker_frame(&one.pose, one.transl, &markers)
+                .unwrap();
             (cal.world_from_cpf(&f.skeleton), f)
         })
     });
     g.throughput(Throughput::Elements(64));
-    g.bench_with_input(BenchmarkId::new("full_batch", 64), &batch, |b, batch| b.iter(|| model.pose_batch(batch).unwrap()));
+    g.bench_with_input(BenchmarkId::new("full_batch", 64), &batch, |b, batch| {
+        b.iter(|| model.pose_batch(batch).unwrap())
+    });
     g.finish();
 
     // Official SMPL-X sizes (random values): the cost of pose correctives, and what skipping
@@ -59,8 +70,12 @@ fn bench(c: &mut Criterion) {
     assert!(with.has_pose_correctives() && !without.has_pose_correctives());
     let mut g = c.benchmark_group("official_shaped");
     g.throughput(Throughput::Elements(1));
-    g.bench_function("full_single_with_correctives", |b| b.iter(|| with.pose(&one).unwrap()));
-    g.bench_function("full_single_zero_correctives", |b| b.iter(|| without.pose(&one).unwrap()));
+    g.bench_function("full_single_with_correctives", |b| {
+        b.iter(|| with.pose(&one).unwrap())
+    });
+    g.bench_function("full_single_zero_correctives", |b| {
+        b.iter(|| without.pose(&one).unwrap())
+    });
     g.finish();
 }
 

@@ -38,6 +38,15 @@ fn run(args: Args) -> Result<()> {
     let raw = RawRun::load(&args.config)?;
     let plan = resolve_run(raw, &args.config)?;
     let model = BodyModel::load(&plan.body_model)?;
+    if plan.betas.len() > model.num_betas() {
+        anyhow::bail!(
+            "config {}: key `body.betas`: {} betas given but the model {} has {}",
+            args.config.display(),
+            plan.betas.len(),
+            plan.body_model.display(),
+            model.num_betas()
+        );
+    }
     let motion = match &plan.motion {
         MotionPlan::ScriptedWalk {
             duration_s,

@@ -64,6 +64,25 @@ enum BodyCommand {
         #[arg(long, default_value_t = 480)]
         height_px: usize,
     },
+    /// Render a PNG row of rest-pose bodies, one per value of one beta (front views).
+    Shapes {
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// Which beta to vary (0-based).
+        #[arg(long, default_value_t = 0)]
+        beta: usize,
+        /// Values of that beta, comma separated.
+        #[arg(
+            long,
+            value_delimiter = ',',
+            allow_hyphen_values = true,
+            default_value = "-3,0,3"
+        )]
+        values: Vec<f64>,
+        /// Output PNG path.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -119,6 +138,47 @@ fn run(cli: Cli) -> Result<()> {
                 eyes.z,
                 cal.rest_tilt_down_rad().to_degrees()
             );
+        }
+        Command::Body(BodyCommand::Shapes {
+            model,
+            beta,
+            values,
+            out,
+        }) => {
+            let m = BodyModel::load(model_path(model))?;
+            if beta >= m.num_betas() {
+                bail!("--beta {beta}: the model has betas 0..{}", m.num_betas());
+            }
+            let bodies = values
+                .iter()
+                .map(|&v| {
+                    let mut betas = vec![0.0; beta + 1];
+                    betas[beta] = v;
+                    m.pose(&BodyParams {
+                        betas,
+                        ..Default::default()
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            // One shared frame so sizes compare: offset bodies along x, draw them together.
+            let mut verts = Vec::new();
+            let mut faces = Vec::new();
+            for (k, b) in bodies.iter().enumerate() {
+                let base = verts.len() as u32;
+                verts.extend(
+                    b.vertices
+                        .iter()
+                        .map(|v| *v + Vec3::new(2.2 * k as f64, 0.0, 0.0)),
+                );
+                faces.extend(m.faces.iter().map(|f| f.map(|i| i + base)));
+            }
+            let img = MeshView::looking_from(Vec3::Z, Vec3::Y).render(
+                &[(&verts, &faces, [0.86, 0.72, 0.62])],
+                360 * values.len(),
+                400,
+            );
+            img.write_png(&out)?;
+            println!("wrote {}", out.display());
         }
         Command::Body(BodyCommand::Pose {
             model,

@@ -19,14 +19,30 @@ pub fn farthest_point_markers(model: &BodyModel, count: usize) -> Vec<u32> {
     if verts.is_empty() || count == 0 {
         return Vec::new();
     }
-    let pelvis: Vec3 = model.j_regressor[0].iter().map(|&(v, w)| verts[v as usize] * w).sum();
+    let pelvis: Vec3 = model.j_regressor[0]
+        .iter()
+        .map(|&(v, w)| verts[v as usize] * w)
+        .sum();
     let nearest = |p: Vec3| {
-        (0..verts.len()).min_by(|&a, &b| verts[a].distance_squared(p).total_cmp(&verts[b].distance_squared(p))).unwrap_or(0)
+        (0..verts.len())
+            .min_by(|&a, &b| {
+                verts[a]
+                    .distance_squared(p)
+                    .total_cmp(&verts[b].distance_squared(p))
+            })
+            .unwrap_or(0)
     };
     let mut chosen = vec![nearest(pelvis) as u32];
-    let mut dist: Vec<Real> = verts.iter().map(|v| v.distance_squared(verts[chosen[0] as usize])).collect();
+    let mut dist: Vec<Real> = verts
+        .iter()
+        .map(|v| v.distance_squared(verts[chosen[0] as usize]))
+        .collect();
     while chosen.len() < count.min(verts.len()) {
-        let (next, _) = dist.iter().enumerate().fold((0, -1.0), |best, (i, &d)| if d > best.1 { (i, d) } else { best });
+        let (next, _) =
+            dist.iter().enumerate().fold(
+                (0, -1.0),
+                |best, (i, &d)| if d > best.1 { (i, d) } else { best },
+            );
         chosen.push(next as u32);
         let p = verts[next];
         for (d, v) in dist.iter_mut().zip(verts) {
@@ -45,7 +61,12 @@ pub struct MarkerFrame {
 
 impl ShapedBody<'_> {
     /// Joints, joint transforms and marker positions only (the motion loop's fast path).
-    pub fn marker_frame(&self, pose: &[Real; POSE_DIM], transl: Vec3, marker_ids: &[u32]) -> Result<MarkerFrame, PoseError> {
+    pub fn marker_frame(
+        &self,
+        pose: &[Real; POSE_DIM],
+        transl: Vec3,
+        marker_ids: &[u32],
+    ) -> Result<MarkerFrame, PoseError> {
         let skeleton = self.skeleton(pose, transl)?;
         let markers = self.pose_vertices(&skeleton, pose, marker_ids);
         Ok(MarkerFrame { skeleton, markers })

@@ -35,22 +35,29 @@ pub struct RawBody {
 }
 
 /// Where motion comes from.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, tag = "source", rename_all = "snake_case")]
-pub enum RawMotion {
-    /// The scripted walk cycle.
-    ScriptedWalk {
-        duration_s: f64,
-        frame_rate_hz: f64,
-        #[serde(default = "default_speed")]
-        speed_m_per_s: f64,
-    },
-    /// An AMASS- or SAMP-style `.npz` motion file.
-    File { path: PathBuf },
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum MotionSource {
+    /// The scripted walk cycle (`duration_s`, `frame_rate_hz`, `speed_m_per_s`).
+    ScriptedWalk,
+    /// An AMASS- or SAMP-style `.npz` motion file (`path`).
+    File,
 }
 
-fn default_speed() -> f64 {
-    1.2
+/// `[motion]`: one flat table so that type errors name their key; `resolve` checks which
+/// keys the chosen `source` needs.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawMotion {
+    pub source: MotionSource,
+    /// Length of the scripted walk (s).
+    pub duration_s: Option<f64>,
+    /// Frame rate of the scripted walk (Hz).
+    pub frame_rate_hz: Option<f64>,
+    /// Walking speed of the scripted walk (m/s, default 1.2).
+    pub speed_m_per_s: Option<f64>,
+    /// Motion file, relative to the config's folder.
+    pub path: Option<PathBuf>,
 }
 
 /// `[output]`: where the run writes.

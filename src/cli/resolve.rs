@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::config::{ConfigError, RawMotion, RawRun};
+use super::config::{ConfigError, MotionSource, RawRun};
 
 /// Default body model, relative to the crate root.
 pub const DEFAULT_BODY_MODEL: &str = "assets/body/SMPLX_NEUTRAL.npz";
@@ -54,20 +54,28 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
             format!("value {i} is not a finite number"),
         ));
     }
-    let motion = match raw.motion {
-        RawMotion::ScriptedWalk {
-            duration_s,
-            frame_rate_hz,
-            speed_m_per_s,
-        } => {
-            for (key, v) in [
-                ("motion.duration_s", duration_s),
-                ("motion.frame_rate_hz", frame_rate_hz),
-            ] {
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(bad(key, format!("expected a positive number, found {v}")));
-                }
-            }
+    let m = raw.motion;
+    let unused = |key: &str, present: bool, source: &str| match present {
+        true => Err(bad(
+            key,
+            format!("not used when motion.source = \"{source}\"; remove it"),
+        )),
+        false => Ok(()),
+    };
+    let motion = match m.source {
+        MotionSource::ScriptedWalk => {
+            unused("motion.path", m.path.is_some(), "scripted_walk")?;
+            let positive = |key: &str, v: Option<f64>| match v {
+                Some(v) if v.is_finite() && v > 0.0 => Ok(v),
+                Some(v) => Err(bad(key, format!("expected a positive number, found {v}"))),
+                None => Err(bad(
+                    key,
+                    "required when motion.source = \"scripted_walk\"".into(),
+                )),
+            };
+            let duration_s = positive("motion.duration_s", m.duration_s)?;
+            let frame_rate_hz = positive("motion.frame_rate_hz", m.frame_rate_hz)?;
+            let speed_m_per_s = m.speed_m_per_s.unwrap_or(1.2);
             if !(speed_m_per_s.is_finite() && (0.0..=10.0).contains(&speed_m_per_s)) {
                 return Err(bad(
                     "motion.speed_m_per_s",
@@ -80,7 +88,20 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
                 speed_m_per_s,
             }
         }
-        RawMotion::File { path } => {
+        MotionSource::File => {
+            for (key, present) in [
+                ("motion.duration_s", m.duration_s.is_some()),
+                ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
+                ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
+            ] {
+                unused(key, present, "file")?;
+            }
+            let path = m.path.ok_or_else(|| {
+                bad(
+                    "motion.path",
+                    "required when motion.source = \"file\"".into(),
+                )
+            })?;
             let path = base.join(path);
             if !path.is_file() {
                 return Err(bad(

@@ -1,0 +1,127 @@
+//! `egogen-run` end to end: a short walk writes a complete sequence folder; bad configs fail
+//! with the file and key named, a non-zero exit, and nothing written.
+
+use std::path::Path;
+use std::process::Command;
+
+fn egogen_run(config: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(config)
+        .output()
+        .unwrap()
+}
+
+const GOOD: &str = r#"
+[body]
+betas = [1.0, -0.5]
+[motion]
+source = "scripted_walk"
+duration_s = 0.5
+frame_rate_hz = 40.0
+[output]
+dir = "seq"
+mesh_every_n_frames = 10
+"#;
+
+#[test]
+fn short_walk_writes_a_complete_sequence() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(&cfg, GOOD).unwrap();
+    let out = egogen_run(&cfg);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let seq = dir.path().join("seq");
+    for f in [
+        "motion.npz",
+        "cpf_trajectory.json",
+        "preview.png",
+        "manifest.json",
+        "meshes/frame_00000.obj",
+        "meshes/frame_00010.obj",
+    ] {
+        assert!(seq.join(f).is_file(), "{f} missing");
+    }
+    assert!(!dir.path().join("seq.partial").exists());
+    let motion = egogen::motion::MotionSequence::read(&seq.join("motion.npz")).unwrap();
+    assert_eq!(motion.len(), 20);
+    assert_eq!(motion.betas, vec![1.0, -0.5]);
+    let cpf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(seq.join("cpf_trajectory.json")).unwrap()).unwrap();
+    let frames = cpf.as_array().unwrap();
+    assert_eq!(frames.len(), 20);
+    // Eyes of a walking adult: 1.3–1.9 m above the floor, moving along +x.
+    let z0 = frames[0]["world_from_cpf"][2][3].as_f64().unwrap();
+    let x_last = frames[19]["world_from_cpf"][0][3].as_f64().unwrap();
+    let x0 = frames[0]["world_from_cpf"][0][3].as_f64().unwrap();
+    assert!((1.3..1.9).contains(&z0), "eye height {z0}");
+    assert!(x_last - x0 > 0.3, "walked {} m", x_last - x0);
+
+    // A second run refuses to overwrite and leaves the folder as it was.
+    let before = std::fs::read(seq.join("manifest.json")).unwrap();
+    let again = egogen_run(&cfg);
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
+    assert_eq!(std::fs::read(seq.join("manifest.json")).unwrap(), before);
+}
+
+fn expect_config_error(text: &str, needles: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("bad.toml");
+    std::fs::write(&cfg, text).unwrap();
+    let out = egogen_run(&cfg);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "must fail: {err}");
+    assert!(err.contains("bad.toml"), "names the file: {err}");
+    for n in needles {
+        assert!(err.contains(n), "`{n}` missing from: {err}");
+    }
+    let entries: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(entries.len(), 1, "nothing written besides the config");
+}
+
+#[test]
+fn unknown_key() {
+    expect_config_error(
+        &GOOD.replace("betas = [1.0, -0.5]", "betas = []\nheight_m = 1.8"),
+        &["unknown field `height_m`"],
+    );
+}
+
+#[test]
+fn wrong_type() {
+    expect_config_error(
+        &GOOD.replace("duration_s = 0.5", "duration_s = \"long\""),
+        &["duration_s", "invalid type"],
+    );
+}
+
+#[test]
+fn missing_model_file() {
+    expect_config_error(
+        &GOOD.replace("[body]", "[body]\nmodel = \"nowhere/SMPLX_NEUTRAL.npz\""),
+        &["body.model", "not found"],
+    );
+}
+
+#[test]
+fn negative_duration() {
+    expect_config_error(
+        &GOOD.replace("duration_s = 0.5", "duration_s = -2.0"),
+        &["motion.duration_s", "positive"],
+    );
+}
+
+#[test]
+fn too_many_betas() {
+    expect_config_error(
+        &GOOD.replace(
+            "betas = [1.0, -0.5]",
+            &format!("betas = [{}]", vec!["0.1"; 11].join(", ")),
+        ),
+        &["11 betas", "has 10"],
+    );
+}
