@@ -1,6 +1,7 @@
 //! egogen: egocentric synthetic data for head-mounted cameras.
 //!
-//! Modules follow the data flow: `body` (SMPL-X skeleton, skinning, eye anchor) →
+//! Modules follow the data flow: `scene` (meshes, walkable map) → `sensing` (ego rays);
+//! `body` (SMPL-X skeleton, skinning, eye anchor) →
 //! `motion` (pose sequences and their files) → `synth` (posed sequences, CPF trajectories);
 //! `preview` draws PNG pictures for people;
 //! `cli` holds the command-line and config plumbing and no domain logic.
@@ -11,4 +12,6 @@ pub mod math;
 pub mod motion;
 pub mod npz;
 pub mod preview;
+pub mod scene;
+pub mod sensing;
 pub mod synth;

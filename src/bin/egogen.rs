@@ -26,6 +26,34 @@ enum Command {
     /// Body model tools.
     #[command(subcommand)]
     Body(BodyCommand),
+    /// Scene tools.
+    #[command(subcommand)]
+    Scene(SceneCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum SceneCommand {
+    /// Load a scene, build its walkable map, print a summary and draw the map with sample
+    /// sensing rays as PNG.
+    Inspect {
+        /// Scene file (.glb, .gltf, .obj, .ply) or `scenario:empty_floor|single_box|moving_box`.
+        scene: String,
+        /// Up axis of the file (default: y for glTF, z otherwise).
+        #[arg(long, value_parser = ["y", "z"])]
+        up: Option<String>,
+        /// Walkable-map cell size (m).
+        #[arg(long, default_value_t = 0.1)]
+        cell_m: f64,
+        /// Output PNG (must not exist).
+        #[arg(long)]
+        out: PathBuf,
+        /// Number of sample agents whose 32 rays are drawn.
+        #[arg(long, default_value_t = 3)]
+        agents: usize,
+        /// Seed for the sample agents.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -108,6 +136,17 @@ fn refuse_existing(path: &Path) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Scene(SceneCommand::Inspect {
+            scene,
+            up,
+            cell_m,
+            out,
+            agents,
+            seed,
+        }) => {
+            refuse_existing(&out)?;
+            scene_inspect(&scene, up.as_deref(), cell_m, &out, agents, seed)?;
+        }
         Command::Body(BodyCommand::Info { model }) => {
             let m = BodyModel::load(model_path(model))?;
             let shaped = m.shape(&[], &[])?;
@@ -253,4 +292,101 @@ fn walk_params(m: &BodyModel, betas: &[f64], t_s: f64) -> Result<BodyParams> {
         .map(|v| v.y)
         .fold(f64::INFINITY, f64::min);
     Ok(WalkCycle::default().params_at(t_s, betas, shaped.rest_joints[0], sole_y))
+}
+
+fn scene_inspect(
+    scene: &str,
+    up: Option<&str>,
+    cell_m: f64,
+    out: &Path,
+    agents: usize,
+    seed: u64,
+) -> Result<()> {
+    use egogen::preview::map::MapPicture;
+    use egogen::scene::{
+        load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind, UpAxis,
+        WalkableSettings,
+    };
+    use egogen::sensing::{EgoPose2, RayScan, SensingWorld};
+
+    if !(cell_m.is_finite() && cell_m > 0.0) {
+        bail!("--cell-m must be a positive number of metres, got {cell_m}");
+    }
+    let (mesh, moving, path) = match scene.strip_prefix("scenario:") {
+        Some(name) => {
+            let kind: ScenarioKind = serde_json::from_value(serde_json::Value::String(name.into()))
+                .map_err(|_| anyhow::anyhow!("unknown scenario `{name}` (expected empty_floor, single_box or moving_box)"))?;
+            let sc = scenario(kind);
+            (sc.mesh, sc.moving, PathBuf::from(scene))
+        }
+        None => {
+            let path = PathBuf::from(scene);
+            let up = up.map(|u| if u == "y" { UpAxis::Y } else { UpAxis::Z });
+            (load_scene(&path, up)?, Vec::new(), path)
+        }
+    };
+    let t = std::time::Instant::now();
+    let map = walkable_map(
+        &mesh,
+        &path,
+        WalkableSettings {
+            cell_m,
+            ..Default::default()
+        },
+    )?;
+    let build_s = t.elapsed().as_secs_f64();
+    let (lo, hi) = mesh.bounds().expect("non-empty scene");
+    let components = map.component.iter().copied().max().unwrap_or(0);
+    println!("scene:      {}", path.display());
+    println!(
+        "objects:    {} ({} triangles)",
+        mesh.objects.len(),
+        mesh.triangles.len()
+    );
+    println!(
+        "bounds:     ({:.2}, {:.2}, {:.2}) .. ({:.2}, {:.2}, {:.2}) m",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
+    println!("floor:      z = {:.3} m", map.floor_z_m);
+    println!(
+        "grid:       {} x {} cells of {} m (built in {:.3} s)",
+        map.nx, map.ny, map.cell_m, build_s
+    );
+    println!(
+        "walkable:   {} cells = {:.1} m², {} connected region(s)",
+        map.walkable_count(),
+        map.walkable_count() as f64 * cell_m * cell_m,
+        components
+    );
+    let obstacles: Vec<_> = moving.iter().map(|m| m.at(0.0)).collect();
+    let world = SensingWorld {
+        map: &map,
+        obstacles: &obstacles,
+    };
+    let scan = RayScan::default();
+    let mut pic = MapPicture::new(&map, 900);
+    for o in &obstacles {
+        pic.obstacle(o, [200, 60, 40]);
+    }
+    for sg in sample_start_goals(&map, seed, agents, 0.3, 1.0) {
+        let heading = (sg.goal - sg.start).to_angle();
+        let pose = EgoPose2 {
+            position: sg.start,
+            heading_rad: heading,
+        };
+        for (k, d) in scan.distances(&world, pose).into_iter().enumerate() {
+            let end = pose.position + scan.beam_dir(pose, k) * d;
+            let colour = if d < scan.settings.max_range_m {
+                [220, 90, 30]
+            } else {
+                [80, 160, 80]
+            };
+            pic.line(pose.position, end, colour);
+        }
+        pic.dot(sg.start, 4, [30, 80, 200]);
+        pic.dot(sg.goal, 4, [200, 30, 160]);
+    }
+    pic.image.write_png(out)?;
+    println!("wrote {}", out.display());
+    Ok(())
 }

@@ -1,5 +1,6 @@
 //! Pictures for people: a small software rasteriser for mesh previews, and PNG writing.
 
+pub mod map;
 pub mod raster;
 
 pub use raster::{MeshView, RgbImage};

@@ -1,0 +1,315 @@
+//! Reading scene files: glTF/GLB (`gltf`), OBJ (`tobj`), PLY (`ply-rs-bw`), into a
+//! [`SceneMesh`] in metres with z up.
+//!
+//! Up axis: glTF is y up by specification, so `.gltf`/`.glb` default to [`UpAxis::Y`]; OBJ and
+//! PLY default to [`UpAxis::Z`] (scanned scenes mostly are). A y-up point `(x, y, z)` becomes
+//! `(x, −z, y)` in the z-up world.
+
+use std::path::{Path, PathBuf};
+
+use super::mesh::SceneMesh;
+use crate::math::Vec3;
+
+/// Which axis of the file points up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UpAxis {
+    Y,
+    Z,
+}
+
+impl UpAxis {
+    /// The default for a file, from its extension.
+    pub fn default_for(path: &Path) -> UpAxis {
+        match extension(path).as_str() {
+            "gltf" | "glb" => UpAxis::Y,
+            _ => UpAxis::Z,
+        }
+    }
+
+    fn to_z_up(self, p: [f64; 3]) -> Vec3 {
+        match self {
+            UpAxis::Z => Vec3::new(p[0], p[1], p[2]),
+            UpAxis::Y => Vec3::new(p[0], -p[2], p[1]),
+        }
+    }
+}
+
+/// A scene that could not be used, with the file named.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("scene {path}: unsupported format `.{ext}` (supported: .glb, .gltf, .obj, .ply)")]
+    Unsupported { path: PathBuf, ext: String },
+    #[error("scene {path}: cannot read ({message})")]
+    Read { path: PathBuf, message: String },
+    #[error("scene {path}: no triangles (empty scene)")]
+    Empty { path: PathBuf },
+    #[error("scene {path}: object `{object}` has a non-finite vertex (index {index})")]
+    NonFinite {
+        path: PathBuf,
+        object: String,
+        index: usize,
+    },
+    #[error("scene {path}: object `{object}` has face index {index} but only {count} vertices")]
+    BadIndex {
+        path: PathBuf,
+        object: String,
+        index: u32,
+        count: usize,
+    },
+    #[error("scene {path}: no floor found (no upward-facing horizontal surface); is the up axis right? (try the other `up_axis`)")]
+    NoFloor { path: PathBuf },
+    #[error("scene {path}: no walkable cell (floor at {floor_z_m:.2} m is covered everywhere between {lo:.2} and {hi:.2} m)")]
+    NoWalkable {
+        path: PathBuf,
+        floor_z_m: f64,
+        lo: f64,
+        hi: f64,
+    },
+}
+
+fn extension(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default()
+}
+
+/// Loads a scene file (format from the extension) into world space, z up, metres.
+pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneError> {
+    let up = up.unwrap_or_else(|| UpAxis::default_for(path));
+    let read_err = |message: String| SceneError::Read {
+        path: path.to_owned(),
+        message,
+    };
+    if !path.is_file() {
+        return Err(read_err("file not found".into()));
+    }
+    let parts = match extension(path).as_str() {
+        "glb" | "gltf" => read_gltf(path).map_err(read_err)?,
+        "obj" => read_obj(path).map_err(read_err)?,
+        "ply" => read_ply(path).map_err(read_err)?,
+        ext => {
+            return Err(SceneError::Unsupported {
+                path: path.to_owned(),
+                ext: ext.to_owned(),
+            })
+        }
+    };
+    let mut mesh = SceneMesh::default();
+    for part in parts {
+        if let Some(i) = part
+            .positions
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite()))
+        {
+            return Err(SceneError::NonFinite {
+                path: path.to_owned(),
+                object: part.name,
+                index: i,
+            });
+        }
+        if let Some(&bad) = part
+            .triangles
+            .iter()
+            .flatten()
+            .find(|&&i| i as usize >= part.positions.len())
+        {
+            return Err(SceneError::BadIndex {
+                path: path.to_owned(),
+                object: part.name,
+                index: bad,
+                count: part.positions.len(),
+            });
+        }
+        if part.triangles.is_empty() {
+            continue;
+        }
+        let verts: Vec<Vec3> = part.positions.iter().map(|&p| up.to_z_up(p)).collect();
+        mesh.add_object(part.name, &verts, &part.triangles);
+    }
+    if mesh.triangles.is_empty() {
+        return Err(SceneError::Empty {
+            path: path.to_owned(),
+        });
+    }
+    Ok(mesh)
+}
+
+/// One object as read from a file, in file coordinates.
+struct Part {
+    name: String,
+    positions: Vec<[f64; 3]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+fn read_gltf(path: &Path) -> Result<Vec<Part>, String> {
+    let gltf = gltf::Gltf::open(path).map_err(|e| e.to_string())?;
+    let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
+        .map_err(|e| e.to_string())?;
+    let scene = gltf
+        .document
+        .default_scene()
+        .or_else(|| gltf.document.scenes().next())
+        .ok_or("the file has no scene")?;
+    let mut parts = Vec::new();
+    let mut stack: Vec<(gltf::Node, glam::DMat4)> =
+        scene.nodes().map(|n| (n, glam::DMat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let local = glam::Mat4::from_cols_array_2d(&node.transform().matrix()).as_dmat4();
+        let world = parent * local;
+        stack.extend(node.children().map(|c| (c, world)));
+        let Some(mesh) = node.mesh() else { continue };
+        let name = node
+            .name()
+            .or(mesh.name())
+            .map(str::to_owned)
+            .unwrap_or_else(|| format!("node_{}", node.index()));
+        let mut part = Part {
+            name,
+            positions: Vec::new(),
+            triangles: Vec::new(),
+        };
+        for prim in mesh.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                continue;
+            }
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(pos) = reader.read_positions() else {
+                continue;
+            };
+            let base = part.positions.len() as u32;
+            part.positions.extend(pos.map(|p| {
+                world
+                    .transform_point3(glam::Vec3::from(p).as_dvec3())
+                    .to_array()
+            }));
+            let n = part.positions.len() as u32 - base;
+            let idx: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..n).collect(),
+            };
+            part.triangles.extend(
+                idx.chunks_exact(3)
+                    .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+            );
+        }
+        parts.push(part);
+    }
+    parts.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(parts)
+}
+
+fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
+    Ok(models
+        .into_iter()
+        .map(|m| Part {
+            name: m.name,
+            positions: m
+                .mesh
+                .positions
+                .chunks_exact(3)
+                .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
+                .collect(),
+            triangles: m
+                .mesh
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+        })
+        .collect())
+}
+
+fn read_ply(path: &Path) -> Result<Vec<Part>, String> {
+    use ply_rs_bw::parser::Parser;
+    use ply_rs_bw::ply::{DefaultElement, Property};
+    let mut f = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| e.to_string())?);
+    let ply = Parser::<DefaultElement>::new()
+        .read_ply(&mut f)
+        .map_err(|e| e.to_string())?;
+    let num = |p: Option<&Property>| -> Option<f64> {
+        match p? {
+            Property::Float(v) => Some(*v as f64),
+            Property::Double(v) => Some(*v),
+            Property::Int(v) => Some(*v as f64),
+            Property::UInt(v) => Some(*v as f64),
+            Property::Short(v) => Some(*v as f64),
+            Property::UShort(v) => Some(*v as f64),
+            Property::Char(v) => Some(*v as f64),
+            Property::UChar(v) => Some(*v as f64),
+            _ => None,
+        }
+    };
+    let verts = ply.payload.get("vertex").ok_or("no `vertex` element")?;
+    let positions = verts
+        .iter()
+        .enumerate()
+        .map(
+            |(i, v)| match (num(v.get("x")), num(v.get("y")), num(v.get("z"))) {
+                (Some(x), Some(y), Some(z)) => Ok([x, y, z]),
+                _ => Err(format!("vertex {i} lacks numeric x, y, z")),
+            },
+        )
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut triangles = Vec::new();
+    for (fi, face) in ply
+        .payload
+        .get("face")
+        .map(|f| f.as_slice())
+        .unwrap_or(&[])
+        .iter()
+        .enumerate()
+    {
+        let list = face
+            .get("vertex_indices")
+            .or_else(|| face.get("vertex_index"))
+            .ok_or(format!("face {fi} lacks vertex_indices"))?;
+        let idx: Vec<u32> = match list {
+            Property::ListInt(v) => v.iter().map(|&i| i.max(0) as u32).collect(),
+            Property::ListUInt(v) => v.clone(),
+            Property::ListUChar(v) => v.iter().map(|&i| i as u32).collect(),
+            Property::ListChar(v) => v.iter().map(|&i| i.max(0) as u32).collect(),
+            Property::ListShort(v) => v.iter().map(|&i| i.max(0) as u32).collect(),
+            Property::ListUShort(v) => v.iter().map(|&i| i as u32).collect(),
+            _ => return Err(format!("face {fi}: vertex_indices is not an integer list")),
+        };
+        for k in 1..idx.len().saturating_sub(1) {
+            triangles.push([idx[0], idx[k], idx[k + 1]]);
+        }
+    }
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "ply".into());
+    Ok(vec![Part {
+        name,
+        positions,
+        triangles,
+    }])
+}
+
+/// Builds the walkable map of a loaded scene, naming the file in errors.
+pub fn walkable_map(
+    mesh: &SceneMesh,
+    path: &Path,
+    settings: super::WalkableSettings,
+) -> Result<super::WalkableMap, SceneError> {
+    use super::walkable::WalkableError;
+    super::WalkableMap::build(mesh, settings).map_err(|e| match e {
+        WalkableError::NoFloor => SceneError::NoFloor {
+            path: path.to_owned(),
+        },
+        WalkableError::NoWalkable { floor_z_m, lo, hi } => SceneError::NoWalkable {
+            path: path.to_owned(),
+            floor_z_m,
+            lo,
+            hi,
+        },
+    })
+}

@@ -1,0 +1,87 @@
+//! A scene as a triangle soup with per-triangle object ids (segmentation needs them later).
+
+use crate::math::Vec3;
+
+/// Stable id of a scene object: its index in [`SceneMesh::objects`] plus one (0 = none).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ObjectId(pub u32);
+
+/// A named part of the scene (a glTF node, an OBJ object, a PLY file).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneObject {
+    pub id: ObjectId,
+    pub name: String,
+}
+
+/// World-space triangles (metres, z up) with the object each belongs to.
+#[derive(Debug, Clone, Default)]
+pub struct SceneMesh {
+    pub vertices: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Object of each triangle.
+    pub triangle_object: Vec<ObjectId>,
+    pub objects: Vec<SceneObject>,
+}
+
+impl SceneMesh {
+    /// Adds an object's triangles (vertices already in world space); returns its id.
+    pub fn add_object(
+        &mut self,
+        name: impl Into<String>,
+        vertices: &[Vec3],
+        triangles: &[[u32; 3]],
+    ) -> ObjectId {
+        let id = ObjectId(self.objects.len() as u32 + 1);
+        self.objects.push(SceneObject {
+            id,
+            name: name.into(),
+        });
+        let base = self.vertices.len() as u32;
+        self.vertices.extend_from_slice(vertices);
+        self.triangles
+            .extend(triangles.iter().map(|t| t.map(|i| i + base)));
+        self.triangle_object
+            .extend(std::iter::repeat_n(id, triangles.len()));
+        id
+    }
+
+    /// Adds an axis-aligned box (closed, outward normals) as an object.
+    pub fn add_box(&mut self, name: impl Into<String>, min: Vec3, max: Vec3) -> ObjectId {
+        let c = |i: usize| {
+            Vec3::new(
+                if i & 1 == 0 { min.x } else { max.x },
+                if i & 2 == 0 { min.y } else { max.y },
+                if i & 4 == 0 { min.z } else { max.z },
+            )
+        };
+        let v: Vec<Vec3> = (0..8).map(c).collect();
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let tris: Vec<[u32; 3]> = quads
+            .iter()
+            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+            .collect();
+        self.add_object(name, &v, &tris)
+    }
+
+    /// Corner points of triangle `t`.
+    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+        self.triangles[t].map(|i| self.vertices[i as usize])
+    }
+
+    /// Axis-aligned bounds of all vertices, or `None` for an empty mesh.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.vertices.first()?;
+        Some(
+            self.vertices
+                .iter()
+                .fold((first, first), |(lo, hi), v| (lo.min(*v), hi.max(*v))),
+        )
+    }
+}

@@ -1,0 +1,69 @@
+//! Obstacles that move or are not part of the mesh: 2D oriented boxes and circles (other
+//! agents' footprints, moving boxes), with straight-line motion.
+
+use glam::DVec2;
+
+/// A 2D obstacle footprint in the world's xy plane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Obstacle2 {
+    /// Box with centre, half extents (along its own axes) and yaw (rad, about +z).
+    Box {
+        centre: DVec2,
+        half_extents: DVec2,
+        yaw_rad: f64,
+    },
+    /// Disc with centre and radius (m).
+    Circle { centre: DVec2, radius_m: f64 },
+}
+
+impl Obstacle2 {
+    /// The same obstacle moved by `offset`.
+    pub fn translated(self, offset: DVec2) -> Self {
+        match self {
+            Obstacle2::Box {
+                centre,
+                half_extents,
+                yaw_rad,
+            } => Obstacle2::Box {
+                centre: centre + offset,
+                half_extents,
+                yaw_rad,
+            },
+            Obstacle2::Circle { centre, radius_m } => Obstacle2::Circle {
+                centre: centre + offset,
+                radius_m,
+            },
+        }
+    }
+
+    /// Whether a point lies inside (boundary included).
+    pub fn contains(&self, p: DVec2) -> bool {
+        match *self {
+            Obstacle2::Box {
+                centre,
+                half_extents,
+                yaw_rad,
+            } => {
+                let local = DVec2::from_angle(-yaw_rad).rotate(p - centre);
+                local.x.abs() <= half_extents.x && local.y.abs() <= half_extents.y
+            }
+            Obstacle2::Circle { centre, radius_m } => {
+                p.distance_squared(centre) <= radius_m * radius_m
+            }
+        }
+    }
+}
+
+/// An obstacle moving at constant velocity: footprint at time 0, velocity (m/s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MovingObstacle {
+    pub at_start: Obstacle2,
+    pub velocity_m_per_s: DVec2,
+}
+
+impl MovingObstacle {
+    /// Footprint at time `t_s`.
+    pub fn at(&self, t_s: f64) -> Obstacle2 {
+        self.at_start.translated(self.velocity_m_per_s * t_s)
+    }
+}

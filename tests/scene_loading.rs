@@ -1,0 +1,165 @@
+//! Scene files: OBJ, PLY and glTF load with names, metres and z up; bad scenes fail with the
+//! file named and a reason.
+
+use std::path::Path;
+
+use egogen::scene::{load_scene, walkable_map, SceneError, UpAxis, WalkableSettings};
+
+const ROOM_OBJ: &str = "\
+o floor
+v -2 -2 0
+v 2 -2 0
+v 2 2 0
+v -2 2 0
+f 1 2 3 4
+o table
+v -0.5 -0.5 0.7
+v 0.5 -0.5 0.7
+v 0.5 0.5 0.7
+v -0.5 0.5 0.7
+v -0.5 -0.5 0.0
+v 0.5 -0.5 0.0
+f 5 6 7 8
+f 9 10 6 5
+";
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn obj_keeps_objects_and_builds_a_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "room.obj", ROOM_OBJ);
+    let mesh = load_scene(&path, None).unwrap();
+    let names: Vec<&str> = mesh.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(names, ["floor", "table"]);
+    assert_eq!(mesh.triangles.len(), 6);
+    let map = walkable_map(&mesh, &path, WalkableSettings::default()).unwrap();
+    assert_eq!(map.floor_z_m, 0.0);
+    // The table top (0.7 m) blocks its 1 m × 1 m footprint; the floor around it is walkable.
+    assert!(!map.is_walkable_at(glam::DVec2::new(0.0, 0.0)));
+    assert!(map.is_walkable_at(glam::DVec2::new(1.5, 1.5)));
+    assert!(
+        !map.is_walkable_at(glam::DVec2::new(2.5, 0.0)),
+        "no floor outside the room"
+    );
+}
+
+#[test]
+fn ply_and_y_up() {
+    let dir = tempfile::tempdir().unwrap();
+    // A y-up floor quad at height 0 plus a 1 m tall pole (y is up in this file).
+    let ply = "ply\nformat ascii 1.0\nelement vertex 7\nproperty float x\nproperty float y\nproperty float z\n\
+element face 2\nproperty list uchar int vertex_indices\nend_header\n\
+-2 0 -2\n2 0 -2\n2 0 2\n-2 0 2\n0 0 0\n0.2 1.5 0\n0 1.5 0.2\n4 3 2 1 0\n3 4 5 6\n";
+    let path = write(dir.path(), "scan.ply", ply);
+    let mesh = load_scene(&path, Some(UpAxis::Y)).unwrap();
+    let (lo, hi) = mesh.bounds().unwrap();
+    assert!(
+        (hi.z - 1.5).abs() < 1e-6 && lo.z.abs() < 1e-6,
+        "y-up became z-up: {lo:?} {hi:?}"
+    );
+    assert!((lo.y + 2.0).abs() < 1e-6 && (hi.y - 2.0).abs() < 1e-6);
+    assert!(walkable_map(&mesh, &path, WalkableSettings::default()).is_ok());
+    // Read as z-up the floor stands vertical: no floor.
+    let as_z = load_scene(&path, Some(UpAxis::Z)).unwrap();
+    let err = walkable_map(&as_z, &path, WalkableSettings::default()).unwrap_err();
+    assert!(matches!(err, SceneError::NoFloor { .. }), "{err}");
+    assert!(err.to_string().contains("scan.ply") && err.to_string().contains("up_axis"));
+}
+
+#[test]
+fn gltf_with_embedded_buffer_is_y_up() {
+    // One triangle at y = 0 (the floor in glTF's y-up frame) in node "floor".
+    let floats: [f32; 9] = [-1.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 0.0, -1.0];
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let b64 = base64_encode(&bytes);
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],
+        "nodes":[{{"name":"floor","mesh":0,"translation":[0,0.5,0]}}],
+        "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+        "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[-1,0,-1],"max":[1,0,1]}}],
+        "bufferViews":[{{"buffer":0,"byteLength":36}}],
+        "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{b64}"}}]}}"#
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "tri.gltf", &json);
+    let mesh = load_scene(&path, None).unwrap();
+    assert_eq!(mesh.objects[0].name, "floor");
+    // Node translation y = 0.5 (up) → world z = 0.5; glTF z = 1 → world y = −1.
+    assert!(mesh.vertices.iter().all(|v| (v.z - 0.5).abs() < 1e-6));
+    assert!((mesh.vertices[0].y + 1.0).abs() < 1e-6);
+}
+
+fn base64_encode(data: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in data.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..4 {
+            if k <= c.len() {
+                s.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                s.push('=');
+            }
+        }
+    }
+    s
+}
+
+#[test]
+fn shipped_apartment_loads_like_a_floor_plan() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/apartment.glb");
+    let mesh = load_scene(&path, None).unwrap();
+    assert!(mesh.objects.iter().any(|o| o.name == "floor"));
+    assert!(mesh.objects.iter().any(|o| o.name == "IKEA_sofa_EKTORP"));
+    let (lo, hi) = mesh.bounds().unwrap();
+    assert!(
+        (hi.z - 2.5).abs() < 0.05 && lo.z > -0.05,
+        "walls 2.5 m high, floor at 0: {lo:?} {hi:?}"
+    );
+    let map = walkable_map(&mesh, &path, WalkableSettings::default()).unwrap();
+    let area = map.walkable_count() as f64 * 0.01;
+    assert!((40.0..120.0).contains(&area), "walkable area {area} m²");
+}
+
+fn expect_err(name: &str, text: &str, needle: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), name, text);
+    let err = load_scene(&path, None)
+        .and_then(|m| walkable_map(&m, &path, WalkableSettings::default()).map(|_| ()))
+        .unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.contains(name) && msg.contains(needle), "{msg}");
+}
+
+#[test]
+fn bad_scenes_fail_clearly() {
+    expect_err("empty.obj", "", "no triangles");
+    expect_err(
+        "wall.obj",
+        "v 0 0 0\nv 1 0 0\nv 1 0 2\nv 0 0 2\nf 1 2 3 4\n",
+        "no floor",
+    );
+    expect_err(
+        "nan.obj",
+        "v 0 0 0\nv NaN 0 0\nv 0 1 0\nf 1 2 3\n",
+        "non-finite vertex (index 1)",
+    );
+    expect_err("scene.fbx", "whatever", "unsupported format `.fbx`");
+    expect_err("broken.glb", "not a glb", "cannot read");
+    // A floor covered everywhere by a 1 m slab.
+    let covered = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\nv -2 -2 1\nv 2 -2 1\nv 2 2 1\nv -2 2 1\nf 5 6 7 8\n";
+    expect_err("covered.obj", covered, "no walkable cell");
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.obj");
+    assert!(load_scene(&missing, None)
+        .unwrap_err()
+        .to_string()
+        .contains("missing.obj"));
+}
