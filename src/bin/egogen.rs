@@ -29,6 +29,38 @@ enum Command {
     /// Scene tools.
     #[command(subcommand)]
     Scene(SceneCommand),
+    /// Motion tools.
+    #[command(subcommand)]
+    Motion(MotionCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum MotionCommand {
+    /// Retarget a CMU BVH clip onto the body model and write an AMASS-style `.npz`.
+    ImportBvh {
+        /// BVH file (CMU skeleton, e.g. /usr/share/assimp/models/BVH/01_01.bvh).
+        bvh: PathBuf,
+        /// Output `.npz` (must not exist).
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// Output frame rate (Hz).
+        #[arg(long, default_value_t = 40.0)]
+        rate_hz: f64,
+        /// Also write the left-right mirrored clip next to `--out` (`*_mirror.npz`).
+        #[arg(long)]
+        mirror: bool,
+        /// PNG strip of the source skeleton over the retargeted body, every 0.5 s.
+        #[arg(long)]
+        strip: Option<PathBuf>,
+        /// Number of frames in the strip.
+        #[arg(long, default_value_t = 8)]
+        strip_frames: usize,
+        /// Source frames to drop at the start (CMU clips open with a T-pose calibration frame).
+        #[arg(long, default_value_t = 0)]
+        skip_frames: usize,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -136,6 +168,27 @@ fn refuse_existing(path: &Path) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Motion(MotionCommand::ImportBvh {
+            bvh,
+            out,
+            model,
+            rate_hz,
+            mirror,
+            strip,
+            strip_frames,
+            skip_frames,
+        }) => {
+            import_bvh(
+                &bvh,
+                &out,
+                model,
+                rate_hz,
+                mirror,
+                strip.as_deref(),
+                strip_frames,
+                skip_frames,
+            )?;
+        }
         Command::Scene(SceneCommand::Inspect {
             scene,
             up,
@@ -388,5 +441,121 @@ fn scene_inspect(
     }
     pic.image.write_png(out)?;
     println!("wrote {}", out.display());
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn import_bvh(
+    bvh: &Path,
+    out: &Path,
+    model: Option<PathBuf>,
+    rate_hz: f64,
+    mirror: bool,
+    strip: Option<&Path>,
+    strip_frames: usize,
+    skip_frames: usize,
+) -> Result<()> {
+    use egogen::motion::bvh::BvhClip;
+    use egogen::motion::resample::{mirror as mirror_seq, resample};
+    use egogen::motion::retarget::{retarget_cmu, CMU_TO_SMPLX, CMU_UNIT_M};
+    use egogen::preview::sticks::bone_mesh;
+
+    refuse_existing(out)?;
+    let mirror_path = out.with_file_name(format!(
+        "{}_mirror.npz",
+        out.file_stem().unwrap_or_default().to_string_lossy()
+    ));
+    if mirror {
+        refuse_existing(&mirror_path)?;
+    }
+    if let Some(s) = strip {
+        refuse_existing(s)?;
+    }
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        bail!("--rate-hz must be positive, got {rate_hz}");
+    }
+    let m = BodyModel::load(model_path(model))?;
+    let mut clip = BvhClip::read(bvh)?;
+    if skip_frames >= clip.frames.len() {
+        bail!(
+            "--skip-frames {skip_frames}: {} has only {} frames",
+            bvh.display(),
+            clip.frames.len()
+        );
+    }
+    clip.frames.drain(..skip_frames);
+    let full = retarget_cmu(&clip, &m)?;
+    let seq = resample(&full, rate_hz);
+    seq.write_amass(out)?;
+    println!(
+        "wrote {} ({} frames at {} Hz from {} at {} Hz)",
+        out.display(),
+        seq.len(),
+        rate_hz,
+        bvh.display(),
+        clip.frame_rate_hz
+    );
+    if mirror {
+        mirror_seq(&seq, &m)?.write_amass(&mirror_path)?;
+        println!("wrote {}", mirror_path.display());
+    }
+    if let Some(strip) = strip {
+        // Columns every 0.5 s; top: the source skeleton (metres, z up), bottom: our body.
+        let step = ((0.5 * rate_hz).round() as usize).max(1);
+        let frames: Vec<usize> = (0..seq.len()).step_by(step).take(strip_frames).collect();
+        let to_world = |p: Vec3| Vec3::new(p.x, -p.z, p.y) * CMU_UNIT_M;
+        let used: Vec<usize> = CMU_TO_SMPLX
+            .iter()
+            .filter_map(|(_, n, _)| clip.joint_index(n))
+            .collect();
+        let shaped = m.shape(&[], &[])?;
+        let mut verts = Vec::new();
+        let mut faces = Vec::new();
+        let mut bones_v = Vec::new();
+        let mut bones_f = Vec::new();
+        for (col, &f) in frames.iter().enumerate() {
+            let src_f = ((f as f64 / rate_hz) * clip.frame_rate_hz).round() as usize;
+            let g = clip.global_transforms(src_f.min(clip.frames.len() - 1));
+            let root = to_world(g[used[0]].translation);
+            let body = shaped.pose(&seq.poses[f], seq.trans[f])?;
+            let pelvis = body.joints[0];
+            let offset = Vec3::new(1.2 * col as f64, 0.0, 0.0);
+            let segs: Vec<(Vec3, Vec3)> = clip
+                .joints
+                .iter()
+                .enumerate()
+                .filter_map(|(i, j)| j.parent.map(|p| (p, i)))
+                .map(|(p, i)| {
+                    let lift = Vec3::new(0.0, 0.0, 2.2);
+                    let place =
+                        |q: Vec3| to_world(q) - Vec3::new(root.x, root.y, 0.0) + offset + lift;
+                    (place(g[p].translation), place(g[i].translation))
+                })
+                .collect();
+            let (bv, bf) = bone_mesh(&segs, 0.02);
+            let base = bones_v.len() as u32;
+            bones_v.extend(bv);
+            bones_f.extend(bf.iter().map(|t| t.map(|i| i + base)));
+            let base = verts.len() as u32;
+            verts.extend(
+                body.vertices
+                    .iter()
+                    .map(|v| *v - Vec3::new(pelvis.x, pelvis.y, 0.0) + offset),
+            );
+            faces.extend(m.faces.iter().map(|t| t.map(|i| i + base)));
+        }
+        // Front view: the retargeted body faces −y, so look from −y.
+        let view = MeshView::looking_from(Vec3::new(0.0, -1.0, 0.0), Vec3::Z);
+        let img = view.render(
+            &[
+                (&verts, &faces, [0.86, 0.72, 0.62]),
+                (&bones_v, &bones_f, [0.3, 0.45, 0.8]),
+            ],
+            150 * frames.len(),
+            560,
+        );
+        img.write_png(strip)?;
+        println!("wrote {}", strip.display());
+    }
     Ok(())
 }

@@ -1,8 +1,12 @@
-//! Motion: SMPL-X pose sequences in time, and the files they travel in.
+//! Motion: SMPL-X pose sequences in time, the files they travel in, and real mocap turned
+//! into them (BVH reading, retargeting, resampling, mirroring).
 //!
 //! Owns frame rates and sequences of body parameters; the body itself (skinning) is `body`'s.
 
 pub mod amass;
+pub mod bvh;
+pub mod resample;
+pub mod retarget;
 pub mod scripted;
 
 pub use amass::{MotionFileError, MotionSequence};

@@ -2,5 +2,6 @@
 
 pub mod map;
 pub mod raster;
+pub mod sticks;
 
 pub use raster::{MeshView, RgbImage};

@@ -1,0 +1,130 @@
+//! Mocap ingestion: CMU BVH retargeting keeps every mapped bone's direction, resampling picks
+//! exact frames, mirroring is an involution that swaps left and right.
+
+mod common;
+
+use egogen::body::{joint, BodyModel};
+use egogen::math::Vec3;
+use egogen::motion::bvh::BvhClip;
+use egogen::motion::resample::{mirror, resample};
+use egogen::motion::retarget::{retarget_cmu, CMU_TO_SMPLX};
+use std::path::Path;
+
+fn fixture() -> BvhClip {
+    BvhClip::read(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/cmu_01_01_excerpt.bvh"),
+    )
+    .unwrap()
+}
+
+fn model() -> BodyModel {
+    BodyModel::load(common::default_model_path()).unwrap()
+}
+
+#[test]
+fn bvh_reads_cmu_skeleton() {
+    let clip = fixture();
+    assert_eq!(clip.frame_rate_hz, 120.0);
+    assert_eq!(clip.frames.len(), 12);
+    assert_eq!(clip.joints.len(), 31);
+    assert_eq!(clip.joints[0].name, "Hips");
+    assert!(clip.joint_index("LeftForeArm").is_some());
+}
+
+#[test]
+fn retargeted_bones_point_where_the_source_bones_point() {
+    let clip = fixture();
+    let m = model();
+    let seq = retarget_cmu(&clip, &m).unwrap();
+    assert_eq!(seq.len(), 12);
+    let shaped = m.shape(&[], &[]).unwrap();
+    // Source bones in the z-up world: body (x, y, z) → world (x, −z, y).
+    let to_world = |p: Vec3| Vec3::new(p.x, -p.z, p.y);
+    let mut worst: f64 = 0.0;
+    for f in 0..seq.len() {
+        let ours = shaped.skeleton(&seq.poses[f], seq.trans[f]).unwrap();
+        let g = clip.global_transforms(f);
+        for (j, name, child) in CMU_TO_SMPLX {
+            let Some(c) = child else { continue };
+            let child_name = CMU_TO_SMPLX.iter().find(|(jj, _, _)| *jj == c).unwrap().1;
+            let (a, b) = (
+                clip.joint_index(name).unwrap(),
+                clip.joint_index(child_name).unwrap(),
+            );
+            let src = to_world(g[b].translation - g[a].translation).normalize();
+            let dst = (ours.joints[c] - ours.joints[j]).normalize();
+            worst = worst.max(src.angle_between(dst));
+        }
+    }
+    eprintln!("max bone direction error after retargeting: {worst:.2e} rad");
+    assert!(worst < 1e-6);
+    // Feet on the floor: the lowest foot joint sits at its rest height above the soles.
+    let lowest = (0..seq.len())
+        .flat_map(|f| {
+            let s = shaped.skeleton(&seq.poses[f], seq.trans[f]).unwrap();
+            [
+                joint::LEFT_ANKLE,
+                joint::RIGHT_ANKLE,
+                joint::LEFT_FOOT,
+                joint::RIGHT_FOOT,
+            ]
+            .map(|j| s.joints[j].z)
+        })
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        (0.0..0.15).contains(&lowest),
+        "lowest foot joint at {lowest} m"
+    );
+}
+
+#[test]
+fn resampling_120_to_40_picks_every_third_frame() {
+    let seq = retarget_cmu(&fixture(), &model()).unwrap();
+    let r = resample(&seq, 40.0);
+    assert_eq!(r.len(), 4);
+    for k in 0..4 {
+        assert_eq!(r.poses[k], seq.poses[3 * k]);
+        assert_eq!(r.trans[k], seq.trans[3 * k]);
+    }
+    // A non-integer ratio interpolates between neighbours.
+    let r = resample(&seq, 50.0);
+    assert_eq!(r.len(), 5);
+    assert!(r.poses[1].iter().all(|v| v.is_finite()));
+}
+
+#[test]
+fn mirroring_swaps_sides_and_is_an_involution() {
+    let m = model();
+    let seq = retarget_cmu(&fixture(), &m).unwrap();
+    let mir = mirror(&seq, &m).unwrap();
+    let back = mirror(&mir, &m).unwrap();
+    for (a, b) in seq.poses.iter().zip(&back.poses) {
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() < 1e-9);
+        }
+    }
+    let shaped = m.shape(&[], &[]).unwrap();
+    let s = shaped.skeleton(&seq.poses[5], seq.trans[5]).unwrap();
+    let t = shaped.skeleton(&mir.poses[5], mir.trans[5]).unwrap();
+    let flip = |p: Vec3| Vec3::new(-p.x, p.y, p.z);
+    // Left wrist of the mirror = mirrored right wrist of the original (up to the model's
+    // small left-right asymmetry).
+    let d = (t.joints[joint::LEFT_WRIST] - flip(s.joints[joint::RIGHT_WRIST])).length();
+    assert!(d < 0.01, "{d}");
+}
+
+#[test]
+fn bad_bvh_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("broken.bvh");
+    std::fs::write(&p, "HIERARCHY\nROOT Hips\n{\n").unwrap();
+    let msg = BvhClip::read(&p).unwrap_err().to_string();
+    assert!(msg.contains("broken.bvh"), "{msg}");
+    // A non-CMU skeleton is refused with the missing joint named.
+    let bvh = "HIERARCHY\nROOT Root\n{\n\tOFFSET 0 0 0\n\tCHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation\n\tEnd Site\n\t{\n\t\tOFFSET 0 1 0\n\t}\n}\nMOTION\nFrames: 1\nFrame Time: 0.033333\n0 0 0 0 0 0\n";
+    let p = dir.path().join("other.bvh");
+    std::fs::write(&p, bvh).unwrap();
+    let clip = BvhClip::read(&p).unwrap();
+    let msg = retarget_cmu(&clip, &model()).unwrap_err().to_string();
+    assert!(msg.contains("other.bvh") && msg.contains("`Hips`"), "{msg}");
+}
