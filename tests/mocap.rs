@@ -128,3 +128,40 @@ fn bad_bvh_is_named() {
     let msg = retarget_cmu(&clip, &model()).unwrap_err().to_string();
     assert!(msg.contains("other.bvh") && msg.contains("`Hips`"), "{msg}");
 }
+
+#[test]
+fn primitives_are_canonical_and_map_back_exactly() {
+    use egogen::math::rotation::orthonormality_error;
+    use egogen::motion::primitive::{extract_primitives, PRIMITIVE_FRAMES};
+    use egogen::motion::MotionSequence;
+    let m = model();
+    let seq = MotionSequence::read(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/motion/cmu_01_03.npz"),
+    )
+    .unwrap();
+    let prims = extract_primitives(&seq, 200, &m).unwrap();
+    assert!(prims.len() >= 7);
+    let shaped = m.shape(&[], &[]).unwrap();
+    let mut worst_mesh: f64 = 0.0;
+    for (k, p) in prims.iter().enumerate() {
+        assert_eq!(p.frames.len(), PRIMITIVE_FRAMES);
+        assert!(orthonormality_error(p.world_from_canon.matrix3) < 1e-14);
+        let first = shaped
+            .skeleton(&p.frames[0].pose, p.frames[0].transl)
+            .unwrap();
+        // Origin at the first pelvis; hips along +x, level.
+        assert!(first.joints[joint::PELVIS].length() < 1e-9);
+        let hips = first.joints[joint::RIGHT_HIP] - first.joints[joint::LEFT_HIP];
+        assert!(hips.y.abs() < 1e-9 && hips.x > 0.0, "{hips:?}");
+        // Back to the world: the same mesh as the source frames.
+        let back = p.to_world(&m).unwrap();
+        for (i, b) in back.iter().enumerate().step_by(6) {
+            let src = m.pose(&seq.frame(200 * k + i)).unwrap();
+            let got = m.pose(b).unwrap();
+            for (a, c) in src.vertices.iter().zip(&got.vertices).step_by(50) {
+                worst_mesh = worst_mesh.max((*a - *c).length());
+            }
+        }
+    }
+    assert!(worst_mesh < 1e-9, "{worst_mesh}");
+}

@@ -5,6 +5,7 @@
 
 pub mod amass;
 pub mod bvh;
+pub mod primitive;
 pub mod resample;
 pub mod retarget;
 pub mod scripted;
