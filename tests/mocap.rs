@@ -165,3 +165,76 @@ fn primitives_are_canonical_and_map_back_exactly() {
     }
     assert!(worst_mesh < 1e-9, "{worst_mesh}");
 }
+
+/// A DeepMimic frame: duration, root position, 13 joint rotations (identity quaternions
+/// `w x y z` = 1 0 0 0, hinges 0), with optional knee and elbow angles.
+fn deepmimic_clip(dir: &Path, right_knee: f64, left_elbow: f64) -> std::path::PathBuf {
+    let mut f = vec![1.0 / 30.0, 0.0, 0.85, 0.0];
+    let q = [1.0, 0.0, 0.0, 0.0];
+    for part in [
+        "root",
+        "chest",
+        "neck",
+        "rhip",
+        "rknee",
+        "rankle",
+        "rshoulder",
+        "relbow",
+        "lhip",
+        "lknee",
+        "lankle",
+        "lshoulder",
+        "lelbow",
+    ] {
+        match part {
+            "rknee" => f.push(right_knee),
+            "relbow" | "lknee" => f.push(0.0),
+            "lelbow" => f.push(left_elbow),
+            _ => f.extend(q),
+        }
+    }
+    assert_eq!(f.len(), 44);
+    let text = format!("{{\"Loop\": \"wrap\", \"Frames\": [{:?}, {:?}]}}", f, f);
+    let p = dir.join("clip.txt");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn deepmimic_rest_hangs_arms_and_hinges_bend_by_their_angle() {
+    use egogen::motion::deepmimic::import_deepmimic;
+    let m = model();
+    let dir = tempfile::tempdir().unwrap();
+    let seq = import_deepmimic(&deepmimic_clip(dir.path(), -1.0, 0.0), &m).unwrap();
+    assert_eq!(seq.frame_rate_hz, 30.0);
+    let s = m
+        .shape(&[], &[])
+        .unwrap()
+        .skeleton(&seq.poses[0], seq.trans[0])
+        .unwrap();
+    // Rest: arms hang down (elbow straight below the shoulder, world z up).
+    let arm = (s.joints[joint::LEFT_ELBOW] - s.joints[joint::LEFT_SHOULDER]).normalize();
+    assert!(arm.z < -0.99, "{arm:?}");
+    let forearm = (s.joints[joint::LEFT_WRIST] - s.joints[joint::LEFT_ELBOW]).normalize();
+    assert!(forearm.z < -0.99, "{forearm:?}");
+    // The right knee bends by the hinge angle (1 rad) between thigh and shin.
+    let thigh = s.joints[joint::RIGHT_KNEE] - s.joints[joint::RIGHT_HIP];
+    let shin = s.joints[joint::RIGHT_ANKLE] - s.joints[joint::RIGHT_KNEE];
+    assert!(
+        (thigh.angle_between(shin) - 1.0).abs() < 1e-6,
+        "{}",
+        thigh.angle_between(shin)
+    );
+    let straight = s.joints[joint::LEFT_ANKLE] - s.joints[joint::LEFT_KNEE];
+    assert!(
+        (s.joints[joint::LEFT_KNEE] - s.joints[joint::LEFT_HIP]).angle_between(straight) < 1e-6
+    );
+    // A malformed clip names the file.
+    let bad = dir.path().join("bad.txt");
+    std::fs::write(&bad, "{\"Frames\": [[0.03, 1, 2]]}").unwrap();
+    let msg = import_deepmimic(&bad, &m).unwrap_err().to_string();
+    assert!(
+        msg.contains("bad.txt") && msg.contains("expected 44"),
+        "{msg}"
+    );
+}

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Builds the redistributable motion training clips in assets/motion/ from real mocap:
-# CMU trials 01_01 and 01_03 (BVH, 120 fps) from Debian's assimp-testmodels, retargeted onto
-# the shipped body model and resampled to 40 fps by `egogen motion import-bvh`.
+# Builds the redistributable motion training clips in assets/motion/ from real mocap, retargeted
+# onto the shipped body model and resampled to 40 fps by `egogen motion import`:
+#   - CMU trials 01_01 and 01_03 (BVH, 120 fps) from Debian's assimp-testmodels;
+#   - DeepMimic humanoid3d clips (30 fps) from PyPI pybullet 3.2.7 (pybullet_data/data/motions).
 # Mirrored copies are made at training time (egogen::motion::resample::mirror), not stored.
 #
 #   bash tools/build_training_clips.sh        # needs root for apt-get (or the package installed)
@@ -11,12 +12,30 @@ BVH=/usr/share/assimp/models/BVH
 if [ ! -f "$BVH/01_01.bvh" ]; then
   apt-get update -qq && apt-get install -y -qq assimp-testmodels
 fi
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+python3 -m pip download -q --no-deps -d "$tmp" pybullet==3.2.7
+python3 - "$tmp" <<'PY'
+import glob, sys, zipfile
+tmp = sys.argv[1]
+with zipfile.ZipFile(glob.glob(f"{tmp}/pybullet-*.whl")[0]) as z:
+    for n in z.namelist():
+        if n.startswith("pybullet_data/data/motions/") and n.endswith(".txt"):
+            z.extract(n, tmp)
+PY
+MOT="$tmp/pybullet_data/data/motions"
 cargo build --release --locked --bin egogen
 mkdir -p assets/motion
-for trial in 01_01 01_03; do
-  out=assets/motion/cmu_${trial}.npz
-  rm -f "$out" "docs/mocap_cmu_${trial}.png"
-  # Source frame 0 of the cgspeed CMU files is a T-pose calibration frame: skip it.
-  ./target/release/egogen motion import-bvh "$BVH/${trial}.bvh" --out "$out" --rate-hz 40 \
-    --skip-frames 1 --strip "docs/mocap_cmu_${trial}.png"
+import() { # source output [extra args]
+  local src=$1 name=$2; shift 2
+  rm -f "assets/motion/$name.npz" "docs/mocap_$name.png"
+  ./target/release/egogen motion import "$src" --out "assets/motion/$name.npz" --rate-hz 40 "$@"
+}
+# Source frame 0 of the cgspeed CMU files is a T-pose calibration frame: skip it.
+import "$BVH/01_01.bvh" cmu_01_01 --skip-frames 1 --strip docs/mocap_cmu_01_01.png
+import "$BVH/01_03.bvh" cmu_01_03 --skip-frames 1 --strip docs/mocap_cmu_01_03.png
+import "$MOT/humanoid3d_walk.txt" deepmimic_walk
+import "$MOT/humanoid3d_run.txt" deepmimic_run
+for clip in 0walk_forward turn_left0 turn_left1 turn_right0 turn_right1; do
+  import "$MOT/walker/$clip.txt" "deepmimic_walker_$clip"
 done

@@ -36,9 +36,10 @@ enum Command {
 
 #[derive(Subcommand, Debug)]
 enum MotionCommand {
-    /// Retarget a CMU BVH clip onto the body model and write an AMASS-style `.npz`.
-    ImportBvh {
-        /// BVH file (CMU skeleton, e.g. /usr/share/assimp/models/BVH/01_01.bvh).
+    /// Retarget a mocap clip onto the body model and write an AMASS-style `.npz`: a CMU BVH
+    /// (`.bvh`) or a DeepMimic humanoid3d clip (`.txt`, from PyPI pybullet's motions).
+    Import {
+        /// Clip file, e.g. /usr/share/assimp/models/BVH/01_01.bvh or humanoid3d_walk.txt.
         bvh: PathBuf,
         /// Output `.npz` (must not exist).
         #[arg(long)]
@@ -51,7 +52,7 @@ enum MotionCommand {
         /// Also write the left-right mirrored clip next to `--out` (`*_mirror.npz`).
         #[arg(long)]
         mirror: bool,
-        /// PNG strip of the source skeleton over the retargeted body, every 0.5 s.
+        /// PNG strip of the retargeted body every 0.5 s (under the source skeleton for BVH).
         #[arg(long)]
         strip: Option<PathBuf>,
         /// Number of frames in the strip.
@@ -168,7 +169,7 @@ fn refuse_existing(path: &Path) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Motion(MotionCommand::ImportBvh {
+        Command::Motion(MotionCommand::Import {
             bvh,
             out,
             model,
@@ -475,16 +476,35 @@ fn import_bvh(
         bail!("--rate-hz must be positive, got {rate_hz}");
     }
     let m = BodyModel::load(model_path(model))?;
-    let mut clip = BvhClip::read(bvh)?;
-    if skip_frames >= clip.frames.len() {
-        bail!(
-            "--skip-frames {skip_frames}: {} has only {} frames",
-            bvh.display(),
-            clip.frames.len()
-        );
-    }
-    clip.frames.drain(..skip_frames);
-    let full = retarget_cmu(&clip, &m)?;
+    let is_bvh = bvh
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
+    let (clip, mut full) = if is_bvh {
+        let mut clip = BvhClip::read(bvh)?;
+        if skip_frames >= clip.frames.len() {
+            bail!(
+                "--skip-frames {skip_frames}: {} has only {} frames",
+                bvh.display(),
+                clip.frames.len()
+            );
+        }
+        clip.frames.drain(..skip_frames);
+        let seq = retarget_cmu(&clip, &m)?;
+        (Some(clip), seq)
+    } else {
+        let mut seq = egogen::motion::deepmimic::import_deepmimic(bvh, &m)?;
+        if skip_frames >= seq.len() {
+            bail!(
+                "--skip-frames {skip_frames}: {} has only {} frames",
+                bvh.display(),
+                seq.len()
+            );
+        }
+        seq.poses.drain(..skip_frames);
+        seq.trans.drain(..skip_frames);
+        (None, seq)
+    };
+    full.gender = "neutral".into();
     let seq = resample(&full, rate_hz);
     seq.write_amass(out)?;
     println!(
@@ -493,7 +513,7 @@ fn import_bvh(
         seq.len(),
         rate_hz,
         bvh.display(),
-        clip.frame_rate_hz
+        full.frame_rate_hz
     );
     if mirror {
         mirror_seq(&seq, &m)?.write_amass(&mirror_path)?;
@@ -504,9 +524,9 @@ fn import_bvh(
         let step = ((0.5 * rate_hz).round() as usize).max(1);
         let frames: Vec<usize> = (0..seq.len()).step_by(step).take(strip_frames).collect();
         let to_world = |p: Vec3| Vec3::new(p.x, -p.z, p.y) * CMU_UNIT_M;
-        let used: Vec<usize> = CMU_TO_SMPLX
+        let used: Vec<usize> = clip
             .iter()
-            .filter_map(|(_, n, _)| clip.joint_index(n))
+            .flat_map(|c| CMU_TO_SMPLX.iter().filter_map(|(_, n, _)| c.joint_index(n)))
             .collect();
         let shaped = m.shape(&[], &[])?;
         let mut verts = Vec::new();
@@ -514,24 +534,28 @@ fn import_bvh(
         let mut bones_v = Vec::new();
         let mut bones_f = Vec::new();
         for (col, &f) in frames.iter().enumerate() {
-            let src_f = ((f as f64 / rate_hz) * clip.frame_rate_hz).round() as usize;
-            let g = clip.global_transforms(src_f.min(clip.frames.len() - 1));
-            let root = to_world(g[used[0]].translation);
             let body = shaped.pose(&seq.poses[f], seq.trans[f])?;
             let pelvis = body.joints[0];
             let offset = Vec3::new(1.2 * col as f64, 0.0, 0.0);
-            let segs: Vec<(Vec3, Vec3)> = clip
-                .joints
-                .iter()
-                .enumerate()
-                .filter_map(|(i, j)| j.parent.map(|p| (p, i)))
-                .map(|(p, i)| {
+            let segs: Vec<(Vec3, Vec3)> = match &clip {
+                Some(clip) => {
+                    let src_f = ((f as f64 / rate_hz) * clip.frame_rate_hz).round() as usize;
+                    let g = clip.global_transforms(src_f.min(clip.frames.len() - 1));
+                    let root = to_world(g[used[0]].translation);
                     let lift = Vec3::new(0.0, 0.0, 2.2);
                     let place =
                         |q: Vec3| to_world(q) - Vec3::new(root.x, root.y, 0.0) + offset + lift;
-                    (place(g[p].translation), place(g[i].translation))
-                })
-                .collect();
+                    clip.joints
+                        .iter()
+                        .enumerate()
+                        .filter_map(|(i, j)| {
+                            j.parent
+                                .map(|p| (place(g[p].translation), place(g[i].translation)))
+                        })
+                        .collect()
+                }
+                None => Vec::new(),
+            };
             let (bv, bf) = bone_mesh(&segs, 0.02);
             let base = bones_v.len() as u32;
             bones_v.extend(bv);

@@ -302,14 +302,20 @@ impl<R: Read + Seek> KeyReader<'_, R> {
     }
 }
 
+/// Deflate, with a fixed timestamp so the same sequence always gives the same bytes.
+fn zip_options() -> npyz::zip::write::FileOptions {
+    npyz::zip::write::FileOptions::default()
+        .compression_method(npyz::zip::CompressionMethod::Deflated)
+        .last_modified_time(npyz::zip::DateTime::default())
+}
+
 fn write_f64<W: Write + Seek>(
     npz: &mut NpzWriter<W>,
     key: &str,
     shape: &[u64],
     data: &[f64],
 ) -> std::io::Result<()> {
-    let options = npyz::zip::write::FileOptions::default()
-        .compression_method(npyz::zip::CompressionMethod::Deflated);
+    let options = zip_options();
     let mut w = npz
         .array::<f64>(key, options)?
         .default_dtype()
@@ -324,8 +330,7 @@ fn write_str<W: Write + Seek>(
     key: &str,
     value: &str,
 ) -> std::io::Result<()> {
-    let options = npyz::zip::write::FileOptions::default()
-        .compression_method(npyz::zip::CompressionMethod::Deflated);
+    let options = zip_options();
     let chars = value.chars().count().max(1);
     let dtype = npyz::DType::Plain(
         format!("<U{chars}")

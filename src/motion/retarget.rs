@@ -56,7 +56,7 @@ pub enum RetargetError {
 }
 
 /// Minimal rotation taking unit direction `from` onto `to`.
-fn rotation_between(from: Vec3, to: Vec3) -> Mat3 {
+pub(crate) fn rotation_between(from: Vec3, to: Vec3) -> Mat3 {
     let (a, b) = (from.normalize(), to.normalize());
     let axis = a.cross(b);
     let s = axis.length();
@@ -111,31 +111,45 @@ pub fn retarget_cmu(clip: &BvhClip, model: &BodyModel) -> Result<MotionSequence,
         cmu_rest[cmu_index[7]],
     );
     let path_scale = ours / theirs;
-    let world_from_body = axis_angle_to_matrix(Vec3::X * FRAC_PI_2);
-
-    let mut poses = Vec::with_capacity(clip.frames.len());
-    let mut trans = Vec::with_capacity(clip.frames.len());
+    let mut world = Vec::with_capacity(clip.frames.len());
+    let mut root_path = Vec::with_capacity(clip.frames.len());
     for f in 0..clip.frames.len() {
         let g = clip.global_transforms(f);
-        let mut world = [Mat3::IDENTITY; NUM_BODY_JOINTS];
-        for j in 0..NUM_BODY_JOINTS {
-            world[j] = g[cmu_index[j]].matrix3 * correction[j];
-        }
+        world.push(std::array::from_fn(|j| {
+            g[cmu_index[j]].matrix3 * correction[j]
+        }));
+        root_path.push(g[cmu_index[0]].translation * path_scale);
+    }
+    sequence_from_body_rotations(&world, &root_path, clip.frame_rate_hz, model)
+}
+
+/// Builds a z-up world sequence from per-frame body-frame world rotations of the 22 body
+/// joints and the pelvis path (model's body frame, metres): local rotations from the world
+/// ones, `world = Rx(90°)·body`, then lifted onto the floor.
+pub(crate) fn sequence_from_body_rotations(
+    world: &[[Mat3; NUM_BODY_JOINTS]],
+    pelvis_path: &[Vec3],
+    frame_rate_hz: f64,
+    model: &BodyModel,
+) -> Result<MotionSequence, RetargetError> {
+    let rest_pelvis = model.rest_joints(&[], &[])?[joint::PELVIS];
+    let world_from_body = axis_angle_to_matrix(Vec3::X * FRAC_PI_2);
+    let mut poses = Vec::with_capacity(world.len());
+    let mut trans = Vec::with_capacity(world.len());
+    for (w, p) in world.iter().zip(pelvis_path) {
         let mut pose = [0.0; POSE_DIM];
         for j in 0..NUM_BODY_JOINTS {
             let local = match PARENTS[j] {
-                None => world_from_body * world[j],
-                Some(p) => world[p].transpose() * world[j],
+                None => world_from_body * w[j],
+                Some(parent) => w[parent].transpose() * w[j],
             };
             pose[3 * j..3 * j + 3].copy_from_slice(&matrix_to_axis_angle(local).to_array());
         }
-        let hips_body: Vec3 = g[cmu_index[0]].translation * path_scale;
-        let pelvis_world: Vec3 = world_from_body.mul_vec3(hips_body);
         poses.push(pose);
-        trans.push(pelvis_world - rest[0]);
+        trans.push(world_from_body.mul_vec3(*p) - rest_pelvis);
     }
     let mut seq = MotionSequence {
-        frame_rate_hz: clip.frame_rate_hz,
+        frame_rate_hz,
         betas: Vec::new(),
         gender: "neutral".into(),
         poses,
