@@ -7,11 +7,13 @@
 //! `cli` holds the command-line and config plumbing and no domain logic.
 
 pub mod body;
+pub mod camera;
 pub mod cli;
 pub mod math;
 pub mod motion;
 pub mod npz;
 pub mod preview;
+pub mod rig;
 pub mod scene;
 pub mod sensing;
 pub mod synth;

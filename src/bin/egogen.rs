@@ -32,6 +32,9 @@ enum Command {
     /// Motion tools.
     #[command(subcommand)]
     Motion(MotionCommand),
+    /// Camera rig tools (rig files and Aria device calibrations).
+    #[command(subcommand)]
+    Rig(egogen::rig::RigCommand),
 }
 
 #[derive(Subcommand, Debug)]
@@ -169,6 +172,7 @@ fn refuse_existing(path: &Path) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
         Command::Motion(MotionCommand::Import {
             bvh,
             out,

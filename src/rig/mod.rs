@@ -1,0 +1,169 @@
+//! Camera rigs: which cameras a head-mounted device carries and where they sit relative to
+//! the eye anchor (CPF), read from rig files (`camera_rigs/*.json`) or from a Project Aria
+//! device calibration; `world_from_cam = world_from_cpf · cpf_from_cam`. Projection
+//! itself belongs to `camera`; the CPF of a posed body to `body::cpf`.
+//!
+//! Frames: CPF x = wearer's left, y = up, z = forward; cameras are OpenCV (x right, y down,
+//! z forward). The file schema is documented in `docs/RIGS.md`.
+
+pub mod aria;
+pub mod command;
+mod error;
+mod file;
+pub mod pose;
+
+use std::path::{Path, PathBuf};
+
+use crate::camera::Camera;
+use crate::math::Affine3;
+
+pub use aria::AriaRgbResolution;
+pub use command::{run_command, RigCommand};
+pub use error::RigError;
+pub use file::FORMAT_VERSION;
+pub use pose::YawPitchRoll;
+
+/// One camera of a rig.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigCamera {
+    /// Unique within the rig (e.g. `camera-rgb`).
+    pub name: String,
+    pub model: Camera,
+    /// Maps camera-frame (OpenCV) points into the CPF.
+    pub cpf_from_cam: Affine3,
+}
+
+/// A validated rig.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rig {
+    pub name: String,
+    /// Provenance and caveats, free text.
+    pub notes: String,
+    /// The file it was read from (used in messages).
+    pub source: PathBuf,
+    /// In file order.
+    pub cameras: Vec<RigCamera>,
+}
+
+impl Rig {
+    /// Reads a rig file or an Aria device calibration (recognised by its `CameraCalibrations`
+    /// key; its RGB camera keeps the full 2880×2880 sensor size).
+    pub fn load(path: &Path) -> Result<Self, RigError> {
+        Self::load_with(path, AriaRgbResolution::default())
+    }
+
+    /// [`Rig::load`] choosing the RGB size for Aria calibrations.
+    pub fn load_with(path: &Path, aria_rgb: AriaRgbResolution) -> Result<Self, RigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| RigError::Read {
+            path: path.into(),
+            source,
+        })?;
+        Self::from_json_str(path, &text, aria_rgb)
+    }
+
+    /// Parses rig JSON; `path` is only used in messages.
+    pub fn from_json_str(
+        path: &Path,
+        text: &str,
+        aria_rgb: AriaRgbResolution,
+    ) -> Result<Self, RigError> {
+        let value = parse_json(path, text)?;
+        if !value.is_object() {
+            return Err(RigError::field(
+                path,
+                "top level",
+                "expected a JSON object: an egogen rig (key `egogen_rig`) or a Project Aria \
+                 device calibration (key `CameraCalibrations`)",
+            ));
+        }
+        if aria::is_aria_calibration(&value) {
+            aria::rig_from_aria_value(path, value, aria_rgb)
+        } else {
+            file::rig_from_value(path, value)
+        }
+    }
+
+    /// The camera called `name`, or an error listing the names there are.
+    pub fn camera(&self, name: &str) -> Result<&RigCamera, RigError> {
+        self.cameras
+            .iter()
+            .find(|c| c.name == name)
+            .ok_or_else(|| RigError::UnknownCamera {
+                path: self.source.clone(),
+                name: name.into(),
+                available: self.camera_names().join(", "),
+            })
+    }
+
+    /// Camera names in file order.
+    pub fn camera_names(&self) -> Vec<&str> {
+        self.cameras.iter().map(|c| c.name.as_str()).collect()
+    }
+
+    /// This rig as an egogen rig file (pretty JSON); loading it gives the same rig back.
+    pub fn to_json(&self) -> String {
+        file::rig_to_json(self)
+    }
+}
+
+impl RigCamera {
+    /// Pose of this camera in the world for a head whose CPF is at `world_from_cpf`.
+    pub fn world_from_cam(&self, world_from_cpf: Affine3) -> Affine3 {
+        world_from_cpf * self.cpf_from_cam
+    }
+}
+
+/// Parses JSON text, turning the NaN / Infinity tokens that some writers emit into an error
+/// that names the field.
+fn parse_json(path: &Path, text: &str) -> Result<serde_json::Value, RigError> {
+    serde_json::from_str(text).map_err(|e| {
+        if let Some((token, field)) = non_finite_token(text, e.line(), e.column()) {
+            RigError::NonFinite {
+                path: path.into(),
+                line: e.line(),
+                column: e.column(),
+                field,
+                token,
+            }
+        } else {
+            RigError::Syntax {
+                path: path.into(),
+                message: e.to_string(),
+            }
+        }
+    })
+}
+
+/// If the syntax error at (line, column), both 1-based, sits on a `NaN` / `Infinity` / `inf`
+/// token, that token and the last key before it.
+fn non_finite_token(text: &str, line: usize, column: usize) -> Option<(String, String)> {
+    let line_start: usize = text
+        .split_inclusive('\n')
+        .take(line.saturating_sub(1))
+        .map(str::len)
+        .sum();
+    let line_text = text[line_start..].lines().next().unwrap_or("");
+    let chars: Vec<char> = line_text.chars().collect();
+    let at = column.saturating_sub(1).min(chars.len().saturating_sub(1));
+    let is_tok = |c: char| c.is_ascii_alphanumeric() || c == '-' || c == '+' || c == '.';
+    let mut start = at;
+    while start > 0 && is_tok(chars[start - 1]) {
+        start -= 1;
+    }
+    let mut end = at;
+    while end < chars.len() && is_tok(chars[end]) {
+        end += 1;
+    }
+    let token: String = chars.get(start..end)?.iter().collect();
+    let bare = token.trim_start_matches(['-', '+']).to_ascii_lowercase();
+    if !matches!(bare.as_str(), "nan" | "infinity" | "inf") {
+        return None;
+    }
+    // The key: the last `"…"` followed by `:` before the token.
+    let byte_offset = line_start + chars[..start].iter().map(|c| c.len_utf8()).sum::<usize>();
+    let before = &text[..byte_offset];
+    let colon = before.rfind(':')?;
+    let key_end = before[..colon].rfind('"')?;
+    let key_start = before[..key_end].rfind('"')? + 1;
+    Some((token, before[key_start..key_end].to_string()))
+}
