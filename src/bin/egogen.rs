@@ -32,6 +32,15 @@ enum Command {
     /// Motion tools.
     #[command(subcommand)]
     Motion(MotionCommand),
+    /// Print an EXR file's parts, channels, types, compression and per-channel statistics
+    /// (min/max/mean, NaN/Inf counts); optionally write a PNG contact sheet of its passes.
+    Inspect {
+        /// EXR file (Blender 4.5 single-part multilayer or 5.0 multi-part).
+        file: PathBuf,
+        /// PNG contact sheet: one tile per pass, left to right in the order printed.
+        #[arg(long)]
+        preview: Option<PathBuf>,
+    },
     /// Camera rig tools (rig files and Aria device calibrations).
     #[command(subcommand)]
     Rig(egogen::rig::RigCommand),
@@ -172,6 +181,7 @@ fn refuse_existing(path: &Path) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
         Command::Motion(MotionCommand::Import {
             bvh,
@@ -584,6 +594,59 @@ fn import_bvh(
         );
         img.write_png(strip)?;
         println!("wrote {}", strip.display());
+    }
+    Ok(())
+}
+
+fn inspect_exr(file: &Path, preview: Option<&Path>) -> Result<()> {
+    use egogen::inspect::preview::preview_kind;
+    use egogen::inspect::{pass_preview, ExrContents};
+    if let Some(p) = preview {
+        refuse_existing(p)?;
+    }
+    let contents = ExrContents::read(file)?;
+    let first = &contents.channels[0];
+    println!(
+        "{}: {} part(s), {} channel(s), {} x {} px",
+        file.display(),
+        contents.parts,
+        contents.channels.len(),
+        first.width,
+        first.height
+    );
+    for (k, pass) in contents.passes.iter().enumerate() {
+        let name = if pass.name.is_empty() {
+            "(unnamed)"
+        } else {
+            pass.name.as_str()
+        };
+        println!(
+            "pass {k}: {name}  [{:?} preview]",
+            preview_kind(&contents, pass)
+        );
+        for (comp, i) in &pass.components {
+            let c = &contents.channels[*i];
+            let s = c.stats();
+            println!(
+                "  {comp:<6} {:<4} {:<6} min {:>12.6} max {:>12.6} mean {:>12.6}  NaN {} Inf {}",
+                c.sample_type, c.compression, s.min, s.max, s.mean, s.nan, s.inf
+            );
+        }
+    }
+    if let Some(p) = preview {
+        let gap = egogen::preview::RgbImage::new(8, first.height, [255, 255, 255]);
+        let mut sheet: Option<egogen::preview::RgbImage> = None;
+        for pass in &contents.passes {
+            let tile = pass_preview(&contents, pass);
+            sheet = Some(match sheet {
+                None => tile,
+                Some(s) => s
+                    .hconcat(&gap, [255, 255, 255])
+                    .hconcat(&tile, [255, 255, 255]),
+            });
+        }
+        sheet.expect("at least one pass").write_png(p)?;
+        println!("wrote {}", p.display());
     }
     Ok(())
 }
