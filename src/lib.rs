@@ -14,6 +14,7 @@ pub mod math;
 pub mod motion;
 pub mod npz;
 pub mod preview;
+pub mod render;
 pub mod rig;
 pub mod scene;
 pub mod sensing;

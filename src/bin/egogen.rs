@@ -32,6 +32,13 @@ enum Command {
     /// Motion tools.
     #[command(subcommand)]
     Motion(MotionCommand),
+    /// Find (installing on first use) and check the Blender that renders; print its version.
+    Blender {
+        /// A Python with bpy 4.5, or a blender 4.5 executable (default: EGOGEN_BLENDER, else
+        /// the managed environment in the egogen cache).
+        #[arg(long)]
+        blender: Option<PathBuf>,
+    },
     /// Print an EXR file's parts, channels, types, compression and per-channel statistics
     /// (min/max/mean, NaN/Inf counts); optionally write a PNG contact sheet of its passes.
     Inspect {
@@ -181,6 +188,15 @@ fn refuse_existing(path: &Path) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Blender { blender } => {
+            let rt = egogen::render::BlenderRuntime::resolve(blender.as_deref())?;
+            println!(
+                "Blender {} ({:?}) at {}",
+                rt.version,
+                rt.kind,
+                rt.path.display()
+            );
+        }
         Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
         Command::Motion(MotionCommand::Import {
