@@ -3,5 +3,9 @@
 //! protocol of shard specs. `render` knows nothing of bodies, motion or policies.
 
 pub mod blender_runtime;
+pub mod camera_setup;
+pub mod protocol;
+pub mod shard;
 
-pub use blender_runtime::{BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
+pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
+pub use protocol::{ShardCamera, ShardFrame, ShardSpec};
