@@ -75,24 +75,24 @@ fn downward_camera_sees_the_floor_at_the_right_depth() {
             .unwrap_or_else(|| panic!("{name} missing"))
             .values[y * W as usize + x]
     };
+    // Camera-frame ray through a pixel centre (principal point at the image centre).
+    let ray_of = |x: usize, y: usize| {
+        Vec3::new(
+            (x as f64 + 0.5 - 32.0) / F_PX,
+            (y as f64 + 0.5 - 24.0) / F_PX,
+            1.0,
+        )
+    };
     // Pixel (32, 24): its centre is half a pixel right and down of the optical axis.
     let (x, y) = (32usize, 24usize);
-    let ray = Vec3::new(
-        (x as f64 + 0.5 - 32.0) / F_PX,
-        (y as f64 + 0.5 - 24.0) / F_PX,
-        1.0,
-    );
+    let ray = ray_of(x, y);
     let z = px("ViewLayer.Depth.Z", x, y) as f64;
     let euclid = HEIGHT_M * ray.length();
     eprintln!("centre depth {z:.6} (planar {HEIGHT_M}, Euclidean {euclid:.6})");
     assert!((z - HEIGHT_M).abs() < 1e-4, "depth {z}");
     // Depth definition, measured 0.73 m off-axis where it tells them apart (≈ 11 % apart).
     let (x2, y2) = (8usize, 24usize);
-    let ray2 = Vec3::new(
-        (x2 as f64 + 0.5 - 32.0) / F_PX,
-        (y2 as f64 + 0.5 - 24.0) / F_PX,
-        1.0,
-    );
+    let ray2 = ray_of(x2, y2);
     let z2 = px("ViewLayer.Depth.Z", x2, y2) as f64;
     eprintln!(
         "off-axis depth {z2:.6}: planar {HEIGHT_M}, Euclidean {:.6}",
