@@ -2,15 +2,20 @@
 
 Run by egogen (`python render_shard.py SPEC.json` with PyPI bpy, or
 `blender --background --python-exit-code 1 --python render_shard.py -- SPEC.json`).
-Thin on purpose: every number comes from the spec (see src/render/protocol.rs). Each frame is
-written to `<output>.partial.exr` and renamed, so a killed worker never leaves a half-written
-file under the final name. Prints one `EGOGEN_DONE <path>` line per finished frame.
+Thin on purpose: every number comes from the spec (see src/render/protocol.rs). Per camera it
+renders the RGB image of every frame (Cycles, camera + deformation motion blur) and then the
+ground truth of every frame (motion blur off, 1 sample at the pixel centre: position, normal,
+object index, motion vectors). Each file is written to `<output>.partial.exr` and renamed, so a
+killed worker never leaves a half-written file under the final name. Prints one
+`EGOGEN_DONE <path>` line per finished file.
 """
 import json
 import os
 import sys
 
 import bpy
+import numpy as np
+from mathutils import Quaternion, Vector
 
 
 def load_spec():
@@ -21,65 +26,179 @@ def load_spec():
         return json.load(f)
 
 
+def add_body(scene, body):
+    """A body mesh with the PC2 vertex cache attached; vertex order is the cache's."""
+    faces = np.load(body["faces_npy"])
+    with open(body["pc2"], "rb") as f:
+        header = f.read(32)
+        num_points = int.from_bytes(header[16:20], "little")
+        rest = np.frombuffer(f.read(12 * num_points), dtype="<f4").reshape(-1, 3)
+    mesh = bpy.data.meshes.new(body["name"])
+    mesh.from_pydata(rest.tolist(), [], faces.tolist())
+    mesh.update()
+    for poly in mesh.polygons:
+        poly.use_smooth = True
+    mat = bpy.data.materials.new(body["name"] + "_material")
+    mat.diffuse_color = tuple(body["color_rgba"])
+    mat.use_nodes = True
+    mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = tuple(body["color_rgba"])
+    mesh.materials.append(mat)
+    obj = bpy.data.objects.new(body["name"], mesh)
+    obj.pass_index = body["pass_index"]
+    scene.collection.objects.link(obj)
+    cache = obj.modifiers.new("egogen_cache", "MESH_CACHE")
+    cache.cache_format = "PC2"
+    cache.filepath = body["pc2"]
+    cache.frame_start = body["cache_frame_start"]
+    cache.frame_scale = body["samples_per_frame"]
+    cache.interpolation = "LINEAR"
+    cache.forward_axis = "POS_Y"
+    cache.up_axis = "POS_Z"
+    obj.cycles.use_motion_blur = True
+    obj.cycles.use_deform_motion = True
+    obj.cycles.motion_steps = body["motion_steps"]
+    return obj
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
     bpy.ops.import_scene.gltf(filepath=spec["scene_glb"])
-    ids = dict(spec["object_ids"])
-    for obj in bpy.context.scene.objects:
-        obj.pass_index = ids.get(obj.name, 0)
     scene = bpy.context.scene
+    ids = dict(spec["object_ids"])
+    for obj in scene.objects:
+        obj.pass_index = ids.get(obj.name, 0)
+    bodies = [add_body(scene, b) for b in spec["bodies"]]
+    scene.render.fps = spec["fps"]
+    scene.render.fps_base = spec["fps_base"]
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
-    scene.cycles.samples = spec["samples"]
-    scene.cycles.use_denoising = False
     scene.world = bpy.data.worlds.new("egogen_world")
-    scene.world.color = (0.05, 0.05, 0.05)
-    sun = bpy.data.objects.new("egogen_sun", bpy.data.lights.new("egogen_sun", type="SUN"))
-    scene.collection.objects.link(sun)
-    layer = scene.view_layers[0]
-    layer.use_pass_z = True
-    layer.use_pass_normal = True
-    layer.use_pass_object_index = True
+    scene.world.color = tuple(spec["lighting"]["world_rgb"])
+    for i, light in enumerate(spec["lighting"]["point_lights"]):
+        data = bpy.data.lights.new(f"egogen_light_{i}", type="POINT")
+        data.energy = light["watts"]
+        data.shadow_soft_size = 0.2
+        obj = bpy.data.objects.new(f"egogen_light_{i}", data)
+        obj.location = light["position"]
+        scene.collection.objects.link(obj)
     settings = scene.render.image_settings
     settings.file_format = "OPEN_EXR_MULTILAYER"
     settings.color_depth = "32"
     settings.exr_codec = "ZIP"
-    return scene
+    return scene, bodies
 
 
-def render_camera(scene, cam_spec):
+def make_camera(scene, cam_spec):
     data = bpy.data.cameras.new(cam_spec["name"])
-    data.sensor_fit = "HORIZONTAL"
-    data.sensor_width = cam_spec["sensor_width_mm"]
-    data.lens = cam_spec["focal_mm"]
-    data.shift_x = cam_spec["shift_x"]
-    data.shift_y = cam_spec["shift_y"]
+    lens = cam_spec["lens"]
+    if "perspective" in lens:
+        p = lens["perspective"]
+        data.type = "PERSP"
+        data.sensor_fit = "HORIZONTAL"
+        data.sensor_width = p["sensor_width_mm"]
+        data.lens = p["focal_mm"]
+        data.shift_x = p["shift_x"]
+        data.shift_y = p["shift_y"]
+        scene.render.resolution_x = p["width_px"]
+        scene.render.resolution_y = p["height_px"]
+    else:
+        p = lens["equidistant_fisheye"]
+        data.type = "PANO"
+        data.panorama_type = "FISHEYE_EQUIDISTANT"
+        data.fisheye_fov = p["fov_rad"]
+        scene.render.resolution_x = p["size_px"]
+        scene.render.resolution_y = p["size_px"]
+    scene.render.resolution_percentage = 100
     data.clip_start = 0.01
     data.clip_end = 1000.0
     cam = bpy.data.objects.new(cam_spec["name"], data)
     scene.collection.objects.link(cam)
+    cam.rotation_mode = "QUATERNION"
+    for key in cam_spec["keys"]:
+        cam.location = Vector(key["location"])
+        cam.rotation_quaternion = Quaternion(key["rotation_wxyz"])
+        cam.keyframe_insert("location", frame=key["frame"])
+        cam.keyframe_insert("rotation_quaternion", frame=key["frame"])
     scene.camera = cam
-    scene.render.resolution_x = cam_spec["width_px"]
-    scene.render.resolution_y = cam_spec["height_px"]
-    scene.render.resolution_percentage = 100
-    from mathutils import Matrix
-    for frame in cam_spec["frames"]:
-        cam.matrix_world = Matrix(frame["matrix_world"])
-        out = frame["output_exr"]
-        os.makedirs(os.path.dirname(out), exist_ok=True)
-        partial = out + ".partial.exr"
-        scene.render.filepath = partial
-        scene.frame_set(frame["frame"])
-        bpy.ops.render.render(write_still=True)
-        os.replace(partial, out)
-        print("EGOGEN_DONE", out, flush=True)
+    return cam
+
+
+def set_rgb_mode(scene, rgb):
+    layer = scene.view_layers[0]
+    for p in ("z", "normal", "object_index", "vector", "position"):
+        setattr(layer, "use_pass_" + p, False)
+    scene.cycles.samples = rgb["samples"]
+    scene.cycles.use_adaptive_sampling = rgb["adaptive_threshold"] > 0
+    if rgb["adaptive_threshold"] > 0:
+        scene.cycles.adaptive_threshold = rgb["adaptive_threshold"]
+    scene.cycles.use_denoising = rgb["denoise"]
+    scene.cycles.pixel_filter_type = "BLACKMAN_HARRIS"
+    scene.cycles.filter_width = 1.5
+    scene.cycles.seed = rgb["seed"]
+    scene.render.film_transparent = False
+    scene.render.use_motion_blur = rgb["shutter_frames"] > 0
+    scene.render.motion_blur_shutter = max(rgb["shutter_frames"], 1e-3)
+    scene.render.motion_blur_position = "CENTER"
+
+
+def set_ground_truth_mode(scene):
+    layer = scene.view_layers[0]
+    for p in ("z", "normal", "object_index", "vector", "position"):
+        setattr(layer, "use_pass_" + p, True)
+    scene.cycles.samples = 1
+    scene.cycles.use_adaptive_sampling = False
+    scene.cycles.use_denoising = False
+    # One sample exactly at the pixel centre.
+    scene.cycles.pixel_filter_type = "BOX"
+    scene.cycles.filter_width = 0.01
+    scene.render.use_motion_blur = False
+    # Alpha 1 where a surface was hit, 0 for background.
+    scene.render.film_transparent = True
+
+
+def write_frame(scene, frame, out):
+    os.makedirs(os.path.dirname(out), exist_ok=True)
+    partial = out + ".partial.exr"
+    scene.render.filepath = partial
+    scene.frame_set(frame)
+    bpy.ops.render.render(write_still=True)
+    os.replace(partial, out)
+    print("EGOGEN_DONE", out, flush=True)
+
+
+def probe_bodies(scene, bodies, probe):
+    """Evaluated body vertices at (sub)frames, for checking the cache read-back."""
+    result = []
+    for t in probe["frames"]:
+        whole = int(np.floor(t))
+        scene.frame_set(whole, subframe=t - whole)
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        per_body = []
+        for obj in bodies:
+            mesh = obj.evaluated_get(depsgraph).to_mesh()
+            co = np.empty(3 * len(mesh.vertices), dtype=np.float64)
+            mesh.vertices.foreach_get("co", co)
+            per_body.append(co.tolist())
+            obj.evaluated_get(depsgraph).to_mesh_clear()
+        result.append({"frame": t, "vertices": per_body})
+    with open(probe["output_json"], "w") as f:
+        json.dump(result, f)
 
 
 def main():
     spec = load_spec()
-    scene = build_scene(spec)
+    scene, bodies = build_scene(spec)
+    if spec.get("body_probe"):
+        probe_bodies(scene, bodies, spec["body_probe"])
     for cam_spec in spec["cameras"]:
-        render_camera(scene, cam_spec)
+        make_camera(scene, cam_spec)
+        set_rgb_mode(scene, spec["rgb"])
+        for frame in cam_spec["frames"]:
+            write_frame(scene, frame["frame"], frame["rgb_exr"])
+        set_ground_truth_mode(scene)
+        for frame in cam_spec["frames"]:
+            write_frame(scene, frame["frame"], frame["ground_truth_exr"])
 
 
 main()

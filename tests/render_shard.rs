@@ -1,29 +1,74 @@
-//! A real render: Blender (PyPI bpy 4.5) renders a tiny 64×48 view of the shipped apartment from
-//! a shard spec written by Rust; the EXR passes are read back with the `exr` crate and checked
-//! against geometry computed in Rust.
+//! Real renders: Blender (PyPI bpy 4.5) renders a walking body in the shipped apartment from a
+//! shard spec written by Rust, seen by a pinhole and by a (tiny) Aria SLAM fisheye looking
+//! down; the passes are read back with the `exr` crate and checked against geometry computed
+//! in Rust: the vertex cache played back at whole and sub-frames, rays of every pixel, planar
+//! depth, camera-frame normals of the floor, the body's segmentation, and optical flow of the
+//! known camera motion.
 
-use std::path::Path;
+use std::path::PathBuf;
 
+use egogen::body::BodyModel;
+use egogen::camera::{Camera, CameraModel, Pinhole, Pixel, Resolution};
 use egogen::inspect::ExrContents;
 use egogen::math::{Affine3, Mat3, Vec3};
-use egogen::render::camera_setup::{blender_lens, row_major, world_from_blender_cam};
+use egogen::motion::scripted::WalkCycle;
+use egogen::motion::MotionSequence;
+use egogen::render::body_cache::{body_cache, write_faces_npy, PointCache};
+use egogen::render::frame_file::{assemble_frame, validate_frame};
+use egogen::render::render_camera::RenderCamera;
 use egogen::render::shard::render_shard;
-use egogen::render::{BlenderRuntime, ShardCamera, ShardFrame, ShardSpec};
+use egogen::render::shard_plan::{blender_fps, shard_camera, AGENT_ID_BASE};
+use egogen::render::{
+    BlenderRuntime, BodyProbe, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec,
+};
+use egogen::rig::Rig;
 use egogen::scene::{load_scene, sample_start_goals, walkable_map, WalkableSettings};
 
-const W: u32 = 64;
-const H: u32 = 48;
-const F_PX: f64 = 48.0;
-const HEIGHT_M: f64 = 1.5;
+const FRAMES: usize = 6;
+const RATE_HZ: f64 = 40.0;
+const SAMPLES_PER_FRAME: u32 = 4;
+const CAMERA_HEIGHT_M: f64 = 2.3;
+const CAMERA_STEP_M: f64 = 0.02;
+const RENDERED: [u32; 2] = [2, 3];
+const PROBE_FRAMES: [f64; 6] = [0.0, 0.125, 0.25, 1.0, 2.5, 5.0];
 
-#[test]
-fn downward_camera_sees_the_floor_at_the_right_depth() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let glb = root.join("assets/scenes/apartment.glb");
+struct Rendered {
+    _dir: tempfile::TempDir,
+    raw_dir: PathBuf,
+    motion: MotionSequence,
+    model: BodyModel,
+    cache: PointCache,
+    probe: PathBuf,
+    floor_id: u32,
+    cameras: Vec<(String, Camera, RenderCamera)>,
+    poses: Vec<Affine3>,
+}
+
+fn repo() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Looking straight down (OpenCV: z_cam = −z, x_cam = +x, y_cam = −y), moving along (½, 1, 0).
+fn camera_poses(spot: Vec3) -> Vec<Affine3> {
+    (0..FRAMES)
+        .map(|i| Affine3 {
+            matrix3: Mat3::from_cols(Vec3::X, -Vec3::Y, -Vec3::Z),
+            translation: spot
+                + Vec3::new(
+                    0.5 * CAMERA_STEP_M * i as f64,
+                    CAMERA_STEP_M * i as f64,
+                    CAMERA_HEIGHT_M,
+                ),
+        })
+        .collect()
+}
+
+fn render_scene() -> Rendered {
+    let glb = repo().join("assets/scenes/apartment.glb");
     let mesh = load_scene(&glb, None).unwrap();
     let map = walkable_map(&mesh, &glb, WalkableSettings::default()).unwrap();
-    // A spot with ≥ 0.8 m of free floor around it.
-    let spot = sample_start_goals(&map, 7, 1, 0.8, 0.0)[0].start;
+    let s = sample_start_goals(&map, 7, 1, 0.8, 0.0)[0].start;
+    let spot = Vec3::new(s.x, s.y, 0.0);
     let floor_id = mesh
         .objects
         .iter()
@@ -32,84 +77,360 @@ fn downward_camera_sees_the_floor_at_the_right_depth() {
         .id
         .0;
 
-    // OpenCV camera looking straight down: z_cam = −z, x_cam = +x, y_cam = −y.
-    let world_from_cam = Affine3 {
-        matrix3: Mat3::from_cols(Vec3::X, -Vec3::Y, -Vec3::Z),
-        translation: Vec3::new(spot.x, spot.y, HEIGHT_M),
-    };
-    let (focal_mm, sensor_width_mm, shift_x, shift_y) =
-        blender_lens(W, H, F_PX, W as f64 / 2.0, H as f64 / 2.0);
+    let model = BodyModel::load(&repo().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let shaped = model.shape(&[], &[]).unwrap();
+    let sole_y = shaped
+        .v_shaped
+        .iter()
+        .map(|v| v.y)
+        .fold(f64::INFINITY, f64::min);
+    let mut motion = WalkCycle::default().sequence(
+        FRAMES as f64 / RATE_HZ,
+        RATE_HZ,
+        &[],
+        shaped.rest_joints[0],
+        sole_y,
+    );
+    for t in &mut motion.trans {
+        *t += spot - Vec3::new(0.1, 0.0, 0.0);
+    }
+
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("cam/frame_00000.exr");
+    let cache = body_cache(&model, &motion, SAMPLES_PER_FRAME).unwrap();
+    let pc2 = dir.path().join("body.pc2");
+    let faces = dir.path().join("faces.npy");
+    cache.write(&pc2).unwrap();
+    write_faces_npy(&faces, &model.faces).unwrap();
+
+    let pinhole = Camera::Pinhole(
+        Pinhole::new(
+            48.0,
+            48.0,
+            31.5,
+            23.5,
+            Resolution {
+                width_px: 64,
+                height_px: 48,
+            },
+        )
+        .unwrap(),
+    );
+    let rig = Rig::load(&repo().join("camera_rigs/aria_gen1.json")).unwrap();
+    let Camera::Fisheye624(slam) = &rig.camera("camera-slam-left").unwrap().model else {
+        panic!("slam camera is Fisheye624")
+    };
+    let tiny_slam = slam
+        .rescaled(
+            Resolution {
+                width_px: 64,
+                height_px: 48,
+            },
+            0.1,
+            Pixel::ZERO,
+        )
+        .unwrap();
+    let cameras: Vec<(String, Camera, RenderCamera)> = [
+        ("pinhole", pinhole),
+        ("slam", Camera::Fisheye624(tiny_slam)),
+    ]
+    .into_iter()
+    .map(|(n, c)| {
+        let r = RenderCamera::for_camera(&c, 1.0);
+        (n.to_string(), c, r)
+    })
+    .collect();
+    let poses = camera_poses(spot);
+    let raw_dir = dir.path().join("raw");
+    let (fps, fps_base) = blender_fps(RATE_HZ);
+    let probe = dir.path().join("probe.json");
     let spec = ShardSpec {
-        scene_glb: glb.clone(),
+        scene_glb: glb,
         object_ids: mesh
             .objects
             .iter()
             .map(|o| (o.name.clone(), o.id.0))
             .collect(),
-        samples: 1,
-        cameras: vec![ShardCamera {
-            name: "cam".into(),
-            width_px: W,
-            height_px: H,
-            focal_mm,
-            sensor_width_mm,
-            shift_x,
-            shift_y,
-            frames: vec![ShardFrame {
-                frame: 0,
-                matrix_world: row_major(world_from_blender_cam(world_from_cam)),
-                output_exr: out.clone(),
-            }],
+        fps,
+        fps_base,
+        bodies: vec![ShardBody {
+            name: "agent_0".into(),
+            pass_index: AGENT_ID_BASE,
+            faces_npy: faces,
+            pc2,
+            cache_frame_start: 0.0,
+            samples_per_frame: SAMPLES_PER_FRAME,
+            motion_steps: 2,
+            color_rgba: [0.6, 0.45, 0.35, 1.0],
         }],
+        lighting: ShardLighting {
+            world_rgb: [0.3, 0.3, 0.3],
+            point_lights: vec![PointLight {
+                position: (spot + Vec3::new(0.5, 0.5, 2.2)).to_array(),
+                watts: 200.0,
+            }],
+        },
+        rgb: ShardRgb {
+            samples: 4,
+            adaptive_threshold: 0.0,
+            denoise: false,
+            shutter_frames: 0.5,
+            seed: 0,
+        },
+        cameras: cameras
+            .iter()
+            .map(|(n, _, r)| shard_camera(n, r, &poses, &RENDERED, SAMPLES_PER_FRAME, &raw_dir))
+            .collect(),
+        body_probe: Some(BodyProbe {
+            frames: PROBE_FRAMES.to_vec(),
+            output_json: probe.clone(),
+        }),
     };
     let runtime = BlenderRuntime::resolve(None).expect("Blender 4.5 (managed PyPI bpy)");
     let done = render_shard(&runtime, &spec, &dir.path().join("shard.json")).unwrap();
-    assert_eq!(done, vec![out.clone()]);
-    assert!(!dir.path().join("cam/frame_00000.exr.partial.exr").exists());
+    assert_eq!(done.len(), spec.num_outputs());
+    Rendered {
+        raw_dir,
+        _dir: dir,
+        motion,
+        model,
+        cache,
+        probe,
+        floor_id,
+        cameras,
+        poses,
+    }
+}
 
-    let exr = ExrContents::read(&out).unwrap();
-    let px = |name: &str, x: usize, y: usize| {
-        exr.channel(name)
-            .unwrap_or_else(|| panic!("{name} missing"))
-            .values[y * W as usize + x]
-    };
-    // Camera-frame ray through a pixel centre (principal point at the image centre).
-    let ray_of = |x: usize, y: usize| {
-        Vec3::new(
-            (x as f64 + 0.5 - 32.0) / F_PX,
-            (y as f64 + 0.5 - 24.0) / F_PX,
-            1.0,
-        )
-    };
-    // Pixel (32, 24): its centre is half a pixel right and down of the optical axis.
-    let (x, y) = (32usize, 24usize);
-    let ray = ray_of(x, y);
-    let z = px("ViewLayer.Depth.Z", x, y) as f64;
-    let euclid = HEIGHT_M * ray.length();
-    eprintln!("centre depth {z:.6} (planar {HEIGHT_M}, Euclidean {euclid:.6})");
-    assert!((z - HEIGHT_M).abs() < 1e-4, "depth {z}");
-    // Depth definition, measured 0.73 m off-axis where it tells them apart (≈ 11 % apart).
-    let (x2, y2) = (8usize, 24usize);
-    let ray2 = ray_of(x2, y2);
-    let z2 = px("ViewLayer.Depth.Z", x2, y2) as f64;
-    eprintln!(
-        "off-axis depth {z2:.6}: planar {HEIGHT_M}, Euclidean {:.6}",
-        HEIGHT_M * ray2.length()
-    );
-    // Measured: Cycles' Z pass is planar depth (distance along the optical axis), not the
-    // Euclidean ray length.
+fn rendered() -> &'static Rendered {
+    static ONCE: std::sync::OnceLock<Rendered> = std::sync::OnceLock::new();
+    ONCE.get_or_init(render_scene)
+}
+
+fn raw(r: &Rendered, camera: &str, frame: u32) -> (PathBuf, PathBuf) {
+    egogen::render::shard_plan::raw_frame_paths(&r.raw_dir, camera, frame)
+}
+
+fn plane<'a>(exr: &'a ExrContents, name: &str) -> &'a [f32] {
+    &exr.channel(name)
+        .unwrap_or_else(|| panic!("{name} missing"))
+        .values
+}
+
+/// Assembles and validates the dataset frame of a camera; returns its contents.
+fn frame(r: &Rendered, cam: usize, frame: u32) -> ExrContents {
+    let (name, target, render) = &r.cameras[cam];
+    let (rgb, gt) = raw(r, name, frame);
+    let image = assemble_frame(&rgb, &gt, render, target, r.poses[frame as usize]).unwrap();
+    let out = r.raw_dir.join(format!("{name}_{frame}.exr"));
+    image.write(&out).unwrap();
+    let res = target.resolution();
+    validate_frame(&out, res.width_px, res.height_px).unwrap()
+}
+
+#[test]
+fn blender_plays_the_vertex_cache_back_at_whole_and_sub_frames() {
+    let r = rendered();
+    let text = std::fs::read_to_string(&r.probe).unwrap();
+    let probe: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
+    assert_eq!(probe.len(), PROBE_FRAMES.len());
+    let s = SAMPLES_PER_FRAME as f64;
+    for entry in probe {
+        let t = entry["frame"].as_f64().unwrap();
+        let got: Vec<f64> = serde_json::from_value(entry["vertices"][0].clone()).unwrap();
+        // What Rust wrote, interpolated linearly between cache samples.
+        let k = t * s;
+        let (k0, a) = (k.floor() as usize, k - k.floor());
+        let k1 = (k0 + 1).min(r.cache.samples.len() - 1);
+        let mut max_err: f64 = 0.0;
+        for v in 0..r.cache.num_points() {
+            for c in 0..3 {
+                let want = (1.0 - a) * r.cache.samples[k0][v][c] as f64
+                    + a * r.cache.samples[k1][v][c] as f64;
+                max_err = max_err.max((got[3 * v + c] - want).abs());
+            }
+        }
+        eprintln!("frame {t}: max |Blender − cache| = {max_err:.2e} m");
+        assert!(max_err < 1e-5, "frame {t}: {max_err} m");
+    }
+    // And the cache's whole-frame samples are the posed body itself.
+    let shaped = r.model.shape(&r.motion.betas, &[]).unwrap();
+    let posed = shaped.pose(&r.motion.poses[3], r.motion.trans[3]).unwrap();
+    let sample = &r.cache.samples[3 * SAMPLES_PER_FRAME as usize];
+    let err = posed
+        .vertices
+        .iter()
+        .zip(sample)
+        .map(|(a, b)| (a.as_vec3() - glam::Vec3::from(*b)).length())
+        .fold(0.0f32, f32::max);
+    assert!(err < 1e-5, "{err}");
+}
+
+#[test]
+fn every_ground_truth_pixel_lies_on_its_ray() {
+    let r = rendered();
+    for (name, _, render) in &r.cameras {
+        let (_, gt) = raw(r, name, 2);
+        let exr = ExrContents::read(&gt).unwrap();
+        let res = render.resolution();
+        let alpha = plane(&exr, "ViewLayer.Combined.A");
+        let p = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("ViewLayer.Position.{c}")));
+        let cam_from_world = r.poses[2].inverse();
+        let (mut worst, mut hits) = (0.0f64, 0);
+        for y in 0..res.height_px as usize {
+            for x in 0..res.width_px as usize {
+                let i = y * res.width_px as usize + x;
+                let px = Pixel::new(x as f64, y as f64);
+                if alpha[i] < 0.5 || !render.renders(px) {
+                    continue;
+                }
+                hits += 1;
+                let world = Vec3::new(p[0][i] as f64, p[1][i] as f64, p[2][i] as f64);
+                let seen = cam_from_world.transform_point3(world).normalize();
+                let ray = render.pixel_to_ray(px).expect("rendered pixels have rays");
+                worst = worst.max(seen.angle_between(ray));
+            }
+        }
+        eprintln!("{name}: {hits} hits, worst angle to the pixel ray {worst:.2e} rad");
+        assert!(hits > 1000, "{name}: {hits}");
+        assert!(worst < 2e-4, "{name}: {worst} rad");
+    }
+}
+
+#[test]
+fn depth_normals_and_segmentation_match_the_geometry() {
+    let r = rendered();
+    let f = 2u32;
+    let exr = frame(r, 0, f);
+    let (_, gt) = raw(r, "pinhole", f);
+    let raw_gt = ExrContents::read(&gt).unwrap();
+    let depth = plane(&exr, "depth.Z");
+    let cycles_z = plane(&raw_gt, "ViewLayer.Depth.Z");
+    let ids = plane(&exr, "segmentation.id");
+    let n = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("normal.{c}")));
+    let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
+    let shaped = r.model.shape(&r.motion.betas, &[]).unwrap();
+    let body = shaped
+        .pose(&r.motion.poses[f as usize], r.motion.trans[f as usize])
+        .unwrap();
+    let (mut floor_px, mut body_px, mut body_near) = (0, 0, 0);
+    for i in 0..depth.len() {
+        if depth[i] > 0.0 {
+            // Planar depth agrees with Cycles' own Z pass.
+            assert!(
+                (depth[i] - cycles_z[i]).abs() < 1e-4,
+                "{} vs {}",
+                depth[i],
+                cycles_z[i]
+            );
+        }
+        let normal = Vec3::new(n[0][i] as f64, n[1][i] as f64, n[2][i] as f64);
+        if ids[i] as u32 == r.floor_id {
+            floor_px += 1;
+            // The floor faces up: towards the camera, −z in a camera looking down.
+            assert!(
+                (normal - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-3,
+                "{normal:?}"
+            );
+            assert!((depth[i] as f64 - CAMERA_HEIGHT_M).abs() < 1e-4);
+        }
+        if ids[i] as u32 == AGENT_ID_BASE {
+            body_px += 1;
+            let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
+            let nearest = body
+                .vertices
+                .iter()
+                .map(|v| v.distance(p))
+                .fold(f64::INFINITY, f64::min);
+            if nearest < 0.02 {
+                body_near += 1;
+            }
+        }
+    }
+    eprintln!("floor {floor_px} px, body {body_px} px ({body_near} within 2 cm of a vertex)");
     assert!(
-        (z2 - HEIGHT_M).abs() < 1e-4,
-        "Cycles' Z pass is planar depth: {z2}"
+        floor_px > 200 && body_px > 100,
+        "floor {floor_px}, body {body_px}"
     );
-    // The floor's normal (world frame) points up, and its object id is the floor's.
-    let n = Vec3::new(
-        px("ViewLayer.Normal.X", x, y) as f64,
-        px("ViewLayer.Normal.Y", x, y) as f64,
-        px("ViewLayer.Normal.Z", x, y) as f64,
+    assert_eq!(body_near, body_px, "body pixels off the posed body");
+}
+
+#[test]
+fn optical_flow_matches_the_camera_motion() {
+    let r = rendered();
+    let f = 2usize;
+    for cam in 0..r.cameras.len() {
+        let (name, target, _) = &r.cameras[cam];
+        let exr = frame(r, cam, f as u32);
+        let ids = plane(&exr, "segmentation.id");
+        let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
+        let fwd = ["X", "Y"].map(|c| plane(&exr, &format!("flow_forward.{c}")));
+        let bwd = ["X", "Y"].map(|c| plane(&exr, &format!("flow_backward.{c}")));
+        let pixel_in = |frame: usize, p: Vec3| {
+            target
+                .project_unbounded(r.poses[frame].inverse().transform_point3(p))
+                .unwrap()
+        };
+        let (mut worst, mut checked, mut mean_flow) = (0.0f64, 0, 0.0);
+        for i in 0..ids.len() {
+            let id = ids[i] as u32;
+            if id == 0 || id == AGENT_ID_BASE {
+                continue; // Only the static scene moves exactly as the camera says.
+            }
+            let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
+            let here = pixel_in(f, p);
+            let want_fwd = pixel_in(f + 1, p) - here;
+            let want_bwd = pixel_in(f - 1, p) - here;
+            let got_fwd = Pixel::new(fwd[0][i] as f64, fwd[1][i] as f64);
+            let got_bwd = Pixel::new(bwd[0][i] as f64, bwd[1][i] as f64);
+            worst = worst
+                .max((got_fwd - want_fwd).length())
+                .max((got_bwd - want_bwd).length());
+            mean_flow += want_fwd.length();
+            checked += 1;
+        }
+        mean_flow /= checked as f64;
+        eprintln!("{name}: {checked} px, mean flow {mean_flow:.3} px, worst error {worst:.2e} px");
+        assert!(checked > 200 && mean_flow > 0.1, "{checked} {mean_flow}");
+        assert!(worst < 0.02, "{name}: {worst} px");
+    }
+}
+
+#[test]
+fn fisheye_frames_follow_the_exact_model() {
+    let r = rendered();
+    let (_, target, render) = &r.cameras[1];
+    assert!(!render.is_identity());
+    let exr = frame(r, 1, 3);
+    let valid = plane(&exr, "valid.V");
+    let depth = plane(&exr, "depth.Z");
+    let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
+    let res = target.resolution();
+    let cam_from_world = r.poses[3].inverse();
+    let raw_res = render.resolution();
+    // Nearest-neighbour lookups: within ~0.71 raw pixels of the exact ray.
+    let RenderCamera::EquidistantFisheye { size_px, fov_rad } = *render else {
+        unreachable!()
+    };
+    let raw_px_rad = fov_rad / size_px as f64;
+    let (mut worst, mut count) = (0.0f64, 0);
+    for y in 0..res.height_px as usize {
+        for x in 0..res.width_px as usize {
+            let i = y * res.width_px as usize + x;
+            let ray = target.unproject(Pixel::new(x as f64, y as f64));
+            assert_eq!(valid[i] > 0.5, ray.is_some(), "valid mask at ({x}, {y})");
+            if depth[i] <= 0.0 {
+                continue;
+            }
+            let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
+            let seen = cam_from_world.transform_point3(p).normalize();
+            worst = worst.max(seen.angle_between(ray.unwrap()) / raw_px_rad);
+            count += 1;
+        }
+    }
+    eprintln!(
+        "fisheye {}×{} from a {}×{} equidistant render: {count} px, worst {worst:.3} raw px",
+        res.width_px, res.height_px, raw_res.width_px, raw_res.height_px
     );
-    assert!((n - Vec3::Z).length() < 1e-3, "normal {n:?}");
-    assert_eq!(px("ViewLayer.IndexOB.X", x, y) as u32, floor_id);
+    assert!(count > 1000);
+    assert!(worst < 0.75, "{worst} raw pixels");
 }

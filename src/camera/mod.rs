@@ -136,6 +136,24 @@ impl Camera {
         }
     }
 
+    /// Pixel of a camera-frame point ignoring the image border and mask (flow targets may
+    /// leave the image); `None` only where the model itself is undefined (behind a pinhole,
+    /// beyond a fisheye's `max θ`).
+    pub fn project_unbounded(&self, p: Vec3) -> Option<Pixel> {
+        match self {
+            Camera::Pinhole(m) => {
+                let [fx, fy, cx, cy] = m.params();
+                (p.z > 0.0).then(|| Pixel::new(fx * p.x / p.z + cx, fy * p.y / p.z + cy))
+            }
+            Camera::Fisheye624(m) => {
+                (theta_of(p) <= CameraModel::max_theta_rad(m)).then(|| m.project_unchecked(p))
+            }
+            Camera::KannalaBrandt4(m) => {
+                (theta_of(p) <= CameraModel::max_theta_rad(m)).then(|| m.project_unchecked(p))
+            }
+        }
+    }
+
     fn as_model(&self) -> &dyn CameraModelDyn {
         match self {
             Camera::Pinhole(m) => m,

@@ -1,7 +1,10 @@
 //! From egogen cameras (OpenCV frame, pinhole intrinsics in pixels) to Blender camera
 //! parameters (matrix_world in Blender's camera axes, lens in mm, shift).
 
+use glam::DQuat;
+
 use crate::math::{Affine3, Mat3, Vec3};
+use crate::render::protocol::CameraKey;
 
 /// Blender's camera axes expressed in the OpenCV camera frame: x right, y up, z backwards
 /// (`opencv_from_blender = diag(1, −1, −1)`).
@@ -36,4 +39,25 @@ pub fn blender_lens(
     let shift_x = -(cx - w / 2.0) / side;
     let shift_y = (cy - h / 2.0) / side;
     (focal_mm, sensor, shift_x, shift_y)
+}
+
+/// Pose keys for Blender from OpenCV `world_from_cam` poses at (sub)frames, quaternion signs
+/// kept continuous so Blender's linear interpolation takes the short way.
+pub fn camera_keys(poses: &[(f64, Affine3)]) -> Vec<CameraKey> {
+    let mut keys: Vec<CameraKey> = Vec::with_capacity(poses.len());
+    let mut last: Option<DQuat> = None;
+    for &(frame, world_from_cam) in poses {
+        let blender = world_from_blender_cam(world_from_cam);
+        let mut q = DQuat::from_mat3(&blender.matrix3).normalize();
+        if last.is_some_and(|l| l.dot(q) < 0.0) {
+            q = -q;
+        }
+        last = Some(q);
+        keys.push(CameraKey {
+            frame,
+            location: blender.translation.to_array(),
+            rotation_wxyz: [q.w, q.x, q.y, q.z],
+        });
+    }
+    keys
 }

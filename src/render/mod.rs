@@ -3,9 +3,16 @@
 //! protocol of shard specs. `render` knows nothing of bodies, motion or policies.
 
 pub mod blender_runtime;
+pub mod body_cache;
 pub mod camera_setup;
+pub mod frame_file;
 pub mod protocol;
+pub mod render_camera;
 pub mod shard;
+pub mod shard_plan;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
-pub use protocol::{ShardCamera, ShardFrame, ShardSpec};
+pub use protocol::{
+    BodyProbe, CameraKey, PointLight, ShardBody, ShardCamera, ShardFrame, ShardLens, ShardLighting,
+    ShardRgb, ShardSpec,
+};

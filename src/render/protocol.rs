@@ -1,35 +1,118 @@
 //! The shard spec: plain serde messages Rust writes and `blender_scripts/render_shard.py` reads.
-//! All geometry is final here — Blender receives camera matrices in its own convention and
-//! lens numbers in its own units, and computes nothing.
+//! All geometry is final here — Blender receives camera poses in its own axes, lens numbers in
+//! its own units and body vertices as caches, and computes nothing.
 
 use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-/// One camera of a shard with its frames.
+/// How Blender's camera images: either the rig camera itself (a pinhole) or the wider ideal
+/// camera that egogen remaps to a distorted model afterwards.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ShardCamera {
-    pub name: String,
-    pub width_px: u32,
-    pub height_px: u32,
-    /// Blender lens: focal length (mm) for a 36 mm wide sensor fitted horizontally.
-    pub focal_mm: f64,
-    pub sensor_width_mm: f64,
-    /// Blender lens shift, in units of the image width.
-    pub shift_x: f64,
-    pub shift_y: f64,
-    pub frames: Vec<ShardFrame>,
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum ShardLens {
+    /// Perspective: focal length (mm) for a sensor fitted horizontally, shift in units of the
+    /// larger image side.
+    Perspective {
+        width_px: u32,
+        height_px: u32,
+        focal_mm: f64,
+        sensor_width_mm: f64,
+        shift_x: f64,
+        shift_y: f64,
+    },
+    /// Cycles' equidistant fisheye: square image, `fov_rad` across its width.
+    EquidistantFisheye { size_px: u32, fov_rad: f64 },
 }
 
-/// One frame of a camera: Blender's `matrix_world` (row-major 4×4; Blender camera axes: x right,
-/// y up, looking along −z) and the output file.
+/// A camera pose key at a (sub)frame: Blender `location` and `rotation_quaternion` (w, x, y, z)
+/// of the camera object (Blender camera axes: x right, y up, looking along −z). Keys are
+/// interpolated linearly.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraKey {
+    pub frame: f64,
+    pub location: [f64; 3],
+    pub rotation_wxyz: [f64; 4],
+}
+
+/// One frame of a camera and its two raw outputs.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShardFrame {
     pub frame: u32,
-    pub matrix_world: [[f64; 4]; 4],
-    pub output_exr: PathBuf,
+    /// Blurred colour (Combined pass).
+    pub rgb_exr: PathBuf,
+    /// Unblurred ground truth (Position, Normal, IndexOB, Vector, Depth).
+    pub ground_truth_exr: PathBuf,
+}
+
+/// One camera of a shard with its pose keys and frames.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardCamera {
+    pub name: String,
+    pub lens: ShardLens,
+    /// Pose keys covering every rendered frame, its neighbours (motion vectors) and the
+    /// shutter interval.
+    pub keys: Vec<CameraKey>,
+    pub frames: Vec<ShardFrame>,
+}
+
+/// A body: topology (`faces_npy`, int32 F×3) and a PC2 vertex cache. Cache sample `k` is the
+/// body at scene frame `cache_frame_start + k / samples_per_frame`.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardBody {
+    pub name: String,
+    /// Segmentation id (object pass index).
+    pub pass_index: u32,
+    pub faces_npy: PathBuf,
+    pub pc2: PathBuf,
+    pub cache_frame_start: f64,
+    pub samples_per_frame: u32,
+    /// Cycles deformation motion steps (each step doubles the time samples minus one).
+    pub motion_steps: u32,
+    pub color_rgba: [f64; 4],
+}
+
+/// Colour render settings.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardRgb {
+    pub samples: u32,
+    /// 0 turns adaptive sampling off.
+    pub adaptive_threshold: f64,
+    pub denoise: bool,
+    /// Shutter open time in frames, centred on the frame; 0 turns motion blur off.
+    pub shutter_frames: f64,
+    pub seed: u32,
+}
+
+/// A point light.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PointLight {
+    pub position: [f64; 3],
+    pub watts: f64,
+}
+
+/// Lights egogen adds to the scene.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardLighting {
+    /// Uniform world (background) colour.
+    pub world_rgb: [f64; 3],
+    pub point_lights: Vec<PointLight>,
+}
+
+/// Asks the worker to write the evaluated body vertices at some (sub)frames as JSON
+/// (`[{frame, vertices: [[x, y, z, …] per body]}]`) — how tests check the cache read-back.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BodyProbe {
+    pub frames: Vec<f64>,
+    pub output_json: PathBuf,
 }
 
 /// A shard: one Blender process renders all of it.
@@ -40,7 +123,20 @@ pub struct ShardSpec {
     pub scene_glb: PathBuf,
     /// Object name → segmentation id (Blender's object pass index; 0 = none).
     pub object_ids: Vec<(String, u32)>,
-    /// Cycles samples per pixel.
-    pub samples: u32,
+    /// Scene frame rate as Blender stores it: `fps / fps_base`.
+    pub fps: u32,
+    pub fps_base: f64,
+    pub bodies: Vec<ShardBody>,
+    pub lighting: ShardLighting,
+    pub rgb: ShardRgb,
     pub cameras: Vec<ShardCamera>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub body_probe: Option<BodyProbe>,
+}
+
+impl ShardSpec {
+    /// Number of files the worker writes.
+    pub fn num_outputs(&self) -> usize {
+        self.cameras.iter().map(|c| 2 * c.frames.len()).sum()
+    }
 }

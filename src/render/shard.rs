@@ -70,7 +70,7 @@ pub fn render_shard(
             blender: runtime.path.clone(),
             status: e.to_string(),
             done: 0,
-            total: spec.cameras.iter().map(|c| c.frames.len()).sum(),
+            total: spec.num_outputs(),
             stderr_tail: String::new(),
         })?;
     let stdout = String::from_utf8_lossy(&output.stdout);
@@ -79,7 +79,7 @@ pub fn render_shard(
         .filter_map(|l| l.strip_prefix("EGOGEN_DONE "))
         .map(PathBuf::from)
         .collect();
-    let total = spec.cameras.iter().map(|c| c.frames.len()).sum();
+    let total = spec.num_outputs();
     if !output.status.success() || done.len() != total {
         let stderr = String::from_utf8_lossy(&output.stderr);
         let lines: Vec<&str> = stderr.lines().collect();

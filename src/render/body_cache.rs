@@ -1,0 +1,192 @@
+//! Bodies for Blender: topology once (`faces.npy`, int32 F×3) and a PC2 point cache of posed
+//! vertices with sub-frame samples, which Blender's Mesh Cache modifier plays back so Cycles'
+//! deformation blur sees the real motion inside the shutter interval.
+//!
+//! PC2 layout (little endian): `"POINTCACHE2\0"`, i32 version 1, i32 points, f32 start frame,
+//! f32 sample rate, i32 samples, then `samples × points × 3` f32. Blender ignores the header's
+//! start and rate; the modifier's `frame_start`/`frame_scale` place the samples in time, which is
+//! what [`crate::render::ShardBody`] carries.
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+
+use npyz::WriterBuilder;
+
+use crate::body::{BodyModel, PoseError};
+use crate::math::Vec3;
+use crate::motion::resample::resample;
+use crate::motion::MotionSequence;
+
+const PC2_MAGIC: &[u8; 12] = b"POINTCACHE2\0";
+
+/// A cache file that could not be written or read.
+#[derive(Debug, thiserror::Error)]
+pub enum CacheError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}: not a PC2 point cache: {reason}")]
+    Format { path: PathBuf, reason: String },
+    #[error("posing the body for its vertex cache: {0}")]
+    Pose(#[from] PoseError),
+}
+
+/// A point cache in memory.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointCache {
+    pub start_frame: f32,
+    pub sample_rate: f32,
+    /// `samples[k][v]`.
+    pub samples: Vec<Vec<[f32; 3]>>,
+}
+
+impl PointCache {
+    pub fn num_points(&self) -> usize {
+        self.samples.first().map_or(0, Vec::len)
+    }
+
+    /// Writes the cache atomically (temporary name, then rename).
+    pub fn write(&self, path: &Path) -> Result<(), CacheError> {
+        let io = |source| CacheError::Io {
+            path: path.into(),
+            source,
+        };
+        let n = self.num_points();
+        let mut bytes = Vec::with_capacity(32 + self.samples.len() * n * 12);
+        bytes.extend_from_slice(PC2_MAGIC);
+        bytes.extend_from_slice(&1i32.to_le_bytes());
+        bytes.extend_from_slice(&(n as i32).to_le_bytes());
+        bytes.extend_from_slice(&self.start_frame.to_le_bytes());
+        bytes.extend_from_slice(&self.sample_rate.to_le_bytes());
+        bytes.extend_from_slice(&(self.samples.len() as i32).to_le_bytes());
+        for sample in &self.samples {
+            assert_eq!(sample.len(), n, "every sample has the same points");
+            for p in sample {
+                for c in p {
+                    bytes.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+        }
+        write_atomically(path, &bytes).map_err(io)
+    }
+
+    /// Reads a PC2 file, checking its header against its size.
+    pub fn read(path: &Path) -> Result<Self, CacheError> {
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|mut f| f.read_to_end(&mut bytes))
+            .map_err(|source| CacheError::Io {
+                path: path.into(),
+                source,
+            })?;
+        let bad = |reason: String| CacheError::Format {
+            path: path.into(),
+            reason,
+        };
+        if bytes.len() < 32 || &bytes[..12] != PC2_MAGIC {
+            return Err(bad("missing the POINTCACHE2 signature".into()));
+        }
+        let i32_at = |o: usize| i32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+        let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+        let (points, samples) = (i32_at(16), i32_at(28));
+        if points < 0 || samples < 0 {
+            return Err(bad(format!("{points} points, {samples} samples")));
+        }
+        let (points, samples) = (points as usize, samples as usize);
+        if bytes.len() != 32 + points * samples * 12 {
+            return Err(bad(format!(
+                "header says {samples} samples of {points} points ({} bytes) but the file has {} bytes",
+                32 + points * samples * 12,
+                bytes.len()
+            )));
+        }
+        let samples = (0..samples)
+            .map(|k| {
+                (0..points)
+                    .map(|v| {
+                        let o = 32 + (k * points + v) * 12;
+                        [f32_at(o), f32_at(o + 4), f32_at(o + 8)]
+                    })
+                    .collect()
+            })
+            .collect();
+        Ok(Self {
+            start_frame: f32_at(20),
+            sample_rate: f32_at(24),
+            samples,
+        })
+    }
+}
+
+/// Writes `bytes` to `<path>.partial` and renames it into place.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = PathBuf::from(format!("{}.partial", path.display()));
+    let result = std::fs::File::create(&tmp).and_then(|mut f| {
+        f.write_all(bytes)?;
+        f.sync_all()
+    });
+    match result {
+        Ok(()) => std::fs::rename(&tmp, path),
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e)
+        }
+    }
+}
+
+/// Writes the triangle list as an int32 `.npy` of shape F×3 (atomically).
+pub fn write_faces_npy(path: &Path, faces: &[[u32; 3]]) -> Result<(), CacheError> {
+    let io = |source| CacheError::Io {
+        path: path.into(),
+        source,
+    };
+    let mut bytes = Vec::new();
+    {
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(&[faces.len() as u64, 3])
+            .writer(&mut bytes)
+            .begin_nd()
+            .map_err(io)?;
+        for f in faces {
+            for &i in f {
+                w.push(&(i as i32)).map_err(io)?;
+            }
+        }
+        w.finish().map_err(io)?;
+    }
+    write_atomically(path, &bytes).map_err(io)
+}
+
+/// Posed vertices of a motion at `samples_per_frame` evenly spaced times per frame, from frame
+/// 0 to the last frame (rotations slerped, translation lerped between frames): sample `k` is
+/// the body at frame `k / samples_per_frame`.
+pub fn body_cache(
+    model: &BodyModel,
+    motion: &MotionSequence,
+    samples_per_frame: u32,
+) -> Result<PointCache, CacheError> {
+    let samples_per_frame = samples_per_frame.max(1);
+    let dense = resample(motion, motion.frame_rate_hz * samples_per_frame as f64);
+    let shaped = model.shape(&motion.betas, &[])?;
+    let samples = dense
+        .poses
+        .iter()
+        .zip(&dense.trans)
+        .map(|(pose, &t)| {
+            let posed = shaped.pose(pose, t)?;
+            Ok(posed.vertices.iter().map(|v| to_f32(*v)).collect())
+        })
+        .collect::<Result<Vec<Vec<[f32; 3]>>, CacheError>>()?;
+    Ok(PointCache {
+        start_frame: 0.0,
+        sample_rate: 1.0 / samples_per_frame as f32,
+        samples,
+    })
+}
+
+fn to_f32(v: Vec3) -> [f32; 3] {
+    [v.x as f32, v.y as f32, v.z as f32]
+}

@@ -1,0 +1,188 @@
+//! The ideal camera Blender renders for a rig camera. A square-pixel pinhole is rendered as
+//! itself; every distorted model (Fisheye624, Kannala-Brandt) is rendered by Cycles'
+//! equidistant fisheye, covering the model's field of view at least at the model's own angular
+//! resolution, and remapped to the exact model in Rust ([`crate::render::remap`]).
+//!
+//! Pixel convention as in [`crate::camera`]: OpenCV, centre of the top-left pixel at (0, 0).
+//! Cycles' equidistant fisheye (measured with the position pass, `tests/render_passes.rs`):
+//! `θ = ρ / f` with `f = size / fov` pixels per radian, `ρ` the distance from the image centre
+//! `((size − 1) / 2, (size − 1) / 2)`, azimuth as in the image (x right, y down).
+
+use crate::camera::{Camera, CameraModel, Pixel, Resolution};
+use crate::math::{Real, Vec3};
+use crate::render::camera_setup::blender_lens;
+use crate::render::protocol::ShardLens;
+
+/// Extra angle rendered beyond the model's `max θ`, in raw pixels (room for bilinear lookups).
+const FOV_MARGIN_PX: Real = 2.0;
+
+/// What Blender renders for one rig camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RenderCamera {
+    /// Square pixels, OpenCV intrinsics.
+    Perspective {
+        resolution: Resolution,
+        f_px: Real,
+        cx: Real,
+        cy: Real,
+    },
+    EquidistantFisheye {
+        size_px: u32,
+        fov_rad: Real,
+    },
+}
+
+impl RenderCamera {
+    /// The render for `target`; `oversample` scales the fisheye's pixels per radian over the
+    /// target's largest (1 = same angular resolution).
+    pub fn for_camera(target: &Camera, oversample: Real) -> Self {
+        if let Camera::Pinhole(p) = target {
+            let [fx, fy, cx, cy] = p.params();
+            if (fx - fy).abs() <= 1e-9 * fx {
+                return RenderCamera::Perspective {
+                    resolution: p.resolution(),
+                    f_px: fx,
+                    cx,
+                    cy,
+                };
+            }
+        }
+        let f = max_pixels_per_radian(target) * oversample;
+        let half = target.max_theta_rad().min(3.1) + FOV_MARGIN_PX / f;
+        let size_px = (2.0 * half * f).ceil() as u32;
+        RenderCamera::EquidistantFisheye {
+            size_px,
+            fov_rad: 2.0 * half,
+        }
+    }
+
+    /// Whether the rendered image is the target image itself (no remap).
+    pub fn is_identity(&self) -> bool {
+        matches!(self, RenderCamera::Perspective { .. })
+    }
+
+    pub fn resolution(&self) -> Resolution {
+        match *self {
+            RenderCamera::Perspective { resolution, .. } => resolution,
+            RenderCamera::EquidistantFisheye { size_px, .. } => Resolution {
+                width_px: size_px,
+                height_px: size_px,
+            },
+        }
+    }
+
+    /// Blender's lens for this camera.
+    pub fn lens(&self) -> ShardLens {
+        match *self {
+            RenderCamera::Perspective {
+                resolution,
+                f_px,
+                cx,
+                cy,
+            } => {
+                // Blender measures the principal point from the image corner.
+                let (focal_mm, sensor_width_mm, shift_x, shift_y) = blender_lens(
+                    resolution.width_px,
+                    resolution.height_px,
+                    f_px,
+                    cx + 0.5,
+                    cy + 0.5,
+                );
+                ShardLens::Perspective {
+                    width_px: resolution.width_px,
+                    height_px: resolution.height_px,
+                    focal_mm,
+                    sensor_width_mm,
+                    shift_x,
+                    shift_y,
+                }
+            }
+            RenderCamera::EquidistantFisheye { size_px, fov_rad } => {
+                ShardLens::EquidistantFisheye { size_px, fov_rad }
+            }
+        }
+    }
+
+    /// Whether Blender renders this pixel meaningfully: Cycles' equidistant fisheye leaves
+    /// pixels outside its image circle (`ρ > size / 2`) undefined.
+    pub fn renders(&self, px: Pixel) -> bool {
+        match *self {
+            RenderCamera::Perspective { .. } => true,
+            RenderCamera::EquidistantFisheye { size_px, .. } => {
+                let c = 0.5 * (size_px as Real - 1.0);
+                (px - Pixel::new(c, c)).length() <= 0.5 * size_px as Real
+            }
+        }
+    }
+
+    /// Unit ray (OpenCV camera frame) through a pixel, also beyond the rendered image (flow
+    /// targets may leave it); `None` only past the fisheye's θ = π.
+    pub fn pixel_to_ray(&self, px: Pixel) -> Option<Vec3> {
+        match *self {
+            RenderCamera::Perspective { f_px, cx, cy, .. } => {
+                Some(Vec3::new((px.x - cx) / f_px, (px.y - cy) / f_px, 1.0).normalize())
+            }
+            RenderCamera::EquidistantFisheye { size_px, fov_rad } => {
+                let c = 0.5 * (size_px as Real - 1.0);
+                let f = size_px as Real / fov_rad;
+                let d = px - Pixel::new(c, c);
+                let rho = d.length();
+                let theta = rho / f;
+                if theta > std::f64::consts::PI {
+                    return None;
+                }
+                if rho == 0.0 {
+                    return Some(Vec3::Z);
+                }
+                let s = theta.sin() / rho;
+                Some(Vec3::new(d.x * s, d.y * s, theta.cos()))
+            }
+        }
+    }
+
+    /// Pixel of a camera-frame direction (not bounded by the image).
+    pub fn ray_to_pixel(&self, ray: Vec3) -> Option<Pixel> {
+        match *self {
+            RenderCamera::Perspective { f_px, cx, cy, .. } => (ray.z > 0.0)
+                .then(|| Pixel::new(f_px * ray.x / ray.z + cx, f_px * ray.y / ray.z + cy)),
+            RenderCamera::EquidistantFisheye { size_px, fov_rad } => {
+                let c = 0.5 * (size_px as Real - 1.0);
+                let f = size_px as Real / fov_rad;
+                let r_xy = ray.x.hypot(ray.y);
+                let theta = r_xy.atan2(ray.z);
+                if r_xy == 0.0 {
+                    return (ray.z > 0.0).then(|| Pixel::new(c, c));
+                }
+                let rho = f * theta;
+                Some(Pixel::new(c + rho * ray.x / r_xy, c + rho * ray.y / r_xy))
+            }
+        }
+    }
+}
+
+/// Largest pixels-per-radian of a model over its valid field of view, radially and
+/// tangentially, sampled on 16 azimuths × 64 angles.
+fn max_pixels_per_radian(cam: &Camera) -> Real {
+    let max_theta = cam.max_theta_rad().min(3.1);
+    let d = 1e-4;
+    let mut best: Real = 0.0;
+    for a in 0..16 {
+        let phi = a as Real / 16.0 * std::f64::consts::TAU;
+        for t in 0..64 {
+            let theta = (t as Real + 0.5) / 64.0 * (max_theta - d);
+            let ray =
+                |th: Real, ph: Real| Vec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos());
+            let (Some(p), Some(pr), Some(pt)) = (
+                cam.project_unbounded(ray(theta, phi)),
+                cam.project_unbounded(ray(theta + d, phi)),
+                cam.project_unbounded(ray(theta, phi + d)),
+            ) else {
+                continue;
+            };
+            best = best
+                .max((pr - p).length() / d)
+                .max((pt - p).length() / (d * theta.sin()));
+        }
+    }
+    best
+}

@@ -1,0 +1,94 @@
+//! From a posed sequence to what one shard's Blender worker needs: camera pose keys at
+//! sub-frames around each rendered frame, raw output names, Blender's frame rate. Planning
+//! only; nothing here runs Blender.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+
+use glam::DQuat;
+
+use crate::math::Affine3;
+use crate::render::camera_setup::camera_keys;
+use crate::render::protocol::{ShardCamera, ShardFrame};
+use crate::render::render_camera::RenderCamera;
+
+/// Segmentation ids: scene objects are numbered from 1 (see `scene::ObjectId`); agent `k` is
+/// `AGENT_ID_BASE + k`.
+pub const AGENT_ID_BASE: u32 = 1000;
+
+/// Blender stores a frame rate as `fps / fps_base` with an integer `fps`.
+pub fn blender_fps(rate_hz: f64) -> (u32, f64) {
+    let fps = rate_hz.round().max(1.0) as u32;
+    (fps, fps as f64 / rate_hz)
+}
+
+/// The pose at a fractional frame, interpolated between per-frame poses (rotation slerp,
+/// translation lerp), held constant outside the sequence.
+pub fn pose_at(poses: &[Affine3], frame: f64) -> Affine3 {
+    let last = poses.len() - 1;
+    let t = frame.clamp(0.0, last as f64);
+    let i = (t.floor() as usize).min(last);
+    let a = t - i as f64;
+    if a == 0.0 || i == last {
+        return poses[i];
+    }
+    let (p, q) = (poses[i], poses[i + 1]);
+    let r = DQuat::from_mat3(&p.matrix3).slerp(DQuat::from_mat3(&q.matrix3), a);
+    Affine3 {
+        matrix3: glam::DMat3::from_quat(r),
+        translation: p.translation.lerp(q.translation, a),
+    }
+}
+
+/// Raw outputs of a frame under `raw_dir`.
+pub fn raw_frame_paths(raw_dir: &Path, camera: &str, frame: u32) -> (PathBuf, PathBuf) {
+    let dir = raw_dir.join(camera);
+    (
+        dir.join(format!("rgb_{frame:05}.exr")),
+        dir.join(format!("gt_{frame:05}.exr")),
+    )
+}
+
+/// A shard camera rendering `frames` of a sequence whose per-frame OpenCV poses are
+/// `world_from_cam`. Pose keys are placed every `1 / keys_per_frame` frames from one frame
+/// before to one after each rendered frame (the shutter interval and the motion vectors'
+/// neighbours), inside the sequence.
+pub fn shard_camera(
+    name: &str,
+    render: &RenderCamera,
+    world_from_cam: &[Affine3],
+    frames: &[u32],
+    keys_per_frame: u32,
+    raw_dir: &Path,
+) -> ShardCamera {
+    let s = keys_per_frame.max(1) as i64;
+    let last = (world_from_cam.len() as i64 - 1) * s;
+    let ticks: BTreeSet<i64> = frames
+        .iter()
+        .flat_map(|&f| (f as i64 - 1) * s..=(f as i64 + 1) * s)
+        .filter(|&k| (0..=last).contains(&k))
+        .collect();
+    let poses: Vec<(f64, Affine3)> = ticks
+        .iter()
+        .map(|&k| {
+            let t = k as f64 / s as f64;
+            (t, pose_at(world_from_cam, t))
+        })
+        .collect();
+    ShardCamera {
+        name: name.into(),
+        lens: render.lens(),
+        keys: camera_keys(&poses),
+        frames: frames
+            .iter()
+            .map(|&frame| {
+                let (rgb_exr, ground_truth_exr) = raw_frame_paths(raw_dir, name, frame);
+                ShardFrame {
+                    frame,
+                    rgb_exr,
+                    ground_truth_exr,
+                }
+            })
+            .collect(),
+    }
+}
