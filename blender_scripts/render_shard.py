@@ -110,7 +110,7 @@ def make_camera(scene, cam_spec):
         scene.render.resolution_x = p["size_px"]
         scene.render.resolution_y = p["size_px"]
     scene.render.resolution_percentage = 100
-    data.clip_start = 0.01
+    data.clip_start = cam_spec["clip_start_m"]
     data.clip_end = 1000.0
     cam = bpy.data.objects.new(cam_spec["name"], data)
     scene.collection.objects.link(cam)

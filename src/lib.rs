@@ -18,4 +18,5 @@ pub mod render;
 pub mod rig;
 pub mod scene;
 pub mod sensing;
+pub mod supervisor;
 pub mod synth;

@@ -1,7 +1,9 @@
-//! `egogen-run`: the pipeline — config in, sequence folder out.
+//! `egogen-run`: the pipeline — config in, dataset out.
 //!
-//! Today's stages: body model + motion (scripted walk or a motion file) → posed bodies, eye
-//! anchor (CPF) trajectory, meshes and a preview. Rendering joins as later stages land.
+//! Body model + motion (scripted walk or a motion file) → posed bodies, eye-anchor (CPF)
+//! trajectory, meshes and a preview; with a `[render]` section, the motion is placed in the
+//! scene and rendered by the rig's cameras through Blender workers into a dataset folder
+//! (`egogen::supervisor`). `egogen-run verify DATASET` re-checks a finished dataset.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -16,16 +18,42 @@ use egogen::motion::scripted::WalkCycle;
 use egogen::motion::MotionSequence;
 use egogen::synth::{track_body, write_sequence_dir};
 
-/// Generate an egocentric sequence from a config file.
+/// Generate an egocentric dataset from a config file.
 #[derive(Parser, Debug)]
-#[command(version, about)]
+#[command(version, about, args_conflicts_with_subcommands = true)]
 struct Args {
+    #[command(subcommand)]
+    command: Option<Command>,
     /// Run config (TOML), e.g. `configs/default.toml`.
-    config: PathBuf,
+    config: Option<PathBuf>,
+    /// Continue the interrupted run in `<output.dir>.partial` (same config only).
+    #[arg(long)]
+    resume: bool,
+    /// Camera rig to render with, overriding `render.rig`.
+    #[arg(long)]
+    rig: Option<PathBuf>,
+    /// Parallel Blender workers, overriding `supervisor.workers`.
+    #[arg(long)]
+    workers: Option<usize>,
+    /// Blender to use (Python with bpy 4.5, or a blender executable); else `EGOGEN_BLENDER`,
+    /// else the managed install.
+    #[arg(long)]
+    blender: Option<PathBuf>,
+}
+
+#[derive(clap::Subcommand, Debug)]
+enum Command {
+    /// Re-check a finished dataset against its manifest (sizes, checksums, frame files).
+    Verify { dataset: PathBuf },
 }
 
 fn main() -> ExitCode {
-    match run(Args::parse()) {
+    let args = Args::parse();
+    let result = match &args.command {
+        Some(Command::Verify { dataset }) => verify(dataset),
+        None => run(args),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -34,14 +62,40 @@ fn main() -> ExitCode {
     }
 }
 
+fn verify(dataset: &std::path::Path) -> Result<()> {
+    let report = egogen::supervisor::verify(dataset)?;
+    println!(
+        "{}: OK — {} files ({} frame files, {:.1} MB) match the manifest",
+        dataset.display(),
+        report.files,
+        report.frames,
+        report.bytes as f64 / 1e6
+    );
+    Ok(())
+}
+
 fn run(args: Args) -> Result<()> {
-    let raw = RawRun::load(&args.config)?;
-    let plan = resolve_run(raw, &args.config)?;
+    let Some(config) = args.config.clone() else {
+        anyhow::bail!("no config given: egogen-run CONFIG (e.g. configs/default.toml), or egogen-run verify DATASET");
+    };
+    let mut raw = RawRun::load(&config)?;
+    if let Some(rig) = &args.rig {
+        let rig = std::path::absolute(rig).context("resolving --rig")?;
+        raw.render.get_or_insert_with(Default::default).rig = Some(rig);
+    }
+    let mut plan = resolve_run(raw, &config)?;
+    if let Some(w) = args.workers {
+        if w == 0 {
+            anyhow::bail!("--workers: expected at least 1");
+        }
+        plan.supervisor.workers = w;
+    }
+    let args = (config, args.resume, args.blender);
     let model = BodyModel::load(&plan.body_model)?;
     if plan.betas.len() > model.num_betas() {
         anyhow::bail!(
             "config {}: key `body.betas`: {} betas given but the model {} has {}",
-            args.config.display(),
+            args.0.display(),
             plan.betas.len(),
             plan.body_model.display(),
             model.num_betas()
@@ -80,6 +134,27 @@ fn run(args: Args) -> Result<()> {
         plan.body_model.display(),
         model.num_vertices()
     );
+    if let Some(render) = &plan.render {
+        let summary = egogen::supervisor::run_pipeline(
+            &plan,
+            render,
+            &motion,
+            &model,
+            &args.0,
+            &egogen::supervisor::RunOptions {
+                resume: args.1,
+                blender: args.2.clone(),
+            },
+        )?;
+        eprintln!(
+            "egogen-run: wrote {} ({} frames, {} rendered now, {} files in the manifest)",
+            summary.dir.display(),
+            summary.frames,
+            summary.rendered_now,
+            summary.files
+        );
+        return Ok(());
+    }
     let track = track_body(&model, &motion)?;
     let mesh_frames: Vec<usize> = match plan.mesh_every_n_frames {
         0 => Vec::new(),

@@ -136,6 +136,49 @@ impl Camera {
         }
     }
 
+    /// The same camera on an image scaled by `scale` (as projectaria-tools rescales: focal
+    /// lengths times `scale`, `c' = scale·(c + 0.5) − 0.5`). Both image sides times `scale`
+    /// must be whole pixels.
+    pub fn scaled(&self, scale: Real) -> Result<Camera, CameraError> {
+        let res = CameraModel::resolution(self);
+        let side = |px: u32| {
+            let v = px as Real * scale;
+            (scale > 0.0 && (v - v.round()).abs() < 1e-6 && v.round() >= 1.0)
+                .then_some(v.round() as u32)
+        };
+        let (Some(width_px), Some(height_px)) = (side(res.width_px), side(res.height_px)) else {
+            return Err(CameraError::param(
+                "scale",
+                scale,
+                format!(
+                    "a factor that turns {}x{} into whole pixels",
+                    res.width_px, res.height_px
+                ),
+            ));
+        };
+        let new = Resolution {
+            width_px,
+            height_px,
+        };
+        let c = |v: Real| scale * (v + 0.5) - 0.5;
+        Ok(match self {
+            Camera::Pinhole(m) => {
+                let [fx, fy, cx, cy] = m.params();
+                Camera::Pinhole(Pinhole::new(scale * fx, scale * fy, c(cx), c(cy), new)?)
+            }
+            Camera::Fisheye624(m) => Camera::Fisheye624(m.rescaled(new, scale, DVec2::ZERO)?),
+            Camera::KannalaBrandt4(m) => {
+                let ([fx, fy, cx, cy], k) = m.params();
+                Camera::KannalaBrandt4(KannalaBrandt4::new(
+                    [scale * fx, scale * fy, c(cx), c(cy)],
+                    k,
+                    new,
+                    Some(CameraModel::max_theta_rad(m)),
+                )?)
+            }
+        })
+    }
+
     /// Pixel of a camera-frame point ignoring the image border and mask (flow targets may
     /// leave the image); `None` only where the model itself is undefined (behind a pinhole,
     /// beyond a fisheye's `max θ`).

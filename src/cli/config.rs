@@ -75,6 +75,66 @@ fn default_mesh_every() -> usize {
     10
 }
 
+/// `[scene]`: where the body walks.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawScene {
+    /// Scene file (GLB/glTF, OBJ, PLY; metres, z up). Default: the shipped apartment.
+    pub path: Option<PathBuf>,
+    /// Seed for placing the walk in the scene (default 0).
+    pub seed: Option<u64>,
+}
+
+/// `[render]`: which cameras render what, and how well.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawRender {
+    /// Camera rig JSON (or an Aria device calibration). Default `camera_rigs/aria_gen1.json`.
+    pub rig: Option<PathBuf>,
+    /// Cameras of the rig to render (default: all).
+    pub cameras: Option<Vec<String>>,
+    /// Scales every camera's image (e.g. 0.25 renders Aria RGB at 352×352); default 1.
+    pub resolution_scale: Option<f64>,
+    /// Render every n-th frame of the motion (default 1).
+    pub every_n_frames: Option<usize>,
+    /// Cycles samples per pixel of the colour image (default 16).
+    pub samples: Option<u32>,
+    /// Cycles adaptive sampling noise threshold; 0 = off (default).
+    pub adaptive_threshold: Option<f64>,
+    /// OpenImageDenoise on the colour image (default false).
+    pub denoise: Option<bool>,
+    /// Shutter open time in frames, centred on the frame; 0 = no motion blur (default 0.5).
+    pub shutter_frames: Option<f64>,
+    /// Body vertex-cache samples per frame (default 4).
+    pub cache_samples_per_frame: Option<u32>,
+    /// Frames per shard (one Blender process; default 20).
+    pub frames_per_shard: Option<usize>,
+    /// Near clipping distance of head cameras, keeping the wearer's own head out (default 0.12 m).
+    pub near_clip_m: Option<f64>,
+}
+
+/// Where shards run.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Backend {
+    /// Blender processes on this machine.
+    Local,
+}
+
+/// `[supervisor]`: how shards are run.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSupervisor {
+    /// Default `local`.
+    pub backend: Option<Backend>,
+    /// Parallel Blender workers (default 1).
+    pub workers: Option<usize>,
+    /// A shard attempt running longer than this is killed (default 3600 s).
+    pub shard_timeout_s: Option<f64>,
+    /// Failed shard attempts retried before the run fails (default 2).
+    pub retries: Option<u32>,
+}
+
 /// The whole run config, as written.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -82,6 +142,12 @@ pub struct RawRun {
     pub body: RawBody,
     pub motion: RawMotion,
     pub output: RawOutput,
+    #[serde(default)]
+    pub scene: RawScene,
+    /// Without `[render]`, the run writes the sequence only.
+    pub render: Option<RawRender>,
+    #[serde(default)]
+    pub supervisor: RawSupervisor,
 }
 
 impl RawRun {

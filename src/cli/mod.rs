@@ -7,4 +7,4 @@ pub mod config;
 pub mod resolve;
 
 pub use config::{ConfigError, RawRun};
-pub use resolve::{resolve_run, MotionPlan, RunPlan};
+pub use resolve::{resolve_run, MotionPlan, RenderPlan, RunPlan, SupervisorPlan};

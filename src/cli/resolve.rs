@@ -2,10 +2,39 @@
 
 use std::path::{Path, PathBuf};
 
-use super::config::{ConfigError, MotionSource, RawRun};
+use super::config::{Backend, ConfigError, MotionSource, RawRender, RawRun, RawSupervisor};
+use crate::rig::{Rig, RigCamera};
 
 /// Default body model, relative to the crate root.
 pub const DEFAULT_BODY_MODEL: &str = "assets/body/SMPLX_NEUTRAL.npz";
+/// Default scene, relative to the crate root.
+pub const DEFAULT_SCENE: &str = "assets/scenes/apartment.glb";
+/// Default rig, relative to the crate root.
+pub const DEFAULT_RIG: &str = "camera_rigs/aria_gen1.json";
+
+/// What to render, checked: the rig's chosen cameras already scaled.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderPlan {
+    pub rig: Rig,
+    pub cameras: Vec<RigCamera>,
+    pub every_n_frames: usize,
+    pub samples: u32,
+    pub adaptive_threshold: f64,
+    pub denoise: bool,
+    pub shutter_frames: f64,
+    pub cache_samples_per_frame: u32,
+    pub frames_per_shard: usize,
+    pub near_clip_m: f64,
+}
+
+/// How shards run, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SupervisorPlan {
+    pub backend: Backend,
+    pub workers: usize,
+    pub shard_timeout_s: f64,
+    pub retries: u32,
+}
 
 /// Where a run's motion comes from, checked.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,6 +57,10 @@ pub struct RunPlan {
     pub motion: MotionPlan,
     pub output_dir: PathBuf,
     pub mesh_every_n_frames: usize,
+    pub scene: PathBuf,
+    pub scene_seed: u64,
+    pub render: Option<RenderPlan>,
+    pub supervisor: SupervisorPlan,
 }
 
 /// Resolves paths against the config's folder and checks value ranges.
@@ -112,12 +145,157 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
             MotionPlan::File { path }
         }
     };
+    let scene = match raw.scene.path {
+        Some(p) => base.join(p),
+        None => crate_root().join(DEFAULT_SCENE),
+    };
+    if !scene.is_file() {
+        return Err(bad(
+            "scene.path",
+            format!("file {} not found", scene.display()),
+        ));
+    }
+    let render = raw
+        .render
+        .map(|r| resolve_render(r, base, config_path))
+        .transpose()?;
     Ok(RunPlan {
         body_model,
         betas: raw.body.betas,
         motion,
         output_dir: base.join(raw.output.dir),
         mesh_every_n_frames: raw.output.mesh_every_n_frames,
+        scene,
+        scene_seed: raw.scene.seed.unwrap_or(0),
+        render,
+        supervisor: resolve_supervisor(raw.supervisor, config_path)?,
+    })
+}
+
+fn resolve_render(
+    r: RawRender,
+    base: &Path,
+    config_path: &Path,
+) -> Result<RenderPlan, ConfigError> {
+    let bad = |key: &str, message: String| ConfigError::Value {
+        path: config_path.into(),
+        key: key.into(),
+        message,
+    };
+    let rig_path = match r.rig {
+        Some(p) => base.join(p),
+        None => crate_root().join(DEFAULT_RIG),
+    };
+    if !rig_path.is_file() {
+        return Err(bad(
+            "render.rig",
+            format!("file {} not found", rig_path.display()),
+        ));
+    }
+    let rig = Rig::load(&rig_path).map_err(|e| bad("render.rig", e.to_string()))?;
+    let names: Vec<String> = match r.cameras {
+        Some(names) if names.is_empty() => {
+            return Err(bad(
+                "render.cameras",
+                "empty list: name at least one camera".into(),
+            ))
+        }
+        Some(names) => names,
+        None => rig.camera_names().iter().map(|n| n.to_string()).collect(),
+    };
+    let scale = r.resolution_scale.unwrap_or(1.0);
+    if !(scale.is_finite() && scale > 0.0 && scale <= 4.0) {
+        return Err(bad(
+            "render.resolution_scale",
+            format!("expected a factor in (0, 4], found {scale}"),
+        ));
+    }
+    let mut cameras = Vec::with_capacity(names.len());
+    for name in &names {
+        let cam = rig
+            .camera(name)
+            .map_err(|e| bad("render.cameras", e.to_string()))?;
+        let model = cam
+            .model
+            .scaled(scale)
+            .map_err(|e| bad("render.resolution_scale", format!("camera `{name}`: {e}")))?;
+        cameras.push(RigCamera {
+            model,
+            ..cam.clone()
+        });
+    }
+    let positive_int = |key: &str, v: Option<usize>, default: usize| match v.unwrap_or(default) {
+        0 => Err(bad(key, "expected a whole number ≥ 1, found 0".into())),
+        n => Ok(n),
+    };
+    let every_n_frames = positive_int("render.every_n_frames", r.every_n_frames, 1)?;
+    let frames_per_shard = positive_int("render.frames_per_shard", r.frames_per_shard, 20)?;
+    let samples = positive_int("render.samples", r.samples.map(|s| s as usize), 16)? as u32;
+    let cache_samples_per_frame = positive_int(
+        "render.cache_samples_per_frame",
+        r.cache_samples_per_frame.map(|s| s as usize),
+        4,
+    )? as u32;
+    let shutter_frames = r.shutter_frames.unwrap_or(0.5);
+    if !(shutter_frames.is_finite() && (0.0..=1.0).contains(&shutter_frames)) {
+        return Err(bad(
+            "render.shutter_frames",
+            format!("expected a shutter time in frames within [0, 1], found {shutter_frames}"),
+        ));
+    }
+    let adaptive_threshold = r.adaptive_threshold.unwrap_or(0.0);
+    if !(adaptive_threshold.is_finite() && adaptive_threshold >= 0.0) {
+        return Err(bad(
+            "render.adaptive_threshold",
+            format!("expected a noise threshold ≥ 0 (0 = off), found {adaptive_threshold}"),
+        ));
+    }
+    let near_clip_m = r.near_clip_m.unwrap_or(0.12);
+    if !(near_clip_m.is_finite() && near_clip_m > 0.0 && near_clip_m < 10.0) {
+        return Err(bad(
+            "render.near_clip_m",
+            format!("expected a distance in (0, 10) m, found {near_clip_m}"),
+        ));
+    }
+    Ok(RenderPlan {
+        rig,
+        cameras,
+        every_n_frames,
+        samples,
+        adaptive_threshold,
+        denoise: r.denoise.unwrap_or(false),
+        shutter_frames,
+        cache_samples_per_frame,
+        frames_per_shard,
+        near_clip_m,
+    })
+}
+
+fn resolve_supervisor(s: RawSupervisor, config_path: &Path) -> Result<SupervisorPlan, ConfigError> {
+    let bad = |key: &str, message: String| ConfigError::Value {
+        path: config_path.into(),
+        key: key.into(),
+        message,
+    };
+    let workers = s.workers.unwrap_or(1);
+    if workers == 0 || workers > 256 {
+        return Err(bad(
+            "supervisor.workers",
+            format!("expected 1..=256 workers, found {workers}"),
+        ));
+    }
+    let shard_timeout_s = s.shard_timeout_s.unwrap_or(3600.0);
+    if !(shard_timeout_s.is_finite() && shard_timeout_s > 0.0) {
+        return Err(bad(
+            "supervisor.shard_timeout_s",
+            format!("expected a positive number of seconds, found {shard_timeout_s}"),
+        ));
+    }
+    Ok(SupervisorPlan {
+        backend: s.backend.unwrap_or(Backend::Local),
+        workers,
+        shard_timeout_s,
+        retries: s.retries.unwrap_or(2),
     })
 }
 

@@ -53,6 +53,8 @@ pub struct ShardFrame {
 pub struct ShardCamera {
     pub name: String,
     pub lens: ShardLens,
+    /// Near clipping distance (m); head cameras use it to keep the wearer's head out.
+    pub clip_start_m: f64,
     /// Pose keys covering every rendered frame, its neighbours (motion vectors) and the
     /// shutter interval.
     pub keys: Vec<CameraKey>,

@@ -27,20 +27,8 @@ pub fn render_script() -> PathBuf {
     crate::cli::resolve::crate_root().join("blender_scripts/render_shard.py")
 }
 
-/// Renders a shard; returns the EXR files Blender reported done, in order.
-pub fn render_shard(
-    runtime: &BlenderRuntime,
-    spec: &ShardSpec,
-    spec_path: &Path,
-) -> Result<Vec<PathBuf>, ShardError> {
-    let json = serde_json::to_vec_pretty(spec).map_err(|e| ShardError::Spec {
-        path: spec_path.into(),
-        message: e.to_string(),
-    })?;
-    std::fs::write(spec_path, json).map_err(|e| ShardError::Spec {
-        path: spec_path.into(),
-        message: e.to_string(),
-    })?;
+/// The command that runs the worker script on a spec with this Blender.
+pub fn worker_command(runtime: &BlenderRuntime, spec_path: &Path) -> Command {
     let script = render_script();
     let mut cmd = match runtime.kind {
         BlenderKind::PythonModule => {
@@ -63,16 +51,32 @@ pub fn render_shard(
             c
         }
     };
-    let output = cmd
-        .env("PYTHONNOUSERSITE", "1")
-        .output()
-        .map_err(|e| ShardError::Worker {
-            blender: runtime.path.clone(),
-            status: e.to_string(),
-            done: 0,
-            total: spec.num_outputs(),
-            stderr_tail: String::new(),
-        })?;
+    cmd.env("PYTHONNOUSERSITE", "1");
+    cmd
+}
+
+/// Renders a shard; returns the EXR files Blender reported done, in order.
+pub fn render_shard(
+    runtime: &BlenderRuntime,
+    spec: &ShardSpec,
+    spec_path: &Path,
+) -> Result<Vec<PathBuf>, ShardError> {
+    let json = serde_json::to_vec_pretty(spec).map_err(|e| ShardError::Spec {
+        path: spec_path.into(),
+        message: e.to_string(),
+    })?;
+    std::fs::write(spec_path, json).map_err(|e| ShardError::Spec {
+        path: spec_path.into(),
+        message: e.to_string(),
+    })?;
+    let mut cmd = worker_command(runtime, spec_path);
+    let output = cmd.output().map_err(|e| ShardError::Worker {
+        blender: runtime.path.clone(),
+        status: e.to_string(),
+        done: 0,
+        total: spec.num_outputs(),
+        stderr_tail: String::new(),
+    })?;
     let stdout = String::from_utf8_lossy(&output.stdout);
     let done: Vec<PathBuf> = stdout
         .lines()

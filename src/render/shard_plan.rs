@@ -78,6 +78,7 @@ pub fn shard_camera(
     ShardCamera {
         name: name.into(),
         lens: render.lens(),
+        clip_start_m: 0.01,
         keys: camera_keys(&poses),
         frames: frames
             .iter()

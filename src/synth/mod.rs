@@ -2,6 +2,7 @@
 //! sequence folder they are written to. (Scenes and the learned policy join here later.)
 
 pub mod body_track;
+pub mod placement;
 pub mod sequence_dir;
 
 pub use body_track::{track_body, BodyTrack, TrackFrame};

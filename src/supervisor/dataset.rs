@@ -1,0 +1,306 @@
+//! A rendered dataset on disk and the work that makes it: which frames of which camera,
+//! grouped into shards; the shard specs Blender receives; turning a shard's raw renders into
+//! validated frame files; per-camera annotations.
+//!
+//! Layout of a dataset folder (built in `<dir>.partial/`, renamed to `<dir>` when complete):
+//! - `sequence/` — the synthesized sequence (motion, CPF trajectory, meshes, preview).
+//! - `cameras/<camera>/frame_NNNNN.exr` — one frame file per camera and frame
+//!   (see [`crate::render::frame_file`]); `cameras/<camera>/annotations.json`.
+//! - `manifest.json` — every dataset file with size and SHA-256.
+//! - `work/` (raw renders, body caches, shard specs) and `logs/` (worker stderr per attempt)
+//!   are scratch; they are not part of the manifest.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use serde_json::json;
+
+use crate::camera::CameraModel;
+use crate::math::Affine3;
+use crate::motion::MotionSequence;
+use crate::render::frame_file::{assemble_frame, validate_frame, FrameImage};
+use crate::render::render_camera::RenderCamera;
+use crate::render::shard_plan::{raw_frame_paths, shard_camera, AGENT_ID_BASE};
+use crate::render::ShardSpec;
+use crate::rig::{Rig, RigCamera};
+use crate::synth::BodyTrack;
+
+/// A joint is occluded when the rendered surface at its pixel is nearer than this (m): joints
+/// lie inside the body, up to about this deep under its surface.
+pub const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
+
+/// One camera's share of the work.
+#[derive(Debug, Clone)]
+pub struct CameraWork {
+    pub camera: RigCamera,
+    pub render: RenderCamera,
+    /// OpenCV `world_from_cam` for every frame of the sequence.
+    pub world_from_cam: Vec<Affine3>,
+    /// Frames to render.
+    pub frames: Vec<u32>,
+}
+
+/// One Blender process's work: some frames of one camera.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Shard {
+    pub id: usize,
+    pub camera: usize,
+    pub frames: Vec<u32>,
+}
+
+/// Everything needed to render and finish a dataset.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    /// Where the dataset is built (`<dir>.partial`).
+    pub staging: PathBuf,
+    /// Everything of the shard spec but its cameras.
+    pub base_spec: ShardSpec,
+    pub cameras: Vec<CameraWork>,
+    pub keys_per_frame: u32,
+    pub frames_per_shard: usize,
+    pub near_clip_m: f64,
+}
+
+impl Dataset {
+    /// The frame file of a camera's frame.
+    pub fn frame_path(&self, camera: usize, frame: u32) -> PathBuf {
+        self.staging
+            .join("cameras")
+            .join(&self.cameras[camera].camera.name)
+            .join(format!("frame_{frame:05}.exr"))
+    }
+
+    pub fn raw_dir(&self) -> PathBuf {
+        self.staging.join("work/raw")
+    }
+
+    pub fn logs_dir(&self) -> PathBuf {
+        self.staging.join("logs")
+    }
+
+    /// Whether a frame is done: its file exists and validates.
+    pub fn frame_done(&self, camera: usize, frame: u32) -> bool {
+        let path = self.frame_path(camera, frame);
+        let res = self.cameras[camera].camera.model.resolution();
+        path.is_file() && validate_frame(&path, res.width_px, res.height_px).is_ok()
+    }
+
+    /// Shards covering the frames not done yet, `frames_per_shard` consecutive planned frames
+    /// of one camera each.
+    pub fn pending_shards(&self) -> Vec<Shard> {
+        let mut shards = Vec::new();
+        for (c, work) in self.cameras.iter().enumerate() {
+            for block in work.frames.chunks(self.frames_per_shard) {
+                let frames: Vec<u32> = block
+                    .iter()
+                    .copied()
+                    .filter(|&f| !self.frame_done(c, f))
+                    .collect();
+                if !frames.is_empty() {
+                    shards.push(Shard {
+                        id: shards.len(),
+                        camera: c,
+                        frames,
+                    });
+                }
+            }
+        }
+        shards
+    }
+
+    /// Total planned frames over all cameras.
+    pub fn total_frames(&self) -> usize {
+        self.cameras.iter().map(|c| c.frames.len()).sum()
+    }
+
+    /// The spec rendering `frames` of a shard's camera.
+    pub fn shard_spec(&self, camera: usize, frames: &[u32]) -> ShardSpec {
+        let work = &self.cameras[camera];
+        let mut cam = shard_camera(
+            &work.camera.name,
+            &work.render,
+            &work.world_from_cam,
+            frames,
+            self.keys_per_frame,
+            &self.raw_dir(),
+        );
+        cam.clip_start_m = self.near_clip_m;
+        ShardSpec {
+            cameras: vec![cam],
+            ..self.base_spec.clone()
+        }
+    }
+
+    /// Turns a frame's raw renders into its frame file: assembled, written under a temporary
+    /// name, validated, renamed; then the raw files are removed.
+    pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<PathBuf> {
+        let work = &self.cameras[camera];
+        let (rgb, gt) = raw_frame_paths(&self.raw_dir(), &work.camera.name, frame);
+        let image: FrameImage = assemble_frame(
+            &rgb,
+            &gt,
+            &work.render,
+            &work.camera.model,
+            work.world_from_cam[frame as usize],
+        )?;
+        let out = self.frame_path(camera, frame);
+        std::fs::create_dir_all(out.parent().unwrap())
+            .with_context(|| format!("creating {}", out.parent().unwrap().display()))?;
+        let tmp = out.with_extension("exr.tmp");
+        image.write(&tmp)?;
+        let res = work.camera.model.resolution();
+        validate_frame(&tmp, res.width_px, res.height_px)?;
+        std::fs::rename(&tmp, &out).with_context(|| format!("renaming to {}", out.display()))?;
+        let _ = std::fs::remove_file(rgb);
+        let _ = std::fs::remove_file(gt);
+        Ok(out)
+    }
+}
+
+/// Writes `cameras/<camera>/annotations.json` for every camera (OpenCV conventions).
+pub fn write_annotations(
+    dataset: &Dataset,
+    rig: &Rig,
+    motion: &MotionSequence,
+    track: &BodyTrack,
+    object_ids: &[(String, u32)],
+) -> Result<()> {
+    for (c, work) in dataset.cameras.iter().enumerate() {
+        let model_json = camera_json(rig, &work.camera)?;
+        let mut frames = Vec::with_capacity(work.frames.len());
+        for &f in &work.frames {
+            let path = dataset.frame_path(c, f);
+            let contents = validate_frame(
+                &path,
+                work.camera.model.resolution().width_px,
+                work.camera.model.resolution().height_px,
+            )?;
+            let depth = &contents.channel("depth.Z").unwrap().values;
+            let ids = &contents.channel("segmentation.id").unwrap().values;
+            frames.push(frame_annotation(work, f, motion, track, depth, ids));
+        }
+        let mut ids: Vec<serde_json::Value> = object_ids
+            .iter()
+            .map(|(n, id)| json!({"name": n, "id": id}))
+            .collect();
+        ids.push(json!({"name": "agent_0", "id": AGENT_ID_BASE}));
+        let doc = json!({
+            "egogen_annotations": 1,
+            "conventions": {
+                "world": "metres, z up",
+                "camera_frame": "OpenCV: x right, y down, z forward",
+                "pixels": "centre of the top-left pixel at (0, 0)",
+                "T_world_cam": "row-major 4x4 mapping camera-frame points to the world",
+                "depth": "planar: z of the surface point in the camera frame (m); 0 = no surface",
+                "joint_visibility": format!("visible | occluded (rendered surface > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view)"),
+                "bbox_xyxy": "tight box of the agent's segmentation pixels, inclusive pixel indices",
+            },
+            "camera": model_json,
+            "frame_rate_hz": motion.frame_rate_hz,
+            "segmentation_ids": ids,
+            "frames": frames,
+        });
+        let path = dataset
+            .staging
+            .join("cameras")
+            .join(&work.camera.name)
+            .join("annotations.json");
+        crate::render::body_cache::write_atomically(
+            &path,
+            serde_json::to_string_pretty(&doc)?.as_bytes(),
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
+    let one = Rig {
+        cameras: vec![camera.clone()],
+        ..rig.clone()
+    };
+    let mut value: serde_json::Value = serde_json::from_str(&one.to_json())?;
+    Ok(value["cameras"][0].take())
+}
+
+fn row_major(m: Affine3) -> [[f64; 4]; 4] {
+    crate::render::camera_setup::row_major(m)
+}
+
+fn frame_annotation(
+    work: &CameraWork,
+    f: u32,
+    motion: &MotionSequence,
+    track: &BodyTrack,
+    depth: &[f32],
+    ids: &[f32],
+) -> serde_json::Value {
+    let i = f as usize;
+    let res = work.camera.model.resolution();
+    let w = res.width_px as usize;
+    let world_from_cam = work.world_from_cam[i];
+    let cam_from_world = world_from_cam.inverse();
+    let joints = &track.frames[i].joints;
+    let mut joints_2d = Vec::with_capacity(joints.len());
+    let mut visibility = Vec::with_capacity(joints.len());
+    for j in joints {
+        let p = cam_from_world.transform_point3(*j);
+        match work.camera.model.project(p) {
+            Some(px) => {
+                let (x, y) = (px.x.round() as usize, px.y.round() as usize);
+                let d = depth[y.min(res.height_px as usize - 1) * w + x.min(w - 1)] as f64;
+                let occluded = d > 0.0 && d < p.z - JOINT_OCCLUSION_TOLERANCE_M;
+                joints_2d.push(Some([px.x, px.y]));
+                visibility.push(if occluded { "occluded" } else { "visible" });
+            }
+            None => {
+                joints_2d.push(None);
+                visibility.push("outside");
+            }
+        }
+    }
+    let bbox = bbox_of(ids, w, AGENT_ID_BASE);
+    let pose = &motion.poses[i];
+    json!({
+        "frame": f,
+        "time_s": f as f64 / motion.frame_rate_hz,
+        "file": format!("frame_{f:05}.exr"),
+        "T_world_cam": row_major(world_from_cam),
+        "agents": [{
+            "id": AGENT_ID_BASE,
+            "wearer": true,
+            "smplx": {
+                "betas": motion.betas,
+                "global_orient": &pose[0..3],
+                "body_pose": &pose[3..66],
+                "jaw_pose": &pose[66..69],
+                "leye_pose": &pose[69..72],
+                "reye_pose": &pose[72..75],
+                "left_hand_pose": &pose[75..120],
+                "right_hand_pose": &pose[120..165],
+                "transl": motion.trans[i].to_array(),
+            },
+            "joints_3d": joints.iter().map(|j| j.to_array()).collect::<Vec<_>>(),
+            "joints_2d": joints_2d,
+            "joint_visibility": visibility,
+            "bbox_xyxy": bbox,
+            // Distance to the nearest other agent; there is none in a single-agent sequence.
+            "interaction_distance_m": null,
+        }],
+    })
+}
+
+/// Inclusive pixel box of the pixels labelled `id`, if any.
+fn bbox_of(ids: &[f32], width: usize, id: u32) -> Option<[usize; 4]> {
+    let mut b: Option<[usize; 4]> = None;
+    for (i, &v) in ids.iter().enumerate() {
+        if v as u32 == id {
+            let (x, y) = (i % width, i / width);
+            b = Some(match b {
+                None => [x, y, x, y],
+                Some([x0, y0, x1, y1]) => [x0.min(x), y0.min(y), x1.max(x), y1.max(y)],
+            });
+        }
+    }
+    b
+}

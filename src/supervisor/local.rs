@@ -1,0 +1,333 @@
+//! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard,
+//! starts Blender on its spec, finishes frames as their raw files are reported, and retries a
+//! failed or timed-out attempt (on the frames still missing) up to the configured count; each
+//! attempt's stderr goes to `logs/`. Ctrl-C kills the workers and leaves every finished frame in
+//! place, so `--resume` continues.
+
+use std::collections::{BTreeSet, VecDeque};
+use std::process::Stdio;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use tokio::io::{AsyncBufReadExt, BufReader};
+use tokio::sync::watch;
+
+use super::dataset::{Dataset, Shard};
+use crate::render::shard::worker_command;
+use crate::render::shard_plan::raw_frame_paths;
+use crate::render::BlenderRuntime;
+
+/// Pool settings.
+#[derive(Debug, Clone, Copy)]
+pub struct PoolSettings {
+    pub workers: usize,
+    pub shard_timeout: Duration,
+    pub retries: u32,
+}
+
+/// One attempt at a shard.
+#[derive(Debug, Clone, Serialize)]
+pub struct Attempt {
+    pub attempt: u32,
+    pub frames: usize,
+    pub finished: usize,
+    /// `ok`, or why it failed.
+    pub outcome: String,
+    pub seconds: f64,
+    pub log: String,
+}
+
+/// What happened to a shard.
+#[derive(Debug, Clone, Serialize)]
+pub struct ShardReport {
+    pub shard: usize,
+    pub camera: String,
+    pub frames: Vec<u32>,
+    pub attempts: Vec<Attempt>,
+}
+
+/// What a pool run did.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoolReport {
+    pub shards: Vec<ShardReport>,
+    pub frames_finished: usize,
+    pub wall_seconds: f64,
+}
+
+struct Shared {
+    dataset: Arc<Dataset>,
+    runtime: BlenderRuntime,
+    settings: PoolSettings,
+    queue: Mutex<VecDeque<Shard>>,
+    reports: Mutex<Vec<ShardReport>>,
+    failed: Mutex<Option<String>>,
+    states: Mutex<Vec<String>>,
+    bar: ProgressBar,
+    stop: watch::Receiver<bool>,
+}
+
+/// Renders `shards` with a pool of local Blender workers; returns when all are done, one has
+/// failed past its retries, or Ctrl-C was pressed (both errors).
+pub fn run_local(
+    dataset: Arc<Dataset>,
+    runtime: BlenderRuntime,
+    shards: Vec<Shard>,
+    settings: PoolSettings,
+    already_done: usize,
+) -> Result<PoolReport> {
+    let rt = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .context("starting the worker pool")?;
+    rt.block_on(run_pool(dataset, runtime, shards, settings, already_done))
+}
+
+async fn run_pool(
+    dataset: Arc<Dataset>,
+    runtime: BlenderRuntime,
+    shards: Vec<Shard>,
+    settings: PoolSettings,
+    already_done: usize,
+) -> Result<PoolReport> {
+    let started = Instant::now();
+    let total = dataset.total_frames() as u64;
+    let bar = ProgressBar::new(total).with_style(
+        ProgressStyle::with_template(
+            "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
+        )
+        .context("progress template")?,
+    );
+    bar.set_position(already_done as u64);
+    let (stop_tx, stop_rx) = watch::channel(false);
+    let workers = settings.workers.min(shards.len()).max(1);
+    let shared = Arc::new(Shared {
+        dataset,
+        runtime,
+        settings,
+        queue: Mutex::new(shards.into()),
+        reports: Mutex::new(Vec::new()),
+        failed: Mutex::new(None),
+        states: Mutex::new(vec!["idle".into(); workers]),
+        bar: bar.clone(),
+        stop: stop_rx,
+    });
+    let interrupt = tokio::spawn(async move {
+        if tokio::signal::ctrl_c().await.is_ok() {
+            let _ = stop_tx.send(true);
+        }
+    });
+    let handles: Vec<_> = (0..workers)
+        .map(|w| tokio::spawn(worker(shared.clone(), w)))
+        .collect();
+    for h in handles {
+        h.await.context("worker task")?;
+    }
+    interrupt.abort();
+    bar.finish_and_clear();
+    let mut reports = std::mem::take(&mut *shared.reports.lock().unwrap());
+    reports.sort_by_key(|r| r.shard);
+    if *shared.stop.borrow() {
+        bail!("interrupted: finished frames are kept; rerun with --resume to continue");
+    }
+    if let Some(reason) = shared.failed.lock().unwrap().take() {
+        bail!("{reason}");
+    }
+    let frames_finished = reports
+        .iter()
+        .flat_map(|r| r.attempts.iter())
+        .map(|a| a.finished)
+        .sum();
+    Ok(PoolReport {
+        shards: reports,
+        frames_finished,
+        wall_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+fn set_state(shared: &Shared, w: usize, state: String) {
+    let mut states = shared.states.lock().unwrap();
+    states[w] = state;
+    let msg = states
+        .iter()
+        .enumerate()
+        .map(|(i, s)| format!("w{i}: {s}"))
+        .collect::<Vec<_>>()
+        .join(" | ");
+    shared.bar.set_message(msg);
+}
+
+async fn worker(shared: Arc<Shared>, w: usize) {
+    loop {
+        if *shared.stop.borrow() || shared.failed.lock().unwrap().is_some() {
+            break;
+        }
+        let Some(shard) = shared.queue.lock().unwrap().pop_front() else {
+            break;
+        };
+        let report = run_shard(&shared, w, &shard).await;
+        let failed =
+            report.attempts.last().is_some_and(|a| a.outcome != "ok") && !*shared.stop.borrow();
+        if failed {
+            let last = report.attempts.last().unwrap();
+            let mut f = shared.failed.lock().unwrap();
+            f.get_or_insert(format!(
+                "shard {} ({} frames {:?}) failed {} times; last: {} (log: {})",
+                report.shard,
+                report.camera,
+                report.frames,
+                report.attempts.len(),
+                last.outcome,
+                last.log
+            ));
+        }
+        shared.reports.lock().unwrap().push(report);
+    }
+    set_state(&shared, w, "done".into());
+}
+
+async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
+    let dataset = &shared.dataset;
+    let camera = dataset.cameras[shard.camera].camera.name.clone();
+    let mut report = ShardReport {
+        shard: shard.id,
+        camera: camera.clone(),
+        frames: shard.frames.clone(),
+        attempts: Vec::new(),
+    };
+    for attempt in 1..=shared.settings.retries + 1 {
+        let missing: Vec<u32> = shard
+            .frames
+            .iter()
+            .copied()
+            .filter(|&f| !dataset.frame_path(shard.camera, f).is_file())
+            .collect();
+        if missing.is_empty() {
+            break;
+        }
+        set_state(
+            shared,
+            w,
+            format!(
+                "shard {} {camera} ×{} (try {attempt})",
+                shard.id,
+                missing.len()
+            ),
+        );
+        let started = Instant::now();
+        let log = dataset
+            .logs_dir()
+            .join(format!("shard_{:04}_attempt_{attempt}.log", shard.id));
+        let (finished, outcome) = match attempt_shard(shared, shard.camera, &missing, &log).await {
+            Ok(n) => (n, "ok".to_string()),
+            Err((n, reason)) => (n, reason),
+        };
+        let ok = outcome == "ok";
+        report.attempts.push(Attempt {
+            attempt,
+            frames: missing.len(),
+            finished,
+            outcome,
+            seconds: started.elapsed().as_secs_f64(),
+            log: log.display().to_string(),
+        });
+        if ok || *shared.stop.borrow() {
+            break;
+        }
+    }
+    report
+}
+
+/// One Blender run over `frames`; returns frames finished, or (finished, reason).
+async fn attempt_shard(
+    shared: &Shared,
+    camera: usize,
+    frames: &[u32],
+    log: &std::path::Path,
+) -> std::result::Result<usize, (usize, String)> {
+    let dataset = shared.dataset.clone();
+    let fail = |n: usize, m: String| (n, m);
+    let spec = dataset.shard_spec(camera, frames);
+    let spec_path = log.with_extension("json");
+    let io = |e: std::io::Error| (0, format!("preparing the shard: {e}"));
+    std::fs::create_dir_all(dataset.logs_dir()).map_err(io)?;
+    std::fs::write(&spec_path, serde_json::to_vec_pretty(&spec).unwrap()).map_err(io)?;
+    let stderr = std::fs::File::create(log).map_err(io)?;
+    let mut cmd = tokio::process::Command::from(worker_command(&shared.runtime, &spec_path));
+    cmd.stdout(Stdio::piped())
+        .stderr(Stdio::from(stderr))
+        .stdin(Stdio::null())
+        .kill_on_drop(true);
+    let mut child = cmd.spawn().map_err(|e| {
+        (
+            0,
+            format!("starting {}: {e}", shared.runtime.path.display()),
+        )
+    })?;
+    let stdout = child.stdout.take().unwrap();
+    let mut lines = BufReader::new(stdout).lines();
+    let name = dataset.cameras[camera].camera.name.clone();
+    let raw_dir = dataset.raw_dir();
+    let mut reported: BTreeSet<std::path::PathBuf> = BTreeSet::new();
+    let mut finished = 0usize;
+    let mut stop = shared.stop.clone();
+    let deadline = tokio::time::sleep(shared.settings.shard_timeout);
+    tokio::pin!(deadline);
+    loop {
+        tokio::select! {
+            line = lines.next_line() => {
+                match line {
+                    Ok(Some(line)) => {
+                        let Some(path) = line.strip_prefix("EGOGEN_DONE ") else { continue };
+                        reported.insert(path.into());
+                        for &f in frames {
+                            let (rgb, gt) = raw_frame_paths(&raw_dir, &name, f);
+                            if reported.contains(&rgb) && reported.contains(&gt)
+                                && !dataset.frame_path(camera, f).is_file()
+                            {
+                                let ds = dataset.clone();
+                                let result = tokio::task::spawn_blocking(move || ds.finish_frame(camera, f))
+                                    .await
+                                    .map_err(|e| fail(finished, format!("finishing frame {f}: {e}")))?;
+                                result.map_err(|e| fail(finished, format!("frame {f}: {e:#}")))?;
+                                finished += 1;
+                                shared.bar.inc(1);
+                            }
+                        }
+                    }
+                    Ok(None) => break,
+                    Err(e) => return Err(fail(finished, format!("reading worker output: {e}"))),
+                }
+            }
+            _ = &mut deadline => {
+                let _ = child.kill().await;
+                return Err(fail(finished, format!("timed out after {:?}", shared.settings.shard_timeout)));
+            }
+            _ = stop.changed() => {
+                let _ = child.kill().await;
+                return Err(fail(finished, "interrupted".into()));
+            }
+        }
+    }
+    let status = child
+        .wait()
+        .await
+        .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
+    if !status.success() {
+        return Err(fail(finished, format!("Blender exited with {status}")));
+    }
+    let missing = frames
+        .iter()
+        .filter(|&&f| !dataset.frame_path(camera, f).is_file())
+        .count();
+    if missing > 0 {
+        return Err(fail(
+            finished,
+            format!("Blender exited cleanly but {missing} frames are missing"),
+        ));
+    }
+    Ok(finished)
+}

@@ -1,0 +1,202 @@
+//! The dataset manifest (`manifest.json`): every dataset file with its size and SHA-256, and
+//! `verify`, which re-checks a dataset against it (sizes, checksums, every frame file opens
+//! with all channels finite).
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use crate::inspect::ExrContents;
+use crate::render::frame_file::FRAME_CHANNELS;
+
+/// Folders of a dataset that are scratch, not data.
+pub const SCRATCH_DIRS: [&str; 2] = ["work", "logs"];
+pub const MANIFEST: &str = "manifest.json";
+
+/// One file.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ManifestEntry {
+    /// Relative to the dataset folder, `/`-separated.
+    pub path: String,
+    pub bytes: u64,
+    pub sha256: String,
+}
+
+/// The manifest.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Manifest {
+    pub egogen_manifest: u32,
+    pub files: Vec<ManifestEntry>,
+}
+
+/// SHA-256 of a file, lower-case hex.
+pub fn sha256_file(path: &Path) -> Result<String> {
+    let mut f = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let n = f
+            .read(&mut buf)
+            .with_context(|| format!("reading {}", path.display()))?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+    }
+    Ok(format!("{:x}", hasher.finalize()))
+}
+
+fn collect(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+    let mut entries: Vec<_> = std::fs::read_dir(dir.join(rel))
+        .with_context(|| format!("listing {}", dir.join(rel).display()))?
+        .collect::<std::io::Result<_>>()?;
+    entries.sort_by_key(|e| e.file_name());
+    for e in entries {
+        let r = rel.join(e.file_name());
+        if e.file_type()?.is_dir() {
+            if rel.as_os_str().is_empty() && SCRATCH_DIRS.iter().any(|s| e.file_name() == *s) {
+                continue;
+            }
+            collect(dir, &r, out)?;
+        } else if r != Path::new(MANIFEST) {
+            out.push(r);
+        }
+    }
+    Ok(())
+}
+
+/// Lists and hashes every dataset file under `dir` (scratch folders excluded).
+pub fn build_manifest(dir: &Path) -> Result<Manifest> {
+    let mut files = Vec::new();
+    collect(dir, Path::new(""), &mut files)?;
+    let files = files
+        .iter()
+        .map(|r| {
+            let p = dir.join(r);
+            Ok(ManifestEntry {
+                path: r
+                    .components()
+                    .map(|c| c.as_os_str().to_string_lossy())
+                    .collect::<Vec<_>>()
+                    .join("/"),
+                bytes: std::fs::metadata(&p)?.len(),
+                sha256: sha256_file(&p)?,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Manifest {
+        egogen_manifest: 1,
+        files,
+    })
+}
+
+/// Writes `manifest.json` atomically.
+pub fn write_manifest(dir: &Path) -> Result<Manifest> {
+    let manifest = build_manifest(dir)?;
+    let path = dir.join(MANIFEST);
+    crate::render::body_cache::write_atomically(
+        &path,
+        serde_json::to_string_pretty(&manifest)?.as_bytes(),
+    )
+    .with_context(|| format!("writing {}", path.display()))?;
+    Ok(manifest)
+}
+
+/// What `verify` checked.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct VerifyReport {
+    pub files: usize,
+    pub frames: usize,
+    pub bytes: u64,
+}
+
+/// Re-checks a dataset: every manifest entry exists with its size and checksum, no dataset
+/// file is missing from the manifest, every frame file has every channel and only finite values.
+pub fn verify(dir: &Path) -> Result<VerifyReport> {
+    let path = dir.join(MANIFEST);
+    let text = std::fs::read_to_string(&path).with_context(|| {
+        format!(
+            "{}: no manifest (is this an egogen dataset?)",
+            path.display()
+        )
+    })?;
+    let manifest: Manifest = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not an egogen manifest", path.display()))?;
+    let mut problems = Vec::new();
+    let mut frames = 0;
+    let mut bytes = 0;
+    for e in &manifest.files {
+        let p = dir.join(&e.path);
+        let Ok(meta) = std::fs::metadata(&p) else {
+            problems.push(format!("{}: missing", e.path));
+            continue;
+        };
+        if meta.len() != e.bytes {
+            problems.push(format!(
+                "{}: {} bytes, manifest says {}",
+                e.path,
+                meta.len(),
+                e.bytes
+            ));
+            continue;
+        }
+        bytes += e.bytes;
+        if sha256_file(&p)? != e.sha256 {
+            problems.push(format!("{}: checksum differs from the manifest", e.path));
+            continue;
+        }
+        if e.path.ends_with(".exr") && e.path.starts_with("cameras/") {
+            frames += 1;
+            match ExrContents::read(&p) {
+                Err(err) => problems.push(format!("{}: {err}", e.path)),
+                Ok(c) => {
+                    for ch in FRAME_CHANNELS {
+                        match c.channel(ch) {
+                            None => problems.push(format!("{}: channel {ch} missing", e.path)),
+                            Some(v) if v.values.iter().any(|x| !x.is_finite()) => {
+                                problems.push(format!("{}: channel {ch} not finite", e.path))
+                            }
+                            Some(_) => {}
+                        }
+                    }
+                }
+            }
+        }
+    }
+    let listed = build_manifest_paths(dir)?;
+    for p in listed {
+        if !manifest.files.iter().any(|e| e.path == p) {
+            problems.push(format!("{p}: not in the manifest"));
+        }
+    }
+    if !problems.is_empty() {
+        bail!(
+            "{}: {} problem(s):\n  {}",
+            dir.display(),
+            problems.len(),
+            problems.join("\n  ")
+        );
+    }
+    Ok(VerifyReport {
+        files: manifest.files.len(),
+        frames,
+        bytes,
+    })
+}
+
+fn build_manifest_paths(dir: &Path) -> Result<Vec<String>> {
+    let mut files = Vec::new();
+    collect(dir, Path::new(""), &mut files)?;
+    Ok(files
+        .iter()
+        .map(|r| {
+            r.components()
+                .map(|c| c.as_os_str().to_string_lossy())
+                .collect::<Vec<_>>()
+                .join("/")
+        })
+        .collect())
+}

@@ -1,0 +1,14 @@
+//! The supervisor: from a checked run plan to a finished dataset. Synthesizes the sequence,
+//! places it in the scene, plans shards (camera × frame block), runs them on a backend,
+//! finishes and validates frames, writes annotations and the manifest, and resumes an
+//! interrupted run where it stopped.
+
+pub mod dataset;
+pub mod local;
+pub mod manifest;
+pub mod pipeline;
+
+pub use dataset::{CameraWork, Dataset, Shard};
+pub use local::{run_local, PoolReport, PoolSettings};
+pub use manifest::{build_manifest, verify, write_manifest, Manifest, VerifyReport};
+pub use pipeline::{run_pipeline, RunOptions, RunSummary};

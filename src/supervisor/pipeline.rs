@@ -1,0 +1,279 @@
+//! `egogen-run` with a `[render]` section: the whole pipeline into a dataset folder, built in
+//! `<dir>.partial/` and renamed when complete. A `.partial` folder left by an interrupted run is
+//! continued by `--resume` (finished frames are kept, partial ones redone) as long as the config
+//! is byte-identical; otherwise nothing is touched.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{bail, Context, Result};
+use serde_json::json;
+
+use super::dataset::{write_annotations, CameraWork, Dataset};
+use super::local::{run_local, PoolSettings};
+use super::manifest::{sha256_file, write_manifest, MANIFEST};
+use crate::body::BodyModel;
+use crate::cli::resolve::{RenderPlan, RunPlan};
+use crate::motion::MotionSequence;
+use crate::render::body_cache::{body_cache, write_atomically, write_faces_npy};
+use crate::render::render_camera::RenderCamera;
+use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
+use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec};
+use crate::scene::{load_scene, walkable_map, WalkableSettings};
+use crate::synth::placement::place_motion;
+use crate::synth::{track_body, write_sequence_dir};
+
+/// Command-line choices that are not in the config.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    pub resume: bool,
+    /// `--blender`; else `EGOGEN_BLENDER`; else the managed install.
+    pub blender: Option<PathBuf>,
+}
+
+/// What a run produced.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    pub dir: PathBuf,
+    pub frames: usize,
+    pub rendered_now: usize,
+    pub files: usize,
+}
+
+fn is_non_empty_dir(p: &Path) -> bool {
+    std::fs::read_dir(p)
+        .map(|mut d| d.next().is_some())
+        .unwrap_or(false)
+}
+
+/// Runs the pipeline for a plan with a render section; `config_path` is hashed so that a
+/// resumed run is known to be the same run.
+pub fn run_pipeline(
+    plan: &RunPlan,
+    render: &RenderPlan,
+    motion: &MotionSequence,
+    model: &BodyModel,
+    config_path: &Path,
+    opts: &RunOptions,
+) -> Result<RunSummary> {
+    let dir = &plan.output_dir;
+    let staging = PathBuf::from(format!("{}.partial", dir.display()));
+    let config_sha = sha256_file(config_path)?;
+    if is_non_empty_dir(dir) {
+        if opts.resume && dir.join(MANIFEST).is_file() {
+            eprintln!("egogen-run: {} is already complete", dir.display());
+            let frames = render.cameras.len();
+            return Ok(RunSummary {
+                dir: dir.clone(),
+                frames,
+                rendered_now: 0,
+                files: 0,
+            });
+        }
+        bail!(
+            "output folder {} already exists and is not empty; choose another `output.dir` (nothing was written)",
+            dir.display()
+        );
+    }
+    let state_path = staging.join("run.json");
+    if staging.exists() {
+        if !opts.resume {
+            bail!(
+                "{} holds an interrupted run; rerun with --resume to continue it, or delete it (nothing was written)",
+                staging.display()
+            );
+        }
+        let state: serde_json::Value = std::fs::read_to_string(&state_path)
+            .ok()
+            .and_then(|t| serde_json::from_str(&t).ok())
+            .with_context(|| {
+                format!(
+                    "{}: missing or unreadable; cannot resume",
+                    state_path.display()
+                )
+            })?;
+        if state["config_sha256"] != json!(config_sha) {
+            bail!(
+                "{} was started from a different config than {}; resuming would mix two runs (nothing was touched)",
+                staging.display(),
+                config_path.display()
+            );
+        }
+        eprintln!("egogen-run: resuming {}", staging.display());
+    } else {
+        std::fs::create_dir_all(&staging)
+            .with_context(|| format!("creating {}", staging.display()))?;
+        write_atomically(
+            &state_path,
+            serde_json::to_string_pretty(&json!({
+                "config": config_path.display().to_string(),
+                "config_sha256": config_sha,
+            }))?
+            .as_bytes(),
+        )?;
+    }
+
+    // The scene and where the motion happens in it.
+    let scene = load_scene(&plan.scene, None)?;
+    let map = walkable_map(&scene, &plan.scene, WalkableSettings::default())?;
+    let (motion, _) = place_motion(model, motion, &map, plan.scene_seed)
+        .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
+    let track = track_body(model, &motion)?;
+
+    let sequence = staging.join("sequence");
+    if !sequence.exists() {
+        let shaped = model.shape(&motion.betas, &[])?;
+        let meshes = match plan.mesh_every_n_frames {
+            0 => Vec::new(),
+            n => (0..motion.len())
+                .step_by(n)
+                .map(|i| Ok((i, shaped.pose(&motion.poses[i], motion.trans[i])?)))
+                .collect::<Result<Vec<_>>>()?,
+        };
+        write_sequence_dir(&sequence, model, &motion, &track, &meshes)?;
+    }
+
+    // Inputs Blender reads, rewritten identically on every (re)start.
+    let work = staging.join("work");
+    std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
+    let pc2 = work.join("agent_0.pc2");
+    let faces = work.join("agent_0_faces.npy");
+    body_cache(model, &motion, render.cache_samples_per_frame)?.write(&pc2)?;
+    write_faces_npy(&faces, &model.faces)?;
+
+    let frames: Vec<u32> = (0..motion.len() as u32)
+        .step_by(render.every_n_frames)
+        .collect();
+    let cameras: Vec<CameraWork> = render
+        .cameras
+        .iter()
+        .map(|cam| CameraWork {
+            camera: cam.clone(),
+            render: RenderCamera::for_camera(&cam.model, 1.0),
+            world_from_cam: track
+                .frames
+                .iter()
+                .map(|f| cam.world_from_cam(f.world_from_cpf))
+                .collect(),
+            frames: frames.clone(),
+        })
+        .collect();
+    let object_ids: Vec<(String, u32)> = scene
+        .objects
+        .iter()
+        .map(|o| (o.name.clone(), o.id.0))
+        .collect();
+    let (fps, fps_base) = blender_fps(motion.frame_rate_hz);
+    let (lo, hi) = scene_bounds(&scene);
+    let mid = 0.5 * (track.frames[0].joints[0] + track.frames[track.frames.len() - 1].joints[0]);
+    let base_spec = ShardSpec {
+        scene_glb: std::fs::canonicalize(&plan.scene)?,
+        object_ids: object_ids.clone(),
+        fps,
+        fps_base,
+        bodies: vec![ShardBody {
+            name: "agent_0".into(),
+            pass_index: AGENT_ID_BASE,
+            faces_npy: std::fs::canonicalize(&faces)?,
+            pc2: std::fs::canonicalize(&pc2)?,
+            cache_frame_start: 0.0,
+            samples_per_frame: render.cache_samples_per_frame,
+            motion_steps: 2,
+            color_rgba: [0.55, 0.42, 0.33, 1.0],
+        }],
+        lighting: ShardLighting {
+            world_rgb: [0.25, 0.25, 0.25],
+            point_lights: vec![PointLight {
+                position: [mid.x, mid.y, lo.z + 0.85 * (hi.z - lo.z)],
+                watts: 300.0,
+            }],
+        },
+        rgb: ShardRgb {
+            samples: render.samples,
+            adaptive_threshold: render.adaptive_threshold,
+            denoise: render.denoise,
+            shutter_frames: render.shutter_frames,
+            seed: 0,
+        },
+        cameras: Vec::new(),
+        body_probe: None,
+    };
+    let dataset = Arc::new(Dataset {
+        staging: std::fs::canonicalize(&staging)?,
+        base_spec,
+        cameras,
+        keys_per_frame: render.cache_samples_per_frame,
+        frames_per_shard: render.frames_per_shard,
+        near_clip_m: render.near_clip_m,
+    });
+    let total = dataset.total_frames();
+    let shards = dataset.pending_shards();
+    let pending: usize = shards.iter().map(|s| s.frames.len()).sum();
+    eprintln!(
+        "egogen-run: {} camera(s) × {} frames = {total} frames; {pending} to render in {} shard(s) on {} worker(s)",
+        render.cameras.len(),
+        frames.len(),
+        shards.len(),
+        plan.supervisor.workers
+    );
+    let mut rendered_now = 0;
+    if !shards.is_empty() {
+        let runtime = BlenderRuntime::resolve(opts.blender.as_deref())?;
+        let report = run_local(
+            dataset.clone(),
+            runtime,
+            shards,
+            PoolSettings {
+                workers: plan.supervisor.workers,
+                shard_timeout: Duration::from_secs_f64(plan.supervisor.shard_timeout_s),
+                retries: plan.supervisor.retries,
+            },
+            total - pending,
+        )?;
+        rendered_now = report.frames_finished;
+        let retried = report
+            .shards
+            .iter()
+            .filter(|s| s.attempts.len() > 1)
+            .count();
+        write_atomically(
+            &dataset.logs_dir().join(format!(
+                "pool_report_{}.json",
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map(|d| d.as_secs())
+                    .unwrap_or(0)
+            )),
+            serde_json::to_string_pretty(&report)?.as_bytes(),
+        )?;
+        eprintln!(
+            "egogen-run: rendered {rendered_now} frames in {:.1} s ({retried} shard(s) retried)",
+            report.wall_seconds
+        );
+    }
+    write_annotations(&dataset, &render.rig, &motion, &track, &object_ids)?;
+    let _ = std::fs::remove_dir_all(dataset.raw_dir());
+    let manifest = write_manifest(&staging)?;
+    if dir.exists() {
+        std::fs::remove_dir(dir).with_context(|| format!("replacing empty {}", dir.display()))?;
+    }
+    std::fs::rename(&staging, dir)
+        .with_context(|| format!("renaming {} to {}", staging.display(), dir.display()))?;
+    Ok(RunSummary {
+        dir: dir.clone(),
+        frames: total,
+        rendered_now,
+        files: manifest.files.len(),
+    })
+}
+
+fn scene_bounds(scene: &crate::scene::SceneMesh) -> (crate::math::Vec3, crate::math::Vec3) {
+    scene.vertices.iter().fold(
+        (
+            crate::math::Vec3::splat(f64::INFINITY),
+            crate::math::Vec3::splat(f64::NEG_INFINITY),
+        ),
+        |(lo, hi), v| (lo.min(*v), hi.max(*v)),
+    )
+}
