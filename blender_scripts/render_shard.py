@@ -157,7 +157,12 @@ def set_ground_truth_mode(scene):
     scene.render.film_transparent = True
 
 
+PARENT = os.getppid()
+
+
 def write_frame(scene, frame, out):
+    if os.getppid() != PARENT:
+        sys.exit("render_shard.py: the egogen supervisor is gone; stopping")
     os.makedirs(os.path.dirname(out), exist_ok=True)
     partial = out + ".partial.exr"
     scene.render.filepath = partial

@@ -76,7 +76,7 @@ pub fn run_pipeline(
             dir.display()
         );
     }
-    let state_path = staging.join("run.json");
+    let state_path = staging.join("work/run.json");
     if staging.exists() {
         if !opts.resume {
             bail!(
@@ -102,8 +102,10 @@ pub fn run_pipeline(
         }
         eprintln!("egogen-run: resuming {}", staging.display());
     } else {
-        std::fs::create_dir_all(&staging)
+        std::fs::create_dir_all(staging.join("work"))
             .with_context(|| format!("creating {}", staging.display()))?;
+        std::fs::copy(config_path, staging.join("config.toml"))
+            .with_context(|| format!("copying {} into the dataset", config_path.display()))?;
         write_atomically(
             &state_path,
             serde_json::to_string_pretty(&json!({

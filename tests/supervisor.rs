@@ -1,0 +1,216 @@
+//! The supervisor against real Blender workers: an uninterrupted run, and a run whose Blender
+//! workers are killed with SIGKILL at random moments (and the supervisor itself once), then
+//! resumed — the two datasets must be identical file for file (SHA-256), no partial file may be
+//! listed, and `egogen-run verify` must pass (and fail on a tampered file).
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command};
+use std::time::{Duration, Instant};
+
+use egogen::supervisor::{verify, Manifest};
+
+const CONFIG: &str = r#"
+[body]
+betas = []
+[motion]
+source = "scripted_walk"
+duration_s = 0.5
+frame_rate_hz = 40.0
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[render]
+cameras = ["camera-slam-left"]
+resolution_scale = 0.1
+every_n_frames = 2
+samples = 2
+frames_per_shard = 2
+[supervisor]
+workers = 1
+retries = 40
+"#;
+
+fn egogen_run() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+}
+
+fn setup() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("run.toml");
+    std::fs::write(&config, CONFIG).unwrap();
+    (dir, config)
+}
+
+fn manifest(dataset: &Path) -> Manifest {
+    serde_json::from_str(&std::fs::read_to_string(dataset.join("manifest.json")).unwrap()).unwrap()
+}
+
+/// Pids of processes whose command line contains every needle.
+fn pids_with(needles: &[&str]) -> Vec<i32> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i32>() else {
+            continue;
+        };
+        let Ok(cmd) = std::fs::read(e.path().join("cmdline")) else {
+            continue;
+        };
+        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+        if needles.iter().all(|n| cmd.contains(n)) {
+            out.push(pid);
+        }
+    }
+    out
+}
+
+fn kill9(pid: i32) -> bool {
+    Command::new("kill")
+        .args(["-9", &pid.to_string()])
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// Small deterministic generator for kill delays.
+struct Lcg(u64);
+impl Lcg {
+    fn millis(&mut self, lo: u64, hi: u64) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        lo + (self.0 >> 33) % (hi - lo)
+    }
+}
+
+/// Waits for `child`, killing its Blender workers (found by the run's folder) after random
+/// delays until `kills` is reached; returns the exit status and the kills made.
+fn run_with_kills(
+    mut child: Child,
+    run_dir: &Path,
+    mut kills: usize,
+    target: usize,
+    rng: &mut Lcg,
+) -> (std::process::ExitStatus, usize) {
+    let needle = run_dir.display().to_string();
+    let mut next = Instant::now() + Duration::from_millis(rng.millis(500, 2500));
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return (status, kills);
+        }
+        if kills < target && Instant::now() >= next {
+            for pid in pids_with(&["render_shard.py", &needle]) {
+                if kill9(pid) {
+                    kills += 1;
+                }
+            }
+            next = Instant::now() + Duration::from_millis(rng.millis(300, 2500));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
+    // Reference: uninterrupted.
+    let (ref_dir, ref_config) = setup();
+    let out = egogen_run().arg(&ref_config).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reference = manifest(&ref_dir.path().join("out"));
+    let frames = reference.files.iter().filter(|f| f.path.ends_with(".exr")).count();
+    assert_eq!(frames, 10);
+
+    // Faulty: workers killed ≥ 10 times; the supervisor killed once and resumed.
+    let (dir, config) = setup();
+    let mut rng = Lcg(7);
+    let child = egogen_run().arg(&config).spawn().unwrap();
+    // Let it finish at least one frame, kill workers three times, then kill the supervisor.
+    let (status, mut kills) = {
+        let mut child = child;
+        let needle = dir.path().display().to_string();
+        let mut kills = 0;
+        let deadline = Instant::now() + Duration::from_secs(300);
+        let frames_dir = dir.path().join("out.partial/cameras/camera-slam-left");
+        loop {
+            assert!(Instant::now() < deadline, "first run stuck");
+            if let Some(s) = child.try_wait().unwrap() {
+                break (Some(s), kills);
+            }
+            let done = std::fs::read_dir(&frames_dir)
+                .map(|d| d.count())
+                .unwrap_or(0);
+            if kills < 3 {
+                std::thread::sleep(Duration::from_millis(rng.millis(500, 2000)));
+                for pid in pids_with(&["render_shard.py", &needle]) {
+                    if kill9(pid) {
+                        kills += 1;
+                    }
+                }
+            } else if done >= 1 {
+                assert!(kill9(child.id() as i32));
+                let s = child.wait().unwrap();
+                break (Some(s), kills);
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    };
+    let status = status.unwrap();
+    assert!(!status.success(), "the supervisor was killed");
+    assert!(dir.path().join("out.partial").is_dir());
+    assert!(!dir.path().join("out").exists());
+    // Without --resume nothing is touched.
+    let refused = egogen_run().arg(&config).output().unwrap();
+    assert!(!refused.status.success());
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
+    // Resume, killing workers until at least 10 kills in all.
+    for attempt in 0.. {
+        assert!(attempt < 4, "resumed runs keep failing");
+        let child = egogen_run().arg(&config).arg("--resume").spawn().unwrap();
+        let (status, k) = run_with_kills(child, dir.path(), kills, 10, &mut rng);
+        kills = k;
+        if status.success() {
+            break;
+        }
+    }
+    eprintln!("workers and supervisor killed {kills} times in all");
+    assert!(kills >= 10);
+    let dataset = dir.path().join("out");
+    let faulty = manifest(&dataset);
+    assert_eq!(faulty, reference, "datasets differ");
+    assert!(faulty
+        .files
+        .iter()
+        .all(|f| !f.path.contains(".partial") && !f.path.ends_with(".tmp")));
+    // Some shard attempts failed and were retried (their logs are kept).
+    let logs = std::fs::read_dir(dataset.join("logs")).unwrap().count();
+    assert!(logs > 5, "{logs} log files");
+
+    // verify passes, and catches a changed byte.
+    let report = verify(&dataset).unwrap();
+    assert_eq!(report.frames, 10);
+    let ok = egogen_run().arg("verify").arg(&dataset).output().unwrap();
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let victim = dataset.join(
+        &faulty
+            .files
+            .iter()
+            .find(|f| f.path.ends_with(".exr"))
+            .unwrap()
+            .path,
+    );
+    let mut bytes = std::fs::read(&victim).unwrap();
+    let n = bytes.len();
+    bytes[n - 10] ^= 0xff;
+    std::fs::write(&victim, bytes).unwrap();
+    let bad = egogen_run().arg("verify").arg(&dataset).output().unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("checksum"), "{err}");
+}
