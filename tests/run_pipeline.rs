@@ -125,3 +125,90 @@ fn too_many_betas() {
         &["11 betas", "has 10"],
     );
 }
+
+/// The good config with a `[render]` section (errors are found before anything renders).
+fn with_render(render: &str) -> String {
+    format!("{GOOD}\n[render]\n{render}\n")
+}
+
+#[test]
+fn unknown_render_key() {
+    expect_config_error(
+        &with_render("samples = 4\nspp = 4"),
+        &["unknown field `spp`"],
+    );
+}
+
+#[test]
+fn render_key_of_wrong_type() {
+    expect_config_error(
+        &with_render("samples = \"many\""),
+        &["samples", "invalid type"],
+    );
+}
+
+#[test]
+fn negative_shutter() {
+    expect_config_error(
+        &with_render("shutter_frames = -0.5"),
+        &["render.shutter_frames", "-0.5"],
+    );
+}
+
+#[test]
+fn impossible_resolution() {
+    expect_config_error(
+        &with_render("resolution_scale = 0.3"),
+        &["render.resolution_scale", "camera `camera-", "whole pixels"],
+    );
+}
+
+#[test]
+fn missing_rig_file() {
+    expect_config_error(
+        &with_render("rig = \"rigs/nowhere.json\""),
+        &["render.rig", "nowhere.json", "not found"],
+    );
+}
+
+#[test]
+fn unknown_camera() {
+    expect_config_error(
+        &with_render("cameras = [\"camera-thermal\"]"),
+        &["render.cameras", "camera-thermal"],
+    );
+}
+
+#[test]
+fn broken_rig_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let rig = dir.path().join("broken_rig.json");
+    std::fs::write(
+        &rig,
+        r#"{"egogen_rig": 1, "name": "x", "cameras": [{"name": "c", "resolution_px": [0, 480],
+            "model": {"type": "pinhole", "params": [100, 100, 320, 240]},
+            "cpf_from_cam": {"translation_m": [0, 0, 0], "rotation": [[1,0,0],[0,1,0],[0,0,1]]}}]}"#,
+    )
+    .unwrap();
+    expect_config_error(
+        &with_render(&format!("rig = \"{}\"", rig.display())),
+        &["render.rig", "broken_rig.json"],
+    );
+}
+
+#[test]
+fn existing_output_is_left_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(&cfg, with_render("samples = 1")).unwrap();
+    let out_dir = dir.path().join("seq");
+    std::fs::create_dir_all(&out_dir).unwrap();
+    std::fs::write(out_dir.join("keep.txt"), "mine").unwrap();
+    let out = egogen_run(&cfg);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("already exists"));
+    let entries: Vec<_> = std::fs::read_dir(&out_dir).unwrap().collect();
+    assert_eq!(entries.len(), 1);
+    assert_eq!(std::fs::read_to_string(out_dir.join("keep.txt")).unwrap(), "mine");
+    assert!(!dir.path().join("seq.partial").exists());
+}
