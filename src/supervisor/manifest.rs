@@ -70,20 +70,14 @@ fn collect(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
 
 /// Lists and hashes every dataset file under `dir` (scratch folders excluded).
 pub fn build_manifest(dir: &Path) -> Result<Manifest> {
-    let mut files = Vec::new();
-    collect(dir, Path::new(""), &mut files)?;
-    let files = files
-        .iter()
-        .map(|r| {
-            let p = dir.join(r);
+    let files = dataset_files(dir)?
+        .into_iter()
+        .map(|path| {
+            let p = dir.join(&path);
             Ok(ManifestEntry {
-                path: r
-                    .components()
-                    .map(|c| c.as_os_str().to_string_lossy())
-                    .collect::<Vec<_>>()
-                    .join("/"),
                 bytes: std::fs::metadata(&p)?.len(),
                 sha256: sha256_file(&p)?,
+                path,
             })
         })
         .collect::<Result<Vec<_>>>()?;
@@ -166,7 +160,7 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
             }
         }
     }
-    let listed = build_manifest_paths(dir)?;
+    let listed = dataset_files(dir)?;
     for p in listed {
         if !manifest.files.iter().any(|e| e.path == p) {
             problems.push(format!("{p}: not in the manifest"));
@@ -187,7 +181,9 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
     })
 }
 
-fn build_manifest_paths(dir: &Path) -> Result<Vec<String>> {
+/// Dataset files under `dir` (scratch folders and the manifest excluded), `/`-separated,
+/// sorted.
+fn dataset_files(dir: &Path) -> Result<Vec<String>> {
     let mut files = Vec::new();
     collect(dir, Path::new(""), &mut files)?;
     Ok(files
