@@ -434,3 +434,99 @@ fn fisheye_frames_follow_the_exact_model() {
     assert!(count > 1000);
     assert!(worst < 0.75, "{worst} raw pixels");
 }
+
+/// A Python with the OpenEXR PyPI bindings, in a virtual environment of the egogen cache
+/// (created on first use, like the managed Blender).
+fn openexr_python() -> PathBuf {
+    let dir = egogen::render::blender_runtime::cache_dir().join("test-openexr-3.5");
+    let python = dir.join("bin/python");
+    if python.is_file() {
+        return python;
+    }
+    let partial = dir.with_extension("partial");
+    let _ = std::fs::remove_dir_all(&partial);
+    std::fs::create_dir_all(partial.parent().unwrap()).unwrap();
+    let ok = |c: &mut std::process::Command| assert!(c.status().unwrap().success(), "{c:?}");
+    ok(std::process::Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&partial));
+    ok(
+        std::process::Command::new(partial.join("bin/python")).args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "OpenEXR==3.5.3",
+        ]),
+    );
+    std::fs::rename(&partial, &dir).unwrap();
+    python
+}
+
+#[test]
+fn openexr_reads_the_frame_file_as_the_exr_crate_does() {
+    let r = rendered();
+    let (name, target, render) = &r.cameras[1];
+    let (rgb, gt) = raw(r, name, 3);
+    let path = r.raw_dir.join("cross_read.exr");
+    assemble_frame(&rgb, &gt, render, target, r.poses[3])
+        .unwrap()
+        .write(&path)
+        .unwrap();
+    let ours = ExrContents::read(&path).unwrap();
+    let script = r#"
+import json, sys, OpenEXR
+f = OpenEXR.File(sys.argv[1], separate_channels=True)
+assert len(f.parts) == 1
+out = {}
+for name, ch in f.parts[0].channels.items():
+    p = ch.pixels.astype("float64")
+    out[name] = {"shape": list(p.shape), "dtype": str(ch.pixels.dtype), "sum": float(p.sum()),
+                 "values": p.ravel()[::97].tolist()}
+print(json.dumps(out))
+"#;
+    let output = std::process::Command::new(openexr_python())
+        .arg("-c")
+        .arg(script)
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let theirs: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    let theirs = theirs.as_object().unwrap();
+    assert_eq!(theirs.len(), ours.channels.len());
+    for ch in &ours.channels {
+        let t = &theirs[&ch.name];
+        assert_eq!(
+            t["shape"],
+            serde_json::json!([ch.height, ch.width]),
+            "{}",
+            ch.name
+        );
+        let expected_type = if ch.name == "segmentation.id" {
+            "uint32"
+        } else {
+            "float32"
+        };
+        assert_eq!(t["dtype"], expected_type, "{}", ch.name);
+        // Exact as f32 (JSON's decimal round trip may move the f64 by an ulp).
+        let values: Vec<f32> = serde_json::from_value::<Vec<f64>>(t["values"].clone())
+            .unwrap()
+            .into_iter()
+            .map(|v| v as f32)
+            .collect();
+        let mine: Vec<f32> = ch.values.iter().step_by(97).copied().collect();
+        assert_eq!(values, mine, "{}", ch.name);
+        let sum: f64 = ch.values.iter().map(|&v| v as f64).sum();
+        assert!(
+            (t["sum"].as_f64().unwrap() - sum).abs() <= 1e-9 * sum.abs().max(1.0),
+            "{}",
+            ch.name
+        );
+    }
+}

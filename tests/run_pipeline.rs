@@ -209,6 +209,9 @@ fn existing_output_is_left_alone() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("already exists"));
     let entries: Vec<_> = std::fs::read_dir(&out_dir).unwrap().collect();
     assert_eq!(entries.len(), 1);
-    assert_eq!(std::fs::read_to_string(out_dir.join("keep.txt")).unwrap(), "mine");
+    assert_eq!(
+        std::fs::read_to_string(out_dir.join("keep.txt")).unwrap(),
+        "mine"
+    );
     assert!(!dir.path().join("seq.partial").exists());
 }

@@ -120,7 +120,11 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         String::from_utf8_lossy(&out.stderr)
     );
     let reference = manifest(&ref_dir.path().join("out"));
-    let frames = reference.files.iter().filter(|f| f.path.ends_with(".exr")).count();
+    let frames = reference
+        .files
+        .iter()
+        .filter(|f| f.path.ends_with(".exr"))
+        .count();
     assert_eq!(frames, 10);
 
     // Faulty: workers killed ≥ 10 times; the supervisor killed once and resumed.

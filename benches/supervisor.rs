@@ -1,0 +1,126 @@
+//! Supervisor overhead and parallel efficiency, in one run: the same tiny dataset (Aria SLAM-left
+//! at 64×48, 16 frames, 2 frames per shard) rendered by `egogen-run` with 1 and with 2 Blender
+//! workers, alternating, `ROUNDS` times each. Reports per run: wall time, the pool's wall time,
+//! the summed Blender attempt time, and what is left for the supervisor (synth, placement,
+//! caches, annotations, manifest); then parallel efficiency `T1 / (2 · T2)`.
+//!
+//! `cargo bench --bench supervisor` (needs Blender: the managed install is provisioned on first
+//! use).
+
+use std::path::Path;
+use std::process::Command;
+use std::time::Instant;
+
+const ROUNDS: usize = 2;
+
+const CONFIG: &str = r#"
+[body]
+betas = []
+[motion]
+source = "scripted_walk"
+duration_s = 0.8
+frame_rate_hz = 40.0
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[render]
+cameras = ["camera-slam-left"]
+resolution_scale = 0.1
+every_n_frames = 2
+samples = 4
+frames_per_shard = 2
+"#;
+
+struct Measured {
+    wall_s: f64,
+    pool_s: f64,
+    blender_s: f64,
+    frames: usize,
+}
+
+fn run(workers: usize) -> Measured {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("run.toml");
+    std::fs::write(&config, CONFIG).unwrap();
+    let started = Instant::now();
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(&config)
+        .args(["--workers", &workers.to_string()])
+        .output()
+        .unwrap();
+    let wall_s = started.elapsed().as_secs_f64();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = pool_report(&dir.path().join("out/logs"));
+    let attempts = report["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["attempts"].as_array().unwrap().clone());
+    let (mut blender_s, mut frames) = (0.0, 0);
+    for a in attempts {
+        blender_s += a["seconds"].as_f64().unwrap();
+        frames += a["finished"].as_u64().unwrap() as usize;
+    }
+    Measured {
+        wall_s,
+        pool_s: report["wall_seconds"].as_f64().unwrap(),
+        blender_s,
+        frames,
+    }
+}
+
+fn pool_report(logs: &Path) -> serde_json::Value {
+    let path = std::fs::read_dir(logs)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("pool_report")
+        })
+        .expect("pool report");
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn main() {
+    // Warm-up: provisions Blender if needed, warms the file cache.
+    run(1);
+    let mut by_workers = [Vec::new(), Vec::new()];
+    for round in 0..ROUNDS {
+        for workers in [1, 2] {
+            let m = run(workers);
+            println!(
+                "round {round} workers {workers}: {} frames, wall {:.2} s, pool {:.2} s, Blender attempts {:.2} s, supervisor outside the pool {:.2} s ({:.1} %)",
+                m.frames,
+                m.wall_s,
+                m.pool_s,
+                m.blender_s,
+                m.wall_s - m.pool_s,
+                100.0 * (m.wall_s - m.pool_s) / m.wall_s
+            );
+            by_workers[workers - 1].push(m);
+        }
+    }
+    let mean =
+        |v: &[Measured], f: fn(&Measured) -> f64| v.iter().map(f).sum::<f64>() / v.len() as f64;
+    let (t1, t2) = (
+        mean(&by_workers[0], |m| m.wall_s),
+        mean(&by_workers[1], |m| m.wall_s),
+    );
+    let (p1, p2) = (
+        mean(&by_workers[0], |m| m.pool_s),
+        mean(&by_workers[1], |m| m.pool_s),
+    );
+    println!(
+        "mean wall: 1 worker {t1:.2} s, 2 workers {t2:.2} s; speed-up {:.2}, parallel efficiency {:.0} % (pool only: {:.0} %)",
+        t1 / t2,
+        100.0 * t1 / (2.0 * t2),
+        100.0 * p1 / (2.0 * p2)
+    );
+}
