@@ -47,8 +47,9 @@ impl RenderCamera {
                 };
             }
         }
-        let f = max_pixels_per_radian(target) * oversample;
-        let half = target.max_theta_rad().min(3.1) + FOV_MARGIN_PX / f;
+        let theta = max_theta_in_image(target);
+        let f = max_pixels_per_radian(target, theta) * oversample;
+        let half = theta + FOV_MARGIN_PX / f;
         let size_px = (2.0 * half * f).ceil() as u32;
         RenderCamera::EquidistantFisheye {
             size_px,
@@ -160,10 +161,35 @@ impl RenderCamera {
     }
 }
 
-/// Largest pixels-per-radian of a model over its valid field of view, radially and
-/// tangentially, sampled on 16 azimuths × 64 angles.
-fn max_pixels_per_radian(cam: &Camera) -> Real {
-    let max_theta = cam.max_theta_rad().min(3.1);
+/// Largest angle from the optical axis that a valid pixel of the image sees (the image border
+/// and the valid circle bound it), at most the model's `max θ`.
+fn max_theta_in_image(cam: &Camera) -> Real {
+    let res = cam.resolution();
+    let (w, h) = (res.width_px as Real, res.height_px as Real);
+    let limit = cam.max_theta_rad().min(3.1);
+    let mut best: Real = 0.0;
+    let steps = 4 * (res.width_px + res.height_px);
+    for k in 0..=steps {
+        let t = k as Real / steps as Real;
+        for px in [
+            Pixel::new(-0.5 + t * w, -0.5),
+            Pixel::new(-0.5 + t * w, h - 0.5),
+            Pixel::new(-0.5, -0.5 + t * h),
+            Pixel::new(w - 0.5, -0.5 + t * h),
+        ] {
+            match cam.unproject(px) {
+                Some(ray) => best = best.max(crate::camera::theta_of(ray)),
+                // Border outside the valid circle: the circle bounds the view.
+                None => return limit,
+            }
+        }
+    }
+    best.min(limit)
+}
+
+/// Largest pixels-per-radian of a model up to `max_theta`, radially and tangentially, sampled
+/// on 16 azimuths × 64 angles.
+fn max_pixels_per_radian(cam: &Camera, max_theta: Real) -> Real {
     let d = 1e-4;
     let mut best: Real = 0.0;
     for a in 0..16 {
