@@ -57,7 +57,9 @@ fn render(samples: u32, adaptive: f64, denoise: bool) -> (PathBuf, f64, tempfile
         .unwrap();
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
-    let seconds = report["shards"][0]["attempts"][0]["seconds"].as_f64().unwrap();
+    let seconds = report["shards"][0]["attempts"][0]["seconds"]
+        .as_f64()
+        .unwrap();
     (
         dir.path().join("out/cameras/camera-rgb/frame_00000.exr"),
         seconds,
@@ -106,7 +108,11 @@ fn main() {
         }
         println!(
             "| {samples} | {} | {} | {s:.2} | {:.4} | {:.4} |",
-            if adaptive > 0.0 { adaptive.to_string() } else { "off".into() },
+            if adaptive > 0.0 {
+                adaptive.to_string()
+            } else {
+                "off".into()
+            },
             if denoise { "OIDN" } else { "off" },
             (se / n as f64).sqrt(),
             ae / n as f64

@@ -90,12 +90,15 @@ fn run(args: Args) -> Result<()> {
         }
         plan.supervisor.workers = w;
     }
-    let args = (config, args.resume, args.blender);
+    let options = egogen::supervisor::RunOptions {
+        resume: args.resume,
+        blender: args.blender,
+    };
     let model = BodyModel::load(&plan.body_model)?;
     if plan.betas.len() > model.num_betas() {
         anyhow::bail!(
             "config {}: key `body.betas`: {} betas given but the model {} has {}",
-            args.0.display(),
+            config.display(),
             plan.betas.len(),
             plan.body_model.display(),
             model.num_betas()
@@ -135,17 +138,8 @@ fn run(args: Args) -> Result<()> {
         model.num_vertices()
     );
     if let Some(render) = &plan.render {
-        let summary = egogen::supervisor::run_pipeline(
-            &plan,
-            render,
-            &motion,
-            &model,
-            &args.0,
-            &egogen::supervisor::RunOptions {
-                resume: args.1,
-                blender: args.2.clone(),
-            },
-        )?;
+        let summary =
+            egogen::supervisor::run_pipeline(&plan, render, &motion, &model, &config, &options)?;
         eprintln!(
             "egogen-run: wrote {} ({} frames, {} rendered now, {} files in the manifest)",
             summary.dir.display(),

@@ -62,11 +62,13 @@ pub fn run_pipeline(
     let config_sha = sha256_file(config_path)?;
     if is_non_empty_dir(dir) {
         if opts.resume && dir.join(MANIFEST).is_file() {
-            eprintln!("egogen-run: {} is already complete", dir.display());
-            let frames = render.cameras.len();
+            eprintln!(
+                "egogen-run: {} is already complete; nothing to do",
+                dir.display()
+            );
             return Ok(RunSummary {
                 dir: dir.clone(),
-                frames,
+                frames: 0,
                 rendered_now: 0,
                 files: 0,
             });
