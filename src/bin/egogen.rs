@@ -51,6 +51,23 @@ enum Command {
     /// Camera rig tools (rig files and Aria device calibrations).
     #[command(subcommand)]
     Rig(egogen::rig::RigCommand),
+    /// Train learned models.
+    #[command(subcommand)]
+    Train(TrainCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum TrainCommand {
+    /// Train the motion-primitive C-VAE on mocap clips; writes safetensors weights (atomically)
+    /// and a JSON-lines loss log, as named in the config.
+    Primitive {
+        /// Training config (TOML), e.g. configs/train_primitive.toml.
+        #[arg(long)]
+        config: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -80,6 +97,28 @@ enum MotionCommand {
         /// Source frames to drop at the start (CMU clips open with a T-pose calibration frame).
         #[arg(long, default_value_t = 0)]
         skip_frames: usize,
+    },
+    /// Measure a trained primitive model: held-out marker error, foot-contact score of random
+    /// latents next to the mocap's, a long chain of primitives; optionally draw a walk.
+    Eval {
+        /// Weights (default: the shipped assets/motion/primitive_cvae.safetensors).
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// The training config, for its clips and held-out split.
+        #[arg(long, default_value = "configs/train_primitive.toml")]
+        config: PathBuf,
+        /// Primitives decoded from random latents for the contact score.
+        #[arg(long, default_value_t = 1000)]
+        random_primitives: usize,
+        /// Primitives in the long chain.
+        #[arg(long, default_value_t = 1000)]
+        chain_primitives: usize,
+        /// Seed of the random latents.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// PNG of the first 10 s of the chain, from above and from the side.
+        #[arg(long)]
+        walk_png: Option<PathBuf>,
     },
 }
 
@@ -199,6 +238,43 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
+        Command::Train(TrainCommand::Primitive { config, quiet }) => {
+            let plan = egogen::cli::train::load_train_plan(&config)?;
+            let report = egogen::motion::cvae::train(&plan, !quiet)?;
+            println!(
+                "trained on {} primitives ({} chains) in {:.0} s; final loss {:.4}; held-out marker error {}",
+                report.train_primitives,
+                report.train_chains,
+                report.seconds,
+                report.final_loss,
+                report
+                    .held_out_mpjpe_mm
+                    .map_or("n/a (nothing held out)".into(), |e| format!("{e:.1} mm ({} primitives)", report.held_out_primitives)),
+            );
+            println!(
+                "wrote {} and {}",
+                plan.weights_out.display(),
+                plan.log_out.display()
+            );
+        }
+        Command::Motion(MotionCommand::Eval {
+            weights,
+            config,
+            random_primitives,
+            chain_primitives,
+            seed,
+            walk_png,
+        }) => {
+            let weights = weights.unwrap_or_else(egogen::motion::cvae::train::shipped_weights_path);
+            motion_eval(
+                &weights,
+                &config,
+                random_primitives,
+                chain_primitives,
+                seed,
+                walk_png.as_deref(),
+            )?;
+        }
         Command::Motion(MotionCommand::Import {
             bvh,
             out,
@@ -611,6 +687,118 @@ fn import_bvh(
         img.write_png(strip)?;
         println!("wrote {}", strip.display());
     }
+    Ok(())
+}
+
+/// `egogen motion eval`: prints the measurements as JSON lines.
+fn motion_eval(
+    weights: &Path,
+    config: &Path,
+    random_primitives: usize,
+    chain_primitives: usize,
+    seed: u64,
+    walk_png: Option<&Path>,
+) -> Result<()> {
+    use egogen::motion::cvae::eval::{long_rollout, marker_mpjpe_mm, random_latent_contact};
+    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+    use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
+    use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::SeedableRng;
+
+    let plan = egogen::cli::train::load_train_plan(config)?;
+    let model = MotionModel::load(weights)?;
+    let body = BodyModel::load(&plan.body_model)?;
+    let (train_set, held_set) = evaluation_sets(&plan, &body)?;
+    let geo = RigGeometry::new(&body, &[])?;
+    let rig = TensorRig::new(&geo, &Default::default());
+    let started = std::time::Instant::now();
+    let held_mm = marker_mpjpe_mm(&model.net, &rig, &held_set, 256);
+    let train_mm = marker_mpjpe_mm(&model.net, &rig, &train_set, 256);
+    println!(
+        "{}",
+        serde_json::json!({
+            "measure": "marker_mpjpe_mm",
+            "held_out": held_mm,
+            "held_out_primitives": held_set.len(),
+            "train": train_mm,
+            "train_primitives": train_set.len(),
+            "seconds": started.elapsed().as_secs_f64(),
+        })
+    );
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let l = model.latent_dim();
+    for (name, set) in [("train_seeds", &train_set), ("held_out_seeds", &held_set)] {
+        let z = normal_samples(&mut rng, random_primitives * l);
+        let report = random_latent_contact(&model.net, &rig, set, &z);
+        println!(
+            "{}",
+            serde_json::json!({"measure": "contact_score", "seeds": name, "report": report})
+        );
+    }
+    // The chain starts from the first two frames of the first training clip's walk.
+    let clip = egogen::motion::MotionSequence::read(&plan.clips[1].path)?;
+    let ctx = BodyContext::new(&body, &[])?;
+    let seed_frames = PrimitiveSeed {
+        frames: [clip.frame(0), clip.frame(1)],
+    };
+    let latents: Vec<Vec<f32>> = (0..chain_primitives)
+        .map(|_| normal_samples(&mut rng, l))
+        .collect();
+    let (chain, prims) = long_rollout(&model, &ctx, seed_frames, &latents)?;
+    println!(
+        "{}",
+        serde_json::json!({"measure": "chain", "seed_clip": plan.clips[1].path.file_name().map(|s| s.to_string_lossy()), "report": chain})
+    );
+    if let Some(png) = walk_png {
+        draw_walk(&prims, png)?;
+        println!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+/// Stick figures every 0.5 s over the first 10 s of a chain, from above (left) and from the
+/// side (right), with the pelvis path.
+fn draw_walk(prims: &[egogen::motion::cvae::DecodedPrimitive], png: &Path) -> Result<()> {
+    use egogen::body::PARENTS;
+    use egogen::motion::primitive::SEED_FRAMES;
+    use egogen::preview::sticks::bone_mesh;
+    let frames: Vec<&Vec<Vec3>> = prims
+        .iter()
+        .flat_map(|p| p.joints[SEED_FRAMES..].iter())
+        .take(400)
+        .collect();
+    let mut bones = Vec::new();
+    for f in frames.iter().step_by(20) {
+        for j in 1..22 {
+            bones.push((f[PARENTS[j].unwrap_or(0)], f[j]));
+        }
+    }
+    let path: Vec<(Vec3, Vec3)> = frames.windows(2).map(|w| (w[0][0], w[1][0])).collect();
+    let floor = {
+        let (lo, hi) = frames.iter().fold(
+            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), f| (lo.min(f[0]), hi.max(f[0])),
+        );
+        let (lo, hi) = (lo - Vec3::splat(0.5), hi + Vec3::splat(0.5));
+        vec![
+            (Vec3::new(lo.x, lo.y, 0.0), Vec3::new(hi.x, lo.y, 0.0)),
+            (Vec3::new(hi.x, lo.y, 0.0), Vec3::new(hi.x, hi.y, 0.0)),
+            (Vec3::new(hi.x, hi.y, 0.0), Vec3::new(lo.x, hi.y, 0.0)),
+            (Vec3::new(lo.x, hi.y, 0.0), Vec3::new(lo.x, lo.y, 0.0)),
+        ]
+    };
+    let (bv, bf) = bone_mesh(&bones, 0.015);
+    let (pv, pf) = bone_mesh(&path, 0.01);
+    let (fv, ff) = bone_mesh(&floor, 0.01);
+    let meshes = [
+        (&bv[..], &bf[..], [0.3, 0.45, 0.8]),
+        (&pv[..], &pf[..], [0.85, 0.3, 0.2]),
+        (&fv[..], &ff[..], [0.5, 0.5, 0.5]),
+    ];
+    let top = MeshView::looking_from(Vec3::Z, Vec3::Y).render(&meshes, 640, 640);
+    let side = MeshView::looking_from(Vec3::new(0.0, -1.0, 0.0), Vec3::Z).render(&meshes, 960, 640);
+    top.hconcat(&side, [255, 255, 255]).write_png(png)?;
     Ok(())
 }
 

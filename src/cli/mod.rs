@@ -5,6 +5,7 @@
 
 pub mod config;
 pub mod resolve;
+pub mod train;
 
 pub use config::{ConfigError, RawRun};
 pub use resolve::{resolve_run, MotionPlan, RenderPlan, RunPlan, SupervisorPlan};

@@ -71,16 +71,7 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         key: key.into(),
         message,
     };
-    let body_model = match raw.body.model {
-        Some(p) => base.join(p),
-        None => crate_root().join(DEFAULT_BODY_MODEL),
-    };
-    if !body_model.is_file() {
-        return Err(bad(
-            "body.model",
-            format!("file {} not found", body_model.display()),
-        ));
-    }
+    let body_model = resolve_body_model(raw.body.model, base).map_err(|m| bad("body.model", m))?;
     if let Some(i) = raw.body.betas.iter().position(|b| !b.is_finite()) {
         return Err(bad(
             "body.betas",
@@ -297,6 +288,19 @@ fn resolve_supervisor(s: RawSupervisor, config_path: &Path) -> Result<Supervisor
         shard_timeout_s,
         retries: s.retries.unwrap_or(2),
     })
+}
+
+/// A body model path from a config (relative to its folder `base`), else the shipped default;
+/// the error says which file is missing.
+pub fn resolve_body_model(path: Option<PathBuf>, base: &Path) -> Result<PathBuf, String> {
+    let body_model = match path {
+        Some(p) => base.join(p),
+        None => crate_root().join(DEFAULT_BODY_MODEL),
+    };
+    match body_model.is_file() {
+        true => Ok(body_model),
+        false => Err(format!("file {} not found", body_model.display())),
+    }
 }
 
 /// The folder shipped data is found in: `EGOGEN_HOME` if set, else the crate's source root.

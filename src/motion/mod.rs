@@ -5,6 +5,7 @@
 
 pub mod amass;
 pub mod bvh;
+pub mod cvae;
 pub mod deepmimic;
 pub mod primitive;
 pub mod resample;

@@ -1,0 +1,206 @@
+//! The primitive-model training config (`egogen train primitive --config FILE`): parsed
+//! strictly (unknown keys refused), then resolved into a [`TrainPlan`].
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::config::{load_toml, ConfigError};
+use super::resolve::resolve_body_model;
+use crate::motion::cvae::loss::LossWeights;
+use crate::motion::cvae::train::{ClipSpec, PhasePlan, TrainPlan};
+use crate::motion::cvae::ArchConfig;
+
+/// `[[clips]]`: one training clip (AMASS-style `.npz` at 40 Hz).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawClip {
+    /// Relative to the config's folder.
+    pub path: PathBuf,
+    /// Hold the whole clip out of training (evaluation only).
+    #[serde(default)]
+    pub held_out: bool,
+    /// Hold out the frames from this time on (s).
+    pub held_out_from_s: Option<f64>,
+}
+
+/// `[primitive]` and `[rollout]`: one training phase.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawPhase {
+    pub steps: usize,
+    pub batch_size: usize,
+    pub learning_rate: f64,
+}
+
+/// `[rollout]`: a phase over chains of primitives.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawRollout {
+    pub steps: usize,
+    pub batch_size: usize,
+    pub learning_rate: f64,
+    /// Primitives per chain.
+    pub primitives: usize,
+}
+
+/// `[data]`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawData {
+    /// Frames between the starts of consecutive training primitives.
+    pub stride_frames: usize,
+    /// Add left-right mirrored copies of the training clips.
+    pub mirror: bool,
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawTrainOutput {
+    /// Weights file (safetensors), written atomically; relative to the config's folder.
+    pub weights: PathBuf,
+    /// Loss log (JSON lines), relative to the config's folder.
+    pub log: PathBuf,
+}
+
+/// The whole training config, as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawTrainPrimitive {
+    /// Seed of weights, batches and noise.
+    pub seed: u64,
+    /// Body model (default: the shipped CC0 model).
+    pub body_model: Option<PathBuf>,
+    pub data: RawData,
+    pub clips: Vec<RawClip>,
+    pub model: ArchConfig,
+    pub loss: LossWeights,
+    /// Steps over which the KL weight ramps up from 0.
+    pub kl_warmup_steps: usize,
+    pub primitive: RawPhase,
+    pub rollout: RawRollout,
+    pub output: RawTrainOutput,
+}
+
+impl RawTrainPrimitive {
+    /// Reads and parses a config file; errors name the file, key and what was expected.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        load_toml(path)
+    }
+
+    /// Resolves paths against the config's folder and checks values.
+    pub fn resolve(self, config_path: &Path) -> Result<TrainPlan, ConfigError> {
+        let base = config_path.parent().unwrap_or(Path::new("."));
+        let bad = |key: &str, message: String| ConfigError::Value {
+            path: config_path.into(),
+            key: key.into(),
+            message,
+        };
+        let body_model =
+            resolve_body_model(self.body_model, base).map_err(|m| bad("body_model", m))?;
+        if self.clips.is_empty() {
+            return Err(bad("clips", "list at least one clip".into()));
+        }
+        let mut clips = Vec::new();
+        for (i, c) in self.clips.into_iter().enumerate() {
+            let path = base.join(&c.path);
+            if !path.is_file() {
+                return Err(bad(
+                    &format!("clips[{i}].path"),
+                    format!("file {} not found", path.display()),
+                ));
+            }
+            if let Some(t) = c.held_out_from_s {
+                if !(t.is_finite() && t >= 0.0) {
+                    return Err(bad(
+                        &format!("clips[{i}].held_out_from_s"),
+                        format!("expected a time ≥ 0 s, found {t}"),
+                    ));
+                }
+                if c.held_out {
+                    return Err(bad(
+                        &format!("clips[{i}].held_out_from_s"),
+                        "the clip is wholly held out (held_out = true); remove one of the two"
+                            .into(),
+                    ));
+                }
+            }
+            clips.push(ClipSpec {
+                path,
+                held_out: c.held_out,
+                held_out_from_s: c.held_out_from_s,
+            });
+        }
+        let positive = |key: &str, v: usize| match v {
+            0 => Err(bad(key, "expected a positive integer, found 0".into())),
+            v => Ok(v),
+        };
+        let rate = |key: &str, v: f64| match v.is_finite() && v > 0.0 && v < 1.0 {
+            true => Ok(v),
+            false => Err(bad(
+                key,
+                format!("expected a learning rate in (0, 1), found {v}"),
+            )),
+        };
+        positive("data.stride_frames", self.data.stride_frames)?;
+        positive("model.latent_dim", self.model.latent_dim)?;
+        positive("model.encoder_width", self.model.encoder_width)?;
+        positive("model.decoder_width", self.model.decoder_width)?;
+        positive("primitive.batch_size", self.primitive.batch_size)?;
+        positive("rollout.batch_size", self.rollout.batch_size)?;
+        if self.rollout.primitives < 2 {
+            return Err(bad(
+                "rollout.primitives",
+                format!(
+                    "expected ≥ 2 chained primitives, found {}",
+                    self.rollout.primitives
+                ),
+            ));
+        }
+        rate("primitive.learning_rate", self.primitive.learning_rate)?;
+        rate("rollout.learning_rate", self.rollout.learning_rate)?;
+        let l = &self.loss;
+        for (key, v) in [
+            ("loss.pose", l.pose),
+            ("loss.transl", l.transl),
+            ("loss.markers", l.markers),
+            ("loss.velocity", l.velocity),
+            ("loss.skate", l.skate),
+            ("loss.floor", l.floor),
+            ("loss.kl", l.kl),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(bad(key, format!("expected a weight ≥ 0, found {v}")));
+            }
+        }
+        Ok(TrainPlan {
+            seed: self.seed,
+            body_model,
+            clips,
+            stride_frames: self.data.stride_frames,
+            mirror: self.data.mirror,
+            arch: self.model,
+            loss: self.loss,
+            kl_warmup_steps: self.kl_warmup_steps,
+            primitive: PhasePlan {
+                steps: self.primitive.steps,
+                batch_size: self.primitive.batch_size,
+                learning_rate: self.primitive.learning_rate,
+            },
+            rollout: PhasePlan {
+                steps: self.rollout.steps,
+                batch_size: self.rollout.batch_size,
+                learning_rate: self.rollout.learning_rate,
+            },
+            rollout_primitives: self.rollout.primitives,
+            weights_out: base.join(self.output.weights),
+            log_out: base.join(self.output.log),
+        })
+    }
+}
+
+/// Loads and resolves a training config.
+pub fn load_train_plan(path: &Path) -> Result<TrainPlan, ConfigError> {
+    RawTrainPrimitive::load(path)?.resolve(path)
+}

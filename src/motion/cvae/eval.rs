@@ -1,0 +1,279 @@
+//! Measurements of a trained model: held-out marker error, the foot-contact score of EgoGen
+//! (paper Eq. 12, as its code computes it) and long-rollout statistics.
+//!
+//! Foot-contact score of one primitive (20 frames at 40 Hz, feet markers `F`, floor height `h`):
+//! `exp(−mean_t |min_{f∈F} z_{t,f} − h − 0.02|) · exp(−mean_t max(0, min_{f∈F} v_{t,f} − 0.075))`
+//! with `v` the horizontal central-difference speed (m/s) over frames `1..T−1`.
+
+use burn::prelude::*;
+
+use super::data::{PrimitiveSet, PRIMITIVE_VALUES};
+use super::features::FRAME_DIM;
+use super::loss::pose_frames;
+use super::net::PrimitiveVae;
+use super::rig::TensorRig;
+use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+
+/// Items `range` of a single-primitive set as raw features `[B, T, F]` and floors `[B]`.
+pub fn set_batch<B: Backend>(
+    set: &PrimitiveSet,
+    range: std::ops::Range<usize>,
+    device: &B::Device,
+) -> (Tensor<B, 3>, Vec<f32>) {
+    let n = range.len();
+    let x = set.features[range.start * PRIMITIVE_VALUES..range.end * PRIMITIVE_VALUES].to_vec();
+    (
+        Tensor::from_data(TensorData::new(x, [n, PRIMITIVE_FRAMES, FRAME_DIM]), device),
+        set.floor_z[range].to_vec(),
+    )
+}
+
+/// Decodes raw seeds `[B, S, F]` with latents `[B, L]` into whole raw primitives `[B, T, F]`
+/// (the seed frames first).
+pub fn decode_raw<B: Backend>(
+    net: &PrimitiveVae<B>,
+    seed: Tensor<B, 3>,
+    z: Tensor<B, 2>,
+) -> Tensor<B, 3> {
+    let decoded = net.denormalize(net.decode(net.normalize(seed.clone()), z));
+    Tensor::cat(vec![seed, decoded], 1)
+}
+
+/// Mean marker error (mm) over the decoded frames of every primitive of `set`, each decoded
+/// from its own seed and its posterior mean latent.
+pub fn marker_mpjpe_mm<B: Backend>(
+    net: &PrimitiveVae<B>,
+    rig: &TensorRig<B>,
+    set: &PrimitiveSet,
+    batch: usize,
+) -> f64 {
+    let device = net.feature_mean.val().device();
+    let mut sum = 0.0;
+    let mut count = 0usize;
+    for start in (0..set.len()).step_by(batch.max(1)) {
+        let end = (start + batch).min(set.len());
+        let (x, _) = set_batch::<B>(set, start..end, &device);
+        let (mu, _) = net.encode(net.normalize(x.clone()));
+        let pred = decode_raw(net, x.clone().narrow(1, 0, SEED_FRAMES), mu);
+        let n = PRIMITIVE_FRAMES - SEED_FRAMES;
+        let pm = pose_frames(rig, pred).markers.narrow(1, SEED_FRAMES, n);
+        let gm = pose_frames(rig, x).markers.narrow(1, SEED_FRAMES, n);
+        let dist = (pm - gm).square().sum_dim(3).sqrt();
+        count += dist.dims().iter().product::<usize>();
+        sum += dist.sum().into_scalar().elem::<f64>();
+    }
+    sum / count.max(1) as f64 * 1000.0
+}
+
+/// Foot-contact score of one primitive from its foot markers `[T][F]` (z up) and floor height.
+pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
+    let t = feet.len();
+    if t < 3 {
+        return f64::NAN;
+    }
+    let dist_floor = feet
+        .iter()
+        .map(|f| {
+            let lowest = f.iter().map(|p| p[2]).fold(f64::INFINITY, f64::min);
+            (lowest - floor_z - 0.02).abs()
+        })
+        .sum::<f64>()
+        / t as f64;
+    let skate = (1..t - 1)
+        .map(|i| {
+            let slowest = (0..feet[i].len())
+                .map(|k| {
+                    let (a, b) = (feet[i - 1][k], feet[i + 1][k]);
+                    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt() * PRIMITIVE_RATE_HZ / 2.0
+                })
+                .fold(f64::INFINITY, f64::min);
+            (slowest - 0.075).max(0.0)
+        })
+        .sum::<f64>()
+        / (t - 2) as f64;
+    (-dist_floor).exp() * (-skate).exp()
+}
+
+/// Contact scores of a batch of raw primitives `[B, T, F]` with floors `[B]`.
+pub fn contact_scores<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>, floors: &[f32]) -> Vec<f64> {
+    let [b, t, _] = x.dims();
+    let feet = pose_frames(rig, x)
+        .markers
+        .select(2, rig.foot_markers.clone());
+    let nf = feet.dims()[2];
+    let values: Vec<f32> = feet.into_data().to_vec().expect("f32 markers");
+    (0..b)
+        .map(|i| {
+            let frames: Vec<Vec<[f64; 3]>> = (0..t)
+                .map(|f| {
+                    (0..nf)
+                        .map(|k| {
+                            let o = ((i * t + f) * nf + k) * 3;
+                            [values[o] as f64, values[o + 1] as f64, values[o + 2] as f64]
+                        })
+                        .collect()
+                })
+                .collect();
+            contact_score(&frames, floors[i] as f64)
+        })
+        .collect()
+}
+
+/// Foot-contact scores of random latents against the mocap's own.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct ContactReport {
+    /// Primitives scored.
+    pub count: usize,
+    /// Mean score of primitives decoded from real seeds with z ~ N(0, I).
+    pub random_latent_mean: f64,
+    /// 10th percentile of those scores.
+    pub random_latent_p10: f64,
+    /// Mean score of the mocap primitives themselves (the ceiling).
+    pub mocap_mean: f64,
+    /// Primitives decoded with a non-finite value.
+    pub non_finite: usize,
+}
+
+/// Scores `count` primitives decoded from the seeds of evenly spread items of `set` with
+/// latents drawn by `latents` (`[count × L]`), next to the score of those mocap primitives.
+pub fn random_latent_contact<B: Backend>(
+    net: &PrimitiveVae<B>,
+    rig: &TensorRig<B>,
+    set: &PrimitiveSet,
+    latents: &[f32],
+) -> ContactReport {
+    let device = net.feature_mean.val().device();
+    let l = net.latent_dim();
+    let count = latents.len() / l;
+    let picks: Vec<usize> = (0..count).map(|i| i * set.len() / count.max(1)).collect();
+    let mut x = Vec::with_capacity(count * PRIMITIVE_VALUES);
+    let mut floors = Vec::with_capacity(count);
+    for &i in &picks {
+        x.extend_from_slice(set.item(i));
+        floors.extend_from_slice(set.floors(i));
+    }
+    let x = Tensor::<B, 3>::from_data(
+        TensorData::new(x, [count, PRIMITIVE_FRAMES, FRAME_DIM]),
+        &device,
+    );
+    let z = Tensor::from_data(TensorData::new(latents.to_vec(), [count, l]), &device);
+    let pred = decode_raw(net, x.clone().narrow(1, 0, SEED_FRAMES), z);
+    let values: Vec<f32> = pred.clone().into_data().to_vec().expect("f32");
+    let per = PRIMITIVE_VALUES;
+    let non_finite = (0..count)
+        .filter(|i| {
+            values[i * per..(i + 1) * per]
+                .iter()
+                .any(|v| !v.is_finite())
+        })
+        .count();
+    let mut scores = contact_scores(rig, pred, &floors);
+    let mocap = contact_scores(rig, x, &floors);
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let mocap_mean = mean(&mocap);
+    let random_latent_mean = mean(&scores);
+    scores.sort_by(f64::total_cmp);
+    ContactReport {
+        count,
+        random_latent_mean,
+        random_latent_p10: scores.get(count / 10).copied().unwrap_or(f64::NAN),
+        mocap_mean,
+        non_finite,
+    }
+}
+
+/// Statistics of one long chain of primitives decoded from random latents.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct ChainReport {
+    pub primitives: usize,
+    /// Decoded frames (18 per primitive).
+    pub frames: usize,
+    /// World pelvis height range (m).
+    pub pelvis_z_min_m: f64,
+    pub pelvis_z_max_m: f64,
+    /// Largest deviation of a body bone's length from its rest length (m).
+    pub bone_length_max_dev_m: f64,
+    /// Largest orthonormality error `max |RᵀR − I|` of the canonical frames.
+    pub canonical_orthonormality_max_err: f64,
+    /// Height of the lowest foot marker above the floor (m): mean, min, max over frames.
+    pub lowest_foot_mean_m: f64,
+    pub lowest_foot_min_m: f64,
+    pub lowest_foot_max_m: f64,
+    /// Mean foot-contact score of the chain's primitives (f64 markers).
+    pub contact_mean: f64,
+    /// Horizontal distance of the pelvis from start to end (m).
+    pub displacement_m: f64,
+    /// Wall time of decoding and posing (s).
+    pub seconds: f64,
+}
+
+/// Chains `latents.len()` primitives from `seed` (one latent each), returning the statistics
+/// and the decoded primitives.
+pub fn long_rollout(
+    model: &super::MotionModel,
+    body: &super::BodyContext,
+    seed: super::PrimitiveSeed,
+    latents: &[Vec<f32>],
+) -> Result<(ChainReport, Vec<super::DecodedPrimitive>), super::infer::DecodeError> {
+    use crate::body::PARENTS;
+    use crate::math::rotation::orthonormality_error;
+    let started = std::time::Instant::now();
+    let rest = body.shaped.rest_joints;
+    let foot = super::rig::RigGeometry::new(body.model, &body.betas)?.foot_markers;
+    let mut seed = seed;
+    let mut out = Vec::with_capacity(latents.len());
+    let mut r = ChainReport {
+        primitives: latents.len(),
+        frames: 0,
+        pelvis_z_min_m: f64::INFINITY,
+        pelvis_z_max_m: f64::NEG_INFINITY,
+        bone_length_max_dev_m: 0.0,
+        canonical_orthonormality_max_err: 0.0,
+        lowest_foot_mean_m: 0.0,
+        lowest_foot_min_m: f64::INFINITY,
+        lowest_foot_max_m: f64::NEG_INFINITY,
+        contact_mean: 0.0,
+        displacement_m: 0.0,
+        seconds: 0.0,
+    };
+    for z in latents {
+        let p = model
+            .decode(body, std::slice::from_ref(&seed), std::slice::from_ref(z))?
+            .remove(0);
+        r.canonical_orthonormality_max_err = r
+            .canonical_orthonormality_max_err
+            .max(orthonormality_error(p.primitive.world_from_canon.matrix3));
+        let feet: Vec<Vec<[f64; 3]>> = p
+            .markers
+            .iter()
+            .map(|m| foot.iter().map(|&k| m[k].to_array()).collect())
+            .collect();
+        r.contact_mean += contact_score(&feet, 0.0);
+        for f in SEED_FRAMES..PRIMITIVE_FRAMES {
+            let joints = &p.joints[f];
+            r.frames += 1;
+            r.pelvis_z_min_m = r.pelvis_z_min_m.min(joints[0].z);
+            r.pelvis_z_max_m = r.pelvis_z_max_m.max(joints[0].z);
+            for j in 1..super::rig::BODY_JOINTS {
+                let parent = PARENTS[j].unwrap_or(0);
+                let posed = joints[j].distance(joints[parent]);
+                let rest_len = rest[j].distance(rest[parent]);
+                r.bone_length_max_dev_m = r.bone_length_max_dev_m.max((posed - rest_len).abs());
+            }
+            let lowest = feet[f].iter().map(|q| q[2]).fold(f64::INFINITY, f64::min);
+            r.lowest_foot_mean_m += lowest;
+            r.lowest_foot_min_m = r.lowest_foot_min_m.min(lowest);
+            r.lowest_foot_max_m = r.lowest_foot_max_m.max(lowest);
+        }
+        seed = p.next_seed();
+        out.push(p);
+    }
+    r.contact_mean /= latents.len().max(1) as f64;
+    r.lowest_foot_mean_m /= r.frames.max(1) as f64;
+    if let (Some(a), Some(b)) = (out.first(), out.last()) {
+        let (a, b) = (a.joints[0][0], b.joints[PRIMITIVE_FRAMES - 1][0]);
+        r.displacement_m = ((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt();
+    }
+    r.seconds = started.elapsed().as_secs_f64();
+    Ok((r, out))
+}

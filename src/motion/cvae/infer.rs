@@ -1,0 +1,239 @@
+//! Inference: a batch of (seed, latent) → primitives in the world, with the 67 markers and the
+//! CPF of every frame from the f64 body code. This is what the locomotion policy calls.
+
+use std::path::{Path, PathBuf};
+
+use burn::backend::Flex;
+use burn::prelude::*;
+
+use super::eval::decode_raw;
+use super::features::{frame_features, frame_params, FRAME_DIM};
+use super::net::{ArchConfig, PrimitiveVae};
+use super::rig::BODY_JOINTS;
+use super::weights::{self, WeightsError};
+use crate::body::{
+    farthest_point_markers, joint, BodyModel, BodyParams, CpfCalibration, PoseError, ShapedBody,
+    NUM_MARKERS,
+};
+use crate::math::{Affine3, Vec3};
+use crate::motion::primitive::{
+    canonical_frame, Primitive, PrimitiveError, PRIMITIVE_FRAMES, SEED_FRAMES,
+};
+
+/// Backend of inference (CPU).
+pub type InferBackend = Flex;
+
+/// The two seed frames of a primitive, in world coordinates (z up).
+#[derive(Debug, Clone)]
+pub struct PrimitiveSeed {
+    pub frames: [BodyParams; SEED_FRAMES],
+}
+
+/// One decoded primitive: all 20 frames (the seed first), canonical and in the world.
+#[derive(Debug, Clone)]
+pub struct DecodedPrimitive {
+    /// Frames in the canonical frame of the seed, and `world_from_canon`.
+    pub primitive: Primitive,
+    /// The same frames in the world.
+    pub world: Vec<BodyParams>,
+    /// The 67 markers of each frame, in the world.
+    pub markers: Vec<Vec<Vec3>>,
+    /// Joints of each frame, in the world.
+    pub joints: Vec<Vec<Vec3>>,
+    /// `world_from_cpf` of each frame.
+    pub world_from_cpf: Vec<Affine3>,
+}
+
+impl DecodedPrimitive {
+    /// The seed of the primitive that follows: this one's last two frames.
+    pub fn next_seed(&self) -> PrimitiveSeed {
+        let n = self.world.len();
+        PrimitiveSeed {
+            frames: std::array::from_fn(|k| self.world[n - SEED_FRAMES + k].clone()),
+        }
+    }
+}
+
+/// The body the decoded motion drives: shape, marker ids and CPF calibration.
+pub struct BodyContext<'m> {
+    pub model: &'m BodyModel,
+    pub shaped: ShapedBody<'m>,
+    pub betas: Vec<f64>,
+    pub marker_ids: Vec<u32>,
+    pub cpf: CpfCalibration,
+}
+
+impl<'m> BodyContext<'m> {
+    pub fn new(model: &'m BodyModel, betas: &[f64]) -> Result<Self, PoseError> {
+        let shaped = model.shape(betas, &[])?;
+        let cpf = CpfCalibration::from_rest_joints(&shaped.rest_joints);
+        Ok(Self {
+            model,
+            shaped,
+            betas: betas.to_vec(),
+            marker_ids: farthest_point_markers(model, NUM_MARKERS),
+            cpf,
+        })
+    }
+
+    fn rest_pelvis(&self) -> Vec3 {
+        self.shaped.rest_joints[joint::PELVIS]
+    }
+}
+
+/// Why decoding failed.
+#[derive(Debug, thiserror::Error)]
+pub enum DecodeError {
+    #[error("{seeds} seeds but {latents} latents")]
+    BatchMismatch { seeds: usize, latents: usize },
+    #[error("latent {index} has {found} values, the model takes {expected}")]
+    LatentSize {
+        index: usize,
+        found: usize,
+        expected: usize,
+    },
+    #[error("decoded primitive {index} is not finite")]
+    NonFinite { index: usize },
+    #[error(transparent)]
+    Primitive(#[from] PrimitiveError),
+    #[error(transparent)]
+    Pose(#[from] PoseError),
+}
+
+/// A trained primitive model, ready to decode.
+#[derive(Debug)]
+pub struct MotionModel {
+    pub path: PathBuf,
+    pub arch: ArchConfig,
+    pub net: PrimitiveVae<InferBackend>,
+}
+
+impl MotionModel {
+    /// Loads a weights file (e.g. the shipped `assets/motion/primitive_cvae.safetensors`).
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, WeightsError> {
+        let path = path.as_ref();
+        let (arch, net) = weights::load(path, &Default::default())?;
+        Ok(Self {
+            path: path.into(),
+            arch,
+            net,
+        })
+    }
+
+    /// Latent size.
+    pub fn latent_dim(&self) -> usize {
+        self.arch.latent_dim
+    }
+
+    /// The network alone: canonical seed features `[B × 2 × F]` and latents `[B × L]` →
+    /// canonical features of all 20 frames `[B × 20 × F]`.
+    pub fn decode_features(&self, seeds: &[f32], latents: &[f32]) -> Vec<f32> {
+        let b = latents.len() / self.latent_dim();
+        let device = Default::default();
+        let seed = Tensor::<InferBackend, 3>::from_data(
+            TensorData::new(seeds.to_vec(), [b, SEED_FRAMES, FRAME_DIM]),
+            &device,
+        );
+        let z = Tensor::from_data(
+            TensorData::new(latents.to_vec(), [b, self.latent_dim()]),
+            &device,
+        );
+        decode_raw(&self.net, seed, z)
+            .into_data()
+            .to_vec()
+            .expect("f32 features")
+    }
+
+    /// Decodes a batch of seeds (world) with one latent each.
+    pub fn decode(
+        &self,
+        body: &BodyContext,
+        seeds: &[PrimitiveSeed],
+        latents: &[Vec<f32>],
+    ) -> Result<Vec<DecodedPrimitive>, DecodeError> {
+        if seeds.len() != latents.len() {
+            return Err(DecodeError::BatchMismatch {
+                seeds: seeds.len(),
+                latents: latents.len(),
+            });
+        }
+        let l = self.latent_dim();
+        if let Some((index, z)) = latents.iter().enumerate().find(|(_, z)| z.len() != l) {
+            return Err(DecodeError::LatentSize {
+                index,
+                found: z.len(),
+                expected: l,
+            });
+        }
+        let rest_pelvis = body.rest_pelvis();
+        let mut canon_seeds = Vec::with_capacity(seeds.len());
+        let mut seed_features = Vec::with_capacity(seeds.len() * SEED_FRAMES * FRAME_DIM);
+        for seed in seeds {
+            let first = body
+                .shaped
+                .skeleton(&seed.frames[0].pose, seed.frames[0].transl)?;
+            let world_from_canon = canonical_frame(&first.joints)?;
+            let canon_from_world = world_from_canon.inverse();
+            let frames: Vec<BodyParams> = seed
+                .frames
+                .iter()
+                .map(|f| f.moved_rigidly(canon_from_world, rest_pelvis))
+                .collect();
+            for f in &frames {
+                seed_features.extend_from_slice(&frame_features(f));
+            }
+            canon_seeds.push((world_from_canon, frames));
+        }
+        let flat: Vec<f32> = latents.iter().flatten().copied().collect();
+        let decoded = self.decode_features(&seed_features, &flat);
+        let per = PRIMITIVE_FRAMES * FRAME_DIM;
+        canon_seeds
+            .into_iter()
+            .enumerate()
+            .map(|(i, (world_from_canon, seed_frames))| {
+                let values = &decoded[i * per..(i + 1) * per];
+                if values.iter().any(|v| !v.is_finite()) {
+                    return Err(DecodeError::NonFinite { index: i });
+                }
+                let last_seed = seed_frames[SEED_FRAMES - 1].clone();
+                let mut frames = seed_frames;
+                for f in SEED_FRAMES..PRIMITIVE_FRAMES {
+                    let mut p =
+                        frame_params(&values[f * FRAME_DIM..(f + 1) * FRAME_DIM], &body.betas);
+                    // Joints the model does not drive (jaw, eyes, hands) keep the seed's pose.
+                    p.pose[3 * BODY_JOINTS..].copy_from_slice(&last_seed.pose[3 * BODY_JOINTS..]);
+                    p.expression = last_seed.expression.clone();
+                    frames.push(p);
+                }
+                let primitive = Primitive {
+                    world_from_canon,
+                    frames,
+                };
+                posed(body, primitive)
+            })
+            .collect()
+    }
+}
+
+/// World frames, markers, joints and CPF of a canonical primitive.
+fn posed(body: &BodyContext, primitive: Primitive) -> Result<DecodedPrimitive, DecodeError> {
+    let world = primitive.to_world(body.model)?;
+    let mut markers = Vec::with_capacity(world.len());
+    let mut joints = Vec::with_capacity(world.len());
+    let mut world_from_cpf = Vec::with_capacity(world.len());
+    for f in &world {
+        let mf = body
+            .shaped
+            .marker_frame(&f.pose, f.transl, &body.marker_ids)?;
+        world_from_cpf.push(body.cpf.world_from_cpf(&mf.skeleton));
+        joints.push(mf.skeleton.joints.to_vec());
+        markers.push(mf.markers);
+    }
+    Ok(DecodedPrimitive {
+        primitive,
+        world,
+        markers,
+        joints,
+        world_from_cpf,
+    })
+}

@@ -1,0 +1,24 @@
+//! The motion-primitive model: a conditional VAE (burn) over canonical primitives of 20
+//! frames at 40 fps. Given the 2 seed frames and a 128-D latent, an autoregressive GRU-cell
+//! decoder writes the other 18 frames (6D rotations of global orient and the 21 body joints,
+//! pelvis translation) in the primitive's canonical frame.
+//!
+//! Owns the network, its losses (pose, FK markers through a tensor rig, velocity, foot skate and
+//! floor, robust KL), training (single primitives, then rollout over chains), weights files and
+//! the inference API; skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
+
+pub mod data;
+pub mod eval;
+pub mod features;
+pub mod infer;
+pub mod loss;
+pub mod net;
+pub mod rig;
+pub mod rollout;
+pub mod train;
+pub mod weights;
+
+pub use infer::{BodyContext, DecodedPrimitive, MotionModel, PrimitiveSeed};
+pub use net::{ArchConfig, PrimitiveVae};
+pub use train::{train, TrainPlan, TrainReport};
+pub use weights::WeightsError;

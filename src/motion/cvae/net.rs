@@ -1,0 +1,165 @@
+//! The network: an MLP encoder over the whole primitive and an autoregressive GRU-cell decoder
+//! that adds a residual to the previous frame, conditioned on the seed and the latent.
+//!
+//! Shapes: `B` primitives, `T = 20` frames, `S = 2` seed frames, `F = FRAME_DIM = 135`
+//! values per frame, `L` latent dimensions (128).
+
+use burn::module::Param;
+use burn::nn::{Linear, LinearConfig};
+use burn::prelude::*;
+use burn::tensor::activation::{relu, sigmoid};
+use serde::{Deserialize, Serialize};
+
+use super::features::FRAME_DIM;
+use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
+
+/// Frames the decoder writes per primitive.
+pub const DECODED_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
+
+/// Architecture of the C-VAE (saved inside the weights file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArchConfig {
+    /// Latent dimensions (paper: 128).
+    pub latent_dim: usize,
+    /// Width of the encoder's hidden layers.
+    pub encoder_width: usize,
+    /// GRU hidden size of the decoder.
+    pub decoder_width: usize,
+}
+
+impl Default for ArchConfig {
+    fn default() -> Self {
+        Self {
+            latent_dim: 128,
+            encoder_width: 256,
+            decoder_width: 256,
+        }
+    }
+}
+
+impl ArchConfig {
+    /// Builds a freshly initialised network; `mean`/`std` normalise frame features.
+    pub fn init<B: Backend>(
+        &self,
+        mean: &[f32; FRAME_DIM],
+        std: &[f32; FRAME_DIM],
+        device: &B::Device,
+    ) -> PrimitiveVae<B> {
+        let (l, e, h) = (self.latent_dim, self.encoder_width, self.decoder_width);
+        let constant = |v: &[f32; FRAME_DIM]| {
+            Param::from_tensor(Tensor::from_data(
+                TensorData::new(v.to_vec(), [FRAME_DIM]),
+                device,
+            ))
+            .set_require_grad(false)
+        };
+        let linear = |i, o| LinearConfig::new(i, o).init(device);
+        PrimitiveVae {
+            feature_mean: constant(mean),
+            feature_std: constant(std),
+            enc_in: linear(PRIMITIVE_FRAMES * FRAME_DIM, e),
+            enc_hidden: linear(e, e),
+            enc_mu: linear(e, l),
+            enc_logvar: linear(e, l),
+            dec_init: linear(l + SEED_FRAMES * FRAME_DIM, h),
+            gru_input: linear(l + 2 * FRAME_DIM, 3 * h),
+            gru_hidden: linear(h, 3 * h),
+            dec_out: linear(h, FRAME_DIM),
+        }
+    }
+
+    /// Multiply-adds of one primitive decoded (linear layers only; activations and the
+    /// Gram-Schmidt step are a few hundred more per frame).
+    pub fn decoder_macs(&self) -> usize {
+        let (l, h) = (self.latent_dim, self.decoder_width);
+        let init = (l + SEED_FRAMES * FRAME_DIM) * h;
+        let step = (l + 2 * FRAME_DIM) * 3 * h + h * 3 * h + h * FRAME_DIM;
+        init + DECODED_FRAMES * step
+    }
+}
+
+/// The motion-primitive C-VAE.
+#[derive(Module, Debug)]
+pub struct PrimitiveVae<B: Backend> {
+    /// Per-value mean and spread of frame features (fixed by the training data, not trained).
+    pub feature_mean: Param<Tensor<B, 1>>,
+    pub feature_std: Param<Tensor<B, 1>>,
+    enc_in: Linear<B>,
+    enc_hidden: Linear<B>,
+    enc_mu: Linear<B>,
+    enc_logvar: Linear<B>,
+    dec_init: Linear<B>,
+    gru_input: Linear<B>,
+    gru_hidden: Linear<B>,
+    dec_out: Linear<B>,
+}
+
+impl<B: Backend> PrimitiveVae<B> {
+    /// Latent size.
+    pub fn latent_dim(&self) -> usize {
+        self.enc_mu.weight.dims()[1]
+    }
+
+    /// Raw features `[.., F]` → normalised.
+    pub fn normalize<const D: usize>(&self, x: Tensor<B, D>) -> Tensor<B, D> {
+        let (mean, std) = self.stats::<D>();
+        (x - mean) / std
+    }
+
+    /// Normalised features `[.., F]` → raw.
+    pub fn denormalize<const D: usize>(&self, x: Tensor<B, D>) -> Tensor<B, D> {
+        let (mean, std) = self.stats::<D>();
+        x * std + mean
+    }
+
+    fn stats<const D: usize>(&self) -> (Tensor<B, D>, Tensor<B, D>) {
+        let mut shape = [1usize; D];
+        shape[D - 1] = FRAME_DIM;
+        (
+            self.feature_mean.val().detach().reshape(shape),
+            self.feature_std.val().detach().reshape(shape),
+        )
+    }
+
+    /// Posterior `(mu, logvar)`, each `[B, L]`, of normalised primitives `[B, T, F]`.
+    pub fn encode(&self, x: Tensor<B, 3>) -> (Tensor<B, 2>, Tensor<B, 2>) {
+        let h = relu(self.enc_in.forward(x.flatten(1, 2)));
+        let h = relu(self.enc_hidden.forward(h));
+        (self.enc_mu.forward(h.clone()), self.enc_logvar.forward(h))
+    }
+
+    /// Decodes normalised seeds `[B, S, F]` and latents `[B, L]` into the normalised frames
+    /// after the seed, `[B, T − S, F]`.
+    pub fn decode(&self, seed: Tensor<B, 3>, z: Tensor<B, 2>) -> Tensor<B, 3> {
+        let [b, s, f] = seed.dims();
+        let hidden = self.gru_hidden.weight.dims()[0];
+        let mut h = self
+            .dec_init
+            .forward(Tensor::cat(
+                vec![z.clone(), seed.clone().reshape([b, s * f])],
+                1,
+            ))
+            .tanh();
+        let mut prev = seed.clone().narrow(1, s - 1, 1).reshape([b, f]);
+        let mut velocity = prev.clone() - seed.narrow(1, s - 2, 1).reshape([b, f]);
+        let mut out = Vec::with_capacity(DECODED_FRAMES);
+        for _ in 0..DECODED_FRAMES {
+            let gx = self
+                .gru_input
+                .forward(Tensor::cat(vec![z.clone(), prev.clone(), velocity], 1));
+            let gh = self.gru_hidden.forward(h.clone());
+            let r = sigmoid(gx.clone().narrow(1, 0, hidden) + gh.clone().narrow(1, 0, hidden));
+            let u = sigmoid(
+                gx.clone().narrow(1, hidden, hidden) + gh.clone().narrow(1, hidden, hidden),
+            );
+            let n =
+                (gx.narrow(1, 2 * hidden, hidden) + r * gh.narrow(1, 2 * hidden, hidden)).tanh();
+            h = n.clone() + u * (h - n);
+            velocity = self.dec_out.forward(h.clone());
+            prev = prev + velocity.clone();
+            out.push(prev.clone());
+        }
+        Tensor::stack(out, 1)
+    }
+}

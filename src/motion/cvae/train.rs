@@ -1,0 +1,414 @@
+//! Training: single primitives first, then rollout fine-tuning over chains of primitives, each
+//! decoded from the previous one's last two frames (gradients flow through the chain).
+//! Deterministic for a seed: batches, noise and initial weights all come from it.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use burn::backend::{Autodiff, Flex};
+use burn::grad_clipping::GradientClippingConfig;
+use burn::module::AutodiffModule;
+use burn::optim::{AdamConfig, GradientsParams, Optimizer};
+use burn::prelude::*;
+use indicatif::{ProgressBar, ProgressStyle};
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
+
+use super::data::{build_set, ClipPart, PrimitiveSet, PRIMITIVE_VALUES};
+use super::eval::{decode_raw, marker_mpjpe_mm};
+use super::loss::{primitive_loss, LossWeights};
+use super::net::{ArchConfig, PrimitiveVae};
+use super::rig::{RigGeometry, TensorRig};
+use super::rollout::next_seed;
+use super::weights;
+use crate::body::BodyModel;
+use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::motion::MotionSequence;
+
+use super::features::FRAME_DIM;
+
+/// The loss log gets every this many steps (and each phase's last).
+pub const LOG_EVERY_STEPS: usize = 10;
+
+/// Backend of training (CPU, reverse-mode autodiff).
+pub type TrainBackend = Autodiff<Flex>;
+
+/// One clip of the training config.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClipSpec {
+    pub path: PathBuf,
+    /// The whole clip is held out for evaluation.
+    pub held_out: bool,
+    /// Frames from this time on (s) are held out; earlier ones train.
+    pub held_out_from_s: Option<f64>,
+}
+
+/// Length of one training phase.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhasePlan {
+    pub steps: usize,
+    pub batch_size: usize,
+    pub learning_rate: f64,
+}
+
+/// A checked training run (see `cli::train` for the config file).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainPlan {
+    pub seed: u64,
+    pub body_model: PathBuf,
+    pub clips: Vec<ClipSpec>,
+    /// Frames between the starts of consecutive training primitives.
+    pub stride_frames: usize,
+    /// Add the left-right mirrored clips.
+    pub mirror: bool,
+    pub arch: ArchConfig,
+    pub loss: LossWeights,
+    /// Steps over which the KL weight ramps up from 0.
+    pub kl_warmup_steps: usize,
+    pub primitive: PhasePlan,
+    pub rollout: PhasePlan,
+    /// Primitives per rollout chain.
+    pub rollout_primitives: usize,
+    pub weights_out: PathBuf,
+    pub log_out: PathBuf,
+}
+
+/// What a run produced.
+#[derive(Debug, Clone)]
+pub struct TrainReport {
+    pub train_primitives: usize,
+    pub train_chains: usize,
+    pub held_out_primitives: usize,
+    pub seconds: f64,
+    pub final_loss: f64,
+    pub held_out_mpjpe_mm: Option<f64>,
+}
+
+/// Why training stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum TrainError {
+    #[error(transparent)]
+    Model(#[from] crate::body::ModelFileError),
+    #[error(transparent)]
+    Motion(#[from] crate::motion::MotionFileError),
+    #[error(transparent)]
+    Primitive(#[from] crate::motion::primitive::PrimitiveError),
+    #[error(transparent)]
+    Pose(#[from] crate::body::PoseError),
+    #[error(transparent)]
+    Weights(#[from] weights::WeightsError),
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{0}")]
+    Data(String),
+    #[error("training diverged: loss is {loss} at {phase} step {step}")]
+    Diverged {
+        phase: &'static str,
+        step: usize,
+        loss: f64,
+    },
+}
+
+/// Loads the clips of a plan and splits them into training and held-out parts.
+pub fn load_clips(plan: &TrainPlan) -> Result<(Vec<ClipPart>, Vec<ClipPart>), TrainError> {
+    let mut train = Vec::new();
+    let mut held_out = Vec::new();
+    for spec in &plan.clips {
+        let seq = MotionSequence::read(&spec.path)?;
+        if (seq.frame_rate_hz - PRIMITIVE_RATE_HZ).abs() > 1e-6 {
+            return Err(TrainError::Data(format!(
+                "clip {}: {} Hz, expected {PRIMITIVE_RATE_HZ} Hz (resample it with `egogen motion import --rate-hz 40`)",
+                spec.path.display(),
+                seq.frame_rate_hz
+            )));
+        }
+        let name = spec
+            .path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let n = seq.len();
+        let split = match (spec.held_out, spec.held_out_from_s) {
+            (true, _) => 0,
+            (false, Some(t)) => ((t * PRIMITIVE_RATE_HZ).round() as usize).min(n),
+            (false, None) => n,
+        };
+        let part = |frames| ClipPart {
+            name: name.clone(),
+            seq: seq.clone(),
+            frames,
+        };
+        if split > 0 {
+            train.push(part(0..split));
+        }
+        if split < n {
+            held_out.push(part(split..n));
+        }
+    }
+    Ok((train, held_out))
+}
+
+/// Standard normal samples (Box-Muller on the seeded stream).
+pub fn normal_samples(rng: &mut ChaCha8Rng, n: usize) -> Vec<f32> {
+    let uniform =
+        |rng: &mut ChaCha8Rng| ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    (0..n)
+        .map(|_| {
+            let (u1, u2) = (uniform(rng), uniform(rng));
+            ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
+        })
+        .collect()
+}
+
+/// A random batch of items of `set` as `[B, K, T, F]` features and `[B, K]` floors.
+fn batch<B: Backend>(
+    set: &PrimitiveSet,
+    size: usize,
+    rng: &mut ChaCha8Rng,
+    device: &B::Device,
+) -> (Tensor<B, 4>, Tensor<B, 2>) {
+    let k = set.chain_len;
+    let mut x = Vec::with_capacity(size * k * PRIMITIVE_VALUES);
+    let mut floors = Vec::with_capacity(size * k);
+    for _ in 0..size {
+        let i = (rng.next_u64() % set.len() as u64) as usize;
+        x.extend_from_slice(set.item(i));
+        floors.extend_from_slice(set.floors(i));
+    }
+    (
+        Tensor::from_data(
+            TensorData::new(x, [size, k, PRIMITIVE_FRAMES, FRAME_DIM]),
+            device,
+        ),
+        Tensor::from_data(TensorData::new(floors, [size, k]), device),
+    )
+}
+
+/// Loss of a batch of chains `[B, K, T, F]`: every primitive after the first is decoded from
+/// the seed that the previous decoded primitive leaves.
+pub fn chain_loss<B: Backend>(
+    net: &PrimitiveVae<B>,
+    rig: &TensorRig<B>,
+    weights: &LossWeights,
+    x: Tensor<B, 4>,
+    floors: Tensor<B, 2>,
+    rng: &mut ChaCha8Rng,
+) -> (Tensor<B, 1>, Vec<(&'static str, f64)>) {
+    let [b, k, t, f] = x.dims();
+    let device = x.device();
+    let latent = net.latent_dim();
+    let mut seed = x
+        .clone()
+        .narrow(1, 0, 1)
+        .reshape([b, t, f])
+        .narrow(1, 0, SEED_FRAMES);
+    let mut pred_floor = floors.clone().narrow(1, 0, 1).reshape([b]);
+    let mut total: Option<Tensor<B, 1>> = None;
+    let mut parts: Vec<(&'static str, f64)> = Vec::new();
+    for c in 0..k {
+        let target = x.clone().narrow(1, c, 1).reshape([b, t, f]);
+        let target_floor = floors.clone().narrow(1, c, 1).reshape([b]);
+        let (mu, logvar) = net.encode(net.normalize(target.clone()));
+        let eps = Tensor::<B, 2>::from_data(
+            TensorData::new(normal_samples(rng, b * latent), [b, latent]),
+            &device,
+        );
+        let z = mu.clone() + logvar.clone().mul_scalar(0.5).exp() * eps;
+        let full = decode_raw(net, seed.clone(), z);
+        let terms = primitive_loss(
+            rig,
+            weights,
+            full.clone(),
+            target,
+            pred_floor.clone(),
+            target_floor,
+            (mu, logvar),
+        );
+        total = Some(match total {
+            Some(t) => t + terms.total,
+            None => terms.total,
+        });
+        for (i, (name, v)) in terms.parts.into_iter().enumerate() {
+            let v = v.into_scalar().elem::<f64>() / k as f64;
+            match parts.get_mut(i) {
+                Some(p) => p.1 += v,
+                None => parts.push((name, v)),
+            }
+        }
+        if c + 1 < k {
+            let (next, height) = next_seed(rig, full);
+            seed = next;
+            pred_floor = pred_floor - height;
+        }
+    }
+    let total = total.expect("at least one primitive").div_scalar(k as f64);
+    (total, parts)
+}
+
+/// Trains per the plan and writes weights and the loss log.
+pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, TrainError> {
+    let started = Instant::now();
+    let device = Default::default();
+    let model = BodyModel::load(&plan.body_model)?;
+    let (train_parts, held_parts) = load_clips(plan)?;
+    let geo = RigGeometry::new(&model, &[])?;
+    let singles = build_set(&train_parts, 1, plan.stride_frames, plan.mirror, &model)?;
+    let chains = if plan.rollout.steps > 0 {
+        build_set(
+            &train_parts,
+            plan.rollout_primitives,
+            plan.stride_frames,
+            plan.mirror,
+            &model,
+        )?
+    } else {
+        PrimitiveSet::new(plan.rollout_primitives)
+    };
+    let held = build_set(&held_parts, 1, plan.stride_frames, false, &model)?;
+    if singles.is_empty() {
+        return Err(TrainError::Data(
+            "no training primitive: every clip is held out or shorter than 20 frames".into(),
+        ));
+    }
+    if plan.rollout.steps > 0 && chains.is_empty() {
+        return Err(TrainError::Data(format!(
+            "rollout: no clip part holds {} chained primitives",
+            plan.rollout_primitives
+        )));
+    }
+    let (mean, std) = singles.feature_stats(1e-3);
+    TrainBackend::seed(&device, plan.seed);
+    let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
+    let rig = TensorRig::<TrainBackend>::new(&geo, &device);
+    let mut net: PrimitiveVae<TrainBackend> = plan.arch.init(&mean, &std, &device);
+
+    let log_file = std::fs::File::create(&plan.log_out).map_err(|source| TrainError::Io {
+        path: plan.log_out.clone(),
+        source,
+    })?;
+    let mut log = std::io::BufWriter::new(log_file);
+    let total_steps = plan.primitive.steps + plan.rollout.steps;
+    let bar = if show_progress {
+        ProgressBar::new(total_steps as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{prefix} {bar:30} {pos}/{len} [{elapsed_precise} < {eta_precise}] {msg}",
+        )
+        .expect("progress template"),
+    );
+    let mut final_loss = f64::NAN;
+    let mut global_step = 0usize;
+    for (phase, phase_plan, set) in [
+        ("primitive", plan.primitive, &singles),
+        ("rollout", plan.rollout, &chains),
+    ] {
+        if phase_plan.steps == 0 {
+            continue;
+        }
+        bar.set_prefix(phase);
+        let mut optim = AdamConfig::new()
+            .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
+            .init::<TrainBackend, PrimitiveVae<TrainBackend>>();
+        for step in 0..phase_plan.steps {
+            // Cosine decay to a tenth of the phase's rate.
+            let progress = step as f64 / phase_plan.steps as f64;
+            let lr = phase_plan.learning_rate
+                * (0.1 + 0.45 * (1.0 + (std::f64::consts::PI * progress).cos()));
+            let mut weights = plan.loss;
+            if plan.kl_warmup_steps > 0 {
+                weights.kl *= (global_step as f64 / plan.kl_warmup_steps as f64).min(1.0);
+            }
+            let (x, floors) = batch::<TrainBackend>(set, phase_plan.batch_size, &mut rng, &device);
+            let (loss, parts) = chain_loss(&net, &rig, &weights, x, floors, &mut rng);
+            let value = loss.clone().into_scalar().elem::<f64>();
+            if !value.is_finite() {
+                return Err(TrainError::Diverged {
+                    phase,
+                    step,
+                    loss: value,
+                });
+            }
+            let grads = GradientsParams::from_grads(loss.backward(), &net);
+            net = optim.step(lr, net, grads);
+            final_loss = value;
+            let mut line = serde_json::json!({
+                "phase": phase,
+                "step": step,
+                "lr": lr,
+                "loss": value,
+                "elapsed_s": started.elapsed().as_secs_f64(),
+            });
+            for (name, v) in &parts {
+                line[*name] = serde_json::json!(v);
+            }
+            if step % LOG_EVERY_STEPS == 0 || step + 1 == phase_plan.steps {
+                writeln!(log, "{line}").map_err(|source| TrainError::Io {
+                    path: plan.log_out.clone(),
+                    source,
+                })?;
+            }
+            bar.set_message(format!("loss {value:.4}"));
+            bar.inc(1);
+            global_step += 1;
+        }
+    }
+    bar.finish_and_clear();
+    let inference = net.valid();
+    let held_out_mpjpe_mm = if held.is_empty() {
+        None
+    } else {
+        let irig = TensorRig::new(&geo, &device);
+        Some(marker_mpjpe_mm(&inference, &irig, &held, 256))
+    };
+    let summary = serde_json::json!({
+        "phase": "done",
+        "seconds": started.elapsed().as_secs_f64(),
+        "held_out_marker_mpjpe_mm": held_out_mpjpe_mm,
+        "train_primitives": singles.len(),
+        "train_chains": chains.len(),
+        "held_out_primitives": held.len(),
+    });
+    writeln!(log, "{summary}")
+        .and_then(|_| log.flush())
+        .map_err(|source| TrainError::Io {
+            path: plan.log_out.clone(),
+            source,
+        })?;
+    weights::save(&inference, &plan.arch, &plan.weights_out)?;
+    Ok(TrainReport {
+        train_primitives: singles.len(),
+        train_chains: chains.len(),
+        held_out_primitives: held.len(),
+        seconds: started.elapsed().as_secs_f64(),
+        final_loss,
+        held_out_mpjpe_mm,
+    })
+}
+
+/// Clip parts of a plan as sets for evaluation: `(train, held_out)` single primitives, no
+/// mirroring.
+pub fn evaluation_sets(
+    plan_clips: &TrainPlan,
+    model: &BodyModel,
+) -> Result<(PrimitiveSet, PrimitiveSet), TrainError> {
+    let (train, held) = load_clips(plan_clips)?;
+    Ok((
+        build_set(&train, 1, plan_clips.stride_frames, false, model)?,
+        build_set(&held, 1, plan_clips.stride_frames, false, model)?,
+    ))
+}
+
+/// Default path of the shipped weights, relative to the crate root.
+pub const SHIPPED_WEIGHTS: &str = "assets/motion/primitive_cvae.safetensors";
+
+/// The shipped weights' path.
+pub fn shipped_weights_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(SHIPPED_WEIGHTS)
+}

@@ -1,0 +1,142 @@
+//! Weights files: safetensors holding the network's tensors, with the architecture in the
+//! header metadata (`egogen.arch`, JSON) so that loading needs nothing else.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use burn::prelude::*;
+use burn::store::{ApplyError, ModuleSnapshot, SafetensorsStore};
+
+use super::features::FRAME_DIM;
+use super::net::{ArchConfig, PrimitiveVae};
+
+/// Metadata key holding the [`ArchConfig`].
+const ARCH_KEY: &str = "egogen.arch";
+
+/// Why a weights file could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum WeightsError {
+    #[error("weights file {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("weights file {path}: not a safetensors file ({message})")]
+    Format { path: PathBuf, message: String },
+    #[error("weights file {path}: no `{ARCH_KEY}` metadata; was it written by `egogen train primitive`?")]
+    NoArchitecture { path: PathBuf },
+    #[error("weights file {path}: tensor `{tensor}` {message}")]
+    Tensor {
+        path: PathBuf,
+        tensor: String,
+        message: String,
+    },
+    #[error("weights file {path}: {message}")]
+    Store { path: PathBuf, message: String },
+}
+
+/// Reads the architecture from a weights file's header.
+pub fn read_arch(path: &Path) -> Result<ArchConfig, WeightsError> {
+    let io = |source| WeightsError::Io {
+        path: path.into(),
+        source,
+    };
+    let format = |message: String| WeightsError::Format {
+        path: path.into(),
+        message,
+    };
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut len = [0u8; 8];
+    file.read_exact(&mut len)
+        .map_err(|e| format(format!("header length: {e}")))?;
+    let len = u64::from_le_bytes(len);
+    if len > 100_000_000 {
+        return Err(format(format!("header of {len} bytes")));
+    }
+    let mut header = vec![0u8; len as usize];
+    file.read_exact(&mut header)
+        .map_err(|e| format(format!("header: {e}")))?;
+    let header: serde_json::Value =
+        serde_json::from_slice(&header).map_err(|e| format(format!("header JSON: {e}")))?;
+    let arch = header
+        .get("__metadata__")
+        .and_then(|m| m.get(ARCH_KEY))
+        .and_then(|a| a.as_str())
+        .ok_or_else(|| WeightsError::NoArchitecture { path: path.into() })?;
+    serde_json::from_str(arch).map_err(|e| format(format!("`{ARCH_KEY}` metadata: {e}")))
+}
+
+/// Loads a network from a weights file written by [`save`].
+pub fn load<B: Backend>(
+    path: &Path,
+    device: &B::Device,
+) -> Result<(ArchConfig, PrimitiveVae<B>), WeightsError> {
+    let arch = read_arch(path)?;
+    let mut net = arch.init::<B>(&[0.0; FRAME_DIM], &[1.0; FRAME_DIM], device);
+    let mut store = SafetensorsStore::from_file(path)
+        .validate(false)
+        .allow_partial(true);
+    let result = net.load_from(&mut store).map_err(|e| WeightsError::Store {
+        path: path.into(),
+        message: e.to_string(),
+    })?;
+    let tensor = |tensor: &str, message: String| WeightsError::Tensor {
+        path: path.into(),
+        tensor: tensor.into(),
+        message,
+    };
+    if let Some(e) = result.errors.first() {
+        return Err(match e {
+            ApplyError::ShapeMismatch {
+                path: t,
+                expected,
+                found,
+            } => tensor(
+                t,
+                format!(
+                    "has shape {:?}, expected {:?} for {arch:?}",
+                    found.as_slice(),
+                    expected.as_slice()
+                ),
+            ),
+            ApplyError::DTypeMismatch {
+                path: t,
+                expected,
+                found,
+            } => tensor(t, format!("has type {found:?}, expected {expected:?}")),
+            ApplyError::AdapterError { path: t, message }
+            | ApplyError::LoadError { path: t, message } => tensor(t, message.clone()),
+        });
+    }
+    if let Some((t, _)) = result.missing.first() {
+        return Err(tensor(t, "is missing".into()));
+    }
+    if let Some(t) = result.unused.first() {
+        return Err(tensor(t, "is not part of the network".into()));
+    }
+    Ok((arch, net))
+}
+
+/// Writes the network atomically (temporary file, then rename).
+pub fn save<B: Backend>(
+    net: &PrimitiveVae<B>,
+    arch: &ArchConfig,
+    path: &Path,
+) -> Result<(), WeightsError> {
+    let tmp = path.with_extension("safetensors.partial");
+    let arch_json = serde_json::to_string(arch).map_err(|e| WeightsError::Store {
+        path: path.into(),
+        message: e.to_string(),
+    })?;
+    let mut store = SafetensorsStore::from_file(&tmp)
+        .overwrite(true)
+        .metadata(ARCH_KEY, arch_json);
+    net.save_into(&mut store).map_err(|e| WeightsError::Store {
+        path: tmp.clone(),
+        message: e.to_string(),
+    })?;
+    std::fs::rename(&tmp, path).map_err(|source| WeightsError::Io {
+        path: path.into(),
+        source,
+    })
+}
