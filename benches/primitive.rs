@@ -2,6 +2,7 @@
 //! primitive, a batch of 64) in f32, f16 and bf16, and the whole inference call (network, world
 //! frames, 67 markers and CPF per frame in f64) for one primitive and for 16.
 //! Prints the network's multiply-adds per primitive so that achieved FLOP/s can be read off.
+//! `EGOGEN_PRIMITIVE_WEIGHTS=path` benches other weights (e.g. the narrow knob model).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use egogen::body::BodyModel;
@@ -15,7 +16,10 @@ use rand_core::SeedableRng;
 
 fn bench(c: &mut Criterion) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let model = MotionModel::load(shipped_weights_path()).expect("shipped weights");
+    let weights = std::env::var_os("EGOGEN_PRIMITIVE_WEIGHTS")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(shipped_weights_path);
+    let model = MotionModel::load(&weights).expect("primitive weights");
     let l = model.latent_dim();
     eprintln!(
         "decoder: {} multiply-adds = {:.1} MFLOP per primitive ({:?})",
@@ -57,10 +61,8 @@ fn bench(c: &mut Criterion) {
         ("bf16", Some(burn::tensor::FloatDType::BF16)),
     ] {
         let m = match dtype {
-            Some(d) => MotionModel::load(shipped_weights_path())
-                .unwrap()
-                .with_precision(d),
-            None => MotionModel::load(shipped_weights_path()).unwrap(),
+            Some(d) => MotionModel::load(&weights).unwrap().with_precision(d),
+            None => MotionModel::load(&weights).unwrap(),
         };
         for batch in [1usize, 64] {
             g.throughput(Throughput::Elements(batch as u64));

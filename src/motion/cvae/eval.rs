@@ -76,6 +76,14 @@ pub fn decode_raw<B: Backend>(
     Tensor::cat(vec![seed, decoded], 1)
 }
 
+/// Posterior mean latents `[B, L]` of raw primitives `[B, T, F]`, in their precision (the
+/// network runs in its own).
+pub fn posterior_mean<B: Backend>(net: &PrimitiveVae<B>, x: Tensor<B, 3>) -> Tensor<B, 2> {
+    let io = FloatDType::from(x.dtype());
+    let dt = FloatDType::from(net.dtype());
+    net.encode(net.normalize(x.cast(dt))).0.cast(io)
+}
+
 /// Mean marker error (mm) over the decoded frames of every primitive of `set`, each decoded
 /// from its own seed and its posterior mean latent.
 pub fn marker_mpjpe_mm<B: Backend>(
@@ -90,7 +98,7 @@ pub fn marker_mpjpe_mm<B: Backend>(
     for start in (0..set.len()).step_by(batch.max(1)) {
         let end = (start + batch).min(set.len());
         let (x, floors) = set_batch::<B>(set, start..end, &device);
-        let (mu, _) = net.encode(net.normalize(x.clone()));
+        let mu = posterior_mean(net, x.clone());
         let floor = floor_tensor(&floors, &device);
         let pred = decode_raw(net, x.clone().narrow(1, 0, SEED_FRAMES), floor, mu);
         let n = PRIMITIVE_FRAMES - SEED_FRAMES;
