@@ -119,7 +119,18 @@ enum MotionCommand {
         /// PNG of the first 10 s of the chain, from above and from the side.
         #[arg(long)]
         walk_png: Option<PathBuf>,
+        /// Float precision the network runs in (the speed/accuracy knob).
+        #[arg(long, value_enum, default_value_t = Precision::F32)]
+        precision: Precision,
     },
+}
+
+/// Float precision of the motion network.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+enum Precision {
+    F32,
+    F16,
+    Bf16,
 }
 
 #[derive(Subcommand, Debug)]
@@ -264,6 +275,7 @@ fn run(cli: Cli) -> Result<()> {
             chain_primitives,
             seed,
             walk_png,
+            precision,
         }) => {
             let weights = weights.unwrap_or_else(egogen::motion::cvae::train::shipped_weights_path);
             motion_eval(
@@ -273,6 +285,7 @@ fn run(cli: Cli) -> Result<()> {
                 chain_primitives,
                 seed,
                 walk_png.as_deref(),
+                precision,
             )?;
         }
         Command::Motion(MotionCommand::Import {
@@ -690,6 +703,10 @@ fn import_bvh(
     Ok(())
 }
 
+/// Chains from different seeds in `egogen motion eval`, and their length in primitives.
+const SHORT_CHAINS: usize = 20;
+const SHORT_CHAIN_PRIMITIVES: usize = 50;
+
 /// `egogen motion eval`: prints the measurements as JSON lines.
 fn motion_eval(
     weights: &Path,
@@ -698,8 +715,10 @@ fn motion_eval(
     chain_primitives: usize,
     seed: u64,
     walk_png: Option<&Path>,
+    precision: Precision,
 ) -> Result<()> {
     use egogen::motion::cvae::eval::{long_rollout, marker_mpjpe_mm, random_latent_contact};
+    use egogen::motion::cvae::features::{frame_params, FRAME_DIM};
     use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
     use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
     use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
@@ -707,13 +726,24 @@ fn motion_eval(
     use rand_core::SeedableRng;
 
     let plan = egogen::cli::train::load_train_plan(config)?;
-    let model = MotionModel::load(weights)?;
+    use burn::tensor::FloatDType;
+    let model = match precision {
+        Precision::F32 => MotionModel::load(weights)?,
+        Precision::F16 => MotionModel::load(weights)?.with_precision(FloatDType::F16),
+        Precision::Bf16 => MotionModel::load(weights)?.with_precision(FloatDType::BF16),
+    };
+    println!(
+        "{}",
+        serde_json::json!({"weights": weights, "precision": format!("{precision:?}")})
+    );
     let body = BodyModel::load(&plan.body_model)?;
-    let (train_set, held_set) = evaluation_sets(&plan, &body)?;
+    let (train_set, held_set) = evaluation_sets(&plan, &body, true)?;
+    let (_, held_all) = evaluation_sets(&plan, &body, false)?;
     let geo = RigGeometry::new(&body, &[])?;
     let rig = TensorRig::new(&geo, &Default::default());
     let started = std::time::Instant::now();
     let held_mm = marker_mpjpe_mm(&model.net, &rig, &held_set, 256);
+    let held_all_mm = marker_mpjpe_mm(&model.net, &rig, &held_all, 256);
     let train_mm = marker_mpjpe_mm(&model.net, &rig, &train_set, 256);
     println!(
         "{}",
@@ -721,6 +751,8 @@ fn motion_eval(
             "measure": "marker_mpjpe_mm",
             "held_out": held_mm,
             "held_out_primitives": held_set.len(),
+            "held_out_unfiltered": held_all_mm,
+            "held_out_unfiltered_primitives": held_all.len(),
             "train": train_mm,
             "train_primitives": train_set.len(),
             "seconds": started.elapsed().as_secs_f64(),
@@ -741,6 +773,7 @@ fn motion_eval(
     let ctx = BodyContext::new(&body, &[])?;
     let seed_frames = PrimitiveSeed {
         frames: [clip.frame(0), clip.frame(1)],
+        floor_z: 0.0,
     };
     let latents: Vec<Vec<f32>> = (0..chain_primitives)
         .map(|_| normal_samples(&mut rng, l))
@@ -749,6 +782,39 @@ fn motion_eval(
     println!(
         "{}",
         serde_json::json!({"measure": "chain", "seed_clip": plan.clips[1].path.file_name().map(|s| s.to_string_lossy()), "report": chain})
+    );
+    // Shorter chains from many (filtered) training seeds, each in its canonical frame: how
+    // long they stay upright.
+    let mut upright = Vec::new();
+    for i in 0..SHORT_CHAINS {
+        let item = i * train_set.len() / SHORT_CHAINS;
+        let values = train_set.item(item);
+        let seed = PrimitiveSeed {
+            frames: std::array::from_fn(|k| {
+                frame_params(&values[k * FRAME_DIM..(k + 1) * FRAME_DIM], &[])
+            }),
+            floor_z: train_set.floors(item)[0] as f64,
+        };
+        let latents: Vec<Vec<f32>> = (0..SHORT_CHAIN_PRIMITIVES)
+            .map(|_| normal_samples(&mut rng, l))
+            .collect();
+        upright.push(
+            long_rollout(&model, &ctx, seed, &latents)?
+                .0
+                .upright_primitives,
+        );
+    }
+    upright.sort_unstable();
+    println!(
+        "{}",
+        serde_json::json!({
+            "measure": "short_chains",
+            "chains": SHORT_CHAINS,
+            "primitives_each": SHORT_CHAIN_PRIMITIVES,
+            "all_upright": upright.iter().filter(|&&u| u == SHORT_CHAIN_PRIMITIVES).count(),
+            "upright_primitives_median": upright[upright.len() / 2],
+            "upright_primitives_sorted": upright,
+        })
     );
     if let Some(png) = walk_png {
         draw_walk(&prims, png)?;
@@ -797,7 +863,13 @@ fn draw_walk(prims: &[egogen::motion::cvae::DecodedPrimitive], png: &Path) -> Re
         (&fv[..], &ff[..], [0.5, 0.5, 0.5]),
     ];
     let top = MeshView::looking_from(Vec3::Z, Vec3::Y).render(&meshes, 640, 640);
-    let side = MeshView::looking_from(Vec3::new(0.0, -1.0, 0.0), Vec3::Z).render(&meshes, 960, 640);
+    // Side view: across the overall walking direction.
+    let travel =
+        frames.last().map_or(Vec3::X, |f| f[0]) - frames.first().map_or(Vec3::ZERO, |f| f[0]);
+    let across = Vec3::new(-travel.y, travel.x, 0.0)
+        .try_normalize()
+        .unwrap_or(Vec3::NEG_Y);
+    let side = MeshView::looking_from(across, Vec3::Z).render(&meshes, 960, 640);
     top.hconcat(&side, [255, 255, 255]).write_png(png)?;
     Ok(())
 }

@@ -52,6 +52,8 @@ pub struct RawData {
     pub stride_frames: usize,
     /// Add left-right mirrored copies of the training clips.
     pub mirror: bool,
+    /// Keep only primitives whose mocap foot-contact score reaches this (0..1); omit to keep all.
+    pub min_contact_score: Option<f64>,
 }
 
 /// `[output]`.
@@ -144,6 +146,14 @@ impl RawTrainPrimitive {
             )),
         };
         positive("data.stride_frames", self.data.stride_frames)?;
+        if let Some(v) = self.data.min_contact_score {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(bad(
+                    "data.min_contact_score",
+                    format!("expected a score in 0..=1, found {v}"),
+                ));
+            }
+        }
         positive("model.latent_dim", self.model.latent_dim)?;
         positive("model.encoder_width", self.model.encoder_width)?;
         positive("model.decoder_width", self.model.decoder_width)?;
@@ -180,6 +190,7 @@ impl RawTrainPrimitive {
             clips,
             stride_frames: self.data.stride_frames,
             mirror: self.data.mirror,
+            min_contact_score: self.data.min_contact_score,
             arch: self.model,
             loss: self.loss,
             kl_warmup_steps: self.kl_warmup_steps,

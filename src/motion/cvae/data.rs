@@ -1,12 +1,15 @@
 //! Training and evaluation data: clips cut into canonical primitives (and chains of primitives
 //! for rollout training), as flat `f32` feature arrays.
 
-use crate::body::BodyModel;
+use crate::body::{BodyModel, PoseError, ShapedBody};
 use crate::motion::primitive::{canonicalize, PrimitiveError, PRIMITIVE_FRAMES, SEED_FRAMES};
 use crate::motion::resample::mirror;
 use crate::motion::MotionSequence;
 
+use super::eval::contact_score;
 use super::features::{primitive_features, FRAME_DIM};
+use super::net::InputStats;
+use super::rig::RigGeometry;
 
 /// Values of one primitive.
 pub const PRIMITIVE_VALUES: usize = PRIMITIVE_FRAMES * FRAME_DIM;
@@ -42,22 +45,34 @@ impl PrimitiveSet {
         self.floor_z.is_empty()
     }
 
-    /// Adds every chain of `frames` (a range of `seq`) starting each `stride` frames.
+    /// Adds every chain of `frames` (a range of `seq`) starting each `stride` frames whose
+    /// primitives all pass `filter`.
     pub fn add_clip(
         &mut self,
         seq: &MotionSequence,
         frames: std::ops::Range<usize>,
         stride: usize,
         model: &BodyModel,
+        filter: Option<&ContactFilter>,
     ) -> Result<(), PrimitiveError> {
         let span = CHAIN_STRIDE * (self.chain_len - 1) + PRIMITIVE_FRAMES;
         let end = frames.end.min(seq.len());
         let mut start = frames.start;
         while start + span <= end {
-            for k in 0..self.chain_len {
-                let p = canonicalize(seq, start + k * CHAIN_STRIDE, model)?;
-                self.features.extend(primitive_features(&p));
-                self.floor_z.push(-p.world_from_canon.translation.z as f32);
+            let chain = (0..self.chain_len)
+                .map(|k| canonicalize(seq, start + k * CHAIN_STRIDE, model))
+                .collect::<Result<Vec<_>, _>>()?;
+            let mut keep = true;
+            if let Some(f) = filter {
+                for p in &chain {
+                    keep &= f.score(p)? >= f.min_score;
+                }
+            }
+            if keep {
+                for p in &chain {
+                    self.features.extend(primitive_features(p));
+                    self.floor_z.push(-p.world_from_canon.translation.z as f32);
+                }
             }
             start += stride.max(1);
         }
@@ -73,6 +88,24 @@ impl PrimitiveSet {
     /// Floor heights of item `i`.
     pub fn floors(&self, i: usize) -> &[f32] {
         &self.floor_z[i * self.chain_len..(i + 1) * self.chain_len]
+    }
+
+    /// Mean and spread of features and floors (spreads floored at `min_std`).
+    pub fn input_stats(&self, min_std: f32) -> InputStats {
+        let (feature_mean, feature_std) = self.feature_stats(min_std);
+        let n = self.floor_z.len().max(1) as f64;
+        let mean = self.floor_z.iter().map(|&f| f as f64).sum::<f64>() / n;
+        let var = self
+            .floor_z
+            .iter()
+            .map(|&f| (f as f64 - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        InputStats {
+            feature_mean,
+            feature_std,
+            floor_mean_std: [mean as f32, (var.sqrt() as f32).max(min_std)],
+        }
     }
 
     /// Per-value mean and standard deviation over all frames (spread floored at `min_std`).
@@ -103,20 +136,60 @@ pub struct ClipPart {
     pub frames: std::ops::Range<usize>,
 }
 
-/// Builds a set from clip parts, each also mirrored when `with_mirror`.
+/// Keeps primitives whose mocap foot-contact score (see `eval`) reaches `min_score`: feet on
+/// the floor (z = 0) and not sliding. Drops climbing on objects and jumps.
+pub struct ContactFilter<'m> {
+    shaped: ShapedBody<'m>,
+    foot_vertices: Vec<u32>,
+    pub min_score: f64,
+}
+
+impl<'m> ContactFilter<'m> {
+    pub fn new(model: &'m BodyModel, min_score: f64) -> Result<Self, PoseError> {
+        let geo = RigGeometry::new(model, &[])?;
+        Ok(Self {
+            shaped: model.shape(&[], &[])?,
+            foot_vertices: geo
+                .foot_markers
+                .iter()
+                .map(|&k| geo.marker_ids[k])
+                .collect(),
+            min_score,
+        })
+    }
+
+    /// Foot-contact score of a canonical primitive over the world floor z = 0.
+    pub fn score(&self, p: &crate::motion::primitive::Primitive) -> Result<f64, PoseError> {
+        let feet = p
+            .frames
+            .iter()
+            .map(|f| {
+                let m = self
+                    .shaped
+                    .marker_frame(&f.pose, f.transl, &self.foot_vertices)?;
+                Ok(m.markers.iter().map(|v| v.to_array()).collect())
+            })
+            .collect::<Result<Vec<Vec<[f64; 3]>>, PoseError>>()?;
+        Ok(contact_score(&feet, -p.world_from_canon.translation.z))
+    }
+}
+
+/// Builds a set from clip parts, each also mirrored when `with_mirror`, keeping the chains
+/// that pass `filter`.
 pub fn build_set(
     parts: &[ClipPart],
     chain_len: usize,
     stride: usize,
     with_mirror: bool,
     model: &BodyModel,
+    filter: Option<&ContactFilter>,
 ) -> Result<PrimitiveSet, PrimitiveError> {
     let mut set = PrimitiveSet::new(chain_len);
     for part in parts {
-        set.add_clip(&part.seq, part.frames.clone(), stride, model)?;
+        set.add_clip(&part.seq, part.frames.clone(), stride, model, filter)?;
         if with_mirror {
             let m = mirror(&part.seq, model)?;
-            set.add_clip(&m, part.frames.clone(), stride, model)?;
+            set.add_clip(&m, part.frames.clone(), stride, model, filter)?;
         }
     }
     Ok(set)

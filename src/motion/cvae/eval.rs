@@ -6,6 +6,7 @@
 //! with `v` the horizontal central-difference speed (m/s) over frames `1..T−1`.
 
 use burn::prelude::*;
+use burn::tensor::FloatDType;
 
 use super::data::{PrimitiveSet, PRIMITIVE_VALUES};
 use super::features::FRAME_DIM;
@@ -20,23 +21,67 @@ pub fn set_batch<B: Backend>(
     range: std::ops::Range<usize>,
     device: &B::Device,
 ) -> (Tensor<B, 3>, Vec<f32>) {
-    let n = range.len();
-    let x = set.features[range.start * PRIMITIVE_VALUES..range.end * PRIMITIVE_VALUES].to_vec();
+    let items: Vec<usize> = range.collect();
+    pick_batch(set, &items, device)
+}
+
+/// Items `items` of a single-primitive set as raw features `[B, T, F]` and floors `[B]`.
+pub fn pick_batch<B: Backend>(
+    set: &PrimitiveSet,
+    items: &[usize],
+    device: &B::Device,
+) -> (Tensor<B, 3>, Vec<f32>) {
+    let mut x = Vec::with_capacity(items.len() * PRIMITIVE_VALUES);
+    let mut floors = Vec::with_capacity(items.len());
+    for &i in items {
+        x.extend_from_slice(set.item(i));
+        floors.extend_from_slice(set.floors(i));
+    }
     (
-        Tensor::from_data(TensorData::new(x, [n, PRIMITIVE_FRAMES, FRAME_DIM]), device),
-        set.floor_z[range].to_vec(),
+        Tensor::from_data(
+            TensorData::new(x, [items.len(), PRIMITIVE_FRAMES, FRAME_DIM]),
+            device,
+        ),
+        floors,
     )
 }
 
-/// Decodes raw seeds `[B, S, F]` with latents `[B, L]` into whole raw primitives `[B, T, F]`
-/// (the seed frames first).
+fn floor_tensor<B: Backend>(floors: &[f32], device: &B::Device) -> Tensor<B, 1> {
+    Tensor::from_data(TensorData::new(floors.to_vec(), [floors.len()]), device)
+}
+
+/// Decodes raw seeds `[B, S, F]` over canonical floors `[B]` (m) with latents `[B, L]` into
+/// whole raw primitives `[B, T, F]` (the seed frames first). The network runs in its weights'
+/// precision; inputs and output are in the seed's.
 pub fn decode_raw<B: Backend>(
     net: &PrimitiveVae<B>,
     seed: Tensor<B, 3>,
+    floor: Tensor<B, 1>,
     z: Tensor<B, 2>,
 ) -> Tensor<B, 3> {
-    let decoded = net.denormalize(net.decode(net.normalize(seed.clone()), z));
+    let io = seed.dtype();
+    let decoded = match net.dtype() {
+        d if d == io => {
+            let s = net.normalize(seed.clone());
+            net.denormalize(net.decode(s, net.normalize_floor(floor), z))
+        }
+        d => {
+            let dt: FloatDType = d.into();
+            let s = net.normalize(seed.clone().cast(dt));
+            let f = net.normalize_floor(floor.cast(dt));
+            net.denormalize(net.decode(s, f, z.cast(dt)))
+                .cast(FloatDType::from(io))
+        }
+    };
     Tensor::cat(vec![seed, decoded], 1)
+}
+
+/// Posterior mean latents `[B, L]` of raw primitives `[B, T, F]`, in their precision (the
+/// network runs in its own).
+pub fn posterior_mean<B: Backend>(net: &PrimitiveVae<B>, x: Tensor<B, 3>) -> Tensor<B, 2> {
+    let io = FloatDType::from(x.dtype());
+    let dt = FloatDType::from(net.dtype());
+    net.encode(net.normalize(x.cast(dt))).0.cast(io)
 }
 
 /// Mean marker error (mm) over the decoded frames of every primitive of `set`, each decoded
@@ -52,9 +97,10 @@ pub fn marker_mpjpe_mm<B: Backend>(
     let mut count = 0usize;
     for start in (0..set.len()).step_by(batch.max(1)) {
         let end = (start + batch).min(set.len());
-        let (x, _) = set_batch::<B>(set, start..end, &device);
-        let (mu, _) = net.encode(net.normalize(x.clone()));
-        let pred = decode_raw(net, x.clone().narrow(1, 0, SEED_FRAMES), mu);
+        let (x, floors) = set_batch::<B>(set, start..end, &device);
+        let mu = posterior_mean(net, x.clone());
+        let floor = floor_tensor(&floors, &device);
+        let pred = decode_raw(net, x.clone().narrow(1, 0, SEED_FRAMES), floor, mu);
         let n = PRIMITIVE_FRAMES - SEED_FRAMES;
         let pm = pose_frames(rig, pred).markers.narrow(1, SEED_FRAMES, n);
         let gm = pose_frames(rig, x).markers.narrow(1, SEED_FRAMES, n);
@@ -146,18 +192,10 @@ pub fn random_latent_contact<B: Backend>(
     let l = net.latent_dim();
     let count = latents.len() / l;
     let picks: Vec<usize> = (0..count).map(|i| i * set.len() / count.max(1)).collect();
-    let mut x = Vec::with_capacity(count * PRIMITIVE_VALUES);
-    let mut floors = Vec::with_capacity(count);
-    for &i in &picks {
-        x.extend_from_slice(set.item(i));
-        floors.extend_from_slice(set.floors(i));
-    }
-    let x = Tensor::<B, 3>::from_data(
-        TensorData::new(x, [count, PRIMITIVE_FRAMES, FRAME_DIM]),
-        &device,
-    );
+    let (x, floors) = pick_batch::<B>(set, &picks, &device);
     let z = Tensor::from_data(TensorData::new(latents.to_vec(), [count, l]), &device);
-    let pred = decode_raw(net, x.clone().narrow(1, 0, SEED_FRAMES), z);
+    let floor = floor_tensor(&floors, &device);
+    let pred = decode_raw(net, x.clone().narrow(1, 0, SEED_FRAMES), floor, z);
     let values: Vec<f32> = pred.clone().into_data().to_vec().expect("f32");
     let per = PRIMITIVE_VALUES;
     let non_finite = (0..count)
@@ -182,12 +220,18 @@ pub fn random_latent_contact<B: Backend>(
     }
 }
 
+/// Pelvis heights above the floor (m) counted as upright for [`ChainReport`].
+pub const UPRIGHT_PELVIS_M: std::ops::Range<f64> = 0.5..1.3;
+
 /// Statistics of one long chain of primitives decoded from random latents.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct ChainReport {
     pub primitives: usize,
     /// Decoded frames (18 per primitive).
     pub frames: usize,
+    /// Primitives decoded before the pelvis first leaves the human range of heights above the
+    /// floor, `UPRIGHT_PELVIS_M` (all of them when it never does).
+    pub upright_primitives: usize,
     /// World pelvis height range (m).
     pub pelvis_z_min_m: f64,
     pub pelvis_z_max_m: f64,
@@ -225,6 +269,7 @@ pub fn long_rollout(
     let mut r = ChainReport {
         primitives: latents.len(),
         frames: 0,
+        upright_primitives: 0,
         pelvis_z_min_m: f64::INFINITY,
         pelvis_z_max_m: f64::NEG_INFINITY,
         bone_length_max_dev_m: 0.0,
@@ -236,6 +281,7 @@ pub fn long_rollout(
         displacement_m: 0.0,
         seconds: 0.0,
     };
+    let mut upright = true;
     for z in latents {
         let p = model
             .decode(body, std::slice::from_ref(&seed), std::slice::from_ref(z))?
@@ -248,10 +294,11 @@ pub fn long_rollout(
             .iter()
             .map(|m| foot.iter().map(|&k| m[k].to_array()).collect())
             .collect();
-        r.contact_mean += contact_score(&feet, 0.0);
+        r.contact_mean += contact_score(&feet, p.floor_z);
         for f in SEED_FRAMES..PRIMITIVE_FRAMES {
             let joints = &p.joints[f];
             r.frames += 1;
+            upright &= UPRIGHT_PELVIS_M.contains(&(joints[0].z - p.floor_z));
             r.pelvis_z_min_m = r.pelvis_z_min_m.min(joints[0].z);
             r.pelvis_z_max_m = r.pelvis_z_max_m.max(joints[0].z);
             for j in 1..super::rig::BODY_JOINTS {
@@ -260,10 +307,13 @@ pub fn long_rollout(
                 let rest_len = rest[j].distance(rest[parent]);
                 r.bone_length_max_dev_m = r.bone_length_max_dev_m.max((posed - rest_len).abs());
             }
-            let lowest = feet[f].iter().map(|q| q[2]).fold(f64::INFINITY, f64::min);
+            let lowest = feet[f].iter().map(|q| q[2]).fold(f64::INFINITY, f64::min) - p.floor_z;
             r.lowest_foot_mean_m += lowest;
             r.lowest_foot_min_m = r.lowest_foot_min_m.min(lowest);
             r.lowest_foot_max_m = r.lowest_foot_max_m.max(lowest);
+        }
+        if upright {
+            r.upright_primitives += 1;
         }
         seed = p.next_seed();
         out.push(p);

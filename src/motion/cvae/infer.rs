@@ -23,10 +23,12 @@ use crate::motion::primitive::{
 /// Backend of inference (CPU).
 pub type InferBackend = Flex;
 
-/// The two seed frames of a primitive, in world coordinates (z up).
+/// The two seed frames of a primitive, in world coordinates (z up), and the height of the
+/// floor under the body (world z, m).
 #[derive(Debug, Clone)]
 pub struct PrimitiveSeed {
     pub frames: [BodyParams; SEED_FRAMES],
+    pub floor_z: f64,
 }
 
 /// One decoded primitive: all 20 frames (the seed first), canonical and in the world.
@@ -34,6 +36,8 @@ pub struct PrimitiveSeed {
 pub struct DecodedPrimitive {
     /// Frames in the canonical frame of the seed, and `world_from_canon`.
     pub primitive: Primitive,
+    /// Floor height (world z, m) the primitive was decoded over.
+    pub floor_z: f64,
     /// The same frames in the world.
     pub world: Vec<BodyParams>,
     /// The 67 markers of each frame, in the world.
@@ -50,6 +54,7 @@ impl DecodedPrimitive {
         let n = self.world.len();
         PrimitiveSeed {
             frames: std::array::from_fn(|k| self.world[n - SEED_FRAMES + k].clone()),
+            floor_z: self.floor_z,
         }
     }
 }
@@ -120,25 +125,35 @@ impl MotionModel {
         })
     }
 
+    /// The model with its network in another float precision (`F16`, `BF16`; `F32` as
+    /// trained). Decoding still takes and returns `f32`.
+    pub fn with_precision(self, dtype: burn::tensor::FloatDType) -> Self {
+        Self {
+            net: self.net.with_precision(dtype),
+            ..self
+        }
+    }
+
     /// Latent size.
     pub fn latent_dim(&self) -> usize {
         self.arch.latent_dim
     }
 
-    /// The network alone: canonical seed features `[B × 2 × F]` and latents `[B × L]` →
-    /// canonical features of all 20 frames `[B × 20 × F]`.
-    pub fn decode_features(&self, seeds: &[f32], latents: &[f32]) -> Vec<f32> {
-        let b = latents.len() / self.latent_dim();
+    /// The network alone: canonical seed features `[B × 2 × F]`, canonical floor heights
+    /// `[B]` (m) and latents `[B × L]` → canonical features of all 20 frames `[B × 20 × F]`.
+    pub fn decode_features(&self, seeds: &[f32], floors: &[f32], latents: &[f32]) -> Vec<f32> {
+        let b = floors.len();
         let device = Default::default();
         let seed = Tensor::<InferBackend, 3>::from_data(
             TensorData::new(seeds.to_vec(), [b, SEED_FRAMES, FRAME_DIM]),
             &device,
         );
+        let floor = Tensor::from_data(TensorData::new(floors.to_vec(), [b]), &device);
         let z = Tensor::from_data(
             TensorData::new(latents.to_vec(), [b, self.latent_dim()]),
             &device,
         );
-        decode_raw(&self.net, seed, z)
+        decode_raw(&self.net, seed, floor, z)
             .into_data()
             .to_vec()
             .expect("f32 features")
@@ -168,6 +183,7 @@ impl MotionModel {
         let rest_pelvis = body.rest_pelvis();
         let mut canon_seeds = Vec::with_capacity(seeds.len());
         let mut seed_features = Vec::with_capacity(seeds.len() * SEED_FRAMES * FRAME_DIM);
+        let mut floors = Vec::with_capacity(seeds.len());
         for seed in seeds {
             let first = body
                 .shaped
@@ -182,15 +198,17 @@ impl MotionModel {
             for f in &frames {
                 seed_features.extend_from_slice(&frame_features(f));
             }
+            floors.push((seed.floor_z - world_from_canon.translation.z) as f32);
             canon_seeds.push((world_from_canon, frames));
         }
         let flat: Vec<f32> = latents.iter().flatten().copied().collect();
-        let decoded = self.decode_features(&seed_features, &flat);
+        let decoded = self.decode_features(&seed_features, &floors, &flat);
         let per = PRIMITIVE_FRAMES * FRAME_DIM;
         canon_seeds
             .into_iter()
+            .zip(seeds)
             .enumerate()
-            .map(|(i, (world_from_canon, seed_frames))| {
+            .map(|(i, ((world_from_canon, seed_frames), seed))| {
                 let values = &decoded[i * per..(i + 1) * per];
                 if values.iter().any(|v| !v.is_finite()) {
                     return Err(DecodeError::NonFinite { index: i });
@@ -209,14 +227,18 @@ impl MotionModel {
                     world_from_canon,
                     frames,
                 };
-                posed(body, primitive)
+                posed(body, primitive, seed.floor_z)
             })
             .collect()
     }
 }
 
 /// World frames, markers, joints and CPF of a canonical primitive.
-fn posed(body: &BodyContext, primitive: Primitive) -> Result<DecodedPrimitive, DecodeError> {
+fn posed(
+    body: &BodyContext,
+    primitive: Primitive,
+    floor_z: f64,
+) -> Result<DecodedPrimitive, DecodeError> {
     let world = primitive.to_world(body.model)?;
     let mut markers = Vec::with_capacity(world.len());
     let mut joints = Vec::with_capacity(world.len());
@@ -231,6 +253,7 @@ fn posed(body: &BodyContext, primitive: Primitive) -> Result<DecodedPrimitive, D
     }
     Ok(DecodedPrimitive {
         primitive,
+        floor_z,
         world,
         markers,
         joints,

@@ -1,5 +1,5 @@
 //! Training losses of the C-VAE: pose (6D), translation, FK markers, marker velocity, foot
-//! skating and floor penetration, and the robust KL of GAMMA/EgoGen (`sqrt(1 + KL²) − 1`).
+//! skating, floor (penetration and contact height), and the robust KL of GAMMA/EgoGen (`sqrt(1 + KL²) − 1`).
 
 use burn::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -22,7 +22,8 @@ pub struct LossWeights {
     pub velocity: f64,
     /// Horizontal speed (m/s) of foot markers where the mocap foot is in contact.
     pub skate: f64,
-    /// Depth (metres) of foot markers below the floor.
+    /// Depth (metres) of foot markers below the floor, plus the error of their height above the
+    /// floor where the mocap foot is in contact (this keeps chained primitives on the floor).
     pub floor: f64,
     /// Robust KL of the posterior to N(0, I) (nats).
     pub kl: f64,
@@ -124,13 +125,15 @@ pub fn primitive_loss<B: Backend>(
             .sub(floor.reshape([b, 1, 1, 1]))
     };
     let g_height = height(g.markers, target_floor);
-    let contact = g_height.lower_elem(CONTACT_HEIGHT_M).float().mul(
+    let contact = g_height.clone().lower_elem(CONTACT_HEIGHT_M).float().mul(
         horizontal_speed(gv)
             .lower_elem(CONTACT_SPEED_M_PER_S)
             .float(),
     );
-    let skate = (horizontal_speed(pv) * contact).mean();
-    let floor = height(p.markers, pred_floor).neg().clamp_min(0.0).mean();
+    let skate = (horizontal_speed(pv) * contact.clone()).mean();
+    let p_height = height(p.markers, pred_floor);
+    let floor = p_height.clone().neg().clamp_min(0.0).mean()
+        + ((p_height - g_height) * contact).abs().mean();
 
     let (mu, logvar) = posterior;
     let kl = (mu.square() + logvar.clone().exp() - logvar - 1.0)

@@ -1,13 +1,17 @@
 //! The network: an MLP encoder over the whole primitive and an autoregressive GRU-cell decoder
 //! that adds a residual to the previous frame, conditioned on the seed and the latent.
 //!
+//! The decoder also reads the floor height in the canonical frame (the pelvis height above the
+//! floor, negated), so feet that drift off the floor along a chain can be brought back.
+//!
 //! Shapes: `B` primitives, `T = 20` frames, `S = 2` seed frames, `F = FRAME_DIM = 135`
 //! values per frame, `L` latent dimensions (128).
 
-use burn::module::Param;
+use burn::module::{ModuleMapper, Param};
 use burn::nn::{Linear, LinearConfig};
 use burn::prelude::*;
 use burn::tensor::activation::{relu, sigmoid};
+use burn::tensor::FloatDType;
 use serde::{Deserialize, Serialize};
 
 use super::features::FRAME_DIM;
@@ -39,31 +43,27 @@ impl Default for ArchConfig {
 }
 
 impl ArchConfig {
-    /// Builds a freshly initialised network; `mean`/`std` normalise frame features.
-    pub fn init<B: Backend>(
-        &self,
-        mean: &[f32; FRAME_DIM],
-        std: &[f32; FRAME_DIM],
-        device: &B::Device,
-    ) -> PrimitiveVae<B> {
+    /// Builds a freshly initialised network; `stats` normalise its inputs.
+    pub fn init<B: Backend>(&self, stats: &InputStats, device: &B::Device) -> PrimitiveVae<B> {
         let (l, e, h) = (self.latent_dim, self.encoder_width, self.decoder_width);
-        let constant = |v: &[f32; FRAME_DIM]| {
+        let constant = |v: &[f32]| {
             Param::from_tensor(Tensor::from_data(
-                TensorData::new(v.to_vec(), [FRAME_DIM]),
+                TensorData::new(v.to_vec(), [v.len()]),
                 device,
             ))
             .set_require_grad(false)
         };
         let linear = |i, o| LinearConfig::new(i, o).init(device);
         PrimitiveVae {
-            feature_mean: constant(mean),
-            feature_std: constant(std),
+            feature_mean: constant(&stats.feature_mean),
+            feature_std: constant(&stats.feature_std),
+            floor_mean_std: constant(&stats.floor_mean_std),
             enc_in: linear(PRIMITIVE_FRAMES * FRAME_DIM, e),
             enc_hidden: linear(e, e),
             enc_mu: linear(e, l),
             enc_logvar: linear(e, l),
-            dec_init: linear(l + SEED_FRAMES * FRAME_DIM, h),
-            gru_input: linear(l + 2 * FRAME_DIM, 3 * h),
+            dec_init: linear(l + SEED_FRAMES * FRAME_DIM + 1, h),
+            gru_input: linear(l + 2 * FRAME_DIM + 1, 3 * h),
             gru_hidden: linear(h, 3 * h),
             dec_out: linear(h, FRAME_DIM),
         }
@@ -73,9 +73,28 @@ impl ArchConfig {
     /// Gram-Schmidt step are a few hundred more per frame).
     pub fn decoder_macs(&self) -> usize {
         let (l, h) = (self.latent_dim, self.decoder_width);
-        let init = (l + SEED_FRAMES * FRAME_DIM) * h;
-        let step = (l + 2 * FRAME_DIM) * 3 * h + h * 3 * h + h * FRAME_DIM;
+        let init = (l + SEED_FRAMES * FRAME_DIM + 1) * h;
+        let step = (l + 2 * FRAME_DIM + 1) * 3 * h + h * 3 * h + h * FRAME_DIM;
         init + DECODED_FRAMES * step
+    }
+}
+
+/// Normalisation of the network's inputs, fixed by the training data.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputStats {
+    pub feature_mean: [f32; FRAME_DIM],
+    pub feature_std: [f32; FRAME_DIM],
+    /// Mean and spread of the canonical floor height (m).
+    pub floor_mean_std: [f32; 2],
+}
+
+impl Default for InputStats {
+    fn default() -> Self {
+        Self {
+            feature_mean: [0.0; FRAME_DIM],
+            feature_std: [1.0; FRAME_DIM],
+            floor_mean_std: [0.0, 1.0],
+        }
     }
 }
 
@@ -85,6 +104,8 @@ pub struct PrimitiveVae<B: Backend> {
     /// Per-value mean and spread of frame features (fixed by the training data, not trained).
     pub feature_mean: Param<Tensor<B, 1>>,
     pub feature_std: Param<Tensor<B, 1>>,
+    /// Mean and spread of the canonical floor height `[2]` (not trained).
+    pub floor_mean_std: Param<Tensor<B, 1>>,
     enc_in: Linear<B>,
     enc_hidden: Linear<B>,
     enc_mu: Linear<B>,
@@ -95,7 +116,28 @@ pub struct PrimitiveVae<B: Backend> {
     dec_out: Linear<B>,
 }
 
+/// Casts every float parameter to one precision.
+struct CastParams(FloatDType);
+
+impl<B: Backend> ModuleMapper<B> for CastParams {
+    fn map_float<const D: usize>(&mut self, param: Param<Tensor<B, D>>) -> Param<Tensor<B, D>> {
+        let (id, tensor, mapper) = param.consume();
+        Param::from_mapped_value(id, tensor.cast(self.0), mapper)
+    }
+}
+
 impl<B: Backend> PrimitiveVae<B> {
+    /// The network with its weights in another float precision (e.g. `F16` or `BF16` for
+    /// faster, less exact inference); [`decode_raw`](super::eval::decode_raw) follows it.
+    pub fn with_precision(self, dtype: FloatDType) -> Self {
+        self.map(&mut CastParams(dtype))
+    }
+
+    /// Float type of the weights.
+    pub fn dtype(&self) -> burn::tensor::DType {
+        self.feature_mean.val().dtype()
+    }
+
     /// Latent size.
     pub fn latent_dim(&self) -> usize {
         self.enc_mu.weight.dims()[1]
@@ -129,15 +171,23 @@ impl<B: Backend> PrimitiveVae<B> {
         (self.enc_mu.forward(h.clone()), self.enc_logvar.forward(h))
     }
 
-    /// Decodes normalised seeds `[B, S, F]` and latents `[B, L]` into the normalised frames
-    /// after the seed, `[B, T − S, F]`.
-    pub fn decode(&self, seed: Tensor<B, 3>, z: Tensor<B, 2>) -> Tensor<B, 3> {
+    /// Canonical floor heights `[B]` (m) → normalised `[B, 1]`.
+    pub fn normalize_floor(&self, floor: Tensor<B, 1>) -> Tensor<B, 2> {
+        let stats = self.floor_mean_std.val().detach();
+        let mean = stats.clone().narrow(0, 0, 1);
+        let std = stats.narrow(0, 1, 1);
+        ((floor - mean) / std).unsqueeze_dim(1)
+    }
+
+    /// Decodes normalised seeds `[B, S, F]`, normalised floors `[B, 1]` and latents `[B, L]`
+    /// into the normalised frames after the seed, `[B, T − S, F]`.
+    pub fn decode(&self, seed: Tensor<B, 3>, floor: Tensor<B, 2>, z: Tensor<B, 2>) -> Tensor<B, 3> {
         let [b, s, f] = seed.dims();
         let hidden = self.gru_hidden.weight.dims()[0];
         let mut h = self
             .dec_init
             .forward(Tensor::cat(
-                vec![z.clone(), seed.clone().reshape([b, s * f])],
+                vec![z.clone(), seed.clone().reshape([b, s * f]), floor.clone()],
                 1,
             ))
             .tanh();
@@ -145,9 +195,10 @@ impl<B: Backend> PrimitiveVae<B> {
         let mut velocity = prev.clone() - seed.narrow(1, s - 2, 1).reshape([b, f]);
         let mut out = Vec::with_capacity(DECODED_FRAMES);
         for _ in 0..DECODED_FRAMES {
-            let gx = self
-                .gru_input
-                .forward(Tensor::cat(vec![z.clone(), prev.clone(), velocity], 1));
+            let gx = self.gru_input.forward(Tensor::cat(
+                vec![z.clone(), prev.clone(), velocity, floor.clone()],
+                1,
+            ));
             let gh = self.gru_hidden.forward(h.clone());
             let r = sigmoid(gx.clone().narrow(1, 0, hidden) + gh.clone().narrow(1, 0, hidden));
             let u = sigmoid(

@@ -15,7 +15,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
-use super::data::{build_set, ClipPart, PrimitiveSet, PRIMITIVE_VALUES};
+use super::data::{build_set, ClipPart, ContactFilter, PrimitiveSet, PRIMITIVE_VALUES};
 use super::eval::{decode_raw, marker_mpjpe_mm};
 use super::loss::{primitive_loss, LossWeights};
 use super::net::{ArchConfig, PrimitiveVae};
@@ -62,6 +62,8 @@ pub struct TrainPlan {
     pub stride_frames: usize,
     /// Add the left-right mirrored clips.
     pub mirror: bool,
+    /// Keep only primitives whose mocap foot-contact score reaches this (`data::ContactFilter`).
+    pub min_contact_score: Option<f64>,
     pub arch: ArchConfig,
     pub loss: LossWeights,
     /// Steps over which the KL weight ramps up from 0.
@@ -218,7 +220,7 @@ pub fn chain_loss<B: Backend>(
             &device,
         );
         let z = mu.clone() + logvar.clone().mul_scalar(0.5).exp() * eps;
-        let full = decode_raw(net, seed.clone(), z);
+        let full = decode_raw(net, seed.clone(), pred_floor.clone(), z);
         let terms = primitive_loss(
             rig,
             weights,
@@ -256,7 +258,12 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
     let model = BodyModel::load(&plan.body_model)?;
     let (train_parts, held_parts) = load_clips(plan)?;
     let geo = RigGeometry::new(&model, &[])?;
-    let singles = build_set(&train_parts, 1, plan.stride_frames, plan.mirror, &model)?;
+    let filter = plan
+        .min_contact_score
+        .map(|s| ContactFilter::new(&model, s))
+        .transpose()?;
+    let f = filter.as_ref();
+    let singles = build_set(&train_parts, 1, plan.stride_frames, plan.mirror, &model, f)?;
     let chains = if plan.rollout.steps > 0 {
         build_set(
             &train_parts,
@@ -264,11 +271,12 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
             plan.stride_frames,
             plan.mirror,
             &model,
+            f,
         )?
     } else {
         PrimitiveSet::new(plan.rollout_primitives)
     };
-    let held = build_set(&held_parts, 1, plan.stride_frames, false, &model)?;
+    let held = build_set(&held_parts, 1, plan.stride_frames, false, &model, f)?;
     if singles.is_empty() {
         return Err(TrainError::Data(
             "no training primitive: every clip is held out or shorter than 20 frames".into(),
@@ -280,12 +288,20 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
             plan.rollout_primitives
         )));
     }
-    let (mean, std) = singles.feature_stats(1e-3);
+    let stats = singles.input_stats(1e-3);
     TrainBackend::seed(&device, plan.seed);
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
     let rig = TensorRig::<TrainBackend>::new(&geo, &device);
-    let mut net: PrimitiveVae<TrainBackend> = plan.arch.init(&mean, &std, &device);
+    let mut net: PrimitiveVae<TrainBackend> = plan.arch.init(&stats, &device);
 
+    for out in [&plan.log_out, &plan.weights_out] {
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
+                path: dir.into(),
+                source,
+            })?;
+        }
+    }
     let log_file = std::fs::File::create(&plan.log_out).map_err(|source| TrainError::Io {
         path: plan.log_out.clone(),
         source,
@@ -393,15 +409,20 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
 }
 
 /// Clip parts of a plan as sets for evaluation: `(train, held_out)` single primitives, no
-/// mirroring.
+/// mirroring, filtered as for training when `filtered`.
 pub fn evaluation_sets(
-    plan_clips: &TrainPlan,
+    plan: &TrainPlan,
     model: &BodyModel,
+    filtered: bool,
 ) -> Result<(PrimitiveSet, PrimitiveSet), TrainError> {
-    let (train, held) = load_clips(plan_clips)?;
+    let (train, held) = load_clips(plan)?;
+    let filter = match (filtered, plan.min_contact_score) {
+        (true, Some(s)) => Some(ContactFilter::new(model, s)?),
+        _ => None,
+    };
     Ok((
-        build_set(&train, 1, plan_clips.stride_frames, false, model)?,
-        build_set(&held, 1, plan_clips.stride_frames, false, model)?,
+        build_set(&train, 1, plan.stride_frames, false, model, filter.as_ref())?,
+        build_set(&held, 1, plan.stride_frames, false, model, filter.as_ref())?,
     ))
 }
 

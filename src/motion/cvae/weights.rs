@@ -7,8 +7,7 @@ use std::path::{Path, PathBuf};
 use burn::prelude::*;
 use burn::store::{ApplyError, ModuleSnapshot, SafetensorsStore};
 
-use super::features::FRAME_DIM;
-use super::net::{ArchConfig, PrimitiveVae};
+use super::net::{ArchConfig, InputStats, PrimitiveVae};
 
 /// Metadata key holding the [`ArchConfig`].
 const ARCH_KEY: &str = "egogen.arch";
@@ -72,7 +71,7 @@ pub fn load<B: Backend>(
     device: &B::Device,
 ) -> Result<(ArchConfig, PrimitiveVae<B>), WeightsError> {
     let arch = read_arch(path)?;
-    let mut net = arch.init::<B>(&[0.0; FRAME_DIM], &[1.0; FRAME_DIM], device);
+    let mut net = arch.init::<B>(&InputStats::default(), device);
     let mut store = SafetensorsStore::from_file(path)
         .validate(false)
         .allow_partial(true);
