@@ -14,7 +14,7 @@ const CONFIG: &str = r#"
 betas = []
 [motion]
 source = "scripted_walk"
-duration_s = 0.5
+duration_s = 1.0
 frame_rate_hz = 40.0
 [output]
 dir = "out"
@@ -92,7 +92,7 @@ fn run_with_kills(
     rng: &mut Lcg,
 ) -> (std::process::ExitStatus, usize) {
     let needle = run_dir.display().to_string();
-    let mut next = Instant::now() + Duration::from_millis(rng.millis(500, 2500));
+    let mut next = Instant::now() + Duration::from_millis(rng.millis(300, 1200));
     loop {
         if let Some(status) = child.try_wait().unwrap() {
             return (status, kills);
@@ -103,7 +103,7 @@ fn run_with_kills(
                     kills += 1;
                 }
             }
-            next = Instant::now() + Duration::from_millis(rng.millis(300, 2500));
+            next = Instant::now() + Duration::from_millis(rng.millis(200, 1000));
         }
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -125,7 +125,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         .iter()
         .filter(|f| f.path.ends_with(".exr"))
         .count();
-    assert_eq!(frames, 10);
+    assert_eq!(frames, 20);
 
     // Faulty: workers killed ≥ 10 times; the supervisor killed once and resumed.
     let (dir, config) = setup();
@@ -194,7 +194,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
 
     // verify passes, and catches a changed byte.
     let report = verify(&dataset).unwrap();
-    assert_eq!(report.frames, 10);
+    assert_eq!(report.frames, 20);
     let ok = egogen_run().arg("verify").arg(&dataset).output().unwrap();
     assert!(
         ok.status.success(),
