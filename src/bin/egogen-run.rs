@@ -10,13 +10,12 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use indicatif::{ProgressBar, ProgressStyle};
 
 use egogen::body::BodyModel;
 use egogen::cli::{resolve_run, MotionPlan, RawRun};
 use egogen::motion::scripted::WalkCycle;
 use egogen::motion::MotionSequence;
-use egogen::synth::{track_body, write_sequence_dir};
+use egogen::synth::{pose_meshes, track_body, write_sequence_dir};
 
 /// Generate an egocentric dataset from a config file.
 #[derive(Parser, Debug)]
@@ -150,23 +149,7 @@ fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     let track = track_body(&model, &motion)?;
-    let mesh_frames: Vec<usize> = match plan.mesh_every_n_frames {
-        0 => Vec::new(),
-        n => (0..motion.len()).step_by(n).collect(),
-    };
-    let bar = ProgressBar::new(mesh_frames.len() as u64).with_style(
-        ProgressStyle::with_template(
-            "posing meshes {bar:30} {pos}/{len} [{elapsed_precise} < {eta_precise}]",
-        )
-        .context("progress template")?,
-    );
-    let shaped = model.shape(&motion.betas, &[])?;
-    let mut meshes = Vec::with_capacity(mesh_frames.len());
-    for &i in &mesh_frames {
-        meshes.push((i, shaped.pose(&motion.poses[i], motion.trans[i])?));
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
+    let meshes = pose_meshes(&model, &motion, plan.mesh_every_n_frames)?;
     let out = write_sequence_dir(&plan.output_dir, &model, &motion, &track, &meshes)?;
     eprintln!(
         "egogen-run: wrote {} ({} files, {} meshes)",

@@ -22,7 +22,7 @@ use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
 use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec};
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
 use crate::synth::placement::place_motion;
-use crate::synth::{track_body, write_sequence_dir};
+use crate::synth::{pose_meshes, track_body, write_sequence_dir};
 
 /// Command-line choices that are not in the config.
 #[derive(Debug, Clone, Default)]
@@ -127,14 +127,7 @@ pub fn run_pipeline(
 
     let sequence = staging.join("sequence");
     if !sequence.exists() {
-        let shaped = model.shape(&motion.betas, &[])?;
-        let meshes = match plan.mesh_every_n_frames {
-            0 => Vec::new(),
-            n => (0..motion.len())
-                .step_by(n)
-                .map(|i| Ok((i, shaped.pose(&motion.poses[i], motion.trans[i])?)))
-                .collect::<Result<Vec<_>>>()?,
-        };
+        let meshes = pose_meshes(model, &motion, plan.mesh_every_n_frames)?;
         write_sequence_dir(&sequence, model, &motion, &track, &meshes)?;
     }
 

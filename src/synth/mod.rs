@@ -6,4 +6,4 @@ pub mod placement;
 pub mod sequence_dir;
 
 pub use body_track::{track_body, BodyTrack, TrackFrame};
-pub use sequence_dir::{write_sequence_dir, SequenceOutputs};
+pub use sequence_dir::{pose_meshes, write_sequence_dir, SequenceOutputs};

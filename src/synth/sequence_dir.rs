@@ -35,6 +35,32 @@ struct CpfFrame {
     world_from_cpf: [[f64; 4]; 4],
 }
 
+/// Posed meshes every `every_n` frames (none for 0), with a progress bar.
+pub fn pose_meshes(
+    model: &BodyModel,
+    motion: &MotionSequence,
+    every_n: usize,
+) -> Result<Vec<(usize, PosedBody)>> {
+    let frames: Vec<usize> = match every_n {
+        0 => Vec::new(),
+        n => (0..motion.len()).step_by(n).collect(),
+    };
+    let bar = indicatif::ProgressBar::new(frames.len() as u64).with_style(
+        indicatif::ProgressStyle::with_template(
+            "posing meshes {bar:30} {pos}/{len} [{elapsed_precise} < {eta_precise}]",
+        )
+        .context("progress template")?,
+    );
+    let shaped = model.shape(&motion.betas, &[])?;
+    let mut meshes = Vec::with_capacity(frames.len());
+    for i in frames {
+        meshes.push((i, shaped.pose(&motion.poses[i], motion.trans[i])?));
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(meshes)
+}
+
 /// Writes a sequence folder; `dir` must not exist or be empty (nothing is overwritten).
 pub fn write_sequence_dir(
     dir: &Path,
