@@ -130,6 +130,19 @@ impl Raw {
             })
     }
 
+    /// The planes of `pass`'s components, in the order given.
+    fn planes<const N: usize>(
+        &self,
+        pass: &str,
+        components: [&str; N],
+    ) -> Result<[&[f32]; N], FrameFileError> {
+        let mut out = [&[][..]; N];
+        for (o, c) in out.iter_mut().zip(components) {
+            *o = self.plane(&format!("{pass}.{c}"))?;
+        }
+        Ok(out)
+    }
+
     fn nearest(&self, q: Pixel) -> Option<usize> {
         let (x, y) = (q.x.round(), q.y.round());
         (x >= 0.0 && y >= 0.0 && x < self.width as Real && y < self.height as Real)
@@ -159,24 +172,12 @@ pub fn assemble_frame(
 ) -> Result<FrameImage, FrameFileError> {
     let rgb = Raw::read(rgb_exr, render)?;
     let gt = Raw::read(ground_truth_exr, render)?;
-    let colour: Vec<&[f32]> = ["R", "G", "B", "A"]
-        .iter()
-        .map(|c| rgb.plane(&format!("Combined.{c}")))
-        .collect::<Result<_, _>>()?;
+    let colour = rgb.planes("Combined", ["R", "G", "B", "A"])?;
     let hit = gt.plane("Combined.A")?;
-    let pos: Vec<&[f32]> = ["X", "Y", "Z"]
-        .iter()
-        .map(|c| gt.plane(&format!("Position.{c}")))
-        .collect::<Result<_, _>>()?;
-    let nrm: Vec<&[f32]> = ["X", "Y", "Z"]
-        .iter()
-        .map(|c| gt.plane(&format!("Normal.{c}")))
-        .collect::<Result<_, _>>()?;
+    let pos = gt.planes("Position", ["X", "Y", "Z"])?;
+    let nrm = gt.planes("Normal", ["X", "Y", "Z"])?;
     let ids = gt.plane("IndexOB.X")?;
-    let vec: Vec<&[f32]> = ["X", "Y", "Z", "W"]
-        .iter()
-        .map(|c| gt.plane(&format!("Vector.{c}")))
-        .collect::<Result<_, _>>()?;
+    let vec = gt.planes("Vector", ["X", "Y", "Z", "W"])?;
 
     let res = target.resolution();
     let (w, h) = (res.width_px as usize, res.height_px as usize);
@@ -251,7 +252,8 @@ pub fn assemble_frame(
 }
 
 impl FrameImage {
-    /// Writes the frame file atomically (`<path>.partial`, then rename).
+    /// Writes the frame file to `path` (callers that need atomicity write a temporary name,
+    /// validate it and rename, as [`crate::supervisor::Dataset::finish_frame`] does).
     pub fn write(&self, path: &Path) -> Result<(), FrameFileError> {
         let plane = |f: &dyn Fn(usize) -> f32| (0..self.width * self.height).map(f).collect();
         let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
@@ -287,20 +289,14 @@ impl FrameImage {
             Encoding::SMALL_LOSSLESS,
             AnyChannels::sort(SmallVec::from_vec(channels)),
         );
-        let tmp = PathBuf::from(format!("{}.partial", path.display()));
-        let written = Image::from_layer(layer)
+        Image::from_layer(layer)
             .write()
             .non_parallel()
-            .to_file(&tmp)
-            .map_err(|e| e.to_string())
-            .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-        written.map_err(|message| {
-            let _ = std::fs::remove_file(&tmp);
-            FrameFileError::Write {
+            .to_file(path)
+            .map_err(|e| FrameFileError::Write {
                 path: path.into(),
-                message,
-            }
-        })
+                message: e.to_string(),
+            })
     }
 }
 
@@ -308,30 +304,42 @@ impl FrameImage {
 /// finite. Returns the file's contents.
 pub fn validate_frame(path: &Path, width: u32, height: u32) -> Result<ExrContents, FrameFileError> {
     let contents = ExrContents::read(path)?;
+    check_frame_channels(&contents, Some((width, height)))?;
+    Ok(contents)
+}
+
+/// Every frame channel is present (at `size`, if given: width, height) and finite.
+pub fn check_frame_channels(
+    contents: &ExrContents,
+    size: Option<(u32, u32)>,
+) -> Result<(), FrameFileError> {
+    let path = &contents.path;
     for name in FRAME_CHANNELS {
         let ch = contents
             .channel(name)
             .ok_or_else(|| FrameFileError::MissingChannel {
-                path: path.into(),
+                path: path.clone(),
                 channel: name.into(),
             })?;
-        if (ch.width, ch.height) != (width as usize, height as usize) {
-            return Err(FrameFileError::Size {
-                path: path.into(),
-                width: ch.width,
-                height: ch.height,
-                expected_w: width,
-                expected_h: height,
-            });
+        if let Some((width, height)) = size {
+            if (ch.width, ch.height) != (width as usize, height as usize) {
+                return Err(FrameFileError::Size {
+                    path: path.clone(),
+                    width: ch.width,
+                    height: ch.height,
+                    expected_w: width,
+                    expected_h: height,
+                });
+            }
         }
         let count = ch.values.iter().filter(|v| !v.is_finite()).count();
         if count > 0 {
             return Err(FrameFileError::NonFinite {
-                path: path.into(),
+                path: path.clone(),
                 channel: name.into(),
                 count,
             });
         }
     }
-    Ok(contents)
+    Ok(())
 }

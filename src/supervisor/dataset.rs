@@ -147,9 +147,14 @@ impl Dataset {
         std::fs::create_dir_all(out.parent().unwrap())
             .with_context(|| format!("creating {}", out.parent().unwrap().display()))?;
         let tmp = out.with_extension("exr.tmp");
-        image.write(&tmp)?;
         let res = work.camera.model.resolution();
-        validate_frame(&tmp, res.width_px, res.height_px)?;
+        let checked = image
+            .write(&tmp)
+            .and_then(|()| validate_frame(&tmp, res.width_px, res.height_px));
+        if let Err(e) = checked {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e.into());
+        }
         std::fs::rename(&tmp, &out).with_context(|| format!("renaming to {}", out.display()))?;
         let _ = std::fs::remove_file(rgb);
         let _ = std::fs::remove_file(gt);
@@ -223,10 +228,6 @@ fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
     Ok(value["cameras"][0].take())
 }
 
-fn row_major(m: Affine3) -> [[f64; 4]; 4] {
-    crate::render::camera_setup::row_major(m)
-}
-
 fn frame_annotation(
     work: &CameraWork,
     f: u32,
@@ -265,7 +266,7 @@ fn frame_annotation(
         "frame": f,
         "time_s": f as f64 / motion.frame_rate_hz,
         "file": format!("frame_{f:05}.exr"),
-        "T_world_cam": row_major(world_from_cam),
+        "T_world_cam": crate::render::camera_setup::row_major(world_from_cam),
         "agents": [{
             "id": AGENT_ID_BASE,
             "wearer": true,

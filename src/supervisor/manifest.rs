@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::inspect::ExrContents;
-use crate::render::frame_file::FRAME_CHANNELS;
+use crate::render::frame_file::{check_frame_channels, FrameFileError};
 
 /// Folders of a dataset that are scratch, not data.
 pub const SCRATCH_DIRS: [&str; 2] = ["work", "logs"];
@@ -144,19 +144,11 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
         }
         if e.path.ends_with(".exr") && e.path.starts_with("cameras/") {
             frames += 1;
-            match ExrContents::read(&p) {
-                Err(err) => problems.push(format!("{}: {err}", e.path)),
-                Ok(c) => {
-                    for ch in FRAME_CHANNELS {
-                        match c.channel(ch) {
-                            None => problems.push(format!("{}: channel {ch} missing", e.path)),
-                            Some(v) if v.values.iter().any(|x| !x.is_finite()) => {
-                                problems.push(format!("{}: channel {ch} not finite", e.path))
-                            }
-                            Some(_) => {}
-                        }
-                    }
-                }
+            let checked = ExrContents::read(&p)
+                .map_err(FrameFileError::from)
+                .and_then(|c| check_frame_channels(&c, None));
+            if let Err(err) = checked {
+                problems.push(format!("{}: {err}", e.path));
             }
         }
     }
