@@ -83,68 +83,60 @@ pub fn run_local(
         .enable_all()
         .build()
         .context("starting the worker pool")?;
-    rt.block_on(run_pool(dataset, runtime, shards, settings, already_done))
-}
-
-async fn run_pool(
-    dataset: Arc<Dataset>,
-    runtime: BlenderRuntime,
-    shards: Vec<Shard>,
-    settings: PoolSettings,
-    already_done: usize,
-) -> Result<PoolReport> {
-    let started = Instant::now();
-    let total = dataset.total_frames() as u64;
-    let bar = ProgressBar::new(total).with_style(
-        ProgressStyle::with_template(
-            "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
-        )
-        .context("progress template")?,
-    );
-    bar.set_position(already_done as u64);
-    let (stop_tx, stop_rx) = watch::channel(false);
-    let workers = settings.workers.min(shards.len()).max(1);
-    let shared = Arc::new(Shared {
-        dataset,
-        runtime,
-        settings,
-        queue: Mutex::new(shards.into()),
-        reports: Mutex::new(Vec::new()),
-        failed: Mutex::new(None),
-        states: Mutex::new(vec!["idle".into(); workers]),
-        bar: bar.clone(),
-        stop: stop_rx,
-    });
-    let interrupt = tokio::spawn(async move {
-        if tokio::signal::ctrl_c().await.is_ok() {
-            let _ = stop_tx.send(true);
+    rt.block_on(async move {
+        let started = Instant::now();
+        let total = dataset.total_frames() as u64;
+        let bar = ProgressBar::new(total).with_style(
+            ProgressStyle::with_template(
+                "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
+            )
+            .context("progress template")?,
+        );
+        bar.set_position(already_done as u64);
+        let (stop_tx, stop_rx) = watch::channel(false);
+        let workers = settings.workers.min(shards.len()).max(1);
+        let shared = Arc::new(Shared {
+            dataset,
+            runtime,
+            settings,
+            queue: Mutex::new(shards.into()),
+            reports: Mutex::new(Vec::new()),
+            failed: Mutex::new(None),
+            states: Mutex::new(vec!["idle".into(); workers]),
+            bar: bar.clone(),
+            stop: stop_rx,
+        });
+        let interrupt = tokio::spawn(async move {
+            if tokio::signal::ctrl_c().await.is_ok() {
+                let _ = stop_tx.send(true);
+            }
+        });
+        let handles: Vec<_> = (0..workers)
+            .map(|w| tokio::spawn(worker(shared.clone(), w)))
+            .collect();
+        for h in handles {
+            h.await.context("worker task")?;
         }
-    });
-    let handles: Vec<_> = (0..workers)
-        .map(|w| tokio::spawn(worker(shared.clone(), w)))
-        .collect();
-    for h in handles {
-        h.await.context("worker task")?;
-    }
-    interrupt.abort();
-    bar.finish_and_clear();
-    let mut reports = std::mem::take(&mut *shared.reports.lock().unwrap());
-    reports.sort_by_key(|r| r.shard);
-    if *shared.stop.borrow() {
-        bail!("interrupted: finished frames are kept; rerun with --resume to continue");
-    }
-    if let Some(reason) = shared.failed.lock().unwrap().take() {
-        bail!("{reason}");
-    }
-    let frames_finished = reports
-        .iter()
-        .flat_map(|r| r.attempts.iter())
-        .map(|a| a.finished)
-        .sum();
-    Ok(PoolReport {
-        shards: reports,
-        frames_finished,
-        wall_seconds: started.elapsed().as_secs_f64(),
+        interrupt.abort();
+        bar.finish_and_clear();
+        let mut reports = std::mem::take(&mut *shared.reports.lock().unwrap());
+        reports.sort_by_key(|r| r.shard);
+        if *shared.stop.borrow() {
+            bail!("interrupted: finished frames are kept; rerun with --resume to continue");
+        }
+        if let Some(reason) = shared.failed.lock().unwrap().take() {
+            bail!("{reason}");
+        }
+        let frames_finished = reports
+            .iter()
+            .flat_map(|r| r.attempts.iter())
+            .map(|a| a.finished)
+            .sum();
+        Ok(PoolReport {
+            shards: reports,
+            frames_finished,
+            wall_seconds: started.elapsed().as_secs_f64(),
+        })
     })
 }
 
