@@ -6,6 +6,7 @@
 //! `preview` draws PNG pictures for people;
 //! `cli` holds the command-line and config plumbing and no domain logic.
 
+pub mod atomic_file;
 pub mod body;
 pub mod camera;
 pub mod cli;

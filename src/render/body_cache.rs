@@ -7,11 +7,12 @@
 //! start and rate; the modifier's `frame_start`/`frame_scale` place the samples in time, which is
 //! what [`crate::render::ShardBody`] carries.
 
-use std::io::{Read, Write};
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use npyz::WriterBuilder;
 
+use crate::atomic_file::write_atomically;
 use crate::body::{BodyModel, PoseError};
 use crate::math::Vec3;
 use crate::motion::resample::resample;
@@ -117,22 +118,6 @@ impl PointCache {
             sample_rate: f32_at(24),
             samples,
         })
-    }
-}
-
-/// Writes `bytes` to `<path>.partial` and renames it into place.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = PathBuf::from(format!("{}.partial", path.display()));
-    let result = std::fs::File::create(&tmp).and_then(|mut f| {
-        f.write_all(bytes)?;
-        f.sync_all()
-    });
-    match result {
-        Ok(()) => std::fs::rename(&tmp, path),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
     }
 }
 

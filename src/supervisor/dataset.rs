@@ -210,11 +210,8 @@ pub fn write_annotations(
             .join("cameras")
             .join(&work.camera.name)
             .join("annotations.json");
-        crate::render::body_cache::write_atomically(
-            &path,
-            serde_json::to_string_pretty(&doc)?.as_bytes(),
-        )
-        .with_context(|| format!("writing {}", path.display()))?;
+        crate::atomic_file::write_atomically(&path, serde_json::to_string_pretty(&doc)?.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

@@ -91,7 +91,7 @@ pub fn build_manifest(dir: &Path) -> Result<Manifest> {
 pub fn write_manifest(dir: &Path) -> Result<Manifest> {
     let manifest = build_manifest(dir)?;
     let path = dir.join(MANIFEST);
-    crate::render::body_cache::write_atomically(
+    crate::atomic_file::write_atomically(
         &path,
         serde_json::to_string_pretty(&manifest)?.as_bytes(),
     )
