@@ -197,6 +197,32 @@ fn broken_rig_file() {
 }
 
 #[test]
+fn slurm_settings_without_the_slurm_backend() {
+    expect_config_error(
+        &with_render("samples = 4\n[supervisor.slurm]\ncpus_per_task = 4"),
+        &["supervisor.slurm", "backend"],
+    );
+}
+
+#[test]
+fn slurm_memory_not_positive() {
+    expect_config_error(
+        &with_render(
+            "samples = 4\n[supervisor]\nbackend = \"slurm\"\n[supervisor.slurm]\nmem_gb = 0.0",
+        ),
+        &["supervisor.slurm.mem_gb", "positive"],
+    );
+}
+
+#[test]
+fn unknown_backend() {
+    expect_config_error(
+        &with_render("samples = 4\n[supervisor]\nbackend = \"kubernetes\""),
+        &["backend", "unknown variant `kubernetes`", "slurm"],
+    );
+}
+
+#[test]
 fn existing_output_is_left_alone() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("run.toml");

@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
-use egogen::supervisor::{verify, Manifest};
+use egogen::supervisor::verify;
+
+mod common;
 
 const CONFIG: &str = r#"
 [body]
@@ -35,14 +37,7 @@ fn egogen_run() -> Command {
 }
 
 fn setup() -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("run.toml");
-    std::fs::write(&config, CONFIG).unwrap();
-    (dir, config)
-}
-
-fn manifest(dataset: &Path) -> Manifest {
-    serde_json::from_str(&std::fs::read_to_string(dataset.join("manifest.json")).unwrap()).unwrap()
+    common::run_dir(CONFIG)
 }
 
 /// Pids of processes whose command line contains every needle.
@@ -119,7 +114,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let reference = manifest(&ref_dir.path().join("out"));
+    let reference = common::read_manifest(&ref_dir.path().join("out"));
     let frames = reference
         .files
         .iter()
@@ -182,7 +177,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
     eprintln!("workers and supervisor killed {kills} times in all");
     assert!(kills >= 10);
     let dataset = dir.path().join("out");
-    let faulty = manifest(&dataset);
+    let faulty = common::read_manifest(&dataset);
     assert_eq!(faulty, reference, "datasets differ");
     assert!(faulty
         .files

@@ -12,6 +12,7 @@ use anyhow::{Context, Result};
 use clap::Parser;
 
 use egogen::body::BodyModel;
+use egogen::cli::config::Backend;
 use egogen::cli::{resolve_run, MotionPlan, RawRun};
 use egogen::motion::scripted::WalkCycle;
 use egogen::motion::MotionSequence;
@@ -31,13 +32,23 @@ struct Args {
     /// Camera rig to render with, overriding `render.rig`.
     #[arg(long)]
     rig: Option<PathBuf>,
-    /// Parallel Blender workers, overriding `supervisor.workers`.
+    /// Where shards run, overriding `supervisor.backend`: `local` (Blender processes here) or
+    /// `slurm` (a job array; resources in `[supervisor.slurm]`).
+    #[arg(long, value_enum)]
+    backend: Option<BackendArg>,
+    /// Parallel Blender workers (with Slurm: array tasks at once), overriding `supervisor.workers`.
     #[arg(long)]
     workers: Option<usize>,
     /// Blender to use (Python with bpy 4.5, or a blender executable); else `EGOGEN_BLENDER`,
     /// else the managed install.
     #[arg(long)]
     blender: Option<PathBuf>,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum BackendArg {
+    Local,
+    Slurm,
 }
 
 #[derive(clap::Subcommand, Debug)]
@@ -88,6 +99,12 @@ fn run(args: Args) -> Result<()> {
             anyhow::bail!("--workers: expected at least 1");
         }
         plan.supervisor.workers = w;
+    }
+    if let Some(b) = args.backend {
+        plan.supervisor.backend = match b {
+            BackendArg::Local => Backend::Local,
+            BackendArg::Slurm => Backend::Slurm,
+        };
     }
     let options = egogen::supervisor::RunOptions {
         resume: args.resume,

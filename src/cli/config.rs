@@ -119,6 +119,24 @@ pub struct RawRender {
 pub enum Backend {
     /// Blender processes on this machine.
     Local,
+    /// A Slurm job array, one task per shard (`sbatch`, `squeue`, `scancel`).
+    Slurm,
+}
+
+/// `[supervisor.slurm]`: resources of each array task.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSlurm {
+    /// Partition (`--partition`); default: the cluster's default partition.
+    pub partition: Option<String>,
+    /// CPUs per task (`--cpus-per-task`, default 2); Blender renders with as many threads.
+    pub cpus_per_task: Option<u32>,
+    /// Memory per task in GB (`--mem`, default 4).
+    pub mem_gb: Option<f64>,
+    /// Seconds between queue polls (default 10).
+    pub poll_interval_s: Option<f64>,
+    /// Further `sbatch` options, passed as written (e.g. `["--account=vision", "--qos=low"]`).
+    pub sbatch_args: Option<Vec<String>>,
 }
 
 /// `[supervisor]`: how shards are run.
@@ -127,12 +145,14 @@ pub enum Backend {
 pub struct RawSupervisor {
     /// Default `local`.
     pub backend: Option<Backend>,
-    /// Parallel Blender workers (default 1).
+    /// Parallel Blender workers (default 1); with Slurm, array tasks running at once.
     pub workers: Option<usize>,
     /// A shard attempt running longer than this is killed (default 3600 s).
     pub shard_timeout_s: Option<f64>,
     /// Failed shard attempts retried before the run fails (default 2).
     pub retries: Option<u32>,
+    /// Used with `backend = "slurm"`.
+    pub slurm: Option<RawSlurm>,
 }
 
 /// The whole run config, as written.

@@ -8,4 +8,4 @@ pub mod resolve;
 pub mod train;
 
 pub use config::{ConfigError, RawRun};
-pub use resolve::{resolve_run, MotionPlan, RenderPlan, RunPlan, SupervisorPlan};
+pub use resolve::{resolve_run, MotionPlan, RenderPlan, RunPlan, SlurmPlan, SupervisorPlan};

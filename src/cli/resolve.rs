@@ -2,7 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
-use super::config::{Backend, ConfigError, MotionSource, RawRender, RawRun, RawSupervisor};
+use super::config::{
+    Backend, ConfigError, MotionSource, RawRender, RawRun, RawSlurm, RawSupervisor,
+};
 use crate::rig::{Rig, RigCamera};
 
 /// Default body model, relative to the crate root.
@@ -34,6 +36,17 @@ pub struct SupervisorPlan {
     pub workers: usize,
     pub shard_timeout_s: f64,
     pub retries: u32,
+    pub slurm: SlurmPlan,
+}
+
+/// Slurm array-task resources, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlurmPlan {
+    pub partition: Option<String>,
+    pub cpus_per_task: u32,
+    pub mem_gb: f64,
+    pub poll_interval_s: f64,
+    pub sbatch_args: Vec<String>,
 }
 
 /// Where a run's motion comes from, checked.
@@ -282,11 +295,68 @@ fn resolve_supervisor(s: RawSupervisor, config_path: &Path) -> Result<Supervisor
             format!("expected a positive number of seconds, found {shard_timeout_s}"),
         ));
     }
+    let backend = s.backend.unwrap_or(Backend::Local);
+    if s.slurm.is_some() && backend != Backend::Slurm {
+        return Err(bad(
+            "supervisor.slurm",
+            "given but `supervisor.backend` is not \"slurm\"".into(),
+        ));
+    }
     Ok(SupervisorPlan {
-        backend: s.backend.unwrap_or(Backend::Local),
+        backend,
         workers,
         shard_timeout_s,
         retries: s.retries.unwrap_or(2),
+        slurm: resolve_slurm(s.slurm.unwrap_or_default(), &bad)?,
+    })
+}
+
+fn resolve_slurm(
+    s: RawSlurm,
+    bad: &dyn Fn(&str, String) -> ConfigError,
+) -> Result<SlurmPlan, ConfigError> {
+    let cpus_per_task = s.cpus_per_task.unwrap_or(2);
+    if cpus_per_task == 0 {
+        return Err(bad(
+            "supervisor.slurm.cpus_per_task",
+            "expected at least 1".into(),
+        ));
+    }
+    let mem_gb = s.mem_gb.unwrap_or(4.0);
+    if !(mem_gb.is_finite() && mem_gb > 0.0) {
+        return Err(bad(
+            "supervisor.slurm.mem_gb",
+            format!("expected a positive number of GB, found {mem_gb}"),
+        ));
+    }
+    let poll_interval_s = s.poll_interval_s.unwrap_or(10.0);
+    if !(poll_interval_s.is_finite() && poll_interval_s > 0.0) {
+        return Err(bad(
+            "supervisor.slurm.poll_interval_s",
+            format!("expected a positive number of seconds, found {poll_interval_s}"),
+        ));
+    }
+    let sbatch_args = s.sbatch_args.unwrap_or_default();
+    if let Some(a) = sbatch_args.iter().find(|a| !a.starts_with('-')) {
+        return Err(bad(
+            "supervisor.slurm.sbatch_args",
+            format!("expected sbatch options starting with `-`, found {a:?}"),
+        ));
+    }
+    if let Some(p) = &s.partition {
+        if p.is_empty() || p.contains(char::is_whitespace) {
+            return Err(bad(
+                "supervisor.slurm.partition",
+                format!("expected a partition name, found {p:?}"),
+            ));
+        }
+    }
+    Ok(SlurmPlan {
+        partition: s.partition,
+        cpus_per_task,
+        mem_gb,
+        poll_interval_s,
+        sbatch_args,
     })
 }
 

@@ -86,13 +86,7 @@ pub fn run_local(
     rt.block_on(async move {
         let started = Instant::now();
         let total = dataset.total_frames() as u64;
-        let bar = ProgressBar::new(total).with_style(
-            ProgressStyle::with_template(
-                "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
-            )
-            .context("progress template")?,
-        );
-        bar.set_position(already_done as u64);
+        let bar = frames_bar(total, already_done as u64)?;
         let (stop_tx, stop_rx) = watch::channel(false);
         let workers = settings.workers.min(shards.len()).max(1);
         let shared = Arc::new(Shared {
@@ -138,6 +132,18 @@ pub fn run_local(
             wall_seconds: started.elapsed().as_secs_f64(),
         })
     })
+}
+
+/// The rendering progress bar: frames done of all planned, ETA, and a status message.
+pub(super) fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
+    let bar = ProgressBar::new(total).with_style(
+        ProgressStyle::with_template(
+            "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
+        )
+        .context("progress template")?,
+    );
+    bar.set_position(done);
+    Ok(bar)
 }
 
 fn set_state(shared: &Shared, w: usize, state: String) {

@@ -13,8 +13,10 @@ use serde_json::json;
 use super::dataset::{write_annotations, CameraWork, Dataset};
 use super::local::{run_local, PoolSettings};
 use super::manifest::{sha256_file, write_manifest, MANIFEST};
+use super::slurm::{run_slurm, SlurmSettings};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
+use crate::cli::config::Backend;
 use crate::cli::resolve::{RenderPlan, RunPlan};
 use crate::motion::MotionSequence;
 use crate::render::body_cache::{body_cache, write_faces_npy};
@@ -218,17 +220,33 @@ pub fn run_pipeline(
     let mut rendered_now = 0;
     if !shards.is_empty() {
         let runtime = BlenderRuntime::resolve(opts.blender.as_deref())?;
-        let report = run_local(
-            dataset.clone(),
-            runtime,
-            shards,
-            PoolSettings {
-                workers: plan.supervisor.workers,
-                shard_timeout: Duration::from_secs_f64(plan.supervisor.shard_timeout_s),
-                retries: plan.supervisor.retries,
-            },
-            total - pending,
-        )?;
+        let sup = &plan.supervisor;
+        let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
+        let report = match sup.backend {
+            Backend::Local => run_local(
+                dataset.clone(),
+                runtime,
+                shards,
+                PoolSettings {
+                    workers: sup.workers,
+                    shard_timeout,
+                    retries: sup.retries,
+                },
+                total - pending,
+            )?,
+            Backend::Slurm => run_slurm(
+                dataset.clone(),
+                runtime,
+                shards,
+                SlurmSettings {
+                    plan: sup.slurm.clone(),
+                    max_running: sup.workers,
+                    shard_timeout,
+                    retries: sup.retries,
+                },
+                total - pending,
+            )?,
+        };
         rendered_now = report.frames_finished;
         let retried = report
             .shards

@@ -221,3 +221,16 @@ pub fn tiny_model_arrays() -> Vec<(&'static str, Arr)> {
         ("kintree_table", Arr::I64(vec![2, 55], kintree)),
     ]
 }
+
+/// A temporary folder holding `run.toml` with `config`; returns both.
+pub fn run_dir(config: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("run.toml");
+    std::fs::write(&path, config).unwrap();
+    (dir, path)
+}
+
+/// A finished dataset's manifest.
+pub fn read_manifest(dataset: &Path) -> egogen::supervisor::Manifest {
+    serde_json::from_str(&std::fs::read_to_string(dataset.join("manifest.json")).unwrap()).unwrap()
+}

@@ -1,0 +1,528 @@
+//! The Slurm backend: each round writes one spec per pending shard and an `sbatch` array
+//! script (one task per shard, resources from `[supervisor.slurm]`), submits it with
+//! `sbatch --parsable`, and polls `squeue` until the array has left the queue, finishing frames
+//! here as the tasks' raw renders appear (the dataset folder is on a filesystem shared with the
+//! nodes). Each task's outcome comes from `scontrol` (or `sacct` once the controller has
+//! forgotten the job); shards that still miss frames — failed, timed out, cancelled, killed
+//! node — go into the next round, up to the retry count. Ctrl-C cancels the array and leaves a
+//! resumable state; a resumed run first cancels the arrays its predecessor left behind.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+
+use super::dataset::{Dataset, Shard};
+use super::local::{frames_bar, Attempt, PoolReport, ShardReport};
+use crate::atomic_file::write_atomically;
+use crate::cli::SlurmPlan;
+use crate::render::shard::worker_command;
+use crate::render::shard_plan::raw_frame_paths;
+use crate::render::BlenderRuntime;
+
+/// Slurm backend settings.
+#[derive(Debug, Clone)]
+pub struct SlurmSettings {
+    pub plan: SlurmPlan,
+    /// Array tasks running at once (`--array=…%N`).
+    pub max_running: usize,
+    /// Becomes each task's `--time` (whole minutes, rounded up).
+    pub shard_timeout: Duration,
+    pub retries: u32,
+}
+
+/// How a finished array task ended, as Slurm reports it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TaskEnd {
+    pub state: String,
+    pub exit_code: String,
+    pub seconds: f64,
+}
+
+struct ShardState {
+    shard: Shard,
+    report: ShardReport,
+}
+
+/// Renders `shards` as Slurm array tasks; returns when every frame is finished, or fails
+/// when a shard has failed past its retries or Ctrl-C was pressed.
+pub fn run_slurm(
+    dataset: Arc<Dataset>,
+    runtime: BlenderRuntime,
+    shards: Vec<Shard>,
+    settings: SlurmSettings,
+    already_done: usize,
+) -> Result<PoolReport> {
+    let started = Instant::now();
+    slurm_tool("sbatch", &["--version"]).context(
+        "the Slurm backend needs Slurm's client commands (sbatch, squeue, scancel) on PATH; \
+         install them or use `supervisor.backend = \"local\"`",
+    )?;
+    let slurm_dir = dataset.staging.join("work/slurm");
+    std::fs::create_dir_all(&slurm_dir)
+        .with_context(|| format!("creating {}", slurm_dir.display()))?;
+    std::fs::create_dir_all(dataset.logs_dir())
+        .with_context(|| format!("creating {}", dataset.logs_dir().display()))?;
+    let jobs_path = slurm_dir.join("jobs.txt");
+    cancel_previous_jobs(&jobs_path);
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    std::thread::spawn(move || {
+        let Ok(rt) = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        else {
+            return;
+        };
+        rt.block_on(async {
+            if tokio::signal::ctrl_c().await.is_ok() {
+                flag.store(true, Ordering::SeqCst);
+            }
+        })
+    });
+
+    let bar = frames_bar(dataset.total_frames() as u64, already_done as u64)?;
+    let mut states: Vec<ShardState> = shards
+        .into_iter()
+        .map(|shard| ShardState {
+            report: ShardReport {
+                shard: shard.id,
+                camera: dataset.cameras[shard.camera].camera.name.clone(),
+                frames: shard.frames.clone(),
+                attempts: Vec::new(),
+            },
+            shard,
+        })
+        .collect();
+    let mut round = 0u32;
+    let mut frames_finished = 0usize;
+    loop {
+        let todo: Vec<usize> = (0..states.len())
+            .filter(|&i| !missing_frames(&dataset, &states[i].shard).is_empty())
+            .collect();
+        if todo.is_empty() {
+            break;
+        }
+        if let Some(&i) = todo
+            .iter()
+            .find(|&&i| states[i].report.attempts.len() > settings.retries as usize)
+        {
+            bar.finish_and_clear();
+            let r = &states[i].report;
+            let last = r
+                .attempts
+                .last()
+                .expect("a shard past its retries has attempts");
+            bail!(
+                "shard {} ({} frames {:?}) failed {} times; last: {} (log: {})",
+                r.shard,
+                r.camera,
+                r.frames,
+                r.attempts.len(),
+                last.outcome,
+                last.log
+            );
+        }
+        round += 1;
+        let round_dir = slurm_dir.join(format!("round_{round:03}"));
+        std::fs::create_dir_all(&round_dir)
+            .with_context(|| format!("creating {}", round_dir.display()))?;
+        let mut tasks = Vec::new();
+        for (t, &i) in todo.iter().enumerate() {
+            let shard = &states[i].shard;
+            let frames = missing_frames(&dataset, shard);
+            let spec_path = round_dir.join(format!("task_{t:04}.json"));
+            let spec = dataset.shard_spec(shard.camera, &frames);
+            write_atomically(&spec_path, &serde_json::to_vec_pretty(&spec)?)?;
+            tasks.push((i, frames, spec_path));
+        }
+        let script = array_script(
+            &runtime,
+            &settings,
+            &dataset.logs_dir(),
+            &tasks.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
+        );
+        let script_path = round_dir.join("array.sh");
+        write_atomically(&script_path, script.as_bytes())?;
+        let out = slurm_tool("sbatch", &["--parsable", &script_path.to_string_lossy()])
+            .with_context(|| format!("submitting {}", script_path.display()))?;
+        // `--parsable` prints `jobid` or `jobid;cluster`.
+        let job = out.trim().split(';').next().unwrap_or("").to_string();
+        if job.is_empty() || !job.chars().all(|c| c.is_ascii_digit()) {
+            bail!("sbatch answered {out:?}; expected a job id");
+        }
+        append_job(&jobs_path, &job)?;
+        bar.suspend(|| {
+            eprintln!(
+                "egogen-run: round {round}: Slurm array job {job}, {} task(s) ({})",
+                tasks.len(),
+                script_path.display()
+            )
+        });
+
+        let poll = Duration::from_secs_f64(settings.plan.poll_interval_s);
+        loop {
+            frames_finished += finish_ready_frames(&dataset, &states, &todo, &bar)?;
+            let live = queued_tasks(&job)?;
+            if live.is_empty() {
+                break;
+            }
+            let running = live.values().filter(|s| s.as_str() == "RUNNING").count();
+            bar.set_message(format!(
+                "job {job}: {running} running, {} queued",
+                live.len() - running
+            ));
+            if sleep_unless_stopped(poll, &stop) {
+                let _ = slurm_tool("scancel", &[&job]);
+                bar.finish_and_clear();
+                bail!(
+                    "interrupted: Slurm job {job} cancelled; finished frames are kept; rerun with --resume to continue"
+                );
+            }
+        }
+        frames_finished += finish_ready_frames(&dataset, &states, &todo, &bar)?;
+        let ends = task_ends(&job);
+        for (t, (i, frames, _)) in tasks.into_iter().enumerate() {
+            let state = &mut states[i];
+            let still_missing = missing_frames(&dataset, &state.shard).len();
+            let end = ends.get(&(t as u32));
+            let outcome = match (end, still_missing) {
+                (Some(e), 0) if e.state == "COMPLETED" => "ok".to_string(),
+                (None, 0) => "ok".to_string(),
+                (Some(e), 0) => format!(
+                    "{} (exit {}) after finishing its frames",
+                    e.state, e.exit_code
+                ),
+                (Some(e), n) => format!("{} (exit {}), {n} frames missing", e.state, e.exit_code),
+                (None, n) => format!("left the queue with {n} frames missing"),
+            };
+            state.report.attempts.push(Attempt {
+                attempt: state.report.attempts.len() as u32 + 1,
+                frames: frames.len(),
+                finished: frames.len() - still_missing,
+                outcome,
+                seconds: end.map_or(0.0, |e| e.seconds),
+                log: dataset
+                    .logs_dir()
+                    .join(format!("slurm_{job}_{t}.log"))
+                    .display()
+                    .to_string(),
+            });
+        }
+        if stop.load(Ordering::SeqCst) {
+            bar.finish_and_clear();
+            bail!("interrupted: finished frames are kept; rerun with --resume to continue");
+        }
+    }
+    bar.finish_and_clear();
+    let mut shards: Vec<ShardReport> = states.into_iter().map(|s| s.report).collect();
+    shards.sort_by_key(|r| r.shard);
+    Ok(PoolReport {
+        shards,
+        frames_finished,
+        wall_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
+    shard
+        .frames
+        .iter()
+        .copied()
+        .filter(|&f| !dataset.frame_path(shard.camera, f).is_file())
+        .collect()
+}
+
+/// Finishes every frame of the round's shards whose two raw renders are in place (Blender
+/// writes each under a temporary name and renames it). A raw pair that does not assemble is
+/// removed so the frame is rendered again.
+fn finish_ready_frames(
+    dataset: &Dataset,
+    states: &[ShardState],
+    todo: &[usize],
+    bar: &indicatif::ProgressBar,
+) -> Result<usize> {
+    let mut finished = 0;
+    for &i in todo {
+        let shard = &states[i].shard;
+        let name = &dataset.cameras[shard.camera].camera.name;
+        for f in missing_frames(dataset, shard) {
+            let (rgb, gt) = raw_frame_paths(&dataset.raw_dir(), name, f);
+            if !(rgb.is_file() && gt.is_file()) {
+                continue;
+            }
+            match dataset.finish_frame(shard.camera, f) {
+                Ok(_) => {
+                    finished += 1;
+                    bar.inc(1);
+                }
+                Err(e) => {
+                    bar.suspend(|| {
+                        eprintln!("egogen-run: {name} frame {f}: {e:#}; rendering it again")
+                    });
+                    let _ = std::fs::remove_file(&rgb);
+                    let _ = std::fs::remove_file(&gt);
+                }
+            }
+        }
+    }
+    Ok(finished)
+}
+
+/// The array script: Slurm options, then one exact worker command per task.
+pub fn array_script(
+    runtime: &BlenderRuntime,
+    settings: &SlurmSettings,
+    logs_dir: &Path,
+    specs: &[PathBuf],
+) -> String {
+    let plan = &settings.plan;
+    let minutes = settings.shard_timeout.as_secs().div_ceil(60).max(1);
+    let mut s = String::from("#!/bin/bash\n# Written by egogen-run: one array task per shard.\n");
+    let mut opt = |o: String| {
+        let _ = writeln!(s, "#SBATCH {o}");
+    };
+    opt("--job-name=egogen".into());
+    opt(format!(
+        "--array=0-{}%{}",
+        specs.len() - 1,
+        settings.max_running.max(1)
+    ));
+    opt(format!(
+        "--output={}",
+        logs_dir.join("slurm_%A_%a.log").display()
+    ));
+    opt(format!("--cpus-per-task={}", plan.cpus_per_task));
+    opt(format!("--mem={}M", (plan.mem_gb * 1024.0).ceil() as u64));
+    opt(format!("--time={minutes}"));
+    opt("--requeue".into());
+    if let Some(p) = &plan.partition {
+        opt(format!("--partition={p}"));
+    }
+    for a in &plan.sbatch_args {
+        opt(a.clone());
+    }
+    s.push_str("set -eu\n");
+    s.push_str("case \"$SLURM_ARRAY_TASK_ID\" in\n");
+    for (t, spec) in specs.iter().enumerate() {
+        let cmd = worker_command(runtime, spec);
+        let mut line = String::new();
+        for (k, v) in cmd.get_envs() {
+            if let Some(v) = v {
+                let _ = write!(
+                    line,
+                    "{}={} ",
+                    k.to_string_lossy(),
+                    shell_quote(&v.to_string_lossy())
+                );
+            }
+        }
+        line.push_str("exec");
+        for part in std::iter::once(cmd.get_program()).chain(cmd.get_args()) {
+            line.push(' ');
+            line.push_str(&shell_quote(&part.to_string_lossy()));
+        }
+        let _ = writeln!(s, "  {t}) {line} ;;");
+    }
+    s.push_str("  *) echo \"egogen: no task $SLURM_ARRAY_TASK_ID in this array\" >&2; exit 2 ;;\n");
+    s.push_str("esac\n");
+    s
+}
+
+/// `'…'` quoting for the shell: safe for every byte but NUL.
+fn shell_quote(s: &str) -> String {
+    format!("'{}'", s.replace('\'', r"'\''"))
+}
+
+/// Runs a Slurm client command; its stdout, or an error with its stderr.
+fn slurm_tool(program: &str, args: &[&str]) -> Result<String> {
+    let out = Command::new(program)
+        .args(args)
+        .output()
+        .with_context(|| format!("running `{program}`"))?;
+    if !out.status.success() {
+        bail!(
+            "`{program} {}` failed ({}): {}",
+            args.join(" "),
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        );
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// The array's tasks still in the queue (pending, running, completing), by task id.
+fn queued_tasks(job: &str) -> Result<BTreeMap<u32, String>> {
+    let out = Command::new("squeue")
+        .args(["--noheader", "--array", "--jobs", job, "--format=%K %T"])
+        .output()
+        .context("running `squeue`")?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        // A job the controller has already purged is no longer queued.
+        if err.contains("Invalid job id") {
+            return Ok(BTreeMap::new());
+        }
+        bail!("`squeue --jobs {job}` failed: {}", err.trim());
+    }
+    Ok(parse_squeue(&String::from_utf8_lossy(&out.stdout)))
+}
+
+/// Parses `squeue --array --format="%K %T"` lines.
+pub fn parse_squeue(text: &str) -> BTreeMap<u32, String> {
+    text.lines()
+        .filter_map(|l| {
+            let mut it = l.split_whitespace();
+            let task = it.next()?.parse().ok()?;
+            Some((task, it.next()?.to_string()))
+        })
+        .collect()
+}
+
+/// How each task of a finished array ended: from `scontrol show job` while the controller
+/// remembers the job (`MinJobAge`), else from `sacct` where accounting is enabled; empty when
+/// neither knows (outcomes then come from the frames on disk alone).
+fn task_ends(job: &str) -> BTreeMap<u32, TaskEnd> {
+    if let Ok(text) = slurm_tool("scontrol", &["--oneliner", "show", "job", job]) {
+        let ends = parse_scontrol(&text);
+        if !ends.is_empty() {
+            return ends;
+        }
+    }
+    slurm_tool(
+        "sacct",
+        &[
+            "--jobs",
+            job,
+            "--noheader",
+            "--parsable2",
+            "--allocations",
+            "--format=JobID,State,ExitCode,ElapsedRaw",
+        ],
+    )
+    .map(|t| parse_sacct(&t))
+    .unwrap_or_default()
+}
+
+/// Parses `scontrol --oneliner show job` (one line per array task).
+pub fn parse_scontrol(text: &str) -> BTreeMap<u32, TaskEnd> {
+    text.lines()
+        .filter_map(|line| {
+            let field = |key: &str| {
+                line.split_whitespace()
+                    .find_map(|kv| kv.strip_prefix(key)?.strip_prefix('='))
+            };
+            let task = field("ArrayTaskId")?.parse().ok()?;
+            Some((
+                task,
+                TaskEnd {
+                    state: field("JobState")?.to_string(),
+                    exit_code: field("ExitCode").unwrap_or("?").to_string(),
+                    seconds: field("RunTime").map_or(0.0, parse_slurm_duration),
+                },
+            ))
+        })
+        .collect()
+}
+
+/// Parses `sacct --parsable2 --format=JobID,State,ExitCode,ElapsedRaw` (`JOB_TASK|…`).
+pub fn parse_sacct(text: &str) -> BTreeMap<u32, TaskEnd> {
+    text.lines()
+        .filter_map(|line| {
+            let f: Vec<&str> = line.split('|').collect();
+            let task = f.first()?.split_once('_')?.1.parse().ok()?;
+            Some((
+                task,
+                TaskEnd {
+                    // `CANCELLED by 0` → `CANCELLED`.
+                    state: f.get(1)?.split_whitespace().next()?.to_string(),
+                    exit_code: f.get(2).unwrap_or(&"?").to_string(),
+                    seconds: f.get(3).and_then(|s| s.parse().ok()).unwrap_or(0.0),
+                },
+            ))
+        })
+        .collect()
+}
+
+/// `[D-]HH:MM:SS` (or `MM:SS`) in seconds.
+fn parse_slurm_duration(s: &str) -> f64 {
+    let (days, hms) = match s.split_once('-') {
+        Some((d, rest)) => (d.parse::<f64>().unwrap_or(0.0), rest),
+        None => (0.0, s),
+    };
+    let secs = hms
+        .split(':')
+        .fold(0.0, |acc, p| acc * 60.0 + p.parse::<f64>().unwrap_or(0.0));
+    days * 86400.0 + secs
+}
+
+fn append_job(jobs_path: &Path, job: &str) -> Result<()> {
+    let mut text = std::fs::read_to_string(jobs_path).unwrap_or_default();
+    text.push_str(job);
+    text.push('\n');
+    Ok(write_atomically(jobs_path, text.as_bytes())?)
+}
+
+/// A resumed run cancels the arrays of the run it continues (they may still be queued if that
+/// supervisor was killed); finished frames are on disk either way.
+fn cancel_previous_jobs(jobs_path: &Path) {
+    let Ok(text) = std::fs::read_to_string(jobs_path) else {
+        return;
+    };
+    for job in text.lines().filter(|l| !l.is_empty()) {
+        if queued_tasks(job).is_ok_and(|q| !q.is_empty()) {
+            eprintln!("egogen-run: cancelling Slurm job {job} left by the interrupted run");
+            let _ = slurm_tool("scancel", &[job]);
+        }
+    }
+}
+
+/// Sleeps `d` in short steps; true as soon as `stop` is set.
+fn sleep_unless_stopped(d: Duration, stop: &AtomicBool) -> bool {
+    let until = Instant::now() + d;
+    while Instant::now() < until {
+        if stop.load(Ordering::SeqCst) {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(100).min(until - Instant::now()));
+    }
+    stop.load(Ordering::SeqCst)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_the_queue_and_task_ends() {
+        let q = parse_squeue("3 RUNNING\n1 PENDING\n\nbogus\n");
+        assert_eq!(q.len(), 2);
+        assert_eq!(q[&1], "PENDING");
+        let s = parse_scontrol(
+            "JobId=6 ArrayJobId=3 ArrayTaskId=2 JobState=COMPLETED Reason=None ExitCode=0:0 RunTime=00:00:09\n\
+             JobId=3 ArrayJobId=3 ArrayTaskId=3 JobState=FAILED Reason=NonZeroExitCode ExitCode=3:0 RunTime=1-00:01:11\n\
+             JobId=1 ArrayJobId=1 ArrayTaskId=2-3 JobState=PENDING\n",
+        );
+        assert_eq!(s.len(), 2);
+        assert_eq!(s[&3].state, "FAILED");
+        assert_eq!(s[&3].exit_code, "3:0");
+        assert_eq!(s[&3].seconds, 86400.0 + 71.0);
+        assert_eq!(s[&2].seconds, 9.0);
+        let a = parse_sacct("7_0|COMPLETED|0:0|12\n7_1|CANCELLED by 0|0:15|3\n7|FAILED|1:0|4\n");
+        assert_eq!(a.len(), 2);
+        assert_eq!(a[&1].state, "CANCELLED");
+        assert_eq!(a[&0].seconds, 12.0);
+    }
+
+    #[test]
+    fn shell_quoting_survives_quotes_and_spaces() {
+        assert_eq!(shell_quote("a b"), "'a b'");
+        assert_eq!(shell_quote("it's"), r"'it'\''s'");
+    }
+}

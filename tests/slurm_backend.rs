@@ -1,0 +1,179 @@
+//! The Slurm backend against a real single-node Slurm (Debian `slurm-wlm` + `munge`, started by
+//! `tools/slurm_single_node.sh`): the run submits an array, one running array task is cancelled
+//! with `scancel JOB_TASK`, the shard is resubmitted, and the finished dataset is identical
+//! (SHA-256, file for file) to the local backend's. Without Slurm on this machine the test says
+//! so and returns; `EGOGEN_REQUIRE_SLURM=1` (set by `.ci/run`) makes that a failure.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use egogen::supervisor::verify;
+
+mod common;
+
+const CONFIG: &str = r#"
+[body]
+betas = []
+[motion]
+source = "scripted_walk"
+duration_s = 1.0
+frame_rate_hz = 40.0
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[render]
+cameras = ["camera-slam-left"]
+resolution_scale = 0.1
+every_n_frames = 4
+samples = 2
+frames_per_shard = 2
+[supervisor]
+backend = "slurm"
+workers = 2
+retries = 2
+[supervisor.slurm]
+cpus_per_task = 1
+mem_gb = 1.0
+poll_interval_s = 0.5
+"#;
+
+fn egogen_run() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+}
+
+fn setup() -> (tempfile::TempDir, PathBuf) {
+    common::run_dir(CONFIG)
+}
+
+/// Starts the single-node cluster when needed; false (with the reason printed) when this
+/// machine has no Slurm.
+fn slurm_cluster() -> bool {
+    let has = |bin: &str| {
+        Command::new("sh")
+            .args(["-c", &format!("command -v {bin}")])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    let required = std::env::var("EGOGEN_REQUIRE_SLURM").is_ok_and(|v| v == "1");
+    if !(has("sbatch") && has("slurmctld") && has("slurmd") && has("munged")) {
+        assert!(
+            !required,
+            "EGOGEN_REQUIRE_SLURM=1 but Slurm is not installed (apt-get install slurmctld slurmd slurm-client munge)"
+        );
+        eprintln!(
+            "SKIPPED slurm_backend: no Slurm on this machine (apt-get install slurmctld slurmd slurm-client munge)"
+        );
+        return false;
+    }
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/slurm_single_node.sh");
+    let out = Command::new("bash").arg(&script).output().unwrap();
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!required, "could not start Slurm: {err}");
+        eprintln!("SKIPPED slurm_backend: could not start Slurm: {err}");
+        return false;
+    }
+    true
+}
+
+/// `(task, state)` of the array's tasks in the queue.
+fn queue(job: &str) -> Vec<(u32, String)> {
+    let out = Command::new("squeue")
+        .args(["--noheader", "--array", "--jobs", job, "--format=%K %T"])
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| {
+            let (t, s) = l.trim().split_once(' ')?;
+            Some((t.parse().ok()?, s.to_string()))
+        })
+        .collect()
+}
+
+#[test]
+fn a_slurm_array_survives_a_cancelled_task_and_matches_the_local_backend() {
+    if !slurm_cluster() {
+        return;
+    }
+    // Reference: the local backend.
+    let (ref_dir, ref_config) = setup();
+    let out = egogen_run()
+        .arg(&ref_config)
+        .args(["--backend", "local"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let reference = common::read_manifest(&ref_dir.path().join("out"));
+
+    // Slurm: cancel the first task seen running, once.
+    let (dir, config) = setup();
+    let mut child = egogen_run().arg(&config).spawn().unwrap();
+    let jobs = dir.path().join("out.partial/work/slurm/jobs.txt");
+    let deadline = Instant::now() + Duration::from_secs(600);
+    let mut cancelled: Option<String> = None;
+    let status = loop {
+        assert!(Instant::now() < deadline, "the Slurm run is stuck");
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if cancelled.is_none() {
+            let first_job = std::fs::read_to_string(&jobs)
+                .ok()
+                .and_then(|t| t.lines().next().map(str::to_string));
+            if let Some(job) = first_job {
+                if let Some((task, _)) = queue(&job).into_iter().find(|(_, s)| s == "RUNNING") {
+                    let target = format!("{job}_{task}");
+                    let ok = Command::new("scancel").arg(&target).status().unwrap();
+                    assert!(ok.success(), "scancel {target}");
+                    eprintln!("cancelled array task {target}");
+                    cancelled = Some(target);
+                }
+            }
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(status.success(), "the Slurm run failed");
+    let cancelled = cancelled.expect("no array task was ever seen running");
+
+    let dataset = dir.path().join("out");
+    assert_eq!(
+        common::read_manifest(&dataset),
+        reference,
+        "Slurm and local datasets differ"
+    );
+    assert_eq!(verify(&dataset).unwrap().frames, 10);
+
+    // The cancelled task's shard was resubmitted in a second array.
+    let jobs = std::fs::read_to_string(dataset.join("work/slurm/jobs.txt")).unwrap();
+    assert!(jobs.lines().count() >= 2, "jobs submitted: {jobs:?}");
+    let report = std::fs::read_dir(dataset.join("logs"))
+        .unwrap()
+        .flatten()
+        .find(|e| e.file_name().to_string_lossy().starts_with("pool_report_"))
+        .expect("a pool report");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.path()).unwrap()).unwrap();
+    let retried: Vec<&serde_json::Value> = report["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["attempts"].as_array().unwrap().len() > 1)
+        .collect();
+    assert_eq!(retried.len(), 1, "{report:#}");
+    let first = &retried[0]["attempts"][0];
+    assert!(
+        first["outcome"].as_str().unwrap().contains("CANCELLED"),
+        "{first}"
+    );
+    let task = cancelled.rsplit('_').next().unwrap();
+    assert!(first["log"]
+        .as_str()
+        .unwrap()
+        .ends_with(&format!("_{task}.log")));
+}
