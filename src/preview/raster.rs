@@ -36,19 +36,18 @@ impl RgbImage {
         out
     }
 
-    /// Writes a PNG, atomically (temporary file, then rename).
+    /// Writes a PNG, atomically (see [`crate::atomic_file`]).
     pub fn write_png(&self, path: &Path) -> std::io::Result<()> {
-        let tmp = path.with_extension("png.partial");
+        let mut encoded = Vec::new();
         {
-            let file = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-            let mut enc = png::Encoder::new(file, self.width as u32, self.height as u32);
+            let mut enc = png::Encoder::new(&mut encoded, self.width as u32, self.height as u32);
             enc.set_color(png::ColorType::Rgb);
             enc.set_depth(png::BitDepth::Eight);
             let mut w = enc.write_header().map_err(std::io::Error::other)?;
             let bytes: Vec<u8> = self.pixels.iter().flatten().copied().collect();
             w.write_image_data(&bytes).map_err(std::io::Error::other)?;
         }
-        std::fs::rename(&tmp, path)
+        crate::atomic_file::write_atomically(path, &encoded)
     }
 }
 

@@ -6,6 +6,8 @@
 //! - `sequence/` — the synthesized sequence (motion, CPF trajectory, meshes, preview).
 //! - `cameras/<camera>/frame_NNNNN.exr` — one frame file per camera and frame
 //!   (see [`crate::render::frame_file`]); `cameras/<camera>/annotations.json`.
+//! - `images/<camera>/frame_NNNNN.png`, `colmap/<camera>/` — the COLMAP export
+//!   (see [`super::colmap`]).
 //! - `manifest.json` — every dataset file with size and SHA-256.
 //! - `work/` (raw renders, body caches, shard specs) and `logs/` (worker stderr per attempt)
 //!   are scratch; they are not part of the manifest.

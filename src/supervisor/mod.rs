@@ -1,8 +1,9 @@
 //! The supervisor: from a checked run plan to a finished dataset. Synthesizes the sequence,
 //! places it in the scene, plans shards (camera × frame block), runs them on a backend,
-//! finishes and validates frames, writes annotations and the manifest, and resumes an
-//! interrupted run where it stopped.
+//! finishes and validates frames, writes annotations, the COLMAP export and the manifest, and
+//! resumes an interrupted run where it stopped.
 
+pub mod colmap;
 pub mod dataset;
 pub mod local;
 pub mod manifest;

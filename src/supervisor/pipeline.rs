@@ -10,6 +10,7 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 use serde_json::json;
 
+use super::colmap::write_colmap;
 use super::dataset::{write_annotations, CameraWork, Dataset};
 use super::local::{run_local, PoolSettings};
 use super::manifest::{sha256_file, write_manifest, MANIFEST};
@@ -269,6 +270,7 @@ pub fn run_pipeline(
         );
     }
     write_annotations(&dataset, &render.rig, &motion, &track, &object_ids)?;
+    write_colmap(&dataset)?;
     let _ = std::fs::remove_dir_all(dataset.raw_dir());
     let manifest = write_manifest(&staging)?;
     if dir.exists() {
