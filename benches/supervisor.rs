@@ -38,10 +38,30 @@ struct Measured {
     frames: usize,
 }
 
-fn run(workers: usize) -> Measured {
+/// Slurm settings appended to the config for the Slurm rows: tasks poll twice a second.
+const SLURM: &str = r#"
+[supervisor]
+backend = "slurm"
+[supervisor.slurm]
+cpus_per_task = 1
+mem_gb = 1.0
+poll_interval_s = 0.5
+"#;
+
+#[derive(Clone, Copy, PartialEq)]
+enum Backend {
+    Local,
+    Slurm,
+}
+
+fn run(workers: usize, backend: Backend) -> Measured {
     let dir = tempfile::tempdir().unwrap();
     let config = dir.path().join("run.toml");
-    std::fs::write(&config, CONFIG).unwrap();
+    let text = match backend {
+        Backend::Local => CONFIG.to_string(),
+        Backend::Slurm => format!("{CONFIG}{SLURM}"),
+    };
+    std::fs::write(&config, text).unwrap();
     let started = Instant::now();
     let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
         .arg(&config)
@@ -88,13 +108,34 @@ fn pool_report(logs: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// Whether a Slurm cluster answers here (start one with `tools/slurm_single_node.sh`).
+fn slurm_answers() -> bool {
+    Command::new("sinfo")
+        .arg("--noheader")
+        .output()
+        .is_ok_and(|o| o.status.success())
+}
+
 fn main() {
     // Warm-up: provisions Blender if needed, warms the file cache.
-    run(1);
+    run(1, Backend::Local);
+    let slurm = slurm_answers();
+    if !slurm {
+        println!("no Slurm cluster answers `sinfo`: Slurm rows skipped");
+    }
     let mut by_workers = [Vec::new(), Vec::new()];
+    let mut slurm_by_workers = [Vec::new(), Vec::new()];
     for round in 0..ROUNDS {
         for workers in [1, 2] {
-            let m = run(workers);
+            if slurm {
+                let m = run(workers, Backend::Slurm);
+                println!(
+                    "round {round} Slurm, {workers} task(s) at once: {} frames, wall {:.2} s, tasks' run time summed {:.2} s",
+                    m.frames, m.wall_s, m.blender_s
+                );
+                slurm_by_workers[workers - 1].push(m);
+            }
+            let m = run(workers, Backend::Local);
             println!(
                 "round {round} workers {workers}: {} frames, wall {:.2} s, pool {:.2} s, Blender attempts {:.2} s, supervisor outside the pool {:.2} s ({:.1} %)",
                 m.frames,
@@ -123,4 +164,16 @@ fn main() {
         100.0 * t1 / (2.0 * t2),
         100.0 * p1 / (2.0 * p2)
     );
+    if slurm {
+        let (s1, s2) = (
+            mean(&slurm_by_workers[0], |m| m.wall_s),
+            mean(&slurm_by_workers[1], |m| m.wall_s),
+        );
+        println!(
+            "mean wall with Slurm: 1 task at once {s1:.2} s ({:.2}× local), 2 at once {s2:.2} s ({:.2}× local); speed-up {:.2}",
+            s1 / t1,
+            s2 / t2,
+            s1 / s2
+        );
+    }
 }

@@ -433,6 +433,11 @@ fn tools_missing() -> bool {
         .map(|(t, _)| t)
         .collect();
     if !missing.is_empty() {
+        assert!(
+            std::env::var("EGOGEN_REQUIRE_SYSTEM_TOOLS").as_deref() != Ok("1"),
+            "EGOGEN_REQUIRE_SYSTEM_TOOLS=1 but {} not on PATH (apt-get install colmap sqlite3)",
+            missing.join(" and ")
+        );
         eprintln!(
             "SKIPPED colmap_export: {} not on PATH (Debian: apt-get install colmap sqlite3)",
             missing.join(" and ")

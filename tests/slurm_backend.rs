@@ -2,7 +2,7 @@
 //! `tools/slurm_single_node.sh`): the run submits an array, one running array task is cancelled
 //! with `scancel JOB_TASK`, the shard is resubmitted, and the finished dataset is identical
 //! (SHA-256, file for file) to the local backend's. Without Slurm on this machine the test says
-//! so and returns; `EGOGEN_REQUIRE_SLURM=1` (set by `.ci/run`) makes that a failure.
+//! so and returns; `EGOGEN_REQUIRE_SYSTEM_TOOLS=1` (set by `.ci/run`) makes that a failure.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -55,11 +55,11 @@ fn slurm_cluster() -> bool {
             .output()
             .is_ok_and(|o| o.status.success())
     };
-    let required = std::env::var("EGOGEN_REQUIRE_SLURM").is_ok_and(|v| v == "1");
+    let required = std::env::var("EGOGEN_REQUIRE_SYSTEM_TOOLS").is_ok_and(|v| v == "1");
     if !(has("sbatch") && has("slurmctld") && has("slurmd") && has("munged")) {
         assert!(
             !required,
-            "EGOGEN_REQUIRE_SLURM=1 but Slurm is not installed (apt-get install slurmctld slurmd slurm-client munge)"
+            "EGOGEN_REQUIRE_SYSTEM_TOOLS=1 but Slurm is not installed (apt-get install slurmctld slurmd slurm-client munge)"
         );
         eprintln!(
             "SKIPPED slurm_backend: no Slurm on this machine (apt-get install slurmctld slurmd slurm-client munge)"
