@@ -156,6 +156,14 @@ fn negative_shutter() {
 }
 
 #[test]
+fn unknown_fisheye_rendering() {
+    expect_config_error(
+        &with_render("fisheye = \"fast\""),
+        &["fisheye", "unknown variant `fast`", "`exact`", "`native`"],
+    );
+}
+
+#[test]
 fn impossible_resolution() {
     expect_config_error(
         &with_render("resolution_scale = 0.3"),

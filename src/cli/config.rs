@@ -4,6 +4,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::render::render_camera::FisheyeRendering;
+
 /// A config file that could not be used, with the file named.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
@@ -111,6 +113,10 @@ pub struct RawRender {
     pub frames_per_shard: Option<usize>,
     /// Near clipping distance of head cameras, keeping the wearer's own head out (default 0.12 m).
     pub near_clip_m: Option<f64>,
+    /// How Fisheye624 cameras render: `exact` (default; a wider equidistant render remapped to
+    /// the model) or `native` (Cycles' polynomial fisheye fitted to the model; faster, off by
+    /// the fit's pixel error, see docs/RENDERING.md).
+    pub fisheye: Option<FisheyeRendering>,
 }
 
 /// Where shards run.

@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use super::config::{Backend, ConfigError, MotionSource, RawRender, RawRun, RawSupervisor};
+use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
 
 /// Default body model, relative to the crate root.
@@ -25,6 +26,8 @@ pub struct RenderPlan {
     pub cache_samples_per_frame: u32,
     pub frames_per_shard: usize,
     pub near_clip_m: f64,
+    /// What Blender renders for each of `cameras` (`[render] fisheye` applied).
+    pub render_cameras: Vec<RenderCamera>,
 }
 
 /// How shards run, checked.
@@ -215,6 +218,14 @@ fn resolve_render(
             ..cam.clone()
         });
     }
+    let fisheye = r.fisheye.unwrap_or_default();
+    let render_cameras = cameras
+        .iter()
+        .map(|cam| {
+            RenderCamera::for_camera(&cam.model, 1.0, fisheye)
+                .map_err(|e| bad("render.fisheye", format!("camera `{}`: {e}", cam.name)))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let positive_int = |key: &str, v: Option<usize>, default: usize| match v.unwrap_or(default) {
         0 => Err(bad(key, "expected a whole number ≥ 1, found 0".into())),
         n => Ok(n),
@@ -259,6 +270,7 @@ fn resolve_render(
         cache_samples_per_frame,
         frames_per_shard,
         near_clip_m,
+        render_cameras,
     })
 }
 

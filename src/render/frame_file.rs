@@ -14,7 +14,9 @@
 //! Pixels with no surface (background) or outside the camera's valid field of view hold 0 in
 //! every ground-truth channel; outside the valid field of view the colour is 0 too. Ground
 //! truth is sampled at the rendered pixel nearest to the exact ray (ids, positions and normals
-//! are never blended); colour is interpolated bilinearly.
+//! are never blended); colour is interpolated bilinearly. A render that is the target image
+//! itself (a pinhole, or the native polynomial fisheye) is taken pixel for pixel, and its flow
+//! is in its own pixels.
 
 use std::path::{Path, PathBuf};
 
@@ -196,6 +198,9 @@ pub fn assemble_frame(
     };
     // Target pixel of a rendered pixel (continuous), through its ray.
     let to_target = |q: Pixel| {
+        if render.is_identity() {
+            return Some(q);
+        }
         render
             .pixel_to_ray(q)
             .and_then(|r| target.project_unbounded(r))
@@ -204,10 +209,13 @@ pub fn assemble_frame(
         for x in 0..w {
             let i = y * w + x;
             let p = Pixel::new(x as Real, y as Real);
+            let Some(ray) = target.unproject(p) else {
+                continue;
+            };
             let q = if render.is_identity() {
                 p
             } else {
-                match target.unproject(p).and_then(|r| render.ray_to_pixel(r)) {
+                match render.ray_to_pixel(ray) {
                     Some(q) => q,
                     None => continue,
                 }

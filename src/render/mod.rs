@@ -6,6 +6,7 @@ pub mod blender_runtime;
 pub mod body_cache;
 pub mod camera_setup;
 pub mod frame_file;
+pub mod lens_polynomial;
 pub mod protocol;
 pub mod render_camera;
 pub mod shard;

@@ -19,6 +19,7 @@ use crate::camera::CameraModel;
 use crate::math::Affine3;
 use crate::motion::MotionSequence;
 use crate::render::frame_file::{assemble_frame, validate_frame, FrameImage};
+use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{raw_frame_paths, shard_camera, AGENT_ID_BASE};
 use crate::render::ShardSpec;
@@ -201,6 +202,7 @@ pub fn write_annotations(
                 "bbox_xyxy": "tight box of the agent's segmentation pixels, inclusive pixel indices",
             },
             "camera": model_json,
+            "image_model": image_model(work),
             "frame_rate_hz": motion.frame_rate_hz,
             "segmentation_ids": ids,
             "frames": frames,
@@ -214,6 +216,22 @@ pub fn write_annotations(
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// What lens the image was rendered with: `exact` (the camera model itself), or Cycles'
+/// polynomial fisheye standing in for it, with its pixel error against the camera model.
+fn image_model(work: &CameraWork) -> serde_json::Value {
+    match &work.render {
+        RenderCamera::PolynomialFisheye(lens) => json!({
+            "kind": "cycles_polynomial_fisheye",
+            "note": "rendered by this radially symmetric lens instead of `camera`: pixel channels (depth, normals, position, segmentation, flow) follow the image; 2D joints follow `camera`, off the image by `error_vs_camera_px`",
+            "centre_px": [lens.centre_px.x, lens.centre_px.y],
+            "theta_rad_of_radius_px": lens.theta_coeffs,
+            "max_radius_px": lens.max_radius_px,
+            "error_vs_camera_px": native_error(&work.camera.model, lens, ERROR_GRID),
+        }),
+        _ => json!({"kind": "exact"}),
+    }
 }
 
 fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
