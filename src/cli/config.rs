@@ -117,6 +117,36 @@ pub struct RawRender {
     /// the model) or `native` (Cycles' polynomial fisheye fitted to the model; faster, off by
     /// the fit's pixel error, see docs/RENDERING.md).
     pub fisheye: Option<FisheyeRendering>,
+    /// `[render.depth_noise]`: a noisy depth channel for some cameras (default: none).
+    pub depth_noise: Option<RawDepthNoise>,
+}
+
+/// `[render.depth_noise]`: which cameras get a `depth_noisy.Z` channel, the seed, and the
+/// model's parameters (each defaults to Nguyen et al.'s Kinect fit or egogen's estimate; see
+/// docs/RENDERING.md and `render/depth_noise.rs`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawDepthNoise {
+    /// Rendered cameras that get the channel, e.g. `["depth-long-throw"]`.
+    pub cameras: Vec<String>,
+    /// Seed of the noise draws (default 0).
+    pub seed: Option<u64>,
+    /// `a` (default 0.0012 m).
+    pub sigma_base_m: Option<f64>,
+    /// `b` (default 0.0019 m⁻¹).
+    pub sigma_quadratic_per_m: Option<f64>,
+    /// `c` (default 0.4 m).
+    pub sigma_offset_m: Option<f64>,
+    /// `d` (default 0.0001 m^1.5).
+    pub sigma_grazing: Option<f64>,
+    /// No measurement beyond this incidence angle (default 75°).
+    pub max_incidence_deg: Option<f64>,
+    /// No measurement nearer than this (default 0.4 m).
+    pub min_range_m: Option<f64>,
+    /// No measurement farther than this (default 4 m).
+    pub max_range_m: Option<f64>,
+    /// Output step (default 0.001 m; 0 = none).
+    pub quantisation_m: Option<f64>,
 }
 
 /// Where shards run.

@@ -10,6 +10,8 @@
 //! - `segmentation.id` — u32: scene object or agent id (0 = nothing).
 //! - `flow_forward.X/Y`, `flow_backward.X/Y` — pixel displacement of the surface point to the
 //!   next / previous frame (OpenCV pixels, x right, y down).
+//! - `depth_noisy.Z` (only for cameras with a depth-noise model) — `depth.Z` through the
+//!   sensor noise model of [`crate::render::depth_noise`]; 0 = no measurement.
 //!
 //! Pixels with no surface (background) or outside the camera's valid field of view hold 0 in
 //! every ground-truth channel; outside the valid field of view the colour is 0 too. Ground
@@ -52,6 +54,9 @@ pub const FRAME_CHANNELS: [&str; 17] = [
     "valid.V",
 ];
 
+/// Channels a frame file may hold besides [`FRAME_CHANNELS`]; checked like them when present.
+pub const OPTIONAL_FRAME_CHANNELS: [&str; 1] = ["depth_noisy.Z"];
+
 /// A frame that could not be assembled, written or validated.
 #[derive(Debug, thiserror::Error)]
 pub enum FrameFileError {
@@ -90,6 +95,8 @@ pub struct FrameImage {
     pub flow_forward: Vec<[f32; 2]>,
     pub flow_backward: Vec<[f32; 2]>,
     pub valid: Vec<f32>,
+    /// `depth` through a sensor noise model, where the camera has one.
+    pub depth_noisy: Option<Vec<f32>>,
 }
 
 /// A raw render's planes, looked up by pass and component.
@@ -195,6 +202,7 @@ pub fn assemble_frame(
         flow_forward: vec![[0.0; 2]; w * h],
         flow_backward: vec![[0.0; 2]; w * h],
         valid: vec![0.0; w * h],
+        depth_noisy: None,
     };
     // Target pixel of a rendered pixel (continuous), through its ray.
     let to_target = |q: Pixel| {
@@ -269,6 +277,9 @@ impl FrameImage {
             channels.push(AnyChannel::new(name, FlatSamples::F32(values)))
         };
         f32_channel("depth.Z", self.depth.clone());
+        if let Some(noisy) = &self.depth_noisy {
+            f32_channel("depth_noisy.Z", noisy.clone());
+        }
         for (c, axis) in ["X", "Y"].iter().enumerate() {
             f32_channel(
                 &format!("flow_backward.{axis}"),
@@ -316,13 +327,17 @@ pub fn validate_frame(path: &Path, width: u32, height: u32) -> Result<ExrContent
     Ok(contents)
 }
 
-/// Every frame channel is present (at `size`, if given: width, height) and finite.
+/// Every frame channel is present, and so are the optional ones that are there: at `size`, if
+/// given (width, height), and finite.
 pub fn check_frame_channels(
     contents: &ExrContents,
     size: Option<(u32, u32)>,
 ) -> Result<(), FrameFileError> {
     let path = &contents.path;
-    for name in FRAME_CHANNELS {
+    let optional = OPTIONAL_FRAME_CHANNELS
+        .into_iter()
+        .filter(|name| contents.channel(name).is_some());
+    for name in FRAME_CHANNELS.into_iter().chain(optional) {
         let ch = contents
             .channel(name)
             .ok_or_else(|| FrameFileError::MissingChannel {

@@ -148,9 +148,11 @@ pub fn run_pipeline(
         .cameras
         .iter()
         .zip(&render.render_cameras)
-        .map(|(cam, rendered)| CameraWork {
+        .zip(&render.depth_noise)
+        .map(|((cam, rendered), noise)| CameraWork {
             camera: cam.clone(),
             render: *rendered,
+            depth_noise: *noise,
             world_from_cam: track
                 .frames
                 .iter()
