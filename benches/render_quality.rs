@@ -7,63 +7,33 @@
 //! `cargo bench --bench render_quality`
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use egogen::inspect::ExrContents;
 
+mod common;
+use common::{egogen_run, walk_config};
+
 fn config(samples: u32, adaptive: f64, denoise: bool) -> String {
-    format!(
-        r#"
-[body]
-betas = []
-[motion]
-source = "scripted_walk"
-duration_s = 0.025
-frame_rate_hz = 40.0
-[output]
-dir = "out"
-mesh_every_n_frames = 0
-[render]
-cameras = ["camera-rgb"]
+    walk_config(
+        1,
+        &format!(
+            r#"cameras = ["camera-rgb"]
 resolution_scale = 0.125
 samples = {samples}
 adaptive_threshold = {adaptive}
 denoise = {denoise}
-shutter_frames = 0.0
-"#
+shutter_frames = 0.0"#
+        ),
     )
 }
 
 /// Renders; returns (frame file, Blender attempt seconds, kept temp dir).
 fn render(samples: u32, adaptive: f64, denoise: bool) -> (PathBuf, f64, tempfile::TempDir) {
-    let dir = tempfile::tempdir().unwrap();
-    let cfg = dir.path().join("run.toml");
-    std::fs::write(&cfg, config(samples, adaptive, denoise)).unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
-        .arg(&cfg)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let logs = dir.path().join("out/logs");
-    let report = std::fs::read_dir(&logs)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .find(|p| p.to_string_lossy().contains("pool_report"))
-        .unwrap();
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
-    let seconds = report["shards"][0]["attempts"][0]["seconds"]
-        .as_f64()
-        .unwrap();
+    let run = egogen_run(&config(samples, adaptive, denoise));
     (
-        dir.path().join("out/cameras/camera-rgb/frame_00000.exr"),
-        seconds,
-        dir,
+        run.out().join("cameras/camera-rgb/frame_00000.exr"),
+        run.attempt_seconds[0],
+        run.dir,
     )
 }
 

@@ -102,13 +102,25 @@ def make_camera(scene, cam_spec):
         data.shift_y = p["shift_y"]
         scene.render.resolution_x = p["width_px"]
         scene.render.resolution_y = p["height_px"]
-    else:
+    elif "equidistant_fisheye" in lens:
         p = lens["equidistant_fisheye"]
         data.type = "PANO"
         data.panorama_type = "FISHEYE_EQUIDISTANT"
         data.fisheye_fov = p["fov_rad"]
         scene.render.resolution_x = p["size_px"]
         scene.render.resolution_y = p["size_px"]
+    else:
+        p = lens["polynomial_fisheye"]
+        data.type = "PANO"
+        data.panorama_type = "FISHEYE_LENS_POLYNOMIAL"
+        data.sensor_fit = "HORIZONTAL"
+        data.sensor_width = p["sensor_width_mm"]
+        for i, k in enumerate(p["k"]):
+            setattr(data, f"fisheye_polynomial_k{i}", k)
+        data.shift_x = p["shift_x"]
+        data.shift_y = p["shift_y"]
+        scene.render.resolution_x = p["width_px"]
+        scene.render.resolution_y = p["height_px"]
     scene.render.resolution_percentage = 100
     data.clip_start = cam_spec["clip_start_m"]
     data.clip_end = 1000.0

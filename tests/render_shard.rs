@@ -15,7 +15,8 @@ use egogen::motion::scripted::WalkCycle;
 use egogen::motion::MotionSequence;
 use egogen::render::body_cache::{body_cache, write_faces_npy, PointCache};
 use egogen::render::frame_file::{assemble_frame, validate_frame};
-use egogen::render::render_camera::RenderCamera;
+use egogen::render::lens_polynomial::native_error;
+use egogen::render::render_camera::{FisheyeRendering, RenderCamera};
 use egogen::render::shard::render_shard;
 use egogen::render::shard_plan::{blender_fps, shard_camera, AGENT_ID_BASE};
 use egogen::render::{
@@ -130,12 +131,21 @@ fn render_scene() -> Rendered {
         )
         .unwrap();
     let cameras: Vec<(String, Camera, RenderCamera)> = [
-        ("pinhole", pinhole),
-        ("slam", Camera::Fisheye624(tiny_slam)),
+        ("pinhole", pinhole, FisheyeRendering::Exact),
+        (
+            "slam",
+            Camera::Fisheye624(tiny_slam),
+            FisheyeRendering::Exact,
+        ),
+        (
+            "slam_native",
+            Camera::Fisheye624(tiny_slam),
+            FisheyeRendering::Native,
+        ),
     ]
     .into_iter()
-    .map(|(n, c)| {
-        let r = RenderCamera::for_camera(&c, 1.0);
+    .map(|(n, c, mode)| {
+        let r = RenderCamera::for_camera(&c, 1.0, mode).unwrap();
         (n.to_string(), c, r)
     })
     .collect();
@@ -283,6 +293,7 @@ fn every_ground_truth_pixel_lies_on_its_ray() {
                 if alpha[i] < 0.5 || !render.renders(px) {
                     continue;
                 }
+
                 hits += 1;
                 let world = Vec3::new(p[0][i] as f64, p[1][i] as f64, p[2][i] as f64);
                 let seen = cam_from_world.transform_point3(world).normalize();
@@ -359,16 +370,20 @@ fn optical_flow_matches_the_camera_motion() {
     let r = rendered();
     let f = 2usize;
     for cam in 0..r.cameras.len() {
-        let (name, target, _) = &r.cameras[cam];
+        let (name, target, render) = &r.cameras[cam];
         let exr = frame(r, cam, f as u32);
         let ids = plane(&exr, "segmentation.id");
         let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
         let fwd = ["X", "Y"].map(|c| plane(&exr, &format!("flow_forward.{c}")));
         let bwd = ["X", "Y"].map(|c| plane(&exr, &format!("flow_backward.{c}")));
+        // Flow is in the frame's own pixels: the rendered image's where it is not remapped.
         let pixel_in = |frame: usize, p: Vec3| {
-            target
-                .project_unbounded(r.poses[frame].inverse().transform_point3(p))
-                .unwrap()
+            let p = r.poses[frame].inverse().transform_point3(p);
+            if render.is_identity() {
+                render.ray_to_pixel(p).unwrap()
+            } else {
+                target.project_unbounded(p).unwrap()
+            }
         };
         let (mut worst, mut checked, mut mean_flow) = (0.0f64, 0, 0.0);
         for i in 0..ids.len() {
@@ -433,6 +448,62 @@ fn fisheye_frames_follow_the_exact_model() {
     );
     assert!(count > 1000);
     assert!(worst < 0.75, "{worst} raw pixels");
+}
+
+#[test]
+fn native_fisheye_frames_are_off_the_exact_model_by_the_fit_error() {
+    let r = rendered();
+    let (_, target, render) = &r.cameras[2];
+    let RenderCamera::PolynomialFisheye(lens) = render else {
+        panic!("native render")
+    };
+    let exr = frame(r, 2, 3);
+    let valid = plane(&exr, "valid.V");
+    let depth = plane(&exr, "depth.Z");
+    let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
+    let res = target.resolution();
+    let cam_from_world = r.poses[3].inverse();
+    let analytic = native_error(target, lens, 512);
+    let (mut worst_native, mut worst_vs_analytic, mut worst_exact, mut count) =
+        (0.0f64, 0.0f64, 0.0f64, 0);
+    for y in 0..res.height_px as usize {
+        for x in 0..res.width_px as usize {
+            let i = y * res.width_px as usize + x;
+            let px = Pixel::new(x as f64, y as f64);
+            let ray = target.unproject(px);
+            assert_eq!(valid[i] > 0.5, ray.is_some(), "valid mask at ({x}, {y})");
+            if depth[i] <= 0.0 {
+                continue;
+            }
+            let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
+            let seen = cam_from_world.transform_point3(p);
+            // Where the polynomial lens puts the point: this very pixel.
+            worst_native = worst_native.max((lens.ray_to_pixel(seen).unwrap() - px).length());
+            // Where the exact model puts it: off by the fit's error at this pixel.
+            let exact_off = target.project_unbounded(seen).unwrap() - px;
+            let predicted = target
+                .project_unbounded(lens.pixel_to_ray(px).unwrap())
+                .unwrap()
+                - px;
+            worst_vs_analytic = worst_vs_analytic.max((exact_off - predicted).length());
+            worst_exact = worst_exact.max(exact_off.length());
+            count += 1;
+        }
+    }
+    eprintln!(
+        "native fisheye {}×{}: {count} px; point vs its pixel: polynomial lens {worst_native:.4} px, \
+         exact model {worst_exact:.4} px (analytic over the valid field of view: max {:.4}, \
+         mean {:.4}, p95 {:.4} px); |measured − analytic offset| ≤ {worst_vs_analytic:.4} px",
+        res.width_px, res.height_px, analytic.max_px, analytic.mean_px, analytic.p95_px
+    );
+    assert!(count > 1000, "{count}");
+    assert!(worst_native < 0.01, "{worst_native} px");
+    assert!(worst_vs_analytic < 0.01, "{worst_vs_analytic} px");
+    assert!(worst_exact <= analytic.max_px + 0.01, "{worst_exact} px");
+    assert!(
+        worst_exact > 0.25 * analytic.max_px,
+        "the fit error shows: {worst_exact} px"
+    );
 }
 
 /// A Python with the OpenEXR PyPI bindings, in a virtual environment of the egogen cache

@@ -19,7 +19,7 @@ pub mod fisheye624;
 mod fov;
 pub mod kannala_brandt;
 pub mod pinhole;
-mod theta_poly;
+pub(crate) mod theta_poly;
 
 use glam::DVec2;
 

@@ -72,30 +72,50 @@ impl<const N: usize> ThetaPolynomial<N> {
             // Allow rounding at the very edge.
             return (theta_d - top <= 4.0 * Real::EPSILON * top).then_some(theta_max);
         }
-        let (mut lo, mut hi) = (0.0, theta_max);
-        let mut theta = theta_d.min(theta_max);
-        for _ in 0..MAX_NEWTON_ITERATIONS {
-            let (value, slope) = self.eval_with_slope(theta);
-            let residual = value - theta_d;
-            if residual > 0.0 {
-                hi = theta;
-            } else {
-                lo = theta;
-            }
-            let newton = theta - residual / slope;
-            let next = if slope > 0.0 && newton >= lo && newton <= hi {
-                newton
-            } else {
-                0.5 * (lo + hi)
-            };
-            let step = (next - theta).abs();
-            theta = next;
-            if step <= THETA_STEP_TOLERANCE || residual == 0.0 {
-                return Some(theta.clamp(0.0, theta_max));
-            }
-        }
-        None
+        invert_increasing(
+            |t| self.eval_with_slope(t),
+            theta_d,
+            theta_max,
+            theta_d.min(theta_max),
+            THETA_STEP_TOLERANCE,
+        )
     }
+}
+
+/// The `x` in `[0, x_max]` with `f(x) = target` for an increasing `f` given with its slope
+/// (`f_with_slope(x) = (f(x), f′(x))`): Newton from `start`, falling back to bisection whenever a
+/// step would leave the bracket, until a step is at most `tolerance`; `None` if that takes more
+/// than [`MAX_NEWTON_ITERATIONS`].
+pub(crate) fn invert_increasing(
+    f_with_slope: impl Fn(Real) -> (Real, Real),
+    target: Real,
+    x_max: Real,
+    start: Real,
+    tolerance: Real,
+) -> Option<Real> {
+    let (mut lo, mut hi) = (0.0, x_max);
+    let mut x = start.clamp(0.0, x_max);
+    for _ in 0..MAX_NEWTON_ITERATIONS {
+        let (value, slope) = f_with_slope(x);
+        let residual = value - target;
+        if residual > 0.0 {
+            hi = x;
+        } else {
+            lo = x;
+        }
+        let newton = x - residual / slope;
+        let next = if slope > 0.0 && newton >= lo && newton <= hi {
+            newton
+        } else {
+            0.5 * (lo + hi)
+        };
+        let step = (next - x).abs();
+        x = next;
+        if step <= tolerance || residual == 0.0 {
+            return Some(x.clamp(0.0, x_max));
+        }
+    }
+    None
 }
 
 #[cfg(test)]

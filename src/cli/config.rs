@@ -4,6 +4,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::render::render_camera::FisheyeRendering;
+
 /// A config file that could not be used, with the file named.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
@@ -111,6 +113,40 @@ pub struct RawRender {
     pub frames_per_shard: Option<usize>,
     /// Near clipping distance of head cameras, keeping the wearer's own head out (default 0.12 m).
     pub near_clip_m: Option<f64>,
+    /// How Fisheye624 cameras render: `exact` (default; a wider equidistant render remapped to
+    /// the model) or `native` (Cycles' polynomial fisheye fitted to the model; faster, off by
+    /// the fit's pixel error, see docs/RENDERING.md).
+    pub fisheye: Option<FisheyeRendering>,
+    /// `[render.depth_noise]`: a noisy depth channel for some cameras (default: none).
+    pub depth_noise: Option<RawDepthNoise>,
+}
+
+/// `[render.depth_noise]`: which cameras get a `depth_noisy.Z` channel, the seed, and the
+/// model's parameters (each defaults to Nguyen et al.'s Kinect fit or egogen's estimate; see
+/// docs/RENDERING.md and `render/depth_noise.rs`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawDepthNoise {
+    /// Rendered cameras that get the channel, e.g. `["depth-long-throw"]`.
+    pub cameras: Vec<String>,
+    /// Seed of the noise draws (default 0).
+    pub seed: Option<u64>,
+    /// `a` (default 0.0012 m).
+    pub sigma_base_m: Option<f64>,
+    /// `b` (default 0.0019 m⁻¹).
+    pub sigma_quadratic_per_m: Option<f64>,
+    /// `c` (default 0.4 m).
+    pub sigma_offset_m: Option<f64>,
+    /// `d` (default 0.0001 m^1.5).
+    pub sigma_grazing: Option<f64>,
+    /// No measurement beyond this incidence angle (default 75°).
+    pub max_incidence_deg: Option<f64>,
+    /// No measurement nearer than this (default 0.4 m).
+    pub min_range_m: Option<f64>,
+    /// No measurement farther than this (default 4 m).
+    pub max_range_m: Option<f64>,
+    /// Output step (default 0.001 m; 0 = none).
+    pub quantisation_m: Option<f64>,
 }
 
 /// Where shards run.

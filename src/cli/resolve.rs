@@ -3,8 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use super::config::{
-    Backend, ConfigError, MotionSource, RawRender, RawRun, RawSlurm, RawSupervisor,
+    Backend, ConfigError, MotionSource, RawDepthNoise, RawRender, RawRun, RawSlurm, RawSupervisor,
 };
+use crate::render::depth_noise::DepthNoise;
+use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
 
 /// Default body model, relative to the crate root.
@@ -27,6 +29,10 @@ pub struct RenderPlan {
     pub cache_samples_per_frame: u32,
     pub frames_per_shard: usize,
     pub near_clip_m: f64,
+    /// What Blender renders for each of `cameras` (`[render] fisheye` applied).
+    pub render_cameras: Vec<RenderCamera>,
+    /// The depth-noise model and seed of each of `cameras`, where it has one.
+    pub depth_noise: Vec<Option<(DepthNoise, u64)>>,
 }
 
 /// How shards run, checked.
@@ -228,6 +234,18 @@ fn resolve_render(
             ..cam.clone()
         });
     }
+    let fisheye = r.fisheye.unwrap_or_default();
+    let render_cameras = cameras
+        .iter()
+        .map(|cam| {
+            RenderCamera::for_camera(&cam.model, 1.0, fisheye)
+                .map_err(|e| bad("render.fisheye", format!("camera `{}`: {e}", cam.name)))
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let depth_noise = match r.depth_noise {
+        None => vec![None; cameras.len()],
+        Some(raw) => resolve_depth_noise(raw, &cameras, config_path)?,
+    };
     let positive_int = |key: &str, v: Option<usize>, default: usize| match v.unwrap_or(default) {
         0 => Err(bad(key, "expected a whole number ≥ 1, found 0".into())),
         n => Ok(n),
@@ -272,7 +290,49 @@ fn resolve_render(
         cache_samples_per_frame,
         frames_per_shard,
         near_clip_m,
+        render_cameras,
+        depth_noise,
     })
+}
+
+/// The model and seed for each rendered camera named in `[render.depth_noise]`.
+fn resolve_depth_noise(
+    raw: RawDepthNoise,
+    cameras: &[RigCamera],
+    config_path: &Path,
+) -> Result<Vec<Option<(DepthNoise, u64)>>, ConfigError> {
+    let bad = |key: &str, message: String| ConfigError::Value {
+        path: config_path.into(),
+        key: format!("render.depth_noise.{key}"),
+        message,
+    };
+    let d = DepthNoise::default();
+    let model = DepthNoise {
+        sigma_base_m: raw.sigma_base_m.unwrap_or(d.sigma_base_m),
+        sigma_quadratic_per_m: raw.sigma_quadratic_per_m.unwrap_or(d.sigma_quadratic_per_m),
+        sigma_offset_m: raw.sigma_offset_m.unwrap_or(d.sigma_offset_m),
+        sigma_grazing: raw.sigma_grazing.unwrap_or(d.sigma_grazing),
+        max_incidence_deg: raw.max_incidence_deg.unwrap_or(d.max_incidence_deg),
+        min_range_m: raw.min_range_m.unwrap_or(d.min_range_m),
+        max_range_m: raw.max_range_m.unwrap_or(d.max_range_m),
+        quantisation_m: raw.quantisation_m.unwrap_or(d.quantisation_m),
+    };
+    model.check().map_err(|(key, message)| bad(key, message))?;
+    let rendered: Vec<&str> = cameras.iter().map(|c| c.name.as_str()).collect();
+    if let Some(name) = raw.cameras.iter().find(|n| !rendered.contains(&n.as_str())) {
+        return Err(bad(
+            "cameras",
+            format!(
+                "`{name}` is not a rendered camera (rendered: {})",
+                rendered.join(", ")
+            ),
+        ));
+    }
+    let seed = raw.seed.unwrap_or(0);
+    Ok(cameras
+        .iter()
+        .map(|c| raw.cameras.contains(&c.name).then_some((model, seed)))
+        .collect())
 }
 
 fn resolve_supervisor(s: RawSupervisor, config_path: &Path) -> Result<SupervisorPlan, ConfigError> {

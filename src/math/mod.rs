@@ -1,4 +1,5 @@
-//! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps.
+//! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps, seeded
+//! random draws.
 //!
 //! Conventions used across egogen:
 //! - Lengths are metres, angles radians, time seconds unless a name says otherwise.
@@ -9,6 +10,7 @@
 //!   camera frame (x right, y down, z forward).
 //! - Rotations are right-handed; axis-angle vectors have angle = norm, in radians.
 
+pub mod random;
 pub mod rotation;
 
 /// Scalar used for geometry. Body maths runs in `f64` so that long kinematic chains and

@@ -10,11 +10,15 @@
 //! - `segmentation.id` — u32: scene object or agent id (0 = nothing).
 //! - `flow_forward.X/Y`, `flow_backward.X/Y` — pixel displacement of the surface point to the
 //!   next / previous frame (OpenCV pixels, x right, y down).
+//! - `depth_noisy.Z` (only for cameras with a depth-noise model) — `depth.Z` through the
+//!   sensor noise model of [`crate::render::depth_noise`]; 0 = no measurement.
 //!
 //! Pixels with no surface (background) or outside the camera's valid field of view hold 0 in
 //! every ground-truth channel; outside the valid field of view the colour is 0 too. Ground
 //! truth is sampled at the rendered pixel nearest to the exact ray (ids, positions and normals
-//! are never blended); colour is interpolated bilinearly.
+//! are never blended); colour is interpolated bilinearly. A render that is the target image
+//! itself (a pinhole, or the native polynomial fisheye) is taken pixel for pixel, and its flow
+//! is in its own pixels.
 
 use std::path::{Path, PathBuf};
 
@@ -49,6 +53,9 @@ pub const FRAME_CHANNELS: [&str; 17] = [
     // Marks pixels inside the camera's valid field of view (1) or outside (0).
     "valid.V",
 ];
+
+/// Channels a frame file may hold besides [`FRAME_CHANNELS`]; checked like them when present.
+pub const OPTIONAL_FRAME_CHANNELS: [&str; 1] = ["depth_noisy.Z"];
 
 /// A frame that could not be assembled, written or validated.
 #[derive(Debug, thiserror::Error)]
@@ -88,6 +95,8 @@ pub struct FrameImage {
     pub flow_forward: Vec<[f32; 2]>,
     pub flow_backward: Vec<[f32; 2]>,
     pub valid: Vec<f32>,
+    /// `depth` through a sensor noise model, where the camera has one.
+    pub depth_noisy: Option<Vec<f32>>,
 }
 
 /// A raw render's planes, looked up by pass and component.
@@ -193,9 +202,13 @@ pub fn assemble_frame(
         flow_forward: vec![[0.0; 2]; w * h],
         flow_backward: vec![[0.0; 2]; w * h],
         valid: vec![0.0; w * h],
+        depth_noisy: None,
     };
     // Target pixel of a rendered pixel (continuous), through its ray.
     let to_target = |q: Pixel| {
+        if render.is_identity() {
+            return Some(q);
+        }
         render
             .pixel_to_ray(q)
             .and_then(|r| target.project_unbounded(r))
@@ -204,10 +217,13 @@ pub fn assemble_frame(
         for x in 0..w {
             let i = y * w + x;
             let p = Pixel::new(x as Real, y as Real);
+            let Some(ray) = target.unproject(p) else {
+                continue;
+            };
             let q = if render.is_identity() {
                 p
             } else {
-                match target.unproject(p).and_then(|r| render.ray_to_pixel(r)) {
+                match render.ray_to_pixel(ray) {
                     Some(q) => q,
                     None => continue,
                 }
@@ -261,6 +277,9 @@ impl FrameImage {
             channels.push(AnyChannel::new(name, FlatSamples::F32(values)))
         };
         f32_channel("depth.Z", self.depth.clone());
+        if let Some(noisy) = &self.depth_noisy {
+            f32_channel("depth_noisy.Z", noisy.clone());
+        }
         for (c, axis) in ["X", "Y"].iter().enumerate() {
             f32_channel(
                 &format!("flow_backward.{axis}"),
@@ -308,13 +327,17 @@ pub fn validate_frame(path: &Path, width: u32, height: u32) -> Result<ExrContent
     Ok(contents)
 }
 
-/// Every frame channel is present (at `size`, if given: width, height) and finite.
+/// Every frame channel is present, and so are the optional ones that are there: at `size`, if
+/// given (width, height), and finite.
 pub fn check_frame_channels(
     contents: &ExrContents,
     size: Option<(u32, u32)>,
 ) -> Result<(), FrameFileError> {
     let path = &contents.path;
-    for name in FRAME_CHANNELS {
+    let optional = OPTIONAL_FRAME_CHANNELS
+        .into_iter()
+        .filter(|name| contents.channel(name).is_some());
+    for name in FRAME_CHANNELS.into_iter().chain(optional) {
         let ch = contents
             .channel(name)
             .ok_or_else(|| FrameFileError::MissingChannel {

@@ -5,7 +5,9 @@
 pub mod blender_runtime;
 pub mod body_cache;
 pub mod camera_setup;
+pub mod depth_noise;
 pub mod frame_file;
+pub mod lens_polynomial;
 pub mod protocol;
 pub mod render_camera;
 pub mod shard;

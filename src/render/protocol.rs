@@ -23,6 +23,17 @@ pub enum ShardLens {
     },
     /// Cycles' equidistant fisheye: square image, `fov_rad` across its width.
     EquidistantFisheye { size_px: u32, fov_rad: f64 },
+    /// Cycles' polynomial fisheye (`FISHEYE_LENS_POLYNOMIAL`, sensor fitted horizontally):
+    /// `θ = −(k0 + k1·r + … + k4·r⁴)` at sensor radius `r` (mm) from the image centre moved
+    /// by the shifts (units of each image side), as `render/lens_polynomial.rs` measured it.
+    PolynomialFisheye {
+        width_px: u32,
+        height_px: u32,
+        sensor_width_mm: f64,
+        k: [f64; 5],
+        shift_x: f64,
+        shift_y: f64,
+    },
 }
 
 /// A camera pose key at a (sub)frame: Blender `location` and `rotation_quaternion` (w, x, y, z)

@@ -1,7 +1,9 @@
 //! The ideal camera Blender renders for a rig camera. A square-pixel pinhole is rendered as
 //! itself; every distorted model (Fisheye624, Kannala-Brandt) is rendered by Cycles'
 //! equidistant fisheye, covering the model's field of view at least at the model's own angular
-//! resolution, and remapped to the exact model in Rust ([`crate::render::remap`]).
+//! resolution, and remapped to the exact model in Rust (`frame_file::assemble_frame`). With
+//! [`FisheyeRendering::Native`] a Fisheye624 camera is instead rendered directly by Cycles'
+//! polynomial fisheye fitted to it ([`LensPolynomial`]), at the target resolution, unremapped.
 //!
 //! Pixel convention as in [`crate::camera`]: OpenCV, centre of the top-left pixel at (0, 0).
 //! Cycles' equidistant fisheye (measured with the position pass, `tests/render_passes.rs`):
@@ -11,10 +13,23 @@
 use crate::camera::{Camera, CameraModel, Pixel, Resolution};
 use crate::math::{Real, Vec3};
 use crate::render::camera_setup::blender_lens;
+use crate::render::lens_polynomial::{LensFitError, LensPolynomial};
 use crate::render::protocol::ShardLens;
 
 /// Extra angle rendered beyond the model's `max θ`, in raw pixels (room for bilinear lookups).
 const FOV_MARGIN_PX: Real = 2.0;
+
+/// How Fisheye624 cameras are rendered (`[render] fisheye`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FisheyeRendering {
+    /// A wider equidistant fisheye remapped to the exact model in Rust.
+    #[default]
+    Exact,
+    /// Cycles' polynomial fisheye fitted to the model, rendered at the target resolution:
+    /// faster, off the exact model by the fit's error (`docs/RENDERING.md`).
+    Native,
+}
 
 /// What Blender renders for one rig camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -30,12 +45,30 @@ pub enum RenderCamera {
         size_px: u32,
         fov_rad: Real,
     },
+    /// Cycles' polynomial fisheye, the image itself (no remap).
+    PolynomialFisheye(LensPolynomial),
 }
 
 impl RenderCamera {
-    /// The render for `target`; `oversample` scales the fisheye's pixels per radian over the
-    /// target's largest (1 = same angular resolution).
-    pub fn for_camera(target: &Camera, oversample: Real) -> Self {
+    /// The render for `target`: with [`FisheyeRendering::Native`], the polynomial lens for a
+    /// Fisheye624 camera; otherwise as [`Self::exact`].
+    pub fn for_camera(
+        target: &Camera,
+        oversample: Real,
+        fisheye: FisheyeRendering,
+    ) -> Result<Self, LensFitError> {
+        match (fisheye, target) {
+            (FisheyeRendering::Native, Camera::Fisheye624(m)) => Ok(
+                RenderCamera::PolynomialFisheye(LensPolynomial::for_fisheye624(m)?),
+            ),
+            _ => Ok(Self::exact(target, oversample)),
+        }
+    }
+
+    /// The render that is remapped exactly to `target` (a pinhole with square pixels renders as
+    /// itself); `oversample` scales the fisheye's pixels per radian over the target's largest
+    /// (1 = same angular resolution).
+    pub fn exact(target: &Camera, oversample: Real) -> Self {
         if let Camera::Pinhole(p) = target {
             let [fx, fy, cx, cy] = p.params();
             if (fx - fy).abs() <= 1e-9 * fx {
@@ -59,7 +92,10 @@ impl RenderCamera {
 
     /// Whether the rendered image is the target image itself (no remap).
     pub fn is_identity(&self) -> bool {
-        matches!(self, RenderCamera::Perspective { .. })
+        matches!(
+            self,
+            RenderCamera::Perspective { .. } | RenderCamera::PolynomialFisheye(_)
+        )
     }
 
     pub fn resolution(&self) -> Resolution {
@@ -69,6 +105,7 @@ impl RenderCamera {
                 width_px: size_px,
                 height_px: size_px,
             },
+            RenderCamera::PolynomialFisheye(lens) => lens.resolution,
         }
     }
 
@@ -101,11 +138,23 @@ impl RenderCamera {
             RenderCamera::EquidistantFisheye { size_px, fov_rad } => {
                 ShardLens::EquidistantFisheye { size_px, fov_rad }
             }
+            RenderCamera::PolynomialFisheye(lens) => {
+                let (sensor_width_mm, k, shift_x, shift_y) = lens.blender();
+                ShardLens::PolynomialFisheye {
+                    width_px: lens.resolution.width_px,
+                    height_px: lens.resolution.height_px,
+                    sensor_width_mm,
+                    k,
+                    shift_x,
+                    shift_y,
+                }
+            }
         }
     }
 
     /// Whether Blender renders this pixel meaningfully: Cycles' equidistant fisheye leaves
-    /// pixels outside its image circle (`ρ > size / 2`) undefined.
+    /// pixels outside its image circle (`ρ > size / 2`) undefined; the polynomial lens is used
+    /// where it increases.
     pub fn renders(&self, px: Pixel) -> bool {
         match *self {
             RenderCamera::Perspective { .. } => true,
@@ -113,6 +162,7 @@ impl RenderCamera {
                 let c = 0.5 * (size_px as Real - 1.0);
                 (px - Pixel::new(c, c)).length() <= 0.5 * size_px as Real
             }
+            RenderCamera::PolynomialFisheye(lens) => lens.renders(px),
         }
     }
 
@@ -138,6 +188,7 @@ impl RenderCamera {
                 let s = theta.sin() / rho;
                 Some(Vec3::new(d.x * s, d.y * s, theta.cos()))
             }
+            RenderCamera::PolynomialFisheye(lens) => lens.pixel_to_ray(px),
         }
     }
 
@@ -157,13 +208,14 @@ impl RenderCamera {
                 let rho = f * theta;
                 Some(Pixel::new(c + rho * ray.x / r_xy, c + rho * ray.y / r_xy))
             }
+            RenderCamera::PolynomialFisheye(lens) => lens.ray_to_pixel(ray),
         }
     }
 }
 
 /// Largest angle from the optical axis that a valid pixel of the image sees (the image border
 /// and the valid circle bound it), at most the model's `max θ`.
-fn max_theta_in_image(cam: &Camera) -> Real {
+pub(crate) fn max_theta_in_image(cam: &Camera) -> Real {
     let res = cam.resolution();
     let (w, h) = (res.width_px as Real, res.height_px as Real);
     let limit = cam.max_theta_rad().min(3.1);

@@ -18,9 +18,11 @@ use anyhow::{Context, Result};
 use serde_json::json;
 
 use crate::camera::CameraModel;
-use crate::math::Affine3;
+use crate::math::{Affine3, Real, Vec3};
 use crate::motion::MotionSequence;
+use crate::render::depth_noise::{DepthNoise, NoiseSeed};
 use crate::render::frame_file::{assemble_frame, validate_frame, FrameImage};
+use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{raw_frame_paths, shard_camera, AGENT_ID_BASE};
 use crate::render::ShardSpec;
@@ -36,6 +38,8 @@ pub const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
 pub struct CameraWork {
     pub camera: RigCamera,
     pub render: RenderCamera,
+    /// Depth-noise model and seed, for a `depth_noisy.Z` channel.
+    pub depth_noise: Option<(DepthNoise, u64)>,
     /// OpenCV `world_from_cam` for every frame of the sequence.
     pub world_from_cam: Vec<Affine3>,
     /// Frames to render.
@@ -138,13 +142,26 @@ impl Dataset {
     pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<PathBuf> {
         let work = &self.cameras[camera];
         let (rgb, gt) = raw_frame_paths(&self.raw_dir(), &work.camera.name, frame);
-        let image: FrameImage = assemble_frame(
+        let mut image: FrameImage = assemble_frame(
             &rgb,
             &gt,
             &work.render,
             &work.camera.model,
             work.world_from_cam[frame as usize],
         )?;
+        if let Some((model, seed)) = &work.depth_noise {
+            let cam_from_world = work.world_from_cam[frame as usize].inverse();
+            let ray = |i: usize| {
+                let p = Vec3::from(image.position[i].map(Real::from));
+                cam_from_world.transform_point3(p).normalize_or_zero()
+            };
+            let seed = NoiseSeed {
+                seed: *seed,
+                camera: &work.camera.name,
+                frame,
+            };
+            image.depth_noisy = Some(model.apply(&image.depth, &image.normal, ray, seed));
+        }
         let out = self.frame_path(camera, frame);
         std::fs::create_dir_all(out.parent().unwrap())
             .with_context(|| format!("creating {}", out.parent().unwrap().display()))?;
@@ -203,6 +220,13 @@ pub fn write_annotations(
                 "bbox_xyxy": "tight box of the agent's segmentation pixels, inclusive pixel indices",
             },
             "camera": model_json,
+            "image_model": image_model(work),
+            "depth_noise": work.depth_noise.map(|(model, seed)| json!({
+                "channel": "depth_noisy.Z",
+                "model": "sigma = a + b (z - c)^2 + d theta^2 / (sqrt(z) (pi/2 - theta)^2), Nguyen et al. 2012; 0 = no measurement",
+                "parameters": model,
+                "seed": seed,
+            })),
             "frame_rate_hz": motion.frame_rate_hz,
             "segmentation_ids": ids,
             "frames": frames,
@@ -216,6 +240,22 @@ pub fn write_annotations(
             .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// What lens the image was rendered with: `exact` (the camera model itself), or Cycles'
+/// polynomial fisheye standing in for it, with its pixel error against the camera model.
+fn image_model(work: &CameraWork) -> serde_json::Value {
+    match &work.render {
+        RenderCamera::PolynomialFisheye(lens) => json!({
+            "kind": "cycles_polynomial_fisheye",
+            "note": "rendered by this radially symmetric lens instead of `camera`: pixel channels (depth, normals, position, segmentation, flow) follow the image; 2D joints follow `camera`, off the image by `error_vs_camera_px`",
+            "centre_px": [lens.centre_px.x, lens.centre_px.y],
+            "theta_rad_of_radius_px": lens.theta_coeffs,
+            "max_radius_px": lens.max_radius_px,
+            "error_vs_camera_px": native_error(&work.camera.model, lens, ERROR_GRID),
+        }),
+        _ => json!({"kind": "exact"}),
+    }
 }
 
 fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {

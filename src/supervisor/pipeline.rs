@@ -21,6 +21,7 @@ use crate::cli::config::Backend;
 use crate::cli::resolve::{RenderPlan, RunPlan};
 use crate::motion::MotionSequence;
 use crate::render::body_cache::{body_cache, write_faces_npy};
+use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
 use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec};
@@ -149,9 +150,12 @@ pub fn run_pipeline(
     let cameras: Vec<CameraWork> = render
         .cameras
         .iter()
-        .map(|cam| CameraWork {
+        .zip(&render.render_cameras)
+        .zip(&render.depth_noise)
+        .map(|((cam, rendered), noise)| CameraWork {
             camera: cam.clone(),
-            render: RenderCamera::for_camera(&cam.model, 1.0),
+            render: *rendered,
+            depth_noise: *noise,
             world_from_cam: track
                 .frames
                 .iter()
@@ -208,6 +212,15 @@ pub fn run_pipeline(
         frames_per_shard: render.frames_per_shard,
         near_clip_m: render.near_clip_m,
     });
+    for work in &dataset.cameras {
+        if let RenderCamera::PolynomialFisheye(lens) = &work.render {
+            let e = native_error(&work.camera.model, lens, ERROR_GRID);
+            eprintln!(
+                "egogen-run: {} renders with Cycles' polynomial fisheye (render.fisheye = \"native\"): off its Fisheye624 model by max {:.2} px, mean {:.2} px, 95% ≤ {:.2} px",
+                work.camera.name, e.max_px, e.mean_px, e.p95_px
+            );
+        }
+    }
     let total = dataset.total_frames();
     let shards = dataset.pending_shards();
     let pending: usize = shards.iter().map(|s| s.frames.len()).sum();

@@ -156,13 +156,8 @@ pub fn load_clips(plan: &TrainPlan) -> Result<(Vec<ClipPart>, Vec<ClipPart>), Tr
 
 /// Standard normal samples (Box-Muller on the seeded stream).
 pub fn normal_samples(rng: &mut ChaCha8Rng, n: usize) -> Vec<f32> {
-    let uniform =
-        |rng: &mut ChaCha8Rng| ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
     (0..n)
-        .map(|_| {
-            let (u1, u2) = (uniform(rng), uniform(rng));
-            ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
-        })
+        .map(|_| crate::math::random::standard_normal(rng) as f32)
         .collect()
 }
 

@@ -1,0 +1,75 @@
+//! Running `egogen-run` from a bench: a config in a temporary folder, the Blender attempt's time
+//! read from the pool report.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+/// A finished run: its folder (kept until dropped) and the seconds of each shard's first
+/// Blender attempt (start-up, both renders and frame assembly).
+pub struct Run {
+    pub dir: tempfile::TempDir,
+    pub attempt_seconds: Vec<f64>,
+}
+
+impl Run {
+    /// The dataset folder (`[output] dir = "out"`).
+    pub fn out(&self) -> PathBuf {
+        self.dir.path().join("out")
+    }
+}
+
+/// A run config: the scripted walk at 40 Hz for `frames` frames (the default body, no meshes),
+/// output in `out`, and the `[render]` keys given.
+pub fn walk_config(frames: usize, render: &str) -> String {
+    format!(
+        r#"
+[body]
+betas = []
+[motion]
+source = "scripted_walk"
+duration_s = {duration}
+frame_rate_hz = 40.0
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[render]
+{render}
+"#,
+        duration = frames as f64 / 40.0
+    )
+}
+
+/// Runs `egogen-run` on a config whose output folder is `out`.
+pub fn egogen_run(config: &str) -> Run {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(&cfg, config).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(&cfg)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let logs = dir.path().join("out/logs");
+    let report = std::fs::read_dir(&logs)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.to_string_lossy().contains("pool_report"))
+        .unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    let attempt_seconds = report["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["attempts"][0]["seconds"].as_f64().unwrap())
+        .collect();
+    Run {
+        dir,
+        attempt_seconds,
+    }
+}

@@ -1,0 +1,345 @@
+//! Cycles' polynomial fisheye ("Fisheye Lens Polynomial" panorama) as egogen's fast stand-in for
+//! a Fisheye624 camera: the least-squares fit of its radial map, both directions of the
+//! polynomial lens, Blender's numbers for it, and the pixel error against the exact model.
+//!
+//! Measured with the position pass of a camera inside a sphere (bpy 4.5.15, square pixels,
+//! `sensor_fit = HORIZONTAL`): Cycles images the ray at angle
+//! `θ = −(k0 + k1·r + k2·r² + k3·r³ + k4·r⁴)` from the optical axis at sensor radius `r` (mm,
+//! `sensor_width / width_px` mm per pixel) from the centre
+//! `((w − 1)/2 − shift_x·w, (h − 1)/2 + shift_y·h)` (OpenCV pixels: the shift is in units of
+//! each image side, +y up), azimuth as in the image (x right, y down). Pixels past θ = 90°
+//! come back with alpha 1 and a zero position (no ray traced), so egogen uses the lens only up
+//! to 90°. egogen writes `k0 = 0` and `kᵢ = −cᵢ / (mm per pixel)ⁱ` for its fit
+//! `θ(ρ) = c₁ρ + c₂ρ² + c₃ρ³ + c₄ρ⁴` in pixels.
+//!
+//! What cannot be represented: Fisheye624's tangential and thin-prism terms (the lens is
+//! radially symmetric), and a radial map that is not a quartic in ρ; [`native_error`] measures
+//! what that costs.
+
+use glam::{DMat4, DVec4};
+
+use crate::camera::theta_poly::invert_increasing;
+use crate::camera::{theta_of, Camera, CameraModel, Fisheye624, Pixel, Resolution};
+use crate::math::{Real, Vec3};
+
+/// Sensor width Blender is given (mm); any value works, this is Blender's default.
+const SENSOR_WIDTH_MM: Real = 36.0;
+/// Grid (per image side) on which egogen reports a stand-in's error ([`native_error`]).
+pub const ERROR_GRID: usize = 256;
+/// Azimuths × angles sampled for the fit.
+const FIT_AZIMUTHS: usize = 64;
+const FIT_ANGLES: usize = 256;
+
+/// `θ(ρ) = Σᵢ cᵢ ρ^i` (i = 1..4, ρ in pixels from `centre_px`), on a square-pixel image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LensPolynomial {
+    pub resolution: Resolution,
+    /// Where the optical axis meets the image (OpenCV pixels).
+    pub centre_px: Pixel,
+    /// `[c₁, c₂, c₃, c₄]`, radians per pixelⁱ.
+    pub theta_coeffs: [Real; 4],
+    /// Up to this radius θ(ρ) increases and stays below 90°; farther pixels are not used.
+    pub max_radius_px: Real,
+}
+
+/// Why a camera has no polynomial stand-in.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LensFitError {
+    #[error("Cycles' polynomial fisheye stands in for Fisheye624 cameras only, not {0}")]
+    Model(&'static str),
+    #[error("the fitted polynomial stops increasing at {turn_px:.1} px, inside the valid field of view ({needed_px:.1} px)")]
+    NotMonotonic { turn_px: Real, needed_px: Real },
+}
+
+/// Pixel error of a stand-in against the exact model over the valid field of view.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct PixelError {
+    pub max_px: Real,
+    pub mean_px: Real,
+    pub p95_px: Real,
+    /// Rays measured.
+    pub rays: usize,
+}
+
+impl LensPolynomial {
+    /// Least-squares fit to a Fisheye624 camera's radial map over its valid field of view (up
+    /// to `max_theta_rad`, the largest angle a valid pixel sees): samples `ρ(θ)` of the exact
+    /// projection on 64 azimuths × 256 angles and minimises Σ (ρ′(θ)·(θ − θ_fit(ρ)))², a
+    /// first-order pixel error; tangential and thin-prism terms average out over azimuth.
+    pub fn fit(target: &Camera, max_theta_rad: Real) -> Result<Self, LensFitError> {
+        let Camera::Fisheye624(model) = target else {
+            return Err(LensFitError::Model(target.model_name()));
+        };
+        let centre = model.principal_point();
+        let rho_at = |theta: Real, phi: Real| {
+            let ray = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            (model.project_unchecked(ray) - centre).length()
+        };
+        let mut samples = Vec::with_capacity(FIT_AZIMUTHS * FIT_ANGLES);
+        let h = 1e-6;
+        for a in 0..FIT_AZIMUTHS {
+            let phi = (a as Real + 0.5) / FIT_AZIMUTHS as Real * std::f64::consts::TAU;
+            for t in 1..=FIT_ANGLES {
+                let theta = max_theta_rad * t as Real / FIT_ANGLES as Real;
+                let rho = rho_at(theta, phi);
+                let slope = (rho_at(theta + h, phi) - rho_at(theta - h, phi)) / (2.0 * h);
+                samples.push((rho, theta, slope));
+            }
+        }
+        let needed_px = samples.iter().map(|s| s.0).fold(0.0, Real::max);
+        // Normalised radius x = ρ / needed_px keeps the normal equations well conditioned.
+        let mut ata = DMat4::ZERO;
+        let mut atb = DVec4::ZERO;
+        for &(rho, theta, w) in &samples {
+            let x = rho / needed_px;
+            let row = DVec4::new(x, x * x, x * x * x, x * x * x * x) * w;
+            ata += DMat4::from_cols(row * row.x, row * row.y, row * row.z, row * row.w);
+            atb += row * (theta * w);
+        }
+        let c = ata.inverse() * atb;
+        let theta_coeffs = [
+            c.x / needed_px,
+            c.y / needed_px.powi(2),
+            c.z / needed_px.powi(3),
+            c.w / needed_px.powi(4),
+        ];
+        let res = model.resolution();
+        let corner_px = [(-0.5, -0.5), (-0.5, 1.0), (1.0, -0.5), (1.0, 1.0)]
+            .iter()
+            .map(|&(x, y)| {
+                let edge = |v: Real, size: u32| if v < 0.0 { -0.5 } else { size as Real - 0.5 };
+                (Pixel::new(edge(x, res.width_px), edge(y, res.height_px)) - centre).length()
+            })
+            .fold(needed_px, Real::max);
+        let mut lens = Self {
+            resolution: res,
+            centre_px: centre,
+            theta_coeffs,
+            max_radius_px: corner_px,
+        };
+        lens.max_radius_px = lens.increasing_limit(corner_px);
+        if lens.max_radius_px < needed_px {
+            return Err(LensFitError::NotMonotonic {
+                turn_px: lens.max_radius_px,
+                needed_px,
+            });
+        }
+        Ok(lens)
+    }
+
+    /// The fit for a Fisheye624 over its valid field of view.
+    pub fn for_fisheye624(model: &Fisheye624) -> Result<Self, LensFitError> {
+        let cam = Camera::Fisheye624(*model);
+        Self::fit(&cam, crate::render::render_camera::max_theta_in_image(&cam))
+    }
+
+    /// `(θ, dθ/dρ)` at radius `rho_px`.
+    pub fn theta_with_slope(&self, rho_px: Real) -> (Real, Real) {
+        let [c1, c2, c3, c4] = self.theta_coeffs;
+        let r = rho_px;
+        (
+            r * (c1 + r * (c2 + r * (c3 + r * c4))),
+            c1 + r * (2.0 * c2 + r * (3.0 * c3 + r * 4.0 * c4)),
+        )
+    }
+
+    /// The first radius in `(0, upper]` where θ stops increasing or reaches 90°, else `upper`.
+    fn increasing_limit(&self, upper: Real) -> Real {
+        const STEPS: usize = 4096;
+        for i in 1..=STEPS {
+            let r = upper * i as Real / STEPS as Real;
+            let (theta, slope) = self.theta_with_slope(r);
+            if slope <= 0.0 || theta >= std::f64::consts::FRAC_PI_2 {
+                return upper * (i - 1) as Real / STEPS as Real;
+            }
+        }
+        upper
+    }
+
+    /// Whether Cycles renders this pixel within the fitted, increasing part of the lens.
+    pub fn renders(&self, px: Pixel) -> bool {
+        (px - self.centre_px).length() <= self.max_radius_px
+    }
+
+    /// Unit ray (OpenCV camera frame) of a pixel, as Cycles traces it; `None` past the radius
+    /// where θ stops increasing.
+    pub fn pixel_to_ray(&self, px: Pixel) -> Option<Vec3> {
+        let d = px - self.centre_px;
+        let rho = d.length();
+        if rho > self.max_radius_px {
+            return None;
+        }
+        if rho == 0.0 {
+            return Some(Vec3::Z);
+        }
+        let (sin, cos) = self.theta_with_slope(rho).0.sin_cos();
+        Some(Vec3::new(d.x / rho * sin, d.y / rho * sin, cos))
+    }
+
+    /// Pixel of a camera-frame direction (not bounded by the image), inverting θ(ρ) by
+    /// bracketed Newton to 1e-10 px; `None` beyond the increasing part.
+    pub fn ray_to_pixel(&self, ray: Vec3) -> Option<Pixel> {
+        let theta = theta_of(ray);
+        let r_xy = ray.x.hypot(ray.y);
+        if r_xy == 0.0 {
+            return (ray.z > 0.0).then_some(self.centre_px);
+        }
+        let (top, _) = self.theta_with_slope(self.max_radius_px);
+        if theta > top {
+            return None;
+        }
+        let rho = invert_increasing(
+            |r| self.theta_with_slope(r),
+            theta,
+            self.max_radius_px,
+            theta / self.theta_coeffs[0].max(1e-12),
+            1e-10,
+        )?;
+        Some(self.centre_px + Pixel::new(ray.x, ray.y) * (rho / r_xy))
+    }
+
+    /// Blender's camera numbers: `(sensor_width_mm, [k0..k4], shift_x, shift_y)` for
+    /// `sensor_fit = HORIZONTAL` (see the module docs for the measured convention).
+    pub fn blender(&self) -> (Real, [Real; 5], Real, Real) {
+        let (w, h) = (
+            self.resolution.width_px as Real,
+            self.resolution.height_px as Real,
+        );
+        let mm_per_px = SENSOR_WIDTH_MM / w;
+        let mut k = [0.0; 5];
+        for (i, c) in self.theta_coeffs.iter().enumerate() {
+            k[i + 1] = -c / mm_per_px.powi(i as i32 + 1);
+        }
+        let shift_x = (0.5 * (w - 1.0) - self.centre_px.x) / w;
+        let shift_y = (self.centre_px.y - 0.5 * (h - 1.0)) / h;
+        (SENSOR_WIDTH_MM, k, shift_x, shift_y)
+    }
+}
+
+/// Pixel error of the polynomial lens against the exact model: for the rays of a grid of
+/// `grid × grid` points spread evenly over the image (cell centres) that lie in the valid field
+/// of view, `|project_exact(ray) − project_polynomial(ray)|`.
+pub fn native_error(target: &Camera, lens: &LensPolynomial, grid: usize) -> PixelError {
+    let res = target.resolution();
+    let mut errors = Vec::with_capacity(grid * grid);
+    for j in 0..grid {
+        for i in 0..grid {
+            let px = Pixel::new(
+                -0.5 + (i as Real + 0.5) / grid as Real * res.width_px as Real,
+                -0.5 + (j as Real + 0.5) / grid as Real * res.height_px as Real,
+            );
+            let Some(ray) = target.unproject(px) else {
+                continue;
+            };
+            // The exact projection of `ray` is `px` itself (within 1e-7 px).
+            let err = lens
+                .ray_to_pixel(ray)
+                .map_or(Real::INFINITY, |q| (q - px).length());
+            errors.push(err);
+        }
+    }
+    pixel_error_stats(errors)
+}
+
+/// Max, mean and 95th percentile (nearest rank) of pixel errors.
+pub fn pixel_error_stats(mut errors: Vec<Real>) -> PixelError {
+    if errors.is_empty() {
+        return PixelError {
+            max_px: 0.0,
+            mean_px: 0.0,
+            p95_px: 0.0,
+            rays: 0,
+        };
+    }
+    errors.sort_by(Real::total_cmp);
+    let n = errors.len();
+    PixelError {
+        max_px: errors[n - 1],
+        mean_px: errors.iter().sum::<Real>() / n as Real,
+        p95_px: errors[((0.95 * n as Real).ceil() as usize).clamp(1, n) - 1],
+        rays: n,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rig::Rig;
+
+    fn aria(name: &str) -> Fisheye624 {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let rig = Rig::load(&root.join("camera_rigs/aria_gen1.json")).unwrap();
+        match &rig.camera(name).unwrap().model {
+            Camera::Fisheye624(m) => *m,
+            _ => panic!("{name} is Fisheye624"),
+        }
+    }
+
+    #[test]
+    fn pixel_and_ray_round_trip() {
+        let lens = LensPolynomial::for_fisheye624(&aria("camera-slam-left")).unwrap();
+        for (x, y) in [
+            (320.0, 240.0),
+            (10.0, 200.0),
+            (600.0, 470.0),
+            (321.7, 242.1),
+        ] {
+            let px = Pixel::new(x, y);
+            let ray = lens.pixel_to_ray(px).unwrap();
+            assert!((ray.length() - 1.0).abs() < 1e-12);
+            let back = lens.ray_to_pixel(ray).unwrap();
+            assert!((back - px).length() < 1e-8, "{px:?} → {back:?}");
+        }
+    }
+
+    #[test]
+    fn aria_cameras_fit_within_a_few_pixels() {
+        for name in ["camera-slam-left", "camera-slam-right", "camera-rgb"] {
+            let m = aria(name);
+            let lens = LensPolynomial::for_fisheye624(&m).unwrap();
+            let err = native_error(&Camera::Fisheye624(m), &lens, 128);
+            eprintln!("{name}: {err:?} {:?}", lens.theta_coeffs);
+            assert!(err.rays > 8000 && err.max_px.is_finite());
+            assert!(err.mean_px <= err.p95_px && err.p95_px <= err.max_px);
+        }
+    }
+
+    #[test]
+    fn blender_numbers_reproduce_the_lens() {
+        let lens = LensPolynomial::for_fisheye624(&aria("camera-slam-left")).unwrap();
+        let (sensor_mm, k, sx, sy) = lens.blender();
+        let (w, h) = (640.0, 480.0);
+        let mm = sensor_mm / w;
+        let centre = Pixel::new(0.5 * (w - 1.0) - sx * w, 0.5 * (h - 1.0) + sy * h);
+        assert!((centre - lens.centre_px).length() < 1e-12);
+        let px = Pixel::new(100.0, 400.0);
+        let r = (px - centre).length() * mm;
+        let theta = -(k[0] + k[1] * r + k[2] * r * r + k[3] * r.powi(3) + k[4] * r.powi(4));
+        assert!((theta - theta_of(lens.pixel_to_ray(px).unwrap())).abs() < 1e-12);
+    }
+
+    #[test]
+    fn only_fisheye624_is_fitted() {
+        let cam = Camera::Pinhole(
+            crate::camera::Pinhole::new(
+                10.0,
+                10.0,
+                4.5,
+                4.5,
+                Resolution {
+                    width_px: 10,
+                    height_px: 10,
+                },
+            )
+            .unwrap(),
+        );
+        assert_eq!(
+            LensPolynomial::fit(&cam, 0.5),
+            Err(LensFitError::Model("pinhole"))
+        );
+    }
+}
