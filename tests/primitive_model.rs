@@ -7,8 +7,8 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use egogen::cli::train::load_train_plan;
-use egogen::motion::cvae::loss::LossWeights;
-use egogen::motion::cvae::train::{ClipSpec, PhasePlan, TrainPlan};
+use egogen::motion::cvae::loss::{LossWeights, PriorWeights};
+use egogen::motion::cvae::train::{ClipSpec, PhasePlan, PriorPlan, TrainPlan};
 use egogen::motion::cvae::{train, ArchConfig, MotionModel};
 
 fn clip(name: &str) -> PathBuf {
@@ -60,6 +60,24 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
             learning_rate: 1e-3,
         },
         rollout_primitives: 2,
+        prior: Some(PriorPlan {
+            phase: PhasePlan {
+                steps: 2,
+                batch_size: 4,
+                learning_rate: 1e-3,
+            },
+            primitives: 2,
+            pool_fraction: 0.5,
+            range_quantile: 0.01,
+            weights: PriorWeights {
+                contact: 1.0,
+                skate: 1.0,
+                penetration: 1.0,
+                pelvis: 1.0,
+                upright: 1.0,
+            },
+        }),
+        init_weights: None,
         weights_out: dir.join("tiny.safetensors"),
         log_out: dir.join("tiny.log.jsonl"),
     }
@@ -89,11 +107,32 @@ fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
         "loss went from {first} to {last}, expected a clear drop"
     );
     assert!(losses.iter().any(|(p, l)| p == "rollout" && l.is_finite()));
+    assert!(losses.iter().any(|(p, l)| p == "prior" && l.is_finite()));
+    assert!(
+        log.contains("prior_contact") && log.contains("prior_range"),
+        "{log}"
+    );
     let mm = report.held_out_mpjpe_mm.unwrap();
     assert!(mm.is_finite() && mm > 0.0, "held-out error {mm} mm");
 
     let model = MotionModel::load(&plan.weights_out).unwrap();
     assert_eq!(model.arch, plan.arch);
+
+    // Fine-tuning starts from those weights; another architecture is refused.
+    let mut tune = plan.clone();
+    tune.init_weights = Some(plan.weights_out.clone());
+    tune.primitive.steps = 0;
+    tune.rollout.steps = 0;
+    tune.weights_out = dir.path().join("tuned.safetensors");
+    let tuned = train(&tune, false).unwrap();
+    let tuned_mm = tuned.held_out_mpjpe_mm.unwrap();
+    assert!(tuned_mm.is_finite(), "{tuned_mm}");
+    tune.arch.decoder_width = 16;
+    let err = train(&tune, false).unwrap_err().to_string();
+    assert!(
+        err.contains("tiny.safetensors") && err.contains("architecture"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -261,7 +300,7 @@ fn fifty_chained_primitives_stay_finite_and_rigid() {
     assert_eq!(report.frames, 50 * 18);
     assert!(report.canonical_orthonormality_max_err < 1e-9);
     assert!(report.bone_length_max_dev_m < 1e-9);
-    // Random-latent chains stay upright for 10 to 31 primitives (docs/MOTION.md); the first
+    // Random-latent chains stay upright for 12 to 44 primitives (docs/MOTION.md); the first
     // 2.5 s must hold, and the body must keep moving.
     assert!(
         report.upright_primitives >= 5,
@@ -269,4 +308,145 @@ fn fifty_chained_primitives_stay_finite_and_rigid() {
         report.upright_primitives
     );
     assert!(report.displacement_m > 0.5, "{report:?}");
+}
+
+#[test]
+fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_leans() {
+    use burn::backend::Flex;
+    use burn::prelude::*;
+    use egogen::body::BodyModel;
+    use egogen::motion::cvae::data::{build_set, ClipPart};
+    use egogen::motion::cvae::eval::set_batch;
+    use egogen::motion::cvae::features::{FRAME_DIM, TRANSL_OFFSET};
+    use egogen::motion::cvae::loss::{plausible_range, prior_loss, PriorWeights};
+    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+
+    let body = BodyModel::load(common::default_model_path()).unwrap();
+    let seq =
+        egogen::motion::MotionSequence::read(&clip("deepmimic_walker_0walk_forward.npz")).unwrap();
+    let part = ClipPart {
+        name: "walk".into(),
+        frames: 0..seq.len(),
+        seq,
+    };
+    let set = build_set(&[part], 1, 2, false, &body, None).unwrap();
+    let device = Default::default();
+    let rig = TensorRig::<Flex>::new(&RigGeometry::new(&body, &[]).unwrap(), &device);
+    let (x, floors) = set_batch::<Flex>(&set, 0..set.len(), &device);
+    let floor =
+        || Tensor::<Flex, 1>::from_data(TensorData::new(floors.clone(), [floors.len()]), &device);
+    let range = plausible_range(&rig, x.clone(), floor(), 0.0);
+    assert!(
+        range.pelvis_m.0 > 0.6 && range.pelvis_m.1 < 1.2 && range.trunk_up_min > 0.7,
+        "{range:?}"
+    );
+    let one = |name: &str| PriorWeights {
+        contact: (name == "contact") as u8 as f64,
+        skate: (name == "skate") as u8 as f64,
+        penetration: (name == "penetration") as u8 as f64,
+        pelvis: (name == "pelvis") as u8 as f64,
+        upright: (name == "upright") as u8 as f64,
+    };
+    let term = |x: Tensor<Flex, 3>, name: &str| {
+        prior_loss(&rig, &one(name), &range, x, floor())
+            .total
+            .into_scalar()
+            .elem::<f64>()
+    };
+    // The mocap walk itself: feet on the floor, inside its own ranges.
+    assert!(term(x.clone(), "contact") < 0.05);
+    assert!(term(x.clone(), "skate") < 0.1);
+    assert!(term(x.clone(), "penetration") < 0.005);
+    assert_eq!(term(x.clone(), "pelvis"), 0.0);
+    assert_eq!(term(x.clone(), "upright"), 0.0);
+    // Every frame after the seed lifted by 0.4 m: the contact term grows by about 0.4 m and
+    // the pelvis leaves its range; sunk by 0.4 m, the feet go through the floor.
+    let [b, t, _] = x.dims();
+    let shift = |dz: f32| {
+        let mut v = vec![0f32; b * t * FRAME_DIM];
+        for i in 0..b {
+            for f in 2..t {
+                v[(i * t + f) * FRAME_DIM + TRANSL_OFFSET + 2] = dz;
+            }
+        }
+        x.clone() + Tensor::from_data(TensorData::new(v, [b, t, FRAME_DIM]), &device)
+    };
+    let lifted = term(shift(0.4), "contact") - term(x.clone(), "contact");
+    assert!((0.3..0.45).contains(&lifted), "contact grew by {lifted}");
+    assert!(term(shift(0.4), "pelvis") > 0.1);
+    assert!(term(shift(-0.4), "penetration") > 0.2);
+    assert!(term(shift(-0.4), "pelvis") > 0.1);
+    // A body pitched forward by 60° about its canonical x axis leans beyond the data's range.
+    let (c, s) = (60f32.to_radians().cos(), 60f32.to_radians().sin());
+    let mut pitched: Vec<f32> = x.clone().into_data().to_vec().unwrap();
+    for frame in pitched.chunks_exact_mut(FRAME_DIM) {
+        // Rotate both 6D columns of global orient about x.
+        for col in 0..2 {
+            let (y, z) = (frame[3 * col + 1], frame[3 * col + 2]);
+            frame[3 * col + 1] = c * y - s * z;
+            frame[3 * col + 2] = s * y + c * z;
+        }
+    }
+    let pitched = Tensor::from_data(TensorData::new(pitched, [b, t, FRAME_DIM]), &device);
+    assert!(term(pitched, "upright") > 0.1);
+}
+
+#[test]
+fn prior_fine_tuning_configs_are_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = common::repo_root();
+    let shipped = std::fs::read_to_string(root.join("configs/train_primitive_prior.toml"))
+        .unwrap()
+        .replace("../assets", &root.join("assets").display().to_string());
+    let init = init_weights_line(&shipped);
+    // The first stage's weights are a build output; the shipped weights stand in for them.
+    let resolved = shipped.replace(
+        &init,
+        &format!(
+            "init_weights = \"{}\"",
+            root.join("assets/motion/primitive_cvae.safetensors")
+                .display()
+        ),
+    );
+    let write = |name: &str, text: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let plan = load_train_plan(&write("ok.toml", &resolved)).unwrap();
+    let prior = plan.prior.expect("a prior phase");
+    assert!(prior.phase.steps > 0 && prior.primitives >= 2);
+    assert!(plan.init_weights.is_some());
+    for (name, text, key) in [
+        (
+            "pool.toml",
+            resolved.replace("pool_fraction = 0.5", "pool_fraction = 1.5"),
+            "prior.pool_fraction",
+        ),
+        (
+            "weight.toml",
+            resolved.replace("upright = ", "upright = -"),
+            "prior.loss.upright",
+        ),
+        (
+            "init.toml",
+            shipped.replace(&init, "init_weights = \"none.safetensors\""),
+            "init_weights",
+        ),
+    ] {
+        assert_ne!(text, resolved, "{name}: the edit must apply");
+        let err = load_train_plan(&write(name, &text))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(name) && err.contains(key), "{name}: {err}");
+    }
+}
+
+/// The `init_weights = ...` line of a config.
+fn init_weights_line(config: &str) -> String {
+    config
+        .lines()
+        .find(|l| l.starts_with("init_weights"))
+        .expect("init_weights line")
+        .to_owned()
 }

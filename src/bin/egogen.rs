@@ -119,6 +119,10 @@ enum MotionCommand {
         /// PNG of the first 10 s of the chain, from above and from the side.
         #[arg(long)]
         walk_png: Option<PathBuf>,
+        /// JSON lines, one per primitive of the long chain: pelvis height, trunk tilt, root
+        /// speed and lowest foot (what goes first when a chain falls).
+        #[arg(long)]
+        chain_trace: Option<PathBuf>,
         /// Float precision the network runs in (the speed/accuracy knob).
         #[arg(long, value_enum, default_value_t = Precision::F32)]
         precision: Precision,
@@ -275,6 +279,7 @@ fn run(cli: Cli) -> Result<()> {
             chain_primitives,
             seed,
             walk_png,
+            chain_trace,
             precision,
         }) => {
             let weights = weights.unwrap_or_else(egogen::motion::cvae::train::shipped_weights_path);
@@ -285,6 +290,7 @@ fn run(cli: Cli) -> Result<()> {
                 chain_primitives,
                 seed,
                 walk_png.as_deref(),
+                chain_trace.as_deref(),
                 precision,
             )?;
         }
@@ -715,6 +721,7 @@ fn motion_eval(
     chain_primitives: usize,
     seed: u64,
     walk_png: Option<&Path>,
+    chain_trace: Option<&Path>,
     precision: Precision,
 ) -> Result<()> {
     use egogen::motion::cvae::eval::{long_rollout, marker_mpjpe_mm, random_latent_contact};
@@ -816,10 +823,81 @@ fn motion_eval(
             "upright_primitives_sorted": upright,
         })
     );
+    if let Some(file) = chain_trace {
+        write_chain_trace(&prims, file)?;
+        println!("wrote {}", file.display());
+    }
     if let Some(png) = walk_png {
         draw_walk(&prims, png)?;
         println!("wrote {}", png.display());
     }
+    Ok(())
+}
+
+/// One JSON line per primitive of a chain: pelvis height above the floor (m, min and max),
+/// the largest tilt of the trunk (pelvis → neck) from the vertical (deg), the mean horizontal
+/// pelvis speed (m/s) and the lowest foot joint above the floor (m, min and max).
+fn write_chain_trace(prims: &[egogen::motion::cvae::DecodedPrimitive], file: &Path) -> Result<()> {
+    use egogen::body::joint;
+    use egogen::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
+    use std::io::Write;
+    let mut out = std::io::BufWriter::new(std::fs::File::create(file)?);
+    for (i, p) in prims.iter().enumerate() {
+        let frames = &p.joints[SEED_FRAMES..];
+        let range = |v: Vec<f64>| {
+            v.iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                    (lo.min(x), hi.max(x))
+                })
+        };
+        let pelvis = range(
+            frames
+                .iter()
+                .map(|j| j[joint::PELVIS].z - p.floor_z)
+                .collect(),
+        );
+        let foot = range(
+            frames
+                .iter()
+                .map(|j| {
+                    [
+                        joint::LEFT_FOOT,
+                        joint::RIGHT_FOOT,
+                        joint::LEFT_ANKLE,
+                        joint::RIGHT_ANKLE,
+                    ]
+                    .iter()
+                    .map(|&k| j[k].z)
+                    .fold(f64::INFINITY, f64::min)
+                        - p.floor_z
+                })
+                .collect(),
+        );
+        let tilt_deg = frames
+            .iter()
+            .map(|j| {
+                let up = (j[joint::NECK] - j[joint::PELVIS]).normalize();
+                up.z.clamp(-1.0, 1.0).acos().to_degrees()
+            })
+            .fold(0.0, f64::max);
+        let start = p.joints[SEED_FRAMES - 1][joint::PELVIS];
+        let end = p.joints[p.joints.len() - 1][joint::PELVIS];
+        let speed = ((end.x - start.x).powi(2) + (end.y - start.y).powi(2)).sqrt()
+            * PRIMITIVE_RATE_HZ
+            / frames.len() as f64;
+        writeln!(
+            out,
+            "{}",
+            serde_json::json!({
+                "primitive": i,
+                "pelvis_min_m": pelvis.0, "pelvis_max_m": pelvis.1,
+                "trunk_tilt_max_deg": tilt_deg,
+                "pelvis_speed_m_s": speed,
+                "lowest_foot_min_m": foot.0, "lowest_foot_max_m": foot.1,
+            })
+        )?;
+    }
+    out.flush()?;
     Ok(())
 }
 

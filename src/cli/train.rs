@@ -7,8 +7,8 @@ use serde::Deserialize;
 
 use super::config::{load_toml, ConfigError};
 use super::resolve::resolve_body_model;
-use crate::motion::cvae::loss::LossWeights;
-use crate::motion::cvae::train::{ClipSpec, PhasePlan, TrainPlan};
+use crate::motion::cvae::loss::{LossWeights, PriorWeights};
+use crate::motion::cvae::train::{ClipSpec, PhasePlan, PriorPlan, TrainPlan};
 use crate::motion::cvae::ArchConfig;
 
 /// `[[clips]]`: one training clip (AMASS-style `.npz` at 40 Hz).
@@ -42,6 +42,25 @@ pub struct RawRollout {
     pub learning_rate: f64,
     /// Primitives per chain.
     pub primitives: usize,
+}
+
+/// `[prior]`: fine-tuning on chains decoded from random latents.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawPrior {
+    pub steps: usize,
+    /// Random chains per step (and as many mocap chains reconstructed, `rollout.primitives` long).
+    pub batch_size: usize,
+    pub learning_rate: f64,
+    /// Primitives per random chain (gradients flow through the chain).
+    pub primitives: usize,
+    /// Share (0..=1) of random chains that start where an earlier one ended.
+    pub pool_fraction: f64,
+    /// Pelvis height and trunk lean are kept between these quantiles (and 1 − it) of the
+    /// training frames; 0 for their whole range.
+    pub range_quantile: f64,
+    /// `[prior.loss]`: weights of the losses on random chains.
+    pub loss: PriorWeights,
 }
 
 /// `[data]`.
@@ -82,6 +101,10 @@ pub struct RawTrainPrimitive {
     pub kl_warmup_steps: usize,
     pub primitive: RawPhase,
     pub rollout: RawRollout,
+    /// Prior fine-tuning after the rollout phase.
+    pub prior: Option<RawPrior>,
+    /// Start from these weights (same `[model]`), relative to the config's folder.
+    pub init_weights: Option<PathBuf>,
     pub output: RawTrainOutput,
 }
 
@@ -145,6 +168,10 @@ impl RawTrainPrimitive {
                 format!("expected a learning rate in (0, 1), found {v}"),
             )),
         };
+        let weight = |key: &str, v: f64| match v.is_finite() && v >= 0.0 {
+            true => Ok(v),
+            false => Err(bad(key, format!("expected a weight ≥ 0, found {v}"))),
+        };
         positive("data.stride_frames", self.data.stride_frames)?;
         if let Some(v) = self.data.min_contact_score {
             if !(0.0..=1.0).contains(&v) {
@@ -180,10 +207,65 @@ impl RawTrainPrimitive {
             ("loss.floor", l.floor),
             ("loss.kl", l.kl),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(bad(key, format!("expected a weight ≥ 0, found {v}")));
-            }
+            weight(key, v)?;
         }
+        let prior = match self.prior {
+            None => None,
+            Some(p) => {
+                positive("prior.batch_size", p.batch_size)?;
+                positive("prior.primitives", p.primitives)?;
+                rate("prior.learning_rate", p.learning_rate)?;
+                if !(0.0..=1.0).contains(&p.pool_fraction) {
+                    return Err(bad(
+                        "prior.pool_fraction",
+                        format!("expected a share in 0..=1, found {}", p.pool_fraction),
+                    ));
+                }
+                if !(0.0..0.5).contains(&p.range_quantile) {
+                    return Err(bad(
+                        "prior.range_quantile",
+                        format!("expected a quantile in 0..0.5, found {}", p.range_quantile),
+                    ));
+                }
+                let w = &p.loss;
+                for (key, v) in [
+                    ("prior.loss.contact", w.contact),
+                    ("prior.loss.skate", w.skate),
+                    ("prior.loss.penetration", w.penetration),
+                    ("prior.loss.pelvis", w.pelvis),
+                    ("prior.loss.upright", w.upright),
+                ] {
+                    weight(key, v)?;
+                }
+                Some(PriorPlan {
+                    phase: PhasePlan {
+                        steps: p.steps,
+                        batch_size: p.batch_size,
+                        learning_rate: p.learning_rate,
+                    },
+                    primitives: p.primitives,
+                    pool_fraction: p.pool_fraction,
+                    range_quantile: p.range_quantile,
+                    weights: p.loss,
+                })
+            }
+        };
+        let init_weights = match self.init_weights {
+            None => None,
+            Some(w) => {
+                let path = base.join(w);
+                if !path.is_file() {
+                    return Err(bad(
+                        "init_weights",
+                        format!(
+                            "file {} not found (train it first with the config that writes it)",
+                            path.display()
+                        ),
+                    ));
+                }
+                Some(path)
+            }
+        };
         Ok(TrainPlan {
             seed: self.seed,
             body_model,
@@ -205,6 +287,8 @@ impl RawTrainPrimitive {
                 learning_rate: self.rollout.learning_rate,
             },
             rollout_primitives: self.rollout.primitives,
+            prior,
+            init_weights,
             weights_out: base.join(self.output.weights),
             log_out: base.join(self.output.log),
         })

@@ -223,6 +223,10 @@ pub fn random_latent_contact<B: Backend>(
 /// Pelvis heights above the floor (m) counted as upright for [`ChainReport`].
 pub const UPRIGHT_PELVIS_M: std::ops::Range<f64> = 0.5..1.3;
 
+/// Distance (m) of the lowest foot marker from the floor within which [`ChainReport`] counts a
+/// frame as standing on the floor.
+pub const FOOT_ON_FLOOR_M: f64 = 0.1;
+
 /// Statistics of one long chain of primitives decoded from random latents.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct ChainReport {
@@ -243,6 +247,8 @@ pub struct ChainReport {
     pub lowest_foot_mean_m: f64,
     pub lowest_foot_min_m: f64,
     pub lowest_foot_max_m: f64,
+    /// Share of frames whose lowest foot marker is within `FOOT_ON_FLOOR_M` of the floor.
+    pub feet_on_floor_share: f64,
     /// Mean foot-contact score of the chain's primitives (f64 markers).
     pub contact_mean: f64,
     /// Horizontal distance of the pelvis from start to end (m).
@@ -277,6 +283,7 @@ pub fn long_rollout(
         lowest_foot_mean_m: 0.0,
         lowest_foot_min_m: f64::INFINITY,
         lowest_foot_max_m: f64::NEG_INFINITY,
+        feet_on_floor_share: 0.0,
         contact_mean: 0.0,
         displacement_m: 0.0,
         seconds: 0.0,
@@ -311,6 +318,9 @@ pub fn long_rollout(
             r.lowest_foot_mean_m += lowest;
             r.lowest_foot_min_m = r.lowest_foot_min_m.min(lowest);
             r.lowest_foot_max_m = r.lowest_foot_max_m.max(lowest);
+            if lowest.abs() <= FOOT_ON_FLOOR_M {
+                r.feet_on_floor_share += 1.0;
+            }
         }
         if upright {
             r.upright_primitives += 1;
@@ -320,6 +330,7 @@ pub fn long_rollout(
     }
     r.contact_mean /= latents.len().max(1) as f64;
     r.lowest_foot_mean_m /= r.frames.max(1) as f64;
+    r.feet_on_floor_share /= r.frames.max(1) as f64;
     if let (Some(a), Some(b)) = (out.first(), out.last()) {
         let (a, b) = (a.joints[0][0], b.joints[PRIMITIVE_FRAMES - 1][0]);
         r.displacement_m = ((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt();

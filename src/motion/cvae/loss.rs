@@ -151,20 +151,171 @@ pub fn primitive_loss<B: Backend>(
         ("floor", floor),
         ("kl", robust_kl),
     ];
-    let w = [
-        weights.pose,
-        weights.transl,
-        weights.markers,
-        weights.velocity,
-        weights.skate,
-        weights.floor,
-        weights.kl,
-    ];
+    weighted(
+        parts,
+        &[
+            weights.pose,
+            weights.transl,
+            weights.markers,
+            weights.velocity,
+            weights.skate,
+            weights.floor,
+            weights.kl,
+        ],
+    )
+}
+
+/// Loss terms and their sum weighted by `w` (in the same order).
+fn weighted<B: Backend>(parts: Vec<(&'static str, Tensor<B, 1>)>, w: &[f64]) -> LossTerms<B> {
     let total = parts
         .iter()
         .zip(w)
-        .map(|((_, v), w)| v.clone().mul_scalar(w))
+        .map(|((_, v), &w)| v.clone().mul_scalar(w))
         .reduce(|a, b| a + b)
         .expect("loss terms");
     LossTerms { total, parts }
+}
+
+/// Weights of the losses on primitives decoded from prior latents z ~ N(0, I), which have no
+/// mocap target: they only ask for what every plausible primitive has.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriorWeights {
+    /// `|lowest foot marker − floor − 2 cm|` per frame (m): the first factor of the
+    /// foot-contact score (`eval::contact_score`).
+    pub contact: f64,
+    /// `max(0, slowest foot marker's horizontal speed − 0.075 m/s)` per frame: its second factor.
+    pub skate: f64,
+    /// Depth of foot markers below the floor (m).
+    pub penetration: f64,
+    /// Distance (m) of the pelvis height above the floor outside the training data's range.
+    pub pelvis: f64,
+    /// How far the trunk's up direction (pelvis → neck) leans beyond the training data's
+    /// steepest lean (`cos` units).
+    pub upright: f64,
+}
+
+/// Ranges of the training data that the prior losses keep decoded primitives inside.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlausibleRange {
+    /// Pelvis height above the floor (m).
+    pub pelvis_m: (f64, f64),
+    /// Smallest vertical component of the unit trunk vector (pelvis → neck).
+    pub trunk_up_min: f64,
+}
+
+/// Offset of the lowest foot above the floor that the contact score rewards (m), and the foot
+/// speed it lets pass (m/s), as in `eval::contact_score`.
+const CONTACT_OFFSET_M: f64 = 0.02;
+const SKATE_FREE_M_PER_S: f64 = 0.075;
+
+/// Pelvis heights above the floor and vertical trunk components `[B, T]` of posed frames over
+/// floors `[B]`.
+fn pelvis_and_trunk<B: Backend>(p: &Posed<B>, floor: Tensor<B, 1>) -> (Tensor<B, 2>, Tensor<B, 2>) {
+    let [b, t, _, _] = p.joints.dims();
+    let joint = |j: usize| p.joints.clone().narrow(2, j, 1).reshape([b, t, 3]);
+    let pelvis = joint(crate::body::joint::PELVIS);
+    let trunk = joint(crate::body::joint::NECK) - pelvis.clone();
+    let len = trunk.clone().square().sum_dim(2).add_scalar(1e-12).sqrt();
+    let up = (trunk.narrow(2, 2, 1) / len).reshape([b, t]);
+    let height = pelvis.narrow(2, 2, 1).reshape([b, t]) - floor.reshape([b, 1]);
+    (height, up)
+}
+
+/// The range of pelvis heights and trunk lean over the frames of raw primitives `[B, T, F]`
+/// with floors `[B]` (the training data), between the quantiles `q` and `1 − q` (0 for the
+/// whole range: a few frames of bending or crouching then widen it).
+pub fn plausible_range<B: Backend>(
+    rig: &TensorRig<B>,
+    x: Tensor<B, 3>,
+    floor: Tensor<B, 1>,
+    q: f64,
+) -> PlausibleRange {
+    let (height, up) = pelvis_and_trunk(&pose_frames(rig, x), floor);
+    let sorted = |t: Tensor<B, 2>| {
+        let mut v: Vec<f64> = t
+            .into_data()
+            .iter::<f64>()
+            .filter(|v| v.is_finite())
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v
+    };
+    let at = |v: &[f64], q: f64| v[((v.len() - 1) as f64 * q.clamp(0.0, 1.0)).round() as usize];
+    let (height, up) = (sorted(height), sorted(up));
+    PlausibleRange {
+        pelvis_m: (at(&height, q), at(&height, 1.0 - q)),
+        trunk_up_min: at(&up, q),
+    }
+}
+
+/// Losses of primitives `pred` (raw features `[B, T, F]`, the seed first) decoded from prior
+/// latents over canonical floors `[B]`.
+pub fn prior_loss<B: Backend>(
+    rig: &TensorRig<B>,
+    weights: &PriorWeights,
+    range: &PlausibleRange,
+    pred: Tensor<B, 3>,
+    floor: Tensor<B, 1>,
+) -> LossTerms<B> {
+    let [b, t, _] = pred.dims();
+    let n = t - SEED_FRAMES;
+    let p = pose_frames(rig, pred);
+    let feet = p.markers.clone().select(2, rig.foot_markers.clone()); // [B, T, F, 3]
+    let foot_height = feet
+        .clone()
+        .narrow(1, SEED_FRAMES, n)
+        .narrow(3, 2, 1)
+        .sub(floor.clone().reshape([b, 1, 1, 1]));
+    let lowest = foot_height.clone().min_dim(2); // [B, n, 1, 1]
+    let contact = lowest.sub_scalar(CONTACT_OFFSET_M).abs().mean();
+    // Central-difference horizontal speed of frames SEED_FRAMES − 1 .. T − 2, so that every
+    // decoded frame but the last, and the seed's last, is scored.
+    let c = t - SEED_FRAMES;
+    let ahead = feet.clone().narrow(1, SEED_FRAMES, c);
+    let behind = feet.narrow(1, SEED_FRAMES - 2, c);
+    let speed = (ahead - behind)
+        .narrow(3, 0, 2)
+        .square()
+        .sum_dim(3)
+        .add_scalar(1e-10)
+        .sqrt()
+        .mul_scalar(PRIMITIVE_RATE_HZ / 2.0);
+    let skate = speed
+        .min_dim(2)
+        .sub_scalar(SKATE_FREE_M_PER_S)
+        .clamp_min(0.0)
+        .mean();
+    let penetration = foot_height.neg().clamp_min(0.0).mean();
+    let (height, up) = pelvis_and_trunk(&p, floor);
+    let (height, up) = (
+        height.narrow(1, SEED_FRAMES, n),
+        up.narrow(1, SEED_FRAMES, n),
+    );
+    let (lo, hi) = range.pelvis_m;
+    let pelvis = (height.clone().neg().add_scalar(lo).clamp_min(0.0)
+        + height.sub_scalar(hi).clamp_min(0.0))
+    .mean();
+    let upright = up
+        .neg()
+        .add_scalar(range.trunk_up_min)
+        .clamp_min(0.0)
+        .mean();
+    let parts = vec![
+        ("prior_contact", contact),
+        ("prior_skate", skate),
+        ("prior_penetration", penetration),
+        ("prior_pelvis", pelvis),
+        ("prior_upright", upright),
+    ];
+    weighted(
+        parts,
+        &[
+            weights.contact,
+            weights.skate,
+            weights.penetration,
+            weights.pelvis,
+            weights.upright,
+        ],
+    )
 }

@@ -1,7 +1,11 @@
 //! Training: single primitives first, then rollout fine-tuning over chains of primitives, each
-//! decoded from the previous one's last two frames (gradients flow through the chain).
-//! Deterministic for a seed: batches, noise and initial weights all come from it.
+//! decoded from the previous one's last two frames (gradients flow through the chain), then
+//! prior fine-tuning: chains decoded from random latents z ~ N(0, I), as they are used, kept
+//! on the floor and upright by losses that need no mocap target, next to the reconstruction
+//! of mocap chains. Deterministic for a seed: batches, noise and initial weights all come
+//! from it.
 
+use std::collections::VecDeque;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -17,7 +21,9 @@ use rand_core::{Rng, SeedableRng};
 
 use super::data::{build_set, ClipPart, ContactFilter, PrimitiveSet, PRIMITIVE_VALUES};
 use super::eval::{decode_raw, marker_mpjpe_mm};
-use super::loss::{primitive_loss, LossWeights};
+use super::loss::{
+    plausible_range, primitive_loss, prior_loss, LossWeights, PlausibleRange, PriorWeights,
+};
 use super::net::{ArchConfig, PrimitiveVae};
 use super::rig::{RigGeometry, TensorRig};
 use super::rollout::next_seed;
@@ -52,6 +58,22 @@ pub struct PhasePlan {
     pub learning_rate: f64,
 }
 
+/// The prior fine-tuning phase: each step decodes `phase.batch_size` chains of `primitives`
+/// primitives from random latents (gradients through the chain) next to as many mocap chains
+/// reconstructed as in the rollout phase.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PriorPlan {
+    pub phase: PhasePlan,
+    pub primitives: usize,
+    /// Share of the random chains that start where an earlier random chain ended (the others
+    /// start from mocap seeds), so that training sees the states long chains reach.
+    pub pool_fraction: f64,
+    /// The pelvis-height and trunk-lean ranges run between these quantiles of the training
+    /// frames (`loss::plausible_range`).
+    pub range_quantile: f64,
+    pub weights: PriorWeights,
+}
+
 /// A checked training run (see `cli::train` for the config file).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrainPlan {
@@ -72,6 +94,11 @@ pub struct TrainPlan {
     pub rollout: PhasePlan,
     /// Primitives per rollout chain.
     pub rollout_primitives: usize,
+    /// Prior fine-tuning after the rollout phase (none when absent).
+    pub prior: Option<PriorPlan>,
+    /// Start from these weights (same architecture) instead of a fresh network; their input
+    /// normalisation is kept.
+    pub init_weights: Option<PathBuf>,
     pub weights_out: PathBuf,
     pub log_out: PathBuf,
 }
@@ -229,13 +256,7 @@ pub fn chain_loss<B: Backend>(
             Some(t) => t + terms.total,
             None => terms.total,
         });
-        for (i, (name, v)) in terms.parts.into_iter().enumerate() {
-            let v = v.into_scalar().elem::<f64>() / k as f64;
-            match parts.get_mut(i) {
-                Some(p) => p.1 += v,
-                None => parts.push((name, v)),
-            }
-        }
+        add_parts(&mut parts, terms.parts, k);
         if c + 1 < k {
             let (next, height) = next_seed(rig, full);
             seed = next;
@@ -244,6 +265,110 @@ pub fn chain_loss<B: Backend>(
     }
     let total = total.expect("at least one primitive").div_scalar(k as f64);
     (total, parts)
+}
+
+/// Seeds that random chains ended in, to start later chains from (oldest dropped first).
+const SEED_POOL_CAPACITY: usize = 4096;
+
+/// Seed frames `[S × F]` and canonical floor of chain ends.
+type SeedPool = VecDeque<(Vec<f32>, f32)>;
+
+/// Loss of `seed.dims()[0]` chains of `primitives` primitives decoded from random latents,
+/// starting from raw seeds `[B, S, F]` over canonical floors `[B]`; adds the chains' final
+/// seeds to `pool`.
+#[allow(clippy::too_many_arguments)]
+fn prior_chain_loss<B: Backend>(
+    net: &PrimitiveVae<B>,
+    rig: &TensorRig<B>,
+    plan: &PriorPlan,
+    range: &PlausibleRange,
+    mut seed: Tensor<B, 3>,
+    mut floor: Tensor<B, 1>,
+    rng: &mut ChaCha8Rng,
+    pool: &mut SeedPool,
+) -> (Tensor<B, 1>, Vec<(&'static str, f64)>) {
+    let [b, s, f] = seed.dims();
+    let k = plan.primitives;
+    let device = seed.device();
+    let latent = net.latent_dim();
+    let mut total: Option<Tensor<B, 1>> = None;
+    let mut parts: Vec<(&'static str, f64)> = Vec::new();
+    for _ in 0..k {
+        let z = Tensor::<B, 2>::from_data(
+            TensorData::new(normal_samples(rng, b * latent), [b, latent]),
+            &device,
+        );
+        let full = decode_raw(net, seed, floor.clone(), z);
+        let terms = prior_loss(rig, &plan.weights, range, full.clone(), floor.clone());
+        total = Some(match total {
+            Some(t) => t + terms.total,
+            None => terms.total,
+        });
+        add_parts(&mut parts, terms.parts, k);
+        let (next, height) = next_seed(rig, full);
+        seed = next;
+        floor = floor - height;
+    }
+    let seeds: Vec<f32> = seed.into_data().convert::<f32>().to_vec().expect("f32");
+    let floors: Vec<f32> = floor.into_data().convert::<f32>().to_vec().expect("f32");
+    for (i, &fl) in floors.iter().enumerate() {
+        let item = &seeds[i * s * f..(i + 1) * s * f];
+        if fl.is_finite() && item.iter().all(|v| v.is_finite()) {
+            if pool.len() == SEED_POOL_CAPACITY {
+                pool.pop_front();
+            }
+            pool.push_back((item.to_vec(), fl));
+        }
+    }
+    let total = total.expect("at least one primitive").div_scalar(k as f64);
+    (total, parts)
+}
+
+/// Adds the mean over `k` primitives of loss terms to `parts` (matched by position).
+fn add_parts<B: Backend>(
+    parts: &mut Vec<(&'static str, f64)>,
+    terms: Vec<(&'static str, Tensor<B, 1>)>,
+    k: usize,
+) {
+    for (i, (name, v)) in terms.into_iter().enumerate() {
+        let v = v.into_scalar().elem::<f64>() / k as f64;
+        match parts.get_mut(i) {
+            Some(p) => p.1 += v,
+            None => parts.push((name, v)),
+        }
+    }
+}
+
+/// Seeds `[B, S, F]` and canonical floors `[B]` of random chains: from the pool with
+/// probability `pool_fraction`, else the first seed of a random mocap chain.
+fn prior_seeds<B: Backend>(
+    set: &PrimitiveSet,
+    pool: &SeedPool,
+    pool_fraction: f64,
+    size: usize,
+    rng: &mut ChaCha8Rng,
+    device: &B::Device,
+) -> (Tensor<B, 3>, Tensor<B, 1>) {
+    let per = SEED_FRAMES * FRAME_DIM;
+    let mut x = Vec::with_capacity(size * per);
+    let mut floors = Vec::with_capacity(size);
+    for _ in 0..size {
+        let from_pool = !pool.is_empty()
+            && ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64) < pool_fraction;
+        if from_pool {
+            let (seed, floor) = &pool[(rng.next_u64() % pool.len() as u64) as usize];
+            x.extend_from_slice(seed);
+            floors.push(*floor);
+        } else {
+            let i = (rng.next_u64() % set.len() as u64) as usize;
+            x.extend_from_slice(&set.item(i)[..per]);
+            floors.push(set.floors(i)[0]);
+        }
+    }
+    (
+        Tensor::from_data(TensorData::new(x, [size, SEED_FRAMES, FRAME_DIM]), device),
+        Tensor::from_data(TensorData::new(floors, [size]), device),
+    )
 }
 
 /// Trains per the plan and writes weights and the loss log.
@@ -259,7 +384,7 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         .transpose()?;
     let f = filter.as_ref();
     let singles = build_set(&train_parts, 1, plan.stride_frames, plan.mirror, &model, f)?;
-    let chains = if plan.rollout.steps > 0 {
+    let chains = if plan.rollout.steps > 0 || plan.prior.is_some() {
         build_set(
             &train_parts,
             plan.rollout_primitives,
@@ -277,7 +402,7 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
             "no training primitive: every clip is held out or shorter than 20 frames".into(),
         ));
     }
-    if plan.rollout.steps > 0 && chains.is_empty() {
+    if (plan.rollout.steps > 0 || plan.prior.is_some()) && chains.is_empty() {
         return Err(TrainError::Data(format!(
             "rollout: no clip part holds {} chained primitives",
             plan.rollout_primitives
@@ -287,7 +412,20 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
     TrainBackend::seed(&device, plan.seed);
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
     let rig = TensorRig::<TrainBackend>::new(&geo, &device);
-    let mut net: PrimitiveVae<TrainBackend> = plan.arch.init(&stats, &device);
+    let mut net: PrimitiveVae<TrainBackend> = match &plan.init_weights {
+        None => plan.arch.init(&stats, &device),
+        Some(path) => {
+            let (arch, net) = weights::load(path, &device)?;
+            if arch != plan.arch {
+                return Err(TrainError::Data(format!(
+                    "init weights {}: architecture {arch:?}, the config asks for {:?}",
+                    path.display(),
+                    plan.arch
+                )));
+            }
+            net
+        }
+    };
 
     for out in [&plan.log_out, &plan.weights_out] {
         if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -302,7 +440,8 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         source,
     })?;
     let mut log = std::io::BufWriter::new(log_file);
-    let total_steps = plan.primitive.steps + plan.rollout.steps;
+    let prior_steps = plan.prior.map_or(0, |p| p.phase.steps);
+    let total_steps = plan.primitive.steps + plan.rollout.steps + prior_steps;
     let bar = if show_progress {
         ProgressBar::new(total_steps as u64)
     } else {
@@ -314,11 +453,34 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         )
         .expect("progress template"),
     );
+    let range = match plan.prior {
+        Some(prior) => {
+            let r = training_range(&singles, &geo, prior.range_quantile);
+            let line = serde_json::json!({
+                "phase": "prior_range",
+                "pelvis_m": [r.pelvis_m.0, r.pelvis_m.1],
+                "trunk_up_min": r.trunk_up_min,
+            });
+            writeln!(log, "{line}").map_err(|source| TrainError::Io {
+                path: plan.log_out.clone(),
+                source,
+            })?;
+            Some(r)
+        }
+        None => None,
+    };
+    let mut pool = SeedPool::new();
     let mut final_loss = f64::NAN;
     let mut global_step = 0usize;
+    let prior_phase = plan.prior.map(|p| p.phase).unwrap_or(PhasePlan {
+        steps: 0,
+        batch_size: 1,
+        learning_rate: 0.0,
+    });
     for (phase, phase_plan, set) in [
         ("primitive", plan.primitive, &singles),
         ("rollout", plan.rollout, &chains),
+        ("prior", prior_phase, &chains),
     ] {
         if phase_plan.steps == 0 {
             continue;
@@ -337,7 +499,21 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                 weights.kl *= (global_step as f64 / plan.kl_warmup_steps as f64).min(1.0);
             }
             let (x, floors) = batch::<TrainBackend>(set, phase_plan.batch_size, &mut rng, &device);
-            let (loss, parts) = chain_loss(&net, &rig, &weights, x, floors, &mut rng);
+            let (mut loss, mut parts) = chain_loss(&net, &rig, &weights, x, floors, &mut rng);
+            if let (true, Some(prior), Some(range)) = (phase == "prior", &plan.prior, &range) {
+                let (seed, floor) = prior_seeds::<TrainBackend>(
+                    set,
+                    &pool,
+                    prior.pool_fraction,
+                    phase_plan.batch_size,
+                    &mut rng,
+                    &device,
+                );
+                let (prior_total, prior_parts) =
+                    prior_chain_loss(&net, &rig, prior, range, seed, floor, &mut rng, &mut pool);
+                loss = loss + prior_total;
+                parts.extend(prior_parts);
+            }
             let value = loss.clone().into_scalar().elem::<f64>();
             if !value.is_finite() {
                 return Err(TrainError::Diverged {
@@ -401,6 +577,15 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         final_loss,
         held_out_mpjpe_mm,
     })
+}
+
+/// Range of pelvis heights and trunk lean over the frames of a single-primitive set.
+fn training_range(set: &PrimitiveSet, geo: &RigGeometry, q: f64) -> PlausibleRange {
+    let device = Default::default();
+    let rig = TensorRig::<Flex>::new(geo, &device);
+    let (x, floors) = super::eval::set_batch::<Flex>(set, 0..set.len(), &device);
+    let floor = Tensor::from_data(TensorData::new(floors.clone(), [floors.len()]), &device);
+    plausible_range(&rig, x, floor, q)
 }
 
 /// Clip parts of a plan as sets for evaluation: `(train, held_out)` single primitives, no
