@@ -7,23 +7,15 @@
 //! `cargo bench --bench supervisor` (needs Blender: the managed install is provisioned on first
 //! use).
 
-use std::path::Path;
 use std::process::Command;
-use std::time::Instant;
+
+mod common;
+use common::{egogen_run_with, walk_config};
 
 const ROUNDS: usize = 2;
 
-const CONFIG: &str = r#"
-[body]
-betas = []
-[motion]
-source = "scripted_walk"
-duration_s = 0.8
-frame_rate_hz = 40.0
-[output]
-dir = "out"
-mesh_every_n_frames = 0
-[render]
+/// Aria SLAM-left at 64×48, 16 of 32 frames, 2 frames per shard.
+const RENDER: &str = r#"
 cameras = ["camera-slam-left"]
 resolution_scale = 0.1
 every_n_frames = 2
@@ -55,27 +47,12 @@ enum Backend {
 }
 
 fn run(workers: usize, backend: Backend) -> Measured {
-    let dir = tempfile::tempdir().unwrap();
-    let config = dir.path().join("run.toml");
-    let text = match backend {
-        Backend::Local => CONFIG.to_string(),
-        Backend::Slurm => format!("{CONFIG}{SLURM}"),
+    let config = match backend {
+        Backend::Local => walk_config(32, RENDER),
+        Backend::Slurm => format!("{}{SLURM}", walk_config(32, RENDER)),
     };
-    std::fs::write(&config, text).unwrap();
-    let started = Instant::now();
-    let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
-        .arg(&config)
-        .args(["--workers", &workers.to_string()])
-        .output()
-        .unwrap();
-    let wall_s = started.elapsed().as_secs_f64();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report = pool_report(&dir.path().join("out/logs"));
-    let attempts = report["shards"]
+    let run = egogen_run_with(&config, &["--workers", &workers.to_string()]);
+    let attempts = run.report["shards"]
         .as_array()
         .unwrap()
         .iter()
@@ -86,26 +63,11 @@ fn run(workers: usize, backend: Backend) -> Measured {
         frames += a["finished"].as_u64().unwrap() as usize;
     }
     Measured {
-        wall_s,
-        pool_s: report["wall_seconds"].as_f64().unwrap(),
+        wall_s: run.wall_seconds,
+        pool_s: run.report["wall_seconds"].as_f64().unwrap(),
         blender_s,
         frames,
     }
-}
-
-fn pool_report(logs: &Path) -> serde_json::Value {
-    let path = std::fs::read_dir(logs)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .find(|p| {
-            p.file_name()
-                .unwrap()
-                .to_string_lossy()
-                .starts_with("pool_report")
-        })
-        .expect("pool report");
-    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
 /// Whether a Slurm cluster answers here (start one with `tools/slurm_single_node.sh`).

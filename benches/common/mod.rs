@@ -1,5 +1,6 @@
 //! Running `egogen-run` from a bench: a config in a temporary folder, the Blender attempt's time
 //! read from the pool report.
+#![allow(dead_code)]
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -9,6 +10,10 @@ use std::process::Command;
 pub struct Run {
     pub dir: tempfile::TempDir,
     pub attempt_seconds: Vec<f64>,
+    /// The whole `logs/pool_report_*.json`.
+    pub report: serde_json::Value,
+    /// Wall time of the `egogen-run` process, seconds.
+    pub wall_seconds: f64,
 }
 
 impl Run {
@@ -41,13 +46,21 @@ mesh_every_n_frames = 0
 
 /// Runs `egogen-run` on a config whose output folder is `out`.
 pub fn egogen_run(config: &str) -> Run {
+    egogen_run_with(config, &[])
+}
+
+/// Runs `egogen-run` on a config whose output folder is `out`, with further arguments.
+pub fn egogen_run_with(config: &str, args: &[&str]) -> Run {
     let dir = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("run.toml");
     std::fs::write(&cfg, config).unwrap();
+    let started = std::time::Instant::now();
     let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
         .arg(&cfg)
+        .args(args)
         .output()
         .unwrap();
+    let wall_seconds = started.elapsed().as_secs_f64();
     assert!(
         out.status.success(),
         "{}",
@@ -71,5 +84,7 @@ pub fn egogen_run(config: &str) -> Run {
     Run {
         dir,
         attempt_seconds,
+        report,
+        wall_seconds,
     }
 }
