@@ -69,12 +69,15 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
             primitives: 2,
             pool_fraction: 0.5,
             range_quantile: 0.01,
+            trunk_tilt_max_deg: Some(30.0),
+            min_pelvis_speed_m_s: 0.5,
             weights: PriorWeights {
                 contact: 1.0,
                 skate: 1.0,
                 penetration: 1.0,
                 pelvis: 1.0,
                 upright: 1.0,
+                speed: 1.0,
             },
         }),
         init_weights: None,
@@ -286,16 +289,24 @@ fn shipped_weights_decode_a_batch_of_finite_rigid_bodies() {
 fn fifty_chained_primitives_stay_finite_and_rigid() {
     use egogen::body::BodyModel;
     use egogen::motion::cvae::eval::long_rollout;
-    use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
-    use egogen::motion::cvae::BodyContext;
+    use egogen::motion::cvae::train::shipped_weights_path;
+    use egogen::motion::cvae::{BestOfK, BodyContext, PlausibilityRules};
     use rand_core::SeedableRng;
     let model = MotionModel::load(shipped_weights_path()).unwrap();
     let body = BodyModel::load(common::default_model_path()).unwrap();
     let ctx = BodyContext::new(&body, &[]).unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
-    let latents: Vec<Vec<f32>> = (0..50).map(|_| normal_samples(&mut rng, 128)).collect();
+    let plain = BestOfK::new(&ctx, 1, PlausibilityRules::default()).unwrap();
     // `decode` refuses non-finite output, so reaching the end means no NaN anywhere.
-    let (report, prims) = long_rollout(&model, &ctx, walking_seeds(1).remove(0), &latents).unwrap();
+    let (report, prims) = long_rollout(
+        &model,
+        &ctx,
+        walking_seeds(1).remove(0),
+        50,
+        &plain,
+        &mut rng,
+    )
+    .unwrap();
     assert_eq!(prims.len(), 50);
     assert_eq!(report.frames, 50 * 18);
     assert!(report.canonical_orthonormality_max_err < 1e-9);
@@ -308,6 +319,57 @@ fn fifty_chained_primitives_stay_finite_and_rigid() {
         report.upright_primitives
     );
     assert!(report.displacement_m > 0.5, "{report:?}");
+}
+
+#[test]
+fn best_of_k_keeps_the_most_plausible_of_its_draws() {
+    use egogen::body::BodyModel;
+    use egogen::motion::cvae::rig::RigGeometry;
+    use egogen::motion::cvae::sampler::plausibility;
+    use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
+    use egogen::motion::cvae::{BestOfK, BodyContext, PlausibilityRules};
+    use rand_core::SeedableRng;
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let body = BodyModel::load(common::default_model_path()).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let rules = PlausibilityRules::default();
+    let feet = RigGeometry::new(&body, &[]).unwrap().foot_markers;
+    let seed = walking_seeds(3).remove(2);
+    let sampler = BestOfK::new(&ctx, 6, rules).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let chosen = sampler.next(&model, &ctx, &seed, &mut rng).unwrap();
+    // The same six draws, decoded one by one.
+    let mut again = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let scores: Vec<f64> = (0..6)
+        .map(|_| {
+            let z = normal_samples(&mut again, 128);
+            let p = model
+                .decode(&ctx, std::slice::from_ref(&seed), &[z])
+                .unwrap()
+                .remove(0);
+            plausibility(&p, &feet, &rules).score
+        })
+        .collect();
+    let best = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert!(scores.iter().any(|&s| s < best), "draws differ: {scores:?}");
+    assert!(
+        (chosen.plausibility.score - best).abs() < 1e-9,
+        "{scores:?} vs {chosen:?}"
+    );
+    assert_eq!(chosen.non_finite_candidates, 0);
+    // Plausibility of a mocap walk: feet on the floor, upright, moving.
+    let p = chosen.plausibility;
+    assert!(p.contact > 0.8 && p.pelvis_out_m == 0.0, "{p:?}");
+    // Lifting the body 0.5 m costs contact and pelvis height.
+    let mut lifted = chosen.primitive.clone();
+    for m in lifted.markers.iter_mut().flatten() {
+        m.z += 0.5;
+    }
+    for j in lifted.joints.iter_mut().flatten() {
+        j.z += 0.5;
+    }
+    let l = plausibility(&lifted, &feet, &rules);
+    assert!(l.score < p.score - 0.5 && l.pelvis_out_m > 0.1, "{l:?}");
 }
 
 #[test]
@@ -335,7 +397,8 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
     let (x, floors) = set_batch::<Flex>(&set, 0..set.len(), &device);
     let floor =
         || Tensor::<Flex, 1>::from_data(TensorData::new(floors.clone(), [floors.len()]), &device);
-    let range = plausible_range(&rig, x.clone(), floor(), 0.0);
+    let mut range = plausible_range(&rig, x.clone(), floor(), 0.0);
+    range.pelvis_speed_min = 0.5;
     assert!(
         range.pelvis_m.0 > 0.6 && range.pelvis_m.1 < 1.2 && range.trunk_up_min > 0.7,
         "{range:?}"
@@ -346,6 +409,7 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
         penetration: (name == "penetration") as u8 as f64,
         pelvis: (name == "pelvis") as u8 as f64,
         upright: (name == "upright") as u8 as f64,
+        speed: (name == "speed") as u8 as f64,
     };
     let term = |x: Tensor<Flex, 3>, name: &str| {
         prior_loss(&rig, &one(name), &range, x, floor())
@@ -359,9 +423,29 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
     assert!(term(x.clone(), "penetration") < 0.005);
     assert_eq!(term(x.clone(), "pelvis"), 0.0);
     assert_eq!(term(x.clone(), "upright"), 0.0);
+    assert_eq!(term(x.clone(), "speed"), 0.0);
+    // Every decoded frame frozen at the seed's last: a body standing still is 0.5 m/s short
+    // of the slowest walk allowed.
+    let [b, t, _] = x.dims();
+    let frozen = {
+        let mut v: Vec<f32> = x.clone().into_data().to_vec().unwrap();
+        for i in 0..b {
+            let last_seed = (i * t + 1) * FRAME_DIM;
+            let seed_frame = v[last_seed..last_seed + FRAME_DIM].to_vec();
+            for f in 2..t {
+                let at = (i * t + f) * FRAME_DIM;
+                v[at..at + FRAME_DIM].copy_from_slice(&seed_frame);
+            }
+        }
+        Tensor::<Flex, 3>::from_data(TensorData::new(v, [b, t, FRAME_DIM]), &device)
+    };
+    let still = term(frozen, "speed");
+    assert!(
+        (0.49..0.51).contains(&still),
+        "standing still scored {still}"
+    );
     // Every frame after the seed lifted by 0.4 m: the contact term grows by about 0.4 m and
     // the pelvis leaves its range; sunk by 0.4 m, the feet go through the floor.
-    let [b, t, _] = x.dims();
     let shift = |dz: f32| {
         let mut v = vec![0f32; b * t * FRAME_DIM];
         for i in 0..b {
@@ -427,6 +511,22 @@ fn prior_fine_tuning_configs_are_checked() {
             "weight.toml",
             resolved.replace("upright = ", "upright = -"),
             "prior.loss.upright",
+        ),
+        (
+            "tilt.toml",
+            resolved.replace(
+                "range_quantile = ",
+                "trunk_tilt_max_deg = 95.0\nrange_quantile = ",
+            ),
+            "prior.trunk_tilt_max_deg",
+        ),
+        (
+            "speed.toml",
+            resolved.replace(
+                "range_quantile = ",
+                "min_pelvis_speed_m_s = -1.0\nrange_quantile = ",
+            ),
+            "prior.min_pelvis_speed_m_s",
         ),
         (
             "init.toml",

@@ -126,6 +126,13 @@ enum MotionCommand {
         /// Float precision the network runs in (the speed/accuracy knob).
         #[arg(long, value_enum, default_value_t = Precision::F32)]
         precision: Precision,
+        /// Latents drawn per primitive of the chains, the most plausible kept (best-of-K
+        /// sampling; 1 for plain random latents).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1024))]
+        candidates: u32,
+        /// Primitives each candidate is continued for before choosing (with --candidates > 1).
+        #[arg(long, default_value_t = 0)]
+        lookahead: usize,
     },
 }
 
@@ -281,6 +288,8 @@ fn run(cli: Cli) -> Result<()> {
             walk_png,
             chain_trace,
             precision,
+            candidates,
+            lookahead,
         }) => {
             let weights = weights.unwrap_or_else(egogen::motion::cvae::train::shipped_weights_path);
             motion_eval(
@@ -292,6 +301,8 @@ fn run(cli: Cli) -> Result<()> {
                 walk_png.as_deref(),
                 chain_trace.as_deref(),
                 precision,
+                candidates as usize,
+                lookahead,
             )?;
         }
         Command::Motion(MotionCommand::Import {
@@ -723,12 +734,16 @@ fn motion_eval(
     walk_png: Option<&Path>,
     chain_trace: Option<&Path>,
     precision: Precision,
+    candidates: usize,
+    lookahead: usize,
 ) -> Result<()> {
     use egogen::motion::cvae::eval::{long_rollout, marker_mpjpe_mm, random_latent_contact};
     use egogen::motion::cvae::features::{frame_params, FRAME_DIM};
     use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
     use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
-    use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
+    use egogen::motion::cvae::{
+        BestOfK, BodyContext, MotionModel, PlausibilityRules, PrimitiveSeed,
+    };
     use rand_chacha::ChaCha8Rng;
     use rand_core::SeedableRng;
 
@@ -782,10 +797,16 @@ fn motion_eval(
         frames: [clip.frame(0), clip.frame(1)],
         floor_z: 0.0,
     };
-    let latents: Vec<Vec<f32>> = (0..chain_primitives)
-        .map(|_| normal_samples(&mut rng, l))
-        .collect();
-    let (chain, prims) = long_rollout(&model, &ctx, seed_frames, &latents)?;
+    let mut sampler = BestOfK::new(&ctx, candidates, PlausibilityRules::default())?;
+    sampler.horizon = lookahead;
+    let (chain, prims) = long_rollout(
+        &model,
+        &ctx,
+        seed_frames,
+        chain_primitives,
+        &sampler,
+        &mut rng,
+    )?;
     println!(
         "{}",
         serde_json::json!({"measure": "chain", "seed_clip": plan.clips[1].path.file_name().map(|s| s.to_string_lossy()), "report": chain})
@@ -802,13 +823,17 @@ fn motion_eval(
             }),
             floor_z: train_set.floors(item)[0] as f64,
         };
-        let latents: Vec<Vec<f32>> = (0..SHORT_CHAIN_PRIMITIVES)
-            .map(|_| normal_samples(&mut rng, l))
-            .collect();
         upright.push(
-            long_rollout(&model, &ctx, seed, &latents)?
-                .0
-                .upright_primitives,
+            long_rollout(
+                &model,
+                &ctx,
+                seed,
+                SHORT_CHAIN_PRIMITIVES,
+                &sampler,
+                &mut rng,
+            )?
+            .0
+            .upright_primitives,
         );
     }
     upright.sort_unstable();

@@ -59,6 +59,12 @@ pub struct RawPrior {
     /// Pelvis height and trunk lean are kept between these quantiles (and 1 − it) of the
     /// training frames; 0 for their whole range.
     pub range_quantile: f64,
+    /// Trunk lean (degrees from vertical) beyond which `prior.loss.upright` penalises; omit
+    /// for the training frames' steepest lean (per `range_quantile`).
+    pub trunk_tilt_max_deg: Option<f64>,
+    /// Mean horizontal pelvis speed (m/s) below which `prior.loss.speed` penalises a
+    /// primitive; omit for none.
+    pub min_pelvis_speed_m_s: Option<f64>,
     /// `[prior.loss]`: weights of the losses on random chains.
     pub loss: PriorWeights,
 }
@@ -227,6 +233,22 @@ impl RawTrainPrimitive {
                         format!("expected a quantile in 0..0.5, found {}", p.range_quantile),
                     ));
                 }
+                if let Some(deg) = p.trunk_tilt_max_deg {
+                    if !(deg > 0.0 && deg < 90.0) {
+                        return Err(bad(
+                            "prior.trunk_tilt_max_deg",
+                            format!("expected degrees in (0, 90), found {deg}"),
+                        ));
+                    }
+                }
+                if let Some(v) = p.min_pelvis_speed_m_s {
+                    if !(v.is_finite() && v >= 0.0) {
+                        return Err(bad(
+                            "prior.min_pelvis_speed_m_s",
+                            format!("expected a speed ≥ 0 m/s, found {v}"),
+                        ));
+                    }
+                }
                 let w = &p.loss;
                 for (key, v) in [
                     ("prior.loss.contact", w.contact),
@@ -234,6 +256,7 @@ impl RawTrainPrimitive {
                     ("prior.loss.penetration", w.penetration),
                     ("prior.loss.pelvis", w.pelvis),
                     ("prior.loss.upright", w.upright),
+                    ("prior.loss.speed", w.speed),
                 ] {
                     weight(key, v)?;
                 }
@@ -246,6 +269,8 @@ impl RawTrainPrimitive {
                     primitives: p.primitives,
                     pool_fraction: p.pool_fraction,
                     range_quantile: p.range_quantile,
+                    trunk_tilt_max_deg: p.trunk_tilt_max_deg,
+                    min_pelvis_speed_m_s: p.min_pelvis_speed_m_s.unwrap_or(0.0),
                     weights: p.loss,
                 })
             }

@@ -253,17 +253,25 @@ pub struct ChainReport {
     pub contact_mean: f64,
     /// Horizontal distance of the pelvis from start to end (m).
     pub displacement_m: f64,
+    /// Latents drawn per primitive, the most plausible kept (`sampler::BestOfK`; 1 for plain
+    /// random latents).
+    pub candidates: usize,
+    /// Candidates dropped because they decoded to non-finite values.
+    pub non_finite_candidates: usize,
     /// Wall time of decoding and posing (s).
     pub seconds: f64,
 }
 
-/// Chains `latents.len()` primitives from `seed` (one latent each), returning the statistics
-/// and the decoded primitives.
+/// Chains `primitives` primitives from `seed`, each the most plausible of `sampler.candidates`
+/// decoded from latents z ~ N(0, I) drawn from `rng`, returning the statistics and the decoded
+/// primitives.
 pub fn long_rollout(
     model: &super::MotionModel,
     body: &super::BodyContext,
     seed: super::PrimitiveSeed,
-    latents: &[Vec<f32>],
+    primitives: usize,
+    sampler: &super::sampler::BestOfK,
+    rng: &mut rand_chacha::ChaCha8Rng,
 ) -> Result<(ChainReport, Vec<super::DecodedPrimitive>), super::infer::DecodeError> {
     use crate::body::PARENTS;
     use crate::math::rotation::orthonormality_error;
@@ -271,9 +279,9 @@ pub fn long_rollout(
     let rest = body.shaped.rest_joints;
     let foot = super::rig::RigGeometry::new(body.model, &body.betas)?.foot_markers;
     let mut seed = seed;
-    let mut out = Vec::with_capacity(latents.len());
+    let mut out = Vec::with_capacity(primitives);
     let mut r = ChainReport {
-        primitives: latents.len(),
+        primitives,
         frames: 0,
         upright_primitives: 0,
         pelvis_z_min_m: f64::INFINITY,
@@ -286,13 +294,15 @@ pub fn long_rollout(
         feet_on_floor_share: 0.0,
         contact_mean: 0.0,
         displacement_m: 0.0,
+        candidates: sampler.candidates,
+        non_finite_candidates: 0,
         seconds: 0.0,
     };
     let mut upright = true;
-    for z in latents {
-        let p = model
-            .decode(body, std::slice::from_ref(&seed), std::slice::from_ref(z))?
-            .remove(0);
+    for _ in 0..primitives {
+        let step = sampler.next(model, body, &seed, rng)?;
+        r.non_finite_candidates += step.non_finite_candidates;
+        let p = step.primitive;
         r.canonical_orthonormality_max_err = r
             .canonical_orthonormality_max_err
             .max(orthonormality_error(p.primitive.world_from_canon.matrix3));
@@ -328,7 +338,7 @@ pub fn long_rollout(
         seed = p.next_seed();
         out.push(p);
     }
-    r.contact_mean /= latents.len().max(1) as f64;
+    r.contact_mean /= primitives.max(1) as f64;
     r.lowest_foot_mean_m /= r.frames.max(1) as f64;
     r.feet_on_floor_share /= r.frames.max(1) as f64;
     if let (Some(a), Some(b)) = (out.first(), out.last()) {

@@ -159,13 +159,27 @@ impl MotionModel {
             .expect("f32 features")
     }
 
-    /// Decodes a batch of seeds (world) with one latent each.
+    /// Decodes a batch of seeds (world) with one latent each; fails on the first primitive
+    /// that is not finite.
     pub fn decode(
         &self,
         body: &BodyContext,
         seeds: &[PrimitiveSeed],
         latents: &[Vec<f32>],
     ) -> Result<Vec<DecodedPrimitive>, DecodeError> {
+        self.decode_each(body, seeds, latents)?
+            .into_iter()
+            .collect()
+    }
+
+    /// Decodes a batch of seeds (world) with one latent each, with a result per item (a
+    /// non-finite primitive fails alone).
+    pub fn decode_each(
+        &self,
+        body: &BodyContext,
+        seeds: &[PrimitiveSeed],
+        latents: &[Vec<f32>],
+    ) -> Result<Vec<Result<DecodedPrimitive, DecodeError>>, DecodeError> {
         if seeds.len() != latents.len() {
             return Err(DecodeError::BatchMismatch {
                 seeds: seeds.len(),
@@ -204,7 +218,7 @@ impl MotionModel {
         let flat: Vec<f32> = latents.iter().flatten().copied().collect();
         let decoded = self.decode_features(&seed_features, &floors, &flat);
         let per = PRIMITIVE_FRAMES * FRAME_DIM;
-        canon_seeds
+        Ok(canon_seeds
             .into_iter()
             .zip(seeds)
             .enumerate()
@@ -229,7 +243,7 @@ impl MotionModel {
                 };
                 posed(body, primitive, seed.floor_z)
             })
-            .collect()
+            .collect())
     }
 }
 

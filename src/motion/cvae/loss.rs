@@ -193,6 +193,11 @@ pub struct PriorWeights {
     /// How far the trunk's up direction (pelvis → neck) leans beyond the training data's
     /// steepest lean (`cos` units).
     pub upright: f64,
+    /// How far (m/s) the pelvis's mean horizontal speed over a primitive falls short of
+    /// `PlausibleRange::pelvis_speed_min`: the training clips walk and run, so a chain that
+    /// slows to a stand leaves the data (0 when absent).
+    #[serde(default)]
+    pub speed: f64,
 }
 
 /// Ranges of the training data that the prior losses keep decoded primitives inside.
@@ -202,6 +207,8 @@ pub struct PlausibleRange {
     pub pelvis_m: (f64, f64),
     /// Smallest vertical component of the unit trunk vector (pelvis → neck).
     pub trunk_up_min: f64,
+    /// Slowest mean horizontal pelvis speed over a primitive's decoded frames (m/s).
+    pub pelvis_speed_min: f64,
 }
 
 /// Offset of the lowest foot above the floor that the contact score rewards (m), and the foot
@@ -246,6 +253,7 @@ pub fn plausible_range<B: Backend>(
     PlausibleRange {
         pelvis_m: (at(&height, q), at(&height, 1.0 - q)),
         trunk_up_min: at(&up, q),
+        pelvis_speed_min: 0.0,
     }
 }
 
@@ -287,6 +295,24 @@ pub fn prior_loss<B: Backend>(
         .clamp_min(0.0)
         .mean();
     let penetration = foot_height.neg().clamp_min(0.0).mean();
+    let pelvis_path = p
+        .joints
+        .clone()
+        .narrow(2, crate::body::joint::PELVIS, 1)
+        .reshape([b, t, 3]);
+    let travelled = (pelvis_path.clone().narrow(1, t - 1, 1)
+        - pelvis_path.narrow(1, SEED_FRAMES - 1, 1))
+    .narrow(2, 0, 2)
+    .square()
+    .sum_dim(2)
+    .add_scalar(1e-10)
+    .sqrt()
+    .mul_scalar(PRIMITIVE_RATE_HZ / n as f64);
+    let speed_short = travelled
+        .neg()
+        .add_scalar(range.pelvis_speed_min)
+        .clamp_min(0.0)
+        .mean();
     let (height, up) = pelvis_and_trunk(&p, floor);
     let (height, up) = (
         height.narrow(1, SEED_FRAMES, n),
@@ -307,6 +333,7 @@ pub fn prior_loss<B: Backend>(
         ("prior_penetration", penetration),
         ("prior_pelvis", pelvis),
         ("prior_upright", upright),
+        ("prior_speed", speed_short),
     ];
     weighted(
         parts,
@@ -316,6 +343,7 @@ pub fn prior_loss<B: Backend>(
             weights.penetration,
             weights.pelvis,
             weights.upright,
+            weights.speed,
         ],
     )
 }

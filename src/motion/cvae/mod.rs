@@ -4,8 +4,9 @@
 //! pelvis translation) in the primitive's canonical frame.
 //!
 //! Owns the network, its losses (pose, FK markers through a tensor rig, velocity, foot skate and
-//! floor, robust KL), training (single primitives, then rollout over chains), weights files and
-//! the inference API; skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
+//! floor, robust KL), training (single primitives, then rollout over chains, then prior
+//! fine-tuning), weights files, the inference API and best-of-K random-latent sampling;
+//! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
 
 pub mod data;
 pub mod eval;
@@ -15,10 +16,12 @@ pub mod loss;
 pub mod net;
 pub mod rig;
 pub mod rollout;
+pub mod sampler;
 pub mod train;
 pub mod weights;
 
 pub use infer::{BodyContext, DecodedPrimitive, MotionModel, PrimitiveSeed};
 pub use net::{ArchConfig, PrimitiveVae};
+pub use sampler::{BestOfK, Plausibility, PlausibilityRules};
 pub use train::{train, TrainPlan, TrainReport};
 pub use weights::WeightsError;

@@ -71,6 +71,10 @@ pub struct PriorPlan {
     /// The pelvis-height and trunk-lean ranges run between these quantiles of the training
     /// frames (`loss::plausible_range`).
     pub range_quantile: f64,
+    /// Overrides the data's steepest trunk lean (degrees from vertical).
+    pub trunk_tilt_max_deg: Option<f64>,
+    /// Slowest mean pelvis speed over a primitive that passes free (m/s; 0 for no limit).
+    pub min_pelvis_speed_m_s: f64,
     pub weights: PriorWeights,
 }
 
@@ -455,11 +459,16 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
     );
     let range = match plan.prior {
         Some(prior) => {
-            let r = training_range(&singles, &geo, prior.range_quantile);
+            let mut r = training_range(&singles, &geo, prior.range_quantile);
+            if let Some(deg) = prior.trunk_tilt_max_deg {
+                r.trunk_up_min = deg.to_radians().cos();
+            }
+            r.pelvis_speed_min = prior.min_pelvis_speed_m_s;
             let line = serde_json::json!({
                 "phase": "prior_range",
                 "pelvis_m": [r.pelvis_m.0, r.pelvis_m.1],
                 "trunk_up_min": r.trunk_up_min,
+                "pelvis_speed_min": r.pelvis_speed_min,
             });
             writeln!(log, "{line}").map_err(|source| TrainError::Io {
                 path: plan.log_out.clone(),
