@@ -34,6 +34,7 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
         stride_frames: 2,
         mirror: true,
         min_contact_score: Some(0.5),
+        contact_context_frames: 0,
         arch: ArchConfig {
             latent_dim: 8,
             encoder_width: 32,
@@ -49,6 +50,7 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
             kl: 0.001,
         },
         kl_warmup_steps: 0,
+        seed_noise: 0.1,
         primitive: PhasePlan {
             steps: 41,
             batch_size: 16,
@@ -68,6 +70,7 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
             },
             primitives: 2,
             pool_fraction: 0.5,
+            pool_slots: None,
             range_quantile: 0.01,
             trunk_tilt_max_deg: Some(30.0),
             min_pelvis_speed_m_s: 0.5,
@@ -78,6 +81,7 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
                 pelvis: 1.0,
                 upright: 1.0,
                 speed: 1.0,
+                recovery: 1.0,
             },
         }),
         init_weights: None,
@@ -115,11 +119,33 @@ fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
         log.contains("prior_contact") && log.contains("prior_range"),
         "{log}"
     );
+    // The second prior step has a pool of chain ends to recover from.
+    assert!(log.contains("\"recovery\""), "{log}");
     let mm = report.held_out_mpjpe_mm.unwrap();
     assert!(mm.is_finite() && mm > 0.0, "held-out error {mm} mm");
 
     let model = MotionModel::load(&plan.weights_out).unwrap();
     assert_eq!(model.arch, plan.arch);
+
+    // Random latents spread the decoded primitives; one latent for every draw does not.
+    {
+        use egogen::body::BodyModel;
+        use egogen::motion::cvae::eval::latent_spread_mm;
+        use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+        use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
+        use rand_core::SeedableRng;
+        let body = BodyModel::load(common::default_model_path()).unwrap();
+        let (train_set, _) = evaluation_sets(&plan, &body, true).unwrap();
+        let rig = TensorRig::new(&RigGeometry::new(&body, &[]).unwrap(), &Default::default());
+        let l = model.latent_dim();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let z = normal_samples(&mut rng, 4 * 4 * l);
+        let spread = latent_spread_mm(&model.net, &rig, &train_set, 4, &z);
+        assert!(spread.is_finite() && spread > 0.01, "{spread} mm");
+        let same = z[..l].repeat(16);
+        let none = latent_spread_mm(&model.net, &rig, &train_set, 4, &same);
+        assert!(none < 1e-3, "{none} mm");
+    }
 
     // Fine-tuning starts from those weights; another architecture is refused.
     let mut tune = plan.clone();
@@ -221,6 +247,19 @@ fn bad_training_configs_are_refused_naming_file_and_key() {
             "rate.toml",
             ("learning_rate = 0.001", "learning_rate = 2.0"),
             "primitive.learning_rate",
+        ),
+        (
+            "context.toml",
+            (
+                "min_contact_score = 0.8",
+                "min_contact_score = 0.8\ncontact_context_s = -1.0",
+            ),
+            "data.contact_context_s",
+        ),
+        (
+            "context_alone.toml",
+            ("min_contact_score = 0.8", "contact_context_s = 1.0"),
+            "data.contact_context_s",
         ),
     ];
     for (name, (from, to), key) in cases {
@@ -410,6 +449,7 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
         pelvis: (name == "pelvis") as u8 as f64,
         upright: (name == "upright") as u8 as f64,
         speed: (name == "speed") as u8 as f64,
+        recovery: 0.0,
     };
     let term = |x: Tensor<Flex, 3>, name: &str| {
         prior_loss(&rig, &one(name), &range, x, floor())
@@ -513,6 +553,11 @@ fn prior_fine_tuning_configs_are_checked() {
             "prior.loss.upright",
         ),
         (
+            "slots.toml",
+            resolved.replace("range_quantile = ", "pool_slots = 3\nrange_quantile = "),
+            "prior.pool_slots",
+        ),
+        (
             "tilt.toml",
             resolved.replace(
                 "range_quantile = ",
@@ -549,4 +594,99 @@ fn init_weights_line(config: &str) -> String {
         .find(|l| l.starts_with("init_weights"))
         .expect("init_weights line")
         .to_owned()
+}
+
+#[test]
+fn contact_context_drops_the_run_up_to_a_failing_primitive() {
+    use egogen::body::BodyModel;
+    use egogen::motion::cvae::data::ContactFilter;
+    use egogen::motion::cvae::data::PrimitiveSet;
+    use egogen::motion::MotionSequence;
+    let body = BodyModel::load(common::default_model_path()).unwrap();
+    // 4 s of walking with the body lifted 0.4 m off the floor for 0.5 s in the middle (like a
+    // step onto an object): the primitives overlapping the lift fail the contact filter.
+    let mut seq = MotionSequence::read(&clip("cmu_01_03.npz")).unwrap();
+    seq.poses.truncate(160);
+    seq.trans.truncate(160);
+    for t in &mut seq.trans[70..90] {
+        t.z += 0.4;
+    }
+    let count = |frames: std::ops::Range<usize>, context: usize| {
+        let filter = ContactFilter::new(&body, 0.8, context).unwrap();
+        let mut set = PrimitiveSet::new(1);
+        set.add_clip(&seq, frames, 1, &body, Some(&filter)).unwrap();
+        set.len()
+    };
+    // Oracle: which single primitives pass on their own.
+    let passes: Vec<bool> = (0..=140).map(|s| count(s..s + 20, 0) == 1).collect();
+    let failing: Vec<usize> = (0..=140).filter(|&s| !passes[s]).collect();
+    assert!(
+        failing.len() >= 20 && failing.len() < 60,
+        "{} failing starts",
+        failing.len()
+    );
+    for context in [0, 10, 40] {
+        let expected = (0..=140usize)
+            .filter(|&s| failing.iter().all(|&f| f.abs_diff(s) > context))
+            .count();
+        assert_eq!(count(0..160, context), expected, "context {context}");
+    }
+    assert!(count(0..160, 40) < count(0..160, 0));
+}
+
+#[test]
+fn training_chains_seed_the_next_primitive_as_inference_does() {
+    use burn::backend::Flex;
+    use burn::prelude::*;
+    use egogen::body::BodyModel;
+    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+    use egogen::motion::cvae::rollout::next_seed;
+    use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
+    use egogen::motion::cvae::{BodyContext, CanonicalSeed};
+    use rand_core::SeedableRng;
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let body = BodyModel::load(common::default_model_path()).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let seeds = walking_seeds(4);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+    let latents: Vec<Vec<f32>> = (0..4).map(|_| normal_samples(&mut rng, 128)).collect();
+    // Inference: decode, take the last two world frames, canonicalise them (f64).
+    let decoded = model.decode(&ctx, &seeds, &latents).unwrap();
+    // Training: the raw network output, chained on tensors.
+    let canon: Vec<CanonicalSeed> = seeds
+        .iter()
+        .map(|s| CanonicalSeed::new(&ctx, s).unwrap())
+        .collect();
+    let features: Vec<f32> = canon.iter().flat_map(|c| c.features.clone()).collect();
+    let floors: Vec<f32> = canon.iter().map(|c| c.floor).collect();
+    let flat: Vec<f32> = latents.concat();
+    let raw = model.decode_features(&features, &floors, &flat);
+    let f = raw.len() / 4 / 20;
+    let device = Default::default();
+    let rig = TensorRig::<Flex>::new(&RigGeometry::new(&body, &[]).unwrap(), &device);
+    let x = Tensor::<Flex, 3>::from_data(TensorData::new(raw.clone(), [4, 20, f]), &device);
+    let (seed, height) = next_seed(&rig, x);
+    let seed: Vec<f32> = seed.into_data().to_vec().unwrap();
+    let height: Vec<f32> = height.into_data().to_vec().unwrap();
+    // The raw output is not a set of valid rotations: the seed must not copy it.
+    let d6 = &raw[19 * f + 6..19 * f + 12];
+    let norm = (d6[..3].iter().map(|v| v * v).sum::<f32>()).sqrt();
+    assert!((norm - 1.0).abs() > 1e-4, "raw 6D column norm {norm}");
+    for i in 0..4 {
+        let next = CanonicalSeed::new(&ctx, &decoded[i].next_seed()).unwrap();
+        let tensor_seed = &seed[i * 2 * f..(i + 1) * 2 * f];
+        let worst = next
+            .features
+            .iter()
+            .zip(tensor_seed)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0f32, f32::max);
+        assert!(worst < 1e-4, "chain {i}: seed features differ by {worst}");
+        let floor = floors[i] - height[i];
+        assert!(
+            (floor - next.floor).abs() < 1e-4,
+            "{floor} vs {}",
+            next.floor
+        );
+    }
 }

@@ -113,6 +113,9 @@ enum MotionCommand {
         /// Primitives in the long chain.
         #[arg(long, default_value_t = 1000)]
         chain_primitives: usize,
+        /// Primitives in each of the 20 chains from spread training seeds.
+        #[arg(long, default_value_t = 50)]
+        short_chain_primitives: usize,
         /// Seed of the random latents.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -284,6 +287,7 @@ fn run(cli: Cli) -> Result<()> {
             config,
             random_primitives,
             chain_primitives,
+            short_chain_primitives,
             seed,
             walk_png,
             chain_trace,
@@ -295,14 +299,17 @@ fn run(cli: Cli) -> Result<()> {
             motion_eval(
                 &weights,
                 &config,
-                random_primitives,
-                chain_primitives,
-                seed,
-                walk_png.as_deref(),
-                chain_trace.as_deref(),
-                precision,
-                candidates as usize,
-                lookahead,
+                &MotionEvalOptions {
+                    random_primitives,
+                    chain_primitives,
+                    short_chain_primitives,
+                    seed,
+                    walk_png,
+                    chain_trace,
+                    precision,
+                    candidates: candidates as usize,
+                    lookahead,
+                },
             )?;
         }
         Command::Motion(MotionCommand::Import {
@@ -720,24 +727,37 @@ fn import_bvh(
     Ok(())
 }
 
-/// Chains from different seeds in `egogen motion eval`, and their length in primitives.
+/// Chains from different seeds in `egogen motion eval`.
 const SHORT_CHAINS: usize = 20;
-const SHORT_CHAIN_PRIMITIVES: usize = 50;
 
-/// `egogen motion eval`: prints the measurements as JSON lines.
-fn motion_eval(
-    weights: &Path,
-    config: &Path,
+/// What `egogen motion eval` measures (its flags).
+struct MotionEvalOptions {
     random_primitives: usize,
     chain_primitives: usize,
+    short_chain_primitives: usize,
     seed: u64,
-    walk_png: Option<&Path>,
-    chain_trace: Option<&Path>,
+    walk_png: Option<PathBuf>,
+    chain_trace: Option<PathBuf>,
     precision: Precision,
     candidates: usize,
     lookahead: usize,
-) -> Result<()> {
-    use egogen::motion::cvae::eval::{long_rollout, marker_mpjpe_mm, random_latent_contact};
+}
+
+/// `egogen motion eval`: prints the measurements as JSON lines.
+fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Result<()> {
+    let MotionEvalOptions {
+        random_primitives,
+        chain_primitives,
+        short_chain_primitives,
+        seed,
+        precision,
+        candidates,
+        lookahead,
+        ..
+    } = *opts;
+    use egogen::motion::cvae::eval::{
+        latent_spread_mm, long_rollout, marker_mpjpe_mm, random_latent_contact,
+    };
     use egogen::motion::cvae::features::{frame_params, FRAME_DIM};
     use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
     use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
@@ -790,6 +810,16 @@ fn motion_eval(
             serde_json::json!({"measure": "contact_score", "seeds": name, "report": report})
         );
     }
+    let draws = 16;
+    let z = normal_samples(&mut rng, 64 * draws * l);
+    println!(
+        "{}",
+        serde_json::json!({
+            "measure": "latent_spread_mm",
+            "about": "RMS distance of the last frame's markers from their mean over 16 random latents, 64 training seeds",
+            "value": latent_spread_mm(&model.net, &rig, &train_set, draws, &z),
+        })
+    );
     // The chain starts from the first two frames of the first training clip's walk.
     let clip = egogen::motion::MotionSequence::read(&plan.clips[1].path)?;
     let ctx = BodyContext::new(&body, &[])?;
@@ -814,6 +844,8 @@ fn motion_eval(
     // Shorter chains from many (filtered) training seeds, each in its canonical frame: how
     // long they stay upright.
     let mut upright = Vec::new();
+    let mut on_floor = Vec::new();
+    let mut pelvis_range = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..SHORT_CHAINS {
         let item = i * train_set.len() / SHORT_CHAINS;
         let values = train_set.item(item);
@@ -823,36 +855,42 @@ fn motion_eval(
             }),
             floor_z: train_set.floors(item)[0] as f64,
         };
-        upright.push(
-            long_rollout(
-                &model,
-                &ctx,
-                seed,
-                SHORT_CHAIN_PRIMITIVES,
-                &sampler,
-                &mut rng,
-            )?
-            .0
-            .upright_primitives,
-        );
+        let (report, prims) = long_rollout(
+            &model,
+            &ctx,
+            seed,
+            short_chain_primitives,
+            &sampler,
+            &mut rng,
+        )?;
+        upright.push(report.upright_primitives);
+        on_floor.push(report.feet_on_floor_share);
+        // Pelvis heights above the chain's floor (the seeds' floors differ).
+        let floor = prims.first().map_or(0.0, |p| p.floor_z);
+        pelvis_range.0 = pelvis_range.0.min(report.pelvis_z_min_m - floor);
+        pelvis_range.1 = pelvis_range.1.max(report.pelvis_z_max_m - floor);
     }
     upright.sort_unstable();
+    on_floor.sort_by(f64::total_cmp);
     println!(
         "{}",
         serde_json::json!({
             "measure": "short_chains",
             "chains": SHORT_CHAINS,
-            "primitives_each": SHORT_CHAIN_PRIMITIVES,
-            "all_upright": upright.iter().filter(|&&u| u == SHORT_CHAIN_PRIMITIVES).count(),
+            "primitives_each": short_chain_primitives,
+            "all_upright": upright.iter().filter(|&&u| u == short_chain_primitives).count(),
+            "pelvis_above_floor_m": [pelvis_range.0, pelvis_range.1],
+            "feet_on_floor_share_min": on_floor[0],
+            "feet_on_floor_share_median": on_floor[on_floor.len() / 2],
             "upright_primitives_median": upright[upright.len() / 2],
             "upright_primitives_sorted": upright,
         })
     );
-    if let Some(file) = chain_trace {
+    if let Some(file) = &opts.chain_trace {
         write_chain_trace(&prims, file)?;
         println!("wrote {}", file.display());
     }
-    if let Some(png) = walk_png {
+    if let Some(png) = &opts.walk_png {
         draw_walk(&prims, png)?;
         println!("wrote {}", png.display());
     }

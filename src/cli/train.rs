@@ -56,6 +56,10 @@ pub struct RawPrior {
     pub primitives: usize,
     /// Share (0..=1) of random chains that start where an earlier one ended.
     pub pool_fraction: f64,
+    /// Keep this many persistent random chains, continued step after step (each step draws
+    /// `batch_size` of them; a chain whose body falls restarts from mocap); omit for the pool
+    /// of the last 4 096 chain ends.
+    pub pool_slots: Option<usize>,
     /// Pelvis height and trunk lean are kept between these quantiles (and 1 − it) of the
     /// training frames; 0 for their whole range.
     pub range_quantile: f64,
@@ -79,6 +83,9 @@ pub struct RawData {
     pub mirror: bool,
     /// Keep only primitives whose mocap foot-contact score reaches this (0..1); omit to keep all.
     pub min_contact_score: Option<f64>,
+    /// Also drop primitives starting within this many seconds of one that fails
+    /// `min_contact_score` (the run-up to a jump or a climb); omit for 0.
+    pub contact_context_s: Option<f64>,
 }
 
 /// `[output]`.
@@ -105,6 +112,9 @@ pub struct RawTrainPrimitive {
     pub loss: LossWeights,
     /// Steps over which the KL weight ramps up from 0.
     pub kl_warmup_steps: usize,
+    /// Gaussian noise on the seeds of mocap primitives, in feature standard deviations (the
+    /// targets stay clean, so the decoder learns to return to the data); omit for 0.
+    pub seed_noise: Option<f64>,
     pub primitive: RawPhase,
     pub rollout: RawRollout,
     /// Prior fine-tuning after the rollout phase.
@@ -187,6 +197,34 @@ impl RawTrainPrimitive {
                 ));
             }
         }
+        let contact_context_frames = match self.data.contact_context_s {
+            None => 0,
+            Some(t) if t.is_finite() && t >= 0.0 => {
+                if self.data.min_contact_score.is_none() {
+                    return Err(bad(
+                        "data.contact_context_s",
+                        "needs data.min_contact_score (the filter whose context it widens)".into(),
+                    ));
+                }
+                (t * crate::motion::primitive::PRIMITIVE_RATE_HZ).round() as usize
+            }
+            Some(t) => {
+                return Err(bad(
+                    "data.contact_context_s",
+                    format!("expected a time ≥ 0 s, found {t}"),
+                ))
+            }
+        };
+        let seed_noise = match self.seed_noise {
+            None => 0.0,
+            Some(v) if v.is_finite() && (0.0..=1.0).contains(&v) => v,
+            Some(v) => {
+                return Err(bad(
+                    "seed_noise",
+                    format!("expected feature standard deviations in 0..=1, found {v}"),
+                ))
+            }
+        };
         positive("model.latent_dim", self.model.latent_dim)?;
         positive("model.encoder_width", self.model.encoder_width)?;
         positive("model.decoder_width", self.model.decoder_width)?;
@@ -227,6 +265,17 @@ impl RawTrainPrimitive {
                         format!("expected a share in 0..=1, found {}", p.pool_fraction),
                     ));
                 }
+                if let Some(n) = p.pool_slots {
+                    if n < p.batch_size {
+                        return Err(bad(
+                            "prior.pool_slots",
+                            format!(
+                                "expected at least prior.batch_size = {} slots, found {n}",
+                                p.batch_size
+                            ),
+                        ));
+                    }
+                }
                 if !(0.0..0.5).contains(&p.range_quantile) {
                     return Err(bad(
                         "prior.range_quantile",
@@ -257,6 +306,7 @@ impl RawTrainPrimitive {
                     ("prior.loss.pelvis", w.pelvis),
                     ("prior.loss.upright", w.upright),
                     ("prior.loss.speed", w.speed),
+                    ("prior.loss.recovery", w.recovery),
                 ] {
                     weight(key, v)?;
                 }
@@ -268,6 +318,7 @@ impl RawTrainPrimitive {
                     },
                     primitives: p.primitives,
                     pool_fraction: p.pool_fraction,
+                    pool_slots: p.pool_slots,
                     range_quantile: p.range_quantile,
                     trunk_tilt_max_deg: p.trunk_tilt_max_deg,
                     min_pelvis_speed_m_s: p.min_pelvis_speed_m_s.unwrap_or(0.0),
@@ -298,9 +349,11 @@ impl RawTrainPrimitive {
             stride_frames: self.data.stride_frames,
             mirror: self.data.mirror,
             min_contact_score: self.data.min_contact_score,
+            contact_context_frames,
             arch: self.model,
             loss: self.loss,
             kl_warmup_steps: self.kl_warmup_steps,
+            seed_noise,
             primitive: PhasePlan {
                 steps: self.primitive.steps,
                 batch_size: self.primitive.batch_size,

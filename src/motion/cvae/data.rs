@@ -57,17 +57,42 @@ impl PrimitiveSet {
     ) -> Result<(), PrimitiveError> {
         let span = CHAIN_STRIDE * (self.chain_len - 1) + PRIMITIVE_FRAMES;
         let end = frames.end.min(seq.len());
+        // Contact verdicts of primitives by start frame, computed once each.
+        let mut passes: Vec<Option<bool>> = vec![None; end];
         let mut start = frames.start;
         while start + span <= end {
             let chain = (0..self.chain_len)
                 .map(|k| canonicalize(seq, start + k * CHAIN_STRIDE, model))
                 .collect::<Result<Vec<_>, _>>()?;
-            let mut keep = true;
-            if let Some(f) = filter {
-                for p in &chain {
-                    keep &= f.score(p)? >= f.min_score;
+            let keep = match filter {
+                None => true,
+                Some(f) if f.context_frames == 0 => {
+                    let mut keep = true;
+                    for p in &chain {
+                        keep &= f.score(p)? >= f.min_score;
+                    }
+                    keep
                 }
-            }
+                Some(f) => {
+                    // Every primitive starting within the context of the chain must pass.
+                    let first = start.saturating_sub(f.context_frames).max(frames.start);
+                    let last = (start + span - PRIMITIVE_FRAMES + f.context_frames)
+                        .min(end - PRIMITIVE_FRAMES);
+                    let mut keep = true;
+                    for (s, verdict) in passes.iter_mut().enumerate().take(last + 1).skip(first) {
+                        let pass = match *verdict {
+                            Some(v) => v,
+                            None => f.score(&canonicalize(seq, s, model)?)? >= f.min_score,
+                        };
+                        *verdict = Some(pass);
+                        if !pass {
+                            keep = false;
+                            break;
+                        }
+                    }
+                    keep
+                }
+            };
             if keep {
                 for p in &chain {
                     self.features.extend(primitive_features(p));
@@ -137,15 +162,24 @@ pub struct ClipPart {
 }
 
 /// Keeps primitives whose mocap foot-contact score (see `eval`) reaches `min_score`: feet on
-/// the floor (z = 0) and not sliding. Drops climbing on objects and jumps.
+/// the floor (z = 0) and not sliding. Drops climbing on objects and jumps. With
+/// `context_frames` > 0 a primitive is kept only when every primitive starting within that
+/// many frames of it passes too, so the run-up to a dropped motion (standing still before a
+/// jump, stepping up onto an object) goes with it: a model should not learn the start of a
+/// motion whose rest it never sees.
 pub struct ContactFilter<'m> {
     shaped: ShapedBody<'m>,
     foot_vertices: Vec<u32>,
     pub min_score: f64,
+    pub context_frames: usize,
 }
 
 impl<'m> ContactFilter<'m> {
-    pub fn new(model: &'m BodyModel, min_score: f64) -> Result<Self, PoseError> {
+    pub fn new(
+        model: &'m BodyModel,
+        min_score: f64,
+        context_frames: usize,
+    ) -> Result<Self, PoseError> {
         let geo = RigGeometry::new(model, &[])?;
         Ok(Self {
             shaped: model.shape(&[], &[])?,
@@ -155,6 +189,7 @@ impl<'m> ContactFilter<'m> {
                 .map(|&k| geo.marker_ids[k])
                 .collect(),
             min_score,
+            context_frames,
         })
     }
 

@@ -220,6 +220,44 @@ pub fn random_latent_contact<B: Backend>(
     }
 }
 
+/// How much the latent moves a primitive: over `seeds` evenly spread items of `set`, each
+/// decoded with `draws` latents z ~ N(0, I) from `latents` (`[seeds × draws × L]`), the root
+/// mean square distance (mm) of the last frame's markers from their mean over the draws.
+pub fn latent_spread_mm<B: Backend>(
+    net: &PrimitiveVae<B>,
+    rig: &TensorRig<B>,
+    set: &PrimitiveSet,
+    draws: usize,
+    latents: &[f32],
+) -> f64 {
+    let device = net.feature_mean.val().device();
+    let l = net.latent_dim();
+    let count = latents.len() / l;
+    let seeds = count / draws.max(1);
+    let picks: Vec<usize> = (0..seeds * draws)
+        .map(|i| (i / draws) * set.len() / seeds.max(1))
+        .collect();
+    let (x, floors) = pick_batch::<B>(set, &picks, &device);
+    let z = Tensor::from_data(
+        TensorData::new(latents[..picks.len() * l].to_vec(), [picks.len(), l]),
+        &device,
+    );
+    let pred = decode_raw(
+        net,
+        x.narrow(1, 0, SEED_FRAMES),
+        floor_tensor(&floors, &device),
+        z,
+    );
+    let last = pose_frames(rig, pred)
+        .markers
+        .narrow(1, PRIMITIVE_FRAMES - 1, 1);
+    let m = last.dims()[2];
+    let last = last.reshape([seeds, draws, m, 3]);
+    let mean = last.clone().mean_dim(1);
+    let sq = (last - mean).square().sum_dim(3).mean();
+    sq.into_scalar().elem::<f64>().sqrt() * 1000.0
+}
+
 /// Pelvis heights above the floor (m) counted as upright for [`ChainReport`].
 pub const UPRIGHT_PELVIS_M: std::ops::Range<f64> = 0.5..1.3;
 

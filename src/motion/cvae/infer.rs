@@ -86,6 +86,41 @@ impl<'m> BodyContext<'m> {
     }
 }
 
+/// A seed in its canonical frame, as the network reads it.
+#[derive(Debug, Clone)]
+pub struct CanonicalSeed {
+    pub world_from_canon: Affine3,
+    /// The seed frames in the canonical frame.
+    pub frames: Vec<BodyParams>,
+    /// Their features `[S × F]`.
+    pub features: Vec<f32>,
+    /// The floor height in the canonical frame (m).
+    pub floor: f32,
+}
+
+impl CanonicalSeed {
+    /// Canonicalises a world seed (origin at the pelvis of its first frame, x along the hips
+    /// made horizontal, z up).
+    pub fn new(body: &BodyContext, seed: &PrimitiveSeed) -> Result<Self, DecodeError> {
+        let first = body
+            .shaped
+            .skeleton(&seed.frames[0].pose, seed.frames[0].transl)?;
+        let world_from_canon = canonical_frame(&first.joints)?;
+        let canon_from_world = world_from_canon.inverse();
+        let frames: Vec<BodyParams> = seed
+            .frames
+            .iter()
+            .map(|f| f.moved_rigidly(canon_from_world, body.rest_pelvis()))
+            .collect();
+        Ok(Self {
+            world_from_canon,
+            features: frames.iter().flat_map(frame_features).collect(),
+            floor: (seed.floor_z - world_from_canon.translation.z) as f32,
+            frames,
+        })
+    }
+}
+
 /// Why decoding failed.
 #[derive(Debug, thiserror::Error)]
 pub enum DecodeError {
@@ -194,26 +229,14 @@ impl MotionModel {
                 expected: l,
             });
         }
-        let rest_pelvis = body.rest_pelvis();
         let mut canon_seeds = Vec::with_capacity(seeds.len());
         let mut seed_features = Vec::with_capacity(seeds.len() * SEED_FRAMES * FRAME_DIM);
         let mut floors = Vec::with_capacity(seeds.len());
         for seed in seeds {
-            let first = body
-                .shaped
-                .skeleton(&seed.frames[0].pose, seed.frames[0].transl)?;
-            let world_from_canon = canonical_frame(&first.joints)?;
-            let canon_from_world = world_from_canon.inverse();
-            let frames: Vec<BodyParams> = seed
-                .frames
-                .iter()
-                .map(|f| f.moved_rigidly(canon_from_world, rest_pelvis))
-                .collect();
-            for f in &frames {
-                seed_features.extend_from_slice(&frame_features(f));
-            }
-            floors.push((seed.floor_z - world_from_canon.translation.z) as f32);
-            canon_seeds.push((world_from_canon, frames));
+            let c = CanonicalSeed::new(body, seed)?;
+            seed_features.extend_from_slice(&c.features);
+            floors.push(c.floor);
+            canon_seeds.push((c.world_from_canon, c.frames));
         }
         let flat: Vec<f32> = latents.iter().flatten().copied().collect();
         let decoded = self.decode_features(&seed_features, &floors, &flat);

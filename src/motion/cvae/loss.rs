@@ -198,6 +198,11 @@ pub struct PriorWeights {
     /// slows to a stand leaves the data (0 when absent).
     #[serde(default)]
     pub speed: f64,
+    /// Reconstruction (the mocap losses) of the mocap chain whose first seed is nearest a seed
+    /// that an earlier random chain ended in, decoded from that seed: a target for the states
+    /// long chains reach, away from the mocap (0 when absent).
+    #[serde(default)]
+    pub recovery: f64,
 }
 
 /// Ranges of the training data that the prior losses keep decoded primitives inside.
@@ -218,7 +223,10 @@ const SKATE_FREE_M_PER_S: f64 = 0.075;
 
 /// Pelvis heights above the floor and vertical trunk components `[B, T]` of posed frames over
 /// floors `[B]`.
-fn pelvis_and_trunk<B: Backend>(p: &Posed<B>, floor: Tensor<B, 1>) -> (Tensor<B, 2>, Tensor<B, 2>) {
+pub(crate) fn pelvis_and_trunk<B: Backend>(
+    p: &Posed<B>,
+    floor: Tensor<B, 1>,
+) -> (Tensor<B, 2>, Tensor<B, 2>) {
     let [b, t, _, _] = p.joints.dims();
     let joint = |j: usize| p.joints.clone().narrow(2, j, 1).reshape([b, t, 3]);
     let pelvis = joint(crate::body::joint::PELVIS);

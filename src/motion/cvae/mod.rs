@@ -14,13 +14,14 @@ pub mod features;
 pub mod infer;
 pub mod loss;
 pub mod net;
+pub mod pool;
 pub mod rig;
 pub mod rollout;
 pub mod sampler;
 pub mod train;
 pub mod weights;
 
-pub use infer::{BodyContext, DecodedPrimitive, MotionModel, PrimitiveSeed};
+pub use infer::{BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed};
 pub use net::{ArchConfig, PrimitiveVae};
 pub use sampler::{BestOfK, Plausibility, PlausibilityRules};
 pub use train::{train, TrainPlan, TrainReport};

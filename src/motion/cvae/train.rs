@@ -5,7 +5,6 @@
 //! of mocap chains. Deterministic for a seed: batches, noise and initial weights all come
 //! from it.
 
-use std::collections::VecDeque;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -20,11 +19,13 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
 use super::data::{build_set, ClipPart, ContactFilter, PrimitiveSet, PRIMITIVE_VALUES};
-use super::eval::{decode_raw, marker_mpjpe_mm};
+use super::eval::{decode_raw, marker_mpjpe_mm, UPRIGHT_PELVIS_M};
 use super::loss::{
-    plausible_range, primitive_loss, prior_loss, LossWeights, PlausibleRange, PriorWeights,
+    pelvis_and_trunk, plausible_range, pose_frames, primitive_loss, prior_loss, LossWeights,
+    PlausibleRange, PriorWeights,
 };
 use super::net::{ArchConfig, PrimitiveVae};
+use super::pool::SeedPool;
 use super::rig::{RigGeometry, TensorRig};
 use super::rollout::next_seed;
 use super::weights;
@@ -68,6 +69,9 @@ pub struct PriorPlan {
     /// Share of the random chains that start where an earlier random chain ended (the others
     /// start from mocap seeds), so that training sees the states long chains reach.
     pub pool_fraction: f64,
+    /// Persistent chains of the seed pool (`pool::SeedPool::Slots`); none for the pool of
+    /// recent chain ends.
+    pub pool_slots: Option<usize>,
     /// The pelvis-height and trunk-lean ranges run between these quantiles of the training
     /// frames (`loss::plausible_range`).
     pub range_quantile: f64,
@@ -90,10 +94,16 @@ pub struct TrainPlan {
     pub mirror: bool,
     /// Keep only primitives whose mocap foot-contact score reaches this (`data::ContactFilter`).
     pub min_contact_score: Option<f64>,
+    /// Primitives starting within this many frames of one that fails the contact filter are
+    /// dropped too (`data::ContactFilter`).
+    pub contact_context_frames: usize,
     pub arch: ArchConfig,
     pub loss: LossWeights,
     /// Steps over which the KL weight ramps up from 0.
     pub kl_warmup_steps: usize,
+    /// Noise on the first seed of mocap chains, in feature standard deviations
+    /// ([`chain_loss`]; 0 for none).
+    pub seed_noise: f64,
     pub primitive: PhasePlan,
     pub rollout: PhasePlan,
     /// Primitives per rollout chain.
@@ -217,11 +227,46 @@ fn batch<B: Backend>(
 }
 
 /// Loss of a batch of chains `[B, K, T, F]`: every primitive after the first is decoded from
-/// the seed that the previous decoded primitive leaves.
+/// the seed that the previous decoded primitive leaves. With `seed_noise` > 0 the first seed
+/// is offset by Gaussian noise (the same for both seed frames) of that many feature standard
+/// deviations while the targets stay the mocap's: the decoder cannot recognise a clip by its
+/// seed alone, and learns to bring a body that is off the data back onto it.
 pub fn chain_loss<B: Backend>(
     net: &PrimitiveVae<B>,
     rig: &TensorRig<B>,
     weights: &LossWeights,
+    x: Tensor<B, 4>,
+    floors: Tensor<B, 2>,
+    seed_noise: f64,
+    rng: &mut ChaCha8Rng,
+) -> (Tensor<B, 1>, Vec<(&'static str, f64)>) {
+    let [b, _, t, f] = x.dims();
+    let mut seed = x
+        .clone()
+        .narrow(1, 0, 1)
+        .reshape([b, t, f])
+        .narrow(1, 0, SEED_FRAMES);
+    if seed_noise > 0.0 {
+        let noise = Tensor::<B, 3>::from_data(
+            TensorData::new(normal_samples(rng, b * f), [b, 1, f]),
+            &x.device(),
+        );
+        let std = net.feature_std.val().detach().reshape([1, 1, f]);
+        seed = seed + noise.mul(std).mul_scalar(seed_noise);
+    }
+    let floor = floors.clone().narrow(1, 0, 1).reshape([b]);
+    chain_loss_from(net, rig, weights, seed, floor, x, floors, rng)
+}
+
+/// [`chain_loss`] of chains whose first primitive is decoded from `seed` `[B, S, F]` over
+/// canonical floors `floor` `[B]` instead of the mocap's own seed.
+#[allow(clippy::too_many_arguments)]
+fn chain_loss_from<B: Backend>(
+    net: &PrimitiveVae<B>,
+    rig: &TensorRig<B>,
+    weights: &LossWeights,
+    mut seed: Tensor<B, 3>,
+    mut pred_floor: Tensor<B, 1>,
     x: Tensor<B, 4>,
     floors: Tensor<B, 2>,
     rng: &mut ChaCha8Rng,
@@ -229,12 +274,6 @@ pub fn chain_loss<B: Backend>(
     let [b, k, t, f] = x.dims();
     let device = x.device();
     let latent = net.latent_dim();
-    let mut seed = x
-        .clone()
-        .narrow(1, 0, 1)
-        .reshape([b, t, f])
-        .narrow(1, 0, SEED_FRAMES);
-    let mut pred_floor = floors.clone().narrow(1, 0, 1).reshape([b]);
     let mut total: Option<Tensor<B, 1>> = None;
     let mut parts: Vec<(&'static str, f64)> = Vec::new();
     for c in 0..k {
@@ -271,16 +310,12 @@ pub fn chain_loss<B: Backend>(
     (total, parts)
 }
 
-/// Seeds that random chains ended in, to start later chains from (oldest dropped first).
-const SEED_POOL_CAPACITY: usize = 4096;
-
-/// Seed frames `[S × F]` and canonical floor of chain ends.
-type SeedPool = VecDeque<(Vec<f32>, f32)>;
-
 /// Loss of `seed.dims()[0]` chains of `primitives` primitives decoded from random latents,
-/// starting from raw seeds `[B, S, F]` over canonical floors `[B]`; adds the chains' final
-/// seeds to `pool`.
-#[allow(clippy::too_many_arguments)]
+/// starting from raw seeds `[B, S, F]` over canonical floors `[B]`. Also returns the chains'
+/// ends (`[B × S × F]` seeds, `[B]` floors) and whether each end is still upright
+/// ([`UPRIGHT_PELVIS_M`] and a trunk within [`POOL_TRUNK_TILT_MAX_DEG`] of vertical) — a
+/// persistent pool drops the others.
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn prior_chain_loss<B: Backend>(
     net: &PrimitiveVae<B>,
     rig: &TensorRig<B>,
@@ -289,15 +324,19 @@ fn prior_chain_loss<B: Backend>(
     mut seed: Tensor<B, 3>,
     mut floor: Tensor<B, 1>,
     rng: &mut ChaCha8Rng,
-    pool: &mut SeedPool,
-) -> (Tensor<B, 1>, Vec<(&'static str, f64)>) {
-    let [b, s, f] = seed.dims();
+) -> (
+    Tensor<B, 1>,
+    Vec<(&'static str, f64)>,
+    (Vec<f32>, Vec<f32>, Vec<bool>),
+) {
+    let [b, _, _] = seed.dims();
     let k = plan.primitives;
     let device = seed.device();
     let latent = net.latent_dim();
     let mut total: Option<Tensor<B, 1>> = None;
     let mut parts: Vec<(&'static str, f64)> = Vec::new();
-    for _ in 0..k {
+    let mut upright = Vec::new();
+    for c in 0..k {
         let z = Tensor::<B, 2>::from_data(
             TensorData::new(normal_samples(rng, b * latent), [b, latent]),
             &device,
@@ -309,23 +348,139 @@ fn prior_chain_loss<B: Backend>(
             None => terms.total,
         });
         add_parts(&mut parts, terms.parts, k);
+        if c + 1 == k {
+            upright = upright_at_end(rig, full.clone(), floor.clone());
+        }
         let (next, height) = next_seed(rig, full);
         seed = next;
         floor = floor - height;
     }
     let seeds: Vec<f32> = seed.into_data().convert::<f32>().to_vec().expect("f32");
     let floors: Vec<f32> = floor.into_data().convert::<f32>().to_vec().expect("f32");
-    for (i, &fl) in floors.iter().enumerate() {
-        let item = &seeds[i * s * f..(i + 1) * s * f];
-        if fl.is_finite() && item.iter().all(|v| v.is_finite()) {
-            if pool.len() == SEED_POOL_CAPACITY {
-                pool.pop_front();
-            }
-            pool.push_back((item.to_vec(), fl));
-        }
-    }
     let total = total.expect("at least one primitive").div_scalar(k as f64);
-    (total, parts)
+    (total, parts, (seeds, floors, upright))
+}
+
+/// Trunk lean (degrees from vertical, pelvis → neck) beyond which a persistent pool drops a
+/// chain's end: the body is falling.
+pub const POOL_TRUNK_TILT_MAX_DEG: f64 = 60.0;
+
+/// Whether the last frame of each primitive (raw features `[B, T, F]` over floors `[B]`) is
+/// upright (see [`prior_chain_loss`]).
+fn upright_at_end<B: Backend>(
+    rig: &TensorRig<B>,
+    x: Tensor<B, 3>,
+    floor: Tensor<B, 1>,
+) -> Vec<bool> {
+    let t = x.dims()[1];
+    let (height, up) = pelvis_and_trunk(&pose_frames(rig, x.narrow(1, t - 1, 1)), floor);
+    let height: Vec<f32> = height.into_data().convert::<f32>().to_vec().expect("f32");
+    let up: Vec<f32> = up.into_data().convert::<f32>().to_vec().expect("f32");
+    let up_min = POOL_TRUNK_TILT_MAX_DEG.to_radians().cos();
+    height
+        .iter()
+        .zip(&up)
+        .map(|(&h, &u)| UPRIGHT_PELVIS_M.contains(&(h as f64)) && u as f64 >= up_min)
+        .collect()
+}
+
+/// How much the floor height counts when matching seeds ([`SeedIndex`]): its normalised
+/// difference is scaled by this, so it weighs as much as a few dozen pose features.
+const SEED_MATCH_FLOOR_SCALE: f32 = 8.0;
+
+/// The first seeds of a chain set, normalised, for finding the mocap chain that starts nearest
+/// a seed a random chain reached (the `prior.loss.recovery` target).
+struct SeedIndex {
+    keys: Vec<f32>,
+    mean: Vec<f32>,
+    std: Vec<f32>,
+    floor_mean_std: [f32; 2],
+}
+
+impl SeedIndex {
+    fn new<B: Backend>(set: &PrimitiveSet, net: &PrimitiveVae<B>) -> Self {
+        let values = |p: &burn::module::Param<Tensor<B, 1>>| -> Vec<f32> {
+            p.val().into_data().convert::<f32>().to_vec().expect("f32")
+        };
+        let fl = values(&net.floor_mean_std);
+        let mut index = Self {
+            keys: Vec::new(),
+            mean: values(&net.feature_mean),
+            std: values(&net.feature_std),
+            floor_mean_std: [fl[0], fl[1]],
+        };
+        for i in 0..set.len() {
+            let key = index.key(&set.item(i)[..SEED_FRAMES * FRAME_DIM], set.floors(i)[0]);
+            index.keys.extend(key);
+        }
+        index
+    }
+
+    fn key(&self, seed: &[f32], floor: f32) -> Vec<f32> {
+        let mut key: Vec<f32> = seed
+            .iter()
+            .enumerate()
+            .map(|(j, v)| (v - self.mean[j % FRAME_DIM]) / self.std[j % FRAME_DIM])
+            .collect();
+        key.push(
+            SEED_MATCH_FLOOR_SCALE * (floor - self.floor_mean_std[0]) / self.floor_mean_std[1],
+        );
+        key
+    }
+
+    /// Index of the chain whose first seed is nearest (squared distance of the keys).
+    fn nearest(&self, seed: &[f32], floor: f32) -> usize {
+        let key = self.key(seed, floor);
+        let distance =
+            |c: &[f32]| -> f32 { c.iter().zip(&key).map(|(a, b)| (a - b) * (a - b)).sum() };
+        self.keys
+            .chunks_exact(key.len())
+            .map(distance)
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(i, _)| i)
+    }
+}
+
+/// The recovery batch: `size` seeds random chains ended in (`[B, S, F]`, floors `[B]`) and, as
+/// targets, the mocap chains of `set` that start nearest them (`[B, K, T, F]`, floors `[B, K]`).
+#[allow(clippy::type_complexity)]
+fn recovery_batch<B: Backend>(
+    set: &PrimitiveSet,
+    index: &SeedIndex,
+    pool: &SeedPool,
+    size: usize,
+    rng: &mut ChaCha8Rng,
+    device: &B::Device,
+) -> (Tensor<B, 3>, Tensor<B, 1>, Tensor<B, 4>, Tensor<B, 2>) {
+    let k = set.chain_len;
+    let mut seeds = Vec::with_capacity(size * SEED_FRAMES * FRAME_DIM);
+    let mut seed_floors = Vec::with_capacity(size);
+    let mut x = Vec::with_capacity(size * k * PRIMITIVE_VALUES);
+    let mut floors = Vec::with_capacity(size * k);
+    for _ in 0..size {
+        let Some(pooled) = pool.sample(rng) else {
+            break;
+        };
+        let i = index.nearest(&pooled.frames, pooled.floor);
+        seeds.extend_from_slice(&pooled.frames);
+        seed_floors.push(pooled.floor);
+        x.extend_from_slice(set.item(i));
+        floors.extend_from_slice(set.floors(i));
+    }
+    let size = seed_floors.len();
+    (
+        Tensor::from_data(
+            TensorData::new(seeds, [size, SEED_FRAMES, FRAME_DIM]),
+            device,
+        ),
+        Tensor::from_data(TensorData::new(seed_floors, [size]), device),
+        Tensor::from_data(
+            TensorData::new(x, [size, k, PRIMITIVE_FRAMES, FRAME_DIM]),
+            device,
+        ),
+        Tensor::from_data(TensorData::new(floors, [size, k]), device),
+    )
 }
 
 /// Adds the mean over `k` primitives of loss terms to `parts` (matched by position).
@@ -343,38 +498,6 @@ fn add_parts<B: Backend>(
     }
 }
 
-/// Seeds `[B, S, F]` and canonical floors `[B]` of random chains: from the pool with
-/// probability `pool_fraction`, else the first seed of a random mocap chain.
-fn prior_seeds<B: Backend>(
-    set: &PrimitiveSet,
-    pool: &SeedPool,
-    pool_fraction: f64,
-    size: usize,
-    rng: &mut ChaCha8Rng,
-    device: &B::Device,
-) -> (Tensor<B, 3>, Tensor<B, 1>) {
-    let per = SEED_FRAMES * FRAME_DIM;
-    let mut x = Vec::with_capacity(size * per);
-    let mut floors = Vec::with_capacity(size);
-    for _ in 0..size {
-        let from_pool = !pool.is_empty()
-            && ((rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64) < pool_fraction;
-        if from_pool {
-            let (seed, floor) = &pool[(rng.next_u64() % pool.len() as u64) as usize];
-            x.extend_from_slice(seed);
-            floors.push(*floor);
-        } else {
-            let i = (rng.next_u64() % set.len() as u64) as usize;
-            x.extend_from_slice(&set.item(i)[..per]);
-            floors.push(set.floors(i)[0]);
-        }
-    }
-    (
-        Tensor::from_data(TensorData::new(x, [size, SEED_FRAMES, FRAME_DIM]), device),
-        Tensor::from_data(TensorData::new(floors, [size]), device),
-    )
-}
-
 /// Trains per the plan and writes weights and the loss log.
 pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, TrainError> {
     let started = Instant::now();
@@ -384,7 +507,7 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
     let geo = RigGeometry::new(&model, &[])?;
     let filter = plan
         .min_contact_score
-        .map(|s| ContactFilter::new(&model, s))
+        .map(|s| ContactFilter::new(&model, s, plan.contact_context_frames))
         .transpose()?;
     let f = filter.as_ref();
     let singles = build_set(&train_parts, 1, plan.stride_frames, plan.mirror, &model, f)?;
@@ -478,7 +601,11 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         }
         None => None,
     };
-    let mut pool = SeedPool::new();
+    let mut pool = SeedPool::new(plan.prior.and_then(|p| p.pool_slots));
+    let seed_index = plan
+        .prior
+        .filter(|p| p.weights.recovery > 0.0 && p.phase.steps > 0)
+        .map(|_| SeedIndex::new(&chains, &net));
     let mut final_loss = f64::NAN;
     let mut global_step = 0usize;
     let prior_phase = plan.prior.map(|p| p.phase).unwrap_or(PhasePlan {
@@ -508,20 +635,49 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                 weights.kl *= (global_step as f64 / plan.kl_warmup_steps as f64).min(1.0);
             }
             let (x, floors) = batch::<TrainBackend>(set, phase_plan.batch_size, &mut rng, &device);
-            let (mut loss, mut parts) = chain_loss(&net, &rig, &weights, x, floors, &mut rng);
+            let (mut loss, mut parts) =
+                chain_loss(&net, &rig, &weights, x, floors, plan.seed_noise, &mut rng);
             if let (true, Some(prior), Some(range)) = (phase == "prior", &plan.prior, &range) {
-                let (seed, floor) = prior_seeds::<TrainBackend>(
-                    set,
-                    &pool,
-                    prior.pool_fraction,
-                    phase_plan.batch_size,
-                    &mut rng,
+                let draw = pool.draw(set, prior.pool_fraction, phase_plan.batch_size, &mut rng);
+                let b = draw.len();
+                let seed = Tensor::from_data(
+                    TensorData::new(draw.seeds.clone(), [b, SEED_FRAMES, FRAME_DIM]),
                     &device,
                 );
-                let (prior_total, prior_parts) =
-                    prior_chain_loss(&net, &rig, prior, range, seed, floor, &mut rng, &mut pool);
+                let floor = Tensor::from_data(TensorData::new(draw.floors.clone(), [b]), &device);
+                let (prior_total, prior_parts, (ends, end_floors, upright)) =
+                    prior_chain_loss(&net, &rig, prior, range, seed, floor, &mut rng);
                 loss = loss + prior_total;
                 parts.extend(prior_parts);
+                let depth_mean = draw.depths.iter().sum::<usize>() as f64 / b.max(1) as f64;
+                let depth_max = draw.depths.iter().copied().max().unwrap_or(0);
+                parts.push(("pool_depth_mean", depth_mean));
+                parts.push(("pool_depth_max", depth_max as f64));
+                parts.push((
+                    "pool_upright_share",
+                    upright.iter().filter(|&&u| u).count() as f64 / b.max(1) as f64,
+                ));
+                let keep = match pool {
+                    SeedPool::Recent(_) => vec![true; b],
+                    SeedPool::Slots(_) => upright,
+                };
+                pool.accept(&draw, &ends, &end_floors, &keep, prior.primitives);
+                if let Some(index) = &seed_index {
+                    let (seed, floor, x, floors) = recovery_batch::<TrainBackend>(
+                        set,
+                        index,
+                        &pool,
+                        phase_plan.batch_size,
+                        &mut rng,
+                        &device,
+                    );
+                    if floor.dims()[0] > 0 {
+                        let (recovery, _) =
+                            chain_loss_from(&net, &rig, &weights, seed, floor, x, floors, &mut rng);
+                        parts.push(("recovery", recovery.clone().into_scalar().elem::<f64>()));
+                        loss = loss + recovery.mul_scalar(prior.weights.recovery);
+                    }
+                }
             }
             let value = loss.clone().into_scalar().elem::<f64>();
             if !value.is_finite() {
@@ -598,7 +754,8 @@ fn training_range(set: &PrimitiveSet, geo: &RigGeometry, q: f64) -> PlausibleRan
 }
 
 /// Clip parts of a plan as sets for evaluation: `(train, held_out)` single primitives, no
-/// mirroring, filtered as for training when `filtered`.
+/// mirroring, filtered by contact score (without context) when `filtered`, so that held-out
+/// numbers stay comparable across `data.contact_context_s`.
 pub fn evaluation_sets(
     plan: &TrainPlan,
     model: &BodyModel,
@@ -606,7 +763,7 @@ pub fn evaluation_sets(
 ) -> Result<(PrimitiveSet, PrimitiveSet), TrainError> {
     let (train, held) = load_clips(plan)?;
     let filter = match (filtered, plan.min_contact_score) {
-        (true, Some(s)) => Some(ContactFilter::new(model, s)?),
+        (true, Some(s)) => Some(ContactFilter::new(model, s, 0)?),
         _ => None,
     };
     Ok((
