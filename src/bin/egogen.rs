@@ -845,6 +845,7 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
     // long they stay upright.
     let mut upright = Vec::new();
     let mut on_floor = Vec::new();
+    let mut moving = Vec::new();
     let mut pelvis_range = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..SHORT_CHAINS {
         let item = i * train_set.len() / SHORT_CHAINS;
@@ -865,6 +866,7 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
         )?;
         upright.push(report.upright_primitives);
         on_floor.push(report.feet_on_floor_share);
+        moving.push(report.moving_share);
         // Pelvis heights above the chain's floor (the seeds' floors differ).
         let floor = prims.first().map_or(0.0, |p| p.floor_z);
         pelvis_range.0 = pelvis_range.0.min(report.pelvis_z_min_m - floor);
@@ -872,6 +874,7 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
     }
     upright.sort_unstable();
     on_floor.sort_by(f64::total_cmp);
+    moving.sort_by(f64::total_cmp);
     println!(
         "{}",
         serde_json::json!({
@@ -882,6 +885,8 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
             "pelvis_above_floor_m": [pelvis_range.0, pelvis_range.1],
             "feet_on_floor_share_min": on_floor[0],
             "feet_on_floor_share_median": on_floor[on_floor.len() / 2],
+            "moving_share_median": moving[moving.len() / 2],
+            "moving_share_min": moving[0],
             "upright_primitives_median": upright[upright.len() / 2],
             "upright_primitives_sorted": upright,
         })

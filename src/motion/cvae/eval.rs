@@ -265,6 +265,10 @@ pub const UPRIGHT_PELVIS_M: std::ops::Range<f64> = 0.5..1.3;
 /// frame as standing on the floor.
 pub const FOOT_ON_FLOOR_M: f64 = 0.1;
 
+/// Mean horizontal pelvis speed over a primitive (m/s) from which [`ChainReport`] counts it as
+/// moving.
+pub const MOVING_M_PER_S: f64 = 0.2;
+
 /// Statistics of one long chain of primitives decoded from random latents.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
 pub struct ChainReport {
@@ -291,6 +295,11 @@ pub struct ChainReport {
     pub contact_mean: f64,
     /// Horizontal distance of the pelvis from start to end (m).
     pub displacement_m: f64,
+    /// Mean horizontal pelvis speed (m/s) over the chain (path length over time).
+    pub pelvis_speed_mean_m_s: f64,
+    /// Share of primitives whose pelvis moves at [`MOVING_M_PER_S`] or faster (walking rather
+    /// than standing).
+    pub moving_share: f64,
     /// Latents drawn per primitive, the most plausible kept (`sampler::BestOfK`; 1 for plain
     /// random latents).
     pub candidates: usize,
@@ -332,6 +341,8 @@ pub fn long_rollout(
         feet_on_floor_share: 0.0,
         contact_mean: 0.0,
         displacement_m: 0.0,
+        pelvis_speed_mean_m_s: 0.0,
+        moving_share: 0.0,
         candidates: sampler.candidates,
         non_finite_candidates: 0,
         seconds: 0.0,
@@ -373,10 +384,22 @@ pub fn long_rollout(
         if upright {
             r.upright_primitives += 1;
         }
+        let (a, b) = (
+            p.joints[SEED_FRAMES - 1][0],
+            p.joints[PRIMITIVE_FRAMES - 1][0],
+        );
+        let path = ((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt();
+        r.pelvis_speed_mean_m_s += path;
+        if path * PRIMITIVE_RATE_HZ / (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 >= MOVING_M_PER_S {
+            r.moving_share += 1.0;
+        }
         seed = p.next_seed();
         out.push(p);
     }
     r.contact_mean /= primitives.max(1) as f64;
+    r.moving_share /= primitives.max(1) as f64;
+    r.pelvis_speed_mean_m_s /=
+        (primitives * (PRIMITIVE_FRAMES - SEED_FRAMES)).max(1) as f64 / PRIMITIVE_RATE_HZ;
     r.lowest_foot_mean_m /= r.frames.max(1) as f64;
     r.feet_on_floor_share /= r.frames.max(1) as f64;
     if let (Some(a), Some(b)) = (out.first(), out.last()) {
