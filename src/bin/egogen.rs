@@ -119,9 +119,15 @@ enum MotionCommand {
         /// Seed of the random latents.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// PNG of the first 10 s of the chain, from above and from the side.
+        /// PNG of the first 10 s of the chain, from above and from the side (of the steered
+        /// walk with --steer-goal-m).
         #[arg(long)]
         walk_png: Option<PathBuf>,
+        /// Also decode a 10 s walk steered to a goal this many metres ahead of the seed, the
+        /// best of 16 random latents kept per primitive (a stand-in for the locomotion policy),
+        /// and report how far it got.
+        #[arg(long)]
+        steer_goal_m: Option<f64>,
         /// JSON lines, one per primitive of the long chain: pelvis height, trunk tilt, root
         /// speed and lowest foot (what goes first when a chain falls).
         #[arg(long)]
@@ -290,6 +296,7 @@ fn run(cli: Cli) -> Result<()> {
             short_chain_primitives,
             seed,
             walk_png,
+            steer_goal_m,
             chain_trace,
             precision,
             candidates,
@@ -305,6 +312,7 @@ fn run(cli: Cli) -> Result<()> {
                     short_chain_primitives,
                     seed,
                     walk_png,
+                    steer_goal_m,
                     chain_trace,
                     precision,
                     candidates: candidates as usize,
@@ -737,6 +745,7 @@ struct MotionEvalOptions {
     short_chain_primitives: usize,
     seed: u64,
     walk_png: Option<PathBuf>,
+    steer_goal_m: Option<f64>,
     chain_trace: Option<PathBuf>,
     precision: Precision,
     candidates: usize,
@@ -755,6 +764,11 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
         lookahead,
         ..
     } = *opts;
+    if let Some(ahead) = opts.steer_goal_m {
+        if !(ahead.is_finite() && ahead > 0.0) {
+            bail!("--steer-goal-m: expected a positive distance in metres, got {ahead}");
+        }
+    }
     use egogen::motion::cvae::eval::{
         latent_spread_mm, long_rollout, marker_mpjpe_mm, random_latent_contact,
     };
@@ -832,7 +846,7 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
     let (chain, prims) = long_rollout(
         &model,
         &ctx,
-        seed_frames,
+        seed_frames.clone(),
         chain_primitives,
         &sampler,
         &mut rng,
@@ -895,11 +909,69 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
         write_chain_trace(&prims, file)?;
         println!("wrote {}", file.display());
     }
+    let walk = match opts.steer_goal_m {
+        Some(ahead) => {
+            let (report, prims) =
+                steered_walk(&model, &ctx, &seed_frames, ahead, lookahead, &mut rng)?;
+            println!("{}", report);
+            prims
+        }
+        None => prims,
+    };
     if let Some(png) = &opts.walk_png {
-        draw_walk(&prims, png)?;
+        draw_walk(&walk, png)?;
         println!("wrote {}", png.display());
     }
     Ok(())
+}
+
+/// Latents drawn per primitive of the steered walk (`egogen motion eval --steer-goal-m`).
+const STEER_CANDIDATES: usize = 16;
+
+/// Primitives of the steered walk: 10 s at 40 Hz, 18 new frames each.
+const STEER_PRIMITIVES: usize = 23;
+
+/// A 10 s chain from `seed` steered to a goal `ahead` metres in front of the seed's body (the
+/// horizontal normal of its hip axis), the best of [`STEER_CANDIDATES`] random latents kept
+/// per primitive: the JSON report line and the primitives.
+fn steered_walk(
+    model: &egogen::motion::cvae::MotionModel,
+    ctx: &egogen::motion::cvae::BodyContext,
+    seed: &egogen::motion::cvae::PrimitiveSeed,
+    ahead: f64,
+    lookahead: usize,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> Result<(
+    serde_json::Value,
+    Vec<egogen::motion::cvae::DecodedPrimitive>,
+)> {
+    use egogen::body::joint;
+    use egogen::motion::cvae::eval::long_rollout;
+    use egogen::motion::cvae::{goal_ahead, BestOfK, PlausibilityRules};
+    let goal = glam::DVec2::from(goal_ahead(ctx, seed, ahead)?);
+    let rules = PlausibilityRules {
+        goal_xy: Some(goal.to_array()),
+        ..PlausibilityRules::default()
+    };
+    let mut sampler = BestOfK::new(ctx, STEER_CANDIDATES, rules)?;
+    sampler.horizon = lookahead;
+    let (chain, prims) = long_rollout(model, ctx, seed.clone(), STEER_PRIMITIVES, &sampler, rng)?;
+    let Some(end) = prims
+        .last()
+        .map(|p| p.joints[p.joints.len() - 1][joint::PELVIS])
+    else {
+        bail!("the steered walk decoded no primitives");
+    };
+    let end = glam::DVec2::new(end.x, end.y);
+    let report = serde_json::json!({
+        "measure": "steered_walk",
+        "goal_ahead_m": ahead,
+        "candidates": STEER_CANDIDATES,
+        "progress_m": ahead - end.distance(goal),
+        "goal_distance_end_m": end.distance(goal),
+        "report": chain,
+    });
+    Ok((report, prims))
 }
 
 /// One JSON line per primitive of a chain: pelvis height above the floor (m, min and max),

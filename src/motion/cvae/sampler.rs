@@ -1,12 +1,13 @@
 //! Random-latent motion without a policy: each primitive of a chain is the most plausible of
 //! `candidates` primitives decoded from latents z ~ N(0, I) (best-of-K sampling).
 //!
-//! EgoGen's locomotion policy picks latents towards a goal; a chain of blind draws instead
-//! leaves the training data within seconds (the body slows, leans and falls, docs/MOTION.md).
-//! Scoring a few random draws per step with what every plausible primitive has — feet on the
-//! floor without skating (the foot-contact score, paper Eq. 12), pelvis at a human height, trunk
-//! near upright, walking pace — and keeping the best holds long chains on the floor. With one
-//! candidate it is the plain random chain. The candidates are decoded as one batch.
+//! EgoGen's locomotion policy picks latents towards a goal. This scores a few random draws per
+//! step with what every plausible primitive has — feet on the floor without skating (the
+//! foot-contact score, paper Eq. 12), pelvis at a human height, trunk near upright, walking
+//! pace — and keeps the best; with one candidate it is the plain random chain. A goal point
+//! (`PlausibilityRules::goal_xy`) makes it a minimal steering policy: it shows what the latent
+//! space can do when latents are chosen (docs/MOTION.md). The candidates are decoded as one
+//! batch.
 
 use rand_chacha::ChaCha8Rng;
 
@@ -35,6 +36,12 @@ pub struct PlausibilityRules {
     pub tilt_weight: f64,
     /// Cost per m/s short of `pelvis_speed_min`.
     pub speed_weight: f64,
+    /// A point on the floor (world x, y) the chain is steered to, as the locomotion policy
+    /// steers it: each metre between the pelvis at a primitive's end and the goal costs
+    /// `goal_weight`. `None`: no goal.
+    pub goal_xy: Option<[f64; 2]>,
+    /// Cost per metre of distance to `goal_xy`.
+    pub goal_weight: f64,
 }
 
 impl Default for PlausibilityRules {
@@ -46,6 +53,8 @@ impl Default for PlausibilityRules {
             pelvis_weight: 10.0,
             tilt_weight: 20.0,
             speed_weight: 2.0,
+            goal_xy: None,
+            goal_weight: 2.0,
         }
     }
 }
@@ -61,6 +70,9 @@ pub struct Plausibility {
     pub tilt_excess_rad: f64,
     /// How far the mean pelvis speed falls short of the minimum (m/s).
     pub speed_short: f64,
+    /// Horizontal distance (m) of the pelvis at the primitive's end from the goal (0 without
+    /// one).
+    pub goal_distance_m: f64,
     /// `ln(contact) − weighted shortfalls`: higher is more plausible.
     pub score: f64,
 }
@@ -100,21 +112,41 @@ pub fn plausibility(
     let speed = ((end.x - start.x).powi(2) + (end.y - start.y).powi(2)).sqrt() * PRIMITIVE_RATE_HZ
         / decoded.len() as f64;
     let speed_short = (rules.pelvis_speed_min - speed).max(0.0);
+    let goal_distance_m = rules.goal_xy.map_or(0.0, |[x, y]| {
+        ((end.x - x).powi(2) + (end.y - y).powi(2)).sqrt()
+    });
     let score = contact.max(1e-300).ln()
         - rules.pelvis_weight * pelvis_out_m
         - rules.tilt_weight * tilt_excess_rad
-        - rules.speed_weight * speed_short;
+        - rules.speed_weight * speed_short
+        - rules.goal_weight * goal_distance_m;
     Plausibility {
         contact,
         pelvis_out_m,
         tilt_excess_rad,
         speed_short,
+        goal_distance_m,
         score: if score.is_nan() {
             f64::NEG_INFINITY
         } else {
             score
         },
     }
+}
+
+/// The floor point (world x, y) `ahead_m` metres in front of the body in the seed's last frame:
+/// along the horizontal normal of its hip axis, the way the body faces.
+pub fn goal_ahead(
+    body: &BodyContext,
+    seed: &PrimitiveSeed,
+    ahead_m: f64,
+) -> Result<[f64; 2], DecodeError> {
+    let last = &seed.frames[seed.frames.len() - 1];
+    let joints = body.shaped.skeleton(&last.pose, last.transl)?.joints;
+    let right = joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP];
+    let forward = glam::DVec2::new(-right.y, right.x).normalize();
+    let pelvis = glam::DVec2::new(joints[joint::PELVIS].x, joints[joint::PELVIS].y);
+    Ok((pelvis + forward * ahead_m).to_array())
 }
 
 /// Draws latents and keeps the most plausible primitive of each step.
