@@ -360,40 +360,46 @@ fn fifty_chained_primitives_stay_finite_and_rigid() {
 }
 
 #[test]
-fn latents_chosen_towards_a_goal_walk_to_it() {
+fn a_goal_costs_its_weight_per_metre_left_to_walk() {
     use egogen::body::BodyModel;
-    use egogen::motion::cvae::eval::long_rollout;
-    use egogen::motion::cvae::train::shipped_weights_path;
-    use egogen::motion::cvae::{goal_ahead, BestOfK, BodyContext, PlausibilityRules};
+    use egogen::motion::cvae::rig::RigGeometry;
+    use egogen::motion::cvae::sampler::plausibility;
+    use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
+    use egogen::motion::cvae::{goal_ahead, BodyContext, PlausibilityRules};
     use rand_core::SeedableRng;
     let model = MotionModel::load(shipped_weights_path()).unwrap();
     let body = BodyModel::load(common::default_model_path()).unwrap();
     let ctx = BodyContext::new(&body, &[]).unwrap();
+    let feet = RigGeometry::new(&body, &[]).unwrap().foot_markers;
     let seed = walking_seeds(1).remove(0);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let p = model
+        .decode(
+            &ctx,
+            std::slice::from_ref(&seed),
+            &[normal_samples(&mut rng, 128)],
+        )
+        .unwrap()
+        .remove(0);
+    // The goal lies in front of the body: 10 m ahead of the seed's pelvis.
+    let pelvis = goal_ahead(&ctx, &seed, 0.0).unwrap();
     let goal = goal_ahead(&ctx, &seed, 10.0).unwrap();
-    let distance_left = |sampler: &BestOfK| {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let (report, prims) =
-            long_rollout(&model, &ctx, seed.clone(), 8, sampler, &mut rng).unwrap();
-        assert_eq!(report.upright_primitives, 8, "{report:?}");
-        let end = prims[7].joints[19][0];
-        ((end.x - goal[0]).powi(2) + (end.y - goal[1]).powi(2)).sqrt()
+    let start = seed.frames[1].transl;
+    assert!(((goal[0] - pelvis[0]).hypot(goal[1] - pelvis[1]) - 10.0).abs() < 1e-9);
+    let free = plausibility(&p, &feet, &PlausibilityRules::default());
+    let rules = PlausibilityRules {
+        goal_xy: Some(goal),
+        goal_weight: 3.0,
+        ..PlausibilityRules::default()
     };
-    let steered = BestOfK::new(
-        &ctx,
-        8,
-        PlausibilityRules {
-            goal_xy: Some(goal),
-            ..PlausibilityRules::default()
-        },
-    )
-    .unwrap();
-    let plain = BestOfK::new(&ctx, 1, PlausibilityRules::default()).unwrap();
-    let (steered, plain) = (distance_left(&steered), distance_left(&plain));
-    // 8 primitives are 3.6 s: the steered body walks at least a metre towards the goal, and
-    // ends nearer to it than random latents take it.
-    assert!(steered < 9.0, "{steered} m left of 10");
-    assert!(steered < plain, "steered {steered} m, random {plain} m");
+    let steered = plausibility(&p, &feet, &rules);
+    let end = p.joints[p.joints.len() - 1][0];
+    let left = (end.x - goal[0]).hypot(end.y - goal[1]);
+    assert!((steered.goal_distance_m - left).abs() < 1e-12);
+    assert!((free.score - steered.score - 3.0 * left).abs() < 1e-9);
+    assert_eq!(free.goal_distance_m, 0.0);
+    // The seed walks forward, so its primitive ends nearer the goal than it started.
+    assert!(left < 10.0, "{left} m left; start {start:?}");
 }
 
 #[test]
