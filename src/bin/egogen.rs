@@ -948,27 +948,26 @@ fn steered_walk(
     use egogen::body::joint;
     use egogen::motion::cvae::eval::long_rollout;
     use egogen::motion::cvae::{goal_ahead, BestOfK, PlausibilityRules};
-    let goal = glam::DVec2::from(goal_ahead(ctx, seed, ahead)?);
+    let goal = goal_ahead(ctx, seed, ahead)?;
     let rules = PlausibilityRules {
-        goal_xy: Some(goal.to_array()),
+        goal_xy: Some(goal),
         ..PlausibilityRules::default()
     };
     let mut sampler = BestOfK::new(ctx, STEER_CANDIDATES, rules)?;
     sampler.horizon = lookahead;
     let (chain, prims) = long_rollout(model, ctx, seed.clone(), STEER_PRIMITIVES, &sampler, rng)?;
-    let Some(end) = prims
-        .last()
-        .map(|p| p.joints[p.joints.len() - 1][joint::PELVIS])
-    else {
+    let Some(last) = prims.last() else {
         bail!("the steered walk decoded no primitives");
     };
-    let end = glam::DVec2::new(end.x, end.y);
+    let left = last.joints[last.joints.len() - 1][joint::PELVIS]
+        .truncate()
+        .distance(goal.into());
     let report = serde_json::json!({
         "measure": "steered_walk",
         "goal_ahead_m": ahead,
         "candidates": STEER_CANDIDATES,
-        "progress_m": ahead - end.distance(goal),
-        "goal_distance_end_m": end.distance(goal),
+        "progress_m": ahead - left,
+        "goal_distance_end_m": left,
         "report": chain,
     });
     Ok((report, prims))

@@ -112,9 +112,9 @@ pub fn plausibility(
     let speed = ((end.x - start.x).powi(2) + (end.y - start.y).powi(2)).sqrt() * PRIMITIVE_RATE_HZ
         / decoded.len() as f64;
     let speed_short = (rules.pelvis_speed_min - speed).max(0.0);
-    let goal_distance_m = rules.goal_xy.map_or(0.0, |[x, y]| {
-        ((end.x - x).powi(2) + (end.y - y).powi(2)).sqrt()
-    });
+    let goal_distance_m = rules
+        .goal_xy
+        .map_or(0.0, |goal| end.truncate().distance(goal.into()));
     let score = contact.max(1e-300).ln()
         - rules.pelvis_weight * pelvis_out_m
         - rules.tilt_weight * tilt_excess_rad
