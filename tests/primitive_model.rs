@@ -82,6 +82,8 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
                 upright: 1.0,
                 speed: 1.0,
                 recovery: 1.0,
+                // Needs init_weights; the fine-tuning below turns it on.
+                anchor: 0.0,
             },
         }),
         init_weights: None,
@@ -153,9 +155,21 @@ fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
     tune.primitive.steps = 0;
     tune.rollout.steps = 0;
     tune.weights_out = dir.path().join("tuned.safetensors");
+    tune.prior.as_mut().unwrap().weights.anchor = 1.0;
+    tune.log_out = dir.path().join("tuned.log.jsonl");
     let tuned = train(&tune, false).unwrap();
     let tuned_mm = tuned.held_out_mpjpe_mm.unwrap();
     assert!(tuned_mm.is_finite(), "{tuned_mm}");
+    // The anchor starts at 0 (the frozen copy decodes the same seeds and latents) and grows
+    // once the weights move.
+    let anchor: Vec<f64> = std::fs::read_to_string(&tune.log_out)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter_map(|v| v["prior_anchor"].as_f64())
+        .collect();
+    assert_eq!(anchor.len(), 2, "{anchor:?}");
+    assert!(anchor[0] < 1e-6 && anchor[1] > anchor[0], "{anchor:?}");
     tune.arch.decoder_width = 16;
     let err = train(&tune, false).unwrap_err().to_string();
     assert!(
@@ -365,7 +379,7 @@ fn a_goal_costs_its_weight_per_metre_left_to_walk() {
     use egogen::motion::cvae::rig::RigGeometry;
     use egogen::motion::cvae::sampler::plausibility;
     use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
-    use egogen::motion::cvae::{goal_ahead, BodyContext, PlausibilityRules};
+    use egogen::motion::cvae::{goal_ahead, goal_toward, BodyContext, PlausibilityRules};
     use rand_core::SeedableRng;
     let model = MotionModel::load(shipped_weights_path()).unwrap();
     let body = BodyModel::load(common::default_model_path()).unwrap();
@@ -385,6 +399,21 @@ fn a_goal_costs_its_weight_per_metre_left_to_walk() {
     let pelvis = goal_ahead(&ctx, &seed, 0.0).unwrap();
     let goal = goal_ahead(&ctx, &seed, 10.0).unwrap();
     assert!(((goal[0] - pelvis[0]).hypot(goal[1] - pelvis[1]) - 10.0).abs() < 1e-9);
+    // Goals at other bearings: 90° to the left lies on the left hip's side, square to ahead;
+    // 180° is behind.
+    let toward = |bearing_deg: f64| {
+        let g = goal_toward(&ctx, &seed, 10.0, bearing_deg.to_radians()).unwrap();
+        glam::DVec2::new(g[0] - pelvis[0], g[1] - pelvis[1])
+    };
+    let ahead = toward(0.0);
+    assert!((ahead - glam::DVec2::new(goal[0] - pelvis[0], goal[1] - pelvis[1])).length() < 1e-9);
+    let last = &seed.frames[1];
+    let joints = ctx.shaped.skeleton(&last.pose, last.transl).unwrap().joints;
+    let hip_left = (joints[egogen::body::joint::LEFT_HIP] - joints[0]).truncate();
+    let left_goal = toward(90.0);
+    assert!(left_goal.dot(hip_left) > 0.0 && left_goal.dot(ahead).abs() < 1e-9);
+    assert!((left_goal.length() - 10.0).abs() < 1e-9);
+    assert!((toward(180.0) + ahead).length() < 1e-9);
     let free = plausibility(&p, &feet, &PlausibilityRules::default());
     let rules = PlausibilityRules {
         goal_xy: Some(goal),
@@ -491,13 +520,15 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
         upright: (name == "upright") as u8 as f64,
         speed: (name == "speed") as u8 as f64,
         recovery: 0.0,
+        anchor: (name == "anchor") as u8 as f64,
     };
-    let term = |x: Tensor<Flex, 3>, name: &str| {
-        prior_loss(&rig, &one(name), &range, x, floor())
+    let anchored = |x: Tensor<Flex, 3>, name: &str, anchor: Option<Tensor<Flex, 3>>| {
+        prior_loss(&rig, &one(name), &range, x, floor(), anchor)
             .total
             .into_scalar()
             .elem::<f64>()
     };
+    let term = |x: Tensor<Flex, 3>, name: &str| anchored(x, name, None);
     // The mocap walk itself: feet on the floor, inside its own ranges.
     assert!(term(x.clone(), "contact") < 0.05);
     assert!(term(x.clone(), "skate") < 0.1);
@@ -553,7 +584,21 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
         }
     }
     let pitched = Tensor::from_data(TensorData::new(pitched, [b, t, FRAME_DIM]), &device);
-    assert!(term(pitched, "upright") > 0.1);
+    assert!(term(pitched.clone(), "upright") > 0.1);
+    // The anchor is the root's distance from the starting weights' decoding: none from
+    // itself, a third of the lift (one of three `transl` values), and the pitch alone
+    // (global orient only; the other 6D values are the legs').
+    assert_eq!(anchored(x.clone(), "anchor", Some(x.clone())), 0.0);
+    assert_eq!(term(shift(0.4), "anchor"), 0.0, "no anchor, no term");
+    let lift = anchored(shift(0.4), "anchor", Some(x.clone()));
+    assert!((lift - 0.4 / 3.0).abs() < 1e-6, "lift scored {lift}");
+    let pitch = anchored(pitched.clone(), "anchor", Some(x.clone()));
+    assert!(pitch > 0.05, "pitch scored {pitch}");
+    assert_eq!(
+        pitch,
+        anchored(x.clone(), "anchor", Some(pitched)),
+        "symmetric"
+    );
 }
 
 #[test]
@@ -618,6 +663,11 @@ fn prior_fine_tuning_configs_are_checked() {
             "init.toml",
             shipped.replace(&init, "init_weights = \"none.safetensors\""),
             "init_weights",
+        ),
+        (
+            "anchor.toml",
+            resolved.replace(&init_weights_line(&resolved), ""),
+            "prior.loss.anchor",
         ),
     ] {
         assert_ne!(text, resolved, "{name}: the edit must apply");

@@ -125,7 +125,8 @@ enum MotionCommand {
         walk_png: Option<PathBuf>,
         /// Also decode a 10 s walk steered to a goal this many metres ahead of the seed, the
         /// best of 16 random latents kept per primitive (a stand-in for the locomotion policy),
-        /// and report how far it got.
+        /// and report how far it got; then 32 such walks from spread training seeds to goals
+        /// this far ahead of, left of, right of and behind the body (their mean progress).
         #[arg(long)]
         steer_goal_m: Option<f64>,
         /// JSON lines, one per primitive of the long chain: pelvis height, trunk tilt, root
@@ -772,7 +773,6 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
     use egogen::motion::cvae::eval::{
         latent_spread_mm, long_rollout, marker_mpjpe_mm, random_latent_contact,
     };
-    use egogen::motion::cvae::features::{frame_params, FRAME_DIM};
     use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
     use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
     use egogen::motion::cvae::{
@@ -862,14 +862,7 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
     let mut moving = Vec::new();
     let mut pelvis_range = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..SHORT_CHAINS {
-        let item = i * train_set.len() / SHORT_CHAINS;
-        let values = train_set.item(item);
-        let seed = PrimitiveSeed {
-            frames: std::array::from_fn(|k| {
-                frame_params(&values[k * FRAME_DIM..(k + 1) * FRAME_DIM], &[])
-            }),
-            floor_z: train_set.floors(item)[0] as f64,
-        };
+        let seed = set_seed(&train_set, i * train_set.len() / SHORT_CHAINS);
         let (report, prims) = long_rollout(
             &model,
             &ctx,
@@ -914,6 +907,8 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
             let (report, prims) =
                 steered_walk(&model, &ctx, &seed_frames, ahead, lookahead, &mut rng)?;
             println!("{}", report);
+            let probes = steer_probes(&model, &ctx, &train_set, ahead, lookahead, &mut rng)?;
+            println!("{}", probes);
             prims
         }
         None => prims,
@@ -931,6 +926,101 @@ const STEER_CANDIDATES: usize = 16;
 /// Primitives of the steered walk: 10 s at 40 Hz, 18 new frames each.
 const STEER_PRIMITIVES: usize = 23;
 
+/// Walks steered by [`steer_probes`]: 8 to each of 4 bearings.
+const STEER_PROBES: usize = 32;
+
+/// The seed (first two frames) of primitive `item` of a set, in its canonical frame.
+fn set_seed(
+    set: &egogen::motion::cvae::data::PrimitiveSet,
+    item: usize,
+) -> egogen::motion::cvae::PrimitiveSeed {
+    use egogen::motion::cvae::features::{frame_params, FRAME_DIM};
+    let values = set.item(item);
+    egogen::motion::cvae::PrimitiveSeed {
+        frames: std::array::from_fn(|k| {
+            frame_params(&values[k * FRAME_DIM..(k + 1) * FRAME_DIM], &[])
+        }),
+        floor_z: set.floors(item)[0] as f64,
+    }
+}
+
+/// A 10 s chain from `seed` steered to the floor point `goal`, the best of
+/// [`STEER_CANDIDATES`] random latents kept per primitive: its report, primitives and the
+/// pelvis's distance from the goal at the end (m).
+fn walk_to_goal(
+    model: &egogen::motion::cvae::MotionModel,
+    ctx: &egogen::motion::cvae::BodyContext,
+    seed: &egogen::motion::cvae::PrimitiveSeed,
+    goal: [f64; 2],
+    lookahead: usize,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> Result<(
+    egogen::motion::cvae::eval::ChainReport,
+    Vec<egogen::motion::cvae::DecodedPrimitive>,
+    f64,
+)> {
+    use egogen::body::joint;
+    use egogen::motion::cvae::eval::long_rollout;
+    use egogen::motion::cvae::{BestOfK, PlausibilityRules};
+    let rules = PlausibilityRules {
+        goal_xy: Some(goal),
+        ..PlausibilityRules::default()
+    };
+    let mut sampler = BestOfK::new(ctx, STEER_CANDIDATES, rules)?;
+    sampler.horizon = lookahead;
+    let (chain, prims) = long_rollout(model, ctx, seed.clone(), STEER_PRIMITIVES, &sampler, rng)?;
+    let Some(last) = prims.last() else {
+        bail!("the steered walk decoded no primitives");
+    };
+    let left = last.joints[last.joints.len() - 1][joint::PELVIS]
+        .truncate()
+        .distance(goal.into());
+    Ok((chain, prims, left))
+}
+
+/// [`STEER_PROBES`] walks steered to goals `distance` metres from spread training seeds, a
+/// quarter each ahead of the body, to its left, right and behind: how much closer they got
+/// (the JSON report line). One walk is chaotic; these are the statistics.
+fn steer_probes(
+    model: &egogen::motion::cvae::MotionModel,
+    ctx: &egogen::motion::cvae::BodyContext,
+    set: &egogen::motion::cvae::data::PrimitiveSet,
+    distance: f64,
+    lookahead: usize,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> Result<serde_json::Value> {
+    use egogen::motion::cvae::goal_toward;
+    const BEARINGS: [(&str, f64); 4] = [
+        ("ahead", 0.0),
+        ("left", 90.0),
+        ("right", -90.0),
+        ("behind", 180.0),
+    ];
+    let mut progress = vec![Vec::new(); BEARINGS.len()];
+    for i in 0..STEER_PROBES {
+        let seed = set_seed(set, i * set.len() / STEER_PROBES);
+        let b = i % BEARINGS.len();
+        let goal = goal_toward(ctx, &seed, distance, BEARINGS[b].1.to_radians())?;
+        let (_, _, left) = walk_to_goal(model, ctx, &seed, goal, lookahead, rng)?;
+        progress[b].push(distance - left);
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let all: Vec<f64> = progress.iter().flatten().copied().collect();
+    let mut by_bearing = serde_json::Map::new();
+    for ((name, _), p) in BEARINGS.iter().zip(&progress) {
+        by_bearing.insert((*name).into(), serde_json::json!(mean(p)));
+    }
+    Ok(serde_json::json!({
+        "measure": "steer_probes",
+        "walks": STEER_PROBES,
+        "goal_m": distance,
+        "candidates": STEER_CANDIDATES,
+        "progress_m_mean": mean(&all),
+        "progress_m_mean_by_bearing": by_bearing,
+        "closer_by_1m_share": all.iter().filter(|&&p| p >= 1.0).count() as f64 / all.len() as f64,
+    }))
+}
+
 /// A 10 s chain from `seed` steered to a goal `ahead` metres in front of the seed's body (the
 /// horizontal normal of its hip axis), the best of [`STEER_CANDIDATES`] random latents kept
 /// per primitive: the JSON report line and the primitives.
@@ -945,23 +1035,8 @@ fn steered_walk(
     serde_json::Value,
     Vec<egogen::motion::cvae::DecodedPrimitive>,
 )> {
-    use egogen::body::joint;
-    use egogen::motion::cvae::eval::long_rollout;
-    use egogen::motion::cvae::{goal_ahead, BestOfK, PlausibilityRules};
-    let goal = goal_ahead(ctx, seed, ahead)?;
-    let rules = PlausibilityRules {
-        goal_xy: Some(goal),
-        ..PlausibilityRules::default()
-    };
-    let mut sampler = BestOfK::new(ctx, STEER_CANDIDATES, rules)?;
-    sampler.horizon = lookahead;
-    let (chain, prims) = long_rollout(model, ctx, seed.clone(), STEER_PRIMITIVES, &sampler, rng)?;
-    let Some(last) = prims.last() else {
-        bail!("the steered walk decoded no primitives");
-    };
-    let left = last.joints[last.joints.len() - 1][joint::PELVIS]
-        .truncate()
-        .distance(goal.into());
+    let goal = egogen::motion::cvae::goal_ahead(ctx, seed, ahead)?;
+    let (chain, prims, left) = walk_to_goal(model, ctx, seed, goal, lookahead, rng)?;
     let report = serde_json::json!({
         "measure": "steered_walk",
         "goal_ahead_m": ahead,

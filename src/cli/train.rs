@@ -307,8 +307,17 @@ impl RawTrainPrimitive {
                     ("prior.loss.upright", w.upright),
                     ("prior.loss.speed", w.speed),
                     ("prior.loss.recovery", w.recovery),
+                    ("prior.loss.anchor", w.anchor),
                 ] {
                     weight(key, v)?;
+                }
+                if w.anchor > 0.0 && self.init_weights.is_none() {
+                    return Err(bad(
+                        "prior.loss.anchor",
+                        "expected init_weights too: the anchor keeps random latents where \
+                         those weights take them"
+                            .into(),
+                    ));
                 }
                 Some(PriorPlan {
                     phase: PhasePlan {

@@ -130,7 +130,8 @@ pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
             let slowest = (0..feet[i].len())
                 .map(|k| {
                     let (a, b) = (feet[i - 1][k], feet[i + 1][k]);
-                    ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt() * PRIMITIVE_RATE_HZ / 2.0
+                    let horizontal = |p: [f64; 3]| glam::DVec2::new(p[0], p[1]);
+                    horizontal(b).distance(horizontal(a)) * PRIMITIVE_RATE_HZ / 2.0
                 })
                 .fold(f64::INFINITY, f64::min);
             (slowest - 0.075).max(0.0)
@@ -388,7 +389,7 @@ pub fn long_rollout(
             p.joints[SEED_FRAMES - 1][0],
             p.joints[PRIMITIVE_FRAMES - 1][0],
         );
-        let path = ((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt();
+        let path = b.truncate().distance(a.truncate());
         r.pelvis_speed_mean_m_s += path;
         if path * PRIMITIVE_RATE_HZ / (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 >= MOVING_M_PER_S {
             r.moving_share += 1.0;
@@ -404,7 +405,7 @@ pub fn long_rollout(
     r.feet_on_floor_share /= r.frames.max(1) as f64;
     if let (Some(a), Some(b)) = (out.first(), out.last()) {
         let (a, b) = (a.joints[0][0], b.joints[PRIMITIVE_FRAMES - 1][0]);
-        r.displacement_m = ((b.x - a.x).powi(2) + (b.y - a.y).powi(2)).sqrt();
+        r.displacement_m = b.truncate().distance(a.truncate());
     }
     r.seconds = started.elapsed().as_secs_f64();
     Ok((r, out))

@@ -203,6 +203,11 @@ pub struct PriorWeights {
     /// long chains reach, away from the mocap (0 when absent).
     #[serde(default)]
     pub recovery: f64,
+    /// L1 distance of the decoded root (global-orient 6D and `transl`, m) from what the
+    /// starting weights (`init_weights`) decode from the same seed and latent: the fine-tuning
+    /// may change how the legs carry the body, not where a latent takes it (0 when absent).
+    #[serde(default)]
+    pub anchor: f64,
 }
 
 /// Ranges of the training data that the prior losses keep decoded primitives inside.
@@ -265,17 +270,35 @@ pub fn plausible_range<B: Backend>(
     }
 }
 
+/// Mean L1 distance of the root features (global-orient 6D and `transl`) of the decoded frames
+/// of raw primitives `pred` and `anchor` (`[B, T, F]`, the seed first).
+pub fn root_distance<B: Backend>(pred: Tensor<B, 3>, anchor: Tensor<B, 3>) -> Tensor<B, 1> {
+    let t = pred.dims()[1];
+    let diff = (pred - anchor)
+        .narrow(1, SEED_FRAMES, t - SEED_FRAMES)
+        .abs();
+    let orient = diff.clone().narrow(2, 0, 6).mean();
+    let transl = diff.narrow(2, TRANSL_OFFSET, 3).mean();
+    orient + transl
+}
+
 /// Losses of primitives `pred` (raw features `[B, T, F]`, the seed first) decoded from prior
-/// latents over canonical floors `[B]`.
+/// latents over canonical floors `[B]`; `anchor`, the same seeds and latents decoded by the
+/// starting weights, for `PriorWeights::anchor` (the term is 0 without it).
 pub fn prior_loss<B: Backend>(
     rig: &TensorRig<B>,
     weights: &PriorWeights,
     range: &PlausibleRange,
     pred: Tensor<B, 3>,
     floor: Tensor<B, 1>,
+    anchor: Option<Tensor<B, 3>>,
 ) -> LossTerms<B> {
     let [b, t, _] = pred.dims();
     let n = t - SEED_FRAMES;
+    let anchor = match anchor {
+        Some(a) => root_distance(pred.clone(), a),
+        None => Tensor::zeros([1], &pred.device()),
+    };
     let p = pose_frames(rig, pred);
     let feet = p.markers.clone().select(2, rig.foot_markers.clone()); // [B, T, F, 3]
     let foot_height = feet
@@ -342,6 +365,7 @@ pub fn prior_loss<B: Backend>(
         ("prior_pelvis", pelvis),
         ("prior_upright", upright),
         ("prior_speed", speed_short),
+        ("prior_anchor", anchor),
     ];
     weighted(
         parts,
@@ -352,6 +376,7 @@ pub fn prior_loss<B: Backend>(
             weights.pelvis,
             weights.upright,
             weights.speed,
+            weights.anchor,
         ],
     )
 }

@@ -23,6 +23,6 @@ pub mod weights;
 
 pub use infer::{BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed};
 pub use net::{ArchConfig, PrimitiveVae};
-pub use sampler::{goal_ahead, BestOfK, Plausibility, PlausibilityRules};
+pub use sampler::{goal_ahead, goal_toward, BestOfK, Plausibility, PlausibilityRules};
 pub use train::{train, TrainPlan, TrainReport};
 pub use weights::WeightsError;

@@ -109,8 +109,8 @@ pub fn plausibility(
         .fold(0.0, f64::max);
     let start = p.joints[SEED_FRAMES - 1][joint::PELVIS];
     let end = p.joints[p.joints.len() - 1][joint::PELVIS];
-    let speed = ((end.x - start.x).powi(2) + (end.y - start.y).powi(2)).sqrt() * PRIMITIVE_RATE_HZ
-        / decoded.len() as f64;
+    let speed =
+        end.truncate().distance(start.truncate()) * PRIMITIVE_RATE_HZ / decoded.len() as f64;
     let speed_short = (rules.pelvis_speed_min - speed).max(0.0);
     let goal_distance_m = rules
         .goal_xy
@@ -141,12 +141,23 @@ pub fn goal_ahead(
     seed: &PrimitiveSeed,
     ahead_m: f64,
 ) -> Result<[f64; 2], DecodeError> {
+    goal_toward(body, seed, ahead_m, 0.0)
+}
+
+/// The floor point (world x, y) `distance_m` metres from the pelvis in the seed's last frame,
+/// `bearing_rad` from the way the body faces (positive: to its left, seen from above).
+pub fn goal_toward(
+    body: &BodyContext,
+    seed: &PrimitiveSeed,
+    distance_m: f64,
+    bearing_rad: f64,
+) -> Result<[f64; 2], DecodeError> {
     let last = &seed.frames[seed.frames.len() - 1];
     let joints = body.shaped.skeleton(&last.pose, last.transl)?.joints;
     let right = joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP];
     let forward = glam::DVec2::new(-right.y, right.x).normalize();
-    let pelvis = glam::DVec2::new(joints[joint::PELVIS].x, joints[joint::PELVIS].y);
-    Ok((pelvis + forward * ahead_m).to_array())
+    let direction = glam::DVec2::from_angle(bearing_rad).rotate(forward);
+    Ok((joints[joint::PELVIS].truncate() + direction * distance_m).to_array())
 }
 
 /// Draws latents and keeps the most plausible primitive of each step.

@@ -14,6 +14,7 @@ use burn::grad_clipping::GradientClippingConfig;
 use burn::module::AutodiffModule;
 use burn::optim::{AdamConfig, GradientsParams, Optimizer};
 use burn::prelude::*;
+use burn::tensor::backend::AutodiffBackend;
 use indicatif::{ProgressBar, ProgressStyle};
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
@@ -316,8 +317,9 @@ fn chain_loss_from<B: Backend>(
 /// ([`UPRIGHT_PELVIS_M`] and a trunk within [`POOL_TRUNK_TILT_MAX_DEG`] of vertical) — a
 /// persistent pool drops the others.
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
-fn prior_chain_loss<B: Backend>(
+fn prior_chain_loss<B: AutodiffBackend>(
     net: &PrimitiveVae<B>,
+    anchor_net: Option<&PrimitiveVae<B::InnerBackend>>,
     rig: &TensorRig<B>,
     plan: &PriorPlan,
     range: &PlausibleRange,
@@ -341,8 +343,23 @@ fn prior_chain_loss<B: Backend>(
             TensorData::new(normal_samples(rng, b * latent), [b, latent]),
             &device,
         );
+        let anchor = anchor_net.map(|a| {
+            Tensor::from_inner(decode_raw(
+                a,
+                seed.clone().inner(),
+                floor.clone().inner(),
+                z.clone().inner(),
+            ))
+        });
         let full = decode_raw(net, seed, floor.clone(), z);
-        let terms = prior_loss(rig, &plan.weights, range, full.clone(), floor.clone());
+        let terms = prior_loss(
+            rig,
+            &plan.weights,
+            range,
+            full.clone(),
+            floor.clone(),
+            anchor,
+        );
         total = Some(match total {
             Some(t) => t + terms.total,
             None => terms.total,
@@ -601,6 +618,19 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         }
         None => None,
     };
+    // The starting weights, frozen, for `prior.loss.anchor`.
+    let anchor_net = match plan.prior {
+        Some(p) if p.weights.anchor > 0.0 && p.phase.steps > 0 => {
+            if plan.init_weights.is_none() {
+                return Err(TrainError::Data(
+                    "prior.loss.anchor needs init_weights: the weights it keeps random latents near"
+                        .into(),
+                ));
+            }
+            Some(net.valid())
+        }
+        _ => None,
+    };
     let mut pool = SeedPool::new(plan.prior.and_then(|p| p.pool_slots));
     let seed_index = plan
         .prior
@@ -645,8 +675,16 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                     &device,
                 );
                 let floor = Tensor::from_data(TensorData::new(draw.floors.clone(), [b]), &device);
-                let (prior_total, prior_parts, (ends, end_floors, upright)) =
-                    prior_chain_loss(&net, &rig, prior, range, seed, floor, &mut rng);
+                let (prior_total, prior_parts, (ends, end_floors, upright)) = prior_chain_loss(
+                    &net,
+                    anchor_net.as_ref(),
+                    &rig,
+                    prior,
+                    range,
+                    seed,
+                    floor,
+                    &mut rng,
+                );
                 loss = loss + prior_total;
                 parts.extend(prior_parts);
                 let depth_mean = draw.depths.iter().sum::<usize>() as f64 / b.max(1) as f64;
@@ -701,10 +739,13 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                 line[*name] = serde_json::json!(v);
             }
             if step % LOG_EVERY_STEPS == 0 || step + 1 == phase_plan.steps {
-                writeln!(log, "{line}").map_err(|source| TrainError::Io {
-                    path: plan.log_out.clone(),
-                    source,
-                })?;
+                // Flushed per line, so that the log can be followed during a run.
+                writeln!(log, "{line}")
+                    .and_then(|_| log.flush())
+                    .map_err(|source| TrainError::Io {
+                        path: plan.log_out.clone(),
+                        source,
+                    })?;
             }
             bar.set_message(format!("loss {value:.4}"));
             bar.inc(1);
