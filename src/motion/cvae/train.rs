@@ -1,9 +1,9 @@
 //! Training: single primitives first, then rollout fine-tuning over chains of primitives, each
 //! decoded from the previous one's last two frames (gradients flow through the chain), then
 //! prior fine-tuning: chains decoded from random latents z ~ N(0, I), as they are used, kept
-//! on the floor and upright by losses that need no mocap target, next to the reconstruction
-//! of mocap chains. Deterministic for a seed: batches, noise and initial weights all come
-//! from it.
+//! on the floor and upright by losses that need no mocap target and anchored to the root motion
+//! the starting weights decode for the same latents, next to the reconstruction of mocap
+//! chains. Deterministic for a seed: batches, noise and initial weights all come from it.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
