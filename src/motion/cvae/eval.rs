@@ -125,12 +125,12 @@ pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
         })
         .sum::<f64>()
         / t as f64;
+    let horizontal = |p: [f64; 3]| glam::DVec2::new(p[0], p[1]);
     let skate = (1..t - 1)
         .map(|i| {
             let slowest = (0..feet[i].len())
                 .map(|k| {
                     let (a, b) = (feet[i - 1][k], feet[i + 1][k]);
-                    let horizontal = |p: [f64; 3]| glam::DVec2::new(p[0], p[1]);
                     horizontal(b).distance(horizontal(a)) * PRIMITIVE_RATE_HZ / 2.0
                 })
                 .fold(f64::INFINITY, f64::min);

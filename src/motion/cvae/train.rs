@@ -515,6 +515,17 @@ fn add_parts<B: Backend>(
     }
 }
 
+/// Writes one JSON line to the loss log at `path`, flushed, so that the log can be followed
+/// during a run.
+fn log_line(log: &mut impl Write, line: &serde_json::Value, path: &Path) -> Result<(), TrainError> {
+    writeln!(log, "{line}")
+        .and_then(|_| log.flush())
+        .map_err(|source| TrainError::Io {
+            path: path.into(),
+            source,
+        })
+}
+
 /// Trains per the plan and writes weights and the loss log.
 pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, TrainError> {
     let started = Instant::now();
@@ -610,10 +621,7 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                 "trunk_up_min": r.trunk_up_min,
                 "pelvis_speed_min": r.pelvis_speed_min,
             });
-            writeln!(log, "{line}").map_err(|source| TrainError::Io {
-                path: plan.log_out.clone(),
-                source,
-            })?;
+            log_line(&mut log, &line, &plan.log_out)?;
             Some(r)
         }
         None => None,
@@ -739,13 +747,7 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                 line[*name] = serde_json::json!(v);
             }
             if step % LOG_EVERY_STEPS == 0 || step + 1 == phase_plan.steps {
-                // Flushed per line, so that the log can be followed during a run.
-                writeln!(log, "{line}")
-                    .and_then(|_| log.flush())
-                    .map_err(|source| TrainError::Io {
-                        path: plan.log_out.clone(),
-                        source,
-                    })?;
+                log_line(&mut log, &line, &plan.log_out)?;
             }
             bar.set_message(format!("loss {value:.4}"));
             bar.inc(1);
@@ -768,12 +770,7 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         "train_chains": chains.len(),
         "held_out_primitives": held.len(),
     });
-    writeln!(log, "{summary}")
-        .and_then(|_| log.flush())
-        .map_err(|source| TrainError::Io {
-            path: plan.log_out.clone(),
-            source,
-        })?;
+    log_line(&mut log, &summary, &plan.log_out)?;
     weights::save(&inference, &plan.arch, &plan.weights_out)?;
     Ok(TrainReport {
         train_primitives: singles.len(),
