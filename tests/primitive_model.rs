@@ -605,9 +605,14 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
 fn prior_fine_tuning_configs_are_checked() {
     let dir = tempfile::tempdir().unwrap();
     let root = common::repo_root();
+    let stage1 = root.join("configs/train_primitive.toml");
     let shipped = std::fs::read_to_string(root.join("configs/train_primitive_prior.toml"))
         .unwrap()
-        .replace("../assets", &root.join("assets").display().to_string());
+        .replace("../assets", &root.join("assets").display().to_string())
+        .replace(
+            "clips_from = \"train_primitive.toml\"",
+            &format!("clips_from = \"{}\"", stage1.display()),
+        );
     let init = init_weights_line(&shipped);
     // The first stage's weights are a build output; the shipped weights stand in for them.
     let resolved = shipped.replace(
@@ -624,6 +629,8 @@ fn prior_fine_tuning_configs_are_checked() {
         p
     };
     let plan = load_train_plan(&write("ok.toml", &resolved)).unwrap();
+    // Stage 2 trains on stage 1's clips and holds out the same ones (`clips_from`).
+    assert_eq!(plan.clips, load_train_plan(&stage1).unwrap().clips);
     let prior = plan.prior.expect("a prior phase");
     assert!(prior.phase.steps > 0 && prior.primitives >= 2);
     assert!(plan.init_weights.is_some());
@@ -668,6 +675,14 @@ fn prior_fine_tuning_configs_are_checked() {
             "anchor.toml",
             resolved.replace(&init_weights_line(&resolved), ""),
             "prior.loss.anchor",
+        ),
+        (
+            "both.toml",
+            format!(
+                "{resolved}\n[[clips]]\npath = \"{}\"\n",
+                root.join("assets/motion/deepmimic_walk.npz").display()
+            ),
+            "clips_from",
         ),
     ] {
         assert_ne!(text, resolved, "{name}: the edit must apply");

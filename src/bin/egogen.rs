@@ -143,7 +143,32 @@ enum MotionCommand {
         /// Primitives each candidate is continued for before choosing (with --candidates > 1).
         #[arg(long, default_value_t = 0)]
         lookahead: usize,
+        /// Write the long random-latent chain as an AMASS-style `.npz` (40 Hz, world
+        /// coordinates; must not exist), for checking the numbers with other tools.
+        #[arg(long)]
+        export_npz: Option<PathBuf>,
+        /// JSON file with the pace (speed, turn) of every primitive of the random-latent
+        /// chains and of the training primitives, for `tools/plot_motion_paces.py` (must not
+        /// exist).
+        #[arg(long)]
+        pace_json: Option<PathBuf>,
     },
+    /// Pace (horizontal pelvis speed) and turn (heading change) of the primitives a training
+    /// config trains on and holds out: quantiles as JSON lines, optionally every value as JSON
+    /// for `tools/plot_motion_paces.py`.
+    Stats {
+        /// The training config (its clips, held-out split and contact filter).
+        #[arg(long, default_value = "configs/train_primitive.toml")]
+        config: PathBuf,
+        /// JSON file with every primitive's speed and turn (must not exist).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// What the latent space can reach: latents chosen per primitive by a cross-entropy-method
+    /// optimiser for a target pelvis speed and heading; sustained straight walks at each
+    /// `--speeds` value and turns by each `--turns` angle, with foot contact and plausibility
+    /// (JSON lines).
+    Control(MotionControlOptions),
 }
 
 /// Float precision of the motion network.
@@ -302,6 +327,8 @@ fn run(cli: Cli) -> Result<()> {
             precision,
             candidates,
             lookahead,
+            export_npz,
+            pace_json,
         }) => {
             let weights = weights.unwrap_or_else(egogen::motion::cvae::train::shipped_weights_path);
             motion_eval(
@@ -318,9 +345,18 @@ fn run(cli: Cli) -> Result<()> {
                     precision,
                     candidates: candidates as usize,
                     lookahead,
+                    export_npz,
+                    pace_json,
                 },
             )?;
         }
+        Command::Motion(MotionCommand::Stats { config, json }) => {
+            if let Some(j) = &json {
+                refuse_existing(j)?;
+            }
+            motion_stats(&config, json.as_deref())?;
+        }
+        Command::Motion(MotionCommand::Control(opts)) => motion_control(&opts)?,
         Command::Motion(MotionCommand::Import {
             bvh,
             out,
@@ -751,6 +787,8 @@ struct MotionEvalOptions {
     precision: Precision,
     candidates: usize,
     lookahead: usize,
+    export_npz: Option<PathBuf>,
+    pace_json: Option<PathBuf>,
 }
 
 /// `egogen motion eval`: prints the measurements as JSON lines.
@@ -769,6 +807,9 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
         if !(ahead.is_finite() && ahead > 0.0) {
             bail!("--steer-goal-m: expected a positive distance in metres, got {ahead}");
         }
+    }
+    for out in [&opts.export_npz, &opts.pace_json].into_iter().flatten() {
+        refuse_existing(out)?;
     }
     use egogen::motion::cvae::eval::{
         latent_spread_mm, long_rollout, marker_mpjpe_mm, random_latent_contact,
@@ -857,6 +898,8 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
     );
     // Shorter chains from many (filtered) training seeds, each in its canonical frame: how
     // long they stay upright.
+    use egogen::motion::cvae::pace::{set_paces, Pace, PaceSummary};
+    let mut chain_paces: Vec<Pace> = prims.iter().map(|p| Pace::of_frames(&p.joints)).collect();
     let mut upright = Vec::new();
     let mut on_floor = Vec::new();
     let mut moving = Vec::new();
@@ -871,6 +914,7 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
             &sampler,
             &mut rng,
         )?;
+        chain_paces.extend(prims.iter().map(|p| Pace::of_frames(&p.joints)));
         upright.push(report.upright_primitives);
         on_floor.push(report.feet_on_floor_share);
         moving.push(report.moving_share);
@@ -898,6 +942,37 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
             "upright_primitives_sorted": upright,
         })
     );
+    let train_paces = set_paces(&rig, &train_set, 256);
+    println!(
+        "{}",
+        serde_json::json!({
+            "measure": "pace",
+            "about": "horizontal pelvis speed (m/s) and |heading change| (deg) per primitive: training primitives (contact-filtered, not mirrored) against every primitive of the random-latent chains above",
+            "train_primitives": PaceSummary::of(&train_paces),
+            "random_chains": PaceSummary::of(&chain_paces),
+        })
+    );
+    if let Some(file) = &opts.pace_json {
+        let values = |p: &[Pace]| {
+            serde_json::json!({
+                "speed_m_s": p.iter().map(|x| x.speed_m_s).collect::<Vec<_>>(),
+                "turn_deg": p.iter().map(|x| x.turn_deg).collect::<Vec<_>>(),
+            })
+        };
+        let doc = serde_json::json!({
+            "weights": weights,
+            "config": config,
+            "train_primitives": values(&train_paces),
+            "random_chains": values(&chain_paces),
+        });
+        egogen::atomic_file::write_atomically(file, doc.to_string().as_bytes())?;
+        println!("wrote {}", file.display());
+    }
+    if let Some(file) = &opts.export_npz {
+        let refs: Vec<_> = prims.iter().collect();
+        egogen::motion::cvae::control::chain_sequence(&refs, &[]).write_amass(file)?;
+        println!("wrote {}", file.display());
+    }
     if let Some(file) = &opts.chain_trace {
         write_chain_trace(&prims, file)?;
         println!("wrote {}", file.display());
@@ -916,6 +991,214 @@ fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Resul
     if let Some(png) = &opts.walk_png {
         draw_walk(&walk, png)?;
         println!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+/// `egogen motion stats`: pace and turn distributions of a config's primitives.
+fn motion_stats(config: &Path, json: Option<&Path>) -> Result<()> {
+    use egogen::motion::cvae::pace::{set_paces, PaceSummary};
+    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+    use egogen::motion::cvae::train::evaluation_sets;
+    let plan = egogen::cli::train::load_train_plan(config)?;
+    let body = BodyModel::load(&plan.body_model)?;
+    let (train, held) = evaluation_sets(&plan, &body, true)?;
+    let (train_all, _) = evaluation_sets(&plan, &body, false)?;
+    let geo = RigGeometry::new(&body, &[])?;
+    let rig = TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(&geo, &Default::default());
+    let mut doc = serde_json::json!({"config": config});
+    for (name, set) in [("train", &train), ("held_out", &held)] {
+        let paces = set_paces(&rig, set, 256);
+        println!(
+            "{}",
+            serde_json::json!({
+                "set": name,
+                "primitives": set.len(),
+                "seconds_of_motion": set.len() as f64 * plan.stride_frames as f64 / 40.0,
+                "summary": PaceSummary::of(&paces),
+            })
+        );
+        doc[name] = serde_json::json!({
+            "speed_m_s": paces.iter().map(|p| p.speed_m_s).collect::<Vec<_>>(),
+            "turn_deg": paces.iter().map(|p| p.turn_deg).collect::<Vec<_>>(),
+        });
+    }
+    println!(
+        "{}",
+        serde_json::json!({
+            "contact_filter": plan.min_contact_score,
+            "train_primitives_before_filter": train_all.len(),
+            "train_primitives_kept": train.len(),
+        })
+    );
+    if let Some(file) = json {
+        egogen::atomic_file::write_atomically(file, doc.to_string().as_bytes())?;
+        println!("wrote {}", file.display());
+    }
+    Ok(())
+}
+
+/// What `egogen motion control` measures (its flags).
+#[derive(clap::Args, Debug)]
+struct MotionControlOptions {
+    /// Weights (default: the shipped assets/motion/primitive_cvae.safetensors).
+    #[arg(long)]
+    weights: Option<PathBuf>,
+    /// The training config, for its clips (the walks start from a training seed).
+    #[arg(long, default_value = "configs/train_primitive.toml")]
+    config: PathBuf,
+    /// Target speeds of the straight walks (m/s), comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "0.6,1.0,1.3,1.6")]
+    speeds: Vec<f64>,
+    /// Length of each straight walk (s of motion; 0.45 s per primitive).
+    #[arg(long, default_value_t = 60.0)]
+    walk_s: f64,
+    /// Turn angles (degrees, positive to the left), comma separated.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_value = "45,90,180")]
+    turns: Vec<f64>,
+    /// Walking speed asked for during the turns (m/s).
+    #[arg(long, default_value_t = 1.0)]
+    turn_speed: f64,
+    /// Primitives allowed per turn.
+    #[arg(long, default_value_t = 6)]
+    turn_primitives: usize,
+    /// Latents decoded per CEM iteration.
+    #[arg(long, default_value_t = 64)]
+    samples: usize,
+    /// CEM iterations per primitive.
+    #[arg(long, default_value_t = 3)]
+    iterations: usize,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// PNG of the first 10 s of the walk at --png-speed, from above and from the side.
+    #[arg(long)]
+    walk_png: Option<PathBuf>,
+    /// Which walk --walk-png draws (m/s; one of --speeds).
+    #[arg(long, default_value_t = 1.3)]
+    png_speed: f64,
+    /// Folder to write every walk and turn into as AMASS-style `.npz` (created; files in
+    /// it must not exist).
+    #[arg(long)]
+    export_dir: Option<PathBuf>,
+}
+
+/// `egogen motion control`: sustained walks and turns with CEM-chosen latents, as JSON lines.
+fn motion_control(opts: &MotionControlOptions) -> Result<()> {
+    use egogen::motion::cvae::control::chain_sequence;
+    use egogen::motion::cvae::pace::{PaceSummary, PACE_SPAN_S};
+    use egogen::motion::cvae::reach::{sustained_walk, turn};
+    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+    use egogen::motion::cvae::train::evaluation_sets;
+    use egogen::motion::cvae::{BodyContext, CemSettings, LatentController, MotionModel};
+    use rand_chacha::ChaCha8Rng;
+    use rand_core::SeedableRng;
+    for &v in opts.speeds.iter().chain([&opts.turn_speed]) {
+        if !(v.is_finite() && (0.0..=5.0).contains(&v)) {
+            bail!("--speeds/--turn-speed: expected speeds in 0..=5 m/s, got {v}");
+        }
+    }
+    if !(opts.walk_s.is_finite() && opts.walk_s > 0.0 && opts.walk_s <= 3600.0) {
+        bail!("--walk-s: expected 0 < seconds <= 3600, got {}", opts.walk_s);
+    }
+    if let Some(t) = opts.turns.iter().find(|t| !t.is_finite() || t.abs() > 360.0) {
+        bail!("--turns: expected angles within ±360°, got {t}");
+    }
+    if opts.samples == 0 || opts.iterations == 0 || opts.turn_primitives == 0 {
+        bail!("--samples, --iterations and --turn-primitives must be at least 1");
+    }
+    let weights = opts
+        .weights
+        .clone()
+        .unwrap_or_else(egogen::motion::cvae::train::shipped_weights_path);
+    let (weights, config) = (weights.as_path(), opts.config.as_path());
+    if let Some(png) = &opts.walk_png {
+        refuse_existing(png)?;
+        if !opts.speeds.contains(&opts.png_speed) {
+            bail!("--png-speed {} is not one of --speeds", opts.png_speed);
+        }
+    }
+    let export = |name: &str| opts.export_dir.as_ref().map(|d| d.join(name));
+    let names: Vec<String> = opts
+        .speeds
+        .iter()
+        .map(|v| format!("walk_{v:.2}m_s.npz"))
+        .chain(opts.turns.iter().map(|t| format!("turn_{t:+.0}deg.npz")))
+        .collect();
+    if let Some(dir) = &opts.export_dir {
+        std::fs::create_dir_all(dir)?;
+        for n in &names {
+            refuse_existing(&dir.join(n))?;
+        }
+    }
+    let plan = egogen::cli::train::load_train_plan(config)?;
+    let model = MotionModel::load(weights)?;
+    let body = BodyModel::load(&plan.body_model)?;
+    let ctx = BodyContext::new(&body, &[])?;
+    let (train_set, _) = evaluation_sets(&plan, &body, true)?;
+    let geo = RigGeometry::new(&body, &[])?;
+    let rig = TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(&geo, &Default::default());
+    let paces = egogen::motion::cvae::pace::set_paces(&rig, &train_set, 256);
+    // Start from the training primitive walking nearest 1.0 m/s straight ahead.
+    let start = (0..paces.len())
+        .min_by(|&a, &b| {
+            let cost = |i: usize| (paces[i].speed_m_s - 1.0).abs() + paces[i].turn_deg.abs() / 30.0;
+            cost(a).total_cmp(&cost(b))
+        })
+        .ok_or_else(|| anyhow::anyhow!("{}: no training primitives", config.display()))?;
+    let seed = set_seed(&train_set, start);
+    let settings = CemSettings {
+        samples: opts.samples,
+        iterations: opts.iterations,
+        ..CemSettings::default()
+    };
+    let controller = LatentController::new(&ctx, settings)?;
+    println!(
+        "{}",
+        serde_json::json!({
+            "weights": weights,
+            "seed_primitive": {"item": start, "pace": paces[start]},
+            "cem": {"samples": settings.samples, "elites": settings.elites, "iterations": settings.iterations},
+        })
+    );
+    let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+    let primitives = (opts.walk_s / PACE_SPAN_S).ceil() as usize;
+    for (i, &v) in opts.speeds.iter().enumerate() {
+        let (report, steps) =
+            sustained_walk(&controller, &model, &ctx, &seed, v, primitives, &mut rng)?;
+        println!("{}", serde_json::json!({"measure": "walk", "report": report}));
+        let prims: Vec<_> = steps.iter().map(|s| &s.primitive).collect();
+        if let Some(file) = export(&names[i]) {
+            chain_sequence(&prims, &[]).write_amass(&file)?;
+            println!("wrote {}", file.display());
+        }
+        if let Some(png) = opts.walk_png.as_ref().filter(|_| v == opts.png_speed) {
+            let owned: Vec<_> = steps.iter().map(|s| s.primitive.clone()).collect();
+            draw_walk(&owned, png)?;
+            println!("wrote {}", png.display());
+        }
+        let paces: Vec<_> = steps.iter().map(|s| s.pace).collect();
+        println!(
+            "{}",
+            serde_json::json!({"measure": "walk_paces", "target_speed_m_s": v, "summary": PaceSummary::of(&paces)})
+        );
+    }
+    for (i, &angle) in opts.turns.iter().enumerate() {
+        let (report, steps) = turn(
+            &controller,
+            &model,
+            &ctx,
+            &seed,
+            angle,
+            opts.turn_speed,
+            opts.turn_primitives,
+            &mut rng,
+        )?;
+        println!("{}", serde_json::json!({"measure": "turn", "report": report}));
+        if let Some(file) = export(&names[opts.speeds.len() + i]) {
+            let prims: Vec<_> = steps.iter().map(|s| &s.primitive).collect();
+            chain_sequence(&prims, &[]).write_amass(&file)?;
+            println!("wrote {}", file.display());
+        }
     }
     Ok(())
 }

@@ -107,7 +107,11 @@ pub struct RawTrainPrimitive {
     /// Body model (default: the shipped CC0 model).
     pub body_model: Option<PathBuf>,
     pub data: RawData,
+    #[serde(default)]
     pub clips: Vec<RawClip>,
+    /// Take the `[[clips]]` of another training config instead (relative to this config's
+    /// folder; that config's own paths are relative to its folder).
+    pub clips_from: Option<PathBuf>,
     pub model: ArchConfig,
     pub loss: LossWeights,
     /// Steps over which the KL weight ramps up from 0.
@@ -140,27 +144,53 @@ impl RawTrainPrimitive {
         };
         let body_model =
             resolve_body_model(self.body_model, base).map_err(|m| bad("body_model", m))?;
-        if self.clips.is_empty() {
-            return Err(bad("clips", "list at least one clip".into()));
+        let (raw_clips, clips_base, clips_file) = match &self.clips_from {
+            None => (self.clips, base.to_path_buf(), config_path.to_path_buf()),
+            Some(_) if !self.clips.is_empty() => {
+                return Err(bad(
+                    "clips_from",
+                    "give either [[clips]] or clips_from, not both".into(),
+                ))
+            }
+            Some(from) => {
+                let file = base.join(from);
+                let other = RawTrainPrimitive::load(&file)?;
+                if other.clips_from.is_some() {
+                    return Err(bad(
+                        "clips_from",
+                        format!("{} takes its clips from a third config; name that one", file.display()),
+                    ));
+                }
+                let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();
+                (other.clips, dir, file)
+            }
+        };
+        let bad_clip = |key: &str, message: String| ConfigError::Value {
+            path: clips_file.clone(),
+            key: key.into(),
+            message,
+        };
+        if raw_clips.is_empty() {
+            return Err(bad_clip("clips", "list at least one clip".into()));
         }
         let mut clips = Vec::new();
-        for (i, c) in self.clips.into_iter().enumerate() {
-            let path = base.join(&c.path);
+        for (i, c) in raw_clips.into_iter().enumerate() {
+            let path = clips_base.join(&c.path);
             if !path.is_file() {
-                return Err(bad(
+                return Err(bad_clip(
                     &format!("clips[{i}].path"),
                     format!("file {} not found", path.display()),
                 ));
             }
             if let Some(t) = c.held_out_from_s {
                 if !(t.is_finite() && t >= 0.0) {
-                    return Err(bad(
+                    return Err(bad_clip(
                         &format!("clips[{i}].held_out_from_s"),
                         format!("expected a time ≥ 0 s, found {t}"),
                     ));
                 }
                 if c.held_out {
-                    return Err(bad(
+                    return Err(bad_clip(
                         &format!("clips[{i}].held_out_from_s"),
                         "the clip is wholly held out (held_out = true); remove one of the two"
                             .into(),

@@ -3,7 +3,10 @@
 //!
 //! Foot-contact score of one primitive (20 frames at 40 Hz, feet markers `F`, floor height `h`):
 //! `exp(−mean_t |min_{f∈F} z_{t,f} − h − 0.02|) · exp(−mean_t max(0, min_{f∈F} v_{t,f} − 0.075))`
-//! with `v` the horizontal central-difference speed (m/s) over frames `1..T−1`.
+//! with `v` the 3-D central-difference speed (m/s) over frames `1..T−1`, as EgoGen's and DIMOS's
+//! code compute it (the paper's Eq. 12 numbers). GAMMA's code used the horizontal speed:
+//! [`contact_score_horizontal`], which scores the same motion higher (a lifted foot's vertical
+//! speed no longer counts as skating).
 
 use burn::prelude::*;
 use burn::tensor::FloatDType;
@@ -111,8 +114,27 @@ pub fn marker_mpjpe_mm<B: Backend>(
     sum / count.max(1) as f64 * 1000.0
 }
 
-/// Foot-contact score of one primitive from its foot markers `[T][F]` (z up) and floor height.
+/// Foot-contact score of one primitive from its foot markers `[T][F]` (z up) and floor height,
+/// with 3-D foot speed (EgoGen/DIMOS, paper Eq. 12): the headline score everywhere.
 pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
+    contact_score_with(feet, floor_z, |a, b| {
+        glam::DVec3::from_array(b).distance(glam::DVec3::from_array(a))
+    })
+}
+
+/// The foot-contact score with horizontal foot speed (GAMMA's code), a variant beside the
+/// headline [`contact_score`].
+pub fn contact_score_horizontal(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
+    contact_score_with(feet, floor_z, |a, b| {
+        glam::DVec2::new(b[0], b[1]).distance(glam::DVec2::new(a[0], a[1]))
+    })
+}
+
+fn contact_score_with(
+    feet: &[Vec<[f64; 3]>],
+    floor_z: f64,
+    distance: impl Fn([f64; 3], [f64; 3]) -> f64,
+) -> f64 {
     let t = feet.len();
     if t < 3 {
         return f64::NAN;
@@ -125,14 +147,10 @@ pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
         })
         .sum::<f64>()
         / t as f64;
-    let horizontal = |p: [f64; 3]| glam::DVec2::new(p[0], p[1]);
     let skate = (1..t - 1)
         .map(|i| {
             let slowest = (0..feet[i].len())
-                .map(|k| {
-                    let (a, b) = (feet[i - 1][k], feet[i + 1][k]);
-                    horizontal(b).distance(horizontal(a)) * PRIMITIVE_RATE_HZ / 2.0
-                })
+                .map(|k| distance(feet[i - 1][k], feet[i + 1][k]) * PRIMITIVE_RATE_HZ / 2.0)
                 .fold(f64::INFINITY, f64::min);
             (slowest - 0.075).max(0.0)
         })
@@ -141,8 +159,12 @@ pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
     (-dist_floor).exp() * (-skate).exp()
 }
 
-/// Contact scores of a batch of raw primitives `[B, T, F]` with floors `[B]`.
-pub fn contact_scores<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>, floors: &[f32]) -> Vec<f64> {
+/// Contact scores (3-D, horizontal) of a batch of raw primitives `[B, T, F]` with floors `[B]`.
+pub fn contact_scores<B: Backend>(
+    rig: &TensorRig<B>,
+    x: Tensor<B, 3>,
+    floors: &[f32],
+) -> Vec<(f64, f64)> {
     let [b, t, _] = x.dims();
     let feet = pose_frames(rig, x)
         .markers
@@ -161,7 +183,11 @@ pub fn contact_scores<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>, floors: &
                         .collect()
                 })
                 .collect();
-            contact_score(&frames, floors[i] as f64)
+            let floor = floors[i] as f64;
+            (
+                contact_score(&frames, floor),
+                contact_score_horizontal(&frames, floor),
+            )
         })
         .collect()
 }
@@ -177,6 +203,9 @@ pub struct ContactReport {
     pub random_latent_p10: f64,
     /// Mean score of the mocap primitives themselves (the ceiling).
     pub mocap_mean: f64,
+    /// The same two means with horizontal foot speed (`contact_score_horizontal`, GAMMA's).
+    pub random_latent_mean_horizontal: f64,
+    pub mocap_mean_horizontal: f64,
     /// Primitives decoded with a non-finite value.
     pub non_finite: usize,
 }
@@ -206,17 +235,20 @@ pub fn random_latent_contact<B: Backend>(
                 .any(|v| !v.is_finite())
         })
         .count();
-    let mut scores = contact_scores(rig, pred, &floors);
+    let decoded = contact_scores(rig, pred, &floors);
     let mocap = contact_scores(rig, x, &floors);
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let mocap_mean = mean(&mocap);
-    let random_latent_mean = mean(&scores);
+    let mean = |v: &[(f64, f64)], pick: fn(&(f64, f64)) -> f64| {
+        v.iter().map(pick).sum::<f64>() / v.len().max(1) as f64
+    };
+    let mut scores: Vec<f64> = decoded.iter().map(|s| s.0).collect();
     scores.sort_by(f64::total_cmp);
     ContactReport {
         count,
-        random_latent_mean,
+        random_latent_mean: mean(&decoded, |s| s.0),
         random_latent_p10: scores.get(count / 10).copied().unwrap_or(f64::NAN),
-        mocap_mean,
+        mocap_mean: mean(&mocap, |s| s.0),
+        random_latent_mean_horizontal: mean(&decoded, |s| s.1),
+        mocap_mean_horizontal: mean(&mocap, |s| s.1),
         non_finite,
     }
 }

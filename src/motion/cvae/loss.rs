@@ -184,7 +184,7 @@ pub struct PriorWeights {
     /// `|lowest foot marker − floor − 2 cm|` per frame (m): the first factor of the
     /// foot-contact score (`eval::contact_score`).
     pub contact: f64,
-    /// `max(0, slowest foot marker's horizontal speed − 0.075 m/s)` per frame: its second factor.
+    /// `max(0, slowest foot marker's 3-D speed − 0.075 m/s)` per frame: its second factor.
     pub skate: f64,
     /// Depth of foot markers below the floor (m).
     pub penetration: f64,
@@ -308,13 +308,13 @@ pub fn prior_loss<B: Backend>(
         .sub(floor.clone().reshape([b, 1, 1, 1]));
     let lowest = foot_height.clone().min_dim(2); // [B, n, 1, 1]
     let contact = lowest.sub_scalar(CONTACT_OFFSET_M).abs().mean();
-    // Central-difference horizontal speed of frames SEED_FRAMES − 1 .. T − 2, so that every
-    // decoded frame but the last, and the seed's last, is scored.
+    // Central-difference 3-D speed (as the contact score measures it) of frames
+    // SEED_FRAMES − 1 .. T − 2, so that every decoded frame but the last, and the seed's last,
+    // is scored.
     let c = t - SEED_FRAMES;
     let ahead = feet.clone().narrow(1, SEED_FRAMES, c);
     let behind = feet.narrow(1, SEED_FRAMES - 2, c);
     let speed = (ahead - behind)
-        .narrow(3, 0, 2)
         .square()
         .sum_dim(3)
         .add_scalar(1e-10)

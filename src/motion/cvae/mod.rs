@@ -5,22 +5,27 @@
 //!
 //! Owns the network, its losses (pose, FK markers through a tensor rig, velocity, foot skate and
 //! floor, robust KL), training (single primitives, then rollout over chains, then prior
-//! fine-tuning), weights files, the inference API and best-of-K random-latent sampling;
+//! fine-tuning), weights files, the inference API, best-of-K random-latent sampling, the pace
+//! and turn of primitives, and latents chosen for a target velocity and heading (`control`);
 //! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
 
+pub mod control;
 pub mod data;
 pub mod eval;
 pub mod features;
 pub mod infer;
 pub mod loss;
 pub mod net;
+pub mod pace;
 pub mod pool;
+pub mod reach;
 pub mod rig;
 pub mod rollout;
 pub mod sampler;
 pub mod train;
 pub mod weights;
 
+pub use control::{CemSettings, LatentController, PaceTarget};
 pub use infer::{BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed};
 pub use net::{ArchConfig, PrimitiveVae};
 pub use sampler::{goal_ahead, goal_toward, BestOfK, Plausibility, PlausibilityRules};

@@ -1,0 +1,225 @@
+//! Pace and turn of primitives: the horizontal pelvis speed and the change of the body's heading
+//! over a primitive's decoded frames, measured the same way on mocap primitives, decoded ones
+//! and chains, and summarised as quantiles.
+//!
+//! Heading is the yaw of the way the body faces: the horizontal normal of the left hip → right
+//! hip line (the canonical frame's y axis), in radians counter-clockwise from world +x, seen from
+//! above (z up). A primitive's pace is measured from the last seed frame to its last frame
+//! (18 frames, 0.45 s at 40 Hz), as [`super::eval::ChainReport`] measures it.
+
+use burn::prelude::*;
+use serde::Serialize;
+
+use super::data::PrimitiveSet;
+use super::eval::set_batch;
+use super::loss::pose_frames;
+use super::rig::TensorRig;
+use crate::body::joint;
+use crate::math::Vec3;
+use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+
+/// Seconds between the last seed frame and the last frame of a primitive.
+pub const PACE_SPAN_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PRIMITIVE_RATE_HZ;
+
+/// Heading (rad, counter-clockwise from world +x) of a body from its posed joints (z up).
+pub fn heading_rad(joints: &[Vec3]) -> f64 {
+    let right = joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP];
+    // Forward = z × right, horizontal.
+    (right.x).atan2(-right.y)
+}
+
+/// Wraps an angle to (−π, π].
+pub fn wrap_rad(a: f64) -> f64 {
+    let w = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+    if w <= -std::f64::consts::PI {
+        w + std::f64::consts::TAU
+    } else {
+        w
+    }
+}
+
+/// How fast a primitive moves and how far it turns.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Pace {
+    /// Horizontal pelvis displacement over the primitive divided by its time (m/s).
+    pub speed_m_s: f64,
+    /// Change of heading over the primitive (degrees, positive = to the body's left).
+    pub turn_deg: f64,
+}
+
+impl Pace {
+    /// The pace between the joints of the last seed frame and those of the last frame.
+    pub fn between(first: &[Vec3], last: &[Vec3]) -> Pace {
+        let d = last[joint::PELVIS].truncate() - first[joint::PELVIS].truncate();
+        Pace {
+            speed_m_s: d.length() / PACE_SPAN_S,
+            turn_deg: wrap_rad(heading_rad(last) - heading_rad(first)).to_degrees(),
+        }
+    }
+
+    /// The pace of a primitive from its posed joints of all `PRIMITIVE_FRAMES` frames.
+    pub fn of_frames(joints: &[Vec<Vec3>]) -> Pace {
+        Pace::between(&joints[SEED_FRAMES - 1], &joints[joints.len() - 1])
+    }
+}
+
+/// Paces of every item of a single-primitive set, posed in batches of `batch`.
+pub fn set_paces<B: Backend>(rig: &TensorRig<B>, set: &PrimitiveSet, batch: usize) -> Vec<Pace> {
+    let device = rig.foot_markers.device();
+    let mut out = Vec::with_capacity(set.len());
+    for start in (0..set.len()).step_by(batch.max(1)) {
+        let end = (start + batch).min(set.len());
+        let (x, _) = set_batch::<B>(set, start..end, &device);
+        out.extend(raw_paces(rig, x));
+    }
+    out
+}
+
+/// Paces of raw primitives `[B, T, F]` (canonical features).
+pub fn raw_paces<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Vec<Pace> {
+    let [b, t, _] = x.dims();
+    let joints = pose_frames(rig, x).joints; // [B, T, 22, 3]
+    let j = joints.dims()[2];
+    let pick = |frame: usize| -> Vec<f32> {
+        joints
+            .clone()
+            .narrow(1, frame, 1)
+            .into_data()
+            .to_vec()
+            .expect("f32 joints")
+    };
+    let (first, last) = (pick(SEED_FRAMES - 1), pick(t - 1));
+    let as_joints = |v: &[f32], i: usize| -> Vec<Vec3> {
+        (0..j)
+            .map(|k| {
+                let o = (i * j + k) * 3;
+                Vec3::new(v[o] as f64, v[o + 1] as f64, v[o + 2] as f64)
+            })
+            .collect()
+    };
+    (0..b)
+        .map(|i| Pace::between(&as_joints(&first, i), &as_joints(&last, i)))
+        .collect()
+}
+
+/// Quantiles of a sample, with its mean and size.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Quantiles {
+    pub count: usize,
+    pub mean: f64,
+    pub p05: f64,
+    pub p25: f64,
+    pub p50: f64,
+    pub p75: f64,
+    pub p95: f64,
+    pub max: f64,
+}
+
+impl Quantiles {
+    /// Quantiles (nearest rank) of the finite values of `values`; all NaN when there are none.
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Quantiles {
+        let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        let q = |p: f64| {
+            if v.is_empty() {
+                f64::NAN
+            } else {
+                v[((v.len() - 1) as f64 * p).round() as usize]
+            }
+        };
+        Quantiles {
+            count: v.len(),
+            mean: if v.is_empty() {
+                f64::NAN
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            },
+            p05: q(0.05),
+            p25: q(0.25),
+            p50: q(0.5),
+            p75: q(0.75),
+            p95: q(0.95),
+            max: q(1.0),
+        }
+    }
+}
+
+/// Speed and turn distributions of a set of paces (turns as absolute degrees).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PaceSummary {
+    pub speed_m_s: Quantiles,
+    pub abs_turn_deg: Quantiles,
+    /// Share of primitives slower than 0.2 m/s (standing), 0.2–0.8 (slow), 0.8–1.8 (walking at
+    /// a human pace), faster (running).
+    pub share_standing: f64,
+    pub share_slow: f64,
+    pub share_walking: f64,
+    pub share_running: f64,
+}
+
+impl PaceSummary {
+    pub fn of(paces: &[Pace]) -> PaceSummary {
+        let n = paces.len().max(1) as f64;
+        let share = |lo: f64, hi: f64| {
+            paces
+                .iter()
+                .filter(|p| p.speed_m_s >= lo && p.speed_m_s < hi)
+                .count() as f64
+                / n
+        };
+        PaceSummary {
+            speed_m_s: Quantiles::of(paces.iter().map(|p| p.speed_m_s)),
+            abs_turn_deg: Quantiles::of(paces.iter().map(|p| p.turn_deg.abs())),
+            share_standing: share(0.0, 0.2),
+            share_slow: share(0.2, 0.8),
+            share_walking: share(0.8, 1.8),
+            share_running: share(1.8, f64::INFINITY),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hips_facing(heading: f64, pelvis: Vec3) -> Vec<Vec3> {
+        // Right hip = pelvis + 0.1 · (the body's right), right = forward rotated by −90°.
+        let forward = Vec3::new(heading.cos(), heading.sin(), 0.0);
+        let right = Vec3::new(forward.y, -forward.x, 0.0);
+        let mut j = vec![pelvis; 22];
+        j[joint::RIGHT_HIP] = pelvis + right * 0.1;
+        j[joint::LEFT_HIP] = pelvis - right * 0.1;
+        j
+    }
+
+    #[test]
+    fn heading_and_turn_follow_the_hips() {
+        for h in [-3.0, -1.0, 0.0, 0.5, 3.1] {
+            assert!((wrap_rad(heading_rad(&hips_facing(h, Vec3::ZERO)) - h)).abs() < 1e-12);
+        }
+        // Walking 0.45 m forward while turning 170° → −170° is a 20° turn to the left.
+        let a = hips_facing(170f64.to_radians(), Vec3::ZERO);
+        let b = hips_facing(-170f64.to_radians(), Vec3::new(-0.45, 0.0, 0.0));
+        let p = Pace::between(&a, &b);
+        assert!((p.speed_m_s - 1.0).abs() < 1e-12);
+        assert!((p.turn_deg - 20.0).abs() < 1e-9, "{p:?}");
+    }
+
+    #[test]
+    fn wrap_stays_in_range_at_the_extremes() {
+        use std::f64::consts::PI;
+        for a in [PI, -PI, 3.0 * PI, -3.0 * PI, 1e-12, -1e-12, 1e6, -1e6] {
+            let w = wrap_rad(a);
+            assert!(w > -PI && w <= PI, "{a} -> {w}");
+            assert!(((w - a) / std::f64::consts::TAU).fract().abs() < 1e-6 || (w - a).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn quantiles_of_a_known_sample() {
+        let q = Quantiles::of((0..=100).map(f64::from).chain([f64::NAN]));
+        assert_eq!((q.count, q.p05, q.p50, q.p95, q.max), (101, 5.0, 50.0, 95.0, 100.0));
+        assert!((q.mean - 50.0).abs() < 1e-12);
+        assert!(Quantiles::of(std::iter::empty()).p50.is_nan());
+    }
+}
