@@ -89,6 +89,7 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
         init_weights: None,
         weights_out: dir.join("tiny.safetensors"),
         log_out: dir.join("tiny.log.jsonl"),
+        checkpoint_every_s: 300.0,
     }
 }
 
@@ -96,7 +97,7 @@ fn tiny_plan(dir: &Path) -> TrainPlan {
 fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
     let dir = tempfile::tempdir().unwrap();
     let plan = tiny_plan(dir.path());
-    let report = train(&plan, false).unwrap();
+    let report = train(&plan, false, false).unwrap();
     assert!(report.train_primitives > 0 && report.held_out_primitives > 0);
     let log = std::fs::read_to_string(&plan.log_out).unwrap();
     let losses: Vec<(String, f64)> = log
@@ -157,7 +158,7 @@ fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
     tune.weights_out = dir.path().join("tuned.safetensors");
     tune.prior.as_mut().unwrap().weights.anchor = 1.0;
     tune.log_out = dir.path().join("tuned.log.jsonl");
-    let tuned = train(&tune, false).unwrap();
+    let tuned = train(&tune, false, false).unwrap();
     let tuned_mm = tuned.held_out_mpjpe_mm.unwrap();
     assert!(tuned_mm.is_finite(), "{tuned_mm}");
     // The anchor starts at 0 (the frozen copy decodes the same seeds and latents) and grows
@@ -171,7 +172,7 @@ fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
     assert_eq!(anchor.len(), 2, "{anchor:?}");
     assert!(anchor[0] < 1e-6 && anchor[1] > anchor[0], "{anchor:?}");
     tune.arch.decoder_width = 16;
-    let err = train(&tune, false).unwrap_err().to_string();
+    let err = train(&tune, false, false).unwrap_err().to_string();
     assert!(
         err.contains("tiny.safetensors") && err.contains("architecture"),
         "{err}"
@@ -795,4 +796,176 @@ fn training_chains_seed_the_next_primitive_as_inference_does() {
             next.floor
         );
     }
+}
+
+/// A tiny config with all three phases (and the seed pool), checkpointing after every step,
+/// writing into `dir`.
+fn tiny_config(dir: &Path) -> String {
+    let assets = common::repo_root().join("assets/motion");
+    format!(
+        r#"seed = 9
+kl_warmup_steps = 5
+seed_noise = 0.1
+[data]
+stride_frames = 2
+mirror = true
+min_contact_score = 0.5
+[[clips]]
+path = "{walk}"
+[[clips]]
+path = "{turn}"
+held_out = true
+[model]
+latent_dim = 8
+encoder_width = 32
+decoder_width = 32
+[loss]
+pose = 1.0
+transl = 1.0
+markers = 2.0
+velocity = 4.0
+skate = 0.1
+floor = 1.0
+kl = 0.001
+[primitive]
+steps = 24
+batch_size = 16
+learning_rate = 0.003
+[rollout]
+steps = 6
+batch_size = 4
+learning_rate = 0.001
+primitives = 2
+[prior]
+steps = 8
+batch_size = 4
+learning_rate = 0.001
+primitives = 2
+pool_fraction = 0.5
+range_quantile = 0.0
+[prior.loss]
+contact = 1.0
+skate = 1.0
+penetration = 1.0
+pelvis = 1.0
+upright = 1.0
+[output]
+weights = "{out}/w.safetensors"
+log = "{out}/w.log.jsonl"
+checkpoint_every_s = 0
+"#,
+        walk = assets.join("deepmimic_walk.npz").display(),
+        turn = assets.join("deepmimic_walker_turn_left0.npz").display(),
+        out = dir.display(),
+    )
+}
+
+/// The loss log without wall times, for comparing runs.
+fn log_without_times(path: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            for key in ["elapsed_s", "seconds"] {
+                v.as_object_mut().unwrap().remove(key);
+            }
+            v
+        })
+        .collect()
+}
+
+#[test]
+fn a_killed_training_run_resumes_exactly_where_it_stopped() {
+    use std::process::{Command, Stdio};
+    let bin = env!("CARGO_BIN_EXE_egogen");
+    let run = |config: &Path, resume: bool| {
+        let mut cmd = Command::new(bin);
+        cmd.args(["train", "primitive", "--quiet", "--config"])
+            .arg(config)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped());
+        if resume {
+            cmd.arg("--resume");
+        }
+        cmd
+    };
+    // The whole run, uninterrupted.
+    let whole = tempfile::tempdir().unwrap();
+    let whole_config = whole.path().join("c.toml");
+    std::fs::write(&whole_config, tiny_config(whole.path())).unwrap();
+    let out = run(&whole_config, false).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!whole.path().join("w.safetensors.checkpoint").exists());
+
+    // The same run killed (SIGKILL) twice: in the first phase and in the prior phase.
+    let cut = tempfile::tempdir().unwrap();
+    let config = cut.path().join("c.toml");
+    std::fs::write(&config, tiny_config(cut.path())).unwrap();
+    let state = cut.path().join("w.safetensors.checkpoint/state.json");
+    let global_step = || -> usize {
+        std::fs::read_to_string(&state)
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|v| v["global_step"].as_u64())
+            .unwrap_or(0) as usize
+    };
+    for (resume, kill_from) in [(false, 10), (true, 33)] {
+        let mut child = run(&config, resume).spawn().unwrap();
+        let started = std::time::Instant::now();
+        while global_step() < kill_from {
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "the run ended before step {kill_from}"
+            );
+            assert!(started.elapsed().as_secs() < 300, "no checkpoint of step {kill_from}");
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        child.kill().unwrap(); // SIGKILL
+        child.wait().unwrap();
+    }
+    // A fresh start over the checkpoint is refused; nothing is deleted.
+    let out = run(&config, false).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--resume"), "{err}");
+    assert!(state.is_file());
+    let out = run(&config, true).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!state.exists(), "the finished run removes its checkpoint");
+    // Bit for bit the weights of the uninterrupted run, and the same loss log.
+    let a = safetensors_tensors(&whole.path().join("w.safetensors"));
+    let b = safetensors_tensors(&cut.path().join("w.safetensors"));
+    assert!(!a.is_empty());
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (name, bytes) in &a {
+        assert!(*bytes == b[name], "tensor {name}: resumed weights differ");
+    }
+    assert_eq!(
+        log_without_times(&whole.path().join("w.log.jsonl")),
+        log_without_times(&cut.path().join("w.log.jsonl"))
+    );
+    // Resuming with nothing to resume is refused.
+    let out = run(&config, true).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no checkpoint"));
+}
+
+/// The tensors of a safetensors file by name, as raw bytes (the header's key order is not
+/// fixed, the tensors are).
+fn safetensors_tensors(path: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let bytes = std::fs::read(path).unwrap();
+    let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).unwrap();
+    let data = &bytes[8 + n..];
+    header
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(k, _)| *k != "__metadata__")
+        .map(|(k, v)| {
+            let o = &v["data_offsets"];
+            let (a, b) = (o[0].as_u64().unwrap() as usize, o[1].as_u64().unwrap() as usize);
+            (k.clone(), data[a..b].to_vec())
+        })
+        .collect()
 }

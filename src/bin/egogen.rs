@@ -67,6 +67,10 @@ enum TrainCommand {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Continue the interrupted run whose checkpoint (`<weights>.checkpoint/`, written
+        /// every `output.checkpoint_every_s`) is there, exactly where it stopped.
+        #[arg(long)]
+        resume: bool,
     },
 }
 
@@ -295,9 +299,13 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
-        Command::Train(TrainCommand::Primitive { config, quiet }) => {
+        Command::Train(TrainCommand::Primitive {
+            config,
+            quiet,
+            resume,
+        }) => {
             let plan = egogen::cli::train::load_train_plan(&config)?;
-            let report = egogen::motion::cvae::train(&plan, !quiet)?;
+            let report = egogen::motion::cvae::train(&plan, !quiet, resume)?;
             println!(
                 "trained on {} primitives ({} chains) in {:.0} s; final loss {:.4}; held-out marker error {}",
                 report.train_primitives,

@@ -96,6 +96,8 @@ pub struct RawTrainOutput {
     pub weights: PathBuf,
     /// Loss log (JSON lines), relative to the config's folder.
     pub log: PathBuf,
+    /// Seconds between checkpoints (`<weights>.checkpoint/`, for `--resume`); default 300.
+    pub checkpoint_every_s: Option<f64>,
 }
 
 /// The whole training config, as written.
@@ -381,6 +383,13 @@ impl RawTrainPrimitive {
                 Some(path)
             }
         };
+        let checkpoint_every_s = self.output.checkpoint_every_s.unwrap_or(300.0);
+        if !(checkpoint_every_s.is_finite() && checkpoint_every_s >= 0.0) {
+            return Err(bad(
+                "output.checkpoint_every_s",
+                format!("expected seconds ≥ 0, found {checkpoint_every_s}"),
+            ));
+        }
         Ok(TrainPlan {
             seed: self.seed,
             body_model,
@@ -408,6 +417,7 @@ impl RawTrainPrimitive {
             init_weights,
             weights_out: base.join(self.output.weights),
             log_out: base.join(self.output.log),
+            checkpoint_every_s,
         })
     }
 }

@@ -9,6 +9,7 @@
 //! and turn of primitives, and latents chosen for a target velocity and heading (`control`);
 //! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
 
+pub mod checkpoint;
 pub mod control;
 pub mod data;
 pub mod eval;

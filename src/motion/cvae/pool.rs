@@ -25,7 +25,7 @@ pub const RECENT_CAPACITY: usize = 4096;
 
 /// A seed (`[S × F]` raw features), its canonical floor (m) and how many random primitives
 /// separate it from the mocap seed its chain started from.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PoolSeed {
     pub frames: Vec<f32>,
     pub floor: f32,
@@ -33,7 +33,7 @@ pub struct PoolSeed {
 }
 
 /// Seeds of the random chains (see the module docs).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub enum SeedPool {
     Recent(VecDeque<PoolSeed>),
     /// `None`: the slot starts from a fresh mocap seed when next drawn.

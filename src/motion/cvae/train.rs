@@ -29,7 +29,7 @@ use super::net::{ArchConfig, PrimitiveVae};
 use super::pool::SeedPool;
 use super::rig::{RigGeometry, TensorRig};
 use super::rollout::next_seed;
-use super::weights;
+use super::{checkpoint, weights};
 use crate::body::BodyModel;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::motion::MotionSequence;
@@ -116,6 +116,9 @@ pub struct TrainPlan {
     pub init_weights: Option<PathBuf>,
     pub weights_out: PathBuf,
     pub log_out: PathBuf,
+    /// Seconds between checkpoints (`checkpoint::checkpoint_dir(weights_out)`); 0 writes one
+    /// after every step.
+    pub checkpoint_every_s: f64,
 }
 
 /// What a run produced.
@@ -526,9 +529,35 @@ fn log_line(log: &mut impl Write, line: &serde_json::Value, path: &Path) -> Resu
         })
 }
 
-/// Trains per the plan and writes weights and the loss log.
-pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, TrainError> {
+/// Trains per the plan and writes weights and the loss log, with a checkpoint every
+/// `plan.checkpoint_every_s`; `resume` continues from the checkpoint an interrupted run left
+/// (refused when there is none, or when it belongs to another plan). Without `resume`, an
+/// existing checkpoint is refused rather than overwritten.
+pub fn train(
+    plan: &TrainPlan,
+    show_progress: bool,
+    resume: bool,
+) -> Result<TrainReport, TrainError> {
     let started = Instant::now();
+    let ckpt_dir = checkpoint::checkpoint_dir(&plan.weights_out);
+    let has_checkpoint = ckpt_dir.join("state.json").is_file();
+    match (resume, has_checkpoint) {
+        (false, true) => {
+            return Err(TrainError::Data(format!(
+                "an interrupted run left a checkpoint in {}: pass --resume to continue it, or \
+                 remove that folder to start over",
+                ckpt_dir.display()
+            )))
+        }
+        (true, false) => {
+            return Err(TrainError::Data(format!(
+                "--resume: no checkpoint in {} (nothing to resume; run without --resume)",
+                ckpt_dir.display()
+            )))
+        }
+        _ => {}
+    }
+    let fingerprint = checkpoint::plan_fingerprint(plan);
     let device = Default::default();
     let model = BodyModel::load(&plan.body_model)?;
     let (train_parts, held_parts) = load_clips(plan)?;
@@ -590,11 +619,49 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
             })?;
         }
     }
-    let log_file = std::fs::File::create(&plan.log_out).map_err(|source| TrainError::Io {
+    let log_io = |source| TrainError::Io {
         path: plan.log_out.clone(),
         source,
-    })?;
+    };
+    // Resuming: the network, the optimiser of the phase under way, the generator and the pool
+    // as the checkpoint left them, and the log cut back to what the run had logged then.
+    let mut resumed_net = None;
+    let mut restored_optim = None;
+    let mut restored_pool = None;
+    let mut elapsed_before_s = 0.0;
+    let mut resume_at = (0usize, 0usize, 0usize, f64::NAN);
+    if resume {
+        let fresh_optim = AdamConfig::new()
+            .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
+            .init::<TrainBackend, PrimitiveVae<TrainBackend>>();
+        let r = checkpoint::load(&ckpt_dir, &fingerprint, net.clone(), fresh_optim, &device)?;
+        resumed_net = Some(r.net);
+        restored_optim = r.optim;
+        restored_pool = r.pool;
+        rng = r.rng;
+        elapsed_before_s = r.state.elapsed_s;
+        resume_at = (
+            r.state.phase,
+            r.state.step,
+            r.state.global_step,
+            r.state.last_loss,
+        );
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&plan.log_out)
+            .map_err(log_io)?;
+        f.set_len(r.state.log_bytes).map_err(log_io)?;
+    }
+    let log_file = if resume {
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(&plan.log_out)
+    } else {
+        std::fs::File::create(&plan.log_out)
+    }
+    .map_err(log_io)?;
     let mut log = std::io::BufWriter::new(log_file);
+
     let prior_steps = plan.prior.map_or(0, |p| p.phase.steps);
     let total_steps = plan.primitive.steps + plan.rollout.steps + prior_steps;
     let bar = if show_progress {
@@ -621,7 +688,9 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                 "trunk_up_min": r.trunk_up_min,
                 "pelvis_speed_min": r.pelvis_speed_min,
             });
-            log_line(&mut log, &line, &plan.log_out)?;
+            if !resume {
+                log_line(&mut log, &line, &plan.log_out)?;
+            }
             Some(r)
         }
         None => None,
@@ -639,31 +708,48 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         }
         _ => None,
     };
-    let mut pool = SeedPool::new(plan.prior.and_then(|p| p.pool_slots));
+    let mut pool = restored_pool.unwrap_or_else(|| SeedPool::new(plan.prior.and_then(|p| p.pool_slots)));
     let seed_index = plan
         .prior
         .filter(|p| p.weights.recovery > 0.0 && p.phase.steps > 0)
         .map(|_| SeedIndex::new(&chains, &net));
-    let mut final_loss = f64::NAN;
-    let mut global_step = 0usize;
+    // The frozen anchor and the seed index above come from the starting weights; training
+    // continues from the checkpoint's.
+    if let Some(n) = resumed_net {
+        net = n;
+    }
+    let (resume_phase, resume_step, mut global_step, mut final_loss) = resume_at;
+    bar.set_position(global_step as u64);
+    let mut last_checkpoint = Instant::now();
     let prior_phase = plan.prior.map(|p| p.phase).unwrap_or(PhasePlan {
         steps: 0,
         batch_size: 1,
         learning_rate: 0.0,
     });
-    for (phase, phase_plan, set) in [
+    for (phase_index, (phase, phase_plan, set)) in [
         ("primitive", plan.primitive, &singles),
         ("rollout", plan.rollout, &chains),
         ("prior", prior_phase, &chains),
-    ] {
-        if phase_plan.steps == 0 {
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        if phase_plan.steps == 0 || phase_index < resume_phase {
             continue;
         }
+        let first_step = if phase_index == resume_phase {
+            resume_step
+        } else {
+            0
+        };
         bar.set_prefix(phase);
-        let mut optim = AdamConfig::new()
-            .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
-            .init::<TrainBackend, PrimitiveVae<TrainBackend>>();
-        for step in 0..phase_plan.steps {
+        let mut optim = match restored_optim.take() {
+            Some(o) if phase_index == resume_phase => o,
+            _ => AdamConfig::new()
+                .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
+                .init::<TrainBackend, PrimitiveVae<TrainBackend>>(),
+        };
+        for step in first_step..phase_plan.steps {
             // Cosine decay to a tenth of the phase's rate.
             let progress = step as f64 / phase_plan.steps as f64;
             let lr = phase_plan.learning_rate
@@ -741,7 +827,7 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
                 "step": step,
                 "lr": lr,
                 "loss": value,
-                "elapsed_s": started.elapsed().as_secs_f64(),
+                "elapsed_s": elapsed_before_s + started.elapsed().as_secs_f64(),
             });
             for (name, v) in &parts {
                 line[*name] = serde_json::json!(v);
@@ -752,6 +838,28 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
             bar.set_message(format!("loss {value:.4}"));
             bar.inc(1);
             global_step += 1;
+            let done = step + 1 == phase_plan.steps;
+            if !done && last_checkpoint.elapsed().as_secs_f64() >= plan.checkpoint_every_s {
+                let (rng_seed_hex, rng_stream, rng_word_pos) = checkpoint::rng_position(&rng);
+                let state = checkpoint::CheckpointState {
+                    plan_sha256: fingerprint.clone(),
+                    phase: phase_index,
+                    step: step + 1,
+                    global_step,
+                    last_loss: final_loss,
+                    elapsed_s: elapsed_before_s + started.elapsed().as_secs_f64(),
+                    rng_seed_hex,
+                    rng_stream,
+                    rng_word_pos,
+                    net_file: String::new(),
+                    optim_file: None,
+                    pool_file: None,
+                    log_bytes: std::fs::metadata(&plan.log_out).map_err(log_io)?.len(),
+                };
+                let pool = (phase == "prior").then_some(&pool);
+                checkpoint::save::<TrainBackend, _, _>(&ckpt_dir, state, &net, Some(&optim), pool)?;
+                last_checkpoint = Instant::now();
+            }
         }
     }
     bar.finish_and_clear();
@@ -762,9 +870,10 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
         let irig = TensorRig::new(&geo, &device);
         Some(marker_mpjpe_mm(&inference, &irig, &held, 256))
     };
+    let seconds = elapsed_before_s + started.elapsed().as_secs_f64();
     let summary = serde_json::json!({
         "phase": "done",
-        "seconds": started.elapsed().as_secs_f64(),
+        "seconds": seconds,
         "held_out_marker_mpjpe_mm": held_out_mpjpe_mm,
         "train_primitives": singles.len(),
         "train_chains": chains.len(),
@@ -772,11 +881,18 @@ pub fn train(plan: &TrainPlan, show_progress: bool) -> Result<TrainReport, Train
     });
     log_line(&mut log, &summary, &plan.log_out)?;
     weights::save(&inference, &plan.arch, &plan.weights_out)?;
+    // The run is complete: its checkpoint has served.
+    if ckpt_dir.exists() {
+        std::fs::remove_dir_all(&ckpt_dir).map_err(|source| TrainError::Io {
+            path: ckpt_dir.clone(),
+            source,
+        })?;
+    }
     Ok(TrainReport {
         train_primitives: singles.len(),
         train_chains: chains.len(),
         held_out_primitives: held.len(),
-        seconds: started.elapsed().as_secs_f64(),
+        seconds,
         final_loss,
         held_out_mpjpe_mm,
     })

@@ -1,0 +1,231 @@
+//! Checkpoints of a training run, so that `egogen train primitive --resume` continues a killed
+//! run exactly where it stopped: the network and the optimiser's moments (burn records, full
+//! precision), the random generator's position, the phase and step reached, the seed pool of
+//! prior fine-tuning and the length of the loss log.
+//!
+//! A checkpoint is a folder next to the weights (`<weights>.checkpoint/`). Its `state.json`
+//! names the record files it belongs to and is replaced atomically after they are written, so a
+//! run killed at any moment leaves the previous checkpoint or the new one, never half of one.
+//! `state.json` carries a fingerprint of the plan: a checkpoint is resumed only by the plan that
+//! wrote it.
+
+use std::path::{Path, PathBuf};
+
+use burn::module::Module;
+use burn::optim::Optimizer;
+use burn::record::{BinFileRecorder, FullPrecisionSettings, Recorder};
+use burn::tensor::backend::AutodiffBackend;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use sha2::Digest;
+
+use super::pool::SeedPool;
+use super::train::TrainError;
+
+/// Where the run stood when the checkpoint was written.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CheckpointState {
+    /// SHA-256 of the plan (its debug form: every setting and path).
+    pub plan_sha256: String,
+    /// Index of the phase to continue (0 primitive, 1 rollout, 2 prior).
+    pub phase: usize,
+    /// Next step of that phase.
+    pub step: usize,
+    /// Steps taken over all phases.
+    pub global_step: usize,
+    pub last_loss: f64,
+    /// Training time before the checkpoint (s).
+    pub elapsed_s: f64,
+    /// The random generator: seed (hex), stream and word position (decimal).
+    pub rng_seed_hex: String,
+    pub rng_stream: u64,
+    pub rng_word_pos: String,
+    /// Record files in the checkpoint folder (names).
+    pub net_file: String,
+    /// None at the start of a phase (its optimiser starts fresh).
+    pub optim_file: Option<String>,
+    pub pool_file: Option<String>,
+    /// Bytes of the loss log that belong to the run up to here.
+    pub log_bytes: u64,
+}
+
+/// The checkpoint folder of a run writing `weights_out`.
+pub fn checkpoint_dir(weights_out: &Path) -> PathBuf {
+    let mut name = weights_out
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
+    name.push(".checkpoint");
+    weights_out.with_file_name(name)
+}
+
+/// SHA-256 of a plan's debug form.
+pub fn plan_fingerprint(plan: &impl std::fmt::Debug) -> String {
+    hex(&sha2::Sha256::digest(format!("{plan:?}").as_bytes()))
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> TrainError + '_ {
+    move |source| TrainError::Io {
+        path: path.into(),
+        source,
+    }
+}
+
+fn recorder_error(path: &Path, e: impl std::fmt::Display) -> TrainError {
+    TrainError::Data(format!("checkpoint {}: {e}", path.display()))
+}
+
+/// The random generator's position as (seed hex, stream, word position).
+pub fn rng_position(rng: &ChaCha8Rng) -> (String, u64, String) {
+    (
+        hex(&rng.get_seed()),
+        rng.get_stream(),
+        rng.get_word_pos().to_string(),
+    )
+}
+
+/// What a checkpoint holds besides its state.
+pub struct Restored<M, O> {
+    pub state: CheckpointState,
+    pub net: M,
+    pub optim: Option<O>,
+    pub rng: ChaCha8Rng,
+    pub pool: Option<SeedPool>,
+}
+
+/// Writes a checkpoint of `net`, `optim` and `pool` with `state` (whose file names it fills
+/// in) into `dir`, then removes the files of the previous one.
+pub fn save<B, M, O>(
+    dir: &Path,
+    mut state: CheckpointState,
+    net: &M,
+    optim: Option<&O>,
+    pool: Option<&SeedPool>,
+) -> Result<(), TrainError>
+where
+    B: AutodiffBackend,
+    M: Module<B> + burn::module::AutodiffModule<B>,
+    O: Optimizer<M, B>,
+{
+    std::fs::create_dir_all(dir).map_err(io(dir))?;
+    let recorder = BinFileRecorder::<FullPrecisionSettings>::new();
+    let tag = state.global_step;
+    let net_path = dir.join(format!("net-{tag}"));
+    Recorder::<B>::record(&recorder, net.clone().into_record(), net_path.clone())
+        .map_err(|e| recorder_error(&net_path, e))?;
+    state.net_file = format!("net-{tag}.bin");
+    state.optim_file = match optim {
+        Some(o) => {
+            let path = dir.join(format!("optim-{tag}"));
+            Recorder::<B>::record(&recorder, o.to_record(), path.clone())
+                .map_err(|e| recorder_error(&path, e))?;
+            Some(format!("optim-{tag}.bin"))
+        }
+        None => None,
+    };
+    state.pool_file = match pool {
+        Some(p) => {
+            let name = format!("pool-{tag}.json");
+            let path = dir.join(&name);
+            let bytes = serde_json::to_vec(p).map_err(|e| recorder_error(&path, e))?;
+            crate::atomic_file::write_atomically(&path, &bytes).map_err(io(&path))?;
+            Some(name)
+        }
+        None => None,
+    };
+    let state_path = dir.join("state.json");
+    let json = serde_json::to_vec_pretty(&state).map_err(|e| recorder_error(&state_path, e))?;
+    crate::atomic_file::write_atomically(&state_path, &json).map_err(io(&state_path))?;
+    // The previous checkpoint's files are no longer referenced.
+    let keep = [
+        Some(state.net_file.as_str()),
+        state.optim_file.as_deref(),
+        state.pool_file.as_deref(),
+        Some("state.json"),
+    ];
+    for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if !keep.contains(&Some(name.as_ref())) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+    Ok(())
+}
+
+/// Reads the checkpoint in `dir` into `net` (the freshly built network of the same plan) and
+/// `optim` (a fresh optimiser, used when the checkpoint has optimiser state).
+pub fn load<B, M, O>(
+    dir: &Path,
+    plan_sha256: &str,
+    net: M,
+    optim: O,
+    device: &B::Device,
+) -> Result<Restored<M, O>, TrainError>
+where
+    B: AutodiffBackend,
+    M: Module<B> + burn::module::AutodiffModule<B>,
+    O: Optimizer<M, B>,
+{
+    let state_path = dir.join("state.json");
+    let text = std::fs::read(&state_path).map_err(io(&state_path))?;
+    let state: CheckpointState =
+        serde_json::from_slice(&text).map_err(|e| recorder_error(&state_path, e))?;
+    if state.plan_sha256 != plan_sha256 {
+        return Err(TrainError::Data(format!(
+            "checkpoint {}: written by another config (plan fingerprint {} here, {} there); \
+             resume with the config that started the run, or remove the folder to start over",
+            dir.display(),
+            plan_sha256,
+            state.plan_sha256
+        )));
+    }
+    let recorder = BinFileRecorder::<FullPrecisionSettings>::new();
+    let net_path = dir.join(&state.net_file);
+    let record = Recorder::<B>::load(&recorder, net_path.clone(), device)
+        .map_err(|e| recorder_error(&net_path, e))?;
+    let net = net.load_record(record);
+    let optim = match &state.optim_file {
+        Some(f) => {
+            let path = dir.join(f);
+            let record = Recorder::<B>::load(&recorder, path.clone(), device)
+                .map_err(|e| recorder_error(&path, e))?;
+            Some(optim.load_record(record))
+        }
+        None => None,
+    };
+    let pool = match &state.pool_file {
+        Some(f) => {
+            let path = dir.join(f);
+            let bytes = std::fs::read(&path).map_err(io(&path))?;
+            Some(serde_json::from_slice(&bytes).map_err(|e| recorder_error(&path, e))?)
+        }
+        None => None,
+    };
+    let bad_rng = || recorder_error(&state_path, "bad random generator state");
+    let seed_bytes: Vec<u8> = (0..state.rng_seed_hex.len())
+        .step_by(2)
+        .map(|i| {
+            state
+                .rng_seed_hex
+                .get(i..i + 2)
+                .and_then(|h| u8::from_str_radix(h, 16).ok())
+        })
+        .collect::<Option<_>>()
+        .ok_or_else(bad_rng)?;
+    let seed: [u8; 32] = seed_bytes.try_into().map_err(|_| bad_rng())?;
+    let mut rng = <ChaCha8Rng as rand_core::SeedableRng>::from_seed(seed);
+    rng.set_stream(state.rng_stream);
+    rng.set_word_pos(state.rng_word_pos.parse().map_err(|_| bad_rng())?);
+    Ok(Restored {
+        state,
+        net,
+        optim,
+        rng,
+        pool,
+    })
+}
