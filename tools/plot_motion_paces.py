@@ -45,17 +45,17 @@ def main():
         sys.exit(f"error: {args.out} already exists; not overwriting it")
     sets = [load(s) for s in args.sets]
     fig, (ax_v, ax_t) = plt.subplots(1, 2, figsize=(12, 4.2))
-    v_bins = np.arange(0.0, 4.01, 0.1)
+    v_bins = np.arange(0.0, 2.51, 0.1)
     t_bins = np.arange(0.0, 90.1, 2.5)
     for label, v, t in sets:
-        ax_v.hist(v, bins=v_bins, density=True, histtype="step", linewidth=1.8,
+        ax_v.hist(np.clip(v, 0, 2.5), bins=v_bins, density=True, histtype="step", linewidth=1.8,
                   label=f"{label} (n={len(v)}, median {np.median(v):.2f} m/s)")
         ax_t.hist(np.clip(t, 0, 90), bins=t_bins, density=True, histtype="step", linewidth=1.8,
                   label=f"{label} (median {np.median(t):.1f}°)")
     ax_v.axvspan(1.2, 1.4, color="0.85", zorder=0, label="human walking pace 1.2–1.4 m/s")
-    ax_v.set_xlabel("pelvis speed over a primitive (m/s)")
+    ax_v.set_xlabel("pelvis speed over a primitive (m/s; last bin ≥ 2.4)")
     ax_v.set_ylabel("density")
-    ax_v.legend(fontsize=8)
+    ax_v.legend(fontsize=8, loc="upper left")
     ax_t.set_xlabel("|heading change| over a primitive (degrees per 0.45 s; last bin ≥ 90)")
     ax_t.set_ylabel("density")
     ax_t.set_yscale("log")

@@ -1071,11 +1071,14 @@ struct MotionControlOptions {
     #[arg(long, default_value_t = 6)]
     turn_primitives: usize,
     /// Latents decoded per CEM iteration.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 128)]
     samples: usize,
     /// CEM iterations per primitive.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 4)]
     iterations: usize,
+    /// Cost per unit of −ln(foot-contact score), against 4 per m/s of speed error.
+    #[arg(long, default_value_t = 20.0)]
+    contact_weight: f64,
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// PNG of the first 10 s of the walk at --png-speed, from above and from the side.
@@ -1154,9 +1157,13 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
         })
         .ok_or_else(|| anyhow::anyhow!("{}: no training primitives", config.display()))?;
     let seed = set_seed(&train_set, start);
+    if !(opts.contact_weight.is_finite() && opts.contact_weight >= 0.0) {
+        bail!("--contact-weight: expected a weight ≥ 0, got {}", opts.contact_weight);
+    }
     let settings = CemSettings {
         samples: opts.samples,
         iterations: opts.iterations,
+        contact_weight: opts.contact_weight,
         ..CemSettings::default()
     };
     let controller = LatentController::new(&ctx, settings)?;
@@ -1165,7 +1172,7 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
         serde_json::json!({
             "weights": weights,
             "seed_primitive": {"item": start, "pace": paces[start]},
-            "cem": {"samples": settings.samples, "elites": settings.elites, "iterations": settings.iterations},
+            "cem": {"samples": settings.samples, "elites": settings.elites, "iterations": settings.iterations, "contact_weight": settings.contact_weight},
         })
     );
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
@@ -1424,6 +1431,9 @@ fn draw_walk(prims: &[egogen::motion::cvae::DecodedPrimitive], png: &Path) -> Re
         }
     }
     let path: Vec<(Vec3, Vec3)> = frames.windows(2).map(|w| (w[0][0], w[1][0])).collect();
+    // The floor under the walk (world z = 0 for mocap seeds, below the canonical origin for
+    // seeds taken from training primitives).
+    let floor_z = prims.first().map_or(0.0, |p| p.floor_z);
     let floor = {
         let (lo, hi) = frames.iter().fold(
             (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
@@ -1431,10 +1441,10 @@ fn draw_walk(prims: &[egogen::motion::cvae::DecodedPrimitive], png: &Path) -> Re
         );
         let (lo, hi) = (lo - Vec3::splat(0.5), hi + Vec3::splat(0.5));
         vec![
-            (Vec3::new(lo.x, lo.y, 0.0), Vec3::new(hi.x, lo.y, 0.0)),
-            (Vec3::new(hi.x, lo.y, 0.0), Vec3::new(hi.x, hi.y, 0.0)),
-            (Vec3::new(hi.x, hi.y, 0.0), Vec3::new(lo.x, hi.y, 0.0)),
-            (Vec3::new(lo.x, hi.y, 0.0), Vec3::new(lo.x, lo.y, 0.0)),
+            (Vec3::new(lo.x, lo.y, floor_z), Vec3::new(hi.x, lo.y, floor_z)),
+            (Vec3::new(hi.x, lo.y, floor_z), Vec3::new(hi.x, hi.y, floor_z)),
+            (Vec3::new(hi.x, hi.y, floor_z), Vec3::new(lo.x, hi.y, floor_z)),
+            (Vec3::new(lo.x, hi.y, floor_z), Vec3::new(lo.x, lo.y, floor_z)),
         ]
     };
     let (bv, bf) = bone_mesh(&bones, 0.015);

@@ -8,12 +8,12 @@
 //! `iterations`; the best primitive decoded on the way is kept. Cost of a decoded primitive:
 //!
 //! `speed_weight·|v − v*| + heading_weight·|ψ_end − ψ*| + travel_weight·|dir(d) − ψ*|·min(1, v/0.3)
-//!  − plausibility score + prior_weight·max(0, |z|/√L − 1)`
+//!  − contact_weight·ln(contact) + pelvis and lean shortfalls + prior_weight·max(0, |z|/√L − 1)`
 //!
 //! with `v` its pelvis speed and `d` its horizontal pelvis displacement ([`super::pace`]), `ψ`
-//! headings (rad), the plausibility score of [`super::sampler::plausibility`] (ln foot contact,
-//! pelvis height, trunk lean; no pace floor, no goal) and the last term keeping latents in the
-//! typical set of the prior N(0, I).
+//! headings (rad), the foot-contact score (3-D, paper Eq. 12) and the pelvis-height and
+//! trunk-lean shortfalls of [`super::sampler::plausibility`] with their weights, and the last
+//! term keeping latents in the typical set of the prior N(0, I).
 
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -49,6 +49,8 @@ pub struct CemSettings {
     pub heading_weight: f64,
     /// Cost per radian between the direction of travel and the target heading.
     pub travel_weight: f64,
+    /// Cost per unit of `−ln(foot-contact score)`.
+    pub contact_weight: f64,
     /// Cost per unit of `|z|/√L` beyond 1.
     pub prior_weight: f64,
     /// Plausibility terms (their `pelvis_speed_min` and goal are not used).
@@ -58,12 +60,13 @@ pub struct CemSettings {
 impl Default for CemSettings {
     fn default() -> Self {
         Self {
-            samples: 64,
+            samples: 128,
             elites: 8,
-            iterations: 3,
+            iterations: 4,
             speed_weight: 4.0,
             heading_weight: 2.0,
             travel_weight: 1.0,
+            contact_weight: 20.0,
             prior_weight: 4.0,
             rules: PlausibilityRules {
                 pelvis_speed_min: 0.0,
@@ -124,7 +127,9 @@ impl LatentController {
         let cost = s.speed_weight * (pace.speed_m_s - target.speed_m_s).abs()
             + s.heading_weight * wrap_rad(heading - target.heading_rad).abs()
             + s.travel_weight * travel_err
-            - plaus.score
+            - s.contact_weight * plaus.contact.max(1e-300).ln()
+            + s.rules.pelvis_weight * plaus.pelvis_out_m
+            + s.rules.tilt_weight * plaus.tilt_excess_rad
             + s.prior_weight * (norm - 1.0).max(0.0);
         Controlled {
             primitive: p,
