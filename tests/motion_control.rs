@@ -149,6 +149,7 @@ fn decoded_chains_export_as_amass_npz_that_reads_back() {
     let seq = chain_sequence(&refs, &[]);
     assert_eq!(seq.len(), 2 + 3 * 18);
     assert_eq!(seq.frame_rate_hz, 40.0);
+    assert_eq!(seq.betas, vec![0.0; 10], "the mean shape as AMASS writes it");
     // Frame 20 is the second primitive's first decoded frame (it continues the first's).
     assert_eq!(seq.poses[20], prims[1].world[2].pose);
     assert_eq!(seq.poses[19], prims[0].world[19].pose);

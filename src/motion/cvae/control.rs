@@ -227,8 +227,14 @@ impl LatentController {
 }
 
 /// A chain of decoded primitives as one motion sequence at 40 Hz: the first primitive's seed
-/// frames, then every primitive's decoded frames (world coordinates, the body's betas).
+/// frames, then every primitive's decoded frames (world coordinates, the body's betas; the mean
+/// shape, `betas` empty, is written as 10 zeros, so that loaders that slice `betas[:10]` work).
 pub fn chain_sequence(prims: &[&DecodedPrimitive], betas: &[f64]) -> MotionSequence {
+    let betas = if betas.is_empty() {
+        vec![0.0; 10]
+    } else {
+        betas.to_vec()
+    };
     let mut poses = Vec::new();
     let mut trans = Vec::new();
     for (i, p) in prims.iter().enumerate() {
@@ -240,7 +246,7 @@ pub fn chain_sequence(prims: &[&DecodedPrimitive], betas: &[f64]) -> MotionSeque
     }
     MotionSequence {
         frame_rate_hz: crate::motion::primitive::PRIMITIVE_RATE_HZ,
-        betas: betas.to_vec(),
+        betas,
         gender: "neutral".into(),
         poses,
         trans,
