@@ -6,8 +6,9 @@
 //! A checkpoint is a folder next to the weights (`<weights>.checkpoint/`). Its `state.json`
 //! names the record files it belongs to and is replaced atomically after they are written, so a
 //! run killed at any moment leaves the previous checkpoint or the new one, never half of one.
-//! `state.json` carries a fingerprint of the plan: a checkpoint is resumed only by the plan that
-//! wrote it.
+//! The checkpoint before it stays beside it (`state.prev.json` and its files): when a file of
+//! the newest is damaged, resuming says so and continues from the one before. `state.json`
+//! carries a fingerprint of the plan: a checkpoint is resumed only by the plan that wrote it.
 
 use std::path::{Path, PathBuf};
 
@@ -137,30 +138,72 @@ where
         }
         None => None,
     };
-    let state_path = dir.join("state.json");
+    let state_path = dir.join(STATE);
+    let prev_path = dir.join(PREVIOUS_STATE);
+    // The current checkpoint becomes the previous one, then the new one is current.
+    let previous: Option<CheckpointState> = match std::fs::read(&state_path) {
+        Ok(bytes) => {
+            crate::atomic_file::write_atomically(&prev_path, &bytes).map_err(io(&prev_path))?;
+            serde_json::from_slice(&bytes).ok()
+        }
+        Err(_) => None,
+    };
     let json = serde_json::to_vec_pretty(&state).map_err(|e| recorder_error(&state_path, e))?;
     crate::atomic_file::write_atomically(&state_path, &json).map_err(io(&state_path))?;
-    // The previous checkpoint's files are no longer referenced.
-    let keep = [
-        Some(state.net_file.as_str()),
-        state.optim_file.as_deref(),
-        state.pool_file.as_deref(),
-        Some("state.json"),
-    ];
+    // Files of older checkpoints are no longer referenced.
+    let mut keep = vec![STATE.to_string(), PREVIOUS_STATE.to_string()];
+    for s in [Some(&state), previous.as_ref()].into_iter().flatten() {
+        keep.push(s.net_file.clone());
+        keep.extend(s.optim_file.clone());
+        keep.extend(s.pool_file.clone());
+    }
     for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
-        let name = entry.file_name();
-        let name = name.to_string_lossy();
-        if !keep.contains(&Some(name.as_ref())) {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if !keep.contains(&name) {
             let _ = std::fs::remove_file(entry.path());
         }
     }
     Ok(())
 }
 
-/// Reads the checkpoint in `dir` into `net` (the freshly built network of the same plan) and
-/// `optim` (a fresh optimiser, used when the checkpoint has optimiser state).
+/// The newest checkpoint's state file, and the one before it.
+const STATE: &str = "state.json";
+const PREVIOUS_STATE: &str = "state.prev.json";
+
+/// Reads the checkpoint in `dir` into `net` (the freshly built network of the same plan) and an
+/// optimiser from `fresh_optim` (used when the checkpoint has optimiser state). When a file of
+/// the newest checkpoint cannot be read, warns on stderr and reads the one before it.
 pub fn load<B, M, O>(
     dir: &Path,
+    plan_sha256: &str,
+    net: M,
+    fresh_optim: impl Fn() -> O,
+    device: &B::Device,
+) -> Result<Restored<M, O>, TrainError>
+where
+    B: AutodiffBackend,
+    M: Module<B> + burn::module::AutodiffModule<B>,
+    O: Optimizer<M, B>,
+{
+    match load_state::<B, M, O>(dir, STATE, plan_sha256, net.clone(), fresh_optim(), device) {
+        Err(e @ TrainError::Data(_)) | Err(e @ TrainError::Io { .. })
+            if dir.join(PREVIOUS_STATE).is_file() && !is_foreign(&e) =>
+        {
+            eprintln!("warning: {e}; resuming from the checkpoint before it");
+            load_state::<B, M, O>(dir, PREVIOUS_STATE, plan_sha256, net, fresh_optim(), device)
+        }
+        other => other,
+    }
+}
+
+/// Whether an error says the checkpoint belongs to another plan (no fallback then).
+fn is_foreign(e: &TrainError) -> bool {
+    matches!(e, TrainError::Data(m) if m.contains("written by another config"))
+}
+
+fn load_state<B, M, O>(
+    dir: &Path,
+    state_file: &str,
     plan_sha256: &str,
     net: M,
     optim: O,
@@ -171,7 +214,7 @@ where
     M: Module<B> + burn::module::AutodiffModule<B>,
     O: Optimizer<M, B>,
 {
-    let state_path = dir.join("state.json");
+    let state_path = dir.join(state_file);
     let text = std::fs::read(&state_path).map_err(io(&state_path))?;
     let state: CheckpointState =
         serde_json::from_slice(&text).map_err(|e| recorder_error(&state_path, e))?;

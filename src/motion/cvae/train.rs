@@ -631,9 +631,11 @@ pub fn train(
     let mut elapsed_before_s = 0.0;
     let mut resume_at = (0usize, 0usize, 0usize, f64::NAN);
     if resume {
-        let fresh_optim = AdamConfig::new()
-            .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
-            .init::<TrainBackend, PrimitiveVae<TrainBackend>>();
+        let fresh_optim = || {
+            AdamConfig::new()
+                .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
+                .init::<TrainBackend, PrimitiveVae<TrainBackend>>()
+        };
         let r = checkpoint::load(&ckpt_dir, &fingerprint, net.clone(), fresh_optim, &device)?;
         resumed_net = Some(r.net);
         restored_optim = r.optim;
