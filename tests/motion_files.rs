@@ -78,6 +78,21 @@ fn bad_motion_files_are_named() {
     let msg = MotionSequence::read(&path).unwrap_err().to_string();
     assert!(msg.contains("missing key `poses`"), "{msg}");
 
+    // A file with no frames is refused by name (it used to reach placement and panic there).
+    write_npz(
+        &path,
+        &[
+            ("poses", Arr::F64(vec![0, 165], vec![])),
+            ("trans", Arr::F64(vec![0, 3], vec![])),
+            ("mocap_frame_rate", Arr::F64(vec![], vec![60.0])),
+        ],
+    );
+    let msg = MotionSequence::read(&path).unwrap_err().to_string();
+    assert!(
+        msg.contains("bad.npz") && msg.contains("`poses`") && msg.contains("at least one frame"),
+        "{msg}"
+    );
+
     let mut poses = vec![0.0; 165 * 2];
     poses[200] = f64::INFINITY;
     write_npz(

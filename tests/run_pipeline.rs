@@ -126,6 +126,15 @@ fn too_many_betas() {
     );
 }
 
+#[test]
+fn absurd_betas() {
+    // 1e300 used to pass and write NaN into the CPF trajectory.
+    expect_config_error(
+        &GOOD.replace("betas = [1.0, -0.5]", "betas = [1e300]"),
+        &["body.betas", "value 0", "±10"],
+    );
+}
+
 /// The good config with a `[render]` section (errors are found before anything renders).
 fn with_render(render: &str) -> String {
     format!("{GOOD}\n[render]\n{render}\n")

@@ -82,6 +82,9 @@ pub struct RunPlan {
     pub supervisor: SupervisorPlan,
 }
 
+/// Largest shape coefficient a config may ask for (standard deviations).
+pub const MAX_ABS_BETA: f64 = 10.0;
+
 /// Resolves paths against the config's folder and checks value ranges.
 pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigError> {
     let base = config_path.parent().unwrap_or(Path::new("."));
@@ -95,6 +98,21 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         return Err(bad(
             "body.betas",
             format!("value {i} is not a finite number"),
+        ));
+    }
+    if let Some((i, b)) = raw
+        .body
+        .betas
+        .iter()
+        .enumerate()
+        .find(|(_, b)| b.abs() > MAX_ABS_BETA)
+    {
+        return Err(bad(
+            "body.betas",
+            format!(
+                "value {i} is {b}: expected within ±{MAX_ABS_BETA} (shape coefficients are in \
+                 standard deviations of the shape space; people lie within about ±3)"
+            ),
         ));
     }
     let m = raw.motion;

@@ -167,6 +167,13 @@ impl MotionSequence {
             ));
         }
         let n = pshape[0];
+        if n == 0 {
+            return Err(reader.shape(
+                poses_key,
+                pshape,
+                "[N, 165] with at least one frame (the file holds none)",
+            ));
+        }
         let (tshape, tdata) = reader.f64(trans_key)?;
         if tshape != [n, 3] {
             return Err(reader.shape(
