@@ -127,6 +127,15 @@ fn too_many_betas() {
 }
 
 #[test]
+fn absurd_duration() {
+    // 1e9 s used to abort on a failed allocation.
+    expect_config_error(
+        &GOOD.replace("duration_s = 0.5", "duration_s = 1e9"),
+        &["motion.duration_s", "frames", "GB", "at most"],
+    );
+}
+
+#[test]
 fn absurd_betas() {
     // 1e300 used to pass and write NaN into the CPF trajectory.
     expect_config_error(

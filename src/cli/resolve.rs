@@ -82,6 +82,9 @@ pub struct RunPlan {
     pub supervisor: SupervisorPlan,
 }
 
+/// Most frames a scripted walk may have (about 7 h at 40 Hz).
+pub const MAX_SCRIPTED_FRAMES: f64 = 1e6;
+
 /// Largest shape coefficient a config may ask for (standard deviations).
 pub const MAX_ABS_BETA: f64 = 10.0;
 
@@ -136,6 +139,17 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
             };
             let duration_s = positive("motion.duration_s", m.duration_s)?;
             let frame_rate_hz = positive("motion.frame_rate_hz", m.frame_rate_hz)?;
+            let frames = duration_s * frame_rate_hz;
+            if frames > MAX_SCRIPTED_FRAMES {
+                return Err(bad(
+                    "motion.duration_s",
+                    format!(
+                        "{duration_s} s at {frame_rate_hz} Hz is {frames:.3e} frames ({:.1} GB of \
+                         poses alone); at most {MAX_SCRIPTED_FRAMES:.0} frames",
+                        frames * (165.0 + 3.0) * 8.0 / 1e9
+                    ),
+                ));
+            }
             let speed_m_per_s = m.speed_m_per_s.unwrap_or(1.2);
             if !(speed_m_per_s.is_finite() && (0.0..=10.0).contains(&speed_m_per_s)) {
                 return Err(bad(
