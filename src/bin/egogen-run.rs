@@ -58,6 +58,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    egogen::cli::exit_quietly_on_closed_pipe();
     let args = Args::parse();
     let result = match &args.command {
         Some(Command::Verify { dataset }) => verify(dataset),

@@ -266,6 +266,7 @@ enum BodyCommand {
 }
 
 fn main() -> ExitCode {
+    egogen::cli::exit_quietly_on_closed_pipe();
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -8,4 +8,15 @@ pub mod resolve;
 pub mod train;
 
 pub use config::{ConfigError, RawRun};
+
+/// Lets a closed standard output end the process quietly, as Unix tools do (`egogen inspect
+/// FILE | head -1`), instead of a panic in `println!`. Binaries call it first thing.
+pub fn exit_quietly_on_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: restores the default disposition of SIGPIPE (terminate) before any thread or
+    // handler exists; Rust's runtime set it to "ignore" at start-up.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
 pub use resolve::{resolve_run, MotionPlan, RenderPlan, RunPlan, SlurmPlan, SupervisorPlan};
