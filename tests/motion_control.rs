@@ -44,7 +44,10 @@ fn contact_counts_vertical_foot_speed_only_in_3d() {
     let three_d = contact_score(&rising, 0.0);
     let flat = contact_score_horizontal(&rising, 0.0);
     // Central difference: 2 cm over 2 frames at 40 Hz = 0.4 m/s, 0.325 above the free speed.
-    assert!((flat - (-mean_height_error(&rising)).exp()).abs() < 1e-12, "{flat}");
+    assert!(
+        (flat - (-mean_height_error(&rising)).exp()).abs() < 1e-12,
+        "{flat}"
+    );
     assert!(
         (three_d - flat * (-0.325f64).exp()).abs() < 1e-9,
         "{three_d} vs {flat}"
@@ -149,7 +152,11 @@ fn decoded_chains_export_as_amass_npz_that_reads_back() {
     let seq = chain_sequence(&refs, &[]);
     assert_eq!(seq.len(), 2 + 3 * 18);
     assert_eq!(seq.frame_rate_hz, 40.0);
-    assert_eq!(seq.betas, vec![0.0; 10], "the mean shape as AMASS writes it");
+    assert_eq!(
+        seq.betas,
+        vec![0.0; 10],
+        "the mean shape as AMASS writes it"
+    );
     // Frame 20 is the second primitive's first decoded frame (it continues the first's).
     assert_eq!(seq.poses[20], prims[1].world[2].pose);
     assert_eq!(seq.poses[19], prims[0].world[19].pose);
@@ -177,7 +184,12 @@ fn shipped_training_primitives_walk_at_a_human_pace() {
     .unwrap();
     let body = BodyModel::load(&plan.body_model).unwrap();
     let (train, held) = evaluation_sets(&plan, &body, true).unwrap();
-    assert!(train.len() > 4000 && held.len() > 400, "{} / {}", train.len(), held.len());
+    assert!(
+        train.len() > 4000 && held.len() > 400,
+        "{} / {}",
+        train.len(),
+        held.len()
+    );
     let rig = TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(
         &RigGeometry::new(&body, &[]).unwrap(),
         &Default::default(),
@@ -188,6 +200,11 @@ fn shipped_training_primitives_walk_at_a_human_pace() {
         "{s:?}"
     );
     // Whole clips are held out: none of the held-out clips is also trained on.
-    let held_paths: Vec<_> = plan.clips.iter().filter(|c| c.held_out).map(|c| &c.path).collect();
+    let held_paths: Vec<_> = plan
+        .clips
+        .iter()
+        .filter(|c| c.held_out)
+        .map(|c| &c.path)
+        .collect();
     assert!(held_paths.len() >= 8);
 }

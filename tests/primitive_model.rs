@@ -895,7 +895,11 @@ fn a_killed_training_run_resumes_exactly_where_it_stopped() {
     let whole_config = whole.path().join("c.toml");
     std::fs::write(&whole_config, tiny_config(whole.path())).unwrap();
     let out = run(&whole_config, false).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(!whole.path().join("w.safetensors.checkpoint").exists());
 
     // The same run killed (SIGKILL) twice: in the first phase and in the prior phase.
@@ -918,7 +922,10 @@ fn a_killed_training_run_resumes_exactly_where_it_stopped() {
                 child.try_wait().unwrap().is_none(),
                 "the run ended before step {kill_from}"
             );
-            assert!(started.elapsed().as_secs() < 300, "no checkpoint of step {kill_from}");
+            assert!(
+                started.elapsed().as_secs() < 300,
+                "no checkpoint of step {kill_from}"
+            );
             std::thread::sleep(std::time::Duration::from_millis(5));
         }
         child.kill().unwrap(); // SIGKILL
@@ -977,7 +984,10 @@ fn safetensors_tensors(path: &Path) -> std::collections::BTreeMap<String, Vec<u8
         .filter(|(k, _)| *k != "__metadata__")
         .map(|(k, v)| {
             let o = &v["data_offsets"];
-            let (a, b) = (o[0].as_u64().unwrap() as usize, o[1].as_u64().unwrap() as usize);
+            let (a, b) = (
+                o[0].as_u64().unwrap() as usize,
+                o[1].as_u64().unwrap() as usize,
+            );
             (k.clone(), data[a..b].to_vec())
         })
         .collect()

@@ -1014,7 +1014,8 @@ fn motion_stats(config: &Path, json: Option<&Path>) -> Result<()> {
     let (train, held) = evaluation_sets(&plan, &body, true)?;
     let (train_all, _) = evaluation_sets(&plan, &body, false)?;
     let geo = RigGeometry::new(&body, &[])?;
-    let rig = TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(&geo, &Default::default());
+    let rig =
+        TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(&geo, &Default::default());
     let mut doc = serde_json::json!({"config": config});
     for (name, set) in [("train", &train), ("held_out", &held)] {
         let paces = set_paces(&rig, set, 256);
@@ -1063,7 +1064,12 @@ struct MotionControlOptions {
     #[arg(long, default_value_t = 60.0)]
     walk_s: f64,
     /// Turn angles (degrees, positive to the left), comma separated.
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, default_value = "45,90,180")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        default_value = "45,90,180"
+    )]
     turns: Vec<f64>,
     /// Walking speed asked for during the turns (m/s).
     #[arg(long, default_value_t = 1.0)]
@@ -1110,9 +1116,16 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
         }
     }
     if !(opts.walk_s.is_finite() && opts.walk_s > 0.0 && opts.walk_s <= 3600.0) {
-        bail!("--walk-s: expected 0 < seconds <= 3600, got {}", opts.walk_s);
+        bail!(
+            "--walk-s: expected 0 < seconds <= 3600, got {}",
+            opts.walk_s
+        );
     }
-    if let Some(t) = opts.turns.iter().find(|t| !t.is_finite() || t.abs() > 360.0) {
+    if let Some(t) = opts
+        .turns
+        .iter()
+        .find(|t| !t.is_finite() || t.abs() > 360.0)
+    {
         bail!("--turns: expected angles within ±360°, got {t}");
     }
     if opts.samples == 0 || opts.iterations == 0 || opts.turn_primitives == 0 {
@@ -1148,7 +1161,8 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
     let ctx = BodyContext::new(&body, &[])?;
     let (train_set, _) = evaluation_sets(&plan, &body, true)?;
     let geo = RigGeometry::new(&body, &[])?;
-    let rig = TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(&geo, &Default::default());
+    let rig =
+        TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(&geo, &Default::default());
     let paces = egogen::motion::cvae::pace::set_paces(&rig, &train_set, 256);
     // Start from the training primitive walking nearest 1.0 m/s straight ahead.
     let start = (0..paces.len())
@@ -1159,7 +1173,10 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
         .ok_or_else(|| anyhow::anyhow!("{}: no training primitives", config.display()))?;
     let seed = set_seed(&train_set, start);
     if !(opts.contact_weight.is_finite() && opts.contact_weight >= 0.0) {
-        bail!("--contact-weight: expected a weight ≥ 0, got {}", opts.contact_weight);
+        bail!(
+            "--contact-weight: expected a weight ≥ 0, got {}",
+            opts.contact_weight
+        );
     }
     let settings = CemSettings {
         samples: opts.samples,
@@ -1181,7 +1198,10 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
     for (i, &v) in opts.speeds.iter().enumerate() {
         let (report, steps) =
             sustained_walk(&controller, &model, &ctx, &seed, v, primitives, &mut rng)?;
-        println!("{}", serde_json::json!({"measure": "walk", "report": report}));
+        println!(
+            "{}",
+            serde_json::json!({"measure": "walk", "report": report})
+        );
         let prims: Vec<_> = steps.iter().map(|s| &s.primitive).collect();
         if let Some(file) = export(&names[i]) {
             chain_sequence(&prims, &[]).write_amass(&file)?;
@@ -1209,7 +1229,10 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
             opts.turn_primitives,
             &mut rng,
         )?;
-        println!("{}", serde_json::json!({"measure": "turn", "report": report}));
+        println!(
+            "{}",
+            serde_json::json!({"measure": "turn", "report": report})
+        );
         if let Some(file) = export(&names[opts.speeds.len() + i]) {
             let prims: Vec<_> = steps.iter().map(|s| &s.primitive).collect();
             chain_sequence(&prims, &[]).write_amass(&file)?;
@@ -1442,10 +1465,22 @@ fn draw_walk(prims: &[egogen::motion::cvae::DecodedPrimitive], png: &Path) -> Re
         );
         let (lo, hi) = (lo - Vec3::splat(0.5), hi + Vec3::splat(0.5));
         vec![
-            (Vec3::new(lo.x, lo.y, floor_z), Vec3::new(hi.x, lo.y, floor_z)),
-            (Vec3::new(hi.x, lo.y, floor_z), Vec3::new(hi.x, hi.y, floor_z)),
-            (Vec3::new(hi.x, hi.y, floor_z), Vec3::new(lo.x, hi.y, floor_z)),
-            (Vec3::new(lo.x, hi.y, floor_z), Vec3::new(lo.x, lo.y, floor_z)),
+            (
+                Vec3::new(lo.x, lo.y, floor_z),
+                Vec3::new(hi.x, lo.y, floor_z),
+            ),
+            (
+                Vec3::new(hi.x, lo.y, floor_z),
+                Vec3::new(hi.x, hi.y, floor_z),
+            ),
+            (
+                Vec3::new(hi.x, hi.y, floor_z),
+                Vec3::new(lo.x, hi.y, floor_z),
+            ),
+            (
+                Vec3::new(lo.x, hi.y, floor_z),
+                Vec3::new(lo.x, lo.y, floor_z),
+            ),
         ]
     };
     let (bv, bf) = bone_mesh(&bones, 0.015);

@@ -160,7 +160,10 @@ impl RawTrainPrimitive {
                 if other.clips_from.is_some() {
                     return Err(bad(
                         "clips_from",
-                        format!("{} takes its clips from a third config; name that one", file.display()),
+                        format!(
+                            "{} takes its clips from a third config; name that one",
+                            file.display()
+                        ),
                     ));
                 }
                 let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();

@@ -104,12 +104,7 @@ impl LatentController {
     }
 
     /// Cost of a decoded primitive for `target` (lower is better) and its pieces.
-    fn judge(
-        &self,
-        p: DecodedPrimitive,
-        latent: Vec<f32>,
-        target: &PaceTarget,
-    ) -> Controlled {
+    fn judge(&self, p: DecodedPrimitive, latent: Vec<f32>, target: &PaceTarget) -> Controlled {
         let s = &self.settings;
         let plaus = plausibility(&p, &self.foot_markers, &s.rules);
         let pace = Pace::of_frames(&p.joints);
@@ -123,7 +118,12 @@ impl LatentController {
             0.0
         };
         let l = latent.len().max(1) as f64;
-        let norm = latent.iter().map(|&x| (x as f64).powi(2)).sum::<f64>().sqrt() / l.sqrt();
+        let norm = latent
+            .iter()
+            .map(|&x| (x as f64).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            / l.sqrt();
         let cost = s.speed_weight * (pace.speed_m_s - target.speed_m_s).abs()
             + s.heading_weight * wrap_rad(heading - target.heading_rad).abs()
             + s.travel_weight * travel_err
@@ -170,7 +170,11 @@ impl LatentController {
                 })
                 .collect();
             let mut judged: Vec<Controlled> = Vec::with_capacity(n);
-            for (decoded, z) in model.decode_each(body, &seeds, &latents)?.into_iter().zip(latents) {
+            for (decoded, z) in model
+                .decode_each(body, &seeds, &latents)?
+                .into_iter()
+                .zip(latents)
+            {
                 match decoded {
                     Ok(p) => judged.push(self.judge(p, z, target)),
                     Err(e @ DecodeError::NonFinite { .. }) => last_error = Some(e),

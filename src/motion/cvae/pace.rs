@@ -218,7 +218,10 @@ mod tests {
     #[test]
     fn quantiles_of_a_known_sample() {
         let q = Quantiles::of((0..=100).map(f64::from).chain([f64::NAN]));
-        assert_eq!((q.count, q.p05, q.p50, q.p95, q.max), (101, 5.0, 50.0, 95.0, 100.0));
+        assert_eq!(
+            (q.count, q.p05, q.p50, q.p95, q.max),
+            (101, 5.0, 50.0, 95.0, 100.0)
+        );
         assert!((q.mean - 50.0).abs() < 1e-12);
         assert!(Quantiles::of(std::iter::empty()).p50.is_nan());
     }

@@ -121,7 +121,12 @@ pub fn sustained_walk(
             .iter()
             .map(|s| {
                 let l = s.latent.len().max(1) as f64;
-                s.latent.iter().map(|&x| (x as f64).powi(2)).sum::<f64>().sqrt() / l.sqrt()
+                s.latent
+                    .iter()
+                    .map(|&x| (x as f64).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+                    / l.sqrt()
             })
             .sum::<f64>()
             / n,
@@ -168,7 +173,9 @@ pub fn turn(
     }
     let primitives_to_turn = turned
         .iter()
-        .position(|t| wrap_rad((t - turn_deg).to_radians()).abs().to_degrees() <= TURN_TOLERANCE_DEG)
+        .position(|t| {
+            wrap_rad((t - turn_deg).to_radians()).abs().to_degrees() <= TURN_TOLERANCE_DEG
+        })
         .map(|i| i + 1);
     let (contact_mean, _, implausible) = contact_stats(&steps);
     Ok((

@@ -655,9 +655,7 @@ pub fn train(
         f.set_len(r.state.log_bytes).map_err(log_io)?;
     }
     let log_file = if resume {
-        std::fs::OpenOptions::new()
-            .append(true)
-            .open(&plan.log_out)
+        std::fs::OpenOptions::new().append(true).open(&plan.log_out)
     } else {
         std::fs::File::create(&plan.log_out)
     }
@@ -710,7 +708,8 @@ pub fn train(
         }
         _ => None,
     };
-    let mut pool = restored_pool.unwrap_or_else(|| SeedPool::new(plan.prior.and_then(|p| p.pool_slots)));
+    let mut pool =
+        restored_pool.unwrap_or_else(|| SeedPool::new(plan.prior.and_then(|p| p.pool_slots)));
     let seed_index = plan
         .prior
         .filter(|p| p.weights.recovery > 0.0 && p.phase.steps > 0)
