@@ -117,13 +117,7 @@ impl LatentController {
         } else {
             0.0
         };
-        let l = latent.len().max(1) as f64;
-        let norm = latent
-            .iter()
-            .map(|&x| (x as f64).powi(2))
-            .sum::<f64>()
-            .sqrt()
-            / l.sqrt();
+        let norm = relative_norm(&latent);
         let cost = s.speed_weight * (pace.speed_m_s - target.speed_m_s).abs()
             + s.heading_weight * wrap_rad(heading - target.heading_rad).abs()
             + s.travel_weight * travel_err
@@ -228,6 +222,12 @@ impl LatentController {
         }
         Ok(out)
     }
+}
+
+/// `|z|/√L`: the length of a latent relative to the typical length of a draw from N(0, I).
+pub fn relative_norm(z: &[f32]) -> f64 {
+    let l = z.len().max(1) as f64;
+    z.iter().map(|&x| (x as f64).powi(2)).sum::<f64>().sqrt() / l.sqrt()
 }
 
 /// A chain of decoded primitives as one motion sequence at 40 Hz: the first primitive's seed

@@ -78,7 +78,15 @@ pub fn set_paces<B: Backend>(rig: &TensorRig<B>, set: &PrimitiveSet, batch: usiz
 /// Paces of raw primitives `[B, T, F]` (canonical features).
 pub fn raw_paces<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Vec<Pace> {
     let [b, t, _] = x.dims();
-    let joints = pose_frames(rig, x).joints; // [B, T, 22, 3]
+    // Only the last seed frame and the last frame are posed.
+    let ends = Tensor::cat(
+        vec![
+            x.clone().narrow(1, SEED_FRAMES - 1, 1),
+            x.narrow(1, t - 1, 1),
+        ],
+        1,
+    );
+    let joints = pose_frames(rig, ends).joints; // [B, 2, 22, 3]
     let j = joints.dims()[2];
     let pick = |frame: usize| -> Vec<f32> {
         joints
@@ -88,7 +96,7 @@ pub fn raw_paces<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Vec<Pace> {
             .to_vec()
             .expect("f32 joints")
     };
-    let (first, last) = (pick(SEED_FRAMES - 1), pick(t - 1));
+    let (first, last) = (pick(0), pick(1));
     let as_joints = |v: &[f32], i: usize| -> Vec<Vec3> {
         (0..j)
             .map(|k| {
@@ -108,6 +116,7 @@ pub struct Quantiles {
     pub count: usize,
     pub mean: f64,
     pub p05: f64,
+    pub p10: f64,
     pub p25: f64,
     pub p50: f64,
     pub p75: f64,
@@ -135,6 +144,7 @@ impl Quantiles {
                 v.iter().sum::<f64>() / v.len() as f64
             },
             p05: q(0.05),
+            p10: q(0.1),
             p25: q(0.25),
             p50: q(0.5),
             p75: q(0.75),
@@ -219,8 +229,8 @@ mod tests {
     fn quantiles_of_a_known_sample() {
         let q = Quantiles::of((0..=100).map(f64::from).chain([f64::NAN]));
         assert_eq!(
-            (q.count, q.p05, q.p50, q.p95, q.max),
-            (101, 5.0, 50.0, 95.0, 100.0)
+            (q.count, q.p05, q.p10, q.p50, q.p95, q.max),
+            (101, 5.0, 10.0, 50.0, 95.0, 100.0)
         );
         assert!((q.mean - 50.0).abs() < 1e-12);
         assert!(Quantiles::of(std::iter::empty()).p50.is_nan());

@@ -5,7 +5,7 @@
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::control::{chain_speed_m_s, Controlled, LatentController, PaceTarget};
+use super::control::{chain_speed_m_s, relative_norm, Controlled, LatentController, PaceTarget};
 use super::infer::{BodyContext, DecodeError, MotionModel, PrimitiveSeed};
 use super::pace::{wrap_rad, Quantiles, PACE_SPAN_S};
 
@@ -58,18 +58,12 @@ pub struct TurnReport {
 pub const TURN_TOLERANCE_DEG: f64 = 15.0;
 
 fn contact_stats(steps: &[Controlled]) -> (f64, f64, usize) {
-    let contact: Vec<f64> = steps.iter().map(|s| s.plausibility.contact).collect();
-    let q = Quantiles::of(contact.iter().copied());
-    let p10 = {
-        let mut c = contact.clone();
-        c.sort_by(f64::total_cmp);
-        c.get(c.len() / 10).copied().unwrap_or(f64::NAN)
-    };
+    let q = Quantiles::of(steps.iter().map(|s| s.plausibility.contact));
     let implausible = steps
         .iter()
         .filter(|s| s.plausibility.pelvis_out_m > 0.0 || s.plausibility.tilt_excess_rad > 0.0)
         .count();
-    (q.mean, p10, implausible)
+    (q.mean, q.p10, implausible)
 }
 
 /// A walk of `primitives` from `seed` asked to keep `speed_m_s` along the heading the seed
@@ -117,19 +111,7 @@ pub fn sustained_walk(
         contact_mean,
         contact_p10,
         implausible_primitives: implausible,
-        latent_norm_mean: steps
-            .iter()
-            .map(|s| {
-                let l = s.latent.len().max(1) as f64;
-                s.latent
-                    .iter()
-                    .map(|&x| (x as f64).powi(2))
-                    .sum::<f64>()
-                    .sqrt()
-                    / l.sqrt()
-            })
-            .sum::<f64>()
-            / n,
+        latent_norm_mean: steps.iter().map(|s| relative_norm(&s.latent)).sum::<f64>() / n,
         reached: (second - speed_m_s).abs() <= 0.1 * speed_m_s && contact_mean >= 0.95,
         wall_s: started.elapsed().as_secs_f64(),
     };
