@@ -60,6 +60,11 @@ pub fn checkpoint_dir(weights_out: &Path) -> PathBuf {
     weights_out.with_file_name(name)
 }
 
+/// Whether `dir` holds a checkpoint to resume.
+pub fn exists(dir: &Path) -> bool {
+    dir.join(STATE).is_file()
+}
+
 /// SHA-256 of a plan's debug form.
 pub fn plan_fingerprint(plan: &impl std::fmt::Debug) -> String {
     hex(&sha2::Sha256::digest(format!("{plan:?}").as_bytes()))

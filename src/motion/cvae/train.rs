@@ -529,6 +529,13 @@ fn log_line(log: &mut impl Write, line: &serde_json::Value, path: &Path) -> Resu
         })
 }
 
+/// The optimiser every phase starts with (Adam, gradients clipped to norm 1 per tensor).
+fn new_optimizer() -> impl Optimizer<PrimitiveVae<TrainBackend>, TrainBackend> {
+    AdamConfig::new()
+        .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
+        .init::<TrainBackend, PrimitiveVae<TrainBackend>>()
+}
+
 /// Trains per the plan and writes weights and the loss log, with a checkpoint every
 /// `plan.checkpoint_every_s`; `resume` continues from the checkpoint an interrupted run left
 /// (refused when there is none, or when it belongs to another plan). Without `resume`, an
@@ -540,7 +547,7 @@ pub fn train(
 ) -> Result<TrainReport, TrainError> {
     let started = Instant::now();
     let ckpt_dir = checkpoint::checkpoint_dir(&plan.weights_out);
-    let has_checkpoint = ckpt_dir.join("state.json").is_file();
+    let has_checkpoint = checkpoint::exists(&ckpt_dir);
     match (resume, has_checkpoint) {
         (false, true) => {
             return Err(TrainError::Data(format!(
@@ -631,12 +638,7 @@ pub fn train(
     let mut elapsed_before_s = 0.0;
     let mut resume_at = (0usize, 0usize, 0usize, f64::NAN);
     if resume {
-        let fresh_optim = || {
-            AdamConfig::new()
-                .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
-                .init::<TrainBackend, PrimitiveVae<TrainBackend>>()
-        };
-        let r = checkpoint::load(&ckpt_dir, &fingerprint, net.clone(), fresh_optim, &device)?;
+        let r = checkpoint::load(&ckpt_dir, &fingerprint, net.clone(), new_optimizer, &device)?;
         resumed_net = Some(r.net);
         restored_optim = r.optim;
         restored_pool = r.pool;
@@ -746,9 +748,7 @@ pub fn train(
         bar.set_prefix(phase);
         let mut optim = match restored_optim.take() {
             Some(o) if phase_index == resume_phase => o,
-            _ => AdamConfig::new()
-                .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
-                .init::<TrainBackend, PrimitiveVae<TrainBackend>>(),
+            _ => new_optimizer(),
         };
         for step in first_step..phase_plan.steps {
             // Cosine decay to a tenth of the phase's rate.
