@@ -1164,12 +1164,7 @@ fn motion_control(opts: &MotionControlOptions) -> Result<()> {
     let rig =
         TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(&geo, &Default::default());
     let paces = egogen::motion::cvae::pace::set_paces(&rig, &train_set, 256);
-    // Start from the training primitive walking nearest 1.0 m/s straight ahead.
-    let start = (0..paces.len())
-        .min_by(|&a, &b| {
-            let cost = |i: usize| (paces[i].speed_m_s - 1.0).abs() + paces[i].turn_deg.abs() / 30.0;
-            cost(a).total_cmp(&cost(b))
-        })
+    let start = egogen::motion::cvae::reach::steady_walk_index(&paces)
         .ok_or_else(|| anyhow::anyhow!("{}: no training primitives", config.display()))?;
     let seed = set_seed(&train_set, start);
     if !(opts.contact_weight.is_finite() && opts.contact_weight >= 0.0) {

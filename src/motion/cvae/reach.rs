@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::control::{chain_speed_m_s, relative_norm, Controlled, LatentController, PaceTarget};
 use super::infer::{BodyContext, DecodeError, MotionModel, PrimitiveSeed};
-use super::pace::{wrap_rad, Quantiles, PACE_SPAN_S};
+use super::pace::{wrap_rad, Pace, Quantiles, PACE_SPAN_S};
 
 /// A straight walk asked for one pace.
 #[derive(Debug, Clone, Serialize)]
@@ -52,6 +52,13 @@ pub struct TurnReport {
     pub contact_mean: f64,
     pub implausible_primitives: usize,
     pub wall_s: f64,
+}
+
+/// The primitive walking nearest 1.0 m/s straight ahead (where walks and turns start), by
+/// index into `paces`; None when there are none.
+pub fn steady_walk_index(paces: &[Pace]) -> Option<usize> {
+    let cost = |p: &Pace| (p.speed_m_s - 1.0).abs() + p.turn_deg.abs() / 30.0;
+    (0..paces.len()).min_by(|&a, &b| cost(&paces[a]).total_cmp(&cost(&paces[b])))
 }
 
 /// Heading error (degrees) under which a turn counts as done.
