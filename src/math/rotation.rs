@@ -79,7 +79,10 @@ pub fn rot6d_to_matrix(d6: [Real; 6]) -> Mat3 {
     {
         u2 = b1.any_orthonormal_vector();
     }
+    // Classical Gram-Schmidt leaves b2·b1 ≈ ε·|a2|/|u2| when a2 is nearly parallel to b1;
+    // a second pass brings it back to rounding ("twice is enough").
     let b2 = u2.normalize();
+    let b2 = (b2 - b1 * b1.dot(b2)).normalize();
     let b3 = b1.cross(b2);
     Mat3::from_cols(b1, b2, b3)
 }
