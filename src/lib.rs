@@ -2,7 +2,8 @@
 //!
 //! Modules follow the data flow: `scene` (meshes, walkable map) → `sensing` (ego rays);
 //! `body` (SMPL-X skeleton, skinning, eye anchor) →
-//! `motion` (pose sequences and their files) → `synth` (posed sequences, CPF trajectories);
+//! `motion` (pose sequences and their files, the motion-primitive model) → `policy` (the
+//! locomotion environment, rewards and controllers) → `synth` (posed sequences, CPF trajectories);
 //! `preview` draws PNG pictures for people;
 //! `cli` holds the command-line and config plumbing and no domain logic.
 
@@ -14,6 +15,7 @@ pub mod inspect;
 pub mod math;
 pub mod motion;
 pub mod npz;
+pub mod policy;
 pub mod preview;
 pub mod render;
 pub mod rig;

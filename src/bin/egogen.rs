@@ -54,6 +54,67 @@ enum Command {
     /// Train learned models.
     #[command(subcommand)]
     Train(TrainCommand),
+    /// Locomotion control: the pose prior of the reward, controller evaluation.
+    #[command(subcommand)]
+    Policy(PolicyCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum PolicyCommand {
+    /// Fit the pose prior of the reward's pose term on a config's training primitives, and
+    /// report how it scores held-out mocap, random-latent primitives and bent joints.
+    PosePrior {
+        /// Motion training config whose clips (and held-out split) are used.
+        #[arg(long, default_value = "configs/train_primitive.toml")]
+        config: PathBuf,
+        /// Motion-model weights (random-latent primitives; default: the shipped ones).
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// Where to write the prior (JSON; refused if it exists).
+        #[arg(long)]
+        out: PathBuf,
+        /// Mixture components.
+        #[arg(long, default_value_t = 16)]
+        components: usize,
+        /// EM iterations.
+        #[arg(long, default_value_t = 60)]
+        iterations: usize,
+        /// Quantile of the training primitives' mean scores taken as the plausibility limit.
+        #[arg(long, default_value_t = 0.99)]
+        quantile: f64,
+        /// Write the scores of the three groups (JSON) for `tools/plot_pose_prior.py`.
+        #[arg(long)]
+        scores_json: Option<PathBuf>,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Evaluate the sampling controller (best of K random latents by the reward) on held-out
+    /// box-scene episodes; one JSON line per K.
+    Eval {
+        #[arg(long, default_value = "configs/train_primitive.toml")]
+        config: PathBuf,
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// Pose prior (default: the shipped one).
+        #[arg(long)]
+        prior: Option<PathBuf>,
+        /// Candidates per step (comma-separated: one evaluation each).
+        #[arg(long, value_delimiter = ',', default_value = "1,16,64")]
+        k: Vec<usize>,
+        #[arg(long, default_value_t = 200)]
+        episodes: usize,
+        /// Episodes run in parallel (one decode batch).
+        #[arg(long, default_value_t = 50)]
+        envs: usize,
+        /// Success radius (m; the table's 0.3).
+        #[arg(long, default_value_t = 0.3)]
+        success_m: f64,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Write every episode's summary (JSON lines).
+        #[arg(long)]
+        episodes_jsonl: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -299,6 +360,7 @@ fn run(cli: Cli) -> Result<()> {
             );
         }
         Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
+        Command::Policy(cmd) => run_policy(cmd)?,
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
         Command::Train(TrainCommand::Primitive {
             config,
@@ -1547,6 +1609,131 @@ fn inspect_exr(file: &Path, preview: Option<&Path>) -> Result<()> {
         }
         sheet.expect("at least one pass").write_png(p)?;
         println!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
+fn run_policy(cmd: PolicyCommand) -> Result<()> {
+    use egogen::motion::cvae::train::{evaluation_sets, shipped_weights_path};
+    use egogen::motion::cvae::{BodyContext, MotionModel};
+    use egogen::policy::pose_prior::shipped_pose_prior_path;
+    use egogen::policy::{EnvSettings, PosePrior, SeedBank};
+    match cmd {
+        PolicyCommand::PosePrior {
+            config,
+            weights,
+            out,
+            components,
+            iterations,
+            quantile,
+            scores_json,
+            seed,
+        } => {
+            refuse_existing(&out)?;
+            if let Some(f) = &scores_json {
+                refuse_existing(f)?;
+            }
+            if !(0.0..=1.0).contains(&quantile) || components == 0 {
+                bail!("--quantile must lie in [0, 1] and --components be at least 1");
+            }
+            let plan = egogen::cli::train::load_train_plan(&config)?;
+            let body = BodyModel::load(&plan.body_model)?;
+            let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
+            let (train, held) = evaluation_sets(&plan, &body, true)?;
+            let (prior, sep) = egogen::policy::tasks::fit_pose_prior(
+                &train,
+                &held,
+                &model,
+                components,
+                iterations,
+                quantile,
+                seed,
+                &config.display().to_string(),
+            );
+            if let Some(parent) = out.parent() {
+                std::fs::create_dir_all(parent)?;
+            }
+            prior.save(&out)?;
+            let mut summary = serde_json::to_value(&sep)?;
+            summary.as_object_mut().map(|o| o.remove("scores"));
+            println!(
+                "{}",
+                serde_json::json!({"frames": prior.frames, "components": components, "separation": summary})
+            );
+            if let Some(f) = scores_json {
+                egogen::atomic_file::write_atomically(
+                    &f,
+                    serde_json::to_string(&sep.scores)?.as_bytes(),
+                )?;
+                println!("wrote {}", f.display());
+            }
+            println!("wrote {}", out.display());
+        }
+        PolicyCommand::Eval {
+            config,
+            weights,
+            prior,
+            k,
+            episodes,
+            envs,
+            success_m,
+            seed,
+            episodes_jsonl,
+        } => {
+            if let Some(f) = &episodes_jsonl {
+                refuse_existing(f)?;
+            }
+            if k.contains(&0) || episodes == 0 || envs == 0 {
+                bail!("--k, --episodes and --envs must be at least 1");
+            }
+            if !(success_m.is_finite() && success_m > 0.0) {
+                bail!("--success-m: expected a radius > 0 m, got {success_m}");
+            }
+            let plan = egogen::cli::train::load_train_plan(&config)?;
+            let body = BodyModel::load(&plan.body_model)?;
+            let ctx = BodyContext::new(&body, &[])?;
+            let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
+            let prior = PosePrior::load(&prior.unwrap_or_else(shipped_pose_prior_path))?;
+            let (_, held) = evaluation_sets(&plan, &body, true)?;
+            let bank = SeedBank::from_set(&held);
+            let settings = EnvSettings {
+                success_m,
+                ..EnvSettings::default()
+            };
+            let mut lines = String::new();
+            for &kk in &k {
+                let bar =
+                    indicatif::ProgressBar::new(episodes as u64).with_message(format!("K = {kk}"));
+                let (report, summaries) = egogen::policy::tasks::evaluate_sampling(
+                    &model,
+                    &ctx,
+                    &bank,
+                    &prior,
+                    settings,
+                    kk,
+                    episodes,
+                    envs,
+                    seed,
+                    |_| bar.inc(1),
+                )?;
+                bar.finish_and_clear();
+                println!(
+                    "{}",
+                    serde_json::json!({"controller": "sampling", "k": kk, "report": report})
+                );
+                for s in summaries {
+                    lines.push_str(
+                        &serde_json::json!({"controller": "sampling", "k": kk, "episode": s})
+                            .to_string(),
+                    );
+                    lines.push('\n');
+                }
+            }
+            if let Some(f) = episodes_jsonl {
+                egogen::atomic_file::write_atomically(&f, lines.as_bytes())?;
+                println!("wrote {}", f.display());
+            }
+        }
     }
     Ok(())
 }

@@ -135,9 +135,27 @@ fn contact_score_with(
     floor_z: f64,
     distance: impl Fn([f64; 3], [f64; 3]) -> f64,
 ) -> f64 {
+    let (floor, skate) = contact_terms_with(feet, floor_z, distance);
+    floor * skate
+}
+
+/// The two factors of the 3-D foot-contact score (paper Eq. 12), as EgoGen's reward uses
+/// them: `exp(−mean |lowest foot − floor − 0.02|)` (floor term) and
+/// `exp(−mean max(0, slowest foot speed − 0.075))` (skate term); NaN for fewer than 3 frames.
+pub fn contact_terms(feet: &[Vec<[f64; 3]>], floor_z: f64) -> (f64, f64) {
+    contact_terms_with(feet, floor_z, |a, b| {
+        glam::DVec3::from_array(b).distance(glam::DVec3::from_array(a))
+    })
+}
+
+fn contact_terms_with(
+    feet: &[Vec<[f64; 3]>],
+    floor_z: f64,
+    distance: impl Fn([f64; 3], [f64; 3]) -> f64,
+) -> (f64, f64) {
     let t = feet.len();
     if t < 3 {
-        return f64::NAN;
+        return (f64::NAN, f64::NAN);
     }
     let dist_floor = feet
         .iter()
@@ -156,7 +174,7 @@ fn contact_score_with(
         })
         .sum::<f64>()
         / (t - 2) as f64;
-    (-dist_floor).exp() * (-skate).exp()
+    ((-dist_floor).exp(), (-skate).exp())
 }
 
 /// Contact scores (3-D, horizontal) of a batch of raw primitives `[B, T, F]` with floors `[B]`.

@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 
 use burn::backend::Flex;
 use burn::prelude::*;
+use rayon::prelude::*;
 
 use super::eval::decode_raw;
 use super::features::{frame_features, frame_params, FRAME_DIM};
@@ -241,8 +242,9 @@ impl MotionModel {
         let flat: Vec<f32> = latents.iter().flatten().copied().collect();
         let decoded = self.decode_features(&seed_features, &floors, &flat);
         let per = PRIMITIVE_FRAMES * FRAME_DIM;
+        // Posing (f64 skinning of markers, joints and CPF) runs on all cores.
         Ok(canon_seeds
-            .into_iter()
+            .into_par_iter()
             .zip(seeds)
             .enumerate()
             .map(|(i, ((world_from_canon, seed_frames), seed))| {

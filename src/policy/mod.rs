@@ -1,0 +1,18 @@
+//! Locomotion control: the egocentric environment in which a body, driven one 0.5 s primitive
+//! at a time by latents of the motion model, walks to a goal past obstacles it sees through
+//! 32 rays; the reward of Tab. S2 with our own pose prior; the sampling controller (best of K
+//! latents by the reward); and the evaluation of controllers over held-out episodes.
+//!
+//! Depends on `motion::cvae` (decoding), `body` (markers, CPF), `scene` (walkable map,
+//! collision) and `sensing` (rays). Nothing here renders.
+
+pub mod box_scene;
+pub mod env;
+pub mod evaluate;
+pub mod pose_prior;
+pub mod reward;
+pub mod sampling;
+pub mod tasks;
+
+pub use env::{EnvSettings, PolicyEnv, SeedBank, OBS_DIM};
+pub use pose_prior::PosePrior;

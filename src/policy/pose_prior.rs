@@ -1,0 +1,259 @@
+//! The pose-plausibility prior of the reward's pose term: a Gaussian mixture with diagonal
+//! covariances over the 21 body-joint rotations (axis-angle, 63 values; global orientation
+//! excluded) fitted by EM on the training mocap's frames.
+//!
+//! EgoGen scores poses with VPoser, which is licence-gated; this prior is fitted on our own
+//! training poses instead. Its score is the negative log-density per joint value,
+//! `nll(θ) = −ln p(θ) / 63`, so that a score does not grow with the number of joints; mocap
+//! frames score low, broken ones (joints bent past their range) high. `egogen policy
+//! pose-prior` fits it and reports how well it separates mocap from random-latent and bent
+//! poses (docs/POLICY.md).
+
+use std::path::Path;
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+use crate::body::BodyParams;
+
+/// Body joints the prior covers (SMPL-X joints 1..=21).
+pub const PRIOR_JOINTS: usize = 21;
+/// Values per pose.
+pub const PRIOR_DIM: usize = 3 * PRIOR_JOINTS;
+
+/// Smallest variance of a component along one value (rad²): keeps a component from collapsing
+/// onto a joint the data never moves.
+const MIN_VARIANCE: f64 = 1e-4;
+
+/// The body-joint rotations of a pose.
+pub fn prior_values(params: &BodyParams) -> [f64; PRIOR_DIM] {
+    std::array::from_fn(|k| params.pose[3 + k])
+}
+
+/// One mixture component.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Component {
+    pub weight: f64,
+    pub mean: Vec<f64>,
+    pub variance: Vec<f64>,
+}
+
+/// A diagonal Gaussian mixture over body-joint rotations.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PosePrior {
+    /// Where the poses came from (config path and frame count), for the record.
+    pub source: String,
+    pub frames: usize,
+    /// Largest mean score over a primitive's frames that still counts as plausible (the
+    /// reward's pose term): a high quantile of the training primitives' mean scores.
+    pub plausible_max_nll: f64,
+    /// The quantile `plausible_max_nll` was set at.
+    pub plausible_quantile: f64,
+    pub components: Vec<Component>,
+}
+
+/// Why a prior file could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum PosePriorError {
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}: not a pose prior: {source}")]
+    Parse {
+        path: String,
+        source: serde_json::Error,
+    },
+    #[error(
+        "{path}: component {index}: expected {PRIOR_DIM} means and variances > 0 and a weight > 0"
+    )]
+    Invalid { path: String, index: usize },
+    #[error("{path}: plausible_max_nll must be a finite number")]
+    NoLimit { path: String },
+    #[error("{path}: no components")]
+    Empty { path: String },
+}
+
+/// `ln N(x; μ, diag σ²)` summed over the values, without the `−d/2 ln 2π` constant.
+fn log_gauss(x: &[f64], mean: &[f64], var: &[f64]) -> f64 {
+    x.iter()
+        .zip(mean)
+        .zip(var)
+        .map(|((x, m), v)| -0.5 * ((x - m).powi(2) / v + v.ln()))
+        .sum()
+}
+
+fn log_sum_exp(v: &[f64]) -> f64 {
+    let m = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !m.is_finite() {
+        return m;
+    }
+    m + v.iter().map(|x| (x - m).exp()).sum::<f64>().ln()
+}
+
+impl PosePrior {
+    /// Fits `components` components by EM (`iterations` rounds) to `poses`, initialised by
+    /// k-means++ seeding with `seed`.
+    pub fn fit(
+        poses: &[[f64; PRIOR_DIM]],
+        components: usize,
+        iterations: usize,
+        seed: u64,
+        source: impl Into<String>,
+    ) -> Self {
+        assert!(!poses.is_empty(), "a pose prior needs poses");
+        let n = poses.len();
+        let k = components.clamp(1, n);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        // k-means++ seeding of the means.
+        let mut means: Vec<Vec<f64>> = vec![poses[(rng.next_u64() % n as u64) as usize].to_vec()];
+        let sq = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
+        let mut nearest: Vec<f64> = poses.iter().map(|p| sq(p, &means[0])).collect();
+        while means.len() < k {
+            let total: f64 = nearest.iter().sum();
+            let mut r = crate::math::random::uniform_open01(&mut rng) * total;
+            let mut pick = n - 1;
+            for (i, d) in nearest.iter().enumerate() {
+                if r < *d {
+                    pick = i;
+                    break;
+                }
+                r -= d;
+            }
+            means.push(poses[pick].to_vec());
+            for (d, p) in nearest.iter_mut().zip(poses) {
+                *d = d.min(sq(p, means.last().expect("just pushed")));
+            }
+        }
+        let global_var: Vec<f64> = (0..PRIOR_DIM)
+            .map(|d| {
+                let m = poses.iter().map(|p| p[d]).sum::<f64>() / n as f64;
+                (poses.iter().map(|p| (p[d] - m).powi(2)).sum::<f64>() / n as f64).max(MIN_VARIANCE)
+            })
+            .collect();
+        let mut prior = Self {
+            source: source.into(),
+            frames: n,
+            plausible_max_nll: f64::MAX,
+            plausible_quantile: 1.0,
+            components: means
+                .into_iter()
+                .map(|mean| Component {
+                    weight: 1.0 / k as f64,
+                    mean,
+                    variance: global_var.clone(),
+                })
+                .collect(),
+        };
+        let mut resp = vec![0.0; n * k];
+        for _ in 0..iterations {
+            // E step.
+            for (i, p) in poses.iter().enumerate() {
+                let row = &mut resp[i * k..(i + 1) * k];
+                for (r, c) in row.iter_mut().zip(&prior.components) {
+                    *r = c.weight.ln() + log_gauss(p, &c.mean, &c.variance);
+                }
+                let lse = log_sum_exp(row);
+                row.iter_mut().for_each(|r| *r = (*r - lse).exp());
+            }
+            // M step.
+            for (j, c) in prior.components.iter_mut().enumerate() {
+                let nk: f64 = (0..n).map(|i| resp[i * k + j]).sum();
+                if nk < 1e-9 {
+                    continue;
+                }
+                c.weight = nk / n as f64;
+                for d in 0..PRIOR_DIM {
+                    let m = (0..n).map(|i| resp[i * k + j] * poses[i][d]).sum::<f64>() / nk;
+                    let v = (0..n)
+                        .map(|i| resp[i * k + j] * (poses[i][d] - m).powi(2))
+                        .sum::<f64>()
+                        / nk;
+                    c.mean[d] = m;
+                    c.variance[d] = v.max(MIN_VARIANCE);
+                }
+            }
+        }
+        prior
+    }
+
+    /// Sets the plausibility limit to quantile `q` of `primitive_means` (mean scores of whole
+    /// primitives).
+    pub fn set_plausible_limit(&mut self, primitive_means: &[f64], q: f64) {
+        let mut v: Vec<f64> = primitive_means
+            .iter()
+            .copied()
+            .filter(|x| x.is_finite())
+            .collect();
+        v.sort_by(f64::total_cmp);
+        if let Some(last) = v.len().checked_sub(1) {
+            self.plausible_max_nll = v[((q.clamp(0.0, 1.0) * last as f64).round()) as usize];
+            self.plausible_quantile = q;
+        }
+    }
+
+    /// Negative log-density per value, `−ln p(θ)/63` (lower is more plausible).
+    pub fn nll(&self, values: &[f64; PRIOR_DIM]) -> f64 {
+        let logs: Vec<f64> = self
+            .components
+            .iter()
+            .map(|c| {
+                c.weight.ln() + log_gauss(values, &c.mean, &c.variance)
+                    - 0.5 * PRIOR_DIM as f64 * std::f64::consts::TAU.ln()
+            })
+            .collect();
+        -log_sum_exp(&logs) / PRIOR_DIM as f64
+    }
+
+    /// [`Self::nll`] of a body's pose.
+    pub fn pose_nll(&self, params: &BodyParams) -> f64 {
+        self.nll(&prior_values(params))
+    }
+
+    /// Writes the prior as JSON (atomically).
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        let text = serde_json::to_string(self).map_err(std::io::Error::other)?;
+        crate::atomic_file::write_atomically(path, text.as_bytes())
+    }
+
+    /// Reads a prior written by [`Self::save`], checking its shape.
+    pub fn load(path: &Path) -> Result<Self, PosePriorError> {
+        let p = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| PosePriorError::Io {
+            path: p.clone(),
+            source,
+        })?;
+        let prior: Self = serde_json::from_str(&text).map_err(|source| PosePriorError::Parse {
+            path: p.clone(),
+            source,
+        })?;
+        if prior.components.is_empty() {
+            return Err(PosePriorError::Empty { path: p });
+        }
+        for (index, c) in prior.components.iter().enumerate() {
+            let ok = c.weight > 0.0
+                && c.weight.is_finite()
+                && c.mean.len() == PRIOR_DIM
+                && c.variance.len() == PRIOR_DIM
+                && c.mean.iter().all(|m| m.is_finite())
+                && c.variance.iter().all(|v| *v > 0.0 && v.is_finite());
+            if !ok {
+                return Err(PosePriorError::Invalid { path: p, index });
+            }
+        }
+        if !prior.plausible_max_nll.is_finite() {
+            return Err(PosePriorError::NoLimit { path: p });
+        }
+        Ok(prior)
+    }
+}
+
+/// Default path of the shipped prior, relative to the crate root.
+pub const SHIPPED_POSE_PRIOR: &str = "assets/policy/pose_prior.json";
+
+/// The shipped prior's path.
+pub fn shipped_pose_prior_path() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(SHIPPED_POSE_PRIOR)
+}

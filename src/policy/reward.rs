@@ -1,0 +1,208 @@
+//! The reward of one primitive (paper Tab. S2, as EgoGen's box environment computes it) and
+//! what it says about the episode: success, penetration, and the per-primitive measures the
+//! evaluation reports.
+//!
+//! Terms, each in `[0, 1]` or a distance decrease, weighted by [`RewardWeights`]:
+//! - floor `exp(−mean_t |lowest foot marker − floor − 0.02|)` and skate
+//!   `exp(−mean_t max(0, slowest foot-marker 3-D speed − 0.075))` (the two factors of Eq. 12);
+//! - goal: decrease of the pelvis's horizontal distance to the goal over the primitive (m);
+//! - orientation `(b·u + 1)/2`, `b` the body's forward (z × hip line) at the last frame and `u`
+//!   the unit direction from the pelvis to the goal; attention `(e·u + 1)/2` with `e` the floor
+//!   projection of the CPF's viewing direction at the last frame;
+//! - penetration: 0.05 while at most `penetration_cells` blocked map cells lie in the body's
+//!   2D box (the bounding box of the 67 markers of the last two frames, in the new canonical
+//!   frame: paper Eq. 7), else 0;
+//! - pose: 0.05 while the mean pose-prior score of the 20 frames is at most the prior's
+//!   plausibility limit, else 0 (EgoGen: VPoser latent norm ≤ 11);
+//! - success: 1 when the pelvis ends within `success_m` of the goal.
+//!
+//! Distances are horizontal (EgoGen's code measures 3-D distance to a goal placed at the
+//! start's pelvis height; the goal here lies on the floor plane).
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use super::pose_prior::PosePrior;
+use crate::body::joint;
+use crate::math::Vec3;
+use crate::motion::cvae::eval::contact_terms;
+use crate::motion::cvae::DecodedPrimitive;
+use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, SEED_FRAMES};
+use crate::scene::{blocked_cells_in_box, Obstacle2, WalkableMap};
+
+/// Weights of the reward terms (paper Tab. S2; penetration 1 in pretraining, 0.1 in
+/// fine-tuning).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RewardWeights {
+    pub floor: f64,
+    pub skate: f64,
+    pub goal: f64,
+    pub orientation: f64,
+    pub attention: f64,
+    pub penetration: f64,
+    pub pose: f64,
+    pub success: f64,
+}
+
+impl Default for RewardWeights {
+    fn default() -> Self {
+        Self {
+            floor: 0.1,
+            skate: 0.3,
+            goal: 1.0,
+            orientation: 0.1,
+            attention: 0.3,
+            penetration: 1.0,
+            pose: 0.1,
+            success: 0.5,
+        }
+    }
+}
+
+/// Value of the penetration and pose terms when they hold (EgoGen's 0.05).
+pub const BINARY_TERM: f64 = 0.05;
+
+/// The reward terms of one primitive, unweighted.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct RewardTerms {
+    pub floor: f64,
+    pub skate: f64,
+    pub goal: f64,
+    pub orientation: f64,
+    pub attention: f64,
+    pub penetration: f64,
+    pub pose: f64,
+    pub success: f64,
+}
+
+impl RewardTerms {
+    /// The weighted sum.
+    pub fn total(&self, w: &RewardWeights) -> f64 {
+        w.floor * self.floor
+            + w.skate * self.skate
+            + w.goal * self.goal
+            + w.orientation * self.orientation
+            + w.attention * self.attention
+            + w.penetration * self.penetration
+            + w.pose * self.pose
+            + w.success * self.success
+    }
+}
+
+/// Where the episode stands before the primitive.
+#[derive(Debug, Clone, Copy)]
+pub struct Situation<'a> {
+    pub map: &'a WalkableMap,
+    pub obstacle: Option<&'a Obstacle2>,
+    pub goal: DVec2,
+    /// Horizontal pelvis–goal distance at the end of the previous primitive (m).
+    pub distance_m: f64,
+}
+
+/// Limits the terms are judged by.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    pub success_m: f64,
+    pub penetration_cells: usize,
+}
+
+/// One primitive judged.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Judged {
+    pub terms: RewardTerms,
+    /// Horizontal pelvis–goal distance at the primitive's end (m).
+    pub distance_m: f64,
+    pub success: bool,
+    /// Blocked cells in the body's 2D box at the end (Eq. 7).
+    pub blocked_cells: usize,
+    pub penetrated: bool,
+    /// Foot contact (3-D, Eq. 12) = floor · skate.
+    pub contact: f64,
+    /// Mean pose-prior score of the frames.
+    pub pose_nll: f64,
+    /// New frames (after the seed) in which a body marker stands inside the obstacle's
+    /// footprint.
+    pub frames_in_obstacle: usize,
+    /// cos(angle) between the viewing direction and the direction to the goal, last frame.
+    pub view_cos: f64,
+}
+
+fn unit_xy(v: Vec3) -> DVec2 {
+    DVec2::new(v.x, v.y).normalize_or_zero()
+}
+
+/// Judges a decoded primitive in a situation.
+pub fn judge(
+    p: &DecodedPrimitive,
+    s: &Situation,
+    foot_markers: &[usize],
+    prior: &PosePrior,
+    limits: &Limits,
+) -> Judged {
+    let feet: Vec<Vec<[f64; 3]>> = p
+        .markers
+        .iter()
+        .map(|m| foot_markers.iter().map(|&k| m[k].to_array()).collect())
+        .collect();
+    let (floor, skate) = contact_terms(&feet, p.floor_z);
+    let pose_nll = p.world.iter().map(|f| prior.pose_nll(f)).sum::<f64>() / p.world.len() as f64;
+    let last = PRIMITIVE_FRAMES - 1;
+    let joints = &p.joints[last];
+    let pelvis = DVec2::new(joints[joint::PELVIS].x, joints[joint::PELVIS].y);
+    let to_goal = (s.goal - pelvis).normalize_or_zero();
+    let forward = unit_xy(Vec3::Z.cross(joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP]));
+    let view = unit_xy(p.world_from_cpf[last].matrix3.z_axis);
+    let distance_m = pelvis.distance(s.goal);
+    // The body's 2D box: markers of the last two frames in the new canonical frame.
+    let blocked_cells = match canonical_frame(&p.joints[last + 1 - SEED_FRAMES]) {
+        Ok(frame) => {
+            let x = DVec2::new(frame.matrix3.x_axis.x, frame.matrix3.x_axis.y);
+            let o = DVec2::new(frame.translation.x, frame.translation.y);
+            let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+            for m in p.markers[last + 1 - SEED_FRAMES..].iter().flatten() {
+                let d = DVec2::new(m.x, m.y) - o;
+                let local = DVec2::new(x.dot(d), x.perp().dot(d));
+                lo = lo.min(local);
+                hi = hi.max(local);
+            }
+            let c = (lo + hi) * 0.5;
+            let centre = o + x * c.x + x.perp() * c.y;
+            blocked_cells_in_box(s.map, centre, (hi - lo) * 0.5, x.y.atan2(x.x))
+        }
+        Err(_) => usize::MAX,
+    };
+    let penetrated = blocked_cells > limits.penetration_cells;
+    let frames_in_obstacle = s.obstacle.map_or(0, |o| {
+        p.markers[SEED_FRAMES..]
+            .iter()
+            .filter(|f| f.iter().any(|m| o.contains(DVec2::new(m.x, m.y))))
+            .count()
+    });
+    let success = distance_m < limits.success_m;
+    let terms = RewardTerms {
+        floor,
+        skate,
+        goal: s.distance_m - distance_m,
+        orientation: (forward.dot(to_goal) + 1.0) / 2.0,
+        attention: (view.dot(to_goal) + 1.0) / 2.0,
+        penetration: if penetrated { 0.0 } else { BINARY_TERM },
+        pose: if pose_nll <= prior.plausible_max_nll {
+            BINARY_TERM
+        } else {
+            0.0
+        },
+        success: if success { 1.0 } else { 0.0 },
+    };
+    Judged {
+        terms,
+        distance_m,
+        success,
+        blocked_cells,
+        penetrated,
+        contact: floor * skate,
+        pose_nll,
+        frames_in_obstacle,
+        view_cos: view.dot(to_goal),
+    }
+}

@@ -1,0 +1,186 @@
+//! Whole jobs the `egogen policy` commands run: fitting and checking the pose prior, and
+//! evaluating the sampling controller on held-out episodes. Each takes loaded parts and
+//! returns a report; the binary only parses arguments and prints.
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
+use serde::Serialize;
+
+use super::env::{EnvSettings, PolicyEnv, SeedBank};
+use super::evaluate::{run_episodes, EvalReport, HELD_OUT_BASE};
+use super::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
+use super::sampling::sampling_step;
+use crate::body::BodyParams;
+use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Vec3};
+use crate::motion::cvae::data::PrimitiveSet;
+use crate::motion::cvae::features::{frame_params, FRAME_DIM};
+use crate::motion::cvae::pace::Quantiles;
+use crate::motion::cvae::train::normal_samples;
+use crate::motion::cvae::{BodyContext, MotionModel};
+use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
+
+/// Frames of every primitive of a set, as poses.
+fn set_frames(set: &PrimitiveSet) -> Vec<Vec<BodyParams>> {
+    (0..set.len())
+        .map(|i| {
+            set.item(i)
+                .chunks(FRAME_DIM)
+                .map(|f| frame_params(f, &[]))
+                .collect()
+        })
+        .collect()
+}
+
+fn mean_nll(prior: &PosePrior, frames: &[BodyParams]) -> f64 {
+    frames.iter().map(|f| prior.pose_nll(f)).sum::<f64>() / frames.len().max(1) as f64
+}
+
+/// Joints bent in the "broken pose" check: hips, knees, spine, shoulders, elbows.
+const BENT_JOINTS: [usize; 9] = [1, 2, 3, 4, 5, 16, 17, 18, 19];
+
+/// Per-primitive mean scores of three groups, and how many of each exceed the limit.
+#[derive(Debug, Clone, Serialize)]
+pub struct PriorSeparation {
+    pub plausible_max_nll: f64,
+    pub held_out_mocap: Quantiles,
+    pub random_latent: Quantiles,
+    pub bent_joint: Quantiles,
+    pub held_out_mocap_implausible_share: f64,
+    pub random_latent_implausible_share: f64,
+    pub bent_joint_implausible_share: f64,
+    /// The scores themselves, for histograms (`tools/plot_pose_prior.py`).
+    pub scores: PriorScores,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct PriorScores {
+    pub held_out_mocap: Vec<f64>,
+    pub random_latent: Vec<f64>,
+    pub bent_joint: Vec<f64>,
+}
+
+/// Fits the prior on the training primitives' frames (limit at quantile `quantile` of their
+/// per-primitive means) and measures how it separates held-out mocap from primitives decoded
+/// from random latents (training seeds, z ~ N(0, I)) and from held-out mocap with one joint
+/// bent by 90° about a random axis in every frame.
+pub fn fit_pose_prior(
+    train: &PrimitiveSet,
+    held_out: &PrimitiveSet,
+    model: &MotionModel,
+    components: usize,
+    iterations: usize,
+    quantile: f64,
+    seed: u64,
+    source: &str,
+) -> (PosePrior, PriorSeparation) {
+    let train_frames = set_frames(train);
+    let poses: Vec<[f64; PRIOR_DIM]> = train_frames.iter().flatten().map(prior_values).collect();
+    let mut prior = PosePrior::fit(&poses, components, iterations, seed, source);
+    let means: Vec<f64> = train_frames.iter().map(|f| mean_nll(&prior, f)).collect();
+    prior.set_plausible_limit(&means, quantile);
+    let held_frames = set_frames(held_out);
+    let mocap: Vec<f64> = held_frames.iter().map(|f| mean_nll(&prior, f)).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xB0D1);
+    let bent: Vec<f64> = held_frames
+        .iter()
+        .map(|frames| {
+            let j = BENT_JOINTS[(rng.next_u64() % BENT_JOINTS.len() as u64) as usize];
+            let axis = Vec3::new(
+                crate::math::random::standard_normal(&mut rng),
+                crate::math::random::standard_normal(&mut rng),
+                crate::math::random::standard_normal(&mut rng),
+            )
+            .normalize();
+            let extra = axis_angle_to_matrix(axis * std::f64::consts::FRAC_PI_2);
+            let bent: Vec<BodyParams> = frames
+                .iter()
+                .map(|f| {
+                    let mut b = f.clone();
+                    let r = extra * axis_angle_to_matrix(f.joint_axis_angle(j));
+                    b.set_joint_axis_angle(j, matrix_to_axis_angle(r));
+                    b
+                })
+                .collect();
+            mean_nll(&prior, &bent)
+        })
+        .collect();
+    // Random latents from training seeds, decoded in batches.
+    let l = model.latent_dim();
+    let mut random = Vec::with_capacity(train.len());
+    for start in (0..train.len()).step_by(256) {
+        let end = (start + 256).min(train.len());
+        let b = end - start;
+        let mut seeds = Vec::with_capacity(b * SEED_FRAMES * FRAME_DIM);
+        let mut floors = Vec::with_capacity(b);
+        for i in start..end {
+            seeds.extend_from_slice(&train.item(i)[..SEED_FRAMES * FRAME_DIM]);
+            floors.push(train.floors(i)[0]);
+        }
+        let z = normal_samples(&mut rng, b * l);
+        let out = model.decode_features(&seeds, &floors, &z);
+        for p in out.chunks(PRIMITIVE_FRAMES * FRAME_DIM) {
+            if p.iter().any(|v| !v.is_finite()) {
+                random.push(f64::INFINITY);
+                continue;
+            }
+            let frames: Vec<BodyParams> =
+                p.chunks(FRAME_DIM).map(|f| frame_params(f, &[])).collect();
+            random.push(mean_nll(&prior, &frames));
+        }
+    }
+    let limit = prior.plausible_max_nll;
+    let share = |v: &[f64]| v.iter().filter(|x| **x > limit).count() as f64 / v.len().max(1) as f64;
+    let sep = PriorSeparation {
+        plausible_max_nll: limit,
+        held_out_mocap: Quantiles::of(mocap.iter().copied()),
+        random_latent: Quantiles::of(random.iter().copied()),
+        bent_joint: Quantiles::of(bent.iter().copied()),
+        held_out_mocap_implausible_share: share(&mocap),
+        random_latent_implausible_share: share(&random),
+        bent_joint_implausible_share: share(&bent),
+        scores: PriorScores {
+            held_out_mocap: mocap,
+            random_latent: random,
+            bent_joint: bent,
+        },
+    };
+    (prior, sep)
+}
+
+/// The sampling controller with `k` candidates on the first `episodes` held-out episodes,
+/// `envs` at a time.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_sampling(
+    model: &MotionModel,
+    body: &BodyContext,
+    bank: &SeedBank,
+    prior: &PosePrior,
+    settings: EnvSettings,
+    k: usize,
+    episodes: usize,
+    envs: usize,
+    seed: u64,
+    progress: impl FnMut(&super::env::EpisodeSummary),
+) -> Result<(EvalReport, Vec<super::env::EpisodeSummary>), super::env::EnvError> {
+    let t0 = std::time::Instant::now();
+    let mut env = PolicyEnv::new(
+        model,
+        body,
+        bank,
+        prior,
+        settings,
+        envs.clamp(1, episodes.max(1)),
+        HELD_OUT_BASE,
+    )?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (summaries, steps) = run_episodes(
+        &mut env,
+        episodes,
+        |e| sampling_step(e, k, &mut rng),
+        progress,
+    )?;
+    Ok((
+        EvalReport::of(&summaries, steps, t0.elapsed().as_secs_f64()),
+        summaries,
+    ))
+}

@@ -1,0 +1,228 @@
+//! The locomotion environment: box scenes put the box between start and goal; episodes are
+//! deterministic per episode base and differ between bases; observations have EgoGen's layout
+//! and ranges; episodes end by timeout after 11 primitives and restart; the best of K
+//! candidates never scores below the first; the pose prior tells mocap from bent joints and
+//! refuses broken files with their path.
+
+mod common;
+
+use egogen::body::BodyModel;
+use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
+use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
+use egogen::policy::box_scene::{BoxScene, BoxSceneSettings};
+use egogen::policy::env::{Ending, OBS_DIST_OFFSET, OBS_RAYS_OFFSET, RAYS, STATE_FRAME_DIM};
+use egogen::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
+use egogen::policy::sampling::sampling_step;
+use egogen::policy::{EnvSettings, PolicyEnv, SeedBank, OBS_DIM};
+use egogen::scene::Obstacle2;
+use glam::DVec2;
+use proptest::prelude::*;
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+
+fn clip() -> egogen::motion::MotionSequence {
+    egogen::motion::MotionSequence::read(&common::repo_root().join("assets/motion/cmu_01_03.npz"))
+        .unwrap()
+}
+
+fn seeds() -> Vec<PrimitiveSeed> {
+    let c = clip();
+    [40usize, 80, 120, 160]
+        .iter()
+        .map(|&f| PrimitiveSeed {
+            frames: [c.frame(f), c.frame(f + 1)],
+            floor_z: 0.0,
+        })
+        .collect()
+}
+
+/// A prior fitted on the clip's own frames (small and quick).
+fn clip_prior() -> PosePrior {
+    let c = clip();
+    let poses: Vec<[f64; PRIOR_DIM]> = (0..c.len())
+        .step_by(2)
+        .map(|i| prior_values(&c.frame(i)))
+        .collect();
+    let mut p = PosePrior::fit(&poses, 4, 20, 0, "cmu_01_03");
+    let means: Vec<f64> = poses.iter().map(|v| p.nll(v)).collect();
+    p.set_plausible_limit(&means, 0.99);
+    p
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    #[test]
+    fn the_box_stands_between_start_and_goal(seed in any::<u64>()) {
+        let s = BoxSceneSettings::default();
+        let scene = BoxScene::sample(&s, &mut ChaCha8Rng::seed_from_u64(seed));
+        let Obstacle2::Box { centre, half_extents, .. } = scene.obstacle else { panic!("a box") };
+        prop_assert!(half_extents.min_element() >= 0.25 && half_extents.max_element() <= 0.5);
+        // Goal mirrored through the box centre: the straight path crosses the box.
+        prop_assert!(((scene.start + scene.goal) * 0.5 - centre).length() < 1e-12);
+        prop_assert!(scene.obstacle.contains(centre));
+        for p in [scene.start, scene.goal] {
+            prop_assert!(scene.map.is_walkable_at(p));
+            prop_assert!(scene.map.sdf_at(p) >= s.clearance_m - 0.15, "sdf {}", scene.map.sdf_at(p));
+            prop_assert!(p.abs().max_element() < s.floor_m / 2.0 - 0.5);
+        }
+        prop_assert!(scene.start.distance(scene.goal) >= 2.0 * (0.25 + s.clearance_m) - 1e-9);
+    }
+}
+
+#[test]
+fn episodes_are_deterministic_observed_as_egogen_and_time_out() {
+    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
+    let prior = clip_prior();
+    let settings = EnvSettings::default();
+    let b = 4;
+    let mut a = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 7).unwrap();
+    let twin = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 7).unwrap();
+    let other = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 8).unwrap();
+    let obs = a.observations();
+    assert_eq!(obs.len(), b * OBS_DIM);
+    assert_eq!(obs, twin.observations());
+    assert_ne!(obs, other.observations());
+    for o in obs.chunks(OBS_DIM) {
+        assert!(o.iter().all(|v| v.is_finite()));
+        // Goal directions are unit vectors; markers lie within 2 m of the canonical origin.
+        for k in 0..2 {
+            let f = &o[k * STATE_FRAME_DIM..(k + 1) * STATE_FRAME_DIM];
+            for m in 0..67 {
+                let p = &f[3 * m..3 * m + 3];
+                assert!(p.iter().map(|x| x * x).sum::<f32>().sqrt() < 2.0);
+                let d = &f[201 + 3 * m..201 + 3 * m + 3];
+                let len = d.iter().map(|x| x * x).sum::<f32>().sqrt();
+                assert!((len - 1.0).abs() < 1e-4, "direction length {len}");
+            }
+        }
+        let rays = &o[OBS_RAYS_OFFSET..OBS_RAYS_OFFSET + 2 * RAYS];
+        assert!(rays.iter().all(|r| (-1.0..=1.0).contains(r)));
+        // The box stands ahead within 7 m: some ray in the fan sees something nearer.
+        assert!(rays.iter().any(|r| *r < 0.9), "{rays:?}");
+        let d = o[OBS_DIST_OFFSET];
+        assert!(d > 0.1 && d < 0.5, "1/(1+d) = {d}");
+        assert_eq!(o[OBS_DIST_OFFSET + 1], 1.0);
+    }
+    // Random latents: deterministic rewards, every episode over after 11 primitives.
+    let l = a.latent_dim();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut b_env = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 7).unwrap();
+    let mut ended = Vec::new();
+    for step in 0..settings.max_primitives {
+        let z = normal_samples(&mut rng, b * l);
+        let out = a.step(&z).unwrap();
+        let twin_out = b_env.step(&z).unwrap();
+        assert_eq!(out.reward, twin_out.reward);
+        assert!(out.reward.iter().all(|r| r.is_finite()));
+        for s in &out.finished {
+            assert!(s.primitives <= step + 1);
+        }
+        ended.extend(out.finished);
+    }
+    let first: Vec<_> = ended.iter().filter(|s| s.id < b as u64).collect();
+    assert_eq!(
+        first.len(),
+        b,
+        "all first episodes end within 11 primitives"
+    );
+    for s in &first {
+        assert!(matches!(s.ending, Ending::Timeout | Ending::Success));
+        assert!(s.contact > 0.0 && s.contact <= 1.0);
+        assert!(s.speed_m_s.is_finite());
+    }
+    assert!(a.episode_ids().iter().all(|&id| id >= b as u64));
+}
+
+#[test]
+fn the_best_of_k_candidates_scores_at_least_the_first() {
+    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
+    let prior = clip_prior();
+    let env = PolicyEnv::new(&model, &ctx, &bank, &prior, EnvSettings::default(), 3, 1).unwrap();
+    let k = 8;
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let z = normal_samples(&mut rng, 3 * k * env.latent_dim());
+    let candidates = env.propose(&z, k).unwrap();
+    assert_eq!(candidates.len(), 3 * k);
+    let best: Vec<f64> = (0..3)
+        .map(|e| {
+            candidates[e * k..(e + 1) * k]
+                .iter()
+                .map(|c| c.reward)
+                .fold(f64::MIN, f64::max)
+        })
+        .collect();
+    // The same draw through the controller keeps the best.
+    let mut env2 =
+        PolicyEnv::new(&model, &ctx, &bank, &prior, EnvSettings::default(), 3, 1).unwrap();
+    let out = sampling_step(&mut env2, k, &mut ChaCha8Rng::seed_from_u64(5)).unwrap();
+    for e in 0..3 {
+        assert!((out.reward[e] as f64 - best[e]).abs() < 1e-6);
+        assert!(best[e] >= candidates[e * k].reward);
+    }
+    // A decreasing distance is rewarded: the goal term is the distance decrease.
+    for c in &candidates {
+        let j = c.judged.unwrap();
+        assert!(
+            j.terms.goal.abs() < 1.5,
+            "a primitive moves < 1.5 m in 0.5 s"
+        );
+        assert!((0.0..=1.0).contains(&j.terms.orientation));
+        assert!((0.0..=1.0).contains(&j.terms.attention));
+    }
+    let _ = DVec2::ZERO;
+}
+
+#[test]
+fn the_pose_prior_tells_mocap_from_bent_joints_and_refuses_broken_files() {
+    let prior = clip_prior();
+    let c = clip();
+    let mut bent_worse = 0;
+    let mut n = 0;
+    for i in (1..c.len()).step_by(7) {
+        let f = c.frame(i);
+        let mut b = f.clone();
+        // Left knee bent 90° sideways.
+        let aa = b.joint_axis_angle(4);
+        b.set_joint_axis_angle(
+            4,
+            aa + egogen::math::Vec3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2),
+        );
+        n += 1;
+        if prior.pose_nll(&b) > prior.plausible_max_nll && prior.pose_nll(&f) < prior.pose_nll(&b) {
+            bent_worse += 1;
+        }
+    }
+    assert!(bent_worse as f64 >= 0.95 * n as f64, "{bent_worse} of {n}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("prior.json");
+    prior.save(&path).unwrap();
+    assert!(
+        PosePrior::load(&path).unwrap() == prior,
+        "the prior reads back exactly"
+    );
+    let text = std::fs::read_to_string(&path).unwrap().replacen(
+        "\"variance\":[",
+        "\"variance\":[-1.0,",
+        1,
+    );
+    let broken = dir.path().join("broken.json");
+    std::fs::write(&broken, text).unwrap();
+    let err = PosePrior::load(&broken).unwrap_err().to_string();
+    assert!(
+        err.contains("broken.json") && err.contains("component 0"),
+        "{err}"
+    );
+    std::fs::write(&broken, "{").unwrap();
+    let err = PosePrior::load(&broken).unwrap_err().to_string();
+    assert!(
+        err.contains("broken.json") && err.contains("not a pose prior"),
+        "{err}"
+    );
+}
