@@ -861,20 +861,6 @@ checkpoint_every_s = 0
 }
 
 /// The loss log without wall times, for comparing runs.
-fn log_without_times(path: &Path) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .map(|l| {
-            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
-            for key in ["elapsed_s", "seconds"] {
-                v.as_object_mut().unwrap().remove(key);
-            }
-            v
-        })
-        .collect()
-}
-
 #[test]
 fn a_killed_training_run_resumes_exactly_where_it_stopped() {
     use std::process::{Command, Stdio};
@@ -953,42 +939,19 @@ fn a_killed_training_run_resumes_exactly_where_it_stopped() {
     );
     assert!(!state.exists(), "the finished run removes its checkpoint");
     // Bit for bit the weights of the uninterrupted run, and the same loss log.
-    let a = safetensors_tensors(&whole.path().join("w.safetensors"));
-    let b = safetensors_tensors(&cut.path().join("w.safetensors"));
+    let a = common::safetensors_tensors(&whole.path().join("w.safetensors"));
+    let b = common::safetensors_tensors(&cut.path().join("w.safetensors"));
     assert!(!a.is_empty());
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
     for (name, bytes) in &a {
         assert!(*bytes == b[name], "tensor {name}: resumed weights differ");
     }
     assert_eq!(
-        log_without_times(&whole.path().join("w.log.jsonl")),
-        log_without_times(&cut.path().join("w.log.jsonl"))
+        common::log_without_times(&whole.path().join("w.log.jsonl")),
+        common::log_without_times(&cut.path().join("w.log.jsonl"))
     );
     // Resuming with nothing to resume is refused.
     let out = run(&config, true).output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("no checkpoint"));
-}
-
-/// The tensors of a safetensors file by name, as raw bytes (the header's key order is not
-/// fixed, the tensors are).
-fn safetensors_tensors(path: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
-    let bytes = std::fs::read(path).unwrap();
-    let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
-    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).unwrap();
-    let data = &bytes[8 + n..];
-    header
-        .as_object()
-        .unwrap()
-        .iter()
-        .filter(|(k, _)| *k != "__metadata__")
-        .map(|(k, v)| {
-            let o = &v["data_offsets"];
-            let (a, b) = (
-                o[0].as_u64().unwrap() as usize,
-                o[1].as_u64().unwrap() as usize,
-            );
-            (k.clone(), data[a..b].to_vec())
-        })
-        .collect()
 }

@@ -119,6 +119,19 @@ enum PolicyCommand {
 
 #[derive(Subcommand, Debug)]
 enum TrainCommand {
+    /// Train the locomotion policy with PPO in the box environment (stages as configured);
+    /// writes safetensors weights, the last weights of every stage and a JSON-lines log.
+    Policy {
+        /// Training config (TOML), e.g. configs/train_policy.toml.
+        #[arg(long)]
+        config: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+        /// Continue the interrupted run from its checkpoint, exactly where it stopped.
+        #[arg(long)]
+        resume: bool,
+    },
     /// Train the motion-primitive C-VAE on mocap clips; writes safetensors weights (atomically)
     /// and a JSON-lines loss log, as named in the config.
     Primitive {
@@ -362,6 +375,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
         Command::Policy(cmd) => run_policy(cmd)?,
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
+        Command::Train(TrainCommand::Policy {
+            config,
+            quiet,
+            resume,
+        }) => train_policy(&config, quiet, resume)?,
         Command::Train(TrainCommand::Primitive {
             config,
             quiet,
@@ -1735,5 +1753,44 @@ fn run_policy(cmd: PolicyCommand) -> Result<()> {
             }
         }
     }
+    Ok(())
+}
+
+fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
+    use egogen::motion::cvae::train::evaluation_sets;
+    use egogen::motion::cvae::{BodyContext, MotionModel};
+    use egogen::policy::ppo::{train_policy, Parts};
+    use egogen::policy::{PosePrior, SeedBank};
+    let mut plan = egogen::cli::train_policy::load_policy_plan(config)?;
+    let body = BodyModel::load(&plan.body_model)?;
+    let ctx = BodyContext::new(&body, &[])?;
+    let model = MotionModel::load(&plan.motion_weights)?;
+    plan.arch.latent_dim = model.latent_dim();
+    let prior = PosePrior::load(&plan.pose_prior)?;
+    let motion_plan = egogen::cli::train::load_train_plan(&plan.motion_config)?;
+    let (train_set, _) = evaluation_sets(&motion_plan, &body, true)?;
+    let bank = SeedBank::from_set(&train_set);
+    let parts = Parts {
+        model: &model,
+        body: &ctx,
+        bank: &bank,
+        prior: &prior,
+    };
+    let report = train_policy(&plan, &parts, !quiet, resume)?;
+    println!(
+        "trained {} parameters for {} updates ({} env steps) in {:.0} s; best validation return {}",
+        report.parameters,
+        report.updates,
+        report.env_steps,
+        report.seconds,
+        report
+            .best_validation_return
+            .map_or("n/a".into(), |r| format!("{r:.3}"))
+    );
+    println!(
+        "wrote {} and {}",
+        plan.weights_out.display(),
+        plan.log_out.display()
+    );
     Ok(())
 }

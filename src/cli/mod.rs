@@ -6,6 +6,7 @@
 pub mod config;
 pub mod resolve;
 pub mod train;
+pub mod train_policy;
 
 pub use config::{ConfigError, RawRun};
 

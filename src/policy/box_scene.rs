@@ -43,6 +43,15 @@ impl Default for BoxSceneSettings {
     }
 }
 
+/// What is drawn for a box scene (the start relative to the box centre).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BoxParams {
+    pub centre: [f64; 2],
+    pub half_extents: [f64; 2],
+    pub yaw_rad: f64,
+    pub start: [f64; 2],
+}
+
 /// One drawn box scene.
 #[derive(Debug, Clone)]
 pub struct BoxScene {
@@ -50,6 +59,7 @@ pub struct BoxScene {
     pub obstacle: Obstacle2,
     pub start: DVec2,
     pub goal: DVec2,
+    pub params: BoxParams,
 }
 
 /// Distance (m) from `p` to an oriented box footprint (0 inside).
@@ -80,10 +90,25 @@ impl BoxScene {
                 break;
             }
         }
+        Self::build(
+            settings,
+            BoxParams {
+                centre: centre.to_array(),
+                half_extents: half.to_array(),
+                yaw_rad: yaw,
+                start: start.to_array(),
+            },
+        )
+    }
+
+    /// The scene of drawn parameters: the box, the start, the goal mirrored through the box.
+    pub fn build(settings: &BoxSceneSettings, p: BoxParams) -> Self {
+        let centre = DVec2::from_array(p.centre);
+        let start = DVec2::from_array(p.start);
         let obstacle = Obstacle2::Box {
             centre,
-            half_extents: half,
-            yaw_rad: yaw,
+            half_extents: DVec2::from_array(p.half_extents),
+            yaw_rad: p.yaw_rad,
         };
         let n = (settings.floor_m / settings.cell_m).round().max(1.0) as usize;
         let origin = centre - DVec2::splat(n as f64 * settings.cell_m / 2.0);
@@ -99,6 +124,7 @@ impl BoxScene {
             obstacle,
             start: centre + start,
             goal: centre - start,
+            params: p,
         }
     }
 }

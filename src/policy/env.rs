@@ -22,10 +22,10 @@ use rand_core::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::box_scene::{BoxScene, BoxSceneSettings};
+use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use super::pose_prior::PosePrior;
 use super::reward::{judge, Judged, Limits, RewardWeights, Situation};
-use crate::body::{joint, BodyParams, NUM_MARKERS};
+use crate::body::{joint, BodyParams, NUM_MARKERS, POSE_DIM};
 use crate::math::random::uniform_open01;
 use crate::math::{Affine3, Mat3, Vec3};
 use crate::motion::cvae::data::PrimitiveSet;
@@ -135,7 +135,7 @@ struct SeedView {
 }
 
 /// Running totals of an episode, for its summary.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 struct Totals {
     reward: f64,
     contact: f64,
@@ -155,6 +155,27 @@ struct Episode {
     distance_m: f64,
     start_distance_m: f64,
     totals: Totals,
+}
+
+/// An episode in progress as data (checkpoints of training).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct EpisodeSnapshot {
+    id: u64,
+    scene: BoxParams,
+    /// The seed frames' pose (165) and translation (3).
+    frames: Vec<Vec<f64>>,
+    steps: usize,
+    distance_m: f64,
+    start_distance_m: f64,
+    totals: Totals,
+}
+
+/// All episodes in progress and the next episode's number.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct EnvSnapshot {
+    pub episode_base: u64,
+    pub next_episode: u64,
+    pub episodes: Vec<EpisodeSnapshot>,
 }
 
 /// How an episode ended.
@@ -223,6 +244,8 @@ pub enum EnvError {
         per: usize,
         dim: usize,
     },
+    #[error("environment snapshot: {0}")]
+    Snapshot(String),
     #[error(transparent)]
     Decode(#[from] DecodeError),
 }
@@ -569,6 +592,79 @@ impl<'m> PolicyEnv<'m> {
     pub fn step(&mut self, latents: &[f32]) -> Result<StepOutput, EnvError> {
         let c = self.propose(latents, 1)?;
         self.commit(c)
+    }
+
+    /// The episodes in progress as data.
+    pub fn snapshot(&self) -> EnvSnapshot {
+        EnvSnapshot {
+            episode_base: self.episode_base,
+            next_episode: self.next_episode,
+            episodes: self
+                .episodes
+                .iter()
+                .map(|e| EpisodeSnapshot {
+                    id: e.id,
+                    scene: e.scene.params,
+                    frames: e
+                        .view
+                        .seed
+                        .frames
+                        .iter()
+                        .map(|f| f.pose.iter().copied().chain(f.transl.to_array()).collect())
+                        .collect(),
+                    steps: e.steps,
+                    distance_m: e.distance_m,
+                    start_distance_m: e.start_distance_m,
+                    totals: e.totals.clone(),
+                })
+                .collect(),
+        }
+    }
+
+    /// Continues from a snapshot of an environment of the same settings and size.
+    pub fn restore(&mut self, snap: &EnvSnapshot) -> Result<(), EnvError> {
+        if snap.episodes.len() != self.episodes.len() || snap.episode_base != self.episode_base {
+            return Err(EnvError::Snapshot(format!(
+                "{} episodes under base {} saved, {} under base {} here",
+                snap.episodes.len(),
+                snap.episode_base,
+                self.episodes.len(),
+                self.episode_base
+            )));
+        }
+        let mut episodes = Vec::with_capacity(snap.episodes.len());
+        for s in &snap.episodes {
+            if s.frames.len() != SEED_FRAMES || s.frames.iter().any(|f| f.len() != POSE_DIM + 3) {
+                return Err(EnvError::Snapshot(format!(
+                    "episode {}: seed frames of the wrong size",
+                    s.id
+                )));
+            }
+            let frames: [BodyParams; SEED_FRAMES] = std::array::from_fn(|k| {
+                let f = &s.frames[k];
+                BodyParams {
+                    pose: std::array::from_fn(|i| f[i]),
+                    transl: Vec3::new(f[POSE_DIM], f[POSE_DIM + 1], f[POSE_DIM + 2]),
+                    ..BodyParams::default()
+                }
+            });
+            let view = self.view_of(PrimitiveSeed {
+                frames,
+                floor_z: 0.0,
+            })?;
+            episodes.push(Episode {
+                id: s.id,
+                scene: BoxScene::build(&self.settings.scene, s.scene),
+                view,
+                steps: s.steps,
+                distance_m: s.distance_m,
+                start_distance_m: s.start_distance_m,
+                totals: s.totals.clone(),
+            });
+        }
+        self.episodes = episodes;
+        self.next_episode = snap.next_episode;
+        Ok(())
     }
 
     /// Ids of the episodes in progress.

@@ -9,7 +9,9 @@
 pub mod box_scene;
 pub mod env;
 pub mod evaluate;
+pub mod net;
 pub mod pose_prior;
+pub mod ppo;
 pub mod reward;
 pub mod sampling;
 pub mod tasks;

@@ -234,3 +234,48 @@ pub fn run_dir(config: &str) -> (tempfile::TempDir, PathBuf) {
 pub fn read_manifest(dataset: &Path) -> egogen::supervisor::Manifest {
     serde_json::from_str(&std::fs::read_to_string(dataset.join("manifest.json")).unwrap()).unwrap()
 }
+
+/// The lines of a JSON-lines log without their wall-clock fields.
+pub fn log_without_times(path: &Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            for key in [
+                "elapsed_s",
+                "seconds",
+                "wall_s",
+                "env_s",
+                "forward_s",
+                "update_s",
+            ] {
+                v.as_object_mut().unwrap().remove(key);
+            }
+            v
+        })
+        .collect()
+}
+
+/// The tensors of a safetensors file by name, as raw bytes (the header's key order is not
+/// fixed, the tensors are).
+pub fn safetensors_tensors(path: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let bytes = std::fs::read(path).unwrap();
+    let n = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n]).unwrap();
+    let data = &bytes[8 + n..];
+    header
+        .as_object()
+        .unwrap()
+        .iter()
+        .filter(|(k, _)| *k != "__metadata__")
+        .map(|(k, v)| {
+            let o = &v["data_offsets"];
+            let (a, b) = (
+                o[0].as_u64().unwrap() as usize,
+                o[1].as_u64().unwrap() as usize,
+            );
+            (k.clone(), data[a..b].to_vec())
+        })
+        .collect()
+}

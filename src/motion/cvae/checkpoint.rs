@@ -1,7 +1,8 @@
 //! Checkpoints of a training run, so that `egogen train primitive --resume` continues a killed
 //! run exactly where it stopped: the network and the optimiser's moments (burn records, full
-//! precision), the random generator's position, the phase and step reached, the seed pool of
-//! prior fine-tuning and the length of the loss log.
+//! precision), the random generator's position, the phase and step reached, any other state
+//! the run needs (JSON: the seed pool of prior fine-tuning, the environments of policy
+//! training) and the length of the log.
 //!
 //! A checkpoint is a folder next to the weights (`<weights>.checkpoint/`). Its `state.json`
 //! names the record files it belongs to and is replaced atomically after they are written, so a
@@ -20,7 +21,6 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sha2::Digest;
 
-use super::pool::SeedPool;
 use super::train::TrainError;
 
 /// Where the run stood when the checkpoint was written.
@@ -45,7 +45,9 @@ pub struct CheckpointState {
     pub net_file: String,
     /// None at the start of a phase (its optimiser starts fresh).
     pub optim_file: Option<String>,
-    pub pool_file: Option<String>,
+    /// The run's other state (JSON), if any.
+    #[serde(alias = "pool_file")]
+    pub extra_file: Option<String>,
     /// Bytes of the loss log that belong to the run up to here.
     pub log_bytes: u64,
 }
@@ -63,6 +65,23 @@ pub fn checkpoint_dir(weights_out: &Path) -> PathBuf {
 /// Whether `dir` holds a checkpoint to resume.
 pub fn exists(dir: &Path) -> bool {
     dir.join(STATE).is_file()
+}
+
+/// Whether a run may start (`resume` false) or resume (`resume` true) given the checkpoint
+/// folder: a leftover checkpoint is never overwritten, and resuming needs one.
+pub fn check_resume(dir: &Path, resume: bool) -> Result<(), TrainError> {
+    match (resume, exists(dir)) {
+        (false, true) => Err(TrainError::Data(format!(
+            "an interrupted run left a checkpoint in {}: pass --resume to continue it, or \
+             remove that folder to start over",
+            dir.display()
+        ))),
+        (true, false) => Err(TrainError::Data(format!(
+            "--resume: no checkpoint in {} (nothing to resume; run without --resume)",
+            dir.display()
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// SHA-256 of a plan's debug form.
@@ -95,27 +114,28 @@ pub fn rng_position(rng: &ChaCha8Rng) -> (String, u64, String) {
 }
 
 /// What a checkpoint holds besides its state.
-pub struct Restored<M, O> {
+pub struct Restored<M, O, X> {
     pub state: CheckpointState,
     pub net: M,
     pub optim: Option<O>,
     pub rng: ChaCha8Rng,
-    pub pool: Option<SeedPool>,
+    pub extra: Option<X>,
 }
 
-/// Writes a checkpoint of `net`, `optim` and `pool` with `state` (whose file names it fills
+/// Writes a checkpoint of `net`, `optim` and `extra` with `state` (whose file names it fills
 /// in) into `dir`, then removes the files of the previous one.
-pub fn save<B, M, O>(
+pub fn save<B, M, O, X>(
     dir: &Path,
     mut state: CheckpointState,
     net: &M,
     optim: Option<&O>,
-    pool: Option<&SeedPool>,
+    extra: Option<&X>,
 ) -> Result<(), TrainError>
 where
     B: AutodiffBackend,
     M: Module<B> + burn::module::AutodiffModule<B>,
     O: Optimizer<M, B>,
+    X: Serialize,
 {
     std::fs::create_dir_all(dir).map_err(io(dir))?;
     let recorder = BinFileRecorder::<FullPrecisionSettings>::new();
@@ -133,9 +153,9 @@ where
         }
         None => None,
     };
-    state.pool_file = match pool {
+    state.extra_file = match extra {
         Some(p) => {
-            let name = format!("pool-{tag}.json");
+            let name = format!("extra-{tag}.json");
             let path = dir.join(&name);
             let bytes = serde_json::to_vec(p).map_err(|e| recorder_error(&path, e))?;
             crate::atomic_file::write_atomically(&path, &bytes).map_err(io(&path))?;
@@ -160,7 +180,7 @@ where
     for s in [Some(&state), previous.as_ref()].into_iter().flatten() {
         keep.push(s.net_file.clone());
         keep.extend(s.optim_file.clone());
-        keep.extend(s.pool_file.clone());
+        keep.extend(s.extra_file.clone());
     }
     for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
@@ -178,24 +198,25 @@ const PREVIOUS_STATE: &str = "state.prev.json";
 /// Reads the checkpoint in `dir` into `net` (the freshly built network of the same plan) and an
 /// optimiser from `fresh_optim` (used when the checkpoint has optimiser state). When a file of
 /// the newest checkpoint cannot be read, warns on stderr and reads the one before it.
-pub fn load<B, M, O>(
+pub fn load<B, M, O, X>(
     dir: &Path,
     plan_sha256: &str,
     net: M,
     fresh_optim: impl Fn() -> O,
     device: &B::Device,
-) -> Result<Restored<M, O>, TrainError>
+) -> Result<Restored<M, O, X>, TrainError>
 where
     B: AutodiffBackend,
     M: Module<B> + burn::module::AutodiffModule<B>,
     O: Optimizer<M, B>,
+    X: serde::de::DeserializeOwned,
 {
-    match load_state::<B, M, O>(dir, STATE, plan_sha256, net.clone(), fresh_optim(), device) {
+    match load_state::<B, M, O, X>(dir, STATE, plan_sha256, net.clone(), fresh_optim(), device) {
         Err(e @ TrainError::Data(_)) | Err(e @ TrainError::Io { .. })
             if dir.join(PREVIOUS_STATE).is_file() && !is_foreign(&e) =>
         {
             eprintln!("warning: {e}; resuming from the checkpoint before it");
-            load_state::<B, M, O>(dir, PREVIOUS_STATE, plan_sha256, net, fresh_optim(), device)
+            load_state::<B, M, O, X>(dir, PREVIOUS_STATE, plan_sha256, net, fresh_optim(), device)
         }
         other => other,
     }
@@ -206,18 +227,19 @@ fn is_foreign(e: &TrainError) -> bool {
     matches!(e, TrainError::Data(m) if m.contains("written by another config"))
 }
 
-fn load_state<B, M, O>(
+fn load_state<B, M, O, X>(
     dir: &Path,
     state_file: &str,
     plan_sha256: &str,
     net: M,
     optim: O,
     device: &B::Device,
-) -> Result<Restored<M, O>, TrainError>
+) -> Result<Restored<M, O, X>, TrainError>
 where
     B: AutodiffBackend,
     M: Module<B> + burn::module::AutodiffModule<B>,
     O: Optimizer<M, B>,
+    X: serde::de::DeserializeOwned,
 {
     let state_path = dir.join(state_file);
     let text = std::fs::read(&state_path).map_err(io(&state_path))?;
@@ -246,7 +268,7 @@ where
         }
         None => None,
     };
-    let pool = match &state.pool_file {
+    let extra = match &state.extra_file {
         Some(f) => {
             let path = dir.join(f);
             let bytes = std::fs::read(&path).map_err(io(&path))?;
@@ -274,6 +296,6 @@ where
         net,
         optim,
         rng,
-        pool,
+        extra,
     })
 }

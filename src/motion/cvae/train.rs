@@ -547,23 +547,7 @@ pub fn train(
 ) -> Result<TrainReport, TrainError> {
     let started = Instant::now();
     let ckpt_dir = checkpoint::checkpoint_dir(&plan.weights_out);
-    let has_checkpoint = checkpoint::exists(&ckpt_dir);
-    match (resume, has_checkpoint) {
-        (false, true) => {
-            return Err(TrainError::Data(format!(
-                "an interrupted run left a checkpoint in {}: pass --resume to continue it, or \
-                 remove that folder to start over",
-                ckpt_dir.display()
-            )))
-        }
-        (true, false) => {
-            return Err(TrainError::Data(format!(
-                "--resume: no checkpoint in {} (nothing to resume; run without --resume)",
-                ckpt_dir.display()
-            )))
-        }
-        _ => {}
-    }
+    checkpoint::check_resume(&ckpt_dir, resume)?;
     let fingerprint = checkpoint::plan_fingerprint(plan);
     let device = Default::default();
     let model = BodyModel::load(&plan.body_model)?;
@@ -641,7 +625,7 @@ pub fn train(
         let r = checkpoint::load(&ckpt_dir, &fingerprint, net.clone(), new_optimizer, &device)?;
         resumed_net = Some(r.net);
         restored_optim = r.optim;
-        restored_pool = r.pool;
+        restored_pool = r.extra;
         rng = r.rng;
         elapsed_before_s = r.state.elapsed_s;
         resume_at = (
@@ -854,11 +838,17 @@ pub fn train(
                     rng_word_pos,
                     net_file: String::new(),
                     optim_file: None,
-                    pool_file: None,
+                    extra_file: None,
                     log_bytes: std::fs::metadata(&plan.log_out).map_err(log_io)?.len(),
                 };
                 let pool = (phase == "prior").then_some(&pool);
-                checkpoint::save::<TrainBackend, _, _>(&ckpt_dir, state, &net, Some(&optim), pool)?;
+                checkpoint::save::<TrainBackend, _, _, _>(
+                    &ckpt_dir,
+                    state,
+                    &net,
+                    Some(&optim),
+                    pool,
+                )?;
                 last_checkpoint = Instant::now();
             }
         }

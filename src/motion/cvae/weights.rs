@@ -22,8 +22,8 @@ pub enum WeightsError {
     },
     #[error("weights file {path}: not a safetensors file ({message})")]
     Format { path: PathBuf, message: String },
-    #[error("weights file {path}: no `{ARCH_KEY}` metadata; was it written by `egogen train primitive`?")]
-    NoArchitecture { path: PathBuf },
+    #[error("weights file {path}: no `{key}` metadata; was it written by `egogen train`?")]
+    NoArchitecture { path: PathBuf, key: &'static str },
     #[error("weights file {path}: tensor `{tensor}` {message}")]
     Tensor {
         path: PathBuf,
@@ -36,6 +36,14 @@ pub enum WeightsError {
 
 /// Reads the architecture from a weights file's header.
 pub fn read_arch(path: &Path) -> Result<ArchConfig, WeightsError> {
+    read_metadata(path, ARCH_KEY)
+}
+
+/// Reads the JSON value under metadata `key` of a safetensors file's header.
+pub fn read_metadata<A: serde::de::DeserializeOwned>(
+    path: &Path,
+    key: &'static str,
+) -> Result<A, WeightsError> {
     let io = |source| WeightsError::Io {
         path: path.into(),
         source,
@@ -59,10 +67,13 @@ pub fn read_arch(path: &Path) -> Result<ArchConfig, WeightsError> {
         serde_json::from_slice(&header).map_err(|e| format(format!("header JSON: {e}")))?;
     let arch = header
         .get("__metadata__")
-        .and_then(|m| m.get(ARCH_KEY))
+        .and_then(|m| m.get(key))
         .and_then(|a| a.as_str())
-        .ok_or_else(|| WeightsError::NoArchitecture { path: path.into() })?;
-    serde_json::from_str(arch).map_err(|e| format(format!("`{ARCH_KEY}` metadata: {e}")))
+        .ok_or_else(|| WeightsError::NoArchitecture {
+            path: path.into(),
+            key,
+        })?;
+    serde_json::from_str(arch).map_err(|e| format(format!("`{key}` metadata: {e}")))
 }
 
 /// Loads a network from a weights file written by [`save`].
@@ -72,6 +83,17 @@ pub fn load<B: Backend>(
 ) -> Result<(ArchConfig, PrimitiveVae<B>), WeightsError> {
     let arch = read_arch(path)?;
     let mut net = arch.init::<B>(&InputStats::default(), device);
+    load_into(path, &mut net, &format!("{arch:?}"))?;
+    Ok((arch, net))
+}
+
+/// Loads every tensor of `net` (built for the architecture `described`) from a safetensors
+/// file, refusing missing, extra and misshapen tensors.
+pub fn load_into<B: Backend, M: burn::module::Module<B>>(
+    path: &Path,
+    net: &mut M,
+    described: &str,
+) -> Result<(), WeightsError> {
     let mut store = SafetensorsStore::from_file(path)
         .validate(false)
         .allow_partial(true);
@@ -93,7 +115,7 @@ pub fn load<B: Backend>(
             } => tensor(
                 t,
                 format!(
-                    "has shape {:?}, expected {:?} for {arch:?}",
+                    "has shape {:?}, expected {:?} for {described}",
                     found.as_slice(),
                     expected.as_slice()
                 ),
@@ -113,7 +135,7 @@ pub fn load<B: Backend>(
     if let Some(t) = result.unused.first() {
         return Err(tensor(t, "is not part of the network".into()));
     }
-    Ok((arch, net))
+    Ok(())
 }
 
 /// Writes the network atomically (temporary file, then rename).
@@ -122,14 +144,24 @@ pub fn save<B: Backend>(
     arch: &ArchConfig,
     path: &Path,
 ) -> Result<(), WeightsError> {
+    save_module(net, ARCH_KEY, arch, path)
+}
+
+/// Writes a module atomically with `metadata` (JSON) under `key` in the header.
+pub fn save_module<B: Backend, M: burn::module::Module<B>>(
+    net: &M,
+    key: &str,
+    metadata: &impl serde::Serialize,
+    path: &Path,
+) -> Result<(), WeightsError> {
     let tmp = path.with_extension("safetensors.partial");
-    let arch_json = serde_json::to_string(arch).map_err(|e| WeightsError::Store {
+    let json = serde_json::to_string(metadata).map_err(|e| WeightsError::Store {
         path: path.into(),
         message: e.to_string(),
     })?;
     let mut store = SafetensorsStore::from_file(&tmp)
         .overwrite(true)
-        .metadata(ARCH_KEY, arch_json);
+        .metadata(key, json);
     net.save_into(&mut store).map_err(|e| WeightsError::Store {
         path: tmp.clone(),
         message: e.to_string(),

@@ -1,0 +1,195 @@
+//! The policy training config (`egogen train policy --config FILE`): parsed strictly (unknown
+//! keys refused), then resolved into a [`PolicyTrainPlan`].
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use super::config::{load_toml, ConfigError};
+use super::resolve::resolve_body_model;
+use crate::policy::env::EnvSettings;
+use crate::policy::net::PolicyArch;
+use crate::policy::ppo::{PolicyTrainPlan, PpoSettings, StagePlan};
+
+/// `[[stages]]`: one training stage.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawStage {
+    pub name: String,
+    pub env_steps: usize,
+    #[serde(default)]
+    pub env: EnvSettings,
+}
+
+/// `[validation]`.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawValidation {
+    pub every_updates: usize,
+    pub episodes: usize,
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawPolicyOutput {
+    pub weights: PathBuf,
+    pub log: PathBuf,
+    pub checkpoint_every_s: Option<f64>,
+}
+
+/// `[policy]`: the network's sizes.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawPolicyArch {
+    pub hidden: usize,
+    pub pe_frequencies: usize,
+    pub residual_blocks: usize,
+}
+
+/// The whole config, as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawTrainPolicy {
+    pub seed: u64,
+    pub body_model: Option<PathBuf>,
+    pub motion_weights: PathBuf,
+    /// Motion training config whose training primitives seed the episodes.
+    pub motion_config: PathBuf,
+    pub pose_prior: PathBuf,
+    pub policy: RawPolicyArch,
+    #[serde(default)]
+    pub ppo: PpoSettings,
+    pub stages: Vec<RawStage>,
+    pub validation: RawValidation,
+    pub output: RawPolicyOutput,
+}
+
+/// Reads and resolves a policy training config.
+pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
+    let raw: RawTrainPolicy = load_toml(path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let bad = |key: &str, message: String| ConfigError::Value {
+        path: path.into(),
+        key: key.into(),
+        message,
+    };
+    let body_model = resolve_body_model(raw.body_model, base).map_err(|m| bad("body_model", m))?;
+    let existing = |key: &str, p: &Path| {
+        let f = base.join(p);
+        match f.is_file() {
+            true => Ok(f),
+            false => Err(bad(key, format!("file {} not found", f.display()))),
+        }
+    };
+    let motion_weights = existing("motion_weights", &raw.motion_weights)?;
+    let motion_config = existing("motion_config", &raw.motion_config)?;
+    let pose_prior = existing("pose_prior", &raw.pose_prior)?;
+    let p = raw.ppo;
+    let positive = [
+        ("ppo.envs", p.envs),
+        ("ppo.steps_per_env", p.steps_per_env),
+        ("ppo.minibatch", p.minibatch),
+        ("ppo.epochs", p.epochs),
+        ("policy.hidden", raw.policy.hidden),
+        ("policy.pe_frequencies", raw.policy.pe_frequencies),
+        ("validation.episodes", raw.validation.episodes),
+    ];
+    for (key, v) in positive {
+        if v == 0 {
+            return Err(bad(key, "expected a whole number ≥ 1, got 0".into()));
+        }
+    }
+    let unit = [
+        ("ppo.gamma", p.gamma),
+        ("ppo.gae_lambda", p.gae_lambda),
+        ("ppo.clip", p.clip),
+    ];
+    for (key, v) in unit {
+        if !(v > 0.0 && v <= 1.0) {
+            return Err(bad(key, format!("expected a number in (0, 1], got {v}")));
+        }
+    }
+    let non_negative = [
+        ("ppo.learning_rate", p.learning_rate),
+        ("ppo.weight_decay", p.weight_decay),
+        ("ppo.value_coef", p.value_coef),
+        ("ppo.entropy_coef", p.entropy_coef),
+        ("ppo.max_grad_norm", p.max_grad_norm),
+        ("ppo.target_kl", p.target_kl),
+    ];
+    for (key, v) in non_negative {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(bad(key, format!("expected a number ≥ 0, got {v}")));
+        }
+    }
+    if raw.stages.is_empty() {
+        return Err(bad("stages", "expected at least one [[stages]]".into()));
+    }
+    let mut stages = Vec::with_capacity(raw.stages.len());
+    for (i, s) in raw.stages.into_iter().enumerate() {
+        let key = |k: &str| format!("stages[{i}].{k}");
+        if s.env_steps == 0 {
+            return Err(bad(
+                &key("env_steps"),
+                "expected a whole number ≥ 1, got 0".into(),
+            ));
+        }
+        let e = &s.env;
+        if e.max_primitives == 0 {
+            return Err(bad(
+                &key("env.max_primitives"),
+                "expected a whole number ≥ 1, got 0".into(),
+            ));
+        }
+        if !(e.success_m.is_finite() && e.success_m > 0.0) {
+            return Err(bad(
+                &key("env.success_m"),
+                format!("expected a radius > 0 m, got {}", e.success_m),
+            ));
+        }
+        let (lo, hi) = e.scene.box_side_m;
+        if !(lo > 0.0
+            && hi >= lo
+            && e.scene.floor_m > 2.0 * (hi + e.scene.start_margin_m)
+            && e.scene.cell_m > 0.0)
+        {
+            return Err(bad(
+                &key("env.scene"),
+                "expected 0 < box_side_m.0 ≤ box_side_m.1, cell_m > 0 and a floor wider than the box and its start margin".into(),
+            ));
+        }
+        stages.push(StagePlan {
+            name: s.name,
+            env_steps: s.env_steps,
+            env: s.env,
+        });
+    }
+    let checkpoint_every_s = raw.output.checkpoint_every_s.unwrap_or(300.0);
+    if !(checkpoint_every_s.is_finite() && checkpoint_every_s >= 0.0) {
+        return Err(bad(
+            "output.checkpoint_every_s",
+            format!("expected seconds ≥ 0, got {checkpoint_every_s}"),
+        ));
+    }
+    Ok(PolicyTrainPlan {
+        seed: raw.seed,
+        body_model,
+        motion_weights,
+        motion_config,
+        pose_prior,
+        arch: PolicyArch {
+            hidden: raw.policy.hidden,
+            pe_frequencies: raw.policy.pe_frequencies,
+            residual_blocks: raw.policy.residual_blocks,
+            latent_dim: 128,
+        },
+        ppo: p,
+        stages,
+        eval_every_updates: raw.validation.every_updates,
+        eval_episodes: raw.validation.episodes,
+        weights_out: base.join(raw.output.weights),
+        log_out: base.join(raw.output.log),
+        checkpoint_every_s,
+    })
+}

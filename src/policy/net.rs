@@ -1,0 +1,246 @@
+//! The actor-critic network (EgoGen's `GAMMAPolicyBase`, actor and critic), in burn.
+//!
+//! Two GRUs read the two seed frames: one the marker state (67 × 6 per frame), one the ray scan
+//! (32 per frame); their last hidden states (`H` each) join sinusoidal positional encodings of
+//! `1/(1 + d)` and `1 − t/T` (`2F` values each: sin and cos at frequencies `2^k·π`,
+//! k < F). The actor, a residual MLP (two blocks `W → W → W` with LeakyReLU, `W = 2H + 4F`,
+//! then a linear layer), writes the mean and log-variance of the latent (log-variance clamped
+//! to [−2.5, 2.5]); the critic, the same shape, writes the value. The actor's last layer is
+//! scaled by 0.01 at initialisation so that the first actions are ≈ N(0, I).
+//!
+//! EgoGen's sizes: H = 512, F = 32 (W = 1152; its frequencies reach 2³¹, beyond f32's
+//! resolution of these inputs), about 13 M parameters. `hidden` is the width knob.
+
+use burn::nn::{Linear, LinearConfig};
+use burn::prelude::*;
+use burn::tensor::activation::{leaky_relu, sigmoid};
+use serde::{Deserialize, Serialize};
+
+use super::env::{OBS_DIM, OBS_DIST_OFFSET, OBS_RAYS_OFFSET, RAYS, STATE_FRAME_DIM};
+use crate::motion::primitive::SEED_FRAMES;
+
+/// Bounds of the actor's log-variance.
+pub const LOGVAR_RANGE: (f32, f32) = (-2.5, 2.5);
+/// LeakyReLU slope (PyTorch's default).
+const LEAKY_SLOPE: f64 = 0.01;
+
+/// Architecture of the policy (saved inside its weights file).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolicyArch {
+    /// GRU width `H` (EgoGen: 512).
+    pub hidden: usize,
+    /// Positional-encoding frequencies `F` per scalar.
+    pub pe_frequencies: usize,
+    /// Residual blocks of the actor and critic MLPs (EgoGen: 2).
+    pub residual_blocks: usize,
+    /// Latent size of the motion model (the action size).
+    pub latent_dim: usize,
+}
+
+impl Default for PolicyArch {
+    fn default() -> Self {
+        Self {
+            hidden: 128,
+            pe_frequencies: 8,
+            residual_blocks: 2,
+            latent_dim: 128,
+        }
+    }
+}
+
+impl PolicyArch {
+    /// Width `W` of the actor's and critic's MLPs.
+    pub fn mlp_width(&self) -> usize {
+        2 * self.hidden + 4 * self.pe_frequencies
+    }
+
+    pub fn init<B: Backend>(&self, device: &B::Device) -> ActorCritic<B> {
+        let (h, w) = (self.hidden, self.mlp_width());
+        let linear = |i, o| LinearConfig::new(i, o).init(device);
+        let mlp = |out: usize, scale: f32| {
+            let mut last: Linear<B> = linear(w, out);
+            // New leaves that require gradients: a mapped tensor would be a node of the graph
+            // that the optimiser never updates.
+            last.weight = last
+                .weight
+                .map(|t| t.mul_scalar(scale).detach().require_grad());
+            if let Some(b) = last.bias.take() {
+                last.bias = Some(b.map(|t| t.zeros_like().detach().require_grad()));
+            }
+            ResidualMlp {
+                blocks: (0..self.residual_blocks)
+                    .map(|_| [linear(w, w), linear(w, w)])
+                    .collect(),
+                out: last,
+            }
+        };
+        ActorCritic {
+            state_gru: Gru::new(STATE_FRAME_DIM, h, device),
+            ray_gru: Gru::new(RAYS, h, device),
+            actor: mlp(2 * self.latent_dim, 0.01),
+            critic: mlp(1, 1.0),
+            pe_frequencies: self.pe_frequencies,
+            latent_dim: self.latent_dim,
+        }
+    }
+}
+
+/// A single-layer GRU (PyTorch's equations) run over a short sequence.
+#[derive(Module, Debug)]
+pub struct Gru<B: Backend> {
+    input: Linear<B>,
+    hidden: Linear<B>,
+}
+
+impl<B: Backend> Gru<B> {
+    fn new(inputs: usize, width: usize, device: &B::Device) -> Self {
+        Self {
+            input: LinearConfig::new(inputs, 3 * width).init(device),
+            hidden: LinearConfig::new(width, 3 * width).init(device),
+        }
+    }
+
+    /// Last hidden state `[B, H]` after the frames `[B, T, I]` (initial state zero).
+    fn forward(&self, x: Tensor<B, 3>) -> Tensor<B, 2> {
+        let [b, t, _] = x.dims();
+        let w = self.hidden.weight.dims()[0];
+        let mut h = Tensor::zeros([b, w], &x.device());
+        for k in 0..t {
+            let gx = self.input.forward(x.clone().narrow(1, k, 1).squeeze_dim(1));
+            let gh = self.hidden.forward(h.clone());
+            let r = sigmoid(gx.clone().narrow(1, 0, w) + gh.clone().narrow(1, 0, w));
+            let z = sigmoid(gx.clone().narrow(1, w, w) + gh.clone().narrow(1, w, w));
+            let n = (gx.narrow(1, 2 * w, w) + r * gh.narrow(1, 2 * w, w)).tanh();
+            h = n.clone() + z * (h - n);
+        }
+        h
+    }
+}
+
+/// Residual blocks then a linear output layer.
+#[derive(Module, Debug)]
+pub struct ResidualMlp<B: Backend> {
+    blocks: Vec<[Linear<B>; 2]>,
+    out: Linear<B>,
+}
+
+impl<B: Backend> ResidualMlp<B> {
+    fn forward(&self, mut h: Tensor<B, 2>) -> Tensor<B, 2> {
+        for [a, b] in &self.blocks {
+            let y = leaky_relu(a.forward(h.clone()), LEAKY_SLOPE);
+            let y = leaky_relu(b.forward(y), LEAKY_SLOPE);
+            h = h + y;
+        }
+        self.out.forward(h)
+    }
+}
+
+/// The actor-critic.
+#[derive(Module, Debug)]
+pub struct ActorCritic<B: Backend> {
+    state_gru: Gru<B>,
+    ray_gru: Gru<B>,
+    actor: ResidualMlp<B>,
+    critic: ResidualMlp<B>,
+    pe_frequencies: usize,
+    latent_dim: usize,
+}
+
+/// What the network says about a batch of observations.
+#[derive(Debug, Clone)]
+pub struct PolicyOutput<B: Backend> {
+    /// `[B, L]`.
+    pub mean: Tensor<B, 2>,
+    /// `[B, L]`, clamped to [`LOGVAR_RANGE`].
+    pub logvar: Tensor<B, 2>,
+    /// `[B]`.
+    pub value: Tensor<B, 1>,
+}
+
+impl<B: Backend> ActorCritic<B> {
+    /// Sinusoidal encoding `[B, 2F]` of a column `[B, 1]`.
+    fn encode(&self, x: Tensor<B, 2>) -> Tensor<B, 2> {
+        let f = self.pe_frequencies;
+        let freqs: Vec<f32> = (0..f)
+            .map(|k| (2f32).powi(k as i32) * std::f32::consts::PI)
+            .collect();
+        let freqs =
+            Tensor::<B, 1>::from_data(TensorData::new(freqs, [f]), &x.device()).unsqueeze_dim(0);
+        let a = x * freqs;
+        Tensor::cat(vec![a.clone().sin(), a.cos()], 1)
+    }
+
+    /// The joint features `[B, W]` of observations `[B, OBS_DIM]`.
+    fn features(&self, obs: Tensor<B, 2>) -> Tensor<B, 2> {
+        let [b, d] = obs.dims();
+        debug_assert_eq!(d, OBS_DIM);
+        let state = obs
+            .clone()
+            .narrow(1, 0, SEED_FRAMES * STATE_FRAME_DIM)
+            .reshape([b, SEED_FRAMES, STATE_FRAME_DIM]);
+        let rays = obs
+            .clone()
+            .narrow(1, OBS_RAYS_OFFSET, SEED_FRAMES * RAYS)
+            .reshape([b, SEED_FRAMES, RAYS]);
+        let dist = obs.clone().narrow(1, OBS_DIST_OFFSET, 1);
+        let time = obs.narrow(1, OBS_DIST_OFFSET + 1, 1);
+        Tensor::cat(
+            vec![
+                self.state_gru.forward(state),
+                self.ray_gru.forward(rays),
+                self.encode(dist),
+                self.encode(time),
+            ],
+            1,
+        )
+    }
+
+    pub fn forward(&self, obs: Tensor<B, 2>) -> PolicyOutput<B> {
+        let h = self.features(obs);
+        let l = self.latent_dim;
+        let a = self.actor.forward(h.clone());
+        let value = self.critic.forward(h).squeeze_dim(1);
+        PolicyOutput {
+            mean: a.clone().narrow(1, 0, l),
+            logvar: a.narrow(1, l, l).clamp(LOGVAR_RANGE.0, LOGVAR_RANGE.1),
+            value,
+        }
+    }
+
+    /// Action size.
+    pub fn latent_dim(&self) -> usize {
+        self.latent_dim
+    }
+}
+
+/// `ln N(a; μ, diag exp(logvar))` per row `[B]`.
+pub fn log_prob<B: Backend>(
+    a: Tensor<B, 2>,
+    mean: Tensor<B, 2>,
+    logvar: Tensor<B, 2>,
+) -> Tensor<B, 1> {
+    let l = a.dims()[1] as f64;
+    let z2 = (a - mean).square() / logvar.clone().exp();
+    (z2 + logvar).sum_dim(1).squeeze_dim(1).mul_scalar(-0.5)
+        - 0.5 * l * (std::f64::consts::TAU).ln()
+}
+
+/// Entropy of the diagonal Gaussian per row `[B]`.
+pub fn entropy<B: Backend>(logvar: Tensor<B, 2>) -> Tensor<B, 1> {
+    let l = logvar.dims()[1] as f64;
+    logvar.sum_dim(1).squeeze_dim(1).mul_scalar(0.5) + 0.5 * l * (1.0 + std::f64::consts::TAU.ln())
+}
+
+/// KL(N(μ, σ²) ‖ N(0, I)) per row `[B]`.
+pub fn kl_to_standard<B: Backend>(mean: Tensor<B, 2>, logvar: Tensor<B, 2>) -> Tensor<B, 1> {
+    (logvar.clone().exp() + mean.square() - logvar - 1.0)
+        .sum_dim(1)
+        .squeeze_dim(1)
+        .mul_scalar(0.5)
+}
+
+/// Parameters of a network.
+pub fn parameter_count<B: Backend>(net: &ActorCritic<B>) -> usize {
+    net.num_params()
+}

@@ -1,0 +1,312 @@
+//! PPO training of the locomotion policy: gradients are clipped on their global norm (not per
+//! tensor); a training run killed twice (SIGKILL, once in each stage) resumes to the same
+//! weights and log as an uninterrupted one; bad configs are refused with file and key; a new
+//! network's first actions are ≈ N(0, I).
+
+mod common;
+
+use std::path::Path;
+
+use burn::module::AutodiffModule;
+use burn::optim::GradientsParams;
+use burn::prelude::*;
+use egogen::motion::cvae::train::TrainBackend;
+use egogen::policy::net::{kl_to_standard, PolicyArch};
+use egogen::policy::ppo::clip_global_norm;
+use egogen::policy::OBS_DIM;
+
+fn tiny_arch() -> PolicyArch {
+    PolicyArch {
+        hidden: 16,
+        pe_frequencies: 4,
+        residual_blocks: 1,
+        latent_dim: 8,
+    }
+}
+
+fn global_norm(
+    net: &egogen::policy::net::ActorCritic<TrainBackend>,
+    obs: Tensor<TrainBackend, 2>,
+    clip: Option<f64>,
+) -> (f64, Vec<f64>) {
+    let out = net.forward(obs);
+    let loss = out.mean.square().sum() + out.value.square().sum().mul_scalar(100.0);
+    let mut grads = GradientsParams::from_grads(loss.backward(), net);
+    let before = match clip {
+        Some(c) => clip_global_norm::<TrainBackend, _>(net, &mut grads, c),
+        None => 0.0,
+    };
+    // Norm per parameter after clipping, from the same visitor order.
+    struct Norms<'a> {
+        grads: &'a GradientsParams,
+        norms: Vec<f64>,
+    }
+    impl burn::module::ModuleVisitor<TrainBackend> for Norms<'_> {
+        fn visit_float<const D: usize>(
+            &mut self,
+            p: &burn::module::Param<Tensor<TrainBackend, D>>,
+        ) {
+            if let Some(g) = self
+                .grads
+                .get::<<TrainBackend as burn::tensor::backend::AutodiffBackend>::InnerBackend, D>(
+                p.id,
+            ) {
+                self.norms
+                    .push(g.square().sum().into_scalar().elem::<f64>().sqrt());
+            }
+        }
+    }
+    let mut n = Norms {
+        grads: &grads,
+        norms: Vec::new(),
+    };
+    net.visit(&mut n);
+    (before, n.norms)
+}
+
+#[test]
+fn gradients_are_clipped_on_their_global_norm() {
+    let device = Default::default();
+    TrainBackend::seed(&device, 1);
+    let net = tiny_arch().init::<TrainBackend>(&device);
+    let obs = Tensor::<TrainBackend, 2>::random(
+        [5, OBS_DIM],
+        burn::tensor::Distribution::Normal(0.0, 1.0),
+        &device,
+    );
+    let (_, raw) = global_norm(&net, obs.clone(), None);
+    let (before, clipped) = global_norm(&net, obs, Some(0.1));
+    let total = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!(
+        (before - total(&raw)).abs() < 1e-3 * before,
+        "{before} vs {}",
+        total(&raw)
+    );
+    assert!(
+        before > 0.1,
+        "the test needs gradients larger than the limit"
+    );
+    assert!(
+        (total(&clipped) - 0.1).abs() < 1e-5,
+        "global norm after clipping {}",
+        total(&clipped)
+    );
+    // One common factor: every tensor keeps its share (per-tensor clipping would not).
+    let scale = 0.1 / before;
+    for (a, b) in raw.iter().zip(&clipped) {
+        assert!(
+            (a * scale - b).abs() <= 1e-5 * a.max(1e-6) + 1e-9,
+            "{a} × {scale} vs {b}"
+        );
+    }
+}
+
+#[test]
+fn every_parameter_of_a_new_network_is_trained() {
+    let device = Default::default();
+    TrainBackend::seed(&device, 4);
+    let net = tiny_arch().init::<TrainBackend>(&device);
+    let obs = Tensor::<TrainBackend, 2>::random(
+        [3, OBS_DIM],
+        burn::tensor::Distribution::Normal(0.0, 1.0),
+        &device,
+    );
+    let out = net.forward(obs);
+    let loss = out.mean.sum() + out.logvar.sum() + out.value.sum();
+    let grads = GradientsParams::from_grads(loss.backward(), &net);
+    // Every float parameter has a gradient (the scaled last actor layer included).
+    struct Count(usize);
+    impl burn::module::ModuleVisitor<TrainBackend> for Count {
+        fn visit_float<const D: usize>(
+            &mut self,
+            _: &burn::module::Param<Tensor<TrainBackend, D>>,
+        ) {
+            self.0 += 1;
+        }
+    }
+    let mut count = Count(0);
+    net.visit(&mut count);
+    assert!(count.0 > 10);
+    assert_eq!(grads.len(), count.0, "parameters without gradients");
+}
+
+#[test]
+fn first_actions_are_close_to_the_standard_normal() {
+    let device = Default::default();
+    TrainBackend::seed(&device, 2);
+    let arch = PolicyArch::default();
+    let net = arch.init::<TrainBackend>(&device).valid();
+    let obs = Tensor::random(
+        [32, OBS_DIM],
+        burn::tensor::Distribution::Uniform(-1.0, 1.0),
+        &device,
+    );
+    let out = net.forward(obs);
+    let kl: Vec<f32> = kl_to_standard(out.mean.clone(), out.logvar)
+        .into_data()
+        .to_vec()
+        .unwrap();
+    // KL over 128 dimensions of the untrained policy: tiny against N(0, I) itself (0).
+    assert!(kl.iter().all(|&k| k < 0.5), "{kl:?}");
+}
+
+fn tiny_config(dir: &Path) -> String {
+    let root = common::repo_root();
+    format!(
+        r#"seed = 3
+motion_weights = "{w}"
+motion_config = "{c}"
+pose_prior = "{p}"
+[policy]
+hidden = 16
+pe_frequencies = 4
+residual_blocks = 1
+[ppo]
+envs = 4
+steps_per_env = 2
+minibatch = 4
+[[stages]]
+name = "pretrain"
+env_steps = 48
+[[stages]]
+name = "finetune"
+env_steps = 48
+[stages.env]
+terminate_on_penetration = true
+[stages.env.weights]
+penetration = 0.1
+[validation]
+every_updates = 2
+episodes = 3
+[output]
+weights = "{d}/w.safetensors"
+log = "{d}/w.log.jsonl"
+checkpoint_every_s = 0
+"#,
+        w = root
+            .join("assets/motion/primitive_cvae.safetensors")
+            .display(),
+        c = root.join("configs/train_primitive.toml").display(),
+        p = root.join("assets/policy/pose_prior.json").display(),
+        d = dir.display(),
+    )
+}
+
+#[test]
+fn a_killed_policy_run_resumes_exactly_where_it_stopped() {
+    use std::process::{Command, Stdio};
+    let bin = env!("CARGO_BIN_EXE_egogen");
+    let run = |config: &Path, resume: bool| {
+        let mut cmd = Command::new(bin);
+        cmd.args(["train", "policy", "--quiet", "--config"])
+            .arg(config)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped());
+        if resume {
+            cmd.arg("--resume");
+        }
+        cmd
+    };
+    let whole = tempfile::tempdir().unwrap();
+    let whole_config = whole.path().join("c.toml");
+    std::fs::write(&whole_config, tiny_config(whole.path())).unwrap();
+    let out = run(&whole_config, false).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!whole.path().join("w.safetensors.checkpoint").exists());
+    for stage in ["pretrain", "finetune"] {
+        assert!(whole
+            .path()
+            .join(format!("w.{stage}.last.safetensors"))
+            .is_file());
+    }
+
+    let cut = tempfile::tempdir().unwrap();
+    let config = cut.path().join("c.toml");
+    std::fs::write(&config, tiny_config(cut.path())).unwrap();
+    let state = cut.path().join("w.safetensors.checkpoint/state.json");
+    let global_step = || -> usize {
+        std::fs::read_to_string(&state)
+            .ok()
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|v| v["global_step"].as_u64())
+            .unwrap_or(0) as usize
+    };
+    // 6 updates per stage: killed in the first stage and in the second.
+    for (resume, kill_from) in [(false, 3), (true, 8)] {
+        let mut child = run(&config, resume).spawn().unwrap();
+        let started = std::time::Instant::now();
+        while global_step() < kill_from {
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "the run ended before update {kill_from}"
+            );
+            assert!(
+                started.elapsed().as_secs() < 300,
+                "no checkpoint of update {kill_from}"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        child.kill().unwrap(); // SIGKILL
+        child.wait().unwrap();
+    }
+    let out = run(&config, false).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--resume"), "{err}");
+    let out = run(&config, true).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!state.exists(), "the finished run removes its checkpoint");
+    for name in [
+        "w.safetensors",
+        "w.pretrain.last.safetensors",
+        "w.finetune.last.safetensors",
+    ] {
+        let a = common::safetensors_tensors(&whole.path().join(name));
+        let b = common::safetensors_tensors(&cut.path().join(name));
+        assert!(!a.is_empty());
+        assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+        for (t, bytes) in &a {
+            assert!(*bytes == b[t], "{name}: tensor {t}: resumed weights differ");
+        }
+    }
+    let la = common::log_without_times(&whole.path().join("w.log.jsonl"));
+    assert_eq!(la.len(), 12);
+    assert_eq!(
+        la,
+        common::log_without_times(&cut.path().join("w.log.jsonl"))
+    );
+}
+
+#[test]
+fn bad_policy_configs_name_the_file_and_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.toml");
+    for (from, to, key) in [
+        ("envs = 4", "envs = 0", "ppo.envs"),
+        ("[ppo]", "[ppo]\nclip = 1.5", "ppo.clip"),
+        (
+            "env_steps = 48\n[[stages]]",
+            "env_steps = 0\n[[stages]]",
+            "stages[0].env_steps",
+        ),
+        ("hidden = 16", "hidden = 16\nwidth = 3", "width"),
+    ] {
+        let text = tiny_config(dir.path()).replacen(from, to, 1);
+        assert_ne!(text, tiny_config(dir.path()), "{from}");
+        std::fs::write(&path, text).unwrap();
+        let err = egogen::cli::train_policy::load_policy_plan(&path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bad.toml") && err.contains(key),
+            "{key}: {err}"
+        );
+    }
+}
