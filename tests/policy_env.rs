@@ -226,3 +226,97 @@ fn the_pose_prior_tells_mocap_from_bent_joints_and_refuses_broken_files() {
         "{err}"
     );
 }
+
+#[test]
+fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
+    use egogen::policy::env::FixedScene;
+    use egogen::scene::{StartGoal, WalkableMap};
+    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
+    let prior = clip_prior();
+    // A 6 × 6 m room at floor height 0.5 m with a wall across half of it.
+    let n = 60;
+    let walkable = (0..n * n)
+        .map(|k| !((k / n) == 30 && (k % n) < 30))
+        .collect();
+    let mut map = WalkableMap::from_walkable(DVec2::splat(-3.0), 0.1, n, n, walkable);
+    map.floor_z_m = 0.5;
+    let pairs = vec![
+        StartGoal {
+            start: DVec2::new(-1.5, -1.5),
+            goal: DVec2::new(-1.5, 1.5),
+        },
+        StartGoal {
+            start: DVec2::new(1.5, -1.5),
+            goal: DVec2::new(1.5, 1.5),
+        },
+    ];
+    let fixed = FixedScene {
+        map: std::sync::Arc::new(map),
+        pairs,
+    };
+    let mut env = PolicyEnv::with_scene(
+        &model,
+        &ctx,
+        &bank,
+        &prior,
+        Some(&fixed),
+        EnvSettings::default(),
+        3,
+        0,
+    )
+    .unwrap();
+    let obs = env.observations();
+    for (e, o) in obs.chunks(OBS_DIM).enumerate() {
+        // Episode e walks pair e mod 2: start 3 m from its goal.
+        let d = 1.0 / o[OBS_DIST_OFFSET] - 1.0;
+        assert!((d - 3.0).abs() < 0.3, "episode {e}: distance {d}");
+    }
+    // The wall stands ahead of pair 0 only: its rays see it nearer than pair 1's.
+    let nearest = |o: &[f32]| {
+        o[OBS_RAYS_OFFSET..OBS_RAYS_OFFSET + RAYS]
+            .iter()
+            .copied()
+            .fold(1.0f32, f32::min)
+    };
+    assert!(nearest(&obs[..OBS_DIM]) < nearest(&obs[OBS_DIM..2 * OBS_DIM]));
+    // Decoded on the scene's floor: feet within a few cm of z = 0.5 m.
+    let z = normal_samples(&mut ChaCha8Rng::seed_from_u64(9), 3 * env.latent_dim());
+    let c = env.propose(&z, 1).unwrap();
+    for cand in &c {
+        let p = cand.primitive.as_ref().unwrap();
+        assert_eq!(p.floor_z, 0.5);
+        let lowest = p
+            .markers
+            .iter()
+            .flatten()
+            .map(|m| m.z)
+            .fold(f64::INFINITY, f64::min);
+        assert!((lowest - 0.5).abs() < 0.08, "lowest marker at {lowest}");
+        assert_eq!(cand.judged.unwrap().frames_in_obstacle, 0);
+    }
+    // Snapshots of fixed-scene episodes restore into a fixed-scene environment only.
+    let snap = env.snapshot();
+    let mut twin = PolicyEnv::with_scene(
+        &model,
+        &ctx,
+        &bank,
+        &prior,
+        Some(&fixed),
+        EnvSettings::default(),
+        3,
+        0,
+    )
+    .unwrap();
+    twin.restore(&snap).unwrap();
+    assert_eq!(twin.observations(), obs);
+    let mut boxes =
+        PolicyEnv::new(&model, &ctx, &bank, &prior, EnvSettings::default(), 3, 0).unwrap();
+    assert!(boxes
+        .restore(&snap)
+        .unwrap_err()
+        .to_string()
+        .contains("not of this environment's kind"));
+}

@@ -98,9 +98,26 @@ enum PolicyCommand {
         /// Pose prior (default: the shipped one).
         #[arg(long)]
         prior: Option<PathBuf>,
-        /// Candidates per step (comma-separated: one evaluation each).
-        #[arg(long, value_delimiter = ',', default_value = "1,16,64")]
-        k: Vec<usize>,
+        /// Candidates per step of the sampling controller (comma-separated: one evaluation
+        /// each; default 1,16,64, none when --policy is given alone).
+        #[arg(long, value_delimiter = ',')]
+        k: Option<Vec<usize>>,
+        /// Also evaluate this trained policy (e.g. assets/policy/policy.safetensors).
+        #[arg(long)]
+        policy: Option<PathBuf>,
+        /// The policy's mean action instead of a sample from it.
+        #[arg(long)]
+        mean_action: bool,
+        /// Evaluate in this scene (e.g. assets/scenes/apartment.glb) on start/goal pairs
+        /// instead of in box scenes.
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// Distance range of the scene's start/goal pairs (m).
+        #[arg(long, value_delimiter = ',', default_value = "2,7")]
+        pair_distance_m: Vec<f64>,
+        /// Primitives before an episode times out (default 11; EgoGen's apartment: 13).
+        #[arg(long)]
+        max_primitives: Option<usize>,
         #[arg(long, default_value_t = 200)]
         episodes: usize,
         /// Episodes run in parallel (one decode batch).
@@ -1697,10 +1714,19 @@ fn run_policy(cmd: PolicyCommand) -> Result<()> {
             success_m,
             seed,
             episodes_jsonl,
+            policy,
+            mean_action,
+            scene,
+            pair_distance_m,
+            max_primitives,
         } => {
             if let Some(f) = &episodes_jsonl {
                 refuse_existing(f)?;
             }
+            let k = k.unwrap_or_else(|| match policy {
+                Some(_) => vec![],
+                None => vec![1, 16, 64],
+            });
             if k.contains(&0) || episodes == 0 || envs == 0 {
                 bail!("--k, --episodes and --envs must be at least 1");
             }
@@ -1714,10 +1740,50 @@ fn run_policy(cmd: PolicyCommand) -> Result<()> {
             let prior = PosePrior::load(&prior.unwrap_or_else(shipped_pose_prior_path))?;
             let (_, held) = evaluation_sets(&plan, &body, true)?;
             let bank = SeedBank::from_set(&held);
+            let defaults = EnvSettings::default();
             let settings = EnvSettings {
                 success_m,
-                ..EnvSettings::default()
+                max_primitives: max_primitives.unwrap_or(defaults.max_primitives),
+                ..defaults
             };
+            if settings.max_primitives == 0 {
+                bail!("--max-primitives must be at least 1");
+            }
+            let fixed = match &scene {
+                None => None,
+                Some(path) => {
+                    let &[lo, hi] = pair_distance_m.as_slice() else {
+                        bail!("--pair-distance-m: expected MIN,MAX in metres");
+                    };
+                    if !(lo >= 0.0 && hi >= lo) {
+                        bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
+                    }
+                    let mesh = egogen::scene::load_scene(path, None)?;
+                    let map = egogen::scene::walkable_map(&mesh, path, Default::default())?;
+                    let pairs = egogen::policy::tasks::scene_pairs(
+                        &map,
+                        episodes,
+                        lo,
+                        hi,
+                        0.4,
+                        seed ^ 0x5CE7E,
+                    );
+                    if pairs.len() < episodes {
+                        bail!(
+                            "{}: only {} start/goal pairs {lo}–{hi} m apart with 0.4 m clearance (asked for {episodes})",
+                            path.display(),
+                            pairs.len()
+                        );
+                    }
+                    Some(egogen::policy::env::FixedScene {
+                        map: std::sync::Arc::new(map),
+                        pairs,
+                    })
+                }
+            };
+            if fixed.is_some() && !k.is_empty() {
+                bail!("--scene evaluates --policy only (give no --k)");
+            }
             let mut lines = String::new();
             for &kk in &k {
                 let bar =
@@ -1743,6 +1809,46 @@ fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     lines.push_str(
                         &serde_json::json!({"controller": "sampling", "k": kk, "episode": s})
                             .to_string(),
+                    );
+                    lines.push('\n');
+                }
+            }
+            if let Some(path) = &policy {
+                let (arch, net) = egogen::policy::ppo::load_policy::<
+                    egogen::motion::cvae::infer::InferBackend,
+                >(path, &Default::default())?;
+                if arch.latent_dim != model.latent_dim() {
+                    bail!(
+                        "{}: the policy acts in {} latent dimensions, the motion model has {}",
+                        path.display(),
+                        arch.latent_dim,
+                        model.latent_dim()
+                    );
+                }
+                let bar = indicatif::ProgressBar::new(episodes as u64).with_message("policy");
+                let (report, summaries) = egogen::policy::tasks::evaluate_policy(
+                    &model,
+                    &ctx,
+                    &bank,
+                    &prior,
+                    fixed.as_ref(),
+                    settings,
+                    &net,
+                    mean_action,
+                    episodes,
+                    envs,
+                    seed,
+                    |_| bar.inc(1),
+                )?;
+                bar.finish_and_clear();
+                let name = if mean_action { "policy_mean" } else { "policy" };
+                println!(
+                    "{}",
+                    serde_json::json!({"controller": name, "weights": path, "scene": scene, "report": report})
+                );
+                for s in summaries {
+                    lines.push_str(
+                        &serde_json::json!({"controller": name, "episode": s}).to_string(),
                     );
                     lines.push('\n');
                 }

@@ -16,6 +16,8 @@
 //! to the goal (2 × 67 × 6); the 32-ray scan of both seed frames (2 × 32,
 //! −1 + 2·hit/7 m); `1/(1 + d)` of the horizontal pelvis–goal distance; `1 − t/T`.
 
+use std::sync::Arc;
+
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
@@ -36,8 +38,12 @@ use crate::motion::cvae::{
     BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed,
 };
 use crate::motion::primitive::{canonical_frame, SEED_FRAMES};
-use crate::scene::blocked_cells_in_box;
+use crate::scene::{blocked_cells_in_box, Obstacle2, StartGoal, WalkableMap};
 use crate::sensing::{EgoPose2, EgoSensor, RayScan, RayScanSettings, SensingWorld};
+
+/// Seed placements tried before an episode starts even with blocked cells under the body
+/// (a start too near a wall for every seed).
+const MAX_RESET_TRIES: usize = 100;
 
 /// Values per seed frame of the marker state: 67 canonical positions and 67 goal directions.
 pub const STATE_FRAME_DIM: usize = NUM_MARKERS * 6;
@@ -145,11 +151,30 @@ struct Totals {
     path_m: f64,
 }
 
+/// Where an episode walks: its walkable map, the obstacle of a box scene, start and goal.
+#[derive(Debug, Clone)]
+struct Course {
+    map: Arc<WalkableMap>,
+    obstacle: Option<Obstacle2>,
+    start: DVec2,
+    goal: DVec2,
+    /// What was drawn: a box scene, or a pair of a fixed scene.
+    box_params: Option<BoxParams>,
+    pair: Option<usize>,
+}
+
+/// A fixed scene (e.g. the apartment) and the start/goal pairs its episodes walk, in turn.
+#[derive(Debug, Clone)]
+pub struct FixedScene {
+    pub map: Arc<WalkableMap>,
+    pub pairs: Vec<StartGoal>,
+}
+
 /// One episode in progress.
 #[derive(Debug, Clone)]
 struct Episode {
     id: u64,
-    scene: BoxScene,
+    course: Course,
     view: SeedView,
     steps: usize,
     distance_m: f64,
@@ -161,7 +186,10 @@ struct Episode {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct EpisodeSnapshot {
     id: u64,
-    scene: BoxParams,
+    #[serde(default)]
+    scene: Option<BoxParams>,
+    #[serde(default)]
+    pair: Option<usize>,
     /// The seed frames' pose (165) and translation (3).
     frames: Vec<Vec<f64>>,
     steps: usize,
@@ -256,6 +284,7 @@ pub struct PolicyEnv<'m> {
     body: &'m BodyContext<'m>,
     bank: &'m SeedBank,
     prior: &'m PosePrior,
+    fixed: Option<&'m FixedScene>,
     pub settings: EnvSettings,
     scan: RayScan,
     foot_markers: Vec<usize>,
@@ -280,14 +309,36 @@ impl<'m> PolicyEnv<'m> {
         envs: usize,
         episode_base: u64,
     ) -> Result<Self, EnvError> {
+        Self::with_scene(model, body, bank, prior, None, settings, envs, episode_base)
+    }
+
+    /// The same in a fixed scene (its `settings.scene` unused): episode `n` walks pair
+    /// `n mod pairs`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_scene(
+        model: &'m MotionModel,
+        body: &'m BodyContext<'m>,
+        bank: &'m SeedBank,
+        prior: &'m PosePrior,
+        fixed: Option<&'m FixedScene>,
+        settings: EnvSettings,
+        envs: usize,
+        episode_base: u64,
+    ) -> Result<Self, EnvError> {
         if bank.seeds.is_empty() {
             return Err(EnvError::NoSeeds);
+        }
+        if fixed.is_some_and(|f| f.pairs.is_empty()) {
+            return Err(EnvError::Snapshot(
+                "the fixed scene has no start/goal pairs".into(),
+            ));
         }
         let mut env = Self {
             model,
             body,
             bank,
             prior,
+            fixed,
             settings,
             scan: RayScan::new(RayScanSettings::default()),
             foot_markers: RigGeometry::new(body.model, &body.betas)
@@ -342,13 +393,45 @@ impl<'m> PolicyEnv<'m> {
         })
     }
 
+    fn box_course(scene: BoxScene) -> Course {
+        Course {
+            map: Arc::new(scene.map),
+            obstacle: Some(scene.obstacle),
+            start: scene.start,
+            goal: scene.goal,
+            box_params: Some(scene.params),
+            pair: None,
+        }
+    }
+
+    fn fixed_course(f: &FixedScene, pair: usize) -> Course {
+        Course {
+            map: f.map.clone(),
+            obstacle: None,
+            start: f.pairs[pair].start,
+            goal: f.pairs[pair].goal,
+            box_params: None,
+            pair: Some(pair),
+        }
+    }
+
+    /// The course of episode `id`: a new box scene, or the next pair of the fixed scene.
+    fn draw_course(&self, id: u64, rng: &mut ChaCha8Rng) -> Course {
+        match self.fixed {
+            Some(f) => Self::fixed_course(f, (id % f.pairs.len() as u64) as usize),
+            None => Self::box_course(BoxScene::sample(&self.settings.scene, rng)),
+        }
+    }
+
     fn start_episode(&mut self) -> Result<Episode, DecodeError> {
         let id = self.next_episode;
         self.next_episode += 1;
         let mut rng = episode_rng(self.episode_base, id);
         let rest_pelvis = self.body.shaped.rest_joints[joint::PELVIS];
+        let mut tries = 0;
         loop {
-            let scene = BoxScene::sample(&self.settings.scene, &mut rng);
+            let scene = self.draw_course(id, &mut rng);
+            let floor_z = scene.map.floor_z_m;
             let (frames, floor) =
                 &self.bank.seeds[(rng.next_u64() % self.bank.seeds.len() as u64) as usize];
             let to_goal = scene.goal - scene.start;
@@ -357,13 +440,13 @@ impl<'m> PolicyEnv<'m> {
             let yaw = to_goal.y.atan2(to_goal.x) - std::f64::consts::FRAC_PI_2 + jitter;
             let world_from_canon = Affine3 {
                 matrix3: Mat3::from_rotation_z(yaw),
-                translation: Vec3::new(scene.start.x, scene.start.y, -floor),
+                translation: Vec3::new(scene.start.x, scene.start.y, floor_z - floor),
             };
             let seed = PrimitiveSeed {
                 frames: std::array::from_fn(|k| {
                     frames[k].moved_rigidly(world_from_canon, rest_pelvis)
                 }),
-                floor_z: 0.0,
+                floor_z,
             };
             let view = self.view_of(seed)?;
             // As EgoGen's reset: no blocked cell under the seed body.
@@ -372,13 +455,16 @@ impl<'m> PolicyEnv<'m> {
                 lo = lo.min(DVec2::new(m.x, m.y));
                 hi = hi.max(DVec2::new(m.x, m.y));
             }
-            if blocked_cells_in_box(&scene.map, (lo + hi) * 0.5, (hi - lo) * 0.5, 0.0) > 0 {
+            tries += 1;
+            if tries < MAX_RESET_TRIES
+                && blocked_cells_in_box(&scene.map, (lo + hi) * 0.5, (hi - lo) * 0.5, 0.0) > 0
+            {
                 continue;
             }
             let distance_m = view.pelvis.distance(scene.goal);
             return Ok(Episode {
                 id,
-                scene,
+                course: scene,
                 view,
                 steps: 0,
                 distance_m,
@@ -398,7 +484,7 @@ impl<'m> PolicyEnv<'m> {
     }
 
     fn observe_into(&self, e: &Episode, out: &mut [f32]) {
-        let goal = Vec3::new(e.scene.goal.x, e.scene.goal.y, 0.0);
+        let goal = Vec3::new(e.course.goal.x, e.course.goal.y, 0.0);
         // The canonical frame of the seed; with hips vertical (never in a walking seed) the
         // world frame at the pelvis stands in.
         let joints0 = self
@@ -427,7 +513,7 @@ impl<'m> PolicyEnv<'m> {
             }
         }
         let world = SensingWorld {
-            map: &e.scene.map,
+            map: &e.course.map,
             obstacles: &[],
         };
         for (k, cpf) in e.view.world_from_cpf.iter().enumerate() {
@@ -477,9 +563,9 @@ impl<'m> PolicyEnv<'m> {
                 match d {
                     Ok(p) => {
                         let s = Situation {
-                            map: &e.scene.map,
-                            obstacle: Some(&e.scene.obstacle),
-                            goal: e.scene.goal,
+                            map: &e.course.map,
+                            obstacle: e.course.obstacle.as_ref(),
+                            goal: e.course.goal,
                             distance_m: e.distance_m,
                         };
                         let j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
@@ -604,7 +690,8 @@ impl<'m> PolicyEnv<'m> {
                 .iter()
                 .map(|e| EpisodeSnapshot {
                     id: e.id,
-                    scene: e.scene.params,
+                    scene: e.course.box_params,
+                    pair: e.course.pair,
                     frames: e
                         .view
                         .seed
@@ -648,13 +735,21 @@ impl<'m> PolicyEnv<'m> {
                     ..BodyParams::default()
                 }
             });
-            let view = self.view_of(PrimitiveSeed {
-                frames,
-                floor_z: 0.0,
-            })?;
+            let course = match (s.scene, s.pair, self.fixed) {
+                (Some(p), None, None) => Self::box_course(BoxScene::build(&self.settings.scene, p)),
+                (None, Some(pair), Some(f)) if pair < f.pairs.len() => Self::fixed_course(f, pair),
+                _ => {
+                    return Err(EnvError::Snapshot(format!(
+                        "episode {}: its scene is not of this environment's kind",
+                        s.id
+                    )))
+                }
+            };
+            let floor_z = course.map.floor_z_m;
+            let view = self.view_of(PrimitiveSeed { frames, floor_z })?;
             episodes.push(Episode {
                 id: s.id,
-                scene: BoxScene::build(&self.settings.scene, s.scene),
+                course,
                 view,
                 steps: s.steps,
                 distance_m: s.distance_m,

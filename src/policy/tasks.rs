@@ -184,3 +184,67 @@ pub fn evaluate_sampling(
         summaries,
     ))
 }
+
+/// Start/goal pairs of a fixed scene for evaluation: `count` pairs between `min_m` and
+/// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, drawn with `seed`.
+pub fn scene_pairs(
+    map: &crate::scene::WalkableMap,
+    count: usize,
+    min_m: f64,
+    max_m: f64,
+    clearance_m: f64,
+    seed: u64,
+) -> Vec<crate::scene::StartGoal> {
+    crate::scene::sample_start_goals(map, seed, count * 8, clearance_m, min_m)
+        .into_iter()
+        .filter(|p| p.start.distance(p.goal) <= max_m)
+        .take(count)
+        .collect()
+}
+
+/// The trained policy on the first `episodes` held-out episodes, `envs` at a time, in box
+/// scenes or in `fixed` scene's pairs; actions sampled from π (as EgoGen's test collector
+/// does) or, with `mean_action`, its mean.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_policy<B: burn::prelude::Backend>(
+    model: &MotionModel,
+    body: &BodyContext,
+    bank: &SeedBank,
+    prior: &PosePrior,
+    fixed: Option<&super::env::FixedScene>,
+    settings: EnvSettings,
+    net: &super::net::ActorCritic<B>,
+    mean_action: bool,
+    episodes: usize,
+    envs: usize,
+    seed: u64,
+    progress: impl FnMut(&super::env::EpisodeSummary),
+) -> Result<(EvalReport, Vec<super::env::EpisodeSummary>), super::env::EnvError> {
+    let t0 = std::time::Instant::now();
+    let device = Default::default();
+    let mut env = PolicyEnv::with_scene(
+        model,
+        body,
+        bank,
+        prior,
+        fixed,
+        settings,
+        envs.clamp(1, episodes.max(1)),
+        HELD_OUT_BASE,
+    )?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (summaries, steps) = run_episodes(
+        &mut env,
+        episodes,
+        |e| {
+            let rng = (!mean_action).then_some(&mut rng);
+            let (a, _, _, _) = super::ppo::act(net, e.observations(), rng, &device);
+            e.step(&a)
+        },
+        progress,
+    )?;
+    Ok((
+        EvalReport::of(&summaries, steps, t0.elapsed().as_secs_f64()),
+        summaries,
+    ))
+}
