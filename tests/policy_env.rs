@@ -257,7 +257,7 @@ fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
         map: std::sync::Arc::new(map),
         pairs,
     };
-    let mut env = PolicyEnv::with_scene(
+    let env = PolicyEnv::with_scene(
         &model,
         &ctx,
         &bank,

@@ -1784,72 +1784,65 @@ fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if fixed.is_some() && !k.is_empty() {
                 bail!("--scene evaluates --policy only (give no --k)");
             }
-            let mut lines = String::new();
-            for &kk in &k {
-                let bar =
-                    indicatif::ProgressBar::new(episodes as u64).with_message(format!("K = {kk}"));
-                let (report, summaries) = egogen::policy::tasks::evaluate_sampling(
-                    &model,
-                    &ctx,
-                    &bank,
-                    &prior,
-                    settings,
-                    kk,
-                    episodes,
-                    envs,
-                    seed,
-                    |_| bar.inc(1),
-                )?;
-                bar.finish_and_clear();
-                println!(
-                    "{}",
-                    serde_json::json!({"controller": "sampling", "k": kk, "report": report})
-                );
-                for s in summaries {
-                    lines.push_str(
-                        &serde_json::json!({"controller": "sampling", "k": kk, "episode": s})
-                            .to_string(),
-                    );
-                    lines.push('\n');
+            use egogen::motion::cvae::infer::InferBackend;
+            use egogen::policy::tasks::{evaluate, Controller, EvalParts};
+            let loaded = match &policy {
+                None => None,
+                Some(path) => {
+                    let (arch, net) = egogen::policy::ppo::load_policy::<InferBackend>(
+                        path,
+                        &Default::default(),
+                    )?;
+                    if arch.latent_dim != model.latent_dim() {
+                        bail!(
+                            "{}: the policy acts in {} latent dimensions, the motion model has {}",
+                            path.display(),
+                            arch.latent_dim,
+                            model.latent_dim()
+                        );
+                    }
+                    Some(net)
                 }
-            }
-            if let Some(path) = &policy {
-                let (arch, net) = egogen::policy::ppo::load_policy::<
-                    egogen::motion::cvae::infer::InferBackend,
-                >(path, &Default::default())?;
-                if arch.latent_dim != model.latent_dim() {
-                    bail!(
-                        "{}: the policy acts in {} latent dimensions, the motion model has {}",
-                        path.display(),
-                        arch.latent_dim,
-                        model.latent_dim()
-                    );
-                }
-                let bar = indicatif::ProgressBar::new(episodes as u64).with_message("policy");
-                let (report, summaries) = egogen::policy::tasks::evaluate_policy(
-                    &model,
-                    &ctx,
-                    &bank,
-                    &prior,
-                    fixed.as_ref(),
-                    settings,
-                    &net,
-                    mean_action,
-                    episodes,
-                    envs,
-                    seed,
-                    |_| bar.inc(1),
-                )?;
-                bar.finish_and_clear();
+            };
+            let mut runs: Vec<(serde_json::Value, Controller<InferBackend>)> = k
+                .iter()
+                .map(|&kk| {
+                    (
+                        serde_json::json!({"controller": "sampling", "k": kk}),
+                        Controller::Sampling { k: kk },
+                    )
+                })
+                .collect();
+            if let Some(net) = &loaded {
                 let name = if mean_action { "policy_mean" } else { "policy" };
-                println!(
-                    "{}",
-                    serde_json::json!({"controller": name, "weights": path, "scene": scene, "report": report})
-                );
+                runs.push((
+                    serde_json::json!({"controller": name, "weights": policy, "scene": scene}),
+                    Controller::Policy { net, mean_action },
+                ));
+            }
+            let parts = EvalParts {
+                model: &model,
+                body: &ctx,
+                bank: &bank,
+                prior: &prior,
+                fixed: fixed.as_ref(),
+            };
+            let mut lines = String::new();
+            for (label, controller) in &runs {
+                let bar =
+                    indicatif::ProgressBar::new(episodes as u64).with_message(label.to_string());
+                let (report, summaries) =
+                    evaluate(&parts, settings, controller, (episodes, envs, seed), |_| {
+                        bar.inc(1)
+                    })?;
+                bar.finish_and_clear();
+                let mut line = label.clone();
+                line["report"] = serde_json::to_value(&report)?;
+                println!("{line}");
                 for s in summaries {
-                    lines.push_str(
-                        &serde_json::json!({"controller": name, "episode": s}).to_string(),
-                    );
+                    let mut e = label.clone();
+                    e["episode"] = serde_json::to_value(&s)?;
+                    lines.push_str(&e.to_string());
                     lines.push('\n');
                 }
             }

@@ -147,44 +147,6 @@ pub fn fit_pose_prior(
     (prior, sep)
 }
 
-/// The sampling controller with `k` candidates on the first `episodes` held-out episodes,
-/// `envs` at a time.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate_sampling(
-    model: &MotionModel,
-    body: &BodyContext,
-    bank: &SeedBank,
-    prior: &PosePrior,
-    settings: EnvSettings,
-    k: usize,
-    episodes: usize,
-    envs: usize,
-    seed: u64,
-    progress: impl FnMut(&super::env::EpisodeSummary),
-) -> Result<(EvalReport, Vec<super::env::EpisodeSummary>), super::env::EnvError> {
-    let t0 = std::time::Instant::now();
-    let mut env = PolicyEnv::new(
-        model,
-        body,
-        bank,
-        prior,
-        settings,
-        envs.clamp(1, episodes.max(1)),
-        HELD_OUT_BASE,
-    )?;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let (summaries, steps) = run_episodes(
-        &mut env,
-        episodes,
-        |e| sampling_step(e, k, &mut rng),
-        progress,
-    )?;
-    Ok((
-        EvalReport::of(&summaries, steps, t0.elapsed().as_secs_f64()),
-        summaries,
-    ))
-}
-
 /// Start/goal pairs of a fixed scene for evaluation: `count` pairs between `min_m` and
 /// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, drawn with `seed`.
 pub fn scene_pairs(
@@ -202,32 +164,44 @@ pub fn scene_pairs(
         .collect()
 }
 
-/// The trained policy on the first `episodes` held-out episodes, `envs` at a time, in box
-/// scenes or in `fixed` scene's pairs; actions sampled from π (as EgoGen's test collector
-/// does) or, with `mean_action`, its mean.
-#[allow(clippy::too_many_arguments)]
-pub fn evaluate_policy<B: burn::prelude::Backend>(
-    model: &MotionModel,
-    body: &BodyContext,
-    bank: &SeedBank,
-    prior: &PosePrior,
-    fixed: Option<&super::env::FixedScene>,
+/// What chooses the latents in an evaluation.
+pub enum Controller<'a, B: burn::prelude::Backend> {
+    /// The best of `k` random latents by the reward.
+    Sampling { k: usize },
+    /// The trained policy: actions sampled from π (as EgoGen's test collector does) or its
+    /// mean.
+    Policy {
+        net: &'a super::net::ActorCritic<B>,
+        mean_action: bool,
+    },
+}
+
+/// The loaded parts an evaluation steps.
+pub struct EvalParts<'m> {
+    pub model: &'m MotionModel,
+    pub body: &'m BodyContext<'m>,
+    pub bank: &'m SeedBank,
+    pub prior: &'m PosePrior,
+    /// Box scenes when `None`.
+    pub fixed: Option<&'m super::env::FixedScene>,
+}
+
+/// A controller on the first `episodes` held-out episodes, `envs` at a time.
+pub fn evaluate<B: burn::prelude::Backend>(
+    parts: &EvalParts,
     settings: EnvSettings,
-    net: &super::net::ActorCritic<B>,
-    mean_action: bool,
-    episodes: usize,
-    envs: usize,
-    seed: u64,
+    controller: &Controller<B>,
+    (episodes, envs, seed): (usize, usize, u64),
     progress: impl FnMut(&super::env::EpisodeSummary),
 ) -> Result<(EvalReport, Vec<super::env::EpisodeSummary>), super::env::EnvError> {
     let t0 = std::time::Instant::now();
     let device = Default::default();
     let mut env = PolicyEnv::with_scene(
-        model,
-        body,
-        bank,
-        prior,
-        fixed,
+        parts.model,
+        parts.body,
+        parts.bank,
+        parts.prior,
+        parts.fixed,
         settings,
         envs.clamp(1, episodes.max(1)),
         HELD_OUT_BASE,
@@ -236,10 +210,13 @@ pub fn evaluate_policy<B: burn::prelude::Backend>(
     let (summaries, steps) = run_episodes(
         &mut env,
         episodes,
-        |e| {
-            let rng = (!mean_action).then_some(&mut rng);
-            let (a, _, _, _) = super::ppo::act(net, e.observations(), rng, &device);
-            e.step(&a)
+        |e| match controller {
+            Controller::Sampling { k } => sampling_step(e, *k, &mut rng),
+            Controller::Policy { net, mean_action } => {
+                let rng = (!mean_action).then_some(&mut rng);
+                let (a, _, _, _) = super::ppo::act(*net, e.observations(), rng, &device);
+                e.step(&a)
+            }
         },
         progress,
     )?;
