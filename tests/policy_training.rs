@@ -297,6 +297,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "stages[0].env_steps",
         ),
         ("hidden = 16", "hidden = 16\nwidth = 3", "width"),
+        (
+            "[policy]",
+            "init_weights = \"missing.safetensors\"\n[policy]",
+            "init_weights",
+        ),
     ] {
         let text = tiny_config(dir.path()).replacen(from, to, 1);
         assert_ne!(text, tiny_config(dir.path()), "{from}");

@@ -57,6 +57,8 @@ pub struct RawTrainPolicy {
     /// Motion training config whose training primitives seed the episodes.
     pub motion_config: PathBuf,
     pub pose_prior: PathBuf,
+    /// Start from these policy weights (same `[policy]`), relative to the config's folder.
+    pub init_weights: Option<PathBuf>,
     pub policy: RawPolicyArch,
     #[serde(default)]
     pub ppo: PpoSettings,
@@ -85,6 +87,10 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
     let motion_weights = existing("motion_weights", &raw.motion_weights)?;
     let motion_config = existing("motion_config", &raw.motion_config)?;
     let pose_prior = existing("pose_prior", &raw.pose_prior)?;
+    let init_weights = match &raw.init_weights {
+        Some(p) => Some(existing("init_weights", p)?),
+        None => None,
+    };
     let p = raw.ppo;
     let positive = [
         ("ppo.envs", p.envs),
@@ -188,6 +194,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         stages,
         eval_every_updates: raw.validation.every_updates,
         eval_episodes: raw.validation.episodes,
+        init_weights,
         weights_out: base.join(raw.output.weights),
         log_out: base.join(raw.output.log),
         checkpoint_every_s,

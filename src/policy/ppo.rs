@@ -105,6 +105,8 @@ pub struct PolicyTrainPlan {
     pub stages: Vec<StagePlan>,
     pub eval_every_updates: usize,
     pub eval_episodes: usize,
+    /// Start from these policy weights (same architecture) instead of a fresh network.
+    pub init_weights: Option<PathBuf>,
     pub weights_out: PathBuf,
     pub log_out: PathBuf,
     pub checkpoint_every_s: f64,
@@ -372,6 +374,17 @@ pub fn train_policy(
     };
     TrainBackend::seed(&device, plan.seed);
     let mut net = plan.arch.init::<TrainBackend>(&device);
+    if let Some(path) = &plan.init_weights {
+        let (arch, init) = load_policy::<TrainBackend>(path, &device).map_err(weights_error)?;
+        if arch != plan.arch {
+            return Err(TrainError::Data(format!(
+                "init_weights {}: architecture {arch:?}, the config asks for {:?}",
+                path.display(),
+                plan.arch
+            )));
+        }
+        net = init;
+    }
     let parameters = net.num_params();
     let mut optim = new_optim();
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
