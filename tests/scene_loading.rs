@@ -163,3 +163,38 @@ fn bad_scenes_fail_clearly() {
         .to_string()
         .contains("missing.obj"));
 }
+
+#[test]
+fn a_map_too_fine_for_memory_is_refused_with_its_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "room.obj", ROOM_OBJ);
+    let mesh = load_scene(&path, None).unwrap();
+    for cell_m in [1e-5, 0.0, -0.1, f64::NAN] {
+        let settings = WalkableSettings {
+            cell_m,
+            ..WalkableSettings::default()
+        };
+        let err = walkable_map(&mesh, &path, settings).unwrap_err();
+        assert!(
+            matches!(err, SceneError::MapTooLarge { .. }),
+            "{cell_m}: {err}"
+        );
+        let msg = err.to_string();
+        assert!(
+            msg.contains("room.obj") && msg.contains("cell size"),
+            "{msg}"
+        );
+    }
+    // 1e-5 m cells over a room metres wide: the error states the memory it would take.
+    let err = walkable_map(
+        &mesh,
+        &path,
+        WalkableSettings {
+            cell_m: 1e-5,
+            ..WalkableSettings::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("GB"), "{err}");
+}

@@ -66,6 +66,18 @@ pub enum SceneError {
         lo: f64,
         hi: f64,
     },
+    #[error(
+        "scene {path}: a walkable map of {nx} × {ny} cells of {cell_m} m would need about {gb:.1} GB; \
+         at most {} cells are allowed: use a larger cell size",
+        super::walkable::MAX_MAP_CELLS
+    )]
+    MapTooLarge {
+        path: PathBuf,
+        nx: f64,
+        ny: f64,
+        cell_m: f64,
+        gb: f64,
+    },
 }
 
 fn extension(path: &Path) -> String {
@@ -310,6 +322,13 @@ pub fn walkable_map(
             floor_z_m,
             lo,
             hi,
+        },
+        WalkableError::TooManyCells { nx, ny, cell_m } => SceneError::MapTooLarge {
+            path: path.to_owned(),
+            nx,
+            ny,
+            cell_m,
+            gb: nx * ny * super::walkable::MAP_BYTES_PER_CELL / 1e9,
         },
     })
 }

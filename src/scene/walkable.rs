@@ -59,8 +59,25 @@ pub struct WalkableMap {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum WalkableError {
     NoFloor,
-    NoWalkable { floor_z_m: f64, lo: f64, hi: f64 },
+    NoWalkable {
+        floor_z_m: f64,
+        lo: f64,
+        hi: f64,
+    },
+    /// The grid would hold more than [`MAX_MAP_CELLS`] cells (or the cell size is not a
+    /// positive number).
+    TooManyCells {
+        nx: f64,
+        ny: f64,
+        cell_m: f64,
+    },
 }
+
+/// Most cells a walkable map may have (about 1.5 GB with the distance transform's scratch).
+pub const MAX_MAP_CELLS: f64 = 5e7;
+
+/// Bytes a map needs per cell, scratch included (flags, signed distance, component, EDT).
+pub const MAP_BYTES_PER_CELL: f64 = 31.0;
 
 impl WalkableMap {
     /// Builds the map of a scene.
@@ -69,8 +86,18 @@ impl WalkableMap {
         let (lo, hi) = mesh.bounds().ok_or(WalkableError::NoFloor)?;
         let cell = settings.cell_m;
         let origin = DVec2::new(lo.x, lo.y) - DVec2::splat(cell);
-        let nx = ((hi.x - lo.x) / cell).ceil() as usize + 2;
-        let ny = ((hi.y - lo.y) / cell).ceil() as usize + 2;
+        let (fx, fy) = (
+            ((hi.x - lo.x) / cell).ceil() + 2.0,
+            ((hi.y - lo.y) / cell).ceil() + 2.0,
+        );
+        if !(cell.is_finite() && cell > 0.0) || !(fx * fy <= MAX_MAP_CELLS) {
+            return Err(WalkableError::TooManyCells {
+                nx: fx,
+                ny: fy,
+                cell_m: cell,
+            });
+        }
+        let (nx, ny) = (fx as usize, fy as usize);
         let mut map = WalkableMap {
             origin,
             cell_m: cell,
