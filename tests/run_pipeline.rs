@@ -359,3 +359,64 @@ fn depth_noise_channel_is_written_and_reproducible() {
     );
     assert_eq!(noisy_of_a_run().1, noisy, "same seed, same noise");
 }
+
+#[test]
+fn a_camera_listed_twice() {
+    expect_config_error(
+        &with_render("cameras = [\"camera-rgb\", \"camera-rgb\"]"),
+        &["render.cameras", "\"camera-rgb\" is listed twice"],
+    );
+}
+
+#[test]
+fn rendering_an_obj_scene_is_refused_before_anything_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("room.obj"),
+        "v 0 0 0\nv 4 0 0\nv 0 4 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(
+        &cfg,
+        format!(
+            "[scene]\npath = \"room.obj\"\n{}",
+            with_render("samples = 1")
+        ),
+    )
+    .unwrap();
+    let out = egogen_run(&cfg);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("scene.path") && err.contains("glTF") && err.contains("room.obj"),
+        "{err}"
+    );
+    assert!(!dir.path().join("seq.partial").exists());
+}
+
+#[test]
+fn a_motion_only_run_leaves_an_interrupted_render_run_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(&cfg, GOOD).unwrap();
+    // What an interrupted render run into the same folder leaves.
+    let staging = dir.path().join("seq.partial");
+    std::fs::create_dir_all(staging.join("work")).unwrap();
+    std::fs::write(staging.join("work/run.json"), "{}").unwrap();
+    std::fs::create_dir_all(staging.join("cameras/camera-rgb")).unwrap();
+    std::fs::write(
+        staging.join("cameras/camera-rgb/frame_00000.exr"),
+        "a frame",
+    )
+    .unwrap();
+    let out = egogen_run(&cfg);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("seq.partial") && err.contains("--resume"),
+        "{err}"
+    );
+    assert!(staging.join("cameras/camera-rgb/frame_00000.exr").is_file());
+    assert!(!dir.path().join("seq").exists());
+}

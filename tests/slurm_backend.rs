@@ -152,13 +152,9 @@ fn a_slurm_array_survives_a_cancelled_task_and_matches_the_local_backend() {
     // The cancelled task's shard was resubmitted in a second array.
     let jobs = std::fs::read_to_string(dataset.join("work/slurm/jobs.txt")).unwrap();
     assert!(jobs.lines().count() >= 2, "jobs submitted: {jobs:?}");
-    let report = std::fs::read_dir(dataset.join("logs"))
-        .unwrap()
-        .flatten()
-        .find(|e| e.file_name().to_string_lossy().starts_with("pool_report_"))
-        .expect("a pool report");
+    let report = dataset.join("logs/start_01/pool_report.json");
     let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report.path()).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
     let retried: Vec<&serde_json::Value> = report["shards"]
         .as_array()
         .unwrap()

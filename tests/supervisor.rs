@@ -184,7 +184,18 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         .iter()
         .all(|f| !f.path.contains(".partial") && !f.path.ends_with(".tmp")));
     // Some shard attempts failed and were retried (their logs are kept).
-    let logs = std::fs::read_dir(dataset.join("logs")).unwrap().count();
+    // Every start keeps its own logs: the killed first start's, then each resume's.
+    let starts: Vec<_> = std::fs::read_dir(dataset.join("logs"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    assert!(starts.len() >= 2, "{starts:?}");
+    assert!(dataset.join("logs/start_01").is_dir());
+    let logs: usize = starts
+        .iter()
+        .map(|s| std::fs::read_dir(s).unwrap().count())
+        .sum();
     assert!(logs > 5, "{logs} log files");
 
     // verify passes, and catches a changed byte.
@@ -212,4 +223,79 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
     assert!(!bad.status.success());
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.contains("checksum"), "{err}");
+}
+
+#[test]
+fn resume_repairs_a_damaged_frame_and_drops_leftover_temporaries() {
+    let (dir, config) = setup();
+    let out = egogen_run().arg(&config).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let dataset = dir.path().join("out");
+    let reference = common::read_manifest(&dataset);
+    // The state a killed run can leave: the staging folder without its manifest, a frame file
+    // damaged after it was finished, temporaries of atomic writes and of frame finishing.
+    let staging = dir.path().join("out.partial");
+    std::fs::rename(&dataset, &staging).unwrap();
+    std::fs::remove_file(staging.join("manifest.json")).unwrap();
+    let frames = staging.join("cameras/camera-slam-left");
+    let victim = frames.join("frame_00004.exr");
+    let bytes = std::fs::read(&victim).unwrap();
+    std::fs::write(&victim, &bytes[..bytes.len() / 2]).unwrap();
+    std::fs::write(staging.join("manifest.json.partial"), b"{\"files\": [").unwrap();
+    std::fs::write(frames.join("frame_00006.exr.tmp"), b"half a frame").unwrap();
+
+    let out = egogen_run().arg(&config).arg("--resume").output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("frame_00004.exr is damaged") && err.contains("1 to render"),
+        "{err}"
+    );
+    assert_eq!(
+        common::read_manifest(&dataset),
+        reference,
+        "datasets differ"
+    );
+    assert!(!dataset.join("manifest.json.partial").exists());
+    assert!(!dataset
+        .join("cameras/camera-slam-left/frame_00006.exr.tmp")
+        .exists());
+    verify(&dataset).unwrap();
+}
+
+#[test]
+fn a_run_that_fails_before_rendering_stages_nothing() {
+    // A scene that is not a scene, and a Blender that is not there: both refused before
+    // `out.partial` exists, so the fixed rerun starts clean.
+    let (dir, config) = setup();
+    std::fs::write(dir.path().join("bad.glb"), b"glTF but not really").unwrap();
+    let text = std::fs::read_to_string(&config).unwrap();
+    std::fs::write(&config, format!("[scene]\npath = \"bad.glb\"\n{text}")).unwrap();
+    let out = egogen_run().arg(&config).output().unwrap();
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("bad.glb"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!dir.path().join("out.partial").exists());
+
+    let (dir, config) = setup();
+    let out = egogen_run()
+        .arg(&config)
+        .arg("--blender")
+        .arg(dir.path().join("no-blender-here"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("no-blender-here"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!dir.path().join("out.partial").exists());
 }

@@ -10,7 +10,7 @@ use std::process::Command;
 pub struct Run {
     pub dir: tempfile::TempDir,
     pub attempt_seconds: Vec<f64>,
-    /// The whole `logs/pool_report_*.json`.
+    /// The whole `logs/start_01/pool_report.json`.
     pub report: serde_json::Value,
     /// Wall time of the `egogen-run` process, seconds.
     pub wall_seconds: f64,
@@ -66,13 +66,7 @@ pub fn egogen_run_with(config: &str, args: &[&str]) -> Run {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let logs = dir.path().join("out/logs");
-    let report = std::fs::read_dir(&logs)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .find(|p| p.to_string_lossy().contains("pool_report"))
-        .unwrap();
+    let report = dir.path().join("out/logs/start_01/pool_report.json");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
     let attempt_seconds = report["shards"]

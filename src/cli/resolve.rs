@@ -201,6 +201,19 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         .render
         .map(|r| resolve_render(r, base, config_path))
         .transpose()?;
+    let gltf = scene
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"));
+    if render.is_some() && !gltf {
+        return Err(bad(
+            "scene.path",
+            format!(
+                "{}: rendering reads glTF scenes (.glb or .gltf) only; export the scene as glTF 2.0 (in Blender: File > Export > glTF 2.0), or leave out [render] for a motion-only run",
+                scene.display()
+            ),
+        ));
+    }
     Ok(RunPlan {
         body_model,
         betas: raw.body.betas,
@@ -242,7 +255,19 @@ fn resolve_render(
                 "empty list: name at least one camera".into(),
             ))
         }
-        Some(names) => names,
+        Some(names) => {
+            if let Some(dup) = names
+                .iter()
+                .enumerate()
+                .find_map(|(i, n)| names[..i].contains(n).then_some(n))
+            {
+                return Err(bad(
+                    "render.cameras",
+                    format!("camera {dup:?} is listed twice; name each camera once"),
+                ));
+            }
+            names
+        }
         None => rig.camera_names().iter().map(|n| n.to_string()).collect(),
     };
     let scale = r.resolution_scale.unwrap_or(1.0);

@@ -63,7 +63,23 @@ impl BlenderRuntime {
         let dir = cache_dir().join(format!("bpy-{SUPPORTED_SERIES}"));
         let python = dir.join("bin/python");
         if !python.is_file() {
-            provision(&dir)?;
+            // Two first runs at once: the second waits for the first's install instead of
+            // removing its half-made folder.
+            let lock_path = dir.with_extension("lock");
+            let fail = |message: String| RuntimeError::Provision {
+                dir: dir.clone(),
+                message,
+            };
+            if let Some(parent) = dir.parent() {
+                std::fs::create_dir_all(parent).map_err(|e| fail(e.to_string()))?;
+            }
+            let lock = std::fs::File::create(&lock_path)
+                .map_err(|e| fail(format!("creating {} ({e})", lock_path.display())))?;
+            lock.lock()
+                .map_err(|e| fail(format!("locking {} ({e})", lock_path.display())))?;
+            if !python.is_file() {
+                provision(&dir)?;
+            }
         }
         Self::check(&python)
     }
@@ -152,7 +168,8 @@ pub fn cache_dir() -> PathBuf {
     home.join(".cache/egogen")
 }
 
-/// Creates the managed environment: venv in `<dir>.partial`, install, rename.
+/// Creates the managed environment: venv in `<dir>.partial`, install, rename. The caller holds
+/// `<dir>.lock`, so a `<dir>.partial` found here is a killed install's, not a running one's.
 fn provision(dir: &Path) -> Result<(), RuntimeError> {
     let fail = |message: String| RuntimeError::Provision {
         dir: dir.to_owned(),

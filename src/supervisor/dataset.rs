@@ -65,6 +65,10 @@ pub struct Dataset {
     pub keys_per_frame: u32,
     pub frames_per_shard: usize,
     pub near_clip_m: f64,
+    /// Which start of the run this is (1 for the first, one more for every `--resume`): each
+    /// start keeps its logs in its own folder, so a resume never overwrites what an earlier
+    /// start wrote (an error message may name those logs).
+    pub start: u32,
 }
 
 impl Dataset {
@@ -80,15 +84,39 @@ impl Dataset {
         self.staging.join("work/raw")
     }
 
+    /// This start's logs: `logs/start_<n>/`.
     pub fn logs_dir(&self) -> PathBuf {
-        self.staging.join("logs")
+        self.staging
+            .join("logs")
+            .join(format!("start_{:02}", self.start))
     }
 
-    /// Whether a frame is done: its file exists and validates.
+    /// Whether a frame is done: its file exists. A frame file appears only by a rename after it
+    /// validated; [`Dataset::remove_invalid_frames`] clears any damaged since, before planning.
     pub fn frame_done(&self, camera: usize, frame: u32) -> bool {
-        let path = self.frame_path(camera, frame);
-        let res = self.cameras[camera].camera.model.resolution();
-        path.is_file() && validate_frame(&path, res.width_px, res.height_px).is_ok()
+        self.frame_path(camera, frame).is_file()
+    }
+
+    /// Removes every frame file of the plan that exists but does not validate (a damaged or
+    /// truncated frame left by an interrupted run, or changed since), so that it is rendered
+    /// again; returns each removed file with the reason it failed.
+    pub fn remove_invalid_frames(&self) -> Result<Vec<(PathBuf, String)>> {
+        let mut removed = Vec::new();
+        for (c, work) in self.cameras.iter().enumerate() {
+            let res = work.camera.model.resolution();
+            for &f in &work.frames {
+                let path = self.frame_path(c, f);
+                if !path.is_file() {
+                    continue;
+                }
+                if let Err(e) = validate_frame(&path, res.width_px, res.height_px) {
+                    std::fs::remove_file(&path)
+                        .with_context(|| format!("removing damaged {}", path.display()))?;
+                    removed.push((path, e.to_string()));
+                }
+            }
+        }
+        Ok(removed)
     }
 
     /// Shards covering the frames not done yet, `frames_per_shard` consecutive planned frames
@@ -179,6 +207,27 @@ impl Dataset {
         let _ = std::fs::remove_file(gt);
         Ok(out)
     }
+}
+
+/// The number of the next start of a run staged in `staging`: one more than the highest
+/// `logs/start_<n>` folder there.
+pub fn next_start(staging: &std::path::Path) -> u32 {
+    std::fs::read_dir(staging.join("logs"))
+        .map(|entries| {
+            entries
+                .flatten()
+                .filter_map(|e| {
+                    e.file_name()
+                        .to_str()?
+                        .strip_prefix("start_")?
+                        .parse::<u32>()
+                        .ok()
+                })
+                .max()
+                .unwrap_or(0)
+        })
+        .unwrap_or(0)
+        + 1
 }
 
 /// Writes `cameras/<camera>/annotations.json` for every camera (OpenCV conventions).

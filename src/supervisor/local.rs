@@ -201,7 +201,7 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
             .frames
             .iter()
             .copied()
-            .filter(|&f| !dataset.frame_path(shard.camera, f).is_file())
+            .filter(|&f| !dataset.frame_done(shard.camera, f))
             .collect();
         if missing.is_empty() {
             break;
@@ -284,7 +284,7 @@ async fn attempt_shard(
                         for &f in frames {
                             let (rgb, gt) = raw_frame_paths(&raw_dir, &name, f);
                             if reported.contains(&rgb) && reported.contains(&gt)
-                                && !dataset.frame_path(camera, f).is_file()
+                                && !dataset.frame_done(camera, f)
                             {
                                 let ds = dataset.clone();
                                 let result = tokio::task::spawn_blocking(move || ds.finish_frame(camera, f))
@@ -319,7 +319,7 @@ async fn attempt_shard(
     }
     let missing = frames
         .iter()
-        .filter(|&&f| !dataset.frame_path(camera, f).is_file())
+        .filter(|&&f| !dataset.frame_done(camera, f))
         .count();
     if missing > 0 {
         return Err(fail(

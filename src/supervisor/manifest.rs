@@ -68,6 +68,27 @@ fn collect(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
     Ok(())
 }
 
+/// Whether a file name is one of egogen's temporaries (`<name>.partial` of an atomic write,
+/// `<frame>.exr.tmp` of a frame being finished): never data, only ever left by a killed run.
+pub fn is_temporary(name: &str) -> bool {
+    name.ends_with(".partial") || name.ends_with(".tmp")
+}
+
+/// Removes the temporaries a killed run left among the dataset files of `dir` (scratch folders
+/// excluded), so that the manifest lists only data; returns what was removed.
+pub fn remove_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut removed = Vec::new();
+    for rel in dataset_files(dir)? {
+        if is_temporary(&rel) {
+            let p = dir.join(&rel);
+            std::fs::remove_file(&p)
+                .with_context(|| format!("removing the leftover {}", p.display()))?;
+            removed.push(p);
+        }
+    }
+    Ok(removed)
+}
+
 /// Lists and hashes every dataset file under `dir` (scratch folders excluded).
 pub fn build_manifest(dir: &Path) -> Result<Manifest> {
     let files = dataset_files(dir)?
@@ -119,10 +140,23 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
     })?;
     let manifest: Manifest = serde_json::from_str(&text)
         .with_context(|| format!("{}: not an egogen manifest", path.display()))?;
+    if manifest.files.is_empty() {
+        bail!("{}: lists no files; not a finished dataset", path.display());
+    }
     let mut problems = Vec::new();
     let mut frames = 0;
     let mut bytes = 0;
     for e in &manifest.files {
+        let inside = Path::new(&e.path)
+            .components()
+            .all(|c| matches!(c, std::path::Component::Normal(_)));
+        if !inside || e.path.is_empty() {
+            problems.push(format!(
+                "{}: not a path inside the dataset (the manifest lists only relative paths without `..`)",
+                e.path
+            ));
+            continue;
+        }
         let p = dir.join(&e.path);
         let Ok(meta) = std::fs::metadata(&p) else {
             problems.push(format!("{}: missing", e.path));
@@ -187,4 +221,73 @@ fn dataset_files(dir: &Path) -> Result<Vec<String>> {
                 .join("/")
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dataset_with(files: &[(&str, &[u8])]) -> tempfile::TempDir {
+        let dir = tempfile::tempdir().unwrap();
+        for (p, bytes) in files {
+            let path = dir.path().join(p);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(path, bytes).unwrap();
+        }
+        dir
+    }
+
+    #[test]
+    fn verify_accepts_a_manifest_it_wrote_and_drops_temporaries_first() {
+        let dir = dataset_with(&[
+            ("a.json", b"{}"),
+            ("sub/b.txt", b"b"),
+            ("sub/c.exr.tmp", b"half"),
+            ("manifest.json.partial", b"{"),
+            ("work/scratch.bin", b"x"),
+        ]);
+        let removed = remove_temporaries(dir.path()).unwrap();
+        assert_eq!(removed.len(), 2);
+        let m = write_manifest(dir.path()).unwrap();
+        let listed: Vec<_> = m.files.iter().map(|f| f.path.as_str()).collect();
+        assert_eq!(listed, ["a.json", "sub/b.txt"]);
+        assert_eq!(verify(dir.path()).unwrap().files, 2);
+    }
+
+    #[test]
+    fn verify_refuses_an_empty_manifest_and_paths_outside_the_dataset() {
+        let dir = dataset_with(&[("a.json", b"{}")]);
+        let write = |files: Vec<ManifestEntry>| {
+            let m = Manifest {
+                egogen_manifest: 1,
+                files,
+            };
+            std::fs::write(
+                dir.path().join(MANIFEST),
+                serde_json::to_string(&m).unwrap(),
+            )
+            .unwrap();
+        };
+        write(Vec::new());
+        let err = verify(dir.path()).unwrap_err().to_string();
+        assert!(err.contains("lists no files"), "{err}");
+        let outside = tempfile::NamedTempFile::new().unwrap();
+        let entry = |path: String| ManifestEntry {
+            path,
+            bytes: 0,
+            sha256: sha256_file(outside.path()).unwrap(),
+        };
+        for path in [
+            "../escape.txt".to_string(),
+            outside.path().display().to_string(),
+        ] {
+            let good = build_manifest(dir.path()).unwrap().files;
+            write([good, vec![entry(path.clone())]].concat());
+            let err = format!("{:#}", verify(dir.path()).unwrap_err());
+            assert!(
+                err.contains("not a path inside the dataset"),
+                "{path}: {err}"
+            );
+        }
+    }
 }

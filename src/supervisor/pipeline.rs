@@ -11,9 +11,9 @@ use anyhow::{bail, Context, Result};
 use serde_json::json;
 
 use super::colmap::write_colmap;
-use super::dataset::{write_annotations, CameraWork, Dataset};
+use super::dataset::{next_start, write_annotations, CameraWork, Dataset};
 use super::local::{run_local, PoolSettings};
-use super::manifest::{sha256_file, write_manifest, MANIFEST};
+use super::manifest::{remove_temporaries, sha256_file, write_manifest, MANIFEST};
 use super::slurm::{run_slurm, SlurmSettings};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
@@ -84,7 +84,8 @@ pub fn run_pipeline(
         );
     }
     let state_path = staging.join("work/run.json");
-    if staging.exists() {
+    let fresh = !staging.exists();
+    if !fresh {
         if !opts.resume {
             bail!(
                 "{} holds an interrupted run; rerun with --resume to continue it, or delete it (nothing was written)",
@@ -107,8 +108,22 @@ pub fn run_pipeline(
                 config_path.display()
             );
         }
-        eprintln!("egogen-run: resuming {}", staging.display());
+    }
+
+    // Everything that can fail on bad input or a missing Blender, before anything is staged:
+    // the scene, where the motion happens in it, and (for a new run) the renderer.
+    let scene = load_scene(&plan.scene, None)?;
+    let map = walkable_map(&scene, &plan.scene, WalkableSettings::default())?;
+    let (motion, _) = place_motion(model, motion, &map, plan.scene_seed)
+        .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
+    let track = track_body(model, &motion)?;
+    let mut runtime = if fresh {
+        Some(BlenderRuntime::resolve(opts.blender.as_deref())?)
     } else {
+        None
+    };
+
+    if fresh {
         std::fs::create_dir_all(staging.join("work"))
             .with_context(|| format!("creating {}", staging.display()))?;
         std::fs::copy(config_path, staging.join("config.toml"))
@@ -121,14 +136,9 @@ pub fn run_pipeline(
             }))?
             .as_bytes(),
         )?;
+    } else {
+        eprintln!("egogen-run: resuming {}", staging.display());
     }
-
-    // The scene and where the motion happens in it.
-    let scene = load_scene(&plan.scene, None)?;
-    let map = walkable_map(&scene, &plan.scene, WalkableSettings::default())?;
-    let (motion, _) = place_motion(model, motion, &map, plan.scene_seed)
-        .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
-    let track = track_body(model, &motion)?;
 
     let sequence = staging.join("sequence");
     if !sequence.exists() {
@@ -211,6 +221,7 @@ pub fn run_pipeline(
         keys_per_frame: render.cache_samples_per_frame,
         frames_per_shard: render.frames_per_shard,
         near_clip_m: render.near_clip_m,
+        start: next_start(&staging),
     });
     for work in &dataset.cameras {
         if let RenderCamera::PolynomialFisheye(lens) = &work.render {
@@ -220,6 +231,12 @@ pub fn run_pipeline(
                 work.camera.name, e.max_px, e.mean_px, e.p95_px
             );
         }
+    }
+    for (path, reason) in dataset.remove_invalid_frames()? {
+        eprintln!(
+            "egogen-run: {} is damaged ({reason}); rendering it again",
+            path.display()
+        );
     }
     let total = dataset.total_frames();
     let shards = dataset.pending_shards();
@@ -233,7 +250,10 @@ pub fn run_pipeline(
     );
     let mut rendered_now = 0;
     if !shards.is_empty() {
-        let runtime = BlenderRuntime::resolve(opts.blender.as_deref())?;
+        let runtime = match runtime.take() {
+            Some(r) => r,
+            None => BlenderRuntime::resolve(opts.blender.as_deref())?,
+        };
         let sup = &plan.supervisor;
         let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
         let report = match sup.backend {
@@ -268,13 +288,7 @@ pub fn run_pipeline(
             .filter(|s| s.attempts.len() > 1)
             .count();
         write_atomically(
-            &dataset.logs_dir().join(format!(
-                "pool_report_{}.json",
-                std::time::SystemTime::now()
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .map(|d| d.as_secs())
-                    .unwrap_or(0)
-            )),
+            &dataset.logs_dir().join("pool_report.json"),
             serde_json::to_string_pretty(&report)?.as_bytes(),
         )?;
         eprintln!(
@@ -284,7 +298,16 @@ pub fn run_pipeline(
     }
     write_annotations(&dataset, &render.rig, &motion, &track, &object_ids)?;
     write_colmap(&dataset)?;
+    // Scratch that only Blender read: the raw renders and the body cache (large).
     let _ = std::fs::remove_dir_all(dataset.raw_dir());
+    let _ = std::fs::remove_file(&pc2);
+    let _ = std::fs::remove_file(&faces);
+    for p in remove_temporaries(&staging)? {
+        eprintln!(
+            "egogen-run: removed {}, left by an interrupted run",
+            p.display()
+        );
+    }
     let manifest = write_manifest(&staging)?;
     if dir.exists() {
         std::fs::remove_dir(dir).with_context(|| format!("replacing empty {}", dir.display()))?;

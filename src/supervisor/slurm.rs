@@ -235,7 +235,7 @@ fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
         .frames
         .iter()
         .copied()
-        .filter(|&f| !dataset.frame_path(shard.camera, f).is_file())
+        .filter(|&f| !dataset.frame_done(shard.camera, f))
         .collect()
 }
 

@@ -61,6 +61,28 @@ pub fn pose_meshes(
     Ok(meshes)
 }
 
+/// Files a sequence folder holds while it is written.
+const SEQUENCE_ENTRIES: [&str; 5] = [
+    "meshes",
+    "motion.npz",
+    "cpf_trajectory.json",
+    "preview.png",
+    "manifest.json",
+];
+
+/// Whether `dir` holds only what [`write_sequence_dir`] writes.
+fn is_sequence_leftover(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|entries| {
+        entries.flatten().all(|e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            SEQUENCE_ENTRIES
+                .iter()
+                .any(|s| name == *s || name.starts_with(&format!("{s}.")))
+        })
+    })
+}
+
 /// Writes a sequence folder; `dir` must not exist or be empty (nothing is overwritten).
 pub fn write_sequence_dir(
     dir: &Path,
@@ -78,6 +100,14 @@ pub fn write_sequence_dir(
     }
     let staging = PathBuf::from(format!("{}.partial", dir.display()));
     if staging.exists() {
+        // A sequence folder is written in one go: its own leftover is worthless and replaced.
+        // Anything else there (an interrupted render run's frames) is not ours to delete.
+        if !is_sequence_leftover(&staging) {
+            bail!(
+                "{} exists and is not an interrupted sequence folder (an interrupted render run? continue it with --resume); move it away or delete it (nothing was touched)",
+                staging.display()
+            );
+        }
         std::fs::remove_dir_all(&staging)
             .with_context(|| format!("removing stale {}", staging.display()))?;
     }
