@@ -315,3 +315,36 @@ fn bad_policy_configs_name_the_file_and_the_key() {
         );
     }
 }
+
+#[test]
+fn damaged_policy_weights_are_refused_with_their_path() {
+    use egogen::policy::ppo::{load_policy, save_policy};
+    let device = Default::default();
+    let arch = tiny_arch();
+    let net = arch.init::<TrainBackend>(&device).valid();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("p.safetensors");
+    save_policy(&net, &arch, &path).unwrap();
+    let (back_arch, _) =
+        load_policy::<egogen::motion::cvae::infer::InferBackend>(&path, &device).unwrap();
+    assert_eq!(back_arch, arch);
+    let bytes = std::fs::read(&path).unwrap();
+    for cut in [4, 100, bytes.len() / 2, bytes.len() - 1] {
+        let bad = dir.path().join(format!("cut{cut}.safetensors"));
+        std::fs::write(&bad, &bytes[..cut]).unwrap();
+        let err = load_policy::<egogen::motion::cvae::infer::InferBackend>(&bad, &device)
+            .err()
+            .unwrap_or_else(|| panic!("{cut} bytes accepted"))
+            .to_string();
+        assert!(err.contains(&format!("cut{cut}.safetensors")), "{err}");
+    }
+    // Motion-model weights are not policy weights.
+    let err = load_policy::<egogen::motion::cvae::infer::InferBackend>(
+        &egogen::motion::cvae::train::shipped_weights_path(),
+        &device,
+    )
+    .err()
+    .unwrap()
+    .to_string();
+    assert!(err.contains("egogen.policy_arch"), "{err}");
+}

@@ -121,6 +121,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         ("ppo.weight_decay", p.weight_decay),
         ("ppo.value_coef", p.value_coef),
         ("ppo.entropy_coef", p.entropy_coef),
+        ("ppo.prior_kl_coef", p.prior_kl_coef),
         ("ppo.max_grad_norm", p.max_grad_norm),
         ("ppo.target_kl", p.target_kl),
     ];

@@ -6,7 +6,7 @@
 //! policy (one batched network forward and one batched decode per step); advantages by GAE
 //! (a timeout ends an episode, as in EgoGen); then `epochs` passes over the batch in shuffled
 //! minibatches: clipped surrogate (advantages normalised per minibatch), value loss without
-//! clipping, entropy bonus, gradients clipped to `max_grad_norm` on their global norm (burn
+//! clipping, entropy bonus, optionally a penalty on KL(π ‖ N(0, I)), gradients clipped to `max_grad_norm` on their global norm (burn
 //! clips per tensor, so the norm is computed here), AdamW. A pass stops early when the
 //! approximate KL between the old and new policy exceeds `target_kl`.
 //!
@@ -56,6 +56,9 @@ pub struct PpoSettings {
     pub clip: f64,
     pub value_coef: f64,
     pub entropy_coef: f64,
+    /// Weight of the mean KL(π(·|s) ‖ N(0, I)) in the loss: keeps the latents where the motion
+    /// model was trained (GAMMA's policy regulariser). 0 leaves them unbounded.
+    pub prior_kl_coef: f64,
     /// Largest global gradient norm.
     pub max_grad_norm: f64,
     /// Stop a pass when the approximate KL(old ‖ new) exceeds this.
@@ -76,6 +79,7 @@ impl Default for PpoSettings {
             clip: 0.1,
             value_coef: 1.0,
             entropy_coef: 0.01,
+            prior_kl_coef: 0.0,
             max_grad_norm: 0.1,
             target_kl: 0.02,
         }
@@ -721,16 +725,20 @@ fn one_update<O: Optimizer<ActorCritic<TrainBackend>, TrainBackend>>(
                 device,
             );
             let out = net.forward(obs);
-            let logp = log_prob(acts, out.mean, out.logvar.clone());
+            let logp = log_prob(acts, out.mean.clone(), out.logvar.clone());
             let log_ratio = logp.clone() - old_logp;
             let ratio = log_ratio.clone().exp();
             let surr1 = ratio.clone() * adv_t.clone();
             let surr2 = ratio.clone().clamp(1.0 - ppo.clip, 1.0 + ppo.clip) * adv_t;
             let policy_loss = -surr1.min_pair(surr2).mean();
             let value_loss = (out.value - ret).square().mean();
-            let ent = entropy(out.logvar).mean();
-            let loss = policy_loss.clone() + value_loss.clone().mul_scalar(ppo.value_coef)
+            let ent = entropy(out.logvar.clone()).mean();
+            let mut loss = policy_loss.clone() + value_loss.clone().mul_scalar(ppo.value_coef)
                 - ent.clone().mul_scalar(ppo.entropy_coef);
+            if ppo.prior_kl_coef > 0.0 {
+                let kl = kl_to_standard(out.mean, out.logvar).mean();
+                loss = loss + kl.mul_scalar(ppo.prior_kl_coef);
+            }
             let mut grads = GradientsParams::from_grads(loss.backward(), net);
             let norm = clip_global_norm::<TrainBackend, _>(net, &mut grads, ppo.max_grad_norm);
             *net = optim.step(ppo.learning_rate, net.clone(), grads);
