@@ -15,6 +15,7 @@ pub mod inspect;
 pub mod math;
 pub mod motion;
 pub mod npz;
+pub mod parser_guard;
 pub mod policy;
 pub mod preview;
 pub mod render;

@@ -55,8 +55,9 @@ impl BvhClip {
             message,
         };
         let bytes = std::fs::read(path).map_err(|e| bad(format!("cannot read ({e})")))?;
-        let bvh =
-            bvh_anim::from_bytes(&bytes).map_err(|e| bad(format!("not a valid BVH file ({e})")))?;
+        let bvh = crate::parser_guard::catch_parser_panic(|| bvh_anim::from_bytes(&bytes))
+            .map_err(|e| bad(format!("not a valid BVH file ({e})")))?
+            .map_err(|e| bad(format!("not a valid BVH file ({e})")))?;
         let joints: Vec<BvhJoint> = bvh
             .joints()
             .map(|j| {

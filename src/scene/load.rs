@@ -155,6 +155,11 @@ struct Part {
 }
 
 fn read_gltf(path: &Path) -> Result<Vec<Part>, String> {
+    crate::parser_guard::catch_parser_panic(|| read_gltf_parts(path))
+        .map_err(|e| format!("not a valid glTF file ({e})"))?
+}
+
+fn read_gltf_parts(path: &Path) -> Result<Vec<Part>, String> {
     let gltf = gltf::Gltf::open(path).map_err(|e| e.to_string())?;
     let buffers = gltf::import_buffers(&gltf.document, path.parent(), gltf.blob.clone())
         .map_err(|e| e.to_string())?;

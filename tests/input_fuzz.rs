@@ -1,0 +1,279 @@
+//! Every file reader against damaged input: a real file of each kind is truncated at many
+//! points, has bytes flipped, or is replaced by random bytes, and the reader must answer with
+//! `Ok` or an error — never a panic and never an abort (an abort ends this test process, which
+//! fails the test too). Errors must name the file.
+//!
+//! CI runs a small form; `EGOGEN_FUZZ_CASES=2000 cargo test --test input_fuzz` runs a long one.
+
+use std::path::{Path, PathBuf};
+
+use egogen::body::BodyModel;
+use egogen::inspect::ExrContents;
+use egogen::motion::amass::MotionSequence;
+use egogen::motion::bvh::BvhClip;
+use egogen::motion::deepmimic::import_deepmimic;
+use egogen::rig::Rig;
+use egogen::scene::load_scene;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Cases per reader (beyond the fixed truncation points).
+fn cases() -> usize {
+    std::env::var("EGOGEN_FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(24)
+}
+
+/// SplitMix64: a small deterministic generator.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+/// Damaged versions of `good`: truncations, flipped bytes, overwritten runs, random bytes.
+fn damaged(good: &[u8], seed: u64) -> Vec<(String, Vec<u8>)> {
+    let n = good.len();
+    let mut rng = Rng(seed);
+    let mut out = Vec::new();
+    for cut in [
+        0,
+        1,
+        2,
+        7,
+        16,
+        n / 10,
+        n / 3,
+        n / 2,
+        n - n / 5,
+        n.saturating_sub(1),
+    ] {
+        out.push((format!("first {cut} bytes"), good[..cut.min(n)].to_vec()));
+    }
+    for case in 0..cases() {
+        let mut b = good.to_vec();
+        let what = match case % 4 {
+            0 => {
+                for _ in 0..1 + rng.below(8) {
+                    let i = rng.below(n);
+                    b[i] ^= 1 << rng.below(8);
+                }
+                "flipped bits"
+            }
+            1 => {
+                // Header-heavy formats keep sizes and counts near the front.
+                let i = rng.below(n.min(512));
+                let v = rng.next().to_le_bytes();
+                for (k, byte) in v.iter().enumerate() {
+                    if i + k < n {
+                        b[i + k] = *byte;
+                    }
+                }
+                "overwritten header bytes"
+            }
+            2 => {
+                let i = rng.below(n);
+                let len = rng.below(64).min(n - i);
+                b.drain(i..i + len);
+                "removed run"
+            }
+            _ => {
+                let len = rng.below(4096);
+                b = (0..len).map(|_| rng.next() as u8).collect();
+                "random bytes"
+            }
+        };
+        out.push((format!("case {case}: {what}"), b));
+    }
+    out
+}
+
+/// Feeds every damaged version of `good` to `read` through a file named `name`.
+fn fuzz<T, E: std::fmt::Display>(
+    name: &str,
+    good: &[u8],
+    seed: u64,
+    read: impl Fn(&Path) -> Result<T, E>,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    let (mut ok, mut errors) = (0, 0);
+    for (what, bytes) in damaged(good, seed) {
+        std::fs::write(&path, &bytes).unwrap();
+        let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| read(&path)));
+        match result {
+            Err(_) => panic!("{name}, {what}: the reader panicked"),
+            Ok(Ok(_)) => ok += 1,
+            Ok(Err(e)) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.contains(name),
+                    "{name}, {what}: the error does not name the file: {msg}"
+                );
+                errors += 1;
+            }
+        }
+    }
+    eprintln!("{name}: {errors} errors, {ok} still readable");
+    assert!(errors > 0, "{name}: no damaged version was refused");
+}
+
+fn read(p: &str) -> Vec<u8> {
+    std::fs::read(root().join(p)).unwrap()
+}
+
+#[test]
+fn run_config() {
+    let good = read("configs/default.toml");
+    fuzz("run.toml", &good, 1, |p| {
+        egogen::cli::config::RawRun::load(p)
+            .and_then(|raw| egogen::cli::resolve::resolve_run(raw, p))
+    });
+}
+
+#[test]
+fn rig_and_aria_calibration() {
+    fuzz(
+        "rig.json",
+        &read("camera_rigs/aria_gen1.json"),
+        2,
+        Rig::load,
+    );
+    fuzz(
+        "calibration.json",
+        &read("tests/fixtures/aria_gen1_device_calibration.json"),
+        3,
+        Rig::load,
+    );
+}
+
+#[test]
+fn body_model_npz() {
+    fuzz("body.npz", &read("assets/body/SMPLX_NEUTRAL.npz"), 4, |p| {
+        BodyModel::load(p)
+    });
+}
+
+#[test]
+fn motion_npz() {
+    fuzz(
+        "motion.npz",
+        &read("assets/motion/cmu_01_01.npz"),
+        5,
+        MotionSequence::read,
+    );
+}
+
+#[test]
+fn bvh() {
+    fuzz(
+        "clip.bvh",
+        &read("tests/fixtures/cmu_01_01_excerpt.bvh"),
+        6,
+        BvhClip::read,
+    );
+}
+
+#[test]
+fn deepmimic() {
+    let model = BodyModel::load(root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    // Two frames of a humanoid3d clip: duration, root position, 8 quaternions, 4 angles.
+    let frame = |x: f64| {
+        let mut f = vec![0.0333, x, 0.85, 0.0];
+        for k in 0..15 {
+            if [4, 8, 11, 14].contains(&k) {
+                f.push(0.1);
+            } else {
+                f.extend([1.0, 0.0, 0.0, 0.0]);
+            }
+        }
+        f.truncate(44);
+        f
+    };
+    let good = serde_json::json!({"Loop": "wrap", "Frames": [frame(0.0), frame(0.05)]});
+    let good = serde_json::to_vec(&good).unwrap();
+    fuzz("walk.txt", &good, 7, |p| import_deepmimic(p, &model));
+}
+
+#[test]
+fn scenes() {
+    fuzz("room.glb", &read("assets/scenes/apartment.glb"), 8, |p| {
+        load_scene(p, None)
+    });
+    let obj = b"o floor\nv 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nf 1 2 3\nf 1 3 4\n\
+o box\nv 1 0 1\nv 2 0 1\nv 2 1 1\nf 5 6 7\n";
+    fuzz("room.obj", obj, 9, |p| load_scene(p, None));
+    let ply = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0\n4 0 0\n4 0 4\n0 0 4\n3 0 1 2\n3 0 2 3\n";
+    fuzz("room.ply", ply, 10, |p| load_scene(p, None));
+}
+
+#[test]
+fn exr() {
+    use exr::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("good.exr");
+    write_rgba_file(&path, 16, 8, |x, y| {
+        (x as f32 / 16.0, y as f32 / 8.0, 0.5f32, 1.0f32)
+    })
+    .unwrap();
+    fuzz(
+        "frame.exr",
+        &std::fs::read(&path).unwrap(),
+        11,
+        ExrContents::read,
+    );
+}
+
+#[test]
+fn weights_files() {
+    let device = Default::default();
+    fuzz(
+        "motion.safetensors",
+        &read("assets/motion/primitive_cvae.safetensors"),
+        12,
+        egogen::motion::cvae::weights::read_arch,
+    );
+    fuzz(
+        "policy.safetensors",
+        &read("assets/policy/policy.safetensors"),
+        13,
+        |p| {
+            egogen::policy::ppo::load_policy::<egogen::motion::cvae::infer::InferBackend>(
+                p, &device,
+            )
+        },
+    );
+}
+
+#[test]
+fn training_configs() {
+    // Paths made absolute, so that damaged versions get past the files they name.
+    let text = String::from_utf8(read("configs/train_policy.toml"))
+        .unwrap()
+        .replace("\"../", &format!("\"{}/", root().display()))
+        .replace(
+            "\"train_primitive.toml",
+            &format!("\"{}/configs/train_primitive.toml", root().display()),
+        );
+    fuzz(
+        "train_policy.toml",
+        text.as_bytes(),
+        14,
+        egogen::cli::train_policy::load_policy_plan,
+    );
+}
