@@ -277,3 +277,22 @@ fn training_configs() {
         egogen::cli::train_policy::load_policy_plan,
     );
 }
+
+#[test]
+fn point_cache() {
+    use egogen::render::body_cache::PointCache;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("good.pc2");
+    let cache = PointCache {
+        start_frame: 0.0,
+        sample_rate: 1.0,
+        samples: vec![vec![[0.0, 1.0, 2.0]; 5]; 3],
+    };
+    cache.write(&path).unwrap();
+    fuzz(
+        "body.pc2",
+        &std::fs::read(&path).unwrap(),
+        15,
+        PointCache::read,
+    );
+}

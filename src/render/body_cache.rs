@@ -96,10 +96,14 @@ impl PointCache {
             return Err(bad(format!("{points} points, {samples} samples")));
         }
         let (points, samples) = (points as usize, samples as usize);
-        if bytes.len() != 32 + points * samples * 12 {
+        let expected = points
+            .checked_mul(samples)
+            .and_then(|n| n.checked_mul(12))
+            .and_then(|n| n.checked_add(32));
+        if expected != Some(bytes.len()) {
             return Err(bad(format!(
                 "header says {samples} samples of {points} points ({} bytes) but the file has {} bytes",
-                32 + points * samples * 12,
+                expected.map_or("more than 2^64".into(), |n| n.to_string()),
                 bytes.len()
             )));
         }
