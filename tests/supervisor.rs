@@ -248,9 +248,16 @@ fn resume_repairs_a_damaged_frame_and_drops_leftover_temporaries() {
     std::fs::write(staging.join("manifest.json.partial"), b"{\"files\": [").unwrap();
     std::fs::write(frames.join("frame_00006.exr.tmp"), b"half a frame").unwrap();
 
-    let out = egogen_run().arg(&config).arg("--resume").output().unwrap();
+    let out = egogen_run()
+        .arg(&config)
+        .arg("--resume")
+        .env("EGOGEN_PROGRESS_EVERY_S", "0.2")
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
+    // Standard error is a pipe here: plain progress lines instead of a bar.
+    assert!(err.contains("egogen-run: rendering 19/20 frames"), "{err}");
     assert!(
         err.contains("frame_00004.exr is damaged") && err.contains("1 to render"),
         "{err}"
@@ -297,5 +304,33 @@ fn a_run_that_fails_before_rendering_stages_nothing() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    assert!(!dir.path().join("out.partial").exists());
+}
+
+#[test]
+fn the_slurm_backend_without_slurm_is_refused_before_anything_is_staged() {
+    let (dir, config) = setup();
+    // A PATH with Python (a first run installs Blender with it) and nothing else.
+    let bin = dir.path().join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    for python in ["python3", "python3.11"] {
+        let found = Command::new("sh")
+            .args(["-c", &format!("command -v {python}")])
+            .output()
+            .unwrap();
+        let found = String::from_utf8_lossy(&found.stdout).trim().to_string();
+        if !found.is_empty() {
+            std::os::unix::fs::symlink(found, bin.join(python)).unwrap();
+        }
+    }
+    let out = egogen_run()
+        .arg(&config)
+        .args(["--backend", "slurm"])
+        .env("PATH", &bin)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("sbatch"), "{err}");
     assert!(!dir.path().join("out.partial").exists());
 }

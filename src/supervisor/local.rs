@@ -5,6 +5,7 @@
 //! place, so `--resume` continues.
 
 use std::collections::{BTreeSet, VecDeque};
+use std::io::IsTerminal;
 use std::process::Stdio;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -143,8 +144,35 @@ pub(super) fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
         .context("progress template")?,
     );
     bar.set_position(done);
+    if !std::io::stderr().is_terminal() {
+        // A farm log or a file: no bar is drawn there, so a plain line every few seconds.
+        let weak = bar.downgrade();
+        let every = std::env::var("EGOGEN_PROGRESS_EVERY_S")
+            .ok()
+            .and_then(|s| s.parse::<f64>().ok())
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .map_or(PLAIN_PROGRESS_EVERY, Duration::from_secs_f64);
+        std::thread::spawn(move || loop {
+            std::thread::sleep(every);
+            let Some(bar) = weak.upgrade() else { break };
+            if bar.is_finished() {
+                break;
+            }
+            eprintln!(
+                "egogen-run: rendering {}/{} frames, {} s elapsed, about {} s left",
+                bar.position(),
+                bar.length().unwrap_or(0),
+                bar.elapsed().as_secs(),
+                bar.eta().as_secs()
+            );
+        });
+    }
     Ok(bar)
 }
+
+/// How often progress is printed when standard error is not a terminal (the environment
+/// variable `EGOGEN_PROGRESS_EVERY_S` overrides it).
+const PLAIN_PROGRESS_EVERY: Duration = Duration::from_secs(10);
 
 fn set_state(shared: &Shared, w: usize, state: String) {
     let mut states = shared.states.lock().unwrap();

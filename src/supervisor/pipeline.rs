@@ -14,7 +14,7 @@ use super::colmap::write_colmap;
 use super::dataset::{next_start, write_annotations, CameraWork, Dataset};
 use super::local::{run_local, PoolSettings};
 use super::manifest::{remove_temporaries, sha256_file, write_manifest, MANIFEST};
-use super::slurm::{run_slurm, SlurmSettings};
+use super::slurm::{check_slurm_tools, run_slurm, SlurmSettings};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::cli::config::Backend;
@@ -122,6 +122,9 @@ pub fn run_pipeline(
     } else {
         None
     };
+    if plan.supervisor.backend == Backend::Slurm {
+        check_slurm_tools()?;
+    }
 
     if fresh {
         std::fs::create_dir_all(staging.join("work"))

@@ -59,10 +59,7 @@ pub fn run_slurm(
     already_done: usize,
 ) -> Result<PoolReport> {
     let started = Instant::now();
-    slurm_tool("sbatch", &["--version"]).context(
-        "the Slurm backend needs Slurm's client commands (sbatch, squeue, scancel) on PATH; \
-         install them or use `supervisor.backend = \"local\"`",
-    )?;
+    check_slurm_tools()?;
     let slurm_dir = dataset.staging.join("work/slurm");
     std::fs::create_dir_all(&slurm_dir)
         .with_context(|| format!("creating {}", slurm_dir.display()))?;
@@ -341,6 +338,15 @@ fn shell_quote(s: &str) -> String {
 }
 
 /// Runs a Slurm client command; its stdout, or an error with its stderr.
+/// Whether Slurm's client commands are here (checked before a run stages anything).
+pub fn check_slurm_tools() -> Result<()> {
+    slurm_tool("sbatch", &["--version"]).context(
+        "the Slurm backend needs Slurm's client commands (sbatch, squeue, scancel) on PATH; \
+         install them or use `supervisor.backend = \"local\"`",
+    )?;
+    Ok(())
+}
+
 fn slurm_tool(program: &str, args: &[&str]) -> Result<String> {
     let out = Command::new(program)
         .args(args)
