@@ -198,3 +198,46 @@ fn a_map_too_fine_for_memory_is_refused_with_its_size() {
     .to_string();
     assert!(err.contains("GB"), "{err}");
 }
+
+#[test]
+fn the_hollow_inside_of_a_closed_wall_is_not_floor() {
+    use egogen::math::Vec3;
+    use egogen::scene::{SceneMesh, WalkableMap};
+    // A 6 × 6 m floor plane, a wall 0.6 m thick modelled as a closed box (as BIM exports are),
+    // a free-standing closed pillar, and an open ceiling plane over everything.
+    let mut mesh = SceneMesh::default();
+    let plane = |z: f64| {
+        [
+            Vec3::new(-3.0, -3.0, z),
+            Vec3::new(3.0, -3.0, z),
+            Vec3::new(3.0, 3.0, z),
+            Vec3::new(-3.0, 3.0, z),
+        ]
+    };
+    mesh.add_object("floor", &plane(0.0), &[[0, 1, 2], [0, 2, 3]]);
+    mesh.add_object("ceiling", &plane(2.5), &[[0, 2, 1], [0, 3, 2]]);
+    mesh.add_box(
+        "wall",
+        Vec3::new(0.53, -3.0, 0.0),
+        Vec3::new(1.13, 3.0, 2.5),
+    );
+    mesh.add_box(
+        "pillar",
+        Vec3::new(-2.07, -2.07, 0.0),
+        Vec3::new(-1.43, -1.43, 2.5),
+    );
+    let map = WalkableMap::build(&mesh, WalkableSettings::default()).unwrap();
+    let walkable = |x: f64, y: f64| map.is_walkable_at(glam::DVec2::new(x, y));
+    for y in [-2.0, 0.0, 2.5] {
+        assert!(!walkable(0.83, y), "inside the wall at y = {y}");
+    }
+    assert!(!walkable(-1.75, -1.75), "inside the pillar");
+    assert!(
+        walkable(-1.0, 0.0) && walkable(2.0, 0.0),
+        "the floor on both sides"
+    );
+    // Two regions (either side of the wall), none inside it.
+    let regions: std::collections::BTreeSet<u32> =
+        map.component.iter().copied().filter(|&c| c > 0).collect();
+    assert_eq!(regions.len(), 2, "{regions:?}");
+}

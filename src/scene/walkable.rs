@@ -131,8 +131,9 @@ impl WalkableMap {
                 map.mark_occupied(&poly, DVec2::new(n.x, n.y));
             }
         }
+        let enclosed = map.enclosed_cells(mesh, 0.5 * (z_lo + z_hi));
         for k in 0..nx * ny {
-            map.walkable[k] = map.has_floor[k] && !map.occupied[k];
+            map.walkable[k] = map.has_floor[k] && !map.occupied[k] && !enclosed[k];
         }
         if !map.walkable.iter().any(|&w| w) {
             return Err(WalkableError::NoWalkable {
@@ -238,6 +239,75 @@ impl WalkableMap {
         let i1 = (b.x.max(-1.0) as i64 + 1).clamp(0, self.nx as i64) as usize;
         let j1 = (b.y.max(-1.0) as i64 + 1).clamp(0, self.ny as i64) as usize;
         ((a.x as usize).min(i1)..i1, (a.y as usize).min(j1)..j1)
+    }
+
+    /// Cells whose centre, at height `z`, lies inside a closed object: the vertical line
+    /// through it crosses that object's surface an odd number of times both above and below
+    /// `z`. The hollow inside of a wall modelled as a closed box has no triangle in the body's
+    /// height range, and would otherwise be floor; an open surface (a ceiling plane, a floor
+    /// slab below) fails one side of the test and encloses nothing.
+    fn enclosed_cells(&self, mesh: &SceneMesh, z: f64) -> Vec<bool> {
+        let mut enclosed = vec![false; self.nx * self.ny];
+        let mut by_object: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
+        if mesh.triangle_object.len() == mesh.triangles.len() {
+            for (t, o) in mesh.triangle_object.iter().enumerate() {
+                by_object.entry(o.0).or_default().push(t);
+            }
+        } else {
+            by_object.insert(0, (0..mesh.triangles.len()).collect());
+        }
+        // Rays off the grid's lines and diagonals, so that they miss shared edges and vertices
+        // of grid-aligned geometry.
+        let jitter = DVec2::new(0.000_618_034, 0.000_414_214) * self.cell_m;
+        for tris in by_object.values() {
+            let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+            for &t in tris {
+                for v in mesh.triangle(t) {
+                    lo = lo.min(DVec2::new(v.x, v.y));
+                    hi = hi.max(DVec2::new(v.x, v.y));
+                }
+            }
+            let (ri, rj) = self.cell_range(lo, hi);
+            if ri.is_empty() || rj.is_empty() {
+                continue;
+            }
+            let w = ri.len();
+            // Crossing parity above (bit 0) and below (bit 1) per cell of the object's box.
+            let mut parity = vec![0u8; w * rj.len()];
+            for &t in tris {
+                let tri = mesh.triangle(t);
+                let p = tri.map(|v| DVec2::new(v.x, v.y));
+                let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+                if area == 0.0 {
+                    continue;
+                }
+                let (tlo, thi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+                let (ti, tj) = self.cell_range(tlo, thi);
+                for j in tj {
+                    for i in ti.clone() {
+                        let c = self.centre(i, j) + jitter;
+                        let b = [
+                            (p[2] - p[1]).perp_dot(c - p[1]) / area,
+                            (p[0] - p[2]).perp_dot(c - p[2]) / area,
+                            (p[1] - p[0]).perp_dot(c - p[0]) / area,
+                        ];
+                        if b.iter().any(|&x| x < 0.0) {
+                            continue;
+                        }
+                        let tz = b[0] * tri[0].z + b[1] * tri[1].z + b[2] * tri[2].z;
+                        parity[(j - rj.start) * w + (i - ri.start)] ^= if tz > z { 1 } else { 2 };
+                    }
+                }
+            }
+            for j in rj.clone() {
+                for i in ri.clone() {
+                    if parity[(j - rj.start) * w + (i - ri.start)] == 3 {
+                        enclosed[j * self.nx + i] = true;
+                    }
+                }
+            }
+        }
+        enclosed
     }
 
     fn mark_floor(&mut self, tri: [Vec3; 3]) {
