@@ -267,6 +267,15 @@ fn resume_repairs_a_damaged_frame_and_drops_leftover_temporaries() {
         reference,
         "datasets differ"
     );
+    // The resume's pool report names its logs inside the finished dataset.
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dataset.join("logs/start_02/pool_report.json")).unwrap(),
+    )
+    .unwrap();
+    let attempt = &report["shards"][0]["attempts"][0];
+    let log = attempt["log"].as_str().unwrap();
+    assert!(log.starts_with("logs/start_02/"), "{attempt}");
+    assert!(dataset.join(log).is_file(), "{log}");
     assert!(!dataset.join("manifest.json.partial").exists());
     assert!(!dataset
         .join("cameras/camera-slam-left/frame_00006.exr.tmp")

@@ -38,6 +38,7 @@ pub struct Attempt {
     /// `ok`, or why it failed.
     pub outcome: String,
     pub seconds: f64,
+    /// The attempt's log, relative to the dataset folder.
     pub log: String,
 }
 
@@ -207,7 +208,7 @@ async fn worker(shared: Arc<Shared>, w: usize) {
                 report.frames,
                 report.attempts.len(),
                 last.outcome,
-                last.log
+                shared.dataset.staging.join(&last.log).display()
             ));
         }
         shared.reports.lock().unwrap().push(report);
@@ -258,7 +259,7 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
             finished,
             outcome,
             seconds: started.elapsed().as_secs_f64(),
-            log: log.display().to_string(),
+            log: dataset.relative(&log),
         });
         if ok || *shared.stop.borrow() {
             break;

@@ -123,7 +123,7 @@ pub fn run_slurm(
                 r.frames,
                 r.attempts.len(),
                 last.outcome,
-                last.log
+                dataset.staging.join(&last.log).display()
             );
         }
         round += 1;
@@ -205,11 +205,7 @@ pub fn run_slurm(
                 finished: frames.len() - still_missing,
                 outcome,
                 seconds: end.map_or(0.0, |e| e.seconds),
-                log: dataset
-                    .logs_dir()
-                    .join(format!("slurm_{job}_{t}.log"))
-                    .display()
-                    .to_string(),
+                log: dataset.relative(&dataset.logs_dir().join(format!("slurm_{job}_{t}.log"))),
             });
         }
         if stop.load(Ordering::SeqCst) {
