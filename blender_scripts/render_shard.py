@@ -203,9 +203,18 @@ def probe_bodies(scene, bodies, probe):
         json.dump(result, f)
 
 
+# Exit status of a failure that happens again on every try (the spec or the scene cannot be
+# loaded): the supervisor does not retry it.
+EXIT_SETUP_FAILED = 3
+
+
 def main():
     spec = load_spec()
-    scene, bodies = build_scene(spec)
+    try:
+        scene, bodies = build_scene(spec)
+    except Exception as e:  # noqa: BLE001 - any setup failure is reported the same way
+        print(f"EGOGEN_SETUP_FAILED {type(e).__name__}: {e}", file=sys.stderr, flush=True)
+        sys.exit(EXIT_SETUP_FAILED)
     if spec.get("body_probe"):
         probe_bodies(scene, bodies, spec["body_probe"])
     for cam_spec in spec["cameras"]:

@@ -343,3 +343,35 @@ fn the_slurm_backend_without_slurm_is_refused_before_anything_is_staged() {
     assert!(err.contains("sbatch"), "{err}");
     assert!(!dir.path().join("out.partial").exists());
 }
+
+#[test]
+fn a_scene_blender_cannot_load_fails_once_without_retries() {
+    // The scene is read by egogen, then taken away before Blender imports it: every try
+    // would fail the same way, so there is one attempt, not `retries` + 1.
+    let (dir, config) = setup();
+    let scene = dir.path().join("room.glb");
+    std::fs::copy(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/apartment.glb"),
+        &scene,
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(&config).unwrap();
+    std::fs::write(&config, format!("[scene]\npath = \"room.glb\"\n{text}")).unwrap();
+    let mut child = egogen_run().arg(&config).spawn().unwrap();
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !dir.path().join("out.partial").exists() {
+        assert!(Instant::now() < deadline, "the run never staged");
+        assert!(child.try_wait().unwrap().is_none(), "the run ended early");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    std::fs::write(&scene, b"not a scene any more").unwrap();
+    let status = child.wait().unwrap();
+    assert!(!status.success());
+    let logs: Vec<_> = std::fs::read_dir(dir.path().join("out.partial/logs/start_01"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".log"))
+        .collect();
+    assert_eq!(logs, ["shard_0000_attempt_1.log"], "retried: {logs:?}");
+}

@@ -253,6 +253,7 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
             Err((n, reason)) => (n, reason),
         };
         let ok = outcome == "ok";
+        let setup_failed = outcome.starts_with(SETUP_FAILED);
         report.attempts.push(Attempt {
             attempt,
             frames: missing.len(),
@@ -261,12 +262,18 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
             seconds: started.elapsed().as_secs_f64(),
             log: dataset.relative(&log),
         });
-        if ok || *shared.stop.borrow() {
+        // A setup failure (the scene does not import) happens again on every try.
+        if ok || setup_failed || *shared.stop.borrow() {
             break;
         }
     }
     report
 }
+
+/// Exit status of `render_shard.py` when the spec or the scene cannot be loaded.
+const EXIT_SETUP_FAILED: i32 = 3;
+/// How such an attempt's outcome starts; it is not retried.
+const SETUP_FAILED: &str = "Blender could not set up the scene (not retried)";
 
 /// One Blender run over `frames`; returns frames finished, or (finished, reason).
 async fn attempt_shard(
@@ -343,6 +350,16 @@ async fn attempt_shard(
         .wait()
         .await
         .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
+    if status.code() == Some(EXIT_SETUP_FAILED) {
+        let reason = std::fs::read_to_string(log)
+            .ok()
+            .and_then(|t| {
+                t.lines()
+                    .find_map(|l| l.strip_prefix("EGOGEN_SETUP_FAILED ").map(str::to_owned))
+            })
+            .unwrap_or_else(|| format!("exit status {EXIT_SETUP_FAILED}"));
+        return Err(fail(finished, format!("{SETUP_FAILED}: {reason}")));
+    }
     if !status.success() {
         return Err(fail(finished, format!("Blender exited with {status}")));
     }
