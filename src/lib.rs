@@ -12,6 +12,7 @@ pub mod body;
 pub mod camera;
 pub mod cli;
 pub mod inspect;
+pub mod manifest;
 pub mod math;
 pub mod motion;
 pub mod npz;

@@ -59,6 +59,9 @@ fn short_walk_writes_a_complete_sequence() {
     let x0 = frames[0]["world_from_cpf"][0][3].as_f64().unwrap();
     assert!((1.3..1.9).contains(&z0), "eye height {z0}");
     assert!(x_last - x0 > 0.3, "walked {} m", x_last - x0);
+    // The sequence folder's manifest has checksums: verify checks it.
+    let report = egogen::supervisor::verify(&seq).unwrap();
+    assert_eq!(report.files, 5, "motion, trajectory, preview, two meshes");
 
     // A second run refuses to overwrite and leaves the folder as it was.
     let before = std::fs::read(seq.join("manifest.json")).unwrap();

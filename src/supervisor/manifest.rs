@@ -1,124 +1,16 @@
-//! The dataset manifest (`manifest.json`): every dataset file with its size and SHA-256, and
-//! `verify`, which re-checks a dataset against it (sizes, checksums, every frame file opens
-//! with all channels finite).
+//! `verify`: re-checks a finished dataset against its manifest (sizes, checksums, every frame
+//! file opens with all channels finite). The manifest itself is `crate::manifest`.
 
-use std::io::Read;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use serde::{Deserialize, Serialize};
-use sha2::{Digest, Sha256};
 
 use crate::inspect::ExrContents;
+pub use crate::manifest::{
+    build_manifest, dataset_files, is_temporary, remove_temporaries, sha256_file, write_manifest,
+    Manifest, ManifestEntry, MANIFEST, SCRATCH_DIRS,
+};
 use crate::render::frame_file::{check_frame_channels, FrameFileError};
-
-/// Folders of a dataset that are scratch, not data.
-pub const SCRATCH_DIRS: [&str; 2] = ["work", "logs"];
-pub const MANIFEST: &str = "manifest.json";
-
-/// One file.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ManifestEntry {
-    /// Relative to the dataset folder, `/`-separated.
-    pub path: String,
-    pub bytes: u64,
-    pub sha256: String,
-}
-
-/// The manifest.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Manifest {
-    pub egogen_manifest: u32,
-    pub files: Vec<ManifestEntry>,
-}
-
-/// SHA-256 of a file, lower-case hex.
-pub fn sha256_file(path: &Path) -> Result<String> {
-    let mut f = std::fs::File::open(path).with_context(|| format!("opening {}", path.display()))?;
-    let mut hasher = Sha256::new();
-    let mut buf = vec![0u8; 1 << 16];
-    loop {
-        let n = f
-            .read(&mut buf)
-            .with_context(|| format!("reading {}", path.display()))?;
-        if n == 0 {
-            break;
-        }
-        hasher.update(&buf[..n]);
-    }
-    Ok(format!("{:x}", hasher.finalize()))
-}
-
-fn collect(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
-    let mut entries: Vec<_> = std::fs::read_dir(dir.join(rel))
-        .with_context(|| format!("listing {}", dir.join(rel).display()))?
-        .collect::<std::io::Result<_>>()?;
-    entries.sort_by_key(|e| e.file_name());
-    for e in entries {
-        let r = rel.join(e.file_name());
-        if e.file_type()?.is_dir() {
-            if rel.as_os_str().is_empty() && SCRATCH_DIRS.iter().any(|s| e.file_name() == *s) {
-                continue;
-            }
-            collect(dir, &r, out)?;
-        } else if r != Path::new(MANIFEST) {
-            out.push(r);
-        }
-    }
-    Ok(())
-}
-
-/// Whether a file name is one of egogen's temporaries (`<name>.partial` of an atomic write,
-/// `<frame>.exr.tmp` of a frame being finished): never data, only ever left by a killed run.
-pub fn is_temporary(name: &str) -> bool {
-    name.ends_with(".partial") || name.ends_with(".tmp")
-}
-
-/// Removes the temporaries a killed run left among the dataset files of `dir` (scratch folders
-/// excluded), so that the manifest lists only data; returns what was removed.
-pub fn remove_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut removed = Vec::new();
-    for rel in dataset_files(dir)? {
-        if is_temporary(&rel) {
-            let p = dir.join(&rel);
-            std::fs::remove_file(&p)
-                .with_context(|| format!("removing the leftover {}", p.display()))?;
-            removed.push(p);
-        }
-    }
-    Ok(removed)
-}
-
-/// Lists and hashes every dataset file under `dir` (scratch folders excluded).
-pub fn build_manifest(dir: &Path) -> Result<Manifest> {
-    let files = dataset_files(dir)?
-        .into_iter()
-        .map(|path| {
-            let p = dir.join(&path);
-            Ok(ManifestEntry {
-                bytes: std::fs::metadata(&p)?.len(),
-                sha256: sha256_file(&p)?,
-                path,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(Manifest {
-        egogen_manifest: 1,
-        files,
-    })
-}
-
-/// Writes `manifest.json` atomically.
-pub fn write_manifest(dir: &Path) -> Result<Manifest> {
-    let manifest = build_manifest(dir)?;
-    let path = dir.join(MANIFEST);
-    crate::atomic_file::write_atomically(
-        &path,
-        serde_json::to_string_pretty(&manifest)?.as_bytes(),
-    )
-    .with_context(|| format!("writing {}", path.display()))?;
-    Ok(manifest)
-}
 
 /// What `verify` checked.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -205,22 +97,6 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
         frames,
         bytes,
     })
-}
-
-/// Dataset files under `dir` (scratch folders and the manifest excluded), `/`-separated,
-/// sorted.
-fn dataset_files(dir: &Path) -> Result<Vec<String>> {
-    let mut files = Vec::new();
-    collect(dir, Path::new(""), &mut files)?;
-    Ok(files
-        .iter()
-        .map(|r| {
-            r.components()
-                .map(|c| c.as_os_str().to_string_lossy())
-                .collect::<Vec<_>>()
-                .join("/")
-        })
-        .collect())
 }
 
 #[cfg(test)]

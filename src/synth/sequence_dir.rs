@@ -12,8 +12,10 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::BodyTrack;
+use crate::atomic_file::write_atomically;
 use crate::body::export::write_obj;
 use crate::body::{BodyModel, PosedBody};
+use crate::manifest::{build_manifest, MANIFEST};
 use crate::math::Vec3;
 use crate::motion::MotionSequence;
 use crate::preview::{MeshView, RgbImage};
@@ -141,19 +143,21 @@ pub fn write_sequence_dir(
     }
     side_view(model, meshes).write_png(&staging.join("preview.png"))?;
 
-    let mut files = Vec::new();
-    collect_files(&staging, &staging, &mut files)?;
-    files.sort();
-    let manifest = serde_json::json!({
-        "frames": motion.len(),
-        "frame_rate_hz": motion.frame_rate_hz,
-        "body_model": model.source,
-        "files": files.iter().map(|(p, s)| serde_json::json!({"path": p, "bytes": s})).collect::<Vec<_>>(),
-    });
-    std::fs::write(
-        staging.join("manifest.json"),
-        serde_json::to_vec_pretty(&manifest)?,
-    )?;
+    // The same manifest as a dataset's (sizes and SHA-256, so `egogen-run verify` checks a
+    // sequence folder too), with what the sequence is.
+    let listed = build_manifest(&staging)?;
+    let files = listed
+        .files
+        .iter()
+        .map(|e| (e.path.clone(), e.bytes))
+        .collect();
+    let mut manifest = serde_json::to_value(&listed)?;
+    manifest["frames"] = motion.len().into();
+    manifest["frame_rate_hz"] = motion.frame_rate_hz.into();
+    manifest["body_model"] = serde_json::to_value(&model.source)?;
+    let manifest_path = staging.join(MANIFEST);
+    write_atomically(&manifest_path, &serde_json::to_vec_pretty(&manifest)?)
+        .with_context(|| format!("writing {}", manifest_path.display()))?;
     if dir.exists() {
         std::fs::remove_dir(dir)?;
     }
@@ -180,21 +184,4 @@ fn side_view(model: &BodyModel, meshes: &[(usize, PosedBody)]) -> RgbImage {
         })
         .collect();
     MeshView::looking_from(Vec3::new(0.0, -1.0, 0.0), Vec3::Z).render(&parts, 960, 360)
-}
-
-fn collect_files(root: &Path, dir: &Path, out: &mut Vec<(String, u64)>) -> Result<()> {
-    for entry in std::fs::read_dir(dir)? {
-        let entry = entry?;
-        let path = entry.path();
-        if path.is_dir() {
-            collect_files(root, &path, out)?;
-        } else {
-            let rel = path
-                .strip_prefix(root)?
-                .to_string_lossy()
-                .replace('\\', "/");
-            out.push((rel, entry.metadata()?.len()));
-        }
-    }
-    Ok(())
 }
