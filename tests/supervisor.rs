@@ -374,4 +374,11 @@ fn a_scene_blender_cannot_load_fails_once_without_retries() {
         .filter(|n| n.ends_with(".log"))
         .collect();
     assert_eq!(logs, ["shard_0000_attempt_1.log"], "retried: {logs:?}");
+    // The failed start still reports what it did.
+    let report = std::fs::read_to_string(
+        dir.path()
+            .join("out.partial/logs/start_01/pool_report.json"),
+    )
+    .unwrap();
+    assert!(report.contains("could not set up the scene"), "{report}");
 }

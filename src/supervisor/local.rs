@@ -59,6 +59,17 @@ pub struct PoolReport {
     pub wall_seconds: f64,
 }
 
+impl PoolReport {
+    /// Writes `logs/start_<n>/pool_report.json`.
+    pub fn write(&self, dataset: &Dataset) -> Result<()> {
+        let path = dataset.logs_dir().join("pool_report.json");
+        std::fs::create_dir_all(dataset.logs_dir())
+            .with_context(|| format!("creating {}", dataset.logs_dir().display()))?;
+        crate::atomic_file::write_atomically(&path, &serde_json::to_vec_pretty(self)?)
+            .with_context(|| format!("writing {}", path.display()))
+    }
+}
+
 struct Shared {
     dataset: Arc<Dataset>,
     runtime: BlenderRuntime,
@@ -117,22 +128,26 @@ pub fn run_local(
         bar.finish_and_clear();
         let mut reports = std::mem::take(&mut *shared.reports.lock().unwrap());
         reports.sort_by_key(|r| r.shard);
+        let frames_finished = reports
+            .iter()
+            .flat_map(|r| r.attempts.iter())
+            .map(|a| a.finished)
+            .sum();
+        let report = PoolReport {
+            shards: reports,
+            frames_finished,
+            wall_seconds: started.elapsed().as_secs_f64(),
+        };
+        // Written whatever happened: an interrupted or failed start's report is the one a
+        // user reads first.
+        report.write(&shared.dataset)?;
         if *shared.stop.borrow() {
             bail!("interrupted: finished frames are kept; rerun with --resume to continue");
         }
         if let Some(reason) = shared.failed.lock().unwrap().take() {
             bail!("{reason}");
         }
-        let frames_finished = reports
-            .iter()
-            .flat_map(|r| r.attempts.iter())
-            .map(|a| a.finished)
-            .sum();
-        Ok(PoolReport {
-            shards: reports,
-            frames_finished,
-            wall_seconds: started.elapsed().as_secs_f64(),
-        })
+        Ok(report)
     })
 }
 

@@ -290,10 +290,6 @@ pub fn run_pipeline(
             .iter()
             .filter(|s| s.attempts.len() > 1)
             .count();
-        write_atomically(
-            &dataset.logs_dir().join("pool_report.json"),
-            serde_json::to_string_pretty(&report)?.as_bytes(),
-        )?;
         eprintln!(
             "egogen-run: rendered {rendered_now} frames in {:.1} s ({retried} shard(s) retried)",
             report.wall_seconds

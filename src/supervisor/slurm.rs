@@ -216,11 +216,13 @@ pub fn run_slurm(
     bar.finish_and_clear();
     let mut shards: Vec<ShardReport> = states.into_iter().map(|s| s.report).collect();
     shards.sort_by_key(|r| r.shard);
-    Ok(PoolReport {
+    let report = PoolReport {
         shards,
         frames_finished,
         wall_seconds: started.elapsed().as_secs_f64(),
-    })
+    };
+    report.write(&dataset)?;
+    Ok(report)
 }
 
 fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
