@@ -280,6 +280,9 @@ fn resume_repairs_a_damaged_frame_and_drops_leftover_temporaries() {
     assert!(!dataset
         .join("cameras/camera-slam-left/frame_00006.exr.tmp")
         .exists());
+    // Scratch only Blender read is gone from the finished dataset (the body cache is large).
+    assert!(!dataset.join("work/agent_0.pc2").exists());
+    assert!(!dataset.join("work/raw").exists());
     verify(&dataset).unwrap();
 }
 
