@@ -348,3 +348,41 @@ fn damaged_policy_weights_are_refused_with_their_path() {
     .to_string();
     assert!(err.contains("egogen.policy_arch"), "{err}");
 }
+
+#[test]
+fn the_prior_kl_penalty_holds_the_policy_near_the_standard_normal() {
+    // An entropy bonus large enough to spread the policy fast; the KL penalty pulls it back.
+    let final_kl = |coef: f64| -> f64 {
+        let dir = tempfile::tempdir().unwrap();
+        let config = dir.path().join("c.toml");
+        let text = tiny_config(dir.path()).replace(
+            "[ppo]\n",
+            &format!(
+                "[ppo]\nlearning_rate = 0.01\nentropy_coef = 1.0\nmax_grad_norm = 10.0\nprior_kl_coef = {coef}\n"
+            ),
+        );
+        std::fs::write(&config, text).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+            .args(["train", "policy", "--quiet", "--config"])
+            .arg(&config)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let log = std::fs::read_to_string(dir.path().join("w.log.jsonl")).unwrap();
+        let last: serde_json::Value = serde_json::from_str(log.lines().last().unwrap()).unwrap();
+        last["kl_prior"].as_f64().unwrap()
+    };
+    let (free, held) = (final_kl(0.0), final_kl(10.0));
+    assert!(
+        free > 1.0,
+        "the entropy bonus spreads the policy: KL {free}"
+    );
+    assert!(
+        held < 0.5 * free,
+        "KL with the penalty {held}, without {free}"
+    );
+}
