@@ -320,3 +320,61 @@ fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
         .to_string()
         .contains("not of this environment's kind"));
 }
+
+#[test]
+fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
+    use egogen::policy::crossing_scene::CrossingSettings;
+    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
+    let prior = clip_prior();
+    let crossing = |share: f64| EnvSettings {
+        crossing: CrossingSettings {
+            share,
+            ..CrossingSettings::default()
+        },
+        ..EnvSettings::default()
+    };
+    let b = 6;
+    let mut env = PolicyEnv::new(&model, &ctx, &bank, &prior, crossing(1.0), b, 5).unwrap();
+    // The same episodes with the other person taken away: the floor's edges only.
+    let mut alone_settings = crossing(1.0);
+    alone_settings.crossing.footprint_m = (1e-6, 1e-6);
+    let mut alone = PolicyEnv::new(&model, &ctx, &bank, &prior, alone_settings, b, 5).unwrap();
+    let l = env.latent_dim();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut seen_nearer = 0;
+    for step in 0..6 {
+        let (o, a) = (env.observations(), alone.observations());
+        for (x, y) in o.chunks(OBS_DIM).zip(a.chunks(OBS_DIM)) {
+            let rays = OBS_RAYS_OFFSET..OBS_RAYS_OFFSET + 2 * RAYS;
+            // The person only ever shortens rays.
+            assert!(x[rays.clone()]
+                .iter()
+                .zip(&y[rays.clone()])
+                .all(|(p, q)| p <= q));
+            if x[rays.clone()] != y[rays] {
+                seen_nearer += 1;
+            }
+        }
+        if step == 3 {
+            // A snapshot mid-episode restores to the same observations and rewards.
+            let snap = env.snapshot();
+            let mut twin =
+                PolicyEnv::new(&model, &ctx, &bank, &prior, crossing(1.0), b, 5).unwrap();
+            twin.restore(&snap).unwrap();
+            assert_eq!(twin.observations(), env.observations());
+            let z = normal_samples(&mut ChaCha8Rng::seed_from_u64(2), b * l);
+            let (r1, r2) = (env.propose(&z, 1).unwrap(), twin.propose(&z, 1).unwrap());
+            let rewards = |c: &[egogen::policy::env::Candidate]| {
+                c.iter().map(|c| c.reward).collect::<Vec<_>>()
+            };
+            assert_eq!(rewards(&r1), rewards(&r2));
+        }
+        let z = normal_samples(&mut rng, b * l);
+        env.step(&z).unwrap();
+        alone.step(&z).unwrap();
+    }
+    assert!(seen_nearer > 0, "the other person was never in view");
+}

@@ -298,6 +298,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
         ),
         ("hidden = 16", "hidden = 16\nwidth = 3", "width"),
         (
+            "[stages.env]",
+            "[stages.env]\ncrossing = { share = 1.5 }",
+            "stages[1].env.crossing",
+        ),
+        (
             "[policy]",
             "init_weights = \"missing.safetensors\"\n[policy]",
             "init_weights",

@@ -118,6 +118,10 @@ enum PolicyCommand {
         /// Primitives before an episode times out (default 11; EgoGen's apartment: 13).
         #[arg(long)]
         max_primitives: Option<usize>,
+        /// Share of crossing scenes (another person walking across the path) instead of box
+        /// scenes: 0 (default) to 1.
+        #[arg(long, default_value_t = 0.0)]
+        crossing_share: f64,
         #[arg(long, default_value_t = 200)]
         episodes: usize,
         /// Episodes run in parallel (one decode batch).
@@ -1719,6 +1723,7 @@ fn run_policy(cmd: PolicyCommand) -> Result<()> {
             scene,
             pair_distance_m,
             max_primitives,
+            crossing_share,
         } => {
             if let Some(f) = &episodes_jsonl {
                 refuse_existing(f)?;
@@ -1741,9 +1746,16 @@ fn run_policy(cmd: PolicyCommand) -> Result<()> {
             let (_, held) = evaluation_sets(&plan, &body, true)?;
             let bank = SeedBank::from_set(&held);
             let defaults = EnvSettings::default();
+            if !(0.0..=1.0).contains(&crossing_share) {
+                bail!("--crossing-share: expected a share in [0, 1], got {crossing_share}");
+            }
             let settings = EnvSettings {
                 success_m,
                 max_primitives: max_primitives.unwrap_or(defaults.max_primitives),
+                crossing: egogen::policy::crossing_scene::CrossingSettings {
+                    share: crossing_share,
+                    ..defaults.crossing
+                },
                 ..defaults
             };
             if settings.max_primitives == 0 {

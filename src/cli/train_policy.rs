@@ -166,6 +166,22 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
                 "expected 0 < box_side_m.0 ≤ box_side_m.1, cell_m > 0 and a floor wider than the box and its start margin".into(),
             ));
         }
+        let c = &e.crossing;
+        let ordered = |(a, b): (f64, f64)| a > 0.0 && b >= a && b.is_finite();
+        if !((0.0..=1.0).contains(&c.share)
+            && ordered(c.distance_m)
+            && ordered(c.speed_m_s)
+            && ordered(c.footprint_m)
+            && c.floor_m > c.distance_m.1
+            && c.walker_speed_m_s > 0.0
+            && c.timing_jitter_s >= 0.0
+            && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2)
+        {
+            return Err(bad(
+                &key("env.crossing"),
+                "expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0 and |cross_angle_rad| < π/2".into(),
+            ));
+        }
         stages.push(StagePlan {
             name: s.name,
             env_steps: s.env_steps,

@@ -2,8 +2,10 @@
 //! per step, all decoded in one batch. The same code serves training, the sampling controller
 //! and evaluation.
 //!
-//! An episode (EgoGen's box environment): a [`BoxScene`], a mocap seed (two frames of a
-//! training primitive) placed at the start facing the goal within ±`seed_yaw_jitter_rad`,
+//! An episode (EgoGen's box environment): a [`BoxScene`] — or, for a configured share of
+//! episodes, a [`CrossingScene`], where another person crosses the path as a moving 2D box
+//! that the rays see and the penetration test counts, on the episode's clock — a mocap seed
+//! (two frames of a training primitive) placed at the start facing the goal within ±`seed_yaw_jitter_rad`,
 //! the floor at z = 0. A step decodes the latent, judges the primitive ([`super::reward`]),
 //! and ends the episode on success, on penetration (when `terminate_on_penetration`), on a
 //! non-finite primitive, or after `max_primitives` (a timeout is terminal, as in EgoGen).
@@ -25,6 +27,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
+use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
 use super::reward::{judge, Judged, Limits, RewardWeights, Situation};
 use crate::body::{joint, BodyParams, NUM_MARKERS, POSE_DIM};
@@ -37,8 +40,8 @@ use crate::motion::cvae::rig::RigGeometry;
 use crate::motion::cvae::{
     BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed,
 };
-use crate::motion::primitive::{canonical_frame, SEED_FRAMES};
-use crate::scene::{blocked_cells_in_box, Obstacle2, StartGoal, WalkableMap};
+use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::scene::{blocked_cells_in_box, MovingObstacle, Obstacle2, StartGoal, WalkableMap};
 use crate::sensing::{EgoPose2, EgoSensor, RayScan, RayScanSettings, SensingWorld};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
@@ -61,6 +64,8 @@ pub const OBS_DIST_OFFSET: usize = OBS_RAYS_OFFSET + SEED_FRAMES * RAYS;
 #[serde(deny_unknown_fields, default)]
 pub struct EnvSettings {
     pub scene: BoxSceneSettings,
+    /// Crossing scenes (another person walking across the path) and their share of episodes.
+    pub crossing: CrossingSettings,
     pub weights: RewardWeights,
     /// Success radius around the goal (m, horizontal; EgoGen's 0.1).
     pub success_m: f64,
@@ -79,6 +84,7 @@ impl Default for EnvSettings {
     fn default() -> Self {
         Self {
             scene: BoxSceneSettings::default(),
+            crossing: CrossingSettings::default(),
             weights: RewardWeights::default(),
             success_m: 0.1,
             max_primitives: 11,
@@ -156,10 +162,13 @@ struct Totals {
 struct Course {
     map: Arc<WalkableMap>,
     obstacle: Option<Obstacle2>,
+    /// Obstacles that move, on the episode's clock.
+    moving: Vec<MovingObstacle>,
     start: DVec2,
     goal: DVec2,
     /// What was drawn: a box scene, or a pair of a fixed scene.
     box_params: Option<BoxParams>,
+    crossing: Option<CrossingParams>,
     pair: Option<usize>,
 }
 
@@ -188,6 +197,8 @@ pub struct EpisodeSnapshot {
     id: u64,
     #[serde(default)]
     scene: Option<BoxParams>,
+    #[serde(default)]
+    crossing: Option<CrossingParams>,
     #[serde(default)]
     pair: Option<usize>,
     /// The seed frames' pose (165) and translation (3).
@@ -291,6 +302,12 @@ pub struct PolicyEnv<'m> {
     episodes: Vec<Episode>,
     episode_base: u64,
     next_episode: u64,
+}
+
+/// Time (s) of frame `f` of the primitive an episode takes at step `steps`, on the episode's
+/// clock (frame 0 of the first seed at 0): moving obstacles are placed at it.
+fn frame_time_s(steps: usize, f: usize) -> f64 {
+    (steps * (PRIMITIVE_FRAMES - SEED_FRAMES) + f) as f64 / PRIMITIVE_RATE_HZ
 }
 
 /// The generator of episode `id` under `base`.
@@ -397,9 +414,24 @@ impl<'m> PolicyEnv<'m> {
         Course {
             map: Arc::new(scene.map),
             obstacle: Some(scene.obstacle),
+            moving: Vec::new(),
             start: scene.start,
             goal: scene.goal,
             box_params: Some(scene.params),
+            crossing: None,
+            pair: None,
+        }
+    }
+
+    fn crossing_course(scene: CrossingScene) -> Course {
+        Course {
+            map: Arc::new(scene.map),
+            obstacle: None,
+            moving: vec![scene.mover],
+            start: scene.start,
+            goal: scene.goal,
+            box_params: None,
+            crossing: Some(scene.params),
             pair: None,
         }
     }
@@ -408,17 +440,25 @@ impl<'m> PolicyEnv<'m> {
         Course {
             map: f.map.clone(),
             obstacle: None,
+            moving: Vec::new(),
             start: f.pairs[pair].start,
             goal: f.pairs[pair].goal,
             box_params: None,
+            crossing: None,
             pair: Some(pair),
         }
     }
 
-    /// The course of episode `id`: a new box scene, or the next pair of the fixed scene.
+    /// The course of episode `id`: the next pair of the fixed scene, or a new crossing scene
+    /// (with the crossing share) or box scene.
     fn draw_course(&self, id: u64, rng: &mut ChaCha8Rng) -> Course {
+        let crossing = self.settings.crossing;
         match self.fixed {
             Some(f) => Self::fixed_course(f, (id % f.pairs.len() as u64) as usize),
+            // No draw when there are no crossings: box-only runs stay as they were.
+            None if crossing.share > 0.0 && uniform_open01(rng) < crossing.share => {
+                Self::crossing_course(CrossingScene::sample(&crossing, rng))
+            }
             None => Self::box_course(BoxScene::sample(&self.settings.scene, rng)),
         }
     }
@@ -512,11 +552,13 @@ impl<'m> PolicyEnv<'m> {
                 o[j..j + 3].copy_from_slice(&[d.x as f32, d.y as f32, d.z as f32]);
             }
         }
-        let world = SensingWorld {
-            map: &e.course.map,
-            obstacles: &[],
-        };
         for (k, cpf) in e.view.world_from_cpf.iter().enumerate() {
+            let t = frame_time_s(e.steps, k);
+            let moving: Vec<Obstacle2> = e.course.moving.iter().map(|m| m.at(t)).collect();
+            let world = SensingWorld {
+                map: &e.course.map,
+                obstacles: &moving,
+            };
             let at = OBS_RAYS_OFFSET + k * RAYS;
             self.scan.observe_into(
                 &world,
@@ -565,6 +607,8 @@ impl<'m> PolicyEnv<'m> {
                         let s = Situation {
                             map: &e.course.map,
                             obstacle: e.course.obstacle.as_ref(),
+                            moving: &e.course.moving,
+                            t0_s: frame_time_s(e.steps, 0),
                             goal: e.course.goal,
                             distance_m: e.distance_m,
                         };
@@ -691,6 +735,7 @@ impl<'m> PolicyEnv<'m> {
                 .map(|e| EpisodeSnapshot {
                     id: e.id,
                     scene: e.course.box_params,
+                    crossing: e.course.crossing,
                     pair: e.course.pair,
                     frames: e
                         .view
@@ -735,9 +780,16 @@ impl<'m> PolicyEnv<'m> {
                     ..BodyParams::default()
                 }
             });
-            let course = match (s.scene, s.pair, self.fixed) {
-                (Some(p), None, None) => Self::box_course(BoxScene::build(&self.settings.scene, p)),
-                (None, Some(pair), Some(f)) if pair < f.pairs.len() => Self::fixed_course(f, pair),
+            let course = match (s.scene, s.crossing, s.pair, self.fixed) {
+                (Some(p), None, None, None) => {
+                    Self::box_course(BoxScene::build(&self.settings.scene, p))
+                }
+                (None, Some(c), None, None) => {
+                    Self::crossing_course(CrossingScene::build(&self.settings.crossing, c))
+                }
+                (None, None, Some(pair), Some(f)) if pair < f.pairs.len() => {
+                    Self::fixed_course(f, pair)
+                }
                 _ => {
                     return Err(EnvError::Snapshot(format!(
                         "episode {}: its scene is not of this environment's kind",

@@ -7,6 +7,7 @@
 //! collision) and `sensing` (rays). Nothing here renders.
 
 pub mod box_scene;
+pub mod crossing_scene;
 pub mod env;
 pub mod evaluate;
 pub mod net;

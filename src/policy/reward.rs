@@ -11,7 +11,8 @@
 //!   projection of the CPF's viewing direction at the last frame;
 //! - penetration: 0.05 while at most `penetration_cells` blocked map cells lie in the body's
 //!   2D box (the bounding box of the 67 markers of the last two frames, in the new canonical
-//!   frame: paper Eq. 7), else 0;
+//!   frame: paper Eq. 7) — cells of that box inside a moving obstacle at the last frame count
+//!   too — else 0;
 //! - pose: 0.05 while the mean pose-prior score of the 20 frames is at most the prior's
 //!   plausibility limit, else 0 (EgoGen: VPoser latent norm ≤ 11);
 //! - success: 1 when the pelvis ends within `success_m` of the goal.
@@ -27,8 +28,8 @@ use crate::body::joint;
 use crate::math::Vec3;
 use crate::motion::cvae::eval::contact_terms;
 use crate::motion::cvae::DecodedPrimitive;
-use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, SEED_FRAMES};
-use crate::scene::{blocked_cells_in_box, Obstacle2, WalkableMap};
+use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::scene::{blocked_cells_in_box, MovingObstacle, Obstacle2, WalkableMap};
 
 /// Weights of the reward terms (paper Tab. S2; penetration 1 in pretraining, 0.1 in
 /// fine-tuning).
@@ -95,6 +96,10 @@ impl RewardTerms {
 pub struct Situation<'a> {
     pub map: &'a WalkableMap,
     pub obstacle: Option<&'a Obstacle2>,
+    /// Obstacles that move (other people as 2D boxes), and the time of the primitive's first
+    /// frame on their clock (s).
+    pub moving: &'a [MovingObstacle],
+    pub t0_s: f64,
     pub goal: DVec2,
     /// Horizontal pelvis–goal distance at the end of the previous primitive (m).
     pub distance_m: f64,
@@ -114,7 +119,7 @@ pub struct Judged {
     /// Horizontal pelvis–goal distance at the primitive's end (m).
     pub distance_m: f64,
     pub success: bool,
-    /// Blocked cells in the body's 2D box at the end (Eq. 7).
+    /// Blocked cells in the body's 2D box at the end (Eq. 7), moving obstacles' included.
     pub blocked_cells: usize,
     pub penetrated: bool,
     /// Foot contact (3-D, Eq. 12) = floor · skate.
@@ -126,6 +131,40 @@ pub struct Judged {
     pub frames_in_obstacle: usize,
     /// cos(angle) between the viewing direction and the direction to the goal, last frame.
     pub view_cos: f64,
+}
+
+/// Cells of a `cell_m` grid laid over an oriented box (centre, half extents, yaw) whose centres
+/// lie inside any of `obstacles`: Eq. 7's blocked-cell count for obstacles that are not in the
+/// walkable map.
+pub fn cells_in_obstacles(
+    obstacles: &[Obstacle2],
+    centre: DVec2,
+    half: DVec2,
+    yaw_rad: f64,
+    cell_m: f64,
+) -> usize {
+    if obstacles.is_empty() || !(half.is_finite() && cell_m > 0.0) {
+        return 0;
+    }
+    let (nx, ny) = (
+        ((2.0 * half.x / cell_m).ceil() as usize).clamp(1, 1000),
+        ((2.0 * half.y / cell_m).ceil() as usize).clamp(1, 1000),
+    );
+    let rot = DVec2::from_angle(yaw_rad);
+    let mut n = 0;
+    for j in 0..ny {
+        for i in 0..nx {
+            let local = DVec2::new(
+                -half.x + (i as f64 + 0.5) * 2.0 * half.x / nx as f64,
+                -half.y + (j as f64 + 0.5) * 2.0 * half.y / ny as f64,
+            );
+            let p = centre + rot.rotate(local);
+            if obstacles.iter().any(|o| o.contains(p)) {
+                n += 1;
+            }
+        }
+    }
+    n
 }
 
 fn unit_xy(v: Vec3) -> DVec2 {
@@ -168,17 +207,27 @@ pub fn judge(
             }
             let c = (lo + hi) * 0.5;
             let centre = o + x * c.x + x.perp() * c.y;
-            blocked_cells_in_box(s.map, centre, (hi - lo) * 0.5, x.y.atan2(x.x))
+            let (half, yaw) = ((hi - lo) * 0.5, x.y.atan2(x.x));
+            let t_end = s.t0_s + last as f64 / PRIMITIVE_RATE_HZ;
+            let moving: Vec<Obstacle2> = s.moving.iter().map(|m| m.at(t_end)).collect();
+            blocked_cells_in_box(s.map, centre, half, yaw)
+                + cells_in_obstacles(&moving, centre, half, yaw, s.map.cell_m)
         }
         Err(_) => usize::MAX,
     };
     let penetrated = blocked_cells > limits.penetration_cells;
-    let frames_in_obstacle = s.obstacle.map_or(0, |o| {
-        p.markers[SEED_FRAMES..]
-            .iter()
-            .filter(|f| f.iter().any(|m| o.contains(DVec2::new(m.x, m.y))))
-            .count()
-    });
+    let frames_in_obstacle = p.markers[SEED_FRAMES..]
+        .iter()
+        .enumerate()
+        .filter(|(k, f)| {
+            let t = s.t0_s + (SEED_FRAMES + k) as f64 / PRIMITIVE_RATE_HZ;
+            let moving: Vec<Obstacle2> = s.moving.iter().map(|m| m.at(t)).collect();
+            f.iter().any(|m| {
+                let q = DVec2::new(m.x, m.y);
+                s.obstacle.is_some_and(|o| o.contains(q)) || moving.iter().any(|o| o.contains(q))
+            })
+        })
+        .count();
     let success = distance_m < limits.success_m;
     let terms = RewardTerms {
         floor,
@@ -204,5 +253,36 @@ pub fn judge(
         pose_nll,
         frames_in_obstacle,
         view_cos: view.dot(to_goal),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_of_the_body_box_inside_a_moving_obstacle_are_counted() {
+        let person = Obstacle2::Box {
+            centre: DVec2::new(1.0, 0.0),
+            half_extents: DVec2::new(0.3, 0.2),
+            yaw_rad: 0.0,
+        };
+        let body = |x: f64| {
+            cells_in_obstacles(
+                &[person],
+                DVec2::new(x, 0.0),
+                DVec2::new(0.3, 0.2),
+                0.3,
+                0.1,
+            )
+        };
+        // Apart, touching a little, overlapping fully.
+        assert_eq!(body(-1.0), 0);
+        assert!((1..=8).contains(&body(0.45)), "{}", body(0.45));
+        assert!(body(1.0) >= 20, "{}", body(1.0));
+        assert_eq!(
+            cells_in_obstacles(&[], DVec2::ZERO, DVec2::ONE, 0.0, 0.1),
+            0
+        );
     }
 }
