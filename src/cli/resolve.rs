@@ -492,7 +492,5 @@ pub fn resolve_body_model(path: Option<PathBuf>, base: &Path) -> Result<PathBuf,
 
 /// The folder shipped data is found in: `EGOGEN_HOME` if set, else the crate's source root.
 pub fn crate_root() -> PathBuf {
-    std::env::var_os("EGOGEN_HOME")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")))
+    crate::paths::crate_root()
 }

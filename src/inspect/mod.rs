@@ -2,8 +2,7 @@
 //! files and 5.0's multi-part files alike), per-channel statistics, and PNG previews chosen by
 //! pass (tonemapped colour, colour-mapped depth, normals, id palette, flow wheel).
 
-pub mod exr_file;
 pub mod preview;
 
-pub use exr_file::{ExrChannel, ExrContents, InspectError, Pass};
+pub use crate::exr_file::{ExrChannel, ExrContents, InspectError, Pass};
 pub use preview::pass_preview;

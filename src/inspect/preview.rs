@@ -7,7 +7,7 @@
 //! - flow (`Vector`, `Flow`): colour wheel, hue = direction, brightness = length / max length;
 //! - anything else: first component, min–max grey.
 
-use super::exr_file::{ExrContents, Pass};
+use crate::exr_file::{ExrContents, Pass};
 use crate::preview::RgbImage;
 
 /// How a pass is drawn.

@@ -28,7 +28,7 @@ use exr::prelude::{
 };
 
 use crate::camera::{Camera, CameraModel, Pixel};
-use crate::inspect::{ExrContents, InspectError};
+use crate::exr_file::{ExrContents, InspectError};
 use crate::math::{Affine3, Real, Vec3};
 use crate::render::render_camera::RenderCamera;
 

@@ -1,6 +1,7 @@
 //! Rendering: the Blender runtime egogen drives (PyPI `bpy` 4.5 LTS in a managed virtual
 //! environment, or a user's own), and — as rendering lands — the backend trait and the wire
-//! protocol of shard specs. `render` knows nothing of bodies, motion or policies.
+//! protocol of shard specs. `render` knows nothing of policies; its body cache still poses bodies
+//! along a motion (a known break of the layering, `docs/ARCHITECTURE.md`).
 
 pub mod blender_runtime;
 pub mod body_cache;

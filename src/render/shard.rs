@@ -24,7 +24,7 @@ pub enum ShardError {
 
 /// The worker script shipped with egogen.
 pub fn render_script() -> PathBuf {
-    crate::cli::resolve::crate_root().join("blender_scripts/render_shard.py")
+    crate::paths::crate_root().join("blender_scripts/render_shard.py")
 }
 
 /// The command that runs the worker script on a spec with this Blender.

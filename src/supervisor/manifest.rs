@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 
-use crate::inspect::ExrContents;
+use crate::exr_file::ExrContents;
 pub use crate::manifest::{
     build_manifest, dataset_files, is_temporary, remove_temporaries, sha256_file, write_manifest,
     Manifest, ManifestEntry, MANIFEST, SCRATCH_DIRS,
