@@ -385,3 +385,35 @@ fn a_scene_blender_cannot_load_fails_once_without_retries() {
     .unwrap();
     assert!(report.contains("could not set up the scene"), "{report}");
 }
+
+#[test]
+fn a_resume_with_another_rig_is_refused() {
+    let (dir, config) = setup();
+    let mut child = egogen_run().arg(&config).spawn().unwrap();
+    let state = dir.path().join("out.partial/work/run.json");
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !state.is_file() {
+        assert!(Instant::now() < deadline, "the run never staged");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    // The same rig file with one camera moved by a centimetre.
+    let rig = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("camera_rigs/aria_gen1.json"),
+    )
+    .unwrap()
+    .replacen("0.06905099990228451", "0.07905099990228451", 1);
+    let moved = dir.path().join("moved_rig.json");
+    std::fs::write(&moved, rig).unwrap();
+    let out = egogen_run()
+        .arg(&config)
+        .arg("--resume")
+        .arg("--rig")
+        .arg(&moved)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("different camera rig"), "{err}");
+}

@@ -65,6 +65,14 @@ pub fn run_pipeline(
     let dir = &plan.output_dir;
     let staging = PathBuf::from(format!("{}.partial", dir.display()));
     let config_sha = sha256_file(config_path)?;
+    // The rig as resolved (a --rig override included): a resume must render with the same one.
+    let rig_sha = {
+        use sha2::Digest;
+        format!(
+            "{:x}",
+            sha2::Sha256::digest(render.rig.to_json().as_bytes())
+        )
+    };
     if is_non_empty_dir(dir) {
         if opts.resume && dir.join(MANIFEST).is_file() {
             eprintln!(
@@ -108,6 +116,15 @@ pub fn run_pipeline(
                 config_path.display()
             );
         }
+        if state
+            .get("rig_sha256")
+            .is_some_and(|s| *s != json!(rig_sha))
+        {
+            bail!(
+                "{} was started with a different camera rig (a --rig override or a changed rig file); resuming would mix two runs (nothing was touched)",
+                staging.display()
+            );
+        }
     }
 
     // Everything that can fail on bad input or a missing Blender, before anything is staged:
@@ -136,6 +153,7 @@ pub fn run_pipeline(
             serde_json::to_string_pretty(&json!({
                 "config": config_path.display().to_string(),
                 "config_sha256": config_sha,
+                "rig_sha256": rig_sha,
             }))?
             .as_bytes(),
         )?;
