@@ -423,3 +423,22 @@ fn a_motion_only_run_leaves_an_interrupted_render_run_alone() {
     assert!(staging.join("cameras/camera-rgb/frame_00000.exr").is_file());
     assert!(!dir.path().join("seq").exists());
 }
+
+#[test]
+fn a_workers_override_gets_the_configs_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(&cfg, GOOD).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(&cfg)
+        .args(["--workers", "100000"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("supervisor.workers") && err.contains("1..=256"),
+        "{err}"
+    );
+    assert!(!dir.path().join("seq").exists());
+}

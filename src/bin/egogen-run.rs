@@ -94,13 +94,12 @@ fn run(args: Args) -> Result<()> {
         let rig = std::path::absolute(rig).context("resolving --rig")?;
         raw.render.get_or_insert_with(Default::default).rig = Some(rig);
     }
-    let mut plan = resolve_run(raw, &config)?;
+    // --workers goes into the config as written, so the config's check applies to it too.
     if let Some(w) = args.workers {
-        if w == 0 {
-            anyhow::bail!("--workers: expected at least 1");
-        }
-        plan.supervisor.workers = w;
+        raw.supervisor.workers = Some(w);
     }
+    let mut plan = resolve_run(raw, &config)?;
+    // --backend may switch a config with `[supervisor.slurm]` settings to local and back.
     if let Some(b) = args.backend {
         plan.supervisor.backend = match b {
             BackendArg::Local => Backend::Local,
