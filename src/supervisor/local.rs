@@ -376,7 +376,20 @@ async fn attempt_shard(
         return Err(fail(finished, format!("{SETUP_FAILED}: {reason}")));
     }
     if !status.success() {
-        return Err(fail(finished, format!("Blender exited with {status}")));
+        // The last thing the worker said is usually why.
+        let said = std::fs::read_to_string(log).ok().and_then(|t| {
+            t.lines()
+                .rev()
+                .find(|l| !l.trim().is_empty())
+                .map(str::to_owned)
+        });
+        return Err(fail(
+            finished,
+            match said {
+                Some(line) => format!("Blender exited with {status}; its last words: {line}"),
+                None => format!("Blender exited with {status}"),
+            },
+        ));
     }
     let missing = frames
         .iter()
