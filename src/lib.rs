@@ -27,3 +27,4 @@ pub mod scene;
 pub mod sensing;
 pub mod supervisor;
 pub mod synth;
+pub mod vertex_cache;

@@ -280,7 +280,7 @@ fn training_configs() {
 
 #[test]
 fn point_cache() {
-    use egogen::render::body_cache::PointCache;
+    use egogen::vertex_cache::PointCache;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("good.pc2");
     let cache = PointCache {

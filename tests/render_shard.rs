@@ -13,7 +13,6 @@ use egogen::inspect::ExrContents;
 use egogen::math::{Affine3, Mat3, Vec3};
 use egogen::motion::scripted::WalkCycle;
 use egogen::motion::MotionSequence;
-use egogen::render::body_cache::{body_cache, write_faces_npy, PointCache};
 use egogen::render::frame_file::{assemble_frame, validate_frame};
 use egogen::render::lens_polynomial::native_error;
 use egogen::render::render_camera::{FisheyeRendering, RenderCamera};
@@ -24,6 +23,8 @@ use egogen::render::{
 };
 use egogen::rig::Rig;
 use egogen::scene::{load_scene, sample_start_goals, walkable_map, WalkableSettings};
+use egogen::synth::body_cache;
+use egogen::vertex_cache::{write_faces_npy, PointCache};
 
 const FRAMES: usize = 6;
 const RATE_HZ: f64 = 40.0;

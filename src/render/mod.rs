@@ -1,10 +1,9 @@
 //! Rendering: the Blender runtime egogen drives (PyPI `bpy` 4.5 LTS in a managed virtual
 //! environment, or a user's own), and — as rendering lands — the backend trait and the wire
-//! protocol of shard specs. `render` knows nothing of policies; its body cache still poses bodies
-//! along a motion (a known break of the layering, `docs/ARCHITECTURE.md`).
+//! protocol of shard specs. `render` knows nothing of bodies, motion or policies: bodies reach it
+//! as files (`crate::vertex_cache`) that `synth` writes.
 
 pub mod blender_runtime;
-pub mod body_cache;
 pub mod camera_setup;
 pub mod depth_noise;
 pub mod frame_file;

@@ -20,14 +20,14 @@ use crate::body::BodyModel;
 use crate::cli::config::Backend;
 use crate::cli::resolve::{RenderPlan, RunPlan};
 use crate::motion::MotionSequence;
-use crate::render::body_cache::{body_cache, write_faces_npy};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
 use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec};
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
 use crate::synth::placement::place_motion;
-use crate::synth::{pose_meshes, track_body, write_sequence_dir};
+use crate::synth::{body_cache, pose_meshes, track_body, write_sequence_dir};
+use crate::vertex_cache::write_faces_npy;
 
 /// Command-line choices that are not in the config.
 #[derive(Debug, Clone, Default)]

@@ -1,9 +1,11 @@
 //! Synth: motion + body → per-frame posed bodies and eye-anchor (CPF) trajectories, and the
 //! sequence folder they are written to. (Scenes and the learned policy join here later.)
 
+pub mod body_cache;
 pub mod body_track;
 pub mod placement;
 pub mod sequence_dir;
 
+pub use body_cache::body_cache;
 pub use body_track::{track_body, BodyTrack, TrackFrame};
 pub use sequence_dir::{pose_meshes, write_sequence_dir, SequenceOutputs};

@@ -1,11 +1,12 @@
-//! Bodies for Blender: topology once (`faces.npy`, int32 F×3) and a PC2 point cache of posed
-//! vertices with sub-frame samples, which Blender's Mesh Cache modifier plays back so Cycles'
-//! deformation blur sees the real motion inside the shutter interval.
+//! The files bodies reach Blender in: topology once (`faces.npy`, int32 F×3) and a PC2 point
+//! cache of posed vertices with sub-frame samples, which Blender's Mesh Cache modifier plays
+//! back so Cycles' deformation blur sees the real motion inside the shutter interval
+//! (`synth::body_cache` fills one from a motion).
 //!
 //! PC2 layout (little endian): `"POINTCACHE2\0"`, i32 version 1, i32 points, f32 start frame,
 //! f32 sample rate, i32 samples, then `samples × points × 3` f32. Blender ignores the header's
 //! start and rate; the modifier's `frame_start`/`frame_scale` place the samples in time, which is
-//! what [`crate::render::ShardBody`] carries.
+//! what `render::ShardBody` carries.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -13,10 +14,6 @@ use std::path::{Path, PathBuf};
 use npyz::WriterBuilder;
 
 use crate::atomic_file::write_atomically;
-use crate::body::{BodyModel, PoseError};
-use crate::math::Vec3;
-use crate::motion::resample::resample;
-use crate::motion::MotionSequence;
 
 const PC2_MAGIC: &[u8; 12] = b"POINTCACHE2\0";
 
@@ -30,8 +27,6 @@ pub enum CacheError {
     },
     #[error("{path}: not a PC2 point cache: {reason}")]
     Format { path: PathBuf, reason: String },
-    #[error("posing the body for its vertex cache: {0}")]
-    Pose(#[from] PoseError),
 }
 
 /// A point cache in memory.
@@ -147,35 +142,4 @@ pub fn write_faces_npy(path: &Path, faces: &[[u32; 3]]) -> Result<(), CacheError
         w.finish().map_err(io)?;
     }
     write_atomically(path, &bytes).map_err(io)
-}
-
-/// Posed vertices of a motion at `samples_per_frame` evenly spaced times per frame, from frame
-/// 0 to the last frame (rotations slerped, translation lerped between frames): sample `k` is
-/// the body at frame `k / samples_per_frame`.
-pub fn body_cache(
-    model: &BodyModel,
-    motion: &MotionSequence,
-    samples_per_frame: u32,
-) -> Result<PointCache, CacheError> {
-    let samples_per_frame = samples_per_frame.max(1);
-    let dense = resample(motion, motion.frame_rate_hz * samples_per_frame as f64);
-    let shaped = model.shape(&motion.betas, &[])?;
-    let samples = dense
-        .poses
-        .iter()
-        .zip(&dense.trans)
-        .map(|(pose, &t)| {
-            let posed = shaped.pose(pose, t)?;
-            Ok(posed.vertices.iter().map(|v| to_f32(*v)).collect())
-        })
-        .collect::<Result<Vec<Vec<[f32; 3]>>, CacheError>>()?;
-    Ok(PointCache {
-        start_frame: 0.0,
-        sample_rate: 1.0 / samples_per_frame as f32,
-        samples,
-    })
-}
-
-fn to_f32(v: Vec3) -> [f32; 3] {
-    [v.x as f32, v.y as f32, v.z as f32]
 }
