@@ -19,6 +19,7 @@ pub mod motion;
 pub mod npz;
 pub mod parser_guard;
 pub mod paths;
+pub mod plan;
 pub mod policy;
 pub mod preview;
 pub mod render;

@@ -78,6 +78,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
         ],
     ),
     ("inspect", &["exr_file", "preview", "math", "atomic_file"]),
+    // Checked run plans: made by cli, carried out by supervisor.
+    ("plan", &["render", "rig", "camera", "math"]),
     // Turning a run plan into a dataset.
     (
         "supervisor",
@@ -98,7 +100,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "render",
             "inspect",
             "preview",
-            "cli",
+            "plan",
         ],
     ),
     // Configs and commands: may use everything but the supervisor.
@@ -124,16 +126,14 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "synth",
             "render",
             "inspect",
+            "plan",
         ],
     ),
 ];
 
-/// Breaks of the layering that exist today, with the reason; each is to be removed.
-const KNOWN_BREAKS: &[(&str, &str, &str)] = &[(
-    "supervisor",
-    "cli",
-    "the pipeline takes cli::resolve's plans and cli::config::Backend; plans belong below cli",
-)];
+/// Breaks of the layering that exist today, as (module, what it uses, why); each is to be
+/// removed. None today.
+const KNOWN_BREAKS: &[(&str, &str, &str)] = &[];
 
 fn module_of(src: &Path, file: &Path) -> String {
     let rel = file.strip_prefix(src).unwrap();

@@ -149,15 +149,7 @@ pub struct RawDepthNoise {
     pub quantisation_m: Option<f64>,
 }
 
-/// Where shards run.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum Backend {
-    /// Blender processes on this machine.
-    Local,
-    /// A Slurm job array, one task per shard (`sbatch`, `squeue`, `scancel`).
-    Slurm,
-}
+pub use crate::plan::Backend;
 
 /// `[supervisor.slurm]`: resources of each array task.
 #[derive(Debug, Clone, Default, Deserialize, PartialEq)]

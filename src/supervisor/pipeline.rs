@@ -17,9 +17,8 @@ use super::manifest::{remove_temporaries, sha256_file, write_manifest, MANIFEST}
 use super::slurm::{check_slurm_tools, run_slurm, SlurmSettings};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
-use crate::cli::config::Backend;
-use crate::cli::resolve::{RenderPlan, RunPlan};
 use crate::motion::MotionSequence;
+use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};

@@ -20,7 +20,7 @@ use anyhow::{bail, Context, Result};
 use super::dataset::{Dataset, Shard};
 use super::local::{frames_bar, Attempt, PoolReport, ShardReport};
 use crate::atomic_file::write_atomically;
-use crate::cli::SlurmPlan;
+use crate::plan::SlurmPlan;
 use crate::render::shard::worker_command;
 use crate::render::shard_plan::raw_frame_paths;
 use crate::render::BlenderRuntime;

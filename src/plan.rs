@@ -1,0 +1,86 @@
+//! Checked run plans: what a run renders and how its shards run, after `cli` has read and
+//! range-checked a config. `cli` makes them; `supervisor` carries them out.
+
+use std::path::PathBuf;
+
+use serde::Deserialize;
+
+use crate::render::depth_noise::DepthNoise;
+use crate::render::render_camera::RenderCamera;
+use crate::rig::{Rig, RigCamera};
+
+/// Where shards run.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Backend {
+    /// Blender processes on this machine.
+    Local,
+    /// A Slurm job array, one task per shard (`sbatch`, `squeue`, `scancel`).
+    Slurm,
+}
+
+/// What to render, checked: the rig's chosen cameras already scaled.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderPlan {
+    pub rig: Rig,
+    pub cameras: Vec<RigCamera>,
+    pub every_n_frames: usize,
+    pub samples: u32,
+    pub adaptive_threshold: f64,
+    pub denoise: bool,
+    pub shutter_frames: f64,
+    pub cache_samples_per_frame: u32,
+    pub frames_per_shard: usize,
+    pub near_clip_m: f64,
+    /// What Blender renders for each of `cameras` (`[render] fisheye` applied).
+    pub render_cameras: Vec<RenderCamera>,
+    /// The depth-noise model and seed of each of `cameras`, where it has one.
+    pub depth_noise: Vec<Option<(DepthNoise, u64)>>,
+}
+
+/// How shards run, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SupervisorPlan {
+    pub backend: Backend,
+    pub workers: usize,
+    pub shard_timeout_s: f64,
+    pub retries: u32,
+    pub slurm: SlurmPlan,
+}
+
+/// Slurm array-task resources, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SlurmPlan {
+    pub partition: Option<String>,
+    pub cpus_per_task: u32,
+    pub mem_gb: f64,
+    pub poll_interval_s: f64,
+    pub sbatch_args: Vec<String>,
+}
+
+/// Where a run's motion comes from, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MotionPlan {
+    ScriptedWalk {
+        duration_s: f64,
+        frame_rate_hz: f64,
+        speed_m_per_s: f64,
+    },
+    File {
+        path: PathBuf,
+    },
+}
+
+/// A checked run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunPlan {
+    pub body_model: PathBuf,
+    pub betas: Vec<f64>,
+    pub motion: MotionPlan,
+    pub output_dir: PathBuf,
+    pub mesh_every_n_frames: usize,
+    pub scene: PathBuf,
+    pub scene_seed: u64,
+    pub render: Option<RenderPlan>,
+    pub supervisor: SupervisorPlan,
+}
