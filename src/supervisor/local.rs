@@ -5,18 +5,17 @@
 //! place, so `--resume` continues.
 
 use std::collections::{BTreeSet, VecDeque};
-use std::io::IsTerminal;
 use std::process::Stdio;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
-use serde::Serialize;
+use indicatif::ProgressBar;
 use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::sync::watch;
 
 use super::dataset::{Dataset, Shard};
+use super::pool::{frames_bar, Attempt, PoolReport, ShardPool, ShardReport};
 use crate::render::shard::worker_command;
 use crate::render::shard_plan::raw_frame_paths;
 use crate::render::BlenderRuntime;
@@ -29,44 +28,19 @@ pub struct PoolSettings {
     pub retries: u32,
 }
 
-/// One attempt at a shard.
-#[derive(Debug, Clone, Serialize)]
-pub struct Attempt {
-    pub attempt: u32,
-    pub frames: usize,
-    pub finished: usize,
-    /// `ok`, or why it failed.
-    pub outcome: String,
-    pub seconds: f64,
-    /// The attempt's log, relative to the dataset folder.
-    pub log: String,
-}
+/// The local backend as a [`ShardPool`].
+#[derive(Debug, Clone, Copy)]
+pub struct LocalPool(pub PoolSettings);
 
-/// What happened to a shard.
-#[derive(Debug, Clone, Serialize)]
-pub struct ShardReport {
-    pub shard: usize,
-    pub camera: String,
-    pub frames: Vec<u32>,
-    pub attempts: Vec<Attempt>,
-}
-
-/// What a pool run did.
-#[derive(Debug, Clone, Serialize)]
-pub struct PoolReport {
-    pub shards: Vec<ShardReport>,
-    pub frames_finished: usize,
-    pub wall_seconds: f64,
-}
-
-impl PoolReport {
-    /// Writes `logs/start_<n>/pool_report.json`.
-    pub fn write(&self, dataset: &Dataset) -> Result<()> {
-        let path = dataset.logs_dir().join("pool_report.json");
-        std::fs::create_dir_all(dataset.logs_dir())
-            .with_context(|| format!("creating {}", dataset.logs_dir().display()))?;
-        crate::atomic_file::write_atomically(&path, &serde_json::to_vec_pretty(self)?)
-            .with_context(|| format!("writing {}", path.display()))
+impl ShardPool for LocalPool {
+    fn run(
+        &self,
+        dataset: Arc<Dataset>,
+        runtime: BlenderRuntime,
+        shards: Vec<Shard>,
+        already_done: usize,
+    ) -> Result<PoolReport> {
+        run_local(dataset, runtime, shards, self.0, already_done)
     }
 }
 
@@ -150,45 +124,6 @@ pub fn run_local(
         Ok(report)
     })
 }
-
-/// The rendering progress bar: frames done of all planned, ETA, and a status message.
-pub(super) fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
-    let bar = ProgressBar::new(total).with_style(
-        ProgressStyle::with_template(
-            "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
-        )
-        .context("progress template")?,
-    );
-    bar.set_position(done);
-    if !std::io::stderr().is_terminal() {
-        // A farm log or a file: no bar is drawn there, so a plain line every few seconds.
-        let weak = bar.downgrade();
-        let every = std::env::var("EGOGEN_PROGRESS_EVERY_S")
-            .ok()
-            .and_then(|s| s.parse::<f64>().ok())
-            .filter(|s| s.is_finite() && *s > 0.0)
-            .map_or(PLAIN_PROGRESS_EVERY, Duration::from_secs_f64);
-        std::thread::spawn(move || loop {
-            std::thread::sleep(every);
-            let Some(bar) = weak.upgrade() else { break };
-            if bar.is_finished() {
-                break;
-            }
-            eprintln!(
-                "egogen-run: rendering {}/{} frames, {} s elapsed, about {} s left",
-                bar.position(),
-                bar.length().unwrap_or(0),
-                bar.elapsed().as_secs(),
-                bar.eta().as_secs()
-            );
-        });
-    }
-    Ok(bar)
-}
-
-/// How often progress is printed when standard error is not a terminal (the environment
-/// variable `EGOGEN_PROGRESS_EVERY_S` overrides it).
-const PLAIN_PROGRESS_EVERY: Duration = Duration::from_secs(10);
 
 fn set_state(shared: &Shared, w: usize, state: String) {
     let mut states = shared.states.lock().unwrap();

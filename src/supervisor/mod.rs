@@ -8,10 +8,12 @@ pub mod dataset;
 pub mod local;
 pub mod manifest;
 pub mod pipeline;
+pub mod pool;
 pub mod slurm;
 
 pub use dataset::{CameraWork, Dataset, Shard};
-pub use local::{run_local, PoolReport, PoolSettings};
+pub use local::{run_local, LocalPool, PoolSettings};
 pub use manifest::{build_manifest, verify, write_manifest, Manifest, VerifyReport};
 pub use pipeline::{run_pipeline, RunOptions, RunSummary};
-pub use slurm::{run_slurm, SlurmSettings};
+pub use pool::{PoolReport, ShardPool};
+pub use slurm::{run_slurm, SlurmPool, SlurmSettings};

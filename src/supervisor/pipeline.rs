@@ -12,9 +12,10 @@ use serde_json::json;
 
 use super::colmap::write_colmap;
 use super::dataset::{next_start, write_annotations, CameraWork, Dataset};
-use super::local::{run_local, PoolSettings};
+use super::local::{LocalPool, PoolSettings};
 use super::manifest::{remove_temporaries, sha256_file, write_manifest, MANIFEST};
-use super::slurm::{check_slurm_tools, run_slurm, SlurmSettings};
+use super::pool::ShardPool;
+use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::motion::MotionSequence;
@@ -276,31 +277,20 @@ pub fn run_pipeline(
         };
         let sup = &plan.supervisor;
         let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
-        let report = match sup.backend {
-            Backend::Local => run_local(
-                dataset.clone(),
-                runtime,
-                shards,
-                PoolSettings {
-                    workers: sup.workers,
-                    shard_timeout,
-                    retries: sup.retries,
-                },
-                total - pending,
-            )?,
-            Backend::Slurm => run_slurm(
-                dataset.clone(),
-                runtime,
-                shards,
-                SlurmSettings {
-                    plan: sup.slurm.clone(),
-                    max_running: sup.workers,
-                    shard_timeout,
-                    retries: sup.retries,
-                },
-                total - pending,
-            )?,
+        let pool: Box<dyn ShardPool> = match sup.backend {
+            Backend::Local => Box::new(LocalPool(PoolSettings {
+                workers: sup.workers,
+                shard_timeout,
+                retries: sup.retries,
+            })),
+            Backend::Slurm => Box::new(SlurmPool(SlurmSettings {
+                plan: sup.slurm.clone(),
+                max_running: sup.workers,
+                shard_timeout,
+                retries: sup.retries,
+            })),
         };
+        let report = pool.run(dataset.clone(), runtime, shards, total - pending)?;
         rendered_now = report.frames_finished;
         let retried = report
             .shards

@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 
 use super::dataset::{Dataset, Shard};
-use super::local::{frames_bar, Attempt, PoolReport, ShardReport};
+use super::pool::{frames_bar, Attempt, PoolReport, ShardPool, ShardReport};
 use crate::atomic_file::write_atomically;
 use crate::plan::SlurmPlan;
 use crate::render::shard::worker_command;
@@ -47,6 +47,22 @@ pub struct TaskEnd {
 struct ShardState {
     shard: Shard,
     report: ShardReport,
+}
+
+/// The Slurm backend as a [`ShardPool`].
+#[derive(Debug, Clone)]
+pub struct SlurmPool(pub SlurmSettings);
+
+impl ShardPool for SlurmPool {
+    fn run(
+        &self,
+        dataset: Arc<Dataset>,
+        runtime: BlenderRuntime,
+        shards: Vec<Shard>,
+        already_done: usize,
+    ) -> Result<PoolReport> {
+        run_slurm(dataset, runtime, shards, self.0.clone(), already_done)
+    }
 }
 
 /// Renders `shards` as Slurm array tasks; returns when every frame is finished, or fails

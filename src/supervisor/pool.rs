@@ -1,0 +1,106 @@
+//! What every backend shares: the [`ShardPool`] interface the pipeline runs shards through
+//! (local processes or a Slurm array), the report of what each shard attempt did, and the
+//! rendering progress bar.
+
+use std::io::IsTerminal;
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+
+use super::dataset::{Dataset, Shard};
+use crate::render::BlenderRuntime;
+
+/// Where shards run: renders `shards` of `dataset` (`already_done` frames finished before) and
+/// reports every attempt; an error when a shard fails past its retries or the run is stopped.
+pub trait ShardPool {
+    fn run(
+        &self,
+        dataset: Arc<Dataset>,
+        runtime: BlenderRuntime,
+        shards: Vec<Shard>,
+        already_done: usize,
+    ) -> Result<PoolReport>;
+}
+
+/// One attempt at a shard.
+#[derive(Debug, Clone, Serialize)]
+pub struct Attempt {
+    pub attempt: u32,
+    pub frames: usize,
+    pub finished: usize,
+    /// `ok`, or why it failed.
+    pub outcome: String,
+    pub seconds: f64,
+    /// The attempt's log, relative to the dataset folder.
+    pub log: String,
+}
+
+/// What happened to a shard.
+#[derive(Debug, Clone, Serialize)]
+pub struct ShardReport {
+    pub shard: usize,
+    pub camera: String,
+    pub frames: Vec<u32>,
+    pub attempts: Vec<Attempt>,
+}
+
+/// What a pool run did.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoolReport {
+    pub shards: Vec<ShardReport>,
+    pub frames_finished: usize,
+    pub wall_seconds: f64,
+}
+
+impl PoolReport {
+    /// Writes `logs/start_<n>/pool_report.json`.
+    pub fn write(&self, dataset: &Dataset) -> Result<()> {
+        let path = dataset.logs_dir().join("pool_report.json");
+        std::fs::create_dir_all(dataset.logs_dir())
+            .with_context(|| format!("creating {}", dataset.logs_dir().display()))?;
+        crate::atomic_file::write_atomically(&path, &serde_json::to_vec_pretty(self)?)
+            .with_context(|| format!("writing {}", path.display()))
+    }
+}
+
+/// The rendering progress bar: frames done of all planned, ETA, and a status message.
+pub fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
+    let bar = ProgressBar::new(total).with_style(
+        ProgressStyle::with_template(
+            "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
+        )
+        .context("progress template")?,
+    );
+    bar.set_position(done);
+    if !std::io::stderr().is_terminal() {
+        // A farm log or a file: no bar is drawn there, so a plain line every few seconds.
+        let weak = bar.downgrade();
+        let every = std::env::var("EGOGEN_PROGRESS_EVERY_S")
+            .ok()
+            .and_then(|s| s.parse::<f64>().ok())
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .map_or(PLAIN_PROGRESS_EVERY, Duration::from_secs_f64);
+        std::thread::spawn(move || loop {
+            std::thread::sleep(every);
+            let Some(bar) = weak.upgrade() else { break };
+            if bar.is_finished() {
+                break;
+            }
+            eprintln!(
+                "egogen-run: rendering {}/{} frames, {} s elapsed, about {} s left",
+                bar.position(),
+                bar.length().unwrap_or(0),
+                bar.elapsed().as_secs(),
+                bar.eta().as_secs()
+            );
+        });
+    }
+    Ok(bar)
+}
+
+/// How often progress is printed when standard error is not a terminal (the environment
+/// variable `EGOGEN_PROGRESS_EVERY_S` overrides it).
+const PLAIN_PROGRESS_EVERY: Duration = Duration::from_secs(10);
