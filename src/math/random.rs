@@ -13,3 +13,8 @@ pub fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
     let (u1, u2) = (uniform_open01(rng), uniform_open01(rng));
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
+
+/// Standard normal samples (Box-Muller on the seeded stream).
+pub fn normal_samples(rng: &mut ChaCha8Rng, n: usize) -> Vec<f32> {
+    (0..n).map(|_| standard_normal(rng) as f32).collect()
+}

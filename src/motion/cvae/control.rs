@@ -22,8 +22,8 @@ use super::infer::{BodyContext, DecodeError, DecodedPrimitive, MotionModel, Prim
 use super::pace::{heading_rad, wrap_rad, Pace, PACE_SPAN_S};
 use super::rig::RigGeometry;
 use super::sampler::{plausibility, Plausibility, PlausibilityRules};
-use super::train::normal_samples;
 use crate::body::joint;
+use crate::math::random::normal_samples;
 use crate::motion::primitive::SEED_FRAMES;
 use crate::motion::MotionSequence;
 

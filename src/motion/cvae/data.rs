@@ -6,7 +6,7 @@ use crate::motion::primitive::{canonicalize, PrimitiveError, PRIMITIVE_FRAMES, S
 use crate::motion::resample::mirror;
 use crate::motion::MotionSequence;
 
-use super::eval::contact_score;
+use super::contact::contact_score;
 use super::features::{primitive_features, FRAME_DIM};
 use super::net::InputStats;
 use super::rig::RigGeometry;

@@ -7,8 +7,8 @@ use burn::backend::Flex;
 use burn::prelude::*;
 use rayon::prelude::*;
 
-use super::eval::decode_raw;
 use super::features::{frame_features, frame_params, FRAME_DIM};
+use super::net::decode_raw;
 use super::net::{ArchConfig, PrimitiveVae};
 use super::rig::BODY_JOINTS;
 use super::weights::{self, WeightsError};

@@ -10,6 +10,7 @@
 //! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
 
 pub mod checkpoint;
+pub mod contact;
 pub mod control;
 pub mod data;
 pub mod eval;

@@ -128,7 +128,7 @@ impl<B: Backend> ModuleMapper<B> for CastParams {
 
 impl<B: Backend> PrimitiveVae<B> {
     /// The network with its weights in another float precision (e.g. `F16` or `BF16` for
-    /// faster, less exact inference); [`decode_raw`](super::eval::decode_raw) follows it.
+    /// faster, less exact inference); [`decode_raw`] follows it.
     pub fn with_precision(self, dtype: FloatDType) -> Self {
         self.map(&mut CastParams(dtype))
     }
@@ -213,4 +213,30 @@ impl<B: Backend> PrimitiveVae<B> {
         }
         Tensor::stack(out, 1)
     }
+}
+
+/// Decodes raw seeds `[B, S, F]` over canonical floors `[B]` (m) with latents `[B, L]` into
+/// whole raw primitives `[B, T, F]` (the seed frames first). The network runs in its weights'
+/// precision; inputs and output are in the seed's.
+pub fn decode_raw<B: Backend>(
+    net: &PrimitiveVae<B>,
+    seed: Tensor<B, 3>,
+    floor: Tensor<B, 1>,
+    z: Tensor<B, 2>,
+) -> Tensor<B, 3> {
+    let io = seed.dtype();
+    let decoded = match net.dtype() {
+        d if d == io => {
+            let s = net.normalize(seed.clone());
+            net.denormalize(net.decode(s, net.normalize_floor(floor), z))
+        }
+        d => {
+            let dt: FloatDType = d.into();
+            let s = net.normalize(seed.clone().cast(dt));
+            let f = net.normalize_floor(floor.cast(dt));
+            net.denormalize(net.decode(s, f, z.cast(dt)))
+                .cast(FloatDType::from(io))
+        }
+    };
+    Tensor::cat(vec![seed, decoded], 1)
 }

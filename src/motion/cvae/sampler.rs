@@ -11,11 +11,11 @@
 
 use rand_chacha::ChaCha8Rng;
 
-use super::eval::contact_score;
+use super::contact::contact_score;
 use super::infer::{BodyContext, DecodeError, DecodedPrimitive, MotionModel, PrimitiveSeed};
 use super::rig::RigGeometry;
-use super::train::normal_samples;
 use crate::body::joint;
+use crate::math::random::normal_samples;
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
 
 /// What makes a decoded primitive plausible, and how much each shortfall costs in the score

@@ -199,12 +199,7 @@ pub fn load_clips(plan: &TrainPlan) -> Result<(Vec<ClipPart>, Vec<ClipPart>), Tr
     Ok((train, held_out))
 }
 
-/// Standard normal samples (Box-Muller on the seeded stream).
-pub fn normal_samples(rng: &mut ChaCha8Rng, n: usize) -> Vec<f32> {
-    (0..n)
-        .map(|_| crate::math::random::standard_normal(rng) as f32)
-        .collect()
-}
+pub use crate::math::random::normal_samples;
 
 /// A random batch of items of `set` as `[B, K, T, F]` features and `[B, K]` floors.
 fn batch<B: Backend>(
