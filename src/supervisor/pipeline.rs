@@ -8,7 +8,6 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use serde_json::json;
 
 use super::colmap::write_colmap;
 use super::dataset::{next_start, write_annotations, CameraWork, Dataset};
@@ -52,8 +51,22 @@ fn is_non_empty_dir(p: &Path) -> bool {
         .unwrap_or(false)
 }
 
+/// What `work/run.json` records of a run, so that a resume continues only the same run.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct RunState {
+    /// The config file the run was started from, and its SHA-256.
+    pub config: String,
+    pub config_sha256: String,
+    /// SHA-256 of the resolved rig (a `--rig` override included); absent in runs started
+    /// before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig_sha256: Option<String>,
+}
+
 /// Runs the pipeline for a plan with a render section; `config_path` is hashed so that a
 /// resumed run is known to be the same run.
+///
+/// `work/run.json`, [`RunState`], says which run a `.partial` folder holds.
 pub fn run_pipeline(
     plan: &RunPlan,
     render: &RenderPlan,
@@ -100,7 +113,7 @@ pub fn run_pipeline(
                 staging.display()
             );
         }
-        let state: serde_json::Value = std::fs::read_to_string(&state_path)
+        let state: RunState = std::fs::read_to_string(&state_path)
             .ok()
             .and_then(|t| serde_json::from_str(&t).ok())
             .with_context(|| {
@@ -109,17 +122,14 @@ pub fn run_pipeline(
                     state_path.display()
                 )
             })?;
-        if state["config_sha256"] != json!(config_sha) {
+        if state.config_sha256 != config_sha {
             bail!(
                 "{} was started from a different config than {}; resuming would mix two runs (nothing was touched)",
                 staging.display(),
                 config_path.display()
             );
         }
-        if state
-            .get("rig_sha256")
-            .is_some_and(|s| *s != json!(rig_sha))
-        {
+        if state.rig_sha256.as_ref().is_some_and(|s| *s != rig_sha) {
             bail!(
                 "{} was started with a different camera rig (a --rig override or a changed rig file); resuming would mix two runs (nothing was touched)",
                 staging.display()
@@ -150,11 +160,11 @@ pub fn run_pipeline(
             .with_context(|| format!("copying {} into the dataset", config_path.display()))?;
         write_atomically(
             &state_path,
-            serde_json::to_string_pretty(&json!({
-                "config": config_path.display().to_string(),
-                "config_sha256": config_sha,
-                "rig_sha256": rig_sha,
-            }))?
+            serde_json::to_string_pretty(&RunState {
+                config: config_path.display().to_string(),
+                config_sha256: config_sha.clone(),
+                rig_sha256: Some(rig_sha.clone()),
+            })?
             .as_bytes(),
         )?;
     } else {
