@@ -15,7 +15,10 @@ use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::sync::watch;
 
 use super::dataset::{Dataset, Shard};
-use super::pool::{frames_bar, Attempt, PoolReport, ShardPool, ShardReport};
+use super::pool::{
+    frames_bar, setup_failure, Attempt, PoolReport, ShardPool, ShardReport, EXIT_SETUP_FAILED,
+    SETUP_FAILED,
+};
 use crate::render::shard::worker_command;
 use crate::render::shard_plan::raw_frame_paths;
 use crate::render::BlenderRuntime;
@@ -220,11 +223,6 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
     report
 }
 
-/// Exit status of `render_shard.py` when the spec or the scene cannot be loaded.
-const EXIT_SETUP_FAILED: i32 = 3;
-/// How such an attempt's outcome starts; it is not retried.
-const SETUP_FAILED: &str = "Blender could not set up the scene (not retried)";
-
 /// One Blender run over `frames`; returns frames finished, or (finished, reason).
 async fn attempt_shard(
     shared: &Shared,
@@ -301,14 +299,7 @@ async fn attempt_shard(
         .await
         .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
     if status.code() == Some(EXIT_SETUP_FAILED) {
-        let reason = std::fs::read_to_string(log)
-            .ok()
-            .and_then(|t| {
-                t.lines()
-                    .find_map(|l| l.strip_prefix("EGOGEN_SETUP_FAILED ").map(str::to_owned))
-            })
-            .unwrap_or_else(|| format!("exit status {EXIT_SETUP_FAILED}"));
-        return Err(fail(finished, format!("{SETUP_FAILED}: {reason}")));
+        return Err(fail(finished, setup_failure(log)));
     }
     if !status.success() {
         // The last thing the worker said is usually why.

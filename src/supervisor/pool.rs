@@ -104,3 +104,22 @@ pub fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
 /// How often progress is printed when standard error is not a terminal (the environment
 /// variable `EGOGEN_PROGRESS_EVERY_S` overrides it).
 const PLAIN_PROGRESS_EVERY: Duration = Duration::from_secs(10);
+
+/// Exit status of `render_shard.py` when the spec or the scene cannot be loaded: a failure
+/// that would repeat on every try.
+pub const EXIT_SETUP_FAILED: i32 = 3;
+/// How such an attempt's outcome starts; backends do not retry it.
+pub const SETUP_FAILED: &str = "Blender could not set up the scene (not retried)";
+
+/// The outcome of an attempt that exited with [`EXIT_SETUP_FAILED`], with the reason the
+/// worker wrote to its log (`EGOGEN_SETUP_FAILED <reason>`).
+pub fn setup_failure(log: &std::path::Path) -> String {
+    let reason = std::fs::read_to_string(log)
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("EGOGEN_SETUP_FAILED ").map(str::to_owned))
+        })
+        .unwrap_or_else(|| format!("exit status {EXIT_SETUP_FAILED}"));
+    format!("{SETUP_FAILED}: {reason}")
+}

@@ -18,7 +18,10 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 
 use super::dataset::{Dataset, Shard};
-use super::pool::{frames_bar, Attempt, PoolReport, ShardPool, ShardReport};
+use super::pool::{
+    frames_bar, setup_failure, Attempt, PoolReport, ShardPool, ShardReport, EXIT_SETUP_FAILED,
+    SETUP_FAILED,
+};
 use crate::atomic_file::write_atomically;
 use crate::plan::SlurmPlan;
 use crate::render::shard::worker_command;
@@ -205,24 +208,47 @@ pub fn run_slurm(
             let state = &mut states[i];
             let still_missing = missing_frames(&dataset, &state.shard).len();
             let end = ends.get(&(t as u32));
-            let outcome = match (end, still_missing) {
-                (Some(e), 0) if e.state == "COMPLETED" => "ok".to_string(),
-                (None, 0) => "ok".to_string(),
-                (Some(e), 0) => format!(
-                    "{} (exit {}) after finishing its frames",
-                    e.state, e.exit_code
-                ),
-                (Some(e), n) => format!("{} (exit {}), {n} frames missing", e.state, e.exit_code),
-                (None, n) => format!("left the queue with {n} frames missing"),
-            };
+            let log = dataset.logs_dir().join(format!("slurm_{job}_{t}.log"));
+            let outcome = task_outcome(end, still_missing, &log);
+            let setup_failed = outcome.starts_with(SETUP_FAILED);
             state.report.attempts.push(Attempt {
                 attempt: state.report.attempts.len() as u32 + 1,
                 frames: frames.len(),
                 finished: frames.len() - still_missing,
                 outcome,
                 seconds: end.map_or(0.0, |e| e.seconds),
-                log: dataset.relative(&dataset.logs_dir().join(format!("slurm_{job}_{t}.log"))),
+                log: dataset.relative(&log),
             });
+            if setup_failed {
+                // It would fail the same way on every try: no more array rounds.
+                let r = &state.report;
+                let shard = (
+                    r.shard,
+                    r.camera.clone(),
+                    r.frames.clone(),
+                    r.attempts.len(),
+                );
+                let outcome = r
+                    .attempts
+                    .last()
+                    .map(|a| a.outcome.clone())
+                    .unwrap_or_default();
+                let report = PoolReport {
+                    shards: states.iter().map(|s| s.report.clone()).collect(),
+                    frames_finished,
+                    wall_seconds: started.elapsed().as_secs_f64(),
+                };
+                report.write(&dataset)?;
+                bar.finish_and_clear();
+                bail!(
+                    "shard {} ({} frames {:?}) failed {} times; last: {outcome} (log: {})",
+                    shard.0,
+                    shard.1,
+                    shard.2,
+                    shard.3,
+                    log.display()
+                );
+            }
         }
         if stop.load(Ordering::SeqCst) {
             bar.finish_and_clear();
@@ -284,6 +310,25 @@ fn finish_ready_frames(
         }
     }
     Ok(finished)
+}
+
+/// What one array task did, from its end state (when Slurm still knows it), the frames it
+/// left missing and its log: `ok`, a setup failure (exit status 3, not retried), or why it
+/// failed.
+fn task_outcome(end: Option<&TaskEnd>, still_missing: usize, log: &Path) -> String {
+    match (end, still_missing) {
+        (Some(e), 0) if e.state == "COMPLETED" => "ok".to_string(),
+        (None, 0) => "ok".to_string(),
+        (Some(e), 0) => format!(
+            "{} (exit {}) after finishing its frames",
+            e.state, e.exit_code
+        ),
+        (Some(e), _) if e.exit_code.split(':').next() == Some(&EXIT_SETUP_FAILED.to_string()) => {
+            setup_failure(log)
+        }
+        (Some(e), n) => format!("{} (exit {}), {n} frames missing", e.state, e.exit_code),
+        (None, n) => format!("left the queue with {n} frames missing"),
+    }
 }
 
 /// The array script: Slurm options, then one exact worker command per task.
@@ -518,6 +563,33 @@ fn sleep_unless_stopped(d: Duration, stop: &AtomicBool) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_task_that_could_not_set_up_the_scene_is_a_setup_failure() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = dir.path().join("slurm_7_0.log");
+        std::fs::write(
+            &log,
+            "Blender 4.5\nEGOGEN_SETUP_FAILED RuntimeError: Bad glTF\n",
+        )
+        .unwrap();
+        let end = |state: &str, exit: &str| TaskEnd {
+            state: state.into(),
+            exit_code: exit.into(),
+            seconds: 1.0,
+        };
+        let setup = task_outcome(Some(&end("FAILED", "3:0")), 2, &log);
+        assert!(setup.starts_with(SETUP_FAILED), "{setup}");
+        assert!(setup.ends_with("RuntimeError: Bad glTF"), "{setup}");
+        // A killed or cancelled task is retried as before.
+        let killed = task_outcome(Some(&end("CANCELLED", "0:15")), 2, &log);
+        assert_eq!(killed, "CANCELLED (exit 0:15), 2 frames missing");
+        assert_eq!(task_outcome(Some(&end("COMPLETED", "0:0")), 0, &log), "ok");
+        assert_eq!(
+            task_outcome(Some(&end("FAILED", "13:0")), 1, &log),
+            "FAILED (exit 13:0), 1 frames missing"
+        );
+    }
 
     #[test]
     fn parses_the_queue_and_task_ends() {
