@@ -125,11 +125,16 @@ pub fn run_slurm(
         if todo.is_empty() {
             break;
         }
-        if let Some(&i) = todo
-            .iter()
-            .find(|&&i| states[i].report.attempts.len() > settings.retries as usize)
-        {
+        // Past its retries, or failed in a way that repeats (the scene does not load).
+        if let Some(&i) = todo.iter().find(|&&i| {
+            let attempts = &states[i].report.attempts;
+            attempts.len() > settings.retries as usize
+                || attempts
+                    .last()
+                    .is_some_and(|a| a.outcome.starts_with(SETUP_FAILED))
+        }) {
             bar.finish_and_clear();
+            report_of(&states, frames_finished, started).write(&dataset)?;
             let r = &states[i].report;
             let last = r
                 .attempts
@@ -197,6 +202,7 @@ pub fn run_slurm(
             if sleep_unless_stopped(poll, &stop) {
                 let _ = slurm_tool("scancel", &[&job]);
                 bar.finish_and_clear();
+                report_of(&states, frames_finished, started).write(&dataset)?;
                 bail!(
                     "interrupted: Slurm job {job} cancelled; finished frames are kept; rerun with --resume to continue"
                 );
@@ -210,7 +216,6 @@ pub fn run_slurm(
             let end = ends.get(&(t as u32));
             let log = dataset.logs_dir().join(format!("slurm_{job}_{t}.log"));
             let outcome = task_outcome(end, still_missing, &log);
-            let setup_failed = outcome.starts_with(SETUP_FAILED);
             state.report.attempts.push(Attempt {
                 attempt: state.report.attempts.len() as u32 + 1,
                 frames: frames.len(),
@@ -219,50 +224,15 @@ pub fn run_slurm(
                 seconds: end.map_or(0.0, |e| e.seconds),
                 log: dataset.relative(&log),
             });
-            if setup_failed {
-                // It would fail the same way on every try: no more array rounds.
-                let r = &state.report;
-                let shard = (
-                    r.shard,
-                    r.camera.clone(),
-                    r.frames.clone(),
-                    r.attempts.len(),
-                );
-                let outcome = r
-                    .attempts
-                    .last()
-                    .map(|a| a.outcome.clone())
-                    .unwrap_or_default();
-                let report = PoolReport {
-                    shards: states.iter().map(|s| s.report.clone()).collect(),
-                    frames_finished,
-                    wall_seconds: started.elapsed().as_secs_f64(),
-                };
-                report.write(&dataset)?;
-                bar.finish_and_clear();
-                bail!(
-                    "shard {} ({} frames {:?}) failed {} times; last: {outcome} (log: {})",
-                    shard.0,
-                    shard.1,
-                    shard.2,
-                    shard.3,
-                    log.display()
-                );
-            }
         }
         if stop.load(Ordering::SeqCst) {
             bar.finish_and_clear();
+            report_of(&states, frames_finished, started).write(&dataset)?;
             bail!("interrupted: finished frames are kept; rerun with --resume to continue");
         }
     }
     bar.finish_and_clear();
-    let mut shards: Vec<ShardReport> = states.into_iter().map(|s| s.report).collect();
-    shards.sort_by_key(|r| r.shard);
-    let report = PoolReport {
-        shards,
-        frames_finished,
-        wall_seconds: started.elapsed().as_secs_f64(),
-    };
+    let report = report_of(&states, frames_finished, started);
     report.write(&dataset)?;
     Ok(report)
 }
@@ -310,6 +280,17 @@ fn finish_ready_frames(
         }
     }
     Ok(finished)
+}
+
+/// The pool report of the shards so far.
+fn report_of(states: &[ShardState], frames_finished: usize, started: Instant) -> PoolReport {
+    let mut shards: Vec<ShardReport> = states.iter().map(|s| s.report.clone()).collect();
+    shards.sort_by_key(|r| r.shard);
+    PoolReport {
+        shards,
+        frames_finished,
+        wall_seconds: started.elapsed().as_secs_f64(),
+    }
 }
 
 /// What one array task did, from its end state (when Slurm still knows it), the frames it
