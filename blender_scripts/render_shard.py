@@ -29,10 +29,7 @@ def load_spec():
 def add_body(scene, body):
     """A body mesh with the PC2 vertex cache attached; vertex order is the cache's."""
     faces = np.load(body["faces_npy"])
-    with open(body["pc2"], "rb") as f:
-        header = f.read(32)
-        num_points = int.from_bytes(header[16:20], "little")
-        rest = np.frombuffer(f.read(12 * num_points), dtype="<f4").reshape(-1, 3)
+    rest = np.load(body["vertices_npy"])
     mesh = bpy.data.meshes.new(body["name"])
     mesh.from_pydata(rest.tolist(), [], faces.tolist())
     mesh.update()

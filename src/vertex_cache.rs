@@ -122,6 +122,21 @@ impl PointCache {
 
 /// Writes the triangle list as an int32 `.npy` of shape F×3 (atomically).
 pub fn write_faces_npy(path: &Path, faces: &[[u32; 3]]) -> Result<(), CacheError> {
+    write_npy_rows(path, faces.iter().map(|f| f.map(|i| i as i32)))
+}
+
+/// Writes the cache's first sample as a float32 `.npy` of shape N×3 (atomically): the mesh's
+/// vertices before the cache plays, so that Blender never parses the PC2 file itself.
+pub fn write_rest_vertices_npy(path: &Path, cache: &PointCache) -> Result<(), CacheError> {
+    let first = cache.samples.first().map(Vec::as_slice).unwrap_or(&[]);
+    write_npy_rows(path, first.iter().copied())
+}
+
+/// Rows of three values as an `.npy` of shape N×3, written atomically.
+fn write_npy_rows<T: npyz::Serialize + npyz::AutoSerialize + Copy>(
+    path: &Path,
+    rows: impl ExactSizeIterator<Item = [T; 3]>,
+) -> Result<(), CacheError> {
     let io = |source| CacheError::Io {
         path: path.into(),
         source,
@@ -130,13 +145,13 @@ pub fn write_faces_npy(path: &Path, faces: &[[u32; 3]]) -> Result<(), CacheError
     {
         let mut w = npyz::WriteOptions::new()
             .default_dtype()
-            .shape(&[faces.len() as u64, 3])
+            .shape(&[rows.len() as u64, 3])
             .writer(&mut bytes)
             .begin_nd()
             .map_err(io)?;
-        for f in faces {
-            for &i in f {
-                w.push(&(i as i32)).map_err(io)?;
+        for row in rows {
+            for v in row {
+                w.push(&v).map_err(io)?;
             }
         }
         w.finish().map_err(io)?;

@@ -24,7 +24,7 @@ use egogen::render::{
 use egogen::rig::Rig;
 use egogen::scene::{load_scene, sample_start_goals, walkable_map, WalkableSettings};
 use egogen::synth::body_cache;
-use egogen::vertex_cache::{write_faces_npy, PointCache};
+use egogen::vertex_cache::{write_faces_npy, write_rest_vertices_npy, PointCache};
 
 const FRAMES: usize = 6;
 const RATE_HZ: f64 = 40.0;
@@ -101,8 +101,10 @@ fn render_scene() -> Rendered {
     let cache = body_cache(&model, &motion, SAMPLES_PER_FRAME).unwrap();
     let pc2 = dir.path().join("body.pc2");
     let faces = dir.path().join("faces.npy");
+    let vertices = dir.path().join("vertices.npy");
     cache.write(&pc2).unwrap();
     write_faces_npy(&faces, &model.faces).unwrap();
+    write_rest_vertices_npy(&vertices, &cache).unwrap();
 
     let pinhole = Camera::Pinhole(
         Pinhole::new(
@@ -167,6 +169,7 @@ fn render_scene() -> Rendered {
             name: "agent_0".into(),
             pass_index: AGENT_ID_BASE,
             faces_npy: faces,
+            vertices_npy: vertices,
             pc2,
             cache_frame_start: 0.0,
             samples_per_frame: SAMPLES_PER_FRAME,

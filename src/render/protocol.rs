@@ -72,7 +72,7 @@ pub struct ShardCamera {
     pub frames: Vec<ShardFrame>,
 }
 
-/// A body: topology (`faces_npy`, int32 F×3) and a PC2 vertex cache. Cache sample `k` is the
+/// A body: topology (`faces_npy`, int32 F×3), vertices (`vertices_npy`) and a PC2 vertex cache. Cache sample `k` is the
 /// body at scene frame `cache_frame_start + k / samples_per_frame`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -81,6 +81,8 @@ pub struct ShardBody {
     /// Segmentation id (object pass index).
     pub pass_index: u32,
     pub faces_npy: PathBuf,
+    /// The mesh's vertices before the cache plays (float32 N×3, the cache's first sample).
+    pub vertices_npy: PathBuf,
     pub pc2: PathBuf,
     pub cache_frame_start: f64,
     pub samples_per_frame: u32,

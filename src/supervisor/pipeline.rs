@@ -26,7 +26,7 @@ use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardR
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
 use crate::synth::placement::place_motion;
 use crate::synth::{body_cache, pose_meshes, track_body, write_sequence_dir};
-use crate::vertex_cache::write_faces_npy;
+use crate::vertex_cache::{write_faces_npy, write_rest_vertices_npy};
 
 /// Command-line choices that are not in the config.
 #[derive(Debug, Clone, Default)]
@@ -182,8 +182,12 @@ pub fn run_pipeline(
     std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
     let pc2 = work.join("agent_0.pc2");
     let faces = work.join("agent_0_faces.npy");
-    body_cache(model, &motion, render.cache_samples_per_frame)?.write(&pc2)?;
+    let vertices = work.join("agent_0_vertices.npy");
+    let cache = body_cache(model, &motion, render.cache_samples_per_frame)?;
+    cache.write(&pc2)?;
     write_faces_npy(&faces, &model.faces)?;
+    write_rest_vertices_npy(&vertices, &cache)?;
+    drop(cache);
 
     let frames: Vec<u32> = (0..motion.len() as u32)
         .step_by(render.every_n_frames)
@@ -222,6 +226,7 @@ pub fn run_pipeline(
             name: "agent_0".into(),
             pass_index: AGENT_ID_BASE,
             faces_npy: std::fs::canonicalize(&faces)?,
+            vertices_npy: std::fs::canonicalize(&vertices)?,
             pc2: std::fs::canonicalize(&pc2)?,
             cache_frame_start: 0.0,
             samples_per_frame: render.cache_samples_per_frame,
@@ -316,8 +321,9 @@ pub fn run_pipeline(
     write_colmap(&dataset)?;
     // Scratch that only Blender read: the raw renders and the body cache (large).
     let _ = std::fs::remove_dir_all(dataset.raw_dir());
-    let _ = std::fs::remove_file(&pc2);
-    let _ = std::fs::remove_file(&faces);
+    for scratch in [&pc2, &faces, &vertices] {
+        let _ = std::fs::remove_file(scratch);
+    }
     for p in remove_temporaries(&staging)? {
         eprintln!(
             "egogen-run: removed {}, left by an interrupted run",
