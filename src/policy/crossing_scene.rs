@@ -62,10 +62,9 @@ pub struct CrossingParams {
     pub mover_velocity: [f64; 2],
 }
 
-/// One drawn crossing scene.
+/// One drawn crossing scene (its floor, the same for every scene, is [`CrossingScene::floor`]).
 #[derive(Debug, Clone)]
 pub struct CrossingScene {
-    pub map: WalkableMap,
     pub mover: MovingObstacle,
     pub start: DVec2,
     pub goal: DVec2,
@@ -103,11 +102,17 @@ impl CrossingScene {
         )
     }
 
-    /// The scene of drawn parameters.
-    pub fn build(settings: &CrossingSettings, p: CrossingParams) -> Self {
+    /// The empty square floor every crossing scene of `settings` walks on (0.1 m cells, its
+    /// edge blocking like a wall).
+    pub fn floor(settings: &CrossingSettings) -> WalkableMap {
         let cell = 0.1;
         let n = (settings.floor_m / cell).round().max(1.0) as usize;
         let origin = DVec2::splat(-(n as f64) * cell / 2.0);
+        WalkableMap::from_walkable(origin, cell, n, n, vec![true; n * n])
+    }
+
+    /// The scene of drawn parameters.
+    pub fn build(settings: &CrossingSettings, p: CrossingParams) -> Self {
         let velocity = DVec2::from_array(p.mover_velocity);
         let mover = MovingObstacle {
             at_start: Obstacle2::Box {
@@ -118,7 +123,6 @@ impl CrossingScene {
             velocity_m_per_s: velocity,
         };
         Self {
-            map: WalkableMap::from_walkable(origin, cell, n, n, vec![true; n * n]),
             mover,
             start: DVec2::from_array(p.start),
             goal: DVec2::from_array(p.goal),
@@ -151,7 +155,8 @@ mod tests {
             let walker_t = along * d / s.walker_speed_m_s;
             assert!((t - walker_t).abs() <= s.timing_jitter_s + 1e-9 || t.abs() < 1e-9);
             // Start and goal are on the floor and free.
-            assert!(c.map.is_walkable_at(c.start) && c.map.is_walkable_at(c.goal));
+            let floor = CrossingScene::floor(&s);
+            assert!(floor.is_walkable_at(c.start) && floor.is_walkable_at(c.goal));
         }
     }
 }

@@ -296,6 +296,8 @@ pub struct PolicyEnv<'m> {
     bank: &'m SeedBank,
     prior: &'m PosePrior,
     fixed: Option<&'m FixedScene>,
+    /// The floor of every crossing scene, built once.
+    crossing_floor: Arc<WalkableMap>,
     pub settings: EnvSettings,
     scan: RayScan,
     foot_markers: Vec<usize>,
@@ -356,6 +358,7 @@ impl<'m> PolicyEnv<'m> {
             bank,
             prior,
             fixed,
+            crossing_floor: Arc::new(CrossingScene::floor(&settings.crossing)),
             settings,
             scan: RayScan::new(RayScanSettings::default()),
             foot_markers: RigGeometry::new(body.model, &body.betas)
@@ -423,9 +426,9 @@ impl<'m> PolicyEnv<'m> {
         }
     }
 
-    fn crossing_course(scene: CrossingScene) -> Course {
+    fn crossing_course(floor: &Arc<WalkableMap>, scene: CrossingScene) -> Course {
         Course {
-            map: Arc::new(scene.map),
+            map: floor.clone(),
             obstacle: None,
             moving: vec![scene.mover],
             start: scene.start,
@@ -457,7 +460,7 @@ impl<'m> PolicyEnv<'m> {
             Some(f) => Self::fixed_course(f, (id % f.pairs.len() as u64) as usize),
             // No draw when there are no crossings: box-only runs stay as they were.
             None if crossing.share > 0.0 && uniform_open01(rng) < crossing.share => {
-                Self::crossing_course(CrossingScene::sample(&crossing, rng))
+                Self::crossing_course(&self.crossing_floor, CrossingScene::sample(&crossing, rng))
             }
             None => Self::box_course(BoxScene::sample(&self.settings.scene, rng)),
         }
@@ -784,9 +787,10 @@ impl<'m> PolicyEnv<'m> {
                 (Some(p), None, None, None) => {
                     Self::box_course(BoxScene::build(&self.settings.scene, p))
                 }
-                (None, Some(c), None, None) => {
-                    Self::crossing_course(CrossingScene::build(&self.settings.crossing, c))
-                }
+                (None, Some(c), None, None) => Self::crossing_course(
+                    &self.crossing_floor,
+                    CrossingScene::build(&self.settings.crossing, c),
+                ),
                 (None, None, Some(pair), Some(f)) if pair < f.pairs.len() => {
                     Self::fixed_course(f, pair)
                 }

@@ -221,10 +221,10 @@ pub fn judge(
         .enumerate()
         .filter(|(k, f)| {
             let t = s.t0_s + (SEED_FRAMES + k) as f64 / PRIMITIVE_RATE_HZ;
-            let moving: Vec<Obstacle2> = s.moving.iter().map(|m| m.at(t)).collect();
             f.iter().any(|m| {
                 let q = DVec2::new(m.x, m.y);
-                s.obstacle.is_some_and(|o| o.contains(q)) || moving.iter().any(|o| o.contains(q))
+                s.obstacle.is_some_and(|o| o.contains(q))
+                    || s.moving.iter().any(|o| o.at(t).contains(q))
             })
         })
         .count();

@@ -249,12 +249,8 @@ impl WalkableMap {
     fn enclosed_cells(&self, mesh: &SceneMesh, z: f64) -> Vec<bool> {
         let mut enclosed = vec![false; self.nx * self.ny];
         let mut by_object: std::collections::BTreeMap<u32, Vec<usize>> = Default::default();
-        if mesh.triangle_object.len() == mesh.triangles.len() {
-            for (t, o) in mesh.triangle_object.iter().enumerate() {
-                by_object.entry(o.0).or_default().push(t);
-            }
-        } else {
-            by_object.insert(0, (0..mesh.triangles.len()).collect());
+        for (t, o) in mesh.triangle_object.iter().enumerate() {
+            by_object.entry(o.0).or_default().push(t);
         }
         // Rays off the grid's lines and diagonals, so that they miss shared edges and vertices
         // of grid-aligned geometry.

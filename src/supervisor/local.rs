@@ -31,21 +31,10 @@ pub struct PoolSettings {
     pub retries: u32,
 }
 
-/// The local backend as a [`ShardPool`].
+/// The local backend: renders shards with a pool of local Blender workers; returns when all
+/// are done, one has failed past its retries, or Ctrl-C was pressed (both errors).
 #[derive(Debug, Clone, Copy)]
 pub struct LocalPool(pub PoolSettings);
-
-impl ShardPool for LocalPool {
-    fn run(
-        &self,
-        dataset: Arc<Dataset>,
-        runtime: BlenderRuntime,
-        shards: Vec<Shard>,
-        already_done: usize,
-    ) -> Result<PoolReport> {
-        run_local(dataset, runtime, shards, self.0, already_done)
-    }
-}
 
 struct Shared {
     dataset: Arc<Dataset>,
@@ -59,9 +48,19 @@ struct Shared {
     stop: watch::Receiver<bool>,
 }
 
-/// Renders `shards` with a pool of local Blender workers; returns when all are done, one has
-/// failed past its retries, or Ctrl-C was pressed (both errors).
-pub fn run_local(
+impl ShardPool for LocalPool {
+    fn run(
+        &self,
+        dataset: Arc<Dataset>,
+        runtime: BlenderRuntime,
+        shards: Vec<Shard>,
+        already_done: usize,
+    ) -> Result<PoolReport> {
+        run_local(dataset, runtime, shards, self.0, already_done)
+    }
+}
+
+fn run_local(
     dataset: Arc<Dataset>,
     runtime: BlenderRuntime,
     shards: Vec<Shard>,

@@ -7,8 +7,8 @@ use anyhow::{bail, Context, Result};
 
 use crate::exr_file::ExrContents;
 pub use crate::manifest::{
-    build_manifest, dataset_files, is_temporary, remove_temporaries, sha256_file, write_manifest,
-    Manifest, ManifestEntry, MANIFEST, SCRATCH_DIRS,
+    build_manifest, dataset_files, is_temporary, remove_temporaries, sha256_file, sha256_hex,
+    write_manifest, Manifest, ManifestEntry, MANIFEST, SCRATCH_DIRS,
 };
 use crate::render::frame_file::{check_frame_channels, FrameFileError};
 

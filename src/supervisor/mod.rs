@@ -12,8 +12,8 @@ pub mod pool;
 pub mod slurm;
 
 pub use dataset::{CameraWork, Dataset, Shard};
-pub use local::{run_local, LocalPool, PoolSettings};
+pub use local::{LocalPool, PoolSettings};
 pub use manifest::{build_manifest, verify, write_manifest, Manifest, VerifyReport};
 pub use pipeline::{run_pipeline, RunOptions, RunSummary};
 pub use pool::{PoolReport, ShardPool};
-pub use slurm::{run_slurm, SlurmPool, SlurmSettings};
+pub use slurm::{SlurmPool, SlurmSettings};

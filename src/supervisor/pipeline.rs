@@ -12,7 +12,7 @@ use anyhow::{bail, Context, Result};
 use super::colmap::write_colmap;
 use super::dataset::{next_start, write_annotations, CameraWork, Dataset};
 use super::local::{LocalPool, PoolSettings};
-use super::manifest::{remove_temporaries, sha256_file, write_manifest, MANIFEST};
+use super::manifest::{remove_temporaries, sha256_file, sha256_hex, write_manifest, MANIFEST};
 use super::pool::ShardPool;
 use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use crate::atomic_file::write_atomically;
@@ -79,13 +79,7 @@ pub fn run_pipeline(
     let staging = PathBuf::from(format!("{}.partial", dir.display()));
     let config_sha = sha256_file(config_path)?;
     // The rig as resolved (a --rig override included): a resume must render with the same one.
-    let rig_sha = {
-        use sha2::Digest;
-        format!(
-            "{:x}",
-            sha2::Sha256::digest(render.rig.to_json().as_bytes())
-        )
-    };
+    let rig_sha = sha256_hex(render.rig.to_json().as_bytes());
     if is_non_empty_dir(dir) {
         if opts.resume && dir.join(MANIFEST).is_file() {
             eprintln!(

@@ -52,7 +52,8 @@ struct ShardState {
     report: ShardReport,
 }
 
-/// The Slurm backend as a [`ShardPool`].
+/// The Slurm backend: renders shards as Slurm array tasks; returns when every frame is
+/// finished, or fails when a shard has failed past its retries or Ctrl-C was pressed.
 #[derive(Debug, Clone)]
 pub struct SlurmPool(pub SlurmSettings);
 
@@ -68,9 +69,7 @@ impl ShardPool for SlurmPool {
     }
 }
 
-/// Renders `shards` as Slurm array tasks; returns when every frame is finished, or fails
-/// when a shard has failed past its retries or Ctrl-C was pressed.
-pub fn run_slurm(
+fn run_slurm(
     dataset: Arc<Dataset>,
     runtime: BlenderRuntime,
     shards: Vec<Shard>,
