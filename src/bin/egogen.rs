@@ -57,6 +57,17 @@ enum Command {
     /// Locomotion control: the pose prior of the reward, controller evaluation.
     #[command(subcommand)]
     Policy(PolicyCommand),
+    /// Make motion without rendering: agents steered by the policy (or by sampling) walk to
+    /// their goals in a scene, in turn, each sensing the others (paper Alg. 1). Writes per
+    /// agent an AMASS-style SMPL-X .npz, eye-frame trajectory and markers, a top view of all
+    /// paths (paths.png) and summary.json; see docs/SYNTH.md.
+    Synth {
+        /// Synth config (TOML), e.g. configs/crowd4.toml.
+        config: PathBuf,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
 }
 
 #[derive(Subcommand, Debug)]
@@ -395,6 +406,23 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
         Command::Policy(cmd) => run_policy(cmd)?,
+        Command::Synth { config, quiet } => {
+            let plan = egogen::cli::synth::load_synth_plan(&config)?;
+            let out = egogen::cli::synth::run_synth(&plan, !quiet)?;
+            let t = &out.summary.totals;
+            println!(
+                "{} agents, {:.1} s of motion each: {}/{} goals reached, {} fell, contact {:.3}, human overlap {:.2}%, {:.0} agent-s of motion per wall s",
+                t.agents,
+                out.summary.frames as f64 / out.summary.frame_rate_hz,
+                t.goals_reached,
+                t.goals,
+                t.agents_fallen,
+                t.contact_mean,
+                100.0 * t.human_overlap_share,
+                t.agent_seconds_per_wall_s
+            );
+            println!("wrote {}", out.dir.display());
+        }
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
         Command::Train(TrainCommand::Policy {
             config,

@@ -5,6 +5,7 @@
 
 pub mod config;
 pub mod resolve;
+pub mod synth;
 pub mod train;
 pub mod train_policy;
 

@@ -13,10 +13,7 @@
 //! environment with `episode_base` b is drawn from a generator seeded by `(b, n)` alone, so
 //! runs are deterministic and held-out bases never meet training ones.
 //!
-//! Observation per episode ([`OBS_DIM`] values, EgoGen's layout): for each of the two seed
-//! frames the 67 markers in the seed's canonical frame and the unit vectors from each marker
-//! to the goal (2 × 67 × 6); the 32-ray scan of both seed frames (2 × 32,
-//! −1 + 2·hit/7 m); `1/(1 + d)` of the horizontal pelvis–goal distance; `1 − t/T`.
+//! The observation is the walker's ([`super::walker`]), on the episode's clock.
 
 use std::sync::Arc;
 
@@ -29,10 +26,12 @@ use serde::{Deserialize, Serialize};
 use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
-use super::reward::{judge, Judged, Limits, RewardWeights, Situation};
-use crate::body::{joint, BodyParams, NUM_MARKERS, POSE_DIM};
+use super::reward::{judge, Judged, Limits, RewardWeights};
+use super::walker::{frame_time_s, place_seed, SeedView, Surroundings, Totals, Walker};
+pub use super::walker::{OBS_DIM, OBS_DIST_OFFSET, OBS_RAYS_OFFSET, RAYS, STATE_FRAME_DIM};
+use crate::body::{joint, BodyParams, POSE_DIM};
 use crate::math::random::uniform_open01;
-use crate::math::{Affine3, Mat3, Vec3};
+use crate::math::Vec3;
 use crate::motion::cvae::data::PrimitiveSet;
 use crate::motion::cvae::features::{frame_params, FRAME_DIM};
 use crate::motion::cvae::infer::DecodeError;
@@ -40,24 +39,13 @@ use crate::motion::cvae::rig::RigGeometry;
 use crate::motion::cvae::{
     BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed,
 };
-use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::motion::primitive::SEED_FRAMES;
 use crate::scene::{blocked_cells_in_box, MovingObstacle, Obstacle2, StartGoal, WalkableMap};
-use crate::sensing::{EgoPose2, EgoSensor, RayScan, RayScanSettings, SensingWorld};
+use crate::sensing::{RayScan, RayScanSettings};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
 /// (a start too near a wall for every seed).
 const MAX_RESET_TRIES: usize = 100;
-
-/// Values per seed frame of the marker state: 67 canonical positions and 67 goal directions.
-pub const STATE_FRAME_DIM: usize = NUM_MARKERS * 6;
-/// Rays per seed frame.
-pub const RAYS: usize = 32;
-/// Observation length.
-pub const OBS_DIM: usize = SEED_FRAMES * (STATE_FRAME_DIM + RAYS) + 2;
-/// Offset of the ray scans in an observation.
-pub const OBS_RAYS_OFFSET: usize = SEED_FRAMES * STATE_FRAME_DIM;
-/// Offset of `1/(1 + d)`; `1 − t/T` follows it.
-pub const OBS_DIST_OFFSET: usize = OBS_RAYS_OFFSET + SEED_FRAMES * RAYS;
 
 /// Settings of the environment (defaults: EgoGen's box pretraining).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -137,26 +125,6 @@ impl SeedBank {
     }
 }
 
-/// What an episode's seed frames look like to the observation.
-#[derive(Debug, Clone)]
-struct SeedView {
-    seed: PrimitiveSeed,
-    markers: [Vec<Vec3>; SEED_FRAMES],
-    world_from_cpf: [Affine3; SEED_FRAMES],
-    pelvis: DVec2,
-}
-
-/// Running totals of an episode, for its summary.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-struct Totals {
-    reward: f64,
-    contact: f64,
-    view_cos: f64,
-    frames: usize,
-    frames_in_obstacle: usize,
-    path_m: f64,
-}
-
 /// Where an episode walks: its walkable map, the obstacle of a box scene, start and goal.
 #[derive(Debug, Clone)]
 struct Course {
@@ -184,11 +152,17 @@ pub struct FixedScene {
 struct Episode {
     id: u64,
     course: Course,
-    view: SeedView,
-    steps: usize,
-    distance_m: f64,
-    start_distance_m: f64,
-    totals: Totals,
+    walker: Walker,
+}
+
+impl Course {
+    fn surroundings(&self) -> Surroundings<'_> {
+        Surroundings {
+            map: &self.map,
+            obstacle: self.obstacle.as_ref(),
+            moving: &self.moving,
+        }
+    }
 }
 
 /// An episode in progress as data (checkpoints of training).
@@ -248,6 +222,25 @@ pub struct EpisodeSummary {
     pub speed_m_s: f64,
 }
 
+impl EpisodeSummary {
+    /// The summary of a walk that ended.
+    pub fn of(id: u64, ending: Ending, w: &Walker) -> Self {
+        let n = w.steps.max(1) as f64;
+        Self {
+            id,
+            ending,
+            primitives: w.steps,
+            start_distance_m: w.start_distance_m,
+            final_distance_m: w.distance_m,
+            reward: w.totals.reward,
+            contact: w.totals.contact / n,
+            view_cos: w.totals.view_cos / n,
+            penetration_share: w.totals.frames_in_obstacle as f64 / w.totals.frames.max(1) as f64,
+            speed_m_s: w.speed_m_s(),
+        }
+    }
+}
+
 /// One candidate primitive for one episode, judged but not yet taken.
 #[derive(Debug, Clone)]
 pub struct Candidate {
@@ -304,12 +297,6 @@ pub struct PolicyEnv<'m> {
     episodes: Vec<Episode>,
     episode_base: u64,
     next_episode: u64,
-}
-
-/// Time (s) of frame `f` of the primitive an episode takes at step `steps`, on the episode's
-/// clock (frame 0 of the first seed at 0): moving obstacles are placed at it.
-fn frame_time_s(steps: usize, f: usize) -> f64 {
-    (steps * (PRIMITIVE_FRAMES - SEED_FRAMES) + f) as f64 / PRIMITIVE_RATE_HZ
 }
 
 /// The generator of episode `id` under `base`.
@@ -389,30 +376,6 @@ impl<'m> PolicyEnv<'m> {
         self.model.latent_dim()
     }
 
-    fn view_of(&self, seed: PrimitiveSeed) -> Result<SeedView, DecodeError> {
-        let mut markers: [Vec<Vec3>; SEED_FRAMES] = Default::default();
-        let mut cpf = [Affine3::IDENTITY; SEED_FRAMES];
-        let mut pelvis = DVec2::ZERO;
-        for (k, f) in seed.frames.iter().enumerate() {
-            let mf = self
-                .body
-                .shaped
-                .marker_frame(&f.pose, f.transl, &self.body.marker_ids)?;
-            cpf[k] = self.body.cpf.world_from_cpf(&mf.skeleton);
-            if k == 0 {
-                let p = mf.skeleton.joints[joint::PELVIS];
-                pelvis = DVec2::new(p.x, p.y);
-            }
-            markers[k] = mf.markers;
-        }
-        Ok(SeedView {
-            seed,
-            markers,
-            world_from_cpf: cpf,
-            pelvis,
-        })
-    }
-
     fn box_course(scene: BoxScene) -> Course {
         Course {
             map: Arc::new(scene.map),
@@ -479,19 +442,9 @@ impl<'m> PolicyEnv<'m> {
                 &self.bank.seeds[(rng.next_u64() % self.bank.seeds.len() as u64) as usize];
             let to_goal = scene.goal - scene.start;
             let jitter = self.settings.seed_yaw_jitter_rad * (2.0 * uniform_open01(&mut rng) - 1.0);
-            // Canonical seeds face +y.
-            let yaw = to_goal.y.atan2(to_goal.x) - std::f64::consts::FRAC_PI_2 + jitter;
-            let world_from_canon = Affine3 {
-                matrix3: Mat3::from_rotation_z(yaw),
-                translation: Vec3::new(scene.start.x, scene.start.y, floor_z - floor),
-            };
-            let seed = PrimitiveSeed {
-                frames: std::array::from_fn(|k| {
-                    frames[k].moved_rigidly(world_from_canon, rest_pelvis)
-                }),
-                floor_z,
-            };
-            let view = self.view_of(seed)?;
+            let facing = to_goal.y.atan2(to_goal.x) + jitter;
+            let seed = place_seed(frames, *floor, scene.start, facing, floor_z, rest_pelvis);
+            let view = SeedView::new(self.body, seed)?;
             // As EgoGen's reset: no blocked cell under the seed body.
             let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
             for m in view.markers.iter().flatten() {
@@ -504,15 +457,10 @@ impl<'m> PolicyEnv<'m> {
             {
                 continue;
             }
-            let distance_m = view.pelvis.distance(scene.goal);
             return Ok(Episode {
                 id,
+                walker: Walker::new(view, scene.goal),
                 course: scene,
-                view,
-                steps: 0,
-                distance_m,
-                start_distance_m: distance_m,
-                totals: Totals::default(),
             });
         }
     }
@@ -527,51 +475,16 @@ impl<'m> PolicyEnv<'m> {
     }
 
     fn observe_into(&self, e: &Episode, out: &mut [f32]) {
-        let goal = Vec3::new(e.course.goal.x, e.course.goal.y, 0.0);
-        // The canonical frame of the seed; with hips vertical (never in a walking seed) the
-        // world frame at the pelvis stands in.
-        let joints0 = self
-            .body
-            .shaped
-            .skeleton(&e.view.seed.frames[0].pose, e.view.seed.frames[0].transl)
-            .map(|s| s.joints.to_vec());
-        let world_from_canon = joints0
-            .ok()
-            .and_then(|j| canonical_frame(&j).ok())
-            .unwrap_or(Affine3::from_translation(Vec3::new(
-                e.view.pelvis.x,
-                e.view.pelvis.y,
-                0.0,
-            )));
-        let canon_from_world = world_from_canon.inverse();
-        for (k, markers) in e.view.markers.iter().enumerate() {
-            let o = &mut out[k * STATE_FRAME_DIM..(k + 1) * STATE_FRAME_DIM];
-            for (i, m) in markers.iter().enumerate() {
-                let c = canon_from_world.transform_point3(*m);
-                let g = goal.with_z(m.z);
-                let d = canon_from_world.transform_vector3((g - *m).normalize_or_zero());
-                o[3 * i..3 * i + 3].copy_from_slice(&[c.x as f32, c.y as f32, c.z as f32]);
-                let j = 3 * NUM_MARKERS + 3 * i;
-                o[j..j + 3].copy_from_slice(&[d.x as f32, d.y as f32, d.z as f32]);
-            }
-        }
-        for (k, cpf) in e.view.world_from_cpf.iter().enumerate() {
-            let t = frame_time_s(e.steps, k);
-            let moving: Vec<Obstacle2> = e.course.moving.iter().map(|m| m.at(t)).collect();
-            let world = SensingWorld {
-                map: &e.course.map,
-                obstacles: &moving,
-            };
-            let at = OBS_RAYS_OFFSET + k * RAYS;
-            self.scan.observe_into(
-                &world,
-                EgoPose2::from_world_from_cpf(cpf),
-                &mut out[at..at + RAYS],
-            );
-        }
-        out[OBS_DIST_OFFSET] = (1.0 / (1.0 + e.distance_m)) as f32;
-        out[OBS_DIST_OFFSET + 1] =
-            (1.0 - e.steps as f64 / self.settings.max_primitives as f64) as f32;
+        let w = &e.walker;
+        w.observe_into(
+            self.body,
+            &self.scan,
+            e.course.goal,
+            &e.course.surroundings(),
+            frame_time_s(w.steps, 0),
+            1.0 - w.steps as f64 / self.settings.max_primitives as f64,
+            out,
+        );
     }
 
     /// Decodes `per` candidate latents for every episode (`[B × per × L]`, episode-major) in
@@ -590,7 +503,7 @@ impl<'m> PolicyEnv<'m> {
         let seeds: Vec<PrimitiveSeed> = self
             .episodes
             .iter()
-            .flat_map(|e| std::iter::repeat_n(e.view.seed.clone(), per))
+            .flat_map(|e| std::iter::repeat_n(e.walker.view.seed.clone(), per))
             .collect();
         let zs: Vec<Vec<f32>> = latents.chunks(l).map(<[f32]>::to_vec).collect();
         let decoded = self.model.decode_each(self.body, &seeds, &zs)?;
@@ -607,14 +520,11 @@ impl<'m> PolicyEnv<'m> {
                 let e = &self.episodes[env];
                 match d {
                     Ok(p) => {
-                        let s = Situation {
-                            map: &e.course.map,
-                            obstacle: e.course.obstacle.as_ref(),
-                            moving: &e.course.moving,
-                            t0_s: frame_time_s(e.steps, 0),
-                            goal: e.course.goal,
-                            distance_m: e.distance_m,
-                        };
+                        let s = e.walker.situation(
+                            &e.course.surroundings(),
+                            e.course.goal,
+                            frame_time_s(e.walker.steps, 0),
+                        );
                         let j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
                         let reward = j.terms.total(&self.settings.weights);
                         Ok(Candidate {
@@ -650,71 +560,31 @@ impl<'m> PolicyEnv<'m> {
             debug_assert_eq!(c.env, i);
             let max_primitives = self.settings.max_primitives;
             let terminate_on_penetration = self.settings.terminate_on_penetration;
-            let e = &mut self.episodes[i];
-            e.steps += 1;
-            e.totals.reward += c.reward;
+            let w = &mut self.episodes[i].walker;
             let ending = match (c.primitive, c.judged) {
                 (Some(p), Some(j)) => {
-                    let first = p.joints[SEED_FRAMES - 1][joint::PELVIS];
-                    let mut path = 0.0;
-                    let mut prev = DVec2::new(first.x, first.y);
-                    for f in &p.joints[SEED_FRAMES..] {
-                        let q = DVec2::new(f[joint::PELVIS].x, f[joint::PELVIS].y);
-                        path += q.distance(prev);
-                        prev = q;
-                    }
-                    e.totals.path_m += path;
-                    e.totals.contact += j.contact;
-                    e.totals.view_cos += j.view_cos;
-                    e.totals.frames += p.joints.len() - SEED_FRAMES;
-                    e.totals.frames_in_obstacle += j.frames_in_obstacle;
-                    e.distance_m = j.distance_m;
-                    let seed = p.next_seed();
-                    e.view = SeedView {
-                        pelvis: prev,
-                        markers: std::array::from_fn(|k| {
-                            p.markers[p.markers.len() - SEED_FRAMES + k].clone()
-                        }),
-                        world_from_cpf: std::array::from_fn(|k| {
-                            p.world_from_cpf[p.world_from_cpf.len() - SEED_FRAMES + k]
-                        }),
-                        seed,
-                    };
-                    // The pelvis of the new seed's first frame.
-                    let p0 = p.joints[p.joints.len() - SEED_FRAMES][joint::PELVIS];
-                    e.view.pelvis = DVec2::new(p0.x, p0.y);
+                    w.advance(&p, &j, c.reward);
                     if j.success {
                         Some(Ending::Success)
                     } else if j.penetrated && terminate_on_penetration {
                         Some(Ending::Penetration)
-                    } else if e.steps >= max_primitives {
+                    } else if w.steps >= max_primitives {
                         Some(Ending::Timeout)
                     } else {
                         None
                     }
                 }
-                _ => Some(Ending::Failure),
+                _ => {
+                    w.fail(c.reward);
+                    Some(Ending::Failure)
+                }
             };
             out.reward.push(c.reward as f32);
             out.done.push(ending.is_some());
             if let Some(ending) = ending {
                 let e = &self.episodes[i];
-                let n = e.steps.max(1) as f64;
-                out.finished.push(EpisodeSummary {
-                    id: e.id,
-                    ending,
-                    primitives: e.steps,
-                    start_distance_m: e.start_distance_m,
-                    final_distance_m: e.distance_m,
-                    reward: e.totals.reward,
-                    contact: e.totals.contact / n,
-                    view_cos: e.totals.view_cos / n,
-                    penetration_share: e.totals.frames_in_obstacle as f64
-                        / e.totals.frames.max(1) as f64,
-                    speed_m_s: e.totals.path_m
-                        / (e.totals.frames.max(1) as f64
-                            / crate::motion::primitive::PRIMITIVE_RATE_HZ),
-                });
+                out.finished
+                    .push(EpisodeSummary::of(e.id, ending, &e.walker));
                 self.episodes[i] = self.start_episode()?;
             }
         }
@@ -741,16 +611,17 @@ impl<'m> PolicyEnv<'m> {
                     crossing: e.course.crossing,
                     pair: e.course.pair,
                     frames: e
+                        .walker
                         .view
                         .seed
                         .frames
                         .iter()
                         .map(|f| f.pose.iter().copied().chain(f.transl.to_array()).collect())
                         .collect(),
-                    steps: e.steps,
-                    distance_m: e.distance_m,
-                    start_distance_m: e.start_distance_m,
-                    totals: e.totals.clone(),
+                    steps: e.walker.steps,
+                    distance_m: e.walker.distance_m,
+                    start_distance_m: e.walker.start_distance_m,
+                    totals: e.walker.totals.clone(),
                 })
                 .collect(),
         }
@@ -802,15 +673,17 @@ impl<'m> PolicyEnv<'m> {
                 }
             };
             let floor_z = course.map.floor_z_m;
-            let view = self.view_of(PrimitiveSeed { frames, floor_z })?;
+            let view = SeedView::new(self.body, PrimitiveSeed { frames, floor_z })?;
             episodes.push(Episode {
                 id: s.id,
                 course,
-                view,
-                steps: s.steps,
-                distance_m: s.distance_m,
-                start_distance_m: s.start_distance_m,
-                totals: s.totals.clone(),
+                walker: Walker {
+                    view,
+                    steps: s.steps,
+                    distance_m: s.distance_m,
+                    start_distance_m: s.start_distance_m,
+                    totals: s.totals.clone(),
+                },
             });
         }
         self.episodes = episodes;

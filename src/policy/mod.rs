@@ -16,6 +16,7 @@ pub mod ppo;
 pub mod reward;
 pub mod sampling;
 pub mod tasks;
+pub mod walker;
 
 pub use env::{EnvSettings, PolicyEnv, SeedBank, OBS_DIM};
 pub use pose_prior::PosePrior;

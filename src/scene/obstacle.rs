@@ -36,6 +36,13 @@ impl Obstacle2 {
         }
     }
 
+    /// The centre of the footprint.
+    pub fn centre(&self) -> DVec2 {
+        match *self {
+            Obstacle2::Box { centre, .. } | Obstacle2::Circle { centre, .. } => centre,
+        }
+    }
+
     /// Whether a point lies inside (boundary included).
     pub fn contains(&self, p: DVec2) -> bool {
         match *self {

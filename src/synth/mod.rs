@@ -3,6 +3,8 @@
 
 pub mod body_cache;
 pub mod body_track;
+pub mod crowd;
+pub mod crowd_dir;
 pub mod placement;
 pub mod sequence_dir;
 

@@ -72,17 +72,23 @@ const SEQUENCE_ENTRIES: [&str; 5] = [
     "manifest.json",
 ];
 
-/// Whether `dir` holds only what [`write_sequence_dir`] writes.
-fn is_sequence_leftover(dir: &Path) -> bool {
-    std::fs::read_dir(dir).is_ok_and(|entries| {
-        entries.flatten().all(|e| {
+/// Whether `dir` holds only the named entries (or their temporaries, `<name>.…`): a
+/// leftover of a writer that writes those.
+pub(crate) fn holds_only(dir: &Path, entries: &[&str]) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|found| {
+        found.flatten().all(|e| {
             let name = e.file_name();
             let name = name.to_string_lossy();
-            SEQUENCE_ENTRIES
+            entries
                 .iter()
                 .any(|s| name == *s || name.starts_with(&format!("{s}.")))
         })
     })
+}
+
+/// Whether `dir` holds only what [`write_sequence_dir`] writes.
+fn is_sequence_leftover(dir: &Path) -> bool {
+    holds_only(dir, &SEQUENCE_ENTRIES)
 }
 
 /// Writes a sequence folder; `dir` must not exist or be empty (nothing is overwritten).

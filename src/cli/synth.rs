@@ -1,0 +1,680 @@
+//! The synth config (`egogen synth CONFIG`): a scene (a glTF/OBJ/PLY file or an open square
+//! floor), the motion model, policy and pose prior (shipped ones by default), agents given one
+//! by one (`[[agents]]`) and/or made by `[crowd]` (on a circle walking to the opposite points,
+//! or at sampled places), static and moving 2D obstacles, and the output folder. Parsed
+//! strictly (unknown keys refused), checked value by value with the key named, then resolved
+//! into a [`SynthPlan`]; [`run_synth`] loads the parts and writes the take.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use glam::DVec2;
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+use serde::Deserialize;
+
+use super::config::{load_toml, ConfigError};
+use super::resolve::{crate_root, resolve_body_model};
+use crate::math::random::normal_samples;
+use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
+use crate::synth::crowd::{
+    run_crowd, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering, NEW_FRAMES,
+};
+
+/// Most agents in one take.
+pub const MAX_AGENTS: usize = 32;
+/// Longest take (s).
+pub const MAX_DURATION_S: f64 = 3600.0;
+
+/// `[scene]`.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSynthScene {
+    /// Scene file (glTF, OBJ, PLY), relative to the config's folder; absent: an open floor.
+    pub path: Option<PathBuf>,
+    /// Side of the open square floor centred on the origin (m, default 8).
+    pub floor_m: Option<f64>,
+}
+
+/// `[motion]`.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSynthMotion {
+    pub weights: Option<PathBuf>,
+    pub policy: Option<PathBuf>,
+    pub pose_prior: Option<PathBuf>,
+    /// Motion training config whose training clips give the start poses.
+    pub train_config: Option<PathBuf>,
+    /// Longest take (s, default 20); it ends earlier when every agent is done, unless
+    /// `stop_when_done = false`.
+    pub duration_s: Option<f64>,
+    pub stop_when_done: Option<bool>,
+    pub success_m: Option<f64>,
+    pub max_primitives_per_goal: Option<usize>,
+    /// Distance range of wandering goals (m).
+    pub wander_distance_m: Option<[f64; 2]>,
+    /// Free space around sampled starts and goals (m).
+    pub clearance_m: Option<f64>,
+    pub seed: Option<u64>,
+}
+
+/// `[crowd]`: agents made by rule.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawCrowd {
+    pub count: usize,
+    /// `"circle"`: evenly on a circle, each walking to the opposite point (paper Fig. S7);
+    /// `"random"`: sampled starts and goals on the walkable map.
+    #[serde(default = "default_layout")]
+    pub layout: String,
+    pub radius_m: Option<f64>,
+    pub centre: Option<[f64; 2]>,
+    #[serde(default = "default_steering")]
+    pub steering: String,
+    pub k: Option<usize>,
+    #[serde(default)]
+    pub wander: bool,
+    /// Betas drawn N(0, 1), clipped to ±`betas_sigma` (0: the neutral shape; default 2).
+    pub betas_sigma: Option<f64>,
+    /// Shape coefficients drawn (default 10, at most what the model has).
+    pub betas_count: Option<usize>,
+}
+
+fn default_layout() -> String {
+    "circle".into()
+}
+
+fn default_steering() -> String {
+    "policy".into()
+}
+
+/// `[[agents]]`: one agent.
+#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawAgent {
+    pub name: Option<String>,
+    #[serde(default)]
+    pub betas: Vec<f64>,
+    /// Absent: sampled on the walkable map.
+    pub start: Option<[f64; 2]>,
+    /// Walking direction of the first step (degrees from +x); absent: towards the first goal.
+    pub facing_deg: Option<f64>,
+    #[serde(default)]
+    pub goals: Vec<[f64; 2]>,
+    #[serde(default)]
+    pub wander: bool,
+    /// `"policy"` (actions sampled from π), `"policy_mean"` or `"sampling"`.
+    pub steering: Option<String>,
+    /// Candidates of `"sampling"` (default 16).
+    pub k: Option<usize>,
+}
+
+/// `[[obstacles]]`: a 2D box, still or moving at constant velocity.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawObstacle {
+    /// Centre at time 0 (m).
+    pub centre: [f64; 2],
+    /// Length and width (m).
+    pub size_m: [f64; 2],
+    #[serde(default)]
+    pub yaw_deg: f64,
+    #[serde(default)]
+    pub velocity_m_s: [f64; 2],
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSynthOutput {
+    /// Must not exist yet (or be empty).
+    pub dir: PathBuf,
+}
+
+/// The whole config, as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSynth {
+    pub body_model: Option<PathBuf>,
+    #[serde(default)]
+    pub scene: RawSynthScene,
+    #[serde(default)]
+    pub motion: RawSynthMotion,
+    pub crowd: Option<RawCrowd>,
+    #[serde(default)]
+    pub agents: Vec<RawAgent>,
+    #[serde(default)]
+    pub obstacles: Vec<RawObstacle>,
+    pub output: RawSynthOutput,
+}
+
+/// Where agents come from before the map is known: given, or to be sampled.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AgentDraft {
+    pub name: String,
+    pub betas: Vec<f64>,
+    pub start: Option<DVec2>,
+    pub facing_rad: Option<f64>,
+    pub goals: Vec<DVec2>,
+    pub wander: bool,
+    pub steering: Steering,
+}
+
+/// A checked synth config.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthPlan {
+    pub config: PathBuf,
+    pub body_model: PathBuf,
+    pub scene: Option<PathBuf>,
+    pub floor_m: f64,
+    pub weights: PathBuf,
+    pub policy: Option<PathBuf>,
+    pub pose_prior: PathBuf,
+    pub train_config: PathBuf,
+    pub settings: CrowdSettings,
+    pub duration_s: f64,
+    pub agents: Vec<AgentDraft>,
+    pub obstacles: Vec<Obstacle2>,
+    pub moving: Vec<MovingObstacle>,
+    pub out_dir: PathBuf,
+}
+
+fn steering(name: &str, k: Option<usize>) -> Result<Steering, String> {
+    match (name, k) {
+        ("policy", None) => Ok(Steering::Policy { mean_action: false }),
+        ("policy_mean", None) => Ok(Steering::Policy { mean_action: true }),
+        ("sampling", k) => match k.unwrap_or(16) {
+            0 => Err("`k` must be at least 1".into()),
+            k => Ok(Steering::Sampling { k }),
+        },
+        ("policy" | "policy_mean", Some(_)) => {
+            Err("`k` is for steering = \"sampling\" only".into())
+        }
+        (other, _) => Err(format!(
+            "expected \"policy\", \"policy_mean\" or \"sampling\", got \"{other}\""
+        )),
+    }
+}
+
+fn finite2(v: [f64; 2]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+/// Reads and checks a synth config.
+pub fn load_synth_plan(path: &Path) -> Result<SynthPlan, ConfigError> {
+    let raw: RawSynth = load_toml(path)?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let bad = |key: &str, message: String| ConfigError::Value {
+        path: path.into(),
+        key: key.into(),
+        message,
+    };
+    let body_model = resolve_body_model(raw.body_model, base).map_err(|m| bad("body_model", m))?;
+    let file = |key: &str, given: &Option<PathBuf>, default: &str| {
+        let f = match given {
+            Some(p) => base.join(p),
+            None => crate_root().join(default),
+        };
+        match f.is_file() {
+            true => Ok(f),
+            false => Err(bad(key, format!("file {} not found", f.display()))),
+        }
+    };
+    let m = &raw.motion;
+    let weights = file(
+        "motion.weights",
+        &m.weights,
+        "assets/motion/primitive_cvae.safetensors",
+    )?;
+    let pose_prior = file(
+        "motion.pose_prior",
+        &m.pose_prior,
+        "assets/policy/pose_prior.json",
+    )?;
+    let train_config = file(
+        "motion.train_config",
+        &m.train_config,
+        "configs/train_primitive.toml",
+    )?;
+    let scene = match &raw.scene.path {
+        Some(p) => {
+            let f = base.join(p);
+            if !f.is_file() {
+                return Err(bad("scene.path", format!("file {} not found", f.display())));
+            }
+            Some(f)
+        }
+        None => None,
+    };
+    let floor_m = raw.scene.floor_m.unwrap_or(8.0);
+    if !(floor_m.is_finite() && (1.0..=200.0).contains(&floor_m)) {
+        return Err(bad(
+            "scene.floor_m",
+            format!("expected 1–200 m, got {floor_m}"),
+        ));
+    }
+    if scene.is_some() && raw.scene.floor_m.is_some() {
+        return Err(bad(
+            "scene.floor_m",
+            "an open floor's size; give either `path` or `floor_m`".into(),
+        ));
+    }
+    let duration_s = m.duration_s.unwrap_or(20.0);
+    if !(duration_s.is_finite() && duration_s > 0.0 && duration_s <= MAX_DURATION_S) {
+        return Err(bad(
+            "motion.duration_s",
+            format!("expected a length in (0, {MAX_DURATION_S}] s, got {duration_s}"),
+        ));
+    }
+    let frames = (duration_s * PRIMITIVE_RATE_HZ).round() as usize;
+    let primitives = frames
+        .saturating_sub(SEED_FRAMES)
+        .div_ceil(NEW_FRAMES)
+        .max(1);
+    let defaults = CrowdSettings::default();
+    let settings = CrowdSettings {
+        success_m: m.success_m.unwrap_or(defaults.success_m),
+        max_primitives_per_goal: m
+            .max_primitives_per_goal
+            .unwrap_or(defaults.max_primitives_per_goal),
+        primitives,
+        stop_when_done: m.stop_when_done.unwrap_or(true),
+        wander_distance_m: m
+            .wander_distance_m
+            .map_or(defaults.wander_distance_m, |[a, b]| (a, b)),
+        clearance_m: m.clearance_m.unwrap_or(defaults.clearance_m),
+        seed: m.seed.unwrap_or(0),
+    };
+    if !(settings.success_m.is_finite() && settings.success_m > 0.0) {
+        return Err(bad(
+            "motion.success_m",
+            format!("expected a radius > 0 m, got {}", settings.success_m),
+        ));
+    }
+    if settings.max_primitives_per_goal == 0 {
+        return Err(bad(
+            "motion.max_primitives_per_goal",
+            "expected a whole number ≥ 1, got 0".into(),
+        ));
+    }
+    let (lo, hi) = settings.wander_distance_m;
+    if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {
+        return Err(bad(
+            "motion.wander_distance_m",
+            format!("expected [MIN, MAX] with 0 < MIN ≤ MAX (m), got [{lo}, {hi}]"),
+        ));
+    }
+    if !(settings.clearance_m.is_finite() && settings.clearance_m >= 0.0) {
+        return Err(bad(
+            "motion.clearance_m",
+            format!("expected a distance ≥ 0 m, got {}", settings.clearance_m),
+        ));
+    }
+
+    let mut agents = Vec::new();
+    for (i, a) in raw.agents.iter().enumerate() {
+        let key = |k: &str| format!("agents[{i}].{k}");
+        let steer = steering(a.steering.as_deref().unwrap_or("policy"), a.k)
+            .map_err(|e| bad(&key("steering"), e))?;
+        if let Some((b, v)) = a
+            .betas
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite() || v.abs() > 10.0)
+        {
+            return Err(bad(
+                &key(&format!("betas[{b}]")),
+                format!("expected a value within ±10 standard deviations, got {v}"),
+            ));
+        }
+        if a.start.is_some_and(|s| !finite2(s)) {
+            return Err(bad(
+                &key("start"),
+                "expected two finite numbers [x, y] (m)".into(),
+            ));
+        }
+        if let Some((g, _)) = a.goals.iter().enumerate().find(|(_, g)| !finite2(**g)) {
+            return Err(bad(
+                &key(&format!("goals[{g}]")),
+                "expected two finite numbers [x, y] (m)".into(),
+            ));
+        }
+        if a.facing_deg.is_some_and(|f| !f.is_finite()) {
+            return Err(bad(&key("facing_deg"), "expected a finite angle".into()));
+        }
+        agents.push(AgentDraft {
+            name: a.name.clone().unwrap_or_else(|| format!("agent_{i:02}")),
+            betas: a.betas.clone(),
+            start: a.start.map(DVec2::from_array),
+            facing_rad: a.facing_deg.map(f64::to_radians),
+            goals: a.goals.iter().copied().map(DVec2::from_array).collect(),
+            wander: a.wander,
+            steering: steer,
+        });
+    }
+    if let Some(c) = &raw.crowd {
+        let steer = steering(&c.steering, c.k).map_err(|e| bad("crowd.steering", e))?;
+        let sigma = c.betas_sigma.unwrap_or(2.0);
+        if !(sigma.is_finite() && (0.0..=10.0).contains(&sigma)) {
+            return Err(bad(
+                "crowd.betas_sigma",
+                format!("expected 0–10, got {sigma}"),
+            ));
+        }
+        let n_betas = if sigma == 0.0 {
+            0
+        } else {
+            c.betas_count.unwrap_or(10)
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0xBE7A5);
+        let centre = DVec2::from_array(c.centre.unwrap_or([0.0, 0.0]));
+        if !centre.is_finite() {
+            return Err(bad("crowd.centre", "expected two finite numbers".into()));
+        }
+        for i in 0..c.count {
+            let betas: Vec<f64> = normal_samples(&mut rng, n_betas)
+                .into_iter()
+                .map(|b| (b as f64).clamp(-sigma, sigma))
+                .collect();
+            let (start, goals) = match c.layout.as_str() {
+                "circle" => {
+                    let r = c.radius_m.unwrap_or(2.0);
+                    if !(r.is_finite() && r > 0.0) {
+                        return Err(bad(
+                            "crowd.radius_m",
+                            format!("expected a radius > 0 m, got {r}"),
+                        ));
+                    }
+                    let a = std::f64::consts::TAU * i as f64 / c.count as f64;
+                    let p = DVec2::from_angle(a) * r;
+                    (Some(centre + p), vec![centre - p])
+                }
+                "random" => {
+                    if c.radius_m.is_some() || c.centre.is_some() {
+                        return Err(bad("crowd.radius_m", "for layout = \"circle\" only".into()));
+                    }
+                    (None, Vec::new())
+                }
+                other => {
+                    return Err(bad(
+                        "crowd.layout",
+                        format!("expected \"circle\" or \"random\", got \"{other}\""),
+                    ))
+                }
+            };
+            agents.push(AgentDraft {
+                name: format!("crowd_{i:02}"),
+                betas,
+                start,
+                facing_rad: None,
+                goals,
+                wander: c.wander,
+                steering: steer,
+            });
+        }
+    }
+    if agents.is_empty() || agents.len() > MAX_AGENTS {
+        return Err(bad(
+            "agents",
+            format!(
+                "expected 1–{MAX_AGENTS} agents ([[agents]] and [crowd] count together), got {}",
+                agents.len()
+            ),
+        ));
+    }
+    let mut names = std::collections::BTreeSet::new();
+    for a in &agents {
+        let ok = !a.name.is_empty()
+            && a.name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+        if !ok {
+            return Err(bad(
+                "agents.name",
+                format!(
+                    "\"{}\": expected letters, digits, _ and - only (it names a folder)",
+                    a.name
+                ),
+            ));
+        }
+        if !names.insert(a.name.clone()) {
+            return Err(bad("agents.name", format!("\"{}\" is used twice", a.name)));
+        }
+    }
+    let policy = if agents
+        .iter()
+        .any(|a| matches!(a.steering, Steering::Policy { .. }))
+    {
+        Some(file(
+            "motion.policy",
+            &m.policy,
+            "assets/policy/policy.safetensors",
+        )?)
+    } else {
+        None
+    };
+    let (mut obstacles, mut moving) = (Vec::new(), Vec::new());
+    for (i, o) in raw.obstacles.iter().enumerate() {
+        let key = |k: &str| format!("obstacles[{i}].{k}");
+        if !finite2(o.centre) {
+            return Err(bad(
+                &key("centre"),
+                "expected two finite numbers [x, y] (m)".into(),
+            ));
+        }
+        if !(finite2(o.size_m) && o.size_m.iter().all(|&s| s > 0.0)) {
+            return Err(bad(
+                &key("size_m"),
+                "expected [length, width] > 0 (m)".into(),
+            ));
+        }
+        if !o.yaw_deg.is_finite() || !finite2(o.velocity_m_s) {
+            return Err(bad(&key("velocity_m_s"), "expected finite numbers".into()));
+        }
+        let shape = Obstacle2::Box {
+            centre: DVec2::from_array(o.centre),
+            half_extents: DVec2::from_array(o.size_m) / 2.0,
+            yaw_rad: o.yaw_deg.to_radians(),
+        };
+        let v = DVec2::from_array(o.velocity_m_s);
+        if v == DVec2::ZERO {
+            obstacles.push(shape);
+        } else {
+            moving.push(MovingObstacle {
+                at_start: shape,
+                velocity_m_per_s: v,
+            });
+        }
+    }
+    Ok(SynthPlan {
+        config: path.into(),
+        body_model,
+        scene,
+        floor_m,
+        weights,
+        policy,
+        pose_prior,
+        train_config,
+        settings,
+        duration_s,
+        agents,
+        obstacles,
+        moving,
+        out_dir: base.join(&raw.output.dir),
+    })
+}
+
+/// The walkable map of the plan's scene, or its open floor.
+pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
+    match &plan.scene {
+        Some(path) => {
+            let mesh = crate::scene::load_scene(path, None)?;
+            Ok(crate::scene::walkable_map(&mesh, path, Default::default())?)
+        }
+        None => {
+            let cell = 0.1;
+            let n = (plan.floor_m / cell).round().max(1.0) as usize;
+            let origin = DVec2::splat(-(n as f64) * cell / 2.0);
+            Ok(WalkableMap::from_walkable(
+                origin,
+                cell,
+                n,
+                n,
+                vec![true; n * n],
+            ))
+        }
+    }
+}
+
+/// The agents with every start and goal placed: sampled ones on the walkable map (with the
+/// clearance, at least 1 m from every other start); given ones checked to stand on it.
+pub fn place_agents(plan: &SynthPlan, map: &WalkableMap) -> Result<Vec<AgentPlan>> {
+    let s = &plan.settings;
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0x57A27);
+    let mut out: Vec<AgentPlan> = Vec::with_capacity(plan.agents.len());
+    let on_map = |p: DVec2| map.is_walkable_at(p);
+    for a in &plan.agents {
+        let start = match a.start {
+            Some(p) => {
+                if !on_map(p) {
+                    anyhow::bail!(
+                        "{}: agent {}: start [{}, {}] is not on the walkable floor",
+                        plan.config.display(),
+                        a.name,
+                        p.x,
+                        p.y
+                    );
+                }
+                p
+            }
+            None => {
+                let mut found = None;
+                for _ in 0..200 {
+                    let Some(p) = sample_point(map, s.clearance_m, &mut rng) else {
+                        break;
+                    };
+                    if out.iter().all(|o| o.start.distance(p) >= 1.0) {
+                        found = Some(p);
+                        break;
+                    }
+                }
+                found.with_context(|| {
+                    format!(
+                        "{}: agent {}: no free start on the walkable floor ({} m clearance, 1 m from the other agents)",
+                        plan.config.display(),
+                        a.name,
+                        s.clearance_m
+                    )
+                })?
+            }
+        };
+        for g in &a.goals {
+            if !on_map(*g) {
+                anyhow::bail!(
+                    "{}: agent {}: goal [{}, {}] is not on the walkable floor",
+                    plan.config.display(),
+                    a.name,
+                    g.x,
+                    g.y
+                );
+            }
+        }
+        out.push(AgentPlan {
+            name: a.name.clone(),
+            betas: a.betas.clone(),
+            start,
+            facing_rad: a.facing_rad,
+            goals: a.goals.clone(),
+            wander: a.wander,
+            steering: a.steering,
+        });
+    }
+    Ok(out)
+}
+
+/// Loads the parts and writes the take (see [`crate::synth::crowd_dir`]).
+pub fn run_synth(
+    plan: &SynthPlan,
+    progress: bool,
+) -> Result<crate::synth::crowd_dir::CrowdOutputs> {
+    use crate::motion::cvae::infer::InferBackend;
+    use crate::motion::cvae::MotionModel;
+    use crate::policy::{PosePrior, SeedBank};
+    crate::synth::crowd_dir::check_out_dir(&plan.out_dir)?;
+    let map = synth_map(plan)?;
+    let agents = place_agents(plan, &map)?;
+    let body = crate::body::BodyModel::load(&plan.body_model)?;
+    for a in &agents {
+        if a.betas.len() > body.num_betas() {
+            anyhow::bail!(
+                "{}: agent {}: {} betas given, the body model {} has {}",
+                plan.config.display(),
+                a.name,
+                a.betas.len(),
+                plan.body_model.display(),
+                body.num_betas()
+            );
+        }
+    }
+    let agents: Vec<AgentPlan> = agents
+        .into_iter()
+        .map(|mut a| {
+            a.betas.truncate(body.num_betas());
+            a
+        })
+        .collect();
+    let model = MotionModel::load(&plan.weights)?;
+    let prior = PosePrior::load(&plan.pose_prior)?;
+    let policy = match &plan.policy {
+        Some(p) => {
+            let (arch, net) =
+                crate::policy::ppo::load_policy::<InferBackend>(p, &Default::default())?;
+            if arch.latent_dim != model.latent_dim() {
+                anyhow::bail!(
+                    "{}: the policy acts in {} latent dimensions, the motion model {} has {}",
+                    p.display(),
+                    arch.latent_dim,
+                    plan.weights.display(),
+                    model.latent_dim()
+                );
+            }
+            Some(net)
+        }
+        None => None,
+    };
+    let train_plan = super::train::load_train_plan(&plan.train_config)?;
+    let (train_set, _) = crate::motion::cvae::train::evaluation_sets(&train_plan, &body, true)?;
+    let bank = SeedBank::from_set(&train_set);
+    let parts = CrowdParts {
+        model: &model,
+        body_model: &body,
+        prior: &prior,
+        bank: &bank,
+        policy: policy.as_ref(),
+    };
+    let world = CrowdWorld {
+        map: &map,
+        obstacles: plan.obstacles.clone(),
+        moving: plan.moving.clone(),
+    };
+    let bar = crate::synth::crowd_dir::progress_bar(progress, plan.settings.primitives)?;
+    let started = std::time::Instant::now();
+    let take = run_crowd(&parts, &world, &agents, &plan.settings, |done, _| {
+        bar.set_position(done as u64)
+    })
+    .with_context(|| format!("{}", plan.config.display()))?;
+    let wall_s = started.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let about = serde_json::json!({
+        "config": plan.config,
+        "scene": plan.scene,
+        "floor_m": plan.scene.is_none().then_some(plan.floor_m),
+        "motion_weights": plan.weights,
+        "policy": plan.policy,
+        "pose_prior": plan.pose_prior,
+        "duration_s": plan.duration_s,
+        "settings": plan.settings,
+    });
+    crate::synth::crowd_dir::write_crowd_dir(&plan.out_dir, &world, &body, &take, wall_s, about)
+}

@@ -1,0 +1,321 @@
+//! One walking body as a controller sees it: the two seed frames of its next primitive (with
+//! their markers, eye frames and pelvis), the pelvis–goal distance, and running totals. The
+//! same state serves an episode of the training environment and an agent of a crowd; what
+//! differs is what surrounds it ([`Surroundings`]) and whose clock moves obstacles.
+//!
+//! Observation (EgoGen's layout, [`OBS_DIM`] values): for each of the two seed frames the 67
+//! markers in the seed's canonical frame and the unit vectors from each marker to the goal
+//! (2 × 67 × 6); the 32-ray scan of both seed frames (2 × 32, −1 + 2·hit/7 m); `1/(1 + d)` of
+//! the horizontal pelvis–goal distance; the share of the episode's time left.
+
+use glam::DVec2;
+use serde::{Deserialize, Serialize};
+
+use super::reward::{Judged, Situation};
+use crate::body::{joint, BodyParams, NUM_MARKERS};
+use crate::math::{Affine3, Mat3, Vec3};
+use crate::motion::cvae::infer::DecodeError;
+use crate::motion::cvae::{BodyContext, DecodedPrimitive, PrimitiveSeed};
+use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
+use crate::sensing::{EgoPose2, EgoSensor, RayScan, SensingWorld};
+
+/// Values per seed frame of the marker state: 67 canonical positions and 67 goal directions.
+pub const STATE_FRAME_DIM: usize = NUM_MARKERS * 6;
+/// Rays per seed frame.
+pub const RAYS: usize = 32;
+/// Observation length.
+pub const OBS_DIM: usize = SEED_FRAMES * (STATE_FRAME_DIM + RAYS) + 2;
+/// Offset of the ray scans in an observation.
+pub const OBS_RAYS_OFFSET: usize = SEED_FRAMES * STATE_FRAME_DIM;
+/// Offset of `1/(1 + d)`; the time left follows it.
+pub const OBS_DIST_OFFSET: usize = OBS_RAYS_OFFSET + SEED_FRAMES * RAYS;
+
+/// Time (s) of frame `f` of the primitive taken at step `steps` of a clock that starts with
+/// frame 0 of the first seed at 0.
+pub fn frame_time_s(steps: usize, f: usize) -> f64 {
+    (steps * (PRIMITIVE_FRAMES - SEED_FRAMES) + f) as f64 / PRIMITIVE_RATE_HZ
+}
+
+/// A canonical mocap seed (facing +y, its floor at `floor` in its frame) placed with its
+/// pelvis over `start`, turned to face `facing_rad` (world yaw of the walking direction,
+/// from +x), its floor on world height `floor_z`.
+pub fn place_seed(
+    frames: &[BodyParams; SEED_FRAMES],
+    floor: f64,
+    start: DVec2,
+    facing_rad: f64,
+    floor_z: f64,
+    rest_pelvis: Vec3,
+) -> PrimitiveSeed {
+    let world_from_canon = Affine3 {
+        matrix3: Mat3::from_rotation_z(facing_rad - std::f64::consts::FRAC_PI_2),
+        translation: Vec3::new(start.x, start.y, floor_z - floor),
+    };
+    PrimitiveSeed {
+        frames: std::array::from_fn(|k| frames[k].moved_rigidly(world_from_canon, rest_pelvis)),
+        floor_z,
+    }
+}
+
+/// What surrounds a walker: the floor map, a static obstacle that is not in the map (a box
+/// scene's box), and obstacles that move on a clock (other people as 2D boxes).
+#[derive(Debug, Clone, Copy)]
+pub struct Surroundings<'a> {
+    pub map: &'a WalkableMap,
+    pub obstacle: Option<&'a Obstacle2>,
+    pub moving: &'a [MovingObstacle],
+}
+
+/// What the seed frames of the next primitive look like to the observation.
+#[derive(Debug, Clone)]
+pub struct SeedView {
+    pub seed: PrimitiveSeed,
+    pub markers: [Vec<Vec3>; SEED_FRAMES],
+    pub world_from_cpf: [Affine3; SEED_FRAMES],
+    /// Horizontal pelvis position of the first seed frame.
+    pub pelvis: DVec2,
+}
+
+impl SeedView {
+    /// Poses the seed frames of `seed` with `body`.
+    pub fn new(body: &BodyContext, seed: PrimitiveSeed) -> Result<Self, DecodeError> {
+        let mut markers: [Vec<Vec3>; SEED_FRAMES] = Default::default();
+        let mut cpf = [Affine3::IDENTITY; SEED_FRAMES];
+        let mut pelvis = DVec2::ZERO;
+        for (k, f) in seed.frames.iter().enumerate() {
+            let mf = body
+                .shaped
+                .marker_frame(&f.pose, f.transl, &body.marker_ids)?;
+            cpf[k] = body.cpf.world_from_cpf(&mf.skeleton);
+            if k == 0 {
+                let p = mf.skeleton.joints[joint::PELVIS];
+                pelvis = DVec2::new(p.x, p.y);
+            }
+            markers[k] = mf.markers;
+        }
+        Ok(Self {
+            seed,
+            markers,
+            world_from_cpf: cpf,
+            pelvis,
+        })
+    }
+
+    /// The seed of the primitive after `p`, from its last frames.
+    pub fn after(p: &DecodedPrimitive) -> Self {
+        let n = p.joints.len();
+        let p0 = p.joints[n - SEED_FRAMES][joint::PELVIS];
+        Self {
+            seed: p.next_seed(),
+            markers: std::array::from_fn(|k| p.markers[p.markers.len() - SEED_FRAMES + k].clone()),
+            world_from_cpf: std::array::from_fn(|k| {
+                p.world_from_cpf[p.world_from_cpf.len() - SEED_FRAMES + k]
+            }),
+            pelvis: DVec2::new(p0.x, p0.y),
+        }
+    }
+
+    /// The body's 2D box as others see it: [`footprint`] of both seed frames' markers.
+    pub fn footprint(&self) -> Obstacle2 {
+        footprint(
+            self.markers.iter().flatten(),
+            &self.world_from_cpf[SEED_FRAMES - 1],
+            self.pelvis,
+        )
+    }
+}
+
+/// A body's 2D box: the bounding box of its markers in its own horizontal frame (x along the
+/// hip line, y the facing of the eye frame `world_from_cpf` on the floor) — the box the
+/// penetration test of Eq. 7 lays over a body. Without finite markers, a point at `pelvis`.
+pub fn footprint<'a>(
+    markers: impl Iterator<Item = &'a Vec3>,
+    world_from_cpf: &Affine3,
+    pelvis: DVec2,
+) -> Obstacle2 {
+    let fwd = world_from_cpf.matrix3.z_axis;
+    let fwd = DVec2::new(fwd.x, fwd.y).normalize_or(DVec2::Y);
+    let x = -fwd.perp();
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for v in markers {
+        let d = v.truncate();
+        let local = DVec2::new(x.dot(d), x.perp().dot(d));
+        lo = lo.min(local);
+        hi = hi.max(local);
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Obstacle2::Circle {
+            centre: pelvis,
+            radius_m: 0.0,
+        };
+    }
+    let c = (lo + hi) * 0.5;
+    Obstacle2::Box {
+        centre: x * c.x + x.perp() * c.y,
+        half_extents: (hi - lo) * 0.5,
+        yaw_rad: x.y.atan2(x.x),
+    }
+}
+
+/// Running totals of a walk, for its summary.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Totals {
+    pub reward: f64,
+    pub contact: f64,
+    pub view_cos: f64,
+    pub frames: usize,
+    pub frames_in_obstacle: usize,
+    pub path_m: f64,
+}
+
+/// A body walking to a goal, one primitive at a time.
+#[derive(Debug, Clone)]
+pub struct Walker {
+    pub view: SeedView,
+    /// Primitives taken.
+    pub steps: usize,
+    /// Horizontal pelvis–goal distance now and at the start (m).
+    pub distance_m: f64,
+    pub start_distance_m: f64,
+    pub totals: Totals,
+}
+
+impl Walker {
+    /// A walker at its seed, `goal` ahead.
+    pub fn new(view: SeedView, goal: DVec2) -> Self {
+        let distance_m = view.pelvis.distance(goal);
+        Self {
+            view,
+            steps: 0,
+            distance_m,
+            start_distance_m: distance_m,
+            totals: Totals::default(),
+        }
+    }
+
+    /// Writes the observation ([`OBS_DIM`] values) for a walk to `goal`; `t0_s` is the time
+    /// of the first seed frame on the obstacles' clock, `time_left` the share of the walk's
+    /// primitives left (EgoGen's `1 − t/T`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn observe_into(
+        &self,
+        body: &BodyContext,
+        scan: &RayScan,
+        goal: DVec2,
+        around: &Surroundings,
+        t0_s: f64,
+        time_left: f64,
+        out: &mut [f32],
+    ) {
+        let v = &self.view;
+        let goal = Vec3::new(goal.x, goal.y, 0.0);
+        // The canonical frame of the seed; with hips vertical (never in a walking seed) the
+        // world frame at the pelvis stands in.
+        let world_from_canon = body
+            .shaped
+            .skeleton(&v.seed.frames[0].pose, v.seed.frames[0].transl)
+            .ok()
+            .and_then(|s| canonical_frame(&s.joints).ok())
+            .unwrap_or(Affine3::from_translation(Vec3::new(
+                v.pelvis.x, v.pelvis.y, 0.0,
+            )));
+        let canon_from_world = world_from_canon.inverse();
+        for (k, markers) in v.markers.iter().enumerate() {
+            let o = &mut out[k * STATE_FRAME_DIM..(k + 1) * STATE_FRAME_DIM];
+            for (i, m) in markers.iter().enumerate() {
+                let c = canon_from_world.transform_point3(*m);
+                let g = goal.with_z(m.z);
+                let d = canon_from_world.transform_vector3((g - *m).normalize_or_zero());
+                o[3 * i..3 * i + 3].copy_from_slice(&[c.x as f32, c.y as f32, c.z as f32]);
+                let j = 3 * NUM_MARKERS + 3 * i;
+                o[j..j + 3].copy_from_slice(&[d.x as f32, d.y as f32, d.z as f32]);
+            }
+        }
+        let mut obstacles: Vec<Obstacle2> = Vec::with_capacity(around.moving.len() + 1);
+        for (k, cpf) in v.world_from_cpf.iter().enumerate() {
+            let t = t0_s + k as f64 / PRIMITIVE_RATE_HZ;
+            obstacles.clear();
+            obstacles.extend(around.obstacle.copied());
+            obstacles.extend(around.moving.iter().map(|m| m.at(t)));
+            let world = SensingWorld {
+                map: around.map,
+                obstacles: &obstacles,
+            };
+            let at = OBS_RAYS_OFFSET + k * RAYS;
+            scan.observe_into(
+                &world,
+                EgoPose2::from_world_from_cpf(cpf),
+                &mut out[at..at + RAYS],
+            );
+        }
+        out[OBS_DIST_OFFSET] = (1.0 / (1.0 + self.distance_m)) as f32;
+        out[OBS_DIST_OFFSET + 1] = time_left as f32;
+    }
+
+    /// Where the walker stands before its next primitive, for [`super::reward::judge`].
+    pub fn situation<'a>(
+        &self,
+        around: &Surroundings<'a>,
+        goal: DVec2,
+        t0_s: f64,
+    ) -> Situation<'a> {
+        Situation {
+            map: around.map,
+            obstacle: around.obstacle,
+            moving: around.moving,
+            t0_s,
+            goal,
+            distance_m: self.distance_m,
+        }
+    }
+
+    /// Takes a judged primitive: totals, distance, and the next seed.
+    pub fn advance(&mut self, p: &DecodedPrimitive, j: &Judged, reward: f64) {
+        self.steps += 1;
+        self.totals.reward += reward;
+        let first = p.joints[SEED_FRAMES - 1][joint::PELVIS];
+        let mut prev = DVec2::new(first.x, first.y);
+        for f in &p.joints[SEED_FRAMES..] {
+            let q = DVec2::new(f[joint::PELVIS].x, f[joint::PELVIS].y);
+            self.totals.path_m += q.distance(prev);
+            prev = q;
+        }
+        self.totals.contact += j.contact;
+        self.totals.view_cos += j.view_cos;
+        self.totals.frames += p.joints.len() - SEED_FRAMES;
+        self.totals.frames_in_obstacle += j.frames_in_obstacle;
+        self.distance_m = j.distance_m;
+        self.view = SeedView::after(p);
+    }
+
+    /// Counts a step that produced no primitive (the decoder's output was not finite).
+    pub fn fail(&mut self, reward: f64) {
+        self.steps += 1;
+        self.totals.reward += reward;
+    }
+
+    /// Aims the walker at a new goal (the totals go on).
+    pub fn retarget(&mut self, goal: DVec2) {
+        self.distance_m = self.view.pelvis.distance(goal);
+        self.start_distance_m = self.distance_m;
+    }
+
+    /// Horizontal walking speed over the primitives taken (m/s).
+    pub fn speed_m_s(&self) -> f64 {
+        self.totals.path_m / (self.totals.frames.max(1) as f64 / PRIMITIVE_RATE_HZ)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_times_follow_the_primitive_clock() {
+        assert_eq!(frame_time_s(0, 0), 0.0);
+        // Each primitive adds 18 new frames at 40 Hz.
+        assert!((frame_time_s(1, 0) - 18.0 / 40.0).abs() < 1e-12);
+        assert!((frame_time_s(2, 1) - 37.0 / 40.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,597 @@
+//! Crowds (paper Alg. 1): several bodies, each driven by its own controller, walking to their
+//! goals through one world. Agents take one primitive each in turn; before choosing, an agent
+//! senses the others' current 2D boxes (their footprints after their latest primitive) and
+//! the moving obstacles at its clock, with the same rays, observation and reward as the
+//! training environment ([`crate::policy::walker`]). No multi-agent learning: every agent
+//! runs the single-agent controller.
+//!
+//! An agent walks its goals in order; with `wander` it draws a new goal on the walkable map
+//! when its list runs out, until the take ends. A goal counts as reached when the pelvis comes
+//! within `success_m`; after `max_primitives_per_goal` primitives without reaching it, it is
+//! reported missed and the agent moves on. An agent that falls (head below half its standing
+//! height) or whose decoder output is not finite stops there and is reported, as is one that
+//! runs out of goals: it stands still (its last pose held) for the rest of the take, still an
+//! obstacle to the others.
+//!
+//! Deterministic per seed: agent `i` draws from a generator seeded by `(seed, i)` alone.
+
+use glam::DVec2;
+use rand_chacha::ChaCha8Rng;
+use rand_core::{Rng, SeedableRng};
+use serde::Serialize;
+
+use crate::body::{joint, BodyModel, BodyParams};
+use crate::math::random::{normal_samples, uniform_open01};
+use crate::math::{Affine3, Vec3};
+use crate::motion::cvae::infer::{DecodeError, InferBackend};
+use crate::motion::cvae::rig::RigGeometry;
+use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
+use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::policy::env::SeedBank;
+use crate::policy::net::ActorCritic;
+use crate::policy::ppo::act;
+use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
+use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker, OBS_DIM};
+use crate::policy::PosePrior;
+use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
+use crate::sensing::{RayScan, RayScanSettings};
+
+/// New frames per primitive (the seed frames are the previous primitive's last).
+pub const NEW_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
+
+/// How an agent chooses its next primitive.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Steering {
+    /// The trained policy: an action sampled from π, or its mean.
+    Policy { mean_action: bool },
+    /// The best of `k` random latents by the environment's reward (one primitive ahead).
+    Sampling { k: usize },
+}
+
+/// One agent of a crowd, as planned.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AgentPlan {
+    pub name: String,
+    /// Shape coefficients (standard deviations).
+    pub betas: Vec<f64>,
+    pub start: DVec2,
+    /// Walking direction of the first seed (rad from +x); `None`: towards the first goal.
+    pub facing_rad: Option<f64>,
+    pub goals: Vec<DVec2>,
+    /// Draw new goals when the list runs out.
+    pub wander: bool,
+    pub steering: Steering,
+}
+
+/// How a crowd walks.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct CrowdSettings {
+    /// A goal is reached when the pelvis comes this close (m, horizontal).
+    pub success_m: f64,
+    /// Primitives an agent spends on one goal before it is missed.
+    pub max_primitives_per_goal: usize,
+    /// Primitives per agent in the take (all agents step together).
+    pub primitives: usize,
+    /// Stop as soon as every agent is done (no goals left, fallen or failed).
+    pub stop_when_done: bool,
+    /// Distance of a wandering agent's new goal (m).
+    pub wander_distance_m: (f64, f64),
+    /// Free space around sampled goals (m to the nearest non-walkable cell).
+    pub clearance_m: f64,
+    pub seed: u64,
+}
+
+impl Default for CrowdSettings {
+    fn default() -> Self {
+        Self {
+            success_m: 0.3,
+            max_primitives_per_goal: 20,
+            primitives: 20,
+            stop_when_done: true,
+            wander_distance_m: (2.0, 5.0),
+            clearance_m: 0.4,
+            seed: 0,
+        }
+    }
+}
+
+/// The world a crowd walks in: the walkable map, static 2D obstacles and obstacles that move
+/// on the take's clock (time 0 at the first seed frame).
+#[derive(Debug, Clone)]
+pub struct CrowdWorld<'a> {
+    pub map: &'a WalkableMap,
+    pub obstacles: Vec<Obstacle2>,
+    pub moving: Vec<MovingObstacle>,
+}
+
+/// The loaded parts a crowd needs.
+pub struct CrowdParts<'m> {
+    pub model: &'m MotionModel,
+    pub body_model: &'m BodyModel,
+    pub prior: &'m PosePrior,
+    pub bank: &'m SeedBank,
+    /// Needed when an agent is steered by the policy.
+    pub policy: Option<&'m ActorCritic<InferBackend>>,
+}
+
+/// Why an agent stopped before the take ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AgentState {
+    /// Still walking when the take ended.
+    Walking,
+    /// No goals left (all reached or missed).
+    Done,
+    /// The head came below half the standing head height.
+    Fell,
+    /// The decoder produced a non-finite primitive.
+    DecoderFailure,
+}
+
+/// One goal an agent walked to.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GoalRecord {
+    pub goal: [f64; 2],
+    pub reached: bool,
+    /// Primitives spent on it.
+    pub primitives: usize,
+    /// Frame at which it was reached or given up.
+    pub end_frame: usize,
+    pub final_distance_m: f64,
+}
+
+/// What an agent did: every frame of its body at 40 Hz, eye frames and markers, goals.
+#[derive(Debug, Clone, Serialize)]
+pub struct AgentTrack {
+    pub name: String,
+    pub betas: Vec<f64>,
+    pub steering: Steering,
+    #[serde(skip)]
+    pub frames: Vec<BodyParams>,
+    #[serde(skip)]
+    pub world_from_cpf: Vec<Affine3>,
+    #[serde(skip)]
+    pub markers: Vec<Vec<Vec3>>,
+    /// Horizontal pelvis position per frame.
+    #[serde(skip)]
+    pub pelvis_xy: Vec<DVec2>,
+    pub goals: Vec<GoalRecord>,
+    pub state: AgentState,
+    /// First frame of the held pose, when the agent stopped before the take ended.
+    pub stopped_at_frame: Option<usize>,
+    /// Primitives taken.
+    pub primitives: usize,
+    /// Mean foot contact (3-D, Eq. 12) over the primitives.
+    pub contact: f64,
+    /// Share of new frames with a body marker inside a static obstacle, a moving obstacle or
+    /// another agent's 2D box.
+    pub penetration_share: f64,
+    /// Horizontal walking speed over the primitives taken (m/s).
+    pub speed_m_s: f64,
+}
+
+/// What went wrong running a crowd.
+#[derive(Debug, thiserror::Error)]
+pub enum CrowdError {
+    #[error("agent {agent}: {message}")]
+    Agent { agent: String, message: String },
+    #[error(transparent)]
+    Decode(#[from] DecodeError),
+}
+
+struct Agent<'m> {
+    plan: AgentPlan,
+    body: BodyContext<'m>,
+    foot_markers: Vec<usize>,
+    standing_head_m: f64,
+    walker: Walker,
+    goal: DVec2,
+    goal_steps: usize,
+    next_goal: usize,
+    rng: ChaCha8Rng,
+    track: AgentTrack,
+}
+
+fn agent_rng(seed: u64, i: usize) -> ChaCha8Rng {
+    ChaCha8Rng::seed_from_u64(
+        seed.rotate_left(17) ^ (i as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03),
+    )
+}
+
+/// A point on the walkable map with `clearance_m` of free space, uniform over such cells.
+pub fn sample_point(map: &WalkableMap, clearance_m: f64, rng: &mut ChaCha8Rng) -> Option<DVec2> {
+    let cells: Vec<usize> = (0..map.nx * map.ny)
+        .filter(|&k| map.walkable[k] && map.sdf_m[k] >= clearance_m)
+        .collect();
+    if cells.is_empty() {
+        return None;
+    }
+    let k = cells[(rng.next_u64() % cells.len() as u64) as usize];
+    Some(map.centre(k % map.nx, k / map.nx))
+}
+
+/// A goal on the walkable map, in the same connected region as `from`, `distance_m` away,
+/// with `clearance_m` of free space; `None` when the map has none after many draws.
+pub fn sample_goal(
+    map: &WalkableMap,
+    from: DVec2,
+    distance_m: (f64, f64),
+    clearance_m: f64,
+    rng: &mut ChaCha8Rng,
+) -> Option<DVec2> {
+    let component = map
+        .cell_of(from)
+        .map(|(i, j)| map.component[j * map.nx + i])
+        .unwrap_or(0);
+    for _ in 0..2000 {
+        let d = distance_m.0 + (distance_m.1 - distance_m.0) * uniform_open01(rng);
+        let a = std::f64::consts::TAU * uniform_open01(rng);
+        let p = from + DVec2::from_angle(a) * d;
+        let Some((i, j)) = map.cell_of(p) else {
+            continue;
+        };
+        let k = j * map.nx + i;
+        if map.walkable[k]
+            && map.sdf_m[k] >= clearance_m
+            && (component == 0 || map.component[k] == component)
+        {
+            return Some(p);
+        }
+    }
+    None
+}
+
+impl<'m> Agent<'m> {
+    fn new(
+        parts: &CrowdParts<'m>,
+        map: &WalkableMap,
+        plan: &AgentPlan,
+        index: usize,
+        settings: &CrowdSettings,
+    ) -> Result<Self, CrowdError> {
+        let err = |message: String| CrowdError::Agent {
+            agent: plan.name.clone(),
+            message,
+        };
+        if parts.bank.seeds.is_empty() {
+            return Err(err("the seed bank is empty".into()));
+        }
+        if matches!(plan.steering, Steering::Policy { .. }) && parts.policy.is_none() {
+            return Err(err("steered by the policy, but no policy was loaded".into()));
+        }
+        let body = BodyContext::new(parts.body_model, &plan.betas)
+            .map_err(|e| err(format!("betas: {e}")))?;
+        let foot_markers = RigGeometry::new(body.model, &body.betas)
+            .map_err(|e| err(format!("body: {e}")))?
+            .foot_markers;
+        let mut rng = agent_rng(settings.seed, index);
+        let mut goals = plan.goals.iter().copied();
+        let goal = match goals.next() {
+            Some(g) => g,
+            None => sample_goal(
+                map,
+                plan.start,
+                settings.wander_distance_m,
+                settings.clearance_m,
+                &mut rng,
+            )
+            .ok_or_else(|| err("no goal given and none could be drawn around the start".into()))?,
+        };
+        let (frames, floor) =
+            &parts.bank.seeds[(rng.next_u64() % parts.bank.seeds.len() as u64) as usize];
+        let to_goal = goal - plan.start;
+        let facing = plan
+            .facing_rad
+            .unwrap_or_else(|| to_goal.y.atan2(to_goal.x));
+        let rest_pelvis = body.shaped.rest_joints[joint::PELVIS];
+        let mut seed = place_seed(
+            frames,
+            *floor,
+            plan.start,
+            facing,
+            map.floor_z_m,
+            rest_pelvis,
+        );
+        // The bank's floor is the mocap body's; a body of another shape stands its lowest foot
+        // marker at the same height over the floor.
+        let neutral =
+            BodyContext::new(parts.body_model, &[]).map_err(|e| err(format!("body: {e}")))?;
+        let lowest = |b: &BodyContext, s: &crate::motion::cvae::PrimitiveSeed| {
+            s.frames
+                .iter()
+                .map(|f| {
+                    b.shaped
+                        .marker_frame(&f.pose, f.transl, &b.marker_ids)
+                        .map(|m| m.markers.iter().map(|v| v.z).fold(f64::INFINITY, f64::min))
+                })
+                .try_fold(f64::INFINITY, |acc, z| z.map(|z| acc.min(z)))
+        };
+        let neutral_seed = place_seed(
+            frames,
+            *floor,
+            plan.start,
+            facing,
+            map.floor_z_m,
+            neutral.shaped.rest_joints[joint::PELVIS],
+        );
+        let dz = lowest(&neutral, &neutral_seed).map_err(DecodeError::from)?
+            - lowest(&body, &seed).map_err(DecodeError::from)?;
+        for f in &mut seed.frames {
+            f.transl.z += dz;
+        }
+        let view = SeedView::new(&body, seed)?;
+        let f0 = &view.seed.frames[0];
+        let standing_head_m = body
+            .shaped
+            .skeleton(&f0.pose, f0.transl)
+            .map_err(DecodeError::from)?
+            .joints[joint::HEAD]
+            .z
+            - map.floor_z_m;
+        let walker = Walker::new(view.clone(), goal);
+        let mut track = AgentTrack {
+            name: plan.name.clone(),
+            betas: plan.betas.clone(),
+            steering: plan.steering,
+            frames: view.seed.frames.to_vec(),
+            world_from_cpf: view.world_from_cpf.to_vec(),
+            markers: view.markers.to_vec(),
+            pelvis_xy: vec![view.pelvis; SEED_FRAMES],
+            goals: Vec::new(),
+            state: AgentState::Walking,
+            stopped_at_frame: None,
+            primitives: 0,
+            contact: 0.0,
+            penetration_share: 0.0,
+            speed_m_s: 0.0,
+        };
+        track
+            .frames
+            .iter_mut()
+            .for_each(|f| f.betas = plan.betas.clone());
+        Ok(Self {
+            plan: plan.clone(),
+            body,
+            foot_markers,
+            standing_head_m,
+            walker,
+            goal,
+            goal_steps: 0,
+            next_goal: 1,
+            rng,
+            track,
+        })
+    }
+
+    fn active(&self) -> bool {
+        self.track.state == AgentState::Walking
+    }
+
+    fn head_height_m(&self, p: &DecodedPrimitive) -> f64 {
+        let last = &p.joints[p.joints.len() - 1];
+        last[joint::HEAD].z - p.floor_z
+    }
+
+    /// Chooses, decodes and judges the next primitive.
+    fn choose(
+        &mut self,
+        parts: &CrowdParts,
+        scan: &RayScan,
+        around: &Surroundings,
+        t0_s: f64,
+        settings: &CrowdSettings,
+    ) -> Result<Option<(DecodedPrimitive, Judged, f64)>, CrowdError> {
+        let l = parts.model.latent_dim();
+        let latents: Vec<Vec<f32>> = match self.plan.steering {
+            Steering::Policy { mean_action } => {
+                let net = parts.policy.expect("checked when the agent was made");
+                let mut obs = vec![0f32; OBS_DIM];
+                let time_left =
+                    1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
+                self.walker.observe_into(
+                    &self.body,
+                    scan,
+                    self.goal,
+                    around,
+                    t0_s,
+                    time_left.max(0.0),
+                    &mut obs,
+                );
+                let rng = (!mean_action).then_some(&mut self.rng);
+                let (a, ..) = act(net, obs, rng, &Default::default());
+                vec![a]
+            }
+            Steering::Sampling { k } => normal_samples(&mut self.rng, k.max(1) * l)
+                .chunks(l)
+                .map(<[f32]>::to_vec)
+                .collect(),
+        };
+        let seeds = vec![self.walker.view.seed.clone(); latents.len()];
+        let decoded = parts.model.decode_each(&self.body, &seeds, &latents)?;
+        let limits = Limits {
+            success_m: settings.success_m,
+            penetration_cells: 3,
+        };
+        let weights = RewardWeights::default();
+        let situation = self.walker.situation(around, self.goal, t0_s);
+        let mut best: Option<(DecodedPrimitive, Judged, f64)> = None;
+        for d in decoded {
+            match d {
+                Ok(p) => {
+                    let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
+                    let r = j.terms.total(&weights);
+                    let r = if r.is_finite() { r } else { f64::NEG_INFINITY };
+                    if best.as_ref().is_none_or(|b| r > b.2) {
+                        best = Some((p, j, r));
+                    }
+                }
+                Err(DecodeError::NonFinite { .. }) => {}
+                Err(e) => return Err(e.into()),
+            }
+        }
+        Ok(best)
+    }
+
+    /// Takes the chosen primitive and moves on to the next goal when this one is over.
+    fn take(
+        &mut self,
+        p: DecodedPrimitive,
+        j: Judged,
+        reward: f64,
+        map: &WalkableMap,
+        settings: &CrowdSettings,
+    ) {
+        self.walker.advance(&p, &j, reward);
+        self.goal_steps += 1;
+        self.track.primitives += 1;
+        for k in SEED_FRAMES..p.world.len() {
+            let mut f = p.world[k].clone();
+            f.betas = self.plan.betas.clone();
+            self.track.frames.push(f);
+            self.track.world_from_cpf.push(p.world_from_cpf[k]);
+            self.track.markers.push(p.markers[k].clone());
+            let q = p.joints[k][joint::PELVIS];
+            self.track.pelvis_xy.push(DVec2::new(q.x, q.y));
+        }
+        let frame = self.track.frames.len() - 1;
+        if self.head_height_m(&p) < 0.5 * self.standing_head_m {
+            self.stop(AgentState::Fell);
+            return;
+        }
+        let reached = j.distance_m < settings.success_m;
+        if !reached && self.goal_steps < settings.max_primitives_per_goal {
+            return;
+        }
+        self.track.goals.push(GoalRecord {
+            goal: self.goal.to_array(),
+            reached,
+            primitives: self.goal_steps,
+            end_frame: frame,
+            final_distance_m: j.distance_m,
+        });
+        let next = match self.plan.goals.get(self.next_goal) {
+            Some(&g) => Some(g),
+            None if self.plan.wander => sample_goal(
+                map,
+                self.walker.view.pelvis,
+                settings.wander_distance_m,
+                settings.clearance_m,
+                &mut self.rng,
+            ),
+            None => None,
+        };
+        self.next_goal += 1;
+        match next {
+            Some(g) => {
+                self.goal = g;
+                self.goal_steps = 0;
+                self.walker.retarget(g);
+            }
+            None => self.stop(AgentState::Done),
+        }
+    }
+
+    fn stop(&mut self, state: AgentState) {
+        self.track.state = state;
+        self.track.stopped_at_frame = Some(self.track.frames.len());
+    }
+
+    /// Holds the last pose until the take has `frames` frames; closes the summary.
+    fn finish(mut self, frames: usize) -> AgentTrack {
+        let t = &mut self.track;
+        while t.frames.len() < frames {
+            t.frames.push(t.frames[t.frames.len() - 1].clone());
+            t.world_from_cpf
+                .push(t.world_from_cpf[t.world_from_cpf.len() - 1]);
+            t.markers.push(t.markers[t.markers.len() - 1].clone());
+            t.pelvis_xy.push(t.pelvis_xy[t.pelvis_xy.len() - 1]);
+        }
+        let w = &self.walker;
+        let n = w.steps.max(1) as f64;
+        t.contact = w.totals.contact / n;
+        t.penetration_share = w.totals.frames_in_obstacle as f64 / w.totals.frames.max(1) as f64;
+        t.speed_m_s = w.speed_m_s();
+        self.track
+    }
+}
+
+/// A finished take: every agent's track, all of the same length.
+#[derive(Debug, Clone, Serialize)]
+pub struct CrowdTake {
+    pub frames: usize,
+    pub frame_rate_hz: f64,
+    pub primitives: usize,
+    pub agents: Vec<AgentTrack>,
+}
+
+/// Runs a crowd (see the module docs); `progress(step, steps)` after every round.
+pub fn run_crowd(
+    parts: &CrowdParts,
+    world: &CrowdWorld,
+    plans: &[AgentPlan],
+    settings: &CrowdSettings,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<CrowdTake, CrowdError> {
+    let mut agents: Vec<Agent> = plans
+        .iter()
+        .enumerate()
+        .map(|(i, p)| Agent::new(parts, world.map, p, i, settings))
+        .collect::<Result<_, _>>()?;
+    let scan = RayScan::new(RayScanSettings::default());
+    let fixed: Vec<MovingObstacle> = world
+        .obstacles
+        .iter()
+        .map(|&o| MovingObstacle {
+            at_start: o,
+            velocity_m_per_s: DVec2::ZERO,
+        })
+        .chain(world.moving.iter().copied())
+        .collect();
+    let mut rounds = 0;
+    for step in 0..settings.primitives {
+        if settings.stop_when_done && !agents.iter().any(Agent::active) {
+            break;
+        }
+        let t0_s = frame_time_s(step, 0);
+        for i in 0..agents.len() {
+            if !agents[i].active() {
+                continue;
+            }
+            // The others' current 2D boxes, still for this primitive.
+            let mut moving = fixed.clone();
+            moving.extend(
+                agents
+                    .iter()
+                    .enumerate()
+                    .filter(|(k, _)| *k != i)
+                    .map(|(_, a)| MovingObstacle {
+                        at_start: a.walker.view.footprint(),
+                        velocity_m_per_s: DVec2::ZERO,
+                    }),
+            );
+            let around = Surroundings {
+                map: world.map,
+                obstacle: None,
+                moving: &moving,
+            };
+            let a = &mut agents[i];
+            match a.choose(parts, &scan, &around, t0_s, settings)? {
+                Some((p, j, r)) => a.take(p, j, r, world.map, settings),
+                None => {
+                    a.walker.fail(0.0);
+                    a.stop(AgentState::DecoderFailure);
+                }
+            }
+        }
+        rounds = step + 1;
+        progress(rounds, settings.primitives);
+    }
+    let frames = SEED_FRAMES + rounds * NEW_FRAMES;
+    Ok(CrowdTake {
+        frames,
+        frame_rate_hz: PRIMITIVE_RATE_HZ,
+        primitives: rounds,
+        agents: agents.into_iter().map(|a| a.finish(frames)).collect(),
+    })
+}

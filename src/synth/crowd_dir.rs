@@ -1,0 +1,331 @@
+//! The folder a crowd take is written to, staged in `<dir>.partial/` and renamed into place
+//! at the end (a failed or killed run never leaves a half-written take under the final name).
+//!
+//! Layout: `agents/<name>/motion.npz` (AMASS-style SMPL-X at 40 fps: `poses` N×165, `trans`,
+//! `betas`, `gender`, `mocap_frame_rate`), `agents/<name>/cpf_trajectory.json`
+//! (`world_from_cpf` per frame), `agents/<name>/markers.npy` (float32 N×67×3, world, m);
+//! `paths.png` (top view: walkable map, obstacles, every agent's pelvis path, starts and goals);
+//! `summary.json` (what was asked, per agent goals and state, totals, wall time);
+//! `manifest.json` (files with sizes and SHA-256).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use glam::DVec2;
+use serde::Serialize;
+
+use super::crowd::{AgentState, AgentTrack, CrowdTake, CrowdWorld};
+use crate::atomic_file::write_atomically;
+use crate::body::BodyModel;
+use crate::manifest::{build_manifest, MANIFEST};
+use crate::math::Affine3;
+use crate::motion::MotionSequence;
+use crate::policy::walker::footprint;
+use crate::preview::map::MapPicture;
+use crate::scene::Obstacle2;
+
+/// What a finished take folder holds.
+#[derive(Debug, Clone, Serialize)]
+pub struct CrowdOutputs {
+    pub dir: PathBuf,
+    pub summary: TakeSummary,
+}
+
+/// Totals over the agents of a take.
+#[derive(Debug, Clone, Serialize)]
+pub struct TakeTotals {
+    pub agents: usize,
+    pub goals: usize,
+    pub goals_reached: usize,
+    pub agents_fallen: usize,
+    pub agents_decoder_failure: usize,
+    /// Mean over agents of their mean foot contact (3-D, Eq. 12).
+    pub contact_mean: f64,
+    /// Mean over agents of the share of new frames with a marker in an obstacle or in
+    /// another agent's 2D box, as judged while walking.
+    pub penetration_share_mean: f64,
+    /// Share of (agent, frame) pairs in which one of the agent's markers lies inside another
+    /// agent's 2D box (the bounding box of that agent's markers in its own horizontal frame) at
+    /// the same frame.
+    pub human_overlap_share: f64,
+    /// Seconds of motion (agents × take length) per wall second.
+    pub agent_seconds_per_wall_s: f64,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct TakeSummary {
+    pub about: serde_json::Value,
+    pub frames: usize,
+    pub frame_rate_hz: f64,
+    pub primitives: usize,
+    pub wall_s: f64,
+    pub totals: TakeTotals,
+    pub agents: Vec<AgentTrack>,
+}
+
+/// Refuses an output folder that exists and is not empty (nothing is overwritten), or a
+/// `.partial` folder beside it that is not a take's leftover.
+pub fn check_out_dir(dir: &Path) -> Result<()> {
+    if dir.exists()
+        && std::fs::read_dir(dir)
+            .map(|mut d| d.next().is_some())
+            .unwrap_or(true)
+    {
+        bail!(
+            "output folder {} already exists and is not empty; choose another `output.dir` (nothing was written)",
+            dir.display()
+        );
+    }
+    let staging = staging_dir(dir);
+    if staging.exists() && !is_take_leftover(&staging) {
+        bail!(
+            "{} exists and is not an interrupted synth take; move it away or delete it (nothing was touched)",
+            staging.display()
+        );
+    }
+    Ok(())
+}
+
+fn staging_dir(dir: &Path) -> PathBuf {
+    PathBuf::from(format!("{}.partial", dir.display()))
+}
+
+const TAKE_ENTRIES: [&str; 4] = ["agents", "paths.png", "summary.json", "manifest.json"];
+
+fn is_take_leftover(dir: &Path) -> bool {
+    super::sequence_dir::holds_only(dir, &TAKE_ENTRIES)
+}
+
+/// A progress bar over the take's rounds (hidden when `show` is false; plain lines when
+/// standard error is not a terminal).
+pub fn progress_bar(show: bool, rounds: usize) -> Result<indicatif::ProgressBar> {
+    if !show {
+        return Ok(indicatif::ProgressBar::hidden());
+    }
+    let bar = indicatif::ProgressBar::new(rounds as u64).with_style(
+        indicatif::ProgressStyle::with_template(
+            "synth {bar:30} {pos}/{len} primitives per agent [{elapsed_precise} < {eta_precise}]",
+        )
+        .context("progress template")?,
+    );
+    Ok(bar)
+}
+
+/// Share of (agent, frame) pairs with a marker inside another agent's 2D box.
+pub fn human_overlap_share(agents: &[AgentTrack]) -> f64 {
+    let frames = agents.iter().map(|a| a.frames.len()).min().unwrap_or(0);
+    if agents.len() < 2 || frames == 0 {
+        return 0.0;
+    }
+    let mut hits = 0usize;
+    for f in 0..frames {
+        let boxes: Vec<Obstacle2> = agents
+            .iter()
+            .map(|a| footprint(a.markers[f].iter(), &a.world_from_cpf[f], a.pelvis_xy[f]))
+            .collect();
+        for (i, a) in agents.iter().enumerate() {
+            let inside = a.markers[f].iter().any(|m| {
+                let q = m.truncate();
+                boxes
+                    .iter()
+                    .enumerate()
+                    .any(|(k, b)| k != i && b.contains(q))
+            });
+            hits += usize::from(inside);
+        }
+    }
+    hits as f64 / (frames * agents.len()) as f64
+}
+
+#[derive(Serialize)]
+struct CpfFrame {
+    frame: usize,
+    time_s: f64,
+    /// Row-major 4×4 `world_from_cpf` (CPF axes: x left, y up, z forward).
+    world_from_cpf: [[f64; 4]; 4],
+}
+
+fn cpf_json(frames: &[Affine3], rate_hz: f64) -> Result<Vec<u8>> {
+    let cpf: Vec<CpfFrame> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, m)| CpfFrame {
+            frame: i,
+            time_s: i as f64 / rate_hz,
+            world_from_cpf: glam::DMat4::from(*m).transpose().to_cols_array_2d(),
+        })
+        .collect();
+    Ok(serde_json::to_vec_pretty(&cpf)?)
+}
+
+fn markers_npy(track: &AgentTrack) -> Result<Vec<u8>> {
+    let n = track.markers.len() as u64;
+    let m = track.markers.first().map_or(0, Vec::len) as u64;
+    let mut bytes = Vec::new();
+    {
+        use npyz::WriterBuilder;
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(&[n, m, 3])
+            .writer(&mut bytes)
+            .begin_nd()?;
+        for frame in &track.markers {
+            for v in frame {
+                for c in v.to_array() {
+                    w.push(&(c as f32))?;
+                }
+            }
+        }
+        w.finish()?;
+    }
+    Ok(bytes)
+}
+
+/// Colours of agents' paths, in turn.
+const PALETTE: [[u8; 3]; 8] = [
+    [31, 119, 180],
+    [214, 39, 40],
+    [44, 160, 44],
+    [148, 103, 189],
+    [255, 127, 14],
+    [23, 190, 207],
+    [227, 119, 194],
+    [140, 86, 75],
+];
+
+fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
+    let mut pic = MapPicture::new(world.map, 900);
+    for o in &world.obstacles {
+        pic.obstacle(o, [120, 30, 30]);
+    }
+    let end_s = take.frames as f64 / take.frame_rate_hz;
+    for m in &world.moving {
+        pic.obstacle(&m.at(0.0), [200, 150, 150]);
+        pic.obstacle(&m.at(end_s), [120, 30, 30]);
+        pic.line(m.at(0.0).centre(), m.at(end_s).centre(), [200, 150, 150]);
+    }
+    for (i, a) in take.agents.iter().enumerate() {
+        let c = PALETTE[i % PALETTE.len()];
+        for w in a.pelvis_xy.windows(2) {
+            pic.line(w[0], w[1], c);
+        }
+        for g in &a.goals {
+            let p = DVec2::from_array(g.goal);
+            pic.dot(p, 5, c);
+            if !g.reached {
+                pic.dot(p, 2, [255, 255, 255]);
+            }
+        }
+        if let Some(&s) = a.pelvis_xy.first() {
+            pic.dot(s, 4, [0, 0, 0]);
+            pic.dot(s, 2, c);
+        }
+        if let Some(&e) = a.pelvis_xy.last() {
+            let mark = match a.state {
+                AgentState::Fell | AgentState::DecoderFailure => [0, 0, 0],
+                _ => c,
+            };
+            pic.obstacle(
+                &Obstacle2::Circle {
+                    centre: e,
+                    radius_m: 0.15,
+                },
+                mark,
+            );
+        }
+    }
+    pic.image.write_png(path)?;
+    Ok(())
+}
+
+/// Writes a take folder (see the module docs); `dir` must pass [`check_out_dir`].
+pub fn write_crowd_dir(
+    dir: &Path,
+    world: &CrowdWorld,
+    body: &BodyModel,
+    take: &CrowdTake,
+    wall_s: f64,
+    about: serde_json::Value,
+) -> Result<CrowdOutputs> {
+    check_out_dir(dir)?;
+    let staging = staging_dir(dir);
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging)
+            .with_context(|| format!("removing stale {}", staging.display()))?;
+    }
+    for a in &take.agents {
+        let folder = staging.join("agents").join(&a.name);
+        std::fs::create_dir_all(&folder)
+            .with_context(|| format!("creating {}", folder.display()))?;
+        let motion = MotionSequence {
+            frame_rate_hz: take.frame_rate_hz,
+            betas: a.betas.clone(),
+            gender: "neutral".into(),
+            poses: a.frames.iter().map(|f| f.pose).collect(),
+            trans: a.frames.iter().map(|f| f.transl).collect(),
+        };
+        motion.write_amass(&folder.join("motion.npz"))?;
+        write_atomically(
+            &folder.join("cpf_trajectory.json"),
+            &cpf_json(&a.world_from_cpf, take.frame_rate_hz)?,
+        )?;
+        write_atomically(&folder.join("markers.npy"), &markers_npy(a)?)?;
+    }
+    paths_png(world, take, &staging.join("paths.png"))?;
+    let n = take.agents.len().max(1) as f64;
+    let totals = TakeTotals {
+        agents: take.agents.len(),
+        goals: take.agents.iter().map(|a| a.goals.len()).sum(),
+        goals_reached: take
+            .agents
+            .iter()
+            .map(|a| a.goals.iter().filter(|g| g.reached).count())
+            .sum(),
+        agents_fallen: take
+            .agents
+            .iter()
+            .filter(|a| a.state == AgentState::Fell)
+            .count(),
+        agents_decoder_failure: take
+            .agents
+            .iter()
+            .filter(|a| a.state == AgentState::DecoderFailure)
+            .count(),
+        contact_mean: take.agents.iter().map(|a| a.contact).sum::<f64>() / n,
+        penetration_share_mean: take.agents.iter().map(|a| a.penetration_share).sum::<f64>() / n,
+        human_overlap_share: human_overlap_share(&take.agents),
+        agent_seconds_per_wall_s: take.agents.len() as f64 * take.frames as f64
+            / take.frame_rate_hz
+            / wall_s.max(1e-9),
+    };
+    let summary = TakeSummary {
+        about,
+        frames: take.frames,
+        frame_rate_hz: take.frame_rate_hz,
+        primitives: take.primitives,
+        wall_s,
+        totals,
+        agents: take.agents.clone(),
+    };
+    let mut summary_json = serde_json::to_value(&summary)?;
+    summary_json["body_model"] = serde_json::to_value(&body.source)?;
+    write_atomically(
+        &staging.join("summary.json"),
+        &serde_json::to_vec_pretty(&summary_json)?,
+    )?;
+    let listed = build_manifest(&staging)?;
+    write_atomically(
+        &staging.join(MANIFEST),
+        &serde_json::to_vec_pretty(&listed)?,
+    )?;
+    if dir.exists() {
+        std::fs::remove_dir(dir)?;
+    }
+    std::fs::rename(&staging, dir)
+        .with_context(|| format!("moving {} into place", staging.display()))?;
+    Ok(CrowdOutputs {
+        dir: dir.into(),
+        summary,
+    })
+}
