@@ -22,6 +22,7 @@ pub mod paths;
 pub mod plan;
 pub mod policy;
 pub mod preview;
+pub mod progress;
 pub mod render;
 pub mod rig;
 pub mod scene;

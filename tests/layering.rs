@@ -15,6 +15,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("parser_guard", &[]),
     ("npz", &[]),
     ("exr_file", &[]),
+    ("progress", &[]),
     ("manifest", &["atomic_file"]),
     ("vertex_cache", &["atomic_file"]),
     // Things in the world.
@@ -63,6 +64,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "atomic_file",
             "npz",
             "vertex_cache",
+            "progress",
         ],
     ),
     (
@@ -101,6 +103,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "inspect",
             "preview",
             "plan",
+            "progress",
         ],
     ),
     // Configs and commands: may use everything but the supervisor.
@@ -127,6 +130,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "render",
             "inspect",
             "plan",
+            "progress",
         ],
     ),
 ];

@@ -658,7 +658,7 @@ pub fn run_synth(
         obstacles: plan.obstacles.clone(),
         moving: plan.moving.clone(),
     };
-    let bar = crate::synth::crowd_dir::progress_bar(progress, plan.settings.primitives)?;
+    let bar = crate::synth::crowd_dir::progress_bar(progress, plan.settings.primitives);
     let started = std::time::Instant::now();
     let take = run_crowd(&parts, &world, &agents, &plan.settings, |done, _| {
         bar.set_position(done as u64)

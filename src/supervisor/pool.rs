@@ -2,12 +2,10 @@
 //! (local processes or a Slurm array), the report of what each shard attempt did, and the
 //! rendering progress bar.
 
-use std::io::IsTerminal;
 use std::sync::Arc;
-use std::time::Duration;
 
 use anyhow::{Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use serde::Serialize;
 
 use super::dataset::{Dataset, Shard};
@@ -68,42 +66,14 @@ impl PoolReport {
 
 /// The rendering progress bar: frames done of all planned, ETA, and a status message.
 pub fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
-    let bar = ProgressBar::new(total).with_style(
-        ProgressStyle::with_template(
-            "rendering {bar:30} {pos}/{len} frames [{elapsed_precise} < {eta_precise}] {msg}",
-        )
-        .context("progress template")?,
-    );
-    bar.set_position(done);
-    if !std::io::stderr().is_terminal() {
-        // A farm log or a file: no bar is drawn there, so a plain line every few seconds.
-        let weak = bar.downgrade();
-        let every = std::env::var("EGOGEN_PROGRESS_EVERY_S")
-            .ok()
-            .and_then(|s| s.parse::<f64>().ok())
-            .filter(|s| s.is_finite() && *s > 0.0)
-            .map_or(PLAIN_PROGRESS_EVERY, Duration::from_secs_f64);
-        std::thread::spawn(move || loop {
-            std::thread::sleep(every);
-            let Some(bar) = weak.upgrade() else { break };
-            if bar.is_finished() {
-                break;
-            }
-            eprintln!(
-                "egogen-run: rendering {}/{} frames, {} s elapsed, about {} s left",
-                bar.position(),
-                bar.length().unwrap_or(0),
-                bar.elapsed().as_secs(),
-                bar.eta().as_secs()
-            );
-        });
-    }
-    Ok(bar)
+    Ok(crate::progress::progress_bar(
+        "egogen-run",
+        "rendering",
+        "frames",
+        total,
+        done,
+    ))
 }
-
-/// How often progress is printed when standard error is not a terminal (the environment
-/// variable `EGOGEN_PROGRESS_EVERY_S` overrides it).
-const PLAIN_PROGRESS_EVERY: Duration = Duration::from_secs(10);
 
 /// Exit status of `render_shard.py` when the spec or the scene cannot be loaded: a failure
 /// that would repeat on every try.

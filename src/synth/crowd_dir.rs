@@ -97,19 +97,18 @@ fn is_take_leftover(dir: &Path) -> bool {
     super::sequence_dir::holds_only(dir, &TAKE_ENTRIES)
 }
 
-/// A progress bar over the take's rounds (hidden when `show` is false; plain lines when
-/// standard error is not a terminal).
-pub fn progress_bar(show: bool, rounds: usize) -> Result<indicatif::ProgressBar> {
-    if !show {
-        return Ok(indicatif::ProgressBar::hidden());
+/// A progress bar over the take's rounds (hidden when `show` is false).
+pub fn progress_bar(show: bool, rounds: usize) -> indicatif::ProgressBar {
+    match show {
+        true => crate::progress::progress_bar(
+            "egogen synth",
+            "walking",
+            "primitives per agent",
+            rounds as u64,
+            0,
+        ),
+        false => indicatif::ProgressBar::hidden(),
     }
-    let bar = indicatif::ProgressBar::new(rounds as u64).with_style(
-        indicatif::ProgressStyle::with_template(
-            "synth {bar:30} {pos}/{len} primitives per agent [{elapsed_precise} < {eta_precise}]",
-        )
-        .context("progress template")?,
-    );
-    Ok(bar)
 }
 
 /// Share of (agent, frame) pairs with a marker inside another agent's 2D box.

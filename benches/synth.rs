@@ -1,0 +1,99 @@
+//! Crowd synthesis speed (paper Alg. 1, `egogen synth`): one take of 8 primitives per agent
+//! (3.65 s of motion) on an open 12 m floor, agents on a circle walking to the opposite points,
+//! for 1, 4 and 16 agents steered by the shipped policy, and for one agent steered by the best of
+//! K = 16 random latents (the no-training controller). Throughput is in frames of motion at
+//! 40 Hz summed over agents: divide by 40 for seconds of motion per wall second.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use egogen::body::BodyModel;
+use egogen::motion::cvae::infer::InferBackend;
+use egogen::motion::cvae::train::shipped_weights_path;
+use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
+use egogen::motion::MotionSequence;
+use egogen::policy::pose_prior::shipped_pose_prior_path;
+use egogen::policy::{PosePrior, SeedBank};
+use egogen::scene::WalkableMap;
+use egogen::synth::crowd::{
+    run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering, NEW_FRAMES,
+};
+use glam::DVec2;
+
+const PRIMITIVES: usize = 8;
+
+fn circle(n: usize, radius_m: f64, steering: Steering) -> Vec<AgentPlan> {
+    (0..n)
+        .map(|i| {
+            let p = DVec2::from_angle(std::f64::consts::TAU * i as f64 / n as f64) * radius_m;
+            AgentPlan {
+                name: format!("a{i}"),
+                betas: Vec::new(),
+                start: p,
+                facing_rad: None,
+                goals: vec![-p],
+                wander: false,
+                steering,
+            }
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let model = MotionModel::load(shipped_weights_path()).expect("primitive weights");
+    let body = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let clip = MotionSequence::read(&root.join("assets/motion/cmu_01_03.npz")).unwrap();
+    let seeds: Vec<PrimitiveSeed> = (0..16)
+        .map(|i| PrimitiveSeed {
+            frames: [clip.frame(30 * i + 20), clip.frame(30 * i + 21)],
+            floor_z: 0.0,
+        })
+        .collect();
+    let bank = SeedBank::from_world_seeds(&ctx, &seeds).unwrap();
+    let prior = PosePrior::load(&shipped_pose_prior_path()).unwrap();
+    let (_, policy) = egogen::policy::ppo::load_policy::<InferBackend>(
+        &root.join("assets/policy/policy.safetensors"),
+        &Default::default(),
+    )
+    .unwrap();
+    let parts = CrowdParts {
+        model: &model,
+        body_model: &body,
+        prior: &prior,
+        bank: &bank,
+        policy: Some(&policy),
+    };
+    let n = 120;
+    let map = WalkableMap::from_walkable(DVec2::splat(-6.0), 0.1, n, n, vec![true; n * n]);
+    let world = CrowdWorld {
+        map: &map,
+        obstacles: Vec::new(),
+        moving: Vec::new(),
+    };
+    let settings = CrowdSettings {
+        primitives: PRIMITIVES,
+        stop_when_done: false,
+        max_primitives_per_goal: 100,
+        ..CrowdSettings::default()
+    };
+    let mut g = c.benchmark_group("synth_crowd");
+    g.sample_size(10);
+    let policy = Steering::Policy { mean_action: false };
+    let cases = [
+        ("policy", 1usize, policy),
+        ("policy", 4, policy),
+        ("policy", 16, policy),
+        ("sampling_k16", 1, Steering::Sampling { k: 16 }),
+    ];
+    for (name, agents, steering) in cases {
+        let plans = circle(agents, 4.0, steering);
+        g.throughput(Throughput::Elements((agents * PRIMITIVES * NEW_FRAMES) as u64));
+        g.bench_with_input(BenchmarkId::new(name, agents), &agents, |b, _| {
+            b.iter(|| run_crowd(&parts, &world, &plans, &settings, |_, _| {}).unwrap())
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
