@@ -67,6 +67,7 @@ fn bench(c: &mut Criterion) {
     let map = WalkableMap::from_walkable(DVec2::splat(-6.0), 0.1, n, n, vec![true; n * n]);
     let world = CrowdWorld {
         map: &map,
+        region: None,
         obstacles: Vec::new(),
         moving: Vec::new(),
     };
@@ -87,7 +88,9 @@ fn bench(c: &mut Criterion) {
     ];
     for (name, agents, steering) in cases {
         let plans = circle(agents, 4.0, steering);
-        g.throughput(Throughput::Elements((agents * PRIMITIVES * NEW_FRAMES) as u64));
+        g.throughput(Throughput::Elements(
+            (agents * PRIMITIVES * NEW_FRAMES) as u64,
+        ));
         g.bench_with_input(BenchmarkId::new(name, agents), &agents, |b, _| {
             b.iter(|| run_crowd(&parts, &world, &plans, &settings, |_, _| {}).unwrap())
         });

@@ -35,6 +35,9 @@ pub struct RawSynthScene {
     pub path: Option<PathBuf>,
     /// Side of the open square floor centred on the origin (m, default 8).
     pub floor_m: Option<f64>,
+    /// Draw starts and goals inside the walls only (default true): the ground around a
+    /// building is not where its people walk.
+    pub indoors: Option<bool>,
 }
 
 /// `[motion]`.
@@ -168,6 +171,7 @@ pub struct SynthPlan {
     pub body_model: PathBuf,
     pub scene: Option<PathBuf>,
     pub floor_m: f64,
+    pub indoors: bool,
     pub weights: PathBuf,
     pub policy: Option<PathBuf>,
     pub pose_prior: PathBuf,
@@ -492,6 +496,7 @@ pub fn load_synth_plan(path: &Path) -> Result<SynthPlan, ConfigError> {
         body_model,
         scene,
         floor_m,
+        indoors: raw.scene.indoors.unwrap_or(true),
         weights,
         policy,
         pose_prior,
@@ -527,9 +532,26 @@ pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
     }
 }
 
-/// The agents with every start and goal placed: sampled ones on the walkable map (with the
-/// clearance, at least 1 m from every other start); given ones checked to stand on it.
-pub fn place_agents(plan: &SynthPlan, map: &WalkableMap) -> Result<Vec<AgentPlan>> {
+/// Share of a cell's rays that must meet something for it to count as inside the walls.
+pub const MIN_ENCLOSED: f64 = 0.75;
+
+/// Where starts and goals are drawn: inside the walls when the plan asks for it and the scene
+/// encloses anything ([`WalkableMap::indoor_cells`] at [`MIN_ENCLOSED`]), else anywhere
+/// walkable.
+pub fn synth_region(plan: &SynthPlan, map: &WalkableMap) -> Option<Vec<bool>> {
+    plan.indoors
+        .then(|| map.indoor_cells(MIN_ENCLOSED))
+        .flatten()
+}
+
+/// The agents with every start and goal placed: sampled ones on the walkable map (in
+/// `region` when given, with the clearance, at least 1 m from every other start); given ones
+/// checked to stand on it.
+pub fn place_agents(
+    plan: &SynthPlan,
+    map: &WalkableMap,
+    region: Option<&[bool]>,
+) -> Result<Vec<AgentPlan>> {
     let s = &plan.settings;
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0x57A27);
     let mut out: Vec<AgentPlan> = Vec::with_capacity(plan.agents.len());
@@ -551,7 +573,7 @@ pub fn place_agents(plan: &SynthPlan, map: &WalkableMap) -> Result<Vec<AgentPlan
             None => {
                 let mut found = None;
                 for _ in 0..200 {
-                    let Some(p) = sample_point(map, s.clearance_m, &mut rng) else {
+                    let Some(p) = sample_point(map, region, s.clearance_m, &mut rng) else {
                         break;
                     };
                     if out.iter().all(|o| o.start.distance(p) >= 1.0) {
@@ -603,7 +625,8 @@ pub fn run_synth(
     use crate::policy::{PosePrior, SeedBank};
     crate::synth::crowd_dir::check_out_dir(&plan.out_dir)?;
     let map = synth_map(plan)?;
-    let agents = place_agents(plan, &map)?;
+    let region = synth_region(plan, &map);
+    let agents = place_agents(plan, &map, region.as_deref())?;
     let body = crate::body::BodyModel::load(&plan.body_model)?;
     for a in &agents {
         if a.betas.len() > body.num_betas() {
@@ -655,6 +678,7 @@ pub fn run_synth(
     };
     let world = CrowdWorld {
         map: &map,
+        region,
         obstacles: plan.obstacles.clone(),
         moving: plan.moving.clone(),
     };

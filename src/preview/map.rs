@@ -45,6 +45,22 @@ impl<'a> MapPicture<'a> {
         }
     }
 
+    /// Paints the cells where `mask` holds (row-major, the map's grid) in `rgb`.
+    pub fn shade_cells(&mut self, mask: &[bool], rgb: [u8; 3]) {
+        let (map, px) = (self.map, self.px_per_cell);
+        for j in 0..map.ny {
+            for i in 0..map.nx {
+                if mask.get(j * map.nx + i).copied().unwrap_or(false) {
+                    for y in 0..px {
+                        let row = (map.ny - 1 - j) * px + y;
+                        let start = row * self.image.width + i * px;
+                        self.image.pixels[start..start + px].fill(rgb);
+                    }
+                }
+            }
+        }
+    }
+
     fn to_px(&self, p: DVec2) -> DVec2 {
         let q = (p - self.map.origin) / self.map.cell_m * self.px_per_cell as f64;
         DVec2::new(q.x, self.image.height as f64 - q.y)

@@ -228,6 +228,42 @@ impl WalkableMap {
         a * (1.0 - fy) + b * fy
     }
 
+    /// The walkable cells inside the walls: those from which at least `min_enclosed` of 32
+    /// horizontal rays, evenly around, meet something that blocks walking (a wall, furniture)
+    /// before they leave the grid. The ground around a building sees open space on one side
+    /// (about half its rays escape); a room sees walls all round but through its doors and
+    /// openings. `None` when no cell is enclosed (an open floor).
+    pub fn indoor_cells(&self, min_enclosed: f64) -> Option<Vec<bool>> {
+        const RAYS: usize = 32;
+        let dirs: Vec<DVec2> = (0..RAYS)
+            .map(|k| DVec2::from_angle(std::f64::consts::TAU * k as f64 / RAYS as f64))
+            .collect();
+        let step = 0.5 * self.cell_m;
+        let max_steps = (2.0 * (self.nx + self.ny) as f64) as usize;
+        let inside: Vec<bool> = (0..self.nx * self.ny)
+            .map(|k| {
+                if !self.walkable[k] {
+                    return false;
+                }
+                let start = self.centre(k % self.nx, k / self.nx);
+                let hits = dirs
+                    .iter()
+                    .filter(|&&d| {
+                        (1..max_steps).find_map(|s| {
+                            match self.cell_of(start + d * (s as f64 * step)) {
+                                None => Some(false),
+                                Some((i, j)) if self.occupied[j * self.nx + i] => Some(true),
+                                Some(_) => None,
+                            }
+                        }) == Some(true)
+                    })
+                    .count();
+                hits as f64 >= min_enclosed * RAYS as f64
+            })
+            .collect();
+        inside.iter().any(|&i| i).then_some(inside)
+    }
+
     /// Number of walkable cells.
     pub fn walkable_count(&self) -> usize {
         self.walkable.iter().filter(|&&w| w).count()
@@ -467,4 +503,50 @@ fn convex_overlaps_rect(p: &[DVec2], lo: DVec2, hi: DVec2, margin: f64, closed: 
         }
     }
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 10 m square of ground with a 4 m room in the middle: walls one cell thick, a 1 m
+    /// door on the south side.
+    fn room_on_ground() -> WalkableMap {
+        let n = 100;
+        let mut walkable = vec![true; n * n];
+        for k in 30..=70 {
+            for (i, j) in [(k, 30), (k, 70), (30, k), (70, k)] {
+                let door = j == 30 && (45..55).contains(&i);
+                if !door {
+                    walkable[j * n + i] = false;
+                }
+            }
+        }
+        WalkableMap::from_walkable(DVec2::ZERO, 0.1, n, n, walkable)
+    }
+
+    #[test]
+    fn the_inside_of_walls_is_told_from_the_ground_around() {
+        let map = room_on_ground();
+        let inside = map.indoor_cells(0.75).expect("the room encloses cells");
+        let at = |x: f64, y: f64| {
+            let (i, j) = map.cell_of(DVec2::new(x, y)).unwrap();
+            inside[j * map.nx + i]
+        };
+        assert!(at(5.0, 5.0), "room centre");
+        assert!(at(3.5, 6.5), "room corner");
+        assert!(at(5.0, 3.6), "just inside the door");
+        assert!(
+            !at(1.0, 1.0) && !at(9.0, 5.0) && !at(5.0, 1.5),
+            "ground around"
+        );
+        assert!(!at(5.0, 3.0), "a wall is not inside");
+    }
+
+    #[test]
+    fn an_open_floor_encloses_nothing() {
+        let n = 50;
+        let map = WalkableMap::from_walkable(DVec2::ZERO, 0.1, n, n, vec![true; n * n]);
+        assert!(map.indoor_cells(0.75).is_none());
+    }
 }

@@ -101,6 +101,9 @@ impl Default for CrowdSettings {
 #[derive(Debug, Clone)]
 pub struct CrowdWorld<'a> {
     pub map: &'a WalkableMap,
+    /// Cells starts and goals are drawn on (e.g. inside the walls); `None`: every walkable
+    /// cell.
+    pub region: Option<Vec<bool>>,
     pub obstacles: Vec<Obstacle2>,
     pub moving: Vec<MovingObstacle>,
 }
@@ -199,10 +202,22 @@ fn agent_rng(seed: u64, i: usize) -> ChaCha8Rng {
     )
 }
 
-/// A point on the walkable map with `clearance_m` of free space, uniform over such cells.
-pub fn sample_point(map: &WalkableMap, clearance_m: f64, rng: &mut ChaCha8Rng) -> Option<DVec2> {
+/// Whether cell `k` may hold a drawn start or goal: walkable, in the region, with
+/// `clearance_m` of free space.
+fn drawable(map: &WalkableMap, region: Option<&[bool]>, clearance_m: f64, k: usize) -> bool {
+    map.walkable[k] && map.sdf_m[k] >= clearance_m && region.is_none_or(|r| r[k])
+}
+
+/// A point on the walkable map (in `region` when given) with `clearance_m` of free space,
+/// uniform over such cells.
+pub fn sample_point(
+    map: &WalkableMap,
+    region: Option<&[bool]>,
+    clearance_m: f64,
+    rng: &mut ChaCha8Rng,
+) -> Option<DVec2> {
     let cells: Vec<usize> = (0..map.nx * map.ny)
-        .filter(|&k| map.walkable[k] && map.sdf_m[k] >= clearance_m)
+        .filter(|&k| drawable(map, region, clearance_m, k))
         .collect();
     if cells.is_empty() {
         return None;
@@ -215,6 +230,7 @@ pub fn sample_point(map: &WalkableMap, clearance_m: f64, rng: &mut ChaCha8Rng) -
 /// with `clearance_m` of free space; `None` when the map has none after many draws.
 pub fn sample_goal(
     map: &WalkableMap,
+    region: Option<&[bool]>,
     from: DVec2,
     distance_m: (f64, f64),
     clearance_m: f64,
@@ -232,8 +248,7 @@ pub fn sample_goal(
             continue;
         };
         let k = j * map.nx + i;
-        if map.walkable[k]
-            && map.sdf_m[k] >= clearance_m
+        if drawable(map, region, clearance_m, k)
             && (component == 0 || map.component[k] == component)
         {
             return Some(p);
@@ -245,7 +260,7 @@ pub fn sample_goal(
 impl<'m> Agent<'m> {
     fn new(
         parts: &CrowdParts<'m>,
-        map: &WalkableMap,
+        world: &CrowdWorld,
         plan: &AgentPlan,
         index: usize,
         settings: &CrowdSettings,
@@ -270,7 +285,8 @@ impl<'m> Agent<'m> {
         let goal = match goals.next() {
             Some(g) => g,
             None => sample_goal(
-                map,
+                world.map,
+                world.region.as_deref(),
                 plan.start,
                 settings.wander_distance_m,
                 settings.clearance_m,
@@ -285,6 +301,7 @@ impl<'m> Agent<'m> {
             .facing_rad
             .unwrap_or_else(|| to_goal.y.atan2(to_goal.x));
         let rest_pelvis = body.shaped.rest_joints[joint::PELVIS];
+        let map = world.map;
         let mut seed = place_seed(
             frames,
             *floor,
@@ -439,7 +456,7 @@ impl<'m> Agent<'m> {
         p: DecodedPrimitive,
         j: Judged,
         reward: f64,
-        map: &WalkableMap,
+        world: &CrowdWorld,
         settings: &CrowdSettings,
     ) {
         self.walker.advance(&p, &j, reward);
@@ -473,7 +490,8 @@ impl<'m> Agent<'m> {
         let next = match self.plan.goals.get(self.next_goal) {
             Some(&g) => Some(g),
             None if self.plan.wander => sample_goal(
-                map,
+                world.map,
+                world.region.as_deref(),
                 self.walker.view.pelvis,
                 settings.wander_distance_m,
                 settings.clearance_m,
@@ -536,7 +554,7 @@ pub fn run_crowd(
     let mut agents: Vec<Agent> = plans
         .iter()
         .enumerate()
-        .map(|(i, p)| Agent::new(parts, world.map, p, i, settings))
+        .map(|(i, p)| Agent::new(parts, world, p, i, settings))
         .collect::<Result<_, _>>()?;
     let scan = RayScan::new(RayScanSettings::default());
     let fixed: Vec<MovingObstacle> = world
@@ -577,7 +595,7 @@ pub fn run_crowd(
             };
             let a = &mut agents[i];
             match a.choose(parts, &scan, &around, t0_s, settings)? {
-                Some((p, j, r)) => a.take(p, j, r, world.map, settings),
+                Some((p, j, r)) => a.take(p, j, r, world, settings),
                 None => {
                     a.walker.fail(0.0);
                     a.stop(AgentState::DecoderFailure);

@@ -195,6 +195,17 @@ const PALETTE: [[u8; 3]; 8] = [
 
 fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
     let mut pic = MapPicture::new(world.map, 900);
+    if let Some(region) = &world.region {
+        // Walkable ground outside the region starts and goals are drawn in.
+        let outside: Vec<bool> = world
+            .map
+            .walkable
+            .iter()
+            .zip(region)
+            .map(|(&w, &r)| w && !r)
+            .collect();
+        pic.shade_cells(&outside, [222, 226, 212]);
+    }
     for o in &world.obstacles {
         pic.obstacle(o, [120, 30, 30]);
     }
