@@ -66,7 +66,7 @@ fn bench(c: &mut Criterion) {
     let n = 120;
     let map = WalkableMap::from_walkable(DVec2::splat(-6.0), 0.1, n, n, vec![true; n * n]);
     let world = CrowdWorld {
-        map: &map,
+        map: std::sync::Arc::new(map),
         region: None,
         obstacles: Vec::new(),
         moving: Vec::new(),

@@ -5,9 +5,13 @@ use std::path::PathBuf;
 
 use serde::Deserialize;
 
+use glam::DVec2;
+
 use crate::render::depth_noise::DepthNoise;
 use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
+use crate::scene::{MovingObstacle, Obstacle2};
+use crate::synth::crowd::{CrowdSettings, Steering};
 
 /// Where shards run.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
@@ -58,6 +62,38 @@ pub struct SlurmPlan {
     pub sbatch_args: Vec<String>,
 }
 
+/// Where agents come from before the map is known: given, or to be sampled.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AgentDraft {
+    pub name: String,
+    pub betas: Vec<f64>,
+    pub start: Option<DVec2>,
+    pub facing_rad: Option<f64>,
+    pub goals: Vec<DVec2>,
+    pub wander: bool,
+    pub steering: Steering,
+}
+
+/// A checked synth config.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthPlan {
+    pub config: PathBuf,
+    pub body_model: PathBuf,
+    pub scene: Option<PathBuf>,
+    pub floor_m: f64,
+    pub indoors: bool,
+    pub weights: PathBuf,
+    pub policy: Option<PathBuf>,
+    pub pose_prior: PathBuf,
+    pub train_config: PathBuf,
+    pub settings: CrowdSettings,
+    pub duration_s: f64,
+    pub agents: Vec<AgentDraft>,
+    pub obstacles: Vec<Obstacle2>,
+    pub moving: Vec<MovingObstacle>,
+    pub out_dir: PathBuf,
+}
+
 /// Where a run's motion comes from, checked.
 #[derive(Debug, Clone, PartialEq)]
 pub enum MotionPlan {
@@ -68,6 +104,12 @@ pub enum MotionPlan {
     },
     File {
         path: PathBuf,
+    },
+    /// Agents steered through the scene (`egogen synth`'s crowd), the cameras on the
+    /// `wearers` (indices into the plan's agents).
+    Agents {
+        synth: Box<SynthPlan>,
+        wearers: Vec<usize>,
     },
 }
 

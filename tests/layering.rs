@@ -81,7 +81,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     ("inspect", &["exr_file", "preview", "math", "atomic_file"]),
     // Checked run plans: made by cli, carried out by supervisor.
-    ("plan", &["render", "rig", "camera", "math"]),
+    (
+        "plan",
+        &["render", "rig", "camera", "math", "scene", "synth"],
+    ),
     // Turning a run plan into a dataset.
     (
         "supervisor",

@@ -301,3 +301,155 @@ fn an_existing_output_folder_is_not_overwritten() {
     );
     assert!(!dir.path().join("take.partial").exists());
 }
+
+/// Two agents cross in the apartment's living room; the first wears the Aria RGB camera.
+/// Rendered by Blender at a small size, the annotations agree with the render: the other
+/// agent is in view in some frame, its box is the box of its segmentation pixels (read back
+/// from the EXR), and its visible joints fall on its mask.
+#[test]
+fn a_wearer_sees_the_other_agent_and_the_annotations_match_the_render() {
+    let config = format!(
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 2.0
+seed = 1
+[[agents]]
+name = "wearer"
+start = [-1.0, 0.0]
+goals = [[1.2, 0.0]]
+[[agents]]
+name = "other"
+start = [1.2, 0.3]
+goals = [[-1.0, 0.3]]
+steering = "sampling"
+k = 8
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[scene]
+path = "{}"
+[render]
+cameras = ["camera-rgb"]
+resolution_scale = 0.125
+every_n_frames = 20
+samples = 2
+shutter_frames = 0.0
+[supervisor]
+workers = 1
+"#,
+        common::repo_root()
+            .join("assets/scenes/apartment.glb")
+            .display()
+    );
+    let (dir, path) = common::run_dir(&config);
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let cam = dir.path().join("out/cameras/camera-rgb");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
+            .unwrap();
+    assert_eq!(doc["wearer"], "wearer");
+    let ids: Vec<&str> = doc["segmentation_ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|i| i["name"].as_str())
+        .collect();
+    assert!(ids.contains(&"wearer") && ids.contains(&"other"), "{ids:?}");
+    let mut seen = 0;
+    for f in doc["frames"].as_array().unwrap() {
+        let agents = f["agents"].as_array().unwrap();
+        assert_eq!(agents.len(), 2);
+        assert_eq!(agents[0]["wearer"], true);
+        let other = &agents[1];
+        assert_eq!(other["name"], "other");
+        assert!(other["interaction_distance_m"].as_f64().unwrap() > 0.0);
+        let exr =
+            egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
+        let seg = &exr.channel("segmentation.id").unwrap().values;
+        let width = (seg.len() as f64).sqrt() as usize;
+        assert_eq!(width * width, seg.len(), "a square Aria RGB image");
+        let id = other["id"].as_u64().unwrap() as u32;
+        let mask: Vec<usize> = (0..seg.len()).filter(|&k| seg[k] as u32 == id).collect();
+        if mask.is_empty() {
+            assert!(other["bbox_xyxy"].is_null());
+            assert_eq!(other["in_view"], false);
+            continue;
+        }
+        seen += 1;
+        assert_eq!(other["in_view"], true);
+        let (xs, ys): (Vec<usize>, Vec<usize>) =
+            mask.iter().map(|k| (k % width, k / width)).unzip();
+        let bbox: Vec<u64> = other["bbox_xyxy"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect();
+        let expected = [
+            *xs.iter().min().unwrap(),
+            *ys.iter().min().unwrap(),
+            *xs.iter().max().unwrap(),
+            *ys.iter().max().unwrap(),
+        ];
+        for (a, b) in bbox.iter().zip(expected) {
+            assert!(
+                (*a as i64 - b as i64).abs() <= 1,
+                "bbox {bbox:?} vs mask {expected:?}"
+            );
+        }
+        // Visible joints land on the agent's mask (within 2 px: joints of thin limbs).
+        let on_mask = |x: f64, y: f64| {
+            let (x, y) = (x.round() as i64, y.round() as i64);
+            (-2..=2).any(|dy| {
+                (-2..=2).any(|dx| {
+                    let (a, b) = (x + dx, y + dy);
+                    a >= 0
+                        && b >= 0
+                        && (a as usize) < width
+                        && (b as usize) < width
+                        && seg[b as usize * width + a as usize] as u32 == id
+                })
+            })
+        };
+        let vis = other["joint_visibility"].as_array().unwrap();
+        let px = other["joints_2d"].as_array().unwrap();
+        let (mut visible, mut on) = (0, 0);
+        for (v, p) in vis.iter().zip(px) {
+            if v == "visible" {
+                visible += 1;
+                let p = p.as_array().unwrap();
+                on += usize::from(on_mask(p[0].as_f64().unwrap(), p[1].as_f64().unwrap()));
+            }
+        }
+        assert!(
+            visible > 0,
+            "frame {}: no joint of the other agent visible",
+            f["frame"]
+        );
+        eprintln!(
+            "frame {}: {on} of {visible} visible joints on the mask",
+            f["frame"]
+        );
+        assert!(
+            on as f64 >= 0.9 * visible as f64,
+            "frame {}: {on} of {visible} visible joints on the mask",
+            f["frame"]
+        );
+    }
+    assert!(seen >= 1, "the wearer never saw the other agent");
+    // The take the render came from is in the dataset.
+    assert!(dir
+        .path()
+        .join("out/sequence/agents/other/motion.npz")
+        .is_file());
+}

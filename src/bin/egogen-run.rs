@@ -121,6 +121,9 @@ fn run(args: Args) -> Result<()> {
         );
     }
     let motion = match &plan.motion {
+        MotionPlan::Agents { synth, wearers } => {
+            return run_agents(&plan, synth, wearers, &model, &config, &options)
+        }
         MotionPlan::ScriptedWalk {
             duration_s,
             frame_rate_hz,
@@ -154,15 +157,10 @@ fn run(args: Args) -> Result<()> {
         model.num_vertices()
     );
     if let Some(render) = &plan.render {
+        let motion = egogen::supervisor::RunMotion::Placed(&motion);
         let summary =
-            egogen::supervisor::run_pipeline(&plan, render, &motion, &model, &config, &options)?;
-        eprintln!(
-            "egogen-run: wrote {} ({} frames, {} rendered now, {} files in the manifest)",
-            summary.dir.display(),
-            summary.frames,
-            summary.rendered_now,
-            summary.files
-        );
+            egogen::supervisor::run_pipeline(&plan, render, motion, &model, &config, &options)?;
+        report(&summary);
         return Ok(());
     }
     let track = track_body(&model, &motion)?;
@@ -174,5 +172,70 @@ fn run(args: Args) -> Result<()> {
         out.files.len(),
         out.meshes
     );
+    Ok(())
+}
+
+fn report(summary: &egogen::supervisor::RunSummary) {
+    eprintln!(
+        "egogen-run: wrote {} ({} frames, {} rendered now, {} files in the manifest)",
+        summary.dir.display(),
+        summary.frames,
+        summary.rendered_now,
+        summary.files
+    );
+}
+
+/// Agents walk the scene (as `egogen synth`), then the take is rendered, or written alone
+/// without `[render]`.
+fn run_agents(
+    plan: &egogen::cli::RunPlan,
+    synth: &egogen::plan::SynthPlan,
+    wearers: &[usize],
+    model: &BodyModel,
+    config: &std::path::Path,
+    options: &egogen::supervisor::RunOptions,
+) -> Result<()> {
+    if plan.render.is_none() {
+        egogen::synth::crowd_dir::check_out_dir(&plan.output_dir)?;
+    }
+    let s = egogen::cli::synth::synthesize(synth, model, true)?;
+    let reached: usize = s
+        .take
+        .agents
+        .iter()
+        .map(|a| a.goals.iter().filter(|g| g.reached).count())
+        .sum();
+    eprintln!(
+        "egogen-run: {} agents walked {} frames at {} Hz ({reached} goals reached) in {:.1} s",
+        s.take.agents.len(),
+        s.take.frames,
+        s.take.frame_rate_hz,
+        s.wall_s
+    );
+    match &plan.render {
+        Some(render) => {
+            let motion = egogen::supervisor::RunMotion::Agents {
+                world: &s.world,
+                take: &s.take,
+                wearers,
+                wall_s: s.wall_s,
+                about: s.about,
+            };
+            let summary =
+                egogen::supervisor::run_pipeline(plan, render, motion, model, config, options)?;
+            report(&summary);
+        }
+        None => {
+            let out = egogen::synth::crowd_dir::write_crowd_dir(
+                &plan.output_dir,
+                &s.world,
+                model,
+                &s.take,
+                s.wall_s,
+                s.about,
+            )?;
+            eprintln!("egogen-run: wrote {}", out.dir.display());
+        }
+    }
     Ok(())
 }

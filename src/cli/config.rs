@@ -44,6 +44,9 @@ pub enum MotionSource {
     ScriptedWalk,
     /// An AMASS- or SAMP-style `.npz` motion file (`path`).
     File,
+    /// Agents steered to their goals in the scene (`[crowd]`, `[[agents]]`, `[[obstacles]]`
+    /// and the keys of `egogen synth`'s `[motion]`; docs/SYNTH.md).
+    Agents,
 }
 
 /// `[motion]`: one flat table so that type errors name their key; `resolve` checks which
@@ -60,6 +63,17 @@ pub struct RawMotion {
     pub speed_m_per_s: Option<f64>,
     /// Motion file, relative to the config's folder.
     pub path: Option<PathBuf>,
+    /// With `source = "agents"`: `egogen synth`'s `[motion]` keys (docs/SYNTH.md).
+    pub weights: Option<PathBuf>,
+    pub policy: Option<PathBuf>,
+    pub pose_prior: Option<PathBuf>,
+    pub train_config: Option<PathBuf>,
+    pub stop_when_done: Option<bool>,
+    pub success_m: Option<f64>,
+    pub max_primitives_per_goal: Option<usize>,
+    pub wander_distance_m: Option<[f64; 2]>,
+    pub clearance_m: Option<f64>,
+    pub seed: Option<u64>,
 }
 
 /// `[output]`: where the run writes.
@@ -83,8 +97,10 @@ fn default_mesh_every() -> usize {
 pub struct RawScene {
     /// Scene file (GLB/glTF, OBJ, PLY; metres, z up). Default: the shipped apartment.
     pub path: Option<PathBuf>,
-    /// Seed for placing the walk in the scene (default 0).
+    /// Seed for placing the walk in the scene (default 0; not with agents).
     pub seed: Option<u64>,
+    /// With agents: draw starts and goals inside the walls only (default true).
+    pub indoors: Option<bool>,
 }
 
 /// `[render]`: which cameras render what, and how well.
@@ -119,6 +135,8 @@ pub struct RawRender {
     pub fisheye: Option<FisheyeRendering>,
     /// `[render.depth_noise]`: a noisy depth channel for some cameras (default: none).
     pub depth_noise: Option<RawDepthNoise>,
+    /// With agents: the agents wearing the rig (names; default the first agent).
+    pub wearers: Option<Vec<String>>,
 }
 
 /// `[render.depth_noise]`: which cameras get a `depth_noisy.Z` channel, the seed, and the
@@ -196,6 +214,12 @@ pub struct RawRun {
     pub render: Option<RawRender>,
     #[serde(default)]
     pub supervisor: RawSupervisor,
+    /// With `motion.source = "agents"`: as in `egogen synth` configs.
+    pub crowd: Option<super::synth::RawCrowd>,
+    #[serde(default)]
+    pub agents: Vec<super::synth::RawAgent>,
+    #[serde(default)]
+    pub obstacles: Vec<super::synth::RawObstacle>,
 }
 
 impl RawRun {

@@ -32,7 +32,8 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         key: key.into(),
         message,
     };
-    let body_model = resolve_body_model(raw.body.model, base).map_err(|m| bad("body.model", m))?;
+    let body_model =
+        resolve_body_model(raw.body.model.clone(), base).map_err(|m| bad("body.model", m))?;
     if let Some(i) = raw.body.betas.iter().position(|b| !b.is_finite()) {
         return Err(bad(
             "body.betas",
@@ -54,6 +55,10 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
             ),
         ));
     }
+    let scene = match &raw.scene.path {
+        Some(p) => base.join(p),
+        None => crate_root().join(DEFAULT_SCENE),
+    };
     let m = raw.motion;
     let unused = |key: &str, present: bool, source: &str| match present {
         true => Err(bad(
@@ -62,7 +67,118 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         )),
         false => Ok(()),
     };
+    if m.source != MotionSource::Agents {
+        let source = match m.source {
+            MotionSource::ScriptedWalk => "scripted_walk",
+            _ => "file",
+        };
+        for (key, present) in [
+            ("motion.weights", m.weights.is_some()),
+            ("motion.policy", m.policy.is_some()),
+            ("motion.pose_prior", m.pose_prior.is_some()),
+            ("motion.train_config", m.train_config.is_some()),
+            ("motion.stop_when_done", m.stop_when_done.is_some()),
+            ("motion.success_m", m.success_m.is_some()),
+            (
+                "motion.max_primitives_per_goal",
+                m.max_primitives_per_goal.is_some(),
+            ),
+            ("motion.wander_distance_m", m.wander_distance_m.is_some()),
+            ("motion.clearance_m", m.clearance_m.is_some()),
+            ("motion.seed", m.seed.is_some()),
+            ("crowd", raw.crowd.is_some()),
+            ("agents", !raw.agents.is_empty()),
+            ("obstacles", !raw.obstacles.is_empty()),
+            ("scene.indoors", raw.scene.indoors.is_some()),
+            (
+                "render.wearers",
+                raw.render.as_ref().is_some_and(|r| r.wearers.is_some()),
+            ),
+        ] {
+            unused(key, present, source)?;
+        }
+    }
     let motion = match m.source {
+        MotionSource::Agents => {
+            for (key, present) in [
+                ("motion.path", m.path.is_some()),
+                ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
+                ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
+                ("scene.seed", raw.scene.seed.is_some()),
+            ] {
+                unused(key, present, "agents")?;
+            }
+            if !raw.body.betas.is_empty() {
+                return Err(bad(
+                    "body.betas",
+                    "not used when motion.source = \"agents\": give each agent its betas in [[agents]] (or let [crowd] draw them)".into(),
+                ));
+            }
+            use super::synth::{RawSynth, RawSynthMotion, RawSynthOutput, RawSynthScene};
+            let synth = RawSynth {
+                body_model: raw.body.model.clone(),
+                scene: RawSynthScene {
+                    path: Some(std::path::absolute(&scene).unwrap_or_else(|_| scene.clone())),
+                    floor_m: None,
+                    indoors: raw.scene.indoors,
+                },
+                motion: RawSynthMotion {
+                    weights: m.weights.clone(),
+                    policy: m.policy.clone(),
+                    pose_prior: m.pose_prior.clone(),
+                    train_config: m.train_config.clone(),
+                    duration_s: m.duration_s,
+                    stop_when_done: Some(m.stop_when_done.unwrap_or(false)),
+                    success_m: m.success_m,
+                    max_primitives_per_goal: m.max_primitives_per_goal,
+                    wander_distance_m: m.wander_distance_m,
+                    clearance_m: m.clearance_m,
+                    seed: m.seed,
+                },
+                crowd: raw.crowd.clone(),
+                agents: raw.agents.clone(),
+                obstacles: raw.obstacles.clone(),
+                output: RawSynthOutput {
+                    dir: raw.output.dir.clone(),
+                },
+            };
+            let synth = super::synth::resolve_synth(synth, config_path, "")?;
+            let names: Vec<&str> = synth.agents.iter().map(|a| a.name.as_str()).collect();
+            let wearers = match raw.render.as_ref().and_then(|r| r.wearers.clone()) {
+                None => vec![0],
+                Some(w) if w.is_empty() => {
+                    return Err(bad(
+                        "render.wearers",
+                        "expected at least one agent's name".into(),
+                    ))
+                }
+                Some(w) => w
+                    .iter()
+                    .map(|n| {
+                        names.iter().position(|a| a == n).ok_or_else(|| {
+                            bad(
+                                "render.wearers",
+                                format!(
+                                    "no agent is called \"{n}\" (agents: {})",
+                                    names.join(", ")
+                                ),
+                            )
+                        })
+                    })
+                    .collect::<Result<_, _>>()?,
+            };
+            let mut seen = std::collections::BTreeSet::new();
+            if let Some(&w) = wearers.iter().find(|&&w| !seen.insert(w)) {
+                return Err(bad(
+                    "render.wearers",
+                    format!("\"{}\" is named twice", names[w]),
+                ));
+            }
+            MotionPlan::Agents {
+                synth: Box::new(synth),
+                wearers,
+            }
+        }
         MotionSource::ScriptedWalk => {
             unused("motion.path", m.path.is_some(), "scripted_walk")?;
             let positive = |key: &str, v: Option<f64>| match v {
@@ -122,10 +238,6 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
             }
             MotionPlan::File { path }
         }
-    };
-    let scene = match raw.scene.path {
-        Some(p) => base.join(p),
-        None => crate_root().join(DEFAULT_SCENE),
     };
     if !scene.is_file() {
         return Err(bad(

@@ -17,6 +17,7 @@ use super::config::{load_toml, ConfigError};
 use super::resolve::{crate_root, resolve_body_model};
 use crate::math::random::normal_samples;
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
+use crate::plan::{AgentDraft, SynthPlan};
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 use crate::synth::crowd::{
     run_crowd, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering, NEW_FRAMES,
@@ -152,38 +153,6 @@ pub struct RawSynth {
     pub output: RawSynthOutput,
 }
 
-/// Where agents come from before the map is known: given, or to be sampled.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AgentDraft {
-    pub name: String,
-    pub betas: Vec<f64>,
-    pub start: Option<DVec2>,
-    pub facing_rad: Option<f64>,
-    pub goals: Vec<DVec2>,
-    pub wander: bool,
-    pub steering: Steering,
-}
-
-/// A checked synth config.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SynthPlan {
-    pub config: PathBuf,
-    pub body_model: PathBuf,
-    pub scene: Option<PathBuf>,
-    pub floor_m: f64,
-    pub indoors: bool,
-    pub weights: PathBuf,
-    pub policy: Option<PathBuf>,
-    pub pose_prior: PathBuf,
-    pub train_config: PathBuf,
-    pub settings: CrowdSettings,
-    pub duration_s: f64,
-    pub agents: Vec<AgentDraft>,
-    pub obstacles: Vec<Obstacle2>,
-    pub moving: Vec<MovingObstacle>,
-    pub out_dir: PathBuf,
-}
-
 fn steering(name: &str, k: Option<usize>) -> Result<Steering, String> {
     match (name, k) {
         ("policy", None) => Ok(Steering::Policy { mean_action: false }),
@@ -207,11 +176,16 @@ fn finite2(v: [f64; 2]) -> bool {
 
 /// Reads and checks a synth config.
 pub fn load_synth_plan(path: &Path) -> Result<SynthPlan, ConfigError> {
-    let raw: RawSynth = load_toml(path)?;
+    resolve_synth(load_toml(path)?, path, "")
+}
+
+/// Checks a synth config read from `path` (relative paths resolve against its folder); keys
+/// are named with `prefix` before the synth config's own names (`""` for a synth config).
+pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPlan, ConfigError> {
     let base = path.parent().unwrap_or(Path::new("."));
     let bad = |key: &str, message: String| ConfigError::Value {
         path: path.into(),
-        key: key.into(),
+        key: format!("{prefix}{key}"),
         message,
     };
     let body_model = resolve_body_model(raw.body_model, base).map_err(|m| bad("body_model", m))?;
@@ -615,19 +589,46 @@ pub fn place_agents(
     Ok(out)
 }
 
+/// A synthesized take and the world it was walked in.
+pub struct Synthesized {
+    pub world: CrowdWorld,
+    pub take: crate::synth::crowd::CrowdTake,
+    pub wall_s: f64,
+    /// What was asked, for the take's summary.
+    pub about: serde_json::Value,
+}
+
 /// Loads the parts and writes the take (see [`crate::synth::crowd_dir`]).
 pub fn run_synth(
     plan: &SynthPlan,
     progress: bool,
 ) -> Result<crate::synth::crowd_dir::CrowdOutputs> {
+    crate::synth::crowd_dir::check_out_dir(&plan.out_dir)?;
+    let body = crate::body::BodyModel::load(&plan.body_model)?;
+    let s = synthesize(plan, &body, progress)?;
+    crate::synth::crowd_dir::write_crowd_dir(
+        &plan.out_dir,
+        &s.world,
+        &body,
+        &s.take,
+        s.wall_s,
+        s.about,
+    )
+}
+
+/// Loads the motion model, policy, pose prior and start poses, places the agents and walks
+/// the take (nothing is written).
+pub fn synthesize(
+    plan: &SynthPlan,
+    body: &crate::body::BodyModel,
+    progress: bool,
+) -> Result<Synthesized> {
     use crate::motion::cvae::infer::InferBackend;
     use crate::motion::cvae::MotionModel;
     use crate::policy::{PosePrior, SeedBank};
-    crate::synth::crowd_dir::check_out_dir(&plan.out_dir)?;
     let map = synth_map(plan)?;
     let region = synth_region(plan, &map);
     let agents = place_agents(plan, &map, region.as_deref())?;
-    let body = crate::body::BodyModel::load(&plan.body_model)?;
     for a in &agents {
         if a.betas.len() > body.num_betas() {
             anyhow::bail!(
@@ -667,17 +668,17 @@ pub fn run_synth(
         None => None,
     };
     let train_plan = super::train::load_train_plan(&plan.train_config)?;
-    let (train_set, _) = crate::motion::cvae::train::evaluation_sets(&train_plan, &body, true)?;
+    let (train_set, _) = crate::motion::cvae::train::evaluation_sets(&train_plan, body, true)?;
     let bank = SeedBank::from_set(&train_set);
     let parts = CrowdParts {
         model: &model,
-        body_model: &body,
+        body_model: body,
         prior: &prior,
         bank: &bank,
         policy: policy.as_ref(),
     };
     let world = CrowdWorld {
-        map: &map,
+        map: std::sync::Arc::new(map),
         region,
         obstacles: plan.obstacles.clone(),
         moving: plan.moving.clone(),
@@ -700,5 +701,10 @@ pub fn run_synth(
         "duration_s": plan.duration_s,
         "settings": plan.settings,
     });
-    crate::synth::crowd_dir::write_crowd_dir(&plan.out_dir, &world, &body, &take, wall_s, about)
+    Ok(Synthesized {
+        world,
+        take,
+        wall_s,
+        about,
+    })
 }

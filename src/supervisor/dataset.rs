@@ -24,7 +24,7 @@ use crate::render::depth_noise::{DepthNoise, NoiseSeed};
 use crate::render::frame_file::{assemble_frame, validate_frame, FrameImage};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
-use crate::render::shard_plan::{raw_frame_paths, shard_camera, AGENT_ID_BASE};
+use crate::render::shard_plan::{raw_frame_paths, shard_camera};
 use crate::render::ShardSpec;
 use crate::rig::{Rig, RigCamera};
 use crate::synth::BodyTrack;
@@ -44,6 +44,8 @@ pub struct CameraWork {
     pub world_from_cam: Vec<Affine3>,
     /// Frames to render.
     pub frames: Vec<u32>,
+    /// The agent wearing the camera (index into the run's agents).
+    pub wearer: usize,
 }
 
 /// One Blender process's work: some frames of one camera.
@@ -239,12 +241,20 @@ pub fn next_start(staging: &std::path::Path) -> u32 {
         + 1
 }
 
+/// One body in the rendered scene.
+pub struct RenderedAgent {
+    pub name: String,
+    /// Segmentation id.
+    pub id: u32,
+    pub motion: MotionSequence,
+    pub track: BodyTrack,
+}
+
 /// Writes `cameras/<camera>/annotations.json` for every camera (OpenCV conventions).
 pub fn write_annotations(
     dataset: &Dataset,
     rig: &Rig,
-    motion: &MotionSequence,
-    track: &BodyTrack,
+    agents: &[RenderedAgent],
     object_ids: &[(String, u32)],
 ) -> Result<()> {
     for (c, work) in dataset.cameras.iter().enumerate() {
@@ -259,13 +269,13 @@ pub fn write_annotations(
             )?;
             let depth = &contents.channel("depth.Z").unwrap().values;
             let ids = &contents.channel("segmentation.id").unwrap().values;
-            frames.push(frame_annotation(work, f, motion, track, depth, ids));
+            frames.push(frame_annotation(work, f, agents, depth, ids));
         }
         let mut ids: Vec<serde_json::Value> = object_ids
             .iter()
             .map(|(n, id)| json!({"name": n, "id": id}))
             .collect();
-        ids.push(json!({"name": "agent_0", "id": AGENT_ID_BASE}));
+        ids.extend(agents.iter().map(|a| json!({"name": a.name, "id": a.id})));
         let doc = json!({
             "egogen_annotations": 1,
             "conventions": {
@@ -274,7 +284,7 @@ pub fn write_annotations(
                 "pixels": "centre of the top-left pixel at (0, 0)",
                 "T_world_cam": "row-major 4x4 mapping camera-frame points to the world",
                 "depth": "planar: z of the surface point in the camera frame (m); 0 = no surface",
-                "joint_visibility": format!("visible | occluded (rendered surface > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view)"),
+                "joint_visibility": format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view)"),
                 "bbox_xyxy": "tight box of the agent's segmentation pixels, inclusive pixel indices",
             },
             "camera": model_json,
@@ -285,7 +295,8 @@ pub fn write_annotations(
                 "parameters": model,
                 "seed": seed,
             })),
-            "frame_rate_hz": motion.frame_rate_hz,
+            "wearer": agents[work.wearer].name,
+            "frame_rate_hz": agents[0].motion.frame_rate_hz,
             "segmentation_ids": ids,
             "frames": frames,
         });
@@ -328,8 +339,7 @@ fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
 fn frame_annotation(
     work: &CameraWork,
     f: u32,
-    motion: &MotionSequence,
-    track: &BodyTrack,
+    agents: &[RenderedAgent],
     depth: &[f32],
     ids: &[f32],
 ) -> serde_json::Value {
@@ -338,53 +348,74 @@ fn frame_annotation(
     let w = res.width_px as usize;
     let world_from_cam = work.world_from_cam[i];
     let cam_from_world = world_from_cam.inverse();
-    let joints = &track.frames[i].joints;
-    let mut joints_2d = Vec::with_capacity(joints.len());
-    let mut visibility = Vec::with_capacity(joints.len());
-    for j in joints {
-        let p = cam_from_world.transform_point3(*j);
-        match work.camera.model.project(p) {
-            Some(px) => {
-                let (x, y) = (px.x.round() as usize, px.y.round() as usize);
-                let d = depth[y.min(res.height_px as usize - 1) * w + x.min(w - 1)] as f64;
-                let occluded = d > 0.0 && d < p.z - JOINT_OCCLUSION_TOLERANCE_M;
-                joints_2d.push(Some([px.x, px.y]));
-                visibility.push(if occluded { "occluded" } else { "visible" });
+    let pelvis = |a: &RenderedAgent| a.track.frames[i].joints[0];
+    let listed: Vec<serde_json::Value> = agents
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let joints = &a.track.frames[i].joints;
+            let mut joints_2d = Vec::with_capacity(joints.len());
+            let mut visibility = Vec::with_capacity(joints.len());
+            for j in joints {
+                let p = cam_from_world.transform_point3(*j);
+                match work.camera.model.project(p) {
+                    Some(px) => {
+                        let (x, y) = (px.x.round() as usize, px.y.round() as usize);
+                        let at = y.min(res.height_px as usize - 1) * w + x.min(w - 1);
+                        let d = depth[at] as f64;
+                        // Hidden when the pixel shows something else, nearer than the joint;
+                        // the agent's own surface over its joint is the joint seen.
+                        let occluded = ids[at] as u32 != a.id
+                            && d > 0.0
+                            && d < p.z - JOINT_OCCLUSION_TOLERANCE_M;
+                        joints_2d.push(Some([px.x, px.y]));
+                        visibility.push(if occluded { "occluded" } else { "visible" });
+                    }
+                    None => {
+                        joints_2d.push(None);
+                        visibility.push("outside");
+                    }
+                }
             }
-            None => {
-                joints_2d.push(None);
-                visibility.push("outside");
-            }
-        }
-    }
-    let bbox = bbox_of(ids, w, AGENT_ID_BASE);
-    let pose = &motion.poses[i];
+            let bbox = bbox_of(ids, w, a.id);
+            let pose = &a.motion.poses[i];
+            // Distance to the nearest other agent (pelvis to pelvis); none alone.
+            let nearest = agents
+                .iter()
+                .enumerate()
+                .filter(|(o, _)| *o != k)
+                .map(|(_, o)| pelvis(o).distance(pelvis(a)))
+                .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.min(d))));
+            json!({
+                "name": a.name,
+                "id": a.id,
+                "wearer": k == work.wearer,
+                "in_view": bbox.is_some(),
+                "smplx": {
+                    "betas": a.motion.betas,
+                    "global_orient": &pose[0..3],
+                    "body_pose": &pose[3..66],
+                    "jaw_pose": &pose[66..69],
+                    "leye_pose": &pose[69..72],
+                    "reye_pose": &pose[72..75],
+                    "left_hand_pose": &pose[75..120],
+                    "right_hand_pose": &pose[120..165],
+                    "transl": a.motion.trans[i].to_array(),
+                },
+                "joints_3d": joints.iter().map(|j| j.to_array()).collect::<Vec<_>>(),
+                "joints_2d": joints_2d,
+                "joint_visibility": visibility,
+                "bbox_xyxy": bbox,
+                "interaction_distance_m": nearest,
+            })
+        })
+        .collect();
     json!({
         "frame": f,
-        "time_s": f as f64 / motion.frame_rate_hz,
+        "time_s": f as f64 / agents[0].motion.frame_rate_hz,
         "file": format!("frame_{f:05}.exr"),
         "T_world_cam": crate::render::camera_setup::row_major(world_from_cam),
-        "agents": [{
-            "id": AGENT_ID_BASE,
-            "wearer": true,
-            "smplx": {
-                "betas": motion.betas,
-                "global_orient": &pose[0..3],
-                "body_pose": &pose[3..66],
-                "jaw_pose": &pose[66..69],
-                "leye_pose": &pose[69..72],
-                "reye_pose": &pose[72..75],
-                "left_hand_pose": &pose[75..120],
-                "right_hand_pose": &pose[120..165],
-                "transl": motion.trans[i].to_array(),
-            },
-            "joints_3d": joints.iter().map(|j| j.to_array()).collect::<Vec<_>>(),
-            "joints_2d": joints_2d,
-            "joint_visibility": visibility,
-            "bbox_xyxy": bbox,
-            // Distance to the nearest other agent; there is none in a single-agent sequence.
-            "interaction_distance_m": null,
-        }],
+        "agents": listed,
     })
 }
 

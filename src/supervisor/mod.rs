@@ -11,9 +11,9 @@ pub mod pipeline;
 pub mod pool;
 pub mod slurm;
 
-pub use dataset::{CameraWork, Dataset, Shard};
+pub use dataset::{CameraWork, Dataset, RenderedAgent, Shard};
 pub use local::{LocalPool, PoolSettings};
 pub use manifest::{build_manifest, verify, write_manifest, Manifest, VerifyReport};
-pub use pipeline::{run_pipeline, RunOptions, RunSummary};
+pub use pipeline::{run_pipeline, RunMotion, RunOptions, RunSummary};
 pub use pool::{PoolReport, ShardPool};
 pub use slurm::{SlurmPool, SlurmSettings};

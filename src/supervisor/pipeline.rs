@@ -10,7 +10,7 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 
 use super::colmap::write_colmap;
-use super::dataset::{next_start, write_annotations, CameraWork, Dataset};
+use super::dataset::{next_start, write_annotations, CameraWork, Dataset, RenderedAgent};
 use super::local::{LocalPool, PoolSettings};
 use super::manifest::{remove_temporaries, sha256_file, sha256_hex, write_manifest, MANIFEST};
 use super::pool::ShardPool;
@@ -24,6 +24,8 @@ use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
 use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec};
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
+use crate::synth::crowd::{CrowdTake, CrowdWorld};
+use crate::synth::crowd_dir::write_crowd_dir;
 use crate::synth::placement::place_motion;
 use crate::synth::{body_cache, pose_meshes, track_body, write_sequence_dir};
 use crate::vertex_cache::{write_faces_npy, write_rest_vertices_npy};
@@ -63,6 +65,30 @@ pub struct RunState {
     pub rig_sha256: Option<String>,
 }
 
+/// What moves in a run's scene.
+pub enum RunMotion<'a> {
+    /// One motion (a scripted walk or a motion file) placed rigidly in the scene by
+    /// `scene.seed`, worn by the rig.
+    Placed(&'a MotionSequence),
+    /// A synthesized take: every agent rendered, the rig on the `wearers` (indices into the
+    /// take's agents). `wall_s` and `about` go into the take's summary.
+    Agents {
+        world: &'a CrowdWorld,
+        take: &'a CrowdTake,
+        wearers: &'a [usize],
+        wall_s: f64,
+        about: serde_json::Value,
+    },
+}
+
+/// Colours of the agents' flat body material, in turn.
+const AGENT_COLOURS: [[f64; 4]; 4] = [
+    [0.55, 0.42, 0.33, 1.0],
+    [0.30, 0.22, 0.17, 1.0],
+    [0.78, 0.62, 0.52, 1.0],
+    [0.45, 0.33, 0.25, 1.0],
+];
+
 /// Runs the pipeline for a plan with a render section; `config_path` is hashed so that a
 /// resumed run is known to be the same run.
 ///
@@ -70,7 +96,7 @@ pub struct RunState {
 pub fn run_pipeline(
     plan: &RunPlan,
     render: &RenderPlan,
-    motion: &MotionSequence,
+    motion: RunMotion,
     model: &BodyModel,
     config_path: &Path,
     opts: &RunOptions,
@@ -134,10 +160,39 @@ pub fn run_pipeline(
     // Everything that can fail on bad input or a missing Blender, before anything is staged:
     // the scene, where the motion happens in it, and (for a new run) the renderer.
     let scene = load_scene(&plan.scene, None)?;
-    let map = walkable_map(&scene, &plan.scene, WalkableSettings::default())?;
-    let (motion, _) = place_motion(model, motion, &map, plan.scene_seed)
-        .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
-    let track = track_body(model, &motion)?;
+    let (agents, wearers): (Vec<RenderedAgent>, Vec<usize>) = match &motion {
+        RunMotion::Placed(m) => {
+            let map = walkable_map(&scene, &plan.scene, WalkableSettings::default())?;
+            let (placed, _) = place_motion(model, m, &map, plan.scene_seed)
+                .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
+            let track = track_body(model, &placed)?;
+            let agent = RenderedAgent {
+                name: "agent_0".into(),
+                id: AGENT_ID_BASE,
+                motion: placed,
+                track,
+            };
+            (vec![agent], vec![0])
+        }
+        RunMotion::Agents { take, wearers, .. } => {
+            let agents = take
+                .agents
+                .iter()
+                .enumerate()
+                .map(|(k, a)| {
+                    let motion = a.motion_sequence(take.frame_rate_hz);
+                    let track = track_body(model, &motion)?;
+                    Ok(RenderedAgent {
+                        name: a.name.clone(),
+                        id: AGENT_ID_BASE + k as u32,
+                        motion,
+                        track,
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            (agents, wearers.to_vec())
+        }
+    };
     let mut runtime = if fresh {
         Some(BlenderRuntime::resolve(opts.blender.as_deref())?)
     } else {
@@ -167,66 +222,99 @@ pub fn run_pipeline(
 
     let sequence = staging.join("sequence");
     if !sequence.exists() {
-        let meshes = pose_meshes(model, &motion, plan.mesh_every_n_frames)?;
-        write_sequence_dir(&sequence, model, &motion, &track, &meshes)?;
+        match &motion {
+            RunMotion::Placed(_) => {
+                let a = &agents[0];
+                let meshes = pose_meshes(model, &a.motion, plan.mesh_every_n_frames)?;
+                write_sequence_dir(&sequence, model, &a.motion, &a.track, &meshes)?;
+            }
+            RunMotion::Agents {
+                world,
+                take,
+                wall_s,
+                about,
+                ..
+            } => {
+                write_crowd_dir(&sequence, world, model, take, *wall_s, about.clone())?;
+            }
+        }
     }
 
     // Inputs Blender reads, rewritten identically on every (re)start.
     let work = staging.join("work");
     std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
-    let pc2 = work.join("agent_0.pc2");
-    let faces = work.join("agent_0_faces.npy");
-    let vertices = work.join("agent_0_vertices.npy");
-    let cache = body_cache(model, &motion, render.cache_samples_per_frame)?;
-    cache.write(&pc2)?;
-    write_faces_npy(&faces, &model.faces)?;
-    write_rest_vertices_npy(&vertices, &cache)?;
-    drop(cache);
-
-    let frames: Vec<u32> = (0..motion.len() as u32)
-        .step_by(render.every_n_frames)
-        .collect();
-    let cameras: Vec<CameraWork> = render
-        .cameras
-        .iter()
-        .zip(&render.render_cameras)
-        .zip(&render.depth_noise)
-        .map(|((cam, rendered), noise)| CameraWork {
-            camera: cam.clone(),
-            render: *rendered,
-            depth_noise: *noise,
-            world_from_cam: track
-                .frames
-                .iter()
-                .map(|f| cam.world_from_cam(f.world_from_cpf))
-                .collect(),
-            frames: frames.clone(),
-        })
-        .collect();
-    let object_ids: Vec<(String, u32)> = scene
-        .objects
-        .iter()
-        .map(|o| (o.name.clone(), o.id.0))
-        .collect();
-    let (fps, fps_base) = blender_fps(motion.frame_rate_hz);
-    let (lo, hi) = scene_bounds(&scene);
-    let mid = 0.5 * (track.frames[0].joints[0] + track.frames[track.frames.len() - 1].joints[0]);
-    let base_spec = ShardSpec {
-        scene_glb: std::fs::canonicalize(&plan.scene)?,
-        object_ids: object_ids.clone(),
-        fps,
-        fps_base,
-        bodies: vec![ShardBody {
-            name: "agent_0".into(),
-            pass_index: AGENT_ID_BASE,
+    let mut bodies = Vec::with_capacity(agents.len());
+    let mut scratch = Vec::new();
+    for (k, a) in agents.iter().enumerate() {
+        let pc2 = work.join(format!("agent_{k}.pc2"));
+        let faces = work.join(format!("agent_{k}_faces.npy"));
+        let vertices = work.join(format!("agent_{k}_vertices.npy"));
+        let cache = body_cache(model, &a.motion, render.cache_samples_per_frame)?;
+        cache.write(&pc2)?;
+        write_faces_npy(&faces, &model.faces)?;
+        write_rest_vertices_npy(&vertices, &cache)?;
+        drop(cache);
+        bodies.push(ShardBody {
+            name: a.name.clone(),
+            pass_index: a.id,
             faces_npy: std::fs::canonicalize(&faces)?,
             vertices_npy: std::fs::canonicalize(&vertices)?,
             pc2: std::fs::canonicalize(&pc2)?,
             cache_frame_start: 0.0,
             samples_per_frame: render.cache_samples_per_frame,
             motion_steps: 2,
-            color_rgba: [0.55, 0.42, 0.33, 1.0],
-        }],
+            color_rgba: AGENT_COLOURS[k % AGENT_COLOURS.len()],
+        });
+        scratch.extend([pc2, faces, vertices]);
+    }
+
+    let frame_count = agents[0].motion.len();
+    let frames: Vec<u32> = (0..frame_count as u32)
+        .step_by(render.every_n_frames)
+        .collect();
+    let mut cameras: Vec<CameraWork> = Vec::new();
+    for &w in &wearers {
+        let track = &agents[w].track;
+        for ((cam, rendered), noise) in render
+            .cameras
+            .iter()
+            .zip(&render.render_cameras)
+            .zip(&render.depth_noise)
+        {
+            let mut camera = cam.clone();
+            if wearers.len() > 1 {
+                // Several camera sets: each named after its wearer.
+                camera.name = format!("{}_{}", agents[w].name, cam.name);
+            }
+            cameras.push(CameraWork {
+                camera,
+                render: *rendered,
+                depth_noise: *noise,
+                world_from_cam: track
+                    .frames
+                    .iter()
+                    .map(|f| cam.world_from_cam(f.world_from_cpf))
+                    .collect(),
+                frames: frames.clone(),
+                wearer: w,
+            });
+        }
+    }
+    let object_ids: Vec<(String, u32)> = scene
+        .objects
+        .iter()
+        .map(|o| (o.name.clone(), o.id.0))
+        .collect();
+    let (fps, fps_base) = blender_fps(agents[0].motion.frame_rate_hz);
+    let (lo, hi) = scene_bounds(&scene);
+    let track = &agents[wearers[0]].track;
+    let mid = 0.5 * (track.frames[0].joints[0] + track.frames[track.frames.len() - 1].joints[0]);
+    let base_spec = ShardSpec {
+        scene_glb: std::fs::canonicalize(&plan.scene)?,
+        object_ids: object_ids.clone(),
+        fps,
+        fps_base,
+        bodies,
         lighting: ShardLighting {
             world_rgb: [0.25, 0.25, 0.25],
             point_lights: vec![PointLight {
@@ -311,12 +399,12 @@ pub fn run_pipeline(
             report.wall_seconds
         );
     }
-    write_annotations(&dataset, &render.rig, &motion, &track, &object_ids)?;
+    write_annotations(&dataset, &render.rig, &agents, &object_ids)?;
     write_colmap(&dataset)?;
     // Scratch that only Blender read: the raw renders and the body cache (large).
     let _ = std::fs::remove_dir_all(dataset.raw_dir());
-    for scratch in [&pc2, &faces, &vertices] {
-        let _ = std::fs::remove_file(scratch);
+    for f in &scratch {
+        let _ = std::fs::remove_file(f);
     }
     for p in remove_temporaries(&staging)? {
         eprintln!(

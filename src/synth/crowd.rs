@@ -99,8 +99,8 @@ impl Default for CrowdSettings {
 /// The world a crowd walks in: the walkable map, static 2D obstacles and obstacles that move
 /// on the take's clock (time 0 at the first seed frame).
 #[derive(Debug, Clone)]
-pub struct CrowdWorld<'a> {
-    pub map: &'a WalkableMap,
+pub struct CrowdWorld {
+    pub map: std::sync::Arc<WalkableMap>,
     /// Cells starts and goals are drawn on (e.g. inside the walls); `None`: every walkable
     /// cell.
     pub region: Option<Vec<bool>>,
@@ -172,6 +172,19 @@ pub struct AgentTrack {
     pub penetration_share: f64,
     /// Horizontal walking speed over the primitives taken (m/s).
     pub speed_m_s: f64,
+}
+
+impl AgentTrack {
+    /// The agent's frames as a motion sequence (neutral gender; the body model's).
+    pub fn motion_sequence(&self, frame_rate_hz: f64) -> crate::motion::MotionSequence {
+        crate::motion::MotionSequence {
+            frame_rate_hz,
+            betas: self.betas.clone(),
+            gender: "neutral".into(),
+            poses: self.frames.iter().map(|f| f.pose).collect(),
+            trans: self.frames.iter().map(|f| f.transl).collect(),
+        }
+    }
 }
 
 /// What went wrong running a crowd.
@@ -285,7 +298,7 @@ impl<'m> Agent<'m> {
         let goal = match goals.next() {
             Some(g) => g,
             None => sample_goal(
-                world.map,
+                &world.map,
                 world.region.as_deref(),
                 plan.start,
                 settings.wander_distance_m,
@@ -301,7 +314,7 @@ impl<'m> Agent<'m> {
             .facing_rad
             .unwrap_or_else(|| to_goal.y.atan2(to_goal.x));
         let rest_pelvis = body.shaped.rest_joints[joint::PELVIS];
-        let map = world.map;
+        let map = &*world.map;
         let mut seed = place_seed(
             frames,
             *floor,
@@ -490,7 +503,7 @@ impl<'m> Agent<'m> {
         let next = match self.plan.goals.get(self.next_goal) {
             Some(&g) => Some(g),
             None if self.plan.wander => sample_goal(
-                world.map,
+                &world.map,
                 world.region.as_deref(),
                 self.walker.view.pelvis,
                 settings.wander_distance_m,
@@ -589,7 +602,7 @@ pub fn run_crowd(
                     }),
             );
             let around = Surroundings {
-                map: world.map,
+                map: &world.map,
                 obstacle: None,
                 moving: &moving,
             };

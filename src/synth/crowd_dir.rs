@@ -19,7 +19,6 @@ use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::manifest::{build_manifest, MANIFEST};
 use crate::math::Affine3;
-use crate::motion::MotionSequence;
 use crate::policy::walker::footprint;
 use crate::preview::map::MapPicture;
 use crate::scene::Obstacle2;
@@ -194,7 +193,7 @@ const PALETTE: [[u8; 3]; 8] = [
 ];
 
 fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
-    let mut pic = MapPicture::new(world.map, 900);
+    let mut pic = MapPicture::new(&world.map, 900);
     if let Some(region) = &world.region {
         // Walkable ground outside the region starts and goals are drawn in.
         let outside: Vec<bool> = world
@@ -268,14 +267,8 @@ pub fn write_crowd_dir(
         let folder = staging.join("agents").join(&a.name);
         std::fs::create_dir_all(&folder)
             .with_context(|| format!("creating {}", folder.display()))?;
-        let motion = MotionSequence {
-            frame_rate_hz: take.frame_rate_hz,
-            betas: a.betas.clone(),
-            gender: "neutral".into(),
-            poses: a.frames.iter().map(|f| f.pose).collect(),
-            trans: a.frames.iter().map(|f| f.transl).collect(),
-        };
-        motion.write_amass(&folder.join("motion.npz"))?;
+        a.motion_sequence(take.frame_rate_hz)
+            .write_amass(&folder.join("motion.npz"))?;
         write_atomically(
             &folder.join("cpf_trajectory.json"),
             &cpf_json(&a.world_from_cpf, take.frame_rate_hz)?,
