@@ -453,3 +453,75 @@ workers = 1
         .join("out/sequence/agents/other/motion.npz")
         .is_file());
 }
+
+#[test]
+fn run_configs_with_agents_are_checked_by_key() {
+    let scene = common::repo_root().join("assets/scenes/apartment.glb");
+    let run = |extra: &str, motion: &str| {
+        format!(
+            "[body]\n{extra}\n[motion]\n{motion}\n[scene]\npath = \"{}\"\n[output]\ndir = \"o\"\n",
+            scene.display()
+        )
+    };
+    let agents = "source = \"agents\"\nduration_s = 2.0";
+    let cases = [
+        (run("betas = [1.0]\n[[agents]]", agents), "body.betas"),
+        (
+            run(
+                "[[agents]]\nname = \"a\"\n[render]\nwearers = [\"b\"]",
+                agents,
+            ),
+            "render.wearers",
+        ),
+        (
+            run("[[agents]]\n[render]\nwearers = []", agents),
+            "render.wearers",
+        ),
+        (
+            run("[[agents]]", "source = \"agents\"\npath = \"x.npz\""),
+            "motion.path",
+        ),
+        (
+            run(
+                "[crowd]\ncount = 2",
+                "source = \"scripted_walk\"\nduration_s = 1.0\nframe_rate_hz = 40.0",
+            ),
+            "crowd",
+        ),
+        (
+            run(
+                "",
+                "source = \"scripted_walk\"\nduration_s = 1.0\nframe_rate_hz = 40.0\nseed = 3",
+            ),
+            "motion.seed",
+        ),
+        (run("", agents), "1–32 agents"),
+    ];
+    for (config, expected) in cases {
+        let (_dir, path) = common::run_dir(&config);
+        let err = egogen::cli::config::RawRun::load(&path)
+            .and_then(|raw| egogen::cli::resolve::resolve_run(raw, &path))
+            .map(|_| ())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains(expected),
+            "{config}: expected {expected:?} in {err}"
+        );
+    }
+    // A good one resolves, the wearer by name.
+    let (_dir, path) = common::run_dir(&run(
+        "[[agents]]\nname = \"a\"\n[[agents]]\nname = \"b\"\n[render]\nwearers = [\"b\"]",
+        agents,
+    ));
+    let plan =
+        egogen::cli::resolve::resolve_run(egogen::cli::config::RawRun::load(&path).unwrap(), &path)
+            .unwrap();
+    match plan.motion {
+        egogen::plan::MotionPlan::Agents { synth, wearers } => {
+            assert_eq!(wearers, vec![1]);
+            assert_eq!(synth.agents.len(), 2);
+        }
+        other => panic!("{other:?}"),
+    }
+}

@@ -82,7 +82,8 @@ pub struct RawMotion {
 pub struct RawOutput {
     /// Output folder; must not exist yet (or be empty).
     pub dir: PathBuf,
-    /// Write a posed mesh (OBJ) every this many frames; 0 writes none.
+    /// Write a posed mesh (OBJ) every this many frames (a scripted walk or a motion file; a
+    /// take of agents writes none); 0 writes none.
     #[serde(default = "default_mesh_every")]
     pub mesh_every_n_frames: usize,
 }
