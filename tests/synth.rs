@@ -187,6 +187,12 @@ dir = "take"
     let out = run_synth(&plan, false).unwrap();
     let body = egogen::body::BodyModel::load(common::default_model_path()).unwrap();
     assert_eq!(out.summary.agents.len(), 3);
+    let checks = out.summary.totals.checks;
+    assert_eq!(checks.non_finite_frames, 0);
+    assert!(checks.min_eye_height_m > 1.0, "{checks:?}");
+    assert!(checks.max_lowest_marker_gap_m < 0.2, "{checks:?}");
+    // Starts and goals are drawn inside the walls; paths may graze the ground outside.
+    assert!(checks.outside_region_share < 0.1, "{checks:?}");
     for a in &out.summary.agents {
         assert_eq!(
             a.state,

@@ -10,6 +10,7 @@ pub mod markers;
 pub mod model;
 pub mod model_file;
 pub mod skeleton;
+pub mod volume;
 
 pub use cpf::CpfCalibration;
 pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody};
@@ -17,3 +18,4 @@ pub use markers::{farthest_point_markers, MarkerFrame, NUM_MARKERS};
 pub use model::BodyModel;
 pub use model_file::ModelFileError;
 pub use skeleton::{joint, JOINT_NAMES, NUM_JOINTS, PARENTS, POSE_DIM};
+pub use volume::CapsuleVolume;

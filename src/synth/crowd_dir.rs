@@ -47,8 +47,67 @@ pub struct TakeTotals {
     /// agent's 2D box (the bounding box of that agent's markers in its own horizontal frame) at
     /// the same frame.
     pub human_overlap_share: f64,
+    /// Vertices of one body inside another's capsule volume (docs/SYNTH.md), every 4th frame.
+    pub human_penetration: super::penetration::HumanPenetration,
     /// Seconds of motion (agents × take length) per wall second.
     pub agent_seconds_per_wall_s: f64,
+    pub checks: TakeChecks,
+}
+
+/// Sanity of every frame of every agent: finite, upright, feet on the floor, in the region.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct TakeChecks {
+    /// Frames with a non-finite pose, translation or marker.
+    pub non_finite_frames: usize,
+    /// Lowest eye (CPF) height above the floor over all frames (m).
+    pub min_eye_height_m: f64,
+    /// Largest distance of the lowest body marker from the floor over all frames (m): a body
+    /// floating or sinking shows here.
+    pub max_lowest_marker_gap_m: f64,
+    /// Share of frames whose pelvis stands outside the region starts and goals are drawn in
+    /// (0 without a region).
+    pub outside_region_share: f64,
+}
+
+/// Checks every frame of a take.
+pub fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
+    let floor = world.map.floor_z_m;
+    let mut c = TakeChecks {
+        non_finite_frames: 0,
+        min_eye_height_m: f64::INFINITY,
+        max_lowest_marker_gap_m: 0.0,
+        outside_region_share: 0.0,
+    };
+    let (mut outside, mut frames) = (0usize, 0usize);
+    for a in &take.agents {
+        for f in 0..a.frames.len() {
+            frames += 1;
+            let finite = a.frames[f].pose.iter().all(|v| v.is_finite())
+                && a.frames[f].transl.is_finite()
+                && a.markers[f].iter().all(|m| m.is_finite());
+            if !finite {
+                c.non_finite_frames += 1;
+                continue;
+            }
+            c.min_eye_height_m = c
+                .min_eye_height_m
+                .min(a.world_from_cpf[f].translation.z - floor);
+            let lowest = a.markers[f]
+                .iter()
+                .map(|m| m.z)
+                .fold(f64::INFINITY, f64::min);
+            c.max_lowest_marker_gap_m = c.max_lowest_marker_gap_m.max((lowest - floor).abs());
+            if let Some(region) = &world.region {
+                let inside = world
+                    .map
+                    .cell_of(a.pelvis_xy[f])
+                    .is_some_and(|(i, j)| region[j * world.map.nx + i]);
+                outside += usize::from(!inside);
+            }
+        }
+    }
+    c.outside_region_share = outside as f64 / frames.max(1) as f64;
+    c
 }
 
 /// `summary.json`.
@@ -298,6 +357,8 @@ pub fn write_crowd_dir(
         contact_mean: take.agents.iter().map(|a| a.contact).sum::<f64>() / n,
         penetration_share_mean: take.agents.iter().map(|a| a.penetration_share).sum::<f64>() / n,
         human_overlap_share: human_overlap_share(&take.agents),
+        human_penetration: super::penetration::human_penetration(body, &take.agents, 4)?,
+        checks: take_checks(world, take),
         agent_seconds_per_wall_s: take.agents.len() as f64 * take.frames as f64
             / take.frame_rate_hz
             / wall_s.max(1e-9),

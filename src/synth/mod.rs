@@ -5,6 +5,7 @@ pub mod body_cache;
 pub mod body_track;
 pub mod crowd;
 pub mod crowd_dir;
+pub mod penetration;
 pub mod placement;
 pub mod sequence_dir;
 
