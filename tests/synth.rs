@@ -502,6 +502,13 @@ fn run_configs_with_agents_are_checked_by_key() {
             "motion.seed",
         ),
         (run("", agents), "1–32 agents"),
+        (
+            run(
+                "[[agents]]\n[[obstacles]]\ncentre = [0.0, 0.0]\nsize_m = [1.0, 1.0]\n[render]",
+                agents,
+            ),
+            "no geometry to render",
+        ),
     ];
     for (config, expected) in cases {
         let (_dir, path) = common::run_dir(&config);

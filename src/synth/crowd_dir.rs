@@ -67,6 +67,9 @@ pub struct TakeChecks {
     /// Share of frames whose pelvis stands outside the region starts and goals are drawn in
     /// (0 without a region).
     pub outside_region_share: f64,
+    /// Walkable floor, and the part of it starts and goals are drawn on (m²).
+    pub walkable_m2: f64,
+    pub region_m2: f64,
 }
 
 /// Checks every frame of a take.
@@ -77,6 +80,13 @@ pub fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
         min_eye_height_m: f64::INFINITY,
         max_lowest_marker_gap_m: 0.0,
         outside_region_share: 0.0,
+        walkable_m2: world.map.walkable_count() as f64 * world.map.cell_m * world.map.cell_m,
+        region_m2: 0.0,
+    };
+    let cell_m2 = world.map.cell_m * world.map.cell_m;
+    c.region_m2 = match &world.region {
+        Some(r) => r.iter().filter(|&&x| x).count() as f64 * cell_m2,
+        None => c.walkable_m2,
     };
     let (mut outside, mut frames) = (0usize, 0usize);
     for a in &take.agents {
