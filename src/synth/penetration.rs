@@ -128,9 +128,8 @@ mod tests {
 
     #[test]
     fn bodies_apart_do_not_penetrate_and_bodies_overlapping_do() {
-        let model =
-            BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz"))
-                .unwrap();
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let model = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
         let measure = |dx: f64| {
             human_penetration(&model, &[standing("a", 0.0, 8), standing("b", dx, 8)], 4).unwrap()
         };
