@@ -308,10 +308,11 @@ fn an_existing_output_folder_is_not_overwritten() {
     assert!(!dir.path().join("take.partial").exists());
 }
 
-/// Two agents cross in the apartment's living room; the first wears the Aria RGB camera.
-/// Rendered by Blender at a small size, the annotations agree with the render: the other
-/// agent is in view in some frame, its box is the box of its segmentation pixels (read back
-/// from the EXR), and its visible joints fall on its mask.
+/// Two agents cross in the apartment's living room, both wearing the Aria RGB camera (two
+/// camera sets, named after their wearers). Rendered by Blender at a small size, the
+/// annotations agree with the render: the first wearer sees the other agent in some frame, its
+/// box is the box of its segmentation pixels (read back from the EXR), and its visible joints
+/// fall on its mask.
 #[test]
 fn a_wearer_sees_the_other_agent_and_the_annotations_match_the_render() {
     let config = format!(
@@ -342,6 +343,7 @@ resolution_scale = 0.125
 every_n_frames = 20
 samples = 2
 shutter_frames = 0.0
+wearers = ["wearer", "other"]
 [supervisor]
 workers = 1
 "#,
@@ -359,7 +361,14 @@ workers = 1
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let cam = dir.path().join("out/cameras/camera-rgb");
+    let other_cam: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("out/cameras/other_camera-rgb/annotations.json"))
+            .unwrap(),
+    )
+    .unwrap();
+    assert_eq!(other_cam["wearer"], "other");
+    assert_eq!(other_cam["frames"][0]["agents"][1]["wearer"], true);
+    let cam = dir.path().join("out/cameras/wearer_camera-rgb");
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
             .unwrap();
