@@ -79,11 +79,11 @@ fn bench(c: &mut Criterion) {
     };
     let mut g = c.benchmark_group("synth_crowd");
     g.sample_size(10);
-    let policy = Steering::Policy { mean_action: false };
+    let steer = Steering::Policy { mean_action: false };
     let cases = [
-        ("policy", 1usize, policy),
-        ("policy", 4, policy),
-        ("policy", 16, policy),
+        ("policy", 1usize, steer),
+        ("policy", 4, steer),
+        ("policy", 16, steer),
         ("sampling_k16", 1, Steering::Sampling { k: 16 }),
     ];
     for (name, agents, steering) in cases {
@@ -95,6 +95,61 @@ fn bench(c: &mut Criterion) {
             b.iter(|| run_crowd(&parts, &world, &plans, &settings, |_, _| {}).unwrap())
         });
     }
+    g.finish();
+
+    // Where one agent's primitive goes: the parts of a step at batch 1.
+    let mut g = c.benchmark_group("synth_step_parts");
+    g.sample_size(20);
+    let seed = bank.seeds[0].clone();
+    let view_seed = egogen::policy::walker::place_seed(
+        &seed.0,
+        seed.1,
+        DVec2::new(-2.0, 0.0),
+        0.0,
+        0.0,
+        ctx.shaped.rest_joints[0],
+    );
+    let view = egogen::policy::walker::SeedView::new(&ctx, view_seed.clone()).unwrap();
+    let walker = egogen::policy::walker::Walker::new(view, DVec2::new(2.0, 0.0));
+    let scan = egogen::sensing::RayScan::new(Default::default());
+    let around = egogen::policy::walker::Surroundings {
+        map: &world.map,
+        obstacle: None,
+        moving: &[],
+    };
+    let mut obs = vec![0f32; egogen::policy::OBS_DIM];
+    g.bench_function("observe", |b| {
+        b.iter(|| {
+            walker.observe_into(&ctx, &scan, DVec2::new(2.0, 0.0), &around, 0.0, 1.0, &mut obs)
+        })
+    });
+    let device = Default::default();
+    let mut rng = <rand_chacha::ChaCha8Rng as rand_core::SeedableRng>::seed_from_u64(0);
+    g.bench_function("policy_forward", |b| {
+        b.iter(|| egogen::policy::ppo::act(&policy, obs.clone(), Some(&mut rng), &device))
+    });
+    let z = vec![vec![0f32; model.latent_dim()]];
+    g.bench_function("decode_and_pose", |b| {
+        b.iter(|| model.decode_each(&ctx, std::slice::from_ref(&view_seed), &z).unwrap())
+    });
+    let p = model
+        .decode(&ctx, std::slice::from_ref(&view_seed), &z)
+        .unwrap()
+        .remove(0);
+    let feet = egogen::motion::cvae::rig::RigGeometry::new(&body, &[])
+        .unwrap()
+        .foot_markers;
+    let situation = walker.situation(&around, DVec2::new(2.0, 0.0), 0.0);
+    let limits = egogen::policy::reward::Limits {
+        success_m: 0.3,
+        penetration_cells: 3,
+    };
+    g.bench_function("judge", |b| {
+        b.iter(|| egogen::policy::reward::judge(&p, &situation, &feet, &prior, &limits))
+    });
+    g.bench_function("agent_setup", |b| {
+        b.iter(|| BodyContext::new(&body, &[0.5, -0.5]).unwrap())
+    });
     g.finish();
 }
 

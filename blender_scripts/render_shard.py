@@ -57,11 +57,28 @@ def add_body(scene, body):
     return obj
 
 
+def add_ceiling(scene, ceiling):
+    """A light grey rectangle facing down at the top of the walls (a scene without a ceiling)."""
+    (x0, y0), (x1, y1), z = ceiling["min_xy"], ceiling["max_xy"], ceiling["z_m"]
+    mesh = bpy.data.meshes.new("egogen_ceiling")
+    # Wound clockwise seen from above: the normal points down, into the rooms.
+    mesh.from_pydata([(x0, y0, z), (x0, y1, z), (x1, y1, z), (x1, y0, z)], [], [(0, 1, 2, 3)])
+    mesh.update()
+    mat = bpy.data.materials.new("egogen_ceiling_material")
+    mat.use_nodes = True
+    mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.8, 0.8, 0.78, 1.0)
+    mesh.materials.append(mat)
+    obj = bpy.data.objects.new("egogen_ceiling", mesh)
+    scene.collection.objects.link(obj)
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
     bpy.ops.import_scene.gltf(filepath=spec["scene_glb"])
     scene = bpy.context.scene
+    if spec.get("ceiling"):
+        add_ceiling(scene, spec["ceiling"])
     ids = dict(spec["object_ids"])
     for obj in scene.objects:
         obj.pass_index = ids.get(obj.name, 0)

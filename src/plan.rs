@@ -123,6 +123,8 @@ pub struct RunPlan {
     pub mesh_every_n_frames: usize,
     pub scene: PathBuf,
     pub scene_seed: u64,
+    /// Add a ceiling when rendering a scene that has none.
+    pub ceiling: bool,
     pub render: Option<RenderPlan>,
     pub supervisor: SupervisorPlan,
 }

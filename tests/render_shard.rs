@@ -198,6 +198,7 @@ fn render_scene() -> Rendered {
             frames: PROBE_FRAMES.to_vec(),
             output_json: probe.clone(),
         }),
+        ceiling: None,
     };
     let runtime = BlenderRuntime::resolve(None).expect("Blender 4.5 (managed PyPI bpy)");
     let done = render_shard(&runtime, &spec, &dir.path().join("shard.json")).unwrap();

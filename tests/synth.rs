@@ -380,6 +380,8 @@ workers = 1
         .filter_map(|i| i["name"].as_str())
         .collect();
     assert!(ids.contains(&"wearer") && ids.contains(&"other"), "{ids:?}");
+    // The apartment has no ceiling: the run closes it (at the top of its walls).
+    assert!(ids.contains(&"egogen_ceiling"), "{ids:?}");
     let mut seen = 0;
     for f in doc["frames"].as_array().unwrap() {
         let agents = f["agents"].as_array().unwrap();
@@ -391,6 +393,18 @@ workers = 1
         let exr =
             egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
         let seg = &exr.channel("segmentation.id").unwrap().values;
+        // The added ceiling is rendered: the wearer, head up, sees it.
+        let ceiling_id = doc["segmentation_ids"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|i| i["name"] == "egogen_ceiling")
+            .unwrap()["id"]
+            .as_u64()
+            .unwrap() as f32;
+        let ceiling_px = seg.iter().filter(|&&v| v == ceiling_id).count();
+        assert!(ceiling_px > 0, "frame {}: no ceiling pixel", f["frame"]);
+
         let width = (seg.len() as f64).sqrt() as usize;
         assert_eq!(width * width, seg.len(), "a square Aria RGB image");
         let id = other["id"].as_u64().unwrap() as u32;

@@ -102,6 +102,9 @@ pub struct RawScene {
     pub seed: Option<u64>,
     /// With agents: draw starts and goals inside the walls only (default true).
     pub indoors: Option<bool>,
+    /// Close a scene that has no ceiling with one at the top of its walls when rendering
+    /// (default true; a scene with its own ceiling is left as it is).
+    pub ceiling: Option<bool>,
 }
 
 /// `[render]`: which cameras render what, and how well.

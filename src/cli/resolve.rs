@@ -276,6 +276,7 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         mesh_every_n_frames: raw.output.mesh_every_n_frames,
         scene,
         scene_seed: raw.scene.seed.unwrap_or(0),
+        ceiling: raw.scene.ceiling.unwrap_or(true),
         render,
         supervisor: resolve_supervisor(raw.supervisor, config_path)?,
     })

@@ -147,7 +147,23 @@ pub struct ShardSpec {
     pub cameras: Vec<ShardCamera>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub body_probe: Option<BodyProbe>,
+    /// A ceiling egogen adds to a scene that has none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ceiling: Option<ShardCeiling>,
 }
+
+/// A horizontal rectangle facing down, named [`CEILING_OBJECT`] (its segmentation id comes
+/// from `object_ids` like the scene's objects).
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardCeiling {
+    pub z_m: f64,
+    pub min_xy: [f64; 2],
+    pub max_xy: [f64; 2],
+}
+
+/// The name of the ceiling object in the rendered scene and its annotations.
+pub const CEILING_OBJECT: &str = "egogen_ceiling";
 
 impl ShardSpec {
     /// Number of files the worker writes.

@@ -5,6 +5,7 @@
 //! off to `sensing` (rays over the walkable map).
 //! Nothing here knows about bodies or policies.
 
+pub mod ceiling;
 pub mod floor;
 pub mod load;
 pub mod mesh;

@@ -22,7 +22,9 @@ use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
+use crate::render::protocol::{ShardCeiling, CEILING_OBJECT};
 use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec};
+use crate::scene::ceiling::ceiling_to_add;
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
 use crate::synth::crowd::{CrowdTake, CrowdWorld};
 use crate::synth::crowd_dir::write_crowd_dir;
@@ -300,11 +302,21 @@ pub fn run_pipeline(
             });
         }
     }
-    let object_ids: Vec<(String, u32)> = scene
+    let mut object_ids: Vec<(String, u32)> = scene
         .objects
         .iter()
         .map(|o| (o.name.clone(), o.id.0))
         .collect();
+    let ceiling = plan.ceiling.then(|| ceiling_to_add(&scene)).flatten();
+    if let Some(c) = ceiling {
+        eprintln!(
+            "egogen-run: {} has no ceiling; closing its rooms with one at z = {:.2} m (scene.ceiling = false leaves it open)",
+            plan.scene.display(),
+            c.z_m
+        );
+        let id = object_ids.iter().map(|o| o.1).max().unwrap_or(0) + 1;
+        object_ids.push((CEILING_OBJECT.into(), id));
+    }
     let (fps, fps_base) = blender_fps(agents[0].motion.frame_rate_hz);
     let (lo, hi) = scene_bounds(&scene);
     let track = &agents[wearers[0]].track;
@@ -331,6 +343,11 @@ pub fn run_pipeline(
         },
         cameras: Vec::new(),
         body_probe: None,
+        ceiling: ceiling.map(|c| ShardCeiling {
+            z_m: c.z_m,
+            min_xy: c.min_xy,
+            max_xy: c.max_xy,
+        }),
     };
     let dataset = Arc::new(Dataset {
         staging: std::fs::canonicalize(&staging)?,
