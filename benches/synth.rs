@@ -120,7 +120,15 @@ fn bench(c: &mut Criterion) {
     let mut obs = vec![0f32; egogen::policy::OBS_DIM];
     g.bench_function("observe", |b| {
         b.iter(|| {
-            walker.observe_into(&ctx, &scan, DVec2::new(2.0, 0.0), &around, 0.0, 1.0, &mut obs)
+            walker.observe_into(
+                &ctx,
+                &scan,
+                DVec2::new(2.0, 0.0),
+                &around,
+                0.0,
+                1.0,
+                &mut obs,
+            )
         })
     });
     let device = Default::default();
@@ -130,7 +138,11 @@ fn bench(c: &mut Criterion) {
     });
     let z = vec![vec![0f32; model.latent_dim()]];
     g.bench_function("decode_and_pose", |b| {
-        b.iter(|| model.decode_each(&ctx, std::slice::from_ref(&view_seed), &z).unwrap())
+        b.iter(|| {
+            model
+                .decode_each(&ctx, std::slice::from_ref(&view_seed), &z)
+                .unwrap()
+        })
     });
     let p = model
         .decode(&ctx, std::slice::from_ref(&view_seed), &z)

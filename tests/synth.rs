@@ -362,8 +362,11 @@ workers = 1
         String::from_utf8_lossy(&out.stderr)
     );
     let other_cam: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.path().join("out/cameras/other_camera-rgb/annotations.json"))
-            .unwrap(),
+        &std::fs::read_to_string(
+            dir.path()
+                .join("out/cameras/other_camera-rgb/annotations.json"),
+        )
+        .unwrap(),
     )
     .unwrap();
     assert_eq!(other_cam["wearer"], "other");
