@@ -36,6 +36,10 @@ use crate::policy::PosePrior;
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 use crate::sensing::{RayScan, RayScanSettings};
 
+/// A primitive moving the pelvis less than this (m, horizontal) with the goal still ahead
+/// counts as stuck (a walking primitive covers 0.2–0.7 m).
+pub const STUCK_STEP_M: f64 = 0.05;
+
 /// New frames per primitive (the seed frames are the previous primitive's last).
 pub const NEW_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 
@@ -165,6 +169,9 @@ pub struct AgentTrack {
     pub stopped_at_frame: Option<usize>,
     /// Primitives taken.
     pub primitives: usize,
+    /// Primitives in which the pelvis moved less than [`STUCK_STEP_M`] with the goal not
+    /// reached: time spent stuck.
+    pub stuck_primitives: usize,
     /// Mean foot contact (3-D, Eq. 12) over the primitives.
     pub contact: f64,
     /// Share of new frames with a body marker inside a static obstacle, a moving obstacle or
@@ -372,6 +379,7 @@ impl<'m> Agent<'m> {
             state: AgentState::Walking,
             stopped_at_frame: None,
             primitives: 0,
+            stuck_primitives: 0,
             contact: 0.0,
             penetration_share: 0.0,
             speed_m_s: 0.0,
@@ -472,9 +480,16 @@ impl<'m> Agent<'m> {
         world: &CrowdWorld,
         settings: &CrowdSettings,
     ) {
+        let before = self.walker.view.pelvis;
         self.walker.advance(&p, &j, reward);
         self.goal_steps += 1;
         self.track.primitives += 1;
+        // Stuck: hardly moving with the goal still ahead.
+        if self.walker.view.pelvis.distance(before) < STUCK_STEP_M
+            && j.distance_m >= settings.success_m
+        {
+            self.track.stuck_primitives += 1;
+        }
         for k in SEED_FRAMES..p.world.len() {
             let mut f = p.world[k].clone();
             f.betas = self.plan.betas.clone();

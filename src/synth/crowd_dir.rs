@@ -37,6 +37,8 @@ pub struct TakeTotals {
     pub goals: usize,
     pub goals_reached: usize,
     pub agents_fallen: usize,
+    /// Share of all primitives spent stuck (hardly moving, goal not reached).
+    pub stuck_share: f64,
     pub agents_decoder_failure: usize,
     /// Mean over agents of their mean foot contact (3-D, Eq. 12).
     pub contact_mean: f64,
@@ -359,6 +361,17 @@ pub fn write_crowd_dir(
             .iter()
             .filter(|a| a.state == AgentState::Fell)
             .count(),
+        stuck_share: take
+            .agents
+            .iter()
+            .map(|a| a.stuck_primitives)
+            .sum::<usize>() as f64
+            / take
+                .agents
+                .iter()
+                .map(|a| a.primitives)
+                .sum::<usize>()
+                .max(1) as f64,
         agents_decoder_failure: take
             .agents
             .iter()

@@ -120,6 +120,7 @@ mod tests {
             state: AgentState::Done,
             stopped_at_frame: None,
             primitives: 0,
+            stuck_primitives: 0,
             contact: 0.0,
             penetration_share: 0.0,
             speed_m_s: 0.0,
