@@ -376,6 +376,14 @@ workers = 1
         serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
             .unwrap();
     assert_eq!(doc["wearer"], "wearer");
+    // The file reads back into its types.
+    let typed: egogen::supervisor::annotations::CameraAnnotations =
+        serde_json::from_value(doc.clone()).unwrap();
+    assert_eq!(typed.egogen_annotations, 1);
+    assert!(typed.frames.iter().all(|f| f.agents.len() == 2
+        && f.agents
+            .iter()
+            .all(|a| a.joints_2d.len() == 55 && a.joint_visibility.len() == 55)));
     let ids: Vec<&str> = doc["segmentation_ids"]
         .as_array()
         .unwrap()

@@ -17,6 +17,10 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use serde_json::json;
 
+use super::annotations::{
+    AgentAnnotation, CameraAnnotations, Conventions, FrameAnnotation, JointVisibility,
+    SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
+};
 use crate::camera::CameraModel;
 use crate::math::{Affine3, Real, Vec3};
 use crate::motion::MotionSequence;
@@ -271,35 +275,41 @@ pub fn write_annotations(
             let ids = &contents.channel("segmentation.id").unwrap().values;
             frames.push(frame_annotation(work, f, agents, depth, ids));
         }
-        let mut ids: Vec<serde_json::Value> = object_ids
+        let mut segmentation_ids: Vec<SegmentationId> = object_ids
             .iter()
-            .map(|(n, id)| json!({"name": n, "id": id}))
+            .map(|(name, id)| SegmentationId {
+                name: name.clone(),
+                id: *id,
+            })
             .collect();
-        ids.extend(agents.iter().map(|a| json!({"name": a.name, "id": a.id})));
-        let doc = json!({
-            "egogen_annotations": 1,
-            "conventions": {
-                "world": "metres, z up",
-                "camera_frame": "OpenCV: x right, y down, z forward",
-                "pixels": "centre of the top-left pixel at (0, 0)",
-                "T_world_cam": "row-major 4x4 mapping camera-frame points to the world",
-                "depth": "planar: z of the surface point in the camera frame (m); 0 = no surface",
-                "joint_visibility": format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view)"),
-                "bbox_xyxy": "tight box of the agent's segmentation pixels, inclusive pixel indices",
+        segmentation_ids.extend(agents.iter().map(|a| SegmentationId {
+            name: a.name.clone(),
+            id: a.id,
+        }));
+        let doc = CameraAnnotations {
+            egogen_annotations: ANNOTATIONS_VERSION,
+            conventions: Conventions {
+                world: "metres, z up".into(),
+                camera_frame: "OpenCV: x right, y down, z forward".into(),
+                pixels: "centre of the top-left pixel at (0, 0)".into(),
+                t_world_cam: "row-major 4x4 mapping camera-frame points to the world".into(),
+                depth: "planar: z of the surface point in the camera frame (m); 0 = no surface".into(),
+                joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view)"),
+                bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices".into(),
             },
-            "camera": model_json,
-            "image_model": image_model(work),
-            "depth_noise": work.depth_noise.map(|(model, seed)| json!({
+            camera: model_json,
+            image_model: image_model(work),
+            depth_noise: work.depth_noise.map(|(model, seed)| json!({
                 "channel": "depth_noisy.Z",
                 "model": "sigma = a + b (z - c)^2 + d theta^2 / (sqrt(z) (pi/2 - theta)^2), Nguyen et al. 2012; 0 = no measurement",
                 "parameters": model,
                 "seed": seed,
             })),
-            "wearer": agents[work.wearer].name,
-            "frame_rate_hz": agents[0].motion.frame_rate_hz,
-            "segmentation_ids": ids,
-            "frames": frames,
-        });
+            wearer: agents[work.wearer].name.clone(),
+            frame_rate_hz: agents[0].motion.frame_rate_hz,
+            segmentation_ids,
+            frames,
+        };
         let path = dataset
             .staging
             .join("cameras")
@@ -342,14 +352,14 @@ fn frame_annotation(
     agents: &[RenderedAgent],
     depth: &[f32],
     ids: &[f32],
-) -> serde_json::Value {
+) -> FrameAnnotation {
     let i = f as usize;
     let res = work.camera.model.resolution();
     let w = res.width_px as usize;
     let world_from_cam = work.world_from_cam[i];
     let cam_from_world = world_from_cam.inverse();
     let pelvis = |a: &RenderedAgent| a.track.frames[i].joints[0];
-    let listed: Vec<serde_json::Value> = agents
+    let listed = agents
         .iter()
         .enumerate()
         .map(|(k, a)| {
@@ -369,16 +379,19 @@ fn frame_annotation(
                             && d > 0.0
                             && d < p.z - JOINT_OCCLUSION_TOLERANCE_M;
                         joints_2d.push(Some([px.x, px.y]));
-                        visibility.push(if occluded { "occluded" } else { "visible" });
+                        visibility.push(if occluded {
+                            JointVisibility::Occluded
+                        } else {
+                            JointVisibility::Visible
+                        });
                     }
                     None => {
                         joints_2d.push(None);
-                        visibility.push("outside");
+                        visibility.push(JointVisibility::Outside);
                     }
                 }
             }
             let bbox = bbox_of(ids, w, a.id);
-            let pose = &a.motion.poses[i];
             // Distance to the nearest other agent (pelvis to pelvis); none alone.
             let nearest = agents
                 .iter()
@@ -386,37 +399,31 @@ fn frame_annotation(
                 .filter(|(o, _)| *o != k)
                 .map(|(_, o)| pelvis(o).distance(pelvis(a)))
                 .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.min(d))));
-            json!({
-                "name": a.name,
-                "id": a.id,
-                "wearer": k == work.wearer,
-                "in_view": bbox.is_some(),
-                "smplx": {
-                    "betas": a.motion.betas,
-                    "global_orient": &pose[0..3],
-                    "body_pose": &pose[3..66],
-                    "jaw_pose": &pose[66..69],
-                    "leye_pose": &pose[69..72],
-                    "reye_pose": &pose[72..75],
-                    "left_hand_pose": &pose[75..120],
-                    "right_hand_pose": &pose[120..165],
-                    "transl": a.motion.trans[i].to_array(),
-                },
-                "joints_3d": joints.iter().map(|j| j.to_array()).collect::<Vec<_>>(),
-                "joints_2d": joints_2d,
-                "joint_visibility": visibility,
-                "bbox_xyxy": bbox,
-                "interaction_distance_m": nearest,
-            })
+            AgentAnnotation {
+                name: a.name.clone(),
+                id: a.id,
+                wearer: k == work.wearer,
+                in_view: bbox.is_some(),
+                smplx: SmplxParams::new(
+                    &a.motion.betas,
+                    &a.motion.poses[i],
+                    a.motion.trans[i].to_array(),
+                ),
+                joints_3d: joints.iter().map(|j| j.to_array()).collect(),
+                joints_2d,
+                joint_visibility: visibility,
+                bbox_xyxy: bbox,
+                interaction_distance_m: nearest,
+            }
         })
         .collect();
-    json!({
-        "frame": f,
-        "time_s": f as f64 / agents[0].motion.frame_rate_hz,
-        "file": format!("frame_{f:05}.exr"),
-        "T_world_cam": crate::render::camera_setup::row_major(world_from_cam),
-        "agents": listed,
-    })
+    FrameAnnotation {
+        frame: f,
+        time_s: f as f64 / agents[0].motion.frame_rate_hz,
+        file: format!("frame_{f:05}.exr"),
+        t_world_cam: crate::render::camera_setup::row_major(world_from_cam),
+        agents: listed,
+    }
 }
 
 /// Inclusive pixel box of the pixels labelled `id`, if any.

@@ -3,6 +3,7 @@
 //! finishes and validates frames, writes annotations, the COLMAP export and the manifest, and
 //! resumes an interrupted run where it stopped.
 
+pub mod annotations;
 pub mod colmap;
 pub mod dataset;
 pub mod local;

@@ -1,0 +1,126 @@
+//! The per-camera annotation file (`cameras/<camera>/annotations.json`) as types: what a
+//! dataset promises its users, written and read back by the same structs. The schema, with
+//! units, is in docs/ANNOTATIONS.md; [`ANNOTATIONS_VERSION`] changes when it does.
+
+use serde::{Deserialize, Serialize};
+
+/// Version of the annotation schema (`egogen_annotations` in the file).
+pub const ANNOTATIONS_VERSION: u32 = 1;
+
+/// One camera's annotations.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CameraAnnotations {
+    pub egogen_annotations: u32,
+    pub conventions: Conventions,
+    /// The camera as in a rig file (model, parameters, resolution, pose on the CPF).
+    pub camera: serde_json::Value,
+    /// The lens the images were rendered with (`kind`: `exact` or
+    /// `cycles_polynomial_fisheye` with its error against `camera`).
+    pub image_model: serde_json::Value,
+    /// The noisy depth channel's model and seed, when the camera has one.
+    pub depth_noise: Option<serde_json::Value>,
+    /// Name of the agent wearing the camera.
+    pub wearer: String,
+    pub frame_rate_hz: f64,
+    pub segmentation_ids: Vec<SegmentationId>,
+    pub frames: Vec<FrameAnnotation>,
+}
+
+/// The conventions, spelled out in every file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Conventions {
+    pub world: String,
+    pub camera_frame: String,
+    pub pixels: String,
+    #[serde(rename = "T_world_cam")]
+    pub t_world_cam: String,
+    pub depth: String,
+    pub joint_visibility: String,
+    pub bbox_xyxy: String,
+}
+
+/// A segmentation id and what carries it (a scene object, the added ceiling, an agent).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SegmentationId {
+    pub name: String,
+    pub id: u32,
+}
+
+/// One rendered frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameAnnotation {
+    pub frame: u32,
+    pub time_s: f64,
+    /// The frame's EXR file, next to the annotations.
+    pub file: String,
+    /// Row-major 4×4 mapping camera-frame points (OpenCV) to the world (m).
+    #[serde(rename = "T_world_cam")]
+    pub t_world_cam: [[f64; 4]; 4],
+    /// Every agent of the run, in view or not.
+    pub agents: Vec<AgentAnnotation>,
+}
+
+/// Where a joint is in the image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointVisibility {
+    Visible,
+    /// The joint's pixel shows another object or agent nearer than the joint.
+    Occluded,
+    /// Not in the camera's valid field of view.
+    Outside,
+}
+
+/// One agent in one frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AgentAnnotation {
+    pub name: String,
+    /// Its segmentation id.
+    pub id: u32,
+    /// Whether it wears this camera.
+    pub wearer: bool,
+    /// Whether its segmentation shows in the image.
+    pub in_view: bool,
+    pub smplx: SmplxParams,
+    /// The 55 SMPL-X joints in the world (m).
+    pub joints_3d: Vec<[f64; 3]>,
+    /// Their pixels; `None` outside the valid field of view.
+    pub joints_2d: Vec<Option<[f64; 2]>>,
+    pub joint_visibility: Vec<JointVisibility>,
+    /// Tight box of its segmentation pixels, inclusive pixel indices; `None` when not in view.
+    pub bbox_xyxy: Option<[usize; 4]>,
+    /// Pelvis distance to the nearest other agent (m); `None` for a single agent.
+    pub interaction_distance_m: Option<f64>,
+}
+
+/// SMPL-X parameters as the `smplx` package takes them (axis-angle, radians; m).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SmplxParams {
+    pub betas: Vec<f64>,
+    pub global_orient: [f64; 3],
+    pub body_pose: Vec<f64>,
+    pub jaw_pose: [f64; 3],
+    pub leye_pose: [f64; 3],
+    pub reye_pose: [f64; 3],
+    pub left_hand_pose: Vec<f64>,
+    pub right_hand_pose: Vec<f64>,
+    pub transl: [f64; 3],
+}
+
+impl SmplxParams {
+    /// Splits a full SMPL-X pose (55 × axis-angle) into the `smplx` package's groups.
+    pub fn new(betas: &[f64], pose: &[f64; crate::body::POSE_DIM], transl: [f64; 3]) -> Self {
+        let three = |k: usize| [pose[k], pose[k + 1], pose[k + 2]];
+        Self {
+            betas: betas.to_vec(),
+            global_orient: three(0),
+            body_pose: pose[3..66].to_vec(),
+            jaw_pose: three(66),
+            leye_pose: three(69),
+            reye_pose: three(72),
+            left_hand_pose: pose[75..120].to_vec(),
+            right_hand_pose: pose[120..165].to_vec(),
+            transl,
+        }
+    }
+}
