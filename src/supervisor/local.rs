@@ -16,8 +16,8 @@ use tokio::sync::watch;
 
 use super::dataset::{Dataset, Shard};
 use super::pool::{
-    frames_bar, setup_failure, Attempt, PoolReport, ShardPool, ShardReport, EXIT_SETUP_FAILED,
-    SETUP_FAILED,
+    frames_bar, setup_failure, Attempt, Outcome, PoolReport, ShardPool, ShardReport,
+    EXIT_SETUP_FAILED,
 };
 use crate::render::shard::worker_command;
 use crate::render::shard_plan::raw_frame_paths;
@@ -149,7 +149,7 @@ async fn worker(shared: Arc<Shared>, w: usize) {
         };
         let report = run_shard(&shared, w, &shard).await;
         let failed =
-            report.attempts.last().is_some_and(|a| a.outcome != "ok") && !*shared.stop.borrow();
+            report.attempts.last().is_some_and(|a| !a.outcome.is_ok()) && !*shared.stop.borrow();
         if failed {
             let last = report.attempts.last().unwrap();
             let mut f = shared.failed.lock().unwrap();
@@ -201,11 +201,11 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
             .logs_dir()
             .join(format!("shard_{:04}_attempt_{attempt}.log", shard.id));
         let (finished, outcome) = match attempt_shard(shared, shard.camera, &missing, &log).await {
-            Ok(n) => (n, "ok".to_string()),
-            Err((n, reason)) => (n, reason),
+            Ok(n) => (n, Outcome::Ok),
+            Err((n, outcome)) => (n, outcome),
         };
-        let ok = outcome == "ok";
-        let setup_failed = outcome.starts_with(SETUP_FAILED);
+        let ok = outcome.is_ok();
+        let setup_failed = outcome.repeats();
         report.attempts.push(Attempt {
             attempt,
             frames: missing.len(),
@@ -228,12 +228,12 @@ async fn attempt_shard(
     camera: usize,
     frames: &[u32],
     log: &std::path::Path,
-) -> std::result::Result<usize, (usize, String)> {
+) -> std::result::Result<usize, (usize, Outcome)> {
     let dataset = shared.dataset.clone();
-    let fail = |n: usize, m: String| (n, m);
+    let fail = |n: usize, reason: String| (n, Outcome::Failed { reason });
     let spec = dataset.shard_spec(camera, frames);
     let spec_path = log.with_extension("json");
-    let io = |e: std::io::Error| (0, format!("preparing the shard: {e}"));
+    let io = |e: std::io::Error| fail(0, format!("preparing the shard: {e}"));
     std::fs::create_dir_all(dataset.logs_dir()).map_err(io)?;
     std::fs::write(&spec_path, serde_json::to_vec_pretty(&spec).unwrap()).map_err(io)?;
     let stderr = std::fs::File::create(log).map_err(io)?;
@@ -243,7 +243,7 @@ async fn attempt_shard(
         .stdin(Stdio::null())
         .kill_on_drop(true);
     let mut child = cmd.spawn().map_err(|e| {
-        (
+        fail(
             0,
             format!("starting {}: {e}", shared.runtime.path.display()),
         )
@@ -298,7 +298,7 @@ async fn attempt_shard(
         .await
         .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
     if status.code() == Some(EXIT_SETUP_FAILED) {
-        return Err(fail(finished, setup_failure(log)));
+        return Err((finished, setup_failure(log)));
     }
     if !status.success() {
         // The last thing the worker said is usually why.

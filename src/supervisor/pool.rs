@@ -29,8 +29,8 @@ pub struct Attempt {
     pub attempt: u32,
     pub frames: usize,
     pub finished: usize,
-    /// `ok`, or why it failed.
-    pub outcome: String,
+    /// `ok`, or why it failed (written as that text).
+    pub outcome: Outcome,
     pub seconds: f64,
     /// The attempt's log, relative to the dataset folder.
     pub log: String,
@@ -81,9 +81,51 @@ pub const EXIT_SETUP_FAILED: i32 = 3;
 /// How such an attempt's outcome starts; backends do not retry it.
 pub const SETUP_FAILED: &str = "Blender could not set up the scene (not retried)";
 
+/// How an attempt at a shard ended. Written to the pool report as text: `ok`, the setup
+/// failure ([`SETUP_FAILED`] and the worker's reason), or why it failed.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    Ok,
+    /// The worker could not set up the scene: it would fail again on every try.
+    SetupFailed {
+        reason: String,
+    },
+    /// Anything else (a crash, a kill, a timeout, a bad frame): worth another try.
+    Failed {
+        reason: String,
+    },
+}
+
+impl Outcome {
+    pub fn is_ok(&self) -> bool {
+        matches!(self, Outcome::Ok)
+    }
+
+    /// Whether it fails the same way on every try (backends do not retry it).
+    pub fn repeats(&self) -> bool {
+        matches!(self, Outcome::SetupFailed { .. })
+    }
+}
+
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Outcome::Ok => f.write_str("ok"),
+            Outcome::SetupFailed { reason } => write!(f, "{SETUP_FAILED}: {reason}"),
+            Outcome::Failed { reason } => f.write_str(reason),
+        }
+    }
+}
+
+impl Serialize for Outcome {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
 /// The outcome of an attempt that exited with [`EXIT_SETUP_FAILED`], with the reason the
 /// worker wrote to its log (`EGOGEN_SETUP_FAILED <reason>`).
-pub fn setup_failure(log: &std::path::Path) -> String {
+pub fn setup_failure(log: &std::path::Path) -> Outcome {
     let reason = std::fs::read_to_string(log)
         .ok()
         .and_then(|t| {
@@ -91,5 +133,5 @@ pub fn setup_failure(log: &std::path::Path) -> String {
                 .find_map(|l| l.strip_prefix("EGOGEN_SETUP_FAILED ").map(str::to_owned))
         })
         .unwrap_or_else(|| format!("exit status {EXIT_SETUP_FAILED}"));
-    format!("{SETUP_FAILED}: {reason}")
+    Outcome::SetupFailed { reason }
 }

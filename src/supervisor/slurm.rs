@@ -19,8 +19,8 @@ use anyhow::{bail, Context, Result};
 
 use super::dataset::{Dataset, Shard};
 use super::pool::{
-    frames_bar, setup_failure, Attempt, PoolReport, ShardPool, ShardReport, EXIT_SETUP_FAILED,
-    SETUP_FAILED,
+    frames_bar, setup_failure, Attempt, Outcome, PoolReport, ShardPool, ShardReport,
+    EXIT_SETUP_FAILED,
 };
 use crate::atomic_file::write_atomically;
 use crate::plan::SlurmPlan;
@@ -128,9 +128,7 @@ fn run_slurm(
         if let Some(&i) = todo.iter().find(|&&i| {
             let attempts = &states[i].report.attempts;
             attempts.len() > settings.retries as usize
-                || attempts
-                    .last()
-                    .is_some_and(|a| a.outcome.starts_with(SETUP_FAILED))
+                || attempts.last().is_some_and(|a| a.outcome.repeats())
         }) {
             bar.finish_and_clear();
             report_of(&states, frames_finished, started).write(&dataset)?;
@@ -295,19 +293,23 @@ fn report_of(states: &[ShardState], frames_finished: usize, started: Instant) ->
 /// What one array task did, from its end state (when Slurm still knows it), the frames it
 /// left missing and its log: `ok`, a setup failure (exit status 3, not retried), or why it
 /// failed.
-fn task_outcome(end: Option<&TaskEnd>, still_missing: usize, log: &Path) -> String {
+fn task_outcome(end: Option<&TaskEnd>, still_missing: usize, log: &Path) -> Outcome {
+    let failed = |reason: String| Outcome::Failed { reason };
     match (end, still_missing) {
-        (Some(e), 0) if e.state == "COMPLETED" => "ok".to_string(),
-        (None, 0) => "ok".to_string(),
-        (Some(e), 0) => format!(
+        (Some(e), 0) if e.state == "COMPLETED" => Outcome::Ok,
+        (None, 0) => Outcome::Ok,
+        (Some(e), 0) => failed(format!(
             "{} (exit {}) after finishing its frames",
             e.state, e.exit_code
-        ),
+        )),
         (Some(e), _) if e.exit_code.split(':').next() == Some(&EXIT_SETUP_FAILED.to_string()) => {
             setup_failure(log)
         }
-        (Some(e), n) => format!("{} (exit {}), {n} frames missing", e.state, e.exit_code),
-        (None, n) => format!("left the queue with {n} frames missing"),
+        (Some(e), n) => failed(format!(
+            "{} (exit {}), {n} frames missing",
+            e.state, e.exit_code
+        )),
+        (None, n) => failed(format!("left the queue with {n} frames missing")),
     }
 }
 
@@ -559,14 +561,26 @@ mod tests {
             seconds: 1.0,
         };
         let setup = task_outcome(Some(&end("FAILED", "3:0")), 2, &log);
-        assert!(setup.starts_with(SETUP_FAILED), "{setup}");
+        assert!(setup.repeats());
+        let setup = setup.to_string();
+        assert!(
+            setup.starts_with(crate::supervisor::pool::SETUP_FAILED),
+            "{setup}"
+        );
         assert!(setup.ends_with("RuntimeError: Bad glTF"), "{setup}");
         // A killed or cancelled task is retried as before.
         let killed = task_outcome(Some(&end("CANCELLED", "0:15")), 2, &log);
-        assert_eq!(killed, "CANCELLED (exit 0:15), 2 frames missing");
-        assert_eq!(task_outcome(Some(&end("COMPLETED", "0:0")), 0, &log), "ok");
+        assert!(!killed.repeats());
         assert_eq!(
-            task_outcome(Some(&end("FAILED", "13:0")), 1, &log),
+            killed.to_string(),
+            "CANCELLED (exit 0:15), 2 frames missing"
+        );
+        assert_eq!(
+            task_outcome(Some(&end("COMPLETED", "0:0")), 0, &log),
+            Outcome::Ok
+        );
+        assert_eq!(
+            task_outcome(Some(&end("FAILED", "13:0")), 1, &log).to_string(),
             "FAILED (exit 13:0), 1 frames missing"
         );
     }
