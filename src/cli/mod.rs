@@ -4,6 +4,7 @@
 //! into typed plans the stages consume.
 
 pub mod config;
+pub mod motion_jobs;
 pub mod resolve;
 pub mod synth;
 pub mod train;
