@@ -5,6 +5,7 @@
 
 pub mod config;
 pub mod motion_jobs;
+pub mod policy_jobs;
 pub mod resolve;
 pub mod synth;
 pub mod train;

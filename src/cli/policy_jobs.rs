@@ -1,0 +1,342 @@
+//! Jobs of the `egogen policy` and `egogen train policy` commands: fitting and checking the
+//! pose prior, evaluating controllers on held-out episodes (box scenes, crossings, a scene's
+//! start/goal pairs), and training the policy. The binary parses the flags and calls them.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Result};
+use clap::Subcommand;
+
+use super::motion_jobs::refuse_existing;
+use crate::body::BodyModel;
+
+#[derive(Subcommand, Debug)]
+pub enum PolicyCommand {
+    /// Fit the pose prior of the reward's pose term on a config's training primitives, and
+    /// report how it scores held-out mocap, random-latent primitives and bent joints.
+    PosePrior {
+        /// Motion training config whose clips (and held-out split) are used.
+        #[arg(long, default_value = "configs/train_primitive.toml")]
+        config: PathBuf,
+        /// Motion-model weights (random-latent primitives; default: the shipped ones).
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// Where to write the prior (JSON; refused if it exists).
+        #[arg(long)]
+        out: PathBuf,
+        /// Mixture components.
+        #[arg(long, default_value_t = 16)]
+        components: usize,
+        /// EM iterations.
+        #[arg(long, default_value_t = 60)]
+        iterations: usize,
+        /// Quantile of the training primitives' mean scores taken as the plausibility limit.
+        #[arg(long, default_value_t = 0.99)]
+        quantile: f64,
+        /// Write the scores of the three groups (JSON) for `tools/plot_pose_prior.py`.
+        #[arg(long)]
+        scores_json: Option<PathBuf>,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Evaluate the sampling controller (best of K random latents by the reward) on held-out
+    /// box-scene episodes; one JSON line per K.
+    Eval {
+        #[arg(long, default_value = "configs/train_primitive.toml")]
+        config: PathBuf,
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// Pose prior (default: the shipped one).
+        #[arg(long)]
+        prior: Option<PathBuf>,
+        /// Candidates per step of the sampling controller (comma-separated: one evaluation
+        /// each; default 1,16,64, none when --policy is given alone).
+        #[arg(long, value_delimiter = ',')]
+        k: Option<Vec<usize>>,
+        /// Also evaluate this trained policy (e.g. assets/policy/policy.safetensors).
+        #[arg(long)]
+        policy: Option<PathBuf>,
+        /// The policy's mean action instead of a sample from it.
+        #[arg(long)]
+        mean_action: bool,
+        /// Evaluate in this scene (e.g. assets/scenes/apartment.glb) on start/goal pairs
+        /// instead of in box scenes.
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        /// Distance range of the scene's start/goal pairs (m).
+        #[arg(long, value_delimiter = ',', default_value = "2,7")]
+        pair_distance_m: Vec<f64>,
+        /// Primitives before an episode times out (default 11; EgoGen's apartment: 13).
+        #[arg(long)]
+        max_primitives: Option<usize>,
+        /// Share of crossing scenes (another person walking across the path) instead of box
+        /// scenes: 0 (default) to 1.
+        #[arg(long, default_value_t = 0.0)]
+        crossing_share: f64,
+        #[arg(long, default_value_t = 200)]
+        episodes: usize,
+        /// Episodes run in parallel (one decode batch).
+        #[arg(long, default_value_t = 50)]
+        envs: usize,
+        /// Success radius (m; the table's 0.3).
+        #[arg(long, default_value_t = 0.3)]
+        success_m: f64,
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Write every episode's summary (JSON lines).
+        #[arg(long)]
+        episodes_jsonl: Option<PathBuf>,
+    },
+}
+
+pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
+    use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
+    use crate::motion::cvae::{BodyContext, MotionModel};
+    use crate::policy::pose_prior::shipped_pose_prior_path;
+    use crate::policy::{EnvSettings, PosePrior, SeedBank};
+    match cmd {
+        PolicyCommand::PosePrior {
+            config,
+            weights,
+            out,
+            components,
+            iterations,
+            quantile,
+            scores_json,
+            seed,
+        } => {
+            refuse_existing(&out)?;
+            if let Some(f) = &scores_json {
+                refuse_existing(f)?;
+            }
+            if !(0.0..=1.0).contains(&quantile) || components == 0 {
+                bail!("--quantile must lie in [0, 1] and --components be at least 1");
+            }
+            let plan = crate::cli::train::load_train_plan(&config)?;
+            let body = BodyModel::load(&plan.body_model)?;
+            let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
+            let (train, held) = evaluation_sets(&plan, &body, true)?;
+            let (prior, sep) = crate::policy::tasks::fit_pose_prior(
+                &train,
+                &held,
+                &model,
+                components,
+                iterations,
+                quantile,
+                seed,
+                &config.display().to_string(),
+            );
+            if let Some(parent) = out.parent() {
+                std::fs::create_dir_all(parent)?;
+            }
+            prior.save(&out)?;
+            let mut summary = serde_json::to_value(&sep)?;
+            summary.as_object_mut().map(|o| o.remove("scores"));
+            println!(
+                "{}",
+                serde_json::json!({"frames": prior.frames, "components": components, "separation": summary})
+            );
+            if let Some(f) = scores_json {
+                crate::atomic_file::write_atomically(
+                    &f,
+                    serde_json::to_string(&sep.scores)?.as_bytes(),
+                )?;
+                println!("wrote {}", f.display());
+            }
+            println!("wrote {}", out.display());
+        }
+        PolicyCommand::Eval {
+            config,
+            weights,
+            prior,
+            k,
+            episodes,
+            envs,
+            success_m,
+            seed,
+            episodes_jsonl,
+            policy,
+            mean_action,
+            scene,
+            pair_distance_m,
+            max_primitives,
+            crossing_share,
+        } => {
+            if let Some(f) = &episodes_jsonl {
+                refuse_existing(f)?;
+            }
+            let k = k.unwrap_or_else(|| match policy {
+                Some(_) => vec![],
+                None => vec![1, 16, 64],
+            });
+            if k.contains(&0) || episodes == 0 || envs == 0 {
+                bail!("--k, --episodes and --envs must be at least 1");
+            }
+            if !(success_m.is_finite() && success_m > 0.0) {
+                bail!("--success-m: expected a radius > 0 m, got {success_m}");
+            }
+            let plan = crate::cli::train::load_train_plan(&config)?;
+            let body = BodyModel::load(&plan.body_model)?;
+            let ctx = BodyContext::new(&body, &[])?;
+            let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
+            let prior = PosePrior::load(&prior.unwrap_or_else(shipped_pose_prior_path))?;
+            let (_, held) = evaluation_sets(&plan, &body, true)?;
+            let bank = SeedBank::from_set(&held);
+            let defaults = EnvSettings::default();
+            if !(0.0..=1.0).contains(&crossing_share) {
+                bail!("--crossing-share: expected a share in [0, 1], got {crossing_share}");
+            }
+            let settings = EnvSettings {
+                success_m,
+                max_primitives: max_primitives.unwrap_or(defaults.max_primitives),
+                crossing: crate::policy::crossing_scene::CrossingSettings {
+                    share: crossing_share,
+                    ..defaults.crossing
+                },
+                ..defaults
+            };
+            if settings.max_primitives == 0 {
+                bail!("--max-primitives must be at least 1");
+            }
+            let fixed = match &scene {
+                None => None,
+                Some(path) => {
+                    let &[lo, hi] = pair_distance_m.as_slice() else {
+                        bail!("--pair-distance-m: expected MIN,MAX in metres");
+                    };
+                    if !(lo >= 0.0 && hi >= lo) {
+                        bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
+                    }
+                    let mesh = crate::scene::load_scene(path, None)?;
+                    let map = crate::scene::walkable_map(&mesh, path, Default::default())?;
+                    let pairs = crate::policy::tasks::scene_pairs(
+                        &map,
+                        episodes,
+                        lo,
+                        hi,
+                        0.4,
+                        seed ^ 0x5CE7E,
+                    );
+                    if pairs.len() < episodes {
+                        bail!(
+                            "{}: only {} start/goal pairs {lo}–{hi} m apart with 0.4 m clearance (asked for {episodes})",
+                            path.display(),
+                            pairs.len()
+                        );
+                    }
+                    Some(crate::policy::env::FixedScene {
+                        map: std::sync::Arc::new(map),
+                        pairs,
+                    })
+                }
+            };
+            if fixed.is_some() && !k.is_empty() {
+                bail!("--scene evaluates --policy only (give no --k)");
+            }
+            use crate::motion::cvae::infer::InferBackend;
+            use crate::policy::tasks::{evaluate, Controller, EvalParts};
+            let loaded = match &policy {
+                None => None,
+                Some(path) => {
+                    let (arch, net) =
+                        crate::policy::ppo::load_policy::<InferBackend>(path, &Default::default())?;
+                    if arch.latent_dim != model.latent_dim() {
+                        bail!(
+                            "{}: the policy acts in {} latent dimensions, the motion model has {}",
+                            path.display(),
+                            arch.latent_dim,
+                            model.latent_dim()
+                        );
+                    }
+                    Some(net)
+                }
+            };
+            let mut runs: Vec<(serde_json::Value, Controller<InferBackend>)> = k
+                .iter()
+                .map(|&kk| {
+                    (
+                        serde_json::json!({"controller": "sampling", "k": kk}),
+                        Controller::Sampling { k: kk },
+                    )
+                })
+                .collect();
+            if let Some(net) = &loaded {
+                let name = if mean_action { "policy_mean" } else { "policy" };
+                runs.push((
+                    serde_json::json!({"controller": name, "weights": policy, "scene": scene}),
+                    Controller::Policy { net, mean_action },
+                ));
+            }
+            let parts = EvalParts {
+                model: &model,
+                body: &ctx,
+                bank: &bank,
+                prior: &prior,
+                fixed: fixed.as_ref(),
+            };
+            let mut lines = String::new();
+            for (label, controller) in &runs {
+                let bar =
+                    indicatif::ProgressBar::new(episodes as u64).with_message(label.to_string());
+                let (report, summaries) =
+                    evaluate(&parts, settings, controller, (episodes, envs, seed), |_| {
+                        bar.inc(1)
+                    })?;
+                bar.finish_and_clear();
+                let mut line = label.clone();
+                line["report"] = serde_json::to_value(&report)?;
+                println!("{line}");
+                for s in summaries {
+                    let mut e = label.clone();
+                    e["episode"] = serde_json::to_value(&s)?;
+                    lines.push_str(&e.to_string());
+                    lines.push('\n');
+                }
+            }
+            if let Some(f) = episodes_jsonl {
+                crate::atomic_file::write_atomically(&f, lines.as_bytes())?;
+                println!("wrote {}", f.display());
+            }
+        }
+    }
+    Ok(())
+}
+
+pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
+    use crate::motion::cvae::train::evaluation_sets;
+    use crate::motion::cvae::{BodyContext, MotionModel};
+    use crate::policy::ppo::{train_policy, Parts};
+    use crate::policy::{PosePrior, SeedBank};
+    let mut plan = crate::cli::train_policy::load_policy_plan(config)?;
+    let body = BodyModel::load(&plan.body_model)?;
+    let ctx = BodyContext::new(&body, &[])?;
+    let model = MotionModel::load(&plan.motion_weights)?;
+    plan.arch.latent_dim = model.latent_dim();
+    let prior = PosePrior::load(&plan.pose_prior)?;
+    let motion_plan = crate::cli::train::load_train_plan(&plan.motion_config)?;
+    let (train_set, _) = evaluation_sets(&motion_plan, &body, true)?;
+    let bank = SeedBank::from_set(&train_set);
+    let parts = Parts {
+        model: &model,
+        body: &ctx,
+        bank: &bank,
+        prior: &prior,
+    };
+    let report = train_policy(&plan, &parts, !quiet, resume)?;
+    println!(
+        "trained {} parameters for {} updates ({} env steps) in {:.0} s; best validation return {}",
+        report.parameters,
+        report.updates,
+        report.env_steps,
+        report.seconds,
+        report
+            .best_validation_return
+            .map_or("n/a".into(), |r| format!("{r:.3}"))
+    );
+    println!(
+        "wrote {} and {}",
+        plan.weights_out.display(),
+        plan.log_out.display()
+    );
+    Ok(())
+}
