@@ -278,8 +278,10 @@ pub fn sample_goal(
 }
 
 impl<'m> Agent<'m> {
+    /// `neutral`: the mocap seeds' body (zero betas), shared by all agents.
     fn new(
         parts: &CrowdParts<'m>,
+        neutral: &BodyContext,
         world: &CrowdWorld,
         plan: &AgentPlan,
         index: usize,
@@ -332,8 +334,6 @@ impl<'m> Agent<'m> {
         );
         // The bank's floor is the mocap body's; a body of another shape stands its lowest foot
         // marker at the same height over the floor.
-        let neutral =
-            BodyContext::new(parts.body_model, &[]).map_err(|e| err(format!("body: {e}")))?;
         let lowest = |b: &BodyContext, s: &crate::motion::cvae::PrimitiveSeed| {
             s.frames
                 .iter()
@@ -352,7 +352,7 @@ impl<'m> Agent<'m> {
             map.floor_z_m,
             neutral.shaped.rest_joints[joint::PELVIS],
         );
-        let dz = lowest(&neutral, &neutral_seed).map_err(DecodeError::from)?
+        let dz = lowest(neutral, &neutral_seed).map_err(DecodeError::from)?
             - lowest(&body, &seed).map_err(DecodeError::from)?;
         for f in &mut seed.frames {
             f.transl.z += dz;
@@ -579,10 +579,11 @@ pub fn run_crowd(
     settings: &CrowdSettings,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<CrowdTake, CrowdError> {
+    let neutral = BodyContext::new(parts.body_model, &[]).map_err(DecodeError::from)?;
     let mut agents: Vec<Agent> = plans
         .iter()
         .enumerate()
-        .map(|(i, p)| Agent::new(parts, world, p, i, settings))
+        .map(|(i, p)| Agent::new(parts, &neutral, world, p, i, settings))
         .collect::<Result<_, _>>()?;
     let scan = RayScan::new(RayScanSettings::default());
     let fixed: Vec<MovingObstacle> = world
@@ -594,6 +595,15 @@ pub fn run_crowd(
         })
         .chain(world.moving.iter().copied())
         .collect();
+    // Every agent's current 2D box; an agent's is renewed when it moves.
+    let mut boxes: Vec<MovingObstacle> = agents
+        .iter()
+        .map(|a| MovingObstacle {
+            at_start: a.walker.view.footprint(),
+            velocity_m_per_s: DVec2::ZERO,
+        })
+        .collect();
+    let mut moving = Vec::with_capacity(fixed.len() + agents.len());
     let mut rounds = 0;
     for step in 0..settings.primitives {
         if settings.stop_when_done && !agents.iter().any(Agent::active) {
@@ -605,16 +615,14 @@ pub fn run_crowd(
                 continue;
             }
             // The others' current 2D boxes, still for this primitive.
-            let mut moving = fixed.clone();
+            moving.clear();
+            moving.extend_from_slice(&fixed);
             moving.extend(
-                agents
+                boxes
                     .iter()
                     .enumerate()
                     .filter(|(k, _)| *k != i)
-                    .map(|(_, a)| MovingObstacle {
-                        at_start: a.walker.view.footprint(),
-                        velocity_m_per_s: DVec2::ZERO,
-                    }),
+                    .map(|(_, b)| *b),
             );
             let around = Surroundings {
                 map: &world.map,
@@ -629,6 +637,7 @@ pub fn run_crowd(
                     a.stop(AgentState::DecoderFailure);
                 }
             }
+            boxes[i].at_start = a.walker.view.footprint();
         }
         rounds = step + 1;
         progress(rounds, settings.primitives);

@@ -18,7 +18,6 @@ use super::crowd::{AgentState, AgentTrack, CrowdTake, CrowdWorld};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::manifest::{build_manifest, MANIFEST};
-use crate::math::Affine3;
 use crate::policy::walker::footprint;
 use crate::preview::map::MapPicture;
 use crate::scene::Obstacle2;
@@ -207,27 +206,6 @@ pub fn human_overlap_share(agents: &[AgentTrack]) -> f64 {
     hits as f64 / (frames * agents.len()) as f64
 }
 
-#[derive(Serialize)]
-struct CpfFrame {
-    frame: usize,
-    time_s: f64,
-    /// Row-major 4×4 `world_from_cpf` (CPF axes: x left, y up, z forward).
-    world_from_cpf: [[f64; 4]; 4],
-}
-
-fn cpf_json(frames: &[Affine3], rate_hz: f64) -> Result<Vec<u8>> {
-    let cpf: Vec<CpfFrame> = frames
-        .iter()
-        .enumerate()
-        .map(|(i, m)| CpfFrame {
-            frame: i,
-            time_s: i as f64 / rate_hz,
-            world_from_cpf: glam::DMat4::from(*m).transpose().to_cols_array_2d(),
-        })
-        .collect();
-    Ok(serde_json::to_vec_pretty(&cpf)?)
-}
-
 fn markers_npy(track: &AgentTrack) -> Result<Vec<u8>> {
     let n = track.markers.len() as u64;
     let m = track.markers.first().map_or(0, Vec::len) as u64;
@@ -342,7 +320,7 @@ pub fn write_crowd_dir(
             .write_amass(&folder.join("motion.npz"))?;
         write_atomically(
             &folder.join("cpf_trajectory.json"),
-            &cpf_json(&a.world_from_cpf, take.frame_rate_hz)?,
+            &super::sequence_dir::cpf_trajectory_json(&a.world_from_cpf, take.frame_rate_hz)?,
         )?;
         write_atomically(&folder.join("markers.npy"), &markers_npy(a)?)?;
     }

@@ -37,6 +37,23 @@ struct CpfFrame {
     world_from_cpf: [[f64; 4]; 4],
 }
 
+/// `cpf_trajectory.json`: `world_from_cpf` of every frame at `rate_hz`, row-major 4×4.
+pub(crate) fn cpf_trajectory_json(
+    frames: &[crate::math::Affine3],
+    rate_hz: f64,
+) -> Result<Vec<u8>> {
+    let cpf: Vec<CpfFrame> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, m)| CpfFrame {
+            frame: i,
+            time_s: i as f64 / rate_hz,
+            world_from_cpf: glam::DMat4::from(*m).transpose().to_cols_array_2d(),
+        })
+        .collect();
+    Ok(serde_json::to_vec_pretty(&cpf)?)
+}
+
 /// Posed meshes every `every_n` frames (none for 0), with a progress bar.
 pub fn pose_meshes(
     model: &BodyModel,
@@ -123,22 +140,16 @@ pub fn write_sequence_dir(
         .with_context(|| format!("creating {}", staging.display()))?;
 
     motion.write_amass(&staging.join("motion.npz"))?;
-    let cpf: Vec<CpfFrame> = track
-        .frames
-        .iter()
-        .enumerate()
-        .map(|(i, f)| {
-            let m = glam::DMat4::from(f.world_from_cpf);
-            CpfFrame {
-                frame: i,
-                time_s: i as f64 / track.frame_rate_hz,
-                world_from_cpf: m.transpose().to_cols_array_2d(),
-            }
-        })
-        .collect();
     std::fs::write(
         staging.join("cpf_trajectory.json"),
-        serde_json::to_vec_pretty(&cpf)?,
+        cpf_trajectory_json(
+            &track
+                .frames
+                .iter()
+                .map(|f| f.world_from_cpf)
+                .collect::<Vec<_>>(),
+            track.frame_rate_hz,
+        )?,
     )?;
     for (i, body) in meshes {
         write_obj(
