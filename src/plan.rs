@@ -67,6 +67,8 @@ pub struct SlurmPlan {
 pub struct AgentDraft {
     pub name: String,
     pub betas: Vec<f64>,
+    /// Drawn by `[crowd]` (cut to what the body model has) rather than given (checked).
+    pub betas_drawn: bool,
     pub start: Option<DVec2>,
     pub facing_rad: Option<f64>,
     pub goals: Vec<DVec2>,

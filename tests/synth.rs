@@ -572,3 +572,15 @@ fn run_configs_with_agents_are_checked_by_key() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn drawn_shapes_are_cut_to_the_model_and_given_ones_beyond_it_refused() {
+    // The shipped model has 10 shape coefficients.
+    let drawn = "[scene]\nfloor_m = 6.0\n[motion]\nduration_s = 1.0\n[crowd]\ncount = 2\nbetas_count = 12\n[output]\ndir = \"take\"\n";
+    let (dir, path) = common::run_dir(drawn);
+    let out = run_synth(&load_synth_plan(&path).unwrap(), false).unwrap();
+    assert!(out.summary.agents.iter().all(|a| a.betas.len() == 10));
+    assert_eq!(read(&dir.path().join("take"), "crowd_00").betas.len(), 10);
+    let given = "[[agents]]\nbetas = [0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1, 0.1]\n[output]\ndir = \"take\"\n";
+    assert!(refused(given).contains("12 betas given"));
+}

@@ -324,6 +324,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         agents.push(AgentDraft {
             name: a.name.clone().unwrap_or_else(|| format!("agent_{i:02}")),
             betas: a.betas.clone(),
+            betas_drawn: false,
             start: a.start.map(DVec2::from_array),
             facing_rad: a.facing_deg.map(f64::to_radians),
             goals: a.goals.iter().copied().map(DVec2::from_array).collect(),
@@ -384,6 +385,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
             agents.push(AgentDraft {
                 name: format!("crowd_{i:02}"),
                 betas,
+                betas_drawn: true,
                 start,
                 facing_rad: None,
                 goals,
@@ -629,8 +631,8 @@ pub fn synthesize(
     let map = synth_map(plan)?;
     let region = synth_region(plan, &map);
     let agents = place_agents(plan, &map, region.as_deref())?;
-    for a in &agents {
-        if a.betas.len() > body.num_betas() {
+    for (a, draft) in agents.iter().zip(&plan.agents) {
+        if !draft.betas_drawn && a.betas.len() > body.num_betas() {
             anyhow::bail!(
                 "{}: agent {}: {} betas given, the body model {} has {}",
                 plan.config.display(),
@@ -641,6 +643,7 @@ pub fn synthesize(
             );
         }
     }
+    // Drawn shapes keep the coefficients the model has.
     let agents: Vec<AgentPlan> = agents
         .into_iter()
         .map(|mut a| {
