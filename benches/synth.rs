@@ -52,7 +52,7 @@ fn bench(c: &mut Criterion) {
     let bank = SeedBank::from_world_seeds(&ctx, &seeds).unwrap();
     let prior = PosePrior::load(&shipped_pose_prior_path()).unwrap();
     let (_, policy) = egogen::policy::ppo::load_policy::<InferBackend>(
-        &root.join("assets/policy/policy.safetensors"),
+        &root.join(egogen::policy::ppo::SHIPPED_POLICY),
         &Default::default(),
     )
     .unwrap();

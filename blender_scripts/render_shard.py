@@ -72,6 +72,27 @@ def add_ceiling(scene, ceiling):
     scene.collection.objects.link(obj)
 
 
+def add_world_hdri(world, hdri):
+    """World light from an HDRI shipped with Blender (datafiles/studiolights/world), turned
+    about the vertical and scaled."""
+    folder = bpy.utils.system_resource("DATAFILES", path="studiolights/world")
+    path = os.path.join(folder or "", hdri["name"] + ".exr")
+    if not os.path.isfile(path):
+        raise RuntimeError(f"HDRI {hdri['name']!r}: {path} not found in this Blender")
+    world.use_nodes = True
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    background = nodes["Background"]
+    coords = nodes.new("ShaderNodeTexCoord")
+    mapping = nodes.new("ShaderNodeMapping")
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, hdri["rotation_rad"])
+    texture = nodes.new("ShaderNodeTexEnvironment")
+    texture.image = bpy.data.images.load(path, check_existing=True)
+    links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    links.new(mapping.outputs["Vector"], texture.inputs["Vector"])
+    links.new(texture.outputs["Color"], background.inputs["Color"])
+    background.inputs["Strength"].default_value = hdri["strength"]
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
@@ -89,6 +110,8 @@ def build_scene(spec):
     scene.cycles.device = "CPU"
     scene.world = bpy.data.worlds.new("egogen_world")
     scene.world.color = tuple(spec["lighting"]["world_rgb"])
+    if spec["lighting"].get("world_hdri"):
+        add_world_hdri(scene.world, spec["lighting"]["world_hdri"])
     for i, light in enumerate(spec["lighting"]["point_lights"]):
         data = bpy.data.lights.new(f"egogen_light_{i}", type="POINT")
         data.energy = light["watts"]

@@ -4,6 +4,7 @@
 //! `body` (SMPL-X skeleton, skinning, eye anchor) →
 //! `motion` (pose sequences and their files, the motion-primitive model) → `policy` (the
 //! locomotion environment, rewards and controllers) → `synth` (posed sequences, CPF trajectories);
+//! `eval` runs the paper's evaluation scenarios through `synth` and measures them;
 //! `preview` draws PNG pictures for people;
 //! `cli` holds the command-line and config plumbing and no domain logic.
 
@@ -11,6 +12,7 @@ pub mod atomic_file;
 pub mod body;
 pub mod camera;
 pub mod cli;
+pub mod eval;
 pub mod exr_file;
 pub mod inspect;
 pub mod manifest;

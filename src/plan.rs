@@ -40,6 +40,10 @@ pub struct RenderPlan {
     pub render_cameras: Vec<RenderCamera>,
     /// The depth-noise model and seed of each of `cameras`, where it has one.
     pub depth_noise: Vec<Option<(DepthNoise, u64)>>,
+    /// How the rig's offset on each wearer's head is drawn (none: the rig as placed).
+    pub headset_wear: Option<crate::rig::wear::HeadsetWear>,
+    /// How the sequence's lighting is drawn.
+    pub lighting: crate::render::lighting::LightingPlan,
 }
 
 /// How shards run, checked.

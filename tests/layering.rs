@@ -79,6 +79,13 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "npz",
         ],
     ),
+    // The paper's tables: scenarios walked by synth, measured.
+    (
+        "eval",
+        &[
+            "math", "body", "motion", "scene", "sensing", "policy", "synth", "preview",
+        ],
+    ),
     ("inspect", &["exr_file", "preview", "math", "atomic_file"]),
     // Checked run plans: made by cli, carried out by supervisor.
     (
@@ -134,6 +141,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "inspect",
             "plan",
             "progress",
+            "eval",
         ],
     ),
 ];

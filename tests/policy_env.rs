@@ -322,6 +322,87 @@ fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
 }
 
 #[test]
+fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
+    use egogen::policy::env::FixedScene;
+    use egogen::scene::{StartGoal, WalkableMap};
+    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
+    let prior = clip_prior();
+    // An open 20 × 20 m floor; its one pair is 9 m long, longer than any box scene's
+    // start–goal distance (at most 4.8 m).
+    let n = 200;
+    let map = WalkableMap::from_walkable(DVec2::splat(-10.0), 0.1, n, n, vec![true; n * n]);
+    let fixed = FixedScene {
+        map: std::sync::Arc::new(map),
+        pairs: vec![StartGoal {
+            start: DVec2::new(-4.5, 0.0),
+            goal: DVec2::new(4.5, 0.0),
+        }],
+    };
+    let settings = EnvSettings {
+        fixed_share: 0.5,
+        fixed_max_primitives: Some(13),
+        ..EnvSettings::default()
+    };
+    let envs = 24;
+    let mut env =
+        PolicyEnv::with_scene(&model, &ctx, &bank, &prior, Some(&fixed), settings, envs, 0)
+            .unwrap();
+    let distance = |o: &[f32]| 1.0 / o[OBS_DIST_OFFSET] as f64 - 1.0;
+    let in_scene: Vec<bool> = env
+        .observations()
+        .chunks(OBS_DIM)
+        .map(|o| distance(o) > 8.0)
+        .collect();
+    let scene_count = in_scene.iter().filter(|&&f| f).count();
+    assert!(
+        (4..=20).contains(&scene_count),
+        "{scene_count} of {envs} episodes in the scene"
+    );
+    // After one primitive the time left is 1 − 1/13 in the scene and 1 − 1/11 in box scenes.
+    let z = normal_samples(&mut ChaCha8Rng::seed_from_u64(3), envs * env.latent_dim());
+    let out = env.step(&z).unwrap();
+    let snap = env.snapshot();
+    for (e, o) in env.observations().chunks(OBS_DIM).enumerate() {
+        if out.done[e] {
+            continue;
+        }
+        let left = o[OBS_DIST_OFFSET + 1] as f64;
+        let expected = if in_scene[e] {
+            1.0 - 1.0 / 13.0
+        } else {
+            1.0 - 1.0 / 11.0
+        };
+        assert!(
+            (left - expected).abs() < 1e-6,
+            "episode {e}: time left {left}"
+        );
+    }
+    // Mixed episodes restore into a mixed environment, not into a scene-only or box-only one.
+    let mut twin =
+        PolicyEnv::with_scene(&model, &ctx, &bank, &prior, Some(&fixed), settings, envs, 0)
+            .unwrap();
+    twin.restore(&snap).unwrap();
+    assert_eq!(twin.observations(), env.observations());
+    let mut scene_only = PolicyEnv::with_scene(
+        &model,
+        &ctx,
+        &bank,
+        &prior,
+        Some(&fixed),
+        EnvSettings::default(),
+        envs,
+        0,
+    )
+    .unwrap();
+    assert!(scene_only.restore(&snap).is_err());
+    let mut boxes = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, envs, 0).unwrap();
+    assert!(boxes.restore(&snap).is_err());
+}
+
+#[test]
 fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
     use egogen::policy::crossing_scene::CrossingSettings;
     let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();

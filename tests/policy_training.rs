@@ -307,6 +307,16 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "init_weights = \"missing.safetensors\"\n[policy]",
             "init_weights",
         ),
+        (
+            "[stages.env]",
+            "[stages.env]\nfixed_share = 0.5",
+            "stages[1].env.fixed_share",
+        ),
+        (
+            "[policy]",
+            "[scene]\npath = \"missing.glb\"\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
+            "scene.path",
+        ),
     ] {
         let text = tiny_config(dir.path()).replacen(from, to, 1);
         assert_ne!(text, tiny_config(dir.path()), "{from}");

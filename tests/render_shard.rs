@@ -178,6 +178,7 @@ fn render_scene() -> Rendered {
         }],
         lighting: ShardLighting {
             world_rgb: [0.3, 0.3, 0.3],
+            world_hdri: None,
             point_lights: vec![PointLight {
                 position: (spot + Vec3::new(0.5, 0.5, 2.2)).to_array(),
                 watts: 200.0,

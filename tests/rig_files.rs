@@ -500,3 +500,50 @@ fn world_from_cam_chains_the_cpf_pose() {
     let expected = world_from_cpf.transform_point3(Vec3::new(0.03, 0.0, 0.0));
     assert!((centre - expected).length() < 1e-15);
 }
+
+#[test]
+fn headset_wear_offsets_are_seeded_bounded_and_exact() {
+    use egogen::rig::wear::{HeadsetWear, WearOffset};
+    let wear = HeadsetWear {
+        translation_m: 0.01,
+        rotation_rad: 3f64.to_radians(),
+        seed: 7,
+    };
+    let offsets: Vec<WearOffset> = (0..64).map(|i| wear.draw(i)).collect();
+    // The same seed and wearer: the same offset; another wearer: another.
+    assert_eq!(wear.draw(3), offsets[3]);
+    assert_ne!(offsets[0], offsets[1]);
+    for o in &offsets {
+        assert!(o.translation_m.iter().all(|t| t.abs() <= 0.01));
+        assert!(o
+            .rotation_xyz_rad
+            .iter()
+            .all(|r| r.abs() <= 3f64.to_radians()));
+        // The recorded matrix is the transform used.
+        let m = o.cpf_from_headset();
+        let p = glam::DVec3::new(0.3, -0.2, 0.5);
+        let q = m.transform_point3(p);
+        let t = &o.t_cpf_headset;
+        for (row, want) in t.iter().take(3).zip(q.to_array()) {
+            let got = row[0] * p.x + row[1] * p.y + row[2] * p.z + row[3];
+            assert!((got - want).abs() < 1e-12);
+        }
+        assert_eq!(t[3], [0.0, 0.0, 0.0, 1.0]);
+    }
+    // The ranges are used, not a corner of them: some offsets reach past half of each.
+    assert!(offsets.iter().any(|o| o.translation_m[0].abs() > 0.005));
+    assert!(offsets
+        .iter()
+        .any(|o| o.rotation_xyz_rad[2].abs() > 1.5f64.to_radians()));
+    // Zero ranges: no offset at all.
+    let none = HeadsetWear {
+        translation_m: 0.0,
+        rotation_rad: 0.0,
+        seed: 7,
+    };
+    assert_eq!(none.draw(0), WearOffset::none());
+    assert_eq!(
+        none.draw(0).cpf_from_headset(),
+        egogen::math::Affine3::IDENTITY
+    );
+}

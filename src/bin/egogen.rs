@@ -73,6 +73,11 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
+    /// The paper's evaluation: Table 1's scenarios (a moving obstacle, 2–16 people on a
+    /// circle, a static box walked again and again) with the policy, the sampling controller
+    /// and a path-planning baseline. Writes OUT/RESULTS.md and OUT/results/ (rows as JSON,
+    /// every episode as JSON lines, top views of the paths).
+    Eval(egogen::cli::eval_jobs::EvalArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -317,6 +322,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
         Command::Policy(cmd) => run_policy(cmd)?,
+        Command::Eval(args) => egogen::cli::eval_jobs::run_eval(&args)?,
         Command::Synth { config, quiet } => {
             let plan = egogen::cli::synth::load_synth_plan(&config)?;
             let out = egogen::cli::synth::run_synth(&plan, !quiet)?;

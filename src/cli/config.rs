@@ -141,6 +141,40 @@ pub struct RawRender {
     pub depth_noise: Option<RawDepthNoise>,
     /// With agents: the agents wearing the rig (names; default the first agent).
     pub wearers: Option<Vec<String>>,
+    /// `[render.headset_wear]`: each wearer's rig moved a little on the head, drawn per
+    /// wearer (default: none, the rig as its file places it).
+    pub headset_wear: Option<RawHeadsetWear>,
+    /// `[render.lighting]`: the world light and the lamp (default: a grey world, 300 W).
+    pub lighting: Option<RawLighting>,
+}
+
+/// `[render.lighting]` (docs/RENDERING.md).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawLighting {
+    /// `"random"` (one of Blender's shipped HDRIs per sequence), an HDRI's name (`"sunset"`),
+    /// or `"none"` for the uniform `world_rgb` (default `"none"`).
+    pub hdri: Option<String>,
+    /// `[MIN, MAX]` of the HDRI's strength (default [0.5, 1.5]).
+    pub hdri_strength: Option<[f64; 2]>,
+    /// The world colour without an HDRI (linear RGB; default [0.25, 0.25, 0.25]).
+    pub world_rgb: Option<[f64; 3]>,
+    /// `[MIN, MAX]` of the lamp's power (W; default [300, 300]).
+    pub lamp_watts: Option<[f64; 2]>,
+    /// Default 0.
+    pub seed: Option<u64>,
+}
+
+/// `[render.headset_wear]`: the ranges of the rig's offset on each wearer's head (docs/RIGS.md).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawHeadsetWear {
+    /// Each translation component uniform in ±this (m; default 0.01).
+    pub translation_m: Option<f64>,
+    /// Each rotation angle about the CPF's axes uniform in ±this (degrees; default 3).
+    pub rotation_deg: Option<f64>,
+    /// Default 0.
+    pub seed: Option<u64>,
 }
 
 /// `[render.depth_noise]`: which cameras get a `depth_noisy.Z` channel, the seed, and the

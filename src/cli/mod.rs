@@ -4,6 +4,7 @@
 //! into typed plans the stages consume.
 
 pub mod config;
+pub mod eval_jobs;
 pub mod motion_jobs;
 pub mod policy_jobs;
 pub mod resolve;

@@ -9,6 +9,8 @@ use clap::Subcommand;
 
 use super::motion_jobs::refuse_existing;
 use crate::body::BodyModel;
+use crate::policy::env::FixedScene;
+use crate::policy::ppo::TrainScene;
 
 #[derive(Subcommand, Debug)]
 pub enum PolicyCommand {
@@ -66,6 +68,9 @@ pub enum PolicyCommand {
         /// Distance range of the scene's start/goal pairs (m).
         #[arg(long, value_delimiter = ',', default_value = "2,7")]
         pair_distance_m: Vec<f64>,
+        /// Draw the scene's starts and goals anywhere walkable, not only inside the walls.
+        #[arg(long)]
+        anywhere: bool,
         /// Primitives before an episode times out (default 11; EgoGen's apartment: 13).
         #[arg(long)]
         max_primitives: Option<usize>,
@@ -159,6 +164,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             mean_action,
             scene,
             pair_distance_m,
+            anywhere,
             max_primitives,
             crossing_share,
         } => {
@@ -207,27 +213,14 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     if !(lo >= 0.0 && hi >= lo) {
                         bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
                     }
-                    let mesh = crate::scene::load_scene(path, None)?;
-                    let map = crate::scene::walkable_map(&mesh, path, Default::default())?;
-                    let pairs = crate::policy::tasks::scene_pairs(
-                        &map,
-                        episodes,
-                        lo,
-                        hi,
-                        0.4,
-                        seed ^ 0x5CE7E,
-                    );
-                    if pairs.len() < episodes {
-                        bail!(
-                            "{}: only {} start/goal pairs {lo}–{hi} m apart with 0.4 m clearance (asked for {episodes})",
-                            path.display(),
-                            pairs.len()
-                        );
-                    }
-                    Some(crate::policy::env::FixedScene {
-                        map: std::sync::Arc::new(map),
-                        pairs,
-                    })
+                    Some(fixed_scene(&TrainScene {
+                        path: path.clone(),
+                        pairs: episodes,
+                        pair_distance_m: (lo, hi),
+                        clearance_m: 0.4,
+                        indoors: !anywhere,
+                        seed: seed ^ 0x5CE7E,
+                    })?)
                 }
             };
             if fixed.is_some() && !k.is_empty() {
@@ -302,6 +295,46 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
     Ok(())
 }
 
+/// A fixed scene loaded, with its start/goal pairs drawn as `spec` says (inside the walls
+/// with `spec.indoors`, when the scene encloses anything); too few pairs is an error.
+fn fixed_scene(spec: &TrainScene) -> Result<FixedScene> {
+    let path = &spec.path;
+    let mesh = crate::scene::load_scene(path, None)?;
+    let map = crate::scene::walkable_map(&mesh, path, Default::default())?;
+    let region = spec
+        .indoors
+        .then(|| map.indoor_cells(crate::cli::synth::MIN_ENCLOSED))
+        .flatten();
+    let (lo, hi) = spec.pair_distance_m;
+    let pairs = crate::policy::tasks::scene_pairs(
+        &map,
+        region.as_deref(),
+        spec.pairs,
+        lo,
+        hi,
+        spec.clearance_m,
+        spec.seed,
+    );
+    if pairs.len() < spec.pairs {
+        bail!(
+            "{}: only {} start/goal pairs {lo}–{hi} m apart with {} m clearance{} (asked for {})",
+            path.display(),
+            pairs.len(),
+            spec.clearance_m,
+            if region.is_some() {
+                " inside the walls"
+            } else {
+                ""
+            },
+            spec.pairs
+        );
+    }
+    Ok(FixedScene {
+        map: std::sync::Arc::new(map),
+        pairs,
+    })
+}
+
 pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
     use crate::motion::cvae::train::evaluation_sets;
     use crate::motion::cvae::{BodyContext, MotionModel};
@@ -316,11 +349,13 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
     let motion_plan = crate::cli::train::load_train_plan(&plan.motion_config)?;
     let (train_set, _) = evaluation_sets(&motion_plan, &body, true)?;
     let bank = SeedBank::from_set(&train_set);
+    let fixed = plan.scene.as_ref().map(fixed_scene).transpose()?;
     let parts = Parts {
         model: &model,
         body: &ctx,
         bank: &bank,
         prior: &prior,
+        fixed: fixed.as_ref(),
     };
     let report = train_policy(&plan, &parts, !quiet, resume)?;
     println!(

@@ -6,6 +6,7 @@ use super::config::{
     Backend, ConfigError, MotionSource, RawDepthNoise, RawRender, RawRun, RawSlurm, RawSupervisor,
 };
 use crate::render::depth_noise::DepthNoise;
+use crate::render::lighting::{LightingPlan, WorldChoice, SHIPPED_HDRIS};
 use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
 
@@ -391,6 +392,34 @@ fn resolve_render(
             format!("expected a distance in (0, 10) m, found {near_clip_m}"),
         ));
     }
+    let headset_wear = match r.headset_wear {
+        None => None,
+        Some(w) => {
+            let translation_m = w.translation_m.unwrap_or(0.01);
+            if !(translation_m.is_finite() && (0.0..=0.1).contains(&translation_m)) {
+                return Err(bad(
+                    "render.headset_wear.translation_m",
+                    format!("expected a distance within [0, 0.1] m, found {translation_m}"),
+                ));
+            }
+            let rotation_deg = w.rotation_deg.unwrap_or(3.0);
+            if !(rotation_deg.is_finite() && (0.0..=30.0).contains(&rotation_deg)) {
+                return Err(bad(
+                    "render.headset_wear.rotation_deg",
+                    format!("expected an angle within [0, 30] degrees, found {rotation_deg}"),
+                ));
+            }
+            Some(crate::rig::wear::HeadsetWear {
+                translation_m,
+                rotation_rad: rotation_deg.to_radians(),
+                seed: w.seed.unwrap_or(0),
+            })
+        }
+    };
+    let lighting = match r.lighting {
+        None => LightingPlan::default(),
+        Some(l) => resolve_lighting(l, config_path)?,
+    };
     Ok(RenderPlan {
         rig,
         cameras,
@@ -404,6 +433,59 @@ fn resolve_render(
         near_clip_m,
         render_cameras,
         depth_noise,
+        headset_wear,
+        lighting,
+    })
+}
+
+/// `[render.lighting]`, checked.
+fn resolve_lighting(
+    raw: super::config::RawLighting,
+    config_path: &Path,
+) -> Result<LightingPlan, ConfigError> {
+    let bad = |key: &str, message: String| ConfigError::Value {
+        path: config_path.into(),
+        key: format!("render.lighting.{key}"),
+        message,
+    };
+    let d = LightingPlan::default();
+    let world_rgb = raw.world_rgb.unwrap_or([0.25; 3]);
+    if !world_rgb.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(bad(
+            "world_rgb",
+            format!("expected three colour values ≥ 0, found {world_rgb:?}"),
+        ));
+    }
+    let world = match raw.hdri.as_deref().unwrap_or("none") {
+        "none" => WorldChoice::Colour(world_rgb),
+        "random" => WorldChoice::RandomHdri,
+        name if SHIPPED_HDRIS.contains(&name) => WorldChoice::Hdri(name.into()),
+        other => {
+            return Err(bad(
+                "hdri",
+                format!(
+                "expected \"none\", \"random\" or one of Blender's HDRIs ({}), found \"{other}\"",
+                SHIPPED_HDRIS.join(", ")
+            ),
+            ))
+        }
+    };
+    let range = |key: &str, v: Option<[f64; 2]>, default: (f64, f64), max: f64| {
+        let [lo, hi] = v.unwrap_or([default.0, default.1]);
+        if lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi && hi <= max {
+            Ok((lo, hi))
+        } else {
+            Err(bad(
+                key,
+                format!("expected [MIN, MAX] with 0 ≤ MIN ≤ MAX ≤ {max}, found [{lo}, {hi}]"),
+            ))
+        }
+    };
+    Ok(LightingPlan {
+        world,
+        hdri_strength: range("hdri_strength", raw.hdri_strength, (0.5, 1.5), 100.0)?,
+        lamp_watts: range("lamp_watts", raw.lamp_watts, d.lamp_watts, 1e5)?,
+        seed: raw.seed.unwrap_or(0),
     })
 }
 

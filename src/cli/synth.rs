@@ -157,15 +157,16 @@ fn steering(name: &str, k: Option<usize>) -> Result<Steering, String> {
     match (name, k) {
         ("policy", None) => Ok(Steering::Policy { mean_action: false }),
         ("policy_mean", None) => Ok(Steering::Policy { mean_action: true }),
-        ("sampling", k) => match k.unwrap_or(16) {
-            0 => Err("`k` must be at least 1".into()),
-            k => Ok(Steering::Sampling { k }),
+        ("sampling" | "path_follow", k) => match (name, k.unwrap_or(16)) {
+            (_, 0) => Err("`k` must be at least 1".into()),
+            ("sampling", k) => Ok(Steering::Sampling { k }),
+            (_, k) => Ok(Steering::PathFollow { k }),
         },
         ("policy" | "policy_mean", Some(_)) => {
-            Err("`k` is for steering = \"sampling\" only".into())
+            Err("`k` is for steering = \"sampling\" or \"path_follow\" only".into())
         }
         (other, _) => Err(format!(
-            "expected \"policy\", \"policy_mean\" or \"sampling\", got \"{other}\""
+            "expected \"policy\", \"policy_mean\", \"sampling\" or \"path_follow\", got \"{other}\""
         )),
     }
 }
@@ -429,7 +430,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         Some(file(
             "motion.policy",
             &m.policy,
-            "assets/policy/policy.safetensors",
+            crate::policy::ppo::SHIPPED_POLICY,
         )?)
     } else {
         None

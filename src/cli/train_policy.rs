@@ -9,7 +9,7 @@ use super::config::{load_toml, ConfigError};
 use super::resolve::resolve_body_model;
 use crate::policy::env::EnvSettings;
 use crate::policy::net::PolicyArch;
-use crate::policy::ppo::{PolicyTrainPlan, PpoSettings, StagePlan};
+use crate::policy::ppo::{PolicyTrainPlan, PpoSettings, StagePlan, TrainScene};
 
 /// `[[stages]]`: one training stage.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -47,6 +47,21 @@ pub struct RawPolicyArch {
     pub residual_blocks: usize,
 }
 
+/// `[scene]`: a fixed scene some episodes walk (each stage's `env.fixed_share`).
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawTrainScene {
+    pub path: PathBuf,
+    /// How many start/goal pairs are drawn.
+    pub pairs: usize,
+    /// `[MIN, MAX]` start–goal distance (m).
+    pub pair_distance_m: [f64; 2],
+    pub clearance_m: Option<f64>,
+    /// Starts and goals inside the walls only (default true).
+    pub indoors: Option<bool>,
+    pub seed: u64,
+}
+
 /// The whole config, as written.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -59,6 +74,7 @@ pub struct RawTrainPolicy {
     pub pose_prior: PathBuf,
     /// Start from these policy weights (same `[policy]`), relative to the config's folder.
     pub init_weights: Option<PathBuf>,
+    pub scene: Option<RawTrainScene>,
     pub policy: RawPolicyArch,
     #[serde(default)]
     pub ppo: PpoSettings,
@@ -149,6 +165,24 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
                 "expected a whole number ≥ 1, got 0".into(),
             ));
         }
+        if e.fixed_max_primitives == Some(0) {
+            return Err(bad(
+                &key("env.fixed_max_primitives"),
+                "expected a whole number ≥ 1, got 0".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&e.fixed_share) {
+            return Err(bad(
+                &key("env.fixed_share"),
+                format!("expected a share in [0, 1], got {}", e.fixed_share),
+            ));
+        }
+        if raw.scene.is_none() && e.fixed_share < 1.0 {
+            return Err(bad(
+                &key("env.fixed_share"),
+                "a share of episodes in a fixed scene needs a [scene] section".into(),
+            ));
+        }
         if !(e.success_m.is_finite() && e.success_m > 0.0) {
             return Err(bad(
                 &key("env.success_m"),
@@ -188,6 +222,46 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             env: s.env,
         });
     }
+    let scene = match raw.scene {
+        None => None,
+        Some(sc) => {
+            let path = existing("scene.path", &sc.path)?;
+            let [lo, hi] = sc.pair_distance_m;
+            if !(lo >= 0.0 && hi >= lo && hi.is_finite()) {
+                return Err(bad(
+                    "scene.pair_distance_m",
+                    format!("expected [MIN, MAX] with 0 ≤ MIN ≤ MAX, got [{lo}, {hi}]"),
+                ));
+            }
+            let clearance_m = sc.clearance_m.unwrap_or(0.4);
+            if !(clearance_m.is_finite() && clearance_m >= 0.0) {
+                return Err(bad(
+                    "scene.clearance_m",
+                    format!("expected metres ≥ 0, got {clearance_m}"),
+                ));
+            }
+            if sc.pairs == 0 {
+                return Err(bad(
+                    "scene.pairs",
+                    "expected a whole number ≥ 1, got 0".into(),
+                ));
+            }
+            Some(TrainScene {
+                path,
+                pairs: sc.pairs,
+                pair_distance_m: (lo, hi),
+                clearance_m,
+                indoors: sc.indoors.unwrap_or(true),
+                seed: sc.seed,
+            })
+        }
+    };
+    if scene.is_some() && stages.iter().all(|s| s.env.fixed_share <= 0.0) {
+        return Err(bad(
+            "scene",
+            "no stage walks the scene: give some stage env.fixed_share > 0".into(),
+        ));
+    }
     let checkpoint_every_s = raw.output.checkpoint_every_s.unwrap_or(300.0);
     if !(checkpoint_every_s.is_finite() && checkpoint_every_s >= 0.0) {
         return Err(bad(
@@ -212,6 +286,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         eval_every_updates: raw.validation.every_updates,
         eval_episodes: raw.validation.episodes,
         init_weights,
+        scene,
         weights_out: base.join(raw.output.weights),
         log_out: base.join(raw.output.log),
         checkpoint_every_s,

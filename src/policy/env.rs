@@ -66,6 +66,12 @@ pub struct EnvSettings {
     /// Largest angle between the seed's facing and the goal direction (rad; EgoGen's box
     /// environment: 0.2π).
     pub seed_yaw_jitter_rad: f64,
+    /// With a fixed scene: the share of episodes that walk one of its pairs (drawn at random),
+    /// the others box scenes and crossings as without one; 1 walks only its pairs, in turn.
+    pub fixed_share: f64,
+    /// Primitives before an episode in the fixed scene times out (EgoGen's apartment: 13);
+    /// `None`: `max_primitives`.
+    pub fixed_max_primitives: Option<usize>,
 }
 
 impl Default for EnvSettings {
@@ -79,6 +85,8 @@ impl Default for EnvSettings {
             terminate_on_penetration: false,
             penetration_cells: 3,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
+            fixed_share: 1.0,
+            fixed_max_primitives: None,
         }
     }
 }
@@ -138,6 +146,8 @@ struct Course {
     box_params: Option<BoxParams>,
     crossing: Option<CrossingParams>,
     pair: Option<usize>,
+    /// Primitives before the episode times out.
+    max_primitives: usize,
 }
 
 /// A fixed scene (e.g. the apartment) and the start/goal pairs its episodes walk, in turn.
@@ -376,7 +386,7 @@ impl<'m> PolicyEnv<'m> {
         self.model.latent_dim()
     }
 
-    fn box_course(scene: BoxScene) -> Course {
+    fn box_course(&self, scene: BoxScene) -> Course {
         Course {
             map: Arc::new(scene.map),
             obstacle: Some(scene.obstacle),
@@ -386,12 +396,13 @@ impl<'m> PolicyEnv<'m> {
             box_params: Some(scene.params),
             crossing: None,
             pair: None,
+            max_primitives: self.settings.max_primitives,
         }
     }
 
-    fn crossing_course(floor: &Arc<WalkableMap>, scene: CrossingScene) -> Course {
+    fn crossing_course(&self, scene: CrossingScene) -> Course {
         Course {
-            map: floor.clone(),
+            map: self.crossing_floor.clone(),
             obstacle: None,
             moving: vec![scene.mover],
             start: scene.start,
@@ -399,10 +410,11 @@ impl<'m> PolicyEnv<'m> {
             box_params: None,
             crossing: Some(scene.params),
             pair: None,
+            max_primitives: self.settings.max_primitives,
         }
     }
 
-    fn fixed_course(f: &FixedScene, pair: usize) -> Course {
+    fn fixed_course(&self, f: &FixedScene, pair: usize) -> Course {
         Course {
             map: f.map.clone(),
             obstacle: None,
@@ -412,20 +424,30 @@ impl<'m> PolicyEnv<'m> {
             box_params: None,
             crossing: None,
             pair: Some(pair),
+            max_primitives: self
+                .settings
+                .fixed_max_primitives
+                .unwrap_or(self.settings.max_primitives),
         }
     }
 
-    /// The course of episode `id`: the next pair of the fixed scene, or a new crossing scene
-    /// (with the crossing share) or box scene.
+    /// The course of episode `id`: the next pair of the fixed scene (or, with a fixed share
+    /// below 1, a random pair for that share of episodes), else a new crossing scene (with the
+    /// crossing share) or box scene.
     fn draw_course(&self, id: u64, rng: &mut ChaCha8Rng) -> Course {
         let crossing = self.settings.crossing;
+        let share = self.settings.fixed_share;
         match self.fixed {
-            Some(f) => Self::fixed_course(f, (id % f.pairs.len() as u64) as usize),
-            // No draw when there are no crossings: box-only runs stay as they were.
-            None if crossing.share > 0.0 && uniform_open01(rng) < crossing.share => {
-                Self::crossing_course(&self.crossing_floor, CrossingScene::sample(&crossing, rng))
+            // No draw when only the fixed scene is walked: evaluations stay as they were.
+            Some(f) if share >= 1.0 => self.fixed_course(f, (id % f.pairs.len() as u64) as usize),
+            Some(f) if uniform_open01(rng) < share => {
+                self.fixed_course(f, (rng.next_u64() % f.pairs.len() as u64) as usize)
             }
-            None => Self::box_course(BoxScene::sample(&self.settings.scene, rng)),
+            // No draw when there are no crossings: box-only runs stay as they were.
+            _ if crossing.share > 0.0 && uniform_open01(rng) < crossing.share => {
+                self.crossing_course(CrossingScene::sample(&crossing, rng))
+            }
+            _ => self.box_course(BoxScene::sample(&self.settings.scene, rng)),
         }
     }
 
@@ -482,7 +504,7 @@ impl<'m> PolicyEnv<'m> {
             e.course.goal,
             &e.course.surroundings(),
             frame_time_s(w.steps, 0),
-            1.0 - w.steps as f64 / self.settings.max_primitives as f64,
+            1.0 - w.steps as f64 / e.course.max_primitives as f64,
             out,
         );
     }
@@ -558,7 +580,7 @@ impl<'m> PolicyEnv<'m> {
         };
         for (i, c) in chosen.into_iter().enumerate() {
             debug_assert_eq!(c.env, i);
-            let max_primitives = self.settings.max_primitives;
+            let max_primitives = self.episodes[i].course.max_primitives;
             let terminate_on_penetration = self.settings.terminate_on_penetration;
             let w = &mut self.episodes[i].walker;
             let ending = match (c.primitive, c.judged) {
@@ -654,16 +676,16 @@ impl<'m> PolicyEnv<'m> {
                     ..BodyParams::default()
                 }
             });
+            let only_fixed = self.fixed.is_some() && self.settings.fixed_share >= 1.0;
             let course = match (s.scene, s.crossing, s.pair, self.fixed) {
-                (Some(p), None, None, None) => {
-                    Self::box_course(BoxScene::build(&self.settings.scene, p))
+                (Some(p), None, None, _) if !only_fixed => {
+                    self.box_course(BoxScene::build(&self.settings.scene, p))
                 }
-                (None, Some(c), None, None) => Self::crossing_course(
-                    &self.crossing_floor,
-                    CrossingScene::build(&self.settings.crossing, c),
-                ),
+                (None, Some(c), None, _) if !only_fixed => {
+                    self.crossing_course(CrossingScene::build(&self.settings.crossing, c))
+                }
                 (None, None, Some(pair), Some(f)) if pair < f.pairs.len() => {
-                    Self::fixed_course(f, pair)
+                    self.fixed_course(f, pair)
                 }
                 _ => {
                     return Err(EnvError::Snapshot(format!(

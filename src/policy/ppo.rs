@@ -27,7 +27,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use super::env::{EnvError, EnvSettings, EnvSnapshot, PolicyEnv, SeedBank, OBS_DIM};
+use super::env::{EnvError, EnvSettings, EnvSnapshot, FixedScene, PolicyEnv, SeedBank, OBS_DIM};
 use super::net::{entropy, kl_to_standard, log_prob, ActorCritic, PolicyArch};
 use super::pose_prior::PosePrior;
 use crate::motion::cvae::checkpoint::{self, CheckpointState};
@@ -95,6 +95,20 @@ pub struct StagePlan {
     pub env: EnvSettings,
 }
 
+/// A fixed training scene (e.g. the apartment) and how its start/goal pairs are drawn.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TrainScene {
+    pub path: PathBuf,
+    pub pairs: usize,
+    /// Start–goal distance range (m, horizontal).
+    pub pair_distance_m: (f64, f64),
+    /// Least distance of a start or goal to anything blocking (m).
+    pub clearance_m: f64,
+    /// Starts and goals inside the walls only ([`crate::scene::WalkableMap::indoor_cells`]).
+    pub indoors: bool,
+    pub seed: u64,
+}
+
 /// Everything a policy training run needs.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PolicyTrainPlan {
@@ -111,6 +125,8 @@ pub struct PolicyTrainPlan {
     pub eval_episodes: usize,
     /// Start from these policy weights (same architecture) instead of a fresh network.
     pub init_weights: Option<PathBuf>,
+    /// A fixed scene some episodes walk (each stage's `env.fixed_share`).
+    pub scene: Option<TrainScene>,
     pub weights_out: PathBuf,
     pub log_out: PathBuf,
     pub checkpoint_every_s: f64,
@@ -122,6 +138,16 @@ impl PolicyTrainPlan {
         let per = (self.ppo.envs * self.ppo.steps_per_env).max(1);
         self.stages[stage].env_steps.div_ceil(per)
     }
+}
+
+/// The shipped policy (relative to the crate's folder): the box-and-crossing policy of
+/// `configs/train_policy.toml` fine-tuned with apartment episodes
+/// (`configs/train_policy_apartment.toml`).
+pub const SHIPPED_POLICY: &str = "assets/policy/apartment/policy.safetensors";
+
+/// Where the shipped policy is.
+pub fn shipped_policy_path() -> PathBuf {
+    crate::paths::crate_root().join(SHIPPED_POLICY)
 }
 
 /// Episode base of validation episodes.
@@ -305,11 +331,12 @@ fn validate(
 ) -> Result<Validation, EnvError> {
     let device = Default::default();
     let envs = episodes.clamp(1, 64);
-    let mut env = PolicyEnv::new(
+    let mut env = PolicyEnv::with_scene(
         parts.model,
         parts.body,
         parts.bank,
         parts.prior,
+        parts.fixed,
         settings,
         envs,
         VALIDATION_BASE,
@@ -347,6 +374,8 @@ pub struct Parts<'m> {
     pub body: &'m BodyContext<'m>,
     pub bank: &'m SeedBank,
     pub prior: &'m PosePrior,
+    /// The plan's training scene, loaded, with its start/goal pairs.
+    pub fixed: Option<&'m FixedScene>,
 }
 
 fn stage_last_path(weights_out: &Path, stage: &str) -> PathBuf {
@@ -447,11 +476,12 @@ pub fn train_policy(
     let mut env_steps_total = global_update * ppo.envs * ppo.steps_per_env;
     while stage < plan.stages.len() {
         let sp = &plan.stages[stage];
-        let mut env = PolicyEnv::new(
+        let mut env = PolicyEnv::with_scene(
             parts.model,
             parts.body,
             parts.bank,
             parts.prior,
+            parts.fixed,
             sp.env,
             ppo.envs,
             stage as u64 + 1,

@@ -148,16 +148,18 @@ pub fn fit_pose_prior(
 }
 
 /// Start/goal pairs of a fixed scene for evaluation: `count` pairs between `min_m` and
-/// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, drawn with `seed`.
+/// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, on the cells of
+/// `region` when given, drawn with `seed`.
 pub fn scene_pairs(
     map: &crate::scene::WalkableMap,
+    region: Option<&[bool]>,
     count: usize,
     min_m: f64,
     max_m: f64,
     clearance_m: f64,
     seed: u64,
 ) -> Vec<crate::scene::StartGoal> {
-    crate::scene::sample_start_goals(map, seed, count * 8, clearance_m, min_m)
+    crate::scene::sample_start_goals_in(map, region, seed, count * 8, clearance_m, min_m)
         .into_iter()
         .filter(|p| p.start.distance(p.goal) <= max_m)
         .take(count)

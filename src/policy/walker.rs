@@ -167,6 +167,9 @@ pub struct Totals {
     pub frames: usize,
     pub frames_in_obstacle: usize,
     pub path_m: f64,
+    /// Sum of the primitives' mean pose-prior scores.
+    #[serde(default)]
+    pub pose_score: f64,
 }
 
 /// A body walking to a goal, one primitive at a time.
@@ -283,6 +286,7 @@ impl Walker {
         }
         self.totals.contact += j.contact;
         self.totals.view_cos += j.view_cos;
+        self.totals.pose_score += j.pose_nll;
         self.totals.frames += p.joints.len() - SEED_FRAMES;
         self.totals.frames_in_obstacle += j.frames_in_obstacle;
         self.distance_m = j.distance_m;

@@ -8,6 +8,7 @@ pub mod camera_setup;
 pub mod depth_noise;
 pub mod frame_file;
 pub mod lens_polynomial;
+pub mod lighting;
 pub mod protocol;
 pub mod render_camera;
 pub mod shard;
@@ -16,5 +17,5 @@ pub mod shard_plan;
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
 pub use protocol::{
     BodyProbe, CameraKey, PointLight, ShardBody, ShardCamera, ShardFrame, ShardLens, ShardLighting,
-    ShardRgb, ShardSpec,
+    ShardRgb, ShardSpec, WorldHdri,
 };

@@ -112,13 +112,28 @@ pub struct PointLight {
     pub watts: f64,
 }
 
-/// Lights egogen adds to the scene.
+/// Lights egogen adds to the scene ([`super::lighting`]).
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShardLighting {
-    /// Uniform world (background) colour.
+    /// Uniform world (background) colour, linear RGB; unused with an HDRI.
     pub world_rgb: [f64; 3],
+    /// World light from an HDRI shipped with Blender, instead of the colour.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub world_hdri: Option<WorldHdri>,
     pub point_lights: Vec<PointLight>,
+}
+
+/// An HDRI of Blender's `datafiles/studiolights/world/` as the world light.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WorldHdri {
+    /// File name without `.exr` (e.g. `sunset`).
+    pub name: String,
+    /// Rotation about the vertical (rad).
+    pub rotation_rad: f64,
+    /// Blender's Background strength.
+    pub strength: f64,
 }
 
 /// Asks the worker to write the evaluated body vertices at some (sub)frames as JSON

@@ -11,6 +11,7 @@ pub mod command;
 mod error;
 mod file;
 pub mod pose;
+pub mod wear;
 
 use std::path::{Path, PathBuf};
 

@@ -36,6 +36,26 @@ impl Obstacle2 {
         }
     }
 
+    /// The same obstacle grown by `margin_m` on every side (a box's corners stay square: the
+    /// grown box holds every point within `margin_m` of the box).
+    pub fn grown(self, margin_m: f64) -> Self {
+        match self {
+            Obstacle2::Box {
+                centre,
+                half_extents,
+                yaw_rad,
+            } => Obstacle2::Box {
+                centre,
+                half_extents: half_extents + DVec2::splat(margin_m),
+                yaw_rad,
+            },
+            Obstacle2::Circle { centre, radius_m } => Obstacle2::Circle {
+                centre,
+                radius_m: radius_m + margin_m,
+            },
+        }
+    }
+
     /// The centre of the footprint.
     pub fn centre(&self) -> DVec2 {
         match *self {

@@ -22,9 +22,22 @@ pub fn sample_start_goals(
     clearance_m: f64,
     min_distance_m: f64,
 ) -> Vec<StartGoal> {
+    sample_start_goals_in(map, None, seed, count, clearance_m, min_distance_m)
+}
+
+/// The same with starts and goals only on the cells of `region` (one flag per cell, e.g.
+/// [`WalkableMap::indoor_cells`]) when given.
+pub fn sample_start_goals_in(
+    map: &WalkableMap,
+    region: Option<&[bool]>,
+    seed: u64,
+    count: usize,
+    clearance_m: f64,
+    min_distance_m: f64,
+) -> Vec<StartGoal> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let candidates: Vec<usize> = (0..map.nx * map.ny)
-        .filter(|&k| map.walkable[k] && map.sdf_m[k] >= clearance_m)
+        .filter(|&k| map.walkable[k] && map.sdf_m[k] >= clearance_m && region.is_none_or(|r| r[k]))
         .collect();
     let mut out = Vec::new();
     if candidates.is_empty() {

@@ -21,6 +21,12 @@ pub struct CameraAnnotations {
     pub depth_noise: Option<serde_json::Value>,
     /// Name of the agent wearing the camera.
     pub wearer: String,
+    /// The rig's offset on the wearer's head (`[render.headset_wear]`); `t_world_cam` of
+    /// every frame includes it. Absent: the rig as its file places it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub headset_wear: Option<crate::rig::wear::WearOffset>,
+    /// The lights egogen added (world light, lamps), as rendered.
+    pub lighting: crate::render::ShardLighting,
     pub frame_rate_hz: f64,
     pub segmentation_ids: Vec<SegmentationId>,
     pub frames: Vec<FrameAnnotation>,

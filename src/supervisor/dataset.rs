@@ -44,8 +44,11 @@ pub struct CameraWork {
     pub render: RenderCamera,
     /// Depth-noise model and seed, for a `depth_noisy.Z` channel.
     pub depth_noise: Option<(DepthNoise, u64)>,
-    /// OpenCV `world_from_cam` for every frame of the sequence.
+    /// OpenCV `world_from_cam` for every frame of the sequence (the headset's offset on
+    /// the wearer's head applied).
     pub world_from_cam: Vec<Affine3>,
+    /// The rig's offset on the wearer's head, when drawn.
+    pub headset_wear: Option<crate::rig::wear::WearOffset>,
     /// Frames to render.
     pub frames: Vec<u32>,
     /// The agent wearing the camera (index into the run's agents).
@@ -306,6 +309,8 @@ pub fn write_annotations(
                 "seed": seed,
             })),
             wearer: agents[work.wearer].name.clone(),
+            headset_wear: work.headset_wear,
+            lighting: dataset.base_spec.lighting.clone(),
             frame_rate_hz: agents[0].motion.frame_rate_hz,
             segmentation_ids,
             frames,

@@ -23,7 +23,7 @@ use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::protocol::{ShardCeiling, CEILING_OBJECT};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
-use crate::render::{BlenderRuntime, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec};
+use crate::render::{BlenderRuntime, ShardBody, ShardRgb, ShardSpec};
 use crate::scene::ceiling::ceiling_to_add;
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
 use crate::synth::crowd::{CrowdTake, CrowdWorld};
@@ -277,6 +277,9 @@ pub fn run_pipeline(
     let mut cameras: Vec<CameraWork> = Vec::new();
     for &w in &wearers {
         let track = &agents[w].track;
+        let wear = render.headset_wear.map(|h| h.draw(w));
+        let cpf_from_headset =
+            wear.map_or(crate::math::Affine3::IDENTITY, |o| o.cpf_from_headset());
         for ((cam, rendered), noise) in render
             .cameras
             .iter()
@@ -295,8 +298,9 @@ pub fn run_pipeline(
                 world_from_cam: track
                     .frames
                     .iter()
-                    .map(|f| cam.world_from_cam(f.world_from_cpf))
+                    .map(|f| cam.world_from_cam(f.world_from_cpf * cpf_from_headset))
                     .collect(),
+                headset_wear: wear,
                 frames: frames.clone(),
                 wearer: w,
             });
@@ -327,13 +331,9 @@ pub fn run_pipeline(
         fps,
         fps_base,
         bodies,
-        lighting: ShardLighting {
-            world_rgb: [0.25, 0.25, 0.25],
-            point_lights: vec![PointLight {
-                position: [mid.x, mid.y, lo.z + 0.85 * (hi.z - lo.z)],
-                watts: 300.0,
-            }],
-        },
+        lighting: render
+            .lighting
+            .draw([mid.x, mid.y, lo.z + 0.85 * (hi.z - lo.z)]),
         rgb: ShardRgb {
             samples: render.samples,
             adaptive_threshold: render.adaptive_threshold,

@@ -33,7 +33,7 @@ use crate::policy::ppo::act;
 use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
 use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker, OBS_DIM};
 use crate::policy::PosePrior;
-use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
+use crate::scene::{plan_path, MovingObstacle, Obstacle2, WalkableMap};
 use crate::sensing::{RayScan, RayScanSettings};
 
 /// A primitive moving the pelvis less than this (m, horizontal) with the goal still ahead
@@ -51,7 +51,24 @@ pub enum Steering {
     Policy { mean_action: bool },
     /// The best of `k` random latents by the environment's reward (one primitive ahead).
     Sampling { k: usize },
+    /// The path-planning baseline (in the spirit of GAMMA's and DIMOS's A* paths): an A* path
+    /// on the walkable map around the others' current boxes and the moving obstacles where
+    /// they stand, replanned every primitive; of `k` random latents the one whose primitive
+    /// ends nearest the path's point [`PATH_LOOKAHEAD_M`] ahead (a primitive that penetrates,
+    /// Eq. 7, counts [`PATH_PENETRATION_COST_M`] farther). No policy, no reward.
+    PathFollow { k: usize },
 }
+
+/// How far along the planned path the path follower aims a primitive (m; a walking
+/// primitive covers 0.2–0.7 m).
+pub const PATH_LOOKAHEAD_M: f64 = 0.8;
+
+/// Free space the planned path keeps from walls and other people (m, about half a body's
+/// width).
+pub const PATH_CLEARANCE_M: f64 = 0.3;
+
+/// What a penetrating primitive costs the path follower, as extra distance (m).
+pub const PATH_PENETRATION_COST_M: f64 = 1.0;
 
 /// One agent of a crowd, as planned.
 #[derive(Debug, Clone, PartialEq)]
@@ -179,6 +196,11 @@ pub struct AgentTrack {
     pub penetration_share: f64,
     /// Horizontal walking speed over the primitives taken (m/s).
     pub speed_m_s: f64,
+    /// Mean cos(angle) between the viewing direction and the direction to the goal at the
+    /// primitives' ends.
+    pub view_cos: f64,
+    /// Mean pose-prior score (−ln p / 63) over the primitives.
+    pub pose_score: f64,
 }
 
 impl AgentTrack {
@@ -383,6 +405,8 @@ impl<'m> Agent<'m> {
             contact: 0.0,
             penetration_share: 0.0,
             speed_m_s: 0.0,
+            view_cos: 0.0,
+            pose_score: 0.0,
         };
         track
             .frames
@@ -440,10 +464,32 @@ impl<'m> Agent<'m> {
                 let (a, ..) = act(net, obs, rng, &Default::default());
                 vec![a]
             }
-            Steering::Sampling { k } => normal_samples(&mut self.rng, k.max(1) * l)
-                .chunks(l)
-                .map(<[f32]>::to_vec)
-                .collect(),
+            Steering::Sampling { k } | Steering::PathFollow { k } => {
+                normal_samples(&mut self.rng, k.max(1) * l)
+                    .chunks(l)
+                    .map(<[f32]>::to_vec)
+                    .collect()
+            }
+        };
+        // The path follower's aim: a point ahead on a path planned now.
+        let aim = match self.plan.steering {
+            Steering::PathFollow { .. } => {
+                let obstacles: Vec<Obstacle2> = around
+                    .moving
+                    .iter()
+                    .map(|m| m.at(t0_s))
+                    .chain(around.obstacle.copied())
+                    .collect();
+                let path = plan_path(
+                    around.map,
+                    &obstacles,
+                    PATH_CLEARANCE_M,
+                    self.walker.view.pelvis,
+                    self.goal,
+                );
+                Some(path.point_along(PATH_LOOKAHEAD_M))
+            }
+            _ => None,
         };
         let seeds = vec![self.walker.view.seed.clone(); latents.len()];
         let decoded = parts.model.decode_each(&self.body, &seeds, &latents)?;
@@ -453,22 +499,40 @@ impl<'m> Agent<'m> {
         };
         let weights = RewardWeights::default();
         let situation = self.walker.situation(around, self.goal, t0_s);
-        let mut best: Option<(DecodedPrimitive, Judged, f64)> = None;
+        let mut best: Option<(DecodedPrimitive, Judged, f64, f64)> = None;
         for d in decoded {
             match d {
                 Ok(p) => {
                     let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
                     let r = j.terms.total(&weights);
-                    let r = if r.is_finite() { r } else { f64::NEG_INFINITY };
-                    if best.as_ref().is_none_or(|b| r > b.2) {
-                        best = Some((p, j, r));
+                    let score = match aim {
+                        Some(aim) => {
+                            let end = p.joints[p.joints.len() - 1][joint::PELVIS];
+                            let miss = DVec2::new(end.x, end.y).distance(aim);
+                            -(miss
+                                + if j.penetrated {
+                                    PATH_PENETRATION_COST_M
+                                } else {
+                                    0.0
+                                })
+                        }
+                        None => r,
+                    };
+                    let score = if score.is_finite() {
+                        score
+                    } else {
+                        f64::NEG_INFINITY
+                    };
+                    let r = if r.is_finite() { r } else { 0.0 };
+                    if best.as_ref().is_none_or(|b| score > b.3) {
+                        best = Some((p, j, r, score));
                     }
                 }
                 Err(DecodeError::NonFinite { .. }) => {}
                 Err(e) => return Err(e.into()),
             }
         }
-        Ok(best)
+        Ok(best.map(|(p, j, r, _)| (p, j, r)))
     }
 
     /// Takes the chosen primitive and moves on to the next goal when this one is over.
@@ -558,6 +622,8 @@ impl<'m> Agent<'m> {
         t.contact = w.totals.contact / n;
         t.penetration_share = w.totals.frames_in_obstacle as f64 / w.totals.frames.max(1) as f64;
         t.speed_m_s = w.speed_m_s();
+        t.view_cos = w.totals.view_cos / n;
+        t.pose_score = w.totals.pose_score / n;
         self.track
     }
 }

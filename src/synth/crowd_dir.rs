@@ -242,7 +242,20 @@ const PALETTE: [[u8; 3]; 8] = [
 ];
 
 fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
-    let mut pic = MapPicture::new(&world.map, 900);
+    paths_picture(world, &[take], 900).image.write_png(path)?;
+    Ok(())
+}
+
+/// A top view of the takes' paths over the walkable map: the region shaded, static
+/// obstacles dark red, moving ones at the first take's start (light) and end (dark), per
+/// agent its pelvis path, start (dot in a ring), goals (dots; a white centre: missed) and end
+/// (a disc; black: fell or failed). Several takes of one world draw over each other.
+pub fn paths_picture<'a>(
+    world: &'a CrowdWorld,
+    takes: &[&CrowdTake],
+    max_side_px: usize,
+) -> MapPicture<'a> {
+    let mut pic = MapPicture::new(&world.map, max_side_px);
     if let Some(region) = &world.region {
         // Walkable ground outside the region starts and goals are drawn in.
         let outside: Vec<bool> = world
@@ -257,13 +270,15 @@ fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
     for o in &world.obstacles {
         pic.obstacle(o, [120, 30, 30]);
     }
-    let end_s = take.frames as f64 / take.frame_rate_hz;
+    let end_s = takes
+        .first()
+        .map_or(0.0, |t| t.frames as f64 / t.frame_rate_hz);
     for m in &world.moving {
         pic.obstacle(&m.at(0.0), [200, 150, 150]);
         pic.obstacle(&m.at(end_s), [120, 30, 30]);
         pic.line(m.at(0.0).centre(), m.at(end_s).centre(), [200, 150, 150]);
     }
-    for (i, a) in take.agents.iter().enumerate() {
+    for (i, a) in takes.iter().flat_map(|t| t.agents.iter().enumerate()) {
         let c = PALETTE[i % PALETTE.len()];
         for w in a.pelvis_xy.windows(2) {
             pic.line(w[0], w[1], c);
@@ -293,8 +308,7 @@ fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
             );
         }
     }
-    pic.image.write_png(path)?;
-    Ok(())
+    pic
 }
 
 /// Writes a take folder (see the module docs); `dir` must pass [`check_out_dir`].

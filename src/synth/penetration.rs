@@ -124,6 +124,8 @@ mod tests {
             contact: 0.0,
             penetration_share: 0.0,
             speed_m_s: 0.0,
+            view_cos: 0.0,
+            pose_score: 0.0,
         }
     }
 

@@ -1,0 +1,176 @@
+//! Runs a table: every scenario × controller for `episodes` episodes each (episodes in
+//! parallel, each deterministic by its seed), measured per episode and summed up per row.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use super::metrics::{measure, row, EpisodeResult, Row};
+use super::scenarios::{episode, open_floor, Scenario, WALK_M};
+use crate::body::BodyModel;
+use crate::synth::crowd::{run_crowd, CrowdError, CrowdParts, CrowdTake, CrowdWorld, Steering};
+
+/// A named way of steering every person of a scenario.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Controller {
+    pub name: String,
+    pub steering: Steering,
+}
+
+impl Controller {
+    /// Table 1's controllers: the policy (sampled actions and mean action), the sampling
+    /// controller and the path-following baseline, both with `k` latents per primitive.
+    pub fn table1(k: usize) -> Vec<Controller> {
+        vec![
+            Controller {
+                name: "policy".into(),
+                steering: Steering::Policy { mean_action: false },
+            },
+            Controller {
+                name: "policy_mean".into(),
+                steering: Steering::Policy { mean_action: true },
+            },
+            Controller {
+                name: format!("sampling_k{k}"),
+                steering: Steering::Sampling { k },
+            },
+            Controller {
+                name: format!("path_follow_k{k}"),
+                steering: Steering::PathFollow { k },
+            },
+        ]
+    }
+}
+
+/// Takes kept for pictures: episode 0 of a scenario and controller (every episode of the
+/// static box, whose paths are drawn together).
+pub struct Picture {
+    pub scenario: Scenario,
+    pub controller: String,
+    pub world: CrowdWorld,
+    pub takes: Vec<CrowdTake>,
+}
+
+/// A finished table.
+pub struct TableRun {
+    pub rows: Vec<Row>,
+    pub episodes: Vec<EpisodeResult>,
+    pub pictures: Vec<Picture>,
+    pub wall_s: f64,
+}
+
+/// Why a table could not be run.
+#[derive(Debug, thiserror::Error)]
+pub enum EvalError {
+    #[error("{scenario}, {controller}, episode {episode}: {source}")]
+    Crowd {
+        scenario: String,
+        controller: String,
+        episode: u64,
+        source: CrowdError,
+    },
+    #[error("{scenario}, {controller}, episode {episode}: posing for Pene-H: {source}")]
+    Pose {
+        scenario: String,
+        controller: String,
+        episode: u64,
+        source: crate::body::PoseError,
+    },
+}
+
+/// The static box scenario's start and goal: every walk's line, for diversity.
+fn diversity_line(s: Scenario) -> Option<(glam::DVec2, glam::DVec2)> {
+    (s == Scenario::StaticBox).then(|| {
+        (
+            glam::DVec2::new(-0.5 * WALK_M, 0.0),
+            glam::DVec2::new(0.5 * WALK_M, 0.0),
+        )
+    })
+}
+
+/// Runs `episodes` episodes of every scenario with every controller; `progress(done, total)`
+/// after each scenario × controller.
+pub fn run_table(
+    parts: &CrowdParts,
+    body: &BodyModel,
+    scenarios: &[Scenario],
+    controllers: &[Controller],
+    episodes: usize,
+    seed: u64,
+    progress: impl Fn(usize, usize, &str),
+) -> Result<TableRun, EvalError> {
+    let t0 = Instant::now();
+    let floor = open_floor();
+    let mut out = TableRun {
+        rows: Vec::new(),
+        episodes: Vec::new(),
+        pictures: Vec::new(),
+        wall_s: 0.0,
+    };
+    let total = scenarios.len() * controllers.len();
+    for &scenario in scenarios {
+        for c in controllers {
+            let name = scenario.name();
+            let results: Vec<(EpisodeResult, Option<CrowdTake>, CrowdWorld)> = (0..episodes as u64)
+                .into_par_iter()
+                .map(|n| {
+                    let ep = episode(scenario, &floor, c.steering, seed, n);
+                    let t = Instant::now();
+                    let take = run_crowd(parts, &ep.world, &ep.agents, &ep.settings, |_, _| {})
+                        .map_err(|source| EvalError::Crowd {
+                            scenario: name.clone(),
+                            controller: c.name.clone(),
+                            episode: n,
+                            source,
+                        })?;
+                    let wall_s = t.elapsed().as_secs_f64();
+                    let mut r = measure(
+                        body,
+                        &ep.world,
+                        &take,
+                        name.clone(),
+                        c.name.clone(),
+                        n,
+                        wall_s,
+                    )
+                    .map_err(|source| EvalError::Pose {
+                        scenario: name.clone(),
+                        controller: c.name.clone(),
+                        episode: n,
+                        source,
+                    })?;
+                    let line = diversity_line(scenario).is_some();
+                    if !line {
+                        r.pelvis_path.clear();
+                    }
+                    let keep = n == 0 || line;
+                    Ok((r, keep.then_some(take), ep.world))
+                })
+                .collect::<Result<_, EvalError>>()?;
+            let mut takes = Vec::new();
+            let mut world = None;
+            let mut eps = Vec::with_capacity(results.len());
+            for (r, take, w) in results {
+                if let Some(t) = take {
+                    takes.push(t);
+                    world.get_or_insert(w);
+                }
+                eps.push(r);
+            }
+            out.rows.push(row(&eps, diversity_line(scenario)));
+            out.episodes.extend(eps);
+            if let Some(world) = world {
+                out.pictures.push(Picture {
+                    scenario,
+                    controller: c.name.clone(),
+                    world,
+                    takes,
+                });
+            }
+            progress(out.rows.len(), total, &format!("{name} {}", c.name));
+        }
+    }
+    out.wall_s = t0.elapsed().as_secs_f64();
+    Ok(out)
+}

@@ -1,0 +1,213 @@
+//! The evaluation suite (`egogen eval`) in a tiny form, so that it cannot rot: every
+//! controller on three scenarios, one episode each, its files checked; the A* planner and the
+//! diversity measure on cases whose answers are known.
+
+mod common;
+
+use std::process::Command;
+
+use egogen::eval::metrics::{lateral_offsets, path_diversity};
+use egogen::scene::{plan_path, Obstacle2, WalkableMap};
+use glam::DVec2;
+
+#[test]
+fn the_planner_goes_around_a_wall_and_a_person_keeping_its_clearance() {
+    // A 6 × 6 m room, a wall across x = 0 from y = −3 to y = 1.5: the way round is above it.
+    let n = 60;
+    let walkable = (0..n * n)
+        .map(|k| {
+            let (i, j) = (k % n, k / n);
+            !((29..=30).contains(&i) && j < 45)
+        })
+        .collect();
+    let map = WalkableMap::from_walkable(DVec2::splat(-3.0), 0.1, n, n, walkable);
+    let from = DVec2::new(-2.0, -2.0);
+    let to = DVec2::new(2.0, -2.0);
+    let path = plan_path(&map, &[], 0.3, from, to);
+    assert!(path.found);
+    assert_eq!(path.points.first(), Some(&from));
+    assert_eq!(path.points.last(), Some(&to));
+    let highest = path.points.iter().map(|p| p.y).fold(f64::MIN, f64::max);
+    assert!(
+        highest > 1.5 + 0.3 - 0.1,
+        "the path stays below the wall's end: {highest}"
+    );
+    for p in &path.points[1..path.points.len() - 1] {
+        assert!(
+            map.sdf_at(*p) >= 0.3 - 1e-9,
+            "{p} is within the clearance of the wall"
+        );
+    }
+    // Round the wall's end: at least the two straight legs via the corner it clears
+    // (2 × 4.16 m), at most 30 % longer (grid steps).
+    let legs = 2.0 * DVec2::new(1.7, 3.8).length();
+    assert!(
+        path.length_m() > legs && path.length_m() < 1.3 * legs,
+        "{} m against legs of {legs} m",
+        path.length_m()
+    );
+    // A person standing on the way: the path keeps 0.3 m from their box.
+    let person = Obstacle2::Box {
+        centre: DVec2::new(-2.0, 0.0),
+        half_extents: DVec2::new(0.3, 0.2),
+        yaw_rad: 0.0,
+    };
+    let around = plan_path(&map, &[person], 0.3, from, DVec2::new(-2.0, 2.0));
+    assert!(around.found);
+    for p in &around.points[1..around.points.len() - 1] {
+        assert!(
+            !person.grown(0.3).contains(*p),
+            "{p} is inside the person's clearance"
+        );
+    }
+    // A goal inside a wall: no path, the straight line instead.
+    let walled = plan_path(&map, &[], 0.3, from, DVec2::new(0.0, -2.0));
+    assert!(!walled.found);
+    assert_eq!(walled.points, vec![from, DVec2::new(0.0, -2.0)]);
+    // Points along the path: the start, the goal beyond the end.
+    assert_eq!(path.point_along(0.0), from);
+    assert_eq!(path.point_along(1e6), to);
+}
+
+#[test]
+fn path_diversity_is_the_spread_of_lateral_offsets() {
+    let (start, goal) = (DVec2::new(-2.5, 0.0), DVec2::new(2.5, 0.0));
+    // Straight walks at constant offsets −0.2, 0 and +0.4 m: std 0.306 m at every station.
+    let walk = |y: f64| -> Vec<[f64; 2]> { (0..=50).map(|k| [-2.5 + 0.1 * k as f64, y]).collect() };
+    let paths = [walk(-0.2), walk(0.0), walk(0.4)];
+    let offsets = lateral_offsets(&paths[2], start, goal, 9);
+    assert!(offsets.iter().all(|o| (o.unwrap() - 0.4).abs() < 1e-12));
+    let refs: Vec<&[[f64; 2]]> = paths.iter().map(|p| p.as_slice()).collect();
+    let (std, left) = path_diversity(&refs, start, goal).unwrap();
+    let mean = (-0.2 + 0.0 + 0.4) / 3.0;
+    let var = ((-0.2f64 - mean).powi(2) + (0.0f64 - mean).powi(2) + (0.4f64 - mean).powi(2)) / 2.0;
+    assert!((std - var.sqrt()).abs() < 1e-12, "{std} vs {}", var.sqrt());
+    assert!((left - 1.0 / 3.0).abs() < 1e-12);
+    // A walk that stops halfway has no offsets beyond.
+    let half: Vec<[f64; 2]> = (0..=25).map(|k| [-2.5 + 0.1 * k as f64, 0.1]).collect();
+    let o = lateral_offsets(&half, start, goal, 9);
+    assert!(o[0].is_some() && o[8].is_none());
+}
+
+#[test]
+fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
+    let out = tempfile::tempdir().unwrap();
+    let run = |extra: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_egogen"))
+            .args([
+                "eval",
+                "--episodes",
+                "2",
+                "--scenarios",
+                "moving_obstacle,circle_2,static_box",
+                "--k",
+                "4",
+                "--quiet",
+                "--out",
+            ])
+            .arg(out.path())
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let first = run(&[]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
+    for row in [
+        "| moving obstacle | policy |",
+        "| 2 people, circle r = 2 m | policy_mean |",
+        "| static box (diversity) | sampling_k4 |",
+        "| static box (diversity) | path_follow_k4 |",
+    ] {
+        assert!(md.contains(row), "{row} missing from\n{md}");
+    }
+    let episodes =
+        std::fs::read_to_string(out.path().join("results/table1_episodes.jsonl")).unwrap();
+    let lines: Vec<serde_json::Value> = episodes
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3 * 4 * 2);
+    for e in &lines {
+        for a in e["agents"].as_array().unwrap() {
+            assert!(a["contact"].as_f64().unwrap() > 0.5, "{e}");
+            assert!(!a["fell"].as_bool().unwrap(), "{e}");
+        }
+        // Two people: Pene-H measured; one person: Pene-S measured instead.
+        let crowd = e["agents"].as_array().unwrap().len() > 1;
+        assert_eq!(e["human_penetration_share"].is_number(), crowd, "{e}");
+        assert_eq!(
+            e["agents"][0]["obstacle_penetration_share"].is_number(),
+            !crowd,
+            "{e}"
+        );
+    }
+    let rows: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("results/table1.json")).unwrap())
+            .unwrap();
+    let static_box = rows["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["scenario"] == "static_box" && r["controller"] == "policy")
+        .unwrap();
+    assert!(static_box["path_std_m"].is_number(), "{static_box}");
+    for png in [
+        "table1_static_box_policy.png",
+        "table1_circle_2_path_follow_k4.png",
+    ] {
+        let bytes = std::fs::read(out.path().join("results").join(png)).unwrap();
+        assert_eq!(&bytes[1..4], b"PNG", "{png}");
+    }
+    // Deterministic per seed: the same episodes again, byte for byte, when asked to replace.
+    let again = run(&["--force"]);
+    assert!(again.status.success());
+    let episodes_again =
+        std::fs::read_to_string(out.path().join("results/table1_episodes.jsonl")).unwrap();
+    let strip = |s: &str| -> Vec<serde_json::Value> {
+        s.lines()
+            .map(|l| {
+                let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+                v["wall_s"] = serde_json::Value::Null;
+                v
+            })
+            .collect()
+    };
+    assert_eq!(strip(&episodes), strip(&episodes_again));
+    // Without --force nothing is replaced.
+    let before = std::fs::read(out.path().join("RESULTS.md")).unwrap();
+    let refused = run(&[]);
+    assert!(!refused.status.success());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        err.contains("RESULTS.md") && err.contains("--force"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read(out.path().join("RESULTS.md")).unwrap(),
+        before
+    );
+    // A scenario that does not exist is named.
+    let bad = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args([
+            "eval",
+            "--episodes",
+            "1",
+            "--scenarios",
+            "circle_3",
+            "--out",
+        ])
+        .arg(out.path().join("other"))
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("circle_3") && err.contains("circle_4"),
+        "{err}"
+    );
+}
