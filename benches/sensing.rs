@@ -119,7 +119,7 @@ fn main() {
     let mut rotated = scenario(ScenarioKind::EmptyFloor).mesh;
     let mut tmp = SceneMesh::default();
     tmp.add_box("box", Vec3::new(-0.6, -0.4, 0.0), Vec3::new(0.6, 0.4, 1.0));
-    let r = glam::DMat3::from_rotation_z(0.5236);
+    let r = glam::DMat3::from_rotation_z(std::f64::consts::FRAC_PI_6);
     let verts: Vec<Vec3> = tmp.vertices.iter().map(|v| r * *v).collect();
     rotated.add_object("box", &verts, &tmp.triangles);
     println!("| cell (m) | apartment build (ms) | max 2D SDF error near box (m) |");
@@ -142,7 +142,7 @@ fn main() {
                 if c.length() > 3.0 {
                     continue;
                 }
-                let local = glam::DMat2::from_angle(-0.5236) * c;
+                let local = glam::DMat2::from_angle(-std::f64::consts::FRAC_PI_6) * c;
                 let q = local.abs() - DVec2::new(0.6, 0.4);
                 let truth = q.max(DVec2::ZERO).length() + q.max_element().min(0.0);
                 worst = worst.max((m.sdf_m[j * m.nx + i] - truth).abs());

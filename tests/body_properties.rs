@@ -93,7 +93,7 @@ proptest! {
         for i in 0..100_000u64 {
             let u = |k: u64| common::uniform(seed, 4 * i + k) * 2.0 - 1.0;
             let aa = Vec3::new(u(0), u(1), u(2)) * 3.0;
-            m = m * Affine3 { matrix3: axis_angle_to_matrix(aa), translation: Vec3::splat(u(3)) };
+            m *= Affine3 { matrix3: axis_angle_to_matrix(aa), translation: Vec3::splat(u(3)) };
         }
         let err = orthonormality_error(m.matrix3);
         prop_assert!(err < 1e-11, "orthonormality error after 1e5 products: {err:e}");
@@ -107,7 +107,7 @@ fn report_chain_orthonormality_error() {
     let mut worst = 0.0f64;
     for i in 0..1_000_000u64 {
         let u = |k: u64| common::uniform(7, 3 * i + k) * 2.0 - 1.0;
-        m = m * axis_angle_to_matrix(Vec3::new(u(0), u(1), u(2)) * 3.0);
+        m *= axis_angle_to_matrix(Vec3::new(u(0), u(1), u(2)) * 3.0);
         worst = worst.max(orthonormality_error(m));
     }
     eprintln!("orthonormality error over 1e6 composed rotations: max {worst:.2e}");

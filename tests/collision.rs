@@ -15,7 +15,7 @@ use proptest::prelude::*;
 fn scene() -> (SceneMesh, glam::DMat3, Vec3, Vec3) {
     let sc = scenario(ScenarioKind::EmptyFloor);
     let mut mesh = sc.mesh;
-    let rot = axis_angle_to_matrix(Vec3::new(0.0, 0.0, 0.5236));
+    let rot = axis_angle_to_matrix(Vec3::new(0.0, 0.0, std::f64::consts::FRAC_PI_6));
     let centre = Vec3::new(0.5, 0.0, 0.6);
     let half = Vec3::splat(0.4);
     let mut tmp = SceneMesh::default();

@@ -79,7 +79,7 @@ fn render_scene() -> Rendered {
         .id
         .0;
 
-    let model = BodyModel::load(&repo().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let model = BodyModel::load(repo().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
     let shaped = model.shape(&[], &[]).unwrap();
     let sole_y = shaped
         .v_shaped

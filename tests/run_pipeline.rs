@@ -123,7 +123,7 @@ fn too_many_betas() {
     expect_config_error(
         &GOOD.replace(
             "betas = [1.0, -0.5]",
-            &format!("betas = [{}]", vec!["0.1"; 11].join(", ")),
+            &format!("betas = [{}]", ["0.1"; 11].join(", ")),
         ),
         &["11 betas", "has 10"],
     );

@@ -140,7 +140,7 @@ impl BvhClip {
                 match kind {
                     Channel::Position(a) => pos[a] = j.offset[a] + values[idx],
                     Channel::Rotation(a) => {
-                        rot = rot * axis_angle_to_matrix(Vec3::AXES[a] * values[idx].to_radians())
+                        rot *= axis_angle_to_matrix(Vec3::AXES[a] * values[idx].to_radians())
                     }
                 }
             }

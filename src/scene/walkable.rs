@@ -90,7 +90,7 @@ impl WalkableMap {
             ((hi.x - lo.x) / cell).ceil() + 2.0,
             ((hi.y - lo.y) / cell).ceil() + 2.0,
         );
-        if !(cell.is_finite() && cell > 0.0) || !(fx * fy <= MAX_MAP_CELLS) {
+        if !(cell.is_finite() && cell > 0.0 && fx * fy <= MAX_MAP_CELLS) {
             return Err(WalkableError::TooManyCells {
                 nx: fx,
                 ny: fy,
@@ -185,7 +185,7 @@ impl WalkableMap {
     pub fn cell_of(&self, p: DVec2) -> Option<(usize, usize)> {
         let q = (p - self.origin) / self.cell_m;
         (q.x >= 0.0 && q.y >= 0.0 && (q.x as usize) < self.nx && (q.y as usize) < self.ny)
-            .then(|| (q.x as usize, q.y as usize))
+            .then_some((q.x as usize, q.y as usize))
     }
 
     /// Centre of cell `(i, j)`.

@@ -227,7 +227,7 @@ fn solve8(mut a: [[Real; 8]; 8], mut b: [Real; 8]) -> [Real; 8] {
 /// translation.
 pub fn colmap_pose(world_from_cam: Affine3) -> ([Real; 4], Vec3) {
     let cam_from_world = world_from_cam.inverse();
-    let q = DQuat::from_mat3(&cam_from_world.matrix3.into()).normalize();
+    let q = DQuat::from_mat3(&cam_from_world.matrix3).normalize();
     let q = if q.w < 0.0 { -q } else { q };
     ([q.w, q.x, q.y, q.z], cam_from_world.translation)
 }
