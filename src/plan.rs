@@ -14,7 +14,7 @@ use crate::scene::{MovingObstacle, Obstacle2};
 use crate::synth::crowd::{CrowdSettings, Steering};
 
 /// Where shards run.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum Backend {
     /// Blender processes on this machine.

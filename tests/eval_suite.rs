@@ -1,5 +1,6 @@
 //! The evaluation suite (`egogen eval`) in a tiny form, so that it cannot rot: every
-//! controller on three scenarios, one episode each, its files checked; the A* planner and the
+//! controller on three scenarios, two episodes each, its files checked, then Table 3's
+//! ablated policies beside it; the A* planner and the
 //! diversity measure on cases whose answers are known.
 
 mod common;
@@ -67,6 +68,59 @@ fn the_planner_goes_around_a_wall_and_a_person_keeping_its_clearance() {
     // Points along the path: the start, the goal beyond the end.
     assert_eq!(path.point_along(0.0), from);
     assert_eq!(path.point_along(1e6), to);
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    /// On a floor far from the origin with a random box in it: a path found is connected
+    /// (steps of at most a cell's diagonal between cell centres), keeps its clearance from the
+    /// box, and is no shorter than the straight line.
+    #[test]
+    fn planned_paths_are_connected_and_keep_clear(
+        sx in 0.3f64..5.7, sy in 0.3f64..5.7, gx in 0.3f64..5.7, gy in 0.3f64..5.7,
+        bx in 1.0f64..5.0, by in 1.0f64..5.0, half in 0.1f64..1.0, yaw in 0.0f64..6.3,
+    ) {
+        let origin = DVec2::new(1.0e5, -2.0e5);
+        let n = 60;
+        let map = WalkableMap::from_walkable(origin, 0.1, n, n, vec![true; n * n]);
+        let b = Obstacle2::Box {
+            centre: origin + DVec2::new(bx, by),
+            half_extents: DVec2::splat(half),
+            yaw_rad: yaw,
+        };
+        let (from, to) = (origin + DVec2::new(sx, sy), origin + DVec2::new(gx, gy));
+        let path = plan_path(&map, &[b], 0.2, from, to);
+        proptest::prop_assert_eq!(path.points.first(), Some(&from));
+        proptest::prop_assert_eq!(path.points.last(), Some(&to));
+        proptest::prop_assert!(path.length_m() >= from.distance(to) - 1e-9);
+        if path.found {
+            let inner = &path.points[1..path.points.len() - 1];
+            for w in inner.windows(2) {
+                proptest::prop_assert!(w[0].distance(w[1]) <= 0.1 * 2f64.sqrt() + 1e-6);
+            }
+            for (k, p) in inner.iter().enumerate() {
+                // The start's own cell may be inside the clearance; every other is not.
+                if k > 0 {
+                    proptest::prop_assert!(!b.grown(0.2).contains(*p), "{} in the box", p);
+                }
+            }
+        } else {
+            // No way only when the goal's cell is inside the clearance, or the start is
+            // walled in by it.
+            let centre = |p: DVec2| {
+                let (i, j) = map.cell_of(p).unwrap();
+                map.centre(i, j)
+            };
+            let grown = b.grown(0.2);
+            proptest::prop_assert!(
+                grown.contains(centre(to)) || grown.contains(centre(from)),
+                "no path from {} to {}",
+                from,
+                to
+            );
+            proptest::prop_assert_eq!(path.points.len(), 2);
+        }
+    }
 }
 
 #[test]
@@ -184,13 +238,44 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     assert!(!refused.status.success());
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(
-        err.contains("RESULTS.md") && err.contains("--force"),
+        err.contains("table1.json") && err.contains("--force"),
         "{err}"
     );
     assert_eq!(
         std::fs::read(out.path().join("RESULTS.md")).unwrap(),
         before
     );
+    // Table 3 beside it: the ablated policies' rows join RESULTS.md, Table 1 stays.
+    let table3 = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args([
+            "eval",
+            "--suite",
+            "table3",
+            "--episodes",
+            "2",
+            "--quiet",
+            "--out",
+        ])
+        .arg(out.path())
+        .output()
+        .unwrap();
+    assert!(
+        table3.status.success(),
+        "{}",
+        String::from_utf8_lossy(&table3.stderr)
+    );
+    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
+    assert!(
+        md.contains("## Table 1") && md.contains("## Table 3"),
+        "{md}"
+    );
+    for row in [
+        "| no pretraining | box scenes | sampled |",
+        "| no attention reward | crossings | mean |",
+        "| full (pretraining + attention reward) | box scenes | mean |",
+    ] {
+        assert!(md.contains(row), "{row} missing from\n{md}");
+    }
     // A scenario that does not exist is named.
     let bad = Command::new(env!("CARGO_BIN_EXE_egogen"))
         .args([

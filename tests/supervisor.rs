@@ -40,6 +40,18 @@ fn setup() -> (tempfile::TempDir, PathBuf) {
     common::run_dir(CONFIG)
 }
 
+/// Kills a run as soon as it has staged its `.partial` folder (its `work/run.json` exists).
+fn kill_once_staged(mut child: Child, partial: &Path) {
+    let state = partial.join("work/run.json");
+    let deadline = Instant::now() + Duration::from_secs(120);
+    while !state.is_file() {
+        assert!(Instant::now() < deadline, "the run never staged");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+}
+
 /// Pids of processes whose command line contains every needle.
 fn pids_with(needles: &[&str]) -> Vec<i32> {
     let mut out = Vec::new();
@@ -389,15 +401,8 @@ fn a_scene_blender_cannot_load_fails_once_without_retries() {
 #[test]
 fn a_resume_with_another_rig_is_refused() {
     let (dir, config) = setup();
-    let mut child = egogen_run().arg(&config).spawn().unwrap();
-    let state = dir.path().join("out.partial/work/run.json");
-    let deadline = Instant::now() + Duration::from_secs(120);
-    while !state.is_file() {
-        assert!(Instant::now() < deadline, "the run never staged");
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
+    let child = egogen_run().arg(&config).spawn().unwrap();
+    kill_once_staged(child, &dir.path().join("out.partial"));
     // The same rig file with one camera moved by a centimetre.
     let rig = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("camera_rigs/aria_gen1.json"),
@@ -416,4 +421,66 @@ fn a_resume_with_another_rig_is_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(err.contains("different camera rig"), "{err}");
+}
+
+#[test]
+fn out_and_seed_overrides_are_recorded_and_a_resume_must_repeat_them() {
+    let (dir, config) = setup();
+    // Give the config a seeded section the override reaches.
+    let text = std::fs::read_to_string(&config).unwrap().replace(
+        "[supervisor]",
+        "[render.lighting]\nlamp_watts = [100.0, 500.0]\nseed = 1\n[supervisor]",
+    );
+    std::fs::write(&config, text).unwrap();
+    let other = dir.path().join("other");
+    let partial = dir.path().join("other.partial");
+    let child = egogen_run()
+        .arg(&config)
+        .args(["--seed", "7", "--out"])
+        .arg(&other)
+        .spawn()
+        .unwrap();
+    kill_once_staged(child, &partial);
+    assert!(
+        !dir.path().join("out.partial").exists(),
+        "--out was not used"
+    );
+    // Another seed is another run: refused, nothing touched.
+    let refused = egogen_run()
+        .arg(&config)
+        .args(["--resume", "--seed", "8", "--out"])
+        .arg(&other)
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("different config"), "{err}");
+    // The same overrides with more workers: the same run, resumed to the end.
+    let resumed = egogen_run()
+        .arg(&config)
+        .args(["--resume", "--seed", "7", "--workers", "2", "--out"])
+        .arg(&other)
+        .output()
+        .unwrap();
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    // The dataset's config.toml holds the effective values and reads back as a config.
+    let recorded = std::fs::read_to_string(other.join("config.toml")).unwrap();
+    let raw: egogen::cli::RawRun = toml::from_str(&recorded).unwrap();
+    assert_eq!(raw.scene.seed, Some(7), "the scripted walk's placement");
+    assert_eq!(raw.render.unwrap().lighting.unwrap().seed, Some(7));
+    assert_eq!(raw.output.dir, other);
+    assert!(recorded.starts_with("# The effective config"), "{recorded}");
+    let doc: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(other.join("cameras/camera-slam-left/annotations.json")).unwrap(),
+    )
+    .unwrap();
+    let watts = doc["lighting"]["point_lights"][0]["watts"]
+        .as_f64()
+        .unwrap();
+    assert!((100.0..=500.0).contains(&watts), "{watts}");
+    verify(&other).unwrap();
 }

@@ -13,6 +13,7 @@ use clap::Parser;
 
 use egogen::body::BodyModel;
 use egogen::cli::config::Backend;
+use egogen::cli::overrides::{effective_config_toml, RunOverrides};
 use egogen::cli::{resolve_run, MotionPlan, RawRun};
 use egogen::motion::scripted::WalkCycle;
 use egogen::motion::MotionSequence;
@@ -29,6 +30,13 @@ struct Args {
     /// Continue the interrupted run in `<output.dir>.partial` (same config only).
     #[arg(long)]
     resume: bool,
+    /// Output folder, overriding `output.dir`.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Every seed of the config (motion, scene placement, lighting, headset wear, depth
+    /// noise): another variant of the same run.
+    #[arg(long)]
+    seed: Option<u64>,
     /// Camera rig to render with, overriding `render.rig`.
     #[arg(long)]
     rig: Option<PathBuf>,
@@ -90,25 +98,30 @@ fn run(args: Args) -> Result<()> {
         anyhow::bail!("no config given: egogen-run CONFIG (e.g. configs/default.toml), or egogen-run verify DATASET");
     };
     let mut raw = RawRun::load(&config)?;
-    if let Some(rig) = &args.rig {
-        let rig = std::path::absolute(rig).context("resolving --rig")?;
-        raw.render.get_or_insert_with(Default::default).rig = Some(rig);
-    }
-    // --workers goes into the config as written, so the config's check applies to it too.
-    if let Some(w) = args.workers {
-        raw.supervisor.workers = Some(w);
-    }
-    let mut plan = resolve_run(raw, &config)?;
-    // --backend may switch a config with `[supervisor.slurm]` settings to local and back.
-    if let Some(b) = args.backend {
-        plan.supervisor.backend = match b {
+    // Overrides go into the config as written, so its checks apply to them too.
+    let overrides = RunOverrides {
+        out: args.out.clone(),
+        seed: args.seed,
+        rig: args.rig.clone(),
+        workers: args.workers,
+        backend: args.backend.map(|b| match b {
             BackendArg::Local => Backend::Local,
             BackendArg::Slurm => Backend::Slurm,
-        };
-    }
+        }),
+    };
+    overrides
+        .apply(&mut raw)
+        .context("resolving a path given on the command line")?;
+    let config_toml = effective_config_toml(&raw, &config, &overrides)
+        .context("writing out the effective config")?;
+    let resume_fingerprint =
+        egogen::cli::overrides::resume_fingerprint(&raw).context("fingerprinting the config")?;
+    let plan = resolve_run(raw, &config)?;
     let options = egogen::supervisor::RunOptions {
         resume: args.resume,
         blender: args.blender,
+        config_toml,
+        resume_fingerprint,
     };
     let model = BodyModel::load(&plan.body_model)?;
     if plan.betas.len() > model.num_betas() {

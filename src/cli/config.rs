@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::render::render_camera::FisheyeRendering;
 
@@ -25,7 +25,7 @@ pub enum ConfigError {
 }
 
 /// `[body]`: which body model and shape.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawBody {
     /// SMPL-X `.npz` model file; relative paths resolve against the config's folder.
@@ -37,7 +37,7 @@ pub struct RawBody {
 }
 
 /// Where motion comes from.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum MotionSource {
     /// The scripted walk cycle (`duration_s`, `frame_rate_hz`, `speed_m_per_s`).
@@ -51,7 +51,7 @@ pub enum MotionSource {
 
 /// `[motion]`: one flat table so that type errors name their key; `resolve` checks which
 /// keys the chosen `source` needs.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawMotion {
     pub source: MotionSource,
@@ -77,7 +77,7 @@ pub struct RawMotion {
 }
 
 /// `[output]`: where the run writes.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawOutput {
     /// Output folder; must not exist yet (or be empty).
@@ -93,7 +93,7 @@ fn default_mesh_every() -> usize {
 }
 
 /// `[scene]`: where the body walks.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawScene {
     /// Scene file (GLB/glTF, OBJ, PLY; metres, z up). Default: the shipped apartment.
@@ -108,7 +108,7 @@ pub struct RawScene {
 }
 
 /// `[render]`: which cameras render what, and how well.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawRender {
     /// Camera rig JSON (or an Aria device calibration). Default `camera_rigs/aria_gen1.json`.
@@ -149,7 +149,7 @@ pub struct RawRender {
 }
 
 /// `[render.lighting]` (docs/RENDERING.md).
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawLighting {
     /// `"random"` (one of Blender's shipped HDRIs per sequence), an HDRI's name (`"sunset"`),
@@ -166,7 +166,7 @@ pub struct RawLighting {
 }
 
 /// `[render.headset_wear]`: the ranges of the rig's offset on each wearer's head (docs/RIGS.md).
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawHeadsetWear {
     /// Each translation component uniform in ±this (m; default 0.01).
@@ -180,7 +180,7 @@ pub struct RawHeadsetWear {
 /// `[render.depth_noise]`: which cameras get a `depth_noisy.Z` channel, the seed, and the
 /// model's parameters (each defaults to Nguyen et al.'s Kinect fit or egogen's estimate; see
 /// docs/RENDERING.md and `render/depth_noise.rs`).
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawDepthNoise {
     /// Rendered cameras that get the channel, e.g. `["depth-long-throw"]`.
@@ -208,7 +208,7 @@ pub struct RawDepthNoise {
 pub use crate::plan::Backend;
 
 /// `[supervisor.slurm]`: resources of each array task.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawSlurm {
     /// Partition (`--partition`); default: the cluster's default partition.
@@ -224,7 +224,7 @@ pub struct RawSlurm {
 }
 
 /// `[supervisor]`: how shards are run.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawSupervisor {
     /// Default `local`.
@@ -240,7 +240,7 @@ pub struct RawSupervisor {
 }
 
 /// The whole run config, as written.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawRun {
     pub body: RawBody,
@@ -254,9 +254,9 @@ pub struct RawRun {
     pub supervisor: RawSupervisor,
     /// With `motion.source = "agents"`: as in `egogen synth` configs.
     pub crowd: Option<super::synth::RawCrowd>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub agents: Vec<super::synth::RawAgent>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub obstacles: Vec<super::synth::RawObstacle>,
 }
 

@@ -1,7 +1,9 @@
-//! `egogen eval`: runs a table of the paper's evaluation (`crate::eval`) and writes
-//! `OUT/RESULTS.md` (the table, how it was made, what each measure means), the rows as JSON,
-//! every episode as JSON lines and top views of the paths under `OUT/results/`. Existing
-//! results are refused unless `--force` (nothing is overwritten unasked).
+//! `egogen eval`: runs a table of the paper's evaluation and writes its results under
+//! `OUT/results/` — Table 1 (`crate::eval`): the rows as JSON, every episode as JSON lines, top
+//! views of the paths; Table 3: the ablated policies on held-out box scenes and crossings —
+//! then renders `OUT/RESULTS.md` from every table's results there (how each was made, what each
+//! measure means). A table's existing results are refused unless `--force` (nothing is
+//! overwritten unasked; `RESULTS.md` is only ever derived from them).
 
 use std::path::{Path, PathBuf};
 
@@ -12,14 +14,16 @@ use crate::body::BodyModel;
 use crate::eval::report::table1_markdown;
 use crate::eval::scenarios::Scenario;
 use crate::eval::suite::{run_table, Controller};
+use crate::policy::EnvSettings;
 
 /// What `egogen eval` is asked.
 #[derive(Debug, Clone, clap::Args)]
 pub struct EvalArgs {
-    /// Which table: table1.
+    /// Which table: table1 (scenarios with moving obstacles and people) or table3 (ablations).
     #[arg(long, default_value = "table1")]
     pub suite: String,
-    /// Episodes per scenario and controller.
+    /// Episodes per row (table1: per scenario and controller; table3: per policy, set and
+    /// actions).
     #[arg(long, default_value_t = 100)]
     pub episodes: usize,
     #[arg(long, default_value_t = 0)]
@@ -54,23 +58,138 @@ fn command_line() -> String {
         .join(" ")
 }
 
-fn files(out: &Path) -> Vec<PathBuf> {
-    vec![
-        out.join("RESULTS.md"),
-        out.join("results/table1.json"),
-        out.join("results/table1_episodes.jsonl"),
-    ]
+/// The shipped policy's training run and its ablations (paper Tab. 3), each trained with the
+/// same budget: label, weights, the config that trains them.
+const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
+    (
+        "full (pretraining + attention reward)",
+        "assets/policy/policy.safetensors",
+        "configs/train_policy.toml",
+    ),
+    (
+        "no pretraining",
+        "assets/policy/ablations/no_pretraining.safetensors",
+        "configs/ablations/no_pretraining.toml",
+    ),
+    (
+        "no attention reward",
+        "assets/policy/ablations/no_attention.safetensors",
+        "configs/ablations/no_attention.toml",
+    ),
+];
+
+/// The files a suite writes under `OUT/results/`.
+fn suite_files(out: &Path, suite: &str) -> Vec<PathBuf> {
+    let results = out.join("results");
+    match suite {
+        "table1" => vec![
+            results.join("table1.json"),
+            results.join("table1_episodes.jsonl"),
+        ],
+        _ => vec![results.join("table3.json")],
+    }
 }
 
-/// Runs the suite and writes its files (see the module docs).
-pub fn run_eval(args: &EvalArgs) -> Result<()> {
-    use crate::motion::cvae::infer::InferBackend;
+/// `results/table1.json`.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct Table1File {
+    command: String,
+    episodes: usize,
+    seed: u64,
+    policy: String,
+    k: usize,
+    wall_s: f64,
+    rows: Vec<crate::eval::metrics::Row>,
+}
+
+/// One row of Table 3: a policy on held-out box scenes or crossings.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct Table3Row {
+    policy: String,
+    weights: String,
+    config: String,
+    set: String,
+    actions: String,
+    episodes: usize,
+    success_rate: f64,
+    contact: f64,
+    penetration_share: f64,
+    view_cos: f64,
+    final_distance_median_m: f64,
+    speed_successful_median_m_s: f64,
+    wall_s: f64,
+}
+
+/// `results/table3.json`.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct Table3File {
+    command: String,
+    episodes: usize,
+    seed: u64,
+    wall_s: f64,
+    rows: Vec<Table3Row>,
+}
+
+/// The motion model, body, pose prior and the held-out seed poses every suite uses.
+struct Common {
+    body: BodyModel,
+    model: crate::motion::cvae::MotionModel,
+    prior: crate::policy::PosePrior,
+    bank: crate::policy::SeedBank,
+}
+
+fn load_common() -> Result<Common> {
     use crate::motion::cvae::train::evaluation_sets;
-    use crate::motion::cvae::MotionModel;
-    use crate::policy::{PosePrior, SeedBank};
-    if args.suite != "table1" {
+    let root = crate::paths::crate_root();
+    let body = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz"))?;
+    let model =
+        crate::motion::cvae::MotionModel::load(crate::motion::cvae::train::shipped_weights_path())?;
+    let prior =
+        crate::policy::PosePrior::load(&crate::policy::pose_prior::shipped_pose_prior_path())?;
+    let train_plan = super::train::load_train_plan(&root.join("configs/train_primitive.toml"))?;
+    // Held-out seeds: whole clips never trained on.
+    let (_, held_out) = evaluation_sets(&train_plan, &body, true)?;
+    let bank = crate::policy::SeedBank::from_set(&held_out);
+    Ok(Common {
+        body,
+        model,
+        prior,
+        bank,
+    })
+}
+
+fn load_net(
+    path: &Path,
+    model: &crate::motion::cvae::MotionModel,
+) -> Result<crate::policy::net::ActorCritic<crate::motion::cvae::infer::InferBackend>> {
+    let (arch, net) = crate::policy::ppo::load_policy::<crate::motion::cvae::infer::InferBackend>(
+        path,
+        &Default::default(),
+    )?;
+    if arch.latent_dim != model.latent_dim() {
         bail!(
-            "--suite {}: expected \"table1\" (Tables 2 and 3 are `egogen policy eval` runs, docs/POLICY.md)",
+            "{}: the policy acts in {} latent dimensions, the motion model has {}",
+            path.display(),
+            arch.latent_dim,
+            model.latent_dim()
+        );
+    }
+    Ok(net)
+}
+
+fn bar(args: &EvalArgs, total: usize, unit: &str) -> indicatif::ProgressBar {
+    match !args.quiet {
+        true => crate::progress::progress_bar("egogen eval", "evaluating", unit, total as u64, 0),
+        false => indicatif::ProgressBar::hidden(),
+    }
+}
+
+/// Runs the suite, writes its files and renders `OUT/RESULTS.md` from every suite's results
+/// there (see the module docs).
+pub fn run_eval(args: &EvalArgs) -> Result<()> {
+    if !matches!(args.suite.as_str(), "table1" | "table3") {
+        bail!(
+            "--suite {}: expected \"table1\" or \"table3\" (Table 2's apartment rows are `egogen policy eval --scene`, docs/POLICY.md)",
             args.suite
         );
     }
@@ -78,7 +197,10 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         bail!("--episodes and --k must be at least 1");
     }
     if !args.force {
-        if let Some(f) = files(&args.out).iter().find(|f| f.exists()) {
+        if let Some(f) = suite_files(&args.out, &args.suite)
+            .iter()
+            .find(|f| f.exists())
+        {
             bail!(
                 "{} exists: give --force to replace the results in {}",
                 f.display(),
@@ -86,95 +208,89 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
             );
         }
     }
+    let results = args.out.join("results");
+    match args.suite.as_str() {
+        "table1" => {
+            let scenarios = chosen_scenarios(&args.scenarios)?;
+            let common = load_common()?;
+            std::fs::create_dir_all(&results)
+                .with_context(|| format!("creating {}", results.display()))?;
+            table1(args, &common, &scenarios, &results)?
+        }
+        _ => {
+            let common = load_common()?;
+            std::fs::create_dir_all(&results)
+                .with_context(|| format!("creating {}", results.display()))?;
+            table3(args, &common, &results)?
+        }
+    }
+    let md = results_markdown(&args.out)?;
+    write_atomically(&args.out.join("RESULTS.md"), md.as_bytes())?;
+    println!("wrote {}", args.out.join("RESULTS.md").display());
+    Ok(())
+}
+
+fn chosen_scenarios(names: &[String]) -> Result<Vec<Scenario>> {
     let all = Scenario::table1();
-    let scenarios: Vec<Scenario> = if args.scenarios.is_empty() {
-        all.clone()
-    } else {
-        args.scenarios
-            .iter()
-            .map(|name| {
-                all.iter()
-                    .copied()
-                    .find(|s| &s.name() == name)
-                    .with_context(|| {
-                        format!(
-                            "--scenarios: no scenario \"{name}\"; expected some of {}",
-                            all.iter().map(|s| s.name()).collect::<Vec<_>>().join(", ")
-                        )
-                    })
-            })
-            .collect::<Result<_>>()?
-    };
-    let body_path = crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz");
-    let body = BodyModel::load(&body_path)?;
-    let model = MotionModel::load(crate::motion::cvae::train::shipped_weights_path())?;
-    let prior = PosePrior::load(&crate::policy::pose_prior::shipped_pose_prior_path())?;
+    if names.is_empty() {
+        return Ok(all);
+    }
+    names
+        .iter()
+        .map(|name| {
+            all.iter()
+                .copied()
+                .find(|s| &s.name() == name)
+                .with_context(|| {
+                    format!(
+                        "--scenarios: no scenario \"{name}\"; expected some of {}",
+                        all.iter().map(|s| s.name()).collect::<Vec<_>>().join(", ")
+                    )
+                })
+        })
+        .collect()
+}
+
+fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -> Result<()> {
     let policy_path = args
         .policy
         .clone()
         .unwrap_or_else(crate::policy::ppo::shipped_policy_path);
-    let (arch, net) =
-        crate::policy::ppo::load_policy::<InferBackend>(&policy_path, &Default::default())?;
-    if arch.latent_dim != model.latent_dim() {
-        bail!(
-            "{}: the policy acts in {} latent dimensions, the motion model has {}",
-            policy_path.display(),
-            arch.latent_dim,
-            model.latent_dim()
-        );
-    }
-    let train_plan = super::train::load_train_plan(
-        &crate::paths::crate_root().join("configs/train_primitive.toml"),
-    )?;
-    // Held-out seeds: whole clips never trained on.
-    let (_, held_out) = evaluation_sets(&train_plan, &body, true)?;
-    let bank = SeedBank::from_set(&held_out);
+    let net = load_net(&policy_path, &c.model)?;
     let parts = crate::synth::crowd::CrowdParts {
-        model: &model,
-        body_model: &body,
-        prior: &prior,
-        bank: &bank,
+        model: &c.model,
+        body_model: &c.body,
+        prior: &c.prior,
+        bank: &c.bank,
         policy: Some(&net),
     };
     let controllers = Controller::table1(args.k);
-    let total = scenarios.len() * controllers.len();
-    let bar = match !args.quiet {
-        true => crate::progress::progress_bar(
-            "egogen eval",
-            "walking",
-            "scenario × controller rows",
-            total as u64,
-            0,
-        ),
-        false => indicatif::ProgressBar::hidden(),
-    };
+    let progress = bar(
+        args,
+        scenarios.len() * controllers.len(),
+        "scenario × controller rows",
+    );
     let run = run_table(
         &parts,
-        &body,
-        &scenarios,
+        &c.body,
+        scenarios,
         &controllers,
         args.episodes,
         args.seed,
         |done, _, what| {
-            bar.set_message(what.to_string());
-            bar.set_position(done as u64);
+            progress.set_message(what.to_string());
+            progress.set_position(done as u64);
         },
     )?;
-    bar.finish_and_clear();
-
-    let results = args.out.join("results");
-    std::fs::create_dir_all(&results).with_context(|| format!("creating {}", results.display()))?;
-    let mut pictures = Vec::new();
+    progress.finish_and_clear();
     for p in &run.pictures {
         let name = format!("table1_{}_{}.png", p.scenario.name(), p.controller);
         let takes: Vec<_> = p.takes.iter().collect();
         let pic = crate::synth::crowd_dir::paths_picture(&p.world, &takes, 420);
-        let file = results.join(&name);
         let partial = results.join(format!("{name}.partial"));
         pic.image.write_png(&partial)?;
-        std::fs::rename(&partial, &file)
+        std::fs::rename(&partial, results.join(&name))
             .with_context(|| format!("renaming {}", partial.display()))?;
-        pictures.push((p.scenario, p.controller.clone(), name));
     }
     let mut lines = String::new();
     for e in &run.episodes {
@@ -182,89 +298,219 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         lines.push('\n');
     }
     write_atomically(&results.join("table1_episodes.jsonl"), lines.as_bytes())?;
+    let file = Table1File {
+        command: command_line(),
+        episodes: args.episodes,
+        seed: args.seed,
+        policy: relative(&policy_path),
+        k: args.k,
+        wall_s: run.wall_s,
+        rows: run.rows,
+    };
     write_atomically(
         &results.join("table1.json"),
-        serde_json::to_string_pretty(&serde_json::json!({
-            "command": command_line(),
-            "episodes": args.episodes,
-            "seed": args.seed,
-            "policy": policy_path,
-            "k": args.k,
-            "wall_s": run.wall_s,
-            "rows": run.rows,
-        }))?
-        .as_bytes(),
+        serde_json::to_string_pretty(&file)?.as_bytes(),
     )?;
-    let labels = |name: &str| {
-        scenarios
-            .iter()
-            .find(|s| s.name() == name)
-            .map_or(name.to_string(), |s| s.label())
-    };
-    let md = results_markdown(
-        args,
-        &policy_path,
-        &run.rows,
-        &labels,
-        &pictures,
-        run.wall_s,
-    );
-    write_atomically(&args.out.join("RESULTS.md"), md.as_bytes())?;
     println!(
-        "{} rows, {} episodes each, in {:.0} s: wrote {} and {}",
-        run.rows.len(),
+        "{} rows, {} episodes each, in {:.0} s",
+        file.rows.len(),
         args.episodes,
-        run.wall_s,
-        args.out.join("RESULTS.md").display(),
-        results.display()
+        run.wall_s
     );
     Ok(())
 }
 
-fn results_markdown(
-    args: &EvalArgs,
-    policy: &Path,
-    rows: &[crate::eval::metrics::Row],
-    labels: &dyn Fn(&str) -> String,
-    pictures: &[(Scenario, String, String)],
-    wall_s: f64,
-) -> String {
-    let mut md = format!(
-        "# Results: the paper's evaluation on egogen\n\n\
-         Written by `egogen eval` — do not edit by hand; rerun:\n\n\
-         ```\n{}\n```\n\n\
-         {} episodes per row, seed {}, policy `{}`, K = {} latents per primitive for the \
-         sampling controller and the path-following baseline; {:.0} s of wall time on the \
-         machine that ran it (episodes two at a time on its cores).\n\n",
-        command_line(),
-        args.episodes,
-        args.seed,
-        policy
-            .strip_prefix(crate::paths::crate_root())
-            .unwrap_or(policy)
-            .display(),
-        args.k,
-        wall_s
+fn table3(args: &EvalArgs, c: &Common, results: &Path) -> Result<()> {
+    use crate::motion::cvae::infer::InferBackend;
+    use crate::policy::tasks::{evaluate, Controller as PolicyController, EvalParts};
+    let root = crate::paths::crate_root();
+    let ctx = crate::motion::cvae::BodyContext::new(&c.body, &[])?;
+    let parts = EvalParts {
+        model: &c.model,
+        body: &ctx,
+        bank: &c.bank,
+        prior: &c.prior,
+        fixed: None,
+    };
+    let t0 = std::time::Instant::now();
+    let progress = bar(
+        args,
+        TABLE3_POLICIES.len() * 4,
+        "policy × set × actions rows",
     );
-    md.push_str("## Table 1: avoiding moving obstacles and other people\n\n");
-    md.push_str(&table1_markdown(rows, labels));
-    md.push_str(TABLE1_NOTES);
-    md.push_str("\n## Paths (episode 0; every episode of the static box)\n\n");
-    let mut last = None;
-    for (scenario, controller, file) in pictures {
-        if last != Some(*scenario) {
-            md.push_str(&format!("\n**{}**\n\n", scenario.label()));
-            last = Some(*scenario);
+    let mut rows = Vec::new();
+    for (label, weights, config) in TABLE3_POLICIES {
+        let path = root.join(weights);
+        if !path.is_file() {
+            bail!(
+                "{}: not found; train it with `egogen train policy --config {config}`",
+                path.display()
+            );
         }
-        md.push_str(&format!(
-            "![{} {}](results/{})\n",
-            scenario.name(),
-            controller,
-            file
-        ));
+        let net = load_net(&path, &c.model)?;
+        for (set, crossing_share) in [("box scenes", 0.0), ("crossings", 1.0)] {
+            let defaults = EnvSettings::default();
+            let settings = EnvSettings {
+                success_m: 0.3,
+                crossing: crate::policy::crossing_scene::CrossingSettings {
+                    share: crossing_share,
+                    ..defaults.crossing
+                },
+                ..defaults
+            };
+            for mean_action in [false, true] {
+                let controller: PolicyController<InferBackend> = PolicyController::Policy {
+                    net: &net,
+                    mean_action,
+                };
+                let (report, _) = evaluate(
+                    &parts,
+                    settings,
+                    &controller,
+                    (args.episodes, 50, args.seed),
+                    |_| {},
+                )?;
+                rows.push(Table3Row {
+                    policy: label.into(),
+                    weights: weights.into(),
+                    config: config.into(),
+                    set: set.into(),
+                    actions: if mean_action { "mean" } else { "sampled" }.into(),
+                    episodes: report.episodes,
+                    success_rate: report.success_rate,
+                    contact: report.contact_mean,
+                    penetration_share: report.penetration_share_mean,
+                    view_cos: report.view_cos_mean,
+                    final_distance_median_m: report.final_distance_m.p50,
+                    speed_successful_median_m_s: report.speed_successful_m_s.p50,
+                    wall_s: report.wall_s,
+                });
+                progress.inc(1);
+            }
+        }
     }
-    md
+    progress.finish_and_clear();
+    let file = Table3File {
+        command: command_line(),
+        episodes: args.episodes,
+        seed: args.seed,
+        wall_s: t0.elapsed().as_secs_f64(),
+        rows,
+    };
+    write_atomically(
+        &results.join("table3.json"),
+        serde_json::to_string_pretty(&file)?.as_bytes(),
+    )?;
+    println!("{} rows in {:.0} s", file.rows.len(), file.wall_s);
+    Ok(())
 }
+
+/// A path as shown in the report: relative to the crate's folder when it is inside it.
+fn relative(path: &Path) -> String {
+    path.strip_prefix(crate::paths::crate_root())
+        .unwrap_or(path)
+        .display()
+        .to_string()
+}
+
+fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<T>> {
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    Ok(Some(serde_json::from_str(&text).with_context(|| {
+        format!("{}: not a results file of this egogen", path.display())
+    })?))
+}
+
+/// `RESULTS.md` from the results files in `out/results/`.
+fn results_markdown(out: &Path) -> Result<String> {
+    let results = out.join("results");
+    let mut md = String::from(
+        "# Results: the paper's evaluation on egogen\n\n\
+         Written by `egogen eval` from the files in `results/` — do not edit by hand; each \
+         table names the command that reproduces it. Wall times are of the machine that ran it \
+         (2 cores; episodes run two at a time).\n\n",
+    );
+    if let Some(t) = read_json::<Table1File>(&results.join("table1.json"))? {
+        let labels = |name: &str| {
+            Scenario::table1()
+                .iter()
+                .find(|s| s.name() == name)
+                .map_or(name.to_string(), |s| s.label())
+        };
+        md.push_str(&format!(
+            "## Table 1: avoiding moving obstacles and other people\n\n```\n{}\n```\n\n\
+             {} episodes per row, seed {}, policy `{}`, K = {} latents per primitive for the \
+             sampling controller and the path-following baseline; {:.0} s of wall time.\n\n",
+            t.command, t.episodes, t.seed, t.policy, t.k, t.wall_s
+        ));
+        md.push_str(&table1_markdown(&t.rows, &labels));
+        md.push_str(TABLE1_NOTES);
+        md.push_str("\n### Paths (episode 0; every episode of the static box)\n");
+        let mut last = String::new();
+        for r in &t.rows {
+            let file = format!("table1_{}_{}.png", r.scenario, r.controller);
+            if !results.join(&file).is_file() {
+                continue;
+            }
+            if r.scenario != last {
+                md.push_str(&format!("\n**{}**\n\n", labels(&r.scenario)));
+                last = r.scenario.clone();
+            }
+            md.push_str(&format!(
+                "![{} {}](results/{file})\n",
+                r.scenario, r.controller
+            ));
+        }
+        md.push('\n');
+    }
+    if let Some(t) = read_json::<Table3File>(&results.join("table3.json"))? {
+        md.push_str(&format!(
+            "## Table 3: ablations\n\n```\n{}\n```\n\n\
+             Each policy trained from scratch with the budget of `configs/train_policy.toml` \
+             (2.0 M environment steps, seed 0; the shipped policy is that run's, fine-tuned \
+             further in the apartment, docs/POLICY.md), evaluated on the first {} held-out box \
+             scenes and crossings (seed {}; success within 0.3 m, 11 primitives, episodes not \
+             ended by penetration); {:.0} s of wall time.\n\n",
+            t.command, t.episodes, t.seed, t.wall_s
+        ));
+        md.push_str(
+            "| policy | set | actions | success | foot contact | penetration | cos(view, goal) | final distance (median) | speed, successful (median) | trained by |\n\
+             | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+        );
+        for r in &t.rows {
+            md.push_str(&format!(
+                "| {} | {} | {} | {:.1} % | {:.3} | {:.2} % | {:.3} | {:.2} m | {:.2} m/s | `{}` |\n",
+                r.policy,
+                r.set,
+                r.actions,
+                100.0 * r.success_rate,
+                r.contact,
+                100.0 * r.penetration_share,
+                r.view_cos,
+                r.final_distance_median_m,
+                r.speed_successful_median_m_s,
+                r.config
+            ));
+        }
+        md.push_str(TABLE3_NOTES);
+    }
+    md.push_str(
+        "\n## Table 2\n\nThe apartment with egocentric sensing is in docs/POLICY.md \
+         (`egogen policy eval --scene assets/scenes/apartment.glb`); its local-map baseline \
+         (a policy observing a 0.8 m or 7 m occupancy patch instead of the rays) is not \
+         trained yet.\n",
+    );
+    Ok(md)
+}
+
+const TABLE3_NOTES: &str = "
+Penetration: share of frames with a body marker inside the box's or the other person's
+footprint. Foot contact: paper Eq. 12 with 3-D foot-marker speed. The paper's own Table 3
+values are not set beside these: they could not be read on the machine that wrote this file.
+";
 
 const TABLE1_NOTES: &str = "
 Scenarios (`src/eval/scenarios.rs`), each on an open 14 × 14 m floor, starts on the held-out
@@ -288,7 +534,8 @@ start–goal line at 9 stations (10–90 % of the way), averaged, and **left** t
 walks passing the box on the left; **cos** between the viewing direction and the goal
 direction at primitive ends; **pose score** the pose prior's −ln p / 63 (lower is more
 plausible; its limit is −0.874, docs/POLICY.md); **speed** of the people who reached the
-goal.
+goal; **wall** the row's episodes' wall times summed (two episodes run at once, so the row
+took about half of it).
 
 Controllers: **policy** actions sampled from the shipped policy, **policy_mean** its mean
 action; **sampling_kK** the best of K random latents by the training reward; **path_follow_kK**

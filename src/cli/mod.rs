@@ -6,6 +6,7 @@
 pub mod config;
 pub mod eval_jobs;
 pub mod motion_jobs;
+pub mod overrides;
 pub mod policy_jobs;
 pub mod resolve;
 pub mod synth;

@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::config::{load_toml, ConfigError};
 use super::resolve::{crate_root, resolve_body_model};
@@ -29,7 +29,7 @@ pub const MAX_AGENTS: usize = 32;
 pub const MAX_DURATION_S: f64 = 3600.0;
 
 /// `[scene]`.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawSynthScene {
     /// Scene file (glTF, OBJ, PLY), relative to the config's folder; absent: an open floor.
@@ -42,7 +42,7 @@ pub struct RawSynthScene {
 }
 
 /// `[motion]`.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawSynthMotion {
     pub weights: Option<PathBuf>,
@@ -64,7 +64,7 @@ pub struct RawSynthMotion {
 }
 
 /// `[crowd]`: agents made by rule.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawCrowd {
     pub count: usize,
@@ -94,7 +94,7 @@ fn default_steering() -> String {
 }
 
 /// `[[agents]]`: one agent.
-#[derive(Debug, Clone, Default, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawAgent {
     pub name: Option<String>,
@@ -115,7 +115,7 @@ pub struct RawAgent {
 }
 
 /// `[[obstacles]]`: a 2D box, still or moving at constant velocity.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawObstacle {
     /// Centre at time 0 (m).
@@ -129,7 +129,7 @@ pub struct RawObstacle {
 }
 
 /// `[output]`.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawSynthOutput {
     /// Must not exist yet (or be empty).
@@ -137,7 +137,7 @@ pub struct RawSynthOutput {
 }
 
 /// The whole config, as written.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawSynth {
     pub body_model: Option<PathBuf>,

@@ -168,7 +168,7 @@ pub fn path_diversity(paths: &[&[[f64; 2]]], start: DVec2, goal: DVec2) -> Optio
 }
 
 /// A table row: the means over every person of every episode of one scenario and controller.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct Row {
     pub scenario: String,
     pub controller: String,

@@ -20,7 +20,7 @@ use crate::render::protocol::ShardLens;
 const FOV_MARGIN_PX: Real = 2.0;
 
 /// How Fisheye624 cameras are rendered (`[render] fisheye`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FisheyeRendering {
     /// A wider equidistant fisheye remapped to the exact model in Rust.

@@ -12,7 +12,7 @@ use anyhow::{bail, Context, Result};
 use super::colmap::write_colmap;
 use super::dataset::{next_start, write_annotations, CameraWork, Dataset, RenderedAgent};
 use super::local::{LocalPool, PoolSettings};
-use super::manifest::{remove_temporaries, sha256_file, sha256_hex, write_manifest, MANIFEST};
+use super::manifest::{remove_temporaries, sha256_hex, write_manifest, MANIFEST};
 use super::pool::ShardPool;
 use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use crate::atomic_file::write_atomically;
@@ -32,12 +32,17 @@ use crate::synth::placement::place_motion;
 use crate::synth::{body_cache, pose_meshes, track_body, write_sequence_dir};
 use crate::vertex_cache::{write_faces_npy, write_rest_vertices_npy};
 
-/// Command-line choices that are not in the config.
+/// Command-line choices that are not in the config, and the effective config.
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     pub resume: bool,
     /// `--blender`; else `EGOGEN_BLENDER`; else the managed install.
     pub blender: Option<PathBuf>,
+    /// The effective config (the file with the command line's overrides), written into the
+    /// dataset as `config.toml` (`cli::overrides::effective_config_toml`).
+    pub config_toml: String,
+    /// What a resume must find unchanged (`cli::overrides::resume_fingerprint`); hashed.
+    pub resume_fingerprint: String,
 }
 
 /// What a run produced.
@@ -58,7 +63,8 @@ fn is_non_empty_dir(p: &Path) -> bool {
 /// What `work/run.json` records of a run, so that a resume continues only the same run.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct RunState {
-    /// The config file the run was started from, and its SHA-256.
+    /// The config file the run was started from, and the SHA-256 of its effective values
+    /// (command-line overrides applied; `[supervisor]` left out).
     pub config: String,
     pub config_sha256: String,
     /// SHA-256 of the resolved rig (a `--rig` override included); absent in runs started
@@ -105,7 +111,7 @@ pub fn run_pipeline(
 ) -> Result<RunSummary> {
     let dir = &plan.output_dir;
     let staging = PathBuf::from(format!("{}.partial", dir.display()));
-    let config_sha = sha256_file(config_path)?;
+    let config_sha = sha256_hex(opts.resume_fingerprint.as_bytes());
     // The rig as resolved (a --rig override included): a resume must render with the same one.
     let rig_sha = sha256_hex(render.rig.to_json().as_bytes());
     if is_non_empty_dir(dir) {
@@ -146,7 +152,7 @@ pub fn run_pipeline(
             })?;
         if state.config_sha256 != config_sha {
             bail!(
-                "{} was started from a different config than {}; resuming would mix two runs (nothing was touched)",
+                "{} was started from a different config than {} with these options (its values or the command line's --out, --seed, --rig); resuming would mix two runs (nothing was touched)",
                 staging.display(),
                 config_path.display()
             );
@@ -207,8 +213,9 @@ pub fn run_pipeline(
     if fresh {
         std::fs::create_dir_all(staging.join("work"))
             .with_context(|| format!("creating {}", staging.display()))?;
-        std::fs::copy(config_path, staging.join("config.toml"))
-            .with_context(|| format!("copying {} into the dataset", config_path.display()))?;
+        write_atomically(&staging.join("config.toml"), opts.config_toml.as_bytes()).with_context(
+            || format!("writing the effective config of {}", config_path.display()),
+        )?;
         write_atomically(
             &state_path,
             serde_json::to_string_pretty(&RunState {

@@ -1,0 +1,121 @@
+//! `egogen-run`'s command-line overrides, applied in one place: to the config as written,
+//! before it is resolved and checked (so every value passes the same checks as one written in
+//! the file), and the effective config a dataset records and a resume compares.
+
+use std::path::{Path, PathBuf};
+
+use super::config::{Backend, MotionSource, RawRun};
+
+/// What the command line overrides.
+#[derive(Debug, Clone, Default)]
+pub struct RunOverrides {
+    /// `output.dir`.
+    pub out: Option<PathBuf>,
+    /// Every seed of the config: `motion.seed` (agents) or `scene.seed` (a placed motion), and
+    /// the seeds of
+    /// `[render.lighting]`, `[render.headset_wear]` and `[render.depth_noise]` where those
+    /// sections are given — another variant of the same config.
+    pub seed: Option<u64>,
+    /// `render.rig`.
+    pub rig: Option<PathBuf>,
+    /// `supervisor.workers`.
+    pub workers: Option<usize>,
+    /// `supervisor.backend`.
+    pub backend: Option<Backend>,
+}
+
+impl RunOverrides {
+    /// Applies the overrides to a config as written; paths given on the command line are made
+    /// absolute (the config's own stay relative to its folder).
+    pub fn apply(&self, raw: &mut RawRun) -> std::io::Result<()> {
+        if let Some(out) = &self.out {
+            raw.output.dir = std::path::absolute(out)?;
+        }
+        if let Some(rig) = &self.rig {
+            raw.render.get_or_insert_with(Default::default).rig = Some(std::path::absolute(rig)?);
+        }
+        if let Some(seed) = self.seed {
+            // Agents draw from the motion's seed; a single motion is placed by the scene's.
+            if raw.motion.source == MotionSource::Agents {
+                raw.motion.seed = Some(seed);
+            } else {
+                raw.scene.seed = Some(seed);
+            }
+            if let Some(r) = raw.render.as_mut() {
+                if let Some(l) = r.lighting.as_mut() {
+                    l.seed = Some(seed);
+                }
+                if let Some(w) = r.headset_wear.as_mut() {
+                    w.seed = Some(seed);
+                }
+                if let Some(d) = r.depth_noise.as_mut() {
+                    d.seed = Some(seed);
+                }
+            }
+        }
+        if let Some(w) = self.workers {
+            raw.supervisor.workers = Some(w);
+        }
+        if let Some(b) = self.backend {
+            raw.supervisor.backend = Some(b);
+            // Slurm resources stay in the record but only the Slurm backend reads them.
+            if b != Backend::Slurm {
+                raw.supervisor.slurm = None;
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether anything is overridden.
+    pub fn is_empty(&self) -> bool {
+        self.out.is_none()
+            && self.seed.is_none()
+            && self.rig.is_none()
+            && self.workers.is_none()
+            && self.backend.is_none()
+    }
+}
+
+/// The config's values without `[supervisor]` (how many workers ran where does not change
+/// what is rendered: a dataset rendered locally and one rendered on Slurm are the same).
+fn content_table(raw: &RawRun) -> Result<toml::Table, toml::ser::Error> {
+    let mut table = toml::Table::try_from(raw)?;
+    table.remove("supervisor");
+    Ok(table)
+}
+
+/// The effective config as TOML, for the dataset's `config.toml`: the file's values with the
+/// overrides applied, `[supervisor]` left out (the logs record how the shards ran), relative
+/// paths still relative to the original config's folder. The header names the file but not
+/// where it lay, so the same config run from two folders gives the same dataset.
+pub fn effective_config_toml(
+    raw: &RawRun,
+    source: &Path,
+    overrides: &RunOverrides,
+) -> Result<String, toml::ser::Error> {
+    let body = toml::to_string(&content_table(raw)?)?;
+    let name = source.file_name().map_or_else(
+        || source.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    );
+    let changed = overrides.out.is_some() || overrides.seed.is_some() || overrides.rig.is_some();
+    Ok(format!(
+        "# The effective config of this dataset: {name}{}, without [supervisor];\n# relative paths are relative to the folder {name} was in.\n\n{body}",
+        if changed {
+            " with the command line's --out, --seed or --rig applied"
+        } else {
+            ""
+        },
+    ))
+}
+
+/// What a resume must find unchanged: the effective config without `[supervisor]` (how many
+/// workers, which backend and how retries go do not change what is rendered) and without the
+/// rig's path (the pipeline compares the rig itself, wherever its file lies).
+pub fn resume_fingerprint(raw: &RawRun) -> Result<String, toml::ser::Error> {
+    let mut r = raw.clone();
+    if let Some(render) = r.render.as_mut() {
+        render.rig = None;
+    }
+    toml::to_string(&content_table(&r)?)
+}
