@@ -158,25 +158,6 @@ fn load_common() -> Result<Common> {
     })
 }
 
-fn load_net(
-    path: &Path,
-    model: &crate::motion::cvae::MotionModel,
-) -> Result<crate::policy::net::ActorCritic<crate::motion::cvae::infer::InferBackend>> {
-    let (arch, net) = crate::policy::ppo::load_policy::<crate::motion::cvae::infer::InferBackend>(
-        path,
-        &Default::default(),
-    )?;
-    if arch.latent_dim != model.latent_dim() {
-        bail!(
-            "{}: the policy acts in {} latent dimensions, the motion model has {}",
-            path.display(),
-            arch.latent_dim,
-            model.latent_dim()
-        );
-    }
-    Ok(net)
-}
-
 fn bar(args: &EvalArgs, total: usize, unit: &str) -> indicatif::ProgressBar {
     match !args.quiet {
         true => crate::progress::progress_bar("egogen eval", "evaluating", unit, total as u64, 0),
@@ -256,7 +237,7 @@ fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -
         .policy
         .clone()
         .unwrap_or_else(crate::policy::ppo::shipped_policy_path);
-    let net = load_net(&policy_path, &c.model)?;
+    let net = super::policy_jobs::load_policy_for(&policy_path, &c.model)?;
     let parts = crate::synth::crowd::CrowdParts {
         model: &c.model,
         body_model: &c.body,
@@ -347,7 +328,7 @@ fn table3(args: &EvalArgs, c: &Common, results: &Path) -> Result<()> {
                 path.display()
             );
         }
-        let net = load_net(&path, &c.model)?;
+        let net = super::policy_jobs::load_policy_for(&path, &c.model)?;
         for (set, crossing_share) in [("box scenes", 0.0), ("crossings", 1.0)] {
             let defaults = EnvSettings::default();
             let settings = EnvSettings {

@@ -230,19 +230,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             use crate::policy::tasks::{evaluate, Controller, EvalParts};
             let loaded = match &policy {
                 None => None,
-                Some(path) => {
-                    let (arch, net) =
-                        crate::policy::ppo::load_policy::<InferBackend>(path, &Default::default())?;
-                    if arch.latent_dim != model.latent_dim() {
-                        bail!(
-                            "{}: the policy acts in {} latent dimensions, the motion model has {}",
-                            path.display(),
-                            arch.latent_dim,
-                            model.latent_dim()
-                        );
-                    }
-                    Some(net)
-                }
+                Some(path) => Some(load_policy_for(path, &model)?),
             };
             let mut runs: Vec<(serde_json::Value, Controller<InferBackend>)> = k
                 .iter()
@@ -333,6 +321,26 @@ fn fixed_scene(spec: &TrainScene) -> Result<FixedScene> {
         map: std::sync::Arc::new(map),
         pairs,
     })
+}
+
+/// A trained policy that acts in `model`'s latent space, or an error naming the file.
+pub fn load_policy_for(
+    path: &Path,
+    model: &crate::motion::cvae::MotionModel,
+) -> Result<crate::policy::net::ActorCritic<crate::motion::cvae::infer::InferBackend>> {
+    let (arch, net) = crate::policy::ppo::load_policy::<crate::motion::cvae::infer::InferBackend>(
+        path,
+        &Default::default(),
+    )?;
+    if arch.latent_dim != model.latent_dim() {
+        bail!(
+            "{}: the policy acts in {} latent dimensions, the motion model has {}",
+            path.display(),
+            arch.latent_dim,
+            model.latent_dim()
+        );
+    }
+    Ok(net)
 }
 
 pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {

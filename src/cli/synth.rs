@@ -626,7 +626,6 @@ pub fn synthesize(
     body: &crate::body::BodyModel,
     progress: bool,
 ) -> Result<Synthesized> {
-    use crate::motion::cvae::infer::InferBackend;
     use crate::motion::cvae::MotionModel;
     use crate::policy::{PosePrior, SeedBank};
     let map = synth_map(plan)?;
@@ -655,20 +654,7 @@ pub fn synthesize(
     let model = MotionModel::load(&plan.weights)?;
     let prior = PosePrior::load(&plan.pose_prior)?;
     let policy = match &plan.policy {
-        Some(p) => {
-            let (arch, net) =
-                crate::policy::ppo::load_policy::<InferBackend>(p, &Default::default())?;
-            if arch.latent_dim != model.latent_dim() {
-                anyhow::bail!(
-                    "{}: the policy acts in {} latent dimensions, the motion model {} has {}",
-                    p.display(),
-                    arch.latent_dim,
-                    plan.weights.display(),
-                    model.latent_dim()
-                );
-            }
-            Some(net)
-        }
+        Some(p) => Some(super::policy_jobs::load_policy_for(p, &model)?),
         None => None,
     };
     let train_plan = super::train::load_train_plan(&plan.train_config)?;
