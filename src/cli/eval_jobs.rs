@@ -189,21 +189,14 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
             );
         }
     }
+    let scenarios = chosen_scenarios(&args.scenarios)?;
+    let common = load_common()?;
     let results = args.out.join("results");
+    std::fs::create_dir_all(&results)
+        .with_context(|| format!("creating {}", results.display()))?;
     match args.suite.as_str() {
-        "table1" => {
-            let scenarios = chosen_scenarios(&args.scenarios)?;
-            let common = load_common()?;
-            std::fs::create_dir_all(&results)
-                .with_context(|| format!("creating {}", results.display()))?;
-            table1(args, &common, &scenarios, &results)?
-        }
-        _ => {
-            let common = load_common()?;
-            std::fs::create_dir_all(&results)
-                .with_context(|| format!("creating {}", results.display()))?;
-            table3(args, &common, &results)?
-        }
+        "table1" => table1(args, &common, &scenarios, &results)?,
+        _ => table3(args, &common, &results)?,
     }
     let md = results_markdown(&args.out)?;
     write_atomically(&args.out.join("RESULTS.md"), md.as_bytes())?;
