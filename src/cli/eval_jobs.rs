@@ -192,8 +192,7 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
     let scenarios = chosen_scenarios(&args.scenarios)?;
     let common = load_common()?;
     let results = args.out.join("results");
-    std::fs::create_dir_all(&results)
-        .with_context(|| format!("creating {}", results.display()))?;
+    std::fs::create_dir_all(&results).with_context(|| format!("creating {}", results.display()))?;
     match args.suite.as_str() {
         "table1" => table1(args, &common, &scenarios, &results)?,
         _ => table3(args, &common, &results)?,
