@@ -3,11 +3,13 @@
 Run by egogen (`python render_shard.py SPEC.json` with PyPI bpy, or
 `blender --background --python-exit-code 1 --python render_shard.py -- SPEC.json`).
 Thin on purpose: every number comes from the spec (see src/render/protocol.rs). Per camera it
-renders the RGB image of every frame (Cycles, camera + deformation motion blur) and then the
-ground truth of every frame (motion blur off, 1 sample at the pixel centre: position, normal,
-object index, motion vectors). Each file is written to `<output>.partial.exr` and renamed, so a
-killed worker never leaves a half-written file under the final name. Prints one
-`EGOGEN_DONE <path>` line per finished file.
+renders the RGB image of every frame (Cycles, camera + deformation motion blur) when the spec
+asks for colour, and then the ground truth of every frame (motion blur off, 1 sample at the
+pixel centre) with the spec's passes (position, normal, object index, motion vectors) when it
+asks for any. The ground truth runs on a timeline scaled by `ground_truth_frame_step`, so that
+motion vectors reach the previous and next *saved* frame. Each file is written to
+`<output>.partial.exr` and renamed, so a killed worker never leaves a half-written file under
+the final name. Prints one `EGOGEN_DONE <path>` line per finished file.
 """
 import json
 import os
@@ -93,6 +95,36 @@ def add_world_hdri(world, hdri):
     background.inputs["Strength"].default_value = hdri["strength"]
 
 
+GPU_BACKENDS = ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL")
+
+
+def set_device(scene, device):
+    """Cycles on the CPU, or on the first GPU backend that Blender finds a device for."""
+    if device == "cpu":
+        scene.cycles.device = "CPU"
+        return
+    prefs = bpy.context.preferences.addons["cycles"].preferences
+    for backend in GPU_BACKENDS:
+        try:
+            prefs.compute_device_type = backend
+        except TypeError:  # not built into this Blender
+            continue
+        prefs.refresh_devices()
+        gpus = [d for d in prefs.devices if d.type == backend]
+        if gpus:
+            for d in prefs.devices:
+                d.use = d.type == backend
+            scene.cycles.device = "GPU"
+            names = ", ".join(d.name for d in gpus)
+            print(f"egogen: rendering on {backend}: {names}", file=sys.stderr, flush=True)
+            return
+    raise RuntimeError(
+        'render.device = "gpu", but Blender found no GPU (looked for '
+        + ", ".join(GPU_BACKENDS)
+        + '); use device = "cpu" on this machine'
+    )
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
@@ -107,7 +139,7 @@ def build_scene(spec):
     scene.render.fps = spec["fps"]
     scene.render.fps_base = spec["fps_base"]
     scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
+    set_device(scene, spec.get("device", "cpu"))
     scene.world = bpy.data.worlds.new("egogen_world")
     scene.world.color = tuple(spec["lighting"]["world_rgb"])
     if spec["lighting"].get("world_hdri"):
@@ -164,13 +196,28 @@ def make_camera(scene, cam_spec):
     cam = bpy.data.objects.new(cam_spec["name"], data)
     scene.collection.objects.link(cam)
     cam.rotation_mode = "QUATERNION"
-    for key in cam_spec["keys"]:
-        cam.location = Vector(key["location"])
-        cam.rotation_quaternion = Quaternion(key["rotation_wxyz"])
-        cam.keyframe_insert("location", frame=key["frame"])
-        cam.keyframe_insert("rotation_quaternion", frame=key["frame"])
+    key_camera(cam, cam_spec["keys"])
     scene.camera = cam
     return cam
+
+
+def key_camera(cam, keys, frame_step=1):
+    """Pose keys at `key.frame / frame_step` (the ground truth's scaled timeline)."""
+    cam.animation_data_clear()
+    for key in keys:
+        cam.location = Vector(key["location"])
+        cam.rotation_quaternion = Quaternion(key["rotation_wxyz"])
+        cam.keyframe_insert("location", frame=key["frame"] / frame_step)
+        cam.keyframe_insert("rotation_quaternion", frame=key["frame"] / frame_step)
+
+
+def set_frame_step(cam, cam_spec, bodies, body_specs, frame_step):
+    """Puts the camera and the bodies on a timeline where one frame is `frame_step` frames of
+    the motion: Cycles' motion vectors (to the frames before and after) then reach the
+    previous and next saved frame."""
+    key_camera(cam, cam_spec["keys"], frame_step)
+    for obj, body in zip(bodies, body_specs):
+        obj.modifiers["egogen_cache"].frame_scale = body["samples_per_frame"] * frame_step
 
 
 def set_rgb_mode(scene, rgb):
@@ -191,10 +238,10 @@ def set_rgb_mode(scene, rgb):
     scene.render.motion_blur_position = "CENTER"
 
 
-def set_ground_truth_mode(scene):
+def set_ground_truth_mode(scene, passes):
     layer = scene.view_layers[0]
     for p in ("z", "normal", "object_index", "vector", "position"):
-        setattr(layer, "use_pass_" + p, True)
+        setattr(layer, "use_pass_" + p, p in passes)
     scene.cycles.samples = 1
     scene.cycles.use_adaptive_sampling = False
     scene.cycles.use_denoising = False
@@ -215,7 +262,8 @@ def write_frame(scene, frame, out):
     os.makedirs(os.path.dirname(out), exist_ok=True)
     partial = out + ".partial.exr"
     scene.render.filepath = partial
-    scene.frame_set(frame)
+    whole = int(np.floor(frame))
+    scene.frame_set(whole, subframe=frame - whole)
     bpy.ops.render.render(write_still=True)
     os.replace(partial, out)
     print("EGOGEN_DONE", out, flush=True)
@@ -254,14 +302,21 @@ def main():
         sys.exit(EXIT_SETUP_FAILED)
     if spec.get("body_probe"):
         probe_bodies(scene, bodies, spec["body_probe"])
+    step = spec["ground_truth_frame_step"]
     for cam_spec in spec["cameras"]:
-        make_camera(scene, cam_spec)
-        set_rgb_mode(scene, spec["rgb"])
-        for frame in cam_spec["frames"]:
-            write_frame(scene, frame["frame"], frame["rgb_exr"])
-        set_ground_truth_mode(scene)
-        for frame in cam_spec["frames"]:
-            write_frame(scene, frame["frame"], frame["ground_truth_exr"])
+        cam = make_camera(scene, cam_spec)
+        if spec["rgb"] is not None:
+            set_rgb_mode(scene, spec["rgb"])
+            for frame in cam_spec["frames"]:
+                write_frame(scene, frame["frame"], frame["rgb_exr"])
+        if spec["ground_truth_passes"]:
+            set_ground_truth_mode(scene, spec["ground_truth_passes"])
+            if step != 1:
+                set_frame_step(cam, cam_spec, bodies, spec["bodies"], step)
+            for frame in cam_spec["frames"]:
+                write_frame(scene, frame["frame"] / step, frame["ground_truth_exr"])
+            if step != 1:
+                set_frame_step(cam, cam_spec, bodies, spec["bodies"], 1)
 
 
 main()

@@ -44,6 +44,10 @@ pub struct RenderPlan {
     pub headset_wear: Option<crate::rig::wear::HeadsetWear>,
     /// How the sequence's lighting is drawn.
     pub lighting: crate::render::lighting::LightingPlan,
+    /// What the dataset holds.
+    pub passes: crate::render::passes::Passes,
+    /// Where Cycles renders.
+    pub device: crate::render::RenderDevice,
 }
 
 /// How shards run, checked.

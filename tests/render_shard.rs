@@ -15,11 +15,15 @@ use egogen::motion::scripted::WalkCycle;
 use egogen::motion::MotionSequence;
 use egogen::render::frame_file::{assemble_frame, validate_frame};
 use egogen::render::lens_polynomial::native_error;
+use egogen::render::passes::{Pass, Passes};
 use egogen::render::render_camera::{FisheyeRendering, RenderCamera};
 use egogen::render::shard::render_shard;
-use egogen::render::shard_plan::{blender_fps, shard_camera, AGENT_ID_BASE};
+use egogen::render::shard_plan::{
+    blender_fps, raw_frame_paths, shard_camera, RawRenders, AGENT_ID_BASE,
+};
 use egogen::render::{
-    BlenderRuntime, BodyProbe, PointLight, ShardBody, ShardLighting, ShardRgb, ShardSpec,
+    BlenderRuntime, BodyProbe, PointLight, RenderDevice, ShardBody, ShardLighting, ShardRgb,
+    ShardSpec,
 };
 use egogen::rig::Rig;
 use egogen::scene::{load_scene, sample_start_goals, walkable_map, WalkableSettings};
@@ -35,6 +39,7 @@ const RENDERED: [u32; 2] = [2, 3];
 const PROBE_FRAMES: [f64; 6] = [0.0, 0.125, 0.25, 1.0, 2.5, 5.0];
 
 struct Rendered {
+    spec: ShardSpec,
     _dir: tempfile::TempDir,
     raw_dir: PathBuf,
     motion: MotionSequence,
@@ -184,16 +189,33 @@ fn render_scene() -> Rendered {
                 watts: 200.0,
             }],
         },
-        rgb: ShardRgb {
+        rgb: Some(ShardRgb {
             samples: 4,
             adaptive_threshold: 0.0,
             denoise: false,
             shutter_frames: 0.5,
             seed: 0,
-        },
+        }),
+        // `z`, Cycles' own depth, only to cross-check the planar depth made from `position`.
+        ground_truth_passes: ["position", "normal", "object_index", "vector", "z"]
+            .map(String::from)
+            .to_vec(),
+        ground_truth_frame_step: 1,
+        device: RenderDevice::Cpu,
         cameras: cameras
             .iter()
-            .map(|(n, _, r)| shard_camera(n, r, &poses, &RENDERED, SAMPLES_PER_FRAME, &raw_dir))
+            .map(|(n, _, r)| {
+                shard_camera(
+                    n,
+                    r,
+                    &poses,
+                    &RENDERED,
+                    SAMPLES_PER_FRAME,
+                    1,
+                    &raw_dir,
+                    BOTH,
+                )
+            })
             .collect(),
         body_probe: Some(BodyProbe {
             frames: PROBE_FRAMES.to_vec(),
@@ -205,6 +227,7 @@ fn render_scene() -> Rendered {
     let done = render_shard(&runtime, &spec, &dir.path().join("shard.json")).unwrap();
     assert_eq!(done.len(), spec.num_outputs());
     Rendered {
+        spec,
         raw_dir,
         _dir: dir,
         motion,
@@ -222,8 +245,14 @@ fn rendered() -> &'static Rendered {
     ONCE.get_or_init(render_scene)
 }
 
+const BOTH: RawRenders = RawRenders {
+    colour: true,
+    ground_truth: true,
+};
+
 fn raw(r: &Rendered, camera: &str, frame: u32) -> (PathBuf, PathBuf) {
-    egogen::render::shard_plan::raw_frame_paths(&r.raw_dir, camera, frame)
+    let (rgb, gt) = raw_frame_paths(&r.raw_dir, camera, frame, BOTH);
+    (rgb.unwrap(), gt.unwrap())
 }
 
 fn plane<'a>(exr: &'a ExrContents, name: &str) -> &'a [f32] {
@@ -236,11 +265,19 @@ fn plane<'a>(exr: &'a ExrContents, name: &str) -> &'a [f32] {
 fn frame(r: &Rendered, cam: usize, frame: u32) -> ExrContents {
     let (name, target, render) = &r.cameras[cam];
     let (rgb, gt) = raw(r, name, frame);
-    let image = assemble_frame(&rgb, &gt, render, target, r.poses[frame as usize]).unwrap();
+    let image = assemble_frame(
+        Some(&rgb),
+        Some(&gt),
+        render,
+        target,
+        r.poses[frame as usize],
+    )
+    .unwrap();
     let out = r.raw_dir.join(format!("{name}_{frame}.exr"));
     image.write(&out).unwrap();
     let res = target.resolution();
-    validate_frame(&out, res.width_px, res.height_px).unwrap()
+    let channels = Passes::default().frame_channels(false, false);
+    validate_frame(&out, res.width_px, res.height_px, &channels).unwrap()
 }
 
 #[test]
@@ -371,6 +408,51 @@ fn depth_normals_and_segmentation_match_the_geometry() {
     assert_eq!(body_near, body_px, "body pixels off the posed body");
 }
 
+/// Over the static scene's pixels of frame `f` (the body moves on its own): the worst error of
+/// the forward and backward flow against the camera's motion to frames `f ± step`, the pixels
+/// checked, and the mean flow. Flow is in the frame's own pixels: the rendered image's where
+/// it is not remapped.
+fn static_flow_error(
+    r: &Rendered,
+    exr: &ExrContents,
+    render: &RenderCamera,
+    target: &Camera,
+    f: usize,
+    step: usize,
+) -> (f64, usize, f64) {
+    let ids = plane(exr, "segmentation.id");
+    let pos = ["X", "Y", "Z"].map(|c| plane(exr, &format!("position.{c}")));
+    let fwd = ["X", "Y"].map(|c| plane(exr, &format!("flow_forward.{c}")));
+    let bwd = ["X", "Y"].map(|c| plane(exr, &format!("flow_backward.{c}")));
+    let pixel_in = |frame: usize, p: Vec3| {
+        let p = r.poses[frame].inverse().transform_point3(p);
+        if render.is_identity() {
+            render.ray_to_pixel(p).unwrap()
+        } else {
+            target.project_unbounded(p).unwrap()
+        }
+    };
+    let (mut worst, mut checked, mut mean_flow) = (0.0f64, 0, 0.0);
+    for i in 0..ids.len() {
+        let id = ids[i] as u32;
+        if id == 0 || id == AGENT_ID_BASE {
+            continue;
+        }
+        let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
+        let here = pixel_in(f, p);
+        let want_fwd = pixel_in(f + step, p) - here;
+        let want_bwd = pixel_in(f - step, p) - here;
+        let got_fwd = Pixel::new(fwd[0][i] as f64, fwd[1][i] as f64);
+        let got_bwd = Pixel::new(bwd[0][i] as f64, bwd[1][i] as f64);
+        worst = worst
+            .max((got_fwd - want_fwd).length())
+            .max((got_bwd - want_bwd).length());
+        mean_flow += want_fwd.length();
+        checked += 1;
+    }
+    (worst, checked, mean_flow / checked.max(1) as f64)
+}
+
 #[test]
 fn optical_flow_matches_the_camera_motion() {
     let r = rendered();
@@ -378,42 +460,80 @@ fn optical_flow_matches_the_camera_motion() {
     for cam in 0..r.cameras.len() {
         let (name, target, render) = &r.cameras[cam];
         let exr = frame(r, cam, f as u32);
-        let ids = plane(&exr, "segmentation.id");
-        let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
-        let fwd = ["X", "Y"].map(|c| plane(&exr, &format!("flow_forward.{c}")));
-        let bwd = ["X", "Y"].map(|c| plane(&exr, &format!("flow_backward.{c}")));
-        // Flow is in the frame's own pixels: the rendered image's where it is not remapped.
-        let pixel_in = |frame: usize, p: Vec3| {
-            let p = r.poses[frame].inverse().transform_point3(p);
-            if render.is_identity() {
-                render.ray_to_pixel(p).unwrap()
-            } else {
-                target.project_unbounded(p).unwrap()
-            }
-        };
-        let (mut worst, mut checked, mut mean_flow) = (0.0f64, 0, 0.0);
-        for i in 0..ids.len() {
-            let id = ids[i] as u32;
-            if id == 0 || id == AGENT_ID_BASE {
-                continue; // Only the static scene moves exactly as the camera says.
-            }
-            let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
-            let here = pixel_in(f, p);
-            let want_fwd = pixel_in(f + 1, p) - here;
-            let want_bwd = pixel_in(f - 1, p) - here;
-            let got_fwd = Pixel::new(fwd[0][i] as f64, fwd[1][i] as f64);
-            let got_bwd = Pixel::new(bwd[0][i] as f64, bwd[1][i] as f64);
-            worst = worst
-                .max((got_fwd - want_fwd).length())
-                .max((got_bwd - want_bwd).length());
-            mean_flow += want_fwd.length();
-            checked += 1;
-        }
-        mean_flow /= checked as f64;
+        let (worst, checked, mean_flow) = static_flow_error(r, &exr, render, target, f, 1);
         eprintln!("{name}: {checked} px, mean flow {mean_flow:.3} px, worst error {worst:.2e} px");
         assert!(checked > 200 && mean_flow > 0.1, "{checked} {mean_flow}");
         assert!(worst < 0.02, "{name}: {worst} px");
     }
+}
+
+/// With every second frame saved, a ground-truth-only render (no colour, no normals) of frame
+/// 2: Blender writes one file per frame with only the asked passes, and the flow reaches the
+/// saved frames 0 and 4 (the camera moves twice as far as between motion frames).
+#[test]
+fn flow_reaches_the_next_saved_frame_and_only_asked_passes_are_rendered() {
+    let r = rendered();
+    const STEP: u32 = 2;
+    let f = 2usize;
+    let (name, target, render) = &r.cameras[0];
+    let dir = tempfile::tempdir().unwrap();
+    let raw_dir = dir.path().join("raw");
+    let passes = Passes::of([Pass::Segmentation, Pass::Position, Pass::Flow]);
+    let only_gt = RawRenders {
+        colour: false,
+        ground_truth: true,
+    };
+    let spec = ShardSpec {
+        rgb: None,
+        ground_truth_passes: passes
+            .ground_truth_render_passes()
+            .into_iter()
+            .map(String::from)
+            .collect(),
+        ground_truth_frame_step: STEP,
+        cameras: vec![shard_camera(
+            name,
+            render,
+            &r.poses,
+            &[f as u32],
+            SAMPLES_PER_FRAME,
+            STEP,
+            &raw_dir,
+            only_gt,
+        )],
+        body_probe: None,
+        ..r.spec.clone()
+    };
+    assert_eq!(
+        spec.ground_truth_passes,
+        ["position", "object_index", "vector"]
+    );
+    let runtime = BlenderRuntime::resolve(None).unwrap();
+    let done = render_shard(&runtime, &spec, &dir.path().join("shard.json")).unwrap();
+    assert_eq!((done.len(), spec.num_outputs()), (1, 1));
+    let (rgb, gt) = raw_frame_paths(&raw_dir, name, f as u32, only_gt);
+    assert!(rgb.is_none());
+    let gt = gt.unwrap();
+    let raw = ExrContents::read(&gt).unwrap();
+    assert!(raw.channel("ViewLayer.Normal.X").is_none());
+    assert!(raw.channel("ViewLayer.Vector.Z").is_some());
+    let mut image = assemble_frame(None, Some(&gt), render, target, r.poses[f]).unwrap();
+    image.keep_only(passes);
+    let out = dir.path().join("frame.exr");
+    image.write(&out).unwrap();
+    let res = target.resolution();
+    let exr = validate_frame(
+        &out,
+        res.width_px,
+        res.height_px,
+        &passes.frame_channels(false, false),
+    )
+    .unwrap();
+    assert!(exr.channel("rgb.R").is_none() && exr.channel("normal.X").is_none());
+    let (worst, checked, mean_flow) = static_flow_error(r, &exr, render, target, f, STEP as usize);
+    eprintln!("{name}, step {STEP}: {checked} px, mean flow {mean_flow:.3} px, worst error {worst:.2e} px");
+    assert!(checked > 200 && mean_flow > 0.2, "{checked} {mean_flow}");
+    assert!(worst < 0.02, "{name}: {worst} px");
 }
 
 #[test]
@@ -547,7 +667,7 @@ fn openexr_reads_the_frame_file_as_the_exr_crate_does() {
     let (name, target, render) = &r.cameras[1];
     let (rgb, gt) = raw(r, name, 3);
     let path = r.raw_dir.join("cross_read.exr");
-    assemble_frame(&rgb, &gt, render, target, r.poses[3])
+    assemble_frame(Some(&rgb), Some(&gt), render, target, r.poses[3])
         .unwrap()
         .write(&path)
         .unwrap();

@@ -442,3 +442,116 @@ fn a_workers_override_gets_the_configs_check() {
     );
     assert!(!dir.path().join("seq").exists());
 }
+
+#[test]
+fn unknown_or_inconsistent_passes() {
+    expect_config_error(
+        &with_render("passes = [\"depth\", \"rgb\"]"),
+        &["render.passes", "\"colour\"", "found \"rgb\""],
+    );
+    expect_config_error(
+        &with_render("passes = [\"depth\", \"colmap\"]"),
+        &["render.passes", "add \"colour\""],
+    );
+    expect_config_error(
+        &with_render("passes = []"),
+        &["render.passes", "empty list"],
+    );
+    expect_config_error(
+        &with_render("passes = [\"depth_noise\"]"),
+        &["render.passes", "[render.depth_noise]"],
+    );
+    expect_config_error(
+        &with_render("device = \"tpu\""),
+        &["device = \"tpu\"", "unknown variant `tpu`", "`gpu`"],
+    );
+}
+
+/// `passes = ["depth"]` renders only the ground truth's position pass: the frame files hold
+/// `depth.Z` and `valid.V` only, there are no COLMAP images, annotations say occlusion is not
+/// known, and `verify` accepts the dataset. The Aria SLAM camera asked for colour stores one
+/// grey channel, and its COLMAP image is grey.
+#[test]
+fn only_the_asked_passes_are_rendered_and_monochrome_cameras_store_grey() {
+    use egogen::inspect::ExrContents;
+    let run = |render: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let cfg = dir.path().join("run.toml");
+        let config = with_render(render).replace("duration_s = 0.5", "duration_s = 0.05");
+        std::fs::write(&cfg, config).unwrap();
+        let out = egogen_run(&cfg);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        dir
+    };
+    let channels = |path: &Path| -> Vec<String> {
+        let exr = ExrContents::read(path).unwrap();
+        exr.channels.iter().map(|c| c.name.clone()).collect()
+    };
+    let verify = |dataset: &Path| {
+        let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+            .arg("verify")
+            .arg(dataset)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+
+    let depth = run("cameras = [\"camera-rgb\"]\nresolution_scale = 0.0625\nsamples = 1\nevery_n_frames = 2\npasses = [\"depth\"]");
+    let seq = depth.path().join("seq");
+    assert_eq!(
+        channels(&seq.join("cameras/camera-rgb/frame_00000.exr")),
+        ["depth.Z", "valid.V"]
+    );
+    assert!(!seq.join("images").exists() && !seq.join("colmap").exists());
+    let ann = std::fs::read_to_string(seq.join("cameras/camera-rgb/annotations.json")).unwrap();
+    assert!(!ann.contains("\"occluded\"") && !ann.contains("\"visible\""));
+    verify(&seq);
+
+    let mono = run("cameras = [\"camera-slam-left\"]\nresolution_scale = 0.1\nsamples = 1\nevery_n_frames = 2\npasses = [\"colour\", \"colmap\"]");
+    let seq = mono.path().join("seq");
+    assert_eq!(
+        channels(&seq.join("cameras/camera-slam-left/frame_00000.exr")),
+        ["gray.Y", "valid.V"]
+    );
+    let png = seq.join("images/camera-slam-left/frame_00000.png");
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let px = &buf[..info.buffer_size()];
+    assert!(px.chunks(3).all(|p| p[0] == p[1] && p[1] == p[2]));
+    assert!(px.iter().any(|&v| v > 0), "a black image");
+    verify(&seq);
+}
+
+/// `device = "gpu"` on a machine without one fails at the first shard, naming the setting, and
+/// leaves no dataset (when a GPU is there, the run succeeds instead).
+#[test]
+fn gpu_device_without_a_gpu_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("run.toml");
+    let config = with_render(
+        "cameras = [\"camera-rgb\"]\nresolution_scale = 0.0625\nsamples = 1\ndevice = \"gpu\"",
+    )
+    .replace("duration_s = 0.5", "duration_s = 0.05");
+    std::fs::write(&cfg, config).unwrap();
+    let out = egogen_run(&cfg);
+    let err = String::from_utf8_lossy(&out.stderr);
+    if out.status.success() {
+        eprintln!("this machine has a GPU: {err}");
+        return;
+    }
+    assert!(
+        err.contains("render.device = \"gpu\"") && err.contains("found no GPU"),
+        "{err}"
+    );
+    assert!(!dir.path().join("seq").exists());
+}

@@ -146,6 +146,12 @@ pub struct RawRender {
     pub headset_wear: Option<RawHeadsetWear>,
     /// `[render.lighting]`: the world light and the lamp (default: a grey world, 300 W).
     pub lighting: Option<RawLighting>,
+    /// What the dataset holds: any of `colour`, `depth`, `normals`, `segmentation`,
+    /// `position`, `flow`, `depth_noise`, `colmap` (default: all, `depth_noise` where
+    /// `[render.depth_noise]` is given). Only these are rendered, assembled and listed.
+    pub passes: Option<Vec<String>>,
+    /// `cpu` (default) or `gpu` (Cycles on a GPU as Blender finds one).
+    pub device: Option<crate::render::RenderDevice>,
 }
 
 /// `[render.lighting]` (docs/RENDERING.md).

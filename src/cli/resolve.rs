@@ -7,6 +7,7 @@ use super::config::{
 };
 use crate::render::depth_noise::DepthNoise;
 use crate::render::lighting::{LightingPlan, WorldChoice, SHIPPED_HDRIS};
+use crate::render::passes::{Pass, Passes};
 use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
 
@@ -420,6 +421,11 @@ fn resolve_render(
         None => LightingPlan::default(),
         Some(l) => resolve_lighting(l, config_path)?,
     };
+    let passes = resolve_passes(
+        r.passes.as_deref(),
+        depth_noise.iter().any(Option::is_some),
+        config_path,
+    )?;
     Ok(RenderPlan {
         rig,
         cameras,
@@ -435,7 +441,65 @@ fn resolve_render(
         depth_noise,
         headset_wear,
         lighting,
+        passes,
+        device: r.device.unwrap_or_default(),
     })
+}
+
+/// `[render] passes`, checked against each other and against `[render.depth_noise]`.
+fn resolve_passes(
+    names: Option<&[String]>,
+    has_depth_noise: bool,
+    config_path: &Path,
+) -> Result<Passes, ConfigError> {
+    let bad = |message: String| ConfigError::Value {
+        path: config_path.into(),
+        key: "render.passes".into(),
+        message,
+    };
+    let Some(names) = names else {
+        let all = Passes::default();
+        return Ok(if has_depth_noise {
+            all.with(Pass::DepthNoise)
+        } else {
+            all
+        });
+    };
+    let known = || {
+        Pass::ALL
+            .iter()
+            .map(|p| format!("\"{}\"", p.name()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mut passes = Passes::NONE;
+    for name in names {
+        let pass = Pass::from_name(name)
+            .ok_or_else(|| bad(format!("expected any of {}, found \"{name}\"", known())))?;
+        if passes.has(pass) {
+            return Err(bad(format!("\"{name}\" is listed twice")));
+        }
+        passes = passes.with(pass);
+    }
+    if passes == Passes::NONE {
+        return Err(bad(format!(
+            "expected at least one of {}, found an empty list",
+            known()
+        )));
+    }
+    if passes.has(Pass::Colmap) && !passes.has(Pass::Colour) {
+        return Err(bad(
+            "\"colmap\" exports the colour images: add \"colour\" or drop \"colmap\"".into(),
+        ));
+    }
+    if passes.has(Pass::DepthNoise) != has_depth_noise {
+        return Err(bad(if has_depth_noise {
+            "[render.depth_noise] is given but \"depth_noise\" is not listed: add it, or drop the section".into()
+        } else {
+            "\"depth_noise\" needs a [render.depth_noise] section naming the cameras".into()
+        }));
+    }
+    Ok(passes)
 }
 
 /// `[render.lighting]`, checked.

@@ -14,6 +14,8 @@ use crate::preview::RgbImage;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PreviewKind {
     Colour,
+    /// A monochrome camera's linear grey (`gray.Y`), drawn like colour.
+    Luminance,
     Depth,
     Normal,
     Ids,
@@ -36,6 +38,8 @@ pub fn preview_kind(contents: &ExrContents, pass: &Pass) -> PreviewKind {
         PreviewKind::Depth
     } else if ["R", "G", "B"].iter().all(|c| comps.contains(c)) {
         PreviewKind::Colour
+    } else if name == "gray" && comps == ["Y"] {
+        PreviewKind::Luminance
     } else {
         PreviewKind::Grey
     }
@@ -60,6 +64,13 @@ pub fn pass_preview(contents: &ExrContents, pass: &Pass) -> RgbImage {
             let (r, g, b) = (get("R"), get("G"), get("B"));
             for i in 0..n {
                 img.pixels[i] = [srgb(r[i]), srgb(g[i]), srgb(b[i])];
+            }
+        }
+        PreviewKind::Luminance => {
+            let y = &ch(0).values;
+            for i in 0..n {
+                let g = srgb(y[i]);
+                img.pixels[i] = [g, g, g];
             }
         }
         PreviewKind::Depth => {

@@ -2,14 +2,16 @@
 //! Blender's two raw renders (blurred colour, unblurred ground truth), remapped to the rig's
 //! camera model where Blender rendered an ideal stand-in.
 //!
-//! Channels (one part, ZIP, 32-bit float unless said):
-//! - `rgb.R, rgb.G, rgb.B, rgb.A` — colour with motion blur (linear, scene-referred).
+//! Channels (one part, ZIP, 32-bit float unless said), each group only where its pass is
+//! asked for (`[render] passes`, [`crate::render::passes`]); `valid.V` always:
+//! - `rgb.R, rgb.G, rgb.B, rgb.A` — colour with motion blur (linear, scene-referred); a
+//!   monochrome camera holds `gray.Y` instead (Rec. 709 luminance of the linear colour).
 //! - `depth.Z` — planar depth: z of the surface point in the OpenCV camera frame (m).
 //! - `normal.X/Y/Z` — unit surface normal in the OpenCV camera frame.
 //! - `position.X/Y/Z` — surface point in the world frame (m).
 //! - `segmentation.id` — u32: scene object or agent id (0 = nothing).
 //! - `flow_forward.X/Y`, `flow_backward.X/Y` — pixel displacement of the surface point to the
-//!   next / previous frame (OpenCV pixels, x right, y down).
+//!   next / previous saved frame (OpenCV pixels, x right, y down).
 //! - `depth_noisy.Z` (only for cameras with a depth-noise model) — `depth.Z` through the
 //!   sensor noise model of [`crate::render::depth_noise`]; 0 = no measurement.
 //!
@@ -30,32 +32,8 @@ use exr::prelude::{
 use crate::camera::{Camera, CameraModel, Pixel};
 use crate::exr_file::{ExrContents, InspectError};
 use crate::math::{Affine3, Real, Vec3};
+use crate::render::passes::{Pass, Passes, CHANNEL_GROUPS};
 use crate::render::render_camera::RenderCamera;
-
-/// Every channel a frame file holds, in file order (sorted, as EXR stores them).
-pub const FRAME_CHANNELS: [&str; 17] = [
-    "depth.Z",
-    "flow_backward.X",
-    "flow_backward.Y",
-    "flow_forward.X",
-    "flow_forward.Y",
-    "normal.X",
-    "normal.Y",
-    "normal.Z",
-    "position.X",
-    "position.Y",
-    "position.Z",
-    "rgb.A",
-    "rgb.B",
-    "rgb.G",
-    "rgb.R",
-    "segmentation.id",
-    // Marks pixels inside the camera's valid field of view (1) or outside (0).
-    "valid.V",
-];
-
-/// Channels a frame file may hold besides [`FRAME_CHANNELS`]; checked like them when present.
-pub const OPTIONAL_FRAME_CHANNELS: [&str; 1] = ["depth_noisy.Z"];
 
 /// A frame that could not be assembled, written or validated.
 #[derive(Debug, thiserror::Error)]
@@ -64,6 +42,12 @@ pub enum FrameFileError {
     Read(#[from] InspectError),
     #[error("{path}: channel `{channel}` missing (Blender did not write the pass)")]
     MissingChannel { path: PathBuf, channel: String },
+    #[error("{path}: channel `{channel}` is not one this frame file should hold ({why})")]
+    UnexpectedChannel {
+        path: PathBuf,
+        channel: String,
+        why: String,
+    },
     #[error("{path}: {width}×{height} px, expected {expected_w}×{expected_h}")]
     Size {
         path: PathBuf,
@@ -82,21 +66,29 @@ pub enum FrameFileError {
     },
 }
 
-/// A frame's pixels, row-major, in the target camera's image.
+/// A frame's pixels, row-major, in the target camera's image: the planes its raw renders
+/// hold (none where a pass was not rendered).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FrameImage {
     pub width: usize,
     pub height: usize,
-    pub rgba: Vec<[f32; 4]>,
-    pub depth: Vec<f32>,
-    pub normal: Vec<[f32; 3]>,
-    pub position: Vec<[f32; 3]>,
-    pub segmentation: Vec<u32>,
-    pub flow_forward: Vec<[f32; 2]>,
-    pub flow_backward: Vec<[f32; 2]>,
     pub valid: Vec<f32>,
+    pub rgba: Option<Vec<[f32; 4]>>,
+    /// Colour is written as one grey channel (`gray.Y`).
+    pub monochrome: bool,
+    pub depth: Option<Vec<f32>>,
+    pub normal: Option<Vec<[f32; 3]>>,
+    pub position: Option<Vec<[f32; 3]>>,
+    pub segmentation: Option<Vec<u32>>,
+    pub flow_forward: Option<Vec<[f32; 2]>>,
+    pub flow_backward: Option<Vec<[f32; 2]>>,
     /// `depth` through a sensor noise model, where the camera has one.
     pub depth_noisy: Option<Vec<f32>>,
+}
+
+/// Rec. 709 luminance of linear RGB: how a monochrome camera's colour is stored.
+pub fn luminance(rgb: [f32; 3]) -> f32 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
 
 /// A raw render's planes, looked up by pass and component.
@@ -170,38 +162,61 @@ impl Raw {
     }
 }
 
-/// Builds a frame from Blender's raw colour and ground-truth renders of `render`, for the rig
-/// camera `target` whose pose at this frame is `world_from_cam` (OpenCV axes).
+/// Builds a frame from Blender's raw colour and ground-truth renders of `render` (each where
+/// it was rendered), for the rig camera `target` whose pose at this frame is `world_from_cam`
+/// (OpenCV axes). The ground truth holds the planes of the passes its render had: `Position`
+/// gives depth and position, `Normal` normals, `IndexOB` segmentation, `Vector` flow.
 pub fn assemble_frame(
-    rgb_exr: &Path,
-    ground_truth_exr: &Path,
+    rgb_exr: Option<&Path>,
+    ground_truth_exr: Option<&Path>,
     render: &RenderCamera,
     target: &Camera,
     world_from_cam: Affine3,
 ) -> Result<FrameImage, FrameFileError> {
-    let rgb = Raw::read(rgb_exr, render)?;
-    let gt = Raw::read(ground_truth_exr, render)?;
-    let colour = rgb.planes("Combined", ["R", "G", "B", "A"])?;
-    let hit = gt.plane("Combined.A")?;
-    let pos = gt.planes("Position", ["X", "Y", "Z"])?;
-    let nrm = gt.planes("Normal", ["X", "Y", "Z"])?;
-    let ids = gt.plane("IndexOB.X")?;
-    let vec = gt.planes("Vector", ["X", "Y", "Z", "W"])?;
+    let rgb = rgb_exr.map(|p| Raw::read(p, render)).transpose()?;
+    let gt = ground_truth_exr.map(|p| Raw::read(p, render)).transpose()?;
+    let colour = rgb
+        .as_ref()
+        .map(|r| r.planes("Combined", ["R", "G", "B", "A"]))
+        .transpose()?;
+    let (hit, pos, nrm, ids, vec) = match &gt {
+        None => (None, None, None, None, None),
+        Some(gt) => {
+            let has = |pass: &str| gt.contents.channel(&format!("ViewLayer.{pass}")).is_some();
+            (
+                Some(gt.plane("Combined.A")?),
+                has("Position.X")
+                    .then(|| gt.planes("Position", ["X", "Y", "Z"]))
+                    .transpose()?,
+                has("Normal.X")
+                    .then(|| gt.planes("Normal", ["X", "Y", "Z"]))
+                    .transpose()?,
+                has("IndexOB.X")
+                    .then(|| gt.plane("IndexOB.X"))
+                    .transpose()?,
+                has("Vector.X")
+                    .then(|| gt.planes("Vector", ["X", "Y", "Z", "W"]))
+                    .transpose()?,
+            )
+        }
+    };
 
     let res = target.resolution();
     let (w, h) = (res.width_px as usize, res.height_px as usize);
+    let n_px = w * h;
     let cam_from_world = world_from_cam.inverse();
     let mut out = FrameImage {
         width: w,
         height: h,
-        rgba: vec![[0.0; 4]; w * h],
-        depth: vec![0.0; w * h],
-        normal: vec![[0.0; 3]; w * h],
-        position: vec![[0.0; 3]; w * h],
-        segmentation: vec![0; w * h],
-        flow_forward: vec![[0.0; 2]; w * h],
-        flow_backward: vec![[0.0; 2]; w * h],
-        valid: vec![0.0; w * h],
+        valid: vec![0.0; n_px],
+        rgba: colour.map(|_| vec![[0.0; 4]; n_px]),
+        monochrome: false,
+        depth: pos.map(|_| vec![0.0; n_px]),
+        normal: nrm.map(|_| vec![[0.0; 3]; n_px]),
+        position: pos.map(|_| vec![[0.0; 3]; n_px]),
+        segmentation: ids.map(|_| vec![0; n_px]),
+        flow_forward: vec.map(|_| vec![[0.0; 2]; n_px]),
+        flow_backward: vec.map(|_| vec![[0.0; 2]; n_px]),
         depth_noisy: None,
     };
     // Target pixel of a rendered pixel (continuous), through its ray.
@@ -229,37 +244,50 @@ pub fn assemble_frame(
                 }
             };
             out.valid[i] = 1.0;
-            for c in 0..4 {
-                out.rgba[i][c] = rgb.bilinear(colour[c], q);
+            if let (Some(planes), Some(rgb), Some(o)) = (&colour, &rgb, out.rgba.as_mut()) {
+                for c in 0..4 {
+                    o[i][c] = rgb.bilinear(planes[c], q);
+                }
             }
+            let (Some(gt), Some(hit)) = (&gt, hit) else {
+                continue;
+            };
             let Some(n) = gt.nearest(q) else { continue };
             let qn = Pixel::new((n % gt.width) as Real, (n / gt.width) as Real);
             if hit[n] < 0.5 || !render.renders(qn) {
                 continue;
             }
-            let world = Vec3::new(pos[0][n] as Real, pos[1][n] as Real, pos[2][n] as Real);
-            let in_cam = cam_from_world.transform_point3(world);
-            let normal = cam_from_world
-                .transform_vector3(Vec3::new(
-                    nrm[0][n] as Real,
-                    nrm[1][n] as Real,
-                    nrm[2][n] as Real,
-                ))
-                .normalize_or_zero();
-            out.depth[i] = in_cam.z as f32;
-            out.normal[i] = normal.as_vec3().to_array();
-            out.position[i] = world.as_vec3().to_array();
-            out.segmentation[i] = ids[n].round() as u32;
-            // Blender's vector pass, pixels in Blender's raster (y up), measured
-            // (`tests/render_shard.rs`): (X, Y) = previous − here, (Z, W) = here − next.
-            let prev = qn + Pixel::new(vec[0][n] as Real, -vec[1][n] as Real);
-            let next = qn + Pixel::new(-vec[2][n] as Real, vec[3][n] as Real);
-            if let Some(here) = to_target(qn) {
-                if let Some(t) = to_target(next) {
-                    out.flow_forward[i] = (t - here).as_vec2().to_array();
-                }
-                if let Some(t) = to_target(prev) {
-                    out.flow_backward[i] = (t - here).as_vec2().to_array();
+            if let Some(pos) = &pos {
+                let world = Vec3::new(pos[0][n] as Real, pos[1][n] as Real, pos[2][n] as Real);
+                let in_cam = cam_from_world.transform_point3(world);
+                out.depth.as_mut().unwrap()[i] = in_cam.z as f32;
+                out.position.as_mut().unwrap()[i] = world.as_vec3().to_array();
+            }
+            if let Some(nrm) = &nrm {
+                let normal = cam_from_world
+                    .transform_vector3(Vec3::new(
+                        nrm[0][n] as Real,
+                        nrm[1][n] as Real,
+                        nrm[2][n] as Real,
+                    ))
+                    .normalize_or_zero();
+                out.normal.as_mut().unwrap()[i] = normal.as_vec3().to_array();
+            }
+            if let Some(ids) = ids {
+                out.segmentation.as_mut().unwrap()[i] = ids[n].round() as u32;
+            }
+            if let Some(vec) = &vec {
+                // Blender's vector pass, pixels in Blender's raster (y up), measured
+                // (`tests/render_shard.rs`): (X, Y) = previous − here, (Z, W) = here − next.
+                let prev = qn + Pixel::new(vec[0][n] as Real, -vec[1][n] as Real);
+                let next = qn + Pixel::new(-vec[2][n] as Real, vec[3][n] as Real);
+                if let Some(here) = to_target(qn) {
+                    if let Some(t) = to_target(next) {
+                        out.flow_forward.as_mut().unwrap()[i] = (t - here).as_vec2().to_array();
+                    }
+                    if let Some(t) = to_target(prev) {
+                        out.flow_backward.as_mut().unwrap()[i] = (t - here).as_vec2().to_array();
+                    }
                 }
             }
         }
@@ -268,40 +296,83 @@ pub fn assemble_frame(
 }
 
 impl FrameImage {
-    /// Writes the frame file to `path` (callers that need atomicity write a temporary name,
-    /// validate it and rename, as [`crate::supervisor::Dataset::finish_frame`] does).
+    /// Drops the planes of passes not in `passes` (the raw renders hold what those asked need:
+    /// depth noise needs position and normals even where they are not kept).
+    pub fn keep_only(&mut self, passes: Passes) {
+        if !passes.has(Pass::Colour) {
+            self.rgba = None;
+        }
+        if !passes.has(Pass::Depth) {
+            self.depth = None;
+        }
+        if !passes.has(Pass::Position) {
+            self.position = None;
+        }
+        if !passes.has(Pass::Normals) {
+            self.normal = None;
+        }
+        if !passes.has(Pass::Segmentation) {
+            self.segmentation = None;
+        }
+        if !passes.has(Pass::Flow) {
+            self.flow_forward = None;
+            self.flow_backward = None;
+        }
+        if !passes.has(Pass::DepthNoise) {
+            self.depth_noisy = None;
+        }
+    }
+
+    /// Writes the frame file to `path` with the planes it holds (callers that need atomicity
+    /// write a temporary name, validate it and rename, as
+    /// [`crate::supervisor::Dataset::finish_frame`] does).
     pub fn write(&self, path: &Path) -> Result<(), FrameFileError> {
-        let plane = |f: &dyn Fn(usize) -> f32| (0..self.width * self.height).map(f).collect();
         let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
         let mut f32_channel = |name: &str, values: Vec<f32>| {
             channels.push(AnyChannel::new(name, FlatSamples::F32(values)))
         };
-        f32_channel("depth.Z", self.depth.clone());
+        fn component<const N: usize>(v: &[[f32; N]], c: usize) -> Vec<f32> {
+            v.iter().map(|p| p[c]).collect()
+        }
+        f32_channel("valid.V", self.valid.clone());
+        match (&self.rgba, self.monochrome) {
+            (Some(rgba), true) => f32_channel(
+                "gray.Y",
+                rgba.iter().map(|p| luminance([p[0], p[1], p[2]])).collect(),
+            ),
+            (Some(rgba), false) => {
+                for (c, name) in ["R", "G", "B", "A"].iter().enumerate() {
+                    f32_channel(&format!("rgb.{name}"), component(rgba, c));
+                }
+            }
+            (None, _) => {}
+        }
+        if let Some(depth) = &self.depth {
+            f32_channel("depth.Z", depth.clone());
+        }
         if let Some(noisy) = &self.depth_noisy {
             f32_channel("depth_noisy.Z", noisy.clone());
         }
-        for (c, axis) in ["X", "Y"].iter().enumerate() {
-            f32_channel(
-                &format!("flow_backward.{axis}"),
-                plane(&|i| self.flow_backward[i][c]),
-            );
-            f32_channel(
-                &format!("flow_forward.{axis}"),
-                plane(&|i| self.flow_forward[i][c]),
-            );
-        }
         for (c, axis) in ["X", "Y", "Z"].iter().enumerate() {
-            f32_channel(&format!("normal.{axis}"), plane(&|i| self.normal[i][c]));
-            f32_channel(&format!("position.{axis}"), plane(&|i| self.position[i][c]));
+            if let Some(normal) = &self.normal {
+                f32_channel(&format!("normal.{axis}"), component(normal, c));
+            }
+            if let Some(position) = &self.position {
+                f32_channel(&format!("position.{axis}"), component(position, c));
+            }
         }
-        for (c, name) in ["R", "G", "B", "A"].iter().enumerate() {
-            f32_channel(&format!("rgb.{name}"), plane(&|i| self.rgba[i][c]));
+        if let (Some(fwd), Some(bwd)) = (&self.flow_forward, &self.flow_backward) {
+            for (c, axis) in ["X", "Y"].iter().enumerate() {
+                f32_channel(&format!("flow_backward.{axis}"), component(bwd, c));
+                f32_channel(&format!("flow_forward.{axis}"), component(fwd, c));
+            }
         }
-        f32_channel("valid.V", self.valid.clone());
-        channels.push(AnyChannel::new(
-            "segmentation.id",
-            FlatSamples::U32(self.segmentation.clone()),
-        ));
+        if let Some(ids) = &self.segmentation {
+            channels.push(AnyChannel::new(
+                "segmentation.id",
+                FlatSamples::U32(ids.clone()),
+            ));
+        }
         let layer = Layer::new(
             (self.width, self.height),
             LayerAttributes::default(),
@@ -319,25 +390,65 @@ impl FrameImage {
     }
 }
 
-/// Checks a frame file: it opens, has every channel at the expected size, and all values are
-/// finite. Returns the file's contents.
-pub fn validate_frame(path: &Path, width: u32, height: u32) -> Result<ExrContents, FrameFileError> {
+/// Checks a frame file: it opens, holds exactly `channels` (e.g. from
+/// [`Passes::frame_channels`]) at `width × height`, and all values are finite. Returns the
+/// file's contents.
+pub fn validate_frame(
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: &[&str],
+) -> Result<ExrContents, FrameFileError> {
     let contents = ExrContents::read(path)?;
-    check_frame_channels(&contents, Some((width, height)))?;
+    if let Some(extra) = contents
+        .channels
+        .iter()
+        .find(|c| !channels.contains(&c.name.as_str()))
+    {
+        return Err(FrameFileError::UnexpectedChannel {
+            path: path.into(),
+            channel: extra.name.clone(),
+            why: format!("the run's passes give {}", channels.join(", ")),
+        });
+    }
+    check_channels(&contents, channels, Some((width, height)))?;
     Ok(contents)
 }
 
-/// Every frame channel is present, and so are the optional ones that are there: at `size`, if
-/// given (width, height), and finite.
-pub fn check_frame_channels(
+/// Checks a frame file without knowing the run that made it (`verify`): `valid.V` is there,
+/// every channel belongs to a frame file's channel group ([`CHANNEL_GROUPS`]) and every group
+/// present is whole, and all values are finite.
+pub fn check_frame_channels(contents: &ExrContents) -> Result<(), FrameFileError> {
+    let path = &contents.path;
+    let mut expected: Vec<&str> = Vec::new();
+    for c in &contents.channels {
+        let Some(group) = CHANNEL_GROUPS.iter().find(|g| g.contains(&c.name.as_str())) else {
+            return Err(FrameFileError::UnexpectedChannel {
+                path: path.clone(),
+                channel: c.name.clone(),
+                why: "not a frame-file channel".into(),
+            });
+        };
+        for name in group.iter() {
+            if !expected.contains(name) {
+                expected.push(name);
+            }
+        }
+    }
+    if !expected.contains(&"valid.V") {
+        expected.push("valid.V");
+    }
+    check_channels(contents, &expected, None)
+}
+
+/// Every channel of `names` is present, at `size` if given (width, height), and finite.
+fn check_channels(
     contents: &ExrContents,
+    names: &[&str],
     size: Option<(u32, u32)>,
 ) -> Result<(), FrameFileError> {
     let path = &contents.path;
-    let optional = OPTIONAL_FRAME_CHANNELS
-        .into_iter()
-        .filter(|name| contents.channel(name).is_some());
-    for name in FRAME_CHANNELS.into_iter().chain(optional) {
+    for &name in names {
         let ch = contents
             .channel(name)
             .ok_or_else(|| FrameFileError::MissingChannel {

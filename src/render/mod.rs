@@ -9,6 +9,7 @@ pub mod depth_noise;
 pub mod frame_file;
 pub mod lens_polynomial;
 pub mod lighting;
+pub mod passes;
 pub mod protocol;
 pub mod render_camera;
 pub mod shard;
@@ -16,6 +17,6 @@ pub mod shard_plan;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
 pub use protocol::{
-    BodyProbe, CameraKey, PointLight, ShardBody, ShardCamera, ShardFrame, ShardLens, ShardLighting,
-    ShardRgb, ShardSpec, WorldHdri,
+    BodyProbe, CameraKey, PointLight, RenderDevice, ShardBody, ShardCamera, ShardFrame, ShardLens,
+    ShardLighting, ShardRgb, ShardSpec, WorldHdri,
 };

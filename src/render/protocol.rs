@@ -47,15 +47,15 @@ pub struct CameraKey {
     pub rotation_wxyz: [f64; 4],
 }
 
-/// One frame of a camera and its two raw outputs.
+/// One frame of a camera and its raw outputs: the renders the run's passes need.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShardFrame {
     pub frame: u32,
-    /// Blurred colour (Combined pass).
-    pub rgb_exr: PathBuf,
-    /// Unblurred ground truth (Position, Normal, IndexOB, Vector, Depth).
-    pub ground_truth_exr: PathBuf,
+    /// Blurred colour (Combined pass), when colour is rendered.
+    pub rgb_exr: Option<PathBuf>,
+    /// Unblurred ground truth (the spec's `ground_truth_passes`), when any is asked for.
+    pub ground_truth_exr: Option<PathBuf>,
 }
 
 /// One camera of a shard with its pose keys and frames.
@@ -158,7 +158,17 @@ pub struct ShardSpec {
     pub fps_base: f64,
     pub bodies: Vec<ShardBody>,
     pub lighting: ShardLighting,
-    pub rgb: ShardRgb,
+    /// The colour render's settings; none: no colour is rendered.
+    pub rgb: Option<ShardRgb>,
+    /// Blender view-layer passes of the ground-truth render (`use_pass_<name>`: `position`,
+    /// `normal`, `object_index`, `vector`, and `z`, which egogen itself never needs); empty: no
+    /// ground-truth render.
+    pub ground_truth_passes: Vec<String>,
+    /// Motion frames between two saved frames: the ground-truth render runs on a timeline
+    /// scaled by it, so that motion vectors reach the next and previous *saved* frame.
+    pub ground_truth_frame_step: u32,
+    /// Where Cycles renders.
+    pub device: RenderDevice,
     pub cameras: Vec<ShardCamera>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub body_probe: Option<BodyProbe>,
@@ -180,9 +190,25 @@ pub struct ShardCeiling {
 /// The name of the ceiling object in the rendered scene and its annotations.
 pub const CEILING_OBJECT: &str = "egogen_ceiling";
 
+/// Where Cycles renders (`[render] device`).
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum RenderDevice {
+    /// The CPU (every machine).
+    #[default]
+    Cpu,
+    /// A GPU as Blender finds one (OptiX, CUDA, HIP, oneAPI or Metal, in that order); the
+    /// worker fails at set-up, naming what it looked for, when there is none.
+    Gpu,
+}
+
 impl ShardSpec {
     /// Number of files the worker writes.
     pub fn num_outputs(&self) -> usize {
-        self.cameras.iter().map(|c| 2 * c.frames.len()).sum()
+        self.cameras
+            .iter()
+            .flat_map(|c| &c.frames)
+            .map(|f| f.rgb_exr.is_some() as usize + f.ground_truth_exr.is_some() as usize)
+            .sum()
     }
 }

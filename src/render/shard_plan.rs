@@ -40,32 +40,53 @@ pub fn pose_at(poses: &[Affine3], frame: f64) -> Affine3 {
     }
 }
 
-/// Raw outputs of a frame under `raw_dir`.
-pub fn raw_frame_paths(raw_dir: &Path, camera: &str, frame: u32) -> (PathBuf, PathBuf) {
+/// Which raw renders a frame needs (`render::passes::Passes` decides).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RawRenders {
+    /// The blurred colour render.
+    pub colour: bool,
+    /// The unblurred ground-truth render.
+    pub ground_truth: bool,
+}
+
+/// The raw renders of a frame under `raw_dir` (colour, ground truth), each where asked.
+pub fn raw_frame_paths(
+    raw_dir: &Path,
+    camera: &str,
+    frame: u32,
+    renders: RawRenders,
+) -> (Option<PathBuf>, Option<PathBuf>) {
     let dir = raw_dir.join(camera);
     (
-        dir.join(format!("rgb_{frame:05}.exr")),
-        dir.join(format!("gt_{frame:05}.exr")),
+        renders
+            .colour
+            .then(|| dir.join(format!("rgb_{frame:05}.exr"))),
+        renders
+            .ground_truth
+            .then(|| dir.join(format!("gt_{frame:05}.exr"))),
     )
 }
 
 /// A shard camera rendering `frames` of a sequence whose per-frame OpenCV poses are
-/// `world_from_cam`. Pose keys are placed every `1 / keys_per_frame` frames from one frame
-/// before to one after each rendered frame (the shutter interval and the motion vectors'
-/// neighbours), inside the sequence.
+/// `world_from_cam`. Pose keys are placed every `1 / keys_per_frame` frames from
+/// `frame_step` frames before to `frame_step` after each rendered frame (the shutter interval
+/// and the motion vectors' neighbours: the previous and next saved frame), inside the sequence.
 pub fn shard_camera(
     name: &str,
     render: &RenderCamera,
     world_from_cam: &[Affine3],
     frames: &[u32],
     keys_per_frame: u32,
+    frame_step: u32,
     raw_dir: &Path,
+    renders: RawRenders,
 ) -> ShardCamera {
     let s = keys_per_frame.max(1) as i64;
+    let step = frame_step.max(1) as i64;
     let last = (world_from_cam.len() as i64 - 1) * s;
     let ticks: BTreeSet<i64> = frames
         .iter()
-        .flat_map(|&f| (f as i64 - 1) * s..=(f as i64 + 1) * s)
+        .flat_map(|&f| (f as i64 - step) * s..=(f as i64 + step) * s)
         .filter(|&k| (0..=last).contains(&k))
         .collect();
     let poses: Vec<(f64, Affine3)> = ticks
@@ -83,7 +104,7 @@ pub fn shard_camera(
         frames: frames
             .iter()
             .map(|&frame| {
-                let (rgb_exr, ground_truth_exr) = raw_frame_paths(raw_dir, name, frame);
+                let (rgb_exr, ground_truth_exr) = raw_frame_paths(raw_dir, name, frame, renders);
                 ShardFrame {
                     frame,
                     rgb_exr,

@@ -299,10 +299,13 @@ pub(super) fn rig_from_aria_value(
                 second: i,
             });
         }
+        let monochrome = cam.label != "camera-rgb";
         cameras.push(RigCamera {
             name: cam.label,
             model: Camera::Fisheye624(model),
             cpf_from_cam: cpf_from_device * device_from_cam,
+            // Only the RGB camera sees colour; SLAM and eye-tracking cameras are monochrome.
+            monochrome,
         });
     }
     if cameras.is_empty() {

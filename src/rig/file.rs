@@ -39,6 +39,9 @@ struct RawCamera {
     resolution_px: [i64; 2],
     model: serde_json::Value,
     cpf_from_cam: serde_json::Value,
+    /// A monochrome sensor (default false).
+    #[serde(default)]
+    monochrome: bool,
 }
 
 /// A camera model, as written; `type` picks the variant.
@@ -169,6 +172,7 @@ fn camera_from_value(
         name: raw.name,
         model,
         cpf_from_cam,
+        monochrome: raw.monochrome,
     })
 }
 
@@ -257,6 +261,8 @@ struct WrittenCamera<'a> {
     resolution_px: [i64; 2],
     model: RawModel,
     cpf_from_cam: RawPose,
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    monochrome: bool,
 }
 
 /// The rig as an egogen rig document, pretty-printed (what `egogen rig convert` writes).
@@ -300,6 +306,7 @@ pub(super) fn rig_to_json(rig: &Rig) -> String {
                     translation_m: c.cpf_from_cam.translation.to_array(),
                     rotation: c.cpf_from_cam.matrix3.transpose().to_cols_array_2d(),
                 },
+                monochrome: c.monochrome,
             }
         })
         .collect();

@@ -32,6 +32,8 @@ pub struct RigCamera {
     pub model: Camera,
     /// Maps camera-frame (OpenCV) points into the CPF.
     pub cpf_from_cam: Affine3,
+    /// A monochrome sensor (Aria SLAM, HoloLens VLC): its colour is stored as one grey channel.
+    pub monochrome: bool,
 }
 
 /// A validated rig.

@@ -75,6 +75,9 @@ pub enum JointVisibility {
     Occluded,
     /// Not in the camera's valid field of view.
     Outside,
+    /// In the valid field of view; whether it is occluded is not known (the run rendered no
+    /// depth or no segmentation).
+    InView,
 }
 
 /// One agent in one frame.

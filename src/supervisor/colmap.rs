@@ -2,8 +2,10 @@
 //! their ground-truth poses and intrinsics, and the colour images COLMAP can read.
 //!
 //! Layout (inside the dataset folder):
-//! - `images/<camera>/frame_NNNNN.png` — the colour of each frame file (`rgb.R/G/B`), linear →
-//!   sRGB, clamped to [0, 1], 8-bit RGB. COLMAP cannot read the multilayer EXR.
+//! - `images/<camera>/frame_NNNNN.png` — the colour of each frame file (`rgb.R/G/B`, or
+//!   `gray.Y` of a monochrome camera), linear → sRGB, clamped to [0, 1], 8-bit RGB (grey for
+//!   a monochrome camera). COLMAP cannot read the multilayer EXR. Written only when the run
+//!   asks for the `colmap` pass (which needs `colour`).
 //! - `colmap/<camera>/cameras.txt` — one camera, id 1, in the COLMAP model that reproduces the
 //!   rig's model exactly (see [`colmap_camera`]).
 //! - `colmap/<camera>/images.txt` — one image per rendered frame, ids 1, 2, … in frame order,
@@ -312,8 +314,8 @@ pub fn write_colmap(dataset: &Dataset) -> Result<()> {
             let rgb = contents
                 .passes
                 .iter()
-                .find(|p| p.name == "rgb")
-                .with_context(|| format!("{}: no `rgb` pass", exr.display()))?;
+                .find(|p| p.name == "rgb" || p.name == "gray")
+                .with_context(|| format!("{}: no colour (`rgb` or `gray`)", exr.display()))?;
             let png = image_dir.join(image_name(f));
             pass_preview(&contents, rgb)
                 .write_png(&png)

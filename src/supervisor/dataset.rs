@@ -22,13 +22,15 @@ use super::annotations::{
     SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
 use crate::camera::CameraModel;
+use crate::exr_file::ExrContents;
 use crate::math::{Affine3, Real, Vec3};
 use crate::motion::MotionSequence;
 use crate::render::depth_noise::{DepthNoise, NoiseSeed};
-use crate::render::frame_file::{assemble_frame, validate_frame, FrameImage};
+use crate::render::frame_file::{assemble_frame, validate_frame, FrameFileError, FrameImage};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
+use crate::render::passes::{Pass, Passes};
 use crate::render::render_camera::RenderCamera;
-use crate::render::shard_plan::{raw_frame_paths, shard_camera};
+use crate::render::shard_plan::{raw_frame_paths, shard_camera, RawRenders};
 use crate::render::ShardSpec;
 use crate::rig::{Rig, RigCamera};
 use crate::synth::BodyTrack;
@@ -71,7 +73,11 @@ pub struct Dataset {
     /// Everything of the shard spec but its cameras.
     pub base_spec: ShardSpec,
     pub cameras: Vec<CameraWork>,
+    /// What the dataset holds (`[render] passes`).
+    pub passes: Passes,
     pub keys_per_frame: u32,
+    /// Motion frames between saved frames (`[render] every_n_frames`).
+    pub frame_step: u32,
     pub frames_per_shard: usize,
     pub near_clip_m: f64,
     /// Which start of the run this is (1 for the first, one more for every `--resume`): each
@@ -91,6 +97,44 @@ impl Dataset {
 
     pub fn raw_dir(&self) -> PathBuf {
         self.staging.join("work/raw")
+    }
+
+    /// Which of Blender's two renders this dataset's passes need.
+    pub fn raw_renders(&self) -> RawRenders {
+        RawRenders {
+            colour: self.base_spec.rgb.is_some(),
+            ground_truth: !self.base_spec.ground_truth_passes.is_empty(),
+        }
+    }
+
+    /// The raw renders a camera's frame is made from (one or two files).
+    pub fn raw_frame_files(&self, camera: usize, frame: u32) -> Vec<PathBuf> {
+        let name = &self.cameras[camera].camera.name;
+        let (rgb, gt) = raw_frame_paths(&self.raw_dir(), name, frame, self.raw_renders());
+        rgb.into_iter().chain(gt).collect()
+    }
+
+    /// The channels a camera's frame files hold.
+    pub fn frame_channels(&self, camera: usize) -> Vec<&'static str> {
+        let work = &self.cameras[camera];
+        self.passes
+            .frame_channels(work.camera.monochrome, work.depth_noise.is_some())
+    }
+
+    /// Checks a camera's frame file: it opens, holds exactly the camera's channels at its
+    /// size, all finite.
+    pub fn validate_frame_file(
+        &self,
+        camera: usize,
+        path: &std::path::Path,
+    ) -> Result<ExrContents, FrameFileError> {
+        let res = self.cameras[camera].camera.model.resolution();
+        validate_frame(
+            path,
+            res.width_px,
+            res.height_px,
+            &self.frame_channels(camera),
+        )
     }
 
     /// A path inside the dataset as the pool report records it: relative to the dataset folder,
@@ -121,13 +165,12 @@ impl Dataset {
     pub fn remove_invalid_frames(&self) -> Result<Vec<(PathBuf, String)>> {
         let mut removed = Vec::new();
         for (c, work) in self.cameras.iter().enumerate() {
-            let res = work.camera.model.resolution();
             for &f in &work.frames {
                 let path = self.frame_path(c, f);
                 if !path.is_file() {
                     continue;
                 }
-                if let Err(e) = validate_frame(&path, res.width_px, res.height_px) {
+                if let Err(e) = self.validate_frame_file(c, &path) {
                     std::fs::remove_file(&path)
                         .with_context(|| format!("removing damaged {}", path.display()))?;
                     removed.push((path, e.to_string()));
@@ -174,7 +217,9 @@ impl Dataset {
             &work.world_from_cam,
             frames,
             self.keys_per_frame,
+            self.frame_step,
             &self.raw_dir(),
+            self.raw_renders(),
         );
         cam.clip_start_m = self.near_clip_m;
         ShardSpec {
@@ -187,18 +232,30 @@ impl Dataset {
     /// name, validated, renamed; then the raw files are removed.
     pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<PathBuf> {
         let work = &self.cameras[camera];
-        let (rgb, gt) = raw_frame_paths(&self.raw_dir(), &work.camera.name, frame);
+        let (rgb, gt) = raw_frame_paths(
+            &self.raw_dir(),
+            &work.camera.name,
+            frame,
+            self.raw_renders(),
+        );
         let mut image: FrameImage = assemble_frame(
-            &rgb,
-            &gt,
+            rgb.as_deref(),
+            gt.as_deref(),
             &work.render,
             &work.camera.model,
             work.world_from_cam[frame as usize],
         )?;
-        if let Some((model, seed)) = &work.depth_noise {
+        image.monochrome = work.camera.monochrome;
+        if let (Some((model, seed)), true) = (&work.depth_noise, self.passes.has(Pass::DepthNoise))
+        {
             let cam_from_world = work.world_from_cam[frame as usize].inverse();
+            let (Some(depth), Some(normal), Some(position)) =
+                (&image.depth, &image.normal, &image.position)
+            else {
+                anyhow::bail!("depth noise needs the position and normal passes");
+            };
             let ray = |i: usize| {
-                let p = Vec3::from(image.position[i].map(Real::from));
+                let p = Vec3::from(position[i].map(Real::from));
                 cam_from_world.transform_point3(p).normalize_or_zero()
             };
             let seed = NoiseSeed {
@@ -206,23 +263,24 @@ impl Dataset {
                 camera: &work.camera.name,
                 frame,
             };
-            image.depth_noisy = Some(model.apply(&image.depth, &image.normal, ray, seed));
+            image.depth_noisy = Some(model.apply(depth, normal, ray, seed));
         }
+        image.keep_only(self.passes);
         let out = self.frame_path(camera, frame);
         std::fs::create_dir_all(out.parent().unwrap())
             .with_context(|| format!("creating {}", out.parent().unwrap().display()))?;
         let tmp = out.with_extension("exr.tmp");
-        let res = work.camera.model.resolution();
         let checked = image
             .write(&tmp)
-            .and_then(|()| validate_frame(&tmp, res.width_px, res.height_px));
+            .and_then(|()| self.validate_frame_file(camera, &tmp).map(drop));
         if let Err(e) = checked {
             let _ = std::fs::remove_file(&tmp);
             return Err(e.into());
         }
         std::fs::rename(&tmp, &out).with_context(|| format!("renaming to {}", out.display()))?;
-        let _ = std::fs::remove_file(rgb);
-        let _ = std::fs::remove_file(gt);
+        for raw in self.raw_frame_files(camera, frame) {
+            let _ = std::fs::remove_file(raw);
+        }
         Ok(out)
     }
 }
@@ -269,14 +327,15 @@ pub fn write_annotations(
         let mut frames = Vec::with_capacity(work.frames.len());
         for &f in &work.frames {
             let path = dataset.frame_path(c, f);
-            let contents = validate_frame(
-                &path,
-                work.camera.model.resolution().width_px,
-                work.camera.model.resolution().height_px,
-            )?;
-            let depth = &contents.channel("depth.Z").unwrap().values;
-            let ids = &contents.channel("segmentation.id").unwrap().values;
-            frames.push(frame_annotation(work, f, agents, depth, ids));
+            let contents = dataset.validate_frame_file(c, &path)?;
+            let plane = |name: &str| contents.channel(name).map(|c| c.values.as_slice());
+            frames.push(frame_annotation(
+                work,
+                f,
+                agents,
+                plane("depth.Z"),
+                plane("segmentation.id"),
+            ));
         }
         let mut segmentation_ids: Vec<SegmentationId> = object_ids
             .iter()
@@ -297,8 +356,8 @@ pub fn write_annotations(
                 pixels: "centre of the top-left pixel at (0, 0)".into(),
                 t_world_cam: "row-major 4x4 mapping camera-frame points to the world".into(),
                 depth: "planar: z of the surface point in the camera frame (m); 0 = no surface".into(),
-                joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view)"),
-                bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices".into(),
+                joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view) | in_view (inside it; occlusion not known: the run rendered no depth or no segmentation)"),
+                bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices; null without the segmentation pass".into(),
             },
             camera: model_json,
             image_model: image_model(work),
@@ -355,8 +414,8 @@ fn frame_annotation(
     work: &CameraWork,
     f: u32,
     agents: &[RenderedAgent],
-    depth: &[f32],
-    ids: &[f32],
+    depth: Option<&[f32]>,
+    ids: Option<&[f32]>,
 ) -> FrameAnnotation {
     let i = f as usize;
     let res = work.camera.model.resolution();
@@ -377,17 +436,22 @@ fn frame_annotation(
                     Some(px) => {
                         let (x, y) = (px.x.round() as usize, px.y.round() as usize);
                         let at = y.min(res.height_px as usize - 1) * w + x.min(w - 1);
-                        let d = depth[at] as f64;
-                        // Hidden when the pixel shows something else, nearer than the joint;
-                        // the agent's own surface over its joint is the joint seen.
-                        let occluded = ids[at] as u32 != a.id
-                            && d > 0.0
-                            && d < p.z - JOINT_OCCLUSION_TOLERANCE_M;
                         joints_2d.push(Some([px.x, px.y]));
-                        visibility.push(if occluded {
-                            JointVisibility::Occluded
-                        } else {
-                            JointVisibility::Visible
+                        visibility.push(match (depth, ids) {
+                            (Some(depth), Some(ids)) => {
+                                let d = depth[at] as f64;
+                                // Hidden when the pixel shows something else, nearer than the
+                                // joint; the agent's own surface over its joint is the joint seen.
+                                if ids[at] as u32 != a.id
+                                    && d > 0.0
+                                    && d < p.z - JOINT_OCCLUSION_TOLERANCE_M
+                                {
+                                    JointVisibility::Occluded
+                                } else {
+                                    JointVisibility::Visible
+                                }
+                            }
+                            _ => JointVisibility::InView,
                         });
                     }
                     None => {
@@ -396,7 +460,12 @@ fn frame_annotation(
                     }
                 }
             }
-            let bbox = bbox_of(ids, w, a.id);
+            let bbox = ids.and_then(|ids| bbox_of(ids, w, a.id));
+            // With segmentation: its pixels are in the image; without: a joint is.
+            let in_view = match ids {
+                Some(_) => bbox.is_some(),
+                None => joints_2d.iter().any(Option::is_some),
+            };
             // Distance to the nearest other agent (pelvis to pelvis); none alone.
             let nearest = agents
                 .iter()
@@ -408,7 +477,7 @@ fn frame_annotation(
                 name: a.name.clone(),
                 id: a.id,
                 wearer: k == work.wearer,
-                in_view: bbox.is_some(),
+                in_view,
                 smplx: SmplxParams::new(
                     &a.motion.betas,
                     &a.motion.poses[i],

@@ -20,7 +20,6 @@ use super::pool::{
     EXIT_SETUP_FAILED,
 };
 use crate::render::shard::worker_command;
-use crate::render::shard_plan::raw_frame_paths;
 use crate::render::BlenderRuntime;
 
 /// Pool settings.
@@ -250,8 +249,6 @@ async fn attempt_shard(
     })?;
     let stdout = child.stdout.take().unwrap();
     let mut lines = BufReader::new(stdout).lines();
-    let name = dataset.cameras[camera].camera.name.clone();
-    let raw_dir = dataset.raw_dir();
     let mut reported: BTreeSet<std::path::PathBuf> = BTreeSet::new();
     let mut finished = 0usize;
     let mut stop = shared.stop.clone();
@@ -265,8 +262,8 @@ async fn attempt_shard(
                         let Some(path) = line.strip_prefix("EGOGEN_DONE ") else { continue };
                         reported.insert(path.into());
                         for &f in frames {
-                            let (rgb, gt) = raw_frame_paths(&raw_dir, &name, f);
-                            if reported.contains(&rgb) && reported.contains(&gt)
+                            let raw = dataset.raw_frame_files(camera, f);
+                            if raw.iter().all(|r| reported.contains(r))
                                 && !dataset.frame_done(camera, f)
                             {
                                 let ds = dataset.clone();

@@ -72,7 +72,7 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
             frames += 1;
             let checked = ExrContents::read(&p)
                 .map_err(FrameFileError::from)
-                .and_then(|c| check_frame_channels(&c, None));
+                .and_then(|c| check_frame_channels(&c));
             if let Err(err) = checked {
                 problems.push(format!("{}: {err}", e.path));
             }

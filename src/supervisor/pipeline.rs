@@ -20,6 +20,7 @@ use crate::body::BodyModel;
 use crate::motion::MotionSequence;
 use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
+use crate::render::passes::Pass;
 use crate::render::protocol::{ShardCeiling, CEILING_OBJECT};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
@@ -341,13 +342,21 @@ pub fn run_pipeline(
         lighting: render
             .lighting
             .draw([mid.x, mid.y, lo.z + 0.85 * (hi.z - lo.z)]),
-        rgb: ShardRgb {
+        rgb: render.passes.needs_colour_render().then_some(ShardRgb {
             samples: render.samples,
             adaptive_threshold: render.adaptive_threshold,
             denoise: render.denoise,
             shutter_frames: render.shutter_frames,
             seed: 0,
-        },
+        }),
+        ground_truth_passes: render
+            .passes
+            .ground_truth_render_passes()
+            .into_iter()
+            .map(String::from)
+            .collect(),
+        ground_truth_frame_step: render.every_n_frames as u32,
+        device: render.device,
         cameras: Vec::new(),
         body_probe: None,
         ceiling: ceiling.map(|c| ShardCeiling {
@@ -360,7 +369,9 @@ pub fn run_pipeline(
         staging: std::fs::canonicalize(&staging)?,
         base_spec,
         cameras,
+        passes: render.passes,
         keys_per_frame: render.cache_samples_per_frame,
+        frame_step: render.every_n_frames as u32,
         frames_per_shard: render.frames_per_shard,
         near_clip_m: render.near_clip_m,
         start: next_start(&staging),
@@ -424,7 +435,9 @@ pub fn run_pipeline(
         );
     }
     write_annotations(&dataset, &render.rig, &agents, &object_ids)?;
-    write_colmap(&dataset)?;
+    if render.passes.has(Pass::Colmap) {
+        write_colmap(&dataset)?;
+    }
     // Scratch that only Blender read: the raw renders and the body cache (large).
     let _ = std::fs::remove_dir_all(dataset.raw_dir());
     for f in &scratch {

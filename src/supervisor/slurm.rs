@@ -25,7 +25,6 @@ use super::pool::{
 use crate::atomic_file::write_atomically;
 use crate::plan::SlurmPlan;
 use crate::render::shard::worker_command;
-use crate::render::shard_plan::raw_frame_paths;
 use crate::render::BlenderRuntime;
 
 /// Slurm backend settings.
@@ -257,8 +256,8 @@ fn finish_ready_frames(
         let shard = &states[i].shard;
         let name = &dataset.cameras[shard.camera].camera.name;
         for f in missing_frames(dataset, shard) {
-            let (rgb, gt) = raw_frame_paths(&dataset.raw_dir(), name, f);
-            if !(rgb.is_file() && gt.is_file()) {
+            let raw = dataset.raw_frame_files(shard.camera, f);
+            if !raw.iter().all(|r| r.is_file()) {
                 continue;
             }
             match dataset.finish_frame(shard.camera, f) {
@@ -270,8 +269,9 @@ fn finish_ready_frames(
                     bar.suspend(|| {
                         eprintln!("egogen-run: {name} frame {f}: {e:#}; rendering it again")
                     });
-                    let _ = std::fs::remove_file(&rgb);
-                    let _ = std::fs::remove_file(&gt);
+                    for r in &raw {
+                        let _ = std::fs::remove_file(r);
+                    }
                 }
             }
         }
