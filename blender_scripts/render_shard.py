@@ -37,11 +37,7 @@ def add_body(scene, body):
     mesh.update()
     for poly in mesh.polygons:
         poly.use_smooth = True
-    mat = bpy.data.materials.new(body["name"] + "_material")
-    mat.diffuse_color = tuple(body["color_rgba"])
-    mat.use_nodes = True
-    mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = tuple(body["color_rgba"])
-    mesh.materials.append(mat)
+    mesh.materials.append(skin_material(body["name"] + "_skin", body["skin"]))
     obj = bpy.data.objects.new(body["name"], mesh)
     obj.pass_index = body["pass_index"]
     scene.collection.objects.link(obj)
@@ -57,6 +53,37 @@ def add_body(scene, body):
     obj.cycles.use_deform_motion = True
     obj.cycles.motion_steps = body["motion_steps"]
     return obj
+
+
+def skin_material(name, skin):
+    """Principled BSDF skin: the tone's base colour mottled by noise on the rest-pose
+    (Generated) coordinates, which stay on the skin as the vertex cache deforms the mesh."""
+    mat = bpy.data.materials.new(name)
+    mat.diffuse_color = (*skin["base_rgb"], 1.0)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    bsdf.inputs["Roughness"].default_value = skin["roughness"]
+    bsdf.inputs["Subsurface Weight"].default_value = skin["subsurface_weight"]
+    bsdf.inputs["Subsurface Radius"].default_value = (1.0, 0.2, 0.1)
+    bsdf.inputs["Subsurface Scale"].default_value = 0.01
+    coords = nodes.new("ShaderNodeTexCoord")
+    noise = nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = 60.0
+    noise.inputs["Detail"].default_value = 4.0
+    links.new(coords.outputs["Generated"], noise.inputs["Vector"])
+    # factor = 1 + mottle * (2 * noise - 1)
+    centred = nodes.new("ShaderNodeMath")
+    centred.operation = "MULTIPLY_ADD"
+    centred.inputs[1].default_value = 2.0 * skin["mottle"]
+    centred.inputs[2].default_value = 1.0 - skin["mottle"]
+    links.new(noise.outputs["Fac"], centred.inputs[0])
+    colour = nodes.new("ShaderNodeVectorMath")
+    colour.operation = "MULTIPLY"
+    colour.inputs[0].default_value = skin["base_rgb"]
+    links.new(centred.outputs["Value"], colour.inputs[1])
+    links.new(colour.outputs["Vector"], bsdf.inputs["Base Color"])
+    return mat
 
 
 def add_ceiling(scene, ceiling):

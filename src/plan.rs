@@ -44,6 +44,8 @@ pub struct RenderPlan {
     pub headset_wear: Option<crate::rig::wear::HeadsetWear>,
     /// How the sequence's lighting is drawn.
     pub lighting: crate::render::lighting::LightingPlan,
+    /// How each agent's skin is drawn.
+    pub skin: crate::render::skin::SkinPlan,
     /// What the dataset holds.
     pub passes: crate::render::passes::Passes,
     /// Where Cycles renders.

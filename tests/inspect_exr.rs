@@ -187,3 +187,73 @@ fn multi_part_blender_50_layout_and_cli() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("not.exr"));
 }
+
+/// Several files, one pass each (`--pass`), side by side; auto exposure brings a uniform image
+/// to middle grey; a missing pass names the passes the file has.
+#[test]
+fn several_files_one_pass_and_auto_exposure() {
+    use egogen::inspect::preview::{auto_exposure, pass_preview_exposed, AUTO_EXPOSURE_KEY};
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.exr");
+    let b = dir.path().join("b.exr");
+    write_single_part(&a);
+    write_multi_part(&b);
+    // A uniform grey of luminance 4 is scaled to the key; sRGB(0.18) is 118.
+    let grey = dir.path().join("grey.exr");
+    let plane = |v: f32| FlatSamples::F32(vec![v; W * H]);
+    let layer = Layer::new(
+        (W, H),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(
+            vec![
+                AnyChannel::new("rgb.R", plane(4.0)),
+                AnyChannel::new("rgb.G", plane(4.0)),
+                AnyChannel::new("rgb.B", plane(4.0)),
+            ]
+            .into(),
+        ),
+    );
+    Image::from_layer(layer).write().to_file(&grey).unwrap();
+    let c = ExrContents::read(&grey).unwrap();
+    let scale = auto_exposure(&c, &c.passes[0]);
+    assert!((scale * 4.0 - AUTO_EXPOSURE_KEY).abs() < 1e-4, "{scale}");
+    assert_eq!(
+        pass_preview_exposed(&c, &c.passes[0], scale).pixels[0],
+        [118; 3]
+    );
+
+    let png = dir.path().join("two.png");
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .arg("inspect")
+        .args([&a, &grey])
+        .args(["--exposure", "auto", "--pass", "ViewLayer.Depth"])
+        .arg("--preview")
+        .arg(&png)
+        .output()
+        .unwrap();
+    // grey.exr has no depth pass: named with what it has.
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("grey.exr")
+            && err.contains("no pass `ViewLayer.Depth`")
+            && err.contains("rgb"),
+        "{err}"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .arg("inspect")
+        .args([&a, &b])
+        .args(["--pass", "ViewLayer.Depth", "--preview"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let info = decoder.read_info().unwrap().info().clone();
+    assert_eq!((info.width as usize, info.height as usize), (2 * W + 8, H));
+}

@@ -21,6 +21,7 @@ use egogen::render::shard::render_shard;
 use egogen::render::shard_plan::{
     blender_fps, raw_frame_paths, shard_camera, RawRenders, AGENT_ID_BASE,
 };
+use egogen::render::skin::SkinPlan;
 use egogen::render::{
     BlenderRuntime, BodyProbe, PointLight, RenderDevice, ShardBody, ShardLighting, ShardRgb,
     ShardSpec,
@@ -179,7 +180,7 @@ fn render_scene() -> Rendered {
             cache_frame_start: 0.0,
             samples_per_frame: SAMPLES_PER_FRAME,
             motion_steps: 2,
-            color_rgba: [0.6, 0.45, 0.35, 1.0],
+            skin: SkinPlan::default().draw(0),
         }],
         lighting: ShardLighting {
             world_rgb: [0.3, 0.3, 0.3],

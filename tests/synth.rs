@@ -655,7 +655,7 @@ fn drawn_shapes_are_cut_to_the_model_and_given_ones_beyond_it_refused() {
 }
 
 #[test]
-fn lighting_and_headset_wear_vary_with_their_seeds_and_the_same_seed_renders_the_same_bytes() {
+fn lighting_skin_and_headset_wear_vary_with_their_seeds_and_the_same_seed_renders_the_same_bytes() {
     let config = |seed: u64| {
         format!(
             r#"
@@ -681,6 +681,8 @@ seed = {seed}
 [render.lighting]
 hdri = "random"
 lamp_watts = [100.0, 500.0]
+seed = {seed}
+[render.skin]
 seed = {seed}
 [supervisor]
 workers = 1
@@ -726,9 +728,15 @@ workers = 1
         .as_f64()
         .unwrap();
     assert!((100.0..=500.0).contains(&watts), "{watts}");
-    // Another seed: other lighting, another headset offset.
+    // Recorded: the body's skin, a Monk tone and its linear colour.
+    let skin = &doc_a["skins"][0]["skin"];
+    let tone = skin["monk_skin_tone"].as_u64().unwrap();
+    assert!((1..=10).contains(&tone), "{skin}");
+    assert_eq!(doc_a["skins"][0]["name"], "agent_0");
+    // Another seed: other lighting, another headset offset, another skin tone.
     assert_ne!(doc_a["lighting"], doc_c["lighting"]);
     assert_ne!(doc_a["headset_wear"], doc_c["headset_wear"]);
+    assert_ne!(doc_a["skins"], doc_c["skins"]);
     // The same seed: the same dataset, byte for byte.
     let ma = common::read_manifest(&a.path().join("out"));
     let mb = common::read_manifest(&b.path().join("out"));

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context as _, Result};
 use clap::{Parser, Subcommand};
 
 use egogen::body::export::write_obj;
@@ -47,11 +47,21 @@ enum Command {
     /// Print an EXR file's parts, channels, types, compression and per-channel statistics
     /// (min/max/mean, NaN/Inf counts); optionally write a PNG contact sheet of its passes.
     Inspect {
-        /// EXR file (Blender 4.5 single-part multilayer or 5.0 multi-part).
-        file: PathBuf,
-        /// PNG contact sheet: one tile per pass, left to right in the order printed.
+        /// EXR files (Blender 4.5 single-part multilayer or 5.0 multi-part).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// PNG contact sheet: one tile per pass, left to right in the order printed, file
+        /// after file.
         #[arg(long)]
         preview: Option<PathBuf>,
+        /// Only this pass (e.g. `rgb`), printed and in the sheet: with several files, the
+        /// same view of each side by side.
+        #[arg(long)]
+        pass: Option<String>,
+        /// Colour in the sheet: `none` (linear, clamped), `auto` (each file's automatic
+        /// exposure, as the COLMAP images have it) or stops (e.g. `-2.5`).
+        #[arg(long, default_value = "none")]
+        exposure: String,
     },
     /// Camera rig tools (rig files and Aria device calibrations).
     #[command(subcommand)]
@@ -320,7 +330,12 @@ fn run(cli: Cli) -> Result<()> {
                 rt.path.display()
             );
         }
-        Command::Inspect { file, preview } => inspect_exr(&file, preview.as_deref())?,
+        Command::Inspect {
+            files,
+            preview,
+            pass,
+            exposure,
+        } => inspect_exr(&files, preview.as_deref(), pass.as_deref(), &exposure)?,
         Command::Policy(cmd) => run_policy(cmd)?,
         Command::Eval(args) => egogen::cli::eval_jobs::run_eval(&args)?,
         Command::Synth { config, quiet } => {
@@ -827,54 +842,94 @@ fn import_bvh(
     Ok(())
 }
 
-fn inspect_exr(file: &Path, preview: Option<&Path>) -> Result<()> {
-    use egogen::inspect::preview::preview_kind;
-    use egogen::inspect::{pass_preview, ExrContents};
+fn inspect_exr(
+    files: &[PathBuf],
+    preview: Option<&Path>,
+    only: Option<&str>,
+    exposure: &str,
+) -> Result<()> {
+    use egogen::inspect::preview::{auto_exposure, pass_preview_exposed, preview_kind};
+    use egogen::inspect::ExrContents;
+    let stops: Option<f32> = match exposure {
+        "auto" => None,
+        "none" => Some(0.0),
+        s => Some(
+            s.parse()
+                .ok()
+                .filter(|v: &f32| v.is_finite())
+                .with_context(|| {
+                    format!("--exposure: expected `none`, `auto` or a number of stops, found `{s}`")
+                })?,
+        ),
+    };
     if let Some(p) = preview {
         refuse_existing(p)?;
     }
-    let contents = ExrContents::read(file)?;
-    let first = &contents.channels[0];
-    println!(
-        "{}: {} part(s), {} channel(s), {} x {} px",
-        file.display(),
-        contents.parts,
-        contents.channels.len(),
-        first.width,
-        first.height
-    );
-    for (k, pass) in contents.passes.iter().enumerate() {
-        let name = if pass.name.is_empty() {
-            "(unnamed)"
-        } else {
-            pass.name.as_str()
-        };
+    let white = [255, 255, 255];
+    let mut sheet: Option<egogen::preview::RgbImage> = None;
+    for file in files {
+        let contents = ExrContents::read(file)?;
+        let first = &contents.channels[0];
         println!(
-            "pass {k}: {name}  [{:?} preview]",
-            preview_kind(&contents, pass)
+            "{}: {} part(s), {} channel(s), {} x {} px",
+            file.display(),
+            contents.parts,
+            contents.channels.len(),
+            first.width,
+            first.height
         );
-        for (comp, i) in &pass.components {
-            let c = &contents.channels[*i];
-            let s = c.stats();
-            println!(
-                "  {comp:<6} {:<4} {:<6} min {:>12.6} max {:>12.6} mean {:>12.6}  NaN {} Inf {}",
-                c.sample_type, c.compression, s.min, s.max, s.mean, s.nan, s.inf
+        let passes: Vec<_> = contents
+            .passes
+            .iter()
+            .filter(|p| only.is_none_or(|n| p.name == n))
+            .collect();
+        if passes.is_empty() {
+            let names: Vec<&str> = contents.passes.iter().map(|p| p.name.as_str()).collect();
+            bail!(
+                "{}: no pass `{}`; it has {}",
+                file.display(),
+                only.unwrap_or_default(),
+                names.join(", ")
             );
         }
-    }
-    if let Some(p) = preview {
-        let gap = egogen::preview::RgbImage::new(8, first.height, [255, 255, 255]);
-        let mut sheet: Option<egogen::preview::RgbImage> = None;
-        for pass in &contents.passes {
-            let tile = pass_preview(&contents, pass);
-            sheet = Some(match sheet {
-                None => tile,
-                Some(s) => s
-                    .hconcat(&gap, [255, 255, 255])
-                    .hconcat(&tile, [255, 255, 255]),
-            });
+        for (k, pass) in passes.iter().enumerate() {
+            let name = if pass.name.is_empty() {
+                "(unnamed)"
+            } else {
+                pass.name.as_str()
+            };
+            println!(
+                "pass {k}: {name}  [{:?} preview]",
+                preview_kind(&contents, pass)
+            );
+            for (comp, i) in &pass.components {
+                let c = &contents.channels[*i];
+                let s = c.stats();
+                println!(
+                    "  {comp:<6} {:<4} {:<6} min {:>12.6} max {:>12.6} mean {:>12.6}  NaN {} Inf {}",
+                    c.sample_type, c.compression, s.min, s.max, s.mean, s.nan, s.inf
+                );
+            }
         }
-        sheet.expect("at least one pass").write_png(p)?;
+        if preview.is_some() {
+            for pass in passes {
+                let scale = stops.map_or_else(|| auto_exposure(&contents, pass), f32::exp2);
+                if stops.is_none() {
+                    println!("{} {}: exposure ×{scale:.4}", file.display(), pass.name);
+                }
+                let tile = pass_preview_exposed(&contents, pass, scale);
+                sheet = Some(match sheet {
+                    None => tile,
+                    Some(s) => {
+                        let gap = egogen::preview::RgbImage::new(8, s.height, white);
+                        s.hconcat(&gap, white).hconcat(&tile, white)
+                    }
+                });
+            }
+        }
+    }
+    if let (Some(p), Some(sheet)) = (preview, sheet) {
+        sheet.write_png(p)?;
         println!("wrote {}", p.display());
     }
     Ok(())

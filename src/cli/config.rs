@@ -152,6 +152,19 @@ pub struct RawRender {
     pub passes: Option<Vec<String>>,
     /// `cpu` (default) or `gpu` (Cycles on a GPU as Blender finds one).
     pub device: Option<crate::render::RenderDevice>,
+    /// `[render.skin]`: how each agent's skin tone is drawn (default: any of the ten Monk
+    /// tones, seed 0).
+    pub skin: Option<RawSkin>,
+}
+
+/// `[render.skin]` (docs/RENDERING.md).
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawSkin {
+    /// Monk Skin Tones to draw from, each in 1..=10 (default: all ten).
+    pub tones: Option<Vec<u8>>,
+    /// Default 0.
+    pub seed: Option<u64>,
 }
 
 /// `[render.lighting]` (docs/RENDERING.md).

@@ -11,10 +11,10 @@ use super::config::{Backend, MotionSource, RawRun};
 pub struct RunOverrides {
     /// `output.dir`.
     pub out: Option<PathBuf>,
-    /// Every seed of the config: `motion.seed` (agents) or `scene.seed` (a placed motion), and
-    /// the seeds of
-    /// `[render.lighting]`, `[render.headset_wear]` and `[render.depth_noise]` where those
-    /// sections are given — another variant of the same config.
+    /// Every seed of the config: `motion.seed` (agents) or `scene.seed` (a placed motion),
+    /// `[render.skin]`'s, and those of `[render.lighting]`, `[render.headset_wear]` and
+    /// `[render.depth_noise]` where those sections are given — another variant of the same
+    /// config.
     pub seed: Option<u64>,
     /// `render.rig`.
     pub rig: Option<PathBuf>,
@@ -51,6 +51,8 @@ impl RunOverrides {
                 if let Some(d) = r.depth_noise.as_mut() {
                     d.seed = Some(seed);
                 }
+                // Skin is always drawn: a new seed gives new skins.
+                r.skin.get_or_insert_with(Default::default).seed = Some(seed);
             }
         }
         if let Some(w) = self.workers {

@@ -9,6 +9,7 @@ use crate::render::depth_noise::DepthNoise;
 use crate::render::lighting::{LightingPlan, WorldChoice, SHIPPED_HDRIS};
 use crate::render::passes::{Pass, Passes};
 use crate::render::render_camera::RenderCamera;
+use crate::render::skin::SkinPlan;
 use crate::rig::{Rig, RigCamera};
 
 /// Default body model, relative to the crate root.
@@ -421,6 +422,22 @@ fn resolve_render(
         None => LightingPlan::default(),
         Some(l) => resolve_lighting(l, config_path)?,
     };
+    let skin = match r.skin {
+        None => SkinPlan::default(),
+        Some(raw) => {
+            let tones = raw.tones.unwrap_or_else(|| (1..=10).collect());
+            if tones.is_empty() || tones.iter().any(|t| !(1..=10).contains(t)) {
+                return Err(bad(
+                    "render.skin.tones",
+                    format!("expected a non-empty list of Monk Skin Tones, each in 1..=10, found {tones:?}"),
+                ));
+            }
+            SkinPlan {
+                tones,
+                seed: raw.seed.unwrap_or(0),
+            }
+        }
+    };
     let passes = resolve_passes(
         r.passes.as_deref(),
         depth_noise.iter().any(Option::is_some),
@@ -441,6 +458,7 @@ fn resolve_render(
         depth_noise,
         headset_wear,
         lighting,
+        skin,
         passes,
         device: r.device.unwrap_or_default(),
     })

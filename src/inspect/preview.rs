@@ -1,5 +1,6 @@
 //! PNG previews of passes, chosen by pass and component names:
-//! - colour (`R G B`, `Combined`, `Image`): linear → sRGB, clamped;
+//! - colour (`R G B`, `Combined`, `Image`; a lone `gray.Y`): linear × exposure → sRGB,
+//!   clamped; [`auto_exposure`] picks the exposure the way a camera's would;
 //! - depth (`Depth`, or a lone `Z`): near → far through a perceptual colour map, background
 //!   (≥ 1e9 or non-finite) black;
 //! - normals (`Normal`): `0.5 + 0.5·n`;
@@ -45,8 +46,59 @@ pub fn preview_kind(contents: &ExrContents, pass: &Pass) -> PreviewKind {
     }
 }
 
+/// Middle grey: [`auto_exposure`] puts a frame's log-average luminance here.
+pub const AUTO_EXPOSURE_KEY: f32 = 0.18;
+
+/// The factor that brings the log-average Rec. 709 luminance of a colour pass (`R G B`, or a
+/// lone grey `Y`) to [`AUTO_EXPOSURE_KEY`] (Reinhard et al. 2002's key value), over the pixels
+/// of the camera's valid field of view (`valid.V` where the file has it): a frame's automatic
+/// exposure. Within [2⁻¹⁶, 2¹⁶]; 1 for an image without light.
+pub fn auto_exposure(contents: &ExrContents, pass: &Pass) -> f32 {
+    let named = |n: &str| {
+        pass.components
+            .iter()
+            .find(|(c, _)| c == n)
+            .map(|(_, i)| &contents.channels[*i].values)
+    };
+    let valid = contents.channel("valid.V").map(|c| &c.values);
+    let luminance: Box<dyn Fn(usize) -> f32> = match (named("R"), named("G"), named("B")) {
+        (Some(r), Some(g), Some(b)) => {
+            Box::new(move |i| 0.2126 * r[i] + 0.7152 * g[i] + 0.0722 * b[i])
+        }
+        _ => {
+            let y = &contents.channels[pass.components[0].1].values;
+            Box::new(move |i| y[i])
+        }
+    };
+    let n = contents.channels[pass.components[0].1].values.len();
+    let (mut sum, mut count) = (0.0f64, 0usize);
+    for i in 0..n {
+        if valid.is_some_and(|v| v[i] < 0.5) {
+            continue;
+        }
+        let l = luminance(i);
+        if l.is_finite() {
+            sum += (1e-4 + l.max(0.0) as f64).ln();
+            count += 1;
+        }
+    }
+    if count == 0 {
+        return 1.0;
+    }
+    let average = (sum / count as f64).exp() as f32;
+    if average <= 2e-4 {
+        return 1.0;
+    }
+    (AUTO_EXPOSURE_KEY / average).clamp(2f32.powi(-16), 2f32.powi(16))
+}
+
 /// Renders a pass as an 8-bit image (same size as the pass).
 pub fn pass_preview(contents: &ExrContents, pass: &Pass) -> RgbImage {
+    pass_preview_exposed(contents, pass, 1.0)
+}
+
+/// [`pass_preview`] with colour multiplied by `exposure` before it is encoded.
+pub fn pass_preview_exposed(contents: &ExrContents, pass: &Pass, exposure: f32) -> RgbImage {
     let ch = |k: usize| &contents.channels[pass.components[k.min(pass.components.len() - 1)].1];
     // EXR stores channels sorted by name (B, G, R): look colour components up by name.
     let named = |n: &str| {
@@ -62,14 +114,15 @@ pub fn pass_preview(contents: &ExrContents, pass: &Pass) -> RgbImage {
         PreviewKind::Colour => {
             let get = |n: &str| &named(n).expect("colour passes have R, G and B").values;
             let (r, g, b) = (get("R"), get("G"), get("B"));
+            let e = |v: f32| srgb(exposure * v);
             for i in 0..n {
-                img.pixels[i] = [srgb(r[i]), srgb(g[i]), srgb(b[i])];
+                img.pixels[i] = [e(r[i]), e(g[i]), e(b[i])];
             }
         }
         PreviewKind::Luminance => {
             let y = &ch(0).values;
             for i in 0..n {
-                let g = srgb(y[i]);
+                let g = srgb(exposure * y[i]);
                 img.pixels[i] = [g, g, g];
             }
         }

@@ -14,6 +14,7 @@ pub mod protocol;
 pub mod render_camera;
 pub mod shard;
 pub mod shard_plan;
+pub mod skin;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
 pub use protocol::{

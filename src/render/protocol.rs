@@ -6,6 +6,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+pub use super::skin::Skin;
+
 /// How Blender's camera images: either the rig camera itself (a pinhole) or the wider ideal
 /// camera that egogen remaps to a distorted model afterwards.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -88,7 +90,8 @@ pub struct ShardBody {
     pub samples_per_frame: u32,
     /// Cycles deformation motion steps (each step doubles the time samples minus one).
     pub motion_steps: u32,
-    pub color_rgba: [f64; 4],
+    /// Its skin material ([`super::skin`]).
+    pub skin: Skin,
 }
 
 /// Colour render settings.

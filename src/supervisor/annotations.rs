@@ -27,6 +27,9 @@ pub struct CameraAnnotations {
     pub headset_wear: Option<crate::rig::wear::WearOffset>,
     /// The lights egogen added (world light, lamps), as rendered.
     pub lighting: crate::render::ShardLighting,
+    /// Each agent's skin material, as rendered (absent in files written before skins).
+    #[serde(default)]
+    pub skins: Vec<AgentSkin>,
     pub frame_rate_hz: f64,
     pub segmentation_ids: Vec<SegmentationId>,
     pub frames: Vec<FrameAnnotation>,
@@ -62,8 +65,19 @@ pub struct FrameAnnotation {
     /// Row-major 4×4 mapping camera-frame points (OpenCV) to the world (m).
     #[serde(rename = "T_world_cam")]
     pub t_world_cam: [[f64; 4]; 4],
+    /// The automatic exposure of the frame's colour: the factor by which the COLMAP image
+    /// multiplies the EXR's linear colour before encoding (absent without the colour pass).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub colour_exposure: Option<f32>,
     /// Every agent of the run, in view or not.
     pub agents: Vec<AgentAnnotation>,
+}
+
+/// An agent's skin ([`crate::render::skin`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AgentSkin {
+    pub name: String,
+    pub skin: crate::render::skin::Skin,
 }
 
 /// Where a joint is in the image.

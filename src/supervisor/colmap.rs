@@ -3,7 +3,9 @@
 //!
 //! Layout (inside the dataset folder):
 //! - `images/<camera>/frame_NNNNN.png` — the colour of each frame file (`rgb.R/G/B`, or
-//!   `gray.Y` of a monochrome camera), linear → sRGB, clamped to [0, 1], 8-bit RGB (grey for
+//!   `gray.Y` of a monochrome camera) times the frame's automatic exposure
+//!   (`inspect::preview::auto_exposure`, `colour_exposure` in the annotations), linear →
+//!   sRGB, clamped to [0, 1], 8-bit RGB (grey for
 //!   a monochrome camera). COLMAP cannot read the multilayer EXR. Written only when the run
 //!   asks for the `colmap` pass (which needs `colour`).
 //! - `colmap/<camera>/cameras.txt` — one camera, id 1, in the COLMAP model that reproduces the
@@ -32,10 +34,11 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use glam::DQuat;
 
-use super::dataset::{CameraWork, Dataset};
+use super::dataset::{colour_pass, CameraWork, Dataset};
 use crate::atomic_file::write_atomically;
 use crate::camera::{Camera, CameraModel, Fisheye624, Pixel};
-use crate::inspect::{pass_preview, ExrContents};
+use crate::inspect::preview::{auto_exposure, pass_preview_exposed};
+use crate::inspect::ExrContents;
 use crate::math::{Affine3, Real, Vec3};
 
 /// A camera as COLMAP's `cameras.txt` spells it.
@@ -311,13 +314,10 @@ pub fn write_colmap(dataset: &Dataset) -> Result<()> {
         for &f in &work.frames {
             let exr = dataset.frame_path(c, f);
             let contents = ExrContents::read(&exr)?;
-            let rgb = contents
-                .passes
-                .iter()
-                .find(|p| p.name == "rgb" || p.name == "gray")
+            let colour = colour_pass(&contents)
                 .with_context(|| format!("{}: no colour (`rgb` or `gray`)", exr.display()))?;
             let png = image_dir.join(image_name(f));
-            pass_preview(&contents, rgb)
+            pass_preview_exposed(&contents, colour, auto_exposure(&contents, colour))
                 .write_png(&png)
                 .with_context(|| format!("writing {}", png.display()))?;
         }

@@ -18,11 +18,12 @@ use anyhow::{Context, Result};
 use serde_json::json;
 
 use super::annotations::{
-    AgentAnnotation, CameraAnnotations, Conventions, FrameAnnotation, JointVisibility,
+    AgentAnnotation, AgentSkin, CameraAnnotations, Conventions, FrameAnnotation, JointVisibility,
     SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
 use crate::camera::CameraModel;
 use crate::exr_file::ExrContents;
+use crate::inspect::preview::auto_exposure;
 use crate::math::{Affine3, Real, Vec3};
 use crate::motion::MotionSequence;
 use crate::render::depth_noise::{DepthNoise, NoiseSeed};
@@ -329,13 +330,10 @@ pub fn write_annotations(
             let path = dataset.frame_path(c, f);
             let contents = dataset.validate_frame_file(c, &path)?;
             let plane = |name: &str| contents.channel(name).map(|c| c.values.as_slice());
-            frames.push(frame_annotation(
-                work,
-                f,
-                agents,
-                plane("depth.Z"),
-                plane("segmentation.id"),
-            ));
+            let mut frame =
+                frame_annotation(work, f, agents, plane("depth.Z"), plane("segmentation.id"));
+            frame.colour_exposure = colour_pass(&contents).map(|p| auto_exposure(&contents, p));
+            frames.push(frame);
         }
         let mut segmentation_ids: Vec<SegmentationId> = object_ids
             .iter()
@@ -370,6 +368,15 @@ pub fn write_annotations(
             wearer: agents[work.wearer].name.clone(),
             headset_wear: work.headset_wear,
             lighting: dataset.base_spec.lighting.clone(),
+            skins: dataset
+                .base_spec
+                .bodies
+                .iter()
+                .map(|b| AgentSkin {
+                    name: b.name.clone(),
+                    skin: b.skin,
+                })
+                .collect(),
             frame_rate_hz: agents[0].motion.frame_rate_hz,
             segmentation_ids,
             frames,
@@ -496,8 +503,17 @@ fn frame_annotation(
         time_s: f as f64 / agents[0].motion.frame_rate_hz,
         file: format!("frame_{f:05}.exr"),
         t_world_cam: crate::render::camera_setup::row_major(world_from_cam),
+        colour_exposure: None,
         agents: listed,
     }
+}
+
+/// A frame file's colour: `rgb`, or `gray` of a monochrome camera.
+pub fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::Pass> {
+    contents
+        .passes
+        .iter()
+        .find(|p| p.name == "rgb" || p.name == "gray")
 }
 
 /// Inclusive pixel box of the pixels labelled `id`, if any.

@@ -90,14 +90,6 @@ pub enum RunMotion<'a> {
     },
 }
 
-/// Colours of the agents' flat body material, in turn.
-const AGENT_COLOURS: [[f64; 4]; 4] = [
-    [0.55, 0.42, 0.33, 1.0],
-    [0.30, 0.22, 0.17, 1.0],
-    [0.78, 0.62, 0.52, 1.0],
-    [0.45, 0.33, 0.25, 1.0],
-];
-
 /// Runs the pipeline for a plan with a render section; `config_path` is hashed so that a
 /// resumed run is known to be the same run.
 ///
@@ -273,7 +265,7 @@ pub fn run_pipeline(
             cache_frame_start: 0.0,
             samples_per_frame: render.cache_samples_per_frame,
             motion_steps: 2,
-            color_rgba: AGENT_COLOURS[k % AGENT_COLOURS.len()],
+            skin: render.skin.draw(k),
         });
         scratch.extend([pc2, faces, vertices]);
     }

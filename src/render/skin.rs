@@ -1,0 +1,119 @@
+//! Skin: each agent's body material, drawn per agent from a seed (`[render.skin]`). The tone is
+//! one of the ten swatches of the Monk Skin Tone scale (Google, CC BY 4.0; light 1 to dark 10),
+//! drawn uniformly from the tones the config allows; the material is procedural — a Principled
+//! BSDF with that base colour, faint mottling from a noise texture on the mesh's rest-pose
+//! coordinates (so it stays on the skin as the body moves), some subsurface scattering and a
+//! skin-like roughness. The body model carries no UVs, so there are no texture maps or region
+//! masks (lips, nails); bodies are clothing-free. Every choice is in the shard spec and the
+//! annotations.
+
+use rand_chacha::ChaCha8Rng;
+use rand_core::SeedableRng;
+use serde::{Deserialize, Serialize};
+
+use crate::math::random::uniform_open01;
+
+/// The Monk Skin Tone scale's swatches, sRGB (8-bit), tone 1 (lightest) to 10 (darkest).
+pub const MONK_SKIN_TONES_SRGB: [[u8; 3]; 10] = [
+    [0xf6, 0xed, 0xe4],
+    [0xf3, 0xe7, 0xdb],
+    [0xf7, 0xea, 0xd0],
+    [0xea, 0xda, 0xba],
+    [0xd7, 0xbd, 0x96],
+    [0xa0, 0x7e, 0x56],
+    [0x82, 0x5c, 0x43],
+    [0x60, 0x41, 0x34],
+    [0x3a, 0x31, 0x2a],
+    [0x29, 0x24, 0x20],
+];
+
+/// An 8-bit sRGB value as linear light (IEC 61966-2-1).
+pub fn srgb_to_linear(v: u8) -> f64 {
+    let c = v as f64 / 255.0;
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// One agent's skin material, as Blender receives it.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Skin {
+    /// Monk Skin Tone, 1 (lightest) to 10 (darkest).
+    pub monk_skin_tone: u8,
+    /// Base colour, linear RGB (the swatch through the sRGB transfer function).
+    pub base_rgb: [f64; 3],
+    /// Relative amplitude of the noise mottling the base colour (0 = flat).
+    pub mottle: f64,
+    /// Principled BSDF roughness.
+    pub roughness: f64,
+    /// Principled BSDF subsurface weight (radius: skin's red-scattering default).
+    pub subsurface_weight: f64,
+}
+
+/// How agents' skins are drawn.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SkinPlan {
+    /// The Monk tones allowed (1..=10), each drawn with equal probability.
+    pub tones: Vec<u8>,
+    pub seed: u64,
+}
+
+impl Default for SkinPlan {
+    /// Every tone, seed 0.
+    fn default() -> Self {
+        Self {
+            tones: (1..=10).collect(),
+            seed: 0,
+        }
+    }
+}
+
+impl SkinPlan {
+    /// The skin of agent `index` (the same agent, seed and tones give the same skin).
+    pub fn draw(&self, index: usize) -> Skin {
+        let mut rng = ChaCha8Rng::seed_from_u64(
+            self.seed.rotate_left(17) ^ (index as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03),
+        );
+        let k = (uniform_open01(&mut rng) * self.tones.len() as f64) as usize;
+        let tone = self.tones[k.min(self.tones.len() - 1)];
+        let swatch = MONK_SKIN_TONES_SRGB[(tone as usize).clamp(1, 10) - 1];
+        Skin {
+            monk_skin_tone: tone,
+            base_rgb: swatch.map(srgb_to_linear),
+            mottle: 0.08,
+            roughness: 0.45,
+            subsurface_weight: 0.15,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tones_run_light_to_dark_and_draws_cover_them() {
+        let luminance = |t: usize| {
+            let [r, g, b] = MONK_SKIN_TONES_SRGB[t].map(srgb_to_linear);
+            0.2126 * r + 0.7152 * g + 0.0722 * b
+        };
+        assert!((1..10).all(|t| luminance(t) <= luminance(t - 1) + 0.03));
+        assert!(luminance(0) > 10.0 * luminance(9));
+        let plan = SkinPlan::default();
+        let mut seen = [0usize; 10];
+        for i in 0..2000 {
+            seen[plan.draw(i).monk_skin_tone as usize - 1] += 1;
+        }
+        // Uniform: 200 each, ±5σ.
+        assert!(seen.iter().all(|&n| (130..=270).contains(&n)), "{seen:?}");
+        assert_eq!(plan.draw(3), plan.draw(3));
+        let dark = SkinPlan {
+            tones: vec![9, 10],
+            seed: 1,
+        };
+        assert!((0..50).all(|i| dark.draw(i).monk_skin_tone >= 9));
+    }
+}
