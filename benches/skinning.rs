@@ -1,5 +1,7 @@
 //! Skinning throughput on the shipped model: full single-frame skinning (shape + pose + LBS),
-//! a batch of 64 bodies, a sequence frame with the shape cached, and the joints-only fast path.
+//! a batch of 64 bodies, a sequence frame with the shape cached, and the joints-only fast path;
+//! on a model with official SMPL-X sizes, single frames and 64-frame sequences with and without
+//! pose correctives.
 //! `tools/bench_skinning.py` runs this and `smplx` in one go and writes the ratio table.
 
 #[path = "../tests/common/mod.rs"]
@@ -75,6 +77,22 @@ fn bench(c: &mut Criterion) {
     });
     g.bench_function("full_single_zero_correctives", |b| {
         b.iter(|| without.pose(&one).unwrap())
+    });
+    // A sequence of 64 frames of one shape (what a vertex cache poses): the correctives of the
+    // batch come from one f32 matrix product.
+    let poses: Vec<_> = batch.iter().map(|p| p.pose).collect();
+    let transl: Vec<_> = batch.iter().map(|p| p.transl).collect();
+    let shaped_with = with.shape(&one.betas, &[]).unwrap();
+    let shaped_without = without.shape(&one.betas, &[]).unwrap();
+    g.bench_function("cached_shape_single_with_correctives", |b| {
+        b.iter(|| shaped_with.pose(&one.pose, one.transl).unwrap())
+    });
+    g.throughput(Throughput::Elements(64));
+    g.bench_function("sequence_64_with_correctives", |b| {
+        b.iter(|| shaped_with.pose_sequence(&poses, &transl).unwrap())
+    });
+    g.bench_function("sequence_64_zero_correctives", |b| {
+        b.iter(|| shaped_without.pose_sequence(&poses, &transl).unwrap())
     });
     g.finish();
 }

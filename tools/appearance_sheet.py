@@ -1,5 +1,6 @@
 """Renders configs/appearance.toml for several seeds and writes one contact sheet of the
-frame in each where the wearer sees the other person largest (its segmentation box), with the
+frame in each where the wearer sees the other person largest (its segmentation box, preferring
+frames where that box is clear of the image border), with the
 seed's skin tones, HDRI, lamp and headset offset printed beside it.
 
     python3 tools/appearance_sheet.py [--seeds 0 1 2 3 4 5] [--out out/appearance_seeds]
@@ -33,11 +34,22 @@ def main():
         with open(os.path.join(out, "cameras/camera-rgb/annotations.json")) as f:
             doc = json.load(f)
 
+        size = doc["camera"]["resolution_px"]
+
         def area(frame):
             boxes = [a["bbox_xyxy"] for a in frame["agents"] if not a["wearer"] and a["bbox_xyxy"]]
             return max(((b[2] - b[0] + 1) * (b[3] - b[1] + 1) for b in boxes), default=0)
 
-        best = max(doc["frames"], key=area)
+        def whole(frame):
+            # The other person's box clear of the image border by 5 % (not cut off).
+            m = [0.05 * size[0], 0.05 * size[1]]
+            return any(
+                b[0] > m[0] and b[1] > m[1] and b[2] < size[0] - m[0] and b[3] < size[1] - m[1]
+                for a in frame["agents"]
+                if not a["wearer"] and (b := a["bbox_xyxy"])
+            )
+
+        best = max(doc["frames"], key=lambda f: (whole(f), area(f)))
         hdri = doc["lighting"].get("world_hdri") or {}
         tones = ", ".join(f"{s['name']} {s['skin']['monk_skin_tone']}" for s in doc["skins"])
         wear = doc.get("headset_wear") or {}

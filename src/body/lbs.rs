@@ -246,19 +246,104 @@ impl ShapedBody<'_> {
         pose: &[Real; POSE_DIM],
         vertex_ids: &[u32],
     ) -> Vec<Vec3> {
-        let rots = self.model.posedirs.as_ref().map(|_| joint_rotations(pose));
+        let feature: Option<Vec<f32>> = self.model.posedirs.as_ref().map(|_| {
+            pose_feature(&joint_rotations(pose))
+                .into_iter()
+                .map(|x| x as f32)
+                .collect()
+        });
         let skin = SkinTransforms::new(&skeleton.world_from_joint, &self.rest_joints);
         vertex_ids
             .iter()
             .map(|&v| {
                 let v = v as usize;
                 let mut p = self.v_shaped[v];
-                if let (Some(pd), Some(r)) = (&self.model.posedirs, &rots) {
-                    p += corrective_offset(pd, v, &pose_feature(r));
+                if let (Some(pd), Some(f)) = (&self.model.posedirs, &feature) {
+                    p += corrective_offset(pd, v, f);
                 }
                 skin.apply(&self.model.skin_weights[v], p)
             })
             .collect()
+    }
+
+    /// Poses a sequence of frames: the pose correctives of a batch of frames come from one f32
+    /// matrix product (`features [B × 486] · posedirsᵀ`), so the 486 × V·3 corrective matrix is
+    /// read once per batch of [`CORRECTIVE_BATCH`] frames instead of once per frame; skinning
+    /// then runs per frame, frames in parallel. Without correctives every frame is posed
+    /// directly, frames in parallel. The same results as [`ShapedBody::pose`] per frame (to
+    /// f32 rounding of the correctives' sums).
+    pub fn pose_sequence(
+        &self,
+        poses: &[[Real; POSE_DIM]],
+        transl: &[Vec3],
+    ) -> Result<Vec<PosedBody>, PoseError> {
+        assert_eq!(poses.len(), transl.len(), "one translation per pose");
+        let Some(posedirs) = &self.model.posedirs else {
+            return poses
+                .par_iter()
+                .zip(transl)
+                .map(|(pose, &t)| self.pose_with(pose, t, false))
+                .collect();
+        };
+        let n = self.v_shaped.len() * 3;
+        let mut out = Vec::with_capacity(poses.len());
+        for (poses, transl) in poses
+            .chunks(CORRECTIVE_BATCH)
+            .zip(transl.chunks(CORRECTIVE_BATCH))
+        {
+            let b = poses.len();
+            let mut features = vec![0f32; b * POSE_FEATURES];
+            for (f, pose) in features.chunks_mut(POSE_FEATURES).zip(poses) {
+                check_finite("pose", pose)?;
+                for (d, s) in f.iter_mut().zip(pose_feature(&joint_rotations(pose))) {
+                    *d = s as f32;
+                }
+            }
+            // offsets[n][b] = Σ_k posedirs[n][k] · features[b][k]; rows n split across threads.
+            let mut offsets = vec![0f32; n * b];
+            const ROWS: usize = 3 * 1024;
+            offsets
+                .par_chunks_mut(ROWS * b)
+                .enumerate()
+                .for_each(|(block, c)| {
+                    let n0 = block * ROWS;
+                    let rows = c.len() / b;
+                    let a = &posedirs[n0 * POSE_FEATURES..(n0 + rows) * POSE_FEATURES];
+                    // SAFETY: `a` is rows × 486 (row stride 486), `features` 486 × b read with
+                    // row stride 1 and column stride 486, `c` rows × b (row stride b); all
+                    // three slices hold exactly those elements.
+                    unsafe {
+                        matrixmultiply::sgemm(
+                            rows,
+                            POSE_FEATURES,
+                            b,
+                            1.0,
+                            a.as_ptr(),
+                            POSE_FEATURES as isize,
+                            1,
+                            features.as_ptr(),
+                            1,
+                            POSE_FEATURES as isize,
+                            0.0,
+                            c.as_mut_ptr(),
+                            b as isize,
+                            1,
+                        );
+                    }
+                });
+            let posed = (0..b)
+                .into_par_iter()
+                .map(|f| {
+                    let offset = |v: usize| {
+                        let at = |c: usize| offsets[(3 * v + c) * b + f] as Real;
+                        Vec3::new(at(0), at(1), at(2))
+                    };
+                    self.skin(&poses[f], transl[f], offset, false)
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            out.extend(posed);
+        }
+        Ok(out)
     }
 
     fn pose_with(
@@ -267,21 +352,36 @@ impl ShapedBody<'_> {
         transl: Vec3,
         parallel: bool,
     ) -> Result<PosedBody, PoseError> {
+        match &self.model.posedirs {
+            Some(pd) => {
+                check_finite("pose", pose)?;
+                let feature: Vec<f32> = pose_feature(&joint_rotations(pose))
+                    .into_iter()
+                    .map(|x| x as f32)
+                    .collect();
+                self.skin(
+                    pose,
+                    transl,
+                    |v| corrective_offset(pd, v, &feature),
+                    parallel,
+                )
+            }
+            None => self.skin(pose, transl, |_| Vec3::ZERO, parallel),
+        }
+    }
+
+    /// LBS of the shaped vertices plus `offset(v)` (the pose correctives).
+    fn skin(
+        &self,
+        pose: &[Real; POSE_DIM],
+        transl: Vec3,
+        offset: impl Fn(usize) -> Vec3 + Sync,
+        parallel: bool,
+    ) -> Result<PosedBody, PoseError> {
         let skeleton = posed_skeleton(&self.rest_joints, pose, transl)?;
-        let feature = self
-            .model
-            .posedirs
-            .as_ref()
-            .map(|_| pose_feature(&joint_rotations(pose)));
         let skin = SkinTransforms::new(&skeleton.world_from_joint, &self.rest_joints);
         let model = self.model;
-        let vertex = |v: usize| {
-            let mut p = self.v_shaped[v];
-            if let (Some(pd), Some(f)) = (&model.posedirs, &feature) {
-                p += corrective_offset(pd, v, f);
-            }
-            skin.apply(&model.skin_weights[v], p)
-        };
+        let vertex = |v: usize| skin.apply(&model.skin_weights[v], self.v_shaped[v] + offset(v));
         let n = self.v_shaped.len();
         let vertices: Vec<Vec3> = if parallel {
             (0..n)
@@ -384,15 +484,18 @@ fn pose_feature(rots: &[Mat3; NUM_JOINTS]) -> Vec<Real> {
     f
 }
 
+/// Frames per corrective matrix product in [`ShapedBody::pose_sequence`].
+pub const CORRECTIVE_BATCH: usize = 64;
+
 #[inline]
-fn corrective_offset(posedirs: &[Real], v: usize, feature: &[Real]) -> Vec3 {
+fn corrective_offset(posedirs: &[f32], v: usize, feature: &[f32]) -> Vec3 {
     let row = |c: usize| {
         let base = (v * 3 + c) * POSE_FEATURES;
         posedirs[base..base + POSE_FEATURES]
             .iter()
             .zip(feature)
             .map(|(a, b)| a * b)
-            .sum::<Real>()
+            .sum::<f32>() as Real
     };
     Vec3::new(row(0), row(1), row(2))
 }

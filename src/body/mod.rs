@@ -13,7 +13,7 @@ pub mod skeleton;
 pub mod volume;
 
 pub use cpf::CpfCalibration;
-pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody};
+pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody, CORRECTIVE_BATCH};
 pub use markers::{farthest_point_markers, MarkerFrame, NUM_MARKERS};
 pub use model::BodyModel;
 pub use model_file::ModelFileError;

@@ -30,9 +30,10 @@ pub struct BodyModel {
     /// 300 + 100 when the file has ≥ 400 columns, else 10 + 10).
     pub(crate) shape_cols: std::ops::Range<usize>,
     pub(crate) expression_cols: std::ops::Range<usize>,
-    /// Pose correctives, row-major `(V·3, 486)`; `None` when every entry is zero, which skips
-    /// the V·3 × 486 product entirely.
-    pub(crate) posedirs: Option<Vec<Real>>,
+    /// Pose correctives, row-major `(V·3, 486)`, in f32 (as `smplx` computes them: the
+    /// product reads half the memory, and a corrective of a few centimetres keeps ~1e-9 m);
+    /// `None` when every entry is zero, which skips the V·3 × 486 product entirely.
+    pub(crate) posedirs: Option<Vec<f32>>,
     /// Joint regressor, one sparse row of vertex weights per joint.
     pub(crate) j_regressor: Vec<SparseRow>,
     /// Skin weights, one sparse row of joint weights per vertex.
@@ -92,7 +93,7 @@ impl BodyModel {
             .data
             .iter()
             .any(|&x| x != 0.0)
-            .then_some(posedirs.data);
+            .then(|| posedirs.data.iter().map(|&x| x as f32).collect());
         let j_regressor = sparse_rows(&j_regressor.data, nv as usize);
         let skin_weights = sparse_rows(&weights.data, NUM_JOINTS);
         if let Some((v, _)) = skin_weights

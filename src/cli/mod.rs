@@ -5,6 +5,7 @@
 
 pub mod config;
 pub mod eval_jobs;
+pub mod inspect_jobs;
 pub mod motion_jobs;
 pub mod overrides;
 pub mod policy_jobs;

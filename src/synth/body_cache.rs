@@ -1,7 +1,7 @@
 //! The body's vertex cache for rendering: the body posed along a motion at sub-frame times,
 //! as the PC2 point cache Blender plays back (`crate::vertex_cache`).
 
-use crate::body::{BodyModel, PoseError};
+use crate::body::{BodyModel, PoseError, CORRECTIVE_BATCH};
 use crate::math::Vec3;
 use crate::motion::resample::resample;
 use crate::motion::MotionSequence;
@@ -18,15 +18,18 @@ pub fn body_cache(
     let samples_per_frame = samples_per_frame.max(1);
     let dense = resample(motion, motion.frame_rate_hz * samples_per_frame as f64);
     let shaped = model.shape(&motion.betas, &[])?;
-    let samples = dense
+    // Batches of frames: pose correctives from one matrix product per batch, frames skinned
+    // in parallel (`ShapedBody::pose_sequence`).
+    let mut samples: Vec<Vec<[f32; 3]>> = Vec::with_capacity(dense.poses.len());
+    for (poses, trans) in dense
         .poses
-        .iter()
-        .zip(&dense.trans)
-        .map(|(pose, &t)| {
-            let posed = shaped.pose(pose, t)?;
-            Ok(posed.vertices.iter().map(|v| to_f32(*v)).collect())
-        })
-        .collect::<Result<Vec<Vec<[f32; 3]>>, PoseError>>()?;
+        .chunks(CORRECTIVE_BATCH)
+        .zip(dense.trans.chunks(CORRECTIVE_BATCH))
+    {
+        for posed in shaped.pose_sequence(poses, trans)? {
+            samples.push(posed.vertices.iter().map(|v| to_f32(*v)).collect());
+        }
+    }
     Ok(PointCache {
         start_frame: 0.0,
         sample_rate: 1.0 / samples_per_frame as f32,
