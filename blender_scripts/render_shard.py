@@ -101,6 +101,49 @@ def add_ceiling(scene, ceiling):
     scene.collection.objects.link(obj)
 
 
+def add_obstacle(scene, ob):
+    """A box (an `[[obstacles]]` entry) standing on the floor, moving linearly between keys."""
+    sx, sy, sz = (0.5 * v for v in ob["size_m"])
+    verts = [(x, y, z) for x in (-sx, sx) for y in (-sy, sy) for z in (-sz, sz)]
+    faces = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    mesh = bpy.data.meshes.new(ob["name"])
+    mesh.from_pydata(verts, [], faces)
+    mesh.update()
+    mat = bpy.data.materials.new(ob["name"] + "_material")
+    mat.use_nodes = True
+    mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.25, 0.32, 0.45, 1.0)
+    mesh.materials.append(mat)
+    obj = bpy.data.objects.new(ob["name"], mesh)
+    obj.pass_index = ob["pass_index"]
+    obj.rotation_euler = (0.0, 0.0, ob["yaw_rad"])
+    obj.cycles.use_motion_blur = True
+    scene.collection.objects.link(obj)
+    key_obstacle(obj, ob["keys"])
+    return obj
+
+
+def key_obstacle(obj, keys, frame_step=1):
+    """Location keys at `key.frame / frame_step` (the ground truth's scaled timeline)."""
+    obj.animation_data_clear()
+    for key in keys:
+        obj.location = Vector(key["centre"])
+        if len(keys) > 1:
+            obj.keyframe_insert("location", frame=key["frame"] / frame_step)
+    if len(keys) > 1:
+        # Two keys would ease in and out (Bezier); the take moves the box at constant speed.
+        for fcurve in action_fcurves(obj.animation_data.action):
+            for point in fcurve.keyframe_points:
+                point.interpolation = "LINEAR"
+
+
+def action_fcurves(action):
+    """An action's F-curves (Blender 4.4+ keeps them in layers, strips and channel bags)."""
+    if getattr(action, "layers", None):
+        return [fc for layer in action.layers for strip in layer.strips
+                for bag in strip.channelbags for fc in bag.fcurves]
+    return list(action.fcurves)
+
+
 def add_world_hdri(world, hdri):
     """World light from an HDRI shipped with Blender (datafiles/studiolights/world), turned
     about the vertical and scaled."""
@@ -163,6 +206,7 @@ def build_scene(spec):
     for obj in scene.objects:
         obj.pass_index = ids.get(obj.name, 0)
     bodies = [add_body(scene, b) for b in spec["bodies"]]
+    obstacles = [add_obstacle(scene, o) for o in spec.get("obstacles", [])]
     scene.render.fps = spec["fps"]
     scene.render.fps_base = spec["fps_base"]
     scene.render.engine = "CYCLES"
@@ -182,7 +226,7 @@ def build_scene(spec):
     settings.file_format = "OPEN_EXR_MULTILAYER"
     settings.color_depth = "32"
     settings.exr_codec = "ZIP"
-    return scene, bodies
+    return scene, bodies, obstacles
 
 
 def make_camera(scene, cam_spec):
@@ -236,15 +280,21 @@ def key_camera(cam, keys, frame_step=1):
         cam.rotation_quaternion = Quaternion(key["rotation_wxyz"])
         cam.keyframe_insert("location", frame=key["frame"] / frame_step)
         cam.keyframe_insert("rotation_quaternion", frame=key["frame"] / frame_step)
+    # Between keys the pose is interpolated linearly, as the spec says (Bezier is the default).
+    for fcurve in action_fcurves(cam.animation_data.action):
+        for point in fcurve.keyframe_points:
+            point.interpolation = "LINEAR"
 
 
-def set_frame_step(cam, cam_spec, bodies, body_specs, frame_step):
-    """Puts the camera and the bodies on a timeline where one frame is `frame_step` frames of
-    the motion: Cycles' motion vectors (to the frames before and after) then reach the
-    previous and next saved frame."""
+def set_frame_step(cam, cam_spec, bodies, obstacles, spec, frame_step):
+    """Puts the camera, the bodies and the obstacles on a timeline where one frame is
+    `frame_step` frames of the motion: Cycles' motion vectors (to the frames before and after)
+    then reach the previous and next saved frame."""
     key_camera(cam, cam_spec["keys"], frame_step)
-    for obj, body in zip(bodies, body_specs):
+    for obj, body in zip(bodies, spec["bodies"]):
         obj.modifiers["egogen_cache"].frame_scale = body["samples_per_frame"] * frame_step
+    for obj, ob in zip(obstacles, spec.get("obstacles", [])):
+        key_obstacle(obj, ob["keys"], frame_step)
 
 
 def set_rgb_mode(scene, rgb):
@@ -323,7 +373,7 @@ EXIT_SETUP_FAILED = 3
 def main():
     spec = load_spec()
     try:
-        scene, bodies = build_scene(spec)
+        scene, bodies, obstacles = build_scene(spec)
     except Exception as e:  # noqa: BLE001 - any setup failure is reported the same way
         print(f"EGOGEN_SETUP_FAILED {type(e).__name__}: {e}", file=sys.stderr, flush=True)
         sys.exit(EXIT_SETUP_FAILED)
@@ -339,11 +389,11 @@ def main():
         if spec["ground_truth_passes"]:
             set_ground_truth_mode(scene, spec["ground_truth_passes"])
             if step != 1:
-                set_frame_step(cam, cam_spec, bodies, spec["bodies"], step)
+                set_frame_step(cam, cam_spec, bodies, obstacles, spec, step)
             for frame in cam_spec["frames"]:
                 write_frame(scene, frame["frame"] / step, frame["ground_truth_exr"])
             if step != 1:
-                set_frame_step(cam, cam_spec, bodies, spec["bodies"], 1)
+                set_frame_step(cam, cam_spec, bodies, obstacles, spec, 1)
 
 
 main()

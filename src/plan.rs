@@ -10,7 +10,7 @@ use glam::DVec2;
 use crate::render::depth_noise::DepthNoise;
 use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
-use crate::scene::{MovingObstacle, Obstacle2};
+use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid};
 use crate::synth::crowd::{CrowdSettings, Steering};
 
 /// Where shards run.
@@ -103,6 +103,8 @@ pub struct SynthPlan {
     pub agents: Vec<AgentDraft>,
     pub obstacles: Vec<Obstacle2>,
     pub moving: Vec<MovingObstacle>,
+    /// Every `[[obstacles]]` box as a solid, in config order (what a rendered run draws).
+    pub solids: Vec<ObstacleSolid>,
     pub out_dir: PathBuf,
 }
 

@@ -223,6 +223,7 @@ fn render_scene() -> Rendered {
             output_json: probe.clone(),
         }),
         ceiling: None,
+        obstacles: Vec::new(),
     };
     let runtime = BlenderRuntime::resolve(None).expect("Blender 4.5 (managed PyPI bpy)");
     let done = render_shard(&runtime, &spec, &dir.path().join("shard.json")).unwrap();

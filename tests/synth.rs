@@ -364,15 +364,7 @@ workers = 1
             .display()
     );
     let (dir, path) = common::run_dir(&config);
-    let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
-        .arg(&path)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::egogen_run_ok(&path);
     let other_cam: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(
             dir.path()
@@ -694,15 +686,7 @@ workers = 1
     };
     let run = |seed: u64| {
         let (dir, path) = common::run_dir(&config(seed));
-        let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
-            .arg(&path)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        common::egogen_run_ok(&path);
         let doc: serde_json::Value = serde_json::from_str(
             &std::fs::read_to_string(dir.path().join("out/cameras/camera-rgb/annotations.json"))
                 .unwrap(),
@@ -742,4 +726,85 @@ workers = 1
     let mb = common::read_manifest(&b.path().join("out"));
     assert_eq!(ma.files, mb.files);
     assert_eq!(doc_a, doc_b);
+}
+
+/// An `[[obstacles]]` box crossing in front of a walking wearer is rendered: it has its own
+/// segmentation id (listed as `obstacle_00`), and the surface points of its pixels (position
+/// pass) lie on the box where the take had it at that frame — it moves with the take's clock.
+#[test]
+fn a_moving_obstacle_is_rendered_where_the_agents_sensed_it() {
+    let config = format!(
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 2.0
+seed = 1
+[[agents]]
+name = "wearer"
+start = [-1.0, 0.0]
+goals = [[1.2, 0.0]]
+[[obstacles]]
+centre = [0.6, -1.2]
+size_m = [0.5, 0.5]
+velocity_m_s = [0.0, 0.8]
+height_m = 1.6
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[scene]
+path = "{}"
+[render]
+cameras = ["camera-rgb"]
+resolution_scale = 0.125
+every_n_frames = 8
+samples = 1
+passes = ["segmentation", "position"]
+[supervisor]
+workers = 1
+"#,
+        common::repo_root()
+            .join("assets/scenes/apartment.glb")
+            .display()
+    );
+    let (dir, path) = common::run_dir(&config);
+    common::egogen_run_ok(&path);
+    let cam = dir.path().join("out/cameras/camera-rgb");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
+            .unwrap();
+    let id = doc["segmentation_ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["name"] == "obstacle_00")
+        .expect("the obstacle is listed")["id"]
+        .as_u64()
+        .unwrap() as u32;
+    let rate = doc["frame_rate_hz"].as_f64().unwrap();
+    let mut seen = Vec::new();
+    for f in doc["frames"].as_array().unwrap() {
+        let exr =
+            egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
+        let seg = &exr.channel("segmentation.id").unwrap().values;
+        let pos = ["X", "Y", "Z"].map(|c| &exr.channel(&format!("position.{c}")).unwrap().values);
+        let px: Vec<usize> = (0..seg.len()).filter(|&k| seg[k] as u32 == id).collect();
+        if px.len() < 20 {
+            continue;
+        }
+        // Where the take had the box at this frame.
+        let t = f["time_s"].as_f64().unwrap();
+        let (cx, cy) = (0.6, -1.2 + 0.8 * t);
+        for &k in &px {
+            let (x, y, z) = (pos[0][k] as f64, pos[1][k] as f64, pos[2][k] as f64);
+            assert!(
+                (x - cx).abs() <= 0.26 && (y - cy).abs() <= 0.26 && z <= 1.61,
+                "frame {}: obstacle pixel at ({x:.3}, {y:.3}, {z:.3}), box centre ({cx:.3}, {cy:.3})",
+                f["frame"]
+            );
+        }
+        seen.push((f["frame"].as_u64().unwrap(), px.len()));
+    }
+    eprintln!("obstacle pixels per frame (rate {rate} Hz): {seen:?}");
+    assert!(seen.len() >= 2, "the obstacle is in view in {seen:?}");
 }

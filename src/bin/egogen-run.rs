@@ -229,6 +229,7 @@ fn run_agents(
         Some(render) => {
             let motion = egogen::supervisor::RunMotion::Agents {
                 world: &s.world,
+                obstacles: &synth.solids,
                 take: &s.take,
                 wearers,
                 wall_s: s.wall_s,

@@ -111,12 +111,6 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
             ] {
                 unused(key, present, "agents")?;
             }
-            if !raw.obstacles.is_empty() && raw.render.is_some() {
-                return Err(bad(
-                    "obstacles",
-                    "2D obstacles are sensed by the agents but have no geometry to render; use them in a motion-only run (no [render]) or with `egogen synth`, or put the obstacle into the scene file".into(),
-                ));
-            }
             if !raw.body.betas.is_empty() {
                 return Err(bad(
                     "body.betas",

@@ -18,7 +18,7 @@ use super::resolve::{crate_root, resolve_body_model};
 use crate::math::random::normal_samples;
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::plan::{AgentDraft, SynthPlan};
-use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
+use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableMap};
 use crate::synth::crowd::{
     run_crowd, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering, NEW_FRAMES,
 };
@@ -126,6 +126,8 @@ pub struct RawObstacle {
     pub yaw_deg: f64,
     #[serde(default)]
     pub velocity_m_s: [f64; 2],
+    /// Height of the box a rendered run draws (m; default 1.0). The agents sense the footprint.
+    pub height_m: Option<f64>,
 }
 
 /// `[output]`.
@@ -435,7 +437,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
     } else {
         None
     };
-    let (mut obstacles, mut moving) = (Vec::new(), Vec::new());
+    let (mut obstacles, mut moving, mut solids) = (Vec::new(), Vec::new(), Vec::new());
     for (i, o) in raw.obstacles.iter().enumerate() {
         let key = |k: &str| format!("obstacles[{i}].{k}");
         if !finite2(o.centre) {
@@ -458,7 +460,21 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
             half_extents: DVec2::from_array(o.size_m) / 2.0,
             yaw_rad: o.yaw_deg.to_radians(),
         };
+        let height_m = o.height_m.unwrap_or(1.0);
+        if !(height_m.is_finite() && height_m > 0.0 && height_m <= 10.0) {
+            return Err(bad(
+                &key("height_m"),
+                format!("expected a height in (0, 10] m, found {height_m}"),
+            ));
+        }
         let v = DVec2::from_array(o.velocity_m_s);
+        solids.push(ObstacleSolid {
+            motion: MovingObstacle {
+                at_start: shape,
+                velocity_m_per_s: v,
+            },
+            height_m,
+        });
         if v == DVec2::ZERO {
             obstacles.push(shape);
         } else {
@@ -482,6 +498,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         duration_s,
         agents,
         obstacles,
+        solids,
         moving,
         out_dir: base.join(&raw.output.dir),
     })

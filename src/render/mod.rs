@@ -18,6 +18,6 @@ pub mod skin;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
 pub use protocol::{
-    BodyProbe, CameraKey, PointLight, RenderDevice, ShardBody, ShardCamera, ShardFrame, ShardLens,
-    ShardLighting, ShardRgb, ShardSpec, WorldHdri,
+    BodyProbe, CameraKey, ObstacleKey, PointLight, RenderDevice, ShardBody, ShardCamera,
+    ShardFrame, ShardLens, ShardLighting, ShardObstacle, ShardRgb, ShardSpec, WorldHdri,
 };

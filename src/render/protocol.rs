@@ -178,6 +178,32 @@ pub struct ShardSpec {
     /// A ceiling egogen adds to a scene that has none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ceiling: Option<ShardCeiling>,
+    /// Boxes egogen adds for the run's `[[obstacles]]`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub obstacles: Vec<ShardObstacle>,
+}
+
+/// A box standing on the floor, still or moving in a straight line (an `[[obstacles]]` entry
+/// the agents sensed), with its own segmentation id.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardObstacle {
+    pub name: String,
+    pub pass_index: u32,
+    /// Full extents along its own axes (m): length, width, height.
+    pub size_m: [f64; 3],
+    /// Rotation about the vertical (rad).
+    pub yaw_rad: f64,
+    /// Its centre at (sub)frames; linear in between, held outside.
+    pub keys: Vec<ObstacleKey>,
+}
+
+/// Where an obstacle's centre is at a frame.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleKey {
+    pub frame: f64,
+    pub centre: [f64; 3],
 }
 
 /// A horizontal rectangle facing down, named [`CEILING_OBJECT`] (its segmentation id comes

@@ -81,6 +81,14 @@ impl Obstacle2 {
     }
 }
 
+/// An obstacle as a solid a rendered run draws: a footprint standing on the floor (or moving
+/// at constant velocity; zero for a still one), `height_m` tall.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObstacleSolid {
+    pub motion: MovingObstacle,
+    pub height_m: f64,
+}
+
 /// An obstacle moving at constant velocity: footprint at time 0, velocity (m/s).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MovingObstacle {

@@ -21,12 +21,13 @@ use crate::motion::MotionSequence;
 use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::passes::Pass;
-use crate::render::protocol::{ShardCeiling, CEILING_OBJECT};
+use crate::render::protocol::{ObstacleKey, ShardCeiling, ShardObstacle, CEILING_OBJECT};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
 use crate::render::{BlenderRuntime, ShardBody, ShardRgb, ShardSpec};
 use crate::scene::ceiling::ceiling_to_add;
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
+use crate::scene::{Obstacle2, ObstacleSolid};
 use crate::synth::crowd::{CrowdTake, CrowdWorld};
 use crate::synth::crowd_dir::write_crowd_dir;
 use crate::synth::placement::place_motion;
@@ -83,6 +84,8 @@ pub enum RunMotion<'a> {
     /// take's agents). `wall_s` and `about` go into the take's summary.
     Agents {
         world: &'a CrowdWorld,
+        /// The `[[obstacles]]` boxes, drawn standing on the walkable map's floor.
+        obstacles: &'a [ObstacleSolid],
         take: &'a CrowdTake,
         wearers: &'a [usize],
         wall_s: f64,
@@ -321,6 +324,18 @@ pub fn run_pipeline(
         let id = object_ids.iter().map(|o| o.1).max().unwrap_or(0) + 1;
         object_ids.push((CEILING_OBJECT.into(), id));
     }
+    let obstacles: Vec<ShardObstacle> = match &motion {
+        RunMotion::Agents {
+            world, obstacles, ..
+        } => {
+            let first = object_ids.iter().map(|o| o.1).max().unwrap_or(0) + 1;
+            let rate = agents[0].motion.frame_rate_hz;
+            let frames = agents[0].motion.len() as f64;
+            obstacle_boxes(obstacles, world.map.floor_z_m, first, rate, frames)
+        }
+        RunMotion::Placed(_) => Vec::new(),
+    };
+    object_ids.extend(obstacles.iter().map(|o| (o.name.clone(), o.pass_index)));
     let (fps, fps_base) = blender_fps(agents[0].motion.frame_rate_hz);
     let (lo, hi) = scene_bounds(&scene);
     let track = &agents[wearers[0]].track;
@@ -356,6 +371,7 @@ pub fn run_pipeline(
             min_xy: c.min_xy,
             max_xy: c.max_xy,
         }),
+        obstacles,
     };
     let dataset = Arc::new(Dataset {
         staging: std::fs::canonicalize(&staging)?,
@@ -453,6 +469,51 @@ pub fn run_pipeline(
         rendered_now,
         files: manifest.files.len(),
     })
+}
+
+/// The `[[obstacles]]` as boxes on the floor at `floor_z_m`, named `obstacle_NN` with ids
+/// from `first_id`; a moving one keyed one frame before the take and one after its last frame
+/// (`frames` at `rate_hz`), so that blur and motion vectors see it move at the ends too.
+fn obstacle_boxes(
+    solids: &[ObstacleSolid],
+    floor_z_m: f64,
+    first_id: u32,
+    rate_hz: f64,
+    frames: f64,
+) -> Vec<ShardObstacle> {
+    solids
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let (half, yaw_rad) = match s.motion.at_start {
+                Obstacle2::Box {
+                    half_extents,
+                    yaw_rad,
+                    ..
+                } => (half_extents, yaw_rad),
+                Obstacle2::Circle { radius_m, .. } => (glam::DVec2::splat(radius_m), 0.0),
+            };
+            let key = |frame: f64| {
+                let c = s.motion.at(frame / rate_hz).centre();
+                ObstacleKey {
+                    frame,
+                    centre: [c.x, c.y, floor_z_m + 0.5 * s.height_m],
+                }
+            };
+            let still = s.motion.velocity_m_per_s == glam::DVec2::ZERO;
+            ShardObstacle {
+                name: format!("obstacle_{k:02}"),
+                pass_index: first_id + k as u32,
+                size_m: [2.0 * half.x, 2.0 * half.y, s.height_m],
+                yaw_rad,
+                keys: if still {
+                    vec![key(0.0)]
+                } else {
+                    vec![key(-1.0), key(frames)]
+                },
+            }
+        })
+        .collect()
 }
 
 fn scene_bounds(scene: &crate::scene::SceneMesh) -> (crate::math::Vec3, crate::math::Vec3) {

@@ -230,6 +230,19 @@ pub fn run_dir(config: &str) -> (tempfile::TempDir, PathBuf) {
     (dir, path)
 }
 
+/// Runs `egogen-run CONFIG`, failing the test with its stderr unless it succeeds.
+pub fn egogen_run_ok(config: &Path) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(config)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// A finished dataset's manifest.
 pub fn read_manifest(dataset: &Path) -> egogen::supervisor::Manifest {
     serde_json::from_str(&std::fs::read_to_string(dataset.join("manifest.json")).unwrap()).unwrap()
