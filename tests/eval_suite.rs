@@ -145,6 +145,7 @@ fn path_diversity_is_the_spread_of_lateral_offsets() {
 
 #[test]
 fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
+    // Table 3 and the speed suite join the same RESULTS.md further down.
     let out = tempfile::tempdir().unwrap();
     let run = |extra: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_egogen"))
@@ -273,6 +274,37 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         "| no pretraining | box scenes | sampled |",
         "| no attention reward | crossings | mean |",
         "| full (pretraining + attention reward) | box scenes | mean |",
+    ] {
+        assert!(md.contains(row), "{row} missing from\n{md}");
+    }
+    // The speed suite beside them: the policy and sampling with K = 4 … 32 in one scenario.
+    let speed = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args([
+            "eval",
+            "--suite",
+            "speed",
+            "--episodes",
+            "1",
+            "--scenarios",
+            "moving_obstacle",
+            "--quiet",
+            "--out",
+        ])
+        .arg(out.path())
+        .output()
+        .unwrap();
+    assert!(
+        speed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&speed.stderr)
+    );
+    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
+    assert!(md.contains("## Table 1") && md.contains("## Speed and accuracy"));
+    for row in [
+        "| moving_obstacle | policy | ",
+        "| moving_obstacle | policy_mean | ",
+        "| moving_obstacle | sampling_k4 | ",
+        "| moving_obstacle | sampling_k32 | ",
     ] {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }

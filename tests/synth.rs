@@ -599,10 +599,10 @@ fn run_configs_with_agents_are_checked_by_key() {
         (run("", agents), "1–32 agents"),
         (
             run(
-                "[[agents]]\n[[obstacles]]\ncentre = [0.0, 0.0]\nsize_m = [1.0, 1.0]\n[render]",
+                "[[agents]]\n[[obstacles]]\ncentre = [0.0, 0.0]\nsize_m = [1.0, 1.0]\nheight_m = 0.0\n[render]",
                 agents,
             ),
-            "no geometry to render",
+            "obstacles[0].height_m",
         ),
     ];
     for (config, expected) in cases {

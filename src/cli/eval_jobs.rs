@@ -19,7 +19,8 @@ use crate::policy::EnvSettings;
 /// What `egogen eval` is asked.
 #[derive(Debug, Clone, clap::Args)]
 pub struct EvalArgs {
-    /// Which table: table1 (scenarios with moving obstacles and people) or table3 (ablations).
+    /// Which table: table1 (scenarios with moving obstacles and people), table3 (ablations) or
+    /// speed (the policy against sampling with K = 4, 8, 16, 32 latents, accuracy and time).
     #[arg(long, default_value = "table1")]
     pub suite: String,
     /// Episodes per row (table1: per scenario and controller; table3: per policy, set and
@@ -86,8 +87,27 @@ fn suite_files(out: &Path, suite: &str) -> Vec<PathBuf> {
             results.join("table1.json"),
             results.join("table1_episodes.jsonl"),
         ],
+        "speed" => vec![
+            results.join("speed.json"),
+            results.join("speed_episodes.jsonl"),
+        ],
         _ => vec![results.join("table3.json")],
     }
+}
+
+/// The speed suite's scenarios unless `--scenarios` names others, and its sampling K.
+const SPEED_SCENARIOS: [&str; 2] = ["moving_obstacle", "circle_4"];
+const SPEED_KS: [usize; 4] = [4, 8, 16, 32];
+
+/// `results/speed.json`.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct SpeedFile {
+    command: String,
+    episodes: usize,
+    seed: u64,
+    policy: String,
+    wall_s: f64,
+    rows: Vec<crate::eval::metrics::Row>,
 }
 
 /// `results/table1.json`.
@@ -168,9 +188,9 @@ fn bar(args: &EvalArgs, total: usize, unit: &str) -> indicatif::ProgressBar {
 /// Runs the suite, writes its files and renders `OUT/RESULTS.md` from every suite's results
 /// there (see the module docs).
 pub fn run_eval(args: &EvalArgs) -> Result<()> {
-    if !matches!(args.suite.as_str(), "table1" | "table3") {
+    if !matches!(args.suite.as_str(), "table1" | "table3" | "speed") {
         bail!(
-            "--suite {}: expected \"table1\" or \"table3\" (Table 2's apartment rows are `egogen policy eval --scene`, docs/POLICY.md)",
+            "--suite {}: expected \"table1\", \"table3\" or \"speed\" (Table 2's apartment rows are `egogen policy eval --scene`, docs/POLICY.md)",
             args.suite
         );
     }
@@ -189,12 +209,16 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
             );
         }
     }
-    let scenarios = chosen_scenarios(&args.scenarios)?;
+    let mut scenarios = chosen_scenarios(&args.scenarios)?;
+    if args.suite == "speed" && args.scenarios.is_empty() {
+        scenarios.retain(|s| SPEED_SCENARIOS.contains(&s.name().as_str()));
+    }
     let common = load_common()?;
     let results = args.out.join("results");
     std::fs::create_dir_all(&results).with_context(|| format!("creating {}", results.display()))?;
     match args.suite.as_str() {
         "table1" => table1(args, &common, &scenarios, &results)?,
+        "speed" => speed(args, &common, &scenarios, &results)?,
         _ => table3(args, &common, &results)?,
     }
     let md = results_markdown(&args.out)?;
@@ -224,7 +248,16 @@ fn chosen_scenarios(names: &[String]) -> Result<Vec<Scenario>> {
         .collect()
 }
 
-fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -> Result<()> {
+/// Runs every scenario × controller with the policy of `--policy` (default the shipped one),
+/// writes `<name>_episodes.jsonl`; returns the run and the policy's path.
+fn run_rows(
+    args: &EvalArgs,
+    c: &Common,
+    scenarios: &[Scenario],
+    controllers: &[Controller],
+    results: &Path,
+    name: &str,
+) -> Result<(crate::eval::suite::TableRun, PathBuf)> {
     let policy_path = args
         .policy
         .clone()
@@ -237,7 +270,6 @@ fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -
         bank: &c.bank,
         policy: Some(&net),
     };
-    let controllers = Controller::table1(args.k);
     let progress = bar(
         args,
         scenarios.len() * controllers.len(),
@@ -247,7 +279,7 @@ fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -
         &parts,
         &c.body,
         scenarios,
-        &controllers,
+        controllers,
         args.episodes,
         args.seed,
         |done, _, what| {
@@ -256,6 +288,45 @@ fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -
         },
     )?;
     progress.finish_and_clear();
+    let mut lines = String::new();
+    for e in &run.episodes {
+        lines.push_str(&serde_json::to_string(e)?);
+        lines.push('\n');
+    }
+    write_atomically(
+        &results.join(format!("{name}_episodes.jsonl")),
+        lines.as_bytes(),
+    )?;
+    Ok((run, policy_path))
+}
+
+fn speed(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -> Result<()> {
+    let controllers = Controller::speed(&SPEED_KS);
+    let (run, policy_path) = run_rows(args, c, scenarios, &controllers, results, "speed")?;
+    let file = SpeedFile {
+        command: command_line(),
+        episodes: args.episodes,
+        seed: args.seed,
+        policy: relative(&policy_path),
+        wall_s: run.wall_s,
+        rows: run.rows,
+    };
+    write_atomically(
+        &results.join("speed.json"),
+        serde_json::to_string_pretty(&file)?.as_bytes(),
+    )?;
+    println!(
+        "{} rows, {} episodes each, in {:.0} s",
+        file.rows.len(),
+        args.episodes,
+        run.wall_s
+    );
+    Ok(())
+}
+
+fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -> Result<()> {
+    let controllers = Controller::table1(args.k);
+    let (run, policy_path) = run_rows(args, c, scenarios, &controllers, results, "table1")?;
     for p in &run.pictures {
         let name = format!("table1_{}_{}.png", p.scenario.name(), p.controller);
         let takes: Vec<_> = p.takes.iter().collect();
@@ -265,12 +336,6 @@ fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -
         std::fs::rename(&partial, results.join(&name))
             .with_context(|| format!("renaming {}", partial.display()))?;
     }
-    let mut lines = String::new();
-    for e in &run.episodes {
-        lines.push_str(&serde_json::to_string(e)?);
-        lines.push('\n');
-    }
-    write_atomically(&results.join("table1_episodes.jsonl"), lines.as_bytes())?;
     let file = Table1File {
         command: command_line(),
         episodes: args.episodes,
@@ -439,6 +504,19 @@ fn results_markdown(out: &Path) -> Result<String> {
         }
         md.push('\n');
     }
+    if let Some(t) = read_json::<SpeedFile>(&results.join("speed.json"))? {
+        md.push_str(&format!(
+            "## Speed and accuracy: the policy against sampling with K latents\n\n```\n{}\n```\n\n\
+             {} episodes per row, seed {}, policy `{}`; {:.0} s of wall time. Wall per episode \
+             is the episode's own time (two episodes run at once on the 2 cores); the ratio is \
+             to the policy with sampled actions in the same scenario. The other knobs of the \
+             trade (ray count, SDF resolution, policy width) need policies trained for them \
+             and are not measured here.\n\n",
+            t.command, t.episodes, t.seed, t.policy, t.wall_s
+        ));
+        md.push_str(&speed_markdown(&t.rows));
+        md.push('\n');
+    }
     if let Some(t) = read_json::<Table3File>(&results.join("table3.json"))? {
         md.push_str(&format!(
             "## Table 3: ablations\n\n```\n{}\n```\n\n\
@@ -484,6 +562,36 @@ Penetration: share of frames with a body marker inside the box's or the other pe
 footprint. Foot contact: paper Eq. 12 with 3-D foot-marker speed. The paper's own Table 3
 values are not set beside these: they could not be read on the machine that wrote this file.
 ";
+
+/// The speed suite's rows: accuracy beside the wall time per episode and its ratio to the
+/// policy's (sampled actions) in the same scenario.
+fn speed_markdown(rows: &[crate::eval::metrics::Row]) -> String {
+    let mut md = String::from(
+        "| scenario | controller | SR | Dist (m) | Cont | Pene-S | Pene-H | wall per episode (s) | × policy |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    let pct = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1} %", 100.0 * v));
+    for r in rows {
+        let per = r.wall_s / r.episodes.max(1) as f64;
+        let policy = rows
+            .iter()
+            .find(|p| p.scenario == r.scenario && p.controller == "policy")
+            .map(|p| p.wall_s / p.episodes.max(1) as f64);
+        md.push_str(&format!(
+            "| {} | {} | {} | {:.2} | {:.3} | {} | {} | {:.2} | {} |\n",
+            r.scenario,
+            r.controller,
+            pct(Some(r.success_rate)),
+            r.final_distance_m,
+            r.contact,
+            pct(r.obstacle_penetration_share),
+            pct(r.human_penetration_share),
+            per,
+            policy.map_or("–".into(), |p| format!("{:.2}", per / p)),
+        ));
+    }
+    md
+}
 
 const TABLE1_NOTES: &str = "
 Scenarios (`src/eval/scenarios.rs`), each on an open 14 × 14 m floor, starts on the held-out

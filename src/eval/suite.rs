@@ -43,6 +43,20 @@ impl Controller {
     }
 }
 
+impl Controller {
+    /// The speed/accuracy trade of steering: the policy (sampled and mean action) against the
+    /// sampling controller with each of `ks` latents per primitive.
+    pub fn speed(ks: &[usize]) -> Vec<Controller> {
+        let mut out = Controller::table1(1);
+        out.truncate(2);
+        out.extend(ks.iter().map(|&k| Controller {
+            name: format!("sampling_k{k}"),
+            steering: Steering::Sampling { k },
+        }));
+        out
+    }
+}
+
 /// Takes kept for pictures: episode 0 of a scenario and controller (every episode of the
 /// static box, whose paths are drawn together).
 pub struct Picture {
