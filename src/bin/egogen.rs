@@ -1,6 +1,6 @@
 //! `egogen`: tools around the pipeline (body model inspection, posing, previews).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{bail, Result};
@@ -442,10 +442,10 @@ fn run(cli: Cli) -> Result<()> {
             strip_frames,
             skip_frames,
         }) => {
-            import_bvh(
+            egogen::cli::import_jobs::import_bvh(
                 &bvh,
                 &out,
-                model,
+                &model_path(model),
                 rate_hz,
                 mirror,
                 strip.as_deref(),
@@ -462,7 +462,14 @@ fn run(cli: Cli) -> Result<()> {
             seed,
         }) => {
             refuse_existing(&out)?;
-            scene_inspect(&scene, up.as_deref(), cell_m, &out, agents, seed)?;
+            egogen::cli::scene_jobs::scene_inspect(
+                &scene,
+                up.as_deref(),
+                cell_m,
+                &out,
+                agents,
+                seed,
+            )?;
         }
         Command::Body(BodyCommand::Info { model }) => {
             let m = BodyModel::load(model_path(model))?;
@@ -609,240 +616,4 @@ fn walk_params(m: &BodyModel, betas: &[f64], t_s: f64) -> Result<BodyParams> {
         .map(|v| v.y)
         .fold(f64::INFINITY, f64::min);
     Ok(WalkCycle::default().params_at(t_s, betas, shaped.rest_joints[0], sole_y))
-}
-
-fn scene_inspect(
-    scene: &str,
-    up: Option<&str>,
-    cell_m: f64,
-    out: &Path,
-    agents: usize,
-    seed: u64,
-) -> Result<()> {
-    use egogen::preview::map::MapPicture;
-    use egogen::scene::{
-        load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind, UpAxis,
-        WalkableSettings,
-    };
-    use egogen::sensing::{EgoPose2, RayScan, SensingWorld};
-
-    if !(cell_m.is_finite() && cell_m > 0.0) {
-        bail!("--cell-m must be a positive number of metres, got {cell_m}");
-    }
-    let (mesh, moving, path) = match scene.strip_prefix("scenario:") {
-        Some(name) => {
-            let kind: ScenarioKind = serde_json::from_value(serde_json::Value::String(name.into()))
-                .map_err(|_| anyhow::anyhow!("unknown scenario `{name}` (expected empty_floor, single_box or moving_box)"))?;
-            let sc = scenario(kind);
-            (sc.mesh, sc.moving, PathBuf::from(scene))
-        }
-        None => {
-            let path = PathBuf::from(scene);
-            let up = up.map(|u| if u == "y" { UpAxis::Y } else { UpAxis::Z });
-            (load_scene(&path, up)?, Vec::new(), path)
-        }
-    };
-    let t = std::time::Instant::now();
-    let map = walkable_map(
-        &mesh,
-        &path,
-        WalkableSettings {
-            cell_m,
-            ..Default::default()
-        },
-    )?;
-    let build_s = t.elapsed().as_secs_f64();
-    let (lo, hi) = mesh.bounds().expect("non-empty scene");
-    let components = map.component.iter().copied().max().unwrap_or(0);
-    println!("scene:      {}", path.display());
-    println!(
-        "objects:    {} ({} triangles)",
-        mesh.objects.len(),
-        mesh.triangles.len()
-    );
-    println!(
-        "bounds:     ({:.2}, {:.2}, {:.2}) .. ({:.2}, {:.2}, {:.2}) m",
-        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
-    );
-    println!("floor:      z = {:.3} m", map.floor_z_m);
-    println!(
-        "grid:       {} x {} cells of {} m (built in {:.3} s)",
-        map.nx, map.ny, map.cell_m, build_s
-    );
-    println!(
-        "walkable:   {} cells = {:.1} m², {} connected region(s)",
-        map.walkable_count(),
-        map.walkable_count() as f64 * cell_m * cell_m,
-        components
-    );
-    let obstacles: Vec<_> = moving.iter().map(|m| m.at(0.0)).collect();
-    let world = SensingWorld {
-        map: &map,
-        obstacles: &obstacles,
-    };
-    let scan = RayScan::default();
-    let mut pic = MapPicture::new(&map, 900);
-    for o in &obstacles {
-        pic.obstacle(o, [200, 60, 40]);
-    }
-    for sg in sample_start_goals(&map, seed, agents, 0.3, 1.0) {
-        let heading = (sg.goal - sg.start).to_angle();
-        let pose = EgoPose2 {
-            position: sg.start,
-            heading_rad: heading,
-        };
-        for (k, d) in scan.distances(&world, pose).into_iter().enumerate() {
-            let end = pose.position + scan.beam_dir(pose, k) * d;
-            let colour = if d < scan.settings.max_range_m {
-                [220, 90, 30]
-            } else {
-                [80, 160, 80]
-            };
-            pic.line(pose.position, end, colour);
-        }
-        pic.dot(sg.start, 4, [30, 80, 200]);
-        pic.dot(sg.goal, 4, [200, 30, 160]);
-    }
-    pic.image.write_png(out)?;
-    println!("wrote {}", out.display());
-    Ok(())
-}
-
-#[allow(clippy::too_many_arguments)]
-fn import_bvh(
-    bvh: &Path,
-    out: &Path,
-    model: Option<PathBuf>,
-    rate_hz: f64,
-    mirror: bool,
-    strip: Option<&Path>,
-    strip_frames: usize,
-    skip_frames: usize,
-) -> Result<()> {
-    use egogen::motion::bvh::BvhClip;
-    use egogen::motion::resample::{mirror as mirror_seq, resample};
-    use egogen::motion::retarget::{retarget_cmu, CMU_TO_SMPLX, CMU_UNIT_M};
-    use egogen::preview::sticks::bone_mesh;
-
-    refuse_existing(out)?;
-    let mirror_path = out.with_file_name(format!(
-        "{}_mirror.npz",
-        out.file_stem().unwrap_or_default().to_string_lossy()
-    ));
-    if mirror {
-        refuse_existing(&mirror_path)?;
-    }
-    if let Some(s) = strip {
-        refuse_existing(s)?;
-    }
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        bail!("--rate-hz must be positive, got {rate_hz}");
-    }
-    let m = BodyModel::load(model_path(model))?;
-    let is_bvh = bvh
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
-    let (clip, mut full) = if is_bvh {
-        let mut clip = BvhClip::read(bvh)?;
-        if skip_frames >= clip.frames.len() {
-            bail!(
-                "--skip-frames {skip_frames}: {} has only {} frames",
-                bvh.display(),
-                clip.frames.len()
-            );
-        }
-        clip.frames.drain(..skip_frames);
-        let seq = retarget_cmu(&clip, &m)?;
-        (Some(clip), seq)
-    } else {
-        let mut seq = egogen::motion::deepmimic::import_deepmimic(bvh, &m)?;
-        if skip_frames >= seq.len() {
-            bail!(
-                "--skip-frames {skip_frames}: {} has only {} frames",
-                bvh.display(),
-                seq.len()
-            );
-        }
-        seq.poses.drain(..skip_frames);
-        seq.trans.drain(..skip_frames);
-        (None, seq)
-    };
-    full.gender = "neutral".into();
-    let seq = resample(&full, rate_hz);
-    seq.write_amass(out)?;
-    println!(
-        "wrote {} ({} frames at {} Hz from {} at {} Hz)",
-        out.display(),
-        seq.len(),
-        rate_hz,
-        bvh.display(),
-        full.frame_rate_hz
-    );
-    if mirror {
-        mirror_seq(&seq, &m)?.write_amass(&mirror_path)?;
-        println!("wrote {}", mirror_path.display());
-    }
-    if let Some(strip) = strip {
-        // Columns every 0.5 s; top: the source skeleton (metres, z up), bottom: our body.
-        let step = ((0.5 * rate_hz).round() as usize).max(1);
-        let frames: Vec<usize> = (0..seq.len()).step_by(step).take(strip_frames).collect();
-        let to_world = |p: Vec3| Vec3::new(p.x, -p.z, p.y) * CMU_UNIT_M;
-        let used: Vec<usize> = clip
-            .iter()
-            .flat_map(|c| CMU_TO_SMPLX.iter().filter_map(|(_, n, _)| c.joint_index(n)))
-            .collect();
-        let shaped = m.shape(&[], &[])?;
-        let mut verts = Vec::new();
-        let mut faces = Vec::new();
-        let mut bones_v = Vec::new();
-        let mut bones_f = Vec::new();
-        for (col, &f) in frames.iter().enumerate() {
-            let body = shaped.pose(&seq.poses[f], seq.trans[f])?;
-            let pelvis = body.joints[0];
-            let offset = Vec3::new(1.2 * col as f64, 0.0, 0.0);
-            let segs: Vec<(Vec3, Vec3)> = match &clip {
-                Some(clip) => {
-                    let src_f = ((f as f64 / rate_hz) * clip.frame_rate_hz).round() as usize;
-                    let g = clip.global_transforms(src_f.min(clip.frames.len() - 1));
-                    let root = to_world(g[used[0]].translation);
-                    let lift = Vec3::new(0.0, 0.0, 2.2);
-                    let place =
-                        |q: Vec3| to_world(q) - Vec3::new(root.x, root.y, 0.0) + offset + lift;
-                    clip.joints
-                        .iter()
-                        .enumerate()
-                        .filter_map(|(i, j)| {
-                            j.parent
-                                .map(|p| (place(g[p].translation), place(g[i].translation)))
-                        })
-                        .collect()
-                }
-                None => Vec::new(),
-            };
-            let (bv, bf) = bone_mesh(&segs, 0.02);
-            let base = bones_v.len() as u32;
-            bones_v.extend(bv);
-            bones_f.extend(bf.iter().map(|t| t.map(|i| i + base)));
-            let base = verts.len() as u32;
-            verts.extend(
-                body.vertices
-                    .iter()
-                    .map(|v| *v - Vec3::new(pelvis.x, pelvis.y, 0.0) + offset),
-            );
-            faces.extend(m.faces.iter().map(|t| t.map(|i| i + base)));
-        }
-        // Front view: the retargeted body faces −y, so look from −y.
-        let view = MeshView::looking_from(Vec3::new(0.0, -1.0, 0.0), Vec3::Z);
-        let img = view.render(
-            &[
-                (&verts, &faces, [0.86, 0.72, 0.62]),
-                (&bones_v, &bones_f, [0.3, 0.45, 0.8]),
-            ],
-            150 * frames.len(),
-            560,
-        );
-        img.write_png(strip)?;
-        println!("wrote {}", strip.display());
-    }
-    Ok(())
 }

@@ -5,11 +5,13 @@
 
 pub mod config;
 pub mod eval_jobs;
+pub mod import_jobs;
 pub mod inspect_jobs;
 pub mod motion_jobs;
 pub mod overrides;
 pub mod policy_jobs;
 pub mod resolve;
+pub mod scene_jobs;
 pub mod synth;
 pub mod train;
 pub mod train_policy;

@@ -1,0 +1,105 @@
+//! `egogen scene inspect`: a scene loaded, its walkable map built and summarised, and a PNG of
+//! the map with sampled starts, goals and their sensing rays.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Result};
+
+/// Prints the summary of `scene` (a file, or `scenario:NAME`) and draws its map with `agents`
+/// sampled start/goal pairs (from `seed`) and their rays to `out`.
+pub fn scene_inspect(
+    scene: &str,
+    up: Option<&str>,
+    cell_m: f64,
+    out: &Path,
+    agents: usize,
+    seed: u64,
+) -> Result<()> {
+    use crate::preview::map::MapPicture;
+    use crate::scene::{
+        load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind, UpAxis,
+        WalkableSettings,
+    };
+    use crate::sensing::{EgoPose2, RayScan, SensingWorld};
+
+    if !(cell_m.is_finite() && cell_m > 0.0) {
+        bail!("--cell-m must be a positive number of metres, got {cell_m}");
+    }
+    let (mesh, moving, path) = match scene.strip_prefix("scenario:") {
+        Some(name) => {
+            let kind: ScenarioKind = serde_json::from_value(serde_json::Value::String(name.into()))
+                .map_err(|_| anyhow::anyhow!("unknown scenario `{name}` (expected empty_floor, single_box or moving_box)"))?;
+            let sc = scenario(kind);
+            (sc.mesh, sc.moving, PathBuf::from(scene))
+        }
+        None => {
+            let path = PathBuf::from(scene);
+            let up = up.map(|u| if u == "y" { UpAxis::Y } else { UpAxis::Z });
+            (load_scene(&path, up)?, Vec::new(), path)
+        }
+    };
+    let t = std::time::Instant::now();
+    let map = walkable_map(
+        &mesh,
+        &path,
+        WalkableSettings {
+            cell_m,
+            ..Default::default()
+        },
+    )?;
+    let build_s = t.elapsed().as_secs_f64();
+    let (lo, hi) = mesh.bounds().expect("non-empty scene");
+    let components = map.component.iter().copied().max().unwrap_or(0);
+    println!("scene:      {}", path.display());
+    println!(
+        "objects:    {} ({} triangles)",
+        mesh.objects.len(),
+        mesh.triangles.len()
+    );
+    println!(
+        "bounds:     ({:.2}, {:.2}, {:.2}) .. ({:.2}, {:.2}, {:.2}) m",
+        lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
+    );
+    println!("floor:      z = {:.3} m", map.floor_z_m);
+    println!(
+        "grid:       {} x {} cells of {} m (built in {:.3} s)",
+        map.nx, map.ny, map.cell_m, build_s
+    );
+    println!(
+        "walkable:   {} cells = {:.1} m², {} connected region(s)",
+        map.walkable_count(),
+        map.walkable_count() as f64 * cell_m * cell_m,
+        components
+    );
+    let obstacles: Vec<_> = moving.iter().map(|m| m.at(0.0)).collect();
+    let world = SensingWorld {
+        map: &map,
+        obstacles: &obstacles,
+    };
+    let scan = RayScan::default();
+    let mut pic = MapPicture::new(&map, 900);
+    for o in &obstacles {
+        pic.obstacle(o, [200, 60, 40]);
+    }
+    for sg in sample_start_goals(&map, seed, agents, 0.3, 1.0) {
+        let heading = (sg.goal - sg.start).to_angle();
+        let pose = EgoPose2 {
+            position: sg.start,
+            heading_rad: heading,
+        };
+        for (k, d) in scan.distances(&world, pose).into_iter().enumerate() {
+            let end = pose.position + scan.beam_dir(pose, k) * d;
+            let colour = if d < scan.settings.max_range_m {
+                [220, 90, 30]
+            } else {
+                [80, 160, 80]
+            };
+            pic.line(pose.position, end, colour);
+        }
+        pic.dot(sg.start, 4, [30, 80, 200]);
+        pic.dot(sg.goal, 4, [200, 30, 160]);
+    }
+    pic.image.write_png(out)?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
