@@ -10,14 +10,40 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// How often progress is printed when standard error is not a terminal.
 const PLAIN_PROGRESS_EVERY: Duration = Duration::from_secs(10);
 
+/// Time left at the average pace since the bar started: `elapsed` for the `pos − start` items
+/// done since then, `len − pos` to go. `None` before the first item. Work that finishes in
+/// bursts (a shard's frames come at its end) keeps a steady estimate this way, where a recent
+/// rate would swing from seconds to days between bursts.
+pub fn average_eta(pos: u64, len: u64, start: u64, elapsed: Duration) -> Option<Duration> {
+    let done = pos.saturating_sub(start);
+    (done > 0).then(|| {
+        Duration::from_secs_f64(
+            elapsed.as_secs_f64() / done as f64 * len.saturating_sub(pos) as f64,
+        )
+    })
+}
+
 /// A bar over `total` items of `unit` (e.g. "frames"), `done` of them already done; `what`
 /// names the work (e.g. "rendering") and `program` the command the plain lines come from.
 pub fn progress_bar(program: &str, what: &str, unit: &str, total: u64, done: u64) -> ProgressBar {
     let template = format!(
-        "{what} {{bar:30}} {{pos}}/{{len}} {unit} [{{elapsed_precise}} < {{eta_precise}}] {{msg}}"
+        "{what} {{bar:30}} {{pos}}/{{len}} {unit} [{{elapsed_precise}} < {{eta_average}}] {{msg}}"
     );
-    let style =
-        ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
+    let style = ProgressStyle::with_template(&template)
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .with_key(
+            "eta_average",
+            move |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let eta = average_eta(state.pos(), state.len().unwrap_or(0), done, state.elapsed());
+                let _ = match eta {
+                    Some(t) => {
+                        let s = t.as_secs();
+                        write!(w, "{:02}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+                    }
+                    None => write!(w, "--:--:--"),
+                };
+            },
+        );
     let bar = ProgressBar::new(total).with_style(style);
     bar.set_position(done);
     if !std::io::stderr().is_terminal() {
@@ -34,14 +60,32 @@ pub fn progress_bar(program: &str, what: &str, unit: &str, total: u64, done: u64
             if bar.is_finished() {
                 break;
             }
+            let (pos, len) = (bar.position(), bar.length().unwrap_or(0));
+            let left = match average_eta(pos, len, done, bar.elapsed()) {
+                Some(t) => format!("about {} s left", t.as_secs()),
+                None => "time left not known yet".into(),
+            };
             eprintln!(
-                "{program}: {what} {}/{} {unit}, {} s elapsed, about {} s left",
-                bar.position(),
-                bar.length().unwrap_or(0),
+                "{program}: {what} {pos}/{len} {unit}, {} s elapsed, {left}",
                 bar.elapsed().as_secs(),
-                bar.eta().as_secs()
             );
         });
     }
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn average_eta_uses_the_pace_since_the_start() {
+        let s = Duration::from_secs;
+        // 10 of 40 done in 20 s after starting at 0: 30 more at 2 s each.
+        assert_eq!(average_eta(10, 40, 0, s(20)), Some(s(60)));
+        // Resumed at 20: only the 5 done since count.
+        assert_eq!(average_eta(25, 40, 20, s(10)), Some(s(30)));
+        assert_eq!(average_eta(20, 40, 20, s(10)), None);
+        assert_eq!(average_eta(40, 40, 0, s(10)), Some(s(0)));
+    }
 }
