@@ -1,5 +1,5 @@
 //! The dataset's frame file: one multilayer EXR per camera and frame, made in Rust from
-//! Blender's two raw renders (blurred colour, unblurred ground truth), remapped to the rig's
+//! Blender's raw renders (blurred colour, unblurred ground truth: whichever the passes need), remapped to the rig's
 //! camera model where Blender rendered an ideal stand-in.
 //!
 //! Channels (one part, ZIP, 32-bit float unless said), each group only where its pass is

@@ -242,8 +242,8 @@ fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
         .collect()
 }
 
-/// Finishes every frame of the round's shards whose two raw renders are in place (Blender
-/// writes each under a temporary name and renames it). A raw pair that does not assemble is
+/// Finishes every frame of the round's shards whose raw renders are all in place (Blender
+/// writes each under a temporary name and renames it). Raw renders that do not assemble are
 /// removed so the frame is rendered again.
 fn finish_ready_frames(
     dataset: &Dataset,
