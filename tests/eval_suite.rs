@@ -301,10 +301,10 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
     assert!(md.contains("## Table 1") && md.contains("## Speed and accuracy"));
     for row in [
-        "| moving_obstacle | policy | ",
-        "| moving_obstacle | policy_mean | ",
-        "| moving_obstacle | sampling_k4 | ",
-        "| moving_obstacle | sampling_k32 | ",
+        "| moving obstacle | policy | ",
+        "| moving obstacle | policy_mean | ",
+        "| moving obstacle | sampling_k4 | ",
+        "| moving obstacle | sampling_k32 | ",
     ] {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }

@@ -463,6 +463,14 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<T>> {
 }
 
 /// `RESULTS.md` from the results files in `out/results/`.
+/// A scenario's label in the tables (its name where none is known).
+fn scenario_label(name: &str) -> String {
+    Scenario::table1()
+        .iter()
+        .find(|s| s.name() == name)
+        .map_or(name.to_string(), |s| s.label())
+}
+
 fn results_markdown(out: &Path) -> Result<String> {
     let results = out.join("results");
     let mut md = String::from(
@@ -472,12 +480,7 @@ fn results_markdown(out: &Path) -> Result<String> {
          (2 cores; episodes run two at a time).\n\n",
     );
     if let Some(t) = read_json::<Table1File>(&results.join("table1.json"))? {
-        let labels = |name: &str| {
-            Scenario::table1()
-                .iter()
-                .find(|s| s.name() == name)
-                .map_or(name.to_string(), |s| s.label())
-        };
+        let labels = scenario_label;
         md.push_str(&format!(
             "## Table 1: avoiding moving obstacles and other people\n\n```\n{}\n```\n\n\
              {} episodes per row, seed {}, policy `{}`, K = {} latents per primitive for the \
@@ -514,7 +517,7 @@ fn results_markdown(out: &Path) -> Result<String> {
              and are not measured here.\n\n",
             t.command, t.episodes, t.seed, t.policy, t.wall_s
         ));
-        md.push_str(&speed_markdown(&t.rows));
+        md.push_str(&speed_markdown(&t.rows, &scenario_label));
         md.push('\n');
     }
     if let Some(t) = read_json::<Table3File>(&results.join("table3.json"))? {
@@ -565,7 +568,7 @@ values are not set beside these: they could not be read on the machine that wrot
 
 /// The speed suite's rows: accuracy beside the wall time per episode and its ratio to the
 /// policy's (sampled actions) in the same scenario.
-fn speed_markdown(rows: &[crate::eval::metrics::Row]) -> String {
+fn speed_markdown(rows: &[crate::eval::metrics::Row], labels: &dyn Fn(&str) -> String) -> String {
     let mut md = String::from(
         "| scenario | controller | SR | Dist (m) | Cont | Pene-S | Pene-H | wall per episode (s) | × policy |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
@@ -579,7 +582,7 @@ fn speed_markdown(rows: &[crate::eval::metrics::Row]) -> String {
             .map(|p| p.wall_s / p.episodes.max(1) as f64);
         md.push_str(&format!(
             "| {} | {} | {} | {:.2} | {:.3} | {} | {} | {:.2} | {} |\n",
-            r.scenario,
+            labels(&r.scenario),
             r.controller,
             pct(Some(r.success_rate)),
             r.final_distance_m,
