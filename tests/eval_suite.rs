@@ -143,27 +143,33 @@ fn path_diversity_is_the_spread_of_lateral_offsets() {
     assert!(o[0].is_some() && o[8].is_none());
 }
 
+/// `egogen eval ARGS --out OUT`.
+fn egogen_eval(args: &[&str], out: impl AsRef<std::path::Path>) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .arg("eval")
+        .args(args)
+        .arg("--out")
+        .arg(out.as_ref())
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     // Table 3 and the speed suite join the same RESULTS.md further down.
     let out = tempfile::tempdir().unwrap();
     let run = |extra: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_egogen"))
-            .args([
-                "eval",
-                "--episodes",
-                "2",
-                "--scenarios",
-                "moving_obstacle,circle_2,static_box",
-                "--k",
-                "4",
-                "--quiet",
-                "--out",
-            ])
-            .arg(out.path())
-            .args(extra)
-            .output()
-            .unwrap()
+        let mut args = vec![
+            "--episodes",
+            "2",
+            "--scenarios",
+            "moving_obstacle,circle_2,static_box",
+            "--k",
+            "4",
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        egogen_eval(&args, out.path())
     };
     let first = run(&[]);
     assert!(
@@ -247,19 +253,10 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         before
     );
     // Table 3 beside it: the ablated policies' rows join RESULTS.md, Table 1 stays.
-    let table3 = Command::new(env!("CARGO_BIN_EXE_egogen"))
-        .args([
-            "eval",
-            "--suite",
-            "table3",
-            "--episodes",
-            "2",
-            "--quiet",
-            "--out",
-        ])
-        .arg(out.path())
-        .output()
-        .unwrap();
+    let table3 = egogen_eval(
+        &["--suite", "table3", "--episodes", "2", "--quiet"],
+        out.path(),
+    );
     assert!(
         table3.status.success(),
         "{}",
@@ -278,9 +275,8 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }
     // The speed suite beside them: the policy and sampling with K = 4 … 32 in one scenario.
-    let speed = Command::new(env!("CARGO_BIN_EXE_egogen"))
-        .args([
-            "eval",
+    let speed = egogen_eval(
+        &[
             "--suite",
             "speed",
             "--episodes",
@@ -288,11 +284,9 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
             "--scenarios",
             "moving_obstacle",
             "--quiet",
-            "--out",
-        ])
-        .arg(out.path())
-        .output()
-        .unwrap();
+        ],
+        out.path(),
+    );
     assert!(
         speed.status.success(),
         "{}",
@@ -309,18 +303,10 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }
     // A scenario that does not exist is named.
-    let bad = Command::new(env!("CARGO_BIN_EXE_egogen"))
-        .args([
-            "eval",
-            "--episodes",
-            "1",
-            "--scenarios",
-            "circle_3",
-            "--out",
-        ])
-        .arg(out.path().join("other"))
-        .output()
-        .unwrap();
+    let bad = egogen_eval(
+        &["--episodes", "1", "--scenarios", "circle_3"],
+        out.path().join("other"),
+    );
     assert!(!bad.status.success());
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(

@@ -246,12 +246,11 @@ impl ShapedBody<'_> {
         pose: &[Real; POSE_DIM],
         vertex_ids: &[u32],
     ) -> Vec<Vec3> {
-        let feature: Option<Vec<f32>> = self.model.posedirs.as_ref().map(|_| {
-            pose_feature(&joint_rotations(pose))
-                .into_iter()
-                .map(|x| x as f32)
-                .collect()
-        });
+        let feature = self
+            .model
+            .posedirs
+            .as_ref()
+            .map(|_| pose_feature(&joint_rotations(pose)));
         let skin = SkinTransforms::new(&skeleton.world_from_joint, &self.rest_joints);
         vertex_ids
             .iter()
@@ -294,10 +293,9 @@ impl ShapedBody<'_> {
             let b = poses.len();
             let mut features = vec![0f32; b * POSE_FEATURES];
             for (f, pose) in features.chunks_mut(POSE_FEATURES).zip(poses) {
+                // Refused before the batch's product, not after it.
                 check_finite("pose", pose)?;
-                for (d, s) in f.iter_mut().zip(pose_feature(&joint_rotations(pose))) {
-                    *d = s as f32;
-                }
+                f.copy_from_slice(&pose_feature(&joint_rotations(pose)));
             }
             // offsets[n][b] = Σ_k posedirs[n][k] · features[b][k]; rows n split across threads.
             let mut offsets = vec![0f32; n * b];
@@ -354,11 +352,7 @@ impl ShapedBody<'_> {
     ) -> Result<PosedBody, PoseError> {
         match &self.model.posedirs {
             Some(pd) => {
-                check_finite("pose", pose)?;
-                let feature: Vec<f32> = pose_feature(&joint_rotations(pose))
-                    .into_iter()
-                    .map(|x| x as f32)
-                    .collect();
+                let feature = pose_feature(&joint_rotations(pose));
                 self.skin(
                     pose,
                     transl,
@@ -474,12 +468,13 @@ fn joint_rotations(pose: &[Real; POSE_DIM]) -> [Mat3; NUM_JOINTS] {
     })
 }
 
-/// `vec(R_j − I)` for joints 1..55, row-major per matrix (the order `smplx` flattens in).
-fn pose_feature(rots: &[Mat3; NUM_JOINTS]) -> Vec<Real> {
+/// `vec(R_j − I)` for joints 1..55, row-major per matrix (the order `smplx` flattens in), in
+/// f32 like the correctives it multiplies.
+fn pose_feature(rots: &[Mat3; NUM_JOINTS]) -> Vec<f32> {
     let mut f = Vec::with_capacity(POSE_FEATURES);
     for r in &rots[1..] {
         let d = *r - Mat3::IDENTITY;
-        f.extend_from_slice(&d.transpose().to_cols_array());
+        f.extend(d.transpose().to_cols_array().map(|x| x as f32));
     }
     f
 }

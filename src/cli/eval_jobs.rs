@@ -99,25 +99,16 @@ fn suite_files(out: &Path, suite: &str) -> Vec<PathBuf> {
 const SPEED_SCENARIOS: [&str; 2] = ["moving_obstacle", "circle_4"];
 const SPEED_KS: [usize; 4] = [4, 8, 16, 32];
 
-/// `results/speed.json`.
+/// `results/table1.json` and `results/speed.json`: scenario × controller rows.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct SpeedFile {
+struct RowsFile {
     command: String,
     episodes: usize,
     seed: u64,
     policy: String,
-    wall_s: f64,
-    rows: Vec<crate::eval::metrics::Row>,
-}
-
-/// `results/table1.json`.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct Table1File {
-    command: String,
-    episodes: usize,
-    seed: u64,
-    policy: String,
-    k: usize,
+    /// Latents per primitive of Table 1's sampling and path-following rows.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    k: Option<usize>,
     wall_s: f64,
     rows: Vec<crate::eval::metrics::Row>,
 }
@@ -249,7 +240,9 @@ fn chosen_scenarios(names: &[String]) -> Result<Vec<Scenario>> {
 }
 
 /// Runs every scenario × controller with the policy of `--policy` (default the shipped one),
-/// writes `<name>_episodes.jsonl`; returns the run and the policy's path.
+/// writes `<name>_episodes.jsonl` and then `<name>.json` (after `before_summary`, given the
+/// run: Table 1 draws its pictures there); `k` is recorded when the rows use one.
+#[allow(clippy::too_many_arguments)]
 fn run_rows(
     args: &EvalArgs,
     c: &Common,
@@ -257,7 +250,9 @@ fn run_rows(
     controllers: &[Controller],
     results: &Path,
     name: &str,
-) -> Result<(crate::eval::suite::TableRun, PathBuf)> {
+    k: Option<usize>,
+    before_summary: impl FnOnce(&crate::eval::suite::TableRun) -> Result<()>,
+) -> Result<()> {
     let policy_path = args
         .policy
         .clone()
@@ -297,65 +292,66 @@ fn run_rows(
         &results.join(format!("{name}_episodes.jsonl")),
         lines.as_bytes(),
     )?;
-    Ok((run, policy_path))
+    before_summary(&run)?;
+    let file = RowsFile {
+        command: command_line(),
+        episodes: args.episodes,
+        seed: args.seed,
+        policy: relative(&policy_path),
+        k,
+        wall_s: run.wall_s,
+        rows: run.rows,
+    };
+    write_atomically(
+        &results.join(format!("{name}.json")),
+        serde_json::to_string_pretty(&file)?.as_bytes(),
+    )?;
+    println!(
+        "{} rows, {} episodes each, in {:.0} s",
+        file.rows.len(),
+        args.episodes,
+        file.wall_s
+    );
+    Ok(())
 }
 
 fn speed(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -> Result<()> {
     let controllers = Controller::speed(&SPEED_KS);
-    let (run, policy_path) = run_rows(args, c, scenarios, &controllers, results, "speed")?;
-    let file = SpeedFile {
-        command: command_line(),
-        episodes: args.episodes,
-        seed: args.seed,
-        policy: relative(&policy_path),
-        wall_s: run.wall_s,
-        rows: run.rows,
-    };
-    write_atomically(
-        &results.join("speed.json"),
-        serde_json::to_string_pretty(&file)?.as_bytes(),
-    )?;
-    println!(
-        "{} rows, {} episodes each, in {:.0} s",
-        file.rows.len(),
-        args.episodes,
-        run.wall_s
-    );
-    Ok(())
+    run_rows(
+        args,
+        c,
+        scenarios,
+        &controllers,
+        results,
+        "speed",
+        None,
+        |_| Ok(()),
+    )
 }
 
 fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -> Result<()> {
     let controllers = Controller::table1(args.k);
-    let (run, policy_path) = run_rows(args, c, scenarios, &controllers, results, "table1")?;
-    for p in &run.pictures {
-        let name = format!("table1_{}_{}.png", p.scenario.name(), p.controller);
-        let takes: Vec<_> = p.takes.iter().collect();
-        let pic = crate::synth::crowd_dir::paths_picture(&p.world, &takes, 420);
-        let partial = results.join(format!("{name}.partial"));
-        pic.image.write_png(&partial)?;
-        std::fs::rename(&partial, results.join(&name))
-            .with_context(|| format!("renaming {}", partial.display()))?;
-    }
-    let file = Table1File {
-        command: command_line(),
-        episodes: args.episodes,
-        seed: args.seed,
-        policy: relative(&policy_path),
-        k: args.k,
-        wall_s: run.wall_s,
-        rows: run.rows,
-    };
-    write_atomically(
-        &results.join("table1.json"),
-        serde_json::to_string_pretty(&file)?.as_bytes(),
-    )?;
-    println!(
-        "{} rows, {} episodes each, in {:.0} s",
-        file.rows.len(),
-        args.episodes,
-        run.wall_s
-    );
-    Ok(())
+    run_rows(
+        args,
+        c,
+        scenarios,
+        &controllers,
+        results,
+        "table1",
+        Some(args.k),
+        |run| {
+            for p in &run.pictures {
+                let name = format!("table1_{}_{}.png", p.scenario.name(), p.controller);
+                let takes: Vec<_> = p.takes.iter().collect();
+                let pic = crate::synth::crowd_dir::paths_picture(&p.world, &takes, 420);
+                let partial = results.join(format!("{name}.partial"));
+                pic.image.write_png(&partial)?;
+                std::fs::rename(&partial, results.join(&name))
+                    .with_context(|| format!("renaming {}", partial.display()))?;
+            }
+            Ok(())
+        },
+    )
 }
 
 fn table3(args: &EvalArgs, c: &Common, results: &Path) -> Result<()> {
@@ -479,13 +475,18 @@ fn results_markdown(out: &Path) -> Result<String> {
          table names the command that reproduces it. Wall times are of the machine that ran it \
          (2 cores; episodes run two at a time).\n\n",
     );
-    if let Some(t) = read_json::<Table1File>(&results.join("table1.json"))? {
+    if let Some(t) = read_json::<RowsFile>(&results.join("table1.json"))? {
         let labels = scenario_label;
         md.push_str(&format!(
             "## Table 1: avoiding moving obstacles and other people\n\n```\n{}\n```\n\n\
              {} episodes per row, seed {}, policy `{}`, K = {} latents per primitive for the \
              sampling controller and the path-following baseline; {:.0} s of wall time.\n\n",
-            t.command, t.episodes, t.seed, t.policy, t.k, t.wall_s
+            t.command,
+            t.episodes,
+            t.seed,
+            t.policy,
+            t.k.map_or("?".into(), |k| k.to_string()),
+            t.wall_s
         ));
         md.push_str(&table1_markdown(&t.rows, &labels));
         md.push_str(TABLE1_NOTES);
@@ -507,7 +508,7 @@ fn results_markdown(out: &Path) -> Result<String> {
         }
         md.push('\n');
     }
-    if let Some(t) = read_json::<SpeedFile>(&results.join("speed.json"))? {
+    if let Some(t) = read_json::<RowsFile>(&results.join("speed.json"))? {
         md.push_str(&format!(
             "## Speed and accuracy: the policy against sampling with K latents\n\n```\n{}\n```\n\n\
              {} episodes per row, seed {}, policy `{}`; {:.0} s of wall time. Wall per episode \

@@ -22,6 +22,25 @@ impl Controller {
     /// Table 1's controllers: the policy (sampled actions and mean action), the sampling
     /// controller and the path-following baseline, both with `k` latents per primitive.
     pub fn table1(k: usize) -> Vec<Controller> {
+        let mut out = Controller::policies();
+        out.push(Controller::sampling(k));
+        out.push(Controller {
+            name: format!("path_follow_k{k}"),
+            steering: Steering::PathFollow { k },
+        });
+        out
+    }
+
+    /// The speed/accuracy trade of steering: the policy (sampled and mean action) against the
+    /// sampling controller with each of `ks` latents per primitive.
+    pub fn speed(ks: &[usize]) -> Vec<Controller> {
+        let mut out = Controller::policies();
+        out.extend(ks.iter().map(|&k| Controller::sampling(k)));
+        out
+    }
+
+    /// The policy with sampled actions and with the mean action.
+    fn policies() -> Vec<Controller> {
         vec![
             Controller {
                 name: "policy".into(),
@@ -31,29 +50,15 @@ impl Controller {
                 name: "policy_mean".into(),
                 steering: Steering::Policy { mean_action: true },
             },
-            Controller {
-                name: format!("sampling_k{k}"),
-                steering: Steering::Sampling { k },
-            },
-            Controller {
-                name: format!("path_follow_k{k}"),
-                steering: Steering::PathFollow { k },
-            },
         ]
     }
-}
 
-impl Controller {
-    /// The speed/accuracy trade of steering: the policy (sampled and mean action) against the
-    /// sampling controller with each of `ks` latents per primitive.
-    pub fn speed(ks: &[usize]) -> Vec<Controller> {
-        let mut out = Controller::table1(1);
-        out.truncate(2);
-        out.extend(ks.iter().map(|&k| Controller {
+    /// The sampling controller with `k` latents per primitive.
+    fn sampling(k: usize) -> Controller {
+        Controller {
             name: format!("sampling_k{k}"),
             steering: Steering::Sampling { k },
-        }));
-        out
+        }
     }
 }
 

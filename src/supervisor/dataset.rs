@@ -29,7 +29,7 @@ use crate::motion::MotionSequence;
 use crate::render::depth_noise::{DepthNoise, NoiseSeed};
 use crate::render::frame_file::{assemble_frame, validate_frame, FrameFileError, FrameImage};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
-use crate::render::passes::{Pass, Passes};
+use crate::render::passes::Passes;
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{raw_frame_paths, shard_camera, RawRenders};
 use crate::render::ShardSpec;
@@ -77,8 +77,6 @@ pub struct Dataset {
     /// What the dataset holds (`[render] passes`).
     pub passes: Passes,
     pub keys_per_frame: u32,
-    /// Motion frames between saved frames (`[render] every_n_frames`).
-    pub frame_step: u32,
     pub frames_per_shard: usize,
     pub near_clip_m: f64,
     /// Which start of the run this is (1 for the first, one more for every `--resume`): each
@@ -218,7 +216,7 @@ impl Dataset {
             &work.world_from_cam,
             frames,
             self.keys_per_frame,
-            self.frame_step,
+            self.base_spec.ground_truth_frame_step,
             &self.raw_dir(),
             self.raw_renders(),
         );
@@ -247,8 +245,8 @@ impl Dataset {
             work.world_from_cam[frame as usize],
         )?;
         image.monochrome = work.camera.monochrome;
-        if let (Some((model, seed)), true) = (&work.depth_noise, self.passes.has(Pass::DepthNoise))
-        {
+        // A camera has a noise model only when the run asks for the depth_noise pass.
+        if let Some((model, seed)) = &work.depth_noise {
             let cam_from_world = work.world_from_cam[frame as usize].inverse();
             let (Some(depth), Some(normal), Some(position)) =
                 (&image.depth, &image.normal, &image.position)

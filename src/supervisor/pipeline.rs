@@ -379,7 +379,6 @@ pub fn run_pipeline(
         cameras,
         passes: render.passes,
         keys_per_frame: render.cache_samples_per_frame,
-        frame_step: render.every_n_frames as u32,
         frames_per_shard: render.frames_per_shard,
         near_clip_m: render.near_clip_m,
         start: next_start(&staging),
