@@ -548,7 +548,8 @@ impl<'m> PolicyEnv<'m> {
                             frame_time_s(e.walker.steps, 0),
                         );
                         let j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
-                        let reward = j.terms.total(&self.settings.weights);
+                        let left = e.course.max_primitives.saturating_sub(e.walker.steps + 1);
+                        let reward = j.terms.total_with_arrival(&self.settings.weights, left);
                         Ok(Candidate {
                             env,
                             latent,
