@@ -1,6 +1,7 @@
-//! Motion-primitive decoding on the CPU with the shipped weights: the network alone (one
-//! primitive, a batch of 64) in f32, f16 and bf16, and the whole inference call (network, world
-//! frames, 67 markers and CPF per frame in f64) for one primitive and for 16.
+//! Motion-primitive decoding on the CPU with the shipped weights: the network alone (1, 16, 64
+//! and 256 primitives) in f32 through the plain f32 decoder (what inference runs) and through
+//! burn, burn in f16 and bf16 (1 and 64), and the whole inference call (network, world frames,
+//! 67 markers and CPF per frame in f64) for one primitive and for 16.
 //! Prints the network's multiply-adds per primitive so that achieved FLOP/s can be read off.
 //! `EGOGEN_PRIMITIVE_WEIGHTS=path` benches other weights (e.g. the narrow knob model).
 
@@ -53,17 +54,30 @@ fn bench(c: &mut Criterion) {
         })
         .collect();
     let flat_z: Vec<f32> = latents.iter().flatten().copied().collect();
+    // 256 primitives (a policy-training step): the 64 repeated.
+    let tile = |v: &[f32]| v.repeat(4);
+    let (seed_features, floors, flat_z) = (tile(&seed_features), tile(&floors), tile(&flat_z));
 
     let mut g = c.benchmark_group("primitive");
+    for batch in [1usize, 16, 64, 256] {
+        g.throughput(Throughput::Elements(batch as u64));
+        let s = &seed_features[..batch * SEED_FRAMES * FRAME_DIM];
+        let z = &flat_z[..batch * l];
+        let f = &floors[..batch];
+        g.bench_with_input(BenchmarkId::new("network_f32", batch), &batch, |b, _| {
+            b.iter(|| model.decode_features(s, f, z))
+        });
+        g.bench_with_input(
+            BenchmarkId::new("network_f32_burn", batch),
+            &batch,
+            |b, _| b.iter(|| model.decode_features_burn(s, f, z)),
+        );
+    }
     for (name, dtype) in [
-        ("f32", None),
-        ("f16", Some(burn::tensor::FloatDType::F16)),
-        ("bf16", Some(burn::tensor::FloatDType::BF16)),
+        ("f16", burn::tensor::FloatDType::F16),
+        ("bf16", burn::tensor::FloatDType::BF16),
     ] {
-        let m = match dtype {
-            Some(d) => MotionModel::load(&weights).unwrap().with_precision(d),
-            None => MotionModel::load(&weights).unwrap(),
-        };
+        let m = MotionModel::load(&weights).unwrap().with_precision(dtype);
         for batch in [1usize, 64] {
             g.throughput(Throughput::Elements(batch as u64));
             let s = &seed_features[..batch * SEED_FRAMES * FRAME_DIM];

@@ -297,6 +297,59 @@ fn walking_seeds(count: usize) -> Vec<egogen::motion::cvae::PrimitiveSeed> {
 }
 
 #[test]
+fn the_f32_decoder_equals_burns_network_to_float_rounding() {
+    use egogen::body::BodyModel;
+    use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
+    use egogen::motion::cvae::{BodyContext, CanonicalSeed};
+    use rand_core::SeedableRng;
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let body = BodyModel::load(common::default_model_path()).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let seeds = walking_seeds(8);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    // 1 primitive, and 40 (more than one block of 32, run on both cores); the last 8 latents
+    // far out in the prior's tail (5 σ).
+    for b in [1usize, 40] {
+        let (mut features, mut floors) = (Vec::new(), Vec::new());
+        for i in 0..b {
+            let c = CanonicalSeed::new(&ctx, &seeds[i % seeds.len()]).unwrap();
+            features.extend_from_slice(&c.features);
+            floors.push(c.floor);
+        }
+        let latents: Vec<f32> = (0..b)
+            .flat_map(|i| {
+                let scale = if i >= 32 { 5.0 } else { 1.0 };
+                normal_samples(&mut rng, 128)
+                    .into_iter()
+                    .map(move |v| v * scale)
+            })
+            .collect();
+        let fast = model.decode_features(&features, &floors, &latents);
+        let reference = model.decode_features_burn(&features, &floors, &latents);
+        assert_eq!(fast.len(), reference.len());
+        let worst = fast
+            .iter()
+            .zip(&reference)
+            .map(|(a, r)| (a - r).abs() / (1.0 + r.abs()))
+            .fold(0.0f32, f32::max);
+        assert!(fast.iter().all(|v| v.is_finite()));
+        assert!(worst < 1e-4, "batch {b}: largest difference {worst}");
+        // The seed frames come back as they went in.
+        assert_eq!(&fast[..2 * 135], &features[..2 * 135]);
+    }
+    // In another precision decoding runs burn's network.
+    let half = MotionModel::load(shipped_weights_path())
+        .unwrap()
+        .with_precision(burn::tensor::FloatDType::BF16);
+    let c = CanonicalSeed::new(&ctx, &seeds[0]).unwrap();
+    let z = normal_samples(&mut rng, 128);
+    assert_eq!(
+        half.decode_features(&c.features, &[c.floor], &z),
+        half.decode_features_burn(&c.features, &[c.floor], &z)
+    );
+}
+
+#[test]
 fn shipped_weights_decode_a_batch_of_finite_rigid_bodies() {
     use egogen::body::{BodyModel, NUM_MARKERS, PARENTS};
     use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};

@@ -7,6 +7,7 @@ use burn::backend::Flex;
 use burn::prelude::*;
 use rayon::prelude::*;
 
+use super::decoder_f32::DecoderF32;
 use super::features::{frame_features, frame_params, FRAME_DIM};
 use super::net::decode_raw;
 use super::net::{ArchConfig, PrimitiveVae};
@@ -147,6 +148,9 @@ pub struct MotionModel {
     pub path: PathBuf,
     pub arch: ArchConfig,
     pub net: PrimitiveVae<InferBackend>,
+    /// The network's decoder as plain f32 arrays, what decoding runs (`None` in another
+    /// precision, which runs burn's).
+    decoder: Option<DecoderF32>,
 }
 
 impl MotionModel {
@@ -157,6 +161,7 @@ impl MotionModel {
         Ok(Self {
             path: path.into(),
             arch,
+            decoder: net.decoder_f32(),
             net,
         })
     }
@@ -164,8 +169,10 @@ impl MotionModel {
     /// The model with its network in another float precision (`F16`, `BF16`; `F32` as
     /// trained). Decoding still takes and returns `f32`.
     pub fn with_precision(self, dtype: burn::tensor::FloatDType) -> Self {
+        let net = self.net.with_precision(dtype);
         Self {
-            net: self.net.with_precision(dtype),
+            decoder: net.decoder_f32(),
+            net,
             ..self
         }
     }
@@ -177,7 +184,17 @@ impl MotionModel {
 
     /// The network alone: canonical seed features `[B × 2 × F]`, canonical floor heights
     /// `[B]` (m) and latents `[B × L]` → canonical features of all 20 frames `[B × 20 × F]`.
+    /// f32 weights run the plain f32 decoder, other precisions burn's.
     pub fn decode_features(&self, seeds: &[f32], floors: &[f32], latents: &[f32]) -> Vec<f32> {
+        match &self.decoder {
+            Some(d) => d.decode(seeds, floors, latents),
+            None => self.decode_features_burn(seeds, floors, latents),
+        }
+    }
+
+    /// [`Self::decode_features`] through burn's network, whatever the precision (the
+    /// reference the f32 decoder is checked against).
+    pub fn decode_features_burn(&self, seeds: &[f32], floors: &[f32], latents: &[f32]) -> Vec<f32> {
         let b = floors.len();
         let device = Default::default();
         let seed = Tensor::<InferBackend, 3>::from_data(

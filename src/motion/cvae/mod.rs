@@ -5,7 +5,8 @@
 //!
 //! Owns the network, its losses (pose, FK markers through a tensor rig, velocity, foot skate and
 //! floor, robust KL), training (single primitives, then rollout over chains, then prior
-//! fine-tuning), weights files, the inference API, best-of-K random-latent sampling, the pace
+//! fine-tuning), weights files, the inference API (burn's decoder beside a plain f32 one for
+//! few primitives at a time), best-of-K random-latent sampling, the pace
 //! and turn of primitives, and latents chosen for a target velocity and heading (`control`);
 //! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
 
@@ -13,6 +14,7 @@ pub mod checkpoint;
 pub mod contact;
 pub mod control;
 pub mod data;
+pub mod decoder_f32;
 pub mod eval;
 pub mod features;
 pub mod infer;

@@ -14,6 +14,7 @@ use burn::tensor::activation::{relu, sigmoid};
 use burn::tensor::FloatDType;
 use serde::{Deserialize, Serialize};
 
+use super::decoder_f32::{DecoderF32, DenseLayer};
 use super::features::FRAME_DIM;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
@@ -141,6 +142,39 @@ impl<B: Backend> PrimitiveVae<B> {
     /// Latent size.
     pub fn latent_dim(&self) -> usize {
         self.enc_mu.weight.dims()[1]
+    }
+
+    /// The decoder as plain f32 arrays, for inference without burn; `None` unless the
+    /// weights are f32.
+    pub fn decoder_f32(&self) -> Option<DecoderF32> {
+        fn values<B: Backend>(t: Tensor<B, 1>) -> Option<Vec<f32>> {
+            t.into_data().to_vec::<f32>().ok()
+        }
+        fn dense<B: Backend>(layer: &Linear<B>) -> Option<DenseLayer> {
+            let [inputs, outputs] = layer.weight.dims();
+            Some(DenseLayer {
+                inputs,
+                outputs,
+                weight: values(layer.weight.val().flatten(0, 1))?,
+                bias: match &layer.bias {
+                    Some(b) => values(b.val())?,
+                    None => vec![0.0; outputs],
+                },
+            })
+        }
+        let floor = values(self.floor_mean_std.val())?;
+        DecoderF32::new(
+            values(self.feature_mean.val())?,
+            values(self.feature_std.val())?,
+            [*floor.first()?, *floor.get(1)?],
+            [
+                dense(&self.dec_init)?,
+                dense(&self.gru_input)?,
+                dense(&self.gru_hidden)?,
+                dense(&self.dec_out)?,
+            ],
+        )
+        .ok()
     }
 
     /// Raw features `[.., F]` → normalised.

@@ -1,0 +1,346 @@
+//! The decoder of [`PrimitiveVae`](super::net::PrimitiveVae) for inference on the CPU in f32,
+//! without burn: the same GRU-cell recursion as `PrimitiveVae::decode` over plain arrays, each
+//! layer one `gemm` call on a block of primitives, no tensor allocated per operation.
+//!
+//! Inference decodes few primitives at a time (one per agent in a crowd, 256 in policy
+//! training), where a tensor library's per-operation overhead costs more than the arithmetic:
+//! see `cargo bench --bench primitive` (docs/MOTION.md) for the two side by side. Two things are
+//! computed once per primitive instead of once per frame: the latent's and the floor's share of
+//! the GRU's input gates (they do not change over the 18 frames). The results equal burn's to
+//! float rounding (another summation order; `tests/primitive_model.rs` checks them).
+//!
+//! Blocks of [`BLOCK`] primitives run on all cores (rayon); a batch of one stays on one.
+
+use gemm::Parallelism;
+use rayon::prelude::*;
+
+use super::features::FRAME_DIM;
+use super::net::DECODED_FRAMES;
+use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
+
+/// Primitives decoded together by one thread.
+pub const BLOCK: usize = 32;
+
+/// A dense layer `y = x · weight + bias`, `weight` `[inputs × outputs]` row-major (burn's
+/// `Linear` layout).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DenseLayer {
+    pub inputs: usize,
+    pub outputs: usize,
+    pub weight: Vec<f32>,
+    pub bias: Vec<f32>,
+}
+
+impl DenseLayer {
+    fn check(&self, name: &str, inputs: usize, outputs: usize) -> Result<(), String> {
+        if self.inputs != inputs
+            || self.outputs != outputs
+            || self.weight.len() != inputs * outputs
+            || self.bias.len() != outputs
+        {
+            return Err(format!(
+                "decoder layer {name}: {} × {} ({} weights, {} biases), expected {inputs} × \
+                 {outputs}",
+                self.inputs,
+                self.outputs,
+                self.weight.len(),
+                self.bias.len()
+            ));
+        }
+        Ok(())
+    }
+
+    /// `weight` rows `rows` (one block of the layer's inputs).
+    fn rows(&self, rows: std::ops::Range<usize>) -> &[f32] {
+        &self.weight[rows.start * self.outputs..rows.end * self.outputs]
+    }
+}
+
+/// The decoder's parameters, as [`PrimitiveVae`](super::net::PrimitiveVae) holds them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DecoderF32 {
+    latent: usize,
+    hidden: usize,
+    feature_mean: Vec<f32>,
+    feature_std: Vec<f32>,
+    floor_mean_std: [f32; 2],
+    /// `[z, seed frames, floor] → h₀`.
+    init: DenseLayer,
+    /// `[z, previous frame, velocity, floor] → input gates (r, u, n)`.
+    gru_input: DenseLayer,
+    /// `h → hidden gates (r, u, n)`.
+    gru_hidden: DenseLayer,
+    /// `h → velocity` (the residual added to the previous frame).
+    out: DenseLayer,
+}
+
+impl DecoderF32 {
+    /// Builds the decoder from the network's arrays; the error names the first layer whose
+    /// shape does not fit the others.
+    pub fn new(
+        feature_mean: Vec<f32>,
+        feature_std: Vec<f32>,
+        floor_mean_std: [f32; 2],
+        [init, gru_input, gru_hidden, out]: [DenseLayer; 4],
+    ) -> Result<Self, String> {
+        let hidden = gru_hidden.inputs;
+        let latent = init.inputs.saturating_sub(SEED_FRAMES * FRAME_DIM + 1);
+        if feature_mean.len() != FRAME_DIM || feature_std.len() != FRAME_DIM {
+            return Err(format!(
+                "feature statistics: {} means and {} spreads, expected {FRAME_DIM}",
+                feature_mean.len(),
+                feature_std.len()
+            ));
+        }
+        init.check("dec_init", latent + SEED_FRAMES * FRAME_DIM + 1, hidden)?;
+        gru_input.check("gru_input", latent + 2 * FRAME_DIM + 1, 3 * hidden)?;
+        gru_hidden.check("gru_hidden", hidden, 3 * hidden)?;
+        out.check("dec_out", hidden, FRAME_DIM)?;
+        Ok(Self {
+            latent,
+            hidden,
+            feature_mean,
+            feature_std,
+            floor_mean_std,
+            init,
+            gru_input,
+            gru_hidden,
+            out,
+        })
+    }
+
+    /// Latent size.
+    pub fn latent_dim(&self) -> usize {
+        self.latent
+    }
+
+    /// Raw canonical seed features `[B × 2 × F]`, canonical floor heights `[B]` (m) and latents
+    /// `[B × L]` → raw canonical features of all 20 frames `[B × 20 × F]` (the seed first), as
+    /// `net::decode_raw` computes them.
+    ///
+    /// # Panics
+    /// When the slices' lengths disagree with `B = floors.len()` (a caller's bug).
+    pub fn decode(&self, seeds: &[f32], floors: &[f32], latents: &[f32]) -> Vec<f32> {
+        let b = floors.len();
+        let (l, f) = (self.latent, FRAME_DIM);
+        assert_eq!(
+            seeds.len(),
+            b * SEED_FRAMES * f,
+            "seed features of {b} primitives"
+        );
+        assert_eq!(latents.len(), b * l, "latents of {b} primitives");
+        let per = PRIMITIVE_FRAMES * f;
+        let mut out = vec![0.0f32; b * per];
+        out.par_chunks_mut(BLOCK * per)
+            .enumerate()
+            .for_each(|(k, block)| {
+                let start = k * BLOCK;
+                let n = block.len() / per;
+                self.decode_block(
+                    &seeds[start * SEED_FRAMES * f..(start + n) * SEED_FRAMES * f],
+                    &floors[start..start + n],
+                    &latents[start * l..(start + n) * l],
+                    block,
+                );
+            });
+        out
+    }
+
+    /// One block of `n` primitives on this thread.
+    fn decode_block(&self, seeds: &[f32], floors: &[f32], latents: &[f32], out: &mut [f32]) {
+        let n = floors.len();
+        let (l, f, h) = (self.latent, FRAME_DIM, self.hidden);
+        let sf = SEED_FRAMES * f;
+        let normal_floor: Vec<f32> = floors
+            .iter()
+            .map(|v| (v - self.floor_mean_std[0]) / self.floor_mean_std[1])
+            .collect();
+        // h₀ = tanh([z, normalised seed, floor] · W + b).
+        let mut x = vec![0.0f32; n * self.init.inputs];
+        for i in 0..n {
+            let row = &mut x[i * self.init.inputs..(i + 1) * self.init.inputs];
+            row[..l].copy_from_slice(&latents[i * l..(i + 1) * l]);
+            for (j, v) in row[l..l + sf].iter_mut().enumerate() {
+                let k = j % f;
+                *v = (seeds[i * sf + j] - self.feature_mean[k]) / self.feature_std[k];
+            }
+            row[l + sf] = normal_floor[i];
+        }
+        let mut state = with_bias(n, &self.init.bias);
+        matmul_add(n, self.init.inputs, h, &x, &self.init.weight, &mut state);
+        state.iter_mut().for_each(|v| *v = v.tanh());
+        // The latent's and the floor's share of the input gates, fixed over the frames.
+        let mut fixed_gates = with_bias(n, &self.gru_input.bias);
+        matmul_add(
+            n,
+            l,
+            3 * h,
+            latents,
+            self.gru_input.rows(0..l),
+            &mut fixed_gates,
+        );
+        let floor_row = self.gru_input.rows(l + 2 * f..l + 2 * f + 1);
+        for i in 0..n {
+            let row = &mut fixed_gates[i * 3 * h..(i + 1) * 3 * h];
+            for (v, w) in row.iter_mut().zip(floor_row) {
+                *v += normal_floor[i] * w;
+            }
+        }
+        // [previous frame, velocity], normalised: the seed's last frame and its last step.
+        let mut frame_velocity = vec![0.0f32; n * 2 * f];
+        for i in 0..n {
+            let seed = &x[i * self.init.inputs + l..i * self.init.inputs + l + sf];
+            let row = &mut frame_velocity[i * 2 * f..(i + 1) * 2 * f];
+            for k in 0..f {
+                row[k] = seed[f + k];
+                row[f + k] = seed[f + k] - seed[k];
+            }
+        }
+        let frame_rows = self.gru_input.rows(l..l + 2 * f);
+        let per = PRIMITIVE_FRAMES * f;
+        for i in 0..n {
+            out[i * per..i * per + sf].copy_from_slice(&seeds[i * sf..(i + 1) * sf]);
+        }
+        let mut input_gates = vec![0.0f32; n * 3 * h];
+        let mut hidden_gates = vec![0.0f32; n * 3 * h];
+        let mut velocity = vec![0.0f32; n * f];
+        for t in 0..DECODED_FRAMES {
+            input_gates.copy_from_slice(&fixed_gates);
+            matmul_add(
+                n,
+                2 * f,
+                3 * h,
+                &frame_velocity,
+                frame_rows,
+                &mut input_gates,
+            );
+            fill_bias(&mut hidden_gates, &self.gru_hidden.bias);
+            matmul_add(
+                n,
+                h,
+                3 * h,
+                &state,
+                &self.gru_hidden.weight,
+                &mut hidden_gates,
+            );
+            for i in 0..n {
+                let gx = &input_gates[i * 3 * h..(i + 1) * 3 * h];
+                let gh = &hidden_gates[i * 3 * h..(i + 1) * 3 * h];
+                let s = &mut state[i * h..(i + 1) * h];
+                for j in 0..h {
+                    let r = sigmoid(gx[j] + gh[j]);
+                    let u = sigmoid(gx[h + j] + gh[h + j]);
+                    let c = (gx[2 * h + j] + r * gh[2 * h + j]).tanh();
+                    s[j] = c + u * (s[j] - c);
+                }
+            }
+            fill_bias(&mut velocity, &self.out.bias);
+            matmul_add(n, h, f, &state, &self.out.weight, &mut velocity);
+            for i in 0..n {
+                let row = &mut frame_velocity[i * 2 * f..(i + 1) * 2 * f];
+                let v = &velocity[i * f..(i + 1) * f];
+                let frame = &mut out[i * per + sf + t * f..i * per + sf + (t + 1) * f];
+                for k in 0..f {
+                    row[k] += v[k];
+                    row[f + k] = v[k];
+                    frame[k] = row[k] * self.feature_std[k] + self.feature_mean[k];
+                }
+            }
+        }
+    }
+}
+
+fn sigmoid(x: f32) -> f32 {
+    1.0 / (1.0 + (-x).exp())
+}
+
+/// `n` rows of `bias`.
+fn with_bias(n: usize, bias: &[f32]) -> Vec<f32> {
+    let mut v = vec![0.0; n * bias.len()];
+    fill_bias(&mut v, bias);
+    v
+}
+
+fn fill_bias(rows: &mut [f32], bias: &[f32]) {
+    for row in rows.chunks_exact_mut(bias.len()) {
+        row.copy_from_slice(bias);
+    }
+}
+
+/// `y[m × n] += x[m × k] · w[k × n]`, all row-major and contiguous.
+fn matmul_add(m: usize, k: usize, n: usize, x: &[f32], w: &[f32], y: &mut [f32]) {
+    assert!(x.len() == m * k && w.len() == k * n && y.len() == m * n);
+    if m == 0 || n == 0 || k == 0 {
+        return;
+    }
+    // SAFETY: the three slices hold exactly the m × k, k × n and m × n row-major matrices the
+    // strides describe (checked above), and `y` is borrowed mutably, so it overlaps neither.
+    unsafe {
+        gemm::gemm(
+            m,
+            n,
+            k,
+            y.as_mut_ptr(),
+            1,
+            n as isize,
+            true,
+            x.as_ptr(),
+            1,
+            k as isize,
+            w.as_ptr(),
+            1,
+            n as isize,
+            1.0f32,
+            1.0f32,
+            false,
+            false,
+            false,
+            Parallelism::None,
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_matrix_product_adds_to_what_is_there() {
+        // [1 2; 3 4] · [1 0 2; 0 1 1] added to ones.
+        let mut y = vec![1.0f32; 6];
+        matmul_add(
+            2,
+            2,
+            3,
+            &[1.0, 2.0, 3.0, 4.0],
+            &[1.0, 0.0, 2.0, 0.0, 1.0, 1.0],
+            &mut y,
+        );
+        assert_eq!(y, vec![2.0, 3.0, 5.0, 4.0, 5.0, 11.0]);
+    }
+
+    #[test]
+    fn a_layer_of_the_wrong_shape_is_named() {
+        let layer = |i: usize, o: usize| DenseLayer {
+            inputs: i,
+            outputs: o,
+            weight: vec![0.0; i * o],
+            bias: vec![0.0; o],
+        };
+        let (l, h, f) = (4, 8, FRAME_DIM);
+        let ok = [
+            layer(l + 2 * f + 1, h),
+            layer(l + 2 * f + 1, 3 * h),
+            layer(h, 3 * h),
+            layer(h, f),
+        ];
+        let stats = || (vec![0.0; f], vec![1.0; f]);
+        let (m, s) = stats();
+        assert!(DecoderF32::new(m, s, [0.0, 1.0], ok.clone()).is_ok());
+        let mut bad = ok;
+        bad[3] = layer(h, f + 1);
+        let (m, s) = stats();
+        let err = DecoderF32::new(m, s, [0.0, 1.0], bad).unwrap_err();
+        assert!(err.contains("dec_out"), "{err}");
+    }
+}
