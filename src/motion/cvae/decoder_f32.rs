@@ -13,6 +13,7 @@
 
 use gemm::Parallelism;
 use rayon::prelude::*;
+use wide::f32x8;
 
 use super::features::FRAME_DIM;
 use super::net::DECODED_FRAMES;
@@ -168,7 +169,7 @@ impl DecoderF32 {
         }
         let mut state = with_bias(n, &self.init.bias);
         matmul_add(n, self.init.inputs, h, &x, &self.init.weight, &mut state);
-        state.iter_mut().for_each(|v| *v = v.tanh());
+        tanh_in_place(&mut state);
         // The latent's and the floor's share of the input gates, fixed over the frames.
         let mut fixed_gates = with_bias(n, &self.gru_input.bias);
         matmul_add(
@@ -224,15 +225,11 @@ impl DecoderF32 {
                 &mut hidden_gates,
             );
             for i in 0..n {
-                let gx = &input_gates[i * 3 * h..(i + 1) * 3 * h];
-                let gh = &hidden_gates[i * 3 * h..(i + 1) * 3 * h];
-                let s = &mut state[i * h..(i + 1) * h];
-                for j in 0..h {
-                    let r = sigmoid(gx[j] + gh[j]);
-                    let u = sigmoid(gx[h + j] + gh[h + j]);
-                    let c = (gx[2 * h + j] + r * gh[2 * h + j]).tanh();
-                    s[j] = c + u * (s[j] - c);
-                }
+                gru_cell(
+                    &input_gates[i * 3 * h..(i + 1) * 3 * h],
+                    &hidden_gates[i * 3 * h..(i + 1) * 3 * h],
+                    &mut state[i * h..(i + 1) * h],
+                );
             }
             fill_bias(&mut velocity, &self.out.bias);
             matmul_add(n, h, f, &state, &self.out.weight, &mut velocity);
@@ -250,8 +247,41 @@ impl DecoderF32 {
     }
 }
 
-fn sigmoid(x: f32) -> f32 {
-    1.0 / (1.0 + (-x).exp())
+/// One GRU cell update of a hidden state `s` `[H]` from its input and hidden gates `[3H]`
+/// (reset, update, new; the hidden gates with their bias): `r = σ(x_r + h_r)`,
+/// `u = σ(x_u + h_u)`, `c = tanh(x_n + r·h_n)`, `s ← c + u·(s − c)`. Eight values at a time.
+fn gru_cell(gx: &[f32], gh: &[f32], s: &mut [f32]) {
+    let h = s.len();
+    let lanes = |v: &[f32], at: usize| f32x8::from(<[f32; 8]>::try_from(&v[at..at + 8]).unwrap());
+    let sigmoid = |x: f32x8| f32x8::ONE / (f32x8::ONE + (-x).exp());
+    let mut j = 0;
+    while j + 8 <= h {
+        let r = sigmoid(lanes(gx, j) + lanes(gh, j));
+        let u = sigmoid(lanes(gx, h + j) + lanes(gh, h + j));
+        let c = (lanes(gx, 2 * h + j) + r * lanes(gh, 2 * h + j)).tanh();
+        let new = c + u * (lanes(s, j) - c);
+        s[j..j + 8].copy_from_slice(&new.to_array());
+        j += 8;
+    }
+    for j in j..h {
+        let sigmoid = |x: f32| 1.0 / (1.0 + (-x).exp());
+        let r = sigmoid(gx[j] + gh[j]);
+        let u = sigmoid(gx[h + j] + gh[h + j]);
+        let c = (gx[2 * h + j] + r * gh[2 * h + j]).tanh();
+        s[j] = c + u * (s[j] - c);
+    }
+}
+
+fn tanh_in_place(v: &mut [f32]) {
+    let mut chunks = v.chunks_exact_mut(8);
+    for c in &mut chunks {
+        let t = f32x8::from(<[f32; 8]>::try_from(&*c).unwrap()).tanh();
+        c.copy_from_slice(&t.to_array());
+    }
+    chunks
+        .into_remainder()
+        .iter_mut()
+        .for_each(|x| *x = x.tanh());
 }
 
 /// `n` rows of `bias`.
@@ -317,6 +347,39 @@ mod tests {
             &mut y,
         );
         assert_eq!(y, vec![2.0, 3.0, 5.0, 4.0, 5.0, 11.0]);
+    }
+
+    #[test]
+    fn the_cell_matches_the_gru_formula_in_every_lane_and_the_remainder() {
+        // H = 11: one block of eight lanes and three values after it.
+        let h = 11;
+        let gx: Vec<f32> = (0..3 * h).map(|k| (k as f32 * 0.37).sin() * 3.0).collect();
+        let gh: Vec<f32> = (0..3 * h).map(|k| (k as f32 * 0.91).cos() * 4.0).collect();
+        let before: Vec<f32> = (0..h).map(|k| (k as f32 * 0.5).sin()).collect();
+        let mut s = before.clone();
+        gru_cell(&gx, &gh, &mut s);
+        let sigmoid = |x: f64| 1.0 / (1.0 + (-x).exp());
+        for j in 0..h {
+            let (x, g) = (|k: usize| gx[k] as f64, |k: usize| gh[k] as f64);
+            let r = sigmoid(x(j) + g(j));
+            let u = sigmoid(x(h + j) + g(h + j));
+            let c = (x(2 * h + j) + r * g(2 * h + j)).tanh();
+            let want = c + u * (before[j] as f64 - c);
+            assert!(
+                (s[j] as f64 - want).abs() < 1e-6,
+                "{j}: {} against {want}",
+                s[j]
+            );
+        }
+        // tanh at its extremes: saturated, tiny, zero.
+        let mut v = vec![-30.0, -9.5, -1e-5, 0.0, 1e-5, 0.5, 9.5, 30.0, 2.0];
+        tanh_in_place(&mut v);
+        for (got, x) in v
+            .iter()
+            .zip([-30.0f64, -9.5, -1e-5, 0.0, 1e-5, 0.5, 9.5, 30.0, 2.0])
+        {
+            assert!((*got as f64 - x.tanh()).abs() < 1e-6, "tanh({x}) = {got}");
+        }
     }
 
     #[test]
