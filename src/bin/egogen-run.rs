@@ -143,11 +143,6 @@ fn run(args: Args) -> Result<()> {
             speed_m_per_s,
         } => {
             let shaped = model.shape(&plan.betas, &[])?;
-            let sole_y = shaped
-                .v_shaped
-                .iter()
-                .map(|v| v.y)
-                .fold(f64::INFINITY, f64::min);
             let walk = WalkCycle {
                 speed_m_per_s: *speed_m_per_s,
                 ..Default::default()
@@ -157,7 +152,7 @@ fn run(args: Args) -> Result<()> {
                 *frame_rate_hz,
                 &plan.betas,
                 shaped.rest_joints[0],
-                sole_y,
+                shaped.rest_sole_y(),
             )
         }
         MotionPlan::File { path } => MotionSequence::read(path)?,

@@ -3,21 +3,16 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::{Parser, Subcommand};
 
-use egogen::body::export::write_obj;
-use egogen::body::{BodyModel, BodyParams, CpfCalibration};
+use egogen::cli::body_jobs;
 use egogen::cli::motion_jobs::{
     motion_control, motion_eval, motion_stats, refuse_existing, MotionControlOptions,
     MotionEvalOptions, Precision,
 };
 use egogen::cli::policy_jobs::{run_policy, train_policy, PolicyCommand};
 use egogen::cli::resolve::{crate_root, DEFAULT_BODY_MODEL};
-use egogen::math::Vec3;
-use egogen::motion::scripted::WalkCycle;
-use egogen::motion::MotionSequence;
-use egogen::preview::MeshView;
 
 #[derive(Parser, Debug)]
 #[command(version, about = "egogen tools: body models, motion files, previews")]
@@ -471,149 +466,25 @@ fn run(cli: Cli) -> Result<()> {
                 seed,
             )?;
         }
-        Command::Body(BodyCommand::Info { model }) => {
-            let m = BodyModel::load(model_path(model))?;
-            let shaped = m.shape(&[], &[])?;
-            let cal = CpfCalibration::from_rest_joints(&shaped.rest_joints);
-            let (lo, hi) = shaped.v_shaped.iter().fold(
-                (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
-                |(lo, hi), v| (lo.min(*v), hi.max(*v)),
-            );
-            println!("model:            {}", m.source.display());
-            println!("vertices:         {}", m.num_vertices());
-            println!("triangles:        {}", m.faces.len());
-            println!("betas:            {}", m.num_betas());
-            println!("expression:       {}", m.num_expression());
-            println!(
-                "pose correctives: {}",
-                if m.has_pose_correctives() {
-                    "yes"
-                } else {
-                    "none (skipped)"
-                }
-            );
-            println!("stature (rest):   {:.3} m", hi.y - lo.y);
-            let eyes = (shaped.rest_joints[23] + shaped.rest_joints[24]) * 0.5;
-            println!(
-                "CPF at rest:      ({:.3}, {:.3}, {:.3}) m; eye-bone plane tilt removed: {:.1}°",
-                eyes.x,
-                eyes.y,
-                eyes.z,
-                cal.rest_tilt_down_rad().to_degrees()
-            );
-        }
+        Command::Body(BodyCommand::Info { model }) => body_jobs::body_info(&model_path(model))?,
         Command::Body(BodyCommand::Shapes {
             model,
             beta,
             values,
             out,
-        }) => {
-            let m = BodyModel::load(model_path(model))?;
-            if beta >= m.num_betas() {
-                bail!("--beta {beta}: the model has betas 0..{}", m.num_betas());
-            }
-            let bodies = values
-                .iter()
-                .map(|&v| {
-                    let mut betas = vec![0.0; beta + 1];
-                    betas[beta] = v;
-                    m.pose(&BodyParams {
-                        betas,
-                        ..Default::default()
-                    })
-                })
-                .collect::<Result<Vec<_>, _>>()?;
-            // One shared frame so sizes compare: offset bodies along x, draw them together.
-            let mut verts = Vec::new();
-            let mut faces = Vec::new();
-            for (k, b) in bodies.iter().enumerate() {
-                let base = verts.len() as u32;
-                verts.extend(
-                    b.vertices
-                        .iter()
-                        .map(|v| *v + Vec3::new(2.2 * k as f64, 0.0, 0.0)),
-                );
-                faces.extend(m.faces.iter().map(|f| f.map(|i| i + base)));
-            }
-            let img = MeshView::looking_from(Vec3::Z, Vec3::Y).render(
-                &[(&verts, &faces, [0.86, 0.72, 0.62])],
-                360 * values.len(),
-                400,
-            );
-            img.write_png(&out)?;
-            println!("wrote {}", out.display());
-        }
+        }) => body_jobs::body_shapes(&model_path(model), beta, &values, &out)?,
         Command::Body(BodyCommand::Pose {
             model,
             motion,
             frame,
             out,
-        }) => {
-            refuse_existing(&out)?;
-            let m = BodyModel::load(model_path(model))?;
-            let params = match motion {
-                Some(p) => {
-                    let seq = MotionSequence::read(&p)?;
-                    if frame >= seq.len() {
-                        bail!(
-                            "motion file {}: frame {frame} requested but it has {} frames",
-                            p.display(),
-                            seq.len()
-                        );
-                    }
-                    seq.frame(frame)
-                }
-                None => walk_params(&m, &[], frame as f64 / 40.0)?,
-            };
-            let body = m.pose(&params)?;
-            write_obj(&out, &body.vertices, &m.faces)?;
-            println!("wrote {}", out.display());
-        }
+        }) => body_jobs::body_pose(&model_path(model), motion.as_deref(), frame, &out)?,
         Command::Body(BodyCommand::Preview {
             model,
             betas,
             out,
             height_px,
-        }) => {
-            let m = BodyModel::load(model_path(model))?;
-            let rest = m.pose(&BodyParams {
-                betas: betas.clone(),
-                ..Default::default()
-            })?;
-            let walk = m.pose(&walk_params(&m, &betas, 0.2)?)?;
-            // The walk is in the z-up world; bring it back to the model's y-up frame for the picture.
-            let to_y_up = |v: &Vec3| Vec3::new(v.y, v.z, v.x);
-            let walk_y_up: Vec<Vec3> = walk.vertices.iter().map(to_y_up).collect();
-            let skin = [0.86, 0.72, 0.62];
-            let front = MeshView::looking_from(Vec3::Z, Vec3::Y);
-            let side = MeshView::looking_from(Vec3::X, Vec3::Y);
-            let w = height_px * 3 / 4;
-            let mut img = front.render(&[(&rest.vertices, &m.faces, skin)], w, height_px);
-            img = img.hconcat(
-                &side.render(&[(&rest.vertices, &m.faces, skin)], w / 2, height_px),
-                [245, 245, 240],
-            );
-            img = img.hconcat(
-                &front.render(&[(&walk_y_up, &m.faces, skin)], w / 2, height_px),
-                [245, 245, 240],
-            );
-            img = img.hconcat(
-                &side.render(&[(&walk_y_up, &m.faces, skin)], w / 2, height_px),
-                [245, 245, 240],
-            );
-            img.write_png(&out)?;
-            println!("wrote {}", out.display());
-        }
+        }) => body_jobs::body_preview(&model_path(model), &betas, &out, height_px)?,
     }
     Ok(())
-}
-
-fn walk_params(m: &BodyModel, betas: &[f64], t_s: f64) -> Result<BodyParams> {
-    let shaped = m.shape(betas, &[])?;
-    let sole_y = shaped
-        .v_shaped
-        .iter()
-        .map(|v| v.y)
-        .fold(f64::INFINITY, f64::min);
-    Ok(WalkCycle::default().params_at(t_s, betas, shaped.rest_joints[0], sole_y))
 }

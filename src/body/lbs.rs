@@ -225,6 +225,14 @@ impl BodyModel {
 }
 
 impl ShapedBody<'_> {
+    /// Height of the soles at rest: the lowest shaped rest vertex's y (the model's y-up frame).
+    pub fn rest_sole_y(&self) -> Real {
+        self.v_shaped
+            .iter()
+            .map(|v| v.y)
+            .fold(Real::INFINITY, Real::min)
+    }
+
     /// Poses the shaped body: pose correctives (if any), rigid chain, LBS, translation.
     pub fn pose(&self, pose: &[Real; POSE_DIM], transl: Vec3) -> Result<PosedBody, PoseError> {
         self.pose_with(pose, transl, true)

@@ -166,11 +166,7 @@ pub fn lift_to_floor(
     model: &BodyModel,
 ) -> Result<(), crate::body::PoseError> {
     let shaped = model.shape(&seq.betas, &[])?;
-    let sole_y = shaped
-        .v_shaped
-        .iter()
-        .map(|v| v.y)
-        .fold(f64::INFINITY, f64::min);
+    let sole_y = shaped.rest_sole_y();
     let feet = [
         joint::LEFT_ANKLE,
         joint::RIGHT_ANKLE,
