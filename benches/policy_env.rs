@@ -1,9 +1,10 @@
 //! Where an environment step of policy training goes, for a batch of 64 episodes: the decoder
-//! network alone, decoding with f64 posing (world frames, 67 markers, joints and CPF of 20
-//! frames), decoding with posing and the reward, a whole step (and the next episodes), the
-//! observations (markers in the canonical frame, 2 × 32 rays); then the policy's forward pass
-//! at two widths (H = 128, the shipped one, and EgoGen's 512) and one PPO minibatch update of
-//! 256 transitions at both widths. Throughput is in environment steps (episodes stepped).
+//! network alone (the f32 decoder that inference runs, and burn's beside it), decoding with f64
+//! posing (world frames, 67 markers, joints and CPF of 20 frames), decoding with posing and the
+//! reward, a whole step (and the next episodes), the observations (markers in the canonical
+//! frame, 2 × 32 rays); then the policy's forward pass at two widths (H = 128, the shipped one,
+//! and EgoGen's 512) and one PPO minibatch update of 256 transitions at both widths. Throughput
+//! is in environment steps (episodes stepped).
 
 use burn::module::AutodiffModule;
 use burn::optim::{AdamWConfig, GradientsParams, Optimizer};
@@ -57,6 +58,9 @@ fn bench(c: &mut Criterion) {
     }
     g.bench_function("decoder_network", |b| {
         b.iter(|| model.decode_features(&feats, &floors, &latents))
+    });
+    g.bench_function("decoder_network_burn", |b| {
+        b.iter(|| model.decode_features_burn(&feats, &floors, &latents))
     });
     g.bench_function("decode_and_pose", |b| {
         b.iter(|| model.decode_each(&ctx, &world_seeds, &zs).unwrap())

@@ -256,6 +256,7 @@ fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
     let fixed = FixedScene {
         map: std::sync::Arc::new(map),
         pairs,
+        sdf: None,
     };
     let env = PolicyEnv::with_scene(
         &model,
@@ -322,6 +323,68 @@ fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
 }
 
 #[test]
+fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
+    use egogen::policy::env::FixedScene;
+    use egogen::policy::reward::EQ11_VERTICES;
+    use egogen::scene::{SceneMesh, SceneSdf, StartGoal, WalkableMap};
+    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+    let ctx = BodyContext::new(&body, &[]).unwrap();
+    let model = MotionModel::load(shipped_weights_path()).unwrap();
+    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
+    let prior = clip_prior();
+    // An open floor (the map sees nothing) with a closed 1.6 × 1.6 × 2 m pillar over the first
+    // pair's start, which only the 3D SDF knows of; the second pair starts 4 m from it.
+    let n = 100;
+    let map = WalkableMap::from_walkable(DVec2::splat(-5.0), 0.1, n, n, vec![true; n * n]);
+    let mut mesh = SceneMesh::default();
+    mesh.add_box(
+        "pillar",
+        egogen::math::Vec3::new(-2.8, -2.8, 0.0),
+        egogen::math::Vec3::new(-1.2, -1.2, 2.0),
+    );
+    let sdf = SceneSdf::build(&mesh, 0.05, 0.2).unwrap();
+    let fixed = FixedScene {
+        map: std::sync::Arc::new(map),
+        pairs: vec![
+            StartGoal {
+                start: DVec2::new(-2.0, -2.0),
+                goal: DVec2::new(-2.0, 1.0),
+            },
+            StartGoal {
+                start: DVec2::new(2.0, -2.0),
+                goal: DVec2::new(2.0, 1.0),
+            },
+        ],
+        sdf: Some(std::sync::Arc::new(sdf)),
+    };
+    let env = PolicyEnv::with_scene(
+        &model,
+        &ctx,
+        &bank,
+        &prior,
+        Some(&fixed),
+        EnvSettings::default(),
+        2,
+        0,
+    )
+    .unwrap();
+    let z = normal_samples(&mut ChaCha8Rng::seed_from_u64(3), 2 * env.latent_dim());
+    let c = env.propose(&z, 1).unwrap();
+    let inside = c[0].judged.unwrap();
+    let free = c[1].judged.unwrap();
+    // Standing in the pillar: every new frame penetrates, with far more than 40 vertices.
+    assert_eq!(inside.scene_penetrating_frames, 18);
+    assert!(
+        inside.scene_vertices_inside_max > 10 * EQ11_VERTICES,
+        "{}",
+        inside.scene_vertices_inside_max
+    );
+    // In free space: none.
+    assert_eq!(free.scene_penetrating_frames, 0);
+    assert_eq!(free.scene_vertices_inside_max, 0);
+}
+
+#[test]
 fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
     use egogen::policy::env::FixedScene;
     use egogen::scene::{StartGoal, WalkableMap};
@@ -340,6 +403,7 @@ fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
             start: DVec2::new(-4.5, 0.0),
             goal: DVec2::new(4.5, 0.0),
         }],
+        sdf: None,
     };
     let settings = EnvSettings {
         fixed_share: 0.5,

@@ -515,9 +515,12 @@ fn best_of_k_keeps_the_most_plausible_of_its_draws() {
         .collect();
     let best = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     assert!(scores.iter().any(|&s| s < best), "draws differ: {scores:?}");
+    // Decoded as a batch of six or one by one: equal to float rounding (the f32 decoder's
+    // summation order depends on the batch size).
     assert!(
-        (chosen.plausibility.score - best).abs() < 1e-9,
-        "{scores:?} vs {chosen:?}"
+        (chosen.plausibility.score - best).abs() < 1e-5,
+        "{scores:?} vs {:?}",
+        chosen.plausibility
     );
     assert_eq!(chosen.non_finite_candidates, 0);
     // Plausibility of a mocap walk: feet on the floor, upright, moving.

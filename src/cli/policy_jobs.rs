@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use clap::Subcommand;
 
 use super::motion_jobs::refuse_existing;
@@ -213,14 +213,17 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     if !(lo >= 0.0 && hi >= lo) {
                         bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
                     }
-                    Some(fixed_scene(&TrainScene {
-                        path: path.clone(),
-                        pairs: episodes,
-                        pair_distance_m: (lo, hi),
-                        clearance_m: 0.4,
-                        indoors: !anywhere,
-                        seed: seed ^ 0x5CE7E,
-                    })?)
+                    Some(fixed_scene(
+                        &TrainScene {
+                            path: path.clone(),
+                            pairs: episodes,
+                            pair_distance_m: (lo, hi),
+                            clearance_m: 0.4,
+                            indoors: !anywhere,
+                            seed: seed ^ 0x5CE7E,
+                        },
+                        true,
+                    )?)
                 }
             };
             if fixed.is_some() && !k.is_empty() {
@@ -284,8 +287,10 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
 }
 
 /// A fixed scene loaded, with its start/goal pairs drawn as `spec` says (inside the walls
-/// with `spec.indoors`, when the scene encloses anything); too few pairs is an error.
-fn fixed_scene(spec: &TrainScene) -> Result<FixedScene> {
+/// with `spec.indoors`, when the scene encloses anything); too few pairs is an error. With
+/// `measure_eq11` its 3D SDF is built too (the default 0.05 m voxels, `docs/SCENES.md`), so
+/// that scene penetration (paper Eq. 11) is measured.
+fn fixed_scene(spec: &TrainScene, measure_eq11: bool) -> Result<FixedScene> {
     let path = &spec.path;
     let mesh = crate::scene::load_scene(path, None)?;
     let map = crate::scene::walkable_map(&mesh, path, Default::default())?;
@@ -317,9 +322,21 @@ fn fixed_scene(spec: &TrainScene) -> Result<FixedScene> {
             spec.pairs
         );
     }
+    let sdf = if measure_eq11 {
+        let sdf = crate::scene::SceneSdf::build(
+            &mesh,
+            crate::scene::sdf3d::DEFAULT_VOXEL_M,
+            crate::scene::sdf3d::MARGIN_M,
+        )
+        .with_context(|| format!("{}: no triangles to build a 3D SDF from", path.display()))?;
+        Some(std::sync::Arc::new(sdf))
+    } else {
+        None
+    };
     Ok(FixedScene {
         map: std::sync::Arc::new(map),
         pairs,
+        sdf,
     })
 }
 
@@ -357,7 +374,11 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
     let motion_plan = crate::cli::train::load_train_plan(&plan.motion_config)?;
     let (train_set, _) = evaluation_sets(&motion_plan, &body, true)?;
     let bank = SeedBank::from_set(&train_set);
-    let fixed = plan.scene.as_ref().map(fixed_scene).transpose()?;
+    let fixed = plan
+        .scene
+        .as_ref()
+        .map(|s| fixed_scene(s, false))
+        .transpose()?;
     let parts = Parts {
         model: &model,
         body: &ctx,

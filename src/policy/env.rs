@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
-use super::reward::{judge, Judged, Limits, RewardWeights};
+use super::reward::{judge, scene_penetration, Judged, Limits, RewardWeights};
 use super::walker::{frame_time_s, place_seed, SeedView, Surroundings, Totals, Walker};
 pub use super::walker::{OBS_DIM, OBS_DIST_OFFSET, OBS_RAYS_OFFSET, RAYS, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
@@ -40,7 +40,9 @@ use crate::motion::cvae::{
     BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed,
 };
 use crate::motion::primitive::SEED_FRAMES;
-use crate::scene::{blocked_cells_in_box, MovingObstacle, Obstacle2, StartGoal, WalkableMap};
+use crate::scene::{
+    blocked_cells_in_box, MovingObstacle, Obstacle2, SceneSdf, StartGoal, WalkableMap,
+};
 use crate::sensing::{RayScan, RayScanSettings};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
@@ -148,6 +150,8 @@ struct Course {
     pair: Option<usize>,
     /// Primitives before the episode times out.
     max_primitives: usize,
+    /// The scene's 3D SDF, where Eq. 11 is measured.
+    sdf: Option<Arc<SceneSdf>>,
 }
 
 /// A fixed scene (e.g. the apartment) and the start/goal pairs its episodes walk, in turn.
@@ -155,6 +159,10 @@ struct Course {
 pub struct FixedScene {
     pub map: Arc<WalkableMap>,
     pub pairs: Vec<StartGoal>,
+    /// The scene's 3D SDF, where scene penetration is measured (paper Eq. 11; evaluation
+    /// only: posing and looking up every vertex of every frame made the apartment evaluation
+    /// about 30× slower, docs/POLICY.md).
+    pub sdf: Option<Arc<SceneSdf>>,
 }
 
 /// One episode in progress.
@@ -230,6 +238,10 @@ pub struct EpisodeSummary {
     pub penetration_share: f64,
     /// Horizontal pelvis path length over time (m/s).
     pub speed_m_s: f64,
+    /// Share of the new frames penetrating the scene by paper Eq. 11, and the most body
+    /// vertices inside it in a frame (0 where the scene has no 3D SDF).
+    pub scene_penetration_share: f64,
+    pub scene_vertices_inside_max: usize,
 }
 
 impl EpisodeSummary {
@@ -247,6 +259,9 @@ impl EpisodeSummary {
             view_cos: w.totals.view_cos / n,
             penetration_share: w.totals.frames_in_obstacle as f64 / w.totals.frames.max(1) as f64,
             speed_m_s: w.speed_m_s(),
+            scene_penetration_share: w.totals.scene_penetrating_frames as f64
+                / w.totals.frames.max(1) as f64,
+            scene_vertices_inside_max: w.totals.scene_vertices_inside_max,
         }
     }
 }
@@ -397,6 +412,7 @@ impl<'m> PolicyEnv<'m> {
             crossing: None,
             pair: None,
             max_primitives: self.settings.max_primitives,
+            sdf: None,
         }
     }
 
@@ -411,6 +427,7 @@ impl<'m> PolicyEnv<'m> {
             crossing: Some(scene.params),
             pair: None,
             max_primitives: self.settings.max_primitives,
+            sdf: None,
         }
     }
 
@@ -428,6 +445,7 @@ impl<'m> PolicyEnv<'m> {
                 .settings
                 .fixed_max_primitives
                 .unwrap_or(self.settings.max_primitives),
+            sdf: f.sdf.clone(),
         }
     }
 
@@ -547,7 +565,12 @@ impl<'m> PolicyEnv<'m> {
                             e.course.goal,
                             frame_time_s(e.walker.steps, 0),
                         );
-                        let j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
+                        let mut j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
+                        if let Some(sdf) = e.course.sdf.as_deref() {
+                            (j.scene_penetrating_frames, j.scene_vertices_inside_max) =
+                                scene_penetration(self.body, &p, sdf)
+                                    .map_err(|e| EnvError::Decode(DecodeError::Pose(e)))?;
+                        }
                         let left = e.course.max_primitives.saturating_sub(e.walker.steps + 1);
                         let reward = j.terms.total_with_arrival(&self.settings.weights, left);
                         Ok(Candidate {

@@ -3,7 +3,8 @@
 //! parallel. Reported as EgoGen's box-scene table: success (pelvis within the success radius
 //! of the goal), foot contact (3-D, Eq. 12), penetration (share of frames with a body marker
 //! inside the obstacle), cos(view, goal direction), walking speed over successful episodes and
-//! the distribution of episode lengths.
+//! the distribution of episode lengths; in a scene with a 3D SDF, scene penetration by paper
+//! Eq. 11 (frames with at least 40 body vertices inside the scene).
 
 use serde::Serialize;
 
@@ -24,6 +25,12 @@ pub struct EvalReport {
     pub contact_mean: f64,
     pub penetration_share_mean: f64,
     pub view_cos_mean: f64,
+    /// Paper Eq. 11 (0 without a scene SDF): mean share of an episode's frames with at least
+    /// 40 body vertices inside the scene, share of episodes with any such frame, and the most
+    /// vertices inside in any frame of any episode.
+    pub scene_penetration_share_mean: f64,
+    pub scene_penetration_episode_rate: f64,
+    pub scene_vertices_inside_max: usize,
     pub final_distance_m: Quantiles,
     pub speed_successful_m_s: Quantiles,
     pub primitives: Quantiles,
@@ -47,6 +54,17 @@ impl EvalReport {
             contact_mean: mean(|s| s.contact),
             penetration_share_mean: mean(|s| s.penetration_share),
             view_cos_mean: mean(|s| s.view_cos),
+            scene_penetration_share_mean: mean(|s| s.scene_penetration_share),
+            scene_penetration_episode_rate: summaries
+                .iter()
+                .filter(|s| s.scene_penetration_share > 0.0)
+                .count() as f64
+                / n,
+            scene_vertices_inside_max: summaries
+                .iter()
+                .map(|s| s.scene_vertices_inside_max)
+                .max()
+                .unwrap_or(0),
             final_distance_m: Quantiles::of(summaries.iter().map(|s| s.final_distance_m)),
             speed_successful_m_s: Quantiles::of(
                 summaries

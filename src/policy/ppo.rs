@@ -141,9 +141,10 @@ impl PolicyTrainPlan {
 }
 
 /// The shipped policy (relative to the crate's folder): the box-and-crossing policy of
-/// `configs/train_policy.toml` fine-tuned with apartment episodes
-/// (`configs/train_policy_apartment.toml`).
-pub const SHIPPED_POLICY: &str = "assets/policy/apartment/policy.safetensors";
+/// `configs/train_policy.toml`, fine-tuned with apartment episodes
+/// (`configs/train_policy_apartment.toml`), then with the pace bonus
+/// (`configs/train_policy_pace.toml`).
+pub const SHIPPED_POLICY: &str = "assets/policy/pace/policy.safetensors";
 
 /// Where the shipped policy is.
 pub fn shipped_policy_path() -> PathBuf {

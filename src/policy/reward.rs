@@ -142,6 +142,31 @@ pub struct Judged {
     pub frames_in_obstacle: usize,
     /// cos(angle) between the viewing direction and the direction to the goal, last frame.
     pub view_cos: f64,
+    /// Scene penetration (paper Eq. 11), where the scene has a 3D SDF: new frames in which at
+    /// least [`EQ11_VERTICES`] body vertices lie inside the scene, and the most vertices inside
+    /// in any new frame (both 0 without an SDF).
+    pub scene_penetrating_frames: usize,
+    pub scene_vertices_inside_max: usize,
+}
+
+/// Body vertices with negative scene SDF that make a frame penetrate (paper Eq. 11: 40).
+pub const EQ11_VERTICES: usize = 40;
+
+/// Paper Eq. 11 on a primitive: every vertex of the posed body in each new frame looked up in
+/// the scene's SDF; `(frames with ≥ EQ11_VERTICES inside, most inside in a frame)`.
+pub fn scene_penetration(
+    body: &crate::motion::cvae::BodyContext,
+    p: &DecodedPrimitive,
+    sdf: &crate::scene::SceneSdf,
+) -> Result<(usize, usize), crate::body::PoseError> {
+    let (mut frames, mut most) = (0, 0);
+    for f in &p.world[SEED_FRAMES..] {
+        let posed = body.shaped.pose(&f.pose, f.transl)?;
+        let inside = crate::scene::sdf_penetration(sdf, &posed.vertices).count;
+        frames += usize::from(inside >= EQ11_VERTICES);
+        most = most.max(inside);
+    }
+    Ok((frames, most))
 }
 
 /// Cells of a `cell_m` grid laid over an oriented box (centre, half extents, yaw) whose centres
@@ -264,6 +289,8 @@ pub fn judge(
         pose_nll,
         frames_in_obstacle,
         view_cos: view.dot(to_goal),
+        scene_penetrating_frames: 0,
+        scene_vertices_inside_max: 0,
     }
 }
 

@@ -170,6 +170,12 @@ pub struct Totals {
     /// Sum of the primitives' mean pose-prior scores.
     #[serde(default)]
     pub pose_score: f64,
+    /// Frames penetrating the scene by paper Eq. 11, and the most body vertices inside it in
+    /// a frame (0 where the scene has no 3D SDF).
+    #[serde(default)]
+    pub scene_penetrating_frames: usize,
+    #[serde(default)]
+    pub scene_vertices_inside_max: usize,
 }
 
 /// A body walking to a goal, one primitive at a time.
@@ -289,6 +295,11 @@ impl Walker {
         self.totals.pose_score += j.pose_nll;
         self.totals.frames += p.joints.len() - SEED_FRAMES;
         self.totals.frames_in_obstacle += j.frames_in_obstacle;
+        self.totals.scene_penetrating_frames += j.scene_penetrating_frames;
+        self.totals.scene_vertices_inside_max = self
+            .totals
+            .scene_vertices_inside_max
+            .max(j.scene_vertices_inside_max);
         self.distance_m = j.distance_m;
         self.view = SeedView::after(p);
     }

@@ -74,7 +74,7 @@ impl CollisionModel {
     pub fn for_scene(mesh: &super::SceneMesh, procedural: bool, voxel_m: f64) -> Self {
         match procedural {
             true => CollisionModel::Box2d,
-            false => SceneSdf::build(mesh, voxel_m, 0.2)
+            false => SceneSdf::build(mesh, voxel_m, super::sdf3d::MARGIN_M)
                 .map_or(CollisionModel::Box2d, CollisionModel::Sdf3d),
         }
     }

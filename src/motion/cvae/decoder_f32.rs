@@ -9,15 +9,19 @@
 //! the GRU's input gates (they do not change over the 18 frames). The results equal burn's to
 //! float rounding (another summation order; `tests/primitive_model.rs` checks them).
 //!
-//! Blocks of [`BLOCK`] primitives run on all cores (rayon); a batch of one stays on one.
+//! Blocks of [`BLOCK`] primitives run on all cores (rayon); a batch of one stays on one. A
+//! primitive decodes the same alone or in a batch to float rounding, not bit for bit: the
+//! matrix-product kernel, and so the summation order, depends on the block's size.
 
 use gemm::Parallelism;
 use rayon::prelude::*;
 use wide::f32x8;
 
 use super::features::FRAME_DIM;
-use super::net::DECODED_FRAMES;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
+
+/// Frames written per primitive (the network's `DECODED_FRAMES`).
+const DECODED_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 
 /// Primitives decoded together by one thread.
 pub const BLOCK: usize = 32;
