@@ -49,6 +49,19 @@ fn clip_prior() -> PosePrior {
     p
 }
 
+/// Binds what the environment tests share: the shipped body as `body` and its context `ctx`,
+/// the shipped motion model `model`, a seed bank of the clip's seeds `bank`, and `prior`.
+macro_rules! env_parts {
+    ($body:ident, $ctx:ident, $model:ident, $bank:ident, $prior:ident) => {
+        let $body =
+            BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+        let $ctx = BodyContext::new(&$body, &[]).unwrap();
+        let $model = MotionModel::load(shipped_weights_path()).unwrap();
+        let $bank = SeedBank::from_world_seeds(&$ctx, &seeds()).unwrap();
+        let $prior = clip_prior();
+    };
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
 
@@ -72,11 +85,7 @@ proptest! {
 
 #[test]
 fn episodes_are_deterministic_observed_as_egogen_and_time_out() {
-    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
-    let ctx = BodyContext::new(&body, &[]).unwrap();
-    let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
-    let prior = clip_prior();
+    env_parts!(body, ctx, model, bank, prior);
     let settings = EnvSettings::default();
     let b = 4;
     let mut a = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 7).unwrap();
@@ -139,11 +148,7 @@ fn episodes_are_deterministic_observed_as_egogen_and_time_out() {
 
 #[test]
 fn the_best_of_k_candidates_scores_at_least_the_first() {
-    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
-    let ctx = BodyContext::new(&body, &[]).unwrap();
-    let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
-    let prior = clip_prior();
+    env_parts!(body, ctx, model, bank, prior);
     let env = PolicyEnv::new(&model, &ctx, &bank, &prior, EnvSettings::default(), 3, 1).unwrap();
     let k = 8;
     let mut rng = ChaCha8Rng::seed_from_u64(5);
@@ -231,11 +236,7 @@ fn the_pose_prior_tells_mocap_from_bent_joints_and_refuses_broken_files() {
 fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
     use egogen::policy::env::FixedScene;
     use egogen::scene::{StartGoal, WalkableMap};
-    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
-    let ctx = BodyContext::new(&body, &[]).unwrap();
-    let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
-    let prior = clip_prior();
+    env_parts!(body, ctx, model, bank, prior);
     // A 6 × 6 m room at floor height 0.5 m with a wall across half of it.
     let n = 60;
     let walkable = (0..n * n)
@@ -327,11 +328,7 @@ fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
     use egogen::policy::env::FixedScene;
     use egogen::policy::reward::EQ11_VERTICES;
     use egogen::scene::{SceneMesh, SceneSdf, StartGoal, WalkableMap};
-    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
-    let ctx = BodyContext::new(&body, &[]).unwrap();
-    let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
-    let prior = clip_prior();
+    env_parts!(body, ctx, model, bank, prior);
     // An open floor (the map sees nothing) with a closed 1.6 × 1.6 × 2 m pillar over the first
     // pair's start, which only the 3D SDF knows of; the second pair starts 4 m from it.
     let n = 100;
@@ -388,11 +385,7 @@ fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
 fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
     use egogen::policy::env::FixedScene;
     use egogen::scene::{StartGoal, WalkableMap};
-    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
-    let ctx = BodyContext::new(&body, &[]).unwrap();
-    let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
-    let prior = clip_prior();
+    env_parts!(body, ctx, model, bank, prior);
     // An open 20 × 20 m floor; its one pair is 9 m long, longer than any box scene's
     // start–goal distance (at most 4.8 m).
     let n = 200;
@@ -469,11 +462,7 @@ fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
 #[test]
 fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
     use egogen::policy::crossing_scene::CrossingSettings;
-    let body = BodyModel::load(common::repo_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
-    let ctx = BodyContext::new(&body, &[]).unwrap();
-    let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let bank = SeedBank::from_world_seeds(&ctx, &seeds()).unwrap();
-    let prior = clip_prior();
+    env_parts!(body, ctx, model, bank, prior);
     let crossing = |share: f64| EnvSettings {
         crossing: CrossingSettings {
             share,
