@@ -2,6 +2,8 @@
 //! one part, dotted channel names; 5.0: one part per pass) read back with the right channels,
 //! statistics and previews.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -241,17 +243,12 @@ fn several_files_one_pass_and_auto_exposure() {
             && err.contains("rgb"),
         "{err}"
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
-        .arg("inspect")
-        .args([&a, &b])
-        .args(["--pass", "ViewLayer.Depth", "--preview"])
-        .arg(&png)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    common::succeeds(
+        Command::new(env!("CARGO_BIN_EXE_egogen"))
+            .arg("inspect")
+            .args([&a, &b])
+            .args(["--pass", "ViewLayer.Depth", "--preview"])
+            .arg(&png),
     );
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
     let info = decoder.read_info().unwrap().info().clone();

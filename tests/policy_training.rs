@@ -210,12 +210,7 @@ fn a_killed_policy_run_resumes_exactly_where_it_stopped() {
     let whole = tempfile::tempdir().unwrap();
     let whole_config = whole.path().join("c.toml");
     std::fs::write(&whole_config, tiny_config(whole.path())).unwrap();
-    let out = run(&whole_config, false).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::succeeds(&mut run(&whole_config, false));
     assert!(!whole.path().join("w.safetensors.checkpoint").exists());
     for stage in ["pretrain", "finetune"] {
         assert!(whole
@@ -256,12 +251,7 @@ fn a_killed_policy_run_resumes_exactly_where_it_stopped() {
     let out = run(&config, false).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--resume"), "{err}");
-    let out = run(&config, true).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::succeeds(&mut run(&config, true));
     assert!(!state.exists(), "the finished run removes its checkpoint");
     for name in [
         "w.safetensors",
@@ -377,15 +367,10 @@ fn the_prior_kl_penalty_holds_the_policy_near_the_standard_normal() {
             ),
         );
         std::fs::write(&config, text).unwrap();
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
-            .args(["train", "policy", "--quiet", "--config"])
-            .arg(&config)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        common::succeeds(
+            std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+                .args(["train", "policy", "--quiet", "--config"])
+                .arg(&config),
         );
         let log = std::fs::read_to_string(dir.path().join("w.log.jsonl")).unwrap();
         let last: serde_json::Value = serde_json::from_str(log.lines().last().unwrap()).unwrap();

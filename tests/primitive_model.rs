@@ -936,12 +936,7 @@ fn a_killed_training_run_resumes_exactly_where_it_stopped() {
     let whole = tempfile::tempdir().unwrap();
     let whole_config = whole.path().join("c.toml");
     std::fs::write(&whole_config, tiny_config(whole.path())).unwrap();
-    let out = run(&whole_config, false).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::succeeds(&mut run(&whole_config, false));
     assert!(!whole.path().join("w.safetensors.checkpoint").exists());
 
     // The same run killed (SIGKILL) twice: in the first phase and in the prior phase.

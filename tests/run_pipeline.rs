@@ -1,6 +1,8 @@
 //! `egogen-run` end to end: a short walk writes a complete sequence folder; bad configs fail
 //! with the file and key named, a non-zero exit, and nothing written.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -492,15 +494,10 @@ fn only_the_asked_passes_are_rendered_and_monochrome_cameras_store_grey() {
         exr.channels.iter().map(|c| c.name.clone()).collect()
     };
     let verify = |dataset: &Path| {
-        let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
-            .arg("verify")
-            .arg(dataset)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        common::succeeds(
+            Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+                .arg("verify")
+                .arg(dataset),
         );
     };
 

@@ -99,16 +99,7 @@ fn a_slurm_array_survives_a_cancelled_task_and_matches_the_local_backend() {
     }
     // Reference: the local backend.
     let (ref_dir, ref_config) = setup();
-    let out = egogen_run()
-        .arg(&ref_config)
-        .args(["--backend", "local"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::succeeds(egogen_run().arg(&ref_config).args(["--backend", "local"]));
     let reference = common::read_manifest(&ref_dir.path().join("out"));
 
     // Slurm: cancel the first task seen running, once.

@@ -120,12 +120,7 @@ fn run_with_kills(
 fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
     // Reference: uninterrupted.
     let (ref_dir, ref_config) = setup();
-    let out = egogen_run().arg(&ref_config).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::succeeds(egogen_run().arg(&ref_config));
     let reference = common::read_manifest(&ref_dir.path().join("out"));
     let frames = reference
         .files
@@ -240,12 +235,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
 #[test]
 fn resume_repairs_a_damaged_frame_and_drops_leftover_temporaries() {
     let (dir, config) = setup();
-    let out = egogen_run().arg(&config).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::succeeds(egogen_run().arg(&config));
     let dataset = dir.path().join("out");
     let reference = common::read_manifest(&dataset);
     // The state a killed run can leave: the staging folder without its manifest, a frame file

@@ -151,16 +151,7 @@ assert d["pose_hand"].shape == (n, 90)
 assert np.isfinite(d["poses"]).all()
 print(n)
 "#;
-    let out = Command::new(&python)
-        .args(["-c", script])
-        .arg(&npz)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = common::succeeds(Command::new(&python).args(["-c", script]).arg(&npz));
     assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "164");
 }
 

@@ -230,17 +230,20 @@ pub fn run_dir(config: &str) -> (tempfile::TempDir, PathBuf) {
     (dir, path)
 }
 
-/// Runs `egogen-run CONFIG`, failing the test with its stderr unless it succeeds.
-pub fn egogen_run_ok(config: &Path) {
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen-run"))
-        .arg(config)
-        .output()
-        .unwrap();
+/// Runs `cmd`, failing the test with its stderr unless it succeeds; its output.
+pub fn succeeds(cmd: &mut std::process::Command) -> std::process::Output {
+    let out = cmd.output().unwrap();
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    out
+}
+
+/// Runs `egogen-run CONFIG`, failing the test with its stderr unless it succeeds.
+pub fn egogen_run_ok(config: &Path) {
+    succeeds(std::process::Command::new(env!("CARGO_BIN_EXE_egogen-run")).arg(config));
 }
 
 /// A finished dataset's manifest.
