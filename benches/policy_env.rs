@@ -17,7 +17,9 @@ use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::motion::MotionSequence;
 use egogen::policy::net::{log_prob, PolicyArch};
 use egogen::policy::pose_prior::shipped_pose_prior_path;
-use egogen::policy::{EnvSettings, PolicyEnv, PosePrior, SeedBank, OBS_DIM};
+use egogen::policy::{EnvSettings, ObsLayout, PolicyEnv, PosePrior, SeedBank};
+
+const OBS_DIM: usize = ObsLayout::PAPER.dim();
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 

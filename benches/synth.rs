@@ -111,18 +111,18 @@ fn bench(c: &mut Criterion) {
     );
     let view = egogen::policy::walker::SeedView::new(&ctx, view_seed.clone()).unwrap();
     let walker = egogen::policy::walker::Walker::new(view, DVec2::new(2.0, 0.0));
-    let scan = egogen::sensing::RayScan::new(Default::default());
+    let sensor = egogen::sensing::Sensor::default();
     let around = egogen::policy::walker::Surroundings {
         map: &world.map,
         obstacle: None,
         moving: &[],
     };
-    let mut obs = vec![0f32; egogen::policy::OBS_DIM];
+    let mut obs = vec![0f32; egogen::policy::ObsLayout::PAPER.dim()];
     g.bench_function("observe", |b| {
         b.iter(|| {
             walker.observe_into(
                 &ctx,
-                &scan,
+                &sensor,
                 DVec2::new(2.0, 0.0),
                 &around,
                 0.0,

@@ -10,10 +10,17 @@ use egogen::body::BodyModel;
 use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::policy::box_scene::{BoxScene, BoxSceneSettings};
-use egogen::policy::env::{Ending, OBS_DIST_OFFSET, OBS_RAYS_OFFSET, RAYS, STATE_FRAME_DIM};
+use egogen::policy::env::{Ending, STATE_FRAME_DIM};
 use egogen::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 use egogen::policy::sampling::sampling_step;
-use egogen::policy::{EnvSettings, PolicyEnv, SeedBank, OBS_DIM};
+use egogen::policy::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};
+
+/// The paper's observation layout (32 rays), which environments use unless told otherwise.
+const LAYOUT: ObsLayout = ObsLayout::PAPER;
+const OBS_DIM: usize = LAYOUT.dim();
+const RAYS: usize = LAYOUT.sensing_per_frame;
+const OBS_RAYS_OFFSET: usize = LAYOUT.sensing_offset();
+const OBS_DIST_OFFSET: usize = LAYOUT.dist_offset();
 use egogen::scene::Obstacle2;
 use glam::DVec2;
 use proptest::prelude::*;
@@ -115,6 +122,23 @@ fn episodes_are_deterministic_observed_as_egogen_and_time_out() {
         let d = o[OBS_DIST_OFFSET];
         assert!(d > 0.1 && d < 0.5, "1/(1+d) = {d}");
         assert_eq!(o[OBS_DIST_OFFSET + 1], 1.0);
+    }
+    // Observed through a 0.8 m local map instead: the same state, the patch in place of the
+    // rays (the box scenes' floor is free around the start).
+    let lm = egogen::sensing::SensingSpec::centred_map(0.8, 16);
+    let mapped = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 7)
+        .unwrap()
+        .with_sensing(&lm);
+    let layout = mapped.obs_layout();
+    assert_eq!(layout.sensing_per_frame, 256);
+    let mo = mapped.observations();
+    assert_eq!(mo.len(), b * layout.dim());
+    for (m, o) in mo.chunks(layout.dim()).zip(obs.chunks(OBS_DIM)) {
+        assert_eq!(m[..layout.sensing_offset()], o[..OBS_RAYS_OFFSET]);
+        assert_eq!(m[layout.dist_offset()..], o[OBS_DIST_OFFSET..]);
+        let patch = &m[layout.sensing_offset()..layout.dist_offset()];
+        assert!(patch.iter().all(|&v| v == 0.0 || v == 1.0));
+        assert!(patch.contains(&0.0));
     }
     // Random latents: deterministic rewards, every episode over after 11 primitives.
     let l = a.latent_dim();

@@ -13,7 +13,9 @@ use burn::prelude::*;
 use egogen::motion::cvae::train::TrainBackend;
 use egogen::policy::net::{kl_to_standard, PolicyArch};
 use egogen::policy::ppo::clip_global_norm;
-use egogen::policy::OBS_DIM;
+use egogen::policy::ObsLayout;
+
+const OBS_DIM: usize = ObsLayout::PAPER.dim();
 
 fn tiny_arch() -> PolicyArch {
     PolicyArch {
@@ -21,6 +23,7 @@ fn tiny_arch() -> PolicyArch {
         pe_frequencies: 4,
         residual_blocks: 1,
         latent_dim: 8,
+        sensing: Default::default(),
     }
 }
 
@@ -307,6 +310,21 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "[scene]\npath = \"missing.glb\"\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
             "scene.path",
         ),
+        (
+            "residual_blocks = 1",
+            "residual_blocks = 1\n[policy.sensing]\nkind = \"rays\"\nnum_rays = 0",
+            "policy.sensing",
+        ),
+        (
+            "residual_blocks = 1",
+            "residual_blocks = 1\n[policy.sensing]\nkind = \"local_map\"\ncell_m = -0.1",
+            "policy.sensing",
+        ),
+        (
+            "residual_blocks = 1",
+            "residual_blocks = 1\n[policy.sensing]\nkind = \"sonar\"",
+            "sonar",
+        ),
     ] {
         let text = tiny_config(dir.path()).replacen(from, to, 1);
         assert_ne!(text, tiny_config(dir.path()), "{from}");
@@ -318,6 +336,44 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             err.contains("bad.toml") && err.contains(key),
             "{key}: {err}"
         );
+    }
+}
+
+#[test]
+fn a_policy_keeps_its_sensing_in_its_weights_file() {
+    use egogen::policy::ppo::{load_policy, save_policy};
+    use egogen::sensing::SensingSpec;
+    let device = Default::default();
+    let dir = tempfile::tempdir().unwrap();
+    // Written before policies had a sensing field: the paper's 32 rays.
+    let shipped = common::repo_root().join("assets/policy/policy.safetensors");
+    let (arch, net) = load_policy::<TrainBackend>(&shipped, &device).unwrap();
+    assert_eq!(arch.sensing, SensingSpec::default());
+    assert_eq!(net.obs_layout(), ObsLayout::PAPER);
+    for (sensing, per_frame) in [
+        (SensingSpec::centred_map(0.8, 16), 256),
+        (
+            SensingSpec::Rays(egogen::sensing::RayScanSettings {
+                num_rays: 8,
+                ..Default::default()
+            }),
+            8,
+        ),
+    ] {
+        let arch = PolicyArch {
+            sensing,
+            ..tiny_arch()
+        };
+        let path = dir.path().join("p.safetensors");
+        save_policy(&arch.init::<TrainBackend>(&device), &arch, &path).unwrap();
+        let (loaded, net) = load_policy::<TrainBackend>(&path, &device).unwrap();
+        assert_eq!(loaded, arch);
+        assert_eq!(net.sensing(), sensing);
+        let layout = net.obs_layout();
+        assert_eq!(layout.sensing_per_frame, per_frame);
+        let b = 3;
+        let out = net.forward(Tensor::zeros([b, layout.dim()], &device));
+        assert_eq!(out.mean.dims(), [b, arch.latent_dim]);
     }
 }
 

@@ -255,3 +255,71 @@ fn dynamic_obstacles_are_seen_and_local_map_marks_them() {
     assert_eq!(patch[12 * 16 + 8], 1.0);
     assert_eq!(patch[4 * 16 + 8], 0.0);
 }
+
+#[test]
+fn a_centred_local_map_surrounds_the_body_and_turns_with_it() {
+    use egogen::sensing::SensingSpec;
+    // Free floor with everything at x ≥ 0.5 m blocked.
+    let bits: Vec<bool> = (0..N * N)
+        .map(|i| -3.0 + ((i % N) as f64 + 0.5) * CELL < 0.5)
+        .collect();
+    let map = random_map(&bits);
+    let world = SensingWorld {
+        map: &map,
+        obstacles: &[],
+    };
+    let sensor = SensingSpec::centred_map(0.8, 16).sensor();
+    assert_eq!(sensor.dim(), 256);
+    let blocked_rows = |heading_rad: f64| -> Vec<usize> {
+        let patch = sensor.observe(
+            &world,
+            EgoPose2 {
+                position: DVec2::ZERO,
+                heading_rad,
+            },
+        );
+        (0..16)
+            .filter(|r| patch[r * 16..(r + 1) * 16].iter().all(|&v| v == 1.0))
+            .collect()
+    };
+    // Rows are 0.1 m deep from 0.8 m behind: centres ≥ 0.5 m ahead are rows 13–15.
+    assert_eq!(blocked_rows(0.0), vec![13, 14, 15]);
+    // Facing away, the wall is behind.
+    assert_eq!(blocked_rows(std::f64::consts::PI), vec![0, 1, 2]);
+}
+
+#[test]
+fn sensing_specs_read_from_toml_with_defaults_and_refuse_unknown_fields() {
+    use egogen::sensing::{RayScanSettings, SensingSpec};
+    let read = |text: &str| toml::from_str::<SensingSpec>(text);
+    assert_eq!(read("kind = \"rays\"").unwrap(), SensingSpec::default());
+    assert_eq!(
+        read("kind = \"rays\"\nnum_rays = 8").unwrap(),
+        SensingSpec::Rays(RayScanSettings {
+            num_rays: 8,
+            ..Default::default()
+        })
+    );
+    assert_eq!(
+        read("kind = \"local_map\"\nrows = 16\ncols = 16\ncell_m = 0.1\nbehind_m = 0.8").unwrap(),
+        SensingSpec::centred_map(0.8, 16)
+    );
+    for bad in [
+        "kind = \"rays\"\nrays = 8",
+        "kind = \"sonar\"",
+        "num_rays = 8",
+    ] {
+        assert!(read(bad).is_err(), "{bad}");
+    }
+    assert!(SensingSpec::default().problem().is_none());
+    assert!(SensingSpec::centred_map(7.0, 32).problem().is_none());
+    let zero_rays = SensingSpec::Rays(RayScanSettings {
+        num_rays: 0,
+        ..Default::default()
+    });
+    assert!(zero_rays.problem().unwrap().contains("num_rays"));
+    assert!(SensingSpec::centred_map(f64::NAN, 4)
+        .problem()
+        .unwrap()
+        .contains("cell_m"));
+}

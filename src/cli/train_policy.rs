@@ -10,6 +10,7 @@ use super::resolve::resolve_body_model;
 use crate::policy::env::EnvSettings;
 use crate::policy::net::PolicyArch;
 use crate::policy::ppo::{PolicyTrainPlan, PpoSettings, StagePlan, TrainScene};
+use crate::sensing::SensingSpec;
 
 /// `[[stages]]`: one training stage.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
@@ -45,6 +46,8 @@ pub struct RawPolicyArch {
     pub hidden: usize,
     pub pe_frequencies: usize,
     pub residual_blocks: usize,
+    /// `[policy.sensing]`: what the policy observes (default: the paper's 32 rays).
+    pub sensing: Option<SensingSpec>,
 }
 
 /// `[scene]`: a fixed scene some episodes walk (each stage's `env.fixed_share`).
@@ -262,6 +265,10 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             "no stage walks the scene: give some stage env.fixed_share > 0".into(),
         ));
     }
+    let sensing = raw.policy.sensing.unwrap_or_default();
+    if let Some(message) = sensing.problem() {
+        return Err(bad("policy.sensing", message));
+    }
     let checkpoint_every_s = raw.output.checkpoint_every_s.unwrap_or(300.0);
     if !(checkpoint_every_s.is_finite() && checkpoint_every_s >= 0.0) {
         return Err(bad(
@@ -280,6 +287,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             pe_frequencies: raw.policy.pe_frequencies,
             residual_blocks: raw.policy.residual_blocks,
             latent_dim: 128,
+            sensing,
         },
         ppo: p,
         stages,

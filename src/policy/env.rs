@@ -28,7 +28,7 @@ use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
 use super::reward::{judge, scene_penetration, Judged, Limits, RewardWeights};
 use super::walker::{frame_time_s, place_seed, SeedView, Surroundings, Totals, Walker};
-pub use super::walker::{OBS_DIM, OBS_DIST_OFFSET, OBS_RAYS_OFFSET, RAYS, STATE_FRAME_DIM};
+pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
 use crate::math::random::uniform_open01;
 use crate::math::Vec3;
@@ -43,7 +43,7 @@ use crate::motion::primitive::SEED_FRAMES;
 use crate::scene::{
     blocked_cells_in_box, MovingObstacle, Obstacle2, SceneSdf, StartGoal, WalkableMap,
 };
-use crate::sensing::{RayScan, RayScanSettings};
+use crate::sensing::{EgoSensor, SensingSpec, Sensor};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
 /// (a start too near a wall for every seed).
@@ -317,7 +317,7 @@ pub struct PolicyEnv<'m> {
     /// The floor of every crossing scene, built once.
     crossing_floor: Arc<WalkableMap>,
     pub settings: EnvSettings,
-    scan: RayScan,
+    sensor: Sensor,
     foot_markers: Vec<usize>,
     episodes: Vec<Episode>,
     episode_base: u64,
@@ -372,7 +372,7 @@ impl<'m> PolicyEnv<'m> {
             fixed,
             crossing_floor: Arc::new(CrossingScene::floor(&settings.crossing)),
             settings,
-            scan: RayScan::new(RayScanSettings::default()),
+            sensor: Sensor::default(),
             foot_markers: RigGeometry::new(body.model, &body.betas)
                 .map_err(DecodeError::from)?
                 .foot_markers,
@@ -385,6 +385,20 @@ impl<'m> PolicyEnv<'m> {
             env.episodes.push(e);
         }
         Ok(env)
+    }
+
+    /// Observes with `spec` instead of the paper's 32 rays (a policy's own sensing:
+    /// [`super::net::ActorCritic::sensing`]).
+    pub fn with_sensing(mut self, spec: &SensingSpec) -> Self {
+        self.sensor = spec.sensor();
+        self
+    }
+
+    /// Where the parts of this environment's observations lie.
+    pub fn obs_layout(&self) -> ObsLayout {
+        ObsLayout {
+            sensing_per_frame: self.sensor.dim(),
+        }
     }
 
     /// Number of parallel episodes.
@@ -505,10 +519,11 @@ impl<'m> PolicyEnv<'m> {
         }
     }
 
-    /// Observations of all episodes, `[B × OBS_DIM]`.
+    /// Observations of all episodes, `[B × D]` ([`Self::obs_layout`]).
     pub fn observations(&self) -> Vec<f32> {
-        let mut out = vec![0f32; self.episodes.len() * OBS_DIM];
-        out.par_chunks_mut(OBS_DIM)
+        let d = self.obs_layout().dim();
+        let mut out = vec![0f32; self.episodes.len() * d];
+        out.par_chunks_mut(d)
             .zip(&self.episodes)
             .for_each(|(o, e)| self.observe_into(e, o));
         out
@@ -518,7 +533,7 @@ impl<'m> PolicyEnv<'m> {
         let w = &e.walker;
         w.observe_into(
             self.body,
-            &self.scan,
+            &self.sensor,
             e.course.goal,
             &e.course.surroundings(),
             frame_time_s(w.steps, 0),

@@ -18,5 +18,5 @@ pub mod sampling;
 pub mod tasks;
 pub mod walker;
 
-pub use env::{EnvSettings, PolicyEnv, SeedBank, OBS_DIM};
+pub use env::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};
 pub use pose_prior::PosePrior;

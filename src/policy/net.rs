@@ -1,7 +1,7 @@
 //! The actor-critic network (EgoGen's `GAMMAPolicyBase`, actor and critic), in burn.
 //!
-//! Two GRUs read the two seed frames: one the marker state (67 × 6 per frame), one the ray scan
-//! (32 per frame); their last hidden states (`H` each) join sinusoidal positional encodings of
+//! Two GRUs read the two seed frames: one the marker state (67 × 6 per frame), one the sensing
+//! (the paper's ray scan: 32 per frame; the architecture's [`SensingSpec`]); their last hidden states (`H` each) join sinusoidal positional encodings of
 //! `1/(1 + d)` and `1 − t/T` (`2F` values each: sin and cos at frequencies `2^k·π`,
 //! k < F). The actor, a residual MLP (two blocks `W → W → W` with LeakyReLU, `W = 2H + 4F`,
 //! then a linear layer), writes the mean and log-variance of the latent (log-variance clamped
@@ -16,8 +16,9 @@ use burn::prelude::*;
 use burn::tensor::activation::{leaky_relu, sigmoid};
 use serde::{Deserialize, Serialize};
 
-use super::env::{OBS_DIM, OBS_DIST_OFFSET, OBS_RAYS_OFFSET, RAYS, STATE_FRAME_DIM};
+use super::env::{ObsLayout, STATE_FRAME_DIM};
 use crate::motion::primitive::SEED_FRAMES;
+use crate::sensing::SensingSpec;
 
 /// Bounds of the actor's log-variance.
 pub const LOGVAR_RANGE: (f32, f32) = (-2.5, 2.5);
@@ -25,7 +26,7 @@ pub const LOGVAR_RANGE: (f32, f32) = (-2.5, 2.5);
 const LEAKY_SLOPE: f64 = 0.01;
 
 /// Architecture of the policy (saved inside its weights file).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PolicyArch {
     /// GRU width `H` (EgoGen: 512).
@@ -36,6 +37,10 @@ pub struct PolicyArch {
     pub residual_blocks: usize,
     /// Latent size of the motion model (the action size).
     pub latent_dim: usize,
+    /// What the policy observes of its surroundings (files written before this field: the
+    /// paper's 32 rays).
+    #[serde(default)]
+    pub sensing: SensingSpec,
 }
 
 impl Default for PolicyArch {
@@ -45,6 +50,7 @@ impl Default for PolicyArch {
             pe_frequencies: 8,
             residual_blocks: 2,
             latent_dim: 128,
+            sensing: SensingSpec::default(),
         }
     }
 }
@@ -77,11 +83,12 @@ impl PolicyArch {
         };
         ActorCritic {
             state_gru: Gru::new(STATE_FRAME_DIM, h, device),
-            ray_gru: Gru::new(RAYS, h, device),
+            ray_gru: Gru::new(self.sensing.dim(), h, device),
             actor: mlp(2 * self.latent_dim, 0.01),
             critic: mlp(1, 1.0),
             pe_frequencies: self.pe_frequencies,
             latent_dim: self.latent_dim,
+            sensing: self.sensing,
         }
     }
 }
@@ -140,11 +147,14 @@ impl<B: Backend> ResidualMlp<B> {
 #[derive(Module, Debug)]
 pub struct ActorCritic<B: Backend> {
     state_gru: Gru<B>,
+    /// The sensing GRU, of whatever [`SensingSpec`] (its name is its weights' key).
     ray_gru: Gru<B>,
     actor: ResidualMlp<B>,
     critic: ResidualMlp<B>,
     pe_frequencies: usize,
     latent_dim: usize,
+    #[module(skip)]
+    sensing: SensingSpec,
 }
 
 /// What the network says about a batch of observations.
@@ -171,24 +181,26 @@ impl<B: Backend> ActorCritic<B> {
         Tensor::cat(vec![a.clone().sin(), a.cos()], 1)
     }
 
-    /// The joint features `[B, W]` of observations `[B, OBS_DIM]`.
+    /// The joint features `[B, W]` of observations `[B, D]` ([`Self::obs_layout`]).
     fn features(&self, obs: Tensor<B, 2>) -> Tensor<B, 2> {
         let [b, d] = obs.dims();
-        debug_assert_eq!(d, OBS_DIM);
+        let layout = self.obs_layout();
+        debug_assert_eq!(d, layout.dim());
+        let s = layout.sensing_per_frame;
         let state = obs
             .clone()
             .narrow(1, 0, SEED_FRAMES * STATE_FRAME_DIM)
             .reshape([b, SEED_FRAMES, STATE_FRAME_DIM]);
-        let rays = obs
+        let sensing = obs
             .clone()
-            .narrow(1, OBS_RAYS_OFFSET, SEED_FRAMES * RAYS)
-            .reshape([b, SEED_FRAMES, RAYS]);
-        let dist = obs.clone().narrow(1, OBS_DIST_OFFSET, 1);
-        let time = obs.narrow(1, OBS_DIST_OFFSET + 1, 1);
+            .narrow(1, layout.sensing_offset(), SEED_FRAMES * s)
+            .reshape([b, SEED_FRAMES, s]);
+        let dist = obs.clone().narrow(1, layout.dist_offset(), 1);
+        let time = obs.narrow(1, layout.dist_offset() + 1, 1);
         Tensor::cat(
             vec![
                 self.state_gru.forward(state),
-                self.ray_gru.forward(rays),
+                self.ray_gru.forward(sensing),
                 self.encode(dist),
                 self.encode(time),
             ],
@@ -211,6 +223,18 @@ impl<B: Backend> ActorCritic<B> {
     /// Action size.
     pub fn latent_dim(&self) -> usize {
         self.latent_dim
+    }
+
+    /// What the policy observes of its surroundings.
+    pub fn sensing(&self) -> SensingSpec {
+        self.sensing
+    }
+
+    /// Where the parts of the policy's observations lie.
+    pub fn obs_layout(&self) -> ObsLayout {
+        ObsLayout {
+            sensing_per_frame: self.sensing.dim(),
+        }
     }
 }
 

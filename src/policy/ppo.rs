@@ -27,7 +27,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use super::env::{EnvError, EnvSettings, EnvSnapshot, FixedScene, PolicyEnv, SeedBank, OBS_DIM};
+use super::env::{EnvError, EnvSettings, EnvSnapshot, FixedScene, PolicyEnv, SeedBank};
 use super::net::{entropy, kl_to_standard, log_prob, ActorCritic, PolicyArch};
 use super::pose_prior::PosePrior;
 use crate::motion::cvae::checkpoint::{self, CheckpointState};
@@ -303,9 +303,10 @@ pub fn act<B: Backend>(
     rng: Option<&mut ChaCha8Rng>,
     device: &B::Device,
 ) -> (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>) {
-    let b = obs.len() / OBS_DIM;
+    let d = net.obs_layout().dim();
+    let b = obs.len() / d;
     let l = net.latent_dim();
-    let out = net.forward(to_tensor(obs, [b, OBS_DIM], device));
+    let out = net.forward(to_tensor(obs, [b, d], device));
     let actions = match rng {
         Some(rng) => {
             let eps = to_tensor(normal_samples(rng, b * l), [b, l], device);
@@ -341,7 +342,8 @@ fn validate(
         settings,
         envs,
         VALIDATION_BASE,
-    )?;
+    )?
+    .with_sensing(&net.sensing());
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut kl_sum = 0.0;
     let mut kl_n = 0usize;
@@ -487,7 +489,8 @@ pub fn train_policy(
             ppo.envs,
             stage as u64 + 1,
         )
-        .map_err(env_error)?;
+        .map_err(env_error)?
+        .with_sensing(&plan.arch.sensing);
         if let Some(s) = run_state.take() {
             env.restore(&s.env).map_err(env_error)?;
         }
@@ -664,7 +667,8 @@ fn one_update<O: Optimizer<ActorCritic<TrainBackend>, TrainBackend>>(
     let b = env.len();
     let t_steps = ppo.steps_per_env.max(1);
     let l = env.latent_dim();
-    let mut obs_buf: Vec<f32> = Vec::with_capacity(t_steps * b * OBS_DIM);
+    let d = env.obs_layout().dim();
+    let mut obs_buf: Vec<f32> = Vec::with_capacity(t_steps * b * d);
     let mut act_buf: Vec<f32> = Vec::with_capacity(t_steps * b * l);
     let (mut logp_buf, mut val_buf, mut rew_buf, mut done_buf) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -739,7 +743,7 @@ fn one_update<O: Optimizer<ActorCritic<TrainBackend>, TrainBackend>>(
                     .flat_map(|&i| src[i * width..(i + 1) * width].iter().copied())
                     .collect()
             };
-            let obs = to_tensor::<TrainBackend>(gather(&obs_buf, OBS_DIM), [m, OBS_DIM], device);
+            let obs = to_tensor::<TrainBackend>(gather(&obs_buf, d), [m, d], device);
             let acts = to_tensor::<TrainBackend>(gather(&act_buf, l), [m, l], device);
             let old_logp = Tensor::<TrainBackend, 1>::from_data(
                 TensorData::new(gather(&logp_buf, 1), [m]),

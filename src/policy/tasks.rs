@@ -208,6 +208,9 @@ pub fn evaluate<B: burn::prelude::Backend>(
         envs.clamp(1, episodes.max(1)),
         HELD_OUT_BASE,
     )?;
+    if let Controller::Policy { net, .. } = controller {
+        env = env.with_sensing(&net.sensing());
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (summaries, steps) = run_episodes(
         &mut env,

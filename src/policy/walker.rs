@@ -3,10 +3,12 @@
 //! same state serves an episode of the training environment and an agent of a crowd; what
 //! differs is what surrounds it ([`Surroundings`]) and whose clock moves obstacles.
 //!
-//! Observation (EgoGen's layout, [`OBS_DIM`] values): for each of the two seed frames the 67
+//! Observation (EgoGen's layout, [`ObsLayout`]): for each of the two seed frames the 67
 //! markers in the seed's canonical frame and the unit vectors from each marker to the goal
-//! (2 × 67 × 6); the 32-ray scan of both seed frames (2 × 32, −1 + 2·hit/7 m); `1/(1 + d)` of
-//! the horizontal pelvis–goal distance; the share of the episode's time left.
+//! (2 × 67 × 6); the sensing of both seed frames (the paper's 32-ray scan, 2 × 32,
+//! −1 + 2·hit/7 m, or another [`crate::sensing::SensingSpec`]); `1/(1 + d)` of the horizontal
+//! pelvis–goal distance; the share of the episode's time left. [`ObsLayout`] says where each
+//! part lies.
 
 use glam::DVec2;
 use serde::{Deserialize, Serialize};
@@ -18,18 +20,38 @@ use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive, PrimitiveSeed};
 use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
-use crate::sensing::{EgoPose2, EgoSensor, RayScan, SensingWorld};
+use crate::sensing::{EgoPose2, EgoSensor, SensingWorld, Sensor};
 
 /// Values per seed frame of the marker state: 67 canonical positions and 67 goal directions.
 pub const STATE_FRAME_DIM: usize = NUM_MARKERS * 6;
-/// Rays per seed frame.
-pub const RAYS: usize = 32;
-/// Observation length.
-pub const OBS_DIM: usize = SEED_FRAMES * (STATE_FRAME_DIM + RAYS) + 2;
-/// Offset of the ray scans in an observation.
-pub const OBS_RAYS_OFFSET: usize = SEED_FRAMES * STATE_FRAME_DIM;
-/// Offset of `1/(1 + d)`; the time left follows it.
-pub const OBS_DIST_OFFSET: usize = OBS_RAYS_OFFSET + SEED_FRAMES * RAYS;
+/// Where the parts of an observation lie, for sensing that writes `sensing_per_frame` values
+/// per seed frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ObsLayout {
+    pub sensing_per_frame: usize,
+}
+
+impl ObsLayout {
+    /// The paper's layout: 32 rays per seed frame.
+    pub const PAPER: Self = Self {
+        sensing_per_frame: 32,
+    };
+
+    /// Observation length.
+    pub const fn dim(&self) -> usize {
+        SEED_FRAMES * (STATE_FRAME_DIM + self.sensing_per_frame) + 2
+    }
+
+    /// Offset of the sensing of the first seed frame (the second follows it).
+    pub const fn sensing_offset(&self) -> usize {
+        SEED_FRAMES * STATE_FRAME_DIM
+    }
+
+    /// Offset of `1/(1 + d)`; the time left follows it.
+    pub const fn dist_offset(&self) -> usize {
+        self.sensing_offset() + SEED_FRAMES * self.sensing_per_frame
+    }
+}
 
 /// Time (s) of frame `f` of the primitive taken at step `steps` of a clock that starts with
 /// frame 0 of the first seed at 0.
@@ -203,14 +225,14 @@ impl Walker {
         }
     }
 
-    /// Writes the observation ([`OBS_DIM`] values) for a walk to `goal`; `t0_s` is the time
+    /// Writes the observation (`sensor`'s [`ObsLayout`]) for a walk to `goal`; `t0_s` is the time
     /// of the first seed frame on the obstacles' clock, `time_left` the share of the walk's
     /// primitives left (EgoGen's `1 − t/T`).
     #[allow(clippy::too_many_arguments)]
     pub fn observe_into(
         &self,
         body: &BodyContext,
-        scan: &RayScan,
+        sensor: &Sensor,
         goal: DVec2,
         around: &Surroundings,
         t0_s: f64,
@@ -218,6 +240,10 @@ impl Walker {
         out: &mut [f32],
     ) {
         let v = &self.view;
+        let layout = ObsLayout {
+            sensing_per_frame: sensor.dim(),
+        };
+        debug_assert_eq!(out.len(), layout.dim());
         let goal = Vec3::new(goal.x, goal.y, 0.0);
         // The canonical frame of the seed; with hips vertical (never in a walking seed) the
         // world frame at the pelvis stands in.
@@ -251,15 +277,15 @@ impl Walker {
                 map: around.map,
                 obstacles: &obstacles,
             };
-            let at = OBS_RAYS_OFFSET + k * RAYS;
-            scan.observe_into(
+            let at = layout.sensing_offset() + k * layout.sensing_per_frame;
+            sensor.observe_into(
                 &world,
                 EgoPose2::from_world_from_cpf(cpf),
-                &mut out[at..at + RAYS],
+                &mut out[at..at + layout.sensing_per_frame],
             );
         }
-        out[OBS_DIST_OFFSET] = (1.0 / (1.0 + self.distance_m)) as f32;
-        out[OBS_DIST_OFFSET + 1] = time_left as f32;
+        out[layout.dist_offset()] = (1.0 / (1.0 + self.distance_m)) as f32;
+        out[layout.dist_offset() + 1] = time_left as f32;
     }
 
     /// Where the walker stands before its next primitive, for [`super::reward::judge`].

@@ -77,7 +77,7 @@ pub trait EgoSensor: Sync {
 }
 
 /// Settings of the ray scan (paper values by default).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RayScanSettings {
     pub num_rays: usize,

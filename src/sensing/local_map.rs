@@ -9,7 +9,7 @@ use glam::DVec2;
 
 use super::ego::{EgoPose2, EgoSensor, SensingWorld};
 
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LocalMapSettings {
     pub rows: usize,

@@ -11,7 +11,9 @@
 pub mod ego;
 pub mod local_map;
 pub mod ray;
+pub mod spec;
 
 pub use ego::{EgoPose2, EgoSensor, RayScan, RayScanSettings, SensingWorld};
 pub use local_map::{LocalMap, LocalMapSettings};
 pub use ray::Ray2;
+pub use spec::{SensingSpec, Sensor};

@@ -31,10 +31,10 @@ use crate::policy::env::SeedBank;
 use crate::policy::net::ActorCritic;
 use crate::policy::ppo::act;
 use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
-use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker, OBS_DIM};
+use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker};
 use crate::policy::PosePrior;
 use crate::scene::{plan_path, MovingObstacle, Obstacle2, WalkableMap};
-use crate::sensing::{RayScan, RayScanSettings};
+use crate::sensing::Sensor;
 
 /// A primitive moving the pelvis less than this (m, horizontal) with the goal still ahead
 /// counts as stuck (a walking primitive covers 0.2–0.7 m).
@@ -439,7 +439,7 @@ impl<'m> Agent<'m> {
     fn choose(
         &mut self,
         parts: &CrowdParts,
-        scan: &RayScan,
+        sensor: &Sensor,
         around: &Surroundings,
         t0_s: f64,
         settings: &CrowdSettings,
@@ -448,12 +448,12 @@ impl<'m> Agent<'m> {
         let latents: Vec<Vec<f32>> = match self.plan.steering {
             Steering::Policy { mean_action } => {
                 let net = parts.policy.expect("checked when the agent was made");
-                let mut obs = vec![0f32; OBS_DIM];
+                let mut obs = vec![0f32; net.obs_layout().dim()];
                 let time_left =
                     1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
                 self.walker.observe_into(
                     &self.body,
-                    scan,
+                    sensor,
                     self.goal,
                     around,
                     t0_s,
@@ -651,7 +651,10 @@ pub fn run_crowd(
         .enumerate()
         .map(|(i, p)| Agent::new(parts, &neutral, world, p, i, settings))
         .collect::<Result<_, _>>()?;
-    let scan = RayScan::new(RayScanSettings::default());
+    // The policy's own sensing (steering without a policy observes nothing).
+    let sensor = parts
+        .policy
+        .map_or_else(Sensor::default, |net| net.sensing().sensor());
     let fixed: Vec<MovingObstacle> = world
         .obstacles
         .iter()
@@ -696,7 +699,7 @@ pub fn run_crowd(
                 moving: &moving,
             };
             let a = &mut agents[i];
-            match a.choose(parts, &scan, &around, t0_s, settings)? {
+            match a.choose(parts, &sensor, &around, t0_s, settings)? {
                 Some((p, j, r)) => a.take(p, j, r, world, settings),
                 None => {
                     a.walker.fail(0.0);
