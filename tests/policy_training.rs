@@ -296,6 +296,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "stages[1].env.crossing",
         ),
         (
+            "[stages.env]",
+            "[stages.env]\ncrossing = { people = [3, 2] }",
+            "stages[1].env.crossing",
+        ),
+        (
             "[policy]",
             "init_weights = \"missing.safetensors\"\n[policy]",
             "init_weights",

@@ -86,6 +86,9 @@ pub struct RawTrainPolicy {
     pub output: RawPolicyOutput,
 }
 
+/// Most other people in a crossing scene.
+const MAX_CROSSING_PEOPLE: usize = 16;
+
 /// Reads and resolves a policy training config.
 pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
     let raw: RawTrainPolicy = load_toml(path)?;
@@ -212,11 +215,13 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             && c.floor_m > c.distance_m.1
             && c.walker_speed_m_s > 0.0
             && c.timing_jitter_s >= 0.0
-            && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2)
+            && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2
+            && (1..=c.people.1).contains(&c.people.0)
+            && c.people.1 <= MAX_CROSSING_PEOPLE)
         {
             return Err(bad(
                 &key("env.crossing"),
-                "expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0 and |cross_angle_rad| < π/2".into(),
+                format!("expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0, |cross_angle_rad| < π/2 and 1 ≤ people.0 ≤ people.1 ≤ {MAX_CROSSING_PEOPLE}"),
             ));
         }
         stages.push(StagePlan {

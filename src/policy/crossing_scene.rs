@@ -10,6 +10,7 @@
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
+use rand_core::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::math::random::uniform_open01;
@@ -35,6 +36,8 @@ pub struct CrossingSettings {
     pub timing_jitter_s: f64,
     /// The other person's footprint: length along its walk and width (m).
     pub footprint_m: (f64, f64),
+    /// Range of how many other people cross, each drawn independently (default one).
+    pub people: (usize, usize),
 }
 
 impl Default for CrossingSettings {
@@ -48,24 +51,29 @@ impl Default for CrossingSettings {
             walker_speed_m_s: 0.7,
             timing_jitter_s: 1.0,
             footprint_m: (0.35, 0.6),
+            people: (1, 1),
         }
     }
 }
 
 /// What is drawn for a crossing scene.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CrossingParams {
     pub start: [f64; 2],
     pub goal: [f64; 2],
-    /// The other person's footprint centre at time 0 and its velocity (m/s).
+    /// The (first) other person's footprint centre at time 0 and its velocity (m/s).
     pub mover_start: [f64; 2],
     pub mover_velocity: [f64; 2],
+    /// The people after the first: footprint centre at time 0, velocity (m/s).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub more_movers: Vec<([f64; 2], [f64; 2])>,
 }
 
 /// One drawn crossing scene (its floor, the same for every scene, is [`CrossingScene::floor`]).
 #[derive(Debug, Clone)]
 pub struct CrossingScene {
-    pub mover: MovingObstacle,
+    /// The other people, the first of [`CrossingParams::mover_start`] first.
+    pub movers: Vec<MovingObstacle>,
     pub start: DVec2,
     pub goal: DVec2,
     pub params: CrossingParams,
@@ -78,26 +86,39 @@ impl CrossingScene {
         let d = u(settings.distance_m.0, settings.distance_m.1);
         let dir = DVec2::from_angle(u(0.0, std::f64::consts::TAU));
         let (start, goal) = (-dir * d / 2.0, dir * d / 2.0);
-        let at = u(0.35, 0.65);
-        let cross = start + (goal - start) * at;
-        let side = if u(0.0, 1.0) < 0.5 { 1.0 } else { -1.0 };
-        let heading = DVec2::from_angle(
-            side * std::f64::consts::FRAC_PI_2
-                + u(-settings.cross_angle_rad, settings.cross_angle_rad),
-        )
-        .rotate(dir);
-        let speed = u(settings.speed_m_s.0, settings.speed_m_s.1);
-        let t_cross = (at * d / settings.walker_speed_m_s.max(0.1)
-            + u(-settings.timing_jitter_s, settings.timing_jitter_s))
-        .max(0.0);
-        let velocity = heading * speed;
+        let crosser = |rng: &mut ChaCha8Rng| {
+            let mut u = |a: f64, b: f64| a + (b - a) * uniform_open01(rng);
+            let at = u(0.35, 0.65);
+            let cross = start + (goal - start) * at;
+            let side = if u(0.0, 1.0) < 0.5 { 1.0 } else { -1.0 };
+            let heading = DVec2::from_angle(
+                side * std::f64::consts::FRAC_PI_2
+                    + u(-settings.cross_angle_rad, settings.cross_angle_rad),
+            )
+            .rotate(dir);
+            let speed = u(settings.speed_m_s.0, settings.speed_m_s.1);
+            let t_cross = (at * d / settings.walker_speed_m_s.max(0.1)
+                + u(-settings.timing_jitter_s, settings.timing_jitter_s))
+            .max(0.0);
+            let velocity = heading * speed;
+            ((cross - velocity * t_cross).to_array(), velocity.to_array())
+        };
+        let (mover_start, mover_velocity) = crosser(rng);
+        // No draw with one person: scenes of one crossing stay as they were.
+        let (lo, hi) = (settings.people.0.max(1), settings.people.1.max(1));
+        let people = match hi > lo {
+            true => lo + (rng.next_u64() % (hi - lo + 1) as u64) as usize,
+            false => lo,
+        };
+        let more_movers = (1..people).map(|_| crosser(rng)).collect();
         Self::build(
             settings,
             CrossingParams {
                 start: start.to_array(),
                 goal: goal.to_array(),
-                mover_start: (cross - velocity * t_cross).to_array(),
-                mover_velocity: velocity.to_array(),
+                mover_start,
+                mover_velocity,
+                more_movers,
             },
         )
     }
@@ -113,17 +134,23 @@ impl CrossingScene {
 
     /// The scene of drawn parameters.
     pub fn build(settings: &CrossingSettings, p: CrossingParams) -> Self {
-        let velocity = DVec2::from_array(p.mover_velocity);
-        let mover = MovingObstacle {
-            at_start: Obstacle2::Box {
-                centre: DVec2::from_array(p.mover_start),
-                half_extents: DVec2::new(settings.footprint_m.0, settings.footprint_m.1) / 2.0,
-                yaw_rad: velocity.y.atan2(velocity.x),
-            },
-            velocity_m_per_s: velocity,
+        let mover = |(at_start, velocity): ([f64; 2], [f64; 2])| {
+            let velocity = DVec2::from_array(velocity);
+            MovingObstacle {
+                at_start: Obstacle2::Box {
+                    centre: DVec2::from_array(at_start),
+                    half_extents: DVec2::new(settings.footprint_m.0, settings.footprint_m.1) / 2.0,
+                    yaw_rad: velocity.y.atan2(velocity.x),
+                },
+                velocity_m_per_s: velocity,
+            }
         };
+        let movers = std::iter::once((p.mover_start, p.mover_velocity))
+            .chain(p.more_movers.iter().copied())
+            .map(mover)
+            .collect();
         Self {
-            mover,
+            movers,
             start: DVec2::from_array(p.start),
             goal: DVec2::from_array(p.goal),
             params: p,
@@ -144,7 +171,8 @@ mod tests {
             let d = c.start.distance(c.goal);
             assert!((s.distance_m.0..=s.distance_m.1).contains(&d));
             // The mover's line meets the start–goal segment.
-            let v = c.mover.velocity_m_per_s;
+            assert_eq!(c.movers.len(), 1);
+            let v = c.movers[0].velocity_m_per_s;
             let p0 = DVec2::from_array(c.params.mover_start);
             let seg = c.goal - c.start;
             let t = (c.start - p0).perp_dot(seg) / v.perp_dot(seg);
@@ -158,5 +186,40 @@ mod tests {
             let floor = CrossingScene::floor(&s);
             assert!(floor.is_walkable_at(c.start) && floor.is_walkable_at(c.goal));
         }
+    }
+
+    #[test]
+    fn more_people_cross_the_same_path_and_the_first_stays_as_alone() {
+        let one = CrossingSettings::default();
+        let many = CrossingSettings {
+            people: (2, 4),
+            ..one
+        };
+        let mut counts = [0usize; 5];
+        for seed in 0..200 {
+            let a = CrossingScene::sample(&one, &mut ChaCha8Rng::seed_from_u64(seed));
+            let c = CrossingScene::sample(&many, &mut ChaCha8Rng::seed_from_u64(seed));
+            assert_eq!(c.movers[0], a.movers[0]);
+            assert_eq!((c.start, c.goal), (a.start, a.goal));
+            counts[c.movers.len()] += 1;
+            let seg = c.goal - c.start;
+            for m in &c.movers {
+                let v = m.velocity_m_per_s;
+                let Obstacle2::Box { centre: p0, .. } = m.at_start else {
+                    panic!("a box")
+                };
+                let t = (c.start - p0).perp_dot(seg) / v.perp_dot(seg);
+                let along = (p0 + v * t - c.start).dot(seg) / seg.length_squared();
+                assert!((0.34..0.66).contains(&along), "{seed}: {along}");
+            }
+            // The scene rebuilt from its parameters is the same scene.
+            let rebuilt = CrossingScene::build(&many, c.params.clone());
+            assert_eq!(rebuilt.movers, c.movers);
+        }
+        assert!(
+            counts[2] > 0 && counts[3] > 0 && counts[4] > 0,
+            "{counts:?}"
+        );
+        assert_eq!(counts[0] + counts[1], 0);
     }
 }

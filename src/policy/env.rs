@@ -434,7 +434,7 @@ impl<'m> PolicyEnv<'m> {
         Course {
             map: self.crossing_floor.clone(),
             obstacle: None,
-            moving: vec![scene.mover],
+            moving: scene.movers,
             start: scene.start,
             goal: scene.goal,
             box_params: None,
@@ -669,7 +669,7 @@ impl<'m> PolicyEnv<'m> {
                 .map(|e| EpisodeSnapshot {
                     id: e.id,
                     scene: e.course.box_params,
-                    crossing: e.course.crossing,
+                    crossing: e.course.crossing.clone(),
                     pair: e.course.pair,
                     frames: e
                         .walker
@@ -716,7 +716,7 @@ impl<'m> PolicyEnv<'m> {
                 }
             });
             let only_fixed = self.fixed.is_some() && self.settings.fixed_share >= 1.0;
-            let course = match (s.scene, s.crossing, s.pair, self.fixed) {
+            let course = match (s.scene, s.crossing.clone(), s.pair, self.fixed) {
                 (Some(p), None, None, _) if !only_fixed => {
                     self.box_course(BoxScene::build(&self.settings.scene, p))
                 }
