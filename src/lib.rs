@@ -6,7 +6,8 @@
 //! locomotion environment, rewards and controllers) → `synth` (posed sequences, CPF trajectories);
 //! `eval` runs the paper's evaluation scenarios through `synth` and measures them;
 //! `preview` draws PNG pictures for people;
-//! `cli` holds the command-line and config plumbing and no domain logic.
+//! `cli` holds the command-line and config plumbing and no domain logic; `run_job` is
+//! `egogen-run`'s job, from a config through `supervisor` to a dataset.
 
 pub mod atomic_file;
 pub mod body;
@@ -27,6 +28,7 @@ pub mod preview;
 pub mod progress;
 pub mod render;
 pub mod rig;
+pub mod run_job;
 pub mod scene;
 pub mod sensing;
 pub mod supervisor;

@@ -144,6 +144,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "eval",
         ],
     ),
+    // egogen-run's job: a config (cli) through the supervisor to a dataset.
+    (
+        "run_job",
+        &["body", "cli", "motion", "plan", "supervisor", "synth"],
+    ),
 ];
 
 /// Breaks of the layering that exist today, as (module, what it uses, why); each is to be
