@@ -1,6 +1,7 @@
 //! The evaluation suite (`egogen eval`) in a tiny form, so that it cannot rot: every
 //! controller on three scenarios, two episodes each, its files checked, then Table 3's
-//! ablated policies beside it; the A* planner and the
+//! ablated policies, Table 2's apartment rows and the speed suite (with its ray-count rows)
+//! beside it; the A* planner and the
 //! diversity measure on cases whose answers are known.
 
 mod common;
@@ -274,6 +275,47 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     ] {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }
+    // Table 2 beside them: rays against local maps in the apartment, and sampling.
+    let table2 = egogen_eval(
+        &[
+            "--suite",
+            "table2",
+            "--episodes",
+            "2",
+            "--k",
+            "2",
+            "--quiet",
+        ],
+        out.path(),
+    );
+    assert!(
+        table2.status.success(),
+        "{}",
+        String::from_utf8_lossy(&table2.stderr)
+    );
+    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
+    assert!(
+        md.contains("## Table 2") && md.contains("## Table 3"),
+        "{md}"
+    );
+    for row in [
+        "| egocentric sensing (32 rays) | sampled |",
+        "| local map 0.8 m | mean |",
+        "| local map 7 m | sampled |",
+        "| sampling controller (no policy) | best of 2 |",
+        "| A* path following (no policy) | best of 2 |",
+    ] {
+        assert!(md.contains(row), "{row} missing from\n{md}");
+    }
+    let t2: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.path().join("results/table2.json")).unwrap())
+            .unwrap();
+    for r in t2["rows"].as_array().unwrap() {
+        assert_eq!(r["episodes"], 2, "{r}");
+        // Eq. 11 is measured in the apartment, but not on the path follower's crowd takes.
+        let crowd_take = r["policy"].as_str().unwrap().starts_with("A*");
+        assert_eq!(r["scene_penetration_share"].is_number(), !crowd_take, "{r}");
+    }
     // The speed suite beside them: the policy and sampling with K = 4 … 32 in one scenario.
     let speed = egogen_eval(
         &[
@@ -302,6 +344,13 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     ] {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }
+    // … and the ray-count knob in the same run.
+    for row in [
+        "| 8 rays | box scenes | sampled |",
+        "| 64 rays | crossings | mean |",
+    ] {
+        assert!(md.contains(row), "{row} missing from\n{md}");
+    }
     // A scenario that does not exist is named.
     let bad = egogen_eval(
         &["--episodes", "1", "--scenarios", "circle_3"],
@@ -311,6 +360,17 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(
         err.contains("circle_3") && err.contains("circle_4"),
+        "{err}"
+    );
+    // So is a controller that does not exist.
+    let bad = egogen_eval(
+        &["--episodes", "1", "--controllers", "policy,oracle"],
+        out.path().join("other"),
+    );
+    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.contains("oracle") && err.contains("path_follow_k16"),
         "{err}"
     );
 }

@@ -78,6 +78,9 @@ pub enum PolicyCommand {
         /// scenes: 0 (default) to 1.
         #[arg(long, default_value_t = 0.0)]
         crossing_share: f64,
+        /// How many other people cross in a crossing scene: N, or MIN,MAX drawn per episode.
+        #[arg(long, value_delimiter = ',', default_value = "1")]
+        crossing_people: Vec<usize>,
         #[arg(long, default_value_t = 200)]
         episodes: usize,
         /// Episodes run in parallel (one decode batch).
@@ -167,6 +170,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             anywhere,
             max_primitives,
             crossing_share,
+            crossing_people,
         } => {
             if let Some(f) = &episodes_jsonl {
                 refuse_existing(f)?;
@@ -192,11 +196,25 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if !(0.0..=1.0).contains(&crossing_share) {
                 bail!("--crossing-share: expected a share in [0, 1], got {crossing_share}");
             }
+            let people = match *crossing_people.as_slice() {
+                [n] => (n, n),
+                [lo, hi] => (lo, hi),
+                _ => bail!("--crossing-people: expected N or MIN,MAX"),
+            };
+            let most = crate::policy::crossing_scene::MAX_PEOPLE;
+            if !(1..=people.1).contains(&people.0) || people.1 > most {
+                bail!(
+                    "--crossing-people: expected 1 ≤ MIN ≤ MAX ≤ {most}, got {},{}",
+                    people.0,
+                    people.1
+                );
+            }
             let settings = EnvSettings {
                 success_m,
                 max_primitives: max_primitives.unwrap_or(defaults.max_primitives),
                 crossing: crate::policy::crossing_scene::CrossingSettings {
                     share: crossing_share,
+                    people,
                     ..defaults.crossing
                 },
                 ..defaults
@@ -213,16 +231,13 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     if !(lo >= 0.0 && hi >= lo) {
                         bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
                     }
-                    Some(fixed_scene(
-                        &TrainScene {
-                            path: path.clone(),
-                            pairs: episodes,
-                            pair_distance_m: (lo, hi),
-                            clearance_m: 0.4,
-                            indoors: !anywhere,
-                            seed: seed ^ 0x5CE7E,
-                        },
-                        true,
+                    Some(held_out_scene(
+                        path,
+                        episodes,
+                        (lo, hi),
+                        !anywhere,
+                        seed,
+                        crate::scene::sdf3d::DEFAULT_VOXEL_M,
                     )?)
                 }
             };
@@ -286,11 +301,35 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
     Ok(())
 }
 
+/// A scene for evaluation: `pairs` start/goal pairs `pair_distance_m` apart, 0.4 m from
+/// anything blocking, drawn under `seed` with another stream than training's pairs, its 3D SDF
+/// built with `sdf_voxel_m` voxels so that paper Eq. 11 is measured.
+pub(crate) fn held_out_scene(
+    path: &Path,
+    pairs: usize,
+    pair_distance_m: (f64, f64),
+    indoors: bool,
+    seed: u64,
+    sdf_voxel_m: f64,
+) -> Result<FixedScene> {
+    fixed_scene(
+        &TrainScene {
+            path: path.into(),
+            pairs,
+            pair_distance_m,
+            clearance_m: 0.4,
+            indoors,
+            seed: seed ^ 0x5CE7E,
+        },
+        Some(sdf_voxel_m),
+    )
+}
+
 /// A fixed scene loaded, with its start/goal pairs drawn as `spec` says (inside the walls
 /// with `spec.indoors`, when the scene encloses anything); too few pairs is an error. With
-/// `measure_eq11` its 3D SDF is built too (the default 0.05 m voxels, `docs/SCENES.md`), so
-/// that scene penetration (paper Eq. 11) is measured.
-fn fixed_scene(spec: &TrainScene, measure_eq11: bool) -> Result<FixedScene> {
+/// `sdf_voxel_m` its 3D SDF is built too with voxels that size (`docs/SCENES.md`), so that
+/// scene penetration (paper Eq. 11) is measured.
+fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
     let path = &spec.path;
     let mesh = crate::scene::load_scene(path, None)?;
     let map = crate::scene::walkable_map(&mesh, path, Default::default())?;
@@ -322,13 +361,9 @@ fn fixed_scene(spec: &TrainScene, measure_eq11: bool) -> Result<FixedScene> {
             spec.pairs
         );
     }
-    let sdf = if measure_eq11 {
-        let sdf = crate::scene::SceneSdf::build(
-            &mesh,
-            crate::scene::sdf3d::DEFAULT_VOXEL_M,
-            crate::scene::sdf3d::MARGIN_M,
-        )
-        .with_context(|| format!("{}: no triangles to build a 3D SDF from", path.display()))?;
+    let sdf = if let Some(voxel_m) = sdf_voxel_m {
+        let sdf = crate::scene::SceneSdf::build(&mesh, voxel_m, crate::scene::sdf3d::MARGIN_M)
+            .with_context(|| format!("{}: no triangles to build a 3D SDF from", path.display()))?;
         Some(std::sync::Arc::new(sdf))
     } else {
         None
@@ -377,7 +412,7 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
     let fixed = plan
         .scene
         .as_ref()
-        .map(|s| fixed_scene(s, false))
+        .map(|s| fixed_scene(s, None))
         .transpose()?;
     let parts = Parts {
         model: &model,

@@ -86,9 +86,6 @@ pub struct RawTrainPolicy {
     pub output: RawPolicyOutput,
 }
 
-/// Most other people in a crossing scene.
-const MAX_CROSSING_PEOPLE: usize = 16;
-
 /// Reads and resolves a policy training config.
 pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
     let raw: RawTrainPolicy = load_toml(path)?;
@@ -217,11 +214,11 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             && c.timing_jitter_s >= 0.0
             && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2
             && (1..=c.people.1).contains(&c.people.0)
-            && c.people.1 <= MAX_CROSSING_PEOPLE)
+            && c.people.1 <= crate::policy::crossing_scene::MAX_PEOPLE)
         {
             return Err(bad(
                 &key("env.crossing"),
-                format!("expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0, |cross_angle_rad| < π/2 and 1 ≤ people.0 ≤ people.1 ≤ {MAX_CROSSING_PEOPLE}"),
+                format!("expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0, |cross_angle_rad| < π/2 and 1 ≤ people.0 ≤ people.1 ≤ {}", crate::policy::crossing_scene::MAX_PEOPLE),
             ));
         }
         stages.push(StagePlan {

@@ -16,6 +16,9 @@ use serde::{Deserialize, Serialize};
 use crate::math::random::uniform_open01;
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 
+/// Most other people a crossing scene may have (a config's `people` is checked against it).
+pub const MAX_PEOPLE: usize = 16;
+
 /// How crossing scenes are drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

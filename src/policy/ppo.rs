@@ -143,8 +143,12 @@ impl PolicyTrainPlan {
 /// The shipped policy (relative to the crate's folder): the box-and-crossing policy of
 /// `configs/train_policy.toml`, fine-tuned with apartment episodes
 /// (`configs/train_policy_apartment.toml`), then with the pace bonus
-/// (`configs/train_policy_pace.toml`).
-pub const SHIPPED_POLICY: &str = "assets/policy/pace/policy.safetensors";
+/// (`configs/train_policy_pace.toml`), then among crossings of one to four people
+/// (`configs/train_policy_crowd.toml`).
+pub const SHIPPED_POLICY: &str = "assets/policy/crowd/policy.safetensors";
+
+/// The config whose run wrote [`SHIPPED_POLICY`].
+pub const SHIPPED_POLICY_CONFIG: &str = "configs/train_policy_crowd.toml";
 
 /// Where the shipped policy is.
 pub fn shipped_policy_path() -> PathBuf {
