@@ -756,6 +756,7 @@ fn path_follow_row(
     fixed: &crate::policy::env::FixedScene,
 ) -> Result<PolicyRow> {
     use crate::eval::metrics::AgentResult;
+    use crate::motion::cvae::pace::Quantiles;
     use crate::synth::crowd::{
         run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering,
     };
@@ -812,15 +813,9 @@ fn path_follow_row(
         .collect::<Result<_>>()?;
     let n = agents.len().max(1) as f64;
     let mean = |f: &dyn Fn(&AgentResult) -> f64| agents.iter().map(f).sum::<f64>() / n;
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
-    };
-    let reached: Vec<f64> = agents
-        .iter()
-        .filter(|a| a.reached)
-        .map(|a| a.speed_m_s)
-        .collect();
+    // The same quantiles as the environment's evaluation reports.
+    let distance = Quantiles::of(agents.iter().map(|a| a.final_distance_m));
+    let speed = Quantiles::of(agents.iter().filter(|a| a.reached).map(|a| a.speed_m_s));
     Ok(PolicyRow {
         policy: "A* path following (no policy)".into(),
         weights: String::new(),
@@ -833,9 +828,9 @@ fn path_follow_row(
         penetration_share: 0.0,
         scene_penetration_share: None,
         view_cos: mean(&|a| a.view_cos),
-        final_distance_median_m: median(agents.iter().map(|a| a.final_distance_m).collect()),
-        final_distance_mean_m: Some(mean(&|a| a.final_distance_m)),
-        speed_successful_median_m_s: median(reached),
+        final_distance_median_m: distance.p50,
+        final_distance_mean_m: Some(distance.mean),
+        speed_successful_median_m_s: speed.p50,
         wall_s: t0.elapsed().as_secs_f64(),
         setup_s: None,
     })
