@@ -1,5 +1,6 @@
 //! Motion-primitive decoding on the CPU with the shipped weights: the network alone (1, 16, 64
-//! and 256 primitives) in f32 through the plain f32 decoder (what inference runs) and through
+//! and 256 primitives) in f32 through the plain f32 decoder (what inference runs; one primitive
+//! alone reads its weights in f16, and once more in f32) and through
 //! burn, burn in f16 and bf16 (1 and 64), and the whole inference call (network, world frames,
 //! 67 markers and CPF per frame in f64) for one primitive and for 16.
 //! Prints the network's multiply-adds per primitive so that achieved FLOP/s can be read off.
@@ -59,6 +60,15 @@ fn bench(c: &mut Criterion) {
     let (seed_features, floors, flat_z) = (tile(&seed_features), tile(&floors), tile(&flat_z));
 
     let mut g = c.benchmark_group("primitive");
+    // One primitive with its weights in f32 (the default reads them in f16).
+    let all_f32 = MotionModel::load(&weights)
+        .unwrap()
+        .without_half_precision();
+    g.throughput(Throughput::Elements(1));
+    g.bench_function(BenchmarkId::new("network_f32_f32_weights", 1), |b| {
+        let s = &seed_features[..SEED_FRAMES * FRAME_DIM];
+        b.iter(|| all_f32.decode_features(s, &floors[..1], &flat_z[..l]))
+    });
     for batch in [1usize, 16, 64, 256] {
         g.throughput(Throughput::Elements(batch as u64));
         let s = &seed_features[..batch * SEED_FRAMES * FRAME_DIM];

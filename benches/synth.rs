@@ -134,7 +134,7 @@ fn bench(c: &mut Criterion) {
     let device = Default::default();
     let mut rng = <rand_chacha::ChaCha8Rng as rand_core::SeedableRng>::seed_from_u64(0);
     g.bench_function("policy_forward", |b| {
-        b.iter(|| egogen::policy::ppo::act(&policy, obs.clone(), Some(&mut rng), &device))
+        b.iter(|| egogen::policy::ppo::actions(&policy, obs.clone(), Some(&mut rng), &device))
     });
     let z = vec![vec![0f32; model.latent_dim()]];
     g.bench_function("decode_and_pose", |b| {

@@ -153,6 +153,27 @@ fn first_actions_are_close_to_the_standard_normal() {
     assert!(kl.iter().all(|&k| k < 0.5), "{kl:?}");
 }
 
+/// Steering draws the same actions as training's `act`, without the critic.
+#[test]
+fn steering_actions_are_the_actions_act_draws() {
+    use egogen::policy::ppo::{act, actions, load_policy};
+    use rand_core::SeedableRng;
+    let device = Default::default();
+    let shipped = common::repo_root().join(egogen::policy::ppo::SHIPPED_POLICY);
+    let (_, net) = load_policy::<TrainBackend>(&shipped, &device).unwrap();
+    let obs: Vec<f32> = (0..3 * OBS_DIM)
+        .map(|k| ((k as f32) * 0.618).fract() * 2.0 - 1.0)
+        .collect();
+    for sampled in [false, true] {
+        let mut r1 = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let mut r2 = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let (a, ..) = act(&net, obs.clone(), sampled.then_some(&mut r1), &device);
+        let b = actions(&net, obs.clone(), sampled.then_some(&mut r2), &device);
+        assert_eq!(a.len(), 3 * net.latent_dim());
+        assert_eq!(a, b, "sampled: {sampled}");
+    }
+}
+
 fn tiny_config(dir: &Path) -> String {
     let root = common::repo_root();
     format!(

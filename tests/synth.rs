@@ -190,8 +190,9 @@ dir = "take"
     assert_eq!(checks.non_finite_frames, 0);
     assert!(checks.min_eye_height_m > 1.0, "{checks:?}");
     assert!(checks.max_lowest_marker_gap_m < 0.2, "{checks:?}");
-    // Starts and goals are drawn inside the walls; paths may graze the ground outside.
-    assert!(checks.outside_region_share < 0.1, "{checks:?}");
+    // Starts and goals are drawn inside the walls, and the agents sense the ground outside as
+    // blocked: a shoulder may pass a doorway, nobody walks out.
+    assert!(checks.outside_region_share < 0.02, "{checks:?}");
     for a in &out.summary.agents {
         assert_eq!(
             a.state,

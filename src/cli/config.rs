@@ -100,7 +100,8 @@ pub struct RawScene {
     pub path: Option<PathBuf>,
     /// Seed for placing the walk in the scene (default 0; not with agents).
     pub seed: Option<u64>,
-    /// With agents: draw starts and goals inside the walls only (default true).
+    /// With agents: draw starts and goals inside the walls only, and let the agents sense the
+    /// ground around the walls as blocked (default true).
     pub indoors: Option<bool>,
     /// Close a scene that has no ceiling with one at the top of its walls when rendering
     /// (default true; a scene with its own ceiling is left as it is).

@@ -36,8 +36,9 @@ pub struct RawSynthScene {
     pub path: Option<PathBuf>,
     /// Side of the open square floor centred on the origin (m, default 8).
     pub floor_m: Option<f64>,
-    /// Draw starts and goals inside the walls only (default true): the ground around a
-    /// building is not where its people walk.
+    /// Draw starts and goals inside the walls only, and block the ground around the walls in
+    /// the map the agents sense (default true): the ground around a building is not where its
+    /// people walk.
     pub indoors: Option<bool>,
 }
 
@@ -550,12 +551,17 @@ pub fn place_agents(
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0x57A27);
     let mut out: Vec<AgentPlan> = Vec::with_capacity(plan.agents.len());
     let on_map = |p: DVec2| map.is_walkable_at(p);
+    let floor = if region.is_some() {
+        "walkable floor inside the walls ([scene] indoors = false walks outside too)"
+    } else {
+        "walkable floor"
+    };
     for a in &plan.agents {
         let start = match a.start {
             Some(p) => {
                 if !on_map(p) {
                     anyhow::bail!(
-                        "{}: agent {}: start [{}, {}] is not on the walkable floor",
+                        "{}: agent {}: start [{}, {}] is not on the {floor}",
                         plan.config.display(),
                         a.name,
                         p.x,
@@ -588,7 +594,7 @@ pub fn place_agents(
         for g in &a.goals {
             if !on_map(*g) {
                 anyhow::bail!(
-                    "{}: agent {}: goal [{}, {}] is not on the walkable floor",
+                    "{}: agent {}: goal [{}, {}] is not on the {floor}",
                     plan.config.display(),
                     a.name,
                     g.x,
@@ -647,6 +653,12 @@ pub fn synthesize(
     use crate::policy::{PosePrior, SeedBank};
     let map = synth_map(plan)?;
     let region = synth_region(plan, &map);
+    // Inside the walls, the ground around the building is a wall to the agents' senses too:
+    // without it they leave through the outer doors.
+    let map = match &region {
+        Some(r) => map.restricted_to(r),
+        None => map,
+    };
     let agents = place_agents(plan, &map, region.as_deref())?;
     for (a, draft) in agents.iter().zip(&plan.agents) {
         if !draft.betas_drawn && a.betas.len() > body.num_betas() {

@@ -210,14 +210,28 @@ impl<B: Backend> ActorCritic<B> {
 
     pub fn forward(&self, obs: Tensor<B, 2>) -> PolicyOutput<B> {
         let h = self.features(obs);
-        let l = self.latent_dim;
-        let a = self.actor.forward(h.clone());
-        let value = self.critic.forward(h).squeeze_dim(1);
+        let value = self.critic.forward(h.clone()).squeeze_dim(1);
+        let (mean, logvar) = self.actor_head(h);
         PolicyOutput {
-            mean: a.clone().narrow(1, 0, l),
-            logvar: a.narrow(1, l, l).clamp(LOGVAR_RANGE.0, LOGVAR_RANGE.1),
+            mean,
+            logvar,
             value,
         }
+    }
+
+    /// The actor alone, `(mean, logvar)` `[B, L]` each: what acting needs, without the
+    /// critic's value (as [`Self::forward`] computes them).
+    pub fn actor_forward(&self, obs: Tensor<B, 2>) -> (Tensor<B, 2>, Tensor<B, 2>) {
+        self.actor_head(self.features(obs))
+    }
+
+    fn actor_head(&self, h: Tensor<B, 2>) -> (Tensor<B, 2>, Tensor<B, 2>) {
+        let l = self.latent_dim;
+        let a = self.actor.forward(h);
+        (
+            a.clone().narrow(1, 0, l),
+            a.narrow(1, l, l).clamp(LOGVAR_RANGE.0, LOGVAR_RANGE.1),
+        )
     }
 
     /// Action size.

@@ -327,6 +327,28 @@ pub fn act<B: Backend>(
     (values(actions), logp, values(out.value), kl)
 }
 
+/// Policy actions for observations, sampled (with `rng`) or the mean: [`act`]'s actions, the
+/// same numbers from the same draws, without the critic, log-probabilities or KL (what
+/// steering needs).
+pub fn actions<B: Backend>(
+    net: &ActorCritic<B>,
+    obs: Vec<f32>,
+    rng: Option<&mut ChaCha8Rng>,
+    device: &B::Device,
+) -> Vec<f32> {
+    let d = net.obs_layout().dim();
+    let b = obs.len() / d;
+    let l = net.latent_dim();
+    let (mean, logvar) = net.actor_forward(to_tensor(obs, [b, d], device));
+    values(match rng {
+        Some(rng) => {
+            let eps = to_tensor(normal_samples(rng, b * l), [b, l], device);
+            mean + logvar.mul_scalar(0.5).exp() * eps
+        }
+        None => mean,
+    })
+}
+
 /// Runs validation episodes with the sampled policy.
 fn validate(
     net: &ActorCritic<<TrainBackend as AutodiffBackend>::InnerBackend>,

@@ -219,7 +219,7 @@ pub fn evaluate<B: burn::prelude::Backend>(
             Controller::Sampling { k } => sampling_step(e, *k, &mut rng),
             Controller::Policy { net, mean_action } => {
                 let rng = (!mean_action).then_some(&mut rng);
-                let (a, _, _, _) = super::ppo::act(*net, e.observations(), rng, &device);
+                let a = super::ppo::actions(*net, e.observations(), rng, &device);
                 e.step(&a)
             }
         },

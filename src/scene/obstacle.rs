@@ -71,6 +71,10 @@ impl Obstacle2 {
                 half_extents,
                 yaw_rad,
             } => {
+                // Farther than the corners: outside, without the rotation's sine and cosine.
+                if (p - centre).length_squared() > half_extents.length_squared() {
+                    return false;
+                }
                 let local = DVec2::from_angle(-yaw_rad).rotate(p - centre);
                 local.x.abs() <= half_extents.x && local.y.abs() <= half_extents.y
             }

@@ -264,6 +264,28 @@ impl WalkableMap {
         inside.iter().any(|&i| i).then_some(inside)
     }
 
+    /// The map with every walkable cell outside `region` blocked, as a wall would block it:
+    /// signed distances and components are those of the smaller floor. Agents that sense this
+    /// map see the ground around a building as blocked and stay inside its walls.
+    pub fn restricted_to(&self, region: &[bool]) -> WalkableMap {
+        assert_eq!(
+            region.len(),
+            self.nx * self.ny,
+            "region must have nx·ny cells"
+        );
+        let mut map = self.clone();
+        for k in 0..self.nx * self.ny {
+            if map.walkable[k] && !region[k] {
+                map.walkable[k] = false;
+                map.occupied[k] = true;
+            }
+        }
+        map.sdf_m = signed_distance(&map.walkable, map.nx, map.ny, map.cell_m);
+        map.component.fill(0);
+        map.label_components();
+        map
+    }
+
     /// Number of walkable cells.
     pub fn walkable_count(&self) -> usize {
         self.walkable.iter().filter(|&&w| w).count()
@@ -541,6 +563,35 @@ mod tests {
             "ground around"
         );
         assert!(!at(5.0, 3.0), "a wall is not inside");
+    }
+
+    #[test]
+    fn a_map_restricted_to_the_inside_blocks_the_ground_around() {
+        let map = room_on_ground();
+        let inside = map.indoor_cells(0.75).unwrap();
+        let closed = map.restricted_to(&inside);
+        let p = |x: f64, y: f64| DVec2::new(x, y);
+        assert!(map.is_walkable_at(p(1.0, 1.0)) && !closed.is_walkable_at(p(1.0, 1.0)));
+        assert!(
+            closed.occupied[closed.nx + 1],
+            "the ground around blocks like a wall"
+        );
+        assert!(closed.is_walkable_at(p(5.0, 5.0)) && closed.is_walkable_at(p(5.0, 3.6)));
+        // The door leads nowhere now: one component, and the room's free space ends at it.
+        let components: std::collections::BTreeSet<u32> = closed
+            .component
+            .iter()
+            .copied()
+            .filter(|&c| c > 0)
+            .collect();
+        assert_eq!(components.len(), 1);
+        assert!(closed.sdf_at(p(5.0, 3.6)) < map.sdf_at(p(5.0, 3.6)));
+        assert_eq!(
+            closed.walkable_count(),
+            inside.iter().filter(|&&x| x).count()
+        );
+        // Walkable now: exactly the walkable cells of the region.
+        assert!((0..map.nx * map.ny).all(|k| closed.walkable[k] == (map.walkable[k] && inside[k])));
     }
 
     #[test]

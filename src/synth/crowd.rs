@@ -29,7 +29,7 @@ use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
 use crate::policy::net::ActorCritic;
-use crate::policy::ppo::act;
+use crate::policy::ppo::actions;
 use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
 use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker};
 use crate::policy::PosePrior;
@@ -461,8 +461,7 @@ impl<'m> Agent<'m> {
                     &mut obs,
                 );
                 let rng = (!mean_action).then_some(&mut self.rng);
-                let (a, ..) = act(net, obs, rng, &Default::default());
-                vec![a]
+                vec![actions(net, obs, rng, &Default::default())]
             }
             Steering::Sampling { k } | Steering::PathFollow { k } => {
                 normal_samples(&mut self.rng, k.max(1) * l)

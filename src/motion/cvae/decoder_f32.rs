@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use wide::f32x8;
 
 use super::features::FRAME_DIM;
+use super::half_matvec::HalfMatrix;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
 /// Frames written per primitive (the network's `DECODED_FRAMES`).
@@ -77,6 +78,21 @@ pub struct DecoderF32 {
     gru_hidden: DenseLayer,
     /// `h → velocity` (the residual added to the previous frame).
     out: DenseLayer,
+    /// The per-frame products in f16 for a primitive decoded alone, where this processor has
+    /// the instructions ([`HalfMatrix::supported`]).
+    half: Option<HalfLayers>,
+}
+
+/// The decoder's weights in f16: the initial state's layer and the latent's rows of the input
+/// gates (read once per primitive), and those every GRU step reads: the frame and velocity
+/// rows of the input gates, the hidden gates, the output layer.
+#[derive(Debug, Clone, PartialEq)]
+struct HalfLayers {
+    init: HalfMatrix,
+    latent_rows: HalfMatrix,
+    frame_rows: HalfMatrix,
+    gru_hidden: HalfMatrix,
+    out: HalfMatrix,
 }
 
 impl DecoderF32 {
@@ -101,6 +117,16 @@ impl DecoderF32 {
         gru_input.check("gru_input", latent + 2 * FRAME_DIM + 1, 3 * hidden)?;
         gru_hidden.check("gru_hidden", hidden, 3 * hidden)?;
         out.check("dec_out", hidden, FRAME_DIM)?;
+        let half = HalfMatrix::supported().then(|| {
+            let (l, f) = (latent, FRAME_DIM);
+            HalfLayers {
+                init: HalfMatrix::new(init.inputs, hidden, &init.weight),
+                latent_rows: HalfMatrix::new(l, 3 * hidden, gru_input.rows(0..l)),
+                frame_rows: HalfMatrix::new(2 * f, 3 * hidden, gru_input.rows(l..l + 2 * f)),
+                gru_hidden: HalfMatrix::new(hidden, 3 * hidden, &gru_hidden.weight),
+                out: HalfMatrix::new(hidden, f, &out.weight),
+            }
+        });
         Ok(Self {
             latent,
             hidden,
@@ -111,7 +137,20 @@ impl DecoderF32 {
             gru_input,
             gru_hidden,
             out,
+            half,
         })
+    }
+
+    /// The decoder without its f16 path: every batch size decodes in f32 (the reference the
+    /// f16 path is measured against).
+    pub fn without_half_precision(mut self) -> Self {
+        self.half = None;
+        self
+    }
+
+    /// Whether a primitive decoded alone reads its weights in f16.
+    pub fn half_precision_weights(&self) -> bool {
+        self.half.is_some()
     }
 
     /// Latent size.
@@ -136,6 +175,9 @@ impl DecoderF32 {
         assert_eq!(latents.len(), b * l, "latents of {b} primitives");
         let per = PRIMITIVE_FRAMES * f;
         let mut out = vec![0.0f32; b * per];
+        // A primitive decoded alone reads the weights in f16 (half the bytes; see
+        // `half_matvec`), a batch in f32 through `gemm`.
+        let half = self.half.as_ref().filter(|_| b == 1);
         out.par_chunks_mut(BLOCK * per)
             .enumerate()
             .for_each(|(k, block)| {
@@ -146,13 +188,21 @@ impl DecoderF32 {
                     &floors[start..start + n],
                     &latents[start * l..(start + n) * l],
                     block,
+                    half,
                 );
             });
         out
     }
 
     /// One block of `n` primitives on this thread.
-    fn decode_block(&self, seeds: &[f32], floors: &[f32], latents: &[f32], out: &mut [f32]) {
+    fn decode_block(
+        &self,
+        seeds: &[f32],
+        floors: &[f32],
+        latents: &[f32],
+        out: &mut [f32],
+        half: Option<&HalfLayers>,
+    ) {
         let n = floors.len();
         let (l, f, h) = (self.latent, FRAME_DIM, self.hidden);
         let sf = SEED_FRAMES * f;
@@ -172,18 +222,26 @@ impl DecoderF32 {
             row[l + sf] = normal_floor[i];
         }
         let mut state = with_bias(n, &self.init.bias);
-        matmul_add(n, self.init.inputs, h, &x, &self.init.weight, &mut state);
-        tanh_in_place(&mut state);
         // The latent's and the floor's share of the input gates, fixed over the frames.
         let mut fixed_gates = with_bias(n, &self.gru_input.bias);
-        matmul_add(
-            n,
-            l,
-            3 * h,
-            latents,
-            self.gru_input.rows(0..l),
-            &mut fixed_gates,
-        );
+        match half {
+            Some(w) => {
+                w.init.mul_add(&x, &mut state);
+                w.latent_rows.mul_add(latents, &mut fixed_gates);
+            }
+            None => {
+                matmul_add(n, self.init.inputs, h, &x, &self.init.weight, &mut state);
+                matmul_add(
+                    n,
+                    l,
+                    3 * h,
+                    latents,
+                    self.gru_input.rows(0..l),
+                    &mut fixed_gates,
+                );
+            }
+        }
+        tanh_in_place(&mut state);
         let floor_row = self.gru_input.rows(l + 2 * f..l + 2 * f + 1);
         for i in 0..n {
             let row = &mut fixed_gates[i * 3 * h..(i + 1) * 3 * h];
@@ -211,23 +269,28 @@ impl DecoderF32 {
         let mut velocity = vec![0.0f32; n * f];
         for t in 0..DECODED_FRAMES {
             input_gates.copy_from_slice(&fixed_gates);
-            matmul_add(
-                n,
-                2 * f,
-                3 * h,
-                &frame_velocity,
-                frame_rows,
-                &mut input_gates,
-            );
             fill_bias(&mut hidden_gates, &self.gru_hidden.bias);
-            matmul_add(
-                n,
-                h,
-                3 * h,
-                &state,
-                &self.gru_hidden.weight,
-                &mut hidden_gates,
-            );
+            if let Some(w) = half {
+                w.frame_rows.mul_add(&frame_velocity, &mut input_gates);
+                w.gru_hidden.mul_add(&state, &mut hidden_gates);
+            } else {
+                matmul_add(
+                    n,
+                    2 * f,
+                    3 * h,
+                    &frame_velocity,
+                    frame_rows,
+                    &mut input_gates,
+                );
+                matmul_add(
+                    n,
+                    h,
+                    3 * h,
+                    &state,
+                    &self.gru_hidden.weight,
+                    &mut hidden_gates,
+                );
+            }
             for i in 0..n {
                 gru_cell(
                     &input_gates[i * 3 * h..(i + 1) * 3 * h],
@@ -236,7 +299,10 @@ impl DecoderF32 {
                 );
             }
             fill_bias(&mut velocity, &self.out.bias);
-            matmul_add(n, h, f, &state, &self.out.weight, &mut velocity);
+            match half {
+                Some(w) => w.out.mul_add(&state, &mut velocity),
+                None => matmul_add(n, h, f, &state, &self.out.weight, &mut velocity),
+            }
             for i in 0..n {
                 let row = &mut frame_velocity[i * 2 * f..(i + 1) * 2 * f];
                 let v = &velocity[i * f..(i + 1) * f];

@@ -13,10 +13,7 @@ use super::net::decode_raw;
 use super::net::{ArchConfig, PrimitiveVae};
 use super::rig::BODY_JOINTS;
 use super::weights::{self, WeightsError};
-use crate::body::{
-    farthest_point_markers, joint, BodyModel, BodyParams, CpfCalibration, PoseError, ShapedBody,
-    NUM_MARKERS,
-};
+use crate::body::{joint, BodyModel, BodyParams, CpfCalibration, PoseError, ShapedBody};
 use crate::math::{Affine3, Vec3};
 use crate::motion::primitive::{
     canonical_frame, Primitive, PrimitiveError, PRIMITIVE_FRAMES, SEED_FRAMES,
@@ -78,7 +75,7 @@ impl<'m> BodyContext<'m> {
             model,
             shaped,
             betas: betas.to_vec(),
-            marker_ids: farthest_point_markers(model, NUM_MARKERS),
+            marker_ids: model.marker_ids().to_vec(),
             cpf,
         })
     }
@@ -175,6 +172,23 @@ impl MotionModel {
             net,
             ..self
         }
+    }
+
+    /// The model decoding a primitive alone in f32 too, not on f16 weights (the
+    /// reference of that path: `DecoderF32::without_half_precision`).
+    pub fn without_half_precision(self) -> Self {
+        Self {
+            decoder: self.decoder.map(DecoderF32::without_half_precision),
+            ..self
+        }
+    }
+
+    /// Whether a primitive decoded alone reads f16 weights (on x86-64 with AVX2, FMA
+    /// and F16C, in f32 precision).
+    pub fn half_precision_weights(&self) -> bool {
+        self.decoder
+            .as_ref()
+            .is_some_and(DecoderF32::half_precision_weights)
     }
 
     /// Latent size.

@@ -17,6 +17,7 @@ pub mod data;
 pub mod decoder_f32;
 pub mod eval;
 pub mod features;
+pub mod half_matvec;
 pub mod infer;
 pub mod loss;
 pub mod net;

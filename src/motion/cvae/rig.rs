@@ -9,7 +9,7 @@
 
 use burn::prelude::*;
 
-use crate::body::{farthest_point_markers, joint, BodyModel, PoseError, NUM_MARKERS, PARENTS};
+use crate::body::{joint, BodyModel, PoseError, PARENTS};
 use crate::math::Vec3;
 
 /// Joints the motion model drives: pelvis (global orient) and the 21 body joints.
@@ -42,7 +42,7 @@ impl RigGeometry {
     /// The rig of `model` shaped by `betas`.
     pub fn new(model: &BodyModel, betas: &[f64]) -> Result<Self, PoseError> {
         let shaped = model.shape(betas, &[])?;
-        let marker_ids = farthest_point_markers(model, NUM_MARKERS);
+        let marker_ids = model.marker_ids().to_vec();
         let body_ancestor = |mut j: usize| {
             while j >= BODY_JOINTS {
                 j = PARENTS[j].unwrap_or(0);

@@ -1,0 +1,171 @@
+//! One primitive's matrix–vector products with the weights stored in half precision (IEEE
+//! f16), computed in f32: the decoder's path for a single primitive, where reading the weights
+//! costs more than the arithmetic (docs/MOTION.md, "Half-precision weights at batch 1").
+//!
+//! At batch 1 each of the decoder's 18 GRU steps reads every weight of the step once: 1.75 MB
+//! in f32, more than a core's 1 MB L2 cache, so the f32 product streams them from L3 every
+//! step. In f16 the step's weights take 0.88 MB. The products themselves stay f32: weights are
+//! widened to f32 in registers (x86-64 F16C) and accumulated with fused multiply-adds.
+//!
+//! Only on x86-64 processors with AVX2, FMA and F16C ([`HalfMatrix::supported`]); elsewhere the
+//! decoder keeps its f32 path.
+
+/// Output columns per tile: eight registers of eight f32 accumulators.
+const TILE: usize = 64;
+
+/// A `[inputs × outputs]` weight matrix (burn's `Linear` layout) in f16, packed tile by tile:
+/// for each tile of [`TILE`] output columns, the inputs' rows of that tile one after another,
+/// so that a product reads the matrix front to back. Columns past `outputs` are zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HalfMatrix {
+    inputs: usize,
+    outputs: usize,
+    /// f16 bit patterns, `[tiles × inputs × TILE]`.
+    packed: Vec<u16>,
+}
+
+impl HalfMatrix {
+    /// Whether this processor runs the f16 product (x86-64 with AVX2, FMA and F16C).
+    pub fn supported() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+                && std::arch::is_x86_feature_detected!("f16c")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+
+    /// Rounds a row-major `[inputs × outputs]` f32 matrix to f16 (to nearest, ties to even).
+    ///
+    /// # Panics
+    /// When `weight` does not hold `inputs × outputs` values (a caller's bug).
+    pub fn new(inputs: usize, outputs: usize, weight: &[f32]) -> Self {
+        assert_eq!(weight.len(), inputs * outputs, "weights of the matrix");
+        let tiles = outputs.div_ceil(TILE);
+        let mut packed = vec![0u16; tiles * inputs * TILE];
+        for t in 0..tiles {
+            for k in 0..inputs {
+                for c in 0..TILE.min(outputs - t * TILE) {
+                    packed[(t * inputs + k) * TILE + c] =
+                        half::f16::from_f32(weight[k * outputs + t * TILE + c]).to_bits();
+                }
+            }
+        }
+        Self {
+            inputs,
+            outputs,
+            packed,
+        }
+    }
+
+    /// The weight at `(input, output)`, widened to f32.
+    pub fn get(&self, input: usize, output: usize) -> f32 {
+        let (t, c) = (output / TILE, output % TILE);
+        half::f16::from_bits(self.packed[(t * self.inputs + input) * TILE + c]).to_f32()
+    }
+
+    /// `y += x · W` for one row `x` `[inputs]`, `y` `[outputs]`.
+    ///
+    /// # Panics
+    /// When the lengths disagree with the matrix, or on a processor without the instructions
+    /// ([`Self::supported`] says; a caller's bug).
+    pub fn mul_add(&self, x: &[f32], y: &mut [f32]) {
+        assert!(
+            x.len() == self.inputs && y.len() == self.outputs,
+            "{} inputs and {} outputs for a {} × {} matrix",
+            x.len(),
+            y.len(),
+            self.inputs,
+            self.outputs
+        );
+        assert!(Self::supported(), "f16 products need AVX2, FMA and F16C");
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the processor has the instructions (checked above); `mul_add_x86` reads
+        // `packed` within its `tiles × inputs × TILE` values and writes `y` within its length.
+        unsafe {
+            self.mul_add_x86(x, y)
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma,f16c")]
+    unsafe fn mul_add_x86(&self, x: &[f32], y: &mut [f32]) {
+        use std::arch::x86_64::*;
+        let k_n = self.inputs;
+        let mut tail = [0f32; TILE];
+        for (t, tile) in self.packed.chunks_exact(k_n * TILE).enumerate() {
+            let start = t * TILE;
+            let width = TILE.min(self.outputs - start);
+            let out: &mut [f32] = if width == TILE {
+                &mut y[start..start + TILE]
+            } else {
+                tail[..width].copy_from_slice(&y[start..start + width]);
+                tail[width..].fill(0.0);
+                &mut tail
+            };
+            let o = out.as_mut_ptr();
+            let mut acc = [_mm256_setzero_ps(); 8];
+            for (r, a) in acc.iter_mut().enumerate() {
+                *a = _mm256_loadu_ps(o.add(8 * r));
+            }
+            let w = tile.as_ptr();
+            for (k, &xk) in x.iter().enumerate() {
+                let xb = _mm256_set1_ps(xk);
+                let row = w.add(k * TILE);
+                for (r, a) in acc.iter_mut().enumerate() {
+                    let h = _mm_loadu_si128(row.add(8 * r) as *const __m128i);
+                    *a = _mm256_fmadd_ps(xb, _mm256_cvtph_ps(h), *a);
+                }
+            }
+            for (r, a) in acc.iter().enumerate() {
+                _mm256_storeu_ps(o.add(8 * r), *a);
+            }
+            if width < TILE {
+                y[start..start + width].copy_from_slice(&tail[..width]);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_product_is_the_rounded_matrix_times_the_vector() {
+        if !HalfMatrix::supported() {
+            eprintln!("no AVX2/FMA/F16C here: nothing to check");
+            return;
+        }
+        // 70 outputs: one full tile and a partial one; 5 inputs.
+        let (k, n) = (5, 70);
+        let w: Vec<f32> = (0..k * n)
+            .map(|i| ((i as f32) * 0.173).sin() * 2.0)
+            .collect();
+        let x: Vec<f32> = (0..k).map(|i| 1.0 - 0.37 * i as f32).collect();
+        let m = HalfMatrix::new(k, n, &w);
+        let mut y: Vec<f32> = (0..n).map(|j| j as f32 * 0.01).collect();
+        let before = y.clone();
+        m.mul_add(&x, &mut y);
+        for j in 0..n {
+            let want: f64 = before[j] as f64
+                + (0..k)
+                    .map(|i| x[i] as f64 * m.get(i, j) as f64)
+                    .sum::<f64>();
+            assert!(
+                (y[j] as f64 - want).abs() < 1e-5,
+                "{j}: {} against {want}",
+                y[j]
+            );
+            // Rounding to f16 keeps 11 significant bits.
+            for i in 0..k {
+                let (a, b) = (w[i * n + j], m.get(i, j));
+                assert!((a - b).abs() <= a.abs() * 4.9e-4 + 6e-8, "{a} → {b}");
+            }
+        }
+    }
+}
