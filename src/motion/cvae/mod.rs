@@ -6,7 +6,7 @@
 //! Owns the network, its losses (pose, FK markers through a tensor rig, velocity, foot skate and
 //! floor, robust KL), training (single primitives, then rollout over chains, then prior
 //! fine-tuning), weights files, the inference API (burn's decoder beside a plain f32 one for
-//! few primitives at a time), best-of-K random-latent sampling, the pace
+//! few primitives at a time, reading f16 weights for one alone), best-of-K random-latent sampling, the pace
 //! and turn of primitives, and latents chosen for a target velocity and heading (`control`);
 //! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
 
