@@ -14,7 +14,7 @@
 const TILE: usize = 64;
 
 /// A `[inputs × outputs]` weight matrix (burn's `Linear` layout) in f16, packed tile by tile:
-/// for each tile of [`TILE`] output columns, the inputs' rows of that tile one after another,
+/// for each tile of 64 output columns, the inputs' rows of that tile one after another,
 /// so that a product reads the matrix front to back. Columns past `outputs` are zero.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HalfMatrix {
