@@ -71,6 +71,7 @@ pub struct RawMotion {
     pub stop_when_done: Option<bool>,
     pub success_m: Option<f64>,
     pub max_primitives_per_goal: Option<usize>,
+    pub penetration_redraws: Option<usize>,
     pub wander_distance_m: Option<[f64; 2]>,
     pub clearance_m: Option<f64>,
     pub seed: Option<u64>,

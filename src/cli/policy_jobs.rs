@@ -325,8 +325,9 @@ pub(crate) fn held_out_scene(
     )
 }
 
-/// A fixed scene loaded, with its start/goal pairs drawn as `spec` says (inside the walls
-/// with `spec.indoors`, when the scene encloses anything); too few pairs is an error. With
+/// A fixed scene loaded, with its start/goal pairs drawn as `spec` says (with `spec.indoors`,
+/// when the scene encloses anything: inside the walls, on a map whose ground around them is
+/// blocked); too few pairs is an error. With
 /// `sdf_voxel_m` its 3D SDF is built too with voxels that size (`docs/SCENES.md`), so that
 /// scene penetration (paper Eq. 11) is measured.
 fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
@@ -337,6 +338,11 @@ fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene
         .indoors
         .then(|| map.indoor_cells(crate::cli::synth::MIN_ENCLOSED))
         .flatten();
+    // Inside the walls the ground around them is blocked, as `egogen synth` senses it.
+    let map = match &region {
+        Some(r) => map.restricted_to(r),
+        None => map,
+    };
     let (lo, hi) = spec.pair_distance_m;
     let pairs = crate::policy::tasks::scene_pairs(
         &map,

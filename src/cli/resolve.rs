@@ -86,6 +86,10 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
                 "motion.max_primitives_per_goal",
                 m.max_primitives_per_goal.is_some(),
             ),
+            (
+                "motion.penetration_redraws",
+                m.penetration_redraws.is_some(),
+            ),
             ("motion.wander_distance_m", m.wander_distance_m.is_some()),
             ("motion.clearance_m", m.clearance_m.is_some()),
             ("motion.seed", m.seed.is_some()),
@@ -134,6 +138,7 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
                     stop_when_done: Some(m.stop_when_done.unwrap_or(false)),
                     success_m: m.success_m,
                     max_primitives_per_goal: m.max_primitives_per_goal,
+                    penetration_redraws: m.penetration_redraws,
                     wander_distance_m: m.wander_distance_m,
                     clearance_m: m.clearance_m,
                     seed: m.seed,

@@ -57,6 +57,9 @@ pub struct RawSynthMotion {
     pub stop_when_done: Option<bool>,
     pub success_m: Option<f64>,
     pub max_primitives_per_goal: Option<usize>,
+    /// Further actions drawn from the policy when its primitive walks into a wall, an
+    /// obstacle or another person (default 4; 0: none).
+    pub penetration_redraws: Option<usize>,
     /// Distance range of wandering goals (m).
     pub wander_distance_m: Option<[f64; 2]>,
     /// Free space around sampled starts and goals (m).
@@ -260,6 +263,9 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         max_primitives_per_goal: m
             .max_primitives_per_goal
             .unwrap_or(defaults.max_primitives_per_goal),
+        penetration_redraws: m
+            .penetration_redraws
+            .unwrap_or(defaults.penetration_redraws),
         primitives,
         stop_when_done: m.stop_when_done.unwrap_or(true),
         wander_distance_m: m

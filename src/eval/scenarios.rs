@@ -209,6 +209,8 @@ pub fn episode(
             primitives: scenario.max_primitives(),
             stop_when_done: true,
             seed: episode_seed,
+            // The policy as trained, without synthesis's redraws.
+            penetration_redraws: 0,
             ..CrowdSettings::default()
         },
     }

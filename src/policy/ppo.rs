@@ -104,7 +104,9 @@ pub struct TrainScene {
     pub pair_distance_m: (f64, f64),
     /// Least distance of a start or goal to anything blocking (m).
     pub clearance_m: f64,
-    /// Starts and goals inside the walls only ([`crate::scene::WalkableMap::indoor_cells`]).
+    /// Starts and goals inside the walls only ([`crate::scene::WalkableMap::indoor_cells`]),
+    /// the ground around the walls blocked in the map the walker senses
+    /// ([`crate::scene::WalkableMap::restricted_to`]).
     pub indoors: bool,
     pub seed: u64,
 }
@@ -144,11 +146,12 @@ impl PolicyTrainPlan {
 /// `configs/train_policy.toml`, fine-tuned with apartment episodes
 /// (`configs/train_policy_apartment.toml`), then with the pace bonus
 /// (`configs/train_policy_pace.toml`), then among crossings of one to four people
-/// (`configs/train_policy_crowd.toml`).
-pub const SHIPPED_POLICY: &str = "assets/policy/crowd/policy.safetensors";
+/// (`configs/train_policy_crowd.toml`), then with the apartment's doors closed
+/// (`configs/train_policy_indoors.toml`).
+pub const SHIPPED_POLICY: &str = "assets/policy/indoors/policy.safetensors";
 
 /// The config whose run wrote [`SHIPPED_POLICY`].
-pub const SHIPPED_POLICY_CONFIG: &str = "configs/train_policy_crowd.toml";
+pub const SHIPPED_POLICY_CONFIG: &str = "configs/train_policy_indoors.toml";
 
 /// Where the shipped policy is.
 pub fn shipped_policy_path() -> PathBuf {
@@ -347,6 +350,18 @@ pub fn actions<B: Backend>(
         }
         None => mean,
     })
+}
+
+/// The policy's action distribution for one observation: `(mean, standard deviation)`, `[L]`
+/// each, for drawing several actions from one forward pass.
+pub fn action_distribution<B: Backend>(
+    net: &ActorCritic<B>,
+    obs: Vec<f32>,
+    device: &B::Device,
+) -> (Vec<f32>, Vec<f32>) {
+    let d = net.obs_layout().dim();
+    let (mean, logvar) = net.actor_forward(to_tensor(obs, [1, d], device));
+    (values(mean), values(logvar.mul_scalar(0.5).exp()))
 }
 
 /// Runs validation episodes with the sampled policy.

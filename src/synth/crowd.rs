@@ -3,7 +3,9 @@
 //! senses the others' current 2D boxes (their footprints after their latest primitive) and
 //! the moving obstacles at its clock, with the same rays, observation and reward as the
 //! training environment ([`crate::policy::walker`]). No multi-agent learning: every agent
-//! runs the single-agent controller.
+//! runs the single-agent controller. One guard beyond the paper: a policy primitive that ends
+//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person) is
+//! redrawn from the same policy output, up to `penetration_redraws` times.
 //!
 //! An agent walks its goals in order; with `wander` it draws a new goal on the walkable map
 //! when its list runs out, until the take ends. A goal counts as reached when the pelvis comes
@@ -29,7 +31,7 @@ use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
 use crate::policy::net::ActorCritic;
-use crate::policy::ppo::actions;
+use crate::policy::ppo::action_distribution;
 use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
 use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker};
 use crate::policy::PosePrior;
@@ -92,6 +94,12 @@ pub struct CrowdSettings {
     pub success_m: f64,
     /// Primitives an agent spends on one goal before it is missed.
     pub max_primitives_per_goal: usize,
+    /// Policy steering: when the chosen primitive ends with the body's 2D box on more than 3
+    /// blocked cells (paper Eq. 7: walls, obstacles, the others' boxes), up to this many more
+    /// actions are drawn from the same policy output; the first that does not penetrate is
+    /// taken, else the one on the fewest blocked cells (of equals, the one whose pelvis ends
+    /// farthest into walkable space).
+    pub penetration_redraws: usize,
     /// Primitives per agent in the take (all agents step together).
     pub primitives: usize,
     /// Stop as soon as every agent is done (no goals left, fallen or failed).
@@ -108,6 +116,7 @@ impl Default for CrowdSettings {
         Self {
             success_m: 0.3,
             max_primitives_per_goal: 20,
+            penetration_redraws: 4,
             primitives: 20,
             stop_when_done: true,
             wander_distance_m: (2.0, 5.0),
@@ -445,6 +454,8 @@ impl<'m> Agent<'m> {
         settings: &CrowdSettings,
     ) -> Result<Option<(DecodedPrimitive, Judged, f64)>, CrowdError> {
         let l = parts.model.latent_dim();
+        // The policy's action distribution, kept for redraws.
+        let mut policy_dist: Option<(Vec<f32>, Vec<f32>)> = None;
         let latents: Vec<Vec<f32>> = match self.plan.steering {
             Steering::Policy { mean_action } => {
                 let net = parts.policy.expect("checked when the agent was made");
@@ -460,8 +471,14 @@ impl<'m> Agent<'m> {
                     time_left.max(0.0),
                     &mut obs,
                 );
-                let rng = (!mean_action).then_some(&mut self.rng);
-                vec![actions(net, obs, rng, &Default::default())]
+                let (mean, std) = action_distribution(net, obs, &Default::default());
+                let a = if mean_action {
+                    mean.clone()
+                } else {
+                    draw_action(&mean, &std, &mut self.rng)
+                };
+                policy_dist = Some((mean, std));
+                vec![a]
             }
             Steering::Sampling { k } | Steering::PathFollow { k } => {
                 normal_samples(&mut self.rng, k.max(1) * l)
@@ -529,6 +546,42 @@ impl<'m> Agent<'m> {
                 }
                 Err(DecodeError::NonFinite { .. }) => {}
                 Err(e) => return Err(e.into()),
+            }
+        }
+        // A policy primitive that walks into something: more actions from the same output.
+        // Of draws that all penetrate, the one on the fewest blocked cells, then the one that
+        // ends deepest in walkable space (the way back for a body already in a wall).
+        let improves = |a: &(DecodedPrimitive, Judged, f64, f64),
+                        b: &(DecodedPrimitive, Judged)| {
+            let room = |p: &DecodedPrimitive| {
+                let end = p.joints[p.joints.len() - 1][joint::PELVIS];
+                around.map.sdf_at(DVec2::new(end.x, end.y))
+            };
+            (b.1.blocked_cells, -room(&b.0)) < (a.1.blocked_cells, -room(&a.0))
+        };
+        if let Some((mean, std)) = &policy_dist {
+            for _ in 0..settings.penetration_redraws {
+                if best.as_ref().is_some_and(|b| !b.1.penetrated) {
+                    break;
+                }
+                let z = draw_action(mean, std, &mut self.rng);
+                let p = match parts.model.decode(
+                    &self.body,
+                    std::slice::from_ref(&self.walker.view.seed),
+                    &[z],
+                ) {
+                    Ok(mut d) => d.remove(0),
+                    Err(DecodeError::NonFinite { .. }) => continue,
+                    Err(e) => return Err(e.into()),
+                };
+                let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
+                let candidate = (p, j);
+                if best.as_ref().is_none_or(|b| improves(b, &candidate)) {
+                    let (p, j) = candidate;
+                    let r = j.terms.total(&weights);
+                    let r = if r.is_finite() { r } else { 0.0 };
+                    best = Some((p, j, r, r));
+                }
             }
         }
         Ok(best.map(|(p, j, r, _)| (p, j, r)))
@@ -625,6 +678,15 @@ impl<'m> Agent<'m> {
         t.pose_score = w.totals.pose_score / n;
         self.track
     }
+}
+
+/// An action `mean + std · ε`, ε ~ N(0, I) drawn from `rng`.
+fn draw_action(mean: &[f32], std: &[f32], rng: &mut ChaCha8Rng) -> Vec<f32> {
+    normal_samples(rng, mean.len())
+        .iter()
+        .zip(mean.iter().zip(std))
+        .map(|(e, (m, s))| m + s * e)
+        .collect()
 }
 
 /// A finished take: every agent's track, all of the same length.
