@@ -432,7 +432,7 @@ workers = 1
     assert!(ids.contains(&"wearer") && ids.contains(&"other"), "{ids:?}");
     // The apartment has no ceiling: the run closes it (at the top of its walls).
     assert!(ids.contains(&"egogen_ceiling"), "{ids:?}");
-    let mut seen = 0;
+    let (mut seen, mut with_joints) = (0, 0);
     for f in doc["frames"].as_array().unwrap() {
         let agents = f["agents"].as_array().unwrap();
         assert_eq!(agents.len(), 2);
@@ -510,11 +510,12 @@ workers = 1
                 on += usize::from(on_mask(p[0].as_f64().unwrap(), p[1].as_f64().unwrap()));
             }
         }
-        assert!(
-            visible > 0,
-            "frame {}: no joint of the other agent visible",
-            f["frame"]
-        );
+        if visible == 0 {
+            // A sliver of the body (a shoulder, a hand) with none of its joints in view.
+            eprintln!("frame {}: in view, no joint visible", f["frame"]);
+            continue;
+        }
+        with_joints += 1;
         eprintln!(
             "frame {}: {on} of {visible} visible joints on the mask",
             f["frame"]
@@ -525,7 +526,10 @@ workers = 1
             f["frame"]
         );
     }
-    assert!(seen >= 1, "the wearer never saw the other agent");
+    assert!(
+        seen >= 1 && with_joints >= 1,
+        "the wearer never saw the other agent ({seen} frames in view, {with_joints} with joints)"
+    );
     // Each wearer's headset sits its own way; the annotated camera poses include the offset:
     // headset⁻¹ · world_from_cpf⁻¹ · t_world_cam is the rig's cpf_from_cam, the same for both
     // wearers and every frame.
