@@ -155,21 +155,20 @@ print(n)
     assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "164");
 }
 
-/// A wandering take in the apartment (the long-take check at 30 s per agent; the 10-minute,
-/// 16-agent take is `egogen synth configs/wander16.toml`): every frame finite, the head
-/// upright above the pelvis, the feet near the floor, the pelvis on the map.
-#[test]
-fn wandering_agents_stay_upright_on_the_floor() {
-    let config = format!(
+/// A synth config: `count` policy-steered agents wandering in the shipped apartment for
+/// `duration_s`, more `[motion]` keys in `motion`.
+fn wandering_in_the_apartment(count: usize, duration_s: f64, seed: u64, motion: &str) -> String {
+    format!(
         r#"
 [scene]
 path = "{}"
 [motion]
-duration_s = 30.0
+duration_s = {duration_s:?}
 stop_when_done = false
-seed = 5
+seed = {seed}
+{motion}
 [crowd]
-count = 3
+count = {count}
 layout = "random"
 wander = true
 steering = "policy"
@@ -179,7 +178,15 @@ dir = "take"
         common::repo_root()
             .join("assets/scenes/apartment.glb")
             .display()
-    );
+    )
+}
+
+/// A wandering take in the apartment (the long-take check at 30 s per agent; the 10-minute,
+/// 16-agent take is `egogen synth configs/wander16.toml`): every frame finite, the head
+/// upright above the pelvis, the feet near the floor, the pelvis on the map.
+#[test]
+fn wandering_agents_stay_upright_on_the_floor() {
+    let config = wandering_in_the_apartment(3, 30.0, 5, "");
     let (dir, path) = common::run_dir(&config);
     let plan = load_synth_plan(&path).unwrap();
     let map = egogen::cli::synth::synth_map(&plan).unwrap();
@@ -234,27 +241,8 @@ dir = "take"
 #[test]
 fn redrawn_primitives_walk_into_less() {
     let take = |redraws: usize| {
-        let config = format!(
-            r#"
-[scene]
-path = "{}"
-[motion]
-duration_s = 15.0
-stop_when_done = false
-penetration_redraws = {redraws}
-seed = 2
-[crowd]
-count = 4
-layout = "random"
-wander = true
-steering = "policy"
-[output]
-dir = "take"
-"#,
-            common::repo_root()
-                .join("assets/scenes/apartment.glb")
-                .display()
-        );
+        let config =
+            wandering_in_the_apartment(4, 15.0, 2, &format!("penetration_redraws = {redraws}"));
         let (_dir, path) = common::run_dir(&config);
         let plan = load_synth_plan(&path).unwrap();
         assert_eq!(plan.settings.penetration_redraws, redraws);
