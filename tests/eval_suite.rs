@@ -155,6 +155,17 @@ fn egogen_eval(args: &[&str], out: impl AsRef<std::path::Path>) -> std::process:
         .unwrap()
 }
 
+/// `egogen eval ARGS --out OUT`, which must succeed; the RESULTS.md it leaves.
+fn results_after(args: &[&str], out: &std::path::Path) -> String {
+    let run = egogen_eval(args, out);
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    std::fs::read_to_string(out.join("RESULTS.md")).unwrap()
+}
+
 #[test]
 fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     // Table 3 and the speed suite join the same RESULTS.md further down.
@@ -254,16 +265,10 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         before
     );
     // Table 3 beside it: the ablated policies' rows join RESULTS.md, Table 1 stays.
-    let table3 = egogen_eval(
+    let md = results_after(
         &["--suite", "table3", "--episodes", "2", "--quiet"],
         out.path(),
     );
-    assert!(
-        table3.status.success(),
-        "{}",
-        String::from_utf8_lossy(&table3.stderr)
-    );
-    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
     assert!(
         md.contains("## Table 1") && md.contains("## Table 3"),
         "{md}"
@@ -276,7 +281,7 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }
     // Table 2 beside them: rays against local maps in the apartment, and sampling.
-    let table2 = egogen_eval(
+    let md = results_after(
         &[
             "--suite",
             "table2",
@@ -288,12 +293,6 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         ],
         out.path(),
     );
-    assert!(
-        table2.status.success(),
-        "{}",
-        String::from_utf8_lossy(&table2.stderr)
-    );
-    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
     assert!(
         md.contains("## Table 2") && md.contains("## Table 3"),
         "{md}"
@@ -317,7 +316,7 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         assert_eq!(r["scene_penetration_share"].is_number(), !crowd_take, "{r}");
     }
     // The speed suite beside them: the policy and sampling with K = 4 … 32 in one scenario.
-    let speed = egogen_eval(
+    let md = results_after(
         &[
             "--suite",
             "speed",
@@ -329,12 +328,6 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         ],
         out.path(),
     );
-    assert!(
-        speed.status.success(),
-        "{}",
-        String::from_utf8_lossy(&speed.stderr)
-    );
-    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
     assert!(md.contains("## Table 1") && md.contains("## Speed and accuracy"));
     for row in [
         "| moving obstacle | policy | ",

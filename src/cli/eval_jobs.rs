@@ -477,19 +477,8 @@ fn speed(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) ->
         |_| Ok(()),
     )?;
     // The ray-count knob: each policy on held-out box scenes and crossings.
-    let t0 = std::time::Instant::now();
+    box_and_crossing_rows(args, c, &RAYS_POLICIES, &results.join("rays.json"))?;
     let ctx = crate::motion::cvae::BodyContext::new(&c.body, &[])?;
-    let progress = bar(args, RAYS_POLICIES.len() * 4, "policy × set × actions rows");
-    let rows = policy_rows(
-        args,
-        c,
-        &box_scene_parts(c, &ctx),
-        &RAYS_POLICIES,
-        &box_and_crossing_sets(),
-        &progress,
-    )?;
-    progress.finish_and_clear();
-    write_policy_rows(&results.join("rays.json"), args, t0, rows)?;
     sdf_rows(args, c, &ctx, results)
 }
 
@@ -843,23 +832,35 @@ fn path_follow_row(
 
 /// Table 3: the ablated policies of [`TABLE3_POLICIES`] on held-out box scenes and crossings.
 fn table3(args: &EvalArgs, c: &Common, results: &Path) -> Result<()> {
+    box_and_crossing_rows(args, c, &TABLE3_POLICIES, &results.join("table3.json"))
+}
+
+/// Each of `policies` (label, weights, config) on held-out box scenes and crossings, sampled
+/// and mean actions, written to `file`.
+fn box_and_crossing_rows(
+    args: &EvalArgs,
+    c: &Common,
+    policies: &[(&str, &str, &str)],
+    file: &Path,
+) -> Result<()> {
     let t0 = std::time::Instant::now();
     let ctx = crate::motion::cvae::BodyContext::new(&c.body, &[])?;
+    let sets = box_and_crossing_sets();
     let progress = bar(
         args,
-        TABLE3_POLICIES.len() * 4,
+        policies.len() * sets.len() * 2,
         "policy × set × actions rows",
     );
     let rows = policy_rows(
         args,
         c,
         &box_scene_parts(c, &ctx),
-        &TABLE3_POLICIES,
-        &box_and_crossing_sets(),
+        policies,
+        &sets,
         &progress,
     )?;
     progress.finish_and_clear();
-    write_policy_rows(&results.join("table3.json"), args, t0, rows)
+    write_policy_rows(file, args, t0, rows)
 }
 
 /// A path as shown in the report: relative to the crate's folder when it is inside it.

@@ -201,10 +201,10 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 [lo, hi] => (lo, hi),
                 _ => bail!("--crossing-people: expected N or MIN,MAX"),
             };
-            let most = crate::policy::crossing_scene::MAX_PEOPLE;
-            if !(1..=people.1).contains(&people.0) || people.1 > most {
+            if !crate::policy::crossing_scene::people_in_range(people) {
                 bail!(
-                    "--crossing-people: expected 1 ≤ MIN ≤ MAX ≤ {most}, got {},{}",
+                    "--crossing-people: expected 1 ≤ MIN ≤ MAX ≤ {}, got {},{}",
+                    crate::policy::crossing_scene::MAX_PEOPLE,
                     people.0,
                     people.1
                 );
@@ -333,16 +333,10 @@ pub(crate) fn held_out_scene(
 fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
     let path = &spec.path;
     let mesh = crate::scene::load_scene(path, None)?;
-    let map = crate::scene::walkable_map(&mesh, path, Default::default())?;
-    let region = spec
-        .indoors
-        .then(|| map.indoor_cells(crate::cli::synth::MIN_ENCLOSED))
-        .flatten();
-    // Inside the walls the ground around them is blocked, as `egogen synth` senses it.
-    let map = match &region {
-        Some(r) => map.restricted_to(r),
-        None => map,
-    };
+    let (map, region) = crate::cli::synth::indoor_map(
+        crate::scene::walkable_map(&mesh, path, Default::default())?,
+        spec.indoors,
+    );
     let (lo, hi) = spec.pair_distance_m;
     let pairs = crate::policy::tasks::scene_pairs(
         &map,

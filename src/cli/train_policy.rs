@@ -213,8 +213,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             && c.walker_speed_m_s > 0.0
             && c.timing_jitter_s >= 0.0
             && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2
-            && (1..=c.people.1).contains(&c.people.0)
-            && c.people.1 <= crate::policy::crossing_scene::MAX_PEOPLE)
+            && crate::policy::crossing_scene::people_in_range(c.people))
         {
             return Err(bad(
                 &key("env.crossing"),

@@ -19,6 +19,12 @@ use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 /// Most other people a crossing scene may have (a config's `people` is checked against it).
 pub const MAX_PEOPLE: usize = 16;
 
+/// Whether `(MIN, MAX)` other people is a count a crossing scene draws from:
+/// 1 ≤ MIN ≤ MAX ≤ [`MAX_PEOPLE`].
+pub fn people_in_range((lo, hi): (usize, usize)) -> bool {
+    (1..=hi).contains(&lo) && hi <= MAX_PEOPLE
+}
+
 /// How crossing scenes are drawn.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

@@ -312,15 +312,8 @@ pub fn act<B: Backend>(
 ) -> (Vec<f32>, Vec<f32>, Vec<f32>, Vec<f32>) {
     let d = net.obs_layout().dim();
     let b = obs.len() / d;
-    let l = net.latent_dim();
     let out = net.forward(to_tensor(obs, [b, d], device));
-    let actions = match rng {
-        Some(rng) => {
-            let eps = to_tensor(normal_samples(rng, b * l), [b, l], device);
-            out.mean.clone() + out.logvar.clone().mul_scalar(0.5).exp() * eps
-        }
-        None => out.mean.clone(),
-    };
+    let actions = draw(out.mean.clone(), out.logvar.clone(), rng, device);
     let logp = values(log_prob(
         actions.clone(),
         out.mean.clone(),
@@ -341,15 +334,26 @@ pub fn actions<B: Backend>(
 ) -> Vec<f32> {
     let d = net.obs_layout().dim();
     let b = obs.len() / d;
-    let l = net.latent_dim();
     let (mean, logvar) = net.actor_forward(to_tensor(obs, [b, d], device));
-    values(match rng {
+    values(draw(mean, logvar, rng, device))
+}
+
+/// Actions `[B, L]` from the policy's distribution: `mean + exp(logvar / 2) · ε` with ε drawn
+/// from `rng`, or the mean without one.
+fn draw<B: Backend>(
+    mean: Tensor<B, 2>,
+    logvar: Tensor<B, 2>,
+    rng: Option<&mut ChaCha8Rng>,
+    device: &B::Device,
+) -> Tensor<B, 2> {
+    match rng {
         Some(rng) => {
+            let [b, l] = mean.dims();
             let eps = to_tensor(normal_samples(rng, b * l), [b, l], device);
             mean + logvar.mul_scalar(0.5).exp() * eps
         }
         None => mean,
-    })
+    }
 }
 
 /// The policy's action distribution for one observation: `(mean, standard deviation)`, `[L]`
