@@ -200,6 +200,7 @@ fn wandering_agents_stay_upright_on_the_floor() {
     // Starts and goals are drawn inside the walls, and the agents sense the ground outside as
     // blocked: a shoulder may pass a doorway, nobody walks out.
     assert!(checks.outside_region_share < 0.02, "{checks:?}");
+    assert!(checks.outside_region_max_m < 0.6, "{checks:?}");
     for a in &out.summary.agents {
         assert_eq!(
             a.state,

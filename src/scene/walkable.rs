@@ -208,8 +208,18 @@ impl WalkableMap {
             .is_some_and(|(i, j)| self.walkable[j * self.nx + i])
     }
 
-    /// Signed distance (m) at a point, bilinear between cell centres; −∞ outside the grid.
+    /// Signed distance (m) at a point, bilinear between cell centres. Beyond the grid: the value
+    /// at the grid's nearest point less the distance to it (still falling away from the floor).
     pub fn sdf_at(&self, p: DVec2) -> f64 {
+        if self.cell_of(p).is_none() {
+            if !p.is_finite() {
+                return f64::NEG_INFINITY;
+            }
+            let size = DVec2::new(self.nx as f64, self.ny as f64) * self.cell_m;
+            let inner = 1e-9 * self.cell_m;
+            let nearest = p.clamp(self.origin + inner, self.origin + size - inner);
+            return self.sdf_at(nearest) - p.distance(nearest);
+        }
         let q = (p - self.origin) / self.cell_m - 0.5;
         let (i0, j0) = (q.x.floor(), q.y.floor());
         let (fx, fy) = (q.x - i0, q.y - j0);
@@ -220,9 +230,6 @@ impl WalkableMap {
             );
             self.sdf_m[j as usize * self.nx + i as usize]
         };
-        if self.cell_of(p).is_none() {
-            return f64::NEG_INFINITY;
-        }
         let a = get(i0, j0) * (1.0 - fx) + get(i0 + 1.0, j0) * fx;
         let b = get(i0, j0 + 1.0) * (1.0 - fx) + get(i0 + 1.0, j0 + 1.0) * fx;
         a * (1.0 - fy) + b * fy
@@ -592,6 +599,27 @@ mod tests {
         );
         // Walkable now: exactly the walkable cells of the region.
         assert!((0..map.nx * map.ny).all(|k| closed.walkable[k] == (map.walkable[k] && inside[k])));
+    }
+
+    /// Beyond the grid the distance keeps falling, so "nearer the floor" still means something
+    /// for a body that has left the map; NaN stays −∞.
+    #[test]
+    fn the_distance_falls_on_beyond_the_grid() {
+        let closed = {
+            let map = room_on_ground();
+            let inside = map.indoor_cells(0.75).unwrap();
+            map.restricted_to(&inside)
+        };
+        let p = |x: f64, y: f64| DVec2::new(x, y);
+        let edge = closed.sdf_at(p(5.0, 0.0001));
+        let (near, far) = (closed.sdf_at(p(5.0, -1.0)), closed.sdf_at(p(5.0, -3.0)));
+        assert!(
+            edge < 0.0 && near < edge && far < near,
+            "{edge} {near} {far}"
+        );
+        assert!((edge - near - 1.0).abs() < 1e-6 && (near - far - 2.0).abs() < 1e-6);
+        assert!(closed.sdf_at(p(-1e12, 1e12)).is_finite());
+        assert_eq!(closed.sdf_at(p(f64::NAN, 1.0)), f64::NEG_INFINITY);
     }
 
     #[test]

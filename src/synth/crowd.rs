@@ -4,8 +4,9 @@
 //! the moving obstacles at its clock, with the same rays, observation and reward as the
 //! training environment ([`crate::policy::walker`]). No multi-agent learning: every agent
 //! runs the single-agent controller. One guard beyond the paper: a policy primitive that ends
-//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person) is
-//! redrawn from the same policy output, up to `penetration_redraws` times.
+//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), or whose
+//! pelvis leaves the walkable floor in any frame, is redrawn from the same policy output, up to
+//! `penetration_redraws` times.
 //!
 //! An agent walks its goals in order; with `wander` it draws a new goal on the walkable map
 //! when its list runs out, until the take ends. A goal counts as reached when the pelvis comes
@@ -548,23 +549,42 @@ impl<'m> Agent<'m> {
                 Err(e) => return Err(e.into()),
             }
         }
-        // A policy primitive that walks into something: more actions from the same output.
-        // Of draws that all penetrate, the one on the fewest blocked cells, then the one that
-        // ends deepest in walkable space (the way back for a body already in a wall).
+        // A policy primitive that walks into something (Eq. 7), or that ends with the pelvis off
+        // the walkable floor (a closed doorway, furniture): more actions from the same output.
+        // Of draws that all do, one that ends on the floor, else the one that ends nearest to it
+        // (the way back for a body already in a wall); then the fewest blocked cells, then the
+        // most room around the end.
+        let room = |p: &DecodedPrimitive| {
+            let end = p.joints[p.joints.len() - 1][joint::PELVIS];
+            around.map.sdf_at(DVec2::new(end.x, end.y))
+        };
+        let off_floor = |p: &DecodedPrimitive| {
+            let end = p.joints[p.joints.len() - 1][joint::PELVIS];
+            !around.map.is_walkable_at(DVec2::new(end.x, end.y))
+        };
+        let rank = |p: &DecodedPrimitive, j: &Judged| {
+            let r = room(p);
+            (off_floor(p), (-r).max(0.0), j.blocked_cells, -r)
+        };
         let improves = |a: &(DecodedPrimitive, Judged, f64, f64),
                         b: &(DecodedPrimitive, Judged)| {
-            let room = |p: &DecodedPrimitive| {
-                let end = p.joints[p.joints.len() - 1][joint::PELVIS];
-                around.map.sdf_at(DVec2::new(end.x, end.y))
-            };
-            (b.1.blocked_cells, -room(&b.0)) < (a.1.blocked_cells, -room(&a.0))
+            rank(&b.0, &b.1) < rank(&a.0, &a.1)
         };
         if let Some((mean, std)) = &policy_dist {
-            for _ in 0..settings.penetration_redraws {
-                if best.as_ref().is_some_and(|b| !b.1.penetrated) {
+            // The policy's own draws first; then as many from the motion model's prior, whose
+            // walks go every way (the way back when the policy's all lead on into a wall).
+            for k in 0..2 * settings.penetration_redraws {
+                if best
+                    .as_ref()
+                    .is_some_and(|b| !b.1.penetrated && !off_floor(&b.0))
+                {
                     break;
                 }
-                let z = draw_action(mean, std, &mut self.rng);
+                let z = if k < settings.penetration_redraws {
+                    draw_action(mean, std, &mut self.rng)
+                } else {
+                    normal_samples(&mut self.rng, l)
+                };
                 let p = match parts.model.decode(
                     &self.body,
                     std::slice::from_ref(&self.walker.view.seed),

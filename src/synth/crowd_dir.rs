@@ -68,6 +68,9 @@ pub struct TakeChecks {
     /// Share of frames whose pelvis stands outside the region starts and goals are drawn in
     /// (0 without a region).
     pub outside_region_share: f64,
+    /// How far such a pelvis stood from the walkable floor at most (m): a body brushing a
+    /// doorway stands a few centimetres out, one that left the dwelling metres.
+    pub outside_region_max_m: f64,
     /// Walkable floor, and the part of it starts and goals are drawn on (m²).
     pub walkable_m2: f64,
     pub region_m2: f64,
@@ -81,6 +84,7 @@ pub fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
         min_eye_height_m: f64::INFINITY,
         max_lowest_marker_gap_m: 0.0,
         outside_region_share: 0.0,
+        outside_region_max_m: 0.0,
         walkable_m2: world.map.walkable_count() as f64 * world.map.cell_m * world.map.cell_m,
         region_m2: 0.0,
     };
@@ -113,7 +117,11 @@ pub fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
                     .map
                     .cell_of(a.pelvis_xy[f])
                     .is_some_and(|(i, j)| region[j * world.map.nx + i]);
-                outside += usize::from(!inside);
+                if !inside {
+                    outside += 1;
+                    let off = -world.map.sdf_at(a.pelvis_xy[f]);
+                    c.outside_region_max_m = c.outside_region_max_m.max(off);
+                }
             }
         }
     }
