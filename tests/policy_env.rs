@@ -403,6 +403,34 @@ fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
     // In free space: none.
     assert_eq!(free.scene_penetrating_frames, 0);
     assert_eq!(free.scene_vertices_inside_max, 0);
+    // The map sees nothing, so Eq. 7 passes both.
+    assert!(!inside.penetrated && !free.penetrated);
+
+    // Training's test (Eq. 11 on a vertex subset) decides instead of Eq. 7: the body in the
+    // pillar penetrates and loses the penetration term, the free one does not.
+    let test = egogen::policy::reward::SceneTest::new(&body, 1024);
+    assert_eq!(test.vertices(), 1024);
+    let expected = (40.0 * 1024.0 / body.num_vertices() as f64)
+        .round()
+        .max(1.0) as usize;
+    assert_eq!(test.threshold(), expected);
+    let settings = EnvSettings {
+        scene_test_vertices: 1024,
+        ..EnvSettings::default()
+    };
+    let env =
+        PolicyEnv::with_scene(&model, &ctx, &bank, &prior, Some(&fixed), settings, 2, 0).unwrap();
+    let c = env.propose(&z, 1).unwrap();
+    let (inside, free) = (c[0].judged.unwrap(), c[1].judged.unwrap());
+    assert!(inside.penetrated && !free.penetrated);
+    assert_eq!(inside.terms.penetration, 0.0);
+    assert!(free.terms.penetration > 0.0);
+    // Only the fast test runs in training: nothing measured on every vertex.
+    assert_eq!(inside.scene_penetrating_frames, 0);
+    let primitive = c[0].primitive.as_ref().unwrap();
+    assert!(test
+        .penetrates(&ctx, primitive, fixed.sdf.as_deref().unwrap())
+        .unwrap());
 }
 
 #[test]

@@ -351,6 +351,16 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "residual_blocks = 1\n[policy.sensing]\nkind = \"sonar\"",
             "sonar",
         ),
+        (
+            "[stages.env]",
+            "[stages.env]\nscene_test_vertices = 1024",
+            "stages[1].env.scene_test_vertices",
+        ),
+        (
+            "episodes = 3",
+            "episodes = 3\nmax_prior_kl = -1.0",
+            "validation.max_prior_kl",
+        ),
     ] {
         let text = tiny_config(dir.path()).replacen(from, to, 1);
         assert_ne!(text, tiny_config(dir.path()), "{from}");

@@ -89,7 +89,7 @@ const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
 /// apartment): the shipped policy's apartment stage and the same two runs observing a local
 /// map instead of the rays; then its pace and crowd continuations (the latter shipped).
 /// Label, weights, configs.
-const TABLE2_POLICIES: [(&str, &str, &str); 6] = [
+const TABLE2_POLICIES: [(&str, &str, &str); 7] = [
     (
         "egocentric sensing (32 rays)",
         "assets/policy/apartment/policy.safetensors",
@@ -119,6 +119,11 @@ const TABLE2_POLICIES: [(&str, &str, &str); 6] = [
         "egocentric sensing, + pace + crowds + doors closed (shipped)",
         "assets/policy/indoors/policy.safetensors",
         "the crowd policy's configs, then configs/train_policy_indoors.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + Eq. 11",
+        "assets/policy/eq11/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_eq11.toml",
     ),
 ];
 

@@ -409,10 +409,16 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
     let motion_plan = crate::cli::train::load_train_plan(&plan.motion_config)?;
     let (train_set, _) = evaluation_sets(&motion_plan, &body, true)?;
     let bank = SeedBank::from_set(&train_set);
+    // The scene's 3D SDF only where a stage tests penetration by Eq. 11.
+    let sdf_voxel_m = plan
+        .stages
+        .iter()
+        .any(|s| s.env.scene_test_vertices > 0)
+        .then_some(crate::scene::sdf3d::DEFAULT_VOXEL_M);
     let fixed = plan
         .scene
         .as_ref()
-        .map(|s| fixed_scene(s, None))
+        .map(|s| fixed_scene(s, sdf_voxel_m))
         .transpose()?;
     let parts = Parts {
         model: &model,

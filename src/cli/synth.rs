@@ -57,8 +57,8 @@ pub struct RawSynthMotion {
     pub stop_when_done: Option<bool>,
     pub success_m: Option<f64>,
     pub max_primitives_per_goal: Option<usize>,
-    /// Further actions drawn from the policy when its primitive walks into a wall, an
-    /// obstacle or another person (default 4; 0: none).
+    /// Further actions drawn from the policy (then as many from the prior) when its primitive
+    /// walks into a wall, an obstacle or another person, or off the floor (default 4; 0: none).
     pub penetration_redraws: Option<usize>,
     /// Distance range of wandering goals (m).
     pub wander_distance_m: Option<[f64; 2]>,

@@ -28,6 +28,9 @@ pub struct RawStage {
 pub struct RawValidation {
     pub every_updates: usize,
     pub episodes: usize,
+    /// Weights are selected only where the validation's mean KL(π ‖ N(0, I)) is at most this.
+    #[serde(default)]
+    pub max_prior_kl: Option<f64>,
 }
 
 /// `[output]`.
@@ -149,6 +152,14 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             return Err(bad(key, format!("expected a number ≥ 0, got {v}")));
         }
     }
+    if let Some(kl) = raw.validation.max_prior_kl {
+        if !(kl.is_finite() && kl > 0.0) {
+            return Err(bad(
+                "validation.max_prior_kl",
+                format!("expected a number > 0, got {kl}"),
+            ));
+        }
+    }
     if raw.stages.is_empty() {
         return Err(bad("stages", "expected at least one [[stages]]".into()));
     }
@@ -178,6 +189,12 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             return Err(bad(
                 &key("env.fixed_share"),
                 format!("expected a share in [0, 1], got {}", e.fixed_share),
+            ));
+        }
+        if raw.scene.is_none() && e.scene_test_vertices > 0 {
+            return Err(bad(
+                &key("env.scene_test_vertices"),
+                "Eq. 11 is tested in a fixed scene: it needs a [scene] section".into(),
             ));
         }
         if raw.scene.is_none() && e.fixed_share < 1.0 {
@@ -294,6 +311,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         stages,
         eval_every_updates: raw.validation.every_updates,
         eval_episodes: raw.validation.episodes,
+        select_max_prior_kl: raw.validation.max_prior_kl,
         init_weights,
         scene,
         weights_out: base.join(raw.output.weights),

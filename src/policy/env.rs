@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
-use super::reward::{judge, scene_penetration, Judged, Limits, RewardWeights};
+use super::reward::{judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest};
 use super::walker::{frame_time_s, place_seed, SeedView, Surroundings, Totals, Walker};
 pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
@@ -74,6 +74,10 @@ pub struct EnvSettings {
     /// Primitives before an episode in the fixed scene times out (EgoGen's apartment: 13);
     /// `None`: `max_primitives`.
     pub fixed_max_primitives: Option<usize>,
+    /// With N > 0, penetration in a fixed scene with a 3D SDF is paper Eq. 11 on N body
+    /// vertices ([`super::reward::SceneTest`]) instead of Eq. 7 (EgoGen's apartment): the
+    /// termination and the penetration reward term. 0: Eq. 7 everywhere.
+    pub scene_test_vertices: usize,
 }
 
 impl Default for EnvSettings {
@@ -89,6 +93,7 @@ impl Default for EnvSettings {
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
             fixed_share: 1.0,
             fixed_max_primitives: None,
+            scene_test_vertices: 0,
         }
     }
 }
@@ -319,6 +324,8 @@ pub struct PolicyEnv<'m> {
     pub settings: EnvSettings,
     sensor: Sensor,
     foot_markers: Vec<usize>,
+    /// Eq. 11 on a vertex subset, where training tests the fixed scene with it.
+    scene_test: Option<SceneTest>,
     episodes: Vec<Episode>,
     episode_base: u64,
     next_episode: u64,
@@ -376,6 +383,8 @@ impl<'m> PolicyEnv<'m> {
             foot_markers: RigGeometry::new(body.model, &body.betas)
                 .map_err(DecodeError::from)?
                 .foot_markers,
+            scene_test: (settings.scene_test_vertices > 0)
+                .then(|| SceneTest::new(body.model, settings.scene_test_vertices)),
             episodes: Vec::with_capacity(envs),
             episode_base,
             next_episode: 0,
@@ -581,10 +590,18 @@ impl<'m> PolicyEnv<'m> {
                             frame_time_s(e.walker.steps, 0),
                         );
                         let mut j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
-                        if let Some(sdf) = e.course.sdf.as_deref() {
-                            (j.scene_penetrating_frames, j.scene_vertices_inside_max) =
-                                scene_penetration(self.body, &p, sdf)
-                                    .map_err(|e| EnvError::Decode(DecodeError::Pose(e)))?;
+                        let pose_error = |e| EnvError::Decode(DecodeError::Pose(e));
+                        match (e.course.sdf.as_deref(), &self.scene_test) {
+                            // Training: the fast test decides.
+                            (Some(sdf), Some(test)) => j.set_penetrated(
+                                test.penetrates(self.body, &p, sdf).map_err(pose_error)?,
+                            ),
+                            // Evaluation: every vertex of every frame, measured.
+                            (Some(sdf), None) => {
+                                (j.scene_penetrating_frames, j.scene_vertices_inside_max) =
+                                    scene_penetration(self.body, &p, sdf).map_err(pose_error)?;
+                            }
+                            (None, _) => {}
                         }
                         let left = e.course.max_primitives.saturating_sub(e.walker.steps + 1);
                         let reward = j.terms.total_with_arrival(&self.settings.weights, left);

@@ -13,7 +13,9 @@
 //! Every `eval_every_updates` the policy runs `eval_episodes` validation episodes (their own
 //! episode base, neither training's nor the held-out test's); the weights with the best
 //! validation return of the last stage are written to `weights_out` (EgoGen selects by test
-//! reward), the last weights of every stage beside them (`<weights>.<stage>.last.safetensors`).
+//! reward and KL(π ‖ N(0, I)): with `select_max_prior_kl`, only among validations whose mean
+//! KL is at most that), the last weights of every stage beside them
+//! (`<weights>.<stage>.last.safetensors`).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -125,6 +127,9 @@ pub struct PolicyTrainPlan {
     pub stages: Vec<StagePlan>,
     pub eval_every_updates: usize,
     pub eval_episodes: usize,
+    /// Model selection: only validations whose mean KL(π ‖ N(0, I)) is at most this are
+    /// candidates (`None`: every validation).
+    pub select_max_prior_kl: Option<f64>,
     /// Start from these policy weights (same architecture) instead of a fresh network.
     pub init_weights: Option<PathBuf>,
     /// A fixed scene some episodes walk (each stage's `env.fixed_share`).
@@ -565,7 +570,8 @@ pub fn train_policy(
                     plan.seed ^ global_update as u64,
                 )
                 .map_err(env_error)?;
-                if last_stage && best.is_none_or(|b| v.episode_return > b) {
+                let eligible = plan.select_max_prior_kl.is_none_or(|m| v.kl_prior <= m);
+                if last_stage && eligible && best.is_none_or(|b| v.episode_return > b) {
                     best = Some(v.episode_return);
                     save_policy(&net.valid(), &plan.arch, &plan.weights_out)
                         .map_err(weights_error)?;

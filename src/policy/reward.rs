@@ -169,6 +169,63 @@ pub fn scene_penetration(
     Ok((frames, most))
 }
 
+/// Paper Eq. 11 as training tests it, on a fixed subset of the body's vertices: `count` ids by
+/// farthest-point sampling of the rest template (spread over the whole surface,
+/// [`crate::body::farthest_point_markers`]), and the threshold of [`EQ11_VERTICES`] of all
+/// vertices scaled to the subset's share (at least 1). Only the subset is posed, so a test
+/// costs a small part of [`scene_penetration`]'s.
+#[derive(Debug, Clone)]
+pub struct SceneTest {
+    ids: Vec<u32>,
+    threshold: usize,
+}
+
+impl SceneTest {
+    pub fn new(model: &crate::body::BodyModel, count: usize) -> Self {
+        let ids = crate::body::farthest_point_markers(model, count);
+        let share = ids.len() as f64 / model.num_vertices().max(1) as f64;
+        let threshold = ((EQ11_VERTICES as f64 * share).round() as usize).max(1);
+        Self { ids, threshold }
+    }
+
+    /// Vertices of the subset.
+    pub fn vertices(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// Subset vertices inside the scene that make a frame penetrate.
+    pub fn threshold(&self) -> usize {
+        self.threshold
+    }
+
+    /// Whether any new frame of `p` has at least [`Self::threshold`] subset vertices inside
+    /// the scene.
+    pub fn penetrates(
+        &self,
+        body: &crate::motion::cvae::BodyContext,
+        p: &DecodedPrimitive,
+        sdf: &crate::scene::SceneSdf,
+    ) -> Result<bool, crate::body::PoseError> {
+        for f in &p.world[SEED_FRAMES..] {
+            let skeleton = body.shaped.skeleton(&f.pose, f.transl)?;
+            let vertices = body.shaped.pose_vertices(&skeleton, &f.pose, &self.ids);
+            if crate::scene::sdf_penetration(sdf, &vertices).count >= self.threshold {
+                return Ok(true);
+            }
+        }
+        Ok(false)
+    }
+}
+
+impl Judged {
+    /// Judges penetration by another test (Eq. 11 where a scene has a 3D SDF): the
+    /// termination and the penetration reward term follow it.
+    pub fn set_penetrated(&mut self, penetrated: bool) {
+        self.penetrated = penetrated;
+        self.terms.penetration = if penetrated { 0.0 } else { BINARY_TERM };
+    }
+}
+
 /// Cells of a `cell_m` grid laid over an oriented box (centre, half extents, yaw) whose centres
 /// lie inside any of `obstacles`: Eq. 7's blocked-cell count for obstacles that are not in the
 /// walkable map.

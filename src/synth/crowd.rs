@@ -96,10 +96,11 @@ pub struct CrowdSettings {
     /// Primitives an agent spends on one goal before it is missed.
     pub max_primitives_per_goal: usize,
     /// Policy steering: when the chosen primitive ends with the body's 2D box on more than 3
-    /// blocked cells (paper Eq. 7: walls, obstacles, the others' boxes), up to this many more
-    /// actions are drawn from the same policy output; the first that does not penetrate is
-    /// taken, else the one on the fewest blocked cells (of equals, the one whose pelvis ends
-    /// farthest into walkable space).
+    /// blocked cells (paper Eq. 7: walls, obstacles, the others' boxes) or with the pelvis off
+    /// the walkable floor, up to this many more actions are drawn from the same policy output,
+    /// then as many from the motion model's prior; the first that does neither is taken, else
+    /// one ending on the floor, else the one ending nearest to it, then the one on the fewest
+    /// blocked cells, then the one with the most room around its end.
     pub penetration_redraws: usize,
     /// Primitives per agent in the take (all agents step together).
     pub primitives: usize,
