@@ -431,6 +431,31 @@ fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
     assert!(test
         .penetrates(&ctx, primitive, fixed.sdf.as_deref().unwrap())
         .unwrap());
+
+    // Keeping the cells: on a map that blocks everything, the body in free 3D space penetrates
+    // by Eq. 7 and so penetrates; without them it does not.
+    let n = 100;
+    let walled = FixedScene {
+        map: std::sync::Arc::new(WalkableMap::from_walkable(
+            DVec2::splat(-5.0),
+            0.1,
+            n,
+            n,
+            vec![false; n * n],
+        )),
+        ..fixed.clone()
+    };
+    let free_in = |keep: bool| {
+        let settings = EnvSettings {
+            scene_test_vertices: 1024,
+            scene_test_keeps_cells: keep,
+            ..EnvSettings::default()
+        };
+        let env = PolicyEnv::with_scene(&model, &ctx, &bank, &prior, Some(&walled), settings, 2, 0)
+            .unwrap();
+        env.propose(&z, 1).unwrap()[1].judged.unwrap().penetrated
+    };
+    assert!(free_in(true) && !free_in(false));
 }
 
 #[test]

@@ -361,6 +361,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "episodes = 3\nmax_prior_kl = -1.0",
             "validation.max_prior_kl",
         ),
+        (
+            "[stages.env]",
+            "[stages.env]\nscene_test_keeps_cells = true",
+            "stages[1].env.scene_test_keeps_cells",
+        ),
     ] {
         let text = tiny_config(dir.path()).replacen(from, to, 1);
         assert_ne!(text, tiny_config(dir.path()), "{from}");

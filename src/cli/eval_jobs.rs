@@ -1058,8 +1058,9 @@ fn table2_markdown(t: &PolicyRowsFile) -> String {
          `{TABLE2_SCENE}` (seed {}; 0.4 m from anything blocking), {TABLE2_MAX_PRIMITIVES} \
          primitives per walk as EgoGen's apartment, success within 0.3 m; {:.0} s of wall \
          time. The apartment is closed: the ground around its walls is blocked in the map \
-         the walker senses, as `egogen synth` has it; only the shipped policy was fine-tuned \
-         so (the others learnt the apartment with its outer doors open). The first three \
+         the walker senses, as `egogen synth` has it; only the shipped policy and those that \
+         continue it (the Eq. 11 rows) were fine-tuned so (the others learnt the apartment \
+         with its outer doors open). The first three \
          policies were trained with the same recipe and budget — the box-and-crossing \
          stages, then the apartment stages (2.0 M + 0.8 M environment steps) — and differ \
          only in what they observe (`[policy.sensing]`): the paper's 32 rays over ±90°, 7 m, \

@@ -197,6 +197,12 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
                 "Eq. 11 is tested in a fixed scene: it needs a [scene] section".into(),
             ));
         }
+        if e.scene_test_keeps_cells && e.scene_test_vertices == 0 {
+            return Err(bad(
+                &key("env.scene_test_keeps_cells"),
+                "keeps Eq. 7 beside Eq. 11: it needs scene_test_vertices > 0".into(),
+            ));
+        }
         if raw.scene.is_none() && e.fixed_share < 1.0 {
             return Err(bad(
                 &key("env.fixed_share"),

@@ -78,6 +78,9 @@ pub struct EnvSettings {
     /// vertices ([`super::reward::SceneTest`]) instead of Eq. 7 (EgoGen's apartment): the
     /// termination and the penetration reward term. 0: Eq. 7 everywhere.
     pub scene_test_vertices: usize,
+    /// With `scene_test_vertices`: Eq. 7's cells still count there too, a primitive penetrating
+    /// when either test says so.
+    pub scene_test_keeps_cells: bool,
 }
 
 impl Default for EnvSettings {
@@ -94,6 +97,7 @@ impl Default for EnvSettings {
             fixed_share: 1.0,
             fixed_max_primitives: None,
             scene_test_vertices: 0,
+            scene_test_keeps_cells: false,
         }
     }
 }
@@ -592,10 +596,16 @@ impl<'m> PolicyEnv<'m> {
                         let mut j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
                         let pose_error = |e| EnvError::Decode(DecodeError::Pose(e));
                         match (e.course.sdf.as_deref(), &self.scene_test) {
-                            // Training: the fast test decides.
-                            (Some(sdf), Some(test)) => j.set_penetrated(
-                                test.penetrates(self.body, &p, sdf).map_err(pose_error)?,
-                            ),
+                            // Training: the fast test decides (beside the cells, if kept).
+                            (Some(sdf), Some(test)) => {
+                                let by_cells = self.settings.scene_test_keeps_cells && j.penetrated;
+                                j.set_penetrated(
+                                    by_cells
+                                        || test
+                                            .penetrates(self.body, &p, sdf)
+                                            .map_err(pose_error)?,
+                                );
+                            }
                             // Evaluation: every vertex of every frame, measured.
                             (Some(sdf), None) => {
                                 (j.scene_penetrating_frames, j.scene_vertices_inside_max) =
