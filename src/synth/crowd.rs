@@ -4,9 +4,9 @@
 //! the moving obstacles at its clock, with the same rays, observation and reward as the
 //! training environment ([`crate::policy::walker`]). No multi-agent learning: every agent
 //! runs the single-agent controller. One guard beyond the paper: a policy primitive that ends
-//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), or whose
-//! pelvis leaves the walkable floor in any frame, is redrawn from the same policy output, up to
-//! `penetration_redraws` times.
+//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), or with
+//! the pelvis off the walkable floor, is redrawn: up to `penetration_redraws` times from the
+//! same policy output, then as many times from the motion model's prior.
 //!
 //! An agent walks its goals in order; with `wander` it draws a new goal on the walkable map
 //! when its list runs out, until the take ends. A goal counts as reached when the pelvis comes
@@ -555,17 +555,14 @@ impl<'m> Agent<'m> {
         // Of draws that all do, one that ends on the floor, else the one that ends nearest to it
         // (the way back for a body already in a wall); then the fewest blocked cells, then the
         // most room around the end.
-        let room = |p: &DecodedPrimitive| {
+        let end_xy = |p: &DecodedPrimitive| {
             let end = p.joints[p.joints.len() - 1][joint::PELVIS];
-            around.map.sdf_at(DVec2::new(end.x, end.y))
+            DVec2::new(end.x, end.y)
         };
-        let off_floor = |p: &DecodedPrimitive| {
-            let end = p.joints[p.joints.len() - 1][joint::PELVIS];
-            !around.map.is_walkable_at(DVec2::new(end.x, end.y))
-        };
+        let off_floor = |p: &DecodedPrimitive| !around.map.is_walkable_at(end_xy(p));
         let rank = |p: &DecodedPrimitive, j: &Judged| {
-            let r = room(p);
-            (off_floor(p), (-r).max(0.0), j.blocked_cells, -r)
+            let room = around.map.sdf_at(end_xy(p));
+            (off_floor(p), (-room).max(0.0), j.blocked_cells, -room)
         };
         let improves = |a: &(DecodedPrimitive, Judged, f64, f64),
                         b: &(DecodedPrimitive, Judged)| {
