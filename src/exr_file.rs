@@ -86,6 +86,23 @@ impl ExrChannel {
 impl ExrContents {
     /// Reads all parts and channels of a file.
     pub fn read(path: &Path) -> Result<Self, InspectError> {
+        let reader = std::fs::File::open(path).map_err(|e| InspectError::Read {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        Self::read_from(path, std::io::BufReader::new(reader))
+    }
+
+    /// Reads all parts and channels of a file's bytes held in memory (`path` names them in
+    /// messages and in [`ExrContents::path`]).
+    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, InspectError> {
+        Self::read_from(path, std::io::Cursor::new(bytes))
+    }
+
+    fn read_from(
+        path: &Path,
+        reader: impl std::io::Read + std::io::Seek,
+    ) -> Result<Self, InspectError> {
         use exr::prelude::*;
         let image = read()
             .no_deep_data()
@@ -93,7 +110,7 @@ impl ExrContents {
             .all_channels()
             .all_layers()
             .all_attributes()
-            .from_file(path)
+            .from_buffered(reader)
             .map_err(|e| InspectError::Read {
                 path: path.to_owned(),
                 message: e.to_string(),

@@ -93,13 +93,28 @@ pub fn remove_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
 
 /// Lists and hashes every dataset file under `dir` (scratch folders excluded).
 pub fn build_manifest(dir: &Path) -> Result<Manifest> {
+    build_manifest_with(dir, &[])
+}
+
+/// [`build_manifest`], taking the checksum of a file from `known` (entries computed when the
+/// file was written) instead of reading it, where the file has the size `known` says.
+pub fn build_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manifest> {
+    let known: std::collections::HashMap<&str, &ManifestEntry> =
+        known.iter().map(|e| (e.path.as_str(), e)).collect();
     let files = dataset_files(dir)?
         .into_iter()
         .map(|path| {
             let p = dir.join(&path);
+            let bytes = std::fs::metadata(&p)
+                .with_context(|| format!("reading {}", p.display()))?
+                .len();
+            let sha256 = match known.get(path.as_str()) {
+                Some(e) if e.bytes == bytes => e.sha256.clone(),
+                _ => sha256_file(&p)?,
+            };
             Ok(ManifestEntry {
-                bytes: std::fs::metadata(&p)?.len(),
-                sha256: sha256_file(&p)?,
+                bytes,
+                sha256,
                 path,
             })
         })
@@ -112,7 +127,12 @@ pub fn build_manifest(dir: &Path) -> Result<Manifest> {
 
 /// Writes `manifest.json` atomically.
 pub fn write_manifest(dir: &Path) -> Result<Manifest> {
-    let manifest = build_manifest(dir)?;
+    write_manifest_with(dir, &[])
+}
+
+/// [`write_manifest`] with checksums `known` ([`build_manifest_with`]).
+pub fn write_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manifest> {
+    let manifest = build_manifest_with(dir, known)?;
     let path = dir.join(MANIFEST);
     crate::atomic_file::write_atomically(
         &path,

@@ -249,6 +249,15 @@ fn resume_repairs_a_damaged_frame_and_drops_leftover_temporaries() {
     std::fs::write(&victim, &bytes[..bytes.len() / 2]).unwrap();
     std::fs::write(staging.join("manifest.json.partial"), b"{\"files\": [").unwrap();
     std::fs::write(frames.join("frame_00006.exr.tmp"), b"half a frame").unwrap();
+    // Frame records (annotation, checksum) a killed supervisor can leave missing, or stale
+    // beside a frame file: both are recorded again from the file, not rendered again.
+    let records = staging.join("work/frames/camera-slam-left");
+    std::fs::remove_file(records.join("frame_00002.json")).unwrap();
+    std::fs::copy(
+        records.join("frame_00010.json"),
+        records.join("frame_00008.json"),
+    )
+    .unwrap();
 
     let out = egogen_run()
         .arg(&config)

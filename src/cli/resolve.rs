@@ -3,7 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use super::config::{
-    Backend, ConfigError, MotionSource, RawDepthNoise, RawRender, RawRun, RawSlurm, RawSupervisor,
+    Backend, ConfigError, MotionSource, RawDepthNoise, RawMotion, RawRender, RawRun, RawSlurm,
+    RawSupervisor,
 };
 use crate::render::depth_noise::DepthNoise;
 use crate::render::lighting::{LightingPlan, WorldChoice, SHIPPED_HDRIS};
@@ -27,6 +28,9 @@ pub const MAX_SCRIPTED_FRAMES: f64 = 1e6;
 /// Largest shape coefficient a config may ask for (standard deviations).
 pub const MAX_ABS_BETA: f64 = 10.0;
 
+/// A config error naming `key`.
+type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
+
 /// Resolves paths against the config's folder and checks value ranges.
 pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigError> {
     let base = config_path.parent().unwrap_or(Path::new("."));
@@ -37,215 +41,16 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
     };
     let body_model =
         resolve_body_model(raw.body.model.clone(), base).map_err(|m| bad("body.model", m))?;
-    if let Some(i) = raw.body.betas.iter().position(|b| !b.is_finite()) {
-        return Err(bad(
-            "body.betas",
-            format!("value {i} is not a finite number"),
-        ));
-    }
-    if let Some((i, b)) = raw
-        .body
-        .betas
-        .iter()
-        .enumerate()
-        .find(|(_, b)| b.abs() > MAX_ABS_BETA)
-    {
-        return Err(bad(
-            "body.betas",
-            format!(
-                "value {i} is {b}: expected within ±{MAX_ABS_BETA} (shape coefficients are in \
-                 standard deviations of the shape space; people lie within about ±3)"
-            ),
-        ));
-    }
+    check_betas(&raw.body.betas, &bad)?;
     let scene = match &raw.scene.path {
         Some(p) => base.join(p),
         None => crate_root().join(DEFAULT_SCENE),
     };
-    let m = raw.motion;
-    let unused = |key: &str, present: bool, source: &str| match present {
-        true => Err(bad(
-            key,
-            format!("not used when motion.source = \"{source}\"; remove it"),
-        )),
-        false => Ok(()),
-    };
-    if m.source != MotionSource::Agents {
-        let source = match m.source {
-            MotionSource::ScriptedWalk => "scripted_walk",
-            _ => "file",
-        };
-        for (key, present) in [
-            ("motion.weights", m.weights.is_some()),
-            ("motion.policy", m.policy.is_some()),
-            ("motion.pose_prior", m.pose_prior.is_some()),
-            ("motion.train_config", m.train_config.is_some()),
-            ("motion.stop_when_done", m.stop_when_done.is_some()),
-            ("motion.success_m", m.success_m.is_some()),
-            (
-                "motion.max_primitives_per_goal",
-                m.max_primitives_per_goal.is_some(),
-            ),
-            (
-                "motion.penetration_redraws",
-                m.penetration_redraws.is_some(),
-            ),
-            ("motion.wander_distance_m", m.wander_distance_m.is_some()),
-            ("motion.clearance_m", m.clearance_m.is_some()),
-            ("motion.seed", m.seed.is_some()),
-            ("crowd", raw.crowd.is_some()),
-            ("agents", !raw.agents.is_empty()),
-            ("obstacles", !raw.obstacles.is_empty()),
-            ("scene.indoors", raw.scene.indoors.is_some()),
-            (
-                "render.wearers",
-                raw.render.as_ref().is_some_and(|r| r.wearers.is_some()),
-            ),
-        ] {
-            unused(key, present, source)?;
-        }
-    }
-    let motion = match m.source {
-        MotionSource::Agents => {
-            for (key, present) in [
-                ("motion.path", m.path.is_some()),
-                ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
-                ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
-                ("scene.seed", raw.scene.seed.is_some()),
-            ] {
-                unused(key, present, "agents")?;
-            }
-            if !raw.body.betas.is_empty() {
-                return Err(bad(
-                    "body.betas",
-                    "not used when motion.source = \"agents\": give each agent its betas in [[agents]] (or let [crowd] draw them)".into(),
-                ));
-            }
-            use super::synth::{RawSynth, RawSynthMotion, RawSynthOutput, RawSynthScene};
-            let synth = RawSynth {
-                body_model: raw.body.model.clone(),
-                scene: RawSynthScene {
-                    path: Some(std::path::absolute(&scene).unwrap_or_else(|_| scene.clone())),
-                    floor_m: None,
-                    indoors: raw.scene.indoors,
-                },
-                motion: RawSynthMotion {
-                    weights: m.weights.clone(),
-                    policy: m.policy.clone(),
-                    pose_prior: m.pose_prior.clone(),
-                    train_config: m.train_config.clone(),
-                    duration_s: m.duration_s,
-                    stop_when_done: Some(m.stop_when_done.unwrap_or(false)),
-                    success_m: m.success_m,
-                    max_primitives_per_goal: m.max_primitives_per_goal,
-                    penetration_redraws: m.penetration_redraws,
-                    wander_distance_m: m.wander_distance_m,
-                    clearance_m: m.clearance_m,
-                    seed: m.seed,
-                },
-                crowd: raw.crowd.clone(),
-                agents: raw.agents.clone(),
-                obstacles: raw.obstacles.clone(),
-                output: RawSynthOutput {
-                    dir: raw.output.dir.clone(),
-                },
-            };
-            let synth = super::synth::resolve_synth(synth, config_path, "")?;
-            let names: Vec<&str> = synth.agents.iter().map(|a| a.name.as_str()).collect();
-            let wearers = match raw.render.as_ref().and_then(|r| r.wearers.clone()) {
-                None => vec![0],
-                Some(w) if w.is_empty() => {
-                    return Err(bad(
-                        "render.wearers",
-                        "expected at least one agent's name".into(),
-                    ))
-                }
-                Some(w) => w
-                    .iter()
-                    .map(|n| {
-                        names.iter().position(|a| a == n).ok_or_else(|| {
-                            bad(
-                                "render.wearers",
-                                format!(
-                                    "no agent is called \"{n}\" (agents: {})",
-                                    names.join(", ")
-                                ),
-                            )
-                        })
-                    })
-                    .collect::<Result<_, _>>()?,
-            };
-            let mut seen = std::collections::BTreeSet::new();
-            if let Some(&w) = wearers.iter().find(|&&w| !seen.insert(w)) {
-                return Err(bad(
-                    "render.wearers",
-                    format!("\"{}\" is named twice", names[w]),
-                ));
-            }
-            MotionPlan::Agents {
-                synth: Box::new(synth),
-                wearers,
-            }
-        }
-        MotionSource::ScriptedWalk => {
-            unused("motion.path", m.path.is_some(), "scripted_walk")?;
-            let positive = |key: &str, v: Option<f64>| match v {
-                Some(v) if v.is_finite() && v > 0.0 => Ok(v),
-                Some(v) => Err(bad(key, format!("expected a positive number, found {v}"))),
-                None => Err(bad(
-                    key,
-                    "required when motion.source = \"scripted_walk\"".into(),
-                )),
-            };
-            let duration_s = positive("motion.duration_s", m.duration_s)?;
-            let frame_rate_hz = positive("motion.frame_rate_hz", m.frame_rate_hz)?;
-            let frames = duration_s * frame_rate_hz;
-            if frames > MAX_SCRIPTED_FRAMES {
-                return Err(bad(
-                    "motion.duration_s",
-                    format!(
-                        "{duration_s} s at {frame_rate_hz} Hz is {frames:.3e} frames ({:.1} GB of \
-                         poses alone); at most {MAX_SCRIPTED_FRAMES:.0} frames",
-                        frames * (165.0 + 3.0) * 8.0 / 1e9
-                    ),
-                ));
-            }
-            let speed_m_per_s = m.speed_m_per_s.unwrap_or(1.2);
-            if !(speed_m_per_s.is_finite() && (0.0..=10.0).contains(&speed_m_per_s)) {
-                return Err(bad(
-                    "motion.speed_m_per_s",
-                    format!("expected 0..=10 m/s, found {speed_m_per_s}"),
-                ));
-            }
-            MotionPlan::ScriptedWalk {
-                duration_s,
-                frame_rate_hz,
-                speed_m_per_s,
-            }
-        }
-        MotionSource::File => {
-            for (key, present) in [
-                ("motion.duration_s", m.duration_s.is_some()),
-                ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
-                ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
-            ] {
-                unused(key, present, "file")?;
-            }
-            let path = m.path.ok_or_else(|| {
-                bad(
-                    "motion.path",
-                    "required when motion.source = \"file\"".into(),
-                )
-            })?;
-            let path = base.join(path);
-            if !path.is_file() {
-                return Err(bad(
-                    "motion.path",
-                    format!("file {} not found", path.display()),
-                ));
-            }
-            MotionPlan::File { path }
-        }
+    check_unused_for_source(&raw, &bad)?;
+    let motion = match raw.motion.source {
+        MotionSource::Agents => agents_motion(&raw, &scene, config_path, &bad)?,
+        MotionSource::ScriptedWalk => scripted_motion(&raw.motion, &bad)?,
+        MotionSource::File => file_motion(&raw.motion, base, &bad)?,
     };
     if !scene.is_file() {
         return Err(bad(
@@ -284,6 +89,243 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
     })
 }
 
+/// A key that `source` does not read.
+fn unused(key: &str, present: bool, source: &str, bad: Bad) -> Result<(), ConfigError> {
+    match present {
+        true => Err(bad(
+            key,
+            format!("not used when motion.source = \"{source}\"; remove it"),
+        )),
+        false => Ok(()),
+    }
+}
+
+/// `body.betas`: finite, within ±[`MAX_ABS_BETA`].
+fn check_betas(betas: &[f64], bad: Bad) -> Result<(), ConfigError> {
+    if let Some(i) = betas.iter().position(|b| !b.is_finite()) {
+        return Err(bad(
+            "body.betas",
+            format!("value {i} is not a finite number"),
+        ));
+    }
+    if let Some((i, b)) = betas
+        .iter()
+        .enumerate()
+        .find(|(_, b)| b.abs() > MAX_ABS_BETA)
+    {
+        return Err(bad(
+            "body.betas",
+            format!(
+                "value {i} is {b}: expected within ±{MAX_ABS_BETA} (shape coefficients are in \
+                 standard deviations of the shape space; people lie within about ±3)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The agents' keys are refused with a scripted walk or a motion file.
+fn check_unused_for_source(raw: &RawRun, bad: Bad) -> Result<(), ConfigError> {
+    let m = &raw.motion;
+    if m.source == MotionSource::Agents {
+        return Ok(());
+    }
+    let source = match m.source {
+        MotionSource::ScriptedWalk => "scripted_walk",
+        _ => "file",
+    };
+    for (key, present) in [
+        ("motion.weights", m.weights.is_some()),
+        ("motion.policy", m.policy.is_some()),
+        ("motion.pose_prior", m.pose_prior.is_some()),
+        ("motion.train_config", m.train_config.is_some()),
+        ("motion.stop_when_done", m.stop_when_done.is_some()),
+        ("motion.success_m", m.success_m.is_some()),
+        (
+            "motion.max_primitives_per_goal",
+            m.max_primitives_per_goal.is_some(),
+        ),
+        (
+            "motion.penetration_redraws",
+            m.penetration_redraws.is_some(),
+        ),
+        ("motion.wander_distance_m", m.wander_distance_m.is_some()),
+        ("motion.clearance_m", m.clearance_m.is_some()),
+        ("motion.seed", m.seed.is_some()),
+        ("crowd", raw.crowd.is_some()),
+        ("agents", !raw.agents.is_empty()),
+        ("obstacles", !raw.obstacles.is_empty()),
+        ("scene.indoors", raw.scene.indoors.is_some()),
+        (
+            "render.wearers",
+            raw.render.as_ref().is_some_and(|r| r.wearers.is_some()),
+        ),
+    ] {
+        unused(key, present, source, bad)?;
+    }
+    Ok(())
+}
+
+/// `motion.source = "agents"`: the synth config inside the run config, checked as
+/// `egogen synth` checks its own, and who wears the rig.
+fn agents_motion(
+    raw: &RawRun,
+    scene: &Path,
+    config_path: &Path,
+    bad: Bad,
+) -> Result<MotionPlan, ConfigError> {
+    let m = &raw.motion;
+    for (key, present) in [
+        ("motion.path", m.path.is_some()),
+        ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
+        ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
+        ("scene.seed", raw.scene.seed.is_some()),
+    ] {
+        unused(key, present, "agents", bad)?;
+    }
+    if !raw.body.betas.is_empty() {
+        return Err(bad(
+            "body.betas",
+            "not used when motion.source = \"agents\": give each agent its betas in [[agents]] (or let [crowd] draw them)".into(),
+        ));
+    }
+    use super::synth::{RawSynth, RawSynthMotion, RawSynthOutput, RawSynthScene};
+    let synth = RawSynth {
+        body_model: raw.body.model.clone(),
+        scene: RawSynthScene {
+            path: Some(std::path::absolute(scene).unwrap_or_else(|_| scene.to_path_buf())),
+            floor_m: None,
+            indoors: raw.scene.indoors,
+        },
+        motion: RawSynthMotion {
+            weights: m.weights.clone(),
+            policy: m.policy.clone(),
+            pose_prior: m.pose_prior.clone(),
+            train_config: m.train_config.clone(),
+            duration_s: m.duration_s,
+            stop_when_done: Some(m.stop_when_done.unwrap_or(false)),
+            success_m: m.success_m,
+            max_primitives_per_goal: m.max_primitives_per_goal,
+            penetration_redraws: m.penetration_redraws,
+            wander_distance_m: m.wander_distance_m,
+            clearance_m: m.clearance_m,
+            seed: m.seed,
+        },
+        crowd: raw.crowd.clone(),
+        agents: raw.agents.clone(),
+        obstacles: raw.obstacles.clone(),
+        output: RawSynthOutput {
+            dir: raw.output.dir.clone(),
+        },
+    };
+    let synth = super::synth::resolve_synth(synth, config_path, "")?;
+    let wearers = wearer_indices(&synth, raw.render.as_ref(), bad)?;
+    Ok(MotionPlan::Agents {
+        synth: Box::new(synth),
+        wearers,
+    })
+}
+
+/// `render.wearers` as indices into the take's agents (default: the first), each named once.
+fn wearer_indices(
+    synth: &crate::plan::SynthPlan,
+    render: Option<&RawRender>,
+    bad: Bad,
+) -> Result<Vec<usize>, ConfigError> {
+    let names: Vec<&str> = synth.agents.iter().map(|a| a.name.as_str()).collect();
+    let wearers = match render.and_then(|r| r.wearers.clone()) {
+        None => vec![0],
+        Some(w) if w.is_empty() => {
+            return Err(bad(
+                "render.wearers",
+                "expected at least one agent's name".into(),
+            ))
+        }
+        Some(w) => w
+            .iter()
+            .map(|n| {
+                names.iter().position(|a| a == n).ok_or_else(|| {
+                    bad(
+                        "render.wearers",
+                        format!("no agent is called \"{n}\" (agents: {})", names.join(", ")),
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?,
+    };
+    let mut seen = std::collections::BTreeSet::new();
+    if let Some(&w) = wearers.iter().find(|&&w| !seen.insert(w)) {
+        return Err(bad(
+            "render.wearers",
+            format!("\"{}\" is named twice", names[w]),
+        ));
+    }
+    Ok(wearers)
+}
+
+/// `motion.source = "scripted_walk"`: its length, rate and pace.
+fn scripted_motion(m: &RawMotion, bad: Bad) -> Result<MotionPlan, ConfigError> {
+    unused("motion.path", m.path.is_some(), "scripted_walk", bad)?;
+    let positive = |key: &str, v: Option<f64>| match v {
+        Some(v) if v.is_finite() && v > 0.0 => Ok(v),
+        Some(v) => Err(bad(key, format!("expected a positive number, found {v}"))),
+        None => Err(bad(
+            key,
+            "required when motion.source = \"scripted_walk\"".into(),
+        )),
+    };
+    let duration_s = positive("motion.duration_s", m.duration_s)?;
+    let frame_rate_hz = positive("motion.frame_rate_hz", m.frame_rate_hz)?;
+    let frames = duration_s * frame_rate_hz;
+    if frames > MAX_SCRIPTED_FRAMES {
+        return Err(bad(
+            "motion.duration_s",
+            format!(
+                "{duration_s} s at {frame_rate_hz} Hz is {frames:.3e} frames ({:.1} GB of \
+                 poses alone); at most {MAX_SCRIPTED_FRAMES:.0} frames",
+                frames * (165.0 + 3.0) * 8.0 / 1e9
+            ),
+        ));
+    }
+    let speed_m_per_s = m.speed_m_per_s.unwrap_or(1.2);
+    if !(speed_m_per_s.is_finite() && (0.0..=10.0).contains(&speed_m_per_s)) {
+        return Err(bad(
+            "motion.speed_m_per_s",
+            format!("expected 0..=10 m/s, found {speed_m_per_s}"),
+        ));
+    }
+    Ok(MotionPlan::ScriptedWalk {
+        duration_s,
+        frame_rate_hz,
+        speed_m_per_s,
+    })
+}
+
+/// `motion.source = "file"`: the motion file, relative to `base`.
+fn file_motion(m: &RawMotion, base: &Path, bad: Bad) -> Result<MotionPlan, ConfigError> {
+    for (key, present) in [
+        ("motion.duration_s", m.duration_s.is_some()),
+        ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
+        ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
+    ] {
+        unused(key, present, "file", bad)?;
+    }
+    let path = m.path.as_ref().ok_or_else(|| {
+        bad(
+            "motion.path",
+            "required when motion.source = \"file\"".into(),
+        )
+    })?;
+    let path = base.join(path);
+    if !path.is_file() {
+        return Err(bad(
+            "motion.path",
+            format!("file {} not found", path.display()),
+        ));
+    }
+    Ok(MotionPlan::File { path })
+}
+
 fn resolve_render(
     r: RawRender,
     base: &Path,
@@ -294,60 +336,7 @@ fn resolve_render(
         key: key.into(),
         message,
     };
-    let rig_path = match r.rig {
-        Some(p) => base.join(p),
-        None => crate_root().join(DEFAULT_RIG),
-    };
-    if !rig_path.is_file() {
-        return Err(bad(
-            "render.rig",
-            format!("file {} not found", rig_path.display()),
-        ));
-    }
-    let rig = Rig::load(&rig_path).map_err(|e| bad("render.rig", e.to_string()))?;
-    let names: Vec<String> = match r.cameras {
-        Some(names) if names.is_empty() => {
-            return Err(bad(
-                "render.cameras",
-                "empty list: name at least one camera".into(),
-            ))
-        }
-        Some(names) => {
-            if let Some(dup) = names
-                .iter()
-                .enumerate()
-                .find_map(|(i, n)| names[..i].contains(n).then_some(n))
-            {
-                return Err(bad(
-                    "render.cameras",
-                    format!("camera {dup:?} is listed twice; name each camera once"),
-                ));
-            }
-            names
-        }
-        None => rig.camera_names().iter().map(|n| n.to_string()).collect(),
-    };
-    let scale = r.resolution_scale.unwrap_or(1.0);
-    if !(scale.is_finite() && scale > 0.0 && scale <= 4.0) {
-        return Err(bad(
-            "render.resolution_scale",
-            format!("expected a factor in (0, 4], found {scale}"),
-        ));
-    }
-    let mut cameras = Vec::with_capacity(names.len());
-    for name in &names {
-        let cam = rig
-            .camera(name)
-            .map_err(|e| bad("render.cameras", e.to_string()))?;
-        let model = cam
-            .model
-            .scaled(scale)
-            .map_err(|e| bad("render.resolution_scale", format!("camera `{name}`: {e}")))?;
-        cameras.push(RigCamera {
-            model,
-            ..cam.clone()
-        });
-    }
+    let (rig, cameras) = rig_cameras(&r, base, &bad)?;
     let fisheye = r.fisheye.unwrap_or_default();
     let render_cameras = cameras
         .iter()
@@ -393,49 +382,18 @@ fn resolve_render(
             format!("expected a distance in (0, 10) m, found {near_clip_m}"),
         ));
     }
-    let headset_wear = match r.headset_wear {
-        None => None,
-        Some(w) => {
-            let translation_m = w.translation_m.unwrap_or(0.01);
-            if !(translation_m.is_finite() && (0.0..=0.1).contains(&translation_m)) {
-                return Err(bad(
-                    "render.headset_wear.translation_m",
-                    format!("expected a distance within [0, 0.1] m, found {translation_m}"),
-                ));
-            }
-            let rotation_deg = w.rotation_deg.unwrap_or(3.0);
-            if !(rotation_deg.is_finite() && (0.0..=30.0).contains(&rotation_deg)) {
-                return Err(bad(
-                    "render.headset_wear.rotation_deg",
-                    format!("expected an angle within [0, 30] degrees, found {rotation_deg}"),
-                ));
-            }
-            Some(crate::rig::wear::HeadsetWear {
-                translation_m,
-                rotation_rad: rotation_deg.to_radians(),
-                seed: w.seed.unwrap_or(0),
-            })
-        }
-    };
+    let headset_wear = r
+        .headset_wear
+        .as_ref()
+        .map(|w| headset_wear(w, &bad))
+        .transpose()?;
     let lighting = match r.lighting {
         None => LightingPlan::default(),
         Some(l) => resolve_lighting(l, config_path)?,
     };
-    let skin = match r.skin {
+    let skin = match &r.skin {
         None => SkinPlan::default(),
-        Some(raw) => {
-            let tones = raw.tones.unwrap_or_else(|| (1..=10).collect());
-            if tones.is_empty() || tones.iter().any(|t| !(1..=10).contains(t)) {
-                return Err(bad(
-                    "render.skin.tones",
-                    format!("expected a non-empty list of Monk Skin Tones, each in 1..=10, found {tones:?}"),
-                ));
-            }
-            SkinPlan {
-                tones,
-                seed: raw.seed.unwrap_or(0),
-            }
-        }
+        Some(raw) => skin_plan(raw, &bad)?,
     };
     let passes = resolve_passes(
         r.passes.as_deref(),
@@ -460,6 +418,109 @@ fn resolve_render(
         skin,
         passes,
         device: r.device.unwrap_or_default(),
+    })
+}
+
+/// The rig of `[render] rig` and the cameras `[render] cameras` names from it, at
+/// `resolution_scale`.
+fn rig_cameras(r: &RawRender, base: &Path, bad: Bad) -> Result<(Rig, Vec<RigCamera>), ConfigError> {
+    let rig_path = match &r.rig {
+        Some(p) => base.join(p),
+        None => crate_root().join(DEFAULT_RIG),
+    };
+    if !rig_path.is_file() {
+        return Err(bad(
+            "render.rig",
+            format!("file {} not found", rig_path.display()),
+        ));
+    }
+    let rig = Rig::load(&rig_path).map_err(|e| bad("render.rig", e.to_string()))?;
+    let names: Vec<String> = match r.cameras.clone() {
+        Some(names) if names.is_empty() => {
+            return Err(bad(
+                "render.cameras",
+                "empty list: name at least one camera".into(),
+            ))
+        }
+        Some(names) => {
+            if let Some(dup) = names
+                .iter()
+                .enumerate()
+                .find_map(|(i, n)| names[..i].contains(n).then_some(n))
+            {
+                return Err(bad(
+                    "render.cameras",
+                    format!("camera {dup:?} is listed twice; name each camera once"),
+                ));
+            }
+            names
+        }
+        None => rig.camera_names().iter().map(|n| n.to_string()).collect(),
+    };
+    let scale = r.resolution_scale.unwrap_or(1.0);
+    if !(scale.is_finite() && scale > 0.0 && scale <= 4.0) {
+        return Err(bad(
+            "render.resolution_scale",
+            format!("expected a factor in (0, 4], found {scale}"),
+        ));
+    }
+    let mut cameras = Vec::with_capacity(names.len());
+    for name in &names {
+        let cam = rig
+            .camera(name)
+            .map_err(|e| bad("render.cameras", e.to_string()))?;
+        let model = cam
+            .model
+            .scaled(scale)
+            .map_err(|e| bad("render.resolution_scale", format!("camera `{name}`: {e}")))?;
+        cameras.push(RigCamera {
+            model,
+            ..cam.clone()
+        });
+    }
+    Ok((rig, cameras))
+}
+
+/// `[render.headset_wear]`: how far the rig may sit off its place on each wearer's head.
+fn headset_wear(
+    w: &super::config::RawHeadsetWear,
+    bad: Bad,
+) -> Result<crate::rig::wear::HeadsetWear, ConfigError> {
+    let translation_m = w.translation_m.unwrap_or(0.01);
+    if !(translation_m.is_finite() && (0.0..=0.1).contains(&translation_m)) {
+        return Err(bad(
+            "render.headset_wear.translation_m",
+            format!("expected a distance within [0, 0.1] m, found {translation_m}"),
+        ));
+    }
+    let rotation_deg = w.rotation_deg.unwrap_or(3.0);
+    if !(rotation_deg.is_finite() && (0.0..=30.0).contains(&rotation_deg)) {
+        return Err(bad(
+            "render.headset_wear.rotation_deg",
+            format!("expected an angle within [0, 30] degrees, found {rotation_deg}"),
+        ));
+    }
+    Ok(crate::rig::wear::HeadsetWear {
+        translation_m,
+        rotation_rad: rotation_deg.to_radians(),
+        seed: w.seed.unwrap_or(0),
+    })
+}
+
+/// `[render.skin]`: the Monk Skin Tones drawn from, and the seed.
+fn skin_plan(raw: &super::config::RawSkin, bad: Bad) -> Result<SkinPlan, ConfigError> {
+    let tones = raw.tones.clone().unwrap_or_else(|| (1..=10).collect());
+    if tones.is_empty() || tones.iter().any(|t| !(1..=10).contains(t)) {
+        return Err(bad(
+            "render.skin.tones",
+            format!(
+                "expected a non-empty list of Monk Skin Tones, each in 1..=10, found {tones:?}"
+            ),
+        ));
+    }
+    Ok(SkinPlan {
+        tones,
+        seed: raw.seed.unwrap_or(0),
     })
 }
 

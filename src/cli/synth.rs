@@ -186,6 +186,9 @@ pub fn load_synth_plan(path: &Path) -> Result<SynthPlan, ConfigError> {
     resolve_synth(load_toml(path)?, path, "")
 }
 
+/// A config error naming `key` (the synth config's own name; the caller adds its prefix).
+type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
+
 /// Checks a synth config read from `path` (relative paths resolve against its folder); keys
 /// are named with `prefix` before the synth config's own names (`""` for a synth config).
 pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPlan, ConfigError> {
@@ -222,29 +225,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         &m.train_config,
         "configs/train_primitive.toml",
     )?;
-    let scene = match &raw.scene.path {
-        Some(p) => {
-            let f = base.join(p);
-            if !f.is_file() {
-                return Err(bad("scene.path", format!("file {} not found", f.display())));
-            }
-            Some(f)
-        }
-        None => None,
-    };
-    let floor_m = raw.scene.floor_m.unwrap_or(8.0);
-    if !(floor_m.is_finite() && (1.0..=200.0).contains(&floor_m)) {
-        return Err(bad(
-            "scene.floor_m",
-            format!("expected 1–200 m, got {floor_m}"),
-        ));
-    }
-    if scene.is_some() && raw.scene.floor_m.is_some() {
-        return Err(bad(
-            "scene.floor_m",
-            "an open floor's size; give either `path` or `floor_m`".into(),
-        ));
-    }
+    let (scene, floor_m) = synth_scene(&raw.scene, base, &bad)?;
     let duration_s = m.duration_s.unwrap_or(20.0);
     if !(duration_s.is_finite() && duration_s > 0.0 && duration_s <= MAX_DURATION_S) {
         return Err(bad(
@@ -257,6 +238,92 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         .saturating_sub(SEED_FRAMES)
         .div_ceil(NEW_FRAMES)
         .max(1);
+    let settings = crowd_settings(m, primitives, &bad)?;
+    let mut agents = listed_agents(&raw.agents, &bad)?;
+    if let Some(c) = &raw.crowd {
+        agents.extend(crowd_agents(c, settings.seed, &bad)?);
+    }
+    if agents.is_empty() || agents.len() > MAX_AGENTS {
+        return Err(bad(
+            "agents",
+            format!(
+                "expected 1–{MAX_AGENTS} agents ([[agents]] and [crowd] count together), got {}",
+                agents.len()
+            ),
+        ));
+    }
+    check_agent_names(&agents, &bad)?;
+    let policy = if agents
+        .iter()
+        .any(|a| matches!(a.steering, Steering::Policy { .. }))
+    {
+        Some(file(
+            "motion.policy",
+            &m.policy,
+            crate::policy::ppo::SHIPPED_POLICY,
+        )?)
+    } else {
+        None
+    };
+    let (obstacles, moving, solids) = synth_obstacles(&raw.obstacles, &bad)?;
+    Ok(SynthPlan {
+        config: path.into(),
+        body_model,
+        scene,
+        floor_m,
+        indoors: raw.scene.indoors.unwrap_or(true),
+        weights,
+        policy,
+        pose_prior,
+        train_config,
+        settings,
+        duration_s,
+        agents,
+        obstacles,
+        solids,
+        moving,
+        out_dir: base.join(&raw.output.dir),
+    })
+}
+
+/// `[scene]`: a scene file (relative to `base`), or an open floor's size.
+fn synth_scene(
+    raw: &RawSynthScene,
+    base: &Path,
+    bad: Bad,
+) -> Result<(Option<PathBuf>, f64), ConfigError> {
+    let scene = match &raw.path {
+        Some(p) => {
+            let f = base.join(p);
+            if !f.is_file() {
+                return Err(bad("scene.path", format!("file {} not found", f.display())));
+            }
+            Some(f)
+        }
+        None => None,
+    };
+    let floor_m = raw.floor_m.unwrap_or(8.0);
+    if !(floor_m.is_finite() && (1.0..=200.0).contains(&floor_m)) {
+        return Err(bad(
+            "scene.floor_m",
+            format!("expected 1–200 m, got {floor_m}"),
+        ));
+    }
+    if scene.is_some() && raw.floor_m.is_some() {
+        return Err(bad(
+            "scene.floor_m",
+            "an open floor's size; give either `path` or `floor_m`".into(),
+        ));
+    }
+    Ok((scene, floor_m))
+}
+
+/// `[motion]`'s stepping settings for a take of `primitives` primitives.
+fn crowd_settings(
+    m: &RawSynthMotion,
+    primitives: usize,
+    bad: Bad,
+) -> Result<CrowdSettings, ConfigError> {
     let defaults = CrowdSettings::default();
     let settings = CrowdSettings {
         success_m: m.success_m.unwrap_or(defaults.success_m),
@@ -299,9 +366,13 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
             format!("expected a distance ≥ 0 m, got {}", settings.clearance_m),
         ));
     }
+    Ok(settings)
+}
 
+/// The `[[agents]]` as given.
+fn listed_agents(raw: &[RawAgent], bad: Bad) -> Result<Vec<AgentDraft>, ConfigError> {
     let mut agents = Vec::new();
-    for (i, a) in raw.agents.iter().enumerate() {
+    for (i, a) in raw.iter().enumerate() {
         let key = |k: &str| format!("agents[{i}].{k}");
         let steer = steering(a.steering.as_deref().unwrap_or("policy"), a.k)
             .map_err(|e| bad(&key("steering"), e))?;
@@ -342,79 +413,80 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
             steering: steer,
         });
     }
-    if let Some(c) = &raw.crowd {
-        let steer = steering(&c.steering, c.k).map_err(|e| bad("crowd.steering", e))?;
-        let sigma = c.betas_sigma.unwrap_or(2.0);
-        if !(sigma.is_finite() && (0.0..=10.0).contains(&sigma)) {
-            return Err(bad(
-                "crowd.betas_sigma",
-                format!("expected 0–10, got {sigma}"),
-            ));
-        }
-        let n_betas = if sigma == 0.0 {
-            0
-        } else {
-            c.betas_count.unwrap_or(10)
-        };
-        let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0xBE7A5);
-        let centre = DVec2::from_array(c.centre.unwrap_or([0.0, 0.0]));
-        if !centre.is_finite() {
-            return Err(bad("crowd.centre", "expected two finite numbers".into()));
-        }
-        for i in 0..c.count {
-            let betas: Vec<f64> = normal_samples(&mut rng, n_betas)
-                .into_iter()
-                .map(|b| (b as f64).clamp(-sigma, sigma))
-                .collect();
-            let (start, goals) = match c.layout.as_str() {
-                "circle" => {
-                    let r = c.radius_m.unwrap_or(2.0);
-                    if !(r.is_finite() && r > 0.0) {
-                        return Err(bad(
-                            "crowd.radius_m",
-                            format!("expected a radius > 0 m, got {r}"),
-                        ));
-                    }
-                    let a = std::f64::consts::TAU * i as f64 / c.count as f64;
-                    let p = DVec2::from_angle(a) * r;
-                    (Some(centre + p), vec![centre - p])
-                }
-                "random" => {
-                    if c.radius_m.is_some() || c.centre.is_some() {
-                        return Err(bad("crowd.radius_m", "for layout = \"circle\" only".into()));
-                    }
-                    (None, Vec::new())
-                }
-                other => {
-                    return Err(bad(
-                        "crowd.layout",
-                        format!("expected \"circle\" or \"random\", got \"{other}\""),
-                    ))
-                }
-            };
-            agents.push(AgentDraft {
-                name: format!("crowd_{i:02}"),
-                betas,
-                betas_drawn: true,
-                start,
-                facing_rad: None,
-                goals,
-                wander: c.wander,
-                steering: steer,
-            });
-        }
-    }
-    if agents.is_empty() || agents.len() > MAX_AGENTS {
+    Ok(agents)
+}
+
+/// `[crowd]`'s agents: `count` bodies with betas drawn from the take's `seed`, on a circle or
+/// at sampled places.
+fn crowd_agents(c: &RawCrowd, seed: u64, bad: Bad) -> Result<Vec<AgentDraft>, ConfigError> {
+    let mut agents = Vec::new();
+    let steer = steering(&c.steering, c.k).map_err(|e| bad("crowd.steering", e))?;
+    let sigma = c.betas_sigma.unwrap_or(2.0);
+    if !(sigma.is_finite() && (0.0..=10.0).contains(&sigma)) {
         return Err(bad(
-            "agents",
-            format!(
-                "expected 1–{MAX_AGENTS} agents ([[agents]] and [crowd] count together), got {}",
-                agents.len()
-            ),
+            "crowd.betas_sigma",
+            format!("expected 0–10, got {sigma}"),
         ));
     }
+    let n_betas = if sigma == 0.0 {
+        0
+    } else {
+        c.betas_count.unwrap_or(10)
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xBE7A5);
+    let centre = DVec2::from_array(c.centre.unwrap_or([0.0, 0.0]));
+    if !centre.is_finite() {
+        return Err(bad("crowd.centre", "expected two finite numbers".into()));
+    }
+    for i in 0..c.count {
+        let betas: Vec<f64> = normal_samples(&mut rng, n_betas)
+            .into_iter()
+            .map(|b| (b as f64).clamp(-sigma, sigma))
+            .collect();
+        let (start, goals) = match c.layout.as_str() {
+            "circle" => {
+                let r = c.radius_m.unwrap_or(2.0);
+                if !(r.is_finite() && r > 0.0) {
+                    return Err(bad(
+                        "crowd.radius_m",
+                        format!("expected a radius > 0 m, got {r}"),
+                    ));
+                }
+                let a = std::f64::consts::TAU * i as f64 / c.count as f64;
+                let p = DVec2::from_angle(a) * r;
+                (Some(centre + p), vec![centre - p])
+            }
+            "random" => {
+                if c.radius_m.is_some() || c.centre.is_some() {
+                    return Err(bad("crowd.radius_m", "for layout = \"circle\" only".into()));
+                }
+                (None, Vec::new())
+            }
+            other => {
+                return Err(bad(
+                    "crowd.layout",
+                    format!("expected \"circle\" or \"random\", got \"{other}\""),
+                ))
+            }
+        };
+        agents.push(AgentDraft {
+            name: format!("crowd_{i:02}"),
+            betas,
+            betas_drawn: true,
+            start,
+            facing_rad: None,
+            goals,
+            wander: c.wander,
+            steering: steer,
+        });
+    }
+    Ok(agents)
+}
+
+/// Agent names name folders: letters, digits, `_` and `-`, each used once.
+fn check_agent_names(agents: &[AgentDraft], bad: Bad) -> Result<(), ConfigError> {
     let mut names = std::collections::BTreeSet::new();
-    for a in &agents {
+    for a in agents {
         let ok = !a.name.is_empty()
             && a.name
                 .chars()
@@ -432,20 +504,17 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
             return Err(bad("agents.name", format!("\"{}\" is used twice", a.name)));
         }
     }
-    let policy = if agents
-        .iter()
-        .any(|a| matches!(a.steering, Steering::Policy { .. }))
-    {
-        Some(file(
-            "motion.policy",
-            &m.policy,
-            crate::policy::ppo::SHIPPED_POLICY,
-        )?)
-    } else {
-        None
-    };
+    Ok(())
+}
+
+/// `[[obstacles]]`: the still ones, the moving ones, and all as solids standing on the floor.
+#[allow(clippy::type_complexity)]
+fn synth_obstacles(
+    raw: &[RawObstacle],
+    bad: Bad,
+) -> Result<(Vec<Obstacle2>, Vec<MovingObstacle>, Vec<ObstacleSolid>), ConfigError> {
     let (mut obstacles, mut moving, mut solids) = (Vec::new(), Vec::new(), Vec::new());
-    for (i, o) in raw.obstacles.iter().enumerate() {
+    for (i, o) in raw.iter().enumerate() {
         let key = |k: &str| format!("obstacles[{i}].{k}");
         if !finite2(o.centre) {
             return Err(bad(
@@ -491,24 +560,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
             });
         }
     }
-    Ok(SynthPlan {
-        config: path.into(),
-        body_model,
-        scene,
-        floor_m,
-        indoors: raw.scene.indoors.unwrap_or(true),
-        weights,
-        policy,
-        pose_prior,
-        train_config,
-        settings,
-        duration_s,
-        agents,
-        obstacles,
-        solids,
-        moving,
-        out_dir: base.join(&raw.output.dir),
-    })
+    Ok((obstacles, moving, solids))
 }
 
 /// The walkable map of the plan's scene, or its open floor.

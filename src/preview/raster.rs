@@ -38,6 +38,11 @@ impl RgbImage {
 
     /// Writes a PNG, atomically (see [`crate::atomic_file`]).
     pub fn write_png(&self, path: &Path) -> std::io::Result<()> {
+        crate::atomic_file::write_atomically(path, &self.encode_png()?)
+    }
+
+    /// The image as PNG bytes (8-bit RGB).
+    pub fn encode_png(&self) -> std::io::Result<Vec<u8>> {
         let mut encoded = Vec::new();
         {
             let mut enc = png::Encoder::new(&mut encoded, self.width as u32, self.height as u32);
@@ -47,7 +52,7 @@ impl RgbImage {
             let bytes: Vec<u8> = self.pixels.iter().flatten().copied().collect();
             w.write_image_data(&bytes).map_err(std::io::Error::other)?;
         }
-        crate::atomic_file::write_atomically(path, &encoded)
+        Ok(encoded)
     }
 }
 

@@ -323,10 +323,19 @@ impl FrameImage {
         }
     }
 
-    /// Writes the frame file to `path` with the planes it holds (callers that need atomicity
-    /// write a temporary name, validate it and rename, as
-    /// [`crate::supervisor::Dataset::finish_frame`] does).
+    /// Writes the frame file to `path` ([`FrameImage::encode`], then the bytes; not atomic).
     pub fn write(&self, path: &Path) -> Result<(), FrameFileError> {
+        let bytes = self.encode(path)?;
+        std::fs::write(path, bytes).map_err(|e| FrameFileError::Write {
+            path: path.into(),
+            message: e.to_string(),
+        })
+    }
+
+    /// The frame file's bytes, with the planes it holds; `path` is where they are meant to go
+    /// (named in errors). Callers write them under a temporary name and rename, as
+    /// [`crate::supervisor::Dataset::finish_frame`] does.
+    pub fn encode(&self, path: &Path) -> Result<Vec<u8>, FrameFileError> {
         let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
         let mut f32_channel = |name: &str, values: Vec<f32>| {
             channels.push(AnyChannel::new(name, FlatSamples::F32(values)))
@@ -379,14 +388,16 @@ impl FrameImage {
             Encoding::SMALL_LOSSLESS,
             AnyChannels::sort(SmallVec::from_vec(channels)),
         );
+        let mut bytes = std::io::Cursor::new(Vec::new());
         Image::from_layer(layer)
             .write()
             .non_parallel()
-            .to_file(path)
+            .to_buffered(&mut bytes)
             .map_err(|e| FrameFileError::Write {
                 path: path.into(),
                 message: e.to_string(),
-            })
+            })?;
+        Ok(bytes.into_inner())
     }
 }
 
@@ -400,6 +411,18 @@ pub fn validate_frame(
     channels: &[&str],
 ) -> Result<ExrContents, FrameFileError> {
     let contents = ExrContents::read(path)?;
+    validate_frame_contents(contents, width, height, channels)
+}
+
+/// [`validate_frame`] of a frame file already read (from disk, or from the bytes about to be
+/// written).
+pub fn validate_frame_contents(
+    contents: ExrContents,
+    width: u32,
+    height: u32,
+    channels: &[&str],
+) -> Result<ExrContents, FrameFileError> {
+    let path = contents.path.as_path();
     if let Some(extra) = contents
         .channels
         .iter()

@@ -7,7 +7,8 @@
 //!   (`inspect::preview::auto_exposure`, `colour_exposure` in the annotations), linear →
 //!   sRGB, clamped to [0, 1], 8-bit RGB (grey for
 //!   a monochrome camera). COLMAP cannot read the multilayer EXR. Written only when the run
-//!   asks for the `colmap` pass (which needs `colour`).
+//!   asks for the `colmap` pass (which needs `colour`), as each frame is finished
+//!   ([`super::frame_record`]).
 //! - `colmap/<camera>/cameras.txt` — one camera, id 1, in the COLMAP model that reproduces the
 //!   rig's model exactly (see [`colmap_camera`]).
 //! - `colmap/<camera>/images.txt` — one image per rendered frame, ids 1, 2, … in frame order,
@@ -34,11 +35,9 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use glam::DQuat;
 
-use super::dataset::{colour_pass, CameraWork, Dataset};
+use super::dataset::{CameraWork, Dataset};
 use crate::atomic_file::write_atomically;
 use crate::camera::{Camera, CameraModel, Fisheye624, Pixel};
-use crate::inspect::preview::{auto_exposure, pass_preview_exposed};
-use crate::inspect::ExrContents;
 use crate::math::{Affine3, Real, Vec3};
 
 /// A camera as COLMAP's `cameras.txt` spells it.
@@ -303,24 +302,12 @@ fn write_model(dir: &Path, cameras: &str, images: &str) -> Result<()> {
     Ok(())
 }
 
-/// Writes `images/<camera>/*.png` and `colmap/<camera>/` for every camera of a dataset whose
-/// frame files are complete.
+/// Writes `colmap/<camera>/` for every camera of a dataset whose frames are finished (their
+/// images, `images/<camera>/*.png`, were written with the frames: see
+/// [`super::frame_record`]).
 pub fn write_colmap(dataset: &Dataset) -> Result<()> {
-    for (c, work) in dataset.cameras.iter().enumerate() {
+    for work in &dataset.cameras {
         let name = &work.camera.name;
-        let image_dir = dataset.staging.join("images").join(name);
-        std::fs::create_dir_all(&image_dir)
-            .with_context(|| format!("creating {}", image_dir.display()))?;
-        for &f in &work.frames {
-            let exr = dataset.frame_path(c, f);
-            let contents = ExrContents::read(&exr)?;
-            let colour = colour_pass(&contents)
-                .with_context(|| format!("{}: no colour (`rgb` or `gray`)", exr.display()))?;
-            let png = image_dir.join(image_name(f));
-            pass_preview_exposed(&contents, colour, auto_exposure(&contents, colour))
-                .write_png(&png)
-                .with_context(|| format!("writing {}", png.display()))?;
-        }
         let model_dir = dataset.staging.join("colmap").join(name);
         let images = images_txt(work);
         let exact = colmap_camera(&work.camera.model);

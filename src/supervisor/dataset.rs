@@ -9,8 +9,9 @@
 //! - `images/<camera>/frame_NNNNN.png`, `colmap/<camera>/` — the COLMAP export
 //!   (see [`super::colmap`]).
 //! - `manifest.json` — every dataset file with size and SHA-256.
-//! - `work/` (raw renders, body caches, shard specs) and `logs/` (worker stderr per attempt)
-//!   are scratch; they are not part of the manifest.
+//! - `work/` (raw renders, body caches, shard specs, frame records: see
+//!   [`super::frame_record`]) and `logs/` (worker stderr per attempt) are scratch; they are not
+//!   part of the manifest.
 
 use std::path::PathBuf;
 
@@ -18,16 +19,17 @@ use anyhow::{Context, Result};
 use serde_json::json;
 
 use super::annotations::{
-    AgentAnnotation, AgentSkin, CameraAnnotations, Conventions, FrameAnnotation, JointVisibility,
-    SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
+    AgentSkin, CameraAnnotations, Conventions, SegmentationId, ANNOTATIONS_VERSION,
 };
+use super::frame_record::{FileFacts, FrameRecord, JOINT_OCCLUSION_TOLERANCE_M};
 use crate::camera::CameraModel;
 use crate::exr_file::ExrContents;
-use crate::inspect::preview::auto_exposure;
 use crate::math::{Affine3, Real, Vec3};
 use crate::motion::MotionSequence;
 use crate::render::depth_noise::{DepthNoise, NoiseSeed};
-use crate::render::frame_file::{assemble_frame, validate_frame, FrameFileError, FrameImage};
+use crate::render::frame_file::{
+    assemble_frame, validate_frame_contents, FrameFileError, FrameImage,
+};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::passes::Passes;
 use crate::render::render_camera::RenderCamera;
@@ -35,10 +37,6 @@ use crate::render::shard_plan::{raw_frame_paths, shard_camera, RawRenders};
 use crate::render::ShardSpec;
 use crate::rig::{Rig, RigCamera};
 use crate::synth::BodyTrack;
-
-/// A joint is occluded when the rendered surface at its pixel is nearer than this (m): joints
-/// lie inside the body, up to about this deep under its surface.
-pub const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
 
 /// One camera's share of the work.
 #[derive(Debug, Clone)]
@@ -79,6 +77,8 @@ pub struct Dataset {
     pub keys_per_frame: u32,
     pub frames_per_shard: usize,
     pub near_clip_m: f64,
+    /// Every body in the scene (the annotations list them all).
+    pub agents: Vec<RenderedAgent>,
     /// Which start of the run this is (1 for the first, one more for every `--resume`): each
     /// start keeps its logs in its own folder, so a resume never overwrites what an earlier
     /// start wrote (an error message may name those logs).
@@ -120,16 +120,17 @@ impl Dataset {
             .frame_channels(work.camera.monochrome, work.depth_noise.is_some())
     }
 
-    /// Checks a camera's frame file: it opens, holds exactly the camera's channels at its
-    /// size, all finite.
-    pub fn validate_frame_file(
+    /// Checks a camera's frame file, read from disk or about to be written (`bytes`, named
+    /// by `path`): it opens, holds exactly the camera's channels at its size, all finite.
+    pub fn validate_frame_bytes(
         &self,
         camera: usize,
         path: &std::path::Path,
+        bytes: &[u8],
     ) -> Result<ExrContents, FrameFileError> {
         let res = self.cameras[camera].camera.model.resolution();
-        validate_frame(
-            path,
+        validate_frame_contents(
+            ExrContents::from_bytes(path, bytes)?,
             res.width_px,
             res.height_px,
             &self.frame_channels(camera),
@@ -153,15 +154,17 @@ impl Dataset {
     }
 
     /// Whether a frame is done: its file exists. A frame file appears only by a rename after it
-    /// validated; [`Dataset::remove_invalid_frames`] clears any damaged since, before planning.
+    /// validated and its record was kept; [`Dataset::check_finished_frames`] clears any damaged
+    /// since, before planning.
     pub fn frame_done(&self, camera: usize, frame: u32) -> bool {
         self.frame_path(camera, frame).is_file()
     }
 
-    /// Removes every frame file of the plan that exists but does not validate (a damaged or
-    /// truncated frame left by an interrupted run, or changed since), so that it is rendered
-    /// again; returns each removed file with the reason it failed.
-    pub fn remove_invalid_frames(&self) -> Result<Vec<(PathBuf, String)>> {
+    /// Reads every frame file of the plan that exists: one that does not validate (a damaged
+    /// or truncated frame left by an interrupted run, or changed since) is removed, so that it
+    /// is rendered again; one whose record is missing or does not match it gets its record
+    /// again. Returns each removed file with the reason it failed.
+    pub fn check_finished_frames(&self) -> Result<Vec<(PathBuf, String)>> {
         let mut removed = Vec::new();
         for (c, work) in self.cameras.iter().enumerate() {
             for &f in &work.frames {
@@ -169,10 +172,20 @@ impl Dataset {
                 if !path.is_file() {
                     continue;
                 }
-                if let Err(e) = self.validate_frame_file(c, &path) {
-                    std::fs::remove_file(&path)
-                        .with_context(|| format!("removing damaged {}", path.display()))?;
-                    removed.push((path, e.to_string()));
+                let bytes =
+                    std::fs::read(&path).with_context(|| format!("reading {}", path.display()))?;
+                match self.validate_frame_bytes(c, &path, &bytes) {
+                    Err(e) => {
+                        std::fs::remove_file(&path)
+                            .with_context(|| format!("removing damaged {}", path.display()))?;
+                        removed.push((path, e.to_string()));
+                    }
+                    Ok(contents) => {
+                        let facts = FileFacts::of(&bytes);
+                        if !self.record_matches(c, f, &facts) {
+                            self.record_frame(c, f, &contents, facts)?;
+                        }
+                    }
                 }
             }
         }
@@ -227,8 +240,9 @@ impl Dataset {
         }
     }
 
-    /// Turns a frame's raw renders into its frame file: assembled, written under a temporary
-    /// name, validated, renamed; then the raw files are removed.
+    /// Turns a frame's raw renders into its frame file: assembled, encoded, validated and
+    /// recorded (annotation, COLMAP image, checksum: [`super::frame_record`]) from the bytes
+    /// in memory, written under a temporary name and renamed; then the raw files are removed.
     pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<PathBuf> {
         let work = &self.cameras[camera];
         let (rgb, gt) = raw_frame_paths(
@@ -268,13 +282,13 @@ impl Dataset {
         let out = self.frame_path(camera, frame);
         std::fs::create_dir_all(out.parent().unwrap())
             .with_context(|| format!("creating {}", out.parent().unwrap().display()))?;
+        let bytes = image.encode(&out)?;
+        let contents = self.validate_frame_bytes(camera, &out, &bytes)?;
+        self.record_frame(camera, frame, &contents, FileFacts::of(&bytes))?;
         let tmp = out.with_extension("exr.tmp");
-        let checked = image
-            .write(&tmp)
-            .and_then(|()| self.validate_frame_file(camera, &tmp).map(drop));
-        if let Err(e) = checked {
+        if let Err(e) = std::fs::write(&tmp, &bytes) {
             let _ = std::fs::remove_file(&tmp);
-            return Err(e.into());
+            return Err(e).with_context(|| format!("writing {}", tmp.display()));
         }
         std::fs::rename(&tmp, &out).with_context(|| format!("renaming to {}", out.display()))?;
         for raw in self.raw_frame_files(camera, frame) {
@@ -306,6 +320,7 @@ pub fn next_start(staging: &std::path::Path) -> u32 {
 }
 
 /// One body in the rendered scene.
+#[derive(Debug, Clone)]
 pub struct RenderedAgent {
     pub name: String,
     /// Segmentation id.
@@ -314,25 +329,18 @@ pub struct RenderedAgent {
     pub track: BodyTrack,
 }
 
-/// Writes `cameras/<camera>/annotations.json` for every camera (OpenCV conventions).
+/// Writes `cameras/<camera>/annotations.json` for every camera (OpenCV conventions) from the
+/// frames' records (`records[camera][k]`: the camera's k-th planned frame).
 pub fn write_annotations(
     dataset: &Dataset,
     rig: &Rig,
-    agents: &[RenderedAgent],
+    records: &[Vec<FrameRecord>],
     object_ids: &[(String, u32)],
 ) -> Result<()> {
-    for (c, work) in dataset.cameras.iter().enumerate() {
+    let agents = &dataset.agents;
+    for (work, records) in dataset.cameras.iter().zip(records) {
         let model_json = camera_json(rig, &work.camera)?;
-        let mut frames = Vec::with_capacity(work.frames.len());
-        for &f in &work.frames {
-            let path = dataset.frame_path(c, f);
-            let contents = dataset.validate_frame_file(c, &path)?;
-            let plane = |name: &str| contents.channel(name).map(|c| c.values.as_slice());
-            let mut frame =
-                frame_annotation(work, f, agents, plane("depth.Z"), plane("segmentation.id"));
-            frame.colour_exposure = colour_pass(&contents).map(|p| auto_exposure(&contents, p));
-            frames.push(frame);
-        }
+        let frames = records.iter().map(|r| r.annotation.clone()).collect();
         let mut segmentation_ids: Vec<SegmentationId> = object_ids
             .iter()
             .map(|(name, id)| SegmentationId {
@@ -413,118 +421,4 @@ fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
     };
     let mut value: serde_json::Value = serde_json::from_str(&one.to_json())?;
     Ok(value["cameras"][0].take())
-}
-
-fn frame_annotation(
-    work: &CameraWork,
-    f: u32,
-    agents: &[RenderedAgent],
-    depth: Option<&[f32]>,
-    ids: Option<&[f32]>,
-) -> FrameAnnotation {
-    let i = f as usize;
-    let res = work.camera.model.resolution();
-    let w = res.width_px as usize;
-    let world_from_cam = work.world_from_cam[i];
-    let cam_from_world = world_from_cam.inverse();
-    let pelvis = |a: &RenderedAgent| a.track.frames[i].joints[0];
-    let listed = agents
-        .iter()
-        .enumerate()
-        .map(|(k, a)| {
-            let joints = &a.track.frames[i].joints;
-            let mut joints_2d = Vec::with_capacity(joints.len());
-            let mut visibility = Vec::with_capacity(joints.len());
-            for j in joints {
-                let p = cam_from_world.transform_point3(*j);
-                match work.camera.model.project(p) {
-                    Some(px) => {
-                        let (x, y) = (px.x.round() as usize, px.y.round() as usize);
-                        let at = y.min(res.height_px as usize - 1) * w + x.min(w - 1);
-                        joints_2d.push(Some([px.x, px.y]));
-                        visibility.push(match (depth, ids) {
-                            (Some(depth), Some(ids)) => {
-                                let d = depth[at] as f64;
-                                // Hidden when the pixel shows something else, nearer than the
-                                // joint; the agent's own surface over its joint is the joint seen.
-                                if ids[at] as u32 != a.id
-                                    && d > 0.0
-                                    && d < p.z - JOINT_OCCLUSION_TOLERANCE_M
-                                {
-                                    JointVisibility::Occluded
-                                } else {
-                                    JointVisibility::Visible
-                                }
-                            }
-                            _ => JointVisibility::InView,
-                        });
-                    }
-                    None => {
-                        joints_2d.push(None);
-                        visibility.push(JointVisibility::Outside);
-                    }
-                }
-            }
-            let bbox = ids.and_then(|ids| bbox_of(ids, w, a.id));
-            // With segmentation: its pixels are in the image; without: a joint is.
-            let in_view = match ids {
-                Some(_) => bbox.is_some(),
-                None => joints_2d.iter().any(Option::is_some),
-            };
-            // Distance to the nearest other agent (pelvis to pelvis); none alone.
-            let nearest = agents
-                .iter()
-                .enumerate()
-                .filter(|(o, _)| *o != k)
-                .map(|(_, o)| pelvis(o).distance(pelvis(a)))
-                .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.min(d))));
-            AgentAnnotation {
-                name: a.name.clone(),
-                id: a.id,
-                wearer: k == work.wearer,
-                in_view,
-                smplx: SmplxParams::new(
-                    &a.motion.betas,
-                    &a.motion.poses[i],
-                    a.motion.trans[i].to_array(),
-                ),
-                joints_3d: joints.iter().map(|j| j.to_array()).collect(),
-                joints_2d,
-                joint_visibility: visibility,
-                bbox_xyxy: bbox,
-                interaction_distance_m: nearest,
-            }
-        })
-        .collect();
-    FrameAnnotation {
-        frame: f,
-        time_s: f as f64 / agents[0].motion.frame_rate_hz,
-        file: format!("frame_{f:05}.exr"),
-        t_world_cam: crate::render::camera_setup::row_major(world_from_cam),
-        colour_exposure: None,
-        agents: listed,
-    }
-}
-
-/// A frame file's colour: `rgb`, or `gray` of a monochrome camera.
-pub fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::Pass> {
-    contents
-        .passes
-        .iter()
-        .find(|p| p.name == "rgb" || p.name == "gray")
-}
-
-/// Inclusive pixel box of the pixels labelled `id`, if any.
-fn bbox_of(ids: &[f32], width: usize, id: u32) -> Option<[usize; 4]> {
-    let mut b: Option<[usize; 4]> = None;
-    for (i, &v) in ids.iter().enumerate() {
-        if v as u32 == id {
-            let (x, y) = (i % width, i / width);
-            b = Some(match b {
-                None => [x, y, x, y],
-                Some([x0, y0, x1, y1]) => [x0.min(x), y0.min(y), x1.max(x), y1.max(y)],
-            });
-        }
-    }
-    b
 }

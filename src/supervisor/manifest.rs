@@ -7,8 +7,9 @@ use anyhow::{bail, Context, Result};
 
 use crate::exr_file::ExrContents;
 pub use crate::manifest::{
-    build_manifest, dataset_files, is_temporary, remove_temporaries, sha256_file, sha256_hex,
-    write_manifest, Manifest, ManifestEntry, MANIFEST, SCRATCH_DIRS,
+    build_manifest, build_manifest_with, dataset_files, is_temporary, remove_temporaries,
+    sha256_file, sha256_hex, write_manifest, write_manifest_with, Manifest, ManifestEntry,
+    MANIFEST, SCRATCH_DIRS,
 };
 use crate::render::frame_file::{check_frame_channels, FrameFileError};
 

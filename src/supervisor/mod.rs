@@ -6,6 +6,7 @@
 pub mod annotations;
 pub mod colmap;
 pub mod dataset;
+pub mod frame_record;
 pub mod local;
 pub mod manifest;
 pub mod pipeline;

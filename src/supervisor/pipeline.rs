@@ -12,7 +12,7 @@ use anyhow::{bail, Context, Result};
 use super::colmap::write_colmap;
 use super::dataset::{next_start, write_annotations, CameraWork, Dataset, RenderedAgent};
 use super::local::{LocalPool, PoolSettings};
-use super::manifest::{remove_temporaries, sha256_hex, write_manifest, MANIFEST};
+use super::manifest::{remove_temporaries, sha256_hex, write_manifest_with, MANIFEST};
 use super::pool::ShardPool;
 use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use crate::atomic_file::write_atomically;
@@ -96,7 +96,10 @@ pub enum RunMotion<'a> {
 /// Runs the pipeline for a plan with a render section; `config_path` is hashed so that a
 /// resumed run is known to be the same run.
 ///
-/// `work/run.json`, [`RunState`], says which run a `.partial` folder holds.
+/// `work/run.json`, [`RunState`], says which run a `.partial` folder holds. The steps, in
+/// order: check the output folder and what a resume continues; everything that can fail on bad
+/// input before anything is staged; stage the run; write the sequence and Blender's inputs;
+/// plan the cameras and the scene's objects; render what is missing; finish the dataset.
 pub fn run_pipeline(
     plan: &RunPlan,
     render: &RenderPlan,
@@ -107,11 +110,14 @@ pub fn run_pipeline(
 ) -> Result<RunSummary> {
     let dir = &plan.output_dir;
     let staging = PathBuf::from(format!("{}.partial", dir.display()));
-    let config_sha = sha256_hex(opts.resume_fingerprint.as_bytes());
-    // The rig as resolved (a --rig override included): a resume must render with the same one.
-    let rig_sha = sha256_hex(render.rig.to_json().as_bytes());
-    if is_non_empty_dir(dir) {
-        if opts.resume && dir.join(MANIFEST).is_file() {
+    let state = RunState {
+        config: config_path.display().to_string(),
+        config_sha256: sha256_hex(opts.resume_fingerprint.as_bytes()),
+        // The rig as resolved (a --rig override included): a resume must render with the same one.
+        rig_sha256: Some(sha256_hex(render.rig.to_json().as_bytes())),
+    };
+    let fresh = match check_output(dir, &staging, &state, opts)? {
+        OutputState::Complete => {
             eprintln!(
                 "egogen-run: {} is already complete; nothing to do",
                 dir.display()
@@ -123,50 +129,146 @@ pub fn run_pipeline(
                 files: 0,
             });
         }
+        OutputState::Fresh => true,
+        OutputState::Resume => false,
+    };
+
+    // Everything that can fail on bad input or a missing Blender, before anything is staged:
+    // the scene, where the motion happens in it, and (for a new run) the renderer.
+    let scene = load_scene(&plan.scene, None)?;
+    let (agents, wearers) = rendered_agents(plan, &scene, &motion, model)?;
+    let runtime = if fresh {
+        Some(BlenderRuntime::resolve(opts.blender.as_deref())?)
+    } else {
+        None
+    };
+    if plan.supervisor.backend == Backend::Slurm {
+        check_slurm_tools()?;
+    }
+
+    if fresh {
+        stage_run(&staging, &state, opts)?;
+    } else {
+        eprintln!("egogen-run: resuming {}", staging.display());
+    }
+    let sequence = staging.join("sequence");
+    if !sequence.exists() {
+        write_sequence(&sequence, &motion, &agents, model, plan)?;
+    }
+    let (bodies, scratch) = write_body_inputs(&staging.join("work"), &agents, model, render)?;
+    let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
+        .step_by(render.every_n_frames)
+        .collect();
+    let cameras = camera_work(render, &agents, &wearers, &frames);
+    let objects = scene_objects(plan, &scene, &motion, &agents);
+    let base_spec = base_spec(plan, render, &scene, &agents[wearers[0]], bodies, &objects)?;
+    let dataset = Arc::new(Dataset {
+        staging: std::fs::canonicalize(&staging)?,
+        base_spec,
+        cameras,
+        passes: render.passes,
+        keys_per_frame: render.cache_samples_per_frame,
+        frames_per_shard: render.frames_per_shard,
+        near_clip_m: render.near_clip_m,
+        agents,
+        start: next_start(&staging),
+    });
+    let rendered_now = render_missing(&dataset, plan, render, runtime, opts)?;
+    let files = finish_dataset(&dataset, render, &objects.ids, &scratch, dir)?;
+    Ok(RunSummary {
+        dir: dir.clone(),
+        frames: dataset.total_frames(),
+        rendered_now,
+        files,
+    })
+}
+
+/// What the output folder holds for a run.
+enum OutputState {
+    /// Neither `<dir>` nor `<dir>.partial`: a new run.
+    Fresh,
+    /// `<dir>.partial` of this same run, and `--resume` asked to continue it.
+    Resume,
+    /// `<dir>` is this run's finished dataset, and `--resume` was asked.
+    Complete,
+}
+
+/// Checks that the run may write where it is told: `<dir>` empty or absent (or finished, under
+/// `--resume`), and a `<dir>.partial` continued only by `--resume` of the same run (`state`).
+/// Nothing is touched either way.
+fn check_output(
+    dir: &Path,
+    staging: &Path,
+    state: &RunState,
+    opts: &RunOptions,
+) -> Result<OutputState> {
+    if is_non_empty_dir(dir) {
+        if opts.resume && dir.join(MANIFEST).is_file() {
+            return Ok(OutputState::Complete);
+        }
         bail!(
             "output folder {} already exists and is not empty; choose another `output.dir` (nothing was written)",
             dir.display()
         );
     }
-    let state_path = staging.join("work/run.json");
-    let fresh = !staging.exists();
-    if !fresh {
-        if !opts.resume {
-            bail!(
-                "{} holds an interrupted run; rerun with --resume to continue it, or delete it (nothing was written)",
-                staging.display()
-            );
-        }
-        let state: RunState = std::fs::read_to_string(&state_path)
-            .ok()
-            .and_then(|t| serde_json::from_str(&t).ok())
-            .with_context(|| {
-                format!(
-                    "{}: missing or unreadable; cannot resume",
-                    state_path.display()
-                )
-            })?;
-        if state.config_sha256 != config_sha {
-            bail!(
-                "{} was started from a different config than {} with these options (its values or the command line's --out, --seed, --rig); resuming would mix two runs (nothing was touched)",
-                staging.display(),
-                config_path.display()
-            );
-        }
-        if state.rig_sha256.as_ref().is_some_and(|s| *s != rig_sha) {
-            bail!(
-                "{} was started with a different camera rig (a --rig override or a changed rig file); resuming would mix two runs (nothing was touched)",
-                staging.display()
-            );
-        }
+    if !staging.exists() {
+        return Ok(OutputState::Fresh);
     }
+    if !opts.resume {
+        bail!(
+            "{} holds an interrupted run; rerun with --resume to continue it, or delete it (nothing was written)",
+            staging.display()
+        );
+    }
+    let state_path = staging.join("work/run.json");
+    let found: RunState = std::fs::read_to_string(&state_path)
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .with_context(|| {
+            format!(
+                "{}: missing or unreadable; cannot resume",
+                state_path.display()
+            )
+        })?;
+    if found.config_sha256 != state.config_sha256 {
+        bail!(
+            "{} was started from a different config than {} with these options (its values or the command line's --out, --seed, --rig); resuming would mix two runs (nothing was touched)",
+            staging.display(),
+            state.config
+        );
+    }
+    if found.rig_sha256.is_some() && found.rig_sha256 != state.rig_sha256 {
+        bail!(
+            "{} was started with a different camera rig (a --rig override or a changed rig file); resuming would mix two runs (nothing was touched)",
+            staging.display()
+        );
+    }
+    Ok(OutputState::Resume)
+}
 
-    // Everything that can fail on bad input or a missing Blender, before anything is staged:
-    // the scene, where the motion happens in it, and (for a new run) the renderer.
-    let scene = load_scene(&plan.scene, None)?;
-    let (agents, wearers): (Vec<RenderedAgent>, Vec<usize>) = match &motion {
+/// Creates `<dir>.partial` with the effective config and `work/run.json`.
+fn stage_run(staging: &Path, state: &RunState, opts: &RunOptions) -> Result<()> {
+    std::fs::create_dir_all(staging.join("work"))
+        .with_context(|| format!("creating {}", staging.display()))?;
+    write_atomically(&staging.join("config.toml"), opts.config_toml.as_bytes())
+        .with_context(|| format!("writing the effective config of {}", state.config))?;
+    write_atomically(
+        &staging.join("work/run.json"),
+        serde_json::to_string_pretty(state)?.as_bytes(),
+    )?;
+    Ok(())
+}
+
+/// The bodies the run renders, each with its track, and which of them wear the rig.
+fn rendered_agents(
+    plan: &RunPlan,
+    scene: &crate::scene::SceneMesh,
+    motion: &RunMotion,
+    model: &BodyModel,
+) -> Result<(Vec<RenderedAgent>, Vec<usize>)> {
+    match motion {
         RunMotion::Placed(m) => {
-            let map = walkable_map(&scene, &plan.scene, WalkableSettings::default())?;
+            let map = walkable_map(scene, &plan.scene, WalkableSettings::default())?;
             let (placed, _) = place_motion(model, m, &map, plan.scene_seed)
                 .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
             let track = track_body(model, &placed)?;
@@ -176,7 +278,7 @@ pub fn run_pipeline(
                 motion: placed,
                 track,
             };
-            (vec![agent], vec![0])
+            Ok((vec![agent], vec![0]))
         }
         RunMotion::Agents { take, wearers, .. } => {
             let agents = take
@@ -194,60 +296,45 @@ pub fn run_pipeline(
                     })
                 })
                 .collect::<Result<Vec<_>>>()?;
-            (agents, wearers.to_vec())
-        }
-    };
-    let mut runtime = if fresh {
-        Some(BlenderRuntime::resolve(opts.blender.as_deref())?)
-    } else {
-        None
-    };
-    if plan.supervisor.backend == Backend::Slurm {
-        check_slurm_tools()?;
-    }
-
-    if fresh {
-        std::fs::create_dir_all(staging.join("work"))
-            .with_context(|| format!("creating {}", staging.display()))?;
-        write_atomically(&staging.join("config.toml"), opts.config_toml.as_bytes()).with_context(
-            || format!("writing the effective config of {}", config_path.display()),
-        )?;
-        write_atomically(
-            &state_path,
-            serde_json::to_string_pretty(&RunState {
-                config: config_path.display().to_string(),
-                config_sha256: config_sha.clone(),
-                rig_sha256: Some(rig_sha.clone()),
-            })?
-            .as_bytes(),
-        )?;
-    } else {
-        eprintln!("egogen-run: resuming {}", staging.display());
-    }
-
-    let sequence = staging.join("sequence");
-    if !sequence.exists() {
-        match &motion {
-            RunMotion::Placed(_) => {
-                let a = &agents[0];
-                let meshes = pose_meshes(model, &a.motion, plan.mesh_every_n_frames)?;
-                write_sequence_dir(&sequence, model, &a.motion, &a.track, &meshes)?;
-            }
-            RunMotion::Agents {
-                world,
-                take,
-                wall_s,
-                about,
-                ..
-            } => {
-                write_crowd_dir(&sequence, world, model, take, *wall_s, about.clone())?;
-            }
+            Ok((agents, wearers.to_vec()))
         }
     }
+}
 
-    // Inputs Blender reads, rewritten identically on every (re)start.
-    let work = staging.join("work");
-    std::fs::create_dir_all(&work).with_context(|| format!("creating {}", work.display()))?;
+/// Writes the dataset's `sequence/` folder: the take's folder, or a placed motion's.
+fn write_sequence(
+    sequence: &Path,
+    motion: &RunMotion,
+    agents: &[RenderedAgent],
+    model: &BodyModel,
+    plan: &RunPlan,
+) -> Result<()> {
+    match motion {
+        RunMotion::Placed(_) => {
+            let a = &agents[0];
+            let meshes = pose_meshes(model, &a.motion, plan.mesh_every_n_frames)?;
+            write_sequence_dir(sequence, model, &a.motion, &a.track, &meshes).map(drop)
+        }
+        RunMotion::Agents {
+            world,
+            take,
+            wall_s,
+            about,
+            ..
+        } => write_crowd_dir(sequence, world, model, take, *wall_s, about.clone()).map(drop),
+    }
+}
+
+/// Writes what Blender reads of each body into `work` (a PC2 cache, faces, rest vertices),
+/// rewritten identically on every (re)start; returns the bodies as shard specs name them and
+/// the files written (scratch, removed when the dataset is finished).
+fn write_body_inputs(
+    work: &Path,
+    agents: &[RenderedAgent],
+    model: &BodyModel,
+    render: &RenderPlan,
+) -> Result<(Vec<ShardBody>, Vec<PathBuf>)> {
+    std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
     let mut bodies = Vec::with_capacity(agents.len());
     let mut scratch = Vec::new();
     for (k, a) in agents.iter().enumerate() {
@@ -272,13 +359,19 @@ pub fn run_pipeline(
         });
         scratch.extend([pc2, faces, vertices]);
     }
+    Ok((bodies, scratch))
+}
 
-    let frame_count = agents[0].motion.len();
-    let frames: Vec<u32> = (0..frame_count as u32)
-        .step_by(render.every_n_frames)
-        .collect();
-    let mut cameras: Vec<CameraWork> = Vec::new();
-    for &w in &wearers {
+/// The rig's cameras on every wearer (each camera set named after its wearer when there are
+/// several), posed along the wearer's track with the headset's drawn offset on the head.
+fn camera_work(
+    render: &RenderPlan,
+    agents: &[RenderedAgent],
+    wearers: &[usize],
+    frames: &[u32],
+) -> Vec<CameraWork> {
+    let mut cameras = Vec::new();
+    for &w in wearers {
         let track = &agents[w].track;
         let wear = render.headset_wear.map(|h| h.draw(w));
         let cpf_from_headset =
@@ -291,7 +384,6 @@ pub fn run_pipeline(
         {
             let mut camera = cam.clone();
             if wearers.len() > 1 {
-                // Several camera sets: each named after its wearer.
                 camera.name = format!("{}_{}", agents[w].name, cam.name);
             }
             cameras.push(CameraWork {
@@ -304,45 +396,83 @@ pub fn run_pipeline(
                     .map(|f| cam.world_from_cam(f.world_from_cpf * cpf_from_headset))
                     .collect(),
                 headset_wear: wear,
-                frames: frames.clone(),
+                frames: frames.to_vec(),
                 wearer: w,
             });
         }
     }
-    let mut object_ids: Vec<(String, u32)> = scene
+    cameras
+}
+
+/// What the renders hold besides the bodies: the scene's objects, a ceiling where the scene
+/// has none and the plan asks for one, the `[[obstacles]]` boxes; with their segmentation ids.
+struct SceneObjects {
+    /// Every segmentation id but the agents': scene objects, ceiling, obstacles.
+    ids: Vec<(String, u32)>,
+    ceiling: Option<ShardCeiling>,
+    obstacles: Vec<ShardObstacle>,
+}
+
+fn scene_objects(
+    plan: &RunPlan,
+    scene: &crate::scene::SceneMesh,
+    motion: &RunMotion,
+    agents: &[RenderedAgent],
+) -> SceneObjects {
+    let mut ids: Vec<(String, u32)> = scene
         .objects
         .iter()
         .map(|o| (o.name.clone(), o.id.0))
         .collect();
-    let ceiling = plan.ceiling.then(|| ceiling_to_add(&scene)).flatten();
+    let next_id = |ids: &[(String, u32)]| ids.iter().map(|o| o.1).max().unwrap_or(0) + 1;
+    let ceiling = plan.ceiling.then(|| ceiling_to_add(scene)).flatten();
     if let Some(c) = ceiling {
         eprintln!(
             "egogen-run: {} has no ceiling; closing its rooms with one at z = {:.2} m (scene.ceiling = false leaves it open)",
             plan.scene.display(),
             c.z_m
         );
-        let id = object_ids.iter().map(|o| o.1).max().unwrap_or(0) + 1;
-        object_ids.push((CEILING_OBJECT.into(), id));
+        ids.push((CEILING_OBJECT.into(), next_id(&ids)));
     }
-    let obstacles: Vec<ShardObstacle> = match &motion {
+    let obstacles: Vec<ShardObstacle> = match motion {
         RunMotion::Agents {
             world, obstacles, ..
         } => {
-            let first = object_ids.iter().map(|o| o.1).max().unwrap_or(0) + 1;
             let rate = agents[0].motion.frame_rate_hz;
             let frames = agents[0].motion.len() as f64;
-            obstacle_boxes(obstacles, world.map.floor_z_m, first, rate, frames)
+            obstacle_boxes(obstacles, world.map.floor_z_m, next_id(&ids), rate, frames)
         }
         RunMotion::Placed(_) => Vec::new(),
     };
-    object_ids.extend(obstacles.iter().map(|o| (o.name.clone(), o.pass_index)));
-    let (fps, fps_base) = blender_fps(agents[0].motion.frame_rate_hz);
-    let (lo, hi) = scene_bounds(&scene);
-    let track = &agents[wearers[0]].track;
+    ids.extend(obstacles.iter().map(|o| (o.name.clone(), o.pass_index)));
+    SceneObjects {
+        ids,
+        ceiling: ceiling.map(|c| ShardCeiling {
+            z_m: c.z_m,
+            min_xy: c.min_xy,
+            max_xy: c.max_xy,
+        }),
+        obstacles,
+    }
+}
+
+/// Everything of a shard spec but its cameras; the lighting is drawn around the middle of the
+/// first wearer's path.
+fn base_spec(
+    plan: &RunPlan,
+    render: &RenderPlan,
+    scene: &crate::scene::SceneMesh,
+    first_wearer: &RenderedAgent,
+    bodies: Vec<ShardBody>,
+    objects: &SceneObjects,
+) -> Result<ShardSpec> {
+    let (fps, fps_base) = blender_fps(first_wearer.motion.frame_rate_hz);
+    let (lo, hi) = scene_bounds(scene);
+    let track = &first_wearer.track;
     let mid = 0.5 * (track.frames[0].joints[0] + track.frames[track.frames.len() - 1].joints[0]);
-    let base_spec = ShardSpec {
+    Ok(ShardSpec {
         scene_glb: std::fs::canonicalize(&plan.scene)?,
-        object_ids: object_ids.clone(),
+        object_ids: objects.ids.clone(),
         fps,
         fps_base,
         bodies,
@@ -366,23 +496,20 @@ pub fn run_pipeline(
         device: render.device,
         cameras: Vec::new(),
         body_probe: None,
-        ceiling: ceiling.map(|c| ShardCeiling {
-            z_m: c.z_m,
-            min_xy: c.min_xy,
-            max_xy: c.max_xy,
-        }),
-        obstacles,
-    };
-    let dataset = Arc::new(Dataset {
-        staging: std::fs::canonicalize(&staging)?,
-        base_spec,
-        cameras,
-        passes: render.passes,
-        keys_per_frame: render.cache_samples_per_frame,
-        frames_per_shard: render.frames_per_shard,
-        near_clip_m: render.near_clip_m,
-        start: next_start(&staging),
-    });
+        ceiling: objects.ceiling,
+        obstacles: objects.obstacles.clone(),
+    })
+}
+
+/// Repairs what an interrupted run left (damaged frames, missing records), then renders the
+/// frames not done yet on the plan's backend; returns how many were rendered.
+fn render_missing(
+    dataset: &Arc<Dataset>,
+    plan: &RunPlan,
+    render: &RenderPlan,
+    runtime: Option<BlenderRuntime>,
+    opts: &RunOptions,
+) -> Result<usize> {
     for work in &dataset.cameras {
         if let RenderCamera::PolynomialFisheye(lens) = &work.render {
             let e = native_error(&work.camera.model, lens, ERROR_GRID);
@@ -392,7 +519,7 @@ pub fn run_pipeline(
             );
         }
     }
-    for (path, reason) in dataset.remove_invalid_frames()? {
+    for (path, reason) in dataset.check_finished_frames()? {
         eprintln!(
             "egogen-run: {} is damaged ({reason}); rendering it again",
             path.display()
@@ -404,70 +531,78 @@ pub fn run_pipeline(
     eprintln!(
         "egogen-run: {} camera(s) × {} frames = {total} frames; {pending} to render in {} shard(s) on {} worker(s)",
         render.cameras.len(),
-        frames.len(),
+        total / dataset.cameras.len().max(1),
         shards.len(),
         plan.supervisor.workers
     );
-    let mut rendered_now = 0;
-    if !shards.is_empty() {
-        let runtime = match runtime.take() {
-            Some(r) => r,
-            None => BlenderRuntime::resolve(opts.blender.as_deref())?,
-        };
-        let sup = &plan.supervisor;
-        let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
-        let pool: Box<dyn ShardPool> = match sup.backend {
-            Backend::Local => Box::new(LocalPool(PoolSettings {
-                workers: sup.workers,
-                shard_timeout,
-                retries: sup.retries,
-            })),
-            Backend::Slurm => Box::new(SlurmPool(SlurmSettings {
-                plan: sup.slurm.clone(),
-                max_running: sup.workers,
-                shard_timeout,
-                retries: sup.retries,
-            })),
-        };
-        let report = pool.run(dataset.clone(), runtime, shards, total - pending)?;
-        rendered_now = report.frames_finished;
-        let retried = report
-            .shards
-            .iter()
-            .filter(|s| s.attempts.len() > 1)
-            .count();
-        eprintln!(
-            "egogen-run: rendered {rendered_now} frames in {:.1} s ({retried} shard(s) retried)",
-            report.wall_seconds
-        );
+    if shards.is_empty() {
+        return Ok(0);
     }
-    write_annotations(&dataset, &render.rig, &agents, &object_ids)?;
+    let runtime = match runtime {
+        Some(r) => r,
+        None => BlenderRuntime::resolve(opts.blender.as_deref())?,
+    };
+    let sup = &plan.supervisor;
+    let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
+    let pool: Box<dyn ShardPool> = match sup.backend {
+        Backend::Local => Box::new(LocalPool(PoolSettings {
+            workers: sup.workers,
+            shard_timeout,
+            retries: sup.retries,
+        })),
+        Backend::Slurm => Box::new(SlurmPool(SlurmSettings {
+            plan: sup.slurm.clone(),
+            max_running: sup.workers,
+            shard_timeout,
+            retries: sup.retries,
+        })),
+    };
+    let report = pool.run(dataset.clone(), runtime, shards, total - pending)?;
+    let retried = report
+        .shards
+        .iter()
+        .filter(|s| s.attempts.len() > 1)
+        .count();
+    eprintln!(
+        "egogen-run: rendered {} frames in {:.1} s ({retried} shard(s) retried)",
+        report.frames_finished, report.wall_seconds
+    );
+    Ok(report.frames_finished)
+}
+
+/// Writes the annotations and the COLMAP model from the frames' records, removes the scratch
+/// only Blender read (raw renders, body inputs) and the temporaries of killed writes, writes
+/// the manifest and renames `<dir>.partial` to `<dir>`; returns how many files it lists.
+fn finish_dataset(
+    dataset: &Dataset,
+    render: &RenderPlan,
+    object_ids: &[(String, u32)],
+    scratch: &[PathBuf],
+    dir: &Path,
+) -> Result<usize> {
+    let staging = &dataset.staging;
+    let records = dataset.records()?;
+    write_annotations(dataset, &render.rig, &records, object_ids)?;
     if render.passes.has(Pass::Colmap) {
-        write_colmap(&dataset)?;
+        write_colmap(dataset)?;
     }
-    // Scratch that only Blender read: the raw renders and the body cache (large).
     let _ = std::fs::remove_dir_all(dataset.raw_dir());
-    for f in &scratch {
+    for f in scratch {
         let _ = std::fs::remove_file(f);
     }
-    for p in remove_temporaries(&staging)? {
+    for p in remove_temporaries(staging)? {
         eprintln!(
             "egogen-run: removed {}, left by an interrupted run",
             p.display()
         );
     }
-    let manifest = write_manifest(&staging)?;
+    let manifest = write_manifest_with(staging, &dataset.recorded_files(&records))?;
     if dir.exists() {
         std::fs::remove_dir(dir).with_context(|| format!("replacing empty {}", dir.display()))?;
     }
-    std::fs::rename(&staging, dir)
+    std::fs::rename(staging, dir)
         .with_context(|| format!("renaming {} to {}", staging.display(), dir.display()))?;
-    Ok(RunSummary {
-        dir: dir.clone(),
-        frames: total,
-        rendered_now,
-        files: manifest.files.len(),
-    })
+    Ok(manifest.files.len())
 }
 
 /// The `[[obstacles]]` as boxes on the floor at `floor_z_m`, named `obstacle_NN` with ids
