@@ -161,7 +161,6 @@ fn run_agents(
                 obstacles: &synth.solids,
                 take: &s.take,
                 wearers,
-                wall_s: s.wall_s,
                 about: s.about,
             };
             report(&run_pipeline(plan, render, motion, model, config, options)?);
@@ -172,7 +171,7 @@ fn run_agents(
                 &s.world,
                 model,
                 &s.take,
-                s.wall_s,
+                Some(s.wall_s),
                 s.about,
             )?;
             eprintln!("egogen-run: wrote {}", out.dir.display());

@@ -351,7 +351,7 @@ fn run(cli: Cli) -> Result<()> {
                 t.agents_fallen,
                 t.contact_mean,
                 100.0 * t.human_overlap_share,
-                t.agent_seconds_per_wall_s
+                t.agent_seconds_per_wall_s.unwrap_or(f64::NAN)
             );
             println!("wrote {}", out.dir.display());
         }

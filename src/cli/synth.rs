@@ -698,7 +698,7 @@ pub fn run_synth(
         &s.world,
         &body,
         &s.take,
-        s.wall_s,
+        Some(s.wall_s),
         s.about,
     )
 }

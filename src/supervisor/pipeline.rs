@@ -81,14 +81,14 @@ pub enum RunMotion<'a> {
     /// `scene.seed`, worn by the rig.
     Placed(&'a MotionSequence),
     /// A synthesized take: every agent rendered, the rig on the `wearers` (indices into the
-    /// take's agents). `wall_s` and `about` go into the take's summary.
+    /// take's agents). `about` goes into the take's summary (its wall time does not: the
+    /// dataset stays the same bytes run after run).
     Agents {
         world: &'a CrowdWorld,
         /// The `[[obstacles]]` boxes, drawn standing on the walkable map's floor.
         obstacles: &'a [ObstacleSolid],
         take: &'a CrowdTake,
         wearers: &'a [usize],
-        wall_s: f64,
         about: serde_json::Value,
     },
 }
@@ -316,12 +316,8 @@ fn write_sequence(
             write_sequence_dir(sequence, model, &a.motion, &a.track, &meshes).map(drop)
         }
         RunMotion::Agents {
-            world,
-            take,
-            wall_s,
-            about,
-            ..
-        } => write_crowd_dir(sequence, world, model, take, *wall_s, about.clone()).map(drop),
+            world, take, about, ..
+        } => write_crowd_dir(sequence, world, model, take, None, about.clone()).map(drop),
     }
 }
 

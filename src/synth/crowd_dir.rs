@@ -50,8 +50,10 @@ pub struct TakeTotals {
     pub human_overlap_share: f64,
     /// Vertices of one body inside another's capsule volume (docs/SYNTH.md), every 4th frame.
     pub human_penetration: super::penetration::HumanPenetration,
-    /// Seconds of motion (agents × take length) per wall second.
-    pub agent_seconds_per_wall_s: f64,
+    /// Seconds of motion (agents × take length) per wall second; absent where the wall time
+    /// is left out (a rendered dataset's take: see [`TakeSummary::wall_s`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub agent_seconds_per_wall_s: Option<f64>,
     pub checks: TakeChecks,
 }
 
@@ -136,7 +138,10 @@ pub struct TakeSummary {
     pub frames: usize,
     pub frame_rate_hz: f64,
     pub primitives: usize,
-    pub wall_s: f64,
+    /// Seconds the walk took. Absent in a rendered dataset's `sequence/`, so that one config
+    /// gives the same bytes (and manifest) run after run; `egogen-run` prints it instead.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wall_s: Option<f64>,
     pub totals: TakeTotals,
     pub agents: Vec<AgentTrack>,
 }
@@ -319,13 +324,14 @@ pub fn paths_picture<'a>(
     pic
 }
 
-/// Writes a take folder (see the module docs); `dir` must pass [`check_out_dir`].
+/// Writes a take folder (see the module docs); `dir` must pass [`check_out_dir`]. `wall_s`:
+/// the seconds the walk took, when the summary should record them.
 pub fn write_crowd_dir(
     dir: &Path,
     world: &CrowdWorld,
     body: &BodyModel,
     take: &CrowdTake,
-    wall_s: f64,
+    wall_s: Option<f64>,
     about: serde_json::Value,
 ) -> Result<CrowdOutputs> {
     check_out_dir(dir)?;
@@ -382,9 +388,9 @@ pub fn write_crowd_dir(
         human_overlap_share: human_overlap_share(&take.agents),
         human_penetration: super::penetration::human_penetration(body, &take.agents, 4)?,
         checks: take_checks(world, take),
-        agent_seconds_per_wall_s: take.agents.len() as f64 * take.frames as f64
-            / take.frame_rate_hz
-            / wall_s.max(1e-9),
+        agent_seconds_per_wall_s: wall_s.map(|w| {
+            take.agents.len() as f64 * take.frames as f64 / take.frame_rate_hz / w.max(1e-9)
+        }),
     };
     let summary = TakeSummary {
         about,
