@@ -145,84 +145,11 @@ impl RawTrainPrimitive {
             message,
         };
         let body_model =
-            resolve_body_model(self.body_model, base).map_err(|m| bad("body_model", m))?;
-        let (raw_clips, clips_base, clips_file) = match &self.clips_from {
-            None => (self.clips, base.to_path_buf(), config_path.to_path_buf()),
-            Some(_) if !self.clips.is_empty() => {
-                return Err(bad(
-                    "clips_from",
-                    "give either [[clips]] or clips_from, not both".into(),
-                ))
-            }
-            Some(from) => {
-                let file = base.join(from);
-                let other = RawTrainPrimitive::load(&file)?;
-                if other.clips_from.is_some() {
-                    return Err(bad(
-                        "clips_from",
-                        format!(
-                            "{} takes its clips from a third config; name that one",
-                            file.display()
-                        ),
-                    ));
-                }
-                let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();
-                (other.clips, dir, file)
-            }
-        };
-        let bad_clip = |key: &str, message: String| ConfigError::Value {
-            path: clips_file.clone(),
-            key: key.into(),
-            message,
-        };
-        if raw_clips.is_empty() {
-            return Err(bad_clip("clips", "list at least one clip".into()));
-        }
-        let mut clips = Vec::new();
-        for (i, c) in raw_clips.into_iter().enumerate() {
-            let path = clips_base.join(&c.path);
-            if !path.is_file() {
-                return Err(bad_clip(
-                    &format!("clips[{i}].path"),
-                    format!("file {} not found", path.display()),
-                ));
-            }
-            if let Some(t) = c.held_out_from_s {
-                if !(t.is_finite() && t >= 0.0) {
-                    return Err(bad_clip(
-                        &format!("clips[{i}].held_out_from_s"),
-                        format!("expected a time ≥ 0 s, found {t}"),
-                    ));
-                }
-                if c.held_out {
-                    return Err(bad_clip(
-                        &format!("clips[{i}].held_out_from_s"),
-                        "the clip is wholly held out (held_out = true); remove one of the two"
-                            .into(),
-                    ));
-                }
-            }
-            clips.push(ClipSpec {
-                path,
-                held_out: c.held_out,
-                held_out_from_s: c.held_out_from_s,
-            });
-        }
-        let positive = |key: &str, v: usize| match v {
-            0 => Err(bad(key, "expected a positive integer, found 0".into())),
-            v => Ok(v),
-        };
-        let rate = |key: &str, v: f64| match v.is_finite() && v > 0.0 && v < 1.0 {
-            true => Ok(v),
-            false => Err(bad(
-                key,
-                format!("expected a learning rate in (0, 1), found {v}"),
-            )),
-        };
-        let weight = |key: &str, v: f64| match v.is_finite() && v >= 0.0 {
-            true => Ok(v),
-            false => Err(bad(key, format!("expected a weight ≥ 0, found {v}"))),
-        };
+            resolve_body_model(self.body_model.clone(), base).map_err(|m| bad("body_model", m))?;
+        let clips = self.resolve_clips(base, config_path, &bad)?;
+        let positive = |key: &str, v: usize| positive(key, v, &bad);
+        let rate = |key: &str, v: f64| rate(key, v, &bad);
+        let weight = |key: &str, v: f64| weight(key, v, &bad);
         positive("data.stride_frames", self.data.stride_frames)?;
         if let Some(v) = self.data.min_contact_score {
             if !(0.0..=1.0).contains(&v) {
@@ -288,88 +215,10 @@ impl RawTrainPrimitive {
         ] {
             weight(key, v)?;
         }
-        let prior = match self.prior {
-            None => None,
-            Some(p) => {
-                positive("prior.batch_size", p.batch_size)?;
-                positive("prior.primitives", p.primitives)?;
-                rate("prior.learning_rate", p.learning_rate)?;
-                if !(0.0..=1.0).contains(&p.pool_fraction) {
-                    return Err(bad(
-                        "prior.pool_fraction",
-                        format!("expected a share in 0..=1, found {}", p.pool_fraction),
-                    ));
-                }
-                if let Some(n) = p.pool_slots {
-                    if n < p.batch_size {
-                        return Err(bad(
-                            "prior.pool_slots",
-                            format!(
-                                "expected at least prior.batch_size = {} slots, found {n}",
-                                p.batch_size
-                            ),
-                        ));
-                    }
-                }
-                if !(0.0..0.5).contains(&p.range_quantile) {
-                    return Err(bad(
-                        "prior.range_quantile",
-                        format!("expected a quantile in 0..0.5, found {}", p.range_quantile),
-                    ));
-                }
-                if let Some(deg) = p.trunk_tilt_max_deg {
-                    if !(deg > 0.0 && deg < 90.0) {
-                        return Err(bad(
-                            "prior.trunk_tilt_max_deg",
-                            format!("expected degrees in (0, 90), found {deg}"),
-                        ));
-                    }
-                }
-                if let Some(v) = p.min_pelvis_speed_m_s {
-                    if !(v.is_finite() && v >= 0.0) {
-                        return Err(bad(
-                            "prior.min_pelvis_speed_m_s",
-                            format!("expected a speed ≥ 0 m/s, found {v}"),
-                        ));
-                    }
-                }
-                let w = &p.loss;
-                for (key, v) in [
-                    ("prior.loss.contact", w.contact),
-                    ("prior.loss.skate", w.skate),
-                    ("prior.loss.penetration", w.penetration),
-                    ("prior.loss.pelvis", w.pelvis),
-                    ("prior.loss.upright", w.upright),
-                    ("prior.loss.speed", w.speed),
-                    ("prior.loss.recovery", w.recovery),
-                    ("prior.loss.anchor", w.anchor),
-                ] {
-                    weight(key, v)?;
-                }
-                if w.anchor > 0.0 && self.init_weights.is_none() {
-                    return Err(bad(
-                        "prior.loss.anchor",
-                        "expected init_weights too: the anchor keeps random latents where \
-                         those weights take them"
-                            .into(),
-                    ));
-                }
-                Some(PriorPlan {
-                    phase: PhasePlan {
-                        steps: p.steps,
-                        batch_size: p.batch_size,
-                        learning_rate: p.learning_rate,
-                    },
-                    primitives: p.primitives,
-                    pool_fraction: p.pool_fraction,
-                    pool_slots: p.pool_slots,
-                    range_quantile: p.range_quantile,
-                    trunk_tilt_max_deg: p.trunk_tilt_max_deg,
-                    min_pelvis_speed_m_s: p.min_pelvis_speed_m_s.unwrap_or(0.0),
-                    weights: p.loss,
-                })
-            }
-        };
+        let prior = self
+            .prior
+            .map(|p| resolve_prior(p, self.init_weights.is_some(), &bad))
+            .transpose()?;
         let init_weights = match self.init_weights {
             None => None,
             Some(w) => {
@@ -423,6 +272,190 @@ impl RawTrainPrimitive {
             checkpoint_every_s,
         })
     }
+
+    /// `[[clips]]`, or those of the config `clips_from` names (its paths relative to it).
+    fn resolve_clips(
+        &self,
+        base: &Path,
+        config_path: &Path,
+        bad: Bad,
+    ) -> Result<Vec<ClipSpec>, ConfigError> {
+        let (raw_clips, clips_base, clips_file) = match &self.clips_from {
+            None => (
+                self.clips.clone(),
+                base.to_path_buf(),
+                config_path.to_path_buf(),
+            ),
+            Some(_) if !self.clips.is_empty() => {
+                return Err(bad(
+                    "clips_from",
+                    "give either [[clips]] or clips_from, not both".into(),
+                ))
+            }
+            Some(from) => {
+                let file = base.join(from);
+                let other = RawTrainPrimitive::load(&file)?;
+                if other.clips_from.is_some() {
+                    return Err(bad(
+                        "clips_from",
+                        format!(
+                            "{} takes its clips from a third config; name that one",
+                            file.display()
+                        ),
+                    ));
+                }
+                let dir = file.parent().unwrap_or(Path::new(".")).to_path_buf();
+                (other.clips, dir, file)
+            }
+        };
+        let bad_clip = |key: &str, message: String| ConfigError::Value {
+            path: clips_file.clone(),
+            key: key.into(),
+            message,
+        };
+        if raw_clips.is_empty() {
+            return Err(bad_clip("clips", "list at least one clip".into()));
+        }
+        let mut clips = Vec::new();
+        for (i, c) in raw_clips.into_iter().enumerate() {
+            let path = clips_base.join(&c.path);
+            if !path.is_file() {
+                return Err(bad_clip(
+                    &format!("clips[{i}].path"),
+                    format!("file {} not found", path.display()),
+                ));
+            }
+            if let Some(t) = c.held_out_from_s {
+                if !(t.is_finite() && t >= 0.0) {
+                    return Err(bad_clip(
+                        &format!("clips[{i}].held_out_from_s"),
+                        format!("expected a time ≥ 0 s, found {t}"),
+                    ));
+                }
+                if c.held_out {
+                    return Err(bad_clip(
+                        &format!("clips[{i}].held_out_from_s"),
+                        "the clip is wholly held out (held_out = true); remove one of the two"
+                            .into(),
+                    ));
+                }
+            }
+            clips.push(ClipSpec {
+                path,
+                held_out: c.held_out,
+                held_out_from_s: c.held_out_from_s,
+            });
+        }
+        Ok(clips)
+    }
+}
+
+/// A config error naming `key`.
+type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
+
+fn positive(key: &str, v: usize, bad: Bad) -> Result<usize, ConfigError> {
+    match v {
+        0 => Err(bad(key, "expected a positive integer, found 0".into())),
+        v => Ok(v),
+    }
+}
+
+fn rate(key: &str, v: f64, bad: Bad) -> Result<f64, ConfigError> {
+    match v.is_finite() && v > 0.0 && v < 1.0 {
+        true => Ok(v),
+        false => Err(bad(
+            key,
+            format!("expected a learning rate in (0, 1), found {v}"),
+        )),
+    }
+}
+
+fn weight(key: &str, v: f64, bad: Bad) -> Result<f64, ConfigError> {
+    match v.is_finite() && v >= 0.0 {
+        true => Ok(v),
+        false => Err(bad(key, format!("expected a weight ≥ 0, found {v}"))),
+    }
+}
+
+/// `[prior]`: the prior phase's settings and loss weights (`anchor` needs `init_weights`).
+fn resolve_prior(p: RawPrior, has_init_weights: bool, bad: Bad) -> Result<PriorPlan, ConfigError> {
+    positive("prior.batch_size", p.batch_size, bad)?;
+    positive("prior.primitives", p.primitives, bad)?;
+    rate("prior.learning_rate", p.learning_rate, bad)?;
+    if !(0.0..=1.0).contains(&p.pool_fraction) {
+        return Err(bad(
+            "prior.pool_fraction",
+            format!("expected a share in 0..=1, found {}", p.pool_fraction),
+        ));
+    }
+    if let Some(n) = p.pool_slots {
+        if n < p.batch_size {
+            return Err(bad(
+                "prior.pool_slots",
+                format!(
+                    "expected at least prior.batch_size = {} slots, found {n}",
+                    p.batch_size
+                ),
+            ));
+        }
+    }
+    if !(0.0..0.5).contains(&p.range_quantile) {
+        return Err(bad(
+            "prior.range_quantile",
+            format!("expected a quantile in 0..0.5, found {}", p.range_quantile),
+        ));
+    }
+    if let Some(deg) = p.trunk_tilt_max_deg {
+        if !(deg > 0.0 && deg < 90.0) {
+            return Err(bad(
+                "prior.trunk_tilt_max_deg",
+                format!("expected degrees in (0, 90), found {deg}"),
+            ));
+        }
+    }
+    if let Some(v) = p.min_pelvis_speed_m_s {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(bad(
+                "prior.min_pelvis_speed_m_s",
+                format!("expected a speed ≥ 0 m/s, found {v}"),
+            ));
+        }
+    }
+    let w = &p.loss;
+    for (key, v) in [
+        ("prior.loss.contact", w.contact),
+        ("prior.loss.skate", w.skate),
+        ("prior.loss.penetration", w.penetration),
+        ("prior.loss.pelvis", w.pelvis),
+        ("prior.loss.upright", w.upright),
+        ("prior.loss.speed", w.speed),
+        ("prior.loss.recovery", w.recovery),
+        ("prior.loss.anchor", w.anchor),
+    ] {
+        weight(key, v, bad)?;
+    }
+    if w.anchor > 0.0 && !has_init_weights {
+        return Err(bad(
+            "prior.loss.anchor",
+            "expected init_weights too: the anchor keeps random latents where \
+             those weights take them"
+                .into(),
+        ));
+    }
+    Ok(PriorPlan {
+        phase: PhasePlan {
+            steps: p.steps,
+            batch_size: p.batch_size,
+            learning_rate: p.learning_rate,
+        },
+        primitives: p.primitives,
+        pool_fraction: p.pool_fraction,
+        pool_slots: p.pool_slots,
+        range_quantile: p.range_quantile,
+        trunk_tilt_max_deg: p.trunk_tilt_max_deg,
+        min_pelvis_speed_m_s: p.min_pelvis_speed_m_s.unwrap_or(0.0),
+        weights: p.loss,
+    })
 }
 
 /// Loads and resolves a training config.

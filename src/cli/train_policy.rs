@@ -98,7 +98,8 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         key: key.into(),
         message,
     };
-    let body_model = resolve_body_model(raw.body_model, base).map_err(|m| bad("body_model", m))?;
+    let body_model =
+        resolve_body_model(raw.body_model.clone(), base).map_err(|m| bad("body_model", m))?;
     let existing = |key: &str, p: &Path| {
         let f = base.join(p);
         match f.is_file() {
@@ -113,7 +114,72 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         Some(p) => Some(existing("init_weights", p)?),
         None => None,
     };
+    check_numbers(&raw, &bad)?;
     let p = raw.ppo;
+    if raw.stages.is_empty() {
+        return Err(bad("stages", "expected at least one [[stages]]".into()));
+    }
+    let mut stages = Vec::with_capacity(raw.stages.len());
+    let has_scene = raw.scene.is_some();
+    for (i, s) in raw.stages.into_iter().enumerate() {
+        stages.push(resolve_stage(i, s, has_scene, &bad)?);
+    }
+    let scene = raw
+        .scene
+        .map(|sc| {
+            let path = existing("scene.path", &sc.path);
+            resolve_train_scene(sc, path, &bad)
+        })
+        .transpose()?;
+    if scene.is_some() && stages.iter().all(|s| s.env.fixed_share <= 0.0) {
+        return Err(bad(
+            "scene",
+            "no stage walks the scene: give some stage env.fixed_share > 0".into(),
+        ));
+    }
+    let sensing = raw.policy.sensing.unwrap_or_default();
+    if let Some(message) = sensing.problem() {
+        return Err(bad("policy.sensing", message));
+    }
+    let checkpoint_every_s = raw.output.checkpoint_every_s.unwrap_or(300.0);
+    if !(checkpoint_every_s.is_finite() && checkpoint_every_s >= 0.0) {
+        return Err(bad(
+            "output.checkpoint_every_s",
+            format!("expected seconds ≥ 0, got {checkpoint_every_s}"),
+        ));
+    }
+    Ok(PolicyTrainPlan {
+        seed: raw.seed,
+        body_model,
+        motion_weights,
+        motion_config,
+        pose_prior,
+        arch: PolicyArch {
+            hidden: raw.policy.hidden,
+            pe_frequencies: raw.policy.pe_frequencies,
+            residual_blocks: raw.policy.residual_blocks,
+            latent_dim: 128,
+            sensing,
+        },
+        ppo: p,
+        stages,
+        eval_every_updates: raw.validation.every_updates,
+        eval_episodes: raw.validation.episodes,
+        select_max_prior_kl: raw.validation.max_prior_kl,
+        init_weights,
+        scene,
+        weights_out: base.join(raw.output.weights),
+        log_out: base.join(raw.output.log),
+        checkpoint_every_s,
+    })
+}
+
+/// A config error naming `key`.
+type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
+
+/// The whole numbers, shares and weights of `[ppo]`, `[policy]` and `[validation]`.
+fn check_numbers(raw: &RawTrainPolicy, bad: Bad) -> Result<(), ConfigError> {
+    let p = &raw.ppo;
     let positive = [
         ("ppo.envs", p.envs),
         ("ppo.steps_per_env", p.steps_per_env),
@@ -160,168 +226,134 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             ));
         }
     }
-    if raw.stages.is_empty() {
-        return Err(bad("stages", "expected at least one [[stages]]".into()));
+    Ok(())
+}
+
+/// One `[[stages]]` entry, checked (`has_scene`: the config has a `[scene]`).
+fn resolve_stage(
+    i: usize,
+    s: RawStage,
+    has_scene: bool,
+    bad: Bad,
+) -> Result<StagePlan, ConfigError> {
+    let key = |k: &str| format!("stages[{i}].{k}");
+    if s.env_steps == 0 {
+        return Err(bad(
+            &key("env_steps"),
+            "expected a whole number ≥ 1, got 0".into(),
+        ));
     }
-    let mut stages = Vec::with_capacity(raw.stages.len());
-    for (i, s) in raw.stages.into_iter().enumerate() {
-        let key = |k: &str| format!("stages[{i}].{k}");
-        if s.env_steps == 0 {
-            return Err(bad(
-                &key("env_steps"),
-                "expected a whole number ≥ 1, got 0".into(),
-            ));
-        }
-        let e = &s.env;
-        if e.max_primitives == 0 {
-            return Err(bad(
-                &key("env.max_primitives"),
-                "expected a whole number ≥ 1, got 0".into(),
-            ));
-        }
-        if e.fixed_max_primitives == Some(0) {
-            return Err(bad(
-                &key("env.fixed_max_primitives"),
-                "expected a whole number ≥ 1, got 0".into(),
-            ));
-        }
-        if !(0.0..=1.0).contains(&e.fixed_share) {
-            return Err(bad(
-                &key("env.fixed_share"),
-                format!("expected a share in [0, 1], got {}", e.fixed_share),
-            ));
-        }
-        if raw.scene.is_none() && e.scene_test_vertices > 0 {
-            return Err(bad(
-                &key("env.scene_test_vertices"),
-                "Eq. 11 is tested in a fixed scene: it needs a [scene] section".into(),
-            ));
-        }
-        if e.scene_test_keeps_cells && e.scene_test_vertices == 0 {
-            return Err(bad(
-                &key("env.scene_test_keeps_cells"),
-                "keeps Eq. 7 beside Eq. 11: it needs scene_test_vertices > 0".into(),
-            ));
-        }
-        if raw.scene.is_none() && e.fixed_share < 1.0 {
-            return Err(bad(
-                &key("env.fixed_share"),
-                "a share of episodes in a fixed scene needs a [scene] section".into(),
-            ));
-        }
-        if !(e.success_m.is_finite() && e.success_m > 0.0) {
-            return Err(bad(
-                &key("env.success_m"),
-                format!("expected a radius > 0 m, got {}", e.success_m),
-            ));
-        }
-        let (lo, hi) = e.scene.box_side_m;
-        if !(lo > 0.0
-            && hi >= lo
-            && e.scene.floor_m > 2.0 * (hi + e.scene.start_margin_m)
-            && e.scene.cell_m > 0.0)
-        {
-            return Err(bad(
+    let e = &s.env;
+    if e.max_primitives == 0 {
+        return Err(bad(
+            &key("env.max_primitives"),
+            "expected a whole number ≥ 1, got 0".into(),
+        ));
+    }
+    if e.fixed_max_primitives == Some(0) {
+        return Err(bad(
+            &key("env.fixed_max_primitives"),
+            "expected a whole number ≥ 1, got 0".into(),
+        ));
+    }
+    if !(0.0..=1.0).contains(&e.fixed_share) {
+        return Err(bad(
+            &key("env.fixed_share"),
+            format!("expected a share in [0, 1], got {}", e.fixed_share),
+        ));
+    }
+    if !has_scene && e.scene_test_vertices > 0 {
+        return Err(bad(
+            &key("env.scene_test_vertices"),
+            "Eq. 11 is tested in a fixed scene: it needs a [scene] section".into(),
+        ));
+    }
+    if e.scene_test_keeps_cells && e.scene_test_vertices == 0 {
+        return Err(bad(
+            &key("env.scene_test_keeps_cells"),
+            "keeps Eq. 7 beside Eq. 11: it needs scene_test_vertices > 0".into(),
+        ));
+    }
+    if !has_scene && e.fixed_share < 1.0 {
+        return Err(bad(
+            &key("env.fixed_share"),
+            "a share of episodes in a fixed scene needs a [scene] section".into(),
+        ));
+    }
+    if !(e.success_m.is_finite() && e.success_m > 0.0) {
+        return Err(bad(
+            &key("env.success_m"),
+            format!("expected a radius > 0 m, got {}", e.success_m),
+        ));
+    }
+    let (lo, hi) = e.scene.box_side_m;
+    if !(lo > 0.0
+        && hi >= lo
+        && e.scene.floor_m > 2.0 * (hi + e.scene.start_margin_m)
+        && e.scene.cell_m > 0.0)
+    {
+        return Err(bad(
                 &key("env.scene"),
                 "expected 0 < box_side_m.0 ≤ box_side_m.1, cell_m > 0 and a floor wider than the box and its start margin".into(),
             ));
-        }
-        let c = &e.crossing;
-        let ordered = |(a, b): (f64, f64)| a > 0.0 && b >= a && b.is_finite();
-        if !((0.0..=1.0).contains(&c.share)
-            && ordered(c.distance_m)
-            && ordered(c.speed_m_s)
-            && ordered(c.footprint_m)
-            && c.floor_m > c.distance_m.1
-            && c.walker_speed_m_s > 0.0
-            && c.timing_jitter_s >= 0.0
-            && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2
-            && crate::policy::crossing_scene::people_in_range(c.people))
-        {
-            return Err(bad(
+    }
+    let c = &e.crossing;
+    let ordered = |(a, b): (f64, f64)| a > 0.0 && b >= a && b.is_finite();
+    if !((0.0..=1.0).contains(&c.share)
+        && ordered(c.distance_m)
+        && ordered(c.speed_m_s)
+        && ordered(c.footprint_m)
+        && c.floor_m > c.distance_m.1
+        && c.walker_speed_m_s > 0.0
+        && c.timing_jitter_s >= 0.0
+        && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2
+        && crate::policy::crossing_scene::people_in_range(c.people))
+    {
+        return Err(bad(
                 &key("env.crossing"),
                 format!("expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0, |cross_angle_rad| < π/2 and 1 ≤ people.0 ≤ people.1 ≤ {}", crate::policy::crossing_scene::MAX_PEOPLE),
             ));
-        }
-        stages.push(StagePlan {
-            name: s.name,
-            env_steps: s.env_steps,
-            env: s.env,
-        });
     }
-    let scene = match raw.scene {
-        None => None,
-        Some(sc) => {
-            let path = existing("scene.path", &sc.path)?;
-            let [lo, hi] = sc.pair_distance_m;
-            if !(lo >= 0.0 && hi >= lo && hi.is_finite()) {
-                return Err(bad(
-                    "scene.pair_distance_m",
-                    format!("expected [MIN, MAX] with 0 ≤ MIN ≤ MAX, got [{lo}, {hi}]"),
-                ));
-            }
-            let clearance_m = sc.clearance_m.unwrap_or(0.4);
-            if !(clearance_m.is_finite() && clearance_m >= 0.0) {
-                return Err(bad(
-                    "scene.clearance_m",
-                    format!("expected metres ≥ 0, got {clearance_m}"),
-                ));
-            }
-            if sc.pairs == 0 {
-                return Err(bad(
-                    "scene.pairs",
-                    "expected a whole number ≥ 1, got 0".into(),
-                ));
-            }
-            Some(TrainScene {
-                path,
-                pairs: sc.pairs,
-                pair_distance_m: (lo, hi),
-                clearance_m,
-                indoors: sc.indoors.unwrap_or(true),
-                seed: sc.seed,
-            })
-        }
-    };
-    if scene.is_some() && stages.iter().all(|s| s.env.fixed_share <= 0.0) {
+    Ok(StagePlan {
+        name: s.name,
+        env_steps: s.env_steps,
+        env: s.env,
+    })
+}
+
+/// `[scene]`: the fixed scene and its start/goal pairs (`path`: its file, checked).
+fn resolve_train_scene(
+    sc: RawTrainScene,
+    path: Result<PathBuf, ConfigError>,
+    bad: Bad,
+) -> Result<TrainScene, ConfigError> {
+    let path = path?;
+    let [lo, hi] = sc.pair_distance_m;
+    if !(lo >= 0.0 && hi >= lo && hi.is_finite()) {
         return Err(bad(
-            "scene",
-            "no stage walks the scene: give some stage env.fixed_share > 0".into(),
+            "scene.pair_distance_m",
+            format!("expected [MIN, MAX] with 0 ≤ MIN ≤ MAX, got [{lo}, {hi}]"),
         ));
     }
-    let sensing = raw.policy.sensing.unwrap_or_default();
-    if let Some(message) = sensing.problem() {
-        return Err(bad("policy.sensing", message));
-    }
-    let checkpoint_every_s = raw.output.checkpoint_every_s.unwrap_or(300.0);
-    if !(checkpoint_every_s.is_finite() && checkpoint_every_s >= 0.0) {
+    let clearance_m = sc.clearance_m.unwrap_or(0.4);
+    if !(clearance_m.is_finite() && clearance_m >= 0.0) {
         return Err(bad(
-            "output.checkpoint_every_s",
-            format!("expected seconds ≥ 0, got {checkpoint_every_s}"),
+            "scene.clearance_m",
+            format!("expected metres ≥ 0, got {clearance_m}"),
         ));
     }
-    Ok(PolicyTrainPlan {
-        seed: raw.seed,
-        body_model,
-        motion_weights,
-        motion_config,
-        pose_prior,
-        arch: PolicyArch {
-            hidden: raw.policy.hidden,
-            pe_frequencies: raw.policy.pe_frequencies,
-            residual_blocks: raw.policy.residual_blocks,
-            latent_dim: 128,
-            sensing,
-        },
-        ppo: p,
-        stages,
-        eval_every_updates: raw.validation.every_updates,
-        eval_episodes: raw.validation.episodes,
-        select_max_prior_kl: raw.validation.max_prior_kl,
-        init_weights,
-        scene,
-        weights_out: base.join(raw.output.weights),
-        log_out: base.join(raw.output.log),
-        checkpoint_every_s,
+    if sc.pairs == 0 {
+        return Err(bad(
+            "scene.pairs",
+            "expected a whole number ≥ 1, got 0".into(),
+        ));
+    }
+    Ok(TrainScene {
+        path,
+        pairs: sc.pairs,
+        pair_distance_m: (lo, hi),
+        clearance_m,
+        indoors: sc.indoors.unwrap_or(true),
+        seed: sc.seed,
     })
 }

@@ -525,7 +525,7 @@ fn log_line(log: &mut impl Write, line: &serde_json::Value, path: &Path) -> Resu
 }
 
 /// The optimiser every phase starts with (Adam, gradients clipped to norm 1 per tensor).
-fn new_optimizer() -> impl Optimizer<PrimitiveVae<TrainBackend>, TrainBackend> {
+fn new_optimizer() -> PrimitiveOptimizer {
     AdamConfig::new()
         .with_grad_clipping(Some(GradientClippingConfig::Norm(1.0)))
         .init::<TrainBackend, PrimitiveVae<TrainBackend>>()
@@ -546,134 +546,46 @@ pub fn train(
     let fingerprint = checkpoint::plan_fingerprint(plan);
     let device = Default::default();
     let model = BodyModel::load(&plan.body_model)?;
-    let (train_parts, held_parts) = load_clips(plan)?;
     let geo = RigGeometry::new(&model, &[])?;
-    let filter = plan
-        .min_contact_score
-        .map(|s| ContactFilter::new(&model, s, plan.contact_context_frames))
-        .transpose()?;
-    let f = filter.as_ref();
-    let singles = build_set(&train_parts, 1, plan.stride_frames, plan.mirror, &model, f)?;
-    let chains = if plan.rollout.steps > 0 || plan.prior.is_some() {
-        build_set(
-            &train_parts,
-            plan.rollout_primitives,
-            plan.stride_frames,
-            plan.mirror,
-            &model,
-            f,
-        )?
-    } else {
-        PrimitiveSet::new(plan.rollout_primitives)
-    };
-    let held = build_set(&held_parts, 1, plan.stride_frames, false, &model, f)?;
-    if singles.is_empty() {
-        return Err(TrainError::Data(
-            "no training primitive: every clip is held out or shorter than 20 frames".into(),
-        ));
-    }
-    if (plan.rollout.steps > 0 || plan.prior.is_some()) && chains.is_empty() {
-        return Err(TrainError::Data(format!(
-            "rollout: no clip part holds {} chained primitives",
-            plan.rollout_primitives
-        )));
-    }
-    let stats = singles.input_stats(1e-3);
+    let TrainingSets {
+        singles,
+        chains,
+        held,
+    } = training_sets(plan, &model)?;
     TrainBackend::seed(&device, plan.seed);
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
     let rig = TensorRig::<TrainBackend>::new(&geo, &device);
-    let mut net: PrimitiveVae<TrainBackend> = match &plan.init_weights {
-        None => plan.arch.init(&stats, &device),
-        Some(path) => {
-            let (arch, net) = weights::load(path, &device)?;
-            if arch != plan.arch {
-                return Err(TrainError::Data(format!(
-                    "init weights {}: architecture {arch:?}, the config asks for {:?}",
-                    path.display(),
-                    plan.arch
-                )));
-            }
-            net
-        }
-    };
-
-    for out in [&plan.log_out, &plan.weights_out] {
-        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
-                path: dir.into(),
-                source,
-            })?;
-        }
-    }
+    let mut net = initial_net(plan, &singles, &device)?;
+    create_output_dirs(plan)?;
     let log_io = |source| TrainError::Io {
         path: plan.log_out.clone(),
         source,
     };
-    // Resuming: the network, the optimiser of the phase under way, the generator and the pool
-    // as the checkpoint left them, and the log cut back to what the run had logged then.
-    let mut resumed_net = None;
-    let mut restored_optim = None;
-    let mut restored_pool = None;
-    let mut elapsed_before_s = 0.0;
-    let mut resume_at = (0usize, 0usize, 0usize, f64::NAN);
-    if resume {
-        let r = checkpoint::load(&ckpt_dir, &fingerprint, net.clone(), new_optimizer, &device)?;
-        resumed_net = Some(r.net);
-        restored_optim = r.optim;
-        restored_pool = r.extra;
-        rng = r.rng;
-        elapsed_before_s = r.state.elapsed_s;
-        resume_at = (
-            r.state.phase,
-            r.state.step,
-            r.state.global_step,
-            r.state.last_loss,
-        );
-        let f = std::fs::OpenOptions::new()
-            .write(true)
-            .open(&plan.log_out)
-            .map_err(log_io)?;
-        f.set_len(r.state.log_bytes).map_err(log_io)?;
-    }
-    let log_file = if resume {
-        std::fs::OpenOptions::new().append(true).open(&plan.log_out)
-    } else {
-        std::fs::File::create(&plan.log_out)
-    }
-    .map_err(log_io)?;
-    let mut log = std::io::BufWriter::new(log_file);
+    let Restored {
+        net: resumed_net,
+        optim: mut restored_optim,
+        pool: restored_pool,
+        elapsed_before_s,
+        at: resume_at,
+        log,
+    } = restore(
+        plan,
+        resume,
+        &ckpt_dir,
+        &fingerprint,
+        &net,
+        &mut rng,
+        &device,
+    )?;
+    let mut log = log;
 
     let prior_steps = plan.prior.map_or(0, |p| p.phase.steps);
     let total_steps = plan.primitive.steps + plan.rollout.steps + prior_steps;
-    let bar = if show_progress {
-        ProgressBar::new(total_steps as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{prefix} {bar:30} {pos}/{len} [{elapsed_precise} < {eta_precise}] {msg}",
-        )
-        .expect("progress template"),
-    );
+    let bar = progress_bar(total_steps, show_progress);
     let range = match plan.prior {
-        Some(prior) => {
-            let mut r = training_range(&singles, &geo, prior.range_quantile);
-            if let Some(deg) = prior.trunk_tilt_max_deg {
-                r.trunk_up_min = deg.to_radians().cos();
-            }
-            r.pelvis_speed_min = prior.min_pelvis_speed_m_s;
-            let line = serde_json::json!({
-                "phase": "prior_range",
-                "pelvis_m": [r.pelvis_m.0, r.pelvis_m.1],
-                "trunk_up_min": r.trunk_up_min,
-                "pelvis_speed_min": r.pelvis_speed_min,
-            });
-            if !resume {
-                log_line(&mut log, &line, &plan.log_out)?;
-            }
-            Some(r)
-        }
+        Some(prior) => Some(prior_range(
+            plan, &prior, &singles, &geo, &mut log, !resume,
+        )?),
         None => None,
     };
     // The starting weights, frozen, for `prior.loss.anchor`.
@@ -742,54 +654,18 @@ pub fn train(
             let (mut loss, mut parts) =
                 chain_loss(&net, &rig, &weights, x, floors, plan.seed_noise, &mut rng);
             if let (true, Some(prior), Some(range)) = (phase == "prior", &plan.prior, &range) {
-                let draw = pool.draw(set, prior.pool_fraction, phase_plan.batch_size, &mut rng);
-                let b = draw.len();
-                let seed = Tensor::from_data(
-                    TensorData::new(draw.seeds.clone(), [b, SEED_FRAMES, FRAME_DIM]),
-                    &device,
-                );
-                let floor = Tensor::from_data(TensorData::new(draw.floors.clone(), [b]), &device);
-                let (prior_total, prior_parts, (ends, end_floors, upright)) = prior_chain_loss(
-                    &net,
-                    anchor_net.as_ref(),
-                    &rig,
+                let step = PriorStep {
+                    net: &net,
+                    anchor_net: anchor_net.as_ref(),
+                    rig: &rig,
                     prior,
                     range,
-                    seed,
-                    floor,
-                    &mut rng,
-                );
-                loss = loss + prior_total;
-                parts.extend(prior_parts);
-                let depth_mean = draw.depths.iter().sum::<usize>() as f64 / b.max(1) as f64;
-                let depth_max = draw.depths.iter().copied().max().unwrap_or(0);
-                parts.push(("pool_depth_mean", depth_mean));
-                parts.push(("pool_depth_max", depth_max as f64));
-                parts.push((
-                    "pool_upright_share",
-                    upright.iter().filter(|&&u| u).count() as f64 / b.max(1) as f64,
-                ));
-                let keep = match pool {
-                    SeedPool::Recent(_) => vec![true; b],
-                    SeedPool::Slots(_) => upright,
+                    set,
+                    seed_index: seed_index.as_ref(),
+                    weights: &weights,
+                    batch_size: phase_plan.batch_size,
                 };
-                pool.accept(&draw, &ends, &end_floors, &keep, prior.primitives);
-                if let Some(index) = &seed_index {
-                    let (seed, floor, x, floors) = recovery_batch::<TrainBackend>(
-                        set,
-                        index,
-                        &pool,
-                        phase_plan.batch_size,
-                        &mut rng,
-                        &device,
-                    );
-                    if floor.dims()[0] > 0 {
-                        let (recovery, _) =
-                            chain_loss_from(&net, &rig, &weights, seed, floor, x, floors, &mut rng);
-                        parts.push(("recovery", recovery.clone().into_scalar().elem::<f64>()));
-                        loss = loss + recovery.mul_scalar(prior.weights.recovery);
-                    }
-                }
+                loss = step.add_to(loss, &mut parts, &mut pool, &mut rng, &device);
             }
             let value = loss.clone().into_scalar().elem::<f64>();
             if !value.is_finite() {
@@ -849,25 +725,327 @@ pub fn train(
         }
     }
     bar.finish_and_clear();
-    let inference = net.valid();
-    let held_out_mpjpe_mm = if held.is_empty() {
-        None
-    } else {
-        let irig = TensorRig::new(&geo, &device);
-        Some(marker_mpjpe_mm(&inference, &irig, &held, 256))
+    let sets = TrainingSets {
+        singles,
+        chains,
+        held,
     };
     let seconds = elapsed_before_s + started.elapsed().as_secs_f64();
+    finish_training(
+        plan,
+        &net.valid(),
+        &geo,
+        &sets,
+        &mut log,
+        seconds,
+        final_loss,
+    )
+}
+
+/// One step's prior-phase terms: chains from the seed pool scored by the prior loss, the
+/// pool updated with their ends, and the recovery term from seeds near the pool's where the
+/// plan weights it.
+struct PriorStep<'a> {
+    net: &'a PrimitiveVae<TrainBackend>,
+    anchor_net: Option<&'a PrimitiveVae<Flex>>,
+    rig: &'a TensorRig<TrainBackend>,
+    prior: &'a PriorPlan,
+    range: &'a PlausibleRange,
+    set: &'a PrimitiveSet,
+    seed_index: Option<&'a SeedIndex>,
+    weights: &'a LossWeights,
+    batch_size: usize,
+}
+
+impl PriorStep<'_> {
+    /// `loss` with the terms added (in this order: prior, recovery), each term named in
+    /// `parts`.
+    fn add_to(
+        &self,
+        mut loss: Tensor<TrainBackend, 1>,
+        parts: &mut Vec<(&'static str, f64)>,
+        pool: &mut SeedPool,
+        rng: &mut ChaCha8Rng,
+        device: &burn::tensor::Device<TrainBackend>,
+    ) -> Tensor<TrainBackend, 1> {
+        let prior = self.prior;
+        let draw = pool.draw(self.set, prior.pool_fraction, self.batch_size, rng);
+        let b = draw.len();
+        let seed = Tensor::from_data(
+            TensorData::new(draw.seeds.clone(), [b, SEED_FRAMES, FRAME_DIM]),
+            device,
+        );
+        let floor = Tensor::from_data(TensorData::new(draw.floors.clone(), [b]), device);
+        let (prior_total, prior_parts, (ends, end_floors, upright)) = prior_chain_loss(
+            self.net,
+            self.anchor_net,
+            self.rig,
+            prior,
+            self.range,
+            seed,
+            floor,
+            rng,
+        );
+        loss = loss + prior_total;
+        parts.extend(prior_parts);
+        let depth_mean = draw.depths.iter().sum::<usize>() as f64 / b.max(1) as f64;
+        let depth_max = draw.depths.iter().copied().max().unwrap_or(0);
+        parts.push(("pool_depth_mean", depth_mean));
+        parts.push(("pool_depth_max", depth_max as f64));
+        parts.push((
+            "pool_upright_share",
+            upright.iter().filter(|&&u| u).count() as f64 / b.max(1) as f64,
+        ));
+        let keep = match pool {
+            SeedPool::Recent(_) => vec![true; b],
+            SeedPool::Slots(_) => upright,
+        };
+        pool.accept(&draw, &ends, &end_floors, &keep, prior.primitives);
+        if let Some(index) = self.seed_index {
+            let (seed, floor, x, floors) =
+                recovery_batch::<TrainBackend>(self.set, index, pool, self.batch_size, rng, device);
+            if floor.dims()[0] > 0 {
+                let (recovery, _) = chain_loss_from(
+                    self.net,
+                    self.rig,
+                    self.weights,
+                    seed,
+                    floor,
+                    x,
+                    floors,
+                    rng,
+                );
+                parts.push(("recovery", recovery.clone().into_scalar().elem::<f64>()));
+                loss = loss + recovery.mul_scalar(prior.weights.recovery);
+            }
+        }
+        loss
+    }
+}
+
+/// Where a run starts: from nothing, or (`resume`) from the checkpoint — the network, the
+/// optimiser of the phase under way, the generator and the pool as the checkpoint left them,
+/// and the log cut back to what the run had logged then.
+struct Restored {
+    net: Option<PrimitiveVae<TrainBackend>>,
+    optim: Option<PrimitiveOptimizer>,
+    pool: Option<SeedPool>,
+    elapsed_before_s: f64,
+    /// Phase, step in it, global step, last loss.
+    at: (usize, usize, usize, f64),
+    log: std::io::BufWriter<std::fs::File>,
+}
+
+/// The optimiser every phase uses ([`new_optimizer`]).
+type PrimitiveOptimizer = burn::optim::adaptor::OptimizerAdaptor<
+    burn::optim::Adam,
+    PrimitiveVae<TrainBackend>,
+    TrainBackend,
+>;
+
+fn restore(
+    plan: &TrainPlan,
+    resume: bool,
+    ckpt_dir: &Path,
+    fingerprint: &str,
+    net: &PrimitiveVae<TrainBackend>,
+    rng: &mut ChaCha8Rng,
+    device: &burn::tensor::Device<TrainBackend>,
+) -> Result<Restored, TrainError> {
+    let log_io = |source| TrainError::Io {
+        path: plan.log_out.clone(),
+        source,
+    };
+    let mut restored = Restored {
+        net: None,
+        optim: None,
+        pool: None,
+        elapsed_before_s: 0.0,
+        at: (0, 0, 0, f64::NAN),
+        log: std::io::BufWriter::new(
+            match resume {
+                true => std::fs::OpenOptions::new().append(true).open(&plan.log_out),
+                false => std::fs::File::create(&plan.log_out),
+            }
+            .map_err(log_io)?,
+        ),
+    };
+    if resume {
+        let r = checkpoint::load(ckpt_dir, fingerprint, net.clone(), new_optimizer, device)?;
+        restored.net = Some(r.net);
+        restored.optim = r.optim;
+        restored.pool = r.extra;
+        *rng = r.rng;
+        restored.elapsed_before_s = r.state.elapsed_s;
+        restored.at = (
+            r.state.phase,
+            r.state.step,
+            r.state.global_step,
+            r.state.last_loss,
+        );
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&plan.log_out)
+            .map_err(log_io)?;
+        f.set_len(r.state.log_bytes).map_err(log_io)?;
+    }
+    Ok(restored)
+}
+
+/// The primitives a run trains on: single primitives, chains of `rollout_primitives` (for the
+/// rollout and prior phases) and the held-out single primitives.
+struct TrainingSets {
+    singles: PrimitiveSet,
+    chains: PrimitiveSet,
+    held: PrimitiveSet,
+}
+
+fn training_sets(plan: &TrainPlan, model: &BodyModel) -> Result<TrainingSets, TrainError> {
+    let (train_parts, held_parts) = load_clips(plan)?;
+    let filter = plan
+        .min_contact_score
+        .map(|s| ContactFilter::new(model, s, plan.contact_context_frames))
+        .transpose()?;
+    let f = filter.as_ref();
+    let singles = build_set(&train_parts, 1, plan.stride_frames, plan.mirror, model, f)?;
+    let needs_chains = plan.rollout.steps > 0 || plan.prior.is_some();
+    let chains = if needs_chains {
+        build_set(
+            &train_parts,
+            plan.rollout_primitives,
+            plan.stride_frames,
+            plan.mirror,
+            model,
+            f,
+        )?
+    } else {
+        PrimitiveSet::new(plan.rollout_primitives)
+    };
+    let held = build_set(&held_parts, 1, plan.stride_frames, false, model, f)?;
+    if singles.is_empty() {
+        return Err(TrainError::Data(
+            "no training primitive: every clip is held out or shorter than 20 frames".into(),
+        ));
+    }
+    if needs_chains && chains.is_empty() {
+        return Err(TrainError::Data(format!(
+            "rollout: no clip part holds {} chained primitives",
+            plan.rollout_primitives
+        )));
+    }
+    Ok(TrainingSets {
+        singles,
+        chains,
+        held,
+    })
+}
+
+/// The network training starts from: `init_weights` (of the plan's architecture), or a new
+/// one normalised by the single primitives' statistics.
+fn initial_net(
+    plan: &TrainPlan,
+    singles: &PrimitiveSet,
+    device: &burn::tensor::Device<TrainBackend>,
+) -> Result<PrimitiveVae<TrainBackend>, TrainError> {
+    let stats = singles.input_stats(1e-3);
+    match &plan.init_weights {
+        None => Ok(plan.arch.init(&stats, device)),
+        Some(path) => {
+            let (arch, net) = weights::load(path, device)?;
+            if arch != plan.arch {
+                return Err(TrainError::Data(format!(
+                    "init weights {}: architecture {arch:?}, the config asks for {:?}",
+                    path.display(),
+                    plan.arch
+                )));
+            }
+            Ok(net)
+        }
+    }
+}
+
+fn create_output_dirs(plan: &TrainPlan) -> Result<(), TrainError> {
+    for out in [&plan.log_out, &plan.weights_out] {
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
+                path: dir.into(),
+                source,
+            })?;
+        }
+    }
+    Ok(())
+}
+
+fn progress_bar(total_steps: usize, show: bool) -> ProgressBar {
+    let bar = if show {
+        ProgressBar::new(total_steps as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{prefix} {bar:30} {pos}/{len} [{elapsed_precise} < {eta_precise}] {msg}",
+        )
+        .expect("progress template"),
+    );
+    bar
+}
+
+/// The plausible range the prior phase holds random chains to (from the single primitives and
+/// the prior's settings); logged when `log_it` (a fresh run; a resumed log has it).
+fn prior_range(
+    plan: &TrainPlan,
+    prior: &PriorPlan,
+    singles: &PrimitiveSet,
+    geo: &RigGeometry,
+    log: &mut impl Write,
+    log_it: bool,
+) -> Result<PlausibleRange, TrainError> {
+    let mut r = training_range(singles, geo, prior.range_quantile);
+    if let Some(deg) = prior.trunk_tilt_max_deg {
+        r.trunk_up_min = deg.to_radians().cos();
+    }
+    r.pelvis_speed_min = prior.min_pelvis_speed_m_s;
+    let line = serde_json::json!({
+        "phase": "prior_range",
+        "pelvis_m": [r.pelvis_m.0, r.pelvis_m.1],
+        "trunk_up_min": r.trunk_up_min,
+        "pelvis_speed_min": r.pelvis_speed_min,
+    });
+    if log_it {
+        log_line(log, &line, &plan.log_out)?;
+    }
+    Ok(r)
+}
+
+/// Scores the trained network on the held-out primitives, logs the run's summary, writes the
+/// weights and removes the checkpoint that has served.
+fn finish_training(
+    plan: &TrainPlan,
+    inference: &PrimitiveVae<Flex>,
+    geo: &RigGeometry,
+    sets: &TrainingSets,
+    log: &mut impl Write,
+    seconds: f64,
+    final_loss: f64,
+) -> Result<TrainReport, TrainError> {
+    let held_out_mpjpe_mm = if sets.held.is_empty() {
+        None
+    } else {
+        let irig = TensorRig::new(geo, &Default::default());
+        Some(marker_mpjpe_mm(inference, &irig, &sets.held, 256))
+    };
     let summary = serde_json::json!({
         "phase": "done",
         "seconds": seconds,
         "held_out_marker_mpjpe_mm": held_out_mpjpe_mm,
-        "train_primitives": singles.len(),
-        "train_chains": chains.len(),
-        "held_out_primitives": held.len(),
+        "train_primitives": sets.singles.len(),
+        "train_chains": sets.chains.len(),
+        "held_out_primitives": sets.held.len(),
     });
-    log_line(&mut log, &summary, &plan.log_out)?;
-    weights::save(&inference, &plan.arch, &plan.weights_out)?;
-    // The run is complete: its checkpoint has served.
+    log_line(log, &summary, &plan.log_out)?;
+    weights::save(inference, &plan.arch, &plan.weights_out)?;
+    let ckpt_dir = checkpoint::checkpoint_dir(&plan.weights_out);
     if ckpt_dir.exists() {
         std::fs::remove_dir_all(&ckpt_dir).map_err(|source| TrainError::Io {
             path: ckpt_dir.clone(),
@@ -875,9 +1053,9 @@ pub fn train(
         })?;
     }
     Ok(TrainReport {
-        train_primitives: singles.len(),
-        train_chains: chains.len(),
-        held_out_primitives: held.len(),
+        train_primitives: sets.singles.len(),
+        train_chains: sets.chains.len(),
+        held_out_primitives: sets.held.len(),
         seconds,
         final_loss,
         held_out_mpjpe_mm,
