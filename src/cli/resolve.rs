@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use super::config::{
-    Backend, ConfigError, MotionSource, RawDepthNoise, RawMotion, RawRender, RawRun, RawSlurm,
+    Backend, Bad, ConfigError, MotionSource, RawDepthNoise, RawMotion, RawRender, RawRun, RawSlurm,
     RawSupervisor,
 };
 use crate::render::depth_noise::DepthNoise;
@@ -27,9 +27,6 @@ pub const MAX_SCRIPTED_FRAMES: f64 = 1e6;
 
 /// Largest shape coefficient a config may ask for (standard deviations).
 pub const MAX_ABS_BETA: f64 = 10.0;
-
-/// A config error naming `key`.
-type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
 
 /// Resolves paths against the config's folder and checks value ranges.
 pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigError> {

@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use super::config::{load_toml, ConfigError};
+use super::config::{load_toml, Bad, ConfigError};
 use super::resolve::{crate_root, resolve_body_model};
 use crate::math::random::normal_samples;
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
@@ -185,9 +185,6 @@ fn finite2(v: [f64; 2]) -> bool {
 pub fn load_synth_plan(path: &Path) -> Result<SynthPlan, ConfigError> {
     resolve_synth(load_toml(path)?, path, "")
 }
-
-/// A config error naming `key` (the synth config's own name; the caller adds its prefix).
-type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
 
 /// Checks a synth config read from `path` (relative paths resolve against its folder); keys
 /// are named with `prefix` before the synth config's own names (`""` for a synth config).

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::config::{load_toml, ConfigError};
+use super::config::{load_toml, Bad, ConfigError};
 use super::resolve::resolve_body_model;
 use crate::motion::cvae::loss::{LossWeights, PriorWeights};
 use crate::motion::cvae::train::{ClipSpec, PhasePlan, PriorPlan, TrainPlan};
@@ -349,9 +349,6 @@ impl RawTrainPrimitive {
         Ok(clips)
     }
 }
-
-/// A config error naming `key`.
-type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
 
 fn positive(key: &str, v: usize, bad: Bad) -> Result<usize, ConfigError> {
     match v {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::config::{load_toml, ConfigError};
+use super::config::{load_toml, Bad, ConfigError};
 use super::resolve::resolve_body_model;
 use crate::policy::env::EnvSettings;
 use crate::policy::net::PolicyArch;
@@ -173,9 +173,6 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         checkpoint_every_s,
     })
 }
-
-/// A config error naming `key`.
-type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
 
 /// The whole numbers, shares and weights of `[ppo]`, `[policy]` and `[validation]`.
 fn check_numbers(raw: &RawTrainPolicy, bad: Bad) -> Result<(), ConfigError> {
