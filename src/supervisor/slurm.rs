@@ -85,21 +85,7 @@ fn run_slurm(
     let jobs_path = slurm_dir.join("jobs.txt");
     cancel_previous_jobs(&jobs_path);
 
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
-    std::thread::spawn(move || {
-        let Ok(rt) = tokio::runtime::Builder::new_current_thread()
-            .enable_all()
-            .build()
-        else {
-            return;
-        };
-        rt.block_on(async {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                flag.store(true, Ordering::SeqCst);
-            }
-        })
-    });
+    let stop = ctrl_c_flag();
 
     let bar = frames_bar(dataset.total_frames() as u64, already_done as u64)?;
     let mut states: Vec<ShardState> = shards
@@ -148,32 +134,8 @@ fn run_slurm(
         }
         round += 1;
         let round_dir = slurm_dir.join(format!("round_{round:03}"));
-        std::fs::create_dir_all(&round_dir)
-            .with_context(|| format!("creating {}", round_dir.display()))?;
-        let mut tasks = Vec::new();
-        for (t, &i) in todo.iter().enumerate() {
-            let shard = &states[i].shard;
-            let frames = missing_frames(&dataset, shard);
-            let spec_path = round_dir.join(format!("task_{t:04}.json"));
-            let spec = dataset.shard_spec(shard.camera, &frames);
-            write_atomically(&spec_path, &serde_json::to_vec_pretty(&spec)?)?;
-            tasks.push((i, frames, spec_path));
-        }
-        let script = array_script(
-            &runtime,
-            &settings,
-            &dataset.logs_dir(),
-            &tasks.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
-        );
-        let script_path = round_dir.join("array.sh");
-        write_atomically(&script_path, script.as_bytes())?;
-        let out = slurm_tool("sbatch", &["--parsable", &script_path.to_string_lossy()])
-            .with_context(|| format!("submitting {}", script_path.display()))?;
-        // `--parsable` prints `jobid` or `jobid;cluster`.
-        let job = out.trim().split(';').next().unwrap_or("").to_string();
-        if job.is_empty() || !job.chars().all(|c| c.is_ascii_digit()) {
-            bail!("sbatch answered {out:?}; expected a job id");
-        }
+        let (job, tasks, script_path) =
+            submit_round(&dataset, &runtime, &settings, &states, &todo, &round_dir)?;
         append_job(&jobs_path, &job)?;
         bar.suspend(|| {
             eprintln!(
@@ -205,22 +167,7 @@ fn run_slurm(
             }
         }
         frames_finished += finish_ready_frames(&dataset, &states, &todo, &bar)?;
-        let ends = task_ends(&job);
-        for (t, (i, frames, _)) in tasks.into_iter().enumerate() {
-            let state = &mut states[i];
-            let still_missing = missing_frames(&dataset, &state.shard).len();
-            let end = ends.get(&(t as u32));
-            let log = dataset.logs_dir().join(format!("slurm_{job}_{t}.log"));
-            let outcome = task_outcome(end, still_missing, &log);
-            state.report.attempts.push(Attempt {
-                attempt: state.report.attempts.len() as u32 + 1,
-                frames: frames.len(),
-                finished: frames.len() - still_missing,
-                outcome,
-                seconds: end.map_or(0.0, |e| e.seconds),
-                log: dataset.relative(&log),
-            });
-        }
+        record_attempts(&dataset, &mut states, tasks, &job);
         if stop.load(Ordering::SeqCst) {
             bar.finish_and_clear();
             report_of(&states, frames_finished, started).write(&dataset)?;
@@ -231,6 +178,88 @@ fn run_slurm(
     let report = report_of(&states, frames_finished, started);
     report.write(&dataset)?;
     Ok(report)
+}
+
+/// A flag raised by Ctrl-C (a thread waits for the signal).
+fn ctrl_c_flag() -> Arc<AtomicBool> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    std::thread::spawn(move || {
+        let Ok(rt) = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+        else {
+            return;
+        };
+        rt.block_on(async {
+            if tokio::signal::ctrl_c().await.is_ok() {
+                flag.store(true, Ordering::SeqCst);
+            }
+        })
+    });
+    stop
+}
+
+/// A shard's task in a round: its index in the states, the frames it renders, its spec.
+type Task = (usize, Vec<u32>, PathBuf);
+
+/// Writes one round's specs (the missing frames of the shards `todo`) and its array script
+/// into `round_dir`, and submits it; returns the job id, the tasks and the script.
+fn submit_round(
+    dataset: &Dataset,
+    runtime: &BlenderRuntime,
+    settings: &SlurmSettings,
+    states: &[ShardState],
+    todo: &[usize],
+    round_dir: &Path,
+) -> Result<(String, Vec<Task>, PathBuf)> {
+    std::fs::create_dir_all(round_dir)
+        .with_context(|| format!("creating {}", round_dir.display()))?;
+    let mut tasks = Vec::new();
+    for (t, &i) in todo.iter().enumerate() {
+        let shard = &states[i].shard;
+        let frames = missing_frames(dataset, shard);
+        let spec_path = round_dir.join(format!("task_{t:04}.json"));
+        let spec = dataset.shard_spec(shard.camera, &frames);
+        write_atomically(&spec_path, &serde_json::to_vec_pretty(&spec)?)?;
+        tasks.push((i, frames, spec_path));
+    }
+    let script = array_script(
+        runtime,
+        settings,
+        &dataset.logs_dir(),
+        &tasks.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
+    );
+    let script_path = round_dir.join("array.sh");
+    write_atomically(&script_path, script.as_bytes())?;
+    let out = slurm_tool("sbatch", &["--parsable", &script_path.to_string_lossy()])
+        .with_context(|| format!("submitting {}", script_path.display()))?;
+    // `--parsable` prints `jobid` or `jobid;cluster`.
+    let job = out.trim().split(';').next().unwrap_or("").to_string();
+    if job.is_empty() || !job.chars().all(|c| c.is_ascii_digit()) {
+        bail!("sbatch answered {out:?}; expected a job id");
+    }
+    Ok((job, tasks, script_path))
+}
+
+/// Adds each task's attempt of a round that has left the queue to its shard's report.
+fn record_attempts(dataset: &Dataset, states: &mut [ShardState], tasks: Vec<Task>, job: &str) {
+    let ends = task_ends(job);
+    for (t, (i, frames, _)) in tasks.into_iter().enumerate() {
+        let state = &mut states[i];
+        let still_missing = missing_frames(dataset, &state.shard).len();
+        let end = ends.get(&(t as u32));
+        let log = dataset.logs_dir().join(format!("slurm_{job}_{t}.log"));
+        let outcome = task_outcome(end, still_missing, &log);
+        state.report.attempts.push(Attempt {
+            attempt: state.report.attempts.len() as u32 + 1,
+            frames: frames.len(),
+            finished: frames.len() - still_missing,
+            outcome,
+            seconds: end.map_or(0.0, |e| e.seconds),
+            log: dataset.relative(&log),
+        });
+    }
 }
 
 fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
