@@ -459,18 +459,7 @@ pub fn train_policy(
             .init::<TrainBackend, ActorCritic<TrainBackend>>()
     };
     TrainBackend::seed(&device, plan.seed);
-    let mut net = plan.arch.init::<TrainBackend>(&device);
-    if let Some(path) = &plan.init_weights {
-        let (arch, init) = load_policy::<TrainBackend>(path, &device).map_err(weights_error)?;
-        if arch != plan.arch {
-            return Err(TrainError::Data(format!(
-                "init_weights {}: architecture {arch:?}, the config asks for {:?}",
-                path.display(),
-                plan.arch
-            )));
-        }
-        net = init;
-    }
+    let mut net = initial_policy(plan, &device)?;
     let parameters = net.num_params();
     let mut optim = new_optim();
     let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
@@ -497,33 +486,13 @@ pub fn train_policy(
         run_state = r.extra;
         truncate_log(&plan.log_out, r.state.log_bytes)?;
     } else {
-        refuse_existing_output(&plan.log_out)?;
-        if let Some(dir) = plan.log_out.parent() {
-            std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
-                path: dir.into(),
-                source,
-            })?;
-        }
-        std::fs::File::create(&plan.log_out).map_err(|source| TrainError::Io {
-            path: plan.log_out.clone(),
-            source,
-        })?;
+        start_log(&plan.log_out)?;
     }
     let mut best = run_state.as_ref().and_then(|s| s.best_validation_return);
     let t0 = Instant::now();
     let elapsed = |t0: &Instant| elapsed_before + t0.elapsed().as_secs_f64();
     let total_updates: usize = (0..plan.stages.len()).map(|s| plan.updates(s)).sum();
-    let bar = if show_progress {
-        indicatif::ProgressBar::new(total_updates as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} updates {elapsed_precise}<{eta_precise} {msg}",
-        )
-        .expect("valid template"),
-    );
+    let bar = updates_bar(total_updates, show_progress);
     bar.set_position(global_update as u64);
     let mut last_checkpoint = Instant::now();
     let mut env_steps_total = global_update * ppo.envs * ppo.steps_per_env;
@@ -621,25 +590,24 @@ pub fn train_policy(
                     extra_file: None,
                     log_bytes,
                 };
-                // A new stage starts with fresh environments.
-                let extra = (next_stage == stage).then(|| RunState {
-                    env: env.snapshot(),
-                    best_validation_return: best,
-                });
-                let extra = extra.or(Some(RunState {
-                    env: EnvSnapshot {
-                        episode_base: u64::MAX,
-                        next_episode: 0,
-                        episodes: Vec::new(),
+                let extra = RunState {
+                    // A new stage starts with fresh environments.
+                    env: match next_stage == stage {
+                        true => env.snapshot(),
+                        false => EnvSnapshot {
+                            episode_base: u64::MAX,
+                            next_episode: 0,
+                            episodes: Vec::new(),
+                        },
                     },
                     best_validation_return: best,
-                }));
+                };
                 checkpoint::save::<TrainBackend, _, _, _>(
                     &ckpt_dir,
                     state,
                     &net,
                     Some(&optim),
-                    extra.as_ref(),
+                    Some(&extra),
                 )?;
                 last_checkpoint = Instant::now();
             }
@@ -661,6 +629,56 @@ pub fn train_policy(
         best_validation_return: best,
         parameters,
     })
+}
+
+/// The network training starts from: `init_weights` (of the plan's architecture), or a new one.
+fn initial_policy(
+    plan: &PolicyTrainPlan,
+    device: &burn::tensor::Device<TrainBackend>,
+) -> Result<ActorCritic<TrainBackend>, TrainError> {
+    let Some(path) = &plan.init_weights else {
+        return Ok(plan.arch.init::<TrainBackend>(device));
+    };
+    let (arch, init) = load_policy::<TrainBackend>(path, device).map_err(weights_error)?;
+    if arch != plan.arch {
+        return Err(TrainError::Data(format!(
+            "init_weights {}: architecture {arch:?}, the config asks for {:?}",
+            path.display(),
+            plan.arch
+        )));
+    }
+    Ok(init)
+}
+
+/// A new run's empty log (an existing one is refused, not overwritten).
+fn start_log(log: &Path) -> Result<(), TrainError> {
+    refuse_existing_output(log)?;
+    if let Some(dir) = log.parent() {
+        std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
+            path: dir.into(),
+            source,
+        })?;
+    }
+    std::fs::File::create(log).map_err(|source| TrainError::Io {
+        path: log.into(),
+        source,
+    })?;
+    Ok(())
+}
+
+fn updates_bar(total_updates: usize, show: bool) -> indicatif::ProgressBar {
+    let bar = if show {
+        indicatif::ProgressBar::new(total_updates as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} updates {elapsed_precise}<{eta_precise} {msg}",
+        )
+        .expect("valid template"),
+    );
+    bar
 }
 
 fn env_error(e: EnvError) -> TrainError {
