@@ -1,8 +1,8 @@
 //! The evaluation suite (`egogen eval`) in a tiny form, so that it cannot rot: every
 //! controller on three scenarios, two episodes each, its files checked, then Table 3's
-//! ablated policies, Table 2's apartment rows and the speed suite (with its ray-count rows)
-//! beside it; the A* planner and the
-//! diversity measure on cases whose answers are known.
+//! ablated policies, Table 2's apartment rows and the speed suite (with its ray-count and
+//! width rows) beside it; the A* planner and the diversity measure on cases whose answers are
+//! known.
 
 mod common;
 
@@ -337,10 +337,12 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     ] {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }
-    // … and the ray-count knob in the same run.
+    // … and the ray-count and width knobs in the same run.
     for row in [
         "| 8 rays | box scenes | sampled |",
         "| 64 rays | crossings | mean |",
+        "| H = 64 | box scenes | sampled |",
+        "| H = 256 | crossings | mean |",
     ] {
         assert!(md.contains(row), "{row} missing from\n{md}");
     }

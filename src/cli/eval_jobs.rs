@@ -159,6 +159,27 @@ const RAYS_POLICIES: [(&str, &str, &str); 4] = [
     ),
 ];
 
+/// The speed suite's policy-width knob: policies trained with the budget and settings of
+/// `configs/train_policy.toml` (whose policy is the 128-wide row), differing only in the GRU
+/// width H (the MLPs are 2H + 4F wide). Label, weights, config.
+const WIDTH_POLICIES: [(&str, &str, &str); 3] = [
+    (
+        "H = 64",
+        "assets/policy/knobs/width_64.safetensors",
+        "configs/knobs/width_64.toml",
+    ),
+    (
+        "H = 128 (shipped width)",
+        "assets/policy/policy.safetensors",
+        "configs/train_policy.toml",
+    ),
+    (
+        "H = 256",
+        "assets/policy/knobs/width_256.safetensors",
+        "configs/knobs/width_256.toml",
+    ),
+];
+
 /// The speed suite's SDF-resolution knob: voxel sizes of the apartment's 3D SDF (m).
 const SDF_VOXELS_M: [f64; 4] = [0.2, 0.1, 0.05, 0.025];
 
@@ -174,6 +195,7 @@ fn suite_files(out: &Path, suite: &str) -> Vec<PathBuf> {
             results.join("speed.json"),
             results.join("speed_episodes.jsonl"),
             results.join("rays.json"),
+            results.join("width.json"),
             results.join("sdf.json"),
         ],
         "table2" => vec![results.join("table2.json")],
@@ -483,6 +505,8 @@ fn speed(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) ->
     )?;
     // The ray-count knob: each policy on held-out box scenes and crossings.
     box_and_crossing_rows(args, c, &RAYS_POLICIES, &results.join("rays.json"))?;
+    // The policy-width knob, the same way.
+    box_and_crossing_rows(args, c, &WIDTH_POLICIES, &results.join("width.json"))?;
     let ctx = crate::motion::cvae::BodyContext::new(&c.body, &[])?;
     sdf_rows(args, c, &ctx, results)
 }
@@ -949,7 +973,20 @@ fn results_markdown(out: &Path) -> Result<String> {
         md.push('\n');
     }
     if let Some(t) = read_json::<PolicyRowsFile>(&results.join("rays.json"))? {
-        md.push_str(&rays_markdown(&t));
+        md.push_str(&knob_markdown(
+            "Rays per scan",
+            "differing only in the rays of their scan (`[policy.sensing] num_rays`, same ±90° \
+             fan and 7 m)",
+            &t,
+        ));
+    }
+    if let Some(t) = read_json::<PolicyRowsFile>(&results.join("width.json"))? {
+        md.push_str(&knob_markdown(
+            "Policy width",
+            "differing only in the width of their networks (`[policy] hidden` = H: GRU \
+             encoders H wide, actor and critic MLPs 2H + 4F; EgoGen's is 512)",
+            &t,
+        ));
     }
     if let Some(t) = read_json::<PolicyRowsFile>(&results.join("sdf.json"))? {
         md.push_str(&sdf_markdown(&t));
@@ -977,19 +1014,18 @@ fn results_markdown(out: &Path) -> Result<String> {
     Ok(md)
 }
 
-/// The speed suite's ray-count rows.
-fn rays_markdown(t: &PolicyRowsFile) -> String {
+/// The speed suite's rows of a knob (`title`) whose policies differ as `differing` says.
+fn knob_markdown(title: &str, differing: &str, t: &PolicyRowsFile) -> String {
     let mut md = format!(
-        "### Rays per scan\n\nThe same run: policies trained with the budget and settings of \
-         `configs/train_policy.toml` (2.0 M environment steps, seed 0), differing only in the \
-         rays of their scan (`[policy.sensing] num_rays`, same ±90° fan and 7 m), on the \
+        "### {title}\n\nThe same run: policies trained with the budget and settings of \
+         `configs/train_policy.toml` (2.0 M environment steps, seed 0), {differing}, on the \
          first {} held-out box scenes and crossings (success within 0.3 m, 11 primitives, 50 \
          episodes at once); {:.0} s. Wall: the row's episodes, one decode batch of 50 at a \
          time.\n\n",
         t.episodes, t.wall_s
     );
     md.push_str(&box_rows_markdown(&t.rows, "wall (s)", &|r| {
-        format!("{:.1}", r.wall_s)
+        format!("{:.2}", r.wall_s)
     }));
     md.push('\n');
     md
