@@ -35,6 +35,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "atomic_file",
             "parser_guard",
             "paths",
+            "progress",
         ],
     ),
     (
@@ -47,6 +48,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "sensing",
             "atomic_file",
             "paths",
+            "progress",
         ],
     ),
     // Making a sequence, rendering it, looking at it.

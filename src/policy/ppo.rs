@@ -492,7 +492,16 @@ pub fn train_policy(
     let t0 = Instant::now();
     let elapsed = |t0: &Instant| elapsed_before + t0.elapsed().as_secs_f64();
     let total_updates: usize = (0..plan.stages.len()).map(|s| plan.updates(s)).sum();
-    let bar = updates_bar(total_updates, show_progress);
+    let bar = match show_progress {
+        true => crate::progress::progress_bar(
+            "egogen train policy",
+            "training",
+            "updates",
+            total_updates as u64,
+            global_update as u64,
+        ),
+        false => indicatif::ProgressBar::hidden(),
+    };
     bar.set_position(global_update as u64);
     let mut last_checkpoint = Instant::now();
     let mut env_steps_total = global_update * ppo.envs * ppo.steps_per_env;
@@ -664,21 +673,6 @@ fn start_log(log: &Path) -> Result<(), TrainError> {
         source,
     })?;
     Ok(())
-}
-
-fn updates_bar(total_updates: usize, show: bool) -> indicatif::ProgressBar {
-    let bar = if show {
-        indicatif::ProgressBar::new(total_updates as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} updates {elapsed_precise}<{eta_precise} {msg}",
-        )
-        .expect("valid template"),
-    );
-    bar
 }
 
 fn env_error(e: EnvError) -> TrainError {

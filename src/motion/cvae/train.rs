@@ -15,7 +15,7 @@ use burn::module::AutodiffModule;
 use burn::optim::{AdamConfig, GradientsParams, Optimizer};
 use burn::prelude::*;
 use burn::tensor::backend::AutodiffBackend;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
@@ -581,7 +581,16 @@ pub fn train(
 
     let prior_steps = plan.prior.map_or(0, |p| p.phase.steps);
     let total_steps = plan.primitive.steps + plan.rollout.steps + prior_steps;
-    let bar = progress_bar(total_steps, show_progress);
+    let bar = match show_progress {
+        true => crate::progress::progress_bar(
+            "egogen train primitive",
+            "training",
+            "steps",
+            total_steps as u64,
+            resume_at.2 as u64,
+        ),
+        false => ProgressBar::hidden(),
+    };
     let range = match plan.prior {
         Some(prior) => Some(prior_range(
             plan, &prior, &singles, &geo, &mut log, !resume,
@@ -636,7 +645,6 @@ pub fn train(
         } else {
             0
         };
-        bar.set_prefix(phase);
         let mut optim = match restored_optim.take() {
             Some(o) if phase_index == resume_phase => o,
             _ => new_optimizer(),
@@ -691,7 +699,7 @@ pub fn train(
             if step % LOG_EVERY_STEPS == 0 || step + 1 == phase_plan.steps {
                 log_line(&mut log, &line, &plan.log_out)?;
             }
-            bar.set_message(format!("loss {value:.4}"));
+            bar.set_message(format!("{phase} loss {value:.4}"));
             bar.inc(1);
             global_step += 1;
             let done = step + 1 == phase_plan.steps;
@@ -974,21 +982,6 @@ fn create_output_dirs(plan: &TrainPlan) -> Result<(), TrainError> {
         }
     }
     Ok(())
-}
-
-fn progress_bar(total_steps: usize, show: bool) -> ProgressBar {
-    let bar = if show {
-        ProgressBar::new(total_steps as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{prefix} {bar:30} {pos}/{len} [{elapsed_precise} < {eta_precise}] {msg}",
-        )
-        .expect("progress template"),
-    );
-    bar
 }
 
 /// The plausible range the prior phase holds random chains to (from the single primitives and
