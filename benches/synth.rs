@@ -56,12 +56,13 @@ fn bench(c: &mut Criterion) {
         &Default::default(),
     )
     .unwrap();
+    let actor = egogen::policy::Actor::of(&policy);
     let parts = CrowdParts {
         model: &model,
         body_model: &body,
         prior: &prior,
         bank: &bank,
-        policy: Some(&policy),
+        policy: Some(&actor),
     };
     let n = 120;
     let map = WalkableMap::from_walkable(DVec2::splat(-6.0), 0.1, n, n, vec![true; n * n]);
@@ -133,7 +134,12 @@ fn bench(c: &mut Criterion) {
     });
     let device = Default::default();
     let mut rng = <rand_chacha::ChaCha8Rng as rand_core::SeedableRng>::seed_from_u64(0);
+    // The actor as acting runs it (plain f32, `policy::Actor`), and the same actions through
+    // burn's network.
     g.bench_function("policy_forward", |b| {
+        b.iter(|| actor.actions(&obs, Some(&mut rng)))
+    });
+    g.bench_function("policy_forward_burn", |b| {
         b.iter(|| egogen::policy::ppo::actions(&policy, obs.clone(), Some(&mut rng), &device))
     });
     let z = vec![vec![0f32; model.latent_dim()]];

@@ -2,8 +2,9 @@
 //!
 //! Shared by the body model reader and the motion file reader; each adds its own typed errors.
 
-use std::io::Read;
+use std::io::{Cursor, Read, Seek};
 
+use npyz::npz::NpzArchive;
 use npyz::NpyFile;
 
 /// Why an array could not be read.
@@ -12,6 +13,29 @@ pub enum ReadError {
     Io(std::io::Error),
     /// The dtype is not a plain number type (the descriptor found).
     Dtype(String),
+}
+
+/// The array `name` of an `.npz`, its bytes inflated at once into memory, or `None` when the
+/// archive has no such array. (Read through the archive, an array is inflated a value at a
+/// time: loading a body model took several times longer.)
+pub fn array_in_memory<R: Read + Seek>(
+    npz: &mut NpzArchive<R>,
+    name: &str,
+) -> std::io::Result<Option<NpyFile<Cursor<Vec<u8>>>>> {
+    use npyz::zip::result::ZipError;
+    let invalid = |s: &str| std::io::Error::new(std::io::ErrorKind::InvalidData, s.to_owned());
+    let file_name = npyz::npz::file_name_from_array_name(name);
+    let mut entry = match npz.zip_archive().by_name(&file_name) {
+        Ok(entry) => entry,
+        Err(ZipError::FileNotFound) => return Ok(None),
+        Err(ZipError::Io(e)) => return Err(e),
+        Err(ZipError::InvalidArchive(s)) | Err(ZipError::UnsupportedArchive(s)) => {
+            return Err(invalid(s))
+        }
+    };
+    let mut bytes = Vec::with_capacity(usize::try_from(entry.size()).unwrap_or(0));
+    entry.read_to_end(&mut bytes)?;
+    NpyFile::new(Cursor::new(bytes)).map(Some)
 }
 
 /// Reads any plain numeric npy array as `f64` in file order; returns whether it was floating point.

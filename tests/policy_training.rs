@@ -483,3 +483,57 @@ fn the_prior_kl_penalty_holds_the_policy_near_the_standard_normal() {
         "KL with the penalty {held}, without {free}"
     );
 }
+
+/// The f32 actor that acting uses (`policy::Actor`) gives burn's actions bit for bit: mean and
+/// sampled, one observation and batches (the batch sizes cross burn's threshold for threaded
+/// products), for policies of three widths and both kinds of sensing.
+#[test]
+fn plain_f32_actor_equals_burn_bit_for_bit() {
+    use egogen::motion::cvae::infer::InferBackend;
+    use egogen::policy::ppo::{action_distribution, actions, load_policy};
+    use egogen::policy::Actor;
+    use rand_core::SeedableRng;
+    let device = Default::default();
+    let root = common::repo_root();
+    for file in [
+        egogen::policy::ppo::SHIPPED_POLICY,
+        "assets/policy/knobs/width_64.safetensors",
+        "assets/policy/knobs/width_256.safetensors",
+        "assets/policy/table2/local_map_0.8m.safetensors",
+    ] {
+        let (_, net) = load_policy::<InferBackend>(&root.join(file), &device).unwrap();
+        let actor = Actor::of(&net);
+        let d = actor.obs_layout().dim();
+        assert_eq!(actor.latent_dim(), net.latent_dim());
+        for batch in [1usize, 3, 64, 300] {
+            // Observations over the range the environment writes (markers, unit directions,
+            // scans in [-1, 1], encodings' inputs in [0, 1]), a few large values too.
+            let obs: Vec<f32> = (0..batch * d)
+                .map(|k| {
+                    let u = ((k as f32) * 0.618_034).fract();
+                    if k % 97 == 0 {
+                        40.0 * (u - 0.5)
+                    } else {
+                        2.0 * u - 1.0
+                    }
+                })
+                .collect();
+            for sampled in [false, true] {
+                let mut r1 = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+                let mut r2 = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+                let burn = actions(&net, obs.clone(), sampled.then_some(&mut r1), &device);
+                let plain = actor.actions(&obs, sampled.then_some(&mut r2));
+                let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(
+                    bits(&burn),
+                    bits(&plain),
+                    "{file}, batch {batch}, sampled {sampled}"
+                );
+            }
+        }
+        let one = vec![0.25f32; d];
+        let (m1, s1) = action_distribution(&net, one.clone(), &device);
+        let (m2, s2) = actor.distribution(&one);
+        assert_eq!((m1, s1), (m2, s2), "{file}: distribution");
+    }
+}

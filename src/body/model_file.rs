@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use npyz::npz::NpzArchive;
 use npyz::Order;
 
-use crate::npz::{fortran_to_c, read_as_f64, ReadError};
+use crate::npz::{array_in_memory, fortran_to_c, read_as_f64, ReadError};
 
 /// What can go wrong reading a body model file.
 #[derive(Debug, thiserror::Error)]
@@ -97,9 +97,7 @@ impl<R: Read + Seek> ModelArchive<R> {
     pub fn read(&mut self, key: &str, expected: &[Option<u64>]) -> Result<Array, ModelFileError> {
         let path = self.path.clone();
         let describe = || describe_shape(expected);
-        let file = self
-            .archive
-            .by_name(key)
+        let file = array_in_memory(&mut self.archive, key)
             .map_err(|source| ModelFileError::Read {
                 path: path.clone(),
                 key: key.into(),

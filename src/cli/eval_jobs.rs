@@ -434,12 +434,13 @@ fn run_rows(
         .clone()
         .unwrap_or_else(crate::policy::ppo::shipped_policy_path);
     let net = super::policy_jobs::load_policy_for(&policy_path, &c.model)?;
+    let actor = crate::policy::Actor::of(&net);
     let parts = crate::synth::crowd::CrowdParts {
         model: &c.model,
         body_model: &c.body,
         prior: &c.prior,
         bank: &c.bank,
-        policy: Some(&net),
+        policy: Some(&actor),
     };
     let progress = bar(
         args,

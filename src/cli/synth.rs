@@ -733,8 +733,10 @@ pub fn synthesize(
         .collect();
     let model = MotionModel::load(&plan.weights)?;
     let prior = PosePrior::load(&plan.pose_prior)?;
-    let policy = match &plan.policy {
-        Some(p) => Some(super::policy_jobs::load_policy_for(p, &model)?),
+    let actor = match &plan.policy {
+        Some(p) => Some(crate::policy::Actor::of(
+            &super::policy_jobs::load_policy_for(p, &model)?,
+        )),
         None => None,
     };
     let train_plan = super::train::load_train_plan(&plan.train_config)?;
@@ -745,7 +747,7 @@ pub fn synthesize(
         body_model: body,
         prior: &prior,
         bank: &bank,
-        policy: policy.as_ref(),
+        policy: actor.as_ref(),
     };
     let world = CrowdWorld {
         map: std::sync::Arc::new(map),

@@ -243,8 +243,7 @@ struct KeyReader<'a, R: Read + Seek> {
 impl<R: Read + Seek> KeyReader<'_, R> {
     fn file(&mut self, key: &str) -> Result<npyz::NpyFile<impl Read + '_>, MotionFileError> {
         let path = self.path.to_owned();
-        self.npz
-            .by_name(key)
+        crate::npz::array_in_memory(self.npz, key)
             .map_err(|source| MotionFileError::Io {
                 path: path.clone(),
                 source,
@@ -316,20 +315,32 @@ fn zip_options() -> npyz::zip::write::FileOptions {
         .last_modified_time(npyz::zip::DateTime::default())
 }
 
+/// One array of the archive: serialised in memory, then written in one piece (fed to the
+/// archive's deflate stream value by value, a long take's arrays took several times longer
+/// to write than to compress).
 fn write_f64<W: Write + Seek>(
     npz: &mut NpzWriter<W>,
     key: &str,
     shape: &[u64],
     data: &[f64],
 ) -> std::io::Result<()> {
-    let options = zip_options();
-    let mut w = npz
-        .array::<f64>(key, options)?
-        .default_dtype()
-        .shape(shape)
-        .begin_nd()?;
-    w.extend(data.iter().copied())?;
-    w.finish()
+    let mut bytes = Vec::with_capacity(128 + 8 * data.len());
+    {
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(shape)
+            .writer(&mut bytes)
+            .begin_nd()?;
+        w.extend(data.iter().copied())?;
+        w.finish()?;
+    }
+    let zip = npz.zip_writer();
+    zip.start_file(npyz::npz::file_name_from_array_name(key), zip_options())?;
+    zip.write_all(&bytes)?;
+    // npyz's array writer flushed the archive twice (in `finish`, again when dropped): so do
+    // we, and archives stay byte for byte what they were.
+    zip.flush()?;
+    zip.flush()
 }
 
 fn write_str<W: Write + Seek>(

@@ -6,6 +6,7 @@
 //! Depends on `motion::cvae` (decoding), `body` (markers, CPF), `scene` (walkable map,
 //! collision) and `sensing` (rays). Nothing here renders.
 
+pub mod actor;
 pub mod box_scene;
 pub mod crossing_scene;
 pub mod env;
@@ -18,5 +19,6 @@ pub mod sampling;
 pub mod tasks;
 pub mod walker;
 
+pub use actor::Actor;
 pub use env::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};
 pub use pose_prior::PosePrior;

@@ -23,7 +23,7 @@ use crate::sensing::SensingSpec;
 /// Bounds of the actor's log-variance.
 pub const LOGVAR_RANGE: (f32, f32) = (-2.5, 2.5);
 /// LeakyReLU slope (PyTorch's default).
-const LEAKY_SLOPE: f64 = 0.01;
+pub(super) const LEAKY_SLOPE: f64 = 0.01;
 
 /// Architecture of the policy (saved inside its weights file).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -96,8 +96,8 @@ impl PolicyArch {
 /// A single-layer GRU (PyTorch's equations) run over a short sequence.
 #[derive(Module, Debug)]
 pub struct Gru<B: Backend> {
-    input: Linear<B>,
-    hidden: Linear<B>,
+    pub(super) input: Linear<B>,
+    pub(super) hidden: Linear<B>,
 }
 
 impl<B: Backend> Gru<B> {
@@ -128,8 +128,8 @@ impl<B: Backend> Gru<B> {
 /// Residual blocks then a linear output layer.
 #[derive(Module, Debug)]
 pub struct ResidualMlp<B: Backend> {
-    blocks: Vec<[Linear<B>; 2]>,
-    out: Linear<B>,
+    pub(super) blocks: Vec<[Linear<B>; 2]>,
+    pub(super) out: Linear<B>,
 }
 
 impl<B: Backend> ResidualMlp<B> {
@@ -146,12 +146,12 @@ impl<B: Backend> ResidualMlp<B> {
 /// The actor-critic.
 #[derive(Module, Debug)]
 pub struct ActorCritic<B: Backend> {
-    state_gru: Gru<B>,
+    pub(super) state_gru: Gru<B>,
     /// The sensing GRU, of whatever [`SensingSpec`] (its name is its weights' key).
-    ray_gru: Gru<B>,
-    actor: ResidualMlp<B>,
+    pub(super) ray_gru: Gru<B>,
+    pub(super) actor: ResidualMlp<B>,
     critic: ResidualMlp<B>,
-    pe_frequencies: usize,
+    pub(super) pe_frequencies: usize,
     latent_dim: usize,
     #[module(skip)]
     sensing: SensingSpec,

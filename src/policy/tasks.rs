@@ -197,7 +197,6 @@ pub fn evaluate<B: burn::prelude::Backend>(
     progress: impl FnMut(&super::env::EpisodeSummary),
 ) -> Result<(EvalReport, Vec<super::env::EpisodeSummary>), super::env::EnvError> {
     let t0 = std::time::Instant::now();
-    let device = Default::default();
     let mut env = PolicyEnv::with_scene(
         parts.model,
         parts.body,
@@ -212,14 +211,21 @@ pub fn evaluate<B: burn::prelude::Backend>(
         env = env.with_sensing(&net.sensing());
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    // The policy acts through its f32 actor (burn's actions, bit for bit, without the cost
+    // per tensor operation).
+    let actor = match controller {
+        Controller::Policy { net, .. } => Some(super::Actor::of(*net)),
+        Controller::Sampling { .. } => None,
+    };
     let (summaries, steps) = run_episodes(
         &mut env,
         episodes,
         |e| match controller {
             Controller::Sampling { k } => sampling_step(e, *k, &mut rng),
-            Controller::Policy { net, mean_action } => {
+            Controller::Policy { mean_action, .. } => {
+                let actor = actor.as_ref().expect("made above for the policy");
                 let rng = (!mean_action).then_some(&mut rng);
-                let a = super::ppo::actions(*net, e.observations(), rng, &device);
+                let a = actor.actions(&e.observations(), rng);
                 e.step(&a)
             }
         },

@@ -26,16 +26,14 @@ use serde::Serialize;
 use crate::body::{joint, BodyModel, BodyParams};
 use crate::math::random::{normal_samples, uniform_open01};
 use crate::math::{Affine3, Vec3};
-use crate::motion::cvae::infer::{DecodeError, InferBackend};
+use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::rig::RigGeometry;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
-use crate::policy::net::ActorCritic;
-use crate::policy::ppo::action_distribution;
 use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
 use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker};
-use crate::policy::PosePrior;
+use crate::policy::{Actor, PosePrior};
 use crate::scene::{plan_path, MovingObstacle, Obstacle2, WalkableMap};
 use crate::sensing::Sensor;
 
@@ -147,7 +145,7 @@ pub struct CrowdParts<'m> {
     pub prior: &'m PosePrior,
     pub bank: &'m SeedBank,
     /// Needed when an agent is steered by the policy.
-    pub policy: Option<&'m ActorCritic<InferBackend>>,
+    pub policy: Option<&'m Actor>,
 }
 
 /// Why an agent stopped before the take ended.
@@ -473,7 +471,7 @@ impl<'m> Agent<'m> {
                     time_left.max(0.0),
                     &mut obs,
                 );
-                let (mean, std) = action_distribution(net, obs, &Default::default());
+                let (mean, std) = net.distribution(&obs);
                 let a = if mean_action {
                     mean.clone()
                 } else {

@@ -1,0 +1,299 @@
+//! The policy's actor for acting on the CPU in f32, without burn: the same layers as
+//! [`ActorCritic::actor_forward`] over plain arrays, and bit for bit its results.
+//!
+//! Acting asks for one agent's action at a time (`egogen synth` steps its people in turn, paper
+//! Alg. 1), where a tensor library's cost per operation — a tensor allocated, copied and freed
+//! for each of some fifty operations — outweighs the arithmetic. Each dense layer here is the
+//! very `gemm` call burn's Flex backend makes for it (the same sizes, strides and threading),
+//! and every element-wise step the same f32 operation in the same order (its sigmoid, tanh,
+//! LeakyReLU, clamp, sin and cos), so the actions equal burn's exactly (`tests/policy_training.rs`
+//! compares them); `cargo bench --bench synth` shows the two side by side. Training keeps burn.
+
+use burn::nn::Linear;
+use burn::prelude::*;
+use rand_chacha::ChaCha8Rng;
+
+use super::env::{ObsLayout, STATE_FRAME_DIM};
+use super::net::{ActorCritic, Gru, LEAKY_SLOPE, LOGVAR_RANGE};
+use crate::math::random::normal_samples;
+use crate::motion::primitive::SEED_FRAMES;
+use crate::sensing::SensingSpec;
+
+/// burn Flex's threshold (`m · n · k`) above which a product runs on all cores.
+const PARALLEL_OPS: usize = 192 * 192 * 192;
+
+/// A dense layer `y = x · weight + bias`, `weight` `[inputs × outputs]` row-major (burn's
+/// `Linear` layout).
+#[derive(Debug, Clone)]
+struct Dense {
+    inputs: usize,
+    outputs: usize,
+    weight: Vec<f32>,
+    bias: Vec<f32>,
+}
+
+impl Dense {
+    fn of<B: Backend>(l: &Linear<B>) -> Self {
+        let [inputs, outputs] = l.weight.dims();
+        let weight = l.weight.val().into_data().to_vec().expect("f32 weights");
+        let bias = match &l.bias {
+            Some(b) => b.val().into_data().to_vec().expect("f32 bias"),
+            None => vec![0.0; outputs],
+        };
+        Self {
+            inputs,
+            outputs,
+            weight,
+            bias,
+        }
+    }
+
+    /// `[m × outputs]` from `m` input rows `row_stride` apart in `x`.
+    fn forward(&self, m: usize, x: &[f32], row_stride: usize) -> Vec<f32> {
+        let (n, k) = (self.outputs, self.inputs);
+        assert!(
+            m == 0 || x.len() >= (m - 1) * row_stride + k,
+            "{m} input rows of {k}"
+        );
+        let mut y = vec![0.0f32; m * n];
+        if m == 0 {
+            return y;
+        }
+        let parallelism = if m * n * k >= PARALLEL_OPS {
+            gemm::Parallelism::Rayon(0)
+        } else {
+            gemm::Parallelism::None
+        };
+        // SAFETY: `y` holds `m × n` values written with row stride `n`; `x` holds `m` rows of
+        // `k` (checked above) with row stride `row_stride`; the weight is `k × n` row-major.
+        // `read_dst` is false, so `y` is only written.
+        unsafe {
+            gemm::gemm(
+                m,
+                n,
+                k,
+                y.as_mut_ptr(),
+                1,
+                n as isize,
+                false,
+                x.as_ptr(),
+                1,
+                row_stride as isize,
+                self.weight.as_ptr(),
+                1,
+                n as isize,
+                0.0,
+                1.0,
+                false,
+                false,
+                false,
+                parallelism,
+            );
+        }
+        for row in y.chunks_mut(n) {
+            for (v, b) in row.iter_mut().zip(&self.bias) {
+                *v += b;
+            }
+        }
+        y
+    }
+}
+
+/// A single-layer GRU (PyTorch's equations).
+#[derive(Debug, Clone)]
+struct GruF32 {
+    input: Dense,
+    hidden: Dense,
+}
+
+impl GruF32 {
+    fn of<B: Backend>(g: &Gru<B>) -> Self {
+        Self {
+            input: Dense::of(&g.input),
+            hidden: Dense::of(&g.hidden),
+        }
+    }
+
+    /// Last hidden state `[m × H]` after `frames` frames of `per_frame` values each, frame `t`
+    /// of row `i` at `x[i·row_stride + t·per_frame ..]`.
+    fn forward(
+        &self,
+        m: usize,
+        x: &[f32],
+        row_stride: usize,
+        frames: usize,
+        per_frame: usize,
+    ) -> Vec<f32> {
+        let w = self.hidden.inputs;
+        let mut h = vec![0.0f32; m * w];
+        for t in 0..frames {
+            let gx = self.input.forward(m, &x[t * per_frame..], row_stride);
+            let gh = self.hidden.forward(m, &h, w);
+            for i in 0..m {
+                let (gx, gh) = (
+                    &gx[i * 3 * w..(i + 1) * 3 * w],
+                    &gh[i * 3 * w..(i + 1) * 3 * w],
+                );
+                for (j, h) in h[i * w..(i + 1) * w].iter_mut().enumerate() {
+                    let r = sigmoid(gx[j] + gh[j]);
+                    let z = sigmoid(gx[w + j] + gh[w + j]);
+                    let n = (gx[2 * w + j] + r * gh[2 * w + j]).tanh();
+                    *h = n + z * (*h - n);
+                }
+            }
+        }
+        h
+    }
+}
+
+/// The actor of a policy network in plain f32 arrays.
+#[derive(Debug, Clone)]
+pub struct Actor {
+    state_gru: GruF32,
+    ray_gru: GruF32,
+    blocks: Vec<[Dense; 2]>,
+    out: Dense,
+    pe_frequencies: usize,
+    latent_dim: usize,
+    sensing: SensingSpec,
+}
+
+impl Actor {
+    /// The actor's weights, copied out of a network.
+    pub fn of<B: Backend>(net: &ActorCritic<B>) -> Self {
+        Self {
+            state_gru: GruF32::of(&net.state_gru),
+            ray_gru: GruF32::of(&net.ray_gru),
+            blocks: net
+                .actor
+                .blocks
+                .iter()
+                .map(|[a, b]| [Dense::of(a), Dense::of(b)])
+                .collect(),
+            out: Dense::of(&net.actor.out),
+            pe_frequencies: net.pe_frequencies,
+            latent_dim: net.latent_dim(),
+            sensing: net.sensing(),
+        }
+    }
+
+    /// Action size.
+    pub fn latent_dim(&self) -> usize {
+        self.latent_dim
+    }
+
+    /// What the policy observes of its surroundings.
+    pub fn sensing(&self) -> SensingSpec {
+        self.sensing
+    }
+
+    /// Where the parts of the policy's observations lie.
+    pub fn obs_layout(&self) -> ObsLayout {
+        ObsLayout {
+            sensing_per_frame: self.sensing.dim(),
+        }
+    }
+
+    /// `(mean, logvar)` `[B × L]` each for observations `[B × D]`, as
+    /// [`ActorCritic::actor_forward`] computes them.
+    ///
+    /// # Panics
+    /// When `obs.len()` is not a multiple of the observation size (a caller's bug).
+    pub fn forward(&self, obs: &[f32]) -> (Vec<f32>, Vec<f32>) {
+        let layout = self.obs_layout();
+        let d = layout.dim();
+        assert_eq!(obs.len() % d, 0, "observations of {d} values");
+        let m = obs.len() / d;
+        let (f, l) = (self.pe_frequencies, self.latent_dim);
+        let s = layout.sensing_per_frame;
+        let state = self
+            .state_gru
+            .forward(m, obs, d, SEED_FRAMES, STATE_FRAME_DIM);
+        let rays = self
+            .ray_gru
+            .forward(m, &obs[layout.sensing_offset()..], d, SEED_FRAMES, s);
+        let hs = self.state_gru.hidden.inputs;
+        let hr = self.ray_gru.hidden.inputs;
+        let width = hs + hr + 4 * f;
+        let freqs: Vec<f32> = (0..f)
+            .map(|k| (2f32).powi(k as i32) * std::f32::consts::PI)
+            .collect();
+        let mut h = Vec::with_capacity(m * width);
+        for i in 0..m {
+            h.extend_from_slice(&state[i * hs..(i + 1) * hs]);
+            h.extend_from_slice(&rays[i * hr..(i + 1) * hr]);
+            for x in [
+                obs[i * d + layout.dist_offset()],
+                obs[i * d + layout.dist_offset() + 1],
+            ] {
+                h.extend(freqs.iter().map(|q| (x * q).sin()));
+                h.extend(freqs.iter().map(|q| (x * q).cos()));
+            }
+        }
+        let slope = LEAKY_SLOPE as f32;
+        let leaky = |v: &mut Vec<f32>| {
+            for x in v.iter_mut() {
+                if *x < 0.0 {
+                    *x *= slope;
+                }
+            }
+        };
+        for [a, b] in &self.blocks {
+            let mut y = a.forward(m, &h, width);
+            leaky(&mut y);
+            let mut y = b.forward(m, &y, width);
+            leaky(&mut y);
+            for (h, y) in h.iter_mut().zip(&y) {
+                *h += y;
+            }
+        }
+        let a = self.out.forward(m, &h, width);
+        let mut mean = Vec::with_capacity(m * l);
+        let mut logvar = Vec::with_capacity(m * l);
+        for row in a.chunks(2 * l) {
+            mean.extend_from_slice(&row[..l]);
+            logvar.extend(
+                row[l..]
+                    .iter()
+                    .map(|v| v.clamp(LOGVAR_RANGE.0, LOGVAR_RANGE.1)),
+            );
+        }
+        (mean, logvar)
+    }
+
+    /// Actions `[B × L]` for observations `[B × D]`: `mean + exp(logvar / 2) · ε` with ε drawn
+    /// from `rng`, or the mean without one (as [`super::ppo::actions`]).
+    pub fn actions(&self, obs: &[f32], rng: Option<&mut ChaCha8Rng>) -> Vec<f32> {
+        let (mean, logvar) = self.forward(obs);
+        match rng {
+            Some(rng) => {
+                let eps = normal_samples(rng, mean.len());
+                mean.iter()
+                    .zip(&logvar)
+                    .zip(&eps)
+                    .map(|((m, lv), e)| m + (lv * 0.5).exp() * e)
+                    .collect()
+            }
+            None => mean,
+        }
+    }
+
+    /// The action distribution for one observation: `(mean, standard deviation)`, `[L]` each
+    /// (as [`super::ppo::action_distribution`]).
+    pub fn distribution(&self, obs: &[f32]) -> (Vec<f32>, Vec<f32>) {
+        let (mean, logvar) = self.forward(obs);
+        let std = logvar.iter().map(|lv| (lv * 0.5).exp()).collect();
+        (mean, std)
+    }
+}
+
+/// burn Flex's sigmoid.
+#[inline]
+fn sigmoid(x: f32) -> f32 {
+    if x >= 0.0 {
+        1.0 / (1.0 + (-x).exp())
+    } else {
+        let e = x.exp();
+        e / (1.0 + e)
+    }
+}
