@@ -4,9 +4,10 @@
 //! the moving obstacles at its clock, with the same rays, observation and reward as the
 //! training environment ([`crate::policy::walker`]). No multi-agent learning: every agent
 //! runs the single-agent controller. One guard beyond the paper: a policy primitive that ends
-//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), or with
-//! the pelvis off the walkable floor, is redrawn: up to `penetration_redraws` times from the
-//! same policy output, then as many times from the motion model's prior.
+//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), that puts
+//! a body marker inside another person's box or an obstacle in any of its frames, or that ends
+//! with the pelvis off the walkable floor, is redrawn: up to `penetration_redraws` times from
+//! the same policy output, then as many times from the motion model's prior.
 //!
 //! An agent walks its goals in order; with `wander` it draws a new goal on the walkable map
 //! when its list runs out, until the take ends. A goal counts as reached when the pelvis comes
@@ -94,11 +95,13 @@ pub struct CrowdSettings {
     /// Primitives an agent spends on one goal before it is missed.
     pub max_primitives_per_goal: usize,
     /// Policy steering: when the chosen primitive ends with the body's 2D box on more than 3
-    /// blocked cells (paper Eq. 7: walls, obstacles, the others' boxes) or with the pelvis off
-    /// the walkable floor, up to this many more actions are drawn from the same policy output,
-    /// then as many from the motion model's prior; the first that does neither is taken, else
-    /// one ending on the floor, else the one ending nearest to it, then the one on the fewest
-    /// blocked cells, then the one with the most room around its end.
+    /// blocked cells (paper Eq. 7: walls, obstacles, the others' boxes), puts a body marker
+    /// inside another person's box or an obstacle in any frame, or ends with the pelvis off the
+    /// walkable floor, up to this many more actions are drawn from the same policy output, then
+    /// as many from the motion model's prior; the first that does none of these is taken, else
+    /// one ending on the floor, else the one ending nearest to it, then the one with the fewest
+    /// frames inside the others' boxes, then the one on the fewest blocked cells, then the one
+    /// with the most room around its end.
     pub penetration_redraws: usize,
     /// Primitives per agent in the take (all agents step together).
     pub primitives: usize,
@@ -548,11 +551,12 @@ impl<'m> Agent<'m> {
                 Err(e) => return Err(e.into()),
             }
         }
-        // A policy primitive that walks into something (Eq. 7), or that ends with the pelvis off
-        // the walkable floor (a closed doorway, furniture): more actions from the same output.
-        // Of draws that all do, one that ends on the floor, else the one that ends nearest to it
-        // (the way back for a body already in a wall); then the fewest blocked cells, then the
-        // most room around the end.
+        // A policy primitive that walks into something (Eq. 7), that steps into another
+        // person's box, or that ends with the pelvis off the walkable floor (a closed doorway,
+        // furniture): more actions from the same output. Of draws that all do, one that ends on
+        // the floor, else the one that ends nearest to it (the way back for a body already in a
+        // wall); then the fewest frames in the others' boxes, the fewest blocked cells, the most
+        // room around the end.
         let end_xy = |p: &DecodedPrimitive| {
             let end = p.joints[p.joints.len() - 1][joint::PELVIS];
             DVec2::new(end.x, end.y)
@@ -560,7 +564,13 @@ impl<'m> Agent<'m> {
         let off_floor = |p: &DecodedPrimitive| !around.map.is_walkable_at(end_xy(p));
         let rank = |p: &DecodedPrimitive, j: &Judged| {
             let room = around.map.sdf_at(end_xy(p));
-            (off_floor(p), (-room).max(0.0), j.blocked_cells, -room)
+            (
+                off_floor(p),
+                (-room).max(0.0),
+                j.frames_in_obstacle,
+                j.blocked_cells,
+                -room,
+            )
         };
         let improves = |a: &(DecodedPrimitive, Judged, f64, f64),
                         b: &(DecodedPrimitive, Judged)| {
@@ -570,10 +580,9 @@ impl<'m> Agent<'m> {
             // The policy's own draws first; then as many from the motion model's prior, whose
             // walks go every way (the way back when the policy's all lead on into a wall).
             for k in 0..2 * settings.penetration_redraws {
-                if best
-                    .as_ref()
-                    .is_some_and(|b| !b.1.penetrated && !off_floor(&b.0))
-                {
+                if best.as_ref().is_some_and(|b| {
+                    !b.1.penetrated && !off_floor(&b.0) && b.1.frames_in_obstacle == 0
+                }) {
                     break;
                 }
                 let z = if k < settings.penetration_redraws {
