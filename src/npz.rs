@@ -33,7 +33,9 @@ pub fn array_in_memory<R: Read + Seek>(
             return Err(invalid(s))
         }
     };
-    let mut bytes = Vec::with_capacity(usize::try_from(entry.size()).unwrap_or(0));
+    // The size the archive declares, as a hint only: a damaged archive may declare anything.
+    let hint = entry.size().min(1 << 28);
+    let mut bytes = Vec::with_capacity(usize::try_from(hint).unwrap_or(0));
     entry.read_to_end(&mut bytes)?;
     NpyFile::new(Cursor::new(bytes)).map(Some)
 }
