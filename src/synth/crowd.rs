@@ -461,8 +461,8 @@ impl<'m> Agent<'m> {
         let mut policy_dist: Option<(Vec<f32>, Vec<f32>)> = None;
         let latents: Vec<Vec<f32>> = match self.plan.steering {
             Steering::Policy { mean_action } => {
-                let net = parts.policy.expect("checked when the agent was made");
-                let mut obs = vec![0f32; net.obs_layout().dim()];
+                let actor = parts.policy.expect("checked when the agent was made");
+                let mut obs = vec![0f32; actor.obs_layout().dim()];
                 let time_left =
                     1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
                 self.walker.observe_into(
@@ -474,7 +474,7 @@ impl<'m> Agent<'m> {
                     time_left.max(0.0),
                     &mut obs,
                 );
-                let (mean, std) = net.distribution(&obs);
+                let (mean, std) = actor.distribution(&obs);
                 let a = if mean_action {
                     mean.clone()
                 } else {
@@ -740,7 +740,7 @@ pub fn run_crowd(
     // The policy's own sensing (steering without a policy observes nothing).
     let sensor = parts
         .policy
-        .map_or_else(Sensor::default, |net| net.sensing().sensor());
+        .map_or_else(Sensor::default, |actor| actor.sensing().sensor());
     let fixed: Vec<MovingObstacle> = world
         .obstacles
         .iter()
