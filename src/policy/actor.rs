@@ -189,9 +189,7 @@ impl Actor {
 
     /// Where the parts of the policy's observations lie.
     pub fn obs_layout(&self) -> ObsLayout {
-        ObsLayout {
-            sensing_per_frame: self.sensing.dim(),
-        }
+        ObsLayout::of(&self.sensing)
     }
 
     /// `(mean, logvar)` `[B × L]` each for observations `[B × D]`, as

@@ -246,9 +246,7 @@ impl<B: Backend> ActorCritic<B> {
 
     /// Where the parts of the policy's observations lie.
     pub fn obs_layout(&self) -> ObsLayout {
-        ObsLayout {
-            sensing_per_frame: self.sensing.dim(),
-        }
+        ObsLayout::of(&self.sensing)
     }
 }
 

@@ -37,6 +37,13 @@ impl ObsLayout {
         sensing_per_frame: 32,
     };
 
+    /// The layout for a policy's sensing.
+    pub fn of(sensing: &crate::sensing::SensingSpec) -> Self {
+        Self {
+            sensing_per_frame: sensing.dim(),
+        }
+    }
+
     /// Observation length.
     pub const fn dim(&self) -> usize {
         SEED_FRAMES * (STATE_FRAME_DIM + self.sensing_per_frame) + 2

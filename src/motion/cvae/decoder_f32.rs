@@ -178,24 +178,19 @@ impl DecoderF32 {
         // A primitive decoded alone reads the weights in f16 (half the bytes; see
         // `half_matvec`), a batch in f32 through `gemm`.
         let half = self.half.as_ref().filter(|_| b == 1);
-        let decode = |(k, block): (usize, &mut [f32])| {
-            let start = k * BLOCK;
-            let n = block.len() / per;
-            self.decode_block(
-                &seeds[start * SEED_FRAMES * f..(start + n) * SEED_FRAMES * f],
-                &floors[start..start + n],
-                &latents[start * l..(start + n) * l],
-                block,
-                half,
-            );
-        };
-        // One block stays on the calling thread: handing it to the pool costs a thread
-        // switch and leaves the decoder's weights in another core's cache.
-        if b <= BLOCK {
-            decode((0, &mut out));
-        } else {
-            out.par_chunks_mut(BLOCK * per).enumerate().for_each(decode);
-        }
+        out.par_chunks_mut(BLOCK * per)
+            .enumerate()
+            .for_each(|(k, block)| {
+                let start = k * BLOCK;
+                let n = block.len() / per;
+                self.decode_block(
+                    &seeds[start * SEED_FRAMES * f..(start + n) * SEED_FRAMES * f],
+                    &floors[start..start + n],
+                    &latents[start * l..(start + n) * l],
+                    block,
+                    half,
+                );
+            });
         out
     }
 

@@ -273,46 +273,33 @@ impl MotionModel {
         let flat: Vec<f32> = latents.iter().flatten().copied().collect();
         let decoded = self.decode_features(&seed_features, &floors, &flat);
         let per = PRIMITIVE_FRAMES * FRAME_DIM;
-        let pose_one = |(i, ((world_from_canon, seed_frames), seed)): (
-            usize,
-            ((Affine3, Vec<BodyParams>), &PrimitiveSeed),
-        )| {
-            let values = &decoded[i * per..(i + 1) * per];
-            if values.iter().any(|v| !v.is_finite()) {
-                return Err(DecodeError::NonFinite { index: i });
-            }
-            let last_seed = seed_frames[SEED_FRAMES - 1].clone();
-            let mut frames = seed_frames;
-            for f in SEED_FRAMES..PRIMITIVE_FRAMES {
-                let mut p = frame_params(&values[f * FRAME_DIM..(f + 1) * FRAME_DIM], &body.betas);
-                // Joints the model does not drive (jaw, eyes, hands) keep the seed's pose.
-                p.pose[3 * BODY_JOINTS..].copy_from_slice(&last_seed.pose[3 * BODY_JOINTS..]);
-                p.expression = last_seed.expression.clone();
-                frames.push(p);
-            }
-            let primitive = Primitive {
-                world_from_canon,
-                frames,
-            };
-            posed(body, primitive, seed.floor_z)
-        };
-        // Posing (f64 skinning of markers, joints and CPF) runs on all cores; a single
-        // primitive on the calling thread (handing it to the pool costs a thread switch).
-        Ok(if seeds.len() == 1 {
-            canon_seeds
-                .into_iter()
-                .zip(seeds)
-                .enumerate()
-                .map(pose_one)
-                .collect()
-        } else {
-            canon_seeds
-                .into_par_iter()
-                .zip(seeds)
-                .enumerate()
-                .map(pose_one)
-                .collect()
-        })
+        // Posing (f64 skinning of markers, joints and CPF) runs on all cores.
+        Ok(canon_seeds
+            .into_par_iter()
+            .zip(seeds)
+            .enumerate()
+            .map(|(i, ((world_from_canon, seed_frames), seed))| {
+                let values = &decoded[i * per..(i + 1) * per];
+                if values.iter().any(|v| !v.is_finite()) {
+                    return Err(DecodeError::NonFinite { index: i });
+                }
+                let last_seed = seed_frames[SEED_FRAMES - 1].clone();
+                let mut frames = seed_frames;
+                for f in SEED_FRAMES..PRIMITIVE_FRAMES {
+                    let mut p =
+                        frame_params(&values[f * FRAME_DIM..(f + 1) * FRAME_DIM], &body.betas);
+                    // Joints the model does not drive (jaw, eyes, hands) keep the seed's pose.
+                    p.pose[3 * BODY_JOINTS..].copy_from_slice(&last_seed.pose[3 * BODY_JOINTS..]);
+                    p.expression = last_seed.expression.clone();
+                    frames.push(p);
+                }
+                let primitive = Primitive {
+                    world_from_canon,
+                    frames,
+                };
+                posed(body, primitive, seed.floor_z)
+            })
+            .collect())
     }
 }
 
