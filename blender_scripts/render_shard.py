@@ -37,7 +37,10 @@ def add_body(scene, body):
     mesh.update()
     for poly in mesh.polygons:
         poly.use_smooth = True
-    mesh.materials.append(skin_material(body["name"] + "_skin", body["skin"]))
+    if body.get("uvs_npy"):
+        add_uv_layer(mesh, np.load(body["uvs_npy"]), body["uvs_npy"])
+    mesh.materials.append(
+        skin_material(body["name"] + "_skin", body["skin"], body.get("skin_regions", [])))
     obj = bpy.data.objects.new(body["name"], mesh)
     obj.pass_index = body["pass_index"]
     scene.collection.objects.link(obj)
@@ -55,9 +58,23 @@ def add_body(scene, body):
     return obj
 
 
-def skin_material(name, skin):
-    """Principled BSDF skin: the tone's base colour mottled by noise on the rest-pose
-    (Generated) coordinates, which stay on the skin as the vertex cache deforms the mesh."""
+def add_uv_layer(mesh, uvs, path):
+    """The body's UV map, one (u, v) per triangle corner in face order (= Blender's loops)."""
+    if uvs.shape != (len(mesh.loops), 2):
+        sys.exit(f"{path}: expected float32 ({len(mesh.loops)}, 2) corner UVs for "
+                 f"{len(mesh.polygons)} triangles, found {uvs.dtype} {uvs.shape}")
+    layer = mesh.uv_layers.new(name="UVMap")
+    layer.data.foreach_set("uv", np.ascontiguousarray(uvs, dtype=np.float32).ravel())
+
+
+def socket(sockets, identifier):
+    return next(s for s in sockets if s.identifier == identifier)
+
+
+def skin_material(name, skin, regions):
+    """Principled BSDF skin: the tone's base colour, each region's colour mixed in through its
+    mask (in the body's UV layout), mottled by noise on the rest-pose (Generated) coordinates,
+    which stay on the skin as the vertex cache deforms the mesh."""
     mat = bpy.data.materials.new(name)
     mat.diffuse_color = (*skin["base_rgb"], 1.0)
     mat.use_nodes = True
@@ -83,6 +100,38 @@ def skin_material(name, skin):
     colour.inputs[0].default_value = skin["base_rgb"]
     links.new(centred.outputs["Value"], colour.inputs[1])
     links.new(colour.outputs["Vector"], bsdf.inputs["Base Color"])
+    if regions:
+        uv = nodes.new("ShaderNodeUVMap")
+        uv.uv_map = "UVMap"
+        base, rough = None, None  # the outputs carrying colour and roughness so far
+        for region in regions:
+            paint = region["paint"]
+            image = bpy.data.images.load(region["mask"], check_existing=True)
+            image.colorspace_settings.name = "Non-Color"
+            mask = nodes.new("ShaderNodeTexImage")
+            mask.image = image
+            mask.interpolation = "Linear"
+            links.new(uv.outputs["UV"], mask.inputs["Vector"])
+            mix = nodes.new("ShaderNodeMix")
+            mix.data_type = "RGBA"
+            links.new(mask.outputs["Color"], socket(mix.inputs, "Factor_Float"))
+            if base is None:
+                socket(mix.inputs, "A_Color").default_value = (*skin["base_rgb"], 1.0)
+            else:
+                links.new(base, socket(mix.inputs, "A_Color"))
+            socket(mix.inputs, "B_Color").default_value = (*paint["rgb"], 1.0)
+            base = socket(mix.outputs, "Result_Color")
+            mixr = nodes.new("ShaderNodeMix")
+            mixr.data_type = "FLOAT"
+            links.new(mask.outputs["Color"], socket(mixr.inputs, "Factor_Float"))
+            if rough is None:
+                socket(mixr.inputs, "A_Float").default_value = skin["roughness"]
+            else:
+                links.new(rough, socket(mixr.inputs, "A_Float"))
+            socket(mixr.inputs, "B_Float").default_value = paint["roughness"]
+            rough = socket(mixr.outputs, "Result_Float")
+        links.new(base, colour.inputs[0])
+        links.new(rough, bsdf.inputs["Roughness"])
     return mat
 
 
@@ -396,4 +445,5 @@ def main():
                 set_frame_step(cam, cam_spec, bodies, obstacles, spec, 1)
 
 
-main()
+if __name__ == "__main__":
+    main()

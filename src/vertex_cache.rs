@@ -132,10 +132,16 @@ pub fn write_rest_vertices_npy(path: &Path, cache: &PointCache) -> Result<(), Ca
     write_npy_rows(path, first.iter().copied())
 }
 
-/// Rows of three values as an `.npy` of shape N×3, written atomically.
-fn write_npy_rows<T: npyz::Serialize + npyz::AutoSerialize + Copy>(
+/// Writes per-corner texture coordinates as a float32 `.npy` of shape (F·3)×2 (atomically),
+/// corner for corner with [`write_faces_npy`]'s triangles.
+pub fn write_corner_uvs_npy(path: &Path, uvs: &[[f32; 2]]) -> Result<(), CacheError> {
+    write_npy_rows(path, uvs.iter().copied())
+}
+
+/// Rows of `C` values as an `.npy` of shape N×C, written atomically.
+fn write_npy_rows<T: npyz::Serialize + npyz::AutoSerialize + Copy, const C: usize>(
     path: &Path,
-    rows: impl ExactSizeIterator<Item = [T; 3]>,
+    rows: impl ExactSizeIterator<Item = [T; C]>,
 ) -> Result<(), CacheError> {
     let io = |source| CacheError::Io {
         path: path.into(),
@@ -145,7 +151,7 @@ fn write_npy_rows<T: npyz::Serialize + npyz::AutoSerialize + Copy>(
     {
         let mut w = npyz::WriteOptions::new()
             .default_dtype()
-            .shape(&[rows.len() as u64, 3])
+            .shape(&[rows.len() as u64, C as u64])
             .writer(&mut bytes)
             .begin_nd()
             .map_err(io)?;

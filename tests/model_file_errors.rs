@@ -141,3 +141,69 @@ fn not_a_model_file() {
     let msg = BodyModel::load(&missing).unwrap_err().to_string();
     assert!(msg.contains("nope.npz"), "{msg}");
 }
+
+/// The tiny model's triangle count (the rows `ft` must have).
+fn num_faces(a: &[(&'static str, Arr)]) -> u64 {
+    match &a.iter().find(|(k, _)| *k == "f").unwrap().1 {
+        Arr::U32(shape, _) => shape[0],
+        _ => panic!("`f` is u32"),
+    }
+}
+
+#[test]
+fn uvs_load_corner_for_corner_and_need_both_keys_and_valid_indices() {
+    let uv_arrays = |a: &mut Vec<(&'static str, Arr)>, bad_index: Option<u32>| {
+        let nf = num_faces(a);
+        let mut ft: Vec<u32> = (0..3 * nf as u32).map(|i| i % 4).collect();
+        if let Some(bad) = bad_index {
+            ft[5] = bad;
+        }
+        a.push((
+            "vt",
+            Arr::F64(vec![4, 2], vec![0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0]),
+        ));
+        a.push(("ft", Arr::U32(vec![nf, 3], ft)));
+    };
+    let (_, r, _dir) = load_modified(|a| uv_arrays(a, None));
+    let m = r.unwrap();
+    let uvs = m.uvs.as_ref().expect("vt/ft read");
+    assert_eq!(uvs.faces.len(), m.faces.len());
+    assert_eq!(
+        uvs.per_corner()[..5],
+        [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.0, 0.0]]
+    );
+    let (_, r, _dir) = load_modified(|_| {});
+    assert!(r.unwrap().uvs.is_none(), "UVs are optional");
+
+    expect_error(
+        |a| {
+            uv_arrays(a, None);
+            a.retain(|(k, _)| *k != "ft");
+        },
+        &["`ft`", "is missing while `vt` is there"],
+    );
+    expect_error(
+        |a| {
+            uv_arrays(a, None);
+            a.retain(|(k, _)| *k != "vt");
+        },
+        &["`vt`", "is missing while `ft` is there"],
+    );
+    expect_error(
+        |a| uv_arrays(a, Some(4)),
+        &["`ft`", "UV index 4 at flat index 5", "0..4"],
+    );
+    let e = expect_error(
+        |a| {
+            uv_arrays(a, None);
+            let nf = num_faces(a);
+            a.retain(|(k, _)| *k != "ft");
+            a.push((
+                "ft",
+                Arr::U32(vec![nf + 1, 3], vec![0; 3 * (nf as usize + 1)]),
+            ));
+        },
+        &["`ft`", "expected ["],
+    );
+    assert!(matches!(e, ModelFileError::Shape { .. }));
+}

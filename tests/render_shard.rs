@@ -16,12 +16,13 @@ use egogen::motion::MotionSequence;
 use egogen::render::frame_file::{assemble_frame, validate_frame};
 use egogen::render::lens_polynomial::native_error;
 use egogen::render::passes::{Pass, Passes};
+use egogen::render::protocol::ShardSkinRegion;
 use egogen::render::render_camera::{FisheyeRendering, RenderCamera};
 use egogen::render::shard::render_shard;
 use egogen::render::shard_plan::{
     blender_fps, raw_frame_paths, shard_camera, RawRenders, AGENT_ID_BASE,
 };
-use egogen::render::skin::SkinPlan;
+use egogen::render::skin::{RegionPaint, SkinPlan};
 use egogen::render::{
     BlenderRuntime, BodyProbe, PointLight, RenderDevice, ShardBody, ShardLighting, ShardRgb,
     ShardSpec,
@@ -29,7 +30,9 @@ use egogen::render::{
 use egogen::rig::Rig;
 use egogen::scene::{load_scene, sample_start_goals, walkable_map, WalkableSettings};
 use egogen::synth::body_cache;
-use egogen::vertex_cache::{write_faces_npy, write_rest_vertices_npy, PointCache};
+use egogen::vertex_cache::{
+    write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy, PointCache,
+};
 
 const FRAMES: usize = 6;
 const RATE_HZ: f64 = 40.0;
@@ -38,6 +41,8 @@ const CAMERA_HEIGHT_M: f64 = 2.3;
 const CAMERA_STEP_M: f64 = 0.02;
 const RENDERED: [u32; 2] = [2, 3];
 const PROBE_FRAMES: [f64; 6] = [0.0, 0.125, 0.25, 1.0, 2.5, 5.0];
+/// The body's one skin region: green wherever its UV has u < 1/2 (a mask written here).
+const GREEN_REGION: [f64; 3] = [0.05, 0.6, 0.05];
 
 struct Rendered {
     spec: ShardSpec,
@@ -111,6 +116,10 @@ fn render_scene() -> Rendered {
     cache.write(&pc2).unwrap();
     write_faces_npy(&faces, &model.faces).unwrap();
     write_rest_vertices_npy(&vertices, &cache).unwrap();
+    let uvs = dir.path().join("uvs.npy");
+    write_corner_uvs_npy(&uvs, &model.uvs.as_ref().unwrap().per_corner()).unwrap();
+    let mask = dir.path().join("u_below_half.png");
+    write_left_half_mask(&mask, 64);
 
     let pinhole = Camera::Pinhole(
         Pinhole::new(
@@ -181,6 +190,16 @@ fn render_scene() -> Rendered {
             samples_per_frame: SAMPLES_PER_FRAME,
             motion_steps: 2,
             skin: SkinPlan::default().draw(0),
+            uvs_npy: Some(uvs),
+            skin_regions: vec![ShardSkinRegion {
+                paint: RegionPaint {
+                    region: "u_below_half".into(),
+                    mask: "u_below_half.png".into(),
+                    rgb: GREEN_REGION,
+                    roughness: 0.45,
+                },
+                mask,
+            }],
         }],
         lighting: ShardLighting {
             world_rgb: [0.3, 0.3, 0.3],
@@ -240,6 +259,19 @@ fn render_scene() -> Rendered {
         cameras,
         poses,
     }
+}
+
+/// A grey `size`² PNG, white where u < 1/2 (the left half), black elsewhere.
+fn write_left_half_mask(path: &std::path::Path, size: u32) {
+    let file = std::io::BufWriter::new(std::fs::File::create(path).unwrap());
+    let mut encoder = png::Encoder::new(file, size, size);
+    encoder.set_color(png::ColorType::Grayscale);
+    encoder.set_depth(png::BitDepth::Eight);
+    let pixels: Vec<u8> = (0..size * size)
+        .map(|i| if i % size < size / 2 { 255 } else { 0 })
+        .collect();
+    let mut writer = encoder.write_header().unwrap();
+    writer.write_image_data(&pixels).unwrap();
 }
 
 fn rendered() -> &'static Rendered {
@@ -408,6 +440,79 @@ fn depth_normals_and_segmentation_match_the_geometry() {
         "floor {floor_px}, body {body_px}"
     );
     assert_eq!(body_near, body_px, "body pixels off the posed body");
+}
+
+/// The skin region reaches the pixels through the body's UVs: where the vertices within 8 cm have
+/// UVs all with u < 0.45 the body is the region's green, where all have u > 0.55 it is
+/// skin (red above green, as every Monk tone).
+#[test]
+fn skin_regions_follow_the_body_uvs() {
+    let r = rendered();
+    let f = 2u32;
+    let exr = frame(r, 0, f);
+    let ids = plane(&exr, "segmentation.id");
+    let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
+    let [red, green] = ["R", "G"].map(|c| plane(&exr, &format!("rgb.{c}")));
+    let uvs = r.model.uvs.as_ref().unwrap();
+    // Per vertex: Some(true) when every corner's u < 0.45, Some(false) when every one > 0.55.
+    let mut side: Vec<Option<Option<bool>>> = vec![None; r.model.num_vertices()];
+    for (tri, uv_tri) in r.model.faces.iter().zip(&uvs.faces) {
+        for c in 0..3 {
+            let u = uvs.coords[uv_tri[c] as usize][0];
+            let here = if u < 0.45 {
+                Some(true)
+            } else if u > 0.55 {
+                Some(false)
+            } else {
+                None
+            };
+            let s = &mut side[tri[c] as usize];
+            *s = Some(match *s {
+                None => here,
+                Some(prev) if prev == here => here,
+                Some(_) => None,
+            });
+        }
+    }
+    let shaped = r.model.shape(&r.motion.betas, &[]).unwrap();
+    let body = shaped
+        .pose(&r.motion.poses[f as usize], r.motion.trans[f as usize])
+        .unwrap();
+    // [region side: (agree, total); skin side: (agree, total)]
+    let mut counts = [(0usize, 0usize); 2];
+    for i in 0..ids.len() {
+        if ids[i] as u32 != AGENT_ID_BASE {
+            continue;
+        }
+        let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
+        // Every vertex within 8 cm on one side: the pixel's footprint (4.8 cm at the body,
+        // widened by the pixel filter and the shutter's motion) stays on that side too.
+        let sides: Vec<Option<bool>> = body
+            .vertices
+            .iter()
+            .zip(&side)
+            .filter(|(v, _)| v.distance(p) < 0.08)
+            .map(|(_, s)| s.flatten())
+            .collect();
+        let Some(in_region) = sides.first().copied().flatten() else {
+            continue;
+        };
+        if sides.iter().any(|s| *s != Some(in_region)) {
+            continue;
+        }
+        let looks_green = green[i] > red[i];
+        let c = &mut counts[usize::from(!in_region)];
+        c.1 += 1;
+        c.0 += usize::from(looks_green == in_region);
+    }
+    eprintln!(
+        "region pixels (agree, total) {:?}, skin pixels {:?}",
+        counts[0], counts[1]
+    );
+    for (agree, total) in counts {
+        assert!(total >= 10, "too few pixels to tell: {counts:?}");
+        assert!(agree * 10 >= total * 9, "{counts:?}");
+    }
 }
 
 /// Over the static scene's pixels of frame `f` (the body moves on its own): the worst error of

@@ -745,6 +745,15 @@ workers = 1
     let tone = skin["monk_skin_tone"].as_u64().unwrap();
     assert!((1..=10).contains(&tone), "{skin}");
     assert_eq!(doc_a["skins"][0]["name"], "agent_0");
+    // The shipped model's masks lie beside it: every region is tinted, in its colour on this skin.
+    let drawn: egogen::render::skin::Skin = serde_json::from_value(skin.clone()).unwrap();
+    let regions: Vec<egogen::render::skin::RegionPaint> =
+        serde_json::from_value(doc_a["skins"][0]["regions"].clone()).unwrap();
+    let expected: Vec<_> = egogen::render::skin::SKIN_REGIONS
+        .iter()
+        .map(|r| r.paint(&drawn))
+        .collect();
+    assert_eq!(regions, expected);
     // Another seed: other lighting, another headset offset, another skin tone.
     assert_ne!(doc_a["lighting"], doc_c["lighting"]);
     assert_ne!(doc_a["headset_wear"], doc_c["headset_wear"]);

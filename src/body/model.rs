@@ -38,8 +38,31 @@ pub struct BodyModel {
     pub(crate) j_regressor: Vec<SparseRow>,
     /// Skin weights, one sparse row of joint weights per vertex.
     pub(crate) skin_weights: Vec<SparseRow>,
+    /// Texture coordinates, when the file has them (`vt`, `ft`: our model carries
+    /// MakeHuman's default UV layout, the official SMPL-X files their own).
+    pub uvs: Option<BodyUvs>,
     /// The motion model's marker vertices, chosen on first use ([`BodyModel::marker_ids`]).
     marker_ids: std::sync::OnceLock<Vec<u32>>,
+}
+
+/// A body model's UV map: coordinates and, per triangle of [`BodyModel::faces`], the
+/// coordinates of its three corners (UV seams give one vertex several coordinates).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyUvs {
+    /// `vt`: (u, v) in [0, 1], v up (OBJ's convention, as Blender's).
+    pub coords: Vec<[f32; 2]>,
+    /// `ft`: per triangle, indices into `coords`, corner for corner with `faces`.
+    pub faces: Vec<[u32; 3]>,
+}
+
+impl BodyUvs {
+    /// Each triangle corner's (u, v), in face order: what a renderer's per-corner UV layer holds.
+    pub fn per_corner(&self) -> Vec<[f32; 2]> {
+        self.faces
+            .iter()
+            .flat_map(|t| t.map(|i| self.coords[i as usize]))
+            .collect()
+    }
 }
 
 impl BodyModel {
@@ -58,6 +81,7 @@ impl BodyModel {
         let j_regressor = ar.read("J_regressor", &[Some(NUM_JOINTS as u64), Some(nv)])?;
         let weights = ar.read("weights", &[Some(nv), Some(NUM_JOINTS as u64)])?;
         let kintree = ar.read("kintree_table", &[Some(2), Some(NUM_JOINTS as u64)])?;
+        let uvs = read_uvs(&mut ar, f.shape[0])?;
 
         let faces = f
             .data
@@ -120,6 +144,7 @@ impl BodyModel {
             posedirs,
             j_regressor,
             skin_weights,
+            uvs,
             marker_ids: Default::default(),
         })
     }
@@ -150,6 +175,49 @@ impl BodyModel {
     pub fn has_pose_correctives(&self) -> bool {
         self.posedirs.is_some()
     }
+}
+
+/// `vt` and `ft` together or neither; `ft` one row per face, every index inside `vt`.
+fn read_uvs<R: std::io::Read + std::io::Seek>(
+    ar: &mut ModelArchive<R>,
+    num_faces: u64,
+) -> Result<Option<BodyUvs>, ModelFileError> {
+    let vt = ar.read_optional("vt", &[None, Some(2)])?;
+    let ft = ar.read_optional("ft", &[Some(num_faces), Some(3)])?;
+    let (vt, ft) = match (vt, ft) {
+        (None, None) => return Ok(None),
+        (Some(vt), Some(ft)) => (vt, ft),
+        (Some(_), None) => {
+            return Err(ar.invalid("ft", "is missing while `vt` is there (UVs need both)"))
+        }
+        (None, Some(_)) => {
+            return Err(ar.invalid("vt", "is missing while `ft` is there (UVs need both)"))
+        }
+    };
+    let n = vt.shape[0];
+    if let Some((i, bad)) = ft
+        .data
+        .iter()
+        .enumerate()
+        .find(|(_, &x)| x < 0.0 || x >= n as f64 || x.fract() != 0.0)
+    {
+        return Err(ar.invalid(
+            "ft",
+            format!("UV index {bad} at flat index {i} is not an index into `vt` (0..{n})"),
+        ));
+    }
+    Ok(Some(BodyUvs {
+        coords: vt
+            .data
+            .chunks_exact(2)
+            .map(|c| [c[0] as f32, c[1] as f32])
+            .collect(),
+        faces: ft
+            .data
+            .chunks_exact(3)
+            .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+            .collect(),
+    }))
 }
 
 fn sparse_rows(dense: &[Real], cols: usize) -> Vec<SparseRow> {

@@ -159,6 +159,19 @@ impl<R: Read + Seek> ModelArchive<R> {
         Ok(Array { shape, data })
     }
 
+    /// [`Self::read`] for a key the format allows to be absent: `None` when it is.
+    pub fn read_optional(
+        &mut self,
+        key: &str,
+        expected: &[Option<u64>],
+    ) -> Result<Option<Array>, ModelFileError> {
+        match self.read(key, expected) {
+            Ok(array) => Ok(Some(array)),
+            Err(ModelFileError::MissingKey { .. }) => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+
     pub fn invalid(&self, key: &str, message: impl Into<String>) -> ModelFileError {
         ModelFileError::Invalid {
             path: self.path.clone(),

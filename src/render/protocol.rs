@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-pub use super::skin::Skin;
+pub use super::skin::{RegionPaint, Skin};
 
 /// How Blender's camera images: either the rig camera itself (a pinhole) or the wider ideal
 /// camera that egogen remaps to a distorted model afterwards.
@@ -92,6 +92,21 @@ pub struct ShardBody {
     pub motion_steps: u32,
     /// Its skin material ([`super::skin`]).
     pub skin: Skin,
+    /// Texture coordinates per triangle corner (float32 (F·3)×2, corner for corner with
+    /// `faces_npy`), when the body model has UVs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uvs_npy: Option<PathBuf>,
+    /// Skin regions painted through masks in that UV layout ([`super::skin::SKIN_REGIONS`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub skin_regions: Vec<ShardSkinRegion>,
+}
+
+/// A skin region: its colour and the grey mask (in the body's UV layout) that places it.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardSkinRegion {
+    pub paint: RegionPaint,
+    pub mask: PathBuf,
 }
 
 /// Colour render settings.

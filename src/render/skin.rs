@@ -3,8 +3,9 @@
 //! drawn uniformly from the tones the config allows; the material is procedural — a Principled
 //! BSDF with that base colour, faint mottling from a noise texture on the mesh's rest-pose
 //! coordinates (so it stays on the skin as the body moves), some subsurface scattering and a
-//! skin-like roughness. The body model carries no UVs, so there are no texture maps or region
-//! masks (lips, nails); bodies are clothing-free. Every choice is in the shard spec and the
+//! skin-like roughness. Where the body model carries MakeHuman's UV layout and its region masks
+//! lie beside it (`textures/`), lips, eyelids, ears, areolae and nails are tinted through the
+//! masks ([`SKIN_REGIONS`]); bodies are clothing-free. Every choice is in the shard spec and the
 //! annotations.
 
 use rand_chacha::ChaCha8Rng;
@@ -51,6 +52,92 @@ pub struct Skin {
     pub roughness: f64,
     /// Principled BSDF subsurface weight (radius: skin's red-scattering default).
     pub subsurface_weight: f64,
+}
+
+/// A region of the skin that MakeHuman paints with a grey mask in its UV layout (CC0, from
+/// MPFB2), and how egogen colours it: `(1 − mix)·(base ∘ tint) + mix·toward` in linear RGB,
+/// with its own roughness. The masks' soft edges blend the region into the skin around it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SkinRegion {
+    /// The region's name (as recorded in the annotations).
+    pub name: &'static str,
+    /// Its mask's file name in the body model's `textures/` directory.
+    pub mask_file: &'static str,
+    /// Per-channel factor on the skin's base colour.
+    pub tint: [f64; 3],
+    /// How far the tinted colour moves toward `toward` (0 keeps the tint only).
+    pub mix: f64,
+    /// A colour of its own (linear RGB), for regions paler than any skin (nails).
+    pub toward: [f64; 3],
+    pub roughness: f64,
+}
+
+/// The regions egogen tints: lips redder and darker, eyelids and ears a little flushed, areolae
+/// darker, nails paler, pinker and glossier than the skin they sit on.
+pub const SKIN_REGIONS: [SkinRegion; 6] = [
+    SkinRegion::tinted("lips", "mpfb_lips.jpg", [0.80, 0.50, 0.50], 0.35),
+    SkinRegion::tinted("eyelids", "mpfb_eyelids.jpg", [0.90, 0.78, 0.76], 0.45),
+    SkinRegion::tinted("ears", "mpfb_ears.jpg", [1.0, 0.86, 0.84], 0.45),
+    SkinRegion::tinted("areolae", "mpfb_aureolae.jpg", [0.62, 0.46, 0.42], 0.45),
+    SkinRegion::nail("fingernails", "mpfb_fingernails.jpg"),
+    SkinRegion::nail("toenails", "mpfb_toenails.jpg"),
+];
+
+/// One region as painted on one body: what Blender receives (with its mask) and the
+/// annotations record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegionPaint {
+    pub region: String,
+    /// The mask's file name (in the body model's `textures/`).
+    pub mask: String,
+    /// Linear RGB inside the mask.
+    pub rgb: [f64; 3],
+    pub roughness: f64,
+}
+
+impl SkinRegion {
+    /// A region that keeps the skin's colour, tinted.
+    const fn tinted(
+        name: &'static str,
+        mask_file: &'static str,
+        tint: [f64; 3],
+        roughness: f64,
+    ) -> Self {
+        Self {
+            name,
+            mask_file,
+            tint,
+            mix: 0.0,
+            toward: [0.0; 3],
+            roughness,
+        }
+    }
+
+    /// A nail: 45 % of the way from the skin to a pale pink, glossy.
+    const fn nail(name: &'static str, mask_file: &'static str) -> Self {
+        Self {
+            name,
+            mask_file,
+            tint: [1.0; 3],
+            mix: 0.45,
+            toward: [0.78, 0.60, 0.55],
+            roughness: 0.15,
+        }
+    }
+
+    /// This region's colour on a skin.
+    pub fn paint(&self, skin: &Skin) -> RegionPaint {
+        let rgb = std::array::from_fn(|c| {
+            (1.0 - self.mix) * skin.base_rgb[c] * self.tint[c] + self.mix * self.toward[c]
+        });
+        RegionPaint {
+            region: self.name.to_owned(),
+            mask: self.mask_file.to_owned(),
+            rgb,
+            roughness: self.roughness,
+        }
+    }
 }
 
 /// How agents' skins are drawn.
@@ -115,5 +202,42 @@ mod tests {
             seed: 1,
         };
         assert!((0..50).all(|i| dark.draw(i).monk_skin_tone >= 9));
+    }
+
+    #[test]
+    fn regions_keep_their_skin_s_tone_order_and_nails_stay_pale() {
+        let skins: Vec<Skin> = (1..=10)
+            .map(|t| {
+                SkinPlan {
+                    tones: vec![t],
+                    seed: 0,
+                }
+                .draw(0)
+            })
+            .collect();
+        let lum = |c: [f64; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+        for region in SKIN_REGIONS {
+            let paints: Vec<RegionPaint> = skins.iter().map(|s| region.paint(s)).collect();
+            for (skin, paint) in skins.iter().zip(&paints) {
+                assert!(
+                    paint.rgb.iter().all(|c| (0.0..=1.0).contains(c)),
+                    "{paint:?}"
+                );
+                if region.mix == 0.0 {
+                    // A tint never lightens: lips and areolae are darker than the skin.
+                    assert!(lum(paint.rgb) <= lum(skin.base_rgb) + 1e-12, "{paint:?}");
+                }
+            }
+            // Lighter skin, lighter region.
+            assert!(paints
+                .windows(2)
+                .all(|w| lum(w[1].rgb) <= lum(w[0].rgb) + 0.03));
+        }
+        let nails = SKIN_REGIONS
+            .iter()
+            .find(|r| r.name == "fingernails")
+            .unwrap();
+        let darkest = &skins[9];
+        assert!(lum(nails.paint(darkest).rgb) > 2.0 * lum(darkest.base_rgb));
     }
 }

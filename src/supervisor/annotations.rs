@@ -78,6 +78,10 @@ pub struct FrameAnnotation {
 pub struct AgentSkin {
     pub name: String,
     pub skin: crate::render::skin::Skin,
+    /// The regions painted through the body model's masks (empty: none; absent in files
+    /// written before regions).
+    #[serde(default)]
+    pub regions: Vec<crate::render::skin::RegionPaint>,
 }
 
 /// Where a joint is in the image.

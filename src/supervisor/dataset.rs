@@ -381,6 +381,7 @@ pub fn write_annotations(
                 .map(|b| AgentSkin {
                     name: b.name.clone(),
                     skin: b.skin,
+                    regions: b.skin_regions.iter().map(|r| r.paint.clone()).collect(),
                 })
                 .collect(),
             frame_rate_hz: agents[0].motion.frame_rate_hz,

@@ -21,9 +21,12 @@ use crate::motion::MotionSequence;
 use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::passes::Pass;
-use crate::render::protocol::{ObstacleKey, ShardCeiling, ShardObstacle, CEILING_OBJECT};
+use crate::render::protocol::{
+    ObstacleKey, ShardCeiling, ShardObstacle, ShardSkinRegion, CEILING_OBJECT,
+};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
+use crate::render::skin::{SkinRegion, SKIN_REGIONS};
 use crate::render::{BlenderRuntime, ShardBody, ShardRgb, ShardSpec};
 use crate::scene::ceiling::ceiling_to_add;
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
@@ -32,7 +35,7 @@ use crate::synth::crowd::{CrowdTake, CrowdWorld};
 use crate::synth::crowd_dir::write_crowd_dir;
 use crate::synth::placement::place_motion;
 use crate::synth::{body_cache, pose_meshes, track_body, write_sequence_dir};
-use crate::vertex_cache::{write_faces_npy, write_rest_vertices_npy};
+use crate::vertex_cache::{write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy};
 
 /// Command-line choices that are not in the config, and the effective config.
 #[derive(Debug, Clone, Default)]
@@ -331,6 +334,7 @@ fn write_body_inputs(
     render: &RenderPlan,
 ) -> Result<(Vec<ShardBody>, Vec<PathBuf>)> {
     std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
+    let masks = skin_region_masks(model)?;
     let mut bodies = Vec::with_capacity(agents.len());
     let mut scratch = Vec::new();
     for (k, a) in agents.iter().enumerate() {
@@ -342,6 +346,23 @@ fn write_body_inputs(
         write_faces_npy(&faces, &model.faces)?;
         write_rest_vertices_npy(&vertices, &cache)?;
         drop(cache);
+        let skin = render.skin.draw(k);
+        let skin_regions: Vec<ShardSkinRegion> = masks
+            .iter()
+            .map(|(region, mask)| ShardSkinRegion {
+                paint: region.paint(&skin),
+                mask: mask.clone(),
+            })
+            .collect();
+        let uvs_npy = match (&model.uvs, skin_regions.is_empty()) {
+            (Some(uvs), false) => {
+                let path = work.join(format!("agent_{k}_uvs.npy"));
+                write_corner_uvs_npy(&path, &uvs.per_corner())?;
+                scratch.push(path.clone());
+                Some(std::fs::canonicalize(&path)?)
+            }
+            _ => None,
+        };
         bodies.push(ShardBody {
             name: a.name.clone(),
             pass_index: a.id,
@@ -351,11 +372,49 @@ fn write_body_inputs(
             cache_frame_start: 0.0,
             samples_per_frame: render.cache_samples_per_frame,
             motion_steps: 2,
-            skin: render.skin.draw(k),
+            skin,
+            uvs_npy,
+            skin_regions,
         });
         scratch.extend([pc2, faces, vertices]);
     }
     Ok((bodies, scratch))
+}
+
+/// The skin regions' masks for `model`: in `textures/` beside the model file, painted in the
+/// UV layout the model carries (ours: MakeHuman's). None when the model has no UVs or no masks
+/// lie beside it (the official SMPL-X files: another layout); all of them, or an error naming
+/// the first one missing.
+fn skin_region_masks(model: &BodyModel) -> Result<Vec<(SkinRegion, PathBuf)>> {
+    let dir = match (&model.uvs, model.source.parent()) {
+        (Some(_), Some(parent)) => parent.join("textures"),
+        _ => return Ok(Vec::new()),
+    };
+    let masks: Vec<(SkinRegion, PathBuf)> = SKIN_REGIONS
+        .iter()
+        .map(|r| (*r, dir.join(r.mask_file)))
+        .collect();
+    let present = masks.iter().filter(|(_, p)| p.is_file()).count();
+    if present == 0 {
+        return Ok(Vec::new());
+    }
+    if let Some((region, path)) = masks.iter().find(|(_, p)| !p.is_file()) {
+        bail!(
+            "{}: the skin region mask for `{}` is missing ({present} of {} masks are there); \
+             masks beside a body model are used all together",
+            path.display(),
+            region.name,
+            masks.len()
+        );
+    }
+    masks
+        .into_iter()
+        .map(|(r, p)| {
+            let p =
+                std::fs::canonicalize(&p).with_context(|| format!("resolving {}", p.display()))?;
+            Ok((r, p))
+        })
+        .collect()
 }
 
 /// The rig's cameras on every wearer (each camera set named after its wearer when there are
@@ -654,4 +713,40 @@ fn scene_bounds(scene: &crate::scene::SceneMesh) -> (crate::math::Vec3, crate::m
         ),
         |(lo, hi), v| (lo.min(*v), hi.max(*v)),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn skin_masks_are_used_all_together_beside_a_model_with_uvs() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let shipped = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+        let masks = skin_region_masks(&shipped).unwrap();
+        assert_eq!(masks.len(), SKIN_REGIONS.len());
+        assert!(masks.iter().all(|(_, p)| p.is_absolute() && p.is_file()));
+
+        // The same model in a directory without masks: no regions.
+        let dir = tempfile::tempdir().unwrap();
+        let mut elsewhere = shipped.clone();
+        elsewhere.source = dir.path().join("SMPLX_NEUTRAL.npz");
+        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
+        // Some of them: an error naming the first one missing.
+        let textures = dir.path().join("textures");
+        std::fs::create_dir(&textures).unwrap();
+        std::fs::copy(
+            root.join("assets/body/textures/mpfb_lips.jpg"),
+            textures.join("mpfb_lips.jpg"),
+        )
+        .unwrap();
+        let msg = format!("{:#}", skin_region_masks(&elsewhere).unwrap_err());
+        assert!(
+            msg.contains("mpfb_eyelids.jpg") && msg.contains("`eyelids`") && msg.contains("1 of 6"),
+            "{msg}"
+        );
+        // A model without UVs never looks for them.
+        elsewhere.uvs = None;
+        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
+    }
 }
