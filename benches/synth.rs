@@ -80,7 +80,7 @@ fn bench(c: &mut Criterion) {
     };
     let mut g = c.benchmark_group("synth_crowd");
     g.sample_size(10);
-    let steer = Steering::Policy { mean_action: false };
+    let steer = Steering::POLICY;
     let cases = [
         ("policy", 1usize, steer),
         ("policy", 4, steer),

@@ -589,3 +589,119 @@ fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
     }
     assert!(seen_nearer > 0, "the other person was never in view");
 }
+
+#[test]
+fn floor_plan_episodes_see_walls_time_out_after_13_primitives_and_restore_from_snapshots() {
+    use egogen::policy::room_scene::RoomSettings;
+    env_parts!(body, ctx, model, bank, prior);
+    let rooms = EnvSettings {
+        rooms: RoomSettings {
+            share: 1.0,
+            ..RoomSettings::default()
+        },
+        ..EnvSettings::default()
+    };
+    let b = 4;
+    let mut env = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms, b, 9).unwrap();
+    // Every episode walks its own plan, ringed by walls: every ray of the first scans ends
+    // within the dwelling (at most 10 m across, so below 7 m for some ray).
+    for (i, o) in env.observations().chunks(OBS_DIM).enumerate() {
+        let rays = &o[OBS_RAYS_OFFSET..OBS_RAYS_OFFSET + RAYS];
+        assert!(rays.iter().all(|r| (-1.0..=1.0).contains(r)));
+        assert!(rays.iter().any(|&r| r < 0.99), "episode {i} sees no wall");
+    }
+    let maps: Vec<_> = (0..b).map(|i| env.course_view(i).map).collect();
+    assert!(maps
+        .windows(2)
+        .any(|w| w[0].walkable != w[1].walkable || w[0].nx != w[1].nx));
+    let l = env.latent_dim();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut ended = Vec::new();
+    for step in 0..14 {
+        if step == 5 {
+            let snap = env.snapshot();
+            let mut twin = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms, b, 9).unwrap();
+            twin.restore(&snap).unwrap();
+            assert_eq!(twin.observations(), env.observations());
+            let z = normal_samples(&mut ChaCha8Rng::seed_from_u64(2), b * l);
+            let rewards = |c: Vec<egogen::policy::env::Candidate>| {
+                c.iter().map(|c| c.reward).collect::<Vec<_>>()
+            };
+            assert_eq!(
+                rewards(env.propose(&z, 1).unwrap()),
+                rewards(twin.propose(&z, 1).unwrap())
+            );
+        }
+        // Random latents: each episode ends by step 13 at the latest.
+        let z = normal_samples(&mut rng, b * l);
+        ended.extend(env.step(&z).unwrap().finished);
+    }
+    assert!(!ended.is_empty());
+    for s in &ended {
+        if s.ending == Ending::Timeout {
+            assert_eq!(s.primitives, 13, "{s:?}");
+        }
+    }
+}
+
+/// Width and height of a PNG file.
+fn png_size(path: &std::path::Path) -> (u32, u32) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let reader = decoder.read_info().unwrap();
+    let info = reader.info();
+    (info.width, info.height)
+}
+
+#[test]
+fn floor_plans_and_evaluated_walks_are_drawn_and_existing_pictures_kept() {
+    use std::process::Command;
+    let bin = env!("CARGO_BIN_EXE_egogen");
+    let root = common::repo_root();
+    let dir = tempfile::tempdir().unwrap();
+    let plans = dir.path().join("plans.png");
+    common::succeeds(
+        Command::new(bin)
+            .args(["policy", "rooms", "--count", "4", "--out"])
+            .arg(&plans),
+    );
+    // Three tiles of 320 px to a row, two rows.
+    assert_eq!(png_size(&plans), (960, 640));
+    let walks = dir.path().join("walks.png");
+    let eval = |png: &std::path::Path| {
+        let mut cmd = Command::new(bin);
+        cmd.current_dir(&root)
+            .args([
+                "policy",
+                "eval",
+                "--rooms-share",
+                "1",
+                "--episodes",
+                "3",
+                "--envs",
+                "3",
+            ])
+            .args([
+                "--paths",
+                "2",
+                "--policy",
+                "assets/policy/policy.safetensors",
+                "--paths-png",
+            ])
+            .arg(png);
+        cmd
+    };
+    let out = common::succeeds(&mut eval(&walks));
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(report.contains("\"report\""), "{report}");
+    assert_eq!(png_size(&walks), (640, 320));
+    // An existing picture is not overwritten; two controllers cannot share one picture.
+    let before = std::fs::read(&walks).unwrap();
+    assert!(!eval(&walks).output().unwrap().status.success());
+    assert_eq!(std::fs::read(&walks).unwrap(), before);
+    let both = eval(&dir.path().join("other.png"))
+        .args(["--k", "1"])
+        .output()
+        .unwrap();
+    assert!(!both.status.success());
+    assert!(String::from_utf8_lossy(&both.stderr).contains("--paths-png"));
+}

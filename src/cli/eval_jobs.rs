@@ -45,7 +45,8 @@ pub struct EvalArgs {
     #[arg(long, value_delimiter = ',')]
     pub scenarios: Vec<String>,
     /// Only these controllers of table1 and speed (comma-separated names, e.g.
-    /// policy,policy_mean).
+    /// policy,policy_mean); `policy_spread_S` adds the policy with its sampled actions'
+    /// standard deviation scaled by S (e.g. policy_spread_0.5).
     #[arg(long, value_delimiter = ',')]
     pub controllers: Vec<String>,
     /// Replace results already in OUT.
@@ -398,8 +399,25 @@ fn chosen_scenarios(names: &[String]) -> Result<Vec<Scenario>> {
         .collect()
 }
 
-/// The controllers named (all when none is), or an error naming the unknown one.
-fn chosen_controllers(all: Vec<Controller>, names: &[String]) -> Result<Vec<Controller>> {
+/// The controllers named (all when none is), or an error naming the unknown one. Besides the
+/// suite's own, `policy_spread_S` names the policy with its sampled actions' standard deviation
+/// scaled by S (e.g. `policy_spread_0.5`; 1 is `policy`, 0 draws the mean).
+fn chosen_controllers(mut all: Vec<Controller>, names: &[String]) -> Result<Vec<Controller>> {
+    for name in names {
+        let Some(s) = name.strip_prefix("policy_spread_") else {
+            continue;
+        };
+        let spread: f32 = s
+            .parse()
+            .ok()
+            .filter(|x: &f32| x.is_finite() && *x >= 0.0)
+            .with_context(|| {
+                format!("--controllers: \"{name}\": expected policy_spread_S with a scale S ≥ 0")
+            })?;
+        if !all.iter().any(|c| &c.name == name) {
+            all.push(Controller::policy_spread(name, spread));
+        }
+    }
     if let Some(name) = names.iter().find(|n| !all.iter().any(|c| &&c.name == n)) {
         bail!(
             "--controllers: no controller \"{name}\" in this suite; expected some of {}",
@@ -529,6 +547,7 @@ fn sdf_rows(
     let controller: PolicyController<InferBackend> = PolicyController::Policy {
         net: &net,
         mean_action: true,
+        spread: 1.0,
     };
     let progress = bar(args, SDF_VOXELS_M.len(), "SDF resolutions");
     let mut rows = Vec::new();
@@ -624,6 +643,7 @@ fn policy_rows(
                 let controller: PolicyController<InferBackend> = PolicyController::Policy {
                     net: &net,
                     mean_action,
+                    spread: 1.0,
                 };
                 let (report, _) = evaluate(
                     parts,

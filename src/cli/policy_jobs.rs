@@ -41,6 +41,19 @@ pub enum PolicyCommand {
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
+    /// Draw procedural floor plans as training draws them with the default `[stages.env.rooms]`
+    /// settings (rooms, doorways, furniture, a start and a goal), side by side as a PNG.
+    Rooms {
+        /// The PNG to write (refused if it exists).
+        #[arg(long)]
+        out: PathBuf,
+        /// How many plans, in rows of three.
+        #[arg(long, default_value_t = 6)]
+        count: usize,
+        /// Plan k is drawn from this seed + k.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// Evaluate the sampling controller (best of K random latents by the reward) on held-out
     /// box-scene episodes; one JSON line per K.
     Eval {
@@ -61,6 +74,10 @@ pub enum PolicyCommand {
         /// The policy's mean action instead of a sample from it.
         #[arg(long)]
         mean_action: bool,
+        /// Scale of the sampled actions' standard deviation: 1 draws as trained, smaller
+        /// values draw nearer the mean (0 is the mean action).
+        #[arg(long, default_value_t = 1.0)]
+        action_spread: f32,
         /// Evaluate in this scene (e.g. assets/scenes/apartment.glb) on start/goal pairs
         /// instead of in box scenes.
         #[arg(long)]
@@ -71,9 +88,14 @@ pub enum PolicyCommand {
         /// Draw the scene's starts and goals anywhere walkable, not only inside the walls.
         #[arg(long)]
         anywhere: bool,
-        /// Primitives before an episode times out (default 11; EgoGen's apartment: 13).
+        /// Primitives before an episode times out (default 11 in box scenes and crossings, 13
+        /// in floor plans and scenes, EgoGen's apartment; given, it applies to all).
         #[arg(long)]
         max_primitives: Option<usize>,
+        /// Share of procedural floor plans (rooms, doorways, furniture; drawn anew every
+        /// episode) instead of box scenes and crossings: 0 (default) to 1.
+        #[arg(long, default_value_t = 0.0)]
+        rooms_share: f64,
         /// Share of crossing scenes (another person walking across the path) instead of box
         /// scenes: 0 (default) to 1.
         #[arg(long, default_value_t = 0.0)]
@@ -94,6 +116,14 @@ pub enum PolicyCommand {
         /// Write every episode's summary (JSON lines).
         #[arg(long)]
         episodes_jsonl: Option<PathBuf>,
+        /// Draw the walks of the first `--paths` episodes from above as a PNG (one controller
+        /// only): the pelvis at every primitive boundary, green where the goal was reached,
+        /// orange on a timeout, red where the walk ended in an obstacle.
+        #[arg(long)]
+        paths_png: Option<PathBuf>,
+        /// How many walks `--paths-png` draws.
+        #[arg(long, default_value_t = 6)]
+        paths: usize,
     },
 }
 
@@ -153,6 +183,14 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             }
             println!("wrote {}", out.display());
         }
+        PolicyCommand::Rooms { out, count, seed } => {
+            refuse_existing(&out)?;
+            if count == 0 {
+                bail!("--count must be at least 1");
+            }
+            rooms_sheet(count, seed).write_png(&out)?;
+            println!("wrote {}", out.display());
+        }
         PolicyCommand::Eval {
             config,
             weights,
@@ -163,13 +201,17 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             success_m,
             seed,
             episodes_jsonl,
+            paths_png,
+            paths,
             policy,
             mean_action,
+            action_spread,
             scene,
             pair_distance_m,
             anywhere,
             max_primitives,
             crossing_share,
+            rooms_share,
             crossing_people,
         } => {
             if let Some(f) = &episodes_jsonl {
@@ -182,6 +224,9 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if k.contains(&0) || episodes == 0 || envs == 0 {
                 bail!("--k, --episodes and --envs must be at least 1");
             }
+            if !(action_spread.is_finite() && action_spread >= 0.0) {
+                bail!("--action-spread: expected a scale ≥ 0, got {action_spread}");
+            }
             if !(success_m.is_finite() && success_m > 0.0) {
                 bail!("--success-m: expected a radius > 0 m, got {success_m}");
             }
@@ -193,6 +238,12 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             let (_, held) = evaluation_sets(&plan, &body, true)?;
             let bank = SeedBank::from_set(&held);
             let defaults = EnvSettings::default();
+            if scene.is_some() && (rooms_share > 0.0 || crossing_share > 0.0) {
+                bail!("--scene walks the scene's pairs only: give no --rooms-share or --crossing-share with it");
+            }
+            if !(0.0..=1.0).contains(&rooms_share) {
+                bail!("--rooms-share: expected a share in [0, 1], got {rooms_share}");
+            }
             if !(0.0..=1.0).contains(&crossing_share) {
                 bail!("--crossing-share: expected a share in [0, 1], got {crossing_share}");
             }
@@ -217,9 +268,14 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     people,
                     ..defaults.crossing
                 },
+                rooms: crate::policy::room_scene::RoomSettings {
+                    share: rooms_share,
+                    max_primitives: max_primitives.unwrap_or(defaults.rooms.max_primitives),
+                    ..defaults.rooms
+                },
                 ..defaults
             };
-            if settings.max_primitives == 0 {
+            if max_primitives == Some(0) {
                 bail!("--max-primitives must be at least 1");
             }
             let fixed = match &scene {
@@ -244,8 +300,14 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if fixed.is_some() && !k.is_empty() {
                 bail!("--scene evaluates --policy only (give no --k)");
             }
+            if let Some(png) = &paths_png {
+                refuse_existing(png)?;
+                if k.len() + usize::from(policy.is_some()) != 1 || paths == 0 {
+                    bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
+                }
+            }
             use crate::motion::cvae::infer::InferBackend;
-            use crate::policy::tasks::{evaluate, Controller, EvalParts};
+            use crate::policy::tasks::{evaluate_with_paths, Controller, EvalParts};
             let loaded = match &policy {
                 None => None,
                 Some(path) => Some(load_policy_for(path, &model)?),
@@ -261,9 +323,18 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 .collect();
             if let Some(net) = &loaded {
                 let name = if mean_action { "policy_mean" } else { "policy" };
+                let mut about =
+                    serde_json::json!({"controller": name, "weights": policy, "scene": scene});
+                if action_spread != 1.0 && !mean_action {
+                    about["action_spread"] = action_spread.into();
+                }
                 runs.push((
-                    serde_json::json!({"controller": name, "weights": policy, "scene": scene}),
-                    Controller::Policy { net, mean_action },
+                    about,
+                    Controller::Policy {
+                        net,
+                        mean_action,
+                        spread: action_spread,
+                    },
                 ));
             }
             let parts = EvalParts {
@@ -277,11 +348,20 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             for (label, controller) in &runs {
                 let bar =
                     indicatif::ProgressBar::new(episodes as u64).with_message(label.to_string());
-                let (report, summaries) =
-                    evaluate(&parts, settings, controller, (episodes, envs, seed), |_| {
-                        bar.inc(1)
-                    })?;
+                let drawn = if paths_png.is_some() { paths } else { 0 };
+                let (report, summaries, walks) = evaluate_with_paths(
+                    &parts,
+                    settings,
+                    controller,
+                    (episodes, envs, seed),
+                    drawn,
+                    |_| bar.inc(1),
+                )?;
                 bar.finish_and_clear();
+                if let Some(png) = &paths_png {
+                    paths_sheet(&walks).write_png(png)?;
+                    println!("wrote {}", png.display());
+                }
                 let mut line = label.clone();
                 line["report"] = serde_json::to_value(&report)?;
                 println!("{line}");
@@ -444,4 +524,97 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
         plan.log_out.display()
     );
     Ok(())
+}
+
+/// Side of a picture's tile (px).
+const TILE_PX: usize = 320;
+const WHITE: [u8; 3] = [255, 255, 255];
+const START_RGB: [u8; 3] = [40, 160, 60];
+const GOAL_RGB: [u8; 3] = [200, 50, 50];
+
+/// `count` floor plans with their start (green), goal (red) and the line between, three to a
+/// row.
+fn rooms_sheet(count: usize, seed: u64) -> crate::preview::RgbImage {
+    use crate::policy::room_scene::{RoomScene, RoomSettings};
+    use crate::preview::map::MapPicture;
+    use rand_core::SeedableRng;
+    let settings = RoomSettings::default();
+    let tiles = (0..count as u64)
+        .map(|k| {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + k);
+            let scene = RoomScene::sample(&settings, &mut rng);
+            let mut pic = MapPicture::new(&scene.map, TILE_PX - 16);
+            pic.line(scene.start, scene.goal, [120, 120, 220]);
+            pic.dot(scene.start, 5, START_RGB);
+            pic.dot(scene.goal, 5, GOAL_RGB);
+            tile(&pic.image)
+        })
+        .collect();
+    grid(tiles)
+}
+
+/// Evaluated walks over their courses (see `--paths-png`), three to a row.
+fn paths_sheet(walks: &[crate::policy::tasks::EpisodePath]) -> crate::preview::RgbImage {
+    use crate::policy::env::Ending;
+    use crate::preview::map::MapPicture;
+    let tiles = walks
+        .iter()
+        .map(|w| {
+            let c = &w.course;
+            let mut pic = MapPicture::new(&c.map, TILE_PX - 16);
+            if let Some(o) = &c.obstacle {
+                pic.obstacle(o, [90, 90, 200]);
+            }
+            for m in &c.moving {
+                pic.obstacle(&m.at_start, [150, 150, 230]);
+            }
+            let rgb = match w.ending {
+                Some(Ending::Success) => [30, 150, 60],
+                Some(Ending::Timeout) | None => [230, 140, 20],
+                Some(Ending::Penetration | Ending::Failure) => [210, 40, 40],
+            };
+            for seg in w.pelvis_xy.windows(2) {
+                pic.line(seg[0], seg[1], rgb);
+            }
+            for &p in &w.pelvis_xy {
+                pic.dot(p, 2, rgb);
+            }
+            pic.dot(c.start, 5, START_RGB);
+            pic.dot(c.goal, 5, GOAL_RGB);
+            tile(&pic.image)
+        })
+        .collect();
+    grid(tiles)
+}
+
+/// A picture centred on a white tile.
+fn tile(image: &crate::preview::RgbImage) -> crate::preview::RgbImage {
+    let mut out = crate::preview::RgbImage::new(TILE_PX, TILE_PX, WHITE);
+    let (w, h) = (image.width.min(TILE_PX), image.height.min(TILE_PX));
+    let (x0, y0) = ((TILE_PX - w) / 2, (TILE_PX - h) / 2);
+    for y in 0..h {
+        let row = (y0 + y) * TILE_PX + x0;
+        out.pixels[row..row + w]
+            .copy_from_slice(&image.pixels[y * image.width..y * image.width + w]);
+    }
+    out
+}
+
+/// Tiles three to a row (an empty list: one blank tile).
+fn grid(tiles: Vec<crate::preview::RgbImage>) -> crate::preview::RgbImage {
+    use crate::preview::RgbImage;
+    if tiles.is_empty() {
+        return RgbImage::new(TILE_PX, TILE_PX, WHITE);
+    }
+    let rows: Vec<RgbImage> = tiles
+        .chunks(3)
+        .map(|row| {
+            row[1..]
+                .iter()
+                .fold(row[0].clone(), |acc, t| acc.hconcat(t, WHITE))
+        })
+        .collect();
+    rows[1..]
+        .iter()
+        .fold(rows[0].clone(), |acc, r| acc.vconcat(r, WHITE))
 }

@@ -81,6 +81,9 @@ pub struct RawCrowd {
     #[serde(default = "default_steering")]
     pub steering: String,
     pub k: Option<usize>,
+    /// Scale of the policy's sampled actions' standard deviation (default 1, as trained;
+    /// smaller walks nearer the mean action: docs/POLICY.md, "Action spread").
+    pub action_spread: Option<f32>,
     #[serde(default)]
     pub wander: bool,
     /// Betas drawn N(0, 1), clipped to ±`betas_sigma` (0: the neutral shape; default 2).
@@ -116,6 +119,8 @@ pub struct RawAgent {
     pub steering: Option<String>,
     /// Candidates of `"sampling"` (default 16).
     pub k: Option<usize>,
+    /// Scale of `"policy"`'s sampled actions' standard deviation (default 1, as trained).
+    pub action_spread: Option<f32>,
 }
 
 /// `[[obstacles]]`: a 2D box, still or moving at constant velocity.
@@ -159,10 +164,20 @@ pub struct RawSynth {
     pub output: RawSynthOutput,
 }
 
-fn steering(name: &str, k: Option<usize>) -> Result<Steering, String> {
+fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<Steering, String> {
+    match (name, spread) {
+        (_, Some(x)) if !(x.is_finite() && x >= 0.0) => {
+            return Err(format!("`action_spread`: expected a scale ≥ 0, got {x}"))
+        }
+        ("policy", _) | (_, None) => {}
+        _ => return Err("`action_spread` is for steering = \"policy\" only".into()),
+    }
     match (name, k) {
-        ("policy", None) => Ok(Steering::Policy { mean_action: false }),
-        ("policy_mean", None) => Ok(Steering::Policy { mean_action: true }),
+        ("policy", None) => Ok(Steering::Policy {
+            mean_action: false,
+            spread: spread.unwrap_or(1.0),
+        }),
+        ("policy_mean", None) => Ok(Steering::POLICY_MEAN),
         ("sampling" | "path_follow", k) => match (name, k.unwrap_or(16)) {
             (_, 0) => Err("`k` must be at least 1".into()),
             ("sampling", k) => Ok(Steering::Sampling { k }),
@@ -371,8 +386,12 @@ fn listed_agents(raw: &[RawAgent], bad: Bad) -> Result<Vec<AgentDraft>, ConfigEr
     let mut agents = Vec::new();
     for (i, a) in raw.iter().enumerate() {
         let key = |k: &str| format!("agents[{i}].{k}");
-        let steer = steering(a.steering.as_deref().unwrap_or("policy"), a.k)
-            .map_err(|e| bad(&key("steering"), e))?;
+        let steer = steering(
+            a.steering.as_deref().unwrap_or("policy"),
+            a.k,
+            a.action_spread,
+        )
+        .map_err(|e| bad(&key("steering"), e))?;
         if let Some((b, v)) = a
             .betas
             .iter()
@@ -417,7 +436,8 @@ fn listed_agents(raw: &[RawAgent], bad: Bad) -> Result<Vec<AgentDraft>, ConfigEr
 /// at sampled places.
 fn crowd_agents(c: &RawCrowd, seed: u64, bad: Bad) -> Result<Vec<AgentDraft>, ConfigError> {
     let mut agents = Vec::new();
-    let steer = steering(&c.steering, c.k).map_err(|e| bad("crowd.steering", e))?;
+    let steer =
+        steering(&c.steering, c.k, c.action_spread).map_err(|e| bad("crowd.steering", e))?;
     let sigma = c.betas_sigma.unwrap_or(2.0);
     if !(sigma.is_finite() && (0.0..=10.0).contains(&sigma)) {
         return Err(bad(

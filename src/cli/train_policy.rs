@@ -311,6 +311,12 @@ fn resolve_stage(
                 format!("expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0, |cross_angle_rad| < π/2 and 1 ≤ people.0 ≤ people.1 ≤ {}", crate::policy::crossing_scene::MAX_PEOPLE),
             ));
     }
+    if !e.rooms.is_valid() {
+        return Err(bad(
+            &key("env.rooms"),
+            "expected share in [0, 1], 0 < MIN ≤ MAX ranges (size_m ≤ 1 000 cells a side, door_m, furniture_side_m, distance_m), 1 ≤ rooms.0 ≤ rooms.1, furniture.0 ≤ furniture.1, min_room_m, wall_m and cell_m > 0, door_clearance_m and clearance_m ≥ 0, max_primitives ≥ 1".into(),
+        ));
+    }
     Ok(StagePlan {
         name: s.name,
         env_steps: s.env_steps,

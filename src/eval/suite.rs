@@ -44,13 +44,24 @@ impl Controller {
         vec![
             Controller {
                 name: "policy".into(),
-                steering: Steering::Policy { mean_action: false },
+                steering: Steering::POLICY,
             },
             Controller {
                 name: "policy_mean".into(),
-                steering: Steering::Policy { mean_action: true },
+                steering: Steering::POLICY_MEAN,
             },
         ]
+    }
+
+    /// The policy's sampled actions with their standard deviation scaled by `spread`.
+    pub fn policy_spread(name: &str, spread: f32) -> Controller {
+        Controller {
+            name: name.into(),
+            steering: Steering::Policy {
+                mean_action: false,
+                spread,
+            },
+        }
     }
 
     /// The sampling controller with `k` latents per primitive.

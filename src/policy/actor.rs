@@ -262,6 +262,18 @@ impl Actor {
     /// Actions `[B × L]` for observations `[B × D]`: `mean + exp(logvar / 2) · ε` with ε drawn
     /// from `rng`, or the mean without one (as [`super::ppo::actions`]).
     pub fn actions(&self, obs: &[f32], rng: Option<&mut ChaCha8Rng>) -> Vec<f32> {
+        self.actions_with_spread(obs, rng, 1.0)
+    }
+
+    /// [`Self::actions`] with the standard deviation scaled by `spread`:
+    /// `mean + (exp(logvar / 2) · spread) · ε` (1 draws as trained, bit for bit; 0 gives the
+    /// mean, though it still draws ε from `rng`).
+    pub fn actions_with_spread(
+        &self,
+        obs: &[f32],
+        rng: Option<&mut ChaCha8Rng>,
+        spread: f32,
+    ) -> Vec<f32> {
         let (mean, logvar) = self.forward(obs);
         match rng {
             Some(rng) => {
@@ -269,7 +281,7 @@ impl Actor {
                 mean.iter()
                     .zip(&logvar)
                     .zip(&eps)
-                    .map(|((m, lv), e)| m + (lv * 0.5).exp() * e)
+                    .map(|((m, lv), e)| m + (lv * 0.5).exp() * spread * e)
                     .collect()
             }
             None => mean,

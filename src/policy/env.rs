@@ -2,8 +2,9 @@
 //! per step, all decoded in one batch. The same code serves training, the sampling controller
 //! and evaluation.
 //!
-//! An episode (EgoGen's box environment): a [`BoxScene`] — or, for a configured share of
-//! episodes, a [`CrossingScene`], where another person crosses the path as a moving 2D box
+//! An episode (EgoGen's box environment): a [`BoxScene`] — or, for configured shares of
+//! episodes, a procedural floor plan ([`RoomScene`]: rooms, doorways, furniture) or a
+//! [`CrossingScene`], where another person crosses the path as a moving 2D box
 //! that the rays see and the penetration test counts, on the episode's clock — a mocap seed
 //! (two frames of a training primitive) placed at the start facing the goal within ±`seed_yaw_jitter_rad`,
 //! the floor at z = 0. A step decodes the latent, judges the primitive ([`super::reward`]),
@@ -27,6 +28,7 @@ use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
 use super::reward::{judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest};
+use super::room_scene::{RoomParams, RoomScene, RoomSettings};
 use super::walker::{frame_time_s, place_seed, SeedView, Surroundings, Totals, Walker};
 pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
@@ -56,6 +58,8 @@ pub struct EnvSettings {
     pub scene: BoxSceneSettings,
     /// Crossing scenes (another person walking across the path) and their share of episodes.
     pub crossing: CrossingSettings,
+    /// Procedural floor plans (rooms, doorways, furniture) and their share of episodes.
+    pub rooms: RoomSettings,
     pub weights: RewardWeights,
     /// Success radius around the goal (m, horizontal; EgoGen's 0.1).
     pub success_m: f64,
@@ -88,6 +92,7 @@ impl Default for EnvSettings {
         Self {
             scene: BoxSceneSettings::default(),
             crossing: CrossingSettings::default(),
+            rooms: RoomSettings::default(),
             weights: RewardWeights::default(),
             success_m: 0.1,
             max_primitives: 11,
@@ -156,6 +161,7 @@ struct Course {
     /// What was drawn: a box scene, or a pair of a fixed scene.
     box_params: Option<BoxParams>,
     crossing: Option<CrossingParams>,
+    rooms: Option<RoomParams>,
     pair: Option<usize>,
     /// Primitives before the episode times out.
     max_primitives: usize,
@@ -172,6 +178,17 @@ pub struct FixedScene {
     /// only: posing and looking up every vertex of every frame made the apartment evaluation
     /// about 30× slower, docs/POLICY.md).
     pub sdf: Option<Arc<SceneSdf>>,
+}
+
+/// Where an episode walks, for pictures: its map, its still and moving obstacles (on the
+/// episode's clock), its start and goal.
+#[derive(Debug, Clone)]
+pub struct CourseView {
+    pub map: Arc<WalkableMap>,
+    pub obstacle: Option<Obstacle2>,
+    pub moving: Vec<MovingObstacle>,
+    pub start: DVec2,
+    pub goal: DVec2,
 }
 
 /// One episode in progress.
@@ -200,6 +217,8 @@ pub struct EpisodeSnapshot {
     scene: Option<BoxParams>,
     #[serde(default)]
     crossing: Option<CrossingParams>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rooms: Option<RoomParams>,
     #[serde(default)]
     pair: Option<usize>,
     /// The seed frames' pose (165) and translation (3).
@@ -251,6 +270,8 @@ pub struct EpisodeSummary {
     /// vertices inside it in a frame (0 where the scene has no 3D SDF).
     pub scene_penetration_share: f64,
     pub scene_vertices_inside_max: usize,
+    /// The pelvis's floor position at the end (m, world).
+    pub end_xy: [f64; 2],
 }
 
 impl EpisodeSummary {
@@ -271,6 +292,7 @@ impl EpisodeSummary {
             scene_penetration_share: w.totals.scene_penetrating_frames as f64
                 / w.totals.frames.max(1) as f64,
             scene_vertices_inside_max: w.totals.scene_vertices_inside_max,
+            end_xy: w.view.pelvis.to_array(),
         }
     }
 }
@@ -437,8 +459,25 @@ impl<'m> PolicyEnv<'m> {
             goal: scene.goal,
             box_params: Some(scene.params),
             crossing: None,
+            rooms: None,
             pair: None,
             max_primitives: self.settings.max_primitives,
+            sdf: None,
+        }
+    }
+
+    fn room_course(&self, scene: RoomScene) -> Course {
+        Course {
+            map: Arc::new(scene.map),
+            obstacle: None,
+            moving: Vec::new(),
+            start: scene.start,
+            goal: scene.goal,
+            box_params: None,
+            crossing: None,
+            rooms: Some(scene.params),
+            pair: None,
+            max_primitives: self.settings.rooms.max_primitives,
             sdf: None,
         }
     }
@@ -452,6 +491,7 @@ impl<'m> PolicyEnv<'m> {
             goal: scene.goal,
             box_params: None,
             crossing: Some(scene.params),
+            rooms: None,
             pair: None,
             max_primitives: self.settings.max_primitives,
             sdf: None,
@@ -467,6 +507,7 @@ impl<'m> PolicyEnv<'m> {
             goal: f.pairs[pair].goal,
             box_params: None,
             crossing: None,
+            rooms: None,
             pair: Some(pair),
             max_primitives: self
                 .settings
@@ -477,16 +518,21 @@ impl<'m> PolicyEnv<'m> {
     }
 
     /// The course of episode `id`: the next pair of the fixed scene (or, with a fixed share
-    /// below 1, a random pair for that share of episodes), else a new crossing scene (with the
-    /// crossing share) or box scene.
+    /// below 1, a random pair for that share of episodes), else a new floor plan (with the
+    /// rooms' share), else a new crossing scene (with the crossing share) or box scene.
     fn draw_course(&self, id: u64, rng: &mut ChaCha8Rng) -> Course {
         let crossing = self.settings.crossing;
+        let rooms = self.settings.rooms;
         let share = self.settings.fixed_share;
         match self.fixed {
             // No draw when only the fixed scene is walked: evaluations stay as they were.
             Some(f) if share >= 1.0 => self.fixed_course(f, (id % f.pairs.len() as u64) as usize),
             Some(f) if uniform_open01(rng) < share => {
                 self.fixed_course(f, (rng.next_u64() % f.pairs.len() as u64) as usize)
+            }
+            // No draw when there are no floor plans: runs without them stay as they were.
+            _ if rooms.share > 0.0 && uniform_open01(rng) < rooms.share => {
+                self.room_course(RoomScene::sample(&rooms, rng))
             }
             // No draw when there are no crossings: box-only runs stay as they were.
             _ if crossing.share > 0.0 && uniform_open01(rng) < crossing.share => {
@@ -697,6 +743,7 @@ impl<'m> PolicyEnv<'m> {
                     id: e.id,
                     scene: e.course.box_params,
                     crossing: e.course.crossing.clone(),
+                    rooms: e.course.rooms.clone(),
                     pair: e.course.pair,
                     frames: e
                         .walker
@@ -743,14 +790,23 @@ impl<'m> PolicyEnv<'m> {
                 }
             });
             let only_fixed = self.fixed.is_some() && self.settings.fixed_share >= 1.0;
-            let course = match (s.scene, s.crossing.clone(), s.pair, self.fixed) {
-                (Some(p), None, None, _) if !only_fixed => {
+            let course = match (
+                s.scene,
+                s.crossing.clone(),
+                s.rooms.clone(),
+                s.pair,
+                self.fixed,
+            ) {
+                (Some(p), None, None, None, _) if !only_fixed => {
                     self.box_course(BoxScene::build(&self.settings.scene, p))
                 }
-                (None, Some(c), None, _) if !only_fixed => {
+                (None, Some(c), None, None, _) if !only_fixed => {
                     self.crossing_course(CrossingScene::build(&self.settings.crossing, c))
                 }
-                (None, None, Some(pair), Some(f)) if pair < f.pairs.len() => {
+                (None, None, Some(r), None, _) if !only_fixed => {
+                    self.room_course(RoomScene::build(&self.settings.rooms, r))
+                }
+                (None, None, None, Some(pair), Some(f)) if pair < f.pairs.len() => {
                     self.fixed_course(f, pair)
                 }
                 _ => {
@@ -777,6 +833,26 @@ impl<'m> PolicyEnv<'m> {
         self.episodes = episodes;
         self.next_episode = snap.next_episode;
         Ok(())
+    }
+
+    /// Each episode in progress: its id and its pelvis's floor position (m, world).
+    pub fn pelvis_positions(&self) -> Vec<(u64, DVec2)> {
+        self.episodes
+            .iter()
+            .map(|e| (e.id, e.walker.view.pelvis))
+            .collect()
+    }
+
+    /// Where episode `i` (of those in progress) walks, for pictures.
+    pub fn course_view(&self, i: usize) -> CourseView {
+        let c = &self.episodes[i].course;
+        CourseView {
+            map: c.map.clone(),
+            obstacle: c.obstacle,
+            moving: c.moving.clone(),
+            start: c.start,
+            goal: c.goal,
+        }
     }
 
     /// Ids of the episodes in progress.

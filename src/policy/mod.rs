@@ -15,6 +15,7 @@ pub mod net;
 pub mod pose_prior;
 pub mod ppo;
 pub mod reward;
+pub mod room_scene;
 pub mod sampling;
 pub mod tasks;
 pub mod walker;

@@ -175,6 +175,8 @@ pub enum Controller<'a, B: burn::prelude::Backend> {
     Policy {
         net: &'a super::net::ActorCritic<B>,
         mean_action: bool,
+        /// Scale of the sampled actions' standard deviation (1: as trained).
+        spread: f32,
     },
 }
 
@@ -193,9 +195,84 @@ pub fn evaluate<B: burn::prelude::Backend>(
     parts: &EvalParts,
     settings: EnvSettings,
     controller: &Controller<B>,
-    (episodes, envs, seed): (usize, usize, u64),
+    run: (usize, usize, u64),
     progress: impl FnMut(&super::env::EpisodeSummary),
 ) -> Result<(EvalReport, Vec<super::env::EpisodeSummary>), super::env::EnvError> {
+    let (report, summaries, _) =
+        evaluate_with_paths(parts, settings, controller, run, 0, progress)?;
+    Ok((report, summaries))
+}
+
+/// One evaluated episode's walk, for pictures: its course and the pelvis's floor position at
+/// its start and after every primitive, and how it ended.
+#[derive(Debug, Clone)]
+pub struct EpisodePath {
+    pub id: u64,
+    pub course: super::env::CourseView,
+    pub pelvis_xy: Vec<glam::DVec2>,
+    pub ending: Option<super::env::Ending>,
+}
+
+/// Records the walks of the episodes numbered below `count` as an evaluation steps.
+struct PathRecorder {
+    count: u64,
+    paths: std::collections::BTreeMap<u64, EpisodePath>,
+}
+
+impl PathRecorder {
+    /// Before a step: every episode in progress not seen yet starts its path.
+    fn before(&mut self, env: &PolicyEnv) {
+        for (i, (id, xy)) in env.pelvis_positions().into_iter().enumerate() {
+            if id < self.count && !self.paths.contains_key(&id) {
+                let course = env.course_view(i);
+                self.paths.insert(
+                    id,
+                    EpisodePath {
+                        id,
+                        course,
+                        pelvis_xy: vec![xy],
+                        ending: None,
+                    },
+                );
+            }
+        }
+    }
+
+    /// After a step: where the walkers now stand (a finished walk's end from its summary).
+    fn after(&mut self, env: &PolicyEnv, ids_before: &[u64], out: &super::env::StepOutput) {
+        let now = env.pelvis_positions();
+        for (k, &id) in ids_before.iter().enumerate() {
+            if !out.done[k] {
+                if let Some(p) = self.paths.get_mut(&id) {
+                    p.pelvis_xy.push(now[k].1);
+                }
+            }
+        }
+        for s in &out.finished {
+            if let Some(p) = self.paths.get_mut(&s.id) {
+                p.pelvis_xy.push(glam::DVec2::from_array(s.end_xy));
+                p.ending = Some(s.ending);
+            }
+        }
+    }
+}
+
+/// [`evaluate`], keeping the walks of the first `paths` episodes ([`EpisodePath`], by id).
+pub fn evaluate_with_paths<B: burn::prelude::Backend>(
+    parts: &EvalParts,
+    settings: EnvSettings,
+    controller: &Controller<B>,
+    (episodes, envs, seed): (usize, usize, u64),
+    paths: usize,
+    progress: impl FnMut(&super::env::EpisodeSummary),
+) -> Result<
+    (
+        EvalReport,
+        Vec<super::env::EpisodeSummary>,
+        Vec<EpisodePath>,
+    ),
+    super::env::EnvError,
+> {
     let t0 = std::time::Instant::now();
     let mut env = PolicyEnv::with_scene(
         parts.model,
@@ -217,22 +294,41 @@ pub fn evaluate<B: burn::prelude::Backend>(
         Controller::Policy { net, .. } => Some(super::Actor::of(*net)),
         Controller::Sampling { .. } => None,
     };
+    let mut recorder = PathRecorder {
+        count: paths as u64,
+        paths: Default::default(),
+    };
     let (summaries, steps) = run_episodes(
         &mut env,
         episodes,
-        |e| match controller {
-            Controller::Sampling { k } => sampling_step(e, *k, &mut rng),
-            Controller::Policy { mean_action, .. } => {
-                let actor = actor.as_ref().expect("made above for the policy");
-                let rng = (!mean_action).then_some(&mut rng);
-                let a = actor.actions(&e.observations(), rng);
-                e.step(&a)
+        |e| {
+            let ids = (paths > 0).then(|| {
+                recorder.before(e);
+                e.episode_ids()
+            });
+            let out = match controller {
+                Controller::Sampling { k } => sampling_step(e, *k, &mut rng),
+                Controller::Policy {
+                    mean_action,
+                    spread,
+                    ..
+                } => {
+                    let actor = actor.as_ref().expect("made above for the policy");
+                    let rng = (!mean_action).then_some(&mut rng);
+                    let a = actor.actions_with_spread(&e.observations(), rng, *spread);
+                    e.step(&a)
+                }
+            }?;
+            if let Some(ids) = ids {
+                recorder.after(e, &ids, &out);
             }
+            Ok(out)
         },
         progress,
     )?;
     Ok((
         EvalReport::of(&summaries, steps, t0.elapsed().as_secs_f64()),
         summaries,
+        recorder.paths.into_values().collect(),
     ))
 }

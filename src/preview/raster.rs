@@ -36,6 +36,20 @@ impl RgbImage {
         out
     }
 
+    /// Places `other` below `self` (left edges aligned).
+    pub fn vconcat(&self, other: &RgbImage, fill: [u8; 3]) -> RgbImage {
+        let width = self.width.max(other.width);
+        let mut out = RgbImage::new(width, self.height + other.height, fill);
+        for (img, y0) in [(self, 0), (other, self.height)] {
+            for y in 0..img.height {
+                let src = &img.pixels[y * img.width..(y + 1) * img.width];
+                let row = (y0 + y) * width;
+                out.pixels[row..row + img.width].copy_from_slice(src);
+            }
+        }
+        out
+    }
+
     /// Writes a PNG, atomically (see [`crate::atomic_file`]).
     pub fn write_png(&self, path: &Path) -> std::io::Result<()> {
         crate::atomic_file::write_atomically(path, &self.encode_png()?)

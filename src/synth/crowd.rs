@@ -49,8 +49,13 @@ pub const NEW_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
 pub enum Steering {
-    /// The trained policy: an action sampled from π, or its mean.
-    Policy { mean_action: bool },
+    /// The trained policy: an action sampled from π, its standard deviation scaled by
+    /// `spread` (1: as trained; smaller draws nearer the mean), or its mean.
+    Policy {
+        mean_action: bool,
+        #[serde(skip_serializing_if = "is_one")]
+        spread: f32,
+    },
     /// The best of `k` random latents by the environment's reward (one primitive ahead).
     Sampling { k: usize },
     /// The path-planning baseline (in the spirit of GAMMA's and DIMOS's A* paths): an A* path
@@ -59,6 +64,23 @@ pub enum Steering {
     /// ends nearest the path's point [`PATH_LOOKAHEAD_M`] ahead (a primitive that penetrates,
     /// Eq. 7, counts [`PATH_PENETRATION_COST_M`] farther). No policy, no reward.
     PathFollow { k: usize },
+}
+
+impl Steering {
+    /// The trained policy's sampled actions, as trained.
+    pub const POLICY: Steering = Steering::Policy {
+        mean_action: false,
+        spread: 1.0,
+    };
+    /// The trained policy's mean action.
+    pub const POLICY_MEAN: Steering = Steering::Policy {
+        mean_action: true,
+        spread: 1.0,
+    };
+}
+
+fn is_one(x: &f32) -> bool {
+    *x == 1.0
 }
 
 /// How far along the planned path the path follower aims a primitive (m; a walking
@@ -460,7 +482,10 @@ impl<'m> Agent<'m> {
         // The policy's action distribution, kept for redraws.
         let mut policy_dist: Option<(Vec<f32>, Vec<f32>)> = None;
         let latents: Vec<Vec<f32>> = match self.plan.steering {
-            Steering::Policy { mean_action } => {
+            Steering::Policy {
+                mean_action,
+                spread,
+            } => {
                 let actor = parts.policy.expect("checked when the agent was made");
                 let mut obs = vec![0f32; actor.obs_layout().dim()];
                 let time_left =
@@ -475,6 +500,8 @@ impl<'m> Agent<'m> {
                     &mut obs,
                 );
                 let (mean, std) = actor.distribution(&obs);
+                // `x · 1` is `x`: spread 1 draws exactly as trained.
+                let std: Vec<f32> = std.iter().map(|s| s * spread).collect();
                 let a = if mean_action {
                     mean.clone()
                 } else {
