@@ -537,3 +537,37 @@ fn plain_f32_actor_equals_burn_bit_for_bit() {
         assert_eq!((m1, s1), (m2, s2), "{file}: distribution");
     }
 }
+
+/// A scaled action spread draws `mean + S · (sample − mean)` from the same noise: 1 is the
+/// sample as trained, bit for bit, 0 the mean action.
+#[test]
+fn action_spread_scales_the_sampled_actions_about_the_mean() {
+    use egogen::motion::cvae::infer::InferBackend;
+    use egogen::policy::ppo::load_policy;
+    use egogen::policy::Actor;
+    use rand_core::SeedableRng;
+    let root = common::repo_root();
+    let (_, net) = load_policy::<InferBackend>(
+        &root.join(egogen::policy::ppo::SHIPPED_POLICY),
+        &Default::default(),
+    )
+    .unwrap();
+    let actor = Actor::of(&net);
+    let d = actor.obs_layout().dim();
+    let obs: Vec<f32> = (0..4 * d)
+        .map(|k| ((k as f32) * 0.618_034).fract() * 2.0 - 1.0)
+        .collect();
+    let draw = |spread: f32| {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        actor.actions_with_spread(&obs, Some(&mut rng), spread)
+    };
+    let mean = actor.actions(&obs, None);
+    let sample = actor.actions(&obs, Some(&mut rand_chacha::ChaCha8Rng::seed_from_u64(5)));
+    assert_eq!(draw(1.0), sample);
+    assert_eq!(draw(0.0), mean);
+    let half = draw(0.5);
+    for ((h, m), s) in half.iter().zip(&mean).zip(&sample) {
+        assert!((h - (m + 0.5 * (s - m))).abs() < 1e-5, "{h} {m} {s}");
+    }
+    assert_ne!(half, mean);
+}

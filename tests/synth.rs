@@ -291,6 +291,14 @@ fn bad_configs_are_refused_by_key() {
             "agents[0].steering",
         ),
         (
+            "[[agents]]\nsteering='sampling'\naction_spread=0.5\n[output]\ndir='o'\n",
+            "`action_spread` is for steering = \"policy\"",
+        ),
+        (
+            "[crowd]\ncount=2\naction_spread=-1\n[output]\ndir='o'\n",
+            "crowd.steering",
+        ),
+        (
             "[[agents]]\nbetas=[20.0]\n[output]\ndir='o'\n",
             "agents[0].betas[0]",
         ),
