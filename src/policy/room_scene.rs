@@ -2,17 +2,16 @@
 //! to find its way through rooms and doorways without walking one apartment over and over, and
 //! be tested in a scene it never saw.
 //!
-//! A plan is a rectangle of U(`size_m`) × U(`size_m`) m whose edge blocks like an outer wall,
-//! split into U(`rooms`) rooms by binary space partition: the largest room is cut across its
-//! longer side at U(`min_room_m`, side − `min_room_m`) by a wall `wall_m` thick with one
-//! doorway U(`door_m`) wide, kept 0.3 m from the wall's ends; a wall never ends in another's
-//! doorway. Furniture — U(`furniture`)
-//! boxes of sides U(`furniture_side_m`), three in four square to the walls, the rest at a
-//! random yaw — stands in random rooms, clear of every doorway by `door_clearance_m`. The
-//! start and goal lie on cells at least `clearance_m` from anything blocked, in the same
-//! connected floor, U(`distance_m`) apart in a straight line (often in different rooms). Only
-//! the 0.1 m walkable map is built, ringed by a wall of blocked cells: the rays and Eq. 7's
-//! blocked cells read it as they read a box scene's.
+//! A plan is a rectangle of U(`size_m`) × U(`size_m`) m ringed by an outer wall, split into
+//! U(`rooms`) rooms by binary space partition: the largest room is cut across its longer side
+//! at U(`min_room_m`, side − `min_room_m`) by a wall `wall_m` thick with one doorway
+//! U(`door_m`) wide, kept 0.3 m from the wall's ends; a wall never ends in another's doorway.
+//! Furniture — U(`furniture`) boxes of sides U(`furniture_side_m`), three in four square to the
+//! walls, the rest at a random yaw — stands in random rooms, clear of every doorway by
+//! `door_clearance_m`. The start and goal lie on cells at least `clearance_m` from anything
+//! blocked, in the same connected floor, U(`distance_m`) apart in a straight line (often in
+//! different rooms). Only the 0.1 m walkable map is built, ringed by a wall of blocked cells:
+//! the rays and Eq. 7's blocked cells read it as they read a box scene's.
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
