@@ -11,6 +11,7 @@ use super::motion_jobs::refuse_existing;
 use crate::body::BodyModel;
 use crate::policy::env::FixedScene;
 use crate::policy::ppo::TrainScene;
+use crate::preview::RgbImage;
 
 #[derive(Subcommand, Debug)]
 pub enum PolicyCommand {
@@ -534,12 +535,12 @@ const GOAL_RGB: [u8; 3] = [200, 50, 50];
 
 /// `count` floor plans with their start (green), goal (red) and the line between, three to a
 /// row.
-fn rooms_sheet(count: usize, seed: u64) -> crate::preview::RgbImage {
+fn rooms_sheet(count: usize, seed: u64) -> RgbImage {
     use crate::policy::room_scene::{RoomScene, RoomSettings};
     use crate::preview::map::MapPicture;
     use rand_core::SeedableRng;
     let settings = RoomSettings::default();
-    let tiles = (0..count as u64)
+    let tiles: Vec<RgbImage> = (0..count as u64)
         .map(|k| {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + k);
             let scene = RoomScene::sample(&settings, &mut rng);
@@ -547,17 +548,17 @@ fn rooms_sheet(count: usize, seed: u64) -> crate::preview::RgbImage {
             pic.line(scene.start, scene.goal, [120, 120, 220]);
             pic.dot(scene.start, 5, START_RGB);
             pic.dot(scene.goal, 5, GOAL_RGB);
-            tile(&pic.image)
+            pic.image
         })
         .collect();
-    grid(tiles)
+    RgbImage::contact_sheet(&tiles, TILE_PX, 3, WHITE)
 }
 
 /// Evaluated walks over their courses (see `--paths-png`), three to a row.
-fn paths_sheet(walks: &[crate::policy::tasks::EpisodePath]) -> crate::preview::RgbImage {
+fn paths_sheet(walks: &[crate::policy::tasks::EpisodePath]) -> RgbImage {
     use crate::policy::env::Ending;
     use crate::preview::map::MapPicture;
-    let tiles = walks
+    let tiles: Vec<RgbImage> = walks
         .iter()
         .map(|w| {
             let c = &w.course;
@@ -581,40 +582,8 @@ fn paths_sheet(walks: &[crate::policy::tasks::EpisodePath]) -> crate::preview::R
             }
             pic.dot(c.start, 5, START_RGB);
             pic.dot(c.goal, 5, GOAL_RGB);
-            tile(&pic.image)
+            pic.image
         })
         .collect();
-    grid(tiles)
-}
-
-/// A picture centred on a white tile.
-fn tile(image: &crate::preview::RgbImage) -> crate::preview::RgbImage {
-    let mut out = crate::preview::RgbImage::new(TILE_PX, TILE_PX, WHITE);
-    let (w, h) = (image.width.min(TILE_PX), image.height.min(TILE_PX));
-    let (x0, y0) = ((TILE_PX - w) / 2, (TILE_PX - h) / 2);
-    for y in 0..h {
-        let row = (y0 + y) * TILE_PX + x0;
-        out.pixels[row..row + w]
-            .copy_from_slice(&image.pixels[y * image.width..y * image.width + w]);
-    }
-    out
-}
-
-/// Tiles three to a row (an empty list: one blank tile).
-fn grid(tiles: Vec<crate::preview::RgbImage>) -> crate::preview::RgbImage {
-    use crate::preview::RgbImage;
-    if tiles.is_empty() {
-        return RgbImage::new(TILE_PX, TILE_PX, WHITE);
-    }
-    let rows: Vec<RgbImage> = tiles
-        .chunks(3)
-        .map(|row| {
-            row[1..]
-                .iter()
-                .fold(row[0].clone(), |acc, t| acc.hconcat(t, WHITE))
-        })
-        .collect();
-    rows[1..]
-        .iter()
-        .fold(rows[0].clone(), |acc, r| acc.vconcat(r, WHITE))
+    RgbImage::contact_sheet(&tiles, TILE_PX, 3, WHITE)
 }

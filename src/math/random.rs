@@ -8,6 +8,11 @@ pub fn uniform_open01(rng: &mut ChaCha8Rng) -> f64 {
     ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
 }
 
+/// Uniform in the open interval (lo, hi): `lo + (hi − lo)·U(0, 1)`.
+pub fn uniform_in(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * uniform_open01(rng)
+}
+
 /// A standard normal sample (Box-Muller, one of the pair).
 pub fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
     let (u1, u2) = (uniform_open01(rng), uniform_open01(rng));

@@ -18,7 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::math::random::uniform_open01;
+use crate::math::random::{uniform_in, uniform_open01};
 use crate::scene::{Obstacle2, WalkableMap};
 
 /// Floor plans drawn before a scene is kept even without a start/goal pair in range (a plan
@@ -227,10 +227,9 @@ impl RoomScene {
 
 /// The dwelling's size, its inner walls and its furniture.
 fn draw_plan(settings: &RoomSettings, rng: &mut ChaCha8Rng) -> (DVec2, Vec<Wall>, Vec<Furniture>) {
-    let mut u = |a: f64, b: f64| a + (b - a) * uniform_open01(rng);
     let size = DVec2::new(
-        u(settings.size_m.0, settings.size_m.1),
-        u(settings.size_m.0, settings.size_m.1),
+        uniform_in(rng, settings.size_m.0, settings.size_m.1),
+        uniform_in(rng, settings.size_m.0, settings.size_m.1),
     );
     let count = draw_count(settings.rooms, rng);
     let mut rooms = vec![Room {
@@ -270,15 +269,15 @@ fn draw_plan(settings: &RoomSettings, rng: &mut ChaCha8Rng) -> (DVec2, Vec<Wall>
             })
         };
         let Some(at) = (0..20)
-            .map(|_| uniform(rng, cut_lo + min, cut_hi - min))
+            .map(|_| uniform_in(rng, cut_lo + min, cut_hi - min))
             .find(|&at| !meets_doorway(at))
         else {
             break;
         };
-        let width = uniform(rng, settings.door_m.0, settings.door_m.1)
+        let width = uniform_in(rng, settings.door_m.0, settings.door_m.1)
             .min(span_hi - span_lo - 0.6)
             .max(0.0);
-        let door = uniform(
+        let door = uniform_in(
             rng,
             span_lo + 0.3 + width / 2.0,
             span_hi - 0.3 - width / 2.0,
@@ -308,7 +307,7 @@ fn draw_plan(settings: &RoomSettings, rng: &mut ChaCha8Rng) -> (DVec2, Vec<Wall>
         for _ in 0..20 {
             let room = rooms[(rng.next_u64() % rooms.len() as u64) as usize];
             let (lo, hi) = settings.furniture_side_m;
-            let half = DVec2::new(uniform(rng, lo, hi), uniform(rng, lo, hi)) / 2.0;
+            let half = DVec2::new(uniform_in(rng, lo, hi), uniform_in(rng, lo, hi)) / 2.0;
             let yaw = if uniform_open01(rng) < 0.75 {
                 if rng.next_u64().is_multiple_of(2) {
                     0.0
@@ -316,7 +315,7 @@ fn draw_plan(settings: &RoomSettings, rng: &mut ChaCha8Rng) -> (DVec2, Vec<Wall>
                     std::f64::consts::FRAC_PI_2
                 }
             } else {
-                uniform(rng, 0.0, std::f64::consts::PI)
+                uniform_in(rng, 0.0, std::f64::consts::PI)
             };
             // The box's axis-aligned half extents, to keep it inside its room.
             let (s, c) = yaw.sin_cos();
@@ -330,8 +329,8 @@ fn draw_plan(settings: &RoomSettings, rng: &mut ChaCha8Rng) -> (DVec2, Vec<Wall>
                 continue;
             }
             let centre = DVec2::new(
-                uniform(rng, inner_lo.x, inner_hi.x),
-                uniform(rng, inner_lo.y, inner_hi.y),
+                uniform_in(rng, inner_lo.x, inner_hi.x),
+                uniform_in(rng, inner_lo.y, inner_hi.y),
             );
             let item = Furniture {
                 centre: centre.to_array(),
@@ -347,10 +346,6 @@ fn draw_plan(settings: &RoomSettings, rng: &mut ChaCha8Rng) -> (DVec2, Vec<Wall>
         }
     }
     (size, walls, furniture)
-}
-
-fn uniform(rng: &mut ChaCha8Rng, a: f64, b: f64) -> f64 {
-    a + (b - a) * uniform_open01(rng)
 }
 
 /// A count drawn uniformly from `lo..=hi`.

@@ -220,9 +220,11 @@ struct PathRecorder {
 }
 
 impl PathRecorder {
-    /// Before a step: every episode in progress not seen yet starts its path.
-    fn before(&mut self, env: &PolicyEnv) {
-        for (i, (id, xy)) in env.pelvis_positions().into_iter().enumerate() {
+    /// Before a step: every episode in progress not seen yet starts its path. Returns the
+    /// ids of the episodes in progress.
+    fn before(&mut self, env: &PolicyEnv) -> Vec<u64> {
+        let now = env.pelvis_positions();
+        for (i, &(id, xy)) in now.iter().enumerate() {
             if id < self.count && !self.paths.contains_key(&id) {
                 let course = env.course_view(i);
                 self.paths.insert(
@@ -236,6 +238,7 @@ impl PathRecorder {
                 );
             }
         }
+        now.into_iter().map(|(id, _)| id).collect()
     }
 
     /// After a step: where the walkers now stand (a finished walk's end from its summary).
@@ -302,10 +305,7 @@ pub fn evaluate_with_paths<B: burn::prelude::Backend>(
         &mut env,
         episodes,
         |e| {
-            let ids = (paths > 0).then(|| {
-                recorder.before(e);
-                e.episode_ids()
-            });
+            let ids = (paths > 0).then(|| recorder.before(e));
             let out = match controller {
                 Controller::Sampling { k } => sampling_step(e, *k, &mut rng),
                 Controller::Policy {

@@ -36,15 +36,25 @@ impl RgbImage {
         out
     }
 
-    /// Places `other` below `self` (left edges aligned).
-    pub fn vconcat(&self, other: &RgbImage, fill: [u8; 3]) -> RgbImage {
-        let width = self.width.max(other.width);
-        let mut out = RgbImage::new(width, self.height + other.height, fill);
-        for (img, y0) in [(self, 0), (other, self.height)] {
-            for y in 0..img.height {
-                let src = &img.pixels[y * img.width..(y + 1) * img.width];
-                let row = (y0 + y) * width;
-                out.pixels[row..row + img.width].copy_from_slice(src);
+    /// `images` centred in square cells of `cell_px` (a larger one cropped to its cell),
+    /// `per_row` (≥ 1) to a row, on `fill`; one blank cell when there are none.
+    pub fn contact_sheet(
+        images: &[RgbImage],
+        cell_px: usize,
+        per_row: usize,
+        fill: [u8; 3],
+    ) -> RgbImage {
+        let cols = images.len().clamp(1, per_row);
+        let rows = images.len().div_ceil(per_row).max(1);
+        let mut out = RgbImage::new(cols * cell_px, rows * cell_px, fill);
+        for (k, img) in images.iter().enumerate() {
+            let (w, h) = (img.width.min(cell_px), img.height.min(cell_px));
+            let x0 = (k % per_row) * cell_px + (cell_px - w) / 2;
+            let y0 = (k / per_row) * cell_px + (cell_px - h) / 2;
+            for y in 0..h {
+                let row = (y0 + y) * out.width + x0;
+                out.pixels[row..row + w]
+                    .copy_from_slice(&img.pixels[y * img.width..y * img.width + w]);
             }
         }
         out

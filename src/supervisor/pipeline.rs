@@ -335,8 +335,18 @@ fn write_body_inputs(
 ) -> Result<(Vec<ShardBody>, Vec<PathBuf>)> {
     std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
     let masks = skin_region_masks(model)?;
-    let mut bodies = Vec::with_capacity(agents.len());
     let mut scratch = Vec::new();
+    // One UV file for every agent: they share the model's layout.
+    let uvs_npy = match (&model.uvs, masks.is_empty()) {
+        (Some(uvs), false) => {
+            let path = work.join("body_uvs.npy");
+            write_corner_uvs_npy(&path, &uvs.per_corner())?;
+            scratch.push(path.clone());
+            Some(std::fs::canonicalize(&path)?)
+        }
+        _ => None,
+    };
+    let mut bodies = Vec::with_capacity(agents.len());
     for (k, a) in agents.iter().enumerate() {
         let pc2 = work.join(format!("agent_{k}.pc2"));
         let faces = work.join(format!("agent_{k}_faces.npy"));
@@ -354,15 +364,6 @@ fn write_body_inputs(
                 mask: mask.clone(),
             })
             .collect();
-        let uvs_npy = match (&model.uvs, skin_regions.is_empty()) {
-            (Some(uvs), false) => {
-                let path = work.join(format!("agent_{k}_uvs.npy"));
-                write_corner_uvs_npy(&path, &uvs.per_corner())?;
-                scratch.push(path.clone());
-                Some(std::fs::canonicalize(&path)?)
-            }
-            _ => None,
-        };
         bodies.push(ShardBody {
             name: a.name.clone(),
             pass_index: a.id,
@@ -373,7 +374,7 @@ fn write_body_inputs(
             samples_per_frame: render.cache_samples_per_frame,
             motion_steps: 2,
             skin,
-            uvs_npy,
+            uvs_npy: uvs_npy.clone(),
             skin_regions,
         });
         scratch.extend([pc2, faces, vertices]);

@@ -499,9 +499,10 @@ impl<'m> Agent<'m> {
                     time_left.max(0.0),
                     &mut obs,
                 );
-                let (mean, std) = actor.distribution(&obs);
-                // `x · 1` is `x`: spread 1 draws exactly as trained.
-                let std: Vec<f32> = std.iter().map(|s| s * spread).collect();
+                let (mean, mut std) = actor.distribution(&obs);
+                if spread != 1.0 {
+                    std.iter_mut().for_each(|s| *s *= spread);
+                }
                 let a = if mean_action {
                     mean.clone()
                 } else {
