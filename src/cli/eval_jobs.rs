@@ -88,9 +88,9 @@ const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
 
 /// Table 2's policies (paper Tab. 2: egocentric sensing against a local map, in the
 /// apartment): the shipped policy's apartment stage and the same two runs observing a local
-/// map instead of the rays; then its pace and crowd continuations (the latter shipped).
-/// Label, weights, configs.
-const TABLE2_POLICIES: [(&str, &str, &str); 7] = [
+/// map instead of the rays; then the continuations that led to the shipped policy (pace,
+/// crowds, doors closed, floor plans) and the Eq. 11 one beside them. Label, weights, configs.
+const TABLE2_POLICIES: [(&str, &str, &str); 8] = [
     (
         "egocentric sensing (32 rays)",
         "assets/policy/apartment/policy.safetensors",
@@ -117,9 +117,14 @@ const TABLE2_POLICIES: [(&str, &str, &str); 7] = [
         "the pace policy's configs, then configs/train_policy_crowd.toml",
     ),
     (
-        "egocentric sensing, + pace + crowds + doors closed (shipped)",
+        "egocentric sensing, + pace + crowds + doors closed",
         "assets/policy/indoors/policy.safetensors",
         "the crowd policy's configs, then configs/train_policy_indoors.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + floor plans (shipped)",
+        "assets/policy/rooms/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_rooms.toml",
     ),
     (
         "egocentric sensing, + pace + crowds + doors closed + Eq. 11",
@@ -1115,9 +1120,9 @@ fn table2_markdown(t: &PolicyRowsFile) -> String {
          `{TABLE2_SCENE}` (seed {}; 0.4 m from anything blocking), {TABLE2_MAX_PRIMITIVES} \
          primitives per walk as EgoGen's apartment, success within 0.3 m; {:.0} s of wall \
          time. The apartment is closed: the ground around its walls is blocked in the map \
-         the walker senses, as `egogen synth` has it; only the shipped policy and those that \
-         continue it (the Eq. 11 rows) were fine-tuned so (the others learnt the apartment \
-         with its outer doors open). The first three \
+         the walker senses, as `egogen synth` has it; only the doors-closed policy and those \
+         that continue it (the floor-plan row, shipped, and the Eq. 11 rows) were fine-tuned \
+         so (the others learnt the apartment with its outer doors open). The first three \
          policies were trained with the same recipe and budget — the box-and-crossing \
          stages, then the apartment stages (2.0 M + 0.8 M environment steps) — and differ \
          only in what they observe (`[policy.sensing]`): the paper's 32 rays over ±90°, 7 m, \
