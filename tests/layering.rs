@@ -3,6 +3,8 @@
 //! break is listed with why it is there; the test also fails when a listed break is gone, so
 //! the list only shrinks.
 
+mod common;
+
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
@@ -168,17 +170,6 @@ fn module_of(src: &Path, file: &Path) -> String {
     first.trim_end_matches(".rs").to_string()
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
-    for e in std::fs::read_dir(dir).unwrap().flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            rust_files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
-}
-
 #[test]
 fn modules_use_only_the_layers_below_them() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
@@ -187,8 +178,7 @@ fn modules_use_only_the_layers_below_them() {
         .map(|(m, deps)| (*m, deps.iter().copied().collect()))
         .collect();
     let known: BTreeSet<(&str, &str)> = KNOWN_BREAKS.iter().map(|(a, b, _)| (*a, *b)).collect();
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
+    let files = common::files_with_extension(&src, "rs");
     let mut found: BTreeSet<(String, String)> = BTreeSet::new();
     let mut problems = Vec::new();
     for file in files {

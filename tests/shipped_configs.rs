@@ -5,22 +5,7 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
-
-/// All `.toml` files below `dir`, sorted.
-fn toml_files(dir: &Path) -> Vec<PathBuf> {
-    let mut found = Vec::new();
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            found.extend(toml_files(&path));
-        } else if path.extension().is_some_and(|e| e == "toml") {
-            found.push(path);
-        }
-    }
-    found.sort();
-    found
-}
+use std::path::Path;
 
 /// The top-level tables and keys of a config file.
 fn top_level(path: &Path) -> toml::Table {
@@ -43,7 +28,7 @@ fn chained_weights_missing(path: &Path, table: &toml::Table) -> bool {
 fn every_shipped_policy_and_synth_config_loads() {
     let root = common::repo_root();
     let (mut policies, mut synths) = (0, 0);
-    for path in toml_files(&root.join("configs")) {
+    for path in common::files_with_extension(&root.join("configs"), "toml") {
         let table = top_level(&path);
         if table.contains_key("stages") {
             match egogen::cli::train_policy::load_policy_plan(&path) {
