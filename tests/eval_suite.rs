@@ -9,12 +9,11 @@ mod common;
 use std::process::Command;
 
 use egogen::eval::metrics::{lateral_offsets, path_diversity};
-use egogen::scene::{plan_path, Obstacle2, WalkableMap};
+use egogen::scene::{guide_aim, line_is_clear, plan_path, Obstacle2, WalkableMap};
 use glam::DVec2;
 
-#[test]
-fn the_planner_goes_around_a_wall_and_a_person_keeping_its_clearance() {
-    // A 6 × 6 m room, a wall across x = 0 from y = −3 to y = 1.5: the way round is above it.
+/// A 6 × 6 m room, a wall across x = 0 from y = −3 to y = 1.5: the way round is above it.
+fn walled_room() -> WalkableMap {
     let n = 60;
     let walkable = (0..n * n)
         .map(|k| {
@@ -22,7 +21,12 @@ fn the_planner_goes_around_a_wall_and_a_person_keeping_its_clearance() {
             !((29..=30).contains(&i) && j < 45)
         })
         .collect();
-    let map = WalkableMap::from_walkable(DVec2::splat(-3.0), 0.1, n, n, walkable);
+    WalkableMap::from_walkable(DVec2::splat(-3.0), 0.1, n, n, walkable)
+}
+
+#[test]
+fn the_planner_goes_around_a_wall_and_a_person_keeping_its_clearance() {
+    let map = walled_room();
     let from = DVec2::new(-2.0, -2.0);
     let to = DVec2::new(2.0, -2.0);
     let path = plan_path(&map, &[], 0.3, from, to);
@@ -69,6 +73,41 @@ fn the_planner_goes_around_a_wall_and_a_person_keeping_its_clearance() {
     // Points along the path: the start, the goal beyond the end.
     assert_eq!(path.point_along(0.0), from);
     assert_eq!(path.point_along(1e6), to);
+}
+
+#[test]
+fn the_guide_shows_a_visible_goal_itself_and_a_hidden_one_along_the_way_round() {
+    let map = walled_room();
+    let from = DVec2::new(-2.0, -2.0);
+    // Same side of the wall: the straight way is clear, the aim is the goal.
+    let near = DVec2::new(-2.0, 1.0);
+    assert!(line_is_clear(&map, &[], 0.3, from, near));
+    assert_eq!(guide_aim(&map, &[], 0.3, from, near, 2.0), near);
+    // Behind the wall: 2 m along the way round, which first heads up, away from the goal.
+    let hidden = DVec2::new(2.0, -2.0);
+    assert!(!line_is_clear(&map, &[], 0.3, from, hidden));
+    let aim = guide_aim(&map, &[], 0.3, from, hidden, 2.0);
+    let path = plan_path(&map, &[], 0.3, from, hidden);
+    assert_eq!(aim, path.point_along(2.0));
+    assert!(
+        aim.distance(from) <= 2.0 + 1e-9 && aim.distance(from) > 1.5,
+        "{aim}"
+    );
+    assert!(
+        aim.y > from.y + 1.0,
+        "{aim} does not head round the wall's end"
+    );
+    // A person standing on the straight way hides the goal too.
+    let person = Obstacle2::Box {
+        centre: DVec2::new(-2.0, -0.5),
+        half_extents: DVec2::new(0.3, 0.2),
+        yaw_rad: 0.0,
+    };
+    assert!(!line_is_clear(&map, &[person], 0.3, from, near));
+    assert_ne!(guide_aim(&map, &[person], 0.3, from, near, 2.0), near);
+    // A goal inside the wall: no way round, the goal itself.
+    let walled = DVec2::new(0.0, -2.0);
+    assert_eq!(guide_aim(&map, &[], 0.3, from, walled, 2.0), walled);
 }
 
 proptest::proptest! {

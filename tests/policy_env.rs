@@ -591,6 +591,102 @@ fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
 }
 
 #[test]
+fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box() {
+    use egogen::policy::crossing_scene::CrossingSettings;
+    env_parts!(body, ctx, model, bank, prior);
+    // Four wide people: bodies meet them often within a few primitives.
+    let settings = |people_every_frame: bool| EnvSettings {
+        crossing: CrossingSettings {
+            share: 1.0,
+            people: (4, 4),
+            footprint_m: (1.2, 1.2),
+            ..CrossingSettings::default()
+        },
+        people_every_frame,
+        ..EnvSettings::default()
+    };
+    let (b, per) = (4, 8);
+    let mut end_only = PolicyEnv::new(&model, &ctx, &bank, &prior, settings(false), b, 3).unwrap();
+    let mut every = PolicyEnv::new(&model, &ctx, &bank, &prior, settings(true), b, 3).unwrap();
+    let l = end_only.latent_dim();
+    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let (mut touching, mut only_within) = (0, 0);
+    for _ in 0..4 {
+        let z = normal_samples(&mut rng, b * per * l);
+        let (a, e) = (
+            end_only.propose(&z, per).unwrap(),
+            every.propose(&z, per).unwrap(),
+        );
+        for (a, e) in a.iter().zip(&e) {
+            let (Some(a), Some(e)) = (a.judged, e.judged) else {
+                continue;
+            };
+            // The same primitive, judged alike but for the people test.
+            assert_eq!(a.frames_in_obstacle, e.frames_in_obstacle);
+            assert_eq!(a.blocked_cells, e.blocked_cells);
+            // No box in a crossing: frames in an obstacle are frames in a person.
+            assert_eq!(e.penetrated, a.penetrated || a.frames_in_obstacle > 0);
+            touching += usize::from(a.frames_in_obstacle > 0);
+            only_within += usize::from(e.penetrated && !a.penetrated);
+        }
+        let z = normal_samples(&mut rng, b * l);
+        end_only.step(&z).unwrap();
+        every.step(&z).unwrap();
+    }
+    assert!(touching > 0, "no primitive met a person");
+    assert!(
+        only_within > 0,
+        "every primitive that met a person was caught by the cells at its end"
+    );
+}
+
+/// The guide (`guide_lookahead_m`): in floor plans, an episode whose goal the straight way
+/// reaches is observed as without it; one whose goal a wall hides sees other goal
+/// directions (towards the way round), and the same distance and rays.
+#[test]
+fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
+    use egogen::policy::room_scene::RoomSettings;
+    use egogen::scene::{line_is_clear, GUIDE_CLEARANCE_M};
+    env_parts!(body, ctx, model, bank, prior);
+    let rooms = |guide_lookahead_m: f64| EnvSettings {
+        rooms: RoomSettings {
+            share: 1.0,
+            ..RoomSettings::default()
+        },
+        guide_lookahead_m,
+        ..EnvSettings::default()
+    };
+    let b = 12;
+    let plain = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(0.0), b, 8).unwrap();
+    let guided = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(2.0), b, 8).unwrap();
+    let (o, g) = (plain.observations(), guided.observations());
+    let pelvis = plain.pelvis_positions();
+    let mut hidden = 0;
+    for i in 0..b {
+        let c = plain.course_view(i);
+        let (x, y) = (
+            &o[i * OBS_DIM..(i + 1) * OBS_DIM],
+            &g[i * OBS_DIM..(i + 1) * OBS_DIM],
+        );
+        let at = pelvis[i].1;
+        if line_is_clear(&c.map, c.obstacle.as_slice(), GUIDE_CLEARANCE_M, at, c.goal) {
+            assert_eq!(x, y, "episode {i}: its goal is in plain view");
+        } else {
+            hidden += 1;
+            assert_ne!(x, y, "episode {i}: its goal is hidden");
+            let rays = OBS_RAYS_OFFSET..OBS_DIST_OFFSET;
+            assert_eq!(x[rays.clone()], y[rays], "episode {i}: the rays");
+            assert_eq!(
+                x[OBS_DIST_OFFSET..],
+                y[OBS_DIST_OFFSET..],
+                "episode {i}: distance, time"
+            );
+        }
+    }
+    assert!(hidden > 0, "no goal hidden by a wall in {b} floor plans");
+}
+
+#[test]
 fn floor_plan_episodes_see_walls_time_out_after_13_primitives_and_restore_from_snapshots() {
     use egogen::policy::room_scene::RoomSettings;
     env_parts!(body, ctx, model, bank, prior);

@@ -311,6 +311,10 @@ fn bad_configs_are_refused_by_key() {
             "nope.safetensors",
         ),
         (
+            "[motion]\nguide_lookahead_m=-2\n[[agents]]\n[output]\ndir='o'\n",
+            "motion.guide_lookahead_m",
+        ),
+        (
             "[scene]\nfloor_m=6\n[[agents]]\nstart=[9.0, 0.0]\n[output]\ndir='o'\n",
             "not on the walkable floor",
         ),

@@ -78,6 +78,7 @@ pub struct RawMotion {
     pub penetration_redraws: Option<usize>,
     pub wander_distance_m: Option<[f64; 2]>,
     pub clearance_m: Option<f64>,
+    pub guide_lookahead_m: Option<f64>,
     pub seed: Option<u64>,
 }
 

@@ -104,6 +104,10 @@ pub enum PolicyCommand {
         /// How many other people cross in a crossing scene: N, or MIN,MAX drawn per episode.
         #[arg(long, value_delimiter = ',', default_value = "1")]
         crossing_people: Vec<usize>,
+        /// Show the policy a guide's aim where a wall hides its goal: the point this many
+        /// metres along the shortest path (0, the default: the goal itself, as EgoGen).
+        #[arg(long, default_value_t = 0.0)]
+        guide_lookahead_m: f64,
         #[arg(long, default_value_t = 200)]
         episodes: usize,
         /// Episodes run in parallel (one decode batch).
@@ -214,6 +218,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             crossing_share,
             rooms_share,
             crossing_people,
+            guide_lookahead_m,
         } => {
             if let Some(f) = &episodes_jsonl {
                 refuse_existing(f)?;
@@ -230,6 +235,9 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             }
             if !(success_m.is_finite() && success_m > 0.0) {
                 bail!("--success-m: expected a radius > 0 m, got {success_m}");
+            }
+            if !(guide_lookahead_m.is_finite() && guide_lookahead_m >= 0.0) {
+                bail!("--guide-lookahead-m: expected a distance ≥ 0 m, got {guide_lookahead_m}");
             }
             let plan = crate::cli::train::load_train_plan(&config)?;
             let body = BodyModel::load(&plan.body_model)?;
@@ -274,6 +282,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     max_primitives: max_primitives.unwrap_or(defaults.rooms.max_primitives),
                     ..defaults.rooms
                 },
+                guide_lookahead_m,
                 ..defaults
             };
             if max_primitives == Some(0) {

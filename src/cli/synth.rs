@@ -64,6 +64,10 @@ pub struct RawSynthMotion {
     pub wander_distance_m: Option<[f64; 2]>,
     /// Free space around sampled starts and goals (m).
     pub clearance_m: Option<f64>,
+    /// Policy steering: where a wall hides the goal, show the policy the point this far (m)
+    /// along the shortest path instead (2 reaches more far goals; default 0: the goal itself,
+    /// as EgoGen).
+    pub guide_lookahead_m: Option<f64>,
     pub seed: Option<u64>,
 }
 
@@ -351,8 +355,18 @@ fn crowd_settings(
             .wander_distance_m
             .map_or(defaults.wander_distance_m, |[a, b]| (a, b)),
         clearance_m: m.clearance_m.unwrap_or(defaults.clearance_m),
+        guide_lookahead_m: m.guide_lookahead_m.unwrap_or(defaults.guide_lookahead_m),
         seed: m.seed.unwrap_or(0),
     };
+    if !(settings.guide_lookahead_m.is_finite() && settings.guide_lookahead_m >= 0.0) {
+        return Err(bad(
+            "motion.guide_lookahead_m",
+            format!(
+                "expected a distance ≥ 0 m, got {}",
+                settings.guide_lookahead_m
+            ),
+        ));
+    }
     if !(settings.success_m.is_finite() && settings.success_m > 0.0) {
         return Err(bad(
             "motion.success_m",

@@ -43,7 +43,8 @@ use crate::motion::cvae::{
 };
 use crate::motion::primitive::SEED_FRAMES;
 use crate::scene::{
-    blocked_cells_in_box, MovingObstacle, Obstacle2, SceneSdf, StartGoal, WalkableMap,
+    blocked_cells_in_box, guide_aim, MovingObstacle, Obstacle2, SceneSdf, StartGoal, WalkableMap,
+    GUIDE_CLEARANCE_M,
 };
 use crate::sensing::{EgoSensor, SensingSpec, Sensor};
 
@@ -69,6 +70,15 @@ pub struct EnvSettings {
     pub terminate_on_penetration: bool,
     /// Blocked cells in the body's 2D box beyond which it penetrates (paper Eq. 7: 3).
     pub penetration_cells: usize,
+    /// Whether a body marker inside another person's box in any frame of a primitive
+    /// penetrates too (Eq. 7 looks at the primitive's last frame only, and a person crossing
+    /// at 1 m/s moves 0.45 m within one); false: Eq. 7 alone, as EgoGen.
+    pub people_every_frame: bool,
+    /// With L > 0, the walker observes a guide's aim instead of its goal where a wall hides
+    /// the goal: the point L m along the shortest path around what blocks the straight way
+    /// (`scene::guide_aim`; rewards, success and distance stay the goal's). 0: the goal, as
+    /// EgoGen.
+    pub guide_lookahead_m: f64,
     /// Largest angle between the seed's facing and the goal direction (rad; EgoGen's box
     /// environment: 0.2π).
     pub seed_yaw_jitter_rad: f64,
@@ -98,6 +108,8 @@ impl Default for EnvSettings {
             max_primitives: 11,
             terminate_on_penetration: false,
             penetration_cells: 3,
+            people_every_frame: false,
+            guide_lookahead_m: 0.0,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
             fixed_share: 1.0,
             fixed_max_primitives: None,
@@ -590,10 +602,21 @@ impl<'m> PolicyEnv<'m> {
 
     fn observe_into(&self, e: &Episode, out: &mut [f32]) {
         let w = &e.walker;
+        let goal = match self.settings.guide_lookahead_m {
+            l if l > 0.0 => guide_aim(
+                &e.course.map,
+                e.course.obstacle.as_slice(),
+                GUIDE_CLEARANCE_M,
+                w.view.pelvis,
+                e.course.goal,
+                l,
+            ),
+            _ => e.course.goal,
+        };
         w.observe_into(
             self.body,
             &self.sensor,
-            e.course.goal,
+            goal,
             &e.course.surroundings(),
             frame_time_s(w.steps, 0),
             1.0 - w.steps as f64 / e.course.max_primitives as f64,
@@ -624,6 +647,7 @@ impl<'m> PolicyEnv<'m> {
         let limits = Limits {
             success_m: self.settings.success_m,
             penetration_cells: self.settings.penetration_cells,
+            people_every_frame: self.settings.people_every_frame,
         };
         decoded
             .into_par_iter()

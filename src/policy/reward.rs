@@ -12,7 +12,8 @@
 //! - penetration: 0.05 while at most `penetration_cells` blocked map cells lie in the body's
 //!   2D box (the bounding box of the 67 markers of the last two frames, in the new canonical
 //!   frame: paper Eq. 7) — cells of that box inside a moving obstacle at the last frame count
-//!   too — else 0;
+//!   too — else 0; with [`Limits::people_every_frame`], also 0 when a body marker stands in
+//!   another person's box in any new frame;
 //! - pose: 0.05 while the mean pose-prior score of the 20 frames is at most the prior's
 //!   plausibility limit, else 0 (EgoGen: VPoser latent norm ≤ 11);
 //! - success: 1 when the pelvis ends within `success_m` of the goal.
@@ -121,6 +122,10 @@ pub struct Situation<'a> {
 pub struct Limits {
     pub success_m: f64,
     pub penetration_cells: usize,
+    /// Whether a body marker inside another person's box (a moving obstacle) in any new frame
+    /// penetrates too, beside Eq. 7's cells at the primitive's end (which miss a person
+    /// passed through within the primitive).
+    pub people_every_frame: bool,
 }
 
 /// One primitive judged.
@@ -308,19 +313,17 @@ pub fn judge(
         }
         Err(_) => usize::MAX,
     };
-    let penetrated = blocked_cells > limits.penetration_cells;
-    let frames_in_obstacle = p.markers[SEED_FRAMES..]
-        .iter()
-        .enumerate()
-        .filter(|(k, f)| {
-            let t = s.t0_s + (SEED_FRAMES + k) as f64 / PRIMITIVE_RATE_HZ;
-            f.iter().any(|m| {
-                let q = DVec2::new(m.x, m.y);
-                s.obstacle.is_some_and(|o| o.contains(q))
-                    || s.moving.iter().any(|o| o.at(t).contains(q))
-            })
-        })
-        .count();
+    let (mut frames_in_obstacle, mut frames_in_people) = (0, 0);
+    for (k, f) in p.markers[SEED_FRAMES..].iter().enumerate() {
+        let t = s.t0_s + (SEED_FRAMES + k) as f64 / PRIMITIVE_RATE_HZ;
+        let inside = |o: &Obstacle2| f.iter().any(|m| o.contains(DVec2::new(m.x, m.y)));
+        let in_people = s.moving.iter().any(|o| inside(&o.at(t)));
+        let in_obstacle = in_people || s.obstacle.is_some_and(inside);
+        frames_in_people += usize::from(in_people);
+        frames_in_obstacle += usize::from(in_obstacle);
+    }
+    let penetrated = blocked_cells > limits.penetration_cells
+        || (limits.people_every_frame && frames_in_people > 0);
     let success = distance_m < limits.success_m;
     let terms = RewardTerms {
         floor,

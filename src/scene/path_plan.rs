@@ -2,13 +2,18 @@
 //! costs), keeping `clearance_m` from anything that blocks walking and from extra 2D
 //! obstacles (other people, moving boxes where they stand now). The planner of the
 //! path-following baseline (`synth::crowd`, steering `path_follow`), in the spirit of
-//! GAMMA's and DIMOS's A* paths.
+//! GAMMA's and DIMOS's A* paths, and of the guide ([`guide_aim`]) that shows a policy where
+//! to head when a wall hides its goal.
 
 use glam::DVec2;
 use pathfinding::prelude::astar;
 
 use super::obstacle::Obstacle2;
 use super::walkable::WalkableMap;
+
+/// Clearance of the guide's straight-line test and path (m): a doorway of 0.8 m leaves a
+/// lane of 0.2 m.
+pub const GUIDE_CLEARANCE_M: f64 = 0.3;
 
 /// Integer costs: one cell straight, √2 diagonal, in thousandths of a cell.
 const STRAIGHT: u32 = 1000;
@@ -130,5 +135,51 @@ pub fn plan_path(
             }
         }
         None => straight,
+    }
+}
+
+/// Whether the straight way from `a` to `b` stays on walkable ground `clearance_m` from
+/// anything blocking and from `obstacles` (points every half cell; the first and last
+/// `clearance_m` are not tested, where a body may stand close to a wall).
+pub fn line_is_clear(
+    map: &WalkableMap,
+    obstacles: &[Obstacle2],
+    clearance_m: f64,
+    a: DVec2,
+    b: DVec2,
+) -> bool {
+    let length = a.distance(b);
+    let steps = (length / (0.5 * map.cell_m)).ceil().max(1.0) as usize;
+    (0..=steps)
+        .map(|k| k as f64 / steps as f64 * length)
+        .filter(|&d| d >= clearance_m && d <= length - clearance_m)
+        .map(|d| a + (b - a) * (d / length))
+        .all(|p| {
+            map.is_walkable_at(p)
+                && map.sdf_at(p) >= clearance_m
+                && !obstacles.iter().any(|o| o.grown(clearance_m).contains(p))
+        })
+}
+
+/// Where a walker at `at` bound for `goal` should head: the goal itself while the straight
+/// way to it is clear ([`line_is_clear`]); otherwise the point `lookahead_m` along the
+/// shortest path planned around what blocks it (pure pursuit), or the goal when no path is
+/// found. Stateless: the path is planned anew from where the walker stands.
+pub fn guide_aim(
+    map: &WalkableMap,
+    obstacles: &[Obstacle2],
+    clearance_m: f64,
+    at: DVec2,
+    goal: DVec2,
+    lookahead_m: f64,
+) -> DVec2 {
+    if line_is_clear(map, obstacles, clearance_m, at, goal) {
+        return goal;
+    }
+    let path = plan_path(map, obstacles, clearance_m, at, goal);
+    if path.found {
+        path.point_along(lookahead_m)
+    } else {
+        goal
     }
 }

@@ -35,7 +35,9 @@ use crate::policy::env::SeedBank;
 use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
 use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker};
 use crate::policy::{Actor, PosePrior};
-use crate::scene::{plan_path, MovingObstacle, Obstacle2, WalkableMap};
+use crate::scene::{
+    guide_aim, plan_path, MovingObstacle, Obstacle2, WalkableMap, GUIDE_CLEARANCE_M,
+};
 use crate::sensing::Sensor;
 
 /// A primitive moving the pelvis less than this (m, horizontal) with the goal still ahead
@@ -133,6 +135,11 @@ pub struct CrowdSettings {
     pub wander_distance_m: (f64, f64),
     /// Free space around sampled goals (m to the nearest non-walkable cell).
     pub clearance_m: f64,
+    /// Policy steering: with L > 0 the policy is shown a guide's aim instead of its goal where
+    /// a wall or obstacle hides the goal: the point L m along the shortest path on the
+    /// walkable map ([`guide_aim`]; the others are left to the policy). 0 (default): the goal
+    /// itself, as EgoGen.
+    pub guide_lookahead_m: f64,
     pub seed: u64,
 }
 
@@ -146,6 +153,7 @@ impl Default for CrowdSettings {
             stop_when_done: true,
             wander_distance_m: (2.0, 5.0),
             clearance_m: 0.4,
+            guide_lookahead_m: 0.0,
             seed: 0,
         }
     }
@@ -490,10 +498,21 @@ impl<'m> Agent<'m> {
                 let mut obs = vec![0f32; actor.obs_layout().dim()];
                 let time_left =
                     1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
+                let aim = match settings.guide_lookahead_m {
+                    l if l > 0.0 => guide_aim(
+                        around.map,
+                        around.obstacle.map_or(&[], std::slice::from_ref),
+                        GUIDE_CLEARANCE_M,
+                        self.walker.view.pelvis,
+                        self.goal,
+                        l,
+                    ),
+                    _ => self.goal,
+                };
                 self.walker.observe_into(
                     &self.body,
                     sensor,
-                    self.goal,
+                    aim,
                     around,
                     t0_s,
                     time_left.max(0.0),
@@ -543,6 +562,7 @@ impl<'m> Agent<'m> {
         let limits = Limits {
             success_m: settings.success_m,
             penetration_cells: 3,
+            people_every_frame: false,
         };
         let weights = RewardWeights::default();
         let situation = self.walker.situation(around, self.goal, t0_s);
