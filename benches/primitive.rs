@@ -4,6 +4,8 @@
 //! burn, burn in f16 and bf16 (1 and 64), and the whole inference call (network, world frames,
 //! 67 markers and CPF per frame in f64) for one primitive and for 16.
 //! Prints the network's multiply-adds per primitive so that achieved FLOP/s can be read off.
+//! `half_matvec`: one GRU step's f16 products (frame rows, hidden gates, output layer) with
+//! sixteen lanes (AVX-512F, where the processor has it) and with eight (AVX2), side by side.
 //! `EGOGEN_PRIMITIVE_WEIGHTS=path` benches other weights (e.g. the narrow knob model).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -109,6 +111,35 @@ fn bench(c: &mut Criterion) {
         );
     }
     g.finish();
+
+    use egogen::motion::cvae::half_matvec::HalfMatrix;
+    if HalfMatrix::supported() {
+        let mut g = c.benchmark_group("half_matvec");
+        let step: Vec<(HalfMatrix, Vec<f32>, Vec<f32>)> = [(270, 768), (256, 768), (256, 135)]
+            .into_iter()
+            .map(|(k, n)| {
+                let w: Vec<f32> = (0..k * n).map(|i| ((i as f32) * 0.0137).cos()).collect();
+                let x: Vec<f32> = (0..k).map(|i| ((i as f32) * 0.71).sin()).collect();
+                (HalfMatrix::new(k, n, &w), x, vec![0f32; n])
+            })
+            .collect();
+        let mut ys: Vec<Vec<f32>> = step.iter().map(|s| s.2.clone()).collect();
+        g.bench_function("gru_step_sixteen_lanes", |b| {
+            b.iter(|| {
+                for ((m, x, _), y) in step.iter().zip(ys.iter_mut()) {
+                    m.mul_add(x, y);
+                }
+            })
+        });
+        g.bench_function("gru_step_eight_lanes", |b| {
+            b.iter(|| {
+                for ((m, x, _), y) in step.iter().zip(ys.iter_mut()) {
+                    m.mul_add_eight_lanes(x, y);
+                }
+            })
+        });
+        g.finish();
+    }
 }
 
 criterion_group!(benches, bench);

@@ -8,7 +8,9 @@
 //! widened to f32 in registers (x86-64 F16C) and accumulated with fused multiply-adds.
 //!
 //! Only on x86-64 processors with AVX2, FMA and F16C ([`HalfMatrix::supported`]); elsewhere the
-//! decoder keeps its f32 path.
+//! decoder keeps its f32 path. Where the processor has AVX-512F the same products run sixteen
+//! lanes at a time, each output's multiply-adds in the same order: the same bits, fewer
+//! instructions (`cargo bench --bench primitive -- half_matvec`).
 
 /// Output columns per tile: eight registers of eight f32 accumulators.
 const TILE: usize = 64;
@@ -84,50 +86,119 @@ impl HalfMatrix {
         );
         assert!(Self::supported(), "f16 products need AVX2, FMA and F16C");
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: the processor has the instructions (checked above); `mul_add_x86` reads
-        // `packed` within its `tiles × inputs × TILE` values and writes `y` within its length.
+        // SAFETY: the processor has the instructions (checked above and here); both kernels
+        // read `packed` within its `tiles × inputs × TILE` values and write `y` within its
+        // length.
+        unsafe {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                self.mul_add_avx512(x, y)
+            } else {
+                self.mul_add_x86(x, y)
+            }
+        }
+    }
+
+    /// [`Self::mul_add`] eight lanes at a time (AVX2), whatever the processor has beyond:
+    /// the reference the 16-lane kernel equals bit for bit.
+    ///
+    /// # Panics
+    /// As [`Self::mul_add`].
+    pub fn mul_add_eight_lanes(&self, x: &[f32], y: &mut [f32]) {
+        assert!(x.len() == self.inputs && y.len() == self.outputs);
+        assert!(Self::supported(), "f16 products need AVX2, FMA and F16C");
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: as in `mul_add`.
         unsafe {
             self.mul_add_x86(x, y)
+        }
+    }
+
+    /// Runs `kernel(tile, out)` on every tile of [`TILE`] outputs: `tile` its packed weights
+    /// (`inputs × TILE`), `out` its [`TILE`] outputs — for the last, partial tile a zero-padded
+    /// copy written back after.
+    fn for_each_tile(&self, y: &mut [f32], mut kernel: impl FnMut(&[u16], &mut [f32; TILE])) {
+        let mut tail = [0f32; TILE];
+        for (t, tile) in self.packed.chunks_exact(self.inputs * TILE).enumerate() {
+            let start = t * TILE;
+            let width = TILE.min(self.outputs - start);
+            if width == TILE {
+                let out = (&mut y[start..start + TILE])
+                    .try_into()
+                    .expect("a full tile");
+                kernel(tile, out);
+            } else {
+                tail[..width].copy_from_slice(&y[start..start + width]);
+                tail[width..].fill(0.0);
+                kernel(tile, &mut tail);
+                y[start..start + width].copy_from_slice(&tail[..width]);
+            }
         }
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma,f16c")]
     unsafe fn mul_add_x86(&self, x: &[f32], y: &mut [f32]) {
-        use std::arch::x86_64::*;
-        let k_n = self.inputs;
-        let mut tail = [0f32; TILE];
-        for (t, tile) in self.packed.chunks_exact(k_n * TILE).enumerate() {
-            let start = t * TILE;
-            let width = TILE.min(self.outputs - start);
-            let out: &mut [f32] = if width == TILE {
-                &mut y[start..start + TILE]
-            } else {
-                tail[..width].copy_from_slice(&y[start..start + width]);
-                tail[width..].fill(0.0);
-                &mut tail
-            };
-            let o = out.as_mut_ptr();
-            let mut acc = [_mm256_setzero_ps(); 8];
-            for (r, a) in acc.iter_mut().enumerate() {
-                *a = _mm256_loadu_ps(o.add(8 * r));
-            }
-            let w = tile.as_ptr();
-            for (k, &xk) in x.iter().enumerate() {
-                let xb = _mm256_set1_ps(xk);
-                let row = w.add(k * TILE);
-                for (r, a) in acc.iter_mut().enumerate() {
-                    let h = _mm_loadu_si128(row.add(8 * r) as *const __m128i);
-                    *a = _mm256_fmadd_ps(xb, _mm256_cvtph_ps(h), *a);
-                }
-            }
-            for (r, a) in acc.iter().enumerate() {
-                _mm256_storeu_ps(o.add(8 * r), *a);
-            }
-            if width < TILE {
-                y[start..start + width].copy_from_slice(&tail[..width]);
-            }
+        // SAFETY: the caller checked the instructions; the kernel reads `inputs × TILE`
+        // weights of the tile and writes its `TILE` outputs.
+        self.for_each_tile(y, |tile, out| unsafe { tile_eight_lanes(tile, x, out) });
+    }
+
+    /// The tiles with 16-lane registers (AVX-512F): per output, the same fused multiply-adds
+    /// in the same order as [`Self::mul_add_x86`], so the same bits, with half the
+    /// conversions and multiply-add instructions.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn mul_add_avx512(&self, x: &[f32], y: &mut [f32]) {
+        // SAFETY: as in `mul_add_x86`.
+        self.for_each_tile(y, |tile, out| unsafe { tile_sixteen_lanes(tile, x, out) });
+    }
+}
+
+/// `out += x · tile` for one tile, eight accumulators of eight lanes, the inputs in order.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,f16c")]
+unsafe fn tile_eight_lanes(tile: &[u16], x: &[f32], out: &mut [f32; TILE]) {
+    use std::arch::x86_64::*;
+    debug_assert_eq!(tile.len(), x.len() * TILE);
+    let (o, w) = (out.as_mut_ptr(), tile.as_ptr());
+    let mut acc = [_mm256_setzero_ps(); 8];
+    for (r, a) in acc.iter_mut().enumerate() {
+        *a = _mm256_loadu_ps(o.add(8 * r));
+    }
+    for (k, &xk) in x.iter().enumerate() {
+        let xb = _mm256_set1_ps(xk);
+        let row = w.add(k * TILE);
+        for (r, a) in acc.iter_mut().enumerate() {
+            let h = _mm_loadu_si128(row.add(8 * r) as *const __m128i);
+            *a = _mm256_fmadd_ps(xb, _mm256_cvtph_ps(h), *a);
         }
+    }
+    for (r, a) in acc.iter().enumerate() {
+        _mm256_storeu_ps(o.add(8 * r), *a);
+    }
+}
+
+/// `out += x · tile` for one tile, four accumulators of sixteen lanes, the inputs in order.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn tile_sixteen_lanes(tile: &[u16], x: &[f32], out: &mut [f32; TILE]) {
+    use std::arch::x86_64::*;
+    debug_assert_eq!(tile.len(), x.len() * TILE);
+    let (o, w) = (out.as_mut_ptr(), tile.as_ptr());
+    let mut acc = [_mm512_setzero_ps(); 4];
+    for (r, a) in acc.iter_mut().enumerate() {
+        *a = _mm512_loadu_ps(o.add(16 * r));
+    }
+    for (k, &xk) in x.iter().enumerate() {
+        let xb = _mm512_set1_ps(xk);
+        let row = w.add(k * TILE);
+        for (r, a) in acc.iter_mut().enumerate() {
+            let h = _mm256_loadu_si256(row.add(16 * r) as *const __m256i);
+            *a = _mm512_fmadd_ps(xb, _mm512_cvtph_ps(h), *a);
+        }
+    }
+    for (r, a) in acc.iter().enumerate() {
+        _mm512_storeu_ps(o.add(16 * r), *a);
     }
 }
 
@@ -151,6 +222,13 @@ mod tests {
         let mut y: Vec<f32> = (0..n).map(|j| j as f32 * 0.01).collect();
         let before = y.clone();
         m.mul_add(&x, &mut y);
+        // Whatever the lanes, the same bits.
+        let mut eight = before.clone();
+        m.mul_add_eight_lanes(&x, &mut eight);
+        assert_eq!(
+            y.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            eight.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
         for j in 0..n {
             let want: f64 = before[j] as f64
                 + (0..k)
@@ -166,6 +244,28 @@ mod tests {
                 let (a, b) = (w[i * n + j], m.get(i, j));
                 assert!((a - b).abs() <= a.abs() * 4.9e-4 + 6e-8, "{a} → {b}");
             }
+        }
+    }
+
+    #[test]
+    fn sixteen_lanes_give_the_bits_of_eight_on_the_decoders_shapes() {
+        if !HalfMatrix::supported() {
+            eprintln!("no AVX2/FMA/F16C here: nothing to check");
+            return;
+        }
+        // The GRU's frame rows and hidden gates, and the output layer (a partial tile).
+        for (k, n) in [(270, 768), (256, 768), (256, 135)] {
+            let w: Vec<f32> = (0..k * n).map(|i| ((i as f32) * 0.0137).cos()).collect();
+            let x: Vec<f32> = (0..k).map(|i| ((i as f32) * 0.71).sin() * 3.0).collect();
+            let m = HalfMatrix::new(k, n, &w);
+            let y0: Vec<f32> = (0..n).map(|j| (j as f32 * 0.3).sin()).collect();
+            let (mut a, mut b) = (y0.clone(), y0);
+            m.mul_add(&x, &mut a);
+            m.mul_add_eight_lanes(&x, &mut b);
+            assert!(
+                a.iter().zip(&b).all(|(p, q)| p.to_bits() == q.to_bits()),
+                "{k} × {n}"
+            );
         }
     }
 }
