@@ -161,6 +161,42 @@ proptest::proptest! {
             proptest::prop_assert_eq!(path.points.len(), 2);
         }
     }
+
+    /// The guide far from the origin: its aim is the goal when the straight way is clear,
+    /// else a point of the planned path no farther than the lookahead (straight-line) from
+    /// the walker, outside the box's clearance once past the start's cell.
+    #[test]
+    fn the_guide_aims_at_the_goal_or_along_a_clear_path_near_the_walker(
+        sx in 0.3f64..5.7, sy in 0.3f64..5.7, gx in 0.3f64..5.7, gy in 0.3f64..5.7,
+        bx in 1.0f64..5.0, by in 1.0f64..5.0, half in 0.1f64..1.0, yaw in 0.0f64..6.3,
+        lookahead in 0.1f64..4.0,
+    ) {
+        let origin = DVec2::new(-3.0e5, 7.0e4);
+        let n = 60;
+        let map = WalkableMap::from_walkable(origin, 0.1, n, n, vec![true; n * n]);
+        let b = Obstacle2::Box {
+            centre: origin + DVec2::new(bx, by),
+            half_extents: DVec2::splat(half),
+            yaw_rad: yaw,
+        };
+        let (from, to) = (origin + DVec2::new(sx, sy), origin + DVec2::new(gx, gy));
+        let aim = guide_aim(&map, &[b], 0.3, from, to, lookahead);
+        proptest::prop_assert!(aim.is_finite());
+        if line_is_clear(&map, &[b], 0.3, from, to) {
+            proptest::prop_assert_eq!(aim, to);
+        } else {
+            let path = plan_path(&map, &[b], 0.3, from, to);
+            if path.found {
+                proptest::prop_assert_eq!(aim, path.point_along(lookahead));
+                proptest::prop_assert!(aim.distance(from) <= lookahead + 1e-6);
+                if aim.distance(from) > 0.15 {
+                    proptest::prop_assert!(!b.grown(0.3 - 0.08).contains(aim), "{} in the box", aim);
+                }
+            } else {
+                proptest::prop_assert_eq!(aim, to);
+            }
+        }
+    }
 }
 
 #[test]
