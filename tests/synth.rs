@@ -261,6 +261,29 @@ fn redrawn_primitives_walk_into_less() {
     assert!(four.checks.outside_region_share < 0.02);
 }
 
+/// The guide (`guide_lookahead_m`): `configs/long_wall.toml`'s walker, its goal hidden behind
+/// a 5 m wall, reaches it round the wall without entering it; the same take without the
+/// guide walks otherwise (the policy alone heads into the wall).
+#[test]
+fn a_guided_walker_goes_round_a_long_wall_to_its_hidden_goal() {
+    let shipped = std::fs::read_to_string(common::repo_root().join("configs/long_wall.toml"))
+        .unwrap()
+        .replace("dir = \"../out/long_wall\"", "dir = \"take\"");
+    let take = |config: &str| {
+        let (_dir, path) = common::run_dir(config);
+        let plan = load_synth_plan(&path).unwrap();
+        run_synth(&plan, false).unwrap().summary.agents.remove(0)
+    };
+    let guided = take(&shipped);
+    assert!(guided.goals[0].reached, "{:?}", guided.goals);
+    assert_eq!(guided.penetration_share, 0.0);
+    let alone = take(&shipped.replace("guide_lookahead_m = 2.0", "guide_lookahead_m = 0.0"));
+    assert_ne!(
+        (alone.primitives, alone.goals[0].final_distance_m),
+        (guided.primitives, guided.goals[0].final_distance_m)
+    );
+}
+
 fn refused(config: &str) -> String {
     let (_dir, path) = common::run_dir(config);
     let out = egogen()

@@ -137,8 +137,8 @@ pub struct CrowdSettings {
     pub clearance_m: f64,
     /// Policy steering: with L > 0 the policy is shown a guide's aim instead of its goal where
     /// a wall or obstacle hides the goal: the point L m along the shortest path on the
-    /// walkable map ([`guide_aim`]; the others are left to the policy). 0 (default): the goal
-    /// itself, as EgoGen.
+    /// walkable map round the standing obstacles ([`guide_aim`]; people and moving obstacles
+    /// are left to the policy). 0 (default): the goal itself, as EgoGen.
     pub guide_lookahead_m: f64,
     pub seed: u64,
 }
@@ -477,12 +477,14 @@ impl<'m> Agent<'m> {
         last[joint::HEAD].z - p.floor_z
     }
 
-    /// Chooses, decodes and judges the next primitive.
+    /// Chooses, decodes and judges the next primitive (`standing`: the world's obstacles
+    /// that do not move, which the guide plans round).
     fn choose(
         &mut self,
         parts: &CrowdParts,
         sensor: &Sensor,
         around: &Surroundings,
+        standing: &[Obstacle2],
         t0_s: f64,
         settings: &CrowdSettings,
     ) -> Result<Option<(DecodedPrimitive, Judged, f64)>, CrowdError> {
@@ -501,7 +503,7 @@ impl<'m> Agent<'m> {
                 let aim = match settings.guide_lookahead_m {
                     l if l > 0.0 => guide_aim(
                         around.map,
-                        around.obstacle.map_or(&[], std::slice::from_ref),
+                        standing,
                         GUIDE_CLEARANCE_M,
                         self.walker.view.pelvis,
                         self.goal,
@@ -833,7 +835,7 @@ pub fn run_crowd(
                 moving: &moving,
             };
             let a = &mut agents[i];
-            match a.choose(parts, &sensor, &around, t0_s, settings)? {
+            match a.choose(parts, &sensor, &around, &world.obstacles, t0_s, settings)? {
                 Some((p, j, r)) => a.take(p, j, r, world, settings),
                 None => {
                     a.walker.fail(0.0);
