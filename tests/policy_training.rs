@@ -332,6 +332,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "stages[1].env.fixed_share",
         ),
         (
+            "[stages.env]",
+            "[stages.env]\nguide_lookahead_m = -1.0",
+            "stages[1].env.guide_lookahead_m",
+        ),
+        (
             "[policy]",
             "[scene]\npath = \"missing.glb\"\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
             "scene.path",

@@ -283,6 +283,12 @@ fn resolve_stage(
             format!("expected a radius > 0 m, got {}", e.success_m),
         ));
     }
+    if !(e.guide_lookahead_m.is_finite() && e.guide_lookahead_m >= 0.0) {
+        return Err(bad(
+            &key("env.guide_lookahead_m"),
+            format!("expected a distance ≥ 0 m, got {}", e.guide_lookahead_m),
+        ));
+    }
     let (lo, hi) = e.scene.box_side_m;
     if !(lo > 0.0
         && hi >= lo
