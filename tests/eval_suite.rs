@@ -83,6 +83,11 @@ fn the_guide_shows_a_visible_goal_itself_and_a_hidden_one_along_the_way_round() 
     let near = DVec2::new(-2.0, 1.0);
     assert!(line_is_clear(&map, &[], 0.3, from, near));
     assert_eq!(guide_aim(&map, &[], 0.3, from, near, 2.0), near);
+    // No lookahead, no guide: the goal, hidden or not.
+    assert_eq!(
+        guide_aim(&map, &[], 0.3, from, DVec2::new(2.0, -2.0), 0.0),
+        DVec2::new(2.0, -2.0)
+    );
     // Behind the wall: 2 m along the way round, which first heads up, away from the goal.
     let hidden = DVec2::new(2.0, -2.0);
     assert!(!line_is_clear(&map, &[], 0.3, from, hidden));

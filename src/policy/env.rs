@@ -602,17 +602,14 @@ impl<'m> PolicyEnv<'m> {
 
     fn observe_into(&self, e: &Episode, out: &mut [f32]) {
         let w = &e.walker;
-        let goal = match self.settings.guide_lookahead_m {
-            l if l > 0.0 => guide_aim(
-                &e.course.map,
-                e.course.obstacle.as_slice(),
-                GUIDE_CLEARANCE_M,
-                w.view.pelvis,
-                e.course.goal,
-                l,
-            ),
-            _ => e.course.goal,
-        };
+        let goal = guide_aim(
+            &e.course.map,
+            e.course.obstacle.as_slice(),
+            GUIDE_CLEARANCE_M,
+            w.view.pelvis,
+            e.course.goal,
+            self.settings.guide_lookahead_m,
+        );
         w.observe_into(
             self.body,
             &self.sensor,

@@ -164,7 +164,8 @@ pub fn line_is_clear(
 /// Where a walker at `at` bound for `goal` should head: the goal itself while the straight
 /// way to it is clear ([`line_is_clear`]); otherwise the point `lookahead_m` along the
 /// shortest path planned around what blocks it (pure pursuit), or the goal when no path is
-/// found. Stateless: the path is planned anew from where the walker stands.
+/// found. A lookahead of 0 (no guide) gives the goal. Stateless: the path is planned anew
+/// from where the walker stands.
 pub fn guide_aim(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
@@ -173,7 +174,7 @@ pub fn guide_aim(
     goal: DVec2,
     lookahead_m: f64,
 ) -> DVec2 {
-    if line_is_clear(map, obstacles, clearance_m, at, goal) {
+    if !(lookahead_m > 0.0) || line_is_clear(map, obstacles, clearance_m, at, goal) {
         return goal;
     }
     let path = plan_path(map, obstacles, clearance_m, at, goal);

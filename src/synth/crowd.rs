@@ -500,17 +500,14 @@ impl<'m> Agent<'m> {
                 let mut obs = vec![0f32; actor.obs_layout().dim()];
                 let time_left =
                     1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
-                let aim = match settings.guide_lookahead_m {
-                    l if l > 0.0 => guide_aim(
-                        around.map,
-                        standing,
-                        GUIDE_CLEARANCE_M,
-                        self.walker.view.pelvis,
-                        self.goal,
-                        l,
-                    ),
-                    _ => self.goal,
-                };
+                let aim = guide_aim(
+                    around.map,
+                    standing,
+                    GUIDE_CLEARANCE_M,
+                    self.walker.view.pelvis,
+                    self.goal,
+                    settings.guide_lookahead_m,
+                );
                 self.walker.observe_into(
                     &self.body,
                     sensor,
