@@ -115,6 +115,32 @@ fn the_guide_shows_a_visible_goal_itself_and_a_hidden_one_along_the_way_round() 
     assert_eq!(guide_aim(&map, &[], 0.3, from, walled, 2.0), walled);
 }
 
+/// An open 6 × 6 m floor of 0.1 m cells with its corner at `origin`, a square box of half side
+/// `half` turned by `yaw` centred at `origin + centre`, and a start and goal at `origin +
+/// start`, `origin + goal`.
+fn far_floor_with_box(
+    origin: DVec2,
+    start: (f64, f64),
+    goal: (f64, f64),
+    centre: (f64, f64),
+    half: f64,
+    yaw: f64,
+) -> (WalkableMap, Obstacle2, DVec2, DVec2) {
+    let n = 60;
+    let map = WalkableMap::from_walkable(origin, 0.1, n, n, vec![true; n * n]);
+    let b = Obstacle2::Box {
+        centre: origin + DVec2::from(centre),
+        half_extents: DVec2::splat(half),
+        yaw_rad: yaw,
+    };
+    (
+        map,
+        b,
+        origin + DVec2::from(start),
+        origin + DVec2::from(goal),
+    )
+}
+
 proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
     /// On a floor far from the origin with a random box in it: a path found is connected
@@ -125,15 +151,8 @@ proptest::proptest! {
         sx in 0.3f64..5.7, sy in 0.3f64..5.7, gx in 0.3f64..5.7, gy in 0.3f64..5.7,
         bx in 1.0f64..5.0, by in 1.0f64..5.0, half in 0.1f64..1.0, yaw in 0.0f64..6.3,
     ) {
-        let origin = DVec2::new(1.0e5, -2.0e5);
-        let n = 60;
-        let map = WalkableMap::from_walkable(origin, 0.1, n, n, vec![true; n * n]);
-        let b = Obstacle2::Box {
-            centre: origin + DVec2::new(bx, by),
-            half_extents: DVec2::splat(half),
-            yaw_rad: yaw,
-        };
-        let (from, to) = (origin + DVec2::new(sx, sy), origin + DVec2::new(gx, gy));
+        let (map, b, from, to) =
+            far_floor_with_box(DVec2::new(1.0e5, -2.0e5), (sx, sy), (gx, gy), (bx, by), half, yaw);
         let path = plan_path(&map, &[b], 0.2, from, to);
         proptest::prop_assert_eq!(path.points.first(), Some(&from));
         proptest::prop_assert_eq!(path.points.last(), Some(&to));
@@ -176,15 +195,8 @@ proptest::proptest! {
         bx in 1.0f64..5.0, by in 1.0f64..5.0, half in 0.1f64..1.0, yaw in 0.0f64..6.3,
         lookahead in 0.1f64..4.0,
     ) {
-        let origin = DVec2::new(-3.0e5, 7.0e4);
-        let n = 60;
-        let map = WalkableMap::from_walkable(origin, 0.1, n, n, vec![true; n * n]);
-        let b = Obstacle2::Box {
-            centre: origin + DVec2::new(bx, by),
-            half_extents: DVec2::splat(half),
-            yaw_rad: yaw,
-        };
-        let (from, to) = (origin + DVec2::new(sx, sy), origin + DVec2::new(gx, gy));
+        let (map, b, from, to) =
+            far_floor_with_box(DVec2::new(-3.0e5, 7.0e4), (sx, sy), (gx, gy), (bx, by), half, yaw);
         let aim = guide_aim(&map, &[b], 0.3, from, to, lookahead);
         proptest::prop_assert!(aim.is_finite());
         if line_is_clear(&map, &[b], 0.3, from, to) {

@@ -86,10 +86,6 @@ const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
     ),
 ];
 
-/// Table 2's policies (paper Tab. 2: egocentric sensing against a local map, in the
-/// apartment): the shipped policy's apartment stage and the same two runs observing a local
-/// map instead of the rays; then the continuations that led to the shipped policy (pace,
-/// crowds, doors closed, floor plans) and the Eq. 11 one beside them. Label, weights, configs.
 /// Table 2's row beyond the paper: the shipped policy guided round walls
 /// (`guide_lookahead_m`, docs/POLICY.md "A guide round walls").
 const TABLE2_GUIDED: (&str, &str, &str) = (
@@ -101,6 +97,10 @@ const TABLE2_GUIDED: (&str, &str, &str) = (
 /// The guided row's lookahead (m).
 const TABLE2_GUIDE_LOOKAHEAD_M: f64 = 2.0;
 
+/// Table 2's policies (paper Tab. 2: egocentric sensing against a local map, in the
+/// apartment): the shipped policy's apartment stage and the same two runs observing a local
+/// map instead of the rays; then the continuations that led to the shipped policy (pace,
+/// crowds, doors closed, floor plans) and the Eq. 11 one beside them. Label, weights, configs.
 const TABLE2_POLICIES: [(&str, &str, &str); 8] = [
     (
         "egocentric sensing (32 rays)",
@@ -739,6 +739,7 @@ fn table2(args: &EvalArgs, c: &Common, results: &Path) -> Result<()> {
         fixed: Some(&fixed),
     };
     let settings = table2_settings();
+    // Each policy sampled and mean, the guided row likewise, sampling, path following.
     let progress = bar(args, TABLE2_POLICIES.len() * 2 + 4, "policy × actions rows");
     let mut rows = policy_rows(
         args,

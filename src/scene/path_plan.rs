@@ -149,6 +149,10 @@ pub fn line_is_clear(
     b: DVec2,
 ) -> bool {
     let length = a.distance(b);
+    if length == 0.0 {
+        return true;
+    }
+    let grown: Vec<Obstacle2> = obstacles.iter().map(|o| o.grown(clearance_m)).collect();
     let steps = (length / (0.5 * map.cell_m)).ceil().max(1.0) as usize;
     (0..=steps)
         .map(|k| k as f64 / steps as f64 * length)
@@ -157,7 +161,7 @@ pub fn line_is_clear(
         .all(|p| {
             map.is_walkable_at(p)
                 && map.sdf_at(p) >= clearance_m
-                && !obstacles.iter().any(|o| o.grown(clearance_m).contains(p))
+                && !grown.iter().any(|o| o.contains(p))
         })
 }
 

@@ -76,15 +76,7 @@ impl HalfMatrix {
     /// When the lengths disagree with the matrix, or on a processor without the instructions
     /// ([`Self::supported`] says; a caller's bug).
     pub fn mul_add(&self, x: &[f32], y: &mut [f32]) {
-        assert!(
-            x.len() == self.inputs && y.len() == self.outputs,
-            "{} inputs and {} outputs for a {} × {} matrix",
-            x.len(),
-            y.len(),
-            self.inputs,
-            self.outputs
-        );
-        assert!(Self::supported(), "f16 products need AVX2, FMA and F16C");
+        self.check(x, y);
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the processor has the instructions (checked above and here); both kernels
         // read `packed` within its `tiles × inputs × TILE` values and write `y` within its
@@ -104,13 +96,25 @@ impl HalfMatrix {
     /// # Panics
     /// As [`Self::mul_add`].
     pub fn mul_add_eight_lanes(&self, x: &[f32], y: &mut [f32]) {
-        assert!(x.len() == self.inputs && y.len() == self.outputs);
-        assert!(Self::supported(), "f16 products need AVX2, FMA and F16C");
+        self.check(x, y);
         #[cfg(target_arch = "x86_64")]
         // SAFETY: as in `mul_add`.
         unsafe {
             self.mul_add_x86(x, y)
         }
+    }
+
+    /// Panics unless `x` and `y` fit the matrix and the processor has the instructions.
+    fn check(&self, x: &[f32], y: &[f32]) {
+        assert!(
+            x.len() == self.inputs && y.len() == self.outputs,
+            "{} inputs and {} outputs for a {} × {} matrix",
+            x.len(),
+            y.len(),
+            self.inputs,
+            self.outputs
+        );
+        assert!(Self::supported(), "f16 products need AVX2, FMA and F16C");
     }
 
     /// Runs `kernel(tile, out)` on every tile of [`TILE`] outputs: `tile` its packed weights
