@@ -125,6 +125,33 @@ fn a_crossing_take_is_complete_and_deterministic_per_seed() {
     assert!(!dir.path().join("a.partial").exists());
 }
 
+/// `[motion] anticipate_people` reaches the crowd stepping: on by default, recorded in the
+/// summary, and the same crossing walked in EgoGen's loop (the others where they were last
+/// put) takes another way.
+#[test]
+fn the_crowd_loop_is_chosen_by_anticipate_people() {
+    let ahead = crossing("ahead", 3);
+    let as_placed = ahead
+        .replace("[motion]\n", "[motion]\nanticipate_people = false\n")
+        .replace("dir = \"ahead\"", "dir = \"placed\"");
+    let (dir, path) = common::run_dir(&ahead);
+    std::fs::write(dir.path().join("placed.toml"), &as_placed).unwrap();
+    let plans = [
+        load_synth_plan(&path).unwrap(),
+        load_synth_plan(&dir.path().join("placed.toml")).unwrap(),
+    ];
+    assert!(plans[0].settings.anticipate_people);
+    assert!(!plans[1].settings.anticipate_people);
+    for plan in &plans {
+        run_synth(plan, false).unwrap();
+    }
+    let (a, b) = (dir.path().join("ahead"), dir.path().join("placed"));
+    assert_eq!(summary(&a)["about"]["settings"]["anticipate_people"], true);
+    assert_eq!(summary(&b)["about"]["settings"]["anticipate_people"], false);
+    let bytes = |d: &Path| std::fs::read(d.join("agents/left/motion.npz")).unwrap();
+    assert_ne!(bytes(&a), bytes(&b));
+}
+
 /// numpy reads the npz as an AMASS SMPL-X file: the keys, shapes and dtypes the `smplx`
 /// package's AMASS loaders read. The Python is the managed Blender environment's (bpy depends
 /// on numpy), provisioned on first use as a first render would.

@@ -46,7 +46,9 @@ pub struct EvalArgs {
     pub scenarios: Vec<String>,
     /// Only these controllers of table1 and speed (comma-separated names, e.g.
     /// policy,policy_mean); `policy_spread_S` adds the policy with its sampled actions'
-    /// standard deviation scaled by S (e.g. policy_spread_0.5).
+    /// standard deviation scaled by S (e.g. policy_spread_0.5), `policy_as_placed` and
+    /// `policy_mean_as_placed` the policy in EgoGen's crowd loop (each person sees the others
+    /// where they were last put, not where they will be).
     #[arg(long, value_delimiter = ',')]
     pub controllers: Vec<String>,
     /// Replace results already in OUT.
@@ -417,8 +419,14 @@ fn chosen_scenarios(names: &[String]) -> Result<Vec<Scenario>> {
 
 /// The controllers named (all when none is), or an error naming the unknown one. Besides the
 /// suite's own, `policy_spread_S` names the policy with its sampled actions' standard deviation
-/// scaled by S (e.g. `policy_spread_0.5`; 1 is `policy`, 0 draws the mean).
+/// scaled by S (e.g. `policy_spread_0.5`; 1 is `policy`, 0 draws the mean), and
+/// `policy_as_placed` and `policy_mean_as_placed` the policy in EgoGen's crowd loop.
 fn chosen_controllers(mut all: Vec<Controller>, names: &[String]) -> Result<Vec<Controller>> {
+    for c in Controller::policies_as_placed() {
+        if names.contains(&c.name) && !all.iter().any(|a| a.name == c.name) {
+            all.push(c);
+        }
+    }
     for name in names {
         let Some(s) = name.strip_prefix("policy_spread_") else {
             continue;
@@ -1233,7 +1241,10 @@ Scenarios (`src/eval/scenarios.rs`), each on an open 14 × 14 m floor, starts on
 mocap clips' seed poses: **moving obstacle** — one person walks 5 m; a box of side 0.5–1 m
 crosses the line at right angles (± 30°) at 0.5–1 m/s through a point 35–65 % of the way,
 timed to meet a walker at 0.7 m/s (± 1 s); **N people** — evenly on a circle (random phase),
-each walking to the opposite point, as EgoGen's `main_crowd_eval.py`; **static box** — one
+each walking to the opposite point, as EgoGen's `main_crowd_eval.py`, each seeing the others
+where they will stand when its primitive ends (egogen's crowd stepping, docs/SYNTH.md, 'Seeing
+the others ahead'; `--controllers policy_as_placed,policy_mean_as_placed` adds the policy in
+EgoGen's loop, the others where they were last put); **static box** — one
 person walks 5 m along the x axis past a 1 × 1 m box at the midpoint, the same scene every
 episode. Each person may take as many primitives as the longest walk needs at 0.5 m/s, plus
 2 s.

@@ -68,6 +68,10 @@ pub struct RawSynthMotion {
     /// along the shortest path instead (2 reaches more far goals; default 0: the goal itself,
     /// as EgoGen).
     pub guide_lookahead_m: Option<f64>,
+    /// Whether each walker sees the others where they will stand when its primitive ends and
+    /// judges its primitive against them moving (default true), or sees and judges them where
+    /// they were last put (false: EgoGen's crowd loop).
+    pub anticipate_people: Option<bool>,
     pub seed: Option<u64>,
 }
 
@@ -356,6 +360,7 @@ fn crowd_settings(
             .map_or(defaults.wander_distance_m, |[a, b]| (a, b)),
         clearance_m: m.clearance_m.unwrap_or(defaults.clearance_m),
         guide_lookahead_m: m.guide_lookahead_m.unwrap_or(defaults.guide_lookahead_m),
+        anticipate_people: m.anticipate_people.unwrap_or(defaults.anticipate_people),
         seed: m.seed.unwrap_or(0),
     };
     if !(settings.guide_lookahead_m.is_finite() && settings.guide_lookahead_m >= 0.0) {

@@ -9,13 +9,18 @@ use serde::Serialize;
 use super::metrics::{measure, row, EpisodeResult, Row};
 use super::scenarios::{episode, open_floor, Scenario, WALK_M};
 use crate::body::BodyModel;
-use crate::synth::crowd::{run_crowd, CrowdError, CrowdParts, CrowdTake, CrowdWorld, Steering};
+use crate::synth::crowd::{
+    run_crowd, CrowdError, CrowdParts, CrowdSettings, CrowdTake, CrowdWorld, Steering,
+};
 
 /// A named way of steering every person of a scenario.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Controller {
     pub name: String,
     pub steering: Steering,
+    /// How each person sees the others ([`CrowdSettings::anticipate_people`]; `false`:
+    /// EgoGen's crowd loop).
+    pub anticipate_people: bool,
 }
 
 impl Controller {
@@ -24,10 +29,10 @@ impl Controller {
     pub fn table1(k: usize) -> Vec<Controller> {
         let mut out = Controller::policies();
         out.push(Controller::sampling(k));
-        out.push(Controller {
-            name: format!("path_follow_k{k}"),
-            steering: Steering::PathFollow { k },
-        });
+        out.push(Controller::new(
+            format!("path_follow_k{k}"),
+            Steering::PathFollow { k },
+        ));
         out
     }
 
@@ -42,34 +47,48 @@ impl Controller {
     /// The policy with sampled actions and with the mean action.
     fn policies() -> Vec<Controller> {
         vec![
-            Controller {
-                name: "policy".into(),
-                steering: Steering::POLICY,
-            },
-            Controller {
-                name: "policy_mean".into(),
-                steering: Steering::POLICY_MEAN,
-            },
+            Controller::new("policy".into(), Steering::POLICY),
+            Controller::new("policy_mean".into(), Steering::POLICY_MEAN),
         ]
+    }
+
+    /// The policy with sampled actions (`policy_as_placed`) and with the mean action
+    /// (`policy_mean_as_placed`) in EgoGen's crowd loop: each person sees the others where they
+    /// were last put ([`CrowdSettings::anticipate_people`] off).
+    pub fn policies_as_placed() -> Vec<Controller> {
+        Controller::policies()
+            .into_iter()
+            .map(|c| Controller {
+                name: format!("{}_as_placed", c.name),
+                anticipate_people: false,
+                ..c
+            })
+            .collect()
+    }
+
+    /// A controller with the others anticipated (egogen's default).
+    fn new(name: String, steering: Steering) -> Controller {
+        Controller {
+            name,
+            steering,
+            anticipate_people: CrowdSettings::default().anticipate_people,
+        }
     }
 
     /// The policy's sampled actions with their standard deviation scaled by `spread`.
     pub fn policy_spread(name: &str, spread: f32) -> Controller {
-        Controller {
-            name: name.into(),
-            steering: Steering::Policy {
+        Controller::new(
+            name.into(),
+            Steering::Policy {
                 mean_action: false,
                 spread,
             },
-        }
+        )
     }
 
     /// The sampling controller with `k` latents per primitive.
     fn sampling(k: usize) -> Controller {
-        Controller {
-            name: format!("sampling_k{k}"),
-            steering: Steering::Sampling { k },
-        }
+        Controller::new(format!("sampling_k{k}"), Steering::Sampling { k })
     }
 }
 
@@ -145,7 +164,8 @@ pub fn run_table(
             let results: Vec<(EpisodeResult, Option<CrowdTake>, CrowdWorld)> = (0..episodes as u64)
                 .into_par_iter()
                 .map(|n| {
-                    let ep = episode(scenario, &floor, c.steering, seed, n);
+                    let mut ep = episode(scenario, &floor, c.steering, seed, n);
+                    ep.settings.anticipate_people = c.anticipate_people;
                     let t = Instant::now();
                     let take = run_crowd(parts, &ep.world, &ep.agents, &ep.settings, |_, _| {})
                         .map_err(|source| EvalError::Crowd {

@@ -1,13 +1,16 @@
-//! Crowds (paper Alg. 1): several bodies, each driven by its own controller, walking to their
-//! goals through one world. Agents take one primitive each in turn; before choosing, an agent
-//! senses the others' current 2D boxes (their footprints after their latest primitive) and
-//! the moving obstacles at its clock, with the same rays, observation and reward as the
-//! training environment ([`crate::policy::walker`]). No multi-agent learning: every agent
-//! runs the single-agent controller. One guard beyond the paper: a policy primitive that ends
-//! with the body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), that puts
-//! a body marker inside another person's box or an obstacle in any of its frames, or that ends
-//! with the pelvis off the walkable floor, is redrawn: up to `penetration_redraws` times from
-//! the same policy output, then as many times from the motion model's prior.
+//! Crowds (paper Alg. 1): several bodies, each driven by its own controller, walking to their goals
+//! through one world. Agents take one primitive each in turn; before choosing, an agent senses the
+//! others' 2D boxes and the moving obstacles at its clock, with the same rays, observation and
+//! reward as the training environment ([`crate::policy::walker`]). The others are seen where they
+//! will stand when its primitive ends (someone who stepped earlier in the round where that
+//! primitive ends, someone yet to step moved on at the velocity of their last primitive) and the
+//! primitive is judged against them moving; EgoGen's loop, every box where it was last put, is
+//! [`CrowdSettings::anticipate_people`] off. No multi-agent learning: every agent runs the
+//! single-agent controller. One guard beyond the paper: a policy primitive that ends with the
+//! body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), that puts a body
+//! marker inside another person's box or an obstacle in any of its frames, or that ends with the
+//! pelvis off the walkable floor, is redrawn: up to `penetration_redraws` times from the same
+//! policy output, then as many times from the motion model's prior.
 //!
 //! An agent walks its goals in order; with `wander` it draws a new goal on the walkable map
 //! when its list runs out, until the take ends. A goal counts as reached when the pelvis comes
@@ -61,10 +64,11 @@ pub enum Steering {
     /// The best of `k` random latents by the environment's reward (one primitive ahead).
     Sampling { k: usize },
     /// The path-planning baseline (in the spirit of GAMMA's and DIMOS's A* paths): an A* path
-    /// on the walkable map around the others' current boxes and the moving obstacles where
-    /// they stand, replanned every primitive; of `k` random latents the one whose primitive
-    /// ends nearest the path's point [`PATH_LOOKAHEAD_M`] ahead (a primitive that penetrates,
-    /// Eq. 7, counts [`PATH_PENETRATION_COST_M`] farther). No policy, no reward.
+    /// on the walkable map around the others' boxes as the agent sees them and the moving
+    /// obstacles where they stand, replanned every primitive; of `k` random latents the one
+    /// whose primitive ends nearest the path's point [`PATH_LOOKAHEAD_M`] ahead (a primitive
+    /// that penetrates, Eq. 7, counts [`PATH_PENETRATION_COST_M`] farther). No policy, no
+    /// reward.
     PathFollow { k: usize },
 }
 
@@ -140,6 +144,15 @@ pub struct CrowdSettings {
     /// walkable map round the standing obstacles ([`guide_aim`]; people and moving obstacles
     /// are left to the policy). 0 (default): the goal itself, as EgoGen.
     pub guide_lookahead_m: f64,
+    /// How the walker whose turn it is sees and judges the others (paper Alg. 1 steps them one
+    /// at a time). `true` (default): its rays see each other person's 2D box where that person
+    /// will stand when the walker's primitive ends — where the primitive it took earlier in the
+    /// round ends, or moved on at the velocity of its last primitive if it has yet to step —
+    /// and its primitive is judged (redraws, Eq. 7) against the boxes moving through it at those
+    /// velocities. `false`: every other box stands where it was last put, for both (EgoGen's
+    /// crowd loop: someone who stepped earlier in the round is where their primitive ends,
+    /// someone yet to step where they stand now). docs/SYNTH.md, "Seeing the others ahead".
+    pub anticipate_people: bool,
     pub seed: u64,
 }
 
@@ -154,6 +167,7 @@ impl Default for CrowdSettings {
             wander_distance_m: (2.0, 5.0),
             clearance_m: 0.4,
             guide_lookahead_m: 0.0,
+            anticipate_people: true,
             seed: 0,
         }
     }
@@ -477,13 +491,16 @@ impl<'m> Agent<'m> {
         last[joint::HEAD].z - p.floor_z
     }
 
-    /// Chooses, decodes and judges the next primitive (`standing`: the world's obstacles
-    /// that do not move, which the guide plans round).
+    /// Chooses, decodes and judges the next primitive: sensing `around`, judged against
+    /// `judged` (the same map, the others as [`CrowdSettings::anticipate_people`] says);
+    /// `standing`: the world's obstacles that do not move, which the guide plans round.
+    #[allow(clippy::too_many_arguments)]
     fn choose(
         &mut self,
         parts: &CrowdParts,
         sensor: &Sensor,
         around: &Surroundings,
+        judged: &Surroundings,
         standing: &[Obstacle2],
         t0_s: f64,
         settings: &CrowdSettings,
@@ -564,7 +581,7 @@ impl<'m> Agent<'m> {
             people_every_frame: false,
         };
         let weights = RewardWeights::default();
-        let situation = self.walker.situation(around, self.goal, t0_s);
+        let situation = self.walker.situation(judged, self.goal, t0_s);
         let mut best: Option<(DecodedPrimitive, Judged, f64, f64)> = None;
         for d in decoded {
             match d {
@@ -761,6 +778,66 @@ fn draw_action(mean: &[f32], std: &[f32], rng: &mut ChaCha8Rng) -> Vec<f32> {
         .collect()
 }
 
+/// An agent's box after its primitive of `primitive_s` seconds from `t0_s` (its box then:
+/// `before`) put it at `now` (at `t_now_s`, the primitive's end): moving on at the primitive's
+/// velocity when `moving_on` (it still walks and people are anticipated), else standing there.
+fn stepped_box(
+    before: &MovingObstacle,
+    now: Obstacle2,
+    (t0_s, t_now_s): (f64, f64),
+    primitive_s: f64,
+    moving_on: bool,
+) -> MovingObstacle {
+    let velocity = if moving_on {
+        (now.centre() - before.at(t0_s).centre()) / primitive_s
+    } else {
+        DVec2::ZERO
+    };
+    MovingObstacle {
+        at_start: now.translated(-velocity * t_now_s),
+        velocity_m_per_s: velocity,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn footprint(x: f64, y: f64) -> Obstacle2 {
+        Obstacle2::Box {
+            centre: DVec2::new(x, y),
+            half_extents: DVec2::new(0.3, 0.15),
+            yaw_rad: 0.4,
+        }
+    }
+
+    #[test]
+    fn a_stepped_box_moves_on_along_its_primitive_or_stands() {
+        let d = NEW_FRAMES as f64 / PRIMITIVE_RATE_HZ;
+        // Placed at (1, 2) at 0.9 s, still since; its primitive to 1.35 s ends at (1.45, 2.0).
+        let before = MovingObstacle {
+            at_start: footprint(1.0, 2.0),
+            velocity_m_per_s: DVec2::ZERO,
+        };
+        let (t0, t1) = (frame_time_s(2, 0), frame_time_s(3, 0));
+        let now = footprint(1.45, 2.0);
+        let on = stepped_box(&before, now, (t0, t1), d, true);
+        assert!((on.velocity_m_per_s - DVec2::new(1.0, 0.0)).length() < 1e-9);
+        assert!((on.at(t1).centre() - now.centre()).length() < 1e-9);
+        assert!((on.at(t0).centre() - DVec2::new(1.0, 2.0)).length() < 1e-9);
+        assert!((on.at(t1 + d).centre() - DVec2::new(1.9, 2.0)).length() < 1e-9);
+        // The shape and turn are the new footprint's.
+        let Obstacle2::Box { yaw_rad, .. } = on.at(t0) else {
+            panic!("a box")
+        };
+        assert_eq!(yaw_rad, 0.4);
+        let still = stepped_box(&before, now, (t0, t1), d, false);
+        assert_eq!(still.velocity_m_per_s, DVec2::ZERO);
+        assert_eq!(still.at(0.0), now);
+        assert_eq!(still.at(t1 + 10.0), now);
+    }
+}
+
 /// A finished take: every agent's track, all of the same length.
 #[derive(Debug, Clone, Serialize)]
 pub struct CrowdTake {
@@ -797,7 +874,9 @@ pub fn run_crowd(
         })
         .chain(world.moving.iter().copied())
         .collect();
-    // Every agent's current 2D box; an agent's is renewed when it moves.
+    // Every agent's 2D box on the take's clock: where its last primitive put it, moving on at
+    // that primitive's velocity (zero before its first, once it stops, and when people are not
+    // anticipated). Renewed when the agent steps.
     let mut boxes: Vec<MovingObstacle> = agents
         .iter()
         .map(|a| MovingObstacle {
@@ -805,7 +884,9 @@ pub fn run_crowd(
             velocity_m_per_s: DVec2::ZERO,
         })
         .collect();
-    let mut moving = Vec::with_capacity(fixed.len() + agents.len());
+    let mut seen = Vec::with_capacity(fixed.len() + agents.len());
+    let mut judged = Vec::with_capacity(fixed.len() + agents.len());
+    let primitive_s = NEW_FRAMES as f64 / PRIMITIVE_RATE_HZ;
     let mut rounds = 0;
     for step in 0..settings.primitives {
         if settings.stop_when_done && !agents.iter().any(Agent::active) {
@@ -816,30 +897,59 @@ pub fn run_crowd(
             if !agents[i].active() {
                 continue;
             }
-            // The others' current 2D boxes, still for this primitive.
-            moving.clear();
-            moving.extend_from_slice(&fixed);
-            moving.extend(
+            // The others: seen still where they stand when this primitive ends, judged moving
+            // through it (with `anticipate_people` off, both where they were last put).
+            let others = || {
                 boxes
                     .iter()
                     .enumerate()
                     .filter(|(k, _)| *k != i)
-                    .map(|(_, b)| *b),
-            );
-            let around = Surroundings {
-                map: &world.map,
-                obstacle: None,
-                moving: &moving,
+                    .map(|(_, b)| b)
             };
+            seen.clear();
+            seen.extend_from_slice(&fixed);
+            seen.extend(others().map(|b| MovingObstacle {
+                at_start: b.at(t0_s + primitive_s),
+                velocity_m_per_s: DVec2::ZERO,
+            }));
+            judged.clear();
+            judged.extend_from_slice(&fixed);
+            judged.extend(others().copied());
+            let (around_seen, around_judged) = (
+                Surroundings {
+                    map: &world.map,
+                    obstacle: None,
+                    moving: &seen,
+                },
+                Surroundings {
+                    map: &world.map,
+                    obstacle: None,
+                    moving: &judged,
+                },
+            );
             let a = &mut agents[i];
-            match a.choose(parts, &sensor, &around, &world.obstacles, t0_s, settings)? {
+            match a.choose(
+                parts,
+                &sensor,
+                &around_seen,
+                &around_judged,
+                &world.obstacles,
+                t0_s,
+                settings,
+            )? {
                 Some((p, j, r)) => a.take(p, j, r, world, settings),
                 None => {
                     a.walker.fail(0.0);
                     a.stop(AgentState::DecoderFailure);
                 }
             }
-            boxes[i].at_start = a.walker.view.footprint();
+            boxes[i] = stepped_box(
+                &boxes[i],
+                a.walker.view.footprint(),
+                (t0_s, frame_time_s(step + 1, 0)),
+                primitive_s,
+                settings.anticipate_people && a.active(),
+            );
         }
         rounds = step + 1;
         progress(rounds, settings.primitives);
