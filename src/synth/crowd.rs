@@ -778,18 +778,18 @@ fn draw_action(mean: &[f32], std: &[f32], rng: &mut ChaCha8Rng) -> Vec<f32> {
         .collect()
 }
 
-/// An agent's box after its primitive of `primitive_s` seconds from `t0_s` (its box then:
-/// `before`) put it at `now` (at `t_now_s`, the primitive's end): moving on at the primitive's
-/// velocity when `moving_on` (it still walks and people are anticipated), else standing there.
+/// An agent's box after a primitive of `primitive_s` seconds took its centre from `before` to
+/// `now`'s, at `t_now_s`: moving on at the primitive's velocity when `moving_on` (it still
+/// walks and people are anticipated), else standing there.
 fn stepped_box(
-    before: &MovingObstacle,
+    before: DVec2,
     now: Obstacle2,
-    (t0_s, t_now_s): (f64, f64),
+    t_now_s: f64,
     primitive_s: f64,
     moving_on: bool,
 ) -> MovingObstacle {
     let velocity = if moving_on {
-        (now.centre() - before.at(t0_s).centre()) / primitive_s
+        (now.centre() - before) / primitive_s
     } else {
         DVec2::ZERO
     };
@@ -814,14 +814,11 @@ mod tests {
     #[test]
     fn a_stepped_box_moves_on_along_its_primitive_or_stands() {
         let d = NEW_FRAMES as f64 / PRIMITIVE_RATE_HZ;
-        // Placed at (1, 2) at 0.9 s, still since; its primitive to 1.35 s ends at (1.45, 2.0).
-        let before = MovingObstacle {
-            at_start: footprint(1.0, 2.0),
-            velocity_m_per_s: DVec2::ZERO,
-        };
+        // At (1, 2) at 0.9 s; its primitive to 1.35 s ends at (1.45, 2.0).
+        let before = DVec2::new(1.0, 2.0);
         let (t0, t1) = (frame_time_s(2, 0), frame_time_s(3, 0));
         let now = footprint(1.45, 2.0);
-        let on = stepped_box(&before, now, (t0, t1), d, true);
+        let on = stepped_box(before, now, t1, d, true);
         assert!((on.velocity_m_per_s - DVec2::new(1.0, 0.0)).length() < 1e-9);
         assert!((on.at(t1).centre() - now.centre()).length() < 1e-9);
         assert!((on.at(t0).centre() - DVec2::new(1.0, 2.0)).length() < 1e-9);
@@ -831,7 +828,7 @@ mod tests {
             panic!("a box")
         };
         assert_eq!(yaw_rad, 0.4);
-        let still = stepped_box(&before, now, (t0, t1), d, false);
+        let still = stepped_box(before, now, t1, d, false);
         assert_eq!(still.velocity_m_per_s, DVec2::ZERO);
         assert_eq!(still.at(0.0), now);
         assert_eq!(still.at(t1 + 10.0), now);
@@ -915,18 +912,15 @@ pub fn run_crowd(
             judged.clear();
             judged.extend_from_slice(&fixed);
             judged.extend(others().copied());
-            let (around_seen, around_judged) = (
-                Surroundings {
-                    map: &world.map,
-                    obstacle: None,
-                    moving: &seen,
-                },
-                Surroundings {
-                    map: &world.map,
-                    obstacle: None,
-                    moving: &judged,
-                },
-            );
+            let around_seen = Surroundings {
+                map: &world.map,
+                obstacle: None,
+                moving: &seen,
+            };
+            let around_judged = Surroundings {
+                moving: &judged,
+                ..around_seen
+            };
             let a = &mut agents[i];
             match a.choose(
                 parts,
@@ -944,9 +938,9 @@ pub fn run_crowd(
                 }
             }
             boxes[i] = stepped_box(
-                &boxes[i],
+                boxes[i].at(t0_s).centre(),
                 a.walker.view.footprint(),
-                (t0_s, frame_time_s(step + 1, 0)),
+                frame_time_s(step + 1, 0),
                 primitive_s,
                 settings.anticipate_people && a.active(),
             );
