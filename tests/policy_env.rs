@@ -640,6 +640,55 @@ fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box
     );
 }
 
+/// `people_seen_ahead`: the crossing people are seen where they will stand when the
+/// primitive ends, which changes the rays only (and not at all for people standing still),
+/// never how a primitive is judged.
+#[test]
+fn people_seen_ahead_change_the_rays_only_and_not_for_people_standing_still() {
+    use egogen::policy::crossing_scene::CrossingSettings;
+    env_parts!(body, ctx, model, bank, prior);
+    let settings = |ahead: bool, speed_m_s: (f64, f64)| EnvSettings {
+        crossing: CrossingSettings {
+            share: 1.0,
+            people: (2, 3),
+            speed_m_s,
+            ..CrossingSettings::default()
+        },
+        people_seen_ahead: ahead,
+        ..EnvSettings::default()
+    };
+    let b = 6;
+    let rays = OBS_RAYS_OFFSET..OBS_RAYS_OFFSET + 2 * RAYS;
+    for (speed, moving) in [((0.6, 1.3), true), ((0.0, 0.0), false)] {
+        let mut now =
+            PolicyEnv::new(&model, &ctx, &bank, &prior, settings(false, speed), b, 7).unwrap();
+        let mut ahead =
+            PolicyEnv::new(&model, &ctx, &bank, &prior, settings(true, speed), b, 7).unwrap();
+        let l = now.latent_dim();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut rays_differ = 0;
+        for _ in 0..6 {
+            let (o, a) = (now.observations(), ahead.observations());
+            for (x, y) in o.chunks(OBS_DIM).zip(a.chunks(OBS_DIM)) {
+                assert_eq!(x[..rays.start], y[..rays.start]);
+                assert_eq!(x[rays.end..], y[rays.end..]);
+                rays_differ += usize::from(x[rays.clone()] != y[rays.clone()]);
+            }
+            let z = normal_samples(&mut rng, b * l);
+            let rewards = |c: Vec<egogen::policy::env::Candidate>| {
+                c.iter().map(|c| c.reward.to_bits()).collect::<Vec<_>>()
+            };
+            assert_eq!(
+                rewards(now.propose(&z, 1).unwrap()),
+                rewards(ahead.propose(&z, 1).unwrap())
+            );
+            now.step(&z).unwrap();
+            ahead.step(&z).unwrap();
+        }
+        assert_eq!(rays_differ > 0, moving, "speeds {speed:?}: {rays_differ}");
+    }
+}
+
 /// The guide (`guide_lookahead_m`): in floor plans, an episode whose goal the straight way
 /// reaches is observed as without it; one whose goal a wall hides sees other goal
 /// directions (towards the way round), and the same distance and rays.

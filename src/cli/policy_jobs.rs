@@ -108,6 +108,10 @@ pub enum PolicyCommand {
         /// metres along the shortest path (0, the default: the goal itself, as EgoGen).
         #[arg(long, default_value_t = 0.0)]
         guide_lookahead_m: f64,
+        /// Show the walker the crossing people where they will stand when its primitive ends,
+        /// as `egogen synth`'s crowds do (a policy trained with `people_seen_ahead`).
+        #[arg(long)]
+        people_seen_ahead: bool,
         #[arg(long, default_value_t = 200)]
         episodes: usize,
         /// Episodes run in parallel (one decode batch).
@@ -219,6 +223,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             rooms_share,
             crossing_people,
             guide_lookahead_m,
+            people_seen_ahead,
         } => {
             if let Some(f) = &episodes_jsonl {
                 refuse_existing(f)?;
@@ -283,6 +288,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     ..defaults.rooms
                 },
                 guide_lookahead_m,
+                people_seen_ahead,
                 ..defaults
             };
             if max_primitives == Some(0) {

@@ -29,7 +29,7 @@ use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
 use super::reward::{judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest};
 use super::room_scene::{RoomParams, RoomScene, RoomSettings};
-use super::walker::{frame_time_s, place_seed, SeedView, Surroundings, Totals, Walker};
+use super::walker::{frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker};
 pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
 use crate::math::random::uniform_open01;
@@ -74,6 +74,11 @@ pub struct EnvSettings {
     /// penetrates too (Eq. 7 looks at the primitive's last frame only, and a person crossing
     /// at 1 m/s moves 0.45 m within one); false: Eq. 7 alone, as EgoGen.
     pub people_every_frame: bool,
+    /// Whether the walker's rays see each other person (a crossing's moving box) standing
+    /// where that person will be when the walker's primitive ends, as `egogen synth`'s crowd
+    /// stepping shows them (`CrowdSettings::anticipate_people`); the primitive is still judged
+    /// against them moving. false: where they are at each seed frame's time, as EgoGen.
+    pub people_seen_ahead: bool,
     /// With L > 0, the walker observes a guide's aim instead of its goal where a wall hides
     /// the goal: the point L m along the shortest path around what blocks the straight way
     /// (`scene::guide_aim`; rewards, success and distance stay the goal's). 0: the goal, as
@@ -109,6 +114,7 @@ impl Default for EnvSettings {
             terminate_on_penetration: false,
             penetration_cells: 3,
             people_every_frame: false,
+            people_seen_ahead: false,
             guide_lookahead_m: 0.0,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
             fixed_share: 1.0,
@@ -274,6 +280,12 @@ pub struct EpisodeSummary {
     pub contact: f64,
     /// Mean cos(view, goal direction) at primitive ends.
     pub view_cos: f64,
+    /// cos(view, goal direction) at the end of each primitive, in order.
+    pub view_cos_each: Vec<f64>,
+    /// Their mean without the arrival (an episode's last primitive when it succeeds), where
+    /// the pelvis stands centimetres from the goal and the direction to it is noise; NaN when
+    /// the first primitive arrives.
+    pub view_cos_walking: f64,
     /// Share of the new frames in which a body marker stood inside the obstacle.
     pub penetration_share: f64,
     /// Horizontal pelvis path length over time (m/s).
@@ -299,6 +311,8 @@ impl EpisodeSummary {
             reward: w.totals.reward,
             contact: w.totals.contact / n,
             view_cos: w.totals.view_cos / n,
+            view_cos_each: w.totals.view_cos_each.clone(),
+            view_cos_walking: mean_before_arrival(&w.totals.view_cos_each, ending),
             penetration_share: w.totals.frames_in_obstacle as f64 / w.totals.frames.max(1) as f64,
             speed_m_s: w.speed_m_s(),
             scene_penetration_share: w.totals.scene_penetrating_frames as f64
@@ -306,6 +320,19 @@ impl EpisodeSummary {
             scene_vertices_inside_max: w.totals.scene_vertices_inside_max,
             end_xy: w.view.pelvis.to_array(),
         }
+    }
+}
+
+/// Mean of a measure taken at each primitive's end, without the arrival (the last primitive
+/// of an episode that succeeded); NaN when nothing is left.
+pub fn mean_before_arrival(each: &[f64], ending: Ending) -> f64 {
+    let walking = match ending {
+        Ending::Success => &each[..each.len().saturating_sub(1)],
+        _ => each,
+    };
+    match walking.len() {
+        0 => f64::NAN,
+        k => walking.iter().sum::<f64>() / k as f64,
     }
 }
 
@@ -610,12 +637,24 @@ impl<'m> PolicyEnv<'m> {
             e.course.goal,
             self.settings.guide_lookahead_m,
         );
+        let t0_s = frame_time_s(w.steps, 0);
+        let around = e.course.surroundings();
+        let ahead: Vec<MovingObstacle>;
+        let around = if self.settings.people_seen_ahead && !around.moving.is_empty() {
+            ahead = seen_ahead(around.moving, t0_s).collect();
+            Surroundings {
+                moving: &ahead,
+                ..around
+            }
+        } else {
+            around
+        };
         w.observe_into(
             self.body,
             &self.sensor,
             goal,
-            &e.course.surroundings(),
-            frame_time_s(w.steps, 0),
+            &around,
+            t0_s,
             1.0 - w.steps as f64 / e.course.max_primitives as f64,
             out,
         );

@@ -2,7 +2,8 @@
 //! episodes of an environment whose `episode_base` training never uses, however many run in
 //! parallel. Reported as EgoGen's box-scene table: success (pelvis within the success radius
 //! of the goal), foot contact (3-D, Eq. 12), penetration (share of frames with a body marker
-//! inside the obstacle), cos(view, goal direction), walking speed over successful episodes and
+//! inside the obstacle), cos(view, goal direction) (over all primitives, and over those before
+//! the arrival), walking speed over successful episodes and
 //! the distribution of episode lengths; in a scene with a 3D SDF, scene penetration by paper
 //! Eq. 11 (frames with at least 40 body vertices inside the scene).
 
@@ -25,6 +26,13 @@ pub struct EvalReport {
     pub contact_mean: f64,
     pub penetration_share_mean: f64,
     pub view_cos_mean: f64,
+    /// Mean over episodes of cos(view, goal direction) at the ends of the primitives before
+    /// the arrival (those ending outside the success radius; episodes arriving in their first
+    /// primitive left out).
+    pub view_cos_walking_mean: f64,
+    /// cos(view, goal direction) at the end of the first, second, … primitive, over the
+    /// episodes that took it.
+    pub view_cos_by_primitive: Vec<Quantiles>,
     /// Paper Eq. 11 (0 without a scene SDF): mean share of an episode's frames with at least
     /// 40 body vertices inside the scene, share of episodes with any such frame, and the most
     /// vertices inside in any frame of any episode.
@@ -54,6 +62,27 @@ impl EvalReport {
             contact_mean: mean(|s| s.contact),
             penetration_share_mean: mean(|s| s.penetration_share),
             view_cos_mean: mean(|s| s.view_cos),
+            view_cos_walking_mean: {
+                let walking: Vec<f64> = summaries
+                    .iter()
+                    .map(|s| s.view_cos_walking)
+                    .filter(|v| !v.is_nan())
+                    .collect();
+                walking.iter().sum::<f64>() / walking.len().max(1) as f64
+            },
+            view_cos_by_primitive: (0..summaries
+                .iter()
+                .map(|s| s.view_cos_each.len())
+                .max()
+                .unwrap_or(0))
+                .map(|k| {
+                    Quantiles::of(
+                        summaries
+                            .iter()
+                            .filter_map(|s| s.view_cos_each.get(k).copied()),
+                    )
+                })
+                .collect(),
             scene_penetration_share_mean: mean(|s| s.scene_penetration_share),
             scene_penetration_episode_rate: summaries
                 .iter()
@@ -102,4 +131,59 @@ pub fn run_episodes(
     }
     done.sort_by_key(|s| s.id);
     Ok((done, steps))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::policy::env::mean_before_arrival;
+
+    fn summary(id: u64, ending: Ending, view_cos_each: Vec<f64>) -> EpisodeSummary {
+        let n = view_cos_each.len();
+        EpisodeSummary {
+            id,
+            ending,
+            primitives: n,
+            start_distance_m: 3.0,
+            final_distance_m: 0.1,
+            reward: 1.0,
+            contact: 1.0,
+            view_cos: view_cos_each.iter().sum::<f64>() / n.max(1) as f64,
+            view_cos_walking: mean_before_arrival(&view_cos_each, ending),
+            view_cos_each,
+            penetration_share: 0.0,
+            speed_m_s: 1.0,
+            scene_penetration_share: 0.0,
+            scene_vertices_inside_max: 0,
+            end_xy: [0.0, 0.0],
+        }
+    }
+
+    #[test]
+    fn the_view_is_reported_with_and_without_the_arrival_and_by_primitive() {
+        let summaries = [
+            // Arrives in its third primitive standing on the goal, looking past it.
+            summary(0, Ending::Success, vec![0.9, 0.7, -0.5]),
+            // Times out: every primitive counts.
+            summary(1, Ending::Timeout, vec![0.5, 0.9, 1.0, 0.6]),
+            // Arrives in its first: nothing before the arrival.
+            summary(2, Ending::Success, vec![0.2]),
+        ];
+        let r = EvalReport::of(&summaries, 8, 1.0);
+        let all = (1.1 / 3.0 + 3.0 / 4.0 + 0.2) / 3.0;
+        assert!((r.view_cos_mean - all).abs() < 1e-12);
+        // (0.9 + 0.7) / 2 and the timeout's 0.75; the third episode left out.
+        assert!((r.view_cos_walking_mean - (0.8 + 0.75) / 2.0).abs() < 1e-12);
+        let by: Vec<(usize, f64)> = r
+            .view_cos_by_primitive
+            .iter()
+            .map(|q| (q.count, q.mean))
+            .collect();
+        let want = [(3, 1.6 / 3.0), (2, 0.8), (2, 0.25), (1, 0.6)];
+        assert_eq!(by.len(), want.len());
+        for ((n, m), (wn, wm)) in by.iter().zip(want) {
+            assert_eq!(*n, wn);
+            assert!((m - wm).abs() < 1e-12, "{m} against {wm}");
+        }
+    }
 }

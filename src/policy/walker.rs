@@ -66,6 +66,24 @@ pub fn frame_time_s(steps: usize, f: usize) -> f64 {
     (steps * (PRIMITIVE_FRAMES - SEED_FRAMES) + f) as f64 / PRIMITIVE_RATE_HZ
 }
 
+/// Length of one primitive's new motion (s).
+pub const PRIMITIVE_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PRIMITIVE_RATE_HZ;
+
+/// Obstacles as a walker sees them ahead: each standing where it will be when the primitive
+/// taken at `t0_s` ends (how the crowd stepping shows the other people, and the training
+/// environment with [`EnvSettings::people_seen_ahead`]).
+///
+/// [`EnvSettings::people_seen_ahead`]: super::env::EnvSettings::people_seen_ahead
+pub fn seen_ahead<'a, I: IntoIterator<Item = &'a MovingObstacle>>(
+    moving: I,
+    t0_s: f64,
+) -> impl Iterator<Item = MovingObstacle> + use<'a, I> {
+    moving.into_iter().map(move |m| MovingObstacle {
+        at_start: m.at(t0_s + PRIMITIVE_S),
+        velocity_m_per_s: DVec2::ZERO,
+    })
+}
+
 /// A canonical mocap seed (facing +y, its floor at `floor` in its frame) placed with its
 /// pelvis over `start`, turned to face `facing_rad` (world yaw of the walking direction,
 /// from +x), its floor on world height `floor_z`.
@@ -193,6 +211,9 @@ pub struct Totals {
     pub reward: f64,
     pub contact: f64,
     pub view_cos: f64,
+    /// cos(view, goal direction) at the end of each primitive, in order.
+    #[serde(default)]
+    pub view_cos_each: Vec<f64>,
     pub frames: usize,
     pub frames_in_obstacle: usize,
     pub path_m: f64,
@@ -325,6 +346,7 @@ impl Walker {
         }
         self.totals.contact += j.contact;
         self.totals.view_cos += j.view_cos;
+        self.totals.view_cos_each.push(j.view_cos);
         self.totals.pose_score += j.pose_nll;
         self.totals.frames += p.joints.len() - SEED_FRAMES;
         self.totals.frames_in_obstacle += j.frames_in_obstacle;

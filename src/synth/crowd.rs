@@ -36,7 +36,9 @@ use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
 use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
-use crate::policy::walker::{frame_time_s, place_seed, SeedView, Surroundings, Walker};
+use crate::policy::walker::{
+    frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Walker, PRIMITIVE_S,
+};
 use crate::policy::{Actor, PosePrior};
 use crate::scene::{
     guide_aim, plan_path, MovingObstacle, Obstacle2, WalkableMap, GUIDE_CLEARANCE_M,
@@ -883,7 +885,6 @@ pub fn run_crowd(
         .collect();
     let mut seen = Vec::with_capacity(fixed.len() + agents.len());
     let mut judged = Vec::with_capacity(fixed.len() + agents.len());
-    let primitive_s = NEW_FRAMES as f64 / PRIMITIVE_RATE_HZ;
     let mut rounds = 0;
     for step in 0..settings.primitives {
         if settings.stop_when_done && !agents.iter().any(Agent::active) {
@@ -905,10 +906,7 @@ pub fn run_crowd(
             };
             seen.clear();
             seen.extend_from_slice(&fixed);
-            seen.extend(others().map(|b| MovingObstacle {
-                at_start: b.at(t0_s + primitive_s),
-                velocity_m_per_s: DVec2::ZERO,
-            }));
+            seen.extend(seen_ahead(others(), t0_s));
             judged.clear();
             judged.extend_from_slice(&fixed);
             judged.extend(others().copied());
@@ -941,7 +939,7 @@ pub fn run_crowd(
                 boxes[i].at(t0_s).centre(),
                 a.walker.view.footprint(),
                 frame_time_s(step + 1, 0),
-                primitive_s,
+                PRIMITIVE_S,
                 settings.anticipate_people && a.active(),
             );
         }
