@@ -640,6 +640,35 @@ fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box
     );
 }
 
+/// The view's angle to the direction of travel: a body walking on from mocap seeds with the
+/// prior's mean latent looks about the way it walks, never backwards.
+#[test]
+fn a_body_walking_on_looks_about_the_way_it_walks() {
+    env_parts!(body, ctx, model, bank, prior);
+    let b = 8;
+    let mut env =
+        PolicyEnv::new(&model, &ctx, &bank, &prior, EnvSettings::default(), b, 9).unwrap();
+    let z = vec![0f32; b * env.latent_dim()];
+    let mut angles = Vec::new();
+    for _ in 0..3 {
+        for c in env.propose(&z, 1).unwrap() {
+            let a = c.judged.unwrap().view_off_travel_rad;
+            if !a.is_nan() {
+                assert!((0.0..=std::f64::consts::PI).contains(&a), "{a}");
+                angles.push(a.to_degrees());
+            }
+        }
+        env.step(&z).unwrap();
+    }
+    angles.sort_by(f64::total_cmp);
+    assert!(angles.len() >= b, "{} primitives travelled", angles.len());
+    let median = angles[angles.len() / 2];
+    assert!(
+        median < 30.0,
+        "median {median}° off the way walked: {angles:?}"
+    );
+}
+
 /// `people_seen_ahead`: the crossing people are seen where they will stand when the
 /// primitive ends, which changes the rays only (and not at all for people standing still),
 /// never how a primitive is judged.

@@ -286,6 +286,9 @@ pub struct EpisodeSummary {
     /// the pelvis stands centimetres from the goal and the direction to it is noise; NaN when
     /// the first primitive arrives.
     pub view_cos_walking: f64,
+    /// Angle between the view and the direction of travel, each primitive that travelled
+    /// (degrees; [`super::reward::Judged::view_off_travel_rad`]).
+    pub view_off_travel_deg: Vec<f64>,
     /// Share of the new frames in which a body marker stood inside the obstacle.
     pub penetration_share: f64,
     /// Horizontal pelvis path length over time (m/s).
@@ -313,6 +316,12 @@ impl EpisodeSummary {
             view_cos: w.totals.view_cos / n,
             view_cos_each: w.totals.view_cos_each.clone(),
             view_cos_walking: mean_before_arrival(&w.totals.view_cos_each, ending),
+            view_off_travel_deg: w
+                .totals
+                .view_off_travel_rad
+                .iter()
+                .map(|a| a.to_degrees())
+                .collect(),
             penetration_share: w.totals.frames_in_obstacle as f64 / w.totals.frames.max(1) as f64,
             speed_m_s: w.speed_m_s(),
             scene_penetration_share: w.totals.scene_penetrating_frames as f64

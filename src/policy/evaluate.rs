@@ -33,6 +33,9 @@ pub struct EvalReport {
     /// cos(view, goal direction) at the end of the first, second, … primitive, over the
     /// episodes that took it.
     pub view_cos_by_primitive: Vec<Quantiles>,
+    /// Angle between the view and the direction of travel (degrees), over every primitive
+    /// that travelled: how far the head looks off the way the body walks.
+    pub view_off_travel_deg: Quantiles,
     /// Paper Eq. 11 (0 without a scene SDF): mean share of an episode's frames with at least
     /// 40 body vertices inside the scene, share of episodes with any such frame, and the most
     /// vertices inside in any frame of any episode.
@@ -83,6 +86,11 @@ impl EvalReport {
                     )
                 })
                 .collect(),
+            view_off_travel_deg: Quantiles::of(
+                summaries
+                    .iter()
+                    .flat_map(|s| s.view_off_travel_deg.iter().copied()),
+            ),
             scene_penetration_share_mean: mean(|s| s.scene_penetration_share),
             scene_penetration_episode_rate: summaries
                 .iter()
@@ -151,6 +159,7 @@ mod tests {
             view_cos: view_cos_each.iter().sum::<f64>() / n.max(1) as f64,
             view_cos_walking: mean_before_arrival(&view_cos_each, ending),
             view_cos_each,
+            view_off_travel_deg: vec![10.0, 30.0],
             penetration_share: 0.0,
             speed_m_s: 1.0,
             scene_penetration_share: 0.0,
@@ -174,6 +183,9 @@ mod tests {
         assert!((r.view_cos_mean - all).abs() < 1e-12);
         // (0.9 + 0.7) / 2 and the timeout's 0.75; the third episode left out.
         assert!((r.view_cos_walking_mean - (0.8 + 0.75) / 2.0).abs() < 1e-12);
+        // Pooled over every primitive that travelled (two per episode here).
+        assert_eq!(r.view_off_travel_deg.count, 6);
+        assert!((r.view_off_travel_deg.mean - 20.0).abs() < 1e-12);
         let by: Vec<(usize, f64)> = r
             .view_cos_by_primitive
             .iter()

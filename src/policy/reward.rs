@@ -147,12 +147,20 @@ pub struct Judged {
     pub frames_in_obstacle: usize,
     /// cos(angle) between the viewing direction and the direction to the goal, last frame.
     pub view_cos: f64,
+    /// Angle between the viewing direction in the last frame and the pelvis's horizontal
+    /// direction of travel over the primitive (last seed frame to last frame; rad, 0 to π);
+    /// NaN when the pelvis moved less than [`TRAVEL_MIN_M`].
+    pub view_off_travel_rad: f64,
     /// Scene penetration (paper Eq. 11), where the scene has a 3D SDF: new frames in which at
     /// least [`EQ11_VERTICES`] body vertices lie inside the scene, and the most vertices inside
     /// in any new frame (both 0 without an SDF).
     pub scene_penetrating_frames: usize,
     pub scene_vertices_inside_max: usize,
 }
+
+/// Shortest pelvis travel over a primitive that gives [`Judged::view_off_travel_rad`] a
+/// direction (m).
+pub const TRAVEL_MIN_M: f64 = 0.1;
 
 /// Body vertices with negative scene SDF that make a frame penetrate (paper Eq. 11: 40).
 pub const EQ11_VERTICES: usize = 40;
@@ -291,6 +299,14 @@ pub fn judge(
     let forward = unit_xy(Vec3::Z.cross(joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP]));
     let view = unit_xy(p.world_from_cpf[last].matrix3.z_axis);
     let distance_m = pelvis.distance(s.goal);
+    let travel = {
+        let from = p.joints[SEED_FRAMES - 1][joint::PELVIS];
+        pelvis - DVec2::new(from.x, from.y)
+    };
+    let view_off_travel_rad = match travel.length() >= TRAVEL_MIN_M {
+        true => view.dot(travel.normalize()).clamp(-1.0, 1.0).acos(),
+        false => f64::NAN,
+    };
     // The body's 2D box: markers of the last two frames in the new canonical frame.
     let blocked_cells = match canonical_frame(&p.joints[last + 1 - SEED_FRAMES]) {
         Ok(frame) => {
@@ -349,6 +365,7 @@ pub fn judge(
         pose_nll,
         frames_in_obstacle,
         view_cos: view.dot(to_goal),
+        view_off_travel_rad,
         scene_penetrating_frames: 0,
         scene_vertices_inside_max: 0,
     }

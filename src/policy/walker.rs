@@ -214,6 +214,9 @@ pub struct Totals {
     /// cos(view, goal direction) at the end of each primitive, in order.
     #[serde(default)]
     pub view_cos_each: Vec<f64>,
+    /// The angle between view and travel of each primitive that travelled (rad).
+    #[serde(default)]
+    pub view_off_travel_rad: Vec<f64>,
     pub frames: usize,
     pub frames_in_obstacle: usize,
     pub path_m: f64,
@@ -347,6 +350,9 @@ impl Walker {
         self.totals.contact += j.contact;
         self.totals.view_cos += j.view_cos;
         self.totals.view_cos_each.push(j.view_cos);
+        if !j.view_off_travel_rad.is_nan() {
+            self.totals.view_off_travel_rad.push(j.view_off_travel_rad);
+        }
         self.totals.pose_score += j.pose_nll;
         self.totals.frames += p.joints.len() - SEED_FRAMES;
         self.totals.frames_in_obstacle += j.frames_in_obstacle;
