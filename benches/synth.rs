@@ -162,6 +162,7 @@ fn bench(c: &mut Criterion) {
         success_m: 0.3,
         penetration_cells: 3,
         people_every_frame: false,
+        box_every_frame: false,
     };
     g.bench_function("judge", |b| {
         b.iter(|| egogen::policy::reward::judge(&p, &situation, &feet, &prior, &limits))

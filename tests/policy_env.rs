@@ -590,26 +590,17 @@ fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
     assert!(seen_nearer > 0, "the other person was never in view");
 }
 
-#[test]
-fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box() {
-    use egogen::policy::crossing_scene::CrossingSettings;
+/// Walks the same random primitives in two environments, one testing an obstacle in every
+/// frame (`every`) and one Eq. 7's cells alone (`end_only`), and checks that the test adds
+/// exactly the primitives with a marker inside an obstacle; returns how many met one and how
+/// many only the test caught. Scenes with one kind of obstacle: people or a box.
+fn every_frame_counts(end_only: EnvSettings, every: EnvSettings, rng_seed: u64) -> (usize, usize) {
     env_parts!(body, ctx, model, bank, prior);
-    // Four wide people: bodies meet them often within a few primitives.
-    let settings = |people_every_frame: bool| EnvSettings {
-        crossing: CrossingSettings {
-            share: 1.0,
-            people: (4, 4),
-            footprint_m: (1.2, 1.2),
-            ..CrossingSettings::default()
-        },
-        people_every_frame,
-        ..EnvSettings::default()
-    };
     let (b, per) = (4, 8);
-    let mut end_only = PolicyEnv::new(&model, &ctx, &bank, &prior, settings(false), b, 3).unwrap();
-    let mut every = PolicyEnv::new(&model, &ctx, &bank, &prior, settings(true), b, 3).unwrap();
+    let mut end_only = PolicyEnv::new(&model, &ctx, &bank, &prior, end_only, b, 3).unwrap();
+    let mut every = PolicyEnv::new(&model, &ctx, &bank, &prior, every, b, 3).unwrap();
     let l = end_only.latent_dim();
-    let mut rng = ChaCha8Rng::seed_from_u64(4);
+    let mut rng = ChaCha8Rng::seed_from_u64(rng_seed);
     let (mut touching, mut only_within) = (0, 0);
     for _ in 0..4 {
         let z = normal_samples(&mut rng, b * per * l);
@@ -621,10 +612,9 @@ fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box
             let (Some(a), Some(e)) = (a.judged, e.judged) else {
                 continue;
             };
-            // The same primitive, judged alike but for the people test.
+            // The same primitive, judged alike but for the every-frame test.
             assert_eq!(a.frames_in_obstacle, e.frames_in_obstacle);
             assert_eq!(a.blocked_cells, e.blocked_cells);
-            // No box in a crossing: frames in an obstacle are frames in a person.
             assert_eq!(e.penetrated, a.penetrated || a.frames_in_obstacle > 0);
             touching += usize::from(a.frames_in_obstacle > 0);
             only_within += usize::from(e.penetrated && !a.penetrated);
@@ -633,6 +623,24 @@ fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box
         end_only.step(&z).unwrap();
         every.step(&z).unwrap();
     }
+    (touching, only_within)
+}
+
+#[test]
+fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box() {
+    use egogen::policy::crossing_scene::CrossingSettings;
+    // Four wide people: bodies meet them often within a few primitives.
+    let settings = |people_every_frame: bool| EnvSettings {
+        crossing: CrossingSettings {
+            share: 1.0,
+            people: (4, 4),
+            footprint_m: (1.2, 1.2),
+            ..CrossingSettings::default()
+        },
+        people_every_frame,
+        ..EnvSettings::default()
+    };
+    let (touching, only_within) = every_frame_counts(settings(false), settings(true), 4);
     assert!(touching > 0, "no primitive met a person");
     assert!(
         only_within > 0,
@@ -716,6 +724,27 @@ fn people_seen_ahead_change_the_rays_only_and_not_for_people_standing_still() {
         }
         assert_eq!(rays_differ > 0, moving, "speeds {speed:?}: {rays_differ}");
     }
+}
+
+#[test]
+fn a_box_tested_in_every_frame_penetrates_exactly_when_a_marker_enters_it() {
+    // Starts near large boxes: bodies walking at random brush them within a few primitives.
+    let settings = |box_every_frame: bool| EnvSettings {
+        scene: BoxSceneSettings {
+            box_side_m: (1.5, 2.0),
+            start_margin_m: 0.3,
+            clearance_m: 0.2,
+            ..BoxSceneSettings::default()
+        },
+        box_every_frame,
+        ..EnvSettings::default()
+    };
+    let (touching, only_within) = every_frame_counts(settings(false), settings(true), 8);
+    assert!(touching > 0, "no primitive met the box");
+    assert!(
+        only_within > 0,
+        "every primitive that met the box was caught by the cells at its end"
+    );
 }
 
 /// The guide (`guide_lookahead_m`): in floor plans, an episode whose goal the straight way

@@ -74,6 +74,10 @@ pub struct EnvSettings {
     /// penetrates too (Eq. 7 looks at the primitive's last frame only, and a person crossing
     /// at 1 m/s moves 0.45 m within one); false: Eq. 7 alone, as EgoGen.
     pub people_every_frame: bool,
+    /// Whether a body marker inside a box scene's box in any frame of a primitive penetrates
+    /// too (the eval's penetration measure; Eq. 7 looks at the primitive's last frame only);
+    /// false: Eq. 7 alone, as EgoGen.
+    pub box_every_frame: bool,
     /// Whether the walker's rays see each other person (a crossing's moving box) standing
     /// where that person will be when the walker's primitive ends, as `egogen synth`'s crowd
     /// stepping shows them (`CrowdSettings::anticipate_people`); the primitive is still judged
@@ -114,6 +118,7 @@ impl Default for EnvSettings {
             terminate_on_penetration: false,
             penetration_cells: 3,
             people_every_frame: false,
+            box_every_frame: false,
             people_seen_ahead: false,
             guide_lookahead_m: 0.0,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
@@ -693,6 +698,7 @@ impl<'m> PolicyEnv<'m> {
             success_m: self.settings.success_m,
             penetration_cells: self.settings.penetration_cells,
             people_every_frame: self.settings.people_every_frame,
+            box_every_frame: self.settings.box_every_frame,
         };
         decoded
             .into_par_iter()

@@ -13,7 +13,8 @@
 //!   2D box (the bounding box of the 67 markers of the last two frames, in the new canonical
 //!   frame: paper Eq. 7) — cells of that box inside a moving obstacle at the last frame count
 //!   too — else 0; with [`Limits::people_every_frame`], also 0 when a body marker stands in
-//!   another person's box in any new frame;
+//!   another person's box in any new frame, with [`Limits::box_every_frame`] when one stands
+//!   in a box scene's box;
 //! - pose: 0.05 while the mean pose-prior score of the 20 frames is at most the prior's
 //!   plausibility limit, else 0 (EgoGen: VPoser latent norm ≤ 11);
 //! - success: 1 when the pelvis ends within `success_m` of the goal.
@@ -49,6 +50,11 @@ pub struct RewardWeights {
     /// the timeout. Tab. S2's per-primitive terms pay about 0.85 for every primitive walked,
     /// so without it a body earns most by arriving at the last one.
     pub arrival: f64,
+    /// Looking away (not in Tab. S2, 0 there): this much times `attention − 1` (0 looking at
+    /// the goal, −1 looking away from it) every primitive. Tab. S2's attention term pays for
+    /// every primitive walked, so weighting it more pays for walking slowly; this one costs
+    /// for every primitive spent looking off the goal.
+    pub attention_gap: f64,
 }
 
 impl Default for RewardWeights {
@@ -63,6 +69,7 @@ impl Default for RewardWeights {
             pose: 0.1,
             success: 0.5,
             arrival: 0.0,
+            attention_gap: 0.0,
         }
     }
 }
@@ -94,6 +101,7 @@ impl RewardTerms {
             + w.penetration * self.penetration
             + w.pose * self.pose
             + w.success * self.success
+            + w.attention_gap * (self.attention - 1.0)
     }
 
     /// The weighted sum, with the pace bonus for a success with `primitives_left` primitives
@@ -126,6 +134,9 @@ pub struct Limits {
     /// penetrates too, beside Eq. 7's cells at the primitive's end (which miss a person
     /// passed through within the primitive).
     pub people_every_frame: bool,
+    /// Whether a body marker inside a box scene's box in any new frame penetrates too (the
+    /// cells at the primitive's end miss an arm or a shoulder brushing it on the way).
+    pub box_every_frame: bool,
 }
 
 /// One primitive judged.
@@ -329,17 +340,19 @@ pub fn judge(
         }
         Err(_) => usize::MAX,
     };
-    let (mut frames_in_obstacle, mut frames_in_people) = (0, 0);
+    let (mut frames_in_obstacle, mut frames_in_people, mut frames_in_box) = (0, 0, 0);
     for (k, f) in p.markers[SEED_FRAMES..].iter().enumerate() {
         let t = s.t0_s + (SEED_FRAMES + k) as f64 / PRIMITIVE_RATE_HZ;
         let inside = |o: &Obstacle2| f.iter().any(|m| o.contains(DVec2::new(m.x, m.y)));
         let in_people = s.moving.iter().any(|o| inside(&o.at(t)));
-        let in_obstacle = in_people || s.obstacle.is_some_and(inside);
+        let in_box = s.obstacle.is_some_and(inside);
         frames_in_people += usize::from(in_people);
-        frames_in_obstacle += usize::from(in_obstacle);
+        frames_in_box += usize::from(in_box);
+        frames_in_obstacle += usize::from(in_people || in_box);
     }
     let penetrated = blocked_cells > limits.penetration_cells
-        || (limits.people_every_frame && frames_in_people > 0);
+        || (limits.people_every_frame && frames_in_people > 0)
+        || (limits.box_every_frame && frames_in_box > 0);
     let success = distance_m < limits.success_m;
     let terms = RewardTerms {
         floor,
@@ -437,5 +450,26 @@ mod tests {
             terms(1.0).total_with_arrival(&pace, 0),
             terms(1.0).total(&pace)
         );
+    }
+
+    #[test]
+    fn looking_away_costs_its_weight_times_the_attention_gap_and_nothing_on_the_goal() {
+        let terms = |attention: f64| RewardTerms {
+            attention,
+            goal: 0.3,
+            skate: 0.9,
+            ..RewardTerms::default()
+        };
+        let tab_s2 = RewardWeights::default();
+        let gap = RewardWeights {
+            attention_gap: 2.0,
+            ..tab_s2
+        };
+        // Looking at the goal: no cost; at right angles (attention 0.5): half the weight;
+        // away from it: the whole weight.
+        for (attention, cost) in [(1.0, 0.0), (0.5, 1.0), (0.0, 2.0)] {
+            let d = terms(attention).total(&tab_s2) - terms(attention).total(&gap);
+            assert!((d - cost).abs() < 1e-12, "{attention}: {d}");
+        }
     }
 }

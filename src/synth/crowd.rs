@@ -581,6 +581,7 @@ impl<'m> Agent<'m> {
             success_m: settings.success_m,
             penetration_cells: 3,
             people_every_frame: false,
+            box_every_frame: false,
         };
         let weights = RewardWeights::default();
         let situation = self.walker.situation(judged, self.goal, t0_s);
