@@ -816,7 +816,7 @@ mod tests {
 
     #[test]
     fn a_stepped_box_moves_on_along_its_primitive_or_stands() {
-        let d = NEW_FRAMES as f64 / PRIMITIVE_RATE_HZ;
+        let d = PRIMITIVE_S;
         // At (1, 2) at 0.9 s; its primitive to 1.35 s ends at (1.45, 2.0).
         let before = DVec2::new(1.0, 2.0);
         let (t0, t1) = (frame_time_s(2, 0), frame_time_s(3, 0));
