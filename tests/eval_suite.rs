@@ -356,6 +356,103 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
         std::fs::read(out.path().join("RESULTS.md")).unwrap(),
         before
     );
+    // Another policy's rows beside the kept ones (`--keep-other-rows`): the rows that do not
+    // read the policy and their episodes stay as they were, the table says which were kept.
+    let other = common::repo_root().join("assets/policy/indoors/policy.safetensors");
+    let other = other.to_str().unwrap();
+    let table = |out: &std::path::Path| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(out.join("results/table1.json")).unwrap()).unwrap()
+    };
+    let before = table(out.path());
+    // A policy row left to be kept under another policy is refused, nothing written.
+    let refused = run(&[
+        "--keep-other-rows",
+        "--controllers",
+        "policy",
+        "--policy",
+        other,
+    ]);
+    assert!(!refused.status.success());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        err.contains("policy_mean") && err.contains("--controllers"),
+        "{err}"
+    );
+    // So are rows measured otherwise (here: one episode per row against two).
+    let refused = egogen_eval(
+        &[
+            "--episodes",
+            "1",
+            "--k",
+            "4",
+            "--quiet",
+            "--keep-other-rows",
+            "--controllers",
+            "policy,policy_mean",
+        ],
+        out.path(),
+    );
+    assert!(!refused.status.success());
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(err.contains("\"episodes\" is 2"), "{err}");
+    assert_eq!(table(out.path()), before);
+    let kept = run(&[
+        "--keep-other-rows",
+        "--controllers",
+        "policy,policy_mean",
+        "--policy",
+        other,
+    ]);
+    assert!(
+        kept.status.success(),
+        "{}",
+        String::from_utf8_lossy(&kept.stderr)
+    );
+    let after = table(out.path());
+    let rows = |t: &serde_json::Value| -> Vec<(String, serde_json::Value)> {
+        t["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| (format!("{}/{}", r["scenario"], r["controller"]), r.clone()))
+            .collect()
+    };
+    let (rows_before, rows_after) = (rows(&before), rows(&after));
+    // Same rows in the same order; those of the policy measured again, the others kept.
+    assert_eq!(rows_before.len(), 12);
+    assert_eq!(
+        rows_before.iter().map(|r| &r.0).collect::<Vec<_>>(),
+        rows_after.iter().map(|r| &r.0).collect::<Vec<_>>()
+    );
+    for ((key, b), (_, a)) in rows_before.iter().zip(&rows_after) {
+        if !key.contains("\"policy") {
+            assert_eq!(a, b, "{key} kept");
+        }
+    }
+    assert_ne!(rows_before, rows_after, "the other policy's rows differ");
+    assert_eq!(after["kept"][0]["rows"].as_array().unwrap().len(), 6);
+    assert!(after["policy"]
+        .as_str()
+        .unwrap()
+        .ends_with("indoors/policy.safetensors"));
+    let kept_episodes =
+        std::fs::read_to_string(out.path().join("results/table1_episodes.jsonl")).unwrap();
+    assert_eq!(kept_episodes.lines().count(), 3 * 4 * 2);
+    let baselines = |s: &str| -> Vec<String> {
+        let mut v: Vec<String> = s
+            .lines()
+            .filter(|l| !l.contains("\"controller\":\"policy"))
+            .map(str::to_string)
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(baselines(&episodes_again), baselines(&kept_episodes));
+    let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
+    assert!(
+        md.contains("kept from an earlier run") && md.contains("`circle_2/sampling_k4`"),
+        "{md}"
+    );
     // Table 3 beside it: the ablated policies' rows join RESULTS.md, Table 1 stays.
     let md = results_after(
         &["--suite", "table3", "--episodes", "2", "--quiet"],

@@ -54,6 +54,13 @@ pub struct EvalArgs {
     /// Replace results already in OUT.
     #[arg(long)]
     pub force: bool,
+    /// Table 1 only: run just the rows `--scenarios` and `--controllers` name and keep the
+    /// others of OUT's table (same episodes, seed and K) — e.g. a new policy's rows beside
+    /// the sampling and path-following rows, which do not read the policy. The table says
+    /// which rows were kept and from which run; a kept row steered by another policy is
+    /// refused.
+    #[arg(long)]
+    pub keep_other_rows: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -238,6 +245,153 @@ struct RowsFile {
     k: Option<usize>,
     wall_s: f64,
     rows: Vec<crate::eval::metrics::Row>,
+    /// Rows kept from earlier runs (`--keep-other-rows`), grouped by the run that measured
+    /// them; `rows` holds them too, `wall_s` is this run's own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    kept: Vec<KeptRows>,
+}
+
+/// Rows of `table1.json` that `--keep-other-rows` kept from the run that measured them.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct KeptRows {
+    command: String,
+    policy: String,
+    wall_s: f64,
+    /// `scenario/controller` of each row kept.
+    rows: Vec<String>,
+}
+
+/// The rows and episodes of an earlier `table1.json` that a run keeps.
+struct KeptTable {
+    rows: Vec<crate::eval::metrics::Row>,
+    /// Its episodes' JSON lines of the kept rows.
+    episode_lines: Vec<String>,
+    kept: Vec<KeptRows>,
+}
+
+fn row_key(scenario: &str, controller: &str) -> String {
+    format!("{scenario}/{controller}")
+}
+
+/// With `--keep-other-rows`: the rows of `results/table1.json` this run does not measure
+/// (every row but those of the scenarios × controllers run now), checked to be comparable —
+/// same episodes, seed and K, and no row steered by a policy other than this run's.
+fn kept_table1_rows(
+    args: &EvalArgs,
+    results: &Path,
+    scenarios: &[Scenario],
+    controllers: &[Controller],
+    policy: &str,
+) -> Result<KeptTable> {
+    let json = results.join("table1.json");
+    let earlier: RowsFile = read_json(&json)?.with_context(|| {
+        format!(
+            "--keep-other-rows: {} does not exist, there are no rows to keep",
+            json.display()
+        )
+    })?;
+    let differs = |field: &str, was: String, now: String| {
+        anyhow::anyhow!(
+            "--keep-other-rows: {}: field \"{field}\" is {was}, this run's is {now}; \
+             rows are only kept beside rows measured alike",
+            json.display()
+        )
+    };
+    if earlier.episodes != args.episodes {
+        return Err(differs(
+            "episodes",
+            earlier.episodes.to_string(),
+            args.episodes.to_string(),
+        ));
+    }
+    if earlier.seed != args.seed {
+        return Err(differs(
+            "seed",
+            earlier.seed.to_string(),
+            args.seed.to_string(),
+        ));
+    }
+    if earlier.k != Some(args.k) {
+        return Err(differs(
+            "k",
+            earlier.k.map_or("missing".into(), |k| k.to_string()),
+            args.k.to_string(),
+        ));
+    }
+    let run_now: std::collections::HashSet<String> = scenarios
+        .iter()
+        .flat_map(|s| controllers.iter().map(move |c| row_key(&s.name(), &c.name)))
+        .collect();
+    // Who measured each earlier row: a run it kept rows from, else the earlier run itself.
+    let measured_by = |key: &str| -> (String, String, f64) {
+        earlier
+            .kept
+            .iter()
+            .find(|k| k.rows.iter().any(|r| r == key))
+            .map_or(
+                (
+                    earlier.command.clone(),
+                    earlier.policy.clone(),
+                    earlier.wall_s,
+                ),
+                |k| (k.command.clone(), k.policy.clone(), k.wall_s),
+            )
+    };
+    let mut kept: Vec<KeptRows> = Vec::new();
+    let mut rows = Vec::new();
+    for row in &earlier.rows {
+        let key = row_key(&row.scenario, &row.controller);
+        if run_now.contains(&key) {
+            continue;
+        }
+        let (command, by_policy, wall_s) = measured_by(&key);
+        if row.controller.starts_with("policy") && by_policy != policy {
+            bail!(
+                "--keep-other-rows: the row {key} of {} was steered by {by_policy}, this run's \
+                 policy is {policy}: run it again (name {} in --controllers)",
+                json.display(),
+                row.controller
+            );
+        }
+        match kept.iter_mut().find(|k| k.command == command) {
+            Some(k) => k.rows.push(key),
+            None => kept.push(KeptRows {
+                command,
+                policy: by_policy,
+                wall_s,
+                rows: vec![key],
+            }),
+        }
+        rows.push(row.clone());
+    }
+    let episodes_path = results.join("table1_episodes.jsonl");
+    let text = std::fs::read_to_string(&episodes_path)
+        .with_context(|| format!("--keep-other-rows: reading {}", episodes_path.display()))?;
+    let mut episode_lines = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let e: serde_json::Value = serde_json::from_str(line).with_context(|| {
+            format!(
+                "{} line {}: not an episode's JSON",
+                episodes_path.display(),
+                n + 1
+            )
+        })?;
+        let (Some(s), Some(c)) = (e["scenario"].as_str(), e["controller"].as_str()) else {
+            bail!(
+                "{} line {}: expected the fields \"scenario\" and \"controller\"",
+                episodes_path.display(),
+                n + 1
+            );
+        };
+        if rows.iter().any(|r| r.scenario == s && r.controller == c) {
+            episode_lines.push(line.to_string());
+        }
+    }
+    Ok(KeptTable {
+        rows,
+        episode_lines,
+        kept,
+    })
 }
 
 /// One row of Table 2 or 3: a controller (a policy with sampled or mean actions, or the
@@ -365,7 +519,10 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
     if args.episodes == 0 || args.k == 0 {
         bail!("--episodes and --k must be at least 1");
     }
-    if !args.force {
+    if args.keep_other_rows && args.suite != "table1" {
+        bail!("--keep-other-rows: only Table 1 keeps rows (--suite table1)");
+    }
+    if !args.force && !args.keep_other_rows {
         if let Some(f) = suite_files(&args.out, &args.suite)
             .iter()
             .find(|f| f.exists())
@@ -475,6 +632,17 @@ fn run_rows(
         .policy
         .clone()
         .unwrap_or_else(crate::policy::ppo::shipped_policy_path);
+    let keep = if args.keep_other_rows {
+        Some(kept_table1_rows(
+            args,
+            results,
+            scenarios,
+            controllers,
+            &relative(&policy_path),
+        )?)
+    } else {
+        None
+    };
     let net = super::policy_jobs::load_policy_for(&policy_path, &c.model)?;
     let actor = crate::policy::Actor::of(&net);
     let parts = crate::synth::crowd::CrowdParts {
@@ -503,6 +671,10 @@ fn run_rows(
     )?;
     progress.finish_and_clear();
     let mut lines = String::new();
+    for line in keep.iter().flat_map(|k| &k.episode_lines) {
+        lines.push_str(line);
+        lines.push('\n');
+    }
     for e in &run.episodes {
         lines.push_str(&serde_json::to_string(e)?);
         lines.push('\n');
@@ -519,7 +691,8 @@ fn run_rows(
         policy: relative(&policy_path),
         k,
         wall_s: run.wall_s,
-        rows: run.rows,
+        rows: merged_rows(keep.as_ref(), run.rows, k),
+        kept: keep.map(|k| k.kept).unwrap_or_default(),
     };
     write_atomically(
         &results.join(format!("{name}.json")),
@@ -606,6 +779,32 @@ fn sdf_rows(
     }
     progress.finish_and_clear();
     write_policy_rows(&results.join("sdf.json"), args, t0, rows)
+}
+
+/// The rows run now beside those kept, in the table's order: scenarios as
+/// `Scenario::table1`, controllers as `Controller::table1`, any others after.
+fn merged_rows(
+    keep: Option<&KeptTable>,
+    run: Vec<crate::eval::metrics::Row>,
+    k: Option<usize>,
+) -> Vec<crate::eval::metrics::Row> {
+    let Some(keep) = keep else {
+        return run;
+    };
+    let scenarios: Vec<String> = Scenario::table1().iter().map(|s| s.name()).collect();
+    let controllers: Vec<String> = Controller::table1(k.unwrap_or(16))
+        .into_iter()
+        .map(|c| c.name)
+        .collect();
+    let place = |names: &[String], name: &str| names.iter().position(|n| n == name);
+    let mut rows: Vec<_> = keep.rows.iter().cloned().chain(run).collect();
+    rows.sort_by_key(|r| {
+        (
+            place(&scenarios, &r.scenario).unwrap_or(usize::MAX),
+            place(&controllers, &r.controller).unwrap_or(usize::MAX),
+        )
+    });
+    rows
 }
 
 fn table1(args: &EvalArgs, c: &Common, scenarios: &[Scenario], results: &Path) -> Result<()> {
@@ -971,6 +1170,26 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<T>> {
 }
 
 /// `RESULTS.md` from the results files in `out/results/`.
+/// What `--keep-other-rows` kept, for the table's header: nothing when it kept nothing.
+fn kept_rows_markdown(kept: &[KeptRows]) -> String {
+    kept.iter()
+        .map(|k| {
+            format!(
+                " The rows {} are kept from an earlier run (`--keep-other-rows`): `{}`, policy \
+                 `{}`, {:.0} s of wall time for all its rows.",
+                k.rows
+                    .iter()
+                    .map(|r| format!("`{r}`"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                k.command,
+                k.policy,
+                k.wall_s
+            )
+        })
+        .collect()
+}
+
 /// A scenario's label in the tables (its name where none is known).
 fn scenario_label(name: &str) -> String {
     Scenario::table1()
@@ -992,13 +1211,14 @@ fn results_markdown(out: &Path) -> Result<String> {
         md.push_str(&format!(
             "## Table 1: avoiding moving obstacles and other people\n\n```\n{}\n```\n\n\
              {} episodes per row, seed {}, policy `{}`, K = {} latents per primitive for the \
-             sampling controller and the path-following baseline; {:.0} s of wall time.\n\n",
+             sampling controller and the path-following baseline; {:.0} s of wall time.{}\n\n",
             t.command,
             t.episodes,
             t.seed,
             t.policy,
             t.k.map_or("?".into(), |k| k.to_string()),
-            t.wall_s
+            t.wall_s,
+            kept_rows_markdown(&t.kept),
         ));
         md.push_str(&table1_markdown(&t.rows, &labels));
         md.push_str(TABLE1_NOTES);
