@@ -450,7 +450,7 @@ fn a_tiny_table_1_runs_every_controller_and_refuses_to_overwrite() {
     assert_eq!(baselines(&episodes_again), baselines(&kept_episodes));
     let md = std::fs::read_to_string(out.path().join("RESULTS.md")).unwrap();
     assert!(
-        md.contains("kept from an earlier run") && md.contains("`circle_2/sampling_k4`"),
+        md.contains("The `sampling_k4`, `path_follow_k4` rows of `moving_obstacle`, `circle_2`, `static_box` are kept from an earlier run"),
         "{md}"
     );
     // Table 3 beside it: the ablated policies' rows join RESULTS.md, Table 1 stays.

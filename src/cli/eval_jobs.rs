@@ -99,7 +99,7 @@ const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
 /// (`guide_lookahead_m`, docs/POLICY.md "A guide round walls").
 const TABLE2_GUIDED: (&str, &str, &str) = (
     "the shipped policy, guided round walls by an A* path (2 m ahead; not the paper's)",
-    "assets/policy/rooms/policy.safetensors",
+    "assets/policy/gaze/policy.safetensors",
     "the shipped row's, walked with guide_lookahead_m = 2",
 );
 
@@ -109,8 +109,9 @@ const TABLE2_GUIDE_LOOKAHEAD_M: f64 = 2.0;
 /// Table 2's policies (paper Tab. 2: egocentric sensing against a local map, in the
 /// apartment): the shipped policy's apartment stage and the same two runs observing a local
 /// map instead of the rays; then the continuations that led to the shipped policy (pace,
-/// crowds, doors closed, floor plans) and the Eq. 11 one beside them. Label, weights, configs.
-const TABLE2_POLICIES: [(&str, &str, &str); 8] = [
+/// crowds, doors closed, then floor plans with or without the cost for looking off the goal)
+/// and the Eq. 11 one beside them. Label, weights, configs.
+const TABLE2_POLICIES: [(&str, &str, &str); 9] = [
     (
         "egocentric sensing (32 rays)",
         "assets/policy/apartment/policy.safetensors",
@@ -142,9 +143,14 @@ const TABLE2_POLICIES: [(&str, &str, &str); 8] = [
         "the crowd policy's configs, then configs/train_policy_indoors.toml",
     ),
     (
-        "egocentric sensing, + pace + crowds + doors closed + floor plans (shipped)",
+        "egocentric sensing, + pace + crowds + doors closed + floor plans",
         "assets/policy/rooms/policy.safetensors",
         "the doors-closed policy's configs, then configs/train_policy_rooms.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + floor plans, looking at the goal (shipped)",
+        "assets/policy/gaze/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_gaze.toml",
     ),
     (
         "egocentric sensing, + pace + crowds + doors closed + Eq. 11",
@@ -1169,22 +1175,46 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<T>> {
     })?))
 }
 
-/// `RESULTS.md` from the results files in `out/results/`.
-/// What `--keep-other-rows` kept, for the table's header: nothing when it kept nothing.
+/// What `--keep-other-rows` kept, for the table's header: nothing when it kept nothing. Rows
+/// are named by controller, with the scenarios of each (once for all when they share them).
 fn kept_rows_markdown(kept: &[KeptRows]) -> String {
+    let code = |names: &[&str]| {
+        names
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     kept.iter()
+        .filter(|k| !k.rows.is_empty())
         .map(|k| {
-            format!(
-                " The rows {} are kept from an earlier run (`--keep-other-rows`): `{}`, policy \
-                 `{}`, {:.0} s of wall time for all its rows.",
-                k.rows
+            let mut by_controller: Vec<(&str, Vec<&str>)> = Vec::new();
+            for key in &k.rows {
+                let (scenario, controller) = key.split_once('/').unwrap_or((key, ""));
+                match by_controller.iter_mut().find(|(c, _)| *c == controller) {
+                    Some((_, scenarios)) => scenarios.push(scenario),
+                    None => by_controller.push((controller, vec![scenario])),
+                }
+            }
+            let shared = by_controller.windows(2).all(|w| w[0].1 == w[1].1);
+            let rows = if shared {
+                let controllers: Vec<&str> = by_controller.iter().map(|(c, _)| *c).collect();
+                format!(
+                    "The {} rows of {}",
+                    code(&controllers),
+                    code(&by_controller[0].1)
+                )
+            } else {
+                let each: Vec<String> = by_controller
                     .iter()
-                    .map(|r| format!("`{r}`"))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                k.command,
-                k.policy,
-                k.wall_s
+                    .map(|(c, scenarios)| format!("`{c}` of {}", code(scenarios)))
+                    .collect();
+                format!("The rows {}", each.join("; "))
+            };
+            format!(
+                " {rows} are kept from an earlier run (`--keep-other-rows`): `{}`, policy `{}`, \
+                 {:.0} s of wall time for all its rows.",
+                k.command, k.policy, k.wall_s
             )
         })
         .collect()
@@ -1198,6 +1228,7 @@ fn scenario_label(name: &str) -> String {
         .map_or(name.to_string(), |s| s.label())
 }
 
+/// `RESULTS.md` from the results files in `out/results/`.
 fn results_markdown(out: &Path) -> Result<String> {
     let results = out.join("results");
     let mut md = String::from(
@@ -1374,7 +1405,8 @@ fn table2_markdown(t: &PolicyRowsFile) -> String {
          primitives per walk as EgoGen's apartment, success within 0.3 m; {:.0} s of wall \
          time. The apartment is closed: the ground around its walls is blocked in the map \
          the walker senses, as `egogen synth` has it; only the doors-closed policy and those \
-         that continue it (the floor-plan row, shipped, and the Eq. 11 rows) were fine-tuned \
+         that continue it (the floor-plan rows, the shipped one among them, and the Eq. 11 \
+         rows) were fine-tuned \
          so (the others learnt the apartment with its outer doors open). The first three \
          policies were trained with the same recipe and budget — the box-and-crossing \
          stages, then the apartment stages (2.0 M + 0.8 M environment steps) — and differ \
