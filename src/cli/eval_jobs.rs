@@ -1527,3 +1527,49 @@ model, no policy.
 The paper's own Table 1 values are not set beside these: they could not be read on the
 machine that wrote this file.
 ";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kept(rows: &[&str]) -> KeptRows {
+        KeptRows {
+            command: "egogen eval --suite table1 --out docs".into(),
+            policy: "assets/policy/rooms/policy.safetensors".into(),
+            wall_s: 3035.4,
+            rows: rows.iter().map(|r| r.to_string()).collect(),
+        }
+    }
+
+    #[test]
+    fn kept_rows_are_named_by_controller_once_for_shared_scenarios() {
+        let shared = kept_rows_markdown(&[kept(&[
+            "circle_2/sampling_k16",
+            "circle_2/path_follow_k16",
+            "static_box/sampling_k16",
+            "static_box/path_follow_k16",
+        ])]);
+        assert!(
+            shared.contains(
+                "The `sampling_k16`, `path_follow_k16` rows of `circle_2`, `static_box` are kept"
+            ),
+            "{shared}"
+        );
+        assert!(shared.contains("3035 s of wall time"), "{shared}");
+        let apart = kept_rows_markdown(&[kept(&[
+            "circle_2/sampling_k16",
+            "static_box/sampling_k16",
+            "static_box/path_follow_k16",
+        ])]);
+        assert!(
+            apart.contains(
+                "The rows `sampling_k16` of `circle_2`, `static_box`; `path_follow_k16` of \
+                 `static_box` are kept"
+            ),
+            "{apart}"
+        );
+        // Nothing kept, nothing said.
+        assert_eq!(kept_rows_markdown(&[]), "");
+        assert_eq!(kept_rows_markdown(&[kept(&[])]), "");
+    }
+}
