@@ -158,12 +158,7 @@ fn bench(c: &mut Criterion) {
         .unwrap()
         .foot_markers;
     let situation = walker.situation(&around, DVec2::new(2.0, 0.0), 0.0);
-    let limits = egogen::policy::reward::Limits {
-        success_m: 0.3,
-        penetration_cells: 3,
-        people_every_frame: false,
-        box_every_frame: false,
-    };
+    let limits = egogen::policy::reward::Limits::eq7(0.3);
     g.bench_function("judge", |b| {
         b.iter(|| egogen::policy::reward::judge(&p, &situation, &feet, &prior, &limits))
     });

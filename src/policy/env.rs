@@ -116,7 +116,7 @@ impl Default for EnvSettings {
             success_m: 0.1,
             max_primitives: 11,
             terminate_on_penetration: false,
-            penetration_cells: 3,
+            penetration_cells: crate::policy::reward::EQ7_PENETRATION_CELLS,
             people_every_frame: false,
             box_every_frame: false,
             people_seen_ahead: false,

@@ -139,6 +139,23 @@ pub struct Limits {
     pub box_every_frame: bool,
 }
 
+/// Blocked cells in the body's 2D box beyond which a primitive penetrates (paper Eq. 7: more
+/// than 3).
+pub const EQ7_PENETRATION_CELLS: usize = 3;
+
+impl Limits {
+    /// EgoGen's test: success within `success_m`, penetration by Eq. 7's cells at the
+    /// primitive's end alone.
+    pub fn eq7(success_m: f64) -> Limits {
+        Limits {
+            success_m,
+            penetration_cells: EQ7_PENETRATION_CELLS,
+            people_every_frame: false,
+            box_every_frame: false,
+        }
+    }
+}
+
 /// One primitive judged.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Judged {

@@ -577,12 +577,7 @@ impl<'m> Agent<'m> {
         };
         let seeds = vec![self.walker.view.seed.clone(); latents.len()];
         let decoded = parts.model.decode_each(&self.body, &seeds, &latents)?;
-        let limits = Limits {
-            success_m: settings.success_m,
-            penetration_cells: 3,
-            people_every_frame: false,
-            box_every_frame: false,
-        };
+        let limits = Limits::eq7(settings.success_m);
         let weights = RewardWeights::default();
         let situation = self.walker.situation(judged, self.goal, t0_s);
         let mut best: Option<(DecodedPrimitive, Judged, f64, f64)> = None;
