@@ -484,6 +484,7 @@ fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
     let mut env =
         PolicyEnv::with_scene(&model, &ctx, &bank, &prior, Some(&fixed), settings, envs, 0)
             .unwrap();
+    let env_start_obs = env.observations().to_vec();
     let distance = |o: &[f32]| 1.0 / o[OBS_DIST_OFFSET] as f64 - 1.0;
     let in_scene: Vec<bool> = env
         .observations()
@@ -512,6 +513,62 @@ fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
         assert!(
             (left - expected).abs() < 1e-6,
             "episode {e}: time left {left}"
+        );
+    }
+    // Indoor weights apply to the scene's pairs, box weights to the box scenes: every weight
+    // doubled indoors and tripled in box scenes doubles and triples their rewards (the reward
+    // is linear in the weights).
+    let w = settings.weights;
+    let scaled = |f: f64| egogen::policy::reward::WeightChanges {
+        floor: Some(f * w.floor),
+        skate: Some(f * w.skate),
+        goal: Some(f * w.goal),
+        orientation: Some(f * w.orientation),
+        attention: Some(f * w.attention),
+        penetration: Some(f * w.penetration),
+        pose: Some(f * w.pose),
+        success: Some(f * w.success),
+        arrival: Some(f * w.arrival),
+        attention_gap: Some(f * w.attention_gap),
+    };
+    let reweighted = EnvSettings {
+        indoor_weights: scaled(2.0),
+        box_weights: scaled(3.0),
+        ..settings
+    };
+    let mut weighted = PolicyEnv::with_scene(
+        &model,
+        &ctx,
+        &bank,
+        &prior,
+        Some(&fixed),
+        reweighted,
+        envs,
+        0,
+    )
+    .unwrap();
+    assert_eq!(weighted.observations(), &env_start_obs[..]);
+    let out_weighted = weighted.step(&z).unwrap();
+    for e in 0..envs {
+        let (plain, changed) = (out.reward[e], out_weighted.reward[e]);
+        let expected = if in_scene[e] {
+            2.0 * plain
+        } else {
+            3.0 * plain
+        };
+        assert!(
+            (changed - expected).abs() <= 1e-5 * expected.abs().max(1.0),
+            "episode {e} (in the scene: {}): reward {changed}, expected {expected}",
+            in_scene[e]
+        );
+    }
+    for indoors in [true, false] {
+        assert!(
+            in_scene
+                .iter()
+                .zip(&out.reward)
+                .any(|(&s, &r)| s == indoors && r.abs() > 1e-3),
+            "no reward to scale (indoors: {indoors})"
         );
     }
     // Mixed episodes restore into a mixed environment, not into a scene-only or box-only one.

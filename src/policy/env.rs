@@ -27,7 +27,9 @@ use serde::{Deserialize, Serialize};
 use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
-use super::reward::{judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest};
+use super::reward::{
+    judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest, WeightChanges,
+};
 use super::room_scene::{RoomParams, RoomScene, RoomSettings};
 use super::walker::{frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker};
 pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
@@ -62,6 +64,12 @@ pub struct EnvSettings {
     /// Procedural floor plans (rooms, doorways, furniture) and their share of episodes.
     pub rooms: RoomSettings,
     pub weights: RewardWeights,
+    /// Changes to `weights` in box-scene episodes (e.g. a stronger cost for looking off the
+    /// goal where a box stands in the open). Nothing given: `weights`.
+    pub box_weights: WeightChanges,
+    /// Changes to `weights` in the indoor episodes, floor plans and the fixed scene's pairs
+    /// (e.g. a pace bonus where paths bend round walls). Nothing given: `weights`.
+    pub indoor_weights: WeightChanges,
     /// Success radius around the goal (m, horizontal; EgoGen's 0.1).
     pub success_m: f64,
     /// Primitives before the episode times out (EgoGen's box scenes: 11).
@@ -113,6 +121,8 @@ impl Default for EnvSettings {
             crossing: CrossingSettings::default(),
             rooms: RoomSettings::default(),
             weights: RewardWeights::default(),
+            box_weights: WeightChanges::default(),
+            indoor_weights: WeightChanges::default(),
             success_m: 0.1,
             max_primitives: 11,
             terminate_on_penetration: false,
@@ -223,6 +233,11 @@ struct Episode {
 }
 
 impl Course {
+    /// Whether the course is indoors: a floor plan or a pair of the fixed scene.
+    fn indoors(&self) -> bool {
+        self.rooms.is_some() || self.pair.is_some()
+    }
+
     fn surroundings(&self) -> Surroundings<'_> {
         Surroundings {
             map: &self.map,
@@ -503,6 +518,18 @@ impl<'m> PolicyEnv<'m> {
         self.model.latent_dim()
     }
 
+    /// The reward weights of an episode on `course`.
+    fn weights(&self, course: &Course) -> RewardWeights {
+        let changes = if course.indoors() {
+            &self.settings.indoor_weights
+        } else if course.box_params.is_some() {
+            &self.settings.box_weights
+        } else {
+            return self.settings.weights;
+        };
+        changes.applied_to(self.settings.weights)
+    }
+
     fn box_course(&self, scene: BoxScene) -> Course {
         Course {
             map: Arc::new(scene.map),
@@ -735,7 +762,7 @@ impl<'m> PolicyEnv<'m> {
                             (None, _) => {}
                         }
                         let left = e.course.max_primitives.saturating_sub(e.walker.steps + 1);
-                        let reward = j.terms.total_with_arrival(&self.settings.weights, left);
+                        let reward = j.terms.total_with_arrival(&self.weights(&e.course), left);
                         Ok(Candidate {
                             env,
                             latent,

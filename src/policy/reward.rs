@@ -74,6 +74,51 @@ impl Default for RewardWeights {
     }
 }
 
+/// Changes to [`RewardWeights`] for some of the episodes (the environment's indoor ones):
+/// each weight given replaces the base one, the others stay as the base has them.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WeightChanges {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub floor: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub skate: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub goal: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub attention: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub penetration: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub success: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arrival: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub attention_gap: Option<f64>,
+}
+
+impl WeightChanges {
+    /// `base` with these changes.
+    pub fn applied_to(&self, base: RewardWeights) -> RewardWeights {
+        RewardWeights {
+            floor: self.floor.unwrap_or(base.floor),
+            skate: self.skate.unwrap_or(base.skate),
+            goal: self.goal.unwrap_or(base.goal),
+            orientation: self.orientation.unwrap_or(base.orientation),
+            attention: self.attention.unwrap_or(base.attention),
+            penetration: self.penetration.unwrap_or(base.penetration),
+            pose: self.pose.unwrap_or(base.pose),
+            success: self.success.unwrap_or(base.success),
+            arrival: self.arrival.unwrap_or(base.arrival),
+            attention_gap: self.attention_gap.unwrap_or(base.attention_gap),
+        }
+    }
+}
+
 /// Value of the penetration and pose terms when they hold (EgoGen's 0.05).
 pub const BINARY_TERM: f64 = 0.05;
 
@@ -404,6 +449,35 @@ pub fn judge(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn weight_changes_replace_only_the_weights_given() {
+        let base = RewardWeights {
+            penetration: 0.1,
+            attention_gap: 3.0,
+            ..RewardWeights::default()
+        };
+        assert_eq!(WeightChanges::default().applied_to(base), base);
+        let changed = WeightChanges {
+            attention_gap: Some(0.5),
+            arrival: Some(1.5),
+            ..WeightChanges::default()
+        }
+        .applied_to(base);
+        assert_eq!(
+            changed,
+            RewardWeights {
+                attention_gap: 0.5,
+                arrival: 1.5,
+                ..base
+            }
+        );
+        // In a config: unknown names are refused, the others default to no change.
+        let parsed: WeightChanges = toml::from_str("arrival = 1.5").unwrap();
+        assert_eq!(parsed.arrival, Some(1.5));
+        assert_eq!(parsed.applied_to(base).skate, base.skate);
+        assert!(toml::from_str::<WeightChanges>("arival = 1.5").is_err());
+    }
 
     #[test]
     fn cells_of_the_body_box_inside_a_moving_obstacle_are_counted() {
