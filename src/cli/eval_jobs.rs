@@ -99,7 +99,7 @@ const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
 /// (`guide_lookahead_m`, docs/POLICY.md "A guide round walls").
 const TABLE2_GUIDED: (&str, &str, &str) = (
     "the shipped policy, guided round walls by an A* path (2 m ahead; not the paper's)",
-    "assets/policy/gaze/policy.safetensors",
+    "assets/policy/scene_weights/policy.safetensors",
     "the shipped row's, walked with guide_lookahead_m = 2",
 );
 
@@ -109,9 +109,10 @@ const TABLE2_GUIDE_LOOKAHEAD_M: f64 = 2.0;
 /// Table 2's policies (paper Tab. 2: egocentric sensing against a local map, in the
 /// apartment): the shipped policy's apartment stage and the same two runs observing a local
 /// map instead of the rays; then the continuations that led to the shipped policy (pace,
-/// crowds, doors closed, then floor plans with or without the cost for looking off the goal)
-/// and the Eq. 11 one beside them. Label, weights, configs.
-const TABLE2_POLICIES: [(&str, &str, &str); 9] = [
+/// crowds, doors closed, then floor plans with or without the cost for looking off the goal,
+/// with one set of weights or weights by scene) and the Eq. 11 one beside them. Label,
+/// weights, configs.
+const TABLE2_POLICIES: [(&str, &str, &str); 10] = [
     (
         "egocentric sensing (32 rays)",
         "assets/policy/apartment/policy.safetensors",
@@ -148,9 +149,14 @@ const TABLE2_POLICIES: [(&str, &str, &str); 9] = [
         "the doors-closed policy's configs, then configs/train_policy_rooms.toml",
     ),
     (
-        "egocentric sensing, + pace + crowds + doors closed + floor plans, looking at the goal (shipped)",
+        "egocentric sensing, + pace + crowds + doors closed + floor plans, looking at the goal",
         "assets/policy/gaze/policy.safetensors",
         "the doors-closed policy's configs, then configs/train_policy_gaze.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + floor plans, looking at the goal, weights by scene (shipped)",
+        "assets/policy/scene_weights/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_scene_weights.toml",
     ),
     (
         "egocentric sensing, + pace + crowds + doors closed + Eq. 11",

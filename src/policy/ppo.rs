@@ -153,12 +153,12 @@ impl PolicyTrainPlan {
 /// (`configs/train_policy_pace.toml`), then among crossings of one to four people
 /// (`configs/train_policy_crowd.toml`), then with the apartment's doors closed
 /// (`configs/train_policy_indoors.toml`), then with procedural floor plans in its mix, a cost
-/// for looking off the goal and the box scenes' box tested in every frame
-/// (`configs/train_policy_gaze.toml`).
-pub const SHIPPED_POLICY: &str = "assets/policy/gaze/policy.safetensors";
+/// for looking off the goal (stronger in box scenes, where feet that skate cost more too) and
+/// the box scenes' box tested in every frame (`configs/train_policy_scene_weights.toml`).
+pub const SHIPPED_POLICY: &str = "assets/policy/scene_weights/policy.safetensors";
 
 /// The config whose run wrote [`SHIPPED_POLICY`].
-pub const SHIPPED_POLICY_CONFIG: &str = "configs/train_policy_gaze.toml";
+pub const SHIPPED_POLICY_CONFIG: &str = "configs/train_policy_scene_weights.toml";
 
 /// Where the shipped policy is.
 pub fn shipped_policy_path() -> PathBuf {
