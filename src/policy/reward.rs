@@ -74,30 +74,21 @@ impl Default for RewardWeights {
     }
 }
 
-/// Changes to [`RewardWeights`] for some of the episodes (the environment's indoor ones):
-/// each weight given replaces the base one, the others stay as the base has them.
+/// Changes to [`RewardWeights`] for some of the episodes (the environment's box scenes, or its
+/// indoor ones): each weight given replaces the base one, the others stay as the base has
+/// them.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WeightChanges {
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub floor: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub skate: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub goal: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub orientation: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub attention: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub penetration: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub pose: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub success: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub arrival: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub attention_gap: Option<f64>,
 }
 
@@ -477,6 +468,15 @@ mod tests {
         assert_eq!(parsed.arrival, Some(1.5));
         assert_eq!(parsed.applied_to(base).skate, base.skate);
         assert!(toml::from_str::<WeightChanges>("arival = 1.5").is_err());
+        // Weights not given stay not given through JSON and TOML.
+        let json = serde_json::to_string(&parsed).unwrap();
+        assert_eq!(
+            serde_json::from_str::<WeightChanges>(&json).unwrap(),
+            parsed
+        );
+        let text = toml::to_string(&parsed).unwrap();
+        assert_eq!(text.trim(), "arrival = 1.5");
+        assert_eq!(toml::from_str::<WeightChanges>(&text).unwrap(), parsed);
     }
 
     #[test]
