@@ -3,11 +3,16 @@
 //!
 //! Acting asks for one agent's action at a time (`egogen synth` steps its people in turn, paper
 //! Alg. 1), where a tensor library's cost per operation — a tensor allocated, copied and freed
-//! for each of some fifty operations — outweighs the arithmetic. Each dense layer here is the
-//! very `gemm` call burn's Flex backend makes for it (the same sizes, strides and threading),
+//! for each of some fifty operations — outweighs the arithmetic. Each dense layer of a batch is
+//! the very `gemm` call burn's Flex backend makes for it (the same sizes, strides and threading),
 //! and every element-wise step the same f32 operation in the same order (its sigmoid, tanh,
 //! LeakyReLU, clamp, sin and cos), so the actions equal burn's exactly (`tests/policy_training.rs`
 //! compares them); `cargo bench --bench synth` shows the two side by side. Training keeps burn.
+//!
+//! One observation at a time (what acting asks for) takes two shortcuts with the same bits:
+//! its products run on weights packed for a single row ([`super::row_product`], `gemm`'s own
+//! order for one row), the GRUs' input gates of both seed frames in one pass over the weights;
+//! and a GRU's first hidden gates, the product of a zero state, are its bias.
 
 use burn::nn::Linear;
 use burn::prelude::*;
@@ -15,6 +20,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::env::{ObsLayout, STATE_FRAME_DIM};
 use super::net::{ActorCritic, Gru, LEAKY_SLOPE, LOGVAR_RANGE};
+use super::row_product::RowMatrix;
 use crate::math::random::normal_samples;
 use crate::motion::primitive::SEED_FRAMES;
 use crate::sensing::SensingSpec;
@@ -30,6 +36,9 @@ struct Dense {
     outputs: usize,
     weight: Vec<f32>,
     bias: Vec<f32>,
+    /// The weights packed for one observation's products, where this processor has the
+    /// instructions ([`RowMatrix::supported`]).
+    rows: Option<RowMatrix>,
 }
 
 impl Dense {
@@ -40,11 +49,14 @@ impl Dense {
             Some(b) => b.val().into_data().to_vec().expect("f32 bias"),
             None => vec![0.0; outputs],
         };
+        let rows = (RowMatrix::supported() && inputs > 0)
+            .then(|| RowMatrix::new(inputs, outputs, &weight));
         Self {
             inputs,
             outputs,
             weight,
             bias,
+            rows,
         }
     }
 
@@ -55,6 +67,12 @@ impl Dense {
             m == 0 || x.len() >= (m - 1) * row_stride + k,
             "{m} input rows of {k}"
         );
+        if let (1, Some(rows)) = (m, &self.rows) {
+            let mut y = vec![0.0f32; n];
+            rows.products([&x[..k]], [&mut y[..]]);
+            self.add_bias(&mut y);
+            return y;
+        }
         let mut y = vec![0.0f32; m * n];
         if m == 0 {
             return y;
@@ -90,12 +108,51 @@ impl Dense {
                 parallelism,
             );
         }
-        for row in y.chunks_mut(n) {
+        self.add_bias(&mut y);
+        y
+    }
+
+    /// The outputs of one observation's `count` rows `step` apart in `x` (a GRU's frames),
+    /// `[count][outputs]`: two at a time with the weights read once where they are packed.
+    fn forward_frames(&self, x: &[f32], step: usize, count: usize) -> Vec<Vec<f32>> {
+        let k = self.inputs;
+        let Some(rows) = &self.rows else {
+            return (0..count)
+                .map(|t| self.forward(1, &x[t * step..], step))
+                .collect();
+        };
+        assert!(
+            count == 0 || x.len() >= (count - 1) * step + k,
+            "{count} frames of {k}"
+        );
+        let mut out = vec![vec![0.0f32; self.outputs]; count];
+        for (pair, ys) in out.chunks_mut(2).enumerate() {
+            let row = |t: usize| &x[t * step..t * step + k];
+            match ys {
+                [a, b] => rows.products([row(2 * pair), row(2 * pair + 1)], [a, b]),
+                [a] => rows.products([row(2 * pair)], [a]),
+                _ => unreachable!("chunks of one or two"),
+            }
+        }
+        for y in &mut out {
+            self.add_bias(y);
+        }
+        out
+    }
+
+    /// `m` rows of the bias alone: what a product of zeros gives (`+0 + b`, the same bits).
+    fn bias_rows(&self, m: usize) -> Vec<f32> {
+        let mut y = vec![0.0f32; m * self.outputs];
+        self.add_bias(&mut y);
+        y
+    }
+
+    fn add_bias(&self, y: &mut [f32]) {
+        for row in y.chunks_mut(self.outputs) {
             for (v, b) in row.iter_mut().zip(&self.bias) {
                 *v += b;
             }
         }
-        y
     }
 }
 
@@ -125,10 +182,21 @@ impl GruF32 {
         per_frame: usize,
     ) -> Vec<f32> {
         let w = self.hidden.inputs;
+        let input_gates: Vec<Vec<f32>> = if m == 1 {
+            self.input.forward_frames(x, per_frame, frames)
+        } else {
+            (0..frames)
+                .map(|t| self.input.forward(m, &x[t * per_frame..], row_stride))
+                .collect()
+        };
         let mut h = vec![0.0f32; m * w];
-        for t in 0..frames {
-            let gx = self.input.forward(m, &x[t * per_frame..], row_stride);
-            let gh = self.hidden.forward(m, &h, w);
+        for (t, gx) in input_gates.iter().enumerate() {
+            // The state starts at zero, so its first gates are the bias alone.
+            let gh = if t == 0 {
+                self.hidden.bias_rows(m)
+            } else {
+                self.hidden.forward(m, &h, w)
+            };
             for i in 0..m {
                 let (gx, gh) = (
                     &gx[i * 3 * w..(i + 1) * 3 * w],

@@ -16,6 +16,7 @@ pub mod pose_prior;
 pub mod ppo;
 pub mod reward;
 pub mod room_scene;
+pub mod row_product;
 pub mod sampling;
 pub mod tasks;
 pub mod walker;

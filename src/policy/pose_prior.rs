@@ -85,6 +85,37 @@ fn log_gauss(x: &[f64], mean: &[f64], var: &[f64]) -> f64 {
         .sum()
 }
 
+/// [`log_gauss`] with the variances' logarithms given (`ln_var[d] = var[d].ln()`): the same
+/// operations in the same order, so the same bits, without a logarithm per value.
+fn log_gauss_with(x: &[f64], mean: &[f64], var: &[f64], ln_var: &[f64]) -> f64 {
+    x.iter()
+        .zip(mean)
+        .zip(var)
+        .zip(ln_var)
+        .map(|(((x, m), v), ln_v)| -0.5 * ((x - m).powi(2) / v + ln_v))
+        .sum()
+}
+
+/// The logarithms a score takes of a prior's fixed numbers: each component's weight and
+/// variances. Worked out once for the frames of a primitive instead of once per frame.
+struct PriorLogs {
+    weight: Vec<f64>,
+    variance: Vec<Vec<f64>>,
+}
+
+impl PriorLogs {
+    fn of(prior: &PosePrior) -> Self {
+        Self {
+            weight: prior.components.iter().map(|c| c.weight.ln()).collect(),
+            variance: prior
+                .components
+                .iter()
+                .map(|c| c.variance.iter().map(|v| v.ln()).collect())
+                .collect(),
+        }
+    }
+}
+
 fn log_sum_exp(v: &[f64]) -> f64 {
     let m = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     if !m.is_finite() {
@@ -196,20 +227,38 @@ impl PosePrior {
 
     /// Negative log-density per value, `−ln p(θ)/63` (lower is more plausible).
     pub fn nll(&self, values: &[f64; PRIOR_DIM]) -> f64 {
-        let logs: Vec<f64> = self
+        self.nll_with(values, &PriorLogs::of(self))
+    }
+
+    fn nll_with(&self, values: &[f64; PRIOR_DIM], logs: &PriorLogs) -> f64 {
+        let terms: Vec<f64> = self
             .components
             .iter()
-            .map(|c| {
-                c.weight.ln() + log_gauss(values, &c.mean, &c.variance)
+            .zip(&logs.weight)
+            .zip(&logs.variance)
+            .map(|((c, ln_weight), ln_var)| {
+                ln_weight + log_gauss_with(values, &c.mean, &c.variance, ln_var)
                     - 0.5 * PRIOR_DIM as f64 * std::f64::consts::TAU.ln()
             })
             .collect();
-        -log_sum_exp(&logs) / PRIOR_DIM as f64
+        -log_sum_exp(&terms) / PRIOR_DIM as f64
     }
 
     /// [`Self::nll`] of a body's pose.
     pub fn pose_nll(&self, params: &BodyParams) -> f64 {
         self.nll(&prior_values(params))
+    }
+
+    /// The mean of [`Self::pose_nll`] over `frames` (0 for none): the reward's pose score of a
+    /// primitive, the prior's logarithms taken once for all its frames (the same bits as
+    /// averaging `pose_nll` frame by frame).
+    pub fn mean_pose_nll(&self, frames: &[BodyParams]) -> f64 {
+        let logs = PriorLogs::of(self);
+        frames
+            .iter()
+            .map(|f| self.nll_with(&prior_values(f), &logs))
+            .sum::<f64>()
+            / frames.len().max(1) as f64
     }
 
     /// Writes the prior as JSON (atomically).
@@ -256,4 +305,42 @@ pub const SHIPPED_POSE_PRIOR: &str = "assets/policy/pose_prior.json";
 /// The shipped prior's path.
 pub fn shipped_pose_prior_path() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(SHIPPED_POSE_PRIOR)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_primitive_scores_the_mean_of_its_frames_bit_for_bit() {
+        // Poses spread over joints and components, some far from any mean.
+        let pose = |i: usize| -> [f64; PRIOR_DIM] {
+            std::array::from_fn(|d| ((i * 31 + d * 7) as f64 * 0.173).sin() * (1.0 + i as f64))
+        };
+        let poses: Vec<[f64; PRIOR_DIM]> = (0..40).map(pose).collect();
+        let prior = PosePrior::fit(&poses, 3, 5, 7, "sines");
+        let frames: Vec<BodyParams> = (0..20)
+            .map(|i| {
+                let mut p = BodyParams::default();
+                p.pose[3..3 + PRIOR_DIM].copy_from_slice(&pose(3 * i + 1));
+                p
+            })
+            .collect();
+        let frame_by_frame =
+            frames.iter().map(|f| prior.pose_nll(f)).sum::<f64>() / frames.len() as f64;
+        assert_eq!(
+            prior.mean_pose_nll(&frames).to_bits(),
+            frame_by_frame.to_bits()
+        );
+        // The logarithms taken once score as `log_gauss` does per value.
+        let logs = PriorLogs::of(&prior);
+        for (c, ln_var) in prior.components.iter().zip(&logs.variance) {
+            let x = pose(5);
+            assert_eq!(
+                log_gauss(&x, &c.mean, &c.variance).to_bits(),
+                log_gauss_with(&x, &c.mean, &c.variance, ln_var).to_bits()
+            );
+        }
+        assert_eq!(prior.mean_pose_nll(&[]), 0.0);
+    }
 }

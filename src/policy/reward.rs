@@ -355,7 +355,7 @@ pub fn judge(
         .map(|m| foot_markers.iter().map(|&k| m[k].to_array()).collect())
         .collect();
     let (floor, skate) = contact_terms(&feet, p.floor_z);
-    let pose_nll = p.world.iter().map(|f| prior.pose_nll(f)).sum::<f64>() / p.world.len() as f64;
+    let pose_nll = prior.mean_pose_nll(&p.world);
     let last = PRIMITIVE_FRAMES - 1;
     let joints = &p.joints[last];
     let pelvis = DVec2::new(joints[joint::PELVIS].x, joints[joint::PELVIS].y);

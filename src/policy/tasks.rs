@@ -31,10 +31,6 @@ fn set_frames(set: &PrimitiveSet) -> Vec<Vec<BodyParams>> {
         .collect()
 }
 
-fn mean_nll(prior: &PosePrior, frames: &[BodyParams]) -> f64 {
-    frames.iter().map(|f| prior.pose_nll(f)).sum::<f64>() / frames.len().max(1) as f64
-}
-
 /// Joints bent in the "broken pose" check: hips, knees, spine, shoulders, elbows.
 const BENT_JOINTS: [usize; 9] = [1, 2, 3, 4, 5, 16, 17, 18, 19];
 
@@ -76,10 +72,13 @@ pub fn fit_pose_prior(
     let train_frames = set_frames(train);
     let poses: Vec<[f64; PRIOR_DIM]> = train_frames.iter().flatten().map(prior_values).collect();
     let mut prior = PosePrior::fit(&poses, components, iterations, seed, source);
-    let means: Vec<f64> = train_frames.iter().map(|f| mean_nll(&prior, f)).collect();
+    let means: Vec<f64> = train_frames
+        .iter()
+        .map(|f| prior.mean_pose_nll(f))
+        .collect();
     prior.set_plausible_limit(&means, quantile);
     let held_frames = set_frames(held_out);
-    let mocap: Vec<f64> = held_frames.iter().map(|f| mean_nll(&prior, f)).collect();
+    let mocap: Vec<f64> = held_frames.iter().map(|f| prior.mean_pose_nll(f)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xB0D1);
     let bent: Vec<f64> = held_frames
         .iter()
@@ -101,7 +100,7 @@ pub fn fit_pose_prior(
                     b
                 })
                 .collect();
-            mean_nll(&prior, &bent)
+            prior.mean_pose_nll(&bent)
         })
         .collect();
     // Random latents from training seeds, decoded in batches.
@@ -125,7 +124,7 @@ pub fn fit_pose_prior(
             }
             let frames: Vec<BodyParams> =
                 p.chunks(FRAME_DIM).map(|f| frame_params(f, &[])).collect();
-            random.push(mean_nll(&prior, &frames));
+            random.push(prior.mean_pose_nll(&frames));
         }
     }
     let limit = prior.plausible_max_nll;
