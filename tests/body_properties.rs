@@ -87,6 +87,43 @@ proptest! {
     }
 
     #[test]
+    fn rot6d_side_by_side_gives_the_same_bits(
+        rows in prop::collection::vec(
+            (prop::array::uniform6(-1e3f64..1e3), 0u8..5, -150.0f64..150.0),
+            1..40,
+        ),
+    ) {
+        // Ordinary, parallel, vanishing, zero and tiny or huge 6D vectors mixed in one call.
+        let d6: Vec<[f64; 6]> = rows
+            .iter()
+            .map(|(v, kind, scale_exp)| {
+                let s = 10f64.powf(*scale_exp);
+                let mut d = v.map(|x| x * s);
+                match kind {
+                    1 => {
+                        let parallel = [d[0] * 2.0, d[1] * 2.0, d[2] * 2.0];
+                        d[3..].copy_from_slice(&parallel);
+                    }
+                    2 => d[..3].fill(0.0),
+                    3 => d.fill(0.0),
+                    4 => {
+                        let nearly = [d[0] + 1e-9 * s, d[1], d[2]];
+                        d[3..].copy_from_slice(&nearly);
+                    }
+                    _ => {}
+                }
+                d
+            })
+            .collect();
+        let mut side_by_side = vec![Mat3::ZERO; d6.len()];
+        egogen::math::rotation::rot6d_to_matrices(&d6, &mut side_by_side);
+        for (d, m) in d6.iter().zip(&side_by_side) {
+            let one = rot6d_to_matrix(*d).to_cols_array().map(f64::to_bits);
+            prop_assert_eq!(m.to_cols_array().map(f64::to_bits), one, "{:?}", d);
+        }
+    }
+
+    #[test]
     fn long_chains_stay_orthonormal(seed in 0u64..1000) {
         // 100 000 random rigid transforms composed, as far longer rollouts would.
         let mut m = Affine3::IDENTITY;

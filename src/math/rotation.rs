@@ -87,6 +87,52 @@ pub fn rot6d_to_matrix(d6: [Real; 6]) -> Mat3 {
     Mat3::from_cols(b1, b2, b3)
 }
 
+/// [`rot6d_to_matrix`] of many 6D vectors into `out`, bit for bit: the same steps for
+/// [`INTERLEAVED`] vectors at a time, each step over all of them before the next, so their square
+/// roots and divisions overlap instead of each waiting on the one before (a decoded frame's 22
+/// joints). Near-degenerate inputs take [`rot6d_to_matrix`] itself.
+///
+/// # Panics
+/// When `out` is not as long as `d6` (a caller's bug).
+pub fn rot6d_to_matrices(d6: &[[Real; 6]], out: &mut [Mat3]) {
+    assert_eq!(d6.len(), out.len(), "one matrix per 6D vector");
+    for (d6, out) in d6.chunks(INTERLEAVED).zip(out.chunks_mut(INTERLEAVED)) {
+        let n = d6.len();
+        let mut b1 = [Vec3::ZERO; INTERLEAVED];
+        let mut b2 = [Vec3::ZERO; INTERLEAVED];
+        let mut regular = [true; INTERLEAVED];
+        // The steps of `rot6d_to_matrix`, with `normalize` spelled out as glam computes it
+        // (`v · (1 / |v|)`, `|v| = √(v·v)`).
+        for j in 0..n {
+            let a1 = Vec3::new(d6[j][0], d6[j][1], d6[j][2]);
+            let rcp = 1.0 / a1.dot(a1).sqrt();
+            regular[j] = rcp.is_finite() && rcp > 0.0;
+            b1[j] = a1 * rcp;
+        }
+        for j in 0..n {
+            let a2 = Vec3::new(d6[j][3], d6[j][4], d6[j][5]);
+            let u2 = a2 - b1[j] * b1[j].dot(a2);
+            let l2 = u2.dot(u2);
+            regular[j] &= !(l2 <= 1e-20 * a2.dot(a2).max(1e-300) || l2 < 1e-300);
+            b2[j] = u2 * (1.0 / l2.sqrt());
+        }
+        for b2 in b2.iter_mut().zip(&b1).take(n) {
+            let v = *b2.0 - *b2.1 * b2.1.dot(*b2.0);
+            *b2.0 = v * (1.0 / v.dot(v).sqrt());
+        }
+        for j in 0..n {
+            out[j] = if regular[j] {
+                Mat3::from_cols(b1[j], b2[j], b1[j].cross(b2[j]))
+            } else {
+                rot6d_to_matrix(d6[j])
+            };
+        }
+    }
+}
+
+/// 6D vectors converted side by side in [`rot6d_to_matrices`].
+pub const INTERLEAVED: usize = 8;
+
 /// 6D representation (first two columns) of a rotation matrix.
 pub fn matrix_to_rot6d(m: Mat3) -> [Real; 6] {
     [

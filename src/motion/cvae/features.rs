@@ -6,7 +6,8 @@
 //! `transl` (metres). Hands, jaw and eyes are not modelled and stay at rest.
 
 use crate::body::BodyParams;
-use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d, rot6d_to_matrix};
+use crate::math::rotation::rot6d_to_matrices;
+use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d};
 use crate::motion::primitive::Primitive;
 
 use super::rig::BODY_JOINTS;
@@ -37,9 +38,12 @@ pub fn frame_params(features: &[f32], betas: &[f64]) -> BodyParams {
         betas: betas.to_vec(),
         ..BodyParams::default()
     };
-    for j in 0..BODY_JOINTS {
-        let d6: [f64; 6] = std::array::from_fn(|k| features[6 * j + k] as f64);
-        p.set_joint_axis_angle(j, matrix_to_axis_angle(rot6d_to_matrix(d6)));
+    let d6: [[f64; 6]; BODY_JOINTS] =
+        std::array::from_fn(|j| std::array::from_fn(|k| features[6 * j + k] as f64));
+    let mut rotations = [crate::math::Mat3::IDENTITY; BODY_JOINTS];
+    rot6d_to_matrices(&d6, &mut rotations);
+    for (j, r) in rotations.into_iter().enumerate() {
+        p.set_joint_axis_angle(j, matrix_to_axis_angle(r));
     }
     p.transl = crate::math::Vec3::new(
         features[TRANSL_OFFSET] as f64,
