@@ -4,7 +4,7 @@
 //! order (`gemm`'s matrix–vector path for `m = 1`).
 //!
 //! `gemm` runs that path a column of eight outputs at a time and loads and stores every output
-//! once per input; here the weights are packed [`TILE`] outputs at a time, each tile's outputs
+//! once per input; here the weights are packed 64 outputs at a time, each tile's outputs
 //! stay in registers over all the inputs, and two rows that share the weights (a GRU's input
 //! gates for both seed frames) read them once. The same operations in the same order per
 //! output, so the same bits with fewer instructions and fewer bytes read
@@ -16,7 +16,7 @@
 /// Output columns per tile.
 const TILE: usize = 64;
 
-/// A `[inputs × outputs]` f32 weight matrix packed tile by tile: for each tile of [`TILE`]
+/// A `[inputs × outputs]` f32 weight matrix packed tile by tile: for each tile of 64
 /// output columns, the inputs' rows of that tile one after another. Columns past `outputs` are
 /// zero.
 #[derive(Debug, Clone, PartialEq)]
