@@ -116,9 +116,9 @@ pub fn rot6d_to_matrices(d6: &[[Real; 6]], out: &mut [Mat3]) {
             regular[j] &= !(l2 <= 1e-20 * a2.dot(a2).max(1e-300) || l2 < 1e-300);
             b2[j] = u2 * (1.0 / l2.sqrt());
         }
-        for b2 in b2.iter_mut().zip(&b1).take(n) {
-            let v = *b2.0 - *b2.1 * b2.1.dot(*b2.0);
-            *b2.0 = v * (1.0 / v.dot(v).sqrt());
+        for (b2, b1) in b2.iter_mut().zip(&b1).take(n) {
+            let v = *b2 - *b1 * b1.dot(*b2);
+            *b2 = v * (1.0 / v.dot(v).sqrt());
         }
         for j in 0..n {
             out[j] = if regular[j] {
