@@ -124,6 +124,41 @@ proptest! {
     }
 
     #[test]
+    fn axis_angles_side_by_side_give_the_same_bits(
+        rows in prop::collection::vec((unit_axis(), 0u8..4, 0.0f64..1.0), 1..70),
+    ) {
+        // Angles of zero, below the series' 1e-4, ordinary ones, and at and near π (where
+        // matrix → axis-angle takes its other branch), mixed in one call both ways.
+        let aa: Vec<Vec3> = rows
+            .iter()
+            .map(|(axis, kind, u)| {
+                *axis * match kind {
+                    0 => 0.0,
+                    1 => u * 1e-4,
+                    2 => u * 3.0,
+                    _ => PI - u * 1e-3,
+                }
+            })
+            .collect();
+        let mut matrices = vec![Mat3::ZERO; aa.len()];
+        egogen::math::rotation::axis_angles_to_matrices(&aa, &mut matrices);
+        let bits = |m: &Mat3| m.to_cols_array().map(f64::to_bits);
+        for (a, m) in aa.iter().zip(&matrices) {
+            prop_assert_eq!(bits(m), bits(&axis_angle_to_matrix(*a)), "{:?}", a);
+        }
+        let mut back = vec![Vec3::ZERO; aa.len()];
+        egogen::math::rotation::matrices_to_axis_angles(&matrices, &mut back);
+        for (m, b) in matrices.iter().zip(&back) {
+            prop_assert_eq!(
+                b.to_array().map(f64::to_bits),
+                matrix_to_axis_angle(*m).to_array().map(f64::to_bits),
+                "{:?}",
+                m
+            );
+        }
+    }
+
+    #[test]
     fn long_chains_stay_orthonormal(seed in 0u64..1000) {
         // 100 000 random rigid transforms composed, as far longer rollouts would.
         let mut m = Affine3::IDENTITY;

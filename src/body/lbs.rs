@@ -13,6 +13,7 @@ use rayon::prelude::*;
 
 use super::model::{BodyModel, POSE_FEATURES};
 use super::skeleton::{NUM_JOINTS, PARENTS, POSE_DIM};
+use crate::math::rotation::axis_angles_to_matrices;
 use crate::math::{axis_angle_to_matrix, Affine3, Mat3, Real, Vec3};
 
 /// Parameters of one posed body, in the `smplx` convention.
@@ -471,9 +472,11 @@ pub fn posed_skeleton(
 }
 
 fn joint_rotations(pose: &[Real; POSE_DIM]) -> [Mat3; NUM_JOINTS] {
-    std::array::from_fn(|j| {
-        axis_angle_to_matrix(Vec3::new(pose[3 * j], pose[3 * j + 1], pose[3 * j + 2]))
-    })
+    let aa: [Vec3; NUM_JOINTS] =
+        std::array::from_fn(|j| Vec3::new(pose[3 * j], pose[3 * j + 1], pose[3 * j + 2]));
+    let mut rotations = [Mat3::IDENTITY; NUM_JOINTS];
+    axis_angles_to_matrices(&aa, &mut rotations);
+    rotations
 }
 
 /// `vec(R_j − I)` for joints 1..55, row-major per matrix (the order `smplx` flattens in), in

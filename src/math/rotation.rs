@@ -130,8 +130,75 @@ pub fn rot6d_to_matrices(d6: &[[Real; 6]], out: &mut [Mat3]) {
     }
 }
 
-/// 6D vectors converted side by side in [`rot6d_to_matrices`].
+/// Rotations converted side by side in [`rot6d_to_matrices`], [`axis_angles_to_matrices`] and
+/// [`matrices_to_axis_angles`].
 pub const INTERLEAVED: usize = 8;
+
+/// [`axis_angle_to_matrix`] of many axis-angle vectors into `out`, bit for bit: each step over
+/// [`INTERLEAVED`] of them before the next, so that their square roots, sines and divisions
+/// overlap (a pose's 55 joints).
+///
+/// # Panics
+/// When `out` is not as long as `aa` (a caller's bug).
+pub fn axis_angles_to_matrices(aa: &[Vec3], out: &mut [Mat3]) {
+    assert_eq!(aa.len(), out.len(), "one matrix per axis-angle vector");
+    for (aa, out) in aa.chunks(INTERLEAVED).zip(out.chunks_mut(INTERLEAVED)) {
+        let mut ab = [(0.0, 0.0); INTERLEAVED];
+        for (ab, aa) in ab.iter_mut().zip(aa) {
+            let theta2 = aa.length_squared();
+            *ab = if theta2 < 1e-8 {
+                (1.0 - theta2 / 6.0, 0.5 - theta2 / 24.0)
+            } else {
+                let theta = theta2.sqrt();
+                (theta.sin() / theta, (1.0 - theta.cos()) / theta2)
+            };
+        }
+        for ((out, aa), (a, b)) in out.iter_mut().zip(aa).zip(ab) {
+            let k = skew(*aa);
+            *out = Mat3::IDENTITY + k * a + (k * k) * b;
+        }
+    }
+}
+
+/// [`matrix_to_axis_angle`] of many rotation matrices into `out`, bit for bit: each step over
+/// [`INTERLEAVED`] of them before the next, so that their square roots, arc tangents and
+/// divisions overlap (a decoded frame's 22 joints). Angles near π take
+/// [`matrix_to_axis_angle`] itself.
+///
+/// # Panics
+/// When `out` is not as long as `m` (a caller's bug).
+pub fn matrices_to_axis_angles(m: &[Mat3], out: &mut [Vec3]) {
+    assert_eq!(m.len(), out.len(), "one axis-angle vector per matrix");
+    for (m, out) in m.chunks(INTERLEAVED).zip(out.chunks_mut(INTERLEAVED)) {
+        let mut cos_theta = [0.0; INTERLEAVED];
+        let mut v = [Vec3::ZERO; INTERLEAVED];
+        let mut sin_theta = [0.0; INTERLEAVED];
+        for j in 0..m.len() {
+            let m = &m[j];
+            let trace = m.x_axis.x + m.y_axis.y + m.z_axis.z;
+            cos_theta[j] = ((trace - 1.0) * 0.5).clamp(-1.0, 1.0);
+            v[j] = Vec3::new(
+                m.y_axis.z - m.z_axis.y,
+                m.z_axis.x - m.x_axis.z,
+                m.x_axis.y - m.y_axis.x,
+            ) * 0.5;
+            sin_theta[j] = v[j].length();
+        }
+        let theta: [Real; INTERLEAVED] = std::array::from_fn(|j| sin_theta[j].atan2(cos_theta[j]));
+        for j in 0..m.len() {
+            out[j] = if cos_theta[j] > -0.9 {
+                let scale = if sin_theta[j] < 1e-8 {
+                    1.0 + theta[j] * theta[j] / 6.0
+                } else {
+                    theta[j] / sin_theta[j]
+                };
+                v[j] * scale
+            } else {
+                matrix_to_axis_angle(m[j])
+            };
+        }
+    }
+}
 
 /// 6D representation (first two columns) of a rotation matrix.
 pub fn matrix_to_rot6d(m: Mat3) -> [Real; 6] {

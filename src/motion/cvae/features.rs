@@ -6,8 +6,8 @@
 //! `transl` (metres). Hands, jaw and eyes are not modelled and stay at rest.
 
 use crate::body::BodyParams;
-use crate::math::rotation::rot6d_to_matrices;
-use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d};
+use crate::math::rotation::{matrices_to_axis_angles, rot6d_to_matrices};
+use crate::math::{axis_angle_to_matrix, matrix_to_rot6d};
 use crate::motion::primitive::Primitive;
 
 use super::rig::BODY_JOINTS;
@@ -42,8 +42,10 @@ pub fn frame_params(features: &[f32], betas: &[f64]) -> BodyParams {
         std::array::from_fn(|j| std::array::from_fn(|k| features[6 * j + k] as f64));
     let mut rotations = [crate::math::Mat3::IDENTITY; BODY_JOINTS];
     rot6d_to_matrices(&d6, &mut rotations);
-    for (j, r) in rotations.into_iter().enumerate() {
-        p.set_joint_axis_angle(j, matrix_to_axis_angle(r));
+    let mut axis_angles = [crate::math::Vec3::ZERO; BODY_JOINTS];
+    matrices_to_axis_angles(&rotations, &mut axis_angles);
+    for (j, aa) in axis_angles.into_iter().enumerate() {
+        p.set_joint_axis_angle(j, aa);
     }
     p.transl = crate::math::Vec3::new(
         features[TRANSL_OFFSET] as f64,
