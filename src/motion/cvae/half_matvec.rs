@@ -117,12 +117,18 @@ impl HalfMatrix {
         assert!(Self::supported(), "f16 products need AVX2, FMA and F16C");
     }
 
-    /// Runs `kernel(tile, out)` on every tile of [`TILE`] outputs: `tile` its packed weights
-    /// (`inputs × TILE`), `out` its [`TILE`] outputs — for the last, partial tile a zero-padded
-    /// copy written back after.
-    fn for_each_tile(&self, y: &mut [f32], mut kernel: impl FnMut(&[u16], &mut [f32; TILE])) {
+    /// Runs `kernel(tile, out)` on every tile of [`TILE`] outputs from tile `first` on: `tile`
+    /// its packed weights (`inputs × TILE`), `out` its [`TILE`] outputs — for the last, partial
+    /// tile a zero-padded copy written back after.
+    fn for_each_tile(
+        &self,
+        first: usize,
+        y: &mut [f32],
+        mut kernel: impl FnMut(&[u16], &mut [f32; TILE]),
+    ) {
         let mut tail = [0f32; TILE];
-        for (t, tile) in self.packed.chunks_exact(self.inputs * TILE).enumerate() {
+        let tiles = self.packed.chunks_exact(self.inputs * TILE).enumerate();
+        for (t, tile) in tiles.skip(first) {
             let start = t * TILE;
             let width = TILE.min(self.outputs - start);
             if width == TILE {
@@ -144,17 +150,32 @@ impl HalfMatrix {
     unsafe fn mul_add_x86(&self, x: &[f32], y: &mut [f32]) {
         // SAFETY: the caller checked the instructions; the kernel reads `inputs × TILE`
         // weights of the tile and writes its `TILE` outputs.
-        self.for_each_tile(y, |tile, out| unsafe { tile_eight_lanes(tile, x, out) });
+        self.for_each_tile(0, y, |tile, out| unsafe { tile_eight_lanes(tile, x, out) });
     }
 
     /// The tiles with 16-lane registers (AVX-512F): per output, the same fused multiply-adds
     /// in the same order as [`Self::mul_add_x86`], so the same bits, with half the
-    /// conversions and multiply-add instructions.
+    /// conversions and multiply-add instructions. Full tiles go four at a time (sixteen
+    /// accumulators, each input's broadcast shared), the rest one at a time.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
     unsafe fn mul_add_avx512(&self, x: &[f32], y: &mut [f32]) {
+        let per_tile = self.inputs * TILE;
+        let groups = self.outputs / TILE / 4;
+        for (tiles, out) in self
+            .packed
+            .chunks_exact(4 * per_tile)
+            .zip(y.chunks_exact_mut(4 * TILE))
+            .take(groups)
+        {
+            // SAFETY: as in `mul_add_x86`; `tiles` holds four tiles' `4 × inputs × TILE`
+            // weights and `out` their `4 × TILE` outputs.
+            unsafe { four_tiles_sixteen_lanes(tiles, x, out) };
+        }
         // SAFETY: as in `mul_add_x86`.
-        self.for_each_tile(y, |tile, out| unsafe { tile_sixteen_lanes(tile, x, out) });
+        self.for_each_tile(4 * groups, y, |tile, out| unsafe {
+            tile_sixteen_lanes(tile, x, out)
+        });
     }
 }
 
@@ -203,6 +224,40 @@ unsafe fn tile_sixteen_lanes(tile: &[u16], x: &[f32], out: &mut [f32; TILE]) {
     }
     for (r, a) in acc.iter().enumerate() {
         _mm512_storeu_ps(o.add(16 * r), *a);
+    }
+}
+
+/// `out += x · tiles` for four tiles side by side (`tiles` `[4 × inputs × TILE]`, `out`
+/// `[4 × TILE]`), sixteen accumulators of sixteen lanes, the inputs in order: per output the
+/// fused multiply-adds of [`tile_sixteen_lanes`], while four tiles' worth of them are in flight.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn four_tiles_sixteen_lanes(tiles: &[u16], x: &[f32], out: &mut [f32]) {
+    use std::arch::x86_64::*;
+    let inputs = x.len();
+    debug_assert_eq!(tiles.len(), 4 * inputs * TILE);
+    debug_assert_eq!(out.len(), 4 * TILE);
+    let (o, w) = (out.as_mut_ptr(), tiles.as_ptr());
+    let mut acc = [[_mm512_setzero_ps(); 4]; 4];
+    for (t, a) in acc.iter_mut().enumerate() {
+        for (r, a) in a.iter_mut().enumerate() {
+            *a = _mm512_loadu_ps(o.add(t * TILE + 16 * r));
+        }
+    }
+    for (k, &xk) in x.iter().enumerate() {
+        let xb = _mm512_set1_ps(xk);
+        for (t, a) in acc.iter_mut().enumerate() {
+            let row = w.add((t * inputs + k) * TILE);
+            for (r, a) in a.iter_mut().enumerate() {
+                let h = _mm256_loadu_si256(row.add(16 * r) as *const __m256i);
+                *a = _mm512_fmadd_ps(xb, _mm512_cvtph_ps(h), *a);
+            }
+        }
+    }
+    for (t, a) in acc.iter().enumerate() {
+        for (r, a) in a.iter().enumerate() {
+            _mm512_storeu_ps(o.add(t * TILE + 16 * r), *a);
+        }
     }
 }
 
@@ -257,8 +312,9 @@ mod tests {
             eprintln!("no AVX2/FMA/F16C here: nothing to check");
             return;
         }
-        // The GRU's frame rows and hidden gates, and the output layer (a partial tile).
-        for (k, n) in [(270, 768), (256, 768), (256, 135)] {
+        // The GRU's frame rows and hidden gates, and the output layer (a partial tile); five
+        // full tiles and a partial one (four side by side, then one at a time).
+        for (k, n) in [(270, 768), (256, 768), (256, 135), (33, 350)] {
             let w: Vec<f32> = (0..k * n).map(|i| ((i as f32) * 0.0137).cos()).collect();
             let x: Vec<f32> = (0..k).map(|i| ((i as f32) * 0.71).sin() * 3.0).collect();
             let m = HalfMatrix::new(k, n, &w);
