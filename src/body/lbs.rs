@@ -113,6 +113,17 @@ pub struct PosedSkeleton {
     pub world_from_joint: [Affine3; NUM_JOINTS],
 }
 
+impl Default for PosedSkeleton {
+    /// Every joint at the origin with the identity transform: a buffer for
+    /// [`ShapedBody::skeleton_into`].
+    fn default() -> Self {
+        Self {
+            joints: [Vec3::ZERO; NUM_JOINTS],
+            world_from_joint: [Affine3::IDENTITY; NUM_JOINTS],
+        }
+    }
+}
+
 impl BodyModel {
     /// Applies betas and expression: the per-sequence part of skinning.
     pub fn shape(&self, betas: &[Real], expression: &[Real]) -> Result<ShapedBody<'_>, PoseError> {
@@ -246,6 +257,16 @@ impl ShapedBody<'_> {
         transl: Vec3,
     ) -> Result<PosedSkeleton, PoseError> {
         posed_skeleton(&self.rest_joints, pose, transl)
+    }
+
+    /// [`Self::skeleton`] written into `out` ([`posed_skeleton_into`]).
+    pub fn skeleton_into(
+        &self,
+        pose: &[Real; POSE_DIM],
+        transl: Vec3,
+        out: &mut PosedSkeleton,
+    ) -> Result<(), PoseError> {
+        posed_skeleton_into(&self.rest_joints, pose, transl, out)
     }
 
     /// Posed positions of selected vertices only (e.g. body markers).
@@ -441,10 +462,23 @@ pub fn posed_skeleton(
     pose: &[Real; POSE_DIM],
     transl: Vec3,
 ) -> Result<PosedSkeleton, PoseError> {
+    let mut skeleton = PosedSkeleton::default();
+    posed_skeleton_into(rest_joints, pose, transl, &mut skeleton)?;
+    Ok(skeleton)
+}
+
+/// [`posed_skeleton`] written into `out` (a sequence's frames posed one after another into one
+/// buffer, without moving 6 KB of transforms per frame). `out` is left as it was on an error.
+pub fn posed_skeleton_into(
+    rest_joints: &[Vec3; NUM_JOINTS],
+    pose: &[Real; POSE_DIM],
+    transl: Vec3,
+    out: &mut PosedSkeleton,
+) -> Result<(), PoseError> {
     check_finite("pose", pose)?;
     check_finite("transl", &transl.to_array())?;
     let rots = joint_rotations(pose);
-    let mut world_from_joint = [Affine3::IDENTITY; NUM_JOINTS];
+    let world_from_joint = &mut out.world_from_joint;
     for j in 0..NUM_JOINTS {
         let local = match PARENTS[j] {
             None => Affine3 {
@@ -461,14 +495,13 @@ pub fn posed_skeleton(
             Some(p) => world_from_joint[p] * local,
         };
     }
-    for m in &mut world_from_joint {
+    for m in world_from_joint.iter_mut() {
         m.translation += transl;
     }
-    let joints = std::array::from_fn(|j| world_from_joint[j].translation);
-    Ok(PosedSkeleton {
-        joints,
-        world_from_joint,
-    })
+    for (joint, m) in out.joints.iter_mut().zip(&out.world_from_joint) {
+        *joint = m.translation;
+    }
+    Ok(())
 }
 
 fn joint_rotations(pose: &[Real; POSE_DIM]) -> [Mat3; NUM_JOINTS] {

@@ -13,7 +13,9 @@ use super::net::decode_raw;
 use super::net::{ArchConfig, PrimitiveVae};
 use super::rig::BODY_JOINTS;
 use super::weights::{self, WeightsError};
-use crate::body::{joint, BodyModel, BodyParams, CpfCalibration, PoseError, ShapedBody};
+use crate::body::{
+    joint, BodyModel, BodyParams, CpfCalibration, PoseError, PosedSkeleton, ShapedBody,
+};
 use crate::math::{Affine3, Vec3};
 use crate::motion::primitive::{
     canonical_frame, Primitive, PrimitiveError, PRIMITIVE_FRAMES, SEED_FRAMES,
@@ -285,6 +287,7 @@ impl MotionModel {
                 }
                 let last_seed = seed_frames[SEED_FRAMES - 1].clone();
                 let mut frames = seed_frames;
+                frames.reserve_exact(PRIMITIVE_FRAMES - SEED_FRAMES);
                 for f in SEED_FRAMES..PRIMITIVE_FRAMES {
                     let mut p =
                         frame_params(&values[f * FRAME_DIM..(f + 1) * FRAME_DIM], &body.betas);
@@ -313,13 +316,17 @@ fn posed(
     let mut markers = Vec::with_capacity(world.len());
     let mut joints = Vec::with_capacity(world.len());
     let mut world_from_cpf = Vec::with_capacity(world.len());
+    // One skeleton buffer for all frames (what `marker_frame` computes, without moving it).
+    let mut skeleton = PosedSkeleton::default();
     for f in &world {
-        let mf = body
-            .shaped
-            .marker_frame(&f.pose, f.transl, &body.marker_ids)?;
-        world_from_cpf.push(body.cpf.world_from_cpf(&mf.skeleton));
-        joints.push(mf.skeleton.joints.to_vec());
-        markers.push(mf.markers);
+        body.shaped
+            .skeleton_into(&f.pose, f.transl, &mut skeleton)?;
+        markers.push(
+            body.shaped
+                .pose_vertices(&skeleton, &f.pose, &body.marker_ids),
+        );
+        world_from_cpf.push(body.cpf.world_from_cpf(&skeleton));
+        joints.push(skeleton.joints.to_vec());
     }
     Ok(DecodedPrimitive {
         primitive,
