@@ -184,7 +184,10 @@ pub fn matrices_to_axis_angles(m: &[Mat3], out: &mut [Vec3]) {
             ) * 0.5;
             sin_theta[j] = v[j].length();
         }
-        let theta: [Real; INTERLEAVED] = std::array::from_fn(|j| sin_theta[j].atan2(cos_theta[j]));
+        let mut theta = [0.0; INTERLEAVED];
+        for j in 0..m.len() {
+            theta[j] = sin_theta[j].atan2(cos_theta[j]);
+        }
         for j in 0..m.len() {
             out[j] = if cos_theta[j] > -0.9 {
                 let scale = if sin_theta[j] < 1e-8 {

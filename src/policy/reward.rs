@@ -285,7 +285,8 @@ impl SceneTest {
     ) -> Result<bool, crate::body::PoseError> {
         let mut skeleton = crate::body::PosedSkeleton::default();
         for f in &p.world[SEED_FRAMES..] {
-            body.shaped.skeleton_into(&f.pose, f.transl, &mut skeleton)?;
+            body.shaped
+                .skeleton_into(&f.pose, f.transl, &mut skeleton)?;
             let vertices = body.shaped.pose_vertices(&skeleton, &f.pose, &self.ids);
             if crate::scene::sdf_penetration(sdf, &vertices).count >= self.threshold {
                 return Ok(true);
