@@ -85,13 +85,15 @@ impl RowMatrix {
         assert!(Self::supported(), "packed products need AVX2 and FMA");
         let mut ys = ys;
         let mut out = [[0f32; TILE]; R];
+        #[cfg(target_arch = "x86_64")]
+        let sixteen_lanes = std::arch::is_x86_feature_detected!("avx512f");
         for (t, tile) in self.packed.chunks_exact(self.inputs * TILE).enumerate() {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the processor has the instructions (checked above); the kernels read
             // `inputs × TILE` weights of the tile and `inputs` values of each row, and write
             // `TILE` outputs per row.
             unsafe {
-                if std::arch::is_x86_feature_detected!("avx512f") {
+                if sixteen_lanes {
                     tile_sixteen_lanes(tile, &xs, &mut out)
                 } else {
                     tile_eight_lanes(tile, &xs, &mut out)
