@@ -116,6 +116,66 @@ fn run_with_kills(
     }
 }
 
+/// Retries count frames, not attempts: with `retries = 0`, a worker killed after it has
+/// written its shard's one frame (its attempt fails, but no frame is lost) does not fail the
+/// run. Every worker is killed as soon as its frame is finished, before Blender exits.
+#[test]
+fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
+    let config = CONFIG
+        .replace("duration_s = 1.0", "duration_s = 0.25")
+        .replace("frames_per_shard = 2", "frames_per_shard = 1")
+        .replace("retries = 40", "retries = 0");
+    let (dir, config) = common::run_dir(&config);
+    let mut child = egogen_run().arg(&config).spawn().unwrap();
+    let needle = dir.path().display().to_string();
+    let frames_dir = dir.path().join("out.partial/cameras/camera-slam-left");
+    let deadline = Instant::now() + Duration::from_secs(300);
+    let (mut seen, mut kills) = (0, 0);
+    let status = loop {
+        assert!(Instant::now() < deadline, "the run is stuck");
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        let done = std::fs::read_dir(&frames_dir)
+            .map(|d| d.count())
+            .unwrap_or(0);
+        if done > seen {
+            seen = done;
+            for pid in pids_with(&["render_shard.py", &needle]) {
+                if kill9(pid) {
+                    kills += 1;
+                }
+            }
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    eprintln!("{kills} workers killed after their frame");
+    assert!(kills >= 1, "no worker was caught after its frame");
+    assert!(status.success(), "a kill after the frame failed the run");
+    let listed = common::read_manifest(&dir.path().join("out"));
+    let frames = listed
+        .files
+        .iter()
+        .filter(|f| f.path.ends_with(".exr"))
+        .count();
+    assert_eq!(frames, 5);
+    let report = verify(&dir.path().join("out")).unwrap();
+    assert_eq!(report.frames, 5);
+    // The pool report shows attempts that were killed although their frame was finished.
+    let pool: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("out/logs/start_01/pool_report.json")).unwrap(),
+    )
+    .unwrap();
+    let killed_after_frame = pool["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["attempts"].as_array().unwrap())
+        .filter(|a| a["outcome"] != "ok" && a["finished"] == a["frames"])
+        .count();
+    assert!(killed_after_frame >= 1, "{pool}");
+}
+
 #[test]
 fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
     // Reference: uninterrupted.

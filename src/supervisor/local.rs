@@ -1,6 +1,7 @@
 //! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard,
 //! starts Blender on its spec, finishes frames as their raw files are reported, and retries a
-//! failed or timed-out attempt (on the frames still missing) up to the configured count; each
+//! failed or timed-out attempt on the frames still missing until one frame has failed more
+//! than the configured count (retries count frames, not attempts: [`run_shard`]); each
 //! attempt's stderr goes to `logs/`. Ctrl-C kills the workers and leaves every finished frame in
 //! place, so `--resume` continues.
 
@@ -146,20 +147,21 @@ async fn worker(shared: Arc<Shared>, w: usize) {
         let Some(shard) = shared.queue.lock().unwrap().pop_front() else {
             break;
         };
-        let report = run_shard(&shared, w, &shard).await;
-        let failed =
-            report.attempts.last().is_some_and(|a| !a.outcome.is_ok()) && !*shared.stop.borrow();
-        if failed {
-            let last = report.attempts.last().unwrap();
+        let (report, failure) = run_shard(&shared, w, &shard).await;
+        if let Some(failure) = failure.filter(|_| !*shared.stop.borrow()) {
+            let last = report.attempts.last();
             let mut f = shared.failed.lock().unwrap();
             f.get_or_insert(format!(
-                "shard {} ({} frames {:?}) failed {} times; last: {} (log: {})",
+                "shard {} ({} frames {:?}): {failure} after {} attempt(s); last: {} (log: {})",
                 report.shard,
                 report.camera,
                 report.frames,
                 report.attempts.len(),
-                last.outcome,
-                shared.dataset.staging.join(&last.log).display()
+                last.map_or_else(|| "none".into(), |a| a.outcome.to_string()),
+                last.map_or_else(
+                    || "none".into(),
+                    |a| shared.dataset.staging.join(&a.log).display().to_string()
+                )
             ));
         }
         shared.reports.lock().unwrap().push(report);
@@ -167,7 +169,13 @@ async fn worker(shared: Arc<Shared>, w: usize) {
     set_state(&shared, w, "done".into());
 }
 
-async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
+/// Renders a shard's missing frames, retrying on the frames still missing. Retries are
+/// counted per frame, not per attempt: a failed attempt charges one try to the frame it left
+/// first unfinished (the one it was rendering when it died), so an attempt killed after
+/// writing its frames costs nothing, and the shard fails only when some frame has failed
+/// `retries + 1` times (or the scene could not be set up, which fails the same way every
+/// time). Returns the report and, when frames are left, why.
+async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> (ShardReport, Option<String>) {
     let dataset = &shared.dataset;
     let camera = dataset.cameras[shard.camera].camera.name.clone();
     let mut report = ShardReport {
@@ -176,16 +184,22 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
         frames: shard.frames.clone(),
         attempts: Vec::new(),
     };
-    for attempt in 1..=shared.settings.retries + 1 {
-        let missing: Vec<u32> = shard
+    let missing_now = || -> Vec<u32> {
+        shard
             .frames
             .iter()
             .copied()
             .filter(|&f| !dataset.frame_done(shard.camera, f))
-            .collect();
+            .collect()
+    };
+    let mut tries_of_frame = std::collections::BTreeMap::<u32, u32>::new();
+    let mut attempt = 0;
+    loop {
+        let missing = missing_now();
         if missing.is_empty() {
-            break;
+            return (report, None);
         }
+        attempt += 1;
         set_state(
             shared,
             w,
@@ -213,12 +227,35 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> ShardReport {
             seconds: started.elapsed().as_secs_f64(),
             log: dataset.relative(&log),
         });
+        let left = missing_now();
+        let Some(&first_left) = left.first() else {
+            return (report, None);
+        };
+        if *shared.stop.borrow() {
+            return (report, Some("interrupted".into()));
+        }
         // A setup failure (the scene does not import) happens again on every try.
-        if ok || setup_failed || *shared.stop.borrow() {
-            break;
+        if setup_failed {
+            return (report, Some("the scene could not be set up".into()));
+        }
+        if ok {
+            return (
+                report,
+                Some(format!(
+                    "Blender exited cleanly but left {} frame(s) unfinished, first {first_left}",
+                    left.len()
+                )),
+            );
+        }
+        let tries = tries_of_frame.entry(first_left).or_insert(0);
+        *tries += 1;
+        if *tries > shared.settings.retries {
+            return (
+                report,
+                Some(format!("frame {first_left} failed {tries} time(s)")),
+            );
         }
     }
-    report
 }
 
 /// One Blender run over `frames`; returns frames finished, or (finished, reason).

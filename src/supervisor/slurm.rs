@@ -49,6 +49,9 @@ pub struct TaskEnd {
 struct ShardState {
     shard: Shard,
     report: ShardReport,
+    /// Failed tries charged to each frame: a failed task charges the frame it left first
+    /// unfinished (retries count frames, not attempts, as in the local pool).
+    tries_of_frame: std::collections::BTreeMap<u32, u32>,
 }
 
 /// The Slurm backend: renders shards as Slurm array tasks; returns when every frame is
@@ -98,6 +101,7 @@ fn run_slurm(
                 attempts: Vec::new(),
             },
             shard,
+            tries_of_frame: Default::default(),
         })
         .collect();
     let mut round = 0u32;
@@ -109,10 +113,13 @@ fn run_slurm(
         if todo.is_empty() {
             break;
         }
-        // Past its retries, or failed in a way that repeats (the scene does not load).
+        // A frame past its retries, or failed in a way that repeats (the scene does not load).
         if let Some(&i) = todo.iter().find(|&&i| {
             let attempts = &states[i].report.attempts;
-            attempts.len() > settings.retries as usize
+            states[i]
+                .tries_of_frame
+                .values()
+                .any(|&t| t > settings.retries)
                 || attempts.last().is_some_and(|a| a.outcome.repeats())
         }) {
             bar.finish_and_clear();
@@ -122,11 +129,16 @@ fn run_slurm(
                 .attempts
                 .last()
                 .expect("a shard past its retries has attempts");
+            let worst = states[i].tries_of_frame.iter().max_by_key(|(_, &t)| t);
             bail!(
-                "shard {} ({} frames {:?}) failed {} times; last: {} (log: {})",
+                "shard {} ({} frames {:?}): {} after {} attempt(s); last: {} (log: {})",
                 r.shard,
                 r.camera,
                 r.frames,
+                worst.map_or_else(
+                    || "the scene could not be set up".into(),
+                    |(f, t)| format!("frame {f} failed {t} time(s)")
+                ),
                 r.attempts.len(),
                 last.outcome,
                 dataset.staging.join(&last.log).display()
@@ -247,10 +259,14 @@ fn record_attempts(dataset: &Dataset, states: &mut [ShardState], tasks: Vec<Task
     let ends = task_ends(job);
     for (t, (i, frames, _)) in tasks.into_iter().enumerate() {
         let state = &mut states[i];
-        let still_missing = missing_frames(dataset, &state.shard).len();
+        let left = missing_frames(dataset, &state.shard);
+        let still_missing = left.len();
         let end = ends.get(&(t as u32));
         let log = dataset.logs_dir().join(format!("slurm_{job}_{t}.log"));
         let outcome = task_outcome(end, still_missing, &log);
+        if let Some(&first_left) = left.first().filter(|_| !outcome.is_ok()) {
+            *state.tries_of_frame.entry(first_left).or_insert(0) += 1;
+        }
         state.report.attempts.push(Attempt {
             attempt: state.report.attempts.len() as u32 + 1,
             frames: frames.len(),
