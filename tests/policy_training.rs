@@ -576,3 +576,82 @@ fn action_spread_scales_the_sampled_actions_about_the_mean() {
     }
     assert_ne!(half, mean);
 }
+
+/// Training never writes a non-finite policy and never replaces an earlier run's weights
+/// unasked: a learning rate of 1e10 stops the run with the update and the term that went
+/// non-finite (exit non-zero); the same run twice writes the same bytes; a second run into the
+/// same outputs is refused until `--force`.
+#[test]
+fn non_finite_training_stops_and_earlier_weights_are_not_replaced_unasked() {
+    use std::process::Command;
+    let train = |config: &Path, extra: &[&str]| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_egogen"));
+        cmd.args(["train", "policy", "--quiet", "--config"])
+            .arg(config)
+            .args(extra);
+        cmd.output().unwrap()
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("c.toml");
+    let text = tiny_config(dir.path()).replace("[ppo]\n", "[ppo]\nlearning_rate = 1e10\n");
+    std::fs::write(&config, text).unwrap();
+    let out = train(&config, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a diverged run exited 0: {err}");
+    assert!(
+        err.contains("update")
+            && (err.contains("not finite") || err.contains("NaN") || err.contains("inf")),
+        "{err}"
+    );
+    assert!(err.contains("learning_rate"), "{err}");
+    // Whatever was written before the divergence is finite.
+    for f in std::fs::read_dir(dir.path()).unwrap().flatten() {
+        let path = f.path();
+        if path.extension().is_some_and(|e| e == "safetensors") {
+            for (name, bytes) in common::safetensors_tensors(&path) {
+                assert!(
+                    bytes
+                        .chunks_exact(4)
+                        .all(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]).is_finite()),
+                    "{}: {name} is not finite",
+                    path.display()
+                );
+            }
+        }
+    }
+
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("c.toml");
+    std::fs::write(&config, tiny_config(dir.path())).unwrap();
+    assert!(train(&config, &[]).status.success());
+    let weights = dir.path().join("w.safetensors");
+    let first = std::fs::read(&weights).unwrap();
+    // The same config and seed give the same bytes (the header's keys in one order).
+    let twin = tempfile::tempdir().unwrap();
+    let twin_config = twin.path().join("c.toml");
+    std::fs::write(&twin_config, tiny_config(twin.path())).unwrap();
+    assert!(train(&twin_config, &[]).status.success());
+    assert!(
+        std::fs::read(twin.path().join("w.safetensors")).unwrap() == first,
+        "the same run wrote other bytes"
+    );
+    std::fs::write(
+        &config,
+        tiny_config(dir.path()).replace("seed = 3", "seed = 4"),
+    )
+    .unwrap();
+    let again = train(&config, &[]);
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(!again.status.success() && err.contains("--force"), "{err}");
+    assert_eq!(
+        std::fs::read(&weights).unwrap(),
+        first,
+        "weights replaced unasked"
+    );
+    assert!(train(&config, &["--force"]).status.success());
+    assert_ne!(
+        std::fs::read(&weights).unwrap(),
+        first,
+        "--force trains anew"
+    );
+}

@@ -99,6 +99,10 @@ enum TrainCommand {
         /// Continue the interrupted run from its checkpoint, exactly where it stopped.
         #[arg(long)]
         resume: bool,
+        /// Replace the weights and log of an earlier run at the config's `output.weights` (and
+        /// its stages' last weights) and `output.log`; without it they are refused.
+        #[arg(long)]
+        force: bool,
     },
     /// Train the motion-primitive C-VAE on mocap clips; writes safetensors weights (atomically)
     /// and a JSON-lines loss log, as named in the config.
@@ -360,7 +364,8 @@ fn run(cli: Cli) -> Result<()> {
             config,
             quiet,
             resume,
-        }) => train_policy(&config, quiet, resume)?,
+            force,
+        }) => train_policy(&config, quiet, resume, force)?,
         Command::Train(TrainCommand::Primitive {
             config,
             quiet,

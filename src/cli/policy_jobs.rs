@@ -54,6 +54,14 @@ pub enum PolicyCommand {
         /// Plan k is drawn from this seed + k.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Also write each plan as a scene file, `DIR/plan_<seed>.obj` (metres, z up, floor at
+        /// z = 0, walls 2.5 m and furniture 0.8 m high, one object per part), which `egogen
+        /// synth` and `egogen-run` load as any OBJ scene (refused if a file exists).
+        #[arg(long, value_name = "DIR")]
+        obj_dir: Option<PathBuf>,
+        /// Thickness of inner walls (m; training draws 0.15).
+        #[arg(long, default_value_t = 0.15)]
+        wall_m: f64,
     },
     /// Evaluate the sampling controller (best of K random latents by the reward) on held-out
     /// box-scene episodes; one JSON line per K.
@@ -192,12 +200,47 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             }
             println!("wrote {}", out.display());
         }
-        PolicyCommand::Rooms { out, count, seed } => {
+        PolicyCommand::Rooms {
+            out,
+            count,
+            seed,
+            obj_dir,
+            wall_m,
+        } => {
+            use crate::policy::room_scene::RoomSettings;
             refuse_existing(&out)?;
             if count == 0 {
                 bail!("--count must be at least 1");
             }
-            rooms_sheet(count, seed).write_png(&out)?;
+            if count > MAX_ROOM_PLANS {
+                bail!("--count {count}: at most {MAX_ROOM_PLANS} plans are drawn at once");
+            }
+            let settings = RoomSettings {
+                wall_m,
+                ..RoomSettings::default()
+            };
+            if !settings.is_valid() {
+                bail!("--wall-m: expected a thickness > 0 m, got {wall_m}");
+            }
+            let plans = room_plans(&settings, count, seed);
+            if let Some(dir) = &obj_dir {
+                let files: Vec<PathBuf> = (0..count as u64)
+                    .map(|k| dir.join(format!("plan_{}.obj", seed.wrapping_add(k))))
+                    .collect();
+                for f in &files {
+                    refuse_existing(f)?;
+                }
+                std::fs::create_dir_all(dir)
+                    .with_context(|| format!("creating {}", dir.display()))?;
+                for (plan, f) in plans.iter().zip(&files) {
+                    plan.params
+                        .scene_mesh(&settings)
+                        .write_obj(f)
+                        .with_context(|| format!("writing {}", f.display()))?;
+                    println!("wrote {}", f.display());
+                }
+            }
+            rooms_sheet(&plans).write_png(&out)?;
             println!("wrote {}", out.display());
         }
         PolicyCommand::Eval {
@@ -491,7 +534,7 @@ pub fn load_policy_for(
     Ok(net)
 }
 
-pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
+pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Result<()> {
     use crate::motion::cvae::train::evaluation_sets;
     use crate::motion::cvae::{BodyContext, MotionModel};
     use crate::policy::ppo::{train_policy, Parts};
@@ -523,7 +566,7 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool) -> Result<()> {
         prior: &prior,
         fixed: fixed.as_ref(),
     };
-    let report = train_policy(&plan, &parts, !quiet, resume)?;
+    let report = train_policy(&plan, &parts, !quiet, resume, force)?;
     println!(
         "trained {} parameters for {} updates ({} env steps) in {:.0} s; best validation return {}",
         report.parameters,
@@ -550,15 +593,29 @@ const GOAL_RGB: [u8; 3] = [200, 50, 50];
 
 /// `count` floor plans with their start (green), goal (red) and the line between, three to a
 /// row.
-fn rooms_sheet(count: usize, seed: u64) -> RgbImage {
-    use crate::policy::room_scene::{RoomScene, RoomSettings};
-    use crate::preview::map::MapPicture;
+/// Most plans `egogen policy rooms` draws at once (a sheet of 1 000 tiles is 54 MB).
+const MAX_ROOM_PLANS: usize = 1000;
+
+/// Plans `seed`, `seed + 1`, … drawn with `settings`.
+fn room_plans(
+    settings: &crate::policy::room_scene::RoomSettings,
+    count: usize,
+    seed: u64,
+) -> Vec<crate::policy::room_scene::RoomScene> {
     use rand_core::SeedableRng;
-    let settings = RoomSettings::default();
-    let tiles: Vec<RgbImage> = (0..count as u64)
+    (0..count as u64)
         .map(|k| {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed + k);
-            let scene = RoomScene::sample(&settings, &mut rng);
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed.wrapping_add(k));
+            crate::policy::room_scene::RoomScene::sample(settings, &mut rng)
+        })
+        .collect()
+}
+
+fn rooms_sheet(plans: &[crate::policy::room_scene::RoomScene]) -> RgbImage {
+    use crate::preview::map::MapPicture;
+    let tiles: Vec<RgbImage> = plans
+        .iter()
+        .map(|scene| {
             let mut pic = MapPicture::new(&scene.map, TILE_PX - 16);
             pic.line(scene.start, scene.goal, [120, 120, 220]);
             pic.dot(scene.start, 5, START_RGB);

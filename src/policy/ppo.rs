@@ -444,15 +444,33 @@ fn stage_last_path(weights_out: &Path, stage: &str) -> PathBuf {
 
 /// Trains per the plan; `resume` continues the checkpoint a killed run left (refused when
 /// there is none or it belongs to another plan; without `resume` an existing one is refused).
+/// A new run refuses weights an earlier run left at the plan's outputs unless `force`; a loss
+/// or a weight that goes non-finite stops the run with the update and the term.
 pub fn train_policy(
     plan: &PolicyTrainPlan,
     parts: &Parts,
     show_progress: bool,
     resume: bool,
+    force: bool,
 ) -> Result<PolicyTrainReport, TrainError> {
     let device = Default::default();
     let ckpt_dir = checkpoint::checkpoint_dir(&plan.weights_out);
     checkpoint::check_resume(&ckpt_dir, resume)?;
+    if !resume && !force {
+        let stage_outputs = plan
+            .stages
+            .iter()
+            .map(|s| stage_last_path(&plan.weights_out, &s.name));
+        for path in std::iter::once(plan.weights_out.clone()).chain(stage_outputs) {
+            if path.exists() {
+                return Err(TrainError::Data(format!(
+                    "{} already exists (an earlier run's weights); not overwriting it: move it \
+                     away, name other `output.weights`, or pass --force to replace it and the log",
+                    path.display()
+                )));
+            }
+        }
+    }
     let fingerprint = checkpoint::plan_fingerprint(plan);
     let ppo = plan.ppo;
     let new_optim = || {
@@ -488,7 +506,7 @@ pub fn train_policy(
         run_state = r.extra;
         truncate_log(&plan.log_out, r.state.log_bytes)?;
     } else {
-        start_log(&plan.log_out)?;
+        start_log(&plan.log_out, force)?;
     }
     let mut best = run_state.as_ref().and_then(|s| s.best_validation_return);
     let t0 = Instant::now();
@@ -531,6 +549,7 @@ pub fn train_policy(
             update += 1;
             global_update += 1;
             env_steps_total += ppo.envs * ppo.steps_per_env;
+            check_finite(&net, &log, &sp.name, global_update, &plan.weights_out)?;
             let mut log = UpdateLog {
                 stage: sp.name.clone(),
                 update: global_update,
@@ -642,6 +661,49 @@ pub fn train_policy(
     })
 }
 
+/// Parameters of a module that are not finite (NaN or ±∞).
+struct NonFiniteParams {
+    count: usize,
+}
+
+impl<B: Backend> ModuleVisitor<B> for NonFiniteParams {
+    fn visit_float<const D: usize>(&mut self, param: &Param<Tensor<B, D>>) {
+        let bad = param.val().is_finite().bool_not().int().sum().into_scalar();
+        self.count += bad.elem::<i64>() as usize;
+    }
+}
+
+/// Stops training when an update's losses or the network's weights are no longer finite (a
+/// learning rate far too high, an exploding gradient): nothing non-finite is ever written as
+/// weights.
+fn check_finite<B: Backend>(
+    net: &ActorCritic<B>,
+    log: &UpdateLog,
+    stage: &str,
+    update: usize,
+    weights_out: &Path,
+) -> Result<(), TrainError> {
+    let terms = [
+        ("policy loss", log.policy_loss),
+        ("value loss", log.value_loss),
+        ("entropy", log.entropy),
+        ("gradient norm", log.grad_norm),
+        ("KL to the prior", log.kl_prior),
+    ];
+    let mut params = NonFiniteParams { count: 0 };
+    net.visit(&mut params);
+    let what = match terms.iter().find(|(_, v)| !v.is_finite()) {
+        Some((term, v)) => format!("the {term} is {v}"),
+        None if params.count > 0 => format!("{} weights are not finite", params.count),
+        None => return Ok(()),
+    };
+    Err(TrainError::Data(format!(
+        "stage `{stage}`, update {update}: {what}; training stopped, nothing written to {} \
+         after this update: lower `[ppo] learning_rate` or `max_grad_norm` and train again",
+        weights_out.display()
+    )))
+}
+
 /// The network training starts from: `init_weights` (of the plan's architecture), or a new one.
 fn initial_policy(
     plan: &PolicyTrainPlan,
@@ -661,9 +723,11 @@ fn initial_policy(
     Ok(init)
 }
 
-/// A new run's empty log (an existing one is refused, not overwritten).
-fn start_log(log: &Path) -> Result<(), TrainError> {
-    refuse_existing_output(log)?;
+/// A new run's empty log (an existing one is refused, not overwritten, unless `force`).
+fn start_log(log: &Path, force: bool) -> Result<(), TrainError> {
+    if !force {
+        refuse_existing_output(log)?;
+    }
     if let Some(dir) = log.parent() {
         std::fs::create_dir_all(dir).map_err(|source| TrainError::Io {
             path: dir.into(),
@@ -688,7 +752,8 @@ fn weights_error(e: WeightsError) -> TrainError {
 fn refuse_existing_output(path: &Path) -> Result<(), TrainError> {
     if path.exists() {
         return Err(TrainError::Data(format!(
-            "{} already exists; not overwriting it (move it away, or --resume an interrupted run)",
+            "{} already exists; not overwriting it (move it away, pass --force to replace it, or \
+             --resume an interrupted run)",
             path.display()
         )));
     }

@@ -174,6 +174,85 @@ pub struct RoomScene {
     pub params: RoomParams,
 }
 
+/// Heights of a floor plan's mesh ([`RoomParams::scene_mesh`], m).
+pub const PLAN_WALL_HEIGHT_M: f64 = 2.5;
+pub const PLAN_FURNITURE_HEIGHT_M: f64 = 0.8;
+/// Thickness of the floor slab under the dwelling (its top at z = 0) and of the outer walls.
+const PLAN_SLAB_M: f64 = 0.1;
+
+impl RoomParams {
+    /// The plan as a scene mesh (metres, z up, floor at z = 0): a floor slab, the outer walls
+    /// ([`PLAN_WALL_HEIGHT_M`] high, their inner faces on the dwelling's edge), each inner
+    /// wall as boxes either side of its doorway (`wall_m` thick), and the furniture as boxes
+    /// [`PLAN_FURNITURE_HEIGHT_M`] high — a multi-room dwelling as a scene file would hold it,
+    /// one object per part (`floor`, `outer_wall_k`, `wall_k_a`/`_b`, `furniture_k`).
+    pub fn scene_mesh(&self, settings: &RoomSettings) -> crate::scene::SceneMesh {
+        use crate::math::Vec3;
+        let mut mesh = crate::scene::SceneMesh::default();
+        let half = DVec2::from_array(self.size_m) / 2.0;
+        let (h, t) = (PLAN_WALL_HEIGHT_M, PLAN_SLAB_M);
+        mesh.add_box(
+            "floor",
+            Vec3::new(-half.x - t, -half.y - t, -t),
+            Vec3::new(half.x + t, half.y + t, 0.0),
+        );
+        let outer = [
+            (
+                DVec2::new(-half.x - t, -half.y - t),
+                DVec2::new(half.x + t, -half.y),
+            ),
+            (
+                DVec2::new(-half.x - t, half.y),
+                DVec2::new(half.x + t, half.y + t),
+            ),
+            (
+                DVec2::new(-half.x - t, -half.y),
+                DVec2::new(-half.x, half.y),
+            ),
+            (DVec2::new(half.x, -half.y), DVec2::new(half.x + t, half.y)),
+        ];
+        for (k, (lo, hi)) in outer.iter().enumerate() {
+            mesh.add_box(
+                format!("outer_wall_{k}"),
+                Vec3::new(lo.x, lo.y, 0.0),
+                Vec3::new(hi.x, hi.y, h),
+            );
+        }
+        let w = settings.wall_m / 2.0;
+        for (k, wall) in self.walls.iter().enumerate() {
+            let pieces = [
+                (wall.from_m, wall.door_m - wall.door_width_m / 2.0),
+                (wall.door_m + wall.door_width_m / 2.0, wall.to_m),
+            ];
+            for ((a, b), side) in pieces.into_iter().zip(["a", "b"]) {
+                if b - a <= 0.0 {
+                    continue;
+                }
+                let (lo, hi) = if wall.along_x {
+                    (DVec2::new(a, wall.at_m - w), DVec2::new(b, wall.at_m + w))
+                } else {
+                    (DVec2::new(wall.at_m - w, a), DVec2::new(wall.at_m + w, b))
+                };
+                mesh.add_box(
+                    format!("wall_{k}_{side}"),
+                    Vec3::new(lo.x, lo.y, 0.0),
+                    Vec3::new(hi.x, hi.y, h),
+                );
+            }
+        }
+        for (k, f) in self.furniture.iter().enumerate() {
+            mesh.add_turned_box(
+                format!("furniture_{k}"),
+                DVec2::from_array(f.centre),
+                DVec2::from_array(f.half_extents),
+                f.yaw_rad,
+                (0.0, PLAN_FURNITURE_HEIGHT_M),
+            );
+        }
+        mesh
+    }
+}
+
 /// A room of the partition: its corners.
 #[derive(Debug, Clone, Copy)]
 struct Room {

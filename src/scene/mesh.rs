@@ -70,6 +70,59 @@ impl SceneMesh {
         self.add_object(name, &v, &tris)
     }
 
+    /// Adds a box standing on the floor plane, turned about z: its footprint (centre, half
+    /// extents along its own axes, yaw in rad) from height `z0` to `z1`; returns its id.
+    pub fn add_turned_box(
+        &mut self,
+        name: impl Into<String>,
+        centre: glam::DVec2,
+        half_extents: glam::DVec2,
+        yaw_rad: f64,
+        (z0, z1): (f64, f64),
+    ) -> ObjectId {
+        let rot = glam::DVec2::from_angle(yaw_rad);
+        let before = self.vertices.len();
+        let id = self.add_box(
+            name,
+            Vec3::new(-half_extents.x, -half_extents.y, z0),
+            Vec3::new(half_extents.x, half_extents.y, z1),
+        );
+        for v in &mut self.vertices[before..] {
+            let p = centre + rot.rotate(glam::DVec2::new(v.x, v.y));
+            (v.x, v.y) = (p.x, p.y);
+        }
+        id
+    }
+
+    /// Writes the mesh as Wavefront OBJ (metres, z up, as [`super::load_scene`] reads an OBJ
+    /// by default), one `o` object per scene object, atomically.
+    pub fn write_obj(&self, path: &std::path::Path) -> std::io::Result<()> {
+        use std::fmt::Write as _;
+        let mut text = format!(
+            "# egogen scene: {} objects, {} vertices, {} triangles; metres, z up\n",
+            self.objects.len(),
+            self.vertices.len(),
+            self.triangles.len()
+        );
+        for v in &self.vertices {
+            let _ = writeln!(text, "v {} {} {}", v.x, v.y, v.z);
+        }
+        let mut current = None;
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let id = self.triangle_object[t];
+            if current != Some(id) {
+                current = Some(id);
+                let name = (id.0 as usize)
+                    .checked_sub(1)
+                    .and_then(|k| self.objects.get(k))
+                    .map_or("object", |o| o.name.as_str());
+                let _ = writeln!(text, "o {name}");
+            }
+            let _ = writeln!(text, "f {} {} {}", tri[0] + 1, tri[1] + 1, tri[2] + 1);
+        }
+        crate::atomic_file::write_atomically(path, text.as_bytes())
+    }
+
     /// Corner points of triangle `t`.
     pub fn triangle(&self, t: usize) -> [Vec3; 3] {
         self.triangles[t].map(|i| self.vertices[i as usize])

@@ -166,8 +166,39 @@ pub fn save_module<B: Backend, M: burn::module::Module<B>>(
         path: tmp.clone(),
         message: e.to_string(),
     })?;
+    canonical_header(&tmp)?;
     std::fs::rename(&tmp, path).map_err(|source| WeightsError::Io {
         path: path.into(),
         source,
     })
+}
+
+/// Rewrites a safetensors file's header with its keys sorted (the store writes them in hash
+/// order), padded with spaces to 8 bytes as the format recommends: the same weights give the
+/// same bytes, run after run. The tensors' bytes and offsets are unchanged.
+fn canonical_header(path: &Path) -> Result<(), WeightsError> {
+    let io = |source| WeightsError::Io {
+        path: path.into(),
+        source,
+    };
+    let bad = |message: String| WeightsError::Store {
+        path: path.into(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(io)?;
+    let n = bytes
+        .get(..8)
+        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")) as usize)
+        .filter(|&n| n <= bytes.len() - 8)
+        .ok_or_else(|| bad("the written file has no header".into()))?;
+    // serde_json's maps are sorted: parsing and writing again orders every key.
+    let header: serde_json::Value = serde_json::from_slice(&bytes[8..8 + n])
+        .map_err(|e| bad(format!("the written header does not parse: {e}")))?;
+    let mut sorted = serde_json::to_vec(&header).map_err(|e| bad(e.to_string()))?;
+    sorted.resize(sorted.len().div_ceil(8) * 8, b' ');
+    let mut out = Vec::with_capacity(8 + sorted.len() + bytes.len() - 8 - n);
+    out.extend_from_slice(&(sorted.len() as u64).to_le_bytes());
+    out.extend_from_slice(&sorted);
+    out.extend_from_slice(&bytes[8 + n..]);
+    std::fs::write(path, out).map_err(io)
 }
