@@ -3,6 +3,11 @@
 //! for 1, 4 and 16 agents steered by the shipped policy, and for one agent steered by the best of
 //! K = 16 random latents (the no-training controller). Throughput is in frames of motion at
 //! 40 Hz summed over agents: divide by 40 for seconds of motion per wall second.
+//!
+//! `synth_dwelling`: three people wander 20 s through a generated four-room dwelling (0.24 m
+//! walls, `egogen policy rooms --seed 1004 --wall-m 0.24`), each primitive tested against the
+//! scene at every frame (`swept`, the default: redraws, then holding still, instead of stepping
+//! through a wall) or at its end alone (`end_only`, EgoGen's test): what the swept test costs.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use egogen::body::BodyModel;
@@ -98,6 +103,48 @@ fn bench(c: &mut Criterion) {
     }
     g.finish();
 
+    let mut g = c.benchmark_group("synth_dwelling");
+    g.sample_size(10);
+    let rooms = egogen::policy::room_scene::RoomSettings {
+        wall_m: 0.24,
+        ..Default::default()
+    };
+    let dwelling = egogen::policy::room_scene::RoomScene::sample(
+        &rooms,
+        &mut <rand_chacha::ChaCha8Rng as rand_core::SeedableRng>::seed_from_u64(1004),
+    );
+    let house = CrowdWorld {
+        map: std::sync::Arc::new(dwelling.map.clone()),
+        region: None,
+        obstacles: Vec::new(),
+        moving: Vec::new(),
+    };
+    let mut draw = <rand_chacha::ChaCha8Rng as rand_core::SeedableRng>::seed_from_u64(7);
+    let wanderers: Vec<AgentPlan> = (0..3)
+        .map(|i| AgentPlan {
+            name: format!("w{i}"),
+            betas: Vec::new(),
+            start: egogen::synth::crowd::sample_point(&house.map, None, 0.4, &mut draw).unwrap(),
+            facing_rad: None,
+            goals: Vec::new(),
+            wander: true,
+            steering: steer,
+        })
+        .collect();
+    for (name, swept) in [("swept", true), ("end_only", false)] {
+        let settings = CrowdSettings {
+            primitives: 40,
+            stop_when_done: false,
+            scene_every_frame: swept,
+            ..CrowdSettings::default()
+        };
+        g.throughput(Throughput::Elements((3 * 40 * NEW_FRAMES) as u64));
+        g.bench_function(name, |b| {
+            b.iter(|| run_crowd(&parts, &house, &wanderers, &settings, |_, _| {}).unwrap())
+        });
+    }
+    g.finish();
+
     // Where one agent's primitive goes: the parts of a step at batch 1.
     let mut g = c.benchmark_group("synth_step_parts");
     g.sample_size(20);
@@ -161,6 +208,11 @@ fn bench(c: &mut Criterion) {
     let limits = egogen::policy::reward::Limits::eq7(0.3);
     g.bench_function("judge", |b| {
         b.iter(|| egogen::policy::reward::judge(&p, &situation, &feet, &prior, &limits))
+    });
+    // The same with the scene tested at every frame (what a take's agents pay per draw).
+    let swept = egogen::policy::reward::Limits::swept(0.3);
+    g.bench_function("judge_swept", |b| {
+        b.iter(|| egogen::policy::reward::judge(&p, &situation, &feet, &prior, &swept))
     });
     g.bench_function("agent_setup", |b| {
         b.iter(|| BodyContext::new(&body, &[0.5, -0.5]).unwrap())

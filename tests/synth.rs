@@ -907,3 +907,103 @@ workers = 1
     eprintln!("obstacle pixels per frame (rate {rate} Hz): {seen:?}");
     assert!(seen.len() >= 2, "the obstacle is in view in {seen:?}");
 }
+
+/// Frames (over all agents of a take) whose pelvis path from the frame before passes over a
+/// cell that the scene's geometry occupies, checked apart from the stepping's own test: the
+/// pelvis from each agent's `motion.npz` (translation plus the shaped body's rest pelvis), the
+/// path sampled every centimetre against the walkable map built from the scene file.
+fn pelvis_frames_in_walls(take: &Path, scene: &Path) -> usize {
+    let mesh = egogen::scene::load_scene(scene, None).unwrap();
+    let map = egogen::scene::WalkableMap::build(&mesh, Default::default()).unwrap();
+    let body = egogen::body::BodyModel::load(common::default_model_path()).unwrap();
+    let in_wall = |p: glam::DVec2| {
+        map.cell_of(p)
+            .is_none_or(|(i, j)| map.occupied[j * map.nx + i])
+    };
+    let mut frames = 0;
+    for agent in std::fs::read_dir(take.join("agents")).unwrap().flatten() {
+        let m = MotionSequence::read(&agent.path().join("motion.npz")).unwrap();
+        let rest = body.shape(&m.betas, &[]).unwrap().rest_joints[0];
+        let xy: Vec<glam::DVec2> = m
+            .trans
+            .iter()
+            .map(|t| glam::DVec2::new(t.x + rest.x, t.y + rest.y))
+            .collect();
+        for w in xy.windows(2) {
+            let steps = (w[0].distance(w[1]) / 0.01).ceil().max(1.0) as usize;
+            if (0..=steps).any(|k| in_wall(w[0].lerp(w[1], k as f64 / steps as f64))) {
+                frames += 1;
+            }
+        }
+    }
+    frames
+}
+
+/// Nobody walks through a wall: three people wander for 20 s through a generated four-room
+/// dwelling (`egogen policy rooms --obj-dir`, 0.24 m walls), and no frame's pelvis path
+/// crosses a wall or furniture. With the scene tested at each primitive's end alone
+/// (`scene_every_frame = false`, EgoGen's test) the same take steps through walls.
+#[test]
+fn wanderers_in_a_dwelling_never_step_through_a_wall() {
+    let dir = tempfile::tempdir().unwrap();
+    let plans = dir.path().join("plans");
+    let out = egogen()
+        .args([
+            "policy", "rooms", "--count", "1", "--seed", "1004", "--wall-m", "0.24",
+        ])
+        .arg("--out")
+        .arg(dir.path().join("sheet.png"))
+        .arg("--obj-dir")
+        .arg(&plans)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let scene = plans.join("plan_1004.obj");
+    let mesh = egogen::scene::load_scene(&scene, None).unwrap();
+    let names: Vec<&str> = mesh.objects.iter().map(|o| o.name.as_str()).collect();
+    assert!(names.contains(&"floor") && names.iter().any(|n| n.starts_with("wall_")));
+    let config = |swept: bool| {
+        format!(
+            r#"
+[scene]
+path = "{scene}"
+[motion]
+duration_s = 20.0
+stop_when_done = false
+seed = 1
+scene_every_frame = {swept}
+[crowd]
+count = 3
+layout = "random"
+steering = "policy"
+wander = true
+[output]
+dir = "{out}"
+"#,
+            scene = scene.display(),
+            out = dir.path().join(format!("take_{swept}")).display()
+        )
+    };
+    for swept in [true, false] {
+        let path = dir.path().join(format!("take_{swept}.toml"));
+        std::fs::write(&path, config(swept)).unwrap();
+        run_synth(&load_synth_plan(&path).unwrap(), false).unwrap();
+    }
+    let swept = dir.path().join("take_true");
+    let end_only = dir.path().join("take_false");
+    assert_eq!(
+        summary(&swept)["totals"]["checks"]["pelvis_off_floor_frames"],
+        0
+    );
+    assert_eq!(pelvis_frames_in_walls(&swept, &scene), 0);
+    let crossed = pelvis_frames_in_walls(&end_only, &scene);
+    assert!(crossed > 0, "the end-only test let no step into a wall");
+    let reported = summary(&end_only)["totals"]["checks"]["pelvis_off_floor_frames"]
+        .as_u64()
+        .unwrap();
+    assert!(reported as usize >= crossed, "{reported} < {crossed}");
+}

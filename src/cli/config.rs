@@ -80,6 +80,7 @@ pub struct RawMotion {
     pub clearance_m: Option<f64>,
     pub guide_lookahead_m: Option<f64>,
     pub anticipate_people: Option<bool>,
+    pub scene_every_frame: Option<bool>,
     pub seed: Option<u64>,
 }
 

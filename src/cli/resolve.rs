@@ -59,15 +59,15 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         .render
         .map(|r| resolve_render(r, base, config_path))
         .transpose()?;
-    let gltf = scene
+    let renderable = scene
         .extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("glb") || e.eq_ignore_ascii_case("gltf"));
-    if render.is_some() && !gltf {
+        .is_some_and(|e| ["glb", "gltf", "obj", "ply"].contains(&e.to_lowercase().as_str()));
+    if render.is_some() && !renderable {
         return Err(bad(
             "scene.path",
             format!(
-                "{}: rendering reads glTF scenes (.glb or .gltf) only; export the scene as glTF 2.0 (in Blender: File > Export > glTF 2.0), or leave out [render] for a motion-only run",
+                "{}: rendering reads glTF (.glb, .gltf), OBJ (.obj) and PLY (.ply) scenes; convert the scene to one of them, or leave out [render] for a motion-only run",
                 scene.display()
             ),
         ));
@@ -150,6 +150,7 @@ fn check_unused_for_source(raw: &RawRun, bad: Bad) -> Result<(), ConfigError> {
         ("motion.clearance_m", m.clearance_m.is_some()),
         ("motion.guide_lookahead_m", m.guide_lookahead_m.is_some()),
         ("motion.anticipate_people", m.anticipate_people.is_some()),
+        ("motion.scene_every_frame", m.scene_every_frame.is_some()),
         ("motion.seed", m.seed.is_some()),
         ("crowd", raw.crowd.is_some()),
         ("agents", !raw.agents.is_empty()),
@@ -210,6 +211,7 @@ fn agents_motion(
             clearance_m: m.clearance_m,
             guide_lookahead_m: m.guide_lookahead_m,
             anticipate_people: m.anticipate_people,
+            scene_every_frame: m.scene_every_frame,
             seed: m.seed,
         },
         crowd: raw.crowd.clone(),

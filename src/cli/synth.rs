@@ -72,6 +72,10 @@ pub struct RawSynthMotion {
     /// judges its primitive against them moving (default true), or sees and judges them where
     /// they were last put (false: EgoGen's crowd loop).
     pub anticipate_people: Option<bool>,
+    /// Whether every primitive is tested against the scene at every frame it spans (default
+    /// true: no step passes through a wall), or at its end alone (false: EgoGen's test, to
+    /// measure what the swept test changes).
+    pub scene_every_frame: Option<bool>,
     pub seed: Option<u64>,
 }
 
@@ -361,6 +365,7 @@ fn crowd_settings(
         clearance_m: m.clearance_m.unwrap_or(defaults.clearance_m),
         guide_lookahead_m: m.guide_lookahead_m.unwrap_or(defaults.guide_lookahead_m),
         anticipate_people: m.anticipate_people.unwrap_or(defaults.anticipate_people),
+        scene_every_frame: m.scene_every_frame.unwrap_or(defaults.scene_every_frame),
         seed: m.seed.unwrap_or(0),
     };
     if !(settings.guide_lookahead_m.is_finite() && settings.guide_lookahead_m >= 0.0) {

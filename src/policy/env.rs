@@ -726,6 +726,7 @@ impl<'m> PolicyEnv<'m> {
             penetration_cells: self.settings.penetration_cells,
             people_every_frame: self.settings.people_every_frame,
             box_every_frame: self.settings.box_every_frame,
+            scene_every_frame: false,
         };
         decoded
             .into_par_iter()

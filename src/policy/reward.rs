@@ -173,6 +173,12 @@ pub struct Limits {
     /// Whether a body marker inside a box scene's box in any new frame penetrates too (the
     /// cells at the primitive's end miss an arm or a shoulder brushing it on the way).
     pub box_every_frame: bool,
+    /// Whether the scene is tested at every new frame, not only at the primitive's end: the
+    /// body's box on more than `penetration_cells` blocked cells in any frame
+    /// ([`Judged::blocked_cells_swept_max`]), or the pelvis's path passing over a cell that is
+    /// not walkable ([`Judged::pelvis_off_floor_frames`]), penetrates. A 0.5 s primitive at
+    /// 1.2 m/s covers 0.6 m: the end alone lets a step pass through a wall.
+    pub scene_every_frame: bool,
 }
 
 /// Blocked cells in the body's 2D box beyond which a primitive penetrates (paper Eq. 7: more
@@ -188,6 +194,16 @@ impl Limits {
             penetration_cells: EQ7_PENETRATION_CELLS,
             people_every_frame: false,
             box_every_frame: false,
+            scene_every_frame: false,
+        }
+    }
+
+    /// [`Limits::eq7`] with the scene tested at every frame ([`Limits::scene_every_frame`]):
+    /// how agents of a take are judged, so that no primitive steps through a wall.
+    pub fn swept(success_m: f64) -> Limits {
+        Limits {
+            scene_every_frame: true,
+            ..Limits::eq7(success_m)
         }
     }
 }
@@ -201,6 +217,14 @@ pub struct Judged {
     pub success: bool,
     /// Blocked cells in the body's 2D box at the end (Eq. 7), moving obstacles' included.
     pub blocked_cells: usize,
+    /// The most blocked cells of the walkable map in the body's 2D box (Eq. 7's box of each
+    /// frame, laid over that frame's markers along its hip line) in any new frame; 0 unless
+    /// [`Limits::scene_every_frame`].
+    pub blocked_cells_swept_max: usize,
+    /// New frames whose pelvis path from the frame before passes over a cell that is not
+    /// walkable (a wall, furniture, a closed doorway): the pelvis crossing solid geometry; 0
+    /// unless [`Limits::scene_every_frame`].
+    pub pelvis_off_floor_frames: usize,
     pub penetrated: bool,
     /// Foot contact (3-D, Eq. 12) = floor · skate.
     pub contact: f64,
@@ -343,6 +367,50 @@ fn unit_xy(v: Vec3) -> DVec2 {
     DVec2::new(v.x, v.y).normalize_or_zero()
 }
 
+/// A body's 2D box (Eq. 7): the bounding box of `markers` in the horizontal canonical frame of
+/// a frame's `joints` (x along the hip line, origin at the pelvis), as its centre, half
+/// extents and yaw; `None` when the hips stand vertical.
+fn body_box<'a>(
+    joints: &[Vec3],
+    markers: impl Iterator<Item = &'a Vec3>,
+) -> Option<(DVec2, DVec2, f64)> {
+    let frame = canonical_frame(joints).ok()?;
+    let x = DVec2::new(frame.matrix3.x_axis.x, frame.matrix3.x_axis.y);
+    let o = DVec2::new(frame.translation.x, frame.translation.y);
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for m in markers {
+        let d = DVec2::new(m.x, m.y) - o;
+        let local = DVec2::new(x.dot(d), x.perp().dot(d));
+        lo = lo.min(local);
+        hi = hi.max(local);
+    }
+    let c = (lo + hi) * 0.5;
+    let centre = o + x * c.x + x.perp() * c.y;
+    Some((centre, (hi - lo) * 0.5, x.y.atan2(x.x)))
+}
+
+/// Whether the straight path from `from` to `to` passes over a cell of `map` that is not
+/// walkable (touching its edge or corner counts; cells outside the grid are not walkable).
+pub fn path_leaves_floor(map: &WalkableMap, from: DVec2, to: DVec2) -> bool {
+    let d = to - from;
+    let length = d.length();
+    if !(from.is_finite() && length.is_finite()) {
+        return true;
+    }
+    if length == 0.0 {
+        return !map.is_walkable_at(from);
+    }
+    crate::sensing::ray::grid::hit_grid(
+        map,
+        crate::sensing::Ray2 {
+            origin: from,
+            dir: d / length,
+        },
+        length,
+    )
+    .is_some()
+}
+
 /// Judges a decoded primitive in a situation.
 pub fn judge(
     p: &DecodedPrimitive,
@@ -374,26 +442,39 @@ pub fn judge(
         false => f64::NAN,
     };
     // The body's 2D box: markers of the last two frames in the new canonical frame.
-    let blocked_cells = match canonical_frame(&p.joints[last + 1 - SEED_FRAMES]) {
-        Ok(frame) => {
-            let x = DVec2::new(frame.matrix3.x_axis.x, frame.matrix3.x_axis.y);
-            let o = DVec2::new(frame.translation.x, frame.translation.y);
-            let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-            for m in p.markers[last + 1 - SEED_FRAMES..].iter().flatten() {
-                let d = DVec2::new(m.x, m.y) - o;
-                let local = DVec2::new(x.dot(d), x.perp().dot(d));
-                lo = lo.min(local);
-                hi = hi.max(local);
-            }
-            let c = (lo + hi) * 0.5;
-            let centre = o + x * c.x + x.perp() * c.y;
-            let (half, yaw) = ((hi - lo) * 0.5, x.y.atan2(x.x));
+    let blocked_cells = match body_box(
+        &p.joints[last + 1 - SEED_FRAMES],
+        p.markers[last + 1 - SEED_FRAMES..].iter().flatten(),
+    ) {
+        Some((centre, half, yaw)) => {
             let t_end = s.t0_s + last as f64 / PRIMITIVE_RATE_HZ;
             let moving: Vec<Obstacle2> = s.moving.iter().map(|m| m.at(t_end)).collect();
             blocked_cells_in_box(s.map, centre, half, yaw)
                 + cells_in_obstacles(&moving, centre, half, yaw, s.map.cell_m)
         }
-        Err(_) => usize::MAX,
+        None => usize::MAX,
+    };
+    // The swept test, where the limits ask for it (training does not pay for it).
+    let (blocked_cells_swept_max, pelvis_off_floor_frames) = match limits.scene_every_frame {
+        true => (
+            (SEED_FRAMES..PRIMITIVE_FRAMES)
+                .map(|k| match body_box(&p.joints[k], p.markers[k].iter()) {
+                    Some((centre, half, yaw)) => blocked_cells_in_box(s.map, centre, half, yaw),
+                    None => usize::MAX,
+                })
+                .max()
+                .unwrap_or(0),
+            (SEED_FRAMES..PRIMITIVE_FRAMES)
+                .filter(|&k| {
+                    let xy = |f: usize| {
+                        let q = p.joints[f][joint::PELVIS];
+                        DVec2::new(q.x, q.y)
+                    };
+                    path_leaves_floor(s.map, xy(k - 1), xy(k))
+                })
+                .count(),
+        ),
+        false => (0, 0),
     };
     let (mut frames_in_obstacle, mut frames_in_people, mut frames_in_box) = (0, 0, 0);
     for (k, f) in p.markers[SEED_FRAMES..].iter().enumerate() {
@@ -407,7 +488,9 @@ pub fn judge(
     }
     let penetrated = blocked_cells > limits.penetration_cells
         || (limits.people_every_frame && frames_in_people > 0)
-        || (limits.box_every_frame && frames_in_box > 0);
+        || (limits.box_every_frame && frames_in_box > 0)
+        || (limits.scene_every_frame
+            && (blocked_cells_swept_max > limits.penetration_cells || pelvis_off_floor_frames > 0));
     let success = distance_m < limits.success_m;
     let terms = RewardTerms {
         floor,
@@ -428,6 +511,8 @@ pub fn judge(
         distance_m,
         success,
         blocked_cells,
+        blocked_cells_swept_max,
+        pelvis_off_floor_frames,
         penetrated,
         contact: floor * skate,
         pose_nll,
@@ -564,5 +649,28 @@ mod tests {
             let d = terms(attention).total(&tab_s2) - terms(attention).total(&gap);
             assert!((d - cost).abs() < 1e-12, "{attention}: {d}");
         }
+    }
+
+    #[test]
+    fn a_pelvis_path_over_a_wall_leaves_the_floor_and_one_beside_it_does_not() {
+        // A 4 × 4 m floor of 0.1 m cells with a one-cell wall along x = 0.0..0.1.
+        let n = 40;
+        let origin = DVec2::splat(-2.0);
+        let walkable = (0..n * n).map(|k| k % n != 20).collect();
+        let map = WalkableMap::from_walkable(origin, 0.1, n, n, walkable);
+        let at = |x: f64, y: f64| DVec2::new(x, y);
+        // Straight through, and a 3 cm step whose two ends lie on either side.
+        assert!(path_leaves_floor(&map, at(-0.5, 0.0), at(0.5, 0.3)));
+        assert!(path_leaves_floor(&map, at(-0.001, 0.0), at(0.101, 0.0)));
+        // Into the wall and standing in it.
+        assert!(path_leaves_floor(&map, at(-0.2, 0.0), at(0.05, 0.0)));
+        assert!(path_leaves_floor(&map, at(0.05, 0.5), at(0.05, 0.5)));
+        // Along it, beside it, and standing still beside it.
+        assert!(!path_leaves_floor(&map, at(-0.02, -1.0), at(-0.02, 1.0)));
+        assert!(!path_leaves_floor(&map, at(0.12, 1.0), at(0.9, -1.5)));
+        assert!(!path_leaves_floor(&map, at(-0.5, 0.5), at(-0.5, 0.5)));
+        // Off the grid, and not a number.
+        assert!(path_leaves_floor(&map, at(1.5, 0.0), at(2.5, 0.0)));
+        assert!(path_leaves_floor(&map, at(f64::NAN, 0.0), at(0.5, 0.0)));
     }
 }

@@ -35,7 +35,7 @@ use crate::motion::cvae::rig::RigGeometry;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
-use crate::policy::reward::{judge, Judged, Limits, RewardWeights};
+use crate::policy::reward::{judge, path_leaves_floor, Judged, Limits, RewardWeights};
 use crate::policy::walker::{
     frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Walker, PRIMITIVE_S,
 };
@@ -155,6 +155,12 @@ pub struct CrowdSettings {
     /// crowd loop: someone who stepped earlier in the round is where their primitive ends,
     /// someone yet to step where they stand now). docs/SYNTH.md, "Seeing the others ahead".
     pub anticipate_people: bool,
+    /// Whether each primitive is tested against the scene at every frame it spans, not only
+    /// at its end ([`Limits::scene_every_frame`]: the body's box on more than 3 blocked cells
+    /// in any frame, or the pelvis passing over a cell that is not walkable, penetrates and is
+    /// redrawn). `true` (default): no step passes through a wall. `false`: EgoGen's test at
+    /// the primitive's end alone, kept to measure what the swept test costs and changes.
+    pub scene_every_frame: bool,
     pub seed: u64,
 }
 
@@ -170,6 +176,7 @@ impl Default for CrowdSettings {
             clearance_m: 0.4,
             guide_lookahead_m: 0.0,
             anticipate_people: true,
+            scene_every_frame: true,
             seed: 0,
         }
     }
@@ -252,6 +259,13 @@ pub struct AgentTrack {
     /// Share of new frames with a body marker inside a static obstacle, a moving obstacle or
     /// another agent's 2D box.
     pub penetration_share: f64,
+    /// Frames of the take whose pelvis path from the frame before passes over a cell of the
+    /// walkable map that is not walkable (a wall, furniture, a closed doorway), measured on
+    /// the track as written ([`crate::policy::reward::path_leaves_floor`]).
+    pub pelvis_off_floor_frames: usize,
+    /// Primitives in which the body held its pose because every draw would have taken its
+    /// pelvis over a wall ([`CrowdSettings::scene_every_frame`]).
+    pub held_primitives: usize,
     /// Horizontal walking speed over the primitives taken (m/s).
     pub speed_m_s: f64,
     /// Mean cos(angle) between the viewing direction and the direction to the goal at the
@@ -462,6 +476,8 @@ impl<'m> Agent<'m> {
             stuck_primitives: 0,
             contact: 0.0,
             penetration_share: 0.0,
+            pelvis_off_floor_frames: 0,
+            held_primitives: 0,
             speed_m_s: 0.0,
             view_cos: 0.0,
             pose_score: 0.0,
@@ -577,7 +593,10 @@ impl<'m> Agent<'m> {
         };
         let seeds = vec![self.walker.view.seed.clone(); latents.len()];
         let decoded = parts.model.decode_each(&self.body, &seeds, &latents)?;
-        let limits = Limits::eq7(settings.success_m);
+        let limits = match settings.scene_every_frame {
+            true => Limits::swept(settings.success_m),
+            false => Limits::eq7(settings.success_m),
+        };
         let weights = RewardWeights::default();
         let situation = self.walker.situation(judged, self.goal, t0_s);
         let mut best: Option<(DecodedPrimitive, Judged, f64, f64)> = None;
@@ -627,6 +646,11 @@ impl<'m> Agent<'m> {
         let rank = |p: &DecodedPrimitive, j: &Judged| {
             let room = around.map.sdf_at(end_xy(p));
             (
+                // Swept: the fewest frames with the pelvis over a wall first.
+                match settings.scene_every_frame {
+                    true => j.pelvis_off_floor_frames,
+                    false => 0,
+                },
                 off_floor(p),
                 (-room).max(0.0),
                 j.frames_in_obstacle,
@@ -637,6 +661,18 @@ impl<'m> Agent<'m> {
         let improves = |a: &(DecodedPrimitive, Judged, f64, f64),
                         b: &(DecodedPrimitive, Judged)| {
             rank(&b.0, &b.1) < rank(&a.0, &a.1)
+        };
+        // A redraw judged and kept when it ranks better than the best so far.
+        let offer = |best: &mut Option<(DecodedPrimitive, Judged, f64, f64)>,
+                     p: DecodedPrimitive| {
+            let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
+            let candidate = (p, j);
+            if best.as_ref().is_none_or(|b| improves(b, &candidate)) {
+                let (p, j) = candidate;
+                let r = j.terms.total(&weights);
+                let r = if r.is_finite() { r } else { 0.0 };
+                *best = Some((p, j, r, r));
+            }
         };
         if let Some((mean, std)) = &policy_dist {
             // The policy's own draws first; then as many from the motion model's prior, whose
@@ -661,14 +697,38 @@ impl<'m> Agent<'m> {
                     Err(DecodeError::NonFinite { .. }) => continue,
                     Err(e) => return Err(e.into()),
                 };
+                offer(&mut best, p);
+            }
+        }
+        // Swept: a primitive whose pelvis would still pass over a wall is never taken. A batch
+        // of the motion model's prior (turning and slow walks among them), then, when every
+        // draw leads into the wall, the body holds its pose for a primitive.
+        let crosses = |j: &Judged| settings.scene_every_frame && j.pelvis_off_floor_frames > 0;
+        let start_on_floor = around.map.is_walkable_at(self.walker.view.pelvis);
+        if settings.penetration_redraws > 0
+            && start_on_floor
+            && best.as_ref().is_some_and(|b| crosses(&b.1))
+        {
+            let zs: Vec<Vec<f32>> = normal_samples(&mut self.rng, WALL_PRIOR_DRAWS * l)
+                .chunks(l)
+                .map(<[f32]>::to_vec)
+                .collect();
+            let seeds = vec![self.walker.view.seed.clone(); zs.len()];
+            for d in parts.model.decode_each(&self.body, &seeds, &zs)? {
+                let p = match d {
+                    Ok(p) => p,
+                    Err(DecodeError::NonFinite { .. }) => continue,
+                    Err(e) => return Err(e.into()),
+                };
+                offer(&mut best, p);
+            }
+            if let Some((p, _, _, _)) = best.take_if(|b| crosses(&b.1)) {
+                let p = held(&p);
                 let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
-                let candidate = (p, j);
-                if best.as_ref().is_none_or(|b| improves(b, &candidate)) {
-                    let (p, j) = candidate;
-                    let r = j.terms.total(&weights);
-                    let r = if r.is_finite() { r } else { 0.0 };
-                    best = Some((p, j, r, r));
-                }
+                let r = j.terms.total(&weights);
+                let r = if r.is_finite() { r } else { 0.0 };
+                self.track.held_primitives += 1;
+                best = Some((p, j, r, r));
             }
         }
         Ok(best.map(|(p, j, r, _)| (p, j, r)))
@@ -765,6 +825,24 @@ impl<'m> Agent<'m> {
         t.pose_score = w.totals.pose_score / n;
         self.track
     }
+}
+
+/// Draws from the motion model's prior when every redraw of a primitive would take the pelvis
+/// over a wall ([`CrowdSettings::scene_every_frame`]), before the body holds its pose.
+pub const WALL_PRIOR_DRAWS: usize = 32;
+
+/// `p` with its new frames all the seed's last frame: the body holding its pose for a
+/// primitive (what an agent does when every draw would walk it through a wall).
+fn held(p: &DecodedPrimitive) -> DecodedPrimitive {
+    let mut h = p.clone();
+    let last = SEED_FRAMES - 1;
+    for k in SEED_FRAMES..h.world.len() {
+        h.world[k] = h.world[last].clone();
+        h.markers[k] = h.markers[last].clone();
+        h.joints[k] = h.joints[last].clone();
+        h.world_from_cpf[k] = h.world_from_cpf[last];
+    }
+    h
 }
 
 /// An action `mean + std · ε`, ε ~ N(0, I) drawn from `rng`.
@@ -947,6 +1025,17 @@ pub fn run_crowd(
         frames,
         frame_rate_hz: PRIMITIVE_RATE_HZ,
         primitives: rounds,
-        agents: agents.into_iter().map(|a| a.finish(frames)).collect(),
+        agents: agents
+            .into_iter()
+            .map(|a| {
+                let mut track = a.finish(frames);
+                track.pelvis_off_floor_frames = track
+                    .pelvis_xy
+                    .windows(2)
+                    .filter(|w| path_leaves_floor(&world.map, w[0], w[1]))
+                    .count();
+                track
+            })
+            .collect(),
     })
 }

@@ -73,6 +73,10 @@ pub struct TakeChecks {
     /// How far such a pelvis stood from the walkable floor at most (m): a body brushing a
     /// doorway stands a few centimetres out, one that left the dwelling metres.
     pub outside_region_max_m: f64,
+    /// Frames, over all agents, whose pelvis path from the frame before passes over a cell
+    /// that is not walkable: the pelvis in or through a wall or furniture (0 with the swept
+    /// scene test, [`crate::synth::crowd::CrowdSettings::scene_every_frame`]).
+    pub pelvis_off_floor_frames: usize,
     /// Walkable floor, and the part of it starts and goals are drawn on (m²).
     pub walkable_m2: f64,
     pub region_m2: f64,
@@ -87,6 +91,7 @@ pub fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
         max_lowest_marker_gap_m: 0.0,
         outside_region_share: 0.0,
         outside_region_max_m: 0.0,
+        pelvis_off_floor_frames: take.agents.iter().map(|a| a.pelvis_off_floor_frames).sum(),
         walkable_m2: world.map.walkable_count() as f64 * world.map.cell_m * world.map.cell_m,
         region_m2: 0.0,
     };

@@ -123,6 +123,8 @@ mod tests {
             stuck_primitives: 0,
             contact: 0.0,
             penetration_share: 0.0,
+            pelvis_off_floor_frames: 0,
+            held_primitives: 0,
             speed_m_s: 0.0,
             view_cos: 0.0,
             pose_score: 0.0,
