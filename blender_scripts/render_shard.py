@@ -244,10 +244,50 @@ def set_device(scene, device):
     )
 
 
+def import_scene_file(path, up_axis):
+    """Imports the scene with Blender's importer for its extension, turned so that z is up
+    (Rust says which axis of the file is up, as its own loader reads it)."""
+    ext = os.path.splitext(path)[1].lower()
+    axes = {"z": ("Y", "Z"), "y": ("NEGATIVE_Z", "Y")}[up_axis]
+    if ext in (".glb", ".gltf"):
+        # glTF is y up by specification; the importer turns it.
+        bpy.ops.import_scene.gltf(filepath=path)
+    elif ext == ".obj":
+        # Objects and groups each become an object, as the Rust loader splits them; the MTL's
+        # materials and image textures come with them.
+        bpy.ops.wm.obj_import(
+            filepath=path,
+            forward_axis=axes[0],
+            up_axis=axes[1],
+            use_split_objects=True,
+            use_split_groups=True,
+        )
+    elif ext == ".ply":
+        bpy.ops.wm.ply_import(filepath=path, forward_axis=axes[0], up_axis=axes[1])
+    else:
+        raise RuntimeError(f"unsupported scene file {path}")
+    for obj in bpy.context.scene.objects:
+        if obj.type == "MESH" and not obj.data.materials and obj.data.color_attributes:
+            obj.data.materials.append(vertex_colour_material(obj.data.color_attributes[0].name))
+
+
+def vertex_colour_material(attribute):
+    """A diffuse material showing a mesh's vertex colours (a scan's PLY has no other)."""
+    mat = bpy.data.materials.new(f"egogen_vertex_colour_{attribute}")
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    colour = nodes.new("ShaderNodeVertexColor")
+    colour.layer_name = attribute
+    bsdf = nodes["Principled BSDF"]
+    mat.node_tree.links.new(colour.outputs["Color"], bsdf.inputs["Base Color"])
+    bsdf.inputs["Roughness"].default_value = 0.8
+    return mat
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
-    bpy.ops.import_scene.gltf(filepath=spec["scene_glb"])
+    import_scene_file(spec["scene_file"], spec["scene_up_axis"])
     scene = bpy.context.scene
     if spec.get("ceiling"):
         add_ceiling(scene, spec["ceiling"])

@@ -172,7 +172,8 @@ fn render_scene() -> Rendered {
     let (fps, fps_base) = blender_fps(RATE_HZ);
     let probe = dir.path().join("probe.json");
     let spec = ShardSpec {
-        scene_glb: glb,
+        scene_file: glb,
+        scene_up_axis: "y".into(),
         object_ids: mesh
             .objects
             .iter()

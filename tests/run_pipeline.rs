@@ -373,19 +373,17 @@ fn a_camera_listed_twice() {
     );
 }
 
+/// OBJ and PLY scenes render (tests/scene_formats.rs); a format Blender is not given is refused
+/// by key before anything is written.
 #[test]
-fn rendering_an_obj_scene_is_refused_before_anything_is_written() {
+fn rendering_a_scene_of_another_format_is_refused_before_anything_is_written() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("room.obj"),
-        "v 0 0 0\nv 4 0 0\nv 0 4 0\nf 1 2 3\n",
-    )
-    .unwrap();
+    std::fs::write(dir.path().join("room.stl"), "solid room\nendsolid room\n").unwrap();
     let cfg = dir.path().join("run.toml");
     std::fs::write(
         &cfg,
         format!(
-            "[scene]\npath = \"room.obj\"\n{}",
+            "[scene]\npath = \"room.stl\"\n{}",
             with_render("samples = 1")
         ),
     )
@@ -394,7 +392,11 @@ fn rendering_an_obj_scene_is_refused_before_anything_is_written() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        err.contains("scene.path") && err.contains("glTF") && err.contains("room.obj"),
+        err.contains("scene.path")
+            && err.contains("glTF")
+            && err.contains("OBJ")
+            && err.contains("PLY")
+            && err.contains("room.stl"),
         "{err}"
     );
     assert!(!dir.path().join("seq.partial").exists());

@@ -167,8 +167,12 @@ pub struct BodyProbe {
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShardSpec {
-    /// Scene file (glTF binary, y up as glTF specifies; Blender's importer makes it z up).
-    pub scene_glb: PathBuf,
+    /// Scene file: glTF (`.glb`/`.gltf`), Wavefront OBJ (with its MTL and textures) or PLY
+    /// (vertex colours kept), imported by Blender's own importer for its extension.
+    pub scene_file: PathBuf,
+    /// Which axis of the scene file points up (`"y"` or `"z"`), as the scene loader reads
+    /// it (`scene::UpAxis::default_for`): Blender turns the file so that z is up.
+    pub scene_up_axis: String,
     /// Object name → segmentation id (Blender's object pass index; 0 = none).
     pub object_ids: Vec<(String, u32)>,
     /// Scene frame rate as Blender stores it: `fps / fps_base`.

@@ -216,6 +216,9 @@ fn read_gltf_parts(path: &Path) -> Result<Vec<Part>, String> {
     Ok(parts)
 }
 
+/// An OBJ's objects and groups (`o`, `g`), each one part; the pieces tobj splits off where
+/// the material changes (`usemtl`) join their object again, in order of first appearance, so
+/// that parts are named as Blender's importer names its objects (one per object or group).
 fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
     let opts = tobj::LoadOptions {
         triangulate: true,
@@ -223,24 +226,33 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
         ..Default::default()
     };
     let (models, _) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
-    Ok(models
-        .into_iter()
-        .map(|m| Part {
-            name: m.name,
-            positions: m
-                .mesh
+    let mut parts: Vec<Part> = Vec::new();
+    let mut index = std::collections::HashMap::new();
+    for m in models {
+        let k = *index.entry(m.name.clone()).or_insert_with(|| {
+            parts.push(Part {
+                name: m.name,
+                positions: Vec::new(),
+                triangles: Vec::new(),
+            });
+            parts.len() - 1
+        });
+        let part = &mut parts[k];
+        let base = part.positions.len() as u32;
+        part.positions.extend(
+            m.mesh
                 .positions
                 .chunks_exact(3)
-                .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
-                .collect(),
-            triangles: m
-                .mesh
+                .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64]),
+        );
+        part.triangles.extend(
+            m.mesh
                 .indices
                 .chunks_exact(3)
-                .map(|t| [t[0], t[1], t[2]])
-                .collect(),
-        })
-        .collect())
+                .map(|t| [t[0], t[1], t[2]].map(|i| i.saturating_add(base))),
+        );
+    }
+    Ok(parts)
 }
 
 fn read_ply(path: &Path) -> Result<Vec<Part>, String> {

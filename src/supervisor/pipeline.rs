@@ -527,7 +527,12 @@ fn base_spec(
     let track = &first_wearer.track;
     let mid = 0.5 * (track.frames[0].joints[0] + track.frames[track.frames.len() - 1].joints[0]);
     Ok(ShardSpec {
-        scene_glb: std::fs::canonicalize(&plan.scene)?,
+        scene_file: std::fs::canonicalize(&plan.scene)?,
+        scene_up_axis: match crate::scene::UpAxis::default_for(&plan.scene) {
+            crate::scene::UpAxis::Y => "y",
+            crate::scene::UpAxis::Z => "z",
+        }
+        .into(),
         object_ids: objects.ids.clone(),
         fps,
         fps_base,

@@ -1,0 +1,244 @@
+//! Scenes in every format the loader reads are rendered by `egogen-run` with real Blender, not
+//! only glTF: a Wavefront OBJ whose MTL gives the floor an image texture and a wall a plain
+//! colour, and a PLY scan-like mesh with vertex colours. Each scene's objects keep their own
+//! names in the segmentation id table, their pixels carry those ids, and the colours the files
+//! hold are the colours rendered (a red/blue checker on the OBJ's floor, a green wall; the PLY's
+//! green floor and red wall).
+
+mod common;
+
+use std::path::Path;
+
+/// One walker crossing the room towards the wall at x = 3, wearing the Aria RGB camera.
+fn config(scene: &Path) -> String {
+    format!(
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 1.0
+seed = 2
+[[agents]]
+name = "wearer"
+start = [-1.5, 0.0]
+goals = [[1.5, 0.0]]
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[scene]
+path = "{}"
+ceiling = false
+indoors = false
+[render]
+cameras = ["camera-rgb"]
+resolution_scale = 0.125
+every_n_frames = 20
+samples = 4
+passes = ["colour", "segmentation", "position"]
+[supervisor]
+workers = 1
+"#,
+        scene.display()
+    )
+}
+
+/// The 8 × 8 m floor and the wall (x 3.0–3.2, 2.5 m high) as vertices and quads (1-based).
+fn room() -> (Vec<[f64; 3]>, Vec<[usize; 4]>, Vec<[usize; 4]>) {
+    let mut v = vec![
+        [-4.0, -4.0, 0.0],
+        [4.0, -4.0, 0.0],
+        [4.0, 4.0, 0.0],
+        [-4.0, 4.0, 0.0],
+    ];
+    for z in [0.0, 2.5] {
+        for (x, y) in [(3.0, -4.0), (3.2, -4.0), (3.2, 4.0), (3.0, 4.0)] {
+            v.push([x, y, z]);
+        }
+    }
+    let floor = vec![[1, 2, 3, 4]];
+    let wall = vec![
+        [5, 8, 7, 6],
+        [9, 10, 11, 12],
+        [5, 6, 10, 9],
+        [6, 7, 11, 10],
+        [7, 8, 12, 11],
+        [8, 5, 9, 12],
+    ];
+    (v, floor, wall)
+}
+
+/// Every frame's pixels: segmentation id, colour (R, G, B) and world position.
+struct Pixel {
+    id: u32,
+    rgb: [f32; 3],
+    xyz: [f32; 3],
+}
+
+/// The dataset's segmentation id table and every rendered pixel of every frame.
+fn rendered(dataset: &Path) -> (Vec<(String, u32)>, Vec<Pixel>) {
+    let cam = dataset.join("cameras/camera-rgb");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
+            .unwrap();
+    let ids = doc["segmentation_ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| {
+            (
+                i["name"].as_str().unwrap().to_owned(),
+                i["id"].as_u64().unwrap() as u32,
+            )
+        })
+        .collect();
+    let mut pixels = Vec::new();
+    for f in doc["frames"].as_array().unwrap() {
+        let exr =
+            egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
+        let ch = |name: &str| exr.channel(name).unwrap().values.clone();
+        let seg = ch("segmentation.id");
+        let rgb = ["rgb.R", "rgb.G", "rgb.B"].map(ch);
+        let pos = ["position.X", "position.Y", "position.Z"].map(ch);
+        for k in 0..seg.len() {
+            pixels.push(Pixel {
+                id: seg[k] as u32,
+                rgb: [rgb[0][k], rgb[1][k], rgb[2][k]],
+                xyz: [pos[0][k], pos[1][k], pos[2][k]],
+            });
+        }
+    }
+    (ids, pixels)
+}
+
+fn id_of(ids: &[(String, u32)], name: &str) -> u32 {
+    ids.iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("{name} not in the id table {ids:?}"))
+        .1
+}
+
+/// Share of `pixels` whose colour channel `c` exceeds both others by half again.
+fn dominated_by(pixels: &[&Pixel], c: usize) -> f64 {
+    let n = pixels
+        .iter()
+        .filter(|p| (0..3).all(|o| o == c || p.rgb[c] > 1.5 * p.rgb[o]))
+        .count();
+    n as f64 / pixels.len().max(1) as f64
+}
+
+#[test]
+fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
+    let dir = tempfile::tempdir().unwrap();
+    // A 4 × 4 texel checker, red and blue, repeated four times across the floor.
+    let png = dir.path().join("checker.png");
+    let mut img = egogen::preview::RgbImage::new(4, 4, [0, 0, 0]);
+    for y in 0..4 {
+        for x in 0..4 {
+            let c = if (x + y) % 2 == 0 {
+                [230, 20, 20]
+            } else {
+                [20, 20, 230]
+            };
+            img.pixels[y * 4 + x] = c;
+        }
+    }
+    img.write_png(&png).unwrap();
+    std::fs::write(
+        dir.path().join("room.mtl"),
+        "newmtl checker\nKd 1 1 1\nmap_Kd checker.png\nnewmtl green\nKd 0.05 0.8 0.05\n",
+    )
+    .unwrap();
+    let (v, floor, wall) = room();
+    let mut obj = String::from("mtllib room.mtl\n");
+    for p in &v {
+        obj += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    obj += "vt 0 0\nvt 4 0\nvt 4 4\nvt 0 4\n";
+    obj += "o floor\nusemtl checker\n";
+    for q in &floor {
+        obj += &format!("f {}/1 {}/2 {}/3 {}/4\n", q[0], q[1], q[2], q[3]);
+    }
+    obj += "o wall\nusemtl green\n";
+    for q in &wall {
+        obj += &format!("f {} {} {} {}\n", q[0], q[1], q[2], q[3]);
+    }
+    let scene = dir.path().join("room.obj");
+    std::fs::write(&scene, obj).unwrap();
+    let config = dir.path().join("run.toml");
+    std::fs::write(&config, self::config(&scene)).unwrap();
+    common::egogen_run_ok(&config);
+
+    let (ids, pixels) = rendered(&dir.path().join("out"));
+    let (floor_id, wall_id) = (id_of(&ids, "floor"), id_of(&ids, "wall"));
+    let floor: Vec<&Pixel> = pixels.iter().filter(|p| p.id == floor_id).collect();
+    let wall: Vec<&Pixel> = pixels.iter().filter(|p| p.id == wall_id).collect();
+    assert!(
+        floor.len() > 50 && wall.len() > 50,
+        "{} floor, {} wall pixels",
+        floor.len(),
+        wall.len()
+    );
+    // Every pixel of an object lies on it (position pass).
+    assert!(floor.iter().all(|p| p.xyz[2].abs() < 0.01));
+    assert!(wall.iter().all(|p| (2.99..=3.21).contains(&p.xyz[0])));
+    // The texture: red and blue squares on the floor; the wall green.
+    let (red, blue) = (dominated_by(&floor, 0), dominated_by(&floor, 2));
+    assert!(
+        red > 0.2 && blue > 0.2,
+        "floor red {red:.2}, blue {blue:.2}"
+    );
+    let green = dominated_by(&wall, 1);
+    assert!(green > 0.8, "wall green {green:.2}");
+    assert!(egogen::supervisor::verify(&dir.path().join("out")).is_ok());
+}
+
+#[test]
+fn a_ply_scan_renders_with_its_vertex_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let (v, floor, wall) = room();
+    // Floor vertices green, wall vertices red (unsigned bytes, as scanners write them).
+    let colour = |k: usize| if k < 4 { [30, 200, 30] } else { [200, 30, 30] };
+    let faces: Vec<[usize; 4]> = floor.iter().chain(&wall).copied().collect();
+    let mut ply = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\nelement face {}\n\
+         property list uchar int vertex_indices\nend_header\n",
+        v.len(),
+        faces.len()
+    );
+    for (k, p) in v.iter().enumerate() {
+        let c = colour(k);
+        ply += &format!("{} {} {} {} {} {}\n", p[0], p[1], p[2], c[0], c[1], c[2]);
+    }
+    for q in &faces {
+        ply += &format!("4 {} {} {} {}\n", q[0] - 1, q[1] - 1, q[2] - 1, q[3] - 1);
+    }
+    let scene = dir.path().join("scan.ply");
+    std::fs::write(&scene, ply).unwrap();
+    let config = dir.path().join("run.toml");
+    std::fs::write(&config, self::config(&scene)).unwrap();
+    common::egogen_run_ok(&config);
+
+    let (ids, pixels) = rendered(&dir.path().join("out"));
+    let scan = id_of(&ids, "scan");
+    let floor: Vec<&Pixel> = pixels
+        .iter()
+        .filter(|p| p.id == scan && p.xyz[2].abs() < 0.01)
+        .collect();
+    let wall: Vec<&Pixel> = pixels
+        .iter()
+        .filter(|p| p.id == scan && p.xyz[0] > 2.99)
+        .collect();
+    assert!(
+        floor.len() > 50 && wall.len() > 50,
+        "{} floor, {} wall pixels",
+        floor.len(),
+        wall.len()
+    );
+    let (green, red) = (dominated_by(&floor, 1), dominated_by(&wall, 0));
+    assert!(
+        green > 0.8 && red > 0.8,
+        "floor green {green:.2}, wall red {red:.2}"
+    );
+    assert!(egogen::supervisor::verify(&dir.path().join("out")).is_ok());
+}
