@@ -38,6 +38,12 @@ pub fn run(config: &Path, overrides: &RunOverrides, request: RunRequest) -> Resu
         .context("writing out the effective config")?;
     let resume_fingerprint = resume_fingerprint(&raw).context("fingerprinting the config")?;
     let plan = resolve_run(raw, config)?;
+    if plan.output_dir.exists() && !plan.output_dir.is_dir() {
+        anyhow::bail!(
+            "output {} exists and is a file, not a folder; choose another `output.dir` or --out (nothing was written)",
+            plan.output_dir.display()
+        );
+    }
     let options = RunOptions {
         resume: request.resume,
         blender: request.blender,

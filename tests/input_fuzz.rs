@@ -296,3 +296,105 @@ fn point_cache() {
         PointCache::read,
     );
 }
+
+/// Sizes that scale memory are refused by key, before anything is allocated — never an abort
+/// (`memory allocation failed`, which ends this test process): a policy file whose header
+/// claims a huge network, training configs asking for one or for huge batches, a synth crowd of
+/// 10¹³ people or 10¹² shape coefficients, `policy eval --episodes 1e12`.
+#[test]
+fn sizes_that_would_exhaust_memory_are_refused_by_key() {
+    let dir = tempfile::tempdir().unwrap();
+    // The shipped policy with its header's architecture claiming hidden = 10⁹.
+    let good = read("assets/policy/policy.safetensors");
+    let n = u64::from_le_bytes(good[..8].try_into().unwrap()) as usize;
+    let mut header: serde_json::Value = serde_json::from_slice(&good[8..8 + n]).unwrap();
+    let arch = header["__metadata__"]["egogen.policy_arch"]
+        .as_str()
+        .unwrap()
+        .to_owned();
+    let mut arch: serde_json::Value = serde_json::from_str(&arch).unwrap();
+    arch["hidden"] = serde_json::json!(1_000_000_000u64);
+    header["__metadata__"]["egogen.policy_arch"] = serde_json::json!(arch.to_string());
+    let mut bytes = serde_json::to_vec(&header).unwrap();
+    let mut file = (bytes.len() as u64).to_le_bytes().to_vec();
+    file.append(&mut bytes);
+    file.extend_from_slice(&good[8 + n..]);
+    let huge = dir.path().join("huge_policy.safetensors");
+    std::fs::write(&huge, file).unwrap();
+    let err = match egogen::policy::ppo::load_policy::<egogen::motion::cvae::infer::InferBackend>(
+        &huge,
+        &Default::default(),
+    ) {
+        Ok(_) => panic!("a policy of hidden = 1e9 was loaded"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("huge_policy.safetensors") && err.contains("hidden"),
+        "{err}"
+    );
+
+    // Training configs.
+    let text = String::from_utf8(read("configs/train_policy.toml"))
+        .unwrap()
+        .replace("\"../", &format!("\"{}/", root().display()))
+        .replace(
+            "\"train_primitive.toml",
+            &format!("\"{}/configs/train_primitive.toml", root().display()),
+        );
+    for (section, key, value) in [
+        ("[policy]", "hidden", "1000000000"),
+        ("[ppo]", "envs", "1000000000000"),
+        ("[validation]", "episodes", "1000000000000"),
+    ] {
+        let config = dir.path().join(format!("train_{key}.toml"));
+        let changed = format!("{section}\n{key} = {value}");
+        let body = if text.contains(&format!("\n{key} =")) {
+            text.lines()
+                .filter(|l| !l.starts_with(&format!("{key} =")))
+                .collect::<Vec<_>>()
+                .join("\n")
+        } else {
+            text.clone()
+        };
+        std::fs::write(&config, body.replacen(section, &changed, 1)).unwrap();
+        let err = egogen::cli::train_policy::load_policy_plan(&config)
+            .err()
+            .unwrap_or_else(|| panic!("{key} = {value} accepted"))
+            .to_string();
+        assert!(
+            err.contains(key) && err.contains(&format!("train_{key}.toml")),
+            "{err}"
+        );
+    }
+
+    // A synth crowd.
+    for (key, line) in [
+        ("crowd.count", "count = 10000000000000"),
+        (
+            "crowd.betas_count",
+            "count = 3\nbetas_count = 1000000000000",
+        ),
+    ] {
+        let config = dir.path().join("synth.toml");
+        std::fs::write(
+            &config,
+            format!(
+                "[scene]\nfloor_m = 8.0\n[motion]\nduration_s = 1.0\n[crowd]\n{line}\nlayout = \"random\"\nsteering = \"sampling\"\nk = 2\n[output]\ndir = \"out\"\n"
+            ),
+        )
+        .unwrap();
+        let err = egogen::cli::synth::load_synth_plan(&config)
+            .err()
+            .unwrap_or_else(|| panic!("{line} accepted"))
+            .to_string();
+        assert!(err.contains(key), "{err}");
+    }
+
+    // policy eval.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["policy", "eval", "--episodes", "1000000000000"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--episodes"), "{err}");
+}

@@ -554,3 +554,51 @@ fn gpu_device_without_a_gpu_is_a_clear_error() {
     );
     assert!(!dir.path().join("seq").exists());
 }
+
+/// Command-line values out of range are refused by the option's name before any work: negative
+/// numbers reach the option's parser (not clap's "use `-- -1`" advice), a seed a config cannot
+/// hold, and `--out` naming an existing file.
+#[test]
+fn out_of_range_options_and_an_output_that_is_a_file_are_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = dir.path().join("run.toml");
+    std::fs::write(&cfg, GOOD).unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+            .arg(&cfg)
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    for (args, needle) in [
+        (&["--seed", "-1"][..], "--seed"),
+        (&["--seed", "18446744073709551615"][..], "--seed"),
+        (&["--workers", "-1"][..], "--workers"),
+        (&["--workers", "0"][..], "--workers"),
+    ] {
+        let out = run(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} accepted");
+        assert!(
+            err.contains(needle) && !err.contains("-- -1"),
+            "{args:?}: {err}"
+        );
+    }
+    let file = dir.path().join("taken");
+    std::fs::write(&file, "a file").unwrap();
+    let out = run(&["--out", file.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("is a file"), "{err}");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "a file");
+    assert!(!dir.path().join("taken.partial").exists());
+    // The tools take negative numbers to their range checks too.
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["policy", "eval", "--action-spread", "-1"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--action-spread") && !err.contains("-- -1"),
+        "{err}"
+    );
+}

@@ -15,7 +15,12 @@ use egogen::run_job::RunRequest;
 
 /// Generate an egocentric dataset from a config file.
 #[derive(Parser, Debug)]
-#[command(version, about, args_conflicts_with_subcommands = true)]
+#[command(
+    version,
+    about,
+    args_conflicts_with_subcommands = true,
+    allow_negative_numbers = true
+)]
 struct Args {
     #[command(subcommand)]
     command: Option<Command>,
@@ -28,8 +33,9 @@ struct Args {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Every seed of the config (motion, scene placement, lighting, headset wear, depth
-    /// noise): another variant of the same run.
-    #[arg(long)]
+    /// noise): another variant of the same run. 0 to 2⁶³ − 1 (a config holds it as a TOML
+    /// integer).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
     seed: Option<u64>,
     /// Camera rig to render with, overriding `render.rig`.
     #[arg(long)]
@@ -39,7 +45,7 @@ struct Args {
     #[arg(long, value_enum)]
     backend: Option<BackendArg>,
     /// Parallel Blender workers (with Slurm: array tasks at once), overriding `supervisor.workers`.
-    #[arg(long)]
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=4096))]
     workers: Option<usize>,
     /// Blender to use (Python with bpy 4.5, or a blender executable); else `EGOGEN_BLENDER`,
     /// else the managed install.

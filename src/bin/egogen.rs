@@ -303,9 +303,29 @@ enum BodyCommand {
     },
 }
 
+/// The command and every subcommand below it taking `-1` as a value, not as a flag: a
+/// negative number reaches its option's parser and range check, which name the option.
+fn with_negative_numbers(cmd: clap::Command) -> clap::Command {
+    let names: Vec<String> = cmd
+        .get_subcommands()
+        .map(|s| s.get_name().to_owned())
+        .collect();
+    names
+        .iter()
+        .fold(cmd.allow_negative_numbers(true), |cmd, name| {
+            cmd.mut_subcommand(name, with_negative_numbers)
+        })
+}
+
 fn main() -> ExitCode {
+    use clap::{CommandFactory, FromArgMatches};
     egogen::cli::exit_quietly_on_closed_pipe();
-    match run(Cli::parse()) {
+    let matches = with_negative_numbers(Cli::command()).get_matches();
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
+    match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");

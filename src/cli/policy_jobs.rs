@@ -278,6 +278,15 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if k.contains(&0) || episodes == 0 || envs == 0 {
                 bail!("--k, --episodes and --envs must be at least 1");
             }
+            const MAX_EPISODES: usize = 1_000_000;
+            const MAX_ENVS: usize = 65_536;
+            const MAX_K: usize = 65_536;
+            if episodes > MAX_EPISODES || envs > MAX_ENVS || k.iter().any(|&k| k > MAX_K) {
+                bail!(
+                    "--episodes {episodes}, --envs {envs}, --k {k:?}: at most {MAX_EPISODES} episodes, \
+                     {MAX_ENVS} environments and K = {MAX_K} (every episode's record is kept in memory)"
+                );
+            }
             if !(action_spread.is_finite() && action_spread >= 0.0) {
                 bail!("--action-spread: expected a scale ≥ 0, got {action_spread}");
             }

@@ -25,6 +25,10 @@ use crate::synth::crowd::{
 
 /// Most agents in one take.
 pub const MAX_AGENTS: usize = 32;
+
+/// Most shape coefficients drawn per agent (SMPL-X's files hold 300; a body model uses as many
+/// as it has).
+pub const MAX_BETAS: usize = 400;
 /// Longest take (s).
 pub const MAX_DURATION_S: f64 = 3600.0;
 
@@ -469,11 +473,25 @@ fn crowd_agents(c: &RawCrowd, seed: u64, bad: Bad) -> Result<Vec<AgentDraft>, Co
             format!("expected 0–10, got {sigma}"),
         ));
     }
+    if c.count > MAX_AGENTS {
+        return Err(bad(
+            "crowd.count",
+            format!("expected at most {MAX_AGENTS} agents, got {}", c.count),
+        ));
+    }
     let n_betas = if sigma == 0.0 {
         0
     } else {
         c.betas_count.unwrap_or(10)
     };
+    if n_betas > MAX_BETAS {
+        return Err(bad(
+            "crowd.betas_count",
+            format!(
+                "expected at most {MAX_BETAS} shape coefficients (SMPL-X has 300), got {n_betas}"
+            ),
+        ));
+    }
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xBE7A5);
     let centre = DVec2::from_array(c.centre.unwrap_or([0.0, 0.0]));
     if !centre.is_finite() {

@@ -148,19 +148,23 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             format!("expected seconds ≥ 0, got {checkpoint_every_s}"),
         ));
     }
+    let arch = PolicyArch {
+        hidden: raw.policy.hidden,
+        pe_frequencies: raw.policy.pe_frequencies,
+        residual_blocks: raw.policy.residual_blocks,
+        latent_dim: 128,
+        sensing,
+    };
+    if let Some(problem) = arch.problem() {
+        return Err(bad("policy", problem));
+    }
     Ok(PolicyTrainPlan {
         seed: raw.seed,
         body_model,
         motion_weights,
         motion_config,
         pose_prior,
-        arch: PolicyArch {
-            hidden: raw.policy.hidden,
-            pe_frequencies: raw.policy.pe_frequencies,
-            residual_blocks: raw.policy.residual_blocks,
-            latent_dim: 128,
-            sensing,
-        },
+        arch,
         ppo: p,
         stages,
         eval_every_updates: raw.validation.every_updates,
@@ -174,21 +178,45 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
     })
 }
 
+/// Most environments stepped together, steps per environment and update, passes per update
+/// and validation episodes a training config may ask for.
+const MAX_ENVS: usize = 65_536;
+const MAX_STEPS_PER_ENV: usize = 4096;
+const MAX_EPOCHS: usize = 1000;
+const MAX_VALIDATION_EPISODES: usize = 100_000;
+
 /// The whole numbers, shares and weights of `[ppo]`, `[policy]` and `[validation]`.
 fn check_numbers(raw: &RawTrainPolicy, bad: Bad) -> Result<(), ConfigError> {
     let p = &raw.ppo;
+    // Upper bounds keep every buffer a run allocates (environments × steps × observation,
+    // validation episodes) within a machine's memory: refused here, not aborted later.
     let positive = [
-        ("ppo.envs", p.envs),
-        ("ppo.steps_per_env", p.steps_per_env),
-        ("ppo.minibatch", p.minibatch),
-        ("ppo.epochs", p.epochs),
-        ("policy.hidden", raw.policy.hidden),
-        ("policy.pe_frequencies", raw.policy.pe_frequencies),
-        ("validation.episodes", raw.validation.episodes),
+        ("ppo.envs", p.envs, MAX_ENVS),
+        ("ppo.steps_per_env", p.steps_per_env, MAX_STEPS_PER_ENV),
+        ("ppo.minibatch", p.minibatch, MAX_ENVS * MAX_STEPS_PER_ENV),
+        ("ppo.epochs", p.epochs, MAX_EPOCHS),
+        (
+            "policy.hidden",
+            raw.policy.hidden,
+            crate::policy::net::MAX_HIDDEN,
+        ),
+        (
+            "policy.pe_frequencies",
+            raw.policy.pe_frequencies,
+            crate::policy::net::MAX_PE_FREQUENCIES,
+        ),
+        (
+            "validation.episodes",
+            raw.validation.episodes,
+            MAX_VALIDATION_EPISODES,
+        ),
     ];
-    for (key, v) in positive {
-        if v == 0 {
-            return Err(bad(key, "expected a whole number ≥ 1, got 0".into()));
+    for (key, v, max) in positive {
+        if !(1..=max).contains(&v) {
+            return Err(bad(
+                key,
+                format!("expected a whole number 1–{max}, got {v}"),
+            ));
         }
     }
     let unit = [

@@ -55,7 +55,42 @@ impl Default for PolicyArch {
     }
 }
 
+/// Largest sizes a policy may have (a GRU of width 4 096 already holds about 0.4 G weights):
+/// a config or a weights file's header asking for more is refused before anything is
+/// allocated.
+pub const MAX_HIDDEN: usize = 4096;
+pub const MAX_PE_FREQUENCIES: usize = 64;
+pub const MAX_RESIDUAL_BLOCKS: usize = 64;
+pub const MAX_LATENT_DIM: usize = 4096;
+pub const MAX_SENSING_DIM: usize = 65_536;
+
 impl PolicyArch {
+    /// What is wrong with the sizes, naming the field and its limit (`None`: usable).
+    pub fn problem(&self) -> Option<String> {
+        let sizes = [
+            ("hidden", self.hidden, 1, MAX_HIDDEN),
+            ("pe_frequencies", self.pe_frequencies, 0, MAX_PE_FREQUENCIES),
+            (
+                "residual_blocks",
+                self.residual_blocks,
+                0,
+                MAX_RESIDUAL_BLOCKS,
+            ),
+            ("latent_dim", self.latent_dim, 1, MAX_LATENT_DIM),
+            (
+                "sensing values per frame",
+                self.sensing.dim(),
+                1,
+                MAX_SENSING_DIM,
+            ),
+        ];
+        sizes
+            .iter()
+            .find(|(_, v, lo, hi)| !(lo..=hi).contains(&v))
+            .map(|(name, v, lo, hi)| format!("{name} = {v}: expected {lo}–{hi}"))
+            .or_else(|| self.sensing.problem())
+    }
+
     /// Width `W` of the actor's and critic's MLPs.
     pub fn mlp_width(&self) -> usize {
         2 * self.hidden + 4 * self.pe_frequencies

@@ -174,6 +174,15 @@ pub fn load_policy<B: Backend>(
     device: &B::Device,
 ) -> Result<(PolicyArch, ActorCritic<B>), WeightsError> {
     let arch: PolicyArch = weights::read_metadata(path, POLICY_ARCH_KEY)?;
+    if let Some(problem) = arch.problem() {
+        return Err(WeightsError::Store {
+            path: path.into(),
+            message: format!(
+                "its header's `{POLICY_ARCH_KEY}` asks for a network that cannot be built \
+                 ({problem}); the file is damaged or not an egogen policy"
+            ),
+        });
+    }
     let mut net = arch.init::<B>(device);
     weights::load_into(path, &mut net, &format!("{arch:?}"))?;
     Ok((arch, net))
