@@ -119,4 +119,18 @@ fn bad_motion_files_are_named() {
         msg.contains("`mocap_frame_rate`") && msg.contains("positive"),
         "{msg}"
     );
+    // A rate no capture has (a damaged file) is refused, not resampled without bound.
+    write_npz(
+        &path,
+        &[
+            ("poses", Arr::F64(vec![2, 165], vec![0.0; 330])),
+            ("trans", Arr::F64(vec![2, 3], vec![0.0; 6])),
+            ("mocap_frame_rate", Arr::F64(vec![], vec![1e9])),
+        ],
+    );
+    let msg = MotionSequence::read(&path).unwrap_err().to_string();
+    assert!(
+        msg.contains("`mocap_frame_rate`") && msg.contains("at most"),
+        "{msg}"
+    );
 }

@@ -68,6 +68,13 @@ fn error_of(v: &Value, needles: &[&str]) -> String {
 }
 
 #[test]
+fn a_camera_far_from_the_eyes_is_refused() {
+    let mut v = base();
+    v["cameras"][0]["cpf_from_cam"]["translation_m"] = json!([1000.0, 0.0, 0.0]);
+    error_of(&v, &["cameras[0] (front)", "translation_m", "millimetres"]);
+}
+
+#[test]
 fn base_rig_loads() {
     let rig = load(&base()).unwrap();
     assert_eq!(rig.camera_names(), ["front", "fish"]);

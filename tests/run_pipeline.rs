@@ -574,7 +574,7 @@ fn out_of_range_options_and_an_output_that_is_a_file_are_refused_before_any_work
         (&["--seed", "-1"][..], "--seed"),
         (&["--seed", "18446744073709551615"][..], "--seed"),
         (&["--workers", "-1"][..], "--workers"),
-        (&["--workers", "0"][..], "--workers"),
+        (&["--workers", "0"][..], "supervisor.workers"),
     ] {
         let out = run(args);
         let err = String::from_utf8_lossy(&out.stderr);

@@ -368,6 +368,15 @@ fn bad_configs_are_refused_by_key() {
             "[scene]\nfloor_m=6\n[[agents]]\nstart=[9.0, 0.0]\n[output]\ndir='o'\n",
             "not on the walkable floor",
         ),
+        (
+            "[scene]\nfloor_m=6\n[[agents]]\nstart=[0.2, 0.0]\n[[obstacles]]\ncentre=[0.0, 0.0]\nsize_m=[1.0, 1.0]\n[output]\ndir='o'\n",
+            "inside an [[obstacles]] box",
+        ),
+        (
+            "[scene]\nfloor_m=6\n[[agents]]\nstart=[-2.0, 0.0]\ngoals=[[0.0, 0.1]]\n[[obstacles]]\ncentre=[0.0, 0.0]\nsize_m=[1.0, 1.0]\n[output]\ndir='o'\n",
+            "goal [0, 0.1] lies inside a standing [[obstacles]] box",
+        ),
+        ("[crowd]\ncount=10000000000000\n[output]\ndir='o'\n", "crowd.count"),
         ("[[agents]]\ncolour='red'\n[output]\ndir='o'\n", "colour"),
         ("[[agents]]\nname='a b'\n[output]\ndir='o'\n", "agents.name"),
     ];

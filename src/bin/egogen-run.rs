@@ -45,7 +45,7 @@ struct Args {
     #[arg(long, value_enum)]
     backend: Option<BackendArg>,
     /// Parallel Blender workers (with Slurm: array tasks at once), overriding `supervisor.workers`.
-    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=4096))]
+    #[arg(long)]
     workers: Option<usize>,
     /// Blender to use (Python with bpy 4.5, or a blender executable); else `EGOGEN_BLENDER`,
     /// else the managed install.

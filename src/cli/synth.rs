@@ -476,7 +476,10 @@ fn crowd_agents(c: &RawCrowd, seed: u64, bad: Bad) -> Result<Vec<AgentDraft>, Co
     if c.count > MAX_AGENTS {
         return Err(bad(
             "crowd.count",
-            format!("expected at most {MAX_AGENTS} agents, got {}", c.count),
+            format!(
+                "expected 1–{MAX_AGENTS} agents ([[agents]] and [crowd] count together), got {}",
+                c.count
+            ),
         ));
     }
     let n_betas = if sigma == 0.0 {
@@ -671,6 +674,19 @@ pub fn place_agents(
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0x57A27);
     let mut out: Vec<AgentPlan> = Vec::with_capacity(plan.agents.len());
     let on_map = |p: DVec2| map.is_walkable_at(p);
+    // `[[obstacles]]` where they stand when the take starts (the still ones and the moving
+    // ones at time 0), by config order among the still ones first.
+    let at_start: Vec<Obstacle2> = plan
+        .obstacles
+        .iter()
+        .copied()
+        .chain(plan.moving.iter().map(|m| m.at(0.0)))
+        .collect();
+    let inside_obstacle = |p: DVec2, clearance_m: f64| {
+        at_start
+            .iter()
+            .position(|o| o.grown(clearance_m).contains(p))
+    };
     let floor = if region.is_some() {
         "walkable floor inside the walls ([scene] indoors = false walks outside too)"
     } else {
@@ -688,6 +704,16 @@ pub fn place_agents(
                         p.y
                     );
                 }
+                if inside_obstacle(p, 0.0).is_some() {
+                    anyhow::bail!(
+                        "{}: agent {}: start [{}, {}] lies inside an [[obstacles]] box (where it \
+                         stands when the take starts); move the start or the obstacle",
+                        plan.config.display(),
+                        a.name,
+                        p.x,
+                        p.y
+                    );
+                }
                 p
             }
             None => {
@@ -696,7 +722,9 @@ pub fn place_agents(
                     let Some(p) = sample_point(map, region, s.clearance_m, &mut rng) else {
                         break;
                     };
-                    if out.iter().all(|o| o.start.distance(p) >= 1.0) {
+                    if out.iter().all(|o| o.start.distance(p) >= 1.0)
+                        && inside_obstacle(p, s.clearance_m).is_none()
+                    {
                         found = Some(p);
                         break;
                     }
@@ -715,6 +743,16 @@ pub fn place_agents(
             if !on_map(*g) {
                 anyhow::bail!(
                     "{}: agent {}: goal [{}, {}] is not on the {floor}",
+                    plan.config.display(),
+                    a.name,
+                    g.x,
+                    g.y
+                );
+            }
+            if plan.obstacles.iter().any(|o| o.contains(*g)) {
+                anyhow::bail!(
+                    "{}: agent {}: goal [{}, {}] lies inside a standing [[obstacles]] box; \
+                     move the goal or the obstacle",
                     plan.config.display(),
                     a.name,
                     g.x,

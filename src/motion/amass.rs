@@ -20,6 +20,10 @@ use crate::math::Vec3;
 use crate::npz::{fortran_to_c, read_as_f64, ReadError};
 
 /// A sequence of SMPL-X bodies sampled at a fixed rate.
+/// Highest frame rate a motion file may declare (Hz): mocap runs at 30–480 Hz; a rate far
+/// beyond it is a damaged file, and resampling it would allocate without bound.
+pub const MAX_FRAME_RATE_HZ: f64 = 10_000.0;
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct MotionSequence {
     /// Frames per second.
@@ -195,11 +199,14 @@ impl MotionSequence {
         };
         let (_, rate) = reader.f64(rate_key)?;
         let frame_rate_hz = match rate.as_slice() {
-            [r] if r.is_finite() && *r > 0.0 => *r,
+            [r] if r.is_finite() && *r > 0.0 && *r <= MAX_FRAME_RATE_HZ => *r,
             _ => {
                 return Err(reader.invalid(
                     rate_key,
-                    format!("expected one positive frame rate, found {rate:?}"),
+                    format!(
+                        "expected one positive frame rate of at most {MAX_FRAME_RATE_HZ} Hz, \
+                         found {rate:?}"
+                    ),
                 ))
             }
         };

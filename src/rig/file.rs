@@ -213,12 +213,25 @@ fn build_model(
     })
 }
 
+/// Farthest a rig's camera may sit from the eyes (CPF) it is mounted on (m): head-mounted
+/// devices keep their cameras within centimetres; one a metre away is a unit mistake (mm).
+pub const MAX_CAMERA_OFFSET_M: Real = 1.0;
+
 fn build_pose(raw: &RawPose) -> Result<Affine3, String> {
     let t = Vec3::from_array(raw.translation_m);
     if !t.is_finite() {
         return Err(format!(
             "translation_m {:?} must be three finite numbers (metres)",
             raw.translation_m
+        ));
+    }
+    if t.length() > MAX_CAMERA_OFFSET_M {
+        return Err(format!(
+            "translation_m {:?} puts the camera {:.3} m from the eyes (CPF); a head-mounted \
+             camera sits within {MAX_CAMERA_OFFSET_M} m of them: is it in millimetres? \
+             (expected metres)",
+            raw.translation_m,
+            t.length()
         ));
     }
     let r = raw.rotation;
