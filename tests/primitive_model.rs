@@ -1034,18 +1034,22 @@ fn a_killed_training_run_resumes_exactly_where_it_stopped() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--resume"), "{err}");
     assert!(state.is_file());
-    // A damaged file of the newest checkpoint: resuming says so and continues from the one
-    // before it, which replays to the same result.
+    // A damaged file of the newest checkpoint (one byte flipped: it still parses, its
+    // checksum does not match): resuming says so and continues from the one before it, which
+    // replays to the same result.
     let current: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&state).unwrap()).unwrap();
     let net_file = state.with_file_name(current["net_file"].as_str().unwrap());
-    let bytes = std::fs::read(&net_file).unwrap();
-    std::fs::write(&net_file, &bytes[..bytes.len() / 2]).unwrap();
+    let mut bytes = std::fs::read(&net_file).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0x01;
+    std::fs::write(&net_file, &bytes).unwrap();
     let out = run(&config, true).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(
         err.contains(&*net_file.file_name().unwrap().to_string_lossy())
+            && err.contains("damaged")
             && err.contains("checkpoint before it"),
         "{err}"
     );

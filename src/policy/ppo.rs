@@ -628,6 +628,7 @@ pub fn train_policy(
                     optim_file: None,
                     extra_file: None,
                     log_bytes,
+                    sha256: Default::default(),
                 };
                 let extra = RunState {
                     // A new stage starts with fresh environments.

@@ -50,6 +50,11 @@ pub struct CheckpointState {
     pub extra_file: Option<String>,
     /// Bytes of the loss log that belong to the run up to here.
     pub log_bytes: u64,
+    /// SHA-256 of each record file above, by name: a file that no longer matches is damaged,
+    /// and the checkpoint before it is used instead (said on stderr). Checkpoints written
+    /// before this field have none and are read unchecked.
+    #[serde(default)]
+    pub sha256: std::collections::BTreeMap<String, String>,
 }
 
 /// The checkpoint folder of a run writing `weights_out`.
@@ -163,6 +168,16 @@ where
         }
         None => None,
     };
+    for name in std::iter::once(&state.net_file)
+        .chain(&state.optim_file)
+        .chain(&state.extra_file)
+    {
+        let path = dir.join(name);
+        let bytes = std::fs::read(&path).map_err(io(&path))?;
+        state
+            .sha256
+            .insert(name.clone(), hex(&sha2::Sha256::digest(&bytes)));
+    }
     let state_path = dir.join(STATE);
     let prev_path = dir.join(PREVIOUS_STATE);
     // The current checkpoint becomes the previous one, then the new one is current.
@@ -253,6 +268,23 @@ where
             plan_sha256,
             state.plan_sha256
         )));
+    }
+    for name in std::iter::once(&state.net_file)
+        .chain(&state.optim_file)
+        .chain(&state.extra_file)
+    {
+        let Some(want) = state.sha256.get(name) else {
+            continue;
+        };
+        let path = dir.join(name);
+        let bytes = std::fs::read(&path).map_err(io(&path))?;
+        let got = hex(&sha2::Sha256::digest(&bytes));
+        if &got != want {
+            return Err(TrainError::Data(format!(
+                "checkpoint file {} is damaged (SHA-256 {got}, the checkpoint recorded {want})",
+                path.display()
+            )));
+        }
     }
     let recorder = BinFileRecorder::<FullPrecisionSettings>::new();
     let net_path = dir.join(&state.net_file);

@@ -719,6 +719,7 @@ pub fn train(
                     optim_file: None,
                     extra_file: None,
                     log_bytes: std::fs::metadata(&plan.log_out).map_err(log_io)?.len(),
+                    sha256: Default::default(),
                 };
                 let pool = (phase == "prior").then_some(&pool);
                 checkpoint::save::<TrainBackend, _, _, _>(
