@@ -155,7 +155,7 @@ enum MotionCommand {
         #[arg(long)]
         weights: Option<PathBuf>,
         /// The training config, for its clips and held-out split.
-        #[arg(long, default_value = "configs/train_primitive.toml")]
+        #[arg(long, default_value_os_t = egogen::paths::crate_root().join("configs/train_primitive.toml"))]
         config: PathBuf,
         /// Primitives decoded from random latents for the contact score.
         #[arg(long, default_value_t = 1000)]
@@ -208,7 +208,7 @@ enum MotionCommand {
     /// for `tools/plot_motion_paces.py`.
     Stats {
         /// The training config (its clips, held-out split and contact filter).
-        #[arg(long, default_value = "configs/train_primitive.toml")]
+        #[arg(long, default_value_os_t = egogen::paths::crate_root().join("configs/train_primitive.toml"))]
         config: PathBuf,
         /// JSON file with every primitive's speed and turn (must not exist).
         #[arg(long)]

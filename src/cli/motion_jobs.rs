@@ -301,7 +301,7 @@ pub struct MotionControlOptions {
     #[arg(long)]
     weights: Option<PathBuf>,
     /// The training config, for its clips (the walks start from a training seed).
-    #[arg(long, default_value = "configs/train_primitive.toml")]
+    #[arg(long, default_value_os_t = crate::paths::crate_root().join("configs/train_primitive.toml"))]
     config: PathBuf,
     /// Target speeds of the straight walks (m/s), comma separated.
     #[arg(long, value_delimiter = ',', default_value = "0.6,1.0,1.3,1.6")]

@@ -19,7 +19,7 @@ pub enum PolicyCommand {
     /// report how it scores held-out mocap, random-latent primitives and bent joints.
     PosePrior {
         /// Motion training config whose clips (and held-out split) are used.
-        #[arg(long, default_value = "configs/train_primitive.toml")]
+        #[arg(long, default_value_os_t = crate::paths::crate_root().join("configs/train_primitive.toml"))]
         config: PathBuf,
         /// Motion-model weights (random-latent primitives; default: the shipped ones).
         #[arg(long)]
@@ -66,7 +66,7 @@ pub enum PolicyCommand {
     /// Evaluate the sampling controller (best of K random latents by the reward) on held-out
     /// box-scene episodes; one JSON line per K.
     Eval {
-        #[arg(long, default_value = "configs/train_primitive.toml")]
+        #[arg(long, default_value_os_t = crate::paths::crate_root().join("configs/train_primitive.toml"))]
         config: PathBuf,
         #[arg(long)]
         weights: Option<PathBuf>,

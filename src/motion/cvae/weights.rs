@@ -20,7 +20,10 @@ pub enum WeightsError {
         path: PathBuf,
         source: std::io::Error,
     },
-    #[error("weights file {path}: not a safetensors file ({message})")]
+    #[error(
+        "weights file {path}: not a safetensors file ({message}); the file is damaged or \
+         truncated (an interrupted copy or download?): copy it again, or retrain"
+    )]
     Format { path: PathBuf, message: String },
     #[error("weights file {path}: no `{key}` metadata; was it written by `egogen train`?")]
     NoArchitecture { path: PathBuf, key: &'static str },
