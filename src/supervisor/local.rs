@@ -1,7 +1,7 @@
 //! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard,
 //! starts Blender on its spec, finishes frames as their raw files are reported, and retries a
 //! failed or timed-out attempt on the frames still missing until one frame has failed more
-//! than the configured count (retries count frames, not attempts: [`run_shard`]); each
+//! than the configured count (retries count frames, not attempts: `run_shard`); each
 //! attempt's stderr goes to `logs/`. Ctrl-C kills the workers and leaves every finished frame in
 //! place, so `--resume` continues.
 

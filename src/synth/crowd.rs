@@ -10,7 +10,10 @@
 //! body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), that puts a body
 //! marker inside another person's box or an obstacle in any of its frames, or that ends with the
 //! pelvis off the walkable floor, is redrawn: up to `penetration_redraws` times from the same
-//! policy output, then as many times from the motion model's prior.
+//! policy output, then as many times from the motion model's prior. The scene is tested at
+//! every frame a primitive spans ([`CrowdSettings::scene_every_frame`]), and a primitive whose
+//! pelvis would pass over a wall is never taken: after the redraws, a batch from the prior,
+//! then the body holds its pose for the primitive.
 //!
 //! An agent walks its goals in order; with `wander` it draws a new goal on the walkable map
 //! when its list runs out, until the take ends. A goal counts as reached when the pelvis comes
