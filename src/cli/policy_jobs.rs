@@ -77,7 +77,8 @@ pub enum PolicyCommand {
         /// each; default 1,16,64, none when --policy is given alone).
         #[arg(long, value_delimiter = ',')]
         k: Option<Vec<usize>>,
-        /// Also evaluate this trained policy (e.g. assets/policy/policy.safetensors).
+        /// Also evaluate this trained policy (the shipped one:
+        /// assets/policy/scene_weights/policy.safetensors).
         #[arg(long)]
         policy: Option<PathBuf>,
         /// The policy's mean action instead of a sample from it.
