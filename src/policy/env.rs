@@ -317,6 +317,9 @@ pub struct EpisodeSummary {
     /// vertices inside it in a frame (0 where the scene has no 3D SDF).
     pub scene_penetration_share: f64,
     pub scene_vertices_inside_max: usize,
+    /// New frames whose pelvis path passed over a cell that is not walkable: through a wall,
+    /// furniture or a closed doorway ([`super::reward::path_leaves_floor`]).
+    pub pelvis_off_floor_frames: usize,
     /// The pelvis's floor position at the end (m, world).
     pub end_xy: [f64; 2],
 }
@@ -347,6 +350,7 @@ impl EpisodeSummary {
             scene_penetration_share: w.totals.scene_penetrating_frames as f64
                 / w.totals.frames.max(1) as f64,
             scene_vertices_inside_max: w.totals.scene_vertices_inside_max,
+            pelvis_off_floor_frames: w.totals.pelvis_off_floor_frames,
             end_xy: w.view.pelvis.to_array(),
         }
     }

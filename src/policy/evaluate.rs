@@ -11,6 +11,7 @@ use serde::Serialize;
 
 use super::env::{Ending, EnvError, EpisodeSummary, PolicyEnv, StepOutput};
 use crate::motion::cvae::pace::Quantiles;
+use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
 /// Episode base of held-out evaluation episodes (training bases are small integers).
 pub const HELD_OUT_BASE: u64 = 0xE7A1_0000_0000;
@@ -42,6 +43,11 @@ pub struct EvalReport {
     pub scene_penetration_share_mean: f64,
     pub scene_penetration_episode_rate: f64,
     pub scene_vertices_inside_max: usize,
+    /// The pelvis over a wall: share of episodes in which its path passed over a cell that is
+    /// not walkable (through a wall, furniture or a closed doorway; the controller as it is,
+    /// without the redraws a take makes), and the mean share of their frames.
+    pub pelvis_over_wall_episode_rate: f64,
+    pub pelvis_over_wall_share_mean: f64,
     pub final_distance_m: Quantiles,
     pub speed_successful_m_s: Quantiles,
     pub primitives: Quantiles,
@@ -102,6 +108,15 @@ impl EvalReport {
                 .map(|s| s.scene_vertices_inside_max)
                 .max()
                 .unwrap_or(0),
+            pelvis_over_wall_episode_rate: summaries
+                .iter()
+                .filter(|s| s.pelvis_off_floor_frames > 0)
+                .count() as f64
+                / n,
+            pelvis_over_wall_share_mean: mean(|s| {
+                s.pelvis_off_floor_frames as f64
+                    / (s.primitives * (PRIMITIVE_FRAMES - SEED_FRAMES)).max(1) as f64
+            }),
             final_distance_m: Quantiles::of(summaries.iter().map(|s| s.final_distance_m)),
             speed_successful_m_s: Quantiles::of(
                 summaries
@@ -164,6 +179,7 @@ mod tests {
             speed_m_s: 1.0,
             scene_penetration_share: 0.0,
             scene_vertices_inside_max: 0,
+            pelvis_off_floor_frames: 0,
             end_xy: [0.0, 0.0],
         }
     }

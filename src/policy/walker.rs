@@ -229,6 +229,10 @@ pub struct Totals {
     pub scene_penetrating_frames: usize,
     #[serde(default)]
     pub scene_vertices_inside_max: usize,
+    /// Frames whose pelvis path passed over a cell that is not walkable
+    /// ([`super::reward::Judged::pelvis_off_floor_frames`]).
+    #[serde(default)]
+    pub pelvis_off_floor_frames: usize,
 }
 
 /// A body walking to a goal, one primitive at a time.
@@ -357,6 +361,7 @@ impl Walker {
         self.totals.frames += p.joints.len() - SEED_FRAMES;
         self.totals.frames_in_obstacle += j.frames_in_obstacle;
         self.totals.scene_penetrating_frames += j.scene_penetrating_frames;
+        self.totals.pelvis_off_floor_frames += j.pelvis_off_floor_frames;
         self.totals.scene_vertices_inside_max = self
             .totals
             .scene_vertices_inside_max
