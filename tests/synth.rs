@@ -377,6 +377,10 @@ fn bad_configs_are_refused_by_key() {
             "goal [0, 0.1] lies inside a standing [[obstacles]] box",
         ),
         ("[crowd]\ncount=10000000000000\n[output]\ndir='o'\n", "crowd.count"),
+        (
+            "[scene]\nfloor_m=6\n[motion]\nwander_distance_m=[40.0, 50.0]\n[[agents]]\nstart=[0.0, 0.0]\nsteering='sampling'\nk=2\n[output]\ndir='o'\n",
+            "wander_distance_m",
+        ),
         ("[[agents]]\ncolour='red'\n[output]\ndir='o'\n", "colour"),
         ("[[agents]]\nname='a b'\n[output]\ndir='o'\n", "agents.name"),
     ];

@@ -411,7 +411,16 @@ impl<'m> Agent<'m> {
                 settings.clearance_m,
                 &mut rng,
             )
-            .ok_or_else(|| err("no goal given and none could be drawn around the start".into()))?,
+            .ok_or_else(|| {
+                err(format!(
+                    "no goal given and none could be drawn around the start: no walkable cell \
+                     {}–{} m away (`[motion] wander_distance_m`) with {} m of free space \
+                     (`clearance_m`) on the start's floor; shorten the distances or give goals",
+                    settings.wander_distance_m.0,
+                    settings.wander_distance_m.1,
+                    settings.clearance_m
+                ))
+            })?,
         };
         let (frames, floor) =
             &parts.bank.seeds[(rng.next_u64() % parts.bank.seeds.len() as u64) as usize];
