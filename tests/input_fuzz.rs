@@ -260,16 +260,21 @@ fn weights_files() {
     );
 }
 
-#[test]
-fn training_configs() {
-    // Paths made absolute, so that damaged versions get past the files they name.
-    let text = String::from_utf8(read("configs/train_policy.toml"))
+/// `configs/train_policy.toml` with its paths made absolute, so that changed versions get past
+/// the files they name.
+fn training_config() -> String {
+    String::from_utf8(read("configs/train_policy.toml"))
         .unwrap()
         .replace("\"../", &format!("\"{}/", root().display()))
         .replace(
             "\"train_primitive.toml",
             &format!("\"{}/configs/train_primitive.toml", root().display()),
-        );
+        )
+}
+
+#[test]
+fn training_configs() {
+    let text = training_config();
     fuzz(
         "train_policy.toml",
         text.as_bytes(),
@@ -334,13 +339,7 @@ fn sizes_that_would_exhaust_memory_are_refused_by_key() {
     );
 
     // Training configs.
-    let text = String::from_utf8(read("configs/train_policy.toml"))
-        .unwrap()
-        .replace("\"../", &format!("\"{}/", root().display()))
-        .replace(
-            "\"train_primitive.toml",
-            &format!("\"{}/configs/train_primitive.toml", root().display()),
-        );
+    let text = training_config();
     for (section, key, value) in [
         ("[policy]", "hidden", "1000000000"),
         ("[ppo]", "envs", "1000000000000"),

@@ -17,7 +17,7 @@ use tokio::sync::watch;
 
 use super::dataset::{Dataset, Shard};
 use super::pool::{
-    frames_bar, setup_failure, Attempt, Outcome, PoolReport, ShardPool, ShardReport,
+    frames_bar, setup_failure, Attempt, FrameTries, Outcome, PoolReport, ShardPool, ShardReport,
     EXIT_SETUP_FAILED,
 };
 use crate::render::shard::worker_command;
@@ -192,7 +192,7 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> (ShardReport, Op
             .filter(|&f| !dataset.frame_done(shard.camera, f))
             .collect()
     };
-    let mut tries_of_frame = std::collections::BTreeMap::<u32, u32>::new();
+    let mut tries = FrameTries::default();
     let mut attempt = 0;
     loop {
         let missing = missing_now();
@@ -247,13 +247,9 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> (ShardReport, Op
                 )),
             );
         }
-        let tries = tries_of_frame.entry(first_left).or_insert(0);
-        *tries += 1;
-        if *tries > shared.settings.retries {
-            return (
-                report,
-                Some(format!("frame {first_left} failed {tries} time(s)")),
-            );
+        tries.charge(first_left);
+        if let Some((frame, n)) = tries.exhausted(shared.settings.retries) {
+            return (report, Some(format!("frame {frame} failed {n} time(s)")));
         }
     }
 }

@@ -78,6 +78,29 @@ pub fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
 /// Exit status of `render_shard.py` when the spec or the scene cannot be loaded: a failure
 /// that would repeat on every try.
 pub const EXIT_SETUP_FAILED: i32 = 3;
+/// Failed tries charged to the frames of a shard: retries count frames, not attempts. A failed
+/// attempt charges one try to the first frame it left unfinished (the one it was rendering
+/// when it died), so an attempt killed after writing its frames costs nothing; the shard is
+/// given up when a frame has failed more than `retries` times. Both backends use it.
+#[derive(Debug, Default, Clone)]
+pub struct FrameTries(std::collections::BTreeMap<u32, u32>);
+
+impl FrameTries {
+    /// Charges a failed attempt to `frame`, the first it left unfinished.
+    pub fn charge(&mut self, frame: u32) {
+        *self.0.entry(frame).or_insert(0) += 1;
+    }
+
+    /// The frame that has failed more than `retries` times (the most tried), with its count.
+    pub fn exhausted(&self, retries: u32) -> Option<(u32, u32)> {
+        self.0
+            .iter()
+            .map(|(&f, &t)| (f, t))
+            .filter(|&(_, t)| t > retries)
+            .max_by_key(|&(_, t)| t)
+    }
+}
+
 /// How such an attempt's outcome starts; backends do not retry it.
 pub const SETUP_FAILED: &str = "Blender could not set up the scene (not retried)";
 

@@ -19,7 +19,7 @@ use anyhow::{bail, Context, Result};
 
 use super::dataset::{Dataset, Shard};
 use super::pool::{
-    frames_bar, setup_failure, Attempt, Outcome, PoolReport, ShardPool, ShardReport,
+    frames_bar, setup_failure, Attempt, FrameTries, Outcome, PoolReport, ShardPool, ShardReport,
     EXIT_SETUP_FAILED,
 };
 use crate::atomic_file::write_atomically;
@@ -49,9 +49,8 @@ pub struct TaskEnd {
 struct ShardState {
     shard: Shard,
     report: ShardReport,
-    /// Failed tries charged to each frame: a failed task charges the frame it left first
-    /// unfinished (retries count frames, not attempts, as in the local pool).
-    tries_of_frame: std::collections::BTreeMap<u32, u32>,
+    /// Failed tries charged to each frame (retries count frames, not attempts).
+    tries: FrameTries,
 }
 
 /// The Slurm backend: renders shards as Slurm array tasks; returns when every frame is
@@ -101,7 +100,7 @@ fn run_slurm(
                 attempts: Vec::new(),
             },
             shard,
-            tries_of_frame: Default::default(),
+            tries: FrameTries::default(),
         })
         .collect();
     let mut round = 0u32;
@@ -116,10 +115,7 @@ fn run_slurm(
         // A frame past its retries, or failed in a way that repeats (the scene does not load).
         if let Some(&i) = todo.iter().find(|&&i| {
             let attempts = &states[i].report.attempts;
-            states[i]
-                .tries_of_frame
-                .values()
-                .any(|&t| t > settings.retries)
+            states[i].tries.exhausted(settings.retries).is_some()
                 || attempts.last().is_some_and(|a| a.outcome.repeats())
         }) {
             bar.finish_and_clear();
@@ -129,7 +125,7 @@ fn run_slurm(
                 .attempts
                 .last()
                 .expect("a shard past its retries has attempts");
-            let worst = states[i].tries_of_frame.iter().max_by_key(|(_, &t)| t);
+            let worst = states[i].tries.exhausted(settings.retries);
             bail!(
                 "shard {} ({} frames {:?}): {} after {} attempt(s); last: {} (log: {})",
                 r.shard,
@@ -265,7 +261,7 @@ fn record_attempts(dataset: &Dataset, states: &mut [ShardState], tasks: Vec<Task
         let log = dataset.logs_dir().join(format!("slurm_{job}_{t}.log"));
         let outcome = task_outcome(end, still_missing, &log);
         if let Some(&first_left) = left.first().filter(|_| !outcome.is_ok()) {
-            *state.tries_of_frame.entry(first_left).or_insert(0) += 1;
+            state.tries.charge(first_left);
         }
         state.report.attempts.push(Attempt {
             attempt: state.report.attempts.len() as u32 + 1,

@@ -57,6 +57,17 @@ pub struct CheckpointState {
     pub sha256: std::collections::BTreeMap<String, String>,
 }
 
+impl CheckpointState {
+    /// The record files the checkpoint names (network, optimiser, other state).
+    fn record_files(&self) -> Vec<String> {
+        std::iter::once(&self.net_file)
+            .chain(&self.optim_file)
+            .chain(&self.extra_file)
+            .cloned()
+            .collect()
+    }
+}
+
 /// The checkpoint folder of a run writing `weights_out`.
 pub fn checkpoint_dir(weights_out: &Path) -> PathBuf {
     let mut name = weights_out
@@ -168,15 +179,11 @@ where
         }
         None => None,
     };
-    for name in std::iter::once(&state.net_file)
-        .chain(&state.optim_file)
-        .chain(&state.extra_file)
-    {
-        let path = dir.join(name);
+    for name in state.record_files() {
+        let path = dir.join(&name);
         let bytes = std::fs::read(&path).map_err(io(&path))?;
-        state
-            .sha256
-            .insert(name.clone(), hex(&sha2::Sha256::digest(&bytes)));
+        let sum = hex(&sha2::Sha256::digest(&bytes));
+        state.sha256.insert(name, sum);
     }
     let state_path = dir.join(STATE);
     let prev_path = dir.join(PREVIOUS_STATE);
@@ -193,9 +200,7 @@ where
     // Files of older checkpoints are no longer referenced.
     let mut keep = vec![STATE.to_string(), PREVIOUS_STATE.to_string()];
     for s in [Some(&state), previous.as_ref()].into_iter().flatten() {
-        keep.push(s.net_file.clone());
-        keep.extend(s.optim_file.clone());
-        keep.extend(s.extra_file.clone());
+        keep.extend(s.record_files());
     }
     for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
         let name = entry.file_name().to_string_lossy().into_owned();
@@ -269,14 +274,11 @@ where
             state.plan_sha256
         )));
     }
-    for name in std::iter::once(&state.net_file)
-        .chain(&state.optim_file)
-        .chain(&state.extra_file)
-    {
-        let Some(want) = state.sha256.get(name) else {
+    for name in state.record_files() {
+        let Some(want) = state.sha256.get(&name) else {
             continue;
         };
-        let path = dir.join(name);
+        let path = dir.join(&name);
         let bytes = std::fs::read(&path).map_err(io(&path))?;
         let got = hex(&sha2::Sha256::digest(&bytes));
         if &got != want {
