@@ -14,6 +14,7 @@ pub mod body;
 pub mod camera;
 pub mod cli;
 pub mod eval;
+pub mod export;
 pub mod exr_file;
 pub mod inspect;
 pub mod manifest;

@@ -91,6 +91,18 @@ const ALLOWED: &[(&str, &[&str])] = &[
         ],
     ),
     ("inspect", &["exr_file", "preview", "math", "atomic_file"]),
+    // Outputs made from a finished take's trajectories (Aria streams).
+    (
+        "export",
+        &[
+            "math",
+            "camera",
+            "rig",
+            "atomic_file",
+            "manifest",
+            "preview",
+        ],
+    ),
     // Checked run plans: made by cli, carried out by supervisor.
     (
         "plan",
@@ -118,6 +130,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "preview",
             "plan",
             "progress",
+            "export",
         ],
     ),
     // Configs and commands: may use everything but the supervisor.
@@ -146,12 +159,21 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "plan",
             "progress",
             "eval",
+            "export",
         ],
     ),
     // egogen-run's job: a config (cli) through the supervisor to a dataset.
     (
         "run_job",
-        &["body", "cli", "motion", "plan", "supervisor", "synth"],
+        &[
+            "body",
+            "cli",
+            "motion",
+            "plan",
+            "supervisor",
+            "synth",
+            "export",
+        ],
     ),
 ];
 

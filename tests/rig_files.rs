@@ -554,3 +554,65 @@ fn headset_wear_offsets_are_seeded_bounded_and_exact() {
         egogen::math::Affine3::IDENTITY
     );
 }
+
+fn with_imu() -> Value {
+    let mut v = base();
+    v["imus"] = json!([{
+        "name": "imu-a",
+        "rate_hz": 1000.0,
+        "cpf_from_imu": {
+            "translation_m": [0.05, 0.0, 0.0],
+            "rotation": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+        }
+    }]);
+    v["device_frame"] = json!("imu-a");
+    v
+}
+
+#[test]
+fn imus_and_the_device_frame_load_and_write_back() {
+    let rig = load(&with_imu()).unwrap();
+    assert_eq!(rig.imus.len(), 1);
+    assert_eq!(rig.device_frame_name(), "imu-a");
+    assert_eq!(rig.cpf_from_device().translation.x, 0.05);
+    assert_eq!(load_text(&rig.to_json()).unwrap().imus, rig.imus);
+    // Without `device_frame`, the first camera's frame is the device frame.
+    let plain = load(&base()).unwrap();
+    assert_eq!(plain.device_frame_name(), "front");
+}
+
+#[test]
+fn bad_imus_are_named() {
+    let mut v = with_imu();
+    v["imus"][0]["rate_hz"] = json!(0.0);
+    error_of(&v, &["imus[0] (imu-a).rate_hz", "sample rate"]);
+    let mut v = with_imu();
+    v["imus"][0]["name"] = json!("front");
+    error_of(&v, &["imus[0] (front).name", "unique"]);
+    let mut v = with_imu();
+    v["imus"][0]["cpf_from_imu"]["translation_m"] = json!([2.0, 0.0, 0.0]);
+    error_of(&v, &["imus[0] (imu-a).cpf_from_imu", "millimetres"]);
+    let mut v = with_imu();
+    v["device_frame"] = json!("imu-z");
+    error_of(&v, &["device_frame", "`imu-z`", "front, fish, imu-a"]);
+    let mut v = with_imu();
+    v["imus"][0]["calibration"] = json!({
+        "accel_rectification": [[3.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        "accel_bias_m_s2": [0.0, 0.0, 0.0],
+        "gyro_rectification": [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        "gyro_bias_rad_s": [0.0, 0.0, 0.0]
+    });
+    error_of(&v, &["imus[0] (imu-a).calibration", "accel_rectification"]);
+}
+
+#[test]
+fn an_aria_calibration_keeps_its_imus() {
+    let rig = Rig::load(&aria_fixture()).unwrap();
+    let names: Vec<&str> = rig.imus.iter().map(|i| i.name.as_str()).collect();
+    assert_eq!(names, ["imu-left", "imu-right"]);
+    assert_eq!(rig.imus[0].rate_hz, 800.0);
+    assert_eq!(rig.imus[1].rate_hz, 1000.0);
+    assert_eq!(rig.device_frame_name(), "camera-slam-left");
+    // The calibration's accelerometer bias of imu-left, as written in the fixture.
+    assert_eq!(rig.imus[0].calibration.accel_bias.x, 0.221434286143159);
+}

@@ -61,6 +61,10 @@ enum Command {
     /// Camera rig tools (rig files and Aria device calibrations).
     #[command(subcommand)]
     Rig(egogen::rig::RigCommand),
+    /// Project Aria outputs of a take: device trajectory, calibration and IMU streams in the
+    /// formats projectaria-tools reads (docs/ARIA.md).
+    #[command(subcommand)]
+    Aria(AriaCommand),
     /// Train learned models.
     #[command(subcommand)]
     Train(TrainCommand),
@@ -83,6 +87,12 @@ enum Command {
     /// and a path-planning baseline. Writes OUT/RESULTS.md and OUT/results/ (rows as JSON,
     /// every episode as JSON lines, top views of the paths).
     Eval(egogen::cli::eval_jobs::EvalArgs),
+}
+
+#[derive(Subcommand, Debug)]
+enum AriaCommand {
+    /// Write each wearer's Aria streams of a finished take into a new folder.
+    Export(egogen::cli::aria_jobs::AriaExportArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -380,6 +390,7 @@ fn run(cli: Cli) -> Result<()> {
             println!("wrote {}", out.dir.display());
         }
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
+        Command::Aria(AriaCommand::Export(args)) => egogen::cli::aria_jobs::aria_export(&args)?,
         Command::Train(TrainCommand::Policy {
             config,
             quiet,

@@ -3,6 +3,7 @@
 //! No domain logic lives here: `config` only parses and checks values, `resolve` turns them
 //! into typed plans the stages consume.
 
+pub mod aria_jobs;
 pub mod body_jobs;
 pub mod config;
 pub mod eval_jobs;

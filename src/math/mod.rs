@@ -10,6 +10,7 @@
 //!   camera frame (x right, y down, z forward).
 //! - Rotations are right-handed; axis-angle vectors have angle = norm, in radians.
 
+pub mod pose_spline;
 pub mod random;
 pub mod rotation;
 

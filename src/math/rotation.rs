@@ -227,6 +227,25 @@ pub fn orthonormality_error(m: Mat3) -> Real {
         .fold(0.0, |acc: Real, x| acc.max(x.abs()))
 }
 
+/// The orthogonal polar factor of `m` (the rotation nearest in Frobenius norm, the same as
+/// `U·Vᵀ` of its SVD, which Sophus' `makeRotationMatrix` uses), by the Newton iteration
+/// `R ← (R + R⁻ᵀ)/2`. `m` must be close to a rotation (det > 0).
+pub fn nearest_rotation(m: Mat3) -> Mat3 {
+    let mut r = m;
+    for _ in 0..100 {
+        let next = (r + r.inverse().transpose()) * 0.5;
+        let change = (next - r)
+            .to_cols_array()
+            .iter()
+            .fold(0.0, |a: Real, v| a.max(v.abs()));
+        r = next;
+        if change < 1e-16 {
+            break;
+        }
+    }
+    r
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,7 +25,7 @@ use serde::Deserialize;
 
 use super::error::RigError;
 use super::pose::nearest_rotation;
-use super::{Rig, RigCamera};
+use super::{ImuCalibration, Rig, RigCamera, RigImu};
 use crate::camera::{Camera, Fisheye624, Resolution};
 use crate::math::{Affine3, Mat3, Real, Vec3};
 
@@ -44,6 +44,66 @@ struct AriaCalibration {
     device_class_info: Option<DeviceClassInfo>,
     origin_specification: Option<OriginSpecification>,
     camera_calibrations: Vec<serde_json::Value>,
+    #[serde(default)]
+    imu_calibrations: Vec<serde_json::Value>,
+}
+
+/// One entry of `ImuCalibrations` (the keys projectaria-tools reads).
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "PascalCase")]
+struct AriaImu {
+    label: String,
+    accelerometer: AriaImuSensor,
+    gyroscope: AriaImuSensor,
+    #[serde(rename = "T_Device_Imu")]
+    t_device_imu: AriaSe3,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "PascalCase")]
+struct AriaImuSensor {
+    bias: AriaImuBias,
+    model: AriaImuModel,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "PascalCase")]
+struct AriaImuBias {
+    offset: [Real; 3],
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "PascalCase")]
+struct AriaImuModel {
+    /// Row-major.
+    rectification_matrix: [[Real; 3]; 3],
+}
+
+/// Sample rates of the Aria gen1 IMUs (projectaria-tools: imu-right stream 1202-1 at 1 kHz,
+/// imu-left 1202-2 at 800 Hz).
+fn imu_rate_hz(label: &str) -> Real {
+    if label == "imu-left" {
+        800.0
+    } else {
+        1000.0
+    }
+}
+
+/// The Aria build whose nominal CAD pose of `camera-slam-left` (the device frame) is
+/// `cpf_from_device` to 1e-9, if any: the rigs read from an Aria calibration, and the shipped
+/// `aria_gen1` rig, have one.
+pub fn aria_build_of_device(cpf_from_device: Affine3) -> Option<&'static str> {
+    [("DVT-S", &CAD_DVT_S), ("DVT-L", &CAD_DVT_L)]
+        .into_iter()
+        .find(|(_, table)| {
+            let cad = table[0].cpf_from_sensor();
+            (cad.translation - cpf_from_device.translation).length() < 1e-9
+                && (cad.matrix3 - cpf_from_device.matrix3)
+                    .to_cols_array()
+                    .iter()
+                    .all(|d| d.abs() < 1e-9)
+        })
+        .map(|(build, _)| build)
 }
 
 #[derive(Debug, Deserialize)]
@@ -315,6 +375,38 @@ pub(super) fn rig_from_aria_value(
             "expected at least one camera",
         ));
     }
+    let mut imus: Vec<RigImu> = Vec::new();
+    for (i, value) in cal.imu_calibrations.into_iter().enumerate() {
+        let hint = value
+            .get("Label")
+            .and_then(|l| l.as_str())
+            .map(|l| format!("ImuCalibrations[{i}] ({l})"))
+            .unwrap_or_else(|| format!("ImuCalibrations[{i}]"));
+        let imu: AriaImu = serde_json::from_value(value)
+            .map_err(|e| RigError::field(path, &hint, e.to_string()))?;
+        let device_from_imu = se3(&imu.t_device_imu)
+            .map_err(|m| RigError::field(path, format!("{hint}.T_Device_Imu"), m))?;
+        let m = |r: &[[Real; 3]; 3]| Mat3::from_cols_array_2d(r).transpose();
+        let calibration = ImuCalibration {
+            accel_rectification: m(&imu.accelerometer.model.rectification_matrix),
+            accel_bias: Vec3::from_array(imu.accelerometer.bias.offset),
+            gyro_rectification: m(&imu.gyroscope.model.rectification_matrix),
+            gyro_bias: Vec3::from_array(imu.gyroscope.bias.offset),
+        };
+        if cameras.iter().any(|c| c.name == imu.label) || imus.iter().any(|o| o.name == imu.label) {
+            return Err(RigError::field(
+                path,
+                format!("{hint}.Label"),
+                "is already used by another sensor; labels must be unique",
+            ));
+        }
+        imus.push(RigImu {
+            rate_hz: imu_rate_hz(&imu.label),
+            name: imu.label,
+            cpf_from_imu: cpf_from_device * device_from_imu,
+            calibration,
+        });
+    }
     let file_name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -343,6 +435,8 @@ pub(super) fn rig_from_aria_value(
         notes,
         source: path.into(),
         cameras,
+        imus,
+        device_frame: Some(origin.child_label.clone()),
     })
 }
 

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::error::RigError;
 use super::pose::{checked_rotation, NotRotation};
-use super::{Rig, RigCamera};
+use super::{ImuCalibration, Rig, RigCamera, RigImu};
 use crate::camera::{Camera, Fisheye624, KannalaBrandt4, Pinhole, Resolution};
 use crate::math::{Affine3, Mat3, Real, Vec3};
 
@@ -28,7 +28,83 @@ struct RawRig {
     notes: String,
     /// Cameras; parsed one by one so that errors name the camera.
     cameras: Vec<serde_json::Value>,
+    /// Inertial sensors (optional); parsed one by one so that errors name the IMU.
+    #[serde(default)]
+    imus: Vec<serde_json::Value>,
+    /// The sensor whose frame is the device frame (optional; default the first camera).
+    #[serde(default)]
+    device_frame: Option<String>,
 }
+
+/// One IMU, as written.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawImu {
+    name: String,
+    rate_hz: Real,
+    cpf_from_imu: serde_json::Value,
+    /// The device's calibration (optional; default a perfect sensor).
+    #[serde(default)]
+    calibration: Option<RawImuCalibration>,
+}
+
+/// `raw = M · rectified + bias` per sensor (projectaria-tools' model); matrices row-major.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+struct RawImuCalibration {
+    accel_rectification: [[Real; 3]; 3],
+    accel_bias_m_s2: [Real; 3],
+    gyro_rectification: [[Real; 3]; 3],
+    gyro_bias_rad_s: [Real; 3],
+}
+
+impl RawImuCalibration {
+    fn from_calibration(c: &ImuCalibration) -> Self {
+        RawImuCalibration {
+            accel_rectification: c.accel_rectification.transpose().to_cols_array_2d(),
+            accel_bias_m_s2: c.accel_bias.to_array(),
+            gyro_rectification: c.gyro_rectification.transpose().to_cols_array_2d(),
+            gyro_bias_rad_s: c.gyro_bias.to_array(),
+        }
+    }
+
+    fn build(&self) -> Result<ImuCalibration, String> {
+        let m = |r: &[[Real; 3]; 3]| Mat3::from_cols_array_2d(r).transpose();
+        let c = ImuCalibration {
+            accel_rectification: m(&self.accel_rectification),
+            accel_bias: Vec3::from_array(self.accel_bias_m_s2),
+            gyro_rectification: m(&self.gyro_rectification),
+            gyro_bias: Vec3::from_array(self.gyro_bias_rad_s),
+        };
+        let finite = c.accel_rectification.is_finite()
+            && c.accel_bias.is_finite()
+            && c.gyro_rectification.is_finite()
+            && c.gyro_bias.is_finite();
+        if !finite {
+            return Err("expected finite numbers".into());
+        }
+        for (key, r) in [
+            ("accel_rectification", c.accel_rectification),
+            ("gyro_rectification", c.gyro_rectification),
+        ] {
+            // A scale-and-misalignment matrix is near the identity; far from it is a mistake.
+            let off = (r - Mat3::IDENTITY)
+                .to_cols_array()
+                .iter()
+                .fold(0.0, |a: Real, v| a.max(v.abs()));
+            if off > 0.5 {
+                return Err(format!(
+                    "{key} differs from the identity by {off:.3} in an entry; expected a scale \
+                     and misalignment matrix near the identity"
+                ));
+            }
+        }
+        Ok(c)
+    }
+}
+
+/// Highest IMU rate a rig may give (Hz); devices sample at 100 Hz – a few kHz.
+pub const MAX_IMU_RATE_HZ: Real = 100_000.0;
 
 /// One camera, as written (the model and pose are parsed separately so errors name them).
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -124,11 +200,87 @@ pub(super) fn rig_from_value(path: &Path, value: serde_json::Value) -> Result<Ri
         }
         cameras.push(cam);
     }
+    let mut imus: Vec<RigImu> = Vec::with_capacity(raw.imus.len());
+    for (i, value) in raw.imus.into_iter().enumerate() {
+        let name = value
+            .get("name")
+            .and_then(|n| n.as_str())
+            .map(|n| format!("imus[{i}] ({n})"))
+            .unwrap_or_else(|| format!("imus[{i}]"));
+        let imu = imu_from_value(path, &name, value)?;
+        if cameras.iter().any(|c| c.name == imu.name) || imus.iter().any(|o| o.name == imu.name) {
+            return Err(RigError::field(
+                path,
+                format!("{name}.name"),
+                "is already used by another camera or IMU; sensor names must be unique",
+            ));
+        }
+        imus.push(imu);
+    }
+    if let Some(device) = &raw.device_frame {
+        let known =
+            cameras.iter().any(|c| &c.name == device) || imus.iter().any(|i| &i.name == device);
+        if !known {
+            let names: Vec<&str> = cameras
+                .iter()
+                .map(|c| c.name.as_str())
+                .chain(imus.iter().map(|i| i.name.as_str()))
+                .collect();
+            return Err(RigError::field(
+                path,
+                "device_frame",
+                format!(
+                    "`{device}` names no camera or IMU of the rig; expected one of {}",
+                    names.join(", ")
+                ),
+            ));
+        }
+    }
     Ok(Rig {
         name: raw.name,
         notes: raw.notes,
         source: path.into(),
         cameras,
+        imus,
+        device_frame: raw.device_frame,
+    })
+}
+
+fn imu_from_value(path: &Path, where_: &str, value: serde_json::Value) -> Result<RigImu, RigError> {
+    let raw: RawImu =
+        serde_json::from_value(value).map_err(|e| RigError::field(path, where_, e.to_string()))?;
+    if raw.name.trim().is_empty() {
+        return Err(RigError::field(
+            path,
+            format!("{where_}.name"),
+            "expected a non-empty IMU name",
+        ));
+    }
+    if !(raw.rate_hz.is_finite() && raw.rate_hz > 0.0 && raw.rate_hz <= MAX_IMU_RATE_HZ) {
+        return Err(RigError::field(
+            path,
+            format!("{where_}.rate_hz"),
+            format!(
+                "{} is not a sample rate, expected Hz in (0, {MAX_IMU_RATE_HZ}]",
+                raw.rate_hz
+            ),
+        ));
+    }
+    let pose_at = format!("{where_}.cpf_from_imu");
+    let raw_pose: RawPose = serde_json::from_value(raw.cpf_from_imu)
+        .map_err(|e| RigError::field(path, &pose_at, e.to_string()))?;
+    let cpf_from_imu = build_pose(&raw_pose).map_err(|m| RigError::field(path, &pose_at, m))?;
+    let calibration = match &raw.calibration {
+        None => ImuCalibration::IDEAL,
+        Some(c) => c
+            .build()
+            .map_err(|m| RigError::field(path, format!("{where_}.calibration"), m))?,
+    };
+    Ok(RigImu {
+        name: raw.name,
+        rate_hz: raw.rate_hz,
+        cpf_from_imu,
+        calibration,
     })
 }
 
@@ -227,8 +379,8 @@ fn build_pose(raw: &RawPose) -> Result<Affine3, String> {
     }
     if t.length() > MAX_CAMERA_OFFSET_M {
         return Err(format!(
-            "translation_m {:?} puts the camera {:.3} m from the eyes (CPF); a head-mounted \
-             camera sits within {MAX_CAMERA_OFFSET_M} m of them: is it in millimetres? \
+            "translation_m {:?} puts the sensor {:.3} m from the eyes (CPF); a head-mounted \
+             sensor sits within {MAX_CAMERA_OFFSET_M} m of them: is it in millimetres? \
              (expected metres)",
             raw.translation_m,
             t.length()
@@ -266,6 +418,19 @@ struct WrittenRig<'a> {
     #[serde(skip_serializing_if = "str::is_empty")]
     notes: &'a str,
     cameras: Vec<WrittenCamera<'a>>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    imus: Vec<WrittenImu<'a>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    device_frame: Option<&'a str>,
+}
+
+#[derive(Serialize)]
+struct WrittenImu<'a> {
+    name: &'a str,
+    rate_hz: Real,
+    cpf_from_imu: RawPose,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    calibration: Option<RawImuCalibration>,
 }
 
 #[derive(Serialize)]
@@ -315,10 +480,7 @@ pub(super) fn rig_to_json(rig: &Rig) -> String {
                 name: &c.name,
                 resolution_px: [res.width_px as i64, res.height_px as i64],
                 model,
-                cpf_from_cam: RawPose {
-                    translation_m: c.cpf_from_cam.translation.to_array(),
-                    rotation: c.cpf_from_cam.matrix3.transpose().to_cols_array_2d(),
-                },
+                cpf_from_cam: raw_pose(&c.cpf_from_cam),
                 monochrome: c.monochrome,
             }
         })
@@ -328,11 +490,30 @@ pub(super) fn rig_to_json(rig: &Rig) -> String {
         name: &rig.name,
         notes: &rig.notes,
         cameras,
+        imus: rig
+            .imus
+            .iter()
+            .map(|i| WrittenImu {
+                name: &i.name,
+                rate_hz: i.rate_hz,
+                cpf_from_imu: raw_pose(&i.cpf_from_imu),
+                calibration: (i.calibration != ImuCalibration::IDEAL)
+                    .then(|| RawImuCalibration::from_calibration(&i.calibration)),
+            })
+            .collect(),
+        device_frame: rig.device_frame.as_deref(),
     })
     .expect("a rig serialises");
     text = compact_number_arrays(&text);
     text.push('\n');
     text
+}
+
+fn raw_pose(pose: &Affine3) -> RawPose {
+    RawPose {
+        translation_m: pose.translation.to_array(),
+        rotation: pose.matrix3.transpose().to_cols_array_2d(),
+    }
 }
 
 /// Puts every array that holds only numbers on one line (`[1.0, 2.0, 3.0]`), so that

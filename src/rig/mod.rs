@@ -16,9 +16,9 @@ pub mod wear;
 use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
-use crate::math::Affine3;
+use crate::math::{Affine3, Mat3, Real, Vec3};
 
-pub use aria::AriaRgbResolution;
+pub use aria::{aria_build_of_device, AriaRgbResolution};
 pub use command::{run_command, RigCommand};
 pub use error::RigError;
 pub use file::FORMAT_VERSION;
@@ -46,6 +46,55 @@ pub struct Rig {
     pub source: PathBuf,
     /// In file order.
     pub cameras: Vec<RigCamera>,
+    /// Inertial sensors, in file order (none for most rigs).
+    pub imus: Vec<RigImu>,
+    /// The sensor (camera or IMU) whose frame is the device frame, the frame a device
+    /// trajectory and a device calibration are expressed in (Aria: `camera-slam-left`);
+    /// `None`: the first camera.
+    pub device_frame: Option<String>,
+}
+
+/// An inertial measurement unit on a rig.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigImu {
+    /// Unique among the rig's cameras and IMUs (e.g. `imu-right`).
+    pub name: String,
+    /// Samples per second.
+    pub rate_hz: Real,
+    /// Maps IMU-frame points into the CPF.
+    pub cpf_from_imu: Affine3,
+    /// The device's own calibration of this IMU (identity for a perfect sensor).
+    pub calibration: ImuCalibration,
+}
+
+/// A device's calibration of an IMU, projectaria-tools' linear model per sensor:
+/// `raw = M · rectified + bias` (so `rectified = M⁻¹ (raw − bias)`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuCalibration {
+    /// `M` of the accelerometer (scale and misalignment).
+    pub accel_rectification: Mat3,
+    /// Accelerometer bias (m/s²).
+    pub accel_bias: Vec3,
+    /// `M` of the gyroscope.
+    pub gyro_rectification: Mat3,
+    /// Gyroscope bias (rad/s).
+    pub gyro_bias: Vec3,
+}
+
+impl ImuCalibration {
+    /// A perfect sensor: identity, no bias.
+    pub const IDEAL: ImuCalibration = ImuCalibration {
+        accel_rectification: Mat3::IDENTITY,
+        accel_bias: Vec3::ZERO,
+        gyro_rectification: Mat3::IDENTITY,
+        gyro_bias: Vec3::ZERO,
+    };
+}
+
+impl Default for ImuCalibration {
+    fn default() -> Self {
+        Self::IDEAL
+    }
 }
 
 impl Rig {
@@ -96,6 +145,29 @@ impl Rig {
                 name: name.into(),
                 available: self.camera_names().join(", "),
             })
+    }
+
+    /// Maps device-frame points into the CPF: the pose of [`Rig::device_frame`]'s sensor.
+    pub fn cpf_from_device(&self) -> Affine3 {
+        let name = self.device_frame_name();
+        self.cameras
+            .iter()
+            .find(|c| c.name == name)
+            .map(|c| c.cpf_from_cam)
+            .or_else(|| {
+                self.imus
+                    .iter()
+                    .find(|i| i.name == name)
+                    .map(|i| i.cpf_from_imu)
+            })
+            .unwrap_or(Affine3::IDENTITY)
+    }
+
+    /// The name of the sensor whose frame is the device frame.
+    pub fn device_frame_name(&self) -> &str {
+        self.device_frame
+            .as_deref()
+            .unwrap_or(self.cameras[0].name.as_str())
     }
 
     /// Camera names in file order.

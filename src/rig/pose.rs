@@ -37,24 +37,7 @@ pub fn checked_rotation(m: Mat3) -> Result<Mat3, NotRotation> {
     Ok(nearest_rotation(m))
 }
 
-/// The orthogonal polar factor of `m` (the rotation nearest in Frobenius norm, the same as
-/// `U·Vᵀ` of its SVD, which Sophus' `makeRotationMatrix` uses), by the Newton iteration
-/// `R ← (R + R⁻ᵀ)/2`. `m` must be close to a rotation (det > 0).
-pub fn nearest_rotation(m: Mat3) -> Mat3 {
-    let mut r = m;
-    for _ in 0..100 {
-        let next = (r + r.inverse().transpose()) * 0.5;
-        let change = (next - r)
-            .to_cols_array()
-            .iter()
-            .fold(0.0, |a: Real, v| a.max(v.abs()));
-        r = next;
-        if change < 1e-16 {
-            break;
-        }
-    }
-    r
-}
+pub use crate::math::rotation::nearest_rotation;
 
 /// Orientation of a camera relative to the CPF as yaw, pitch and roll (radians), measured
 /// from an upright camera looking along the CPF's forward axis (camera x = wearer's right,

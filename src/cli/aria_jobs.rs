@@ -1,0 +1,310 @@
+//! `egogen aria export`: a finished take (an `egogen synth` folder, a motion folder, or an
+//! `egogen-run` dataset) in, each wearer's Aria streams out (`export::aria`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+use crate::export::aria::{write_wearer_streams, AriaSettings, AriaStreams, Wearer};
+use crate::math::Affine3;
+use crate::rig::Rig;
+
+/// What `egogen aria export` was asked.
+#[derive(Debug, Clone, clap::Args)]
+pub struct AriaExportArgs {
+    /// The take: a folder written by `egogen synth`, `egogen-run` without `[render]`, or an
+    /// `egogen-run` dataset (its `sequence/` is read, and each camera's headset offset).
+    pub take: PathBuf,
+    /// The device: an egogen rig or an Aria device calibration JSON (default: the shipped
+    /// Aria gen1 rig, with imu-left and imu-right).
+    #[arg(long)]
+    pub rig: Option<PathBuf>,
+    /// The new folder to write (must not exist): `OUT/<wearer>/…` and `OUT/manifest.json`.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Streams to write (comma-separated): trajectory, calibration, imu.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "trajectory,calibration,imu"
+    )]
+    pub streams: Vec<String>,
+    /// Agents that wear the device (repeat or comma-separate); default: a dataset's wearers,
+    /// else every agent of the take.
+    #[arg(long, value_delimiter = ',')]
+    pub wearer: Vec<String>,
+    /// Rows per second of the device trajectory.
+    #[arg(long, default_value_t = 1000.0)]
+    pub trajectory_rate_hz: f64,
+    /// Ideal IMUs: no noise, no bias, no saturation, an identity calibration.
+    #[arg(long)]
+    pub ideal_imu: bool,
+    /// Seed of the IMU errors.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// One agent's head through a take, as read from its folder.
+struct TakeHead {
+    name: String,
+    frame_rate_hz: f64,
+    world_from_cpf: Vec<Affine3>,
+    cpf_from_headset: Affine3,
+}
+
+/// Runs `egogen aria export`.
+pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
+    let streams =
+        AriaStreams::parse(&args.streams).map_err(|e| anyhow::anyhow!("--streams: {e}"))?;
+    if !streams.any() {
+        bail!(
+            "--streams: no stream asked; expected any of {}",
+            AriaStreams::NAMES.join(", ")
+        );
+    }
+    let rig_path = args
+        .rig
+        .clone()
+        .unwrap_or_else(|| crate::paths::crate_root().join("camera_rigs/aria_gen1.json"));
+    let rig = Rig::load(&rig_path)?;
+    let settings = AriaSettings {
+        streams,
+        trajectory_rate_hz: args.trajectory_rate_hz,
+        imu_errors: !args.ideal_imu,
+        seed: args.seed,
+        ..Default::default()
+    };
+    if let Some(p) = settings.problem(&rig) {
+        bail!("{p}");
+    }
+    if args.out.exists() {
+        bail!(
+            "--out {} already exists; choose a new folder (nothing was written)",
+            args.out.display()
+        );
+    }
+    let staging = PathBuf::from(format!("{}.partial", args.out.display()));
+    if staging.exists() {
+        bail!(
+            "{} is left from an interrupted export; delete it first (nothing was written)",
+            staging.display()
+        );
+    }
+    let heads = read_take_heads(&args.take, &args.wearer)?;
+    std::fs::create_dir_all(&staging).with_context(|| format!("creating {}", staging.display()))?;
+    let started = std::time::Instant::now();
+    for (index, head) in heads.iter().enumerate() {
+        let wearer = Wearer {
+            name: &head.name,
+            index,
+            frame_rate_hz: head.frame_rate_hz,
+            world_from_cpf: &head.world_from_cpf,
+            cpf_from_headset: head.cpf_from_headset,
+        };
+        let written = write_wearer_streams(&staging.join(&head.name), &rig, &settings, &wearer)?;
+        let bytes: u64 = written.files.iter().map(|f| f.1).sum();
+        eprintln!(
+            "egogen aria export: {}: {} trajectory rows, {} IMU samples, {} files, {:.1} MB (spline off the head poses by at most {:.1e} rad)",
+            head.name,
+            written.trajectory_rows,
+            written.imu_samples,
+            written.files.len(),
+            bytes as f64 / 1e6,
+            written.spline_residual_rad
+        );
+        if let Some(note) = written.device_calibration_note {
+            eprintln!("egogen aria export: {}: {note}", head.name);
+        }
+    }
+    crate::manifest::write_manifest(&staging)?;
+    std::fs::rename(&staging, &args.out)
+        .with_context(|| format!("renaming {} to {}", staging.display(), args.out.display()))?;
+    println!(
+        "wrote {} ({} wearers in {:.2} s)",
+        args.out.display(),
+        heads.len(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// The agents' heads of a take folder, the `wanted` ones (all, or a dataset's wearers, when
+/// empty).
+fn read_take_heads(take: &Path, wanted: &[String]) -> Result<Vec<TakeHead>> {
+    if !take.is_dir() {
+        bail!("take {}: not a folder", take.display());
+    }
+    let dataset_wear = read_dataset_wear(take)?;
+    let root = if take.join("sequence").is_dir() {
+        take.join("sequence")
+    } else {
+        take.to_path_buf()
+    };
+    let mut found: Vec<(String, PathBuf)> = Vec::new();
+    if root.join("agents").is_dir() {
+        let mut entries: Vec<PathBuf> = std::fs::read_dir(root.join("agents"))
+            .with_context(|| format!("reading {}", root.join("agents").display()))?
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.join("cpf_trajectory.json").is_file())
+            .collect();
+        entries.sort();
+        for p in entries {
+            let name = p
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            found.push((name, p.join("cpf_trajectory.json")));
+        }
+    } else if root.join("cpf_trajectory.json").is_file() {
+        found.push(("agent_0".into(), root.join("cpf_trajectory.json")));
+    }
+    if found.is_empty() {
+        bail!(
+            "take {}: no head trajectory found; expected agents/<name>/cpf_trajectory.json (egogen synth), cpf_trajectory.json (a motion folder) or sequence/ (an egogen-run dataset)",
+            take.display()
+        );
+    }
+    let names: Vec<String> = if !wanted.is_empty() {
+        wanted.to_vec()
+    } else if !dataset_wear.is_empty() {
+        dataset_wear.iter().map(|w| w.0.clone()).collect()
+    } else {
+        found.iter().map(|f| f.0.clone()).collect()
+    };
+    names
+        .iter()
+        .map(|name| {
+            let (_, path) = found.iter().find(|f| &f.0 == name).with_context(|| {
+                format!(
+                    "--wearer {name}: take {} has no agent `{name}`; it has {}",
+                    take.display(),
+                    found
+                        .iter()
+                        .map(|f| f.0.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })?;
+            let (frame_rate_hz, world_from_cpf) = read_cpf_trajectory(path)?;
+            let cpf_from_headset = dataset_wear
+                .iter()
+                .find(|w| &w.0 == name)
+                .map_or(Affine3::IDENTITY, |w| w.1);
+            Ok(TakeHead {
+                name: name.clone(),
+                frame_rate_hz,
+                world_from_cpf,
+                cpf_from_headset,
+            })
+        })
+        .collect()
+}
+
+/// A dataset's wearers with their headset offsets (`cameras/*/annotations.json`), in the
+/// order first seen; empty for a take that is not a dataset.
+fn read_dataset_wear(take: &Path) -> Result<Vec<(String, Affine3)>> {
+    let cameras = take.join("cameras");
+    let mut wear: Vec<(String, Affine3)> = Vec::new();
+    let Ok(dir) = std::fs::read_dir(&cameras) else {
+        return Ok(wear);
+    };
+    let mut files: Vec<PathBuf> = dir
+        .filter_map(|e| e.ok().map(|e| e.path().join("annotations.json")))
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    for path in files {
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("reading {}", path.display()))?;
+        let v: serde_json::Value =
+            serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+        let Some(name) = v["wearer"].as_str() else {
+            bail!(
+                "{}: key `wearer`: expected the wearer's name",
+                path.display()
+            );
+        };
+        let pose = match v["headset_wear"]["t_cpf_headset"].as_array() {
+            None => Affine3::IDENTITY,
+            Some(rows) => affine_from_rows(rows).with_context(|| {
+                format!("{}: key `headset_wear.t_cpf_headset`: expected a row-major 4×4 rigid transform", path.display())
+            })?,
+        };
+        if !wear.iter().any(|w| w.0 == name) {
+            wear.push((name.to_string(), pose));
+        }
+    }
+    Ok(wear)
+}
+
+fn affine_from_rows(rows: &[serde_json::Value]) -> Option<Affine3> {
+    let m: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .map(|r| r.iter().filter_map(|x| x.as_f64()).collect())
+        })
+        .collect::<Option<Vec<_>>>()?;
+    if m.len() != 4 || m.iter().any(|r| r.len() != 4) {
+        return None;
+    }
+    let mut cols = [[0.0; 4]; 4];
+    for (i, row) in m.iter().enumerate() {
+        for (j, v) in row.iter().enumerate() {
+            cols[j][i] = *v;
+        }
+    }
+    let a = Affine3::from_mat4(glam::DMat4::from_cols_array_2d(&cols));
+    a.is_finite().then_some(a)
+}
+
+/// `cpf_trajectory.json`: its frame rate (from the frames' times) and poses.
+fn read_cpf_trajectory(path: &Path) -> Result<(f64, Vec<Affine3>)> {
+    #[derive(serde::Deserialize)]
+    struct Frame {
+        frame: usize,
+        time_s: f64,
+        world_from_cpf: Vec<serde_json::Value>,
+    }
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let frames: Vec<Frame> = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: expected a list of {{frame, time_s, world_from_cpf}}",
+            path.display()
+        )
+    })?;
+    if frames.is_empty() {
+        bail!("{}: no frames", path.display());
+    }
+    let mut poses = Vec::with_capacity(frames.len());
+    for (i, f) in frames.iter().enumerate() {
+        if f.frame != i {
+            bail!(
+                "{}: entry {i} is frame {}; expected frames 0, 1, 2, … in order",
+                path.display(),
+                f.frame
+            );
+        }
+        poses.push(affine_from_rows(&f.world_from_cpf).with_context(|| {
+            format!("{}: frame {i}: key `world_from_cpf`: expected a row-major 4×4 rigid transform of finite numbers", path.display())
+        })?);
+    }
+    let mut rate = if frames.len() > 1 {
+        1.0 / frames[1].time_s
+    } else {
+        40.0
+    };
+    // Times are written as i / rate: a whole rate comes back within rounding.
+    if (rate - rate.round()).abs() < 1e-9 * rate {
+        rate = rate.round();
+    }
+    if !(rate.is_finite() && rate > 0.0 && rate <= 10_000.0) {
+        bail!(
+            "{}: frame 1 at time_s = {}: expected a frame rate in (0, 10000] Hz",
+            path.display(),
+            frames[1].time_s
+        );
+    }
+    Ok((rate, poses))
+}

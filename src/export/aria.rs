@@ -1,0 +1,480 @@
+//! A wearer's take as a Project Aria recording's machine-perception outputs, in the formats
+//! projectaria-tools reads (docs/ARIA.md): the device trajectory
+//! (`slam/closed_loop_trajectory.csv`, `mps.read_closed_loop_trajectory`), the calibration
+//! (`slam/online_calibration.jsonl`, `mps.read_online_calibration`; `device_calibration.json`,
+//! `calibration.device_calibration_from_json`, for rigs on an Aria device frame) and the IMU
+//! streams (`imu/<label>.csv`). Every stream is sampled from one C² spline through the
+//! wearer's head poses (`math::pose_spline`), so positions, velocities, accelerations and the
+//! IMUs agree with each other; the trajectory passes through every head pose exactly.
+//!
+//! Time: the device clock starts at the take's frame 0 (`tracking_timestamp_us = 0`); frame
+//! `i` is at `i / frame_rate_hz`. There is no wall clock (`utc_timestamp_ns = -1`, as MPS
+//! writes when it has none).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use serde_json::json;
+
+use super::imu::{sample_times_ns, simulate_imu, ImuErrors, ImuSample, GRAVITY_WORLD};
+use crate::atomic_file::write_atomically;
+use crate::camera::Camera;
+use crate::math::pose_spline::PoseSpline;
+use crate::math::{Affine3, Mat3, Real};
+use crate::rig::{aria_build_of_device, ImuCalibration, Rig};
+
+/// Which streams to write; each is off unless asked.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct AriaStreams {
+    pub trajectory: bool,
+    pub calibration: bool,
+    pub imu: bool,
+}
+
+impl AriaStreams {
+    /// Names as configs and the command line spell them.
+    pub const NAMES: [&'static str; 3] = ["trajectory", "calibration", "imu"];
+
+    /// The streams named in `names`, or an error naming the unknown one.
+    pub fn parse<S: AsRef<str>>(names: &[S]) -> Result<Self, String> {
+        let mut s = AriaStreams::default();
+        for n in names {
+            match n.as_ref() {
+                "trajectory" => s.trajectory = true,
+                "calibration" => s.calibration = true,
+                "imu" => s.imu = true,
+                other => {
+                    return Err(format!(
+                        "unknown stream `{other}`, expected any of {}",
+                        Self::NAMES.join(", ")
+                    ))
+                }
+            }
+        }
+        Ok(s)
+    }
+
+    pub fn any(&self) -> bool {
+        self.trajectory || self.calibration || self.imu
+    }
+}
+
+/// How the streams are made.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AriaSettings {
+    pub streams: AriaStreams,
+    /// Rows per second of the device trajectory (MPS: 1 kHz).
+    pub trajectory_rate_hz: Real,
+    /// The IMUs' errors (noise, bias, the device's calibration, saturation); `false`: ideal
+    /// sensors, and an identity calibration written.
+    pub imu_errors: bool,
+    /// Errors per IMU name; IMUs not named get [`ImuErrors::aria_gen1`] of their label.
+    pub imu_error_overrides: BTreeMap<String, ImuErrors>,
+    /// Draws the IMU errors (with the wearer and IMU index).
+    pub seed: u64,
+    /// An `online_calibration.jsonl` line every this many seconds (MPS writes about 1 Hz).
+    pub calibration_every_s: Real,
+}
+
+impl Default for AriaSettings {
+    fn default() -> Self {
+        AriaSettings {
+            streams: AriaStreams::default(),
+            trajectory_rate_hz: 1000.0,
+            imu_errors: true,
+            imu_error_overrides: BTreeMap::new(),
+            seed: 0,
+            calibration_every_s: 1.0,
+        }
+    }
+}
+
+/// Highest trajectory rate accepted (Hz): one row per microsecond, the format's resolution.
+pub const MAX_TRAJECTORY_RATE_HZ: Real = 1e6;
+
+impl AriaSettings {
+    /// Why these settings cannot be used with `rig`, naming the key, or `None`.
+    pub fn problem(&self, rig: &Rig) -> Option<String> {
+        let r = self.trajectory_rate_hz;
+        if !(r.is_finite() && r > 0.0 && r <= MAX_TRAJECTORY_RATE_HZ) {
+            return Some(format!(
+                "trajectory_rate_hz = {r}: expected Hz in (0, {MAX_TRAJECTORY_RATE_HZ}]"
+            ));
+        }
+        let c = self.calibration_every_s;
+        if !(c.is_finite() && c > 0.0) {
+            return Some(format!("calibration_every_s = {c}: expected seconds > 0"));
+        }
+        if self.streams.imu && rig.imus.is_empty() {
+            return Some(format!(
+                "streams: `imu` asked, but rig {} has no IMUs (camera_rigs/aria_gen1.json has \
+                 imu-left and imu-right; a rig file lists them under `imus`)",
+                rig.source.display()
+            ));
+        }
+        for (name, e) in &self.imu_error_overrides {
+            if !rig.imus.iter().any(|i| &i.name == name) {
+                return Some(format!(
+                    "imu.{name}: rig {} has no IMU `{name}`; it has {}",
+                    rig.source.display(),
+                    rig.imus
+                        .iter()
+                        .map(|i| i.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+            if let Some(p) = e.problem() {
+                return Some(format!("imu.{name}.{p}"));
+            }
+        }
+        if self.streams.calibration {
+            if let Some(cam) = rig
+                .cameras
+                .iter()
+                .find(|c| matches!(c.model, Camera::Pinhole(_)))
+            {
+                return Some(format!(
+                    "streams: `calibration` asked, but camera `{}` of rig {} is a pinhole, which \
+                     projectaria-tools' calibration JSON cannot express (it reads \
+                     FisheyeRadTanThinPrism, Fisheye62 and KannalaBrandtK3 cameras)",
+                    cam.name,
+                    rig.source.display()
+                ));
+            }
+        }
+        None
+    }
+
+    /// The error model of `rig`'s IMU `name` (label) in this run.
+    pub fn imu_errors_of(&self, name: &str) -> ImuErrors {
+        self.imu_error_overrides
+            .get(name)
+            .copied()
+            .unwrap_or_else(|| ImuErrors::aria_gen1(name))
+    }
+}
+
+/// One wearer's head through the take.
+#[derive(Debug, Clone, Copy)]
+pub struct Wearer<'a> {
+    pub name: &'a str,
+    /// Its index among the take's wearers (it seeds the IMU errors).
+    pub index: usize,
+    pub frame_rate_hz: Real,
+    /// `world_from_cpf` per frame (world z up, metres).
+    pub world_from_cpf: &'a [Affine3],
+    /// How the headset sits on this head (identity: as the rig says).
+    pub cpf_from_headset: Affine3,
+}
+
+/// What was written for a wearer.
+#[derive(Debug, Clone, Default)]
+pub struct AriaWritten {
+    /// Paths relative to the wearer's folder, with their sizes.
+    pub files: Vec<(String, u64)>,
+    pub trajectory_rows: usize,
+    pub imu_samples: usize,
+    /// Largest angle between a head pose and the spline's at its time (rad).
+    pub spline_residual_rad: Real,
+    /// Why `device_calibration.json` was not written, when `calibration` was asked.
+    pub device_calibration_note: Option<String>,
+}
+
+/// The headset's trajectory through the wearer's head poses.
+pub fn headset_spline(wearer: &Wearer) -> Result<PoseSpline> {
+    let poses: Vec<Affine3> = wearer
+        .world_from_cpf
+        .iter()
+        .map(|p| *p * wearer.cpf_from_headset)
+        .collect();
+    PoseSpline::interpolate(wearer.frame_rate_hz, &poses)
+        .with_context(|| format!("splining the head poses of {}", wearer.name))
+}
+
+/// Writes the asked streams of `wearer` into `dir` (created; each file written atomically).
+pub fn write_wearer_streams(
+    dir: &Path,
+    rig: &Rig,
+    settings: &AriaSettings,
+    wearer: &Wearer,
+) -> Result<AriaWritten> {
+    if let Some(p) = settings.problem(rig) {
+        bail!("aria streams: {p}");
+    }
+    let spline = headset_spline(wearer)?;
+    let cpf_from_device = rig.cpf_from_device();
+    let mut out = AriaWritten {
+        spline_residual_rad: spline.rotation_residual_rad(),
+        ..Default::default()
+    };
+    let mut put = |rel: &str, bytes: &[u8]| -> Result<()> {
+        let path = dir.join(rel);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)
+                .with_context(|| format!("creating {}", parent.display()))?;
+        }
+        write_atomically(&path, bytes).with_context(|| format!("writing {}", path.display()))?;
+        out.files.push((rel.to_string(), bytes.len() as u64));
+        Ok(())
+    };
+    let mut rows = 0;
+    if settings.streams.trajectory {
+        let (text, n) = closed_loop_trajectory_csv(
+            &spline,
+            cpf_from_device,
+            settings.trajectory_rate_hz,
+            wearer.name,
+        );
+        rows = n;
+        put("slam/closed_loop_trajectory.csv", text.as_bytes())?;
+    }
+    let mut note = None;
+    if settings.streams.calibration {
+        let line = calibration_json(rig, settings.imu_errors);
+        let mut text = String::new();
+        for us in calibration_times_us(spline.duration_s(), settings.calibration_every_s) {
+            let mut l = line.clone();
+            l["tracking_timestamp_us"] = json!(us);
+            l["utc_timestamp_ns"] = json!(-1);
+            text.push_str(&serde_json::to_string(&l)?);
+            text.push('\n');
+        }
+        put("slam/online_calibration.jsonl", text.as_bytes())?;
+        match aria_build_of_device(cpf_from_device) {
+            Some(build) if rig.device_frame_name() == "camera-slam-left" => {
+                let mut device = line;
+                device["DeviceClassInfo"] = json!({"DeviceClass": "Aria", "BuildVersion": build});
+                device["OriginSpecification"] =
+                    json!({"Type": "Custom", "ChildLabel": "camera-slam-left"});
+                put(
+                    "device_calibration.json",
+                    serde_json::to_string_pretty(&device)?.as_bytes(),
+                )?;
+            }
+            _ => {
+                note = Some(format!(
+                    "device_calibration.json not written: projectaria-tools places the CPF by an \
+                     Aria build's CAD pose of camera-slam-left, and rig {}'s device frame `{}` \
+                     is not at one",
+                    rig.source.display(),
+                    rig.device_frame_name()
+                ));
+            }
+        }
+    }
+    let mut samples = 0;
+    if settings.streams.imu {
+        for (k, imu) in rig.imus.iter().enumerate() {
+            let head_from_imu = imu.cpf_from_imu;
+            let errors = settings.imu_errors_of(&imu.name);
+            let seed = imu_seed(settings.seed, wearer.index, k);
+            let stream = simulate_imu(
+                &spline,
+                head_from_imu,
+                imu.rate_hz,
+                settings
+                    .imu_errors
+                    .then_some((&errors, &imu.calibration, seed)),
+            );
+            samples += stream.len();
+            put(
+                &format!("imu/{}.csv", imu.name),
+                imu_csv(&stream).as_bytes(),
+            )?;
+        }
+    }
+    out.trajectory_rows = rows;
+    out.imu_samples = samples;
+    out.device_calibration_note = note;
+    Ok(out)
+}
+
+/// The seed of one IMU's errors: the run's seed, the wearer, the IMU.
+fn imu_seed(seed: u64, wearer: usize, imu: usize) -> u64 {
+    seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+        .wrapping_add((wearer as u64) << 16)
+        .wrapping_add(imu as u64)
+}
+
+/// The header of the MPS closed-loop trajectory (projectaria-tools' `TrajectoryFormat.h`).
+pub const CLOSED_LOOP_HEADER: &str = "graph_uid,tracking_timestamp_us,utc_timestamp_ns,\
+tx_world_device,ty_world_device,tz_world_device,qx_world_device,qy_world_device,qz_world_device,\
+qw_world_device,device_linear_velocity_x_device,device_linear_velocity_y_device,\
+device_linear_velocity_z_device,angular_velocity_x_device,angular_velocity_y_device,\
+angular_velocity_z_device,gravity_x_world,gravity_y_world,gravity_z_world,quality_score";
+
+/// The device trajectory as MPS writes it, one row per whole microsecond nearest to
+/// `k / rate_hz`; returns the text and the number of rows.
+pub fn closed_loop_trajectory_csv(
+    spline: &PoseSpline,
+    head_from_device: Affine3,
+    rate_hz: Real,
+    graph: &str,
+) -> (String, usize) {
+    let times_ns = sample_times_ns(rate_hz, spline.duration_s());
+    let graph_uid: String = graph
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let mut text = String::with_capacity(times_ns.len() * 320 + 400);
+    text.push_str(CLOSED_LOOP_HEADER);
+    text.push('\n');
+    let mut last_q: Option<glam::DQuat> = None;
+    let mut last_us = i64::MIN;
+    let mut rows = 0;
+    for ns in times_ns {
+        let us = (ns + 500) / 1000;
+        if us == last_us {
+            continue;
+        }
+        last_us = us;
+        let s = spline.sample(us as Real * 1e-6).attached(head_from_device);
+        let r = s.world_from_body.matrix3;
+        let t = s.world_from_body.translation;
+        let mut q = glam::DQuat::from_mat3(&r).normalize();
+        // One hemisphere along the stream, so the quaternions read as a smooth curve.
+        if last_q.is_some_and(|p| p.dot(q) < 0.0) {
+            q = -q;
+        }
+        last_q = Some(q);
+        let v = r.transpose() * s.velocity_world;
+        let w = s.angular_velocity_body;
+        let g = GRAVITY_WORLD;
+        let _ = writeln!(
+            text,
+            "{graph_uid},{us},-1,{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},1",
+            t.x, t.y, t.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z, g.x, g.y, g.z
+        );
+        rows += 1;
+    }
+    (text, rows)
+}
+
+/// Times of the calibration lines (µs): from 0 every `every_s`, and the take's end.
+fn calibration_times_us(duration_s: Real, every_s: Real) -> Vec<i64> {
+    let mut times: Vec<i64> = sample_times_ns(1.0 / every_s, duration_s)
+        .into_iter()
+        .map(|ns| (ns + 500) / 1000)
+        .collect();
+    let end = (duration_s * 1e6).round() as i64;
+    if times.last() != Some(&end) {
+        times.push(end);
+    }
+    times
+}
+
+/// `{"tracking_timestamp_us": 0, "utc_timestamp_ns": -1, "CameraCalibrations": […],
+/// "ImuCalibrations": […]}` of the rig, every pose relative to the device frame. With
+/// `imu_errors` off the IMUs' calibrations are the identity (the streams are ideal).
+pub fn calibration_json(rig: &Rig, imu_errors: bool) -> serde_json::Value {
+    let device_from_cpf = rig.cpf_from_device().inverse();
+    let cameras: Vec<serde_json::Value> = rig
+        .cameras
+        .iter()
+        .filter_map(|c| {
+            use crate::camera::CameraModel;
+            let (name, params): (&str, Vec<Real>) = match &c.model {
+                Camera::Fisheye624(m) => ("FisheyeRadTanThinPrism", m.params().to_vec()),
+                Camera::KannalaBrandt4(m) => {
+                    let (f, k) = m.params();
+                    ("KannalaBrandtK3", f.iter().chain(&k).copied().collect())
+                }
+                Camera::Pinhole(_) => return None,
+            };
+            let res = c.model.resolution();
+            let mut config = json!({
+                "ImageWidth": res.width_px,
+                "ImageHeight": res.height_px,
+                "MaxSolidAngle": c.model.max_theta_rad(),
+            });
+            if let Camera::Fisheye624(m) = &c.model {
+                if let Some(r) = m.valid_radius_px() {
+                    config["ValidRadius"] = json!(r);
+                }
+            }
+            Some(json!({
+                "Calibrated": true,
+                "Label": c.name,
+                "SerialNumber": "",
+                "Projection": {"Name": name, "Params": params, "Description": ""},
+                "T_Device_Camera": se3_json(device_from_cpf * c.cpf_from_cam),
+                "ConfigData": config,
+            }))
+        })
+        .collect();
+    let imus: Vec<serde_json::Value> = rig
+        .imus
+        .iter()
+        .map(|i| {
+            let c = if imu_errors {
+                i.calibration
+            } else {
+                ImuCalibration::IDEAL
+            };
+            let rows = |m: Mat3| m.transpose().to_cols_array_2d();
+            json!({
+                "Calibrated": true,
+                "Label": i.name,
+                "SerialNumber": "",
+                "Accelerometer": {
+                    "TimeOffsetSec_Device_Accel": 0.0,
+                    "Bias": {"Name": "Constant", "Offset": c.accel_bias.to_array()},
+                    "Model": {"Name": "UpperTriagonalLinear", "RectificationMatrix": rows(c.accel_rectification)},
+                },
+                "Gyroscope": {
+                    "TimeOffsetSec_Device_Gyro": 0.0,
+                    "Bias": {"Name": "Constant", "Offset": c.gyro_bias.to_array()},
+                    "Model": {
+                        "Name": "LinearGSensitivity",
+                        "RectificationMatrix": rows(c.gyro_rectification),
+                        "GSensitivityMatrix": [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
+                    },
+                },
+                "T_Device_Imu": se3_json(device_from_cpf * i.cpf_from_imu),
+            })
+        })
+        .collect();
+    json!({
+        "tracking_timestamp_us": 0,
+        "utc_timestamp_ns": -1,
+        "CameraCalibrations": cameras,
+        "ImuCalibrations": imus,
+    })
+}
+
+/// A projectaria-tools SE(3): `Translation` (m) and `UnitQuaternion` `[w, [x, y, z]]`.
+fn se3_json(pose: Affine3) -> serde_json::Value {
+    let q = glam::DQuat::from_mat3(&pose.matrix3).normalize();
+    json!({
+        "Translation": pose.translation.to_array(),
+        "UnitQuaternion": [q.w, [q.x, q.y, q.z]],
+    })
+}
+
+/// The IMU CSV header: device time (ns), specific force (m/s²) and angular rate (rad/s) in the
+/// IMU frame, raw as the device reports them.
+pub const IMU_HEADER: &str = "tracking_timestamp_ns,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2,\
+gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s";
+
+fn imu_csv(stream: &[ImuSample]) -> String {
+    let mut text = String::with_capacity(stream.len() * 140 + 100);
+    text.push_str(IMU_HEADER);
+    text.push('\n');
+    for s in stream {
+        let _ = writeln!(
+            text,
+            "{},{},{},{},{},{},{}",
+            s.timestamp_ns, s.accel.x, s.accel.y, s.accel.z, s.gyro.x, s.gyro.y, s.gyro.z
+        );
+    }
+    text
+}
