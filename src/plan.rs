@@ -50,6 +50,8 @@ pub struct RenderPlan {
     pub passes: crate::render::passes::Passes,
     /// Where Cycles renders.
     pub device: crate::render::RenderDevice,
+    /// `[render.aria]`: each wearer's Aria streams; `None` writes none.
+    pub aria: Option<crate::export::aria::AriaSettings>,
 }
 
 /// How shards run, checked.

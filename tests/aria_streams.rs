@@ -309,30 +309,116 @@ fn turn_of_more_than_half_a_turn_between_frames_is_refused() {
     );
 }
 
-#[test]
-fn aria_export_writes_every_stream_of_a_take_and_refuses_bad_requests() {
-    let tmp = tempfile::tempdir().unwrap();
-    let bin = env!("CARGO_BIN_EXE_egogen");
+/// A 3-person take of `seconds` in the shipped apartment, by `egogen synth`.
+fn make_take(dir: &std::path::Path, seconds: f64) -> PathBuf {
     let config = std::fs::read_to_string(root().join("configs/apartment3.toml"))
         .unwrap()
         .replace("\"../", &format!("\"{}/", root().display()))
-        .replace("duration_s = 30.0", "duration_s = 3.0")
+        .replace("duration_s = 30.0", &format!("duration_s = {seconds:?}"))
         .replace(
             &format!("dir = \"{}/out/apartment3\"", root().display()),
-            &format!("dir = \"{}\"", tmp.path().join("take").display()),
+            &format!("dir = \"{}\"", dir.join("take").display()),
         );
-    std::fs::write(tmp.path().join("take.toml"), config).unwrap();
-    let run = |args: &[&str]| Command::new(bin).args(args).output().unwrap();
-    let synth = run(&[
-        "synth",
-        tmp.path().join("take.toml").to_str().unwrap(),
-        "--quiet",
-    ]);
+    std::fs::write(dir.join("take.toml"), config).unwrap();
+    let synth = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["synth", dir.join("take.toml").to_str().unwrap(), "--quiet"])
+        .output()
+        .unwrap();
     assert!(
         synth.status.success(),
         "{}",
         String::from_utf8_lossy(&synth.stderr)
     );
+    dir.join("take")
+}
+
+/// `world_from_cpf` per frame of an agent of a take.
+fn head_poses(take: &std::path::Path, agent: &str) -> Vec<Affine3> {
+    let text = std::fs::read_to_string(take.join("agents").join(agent).join("cpf_trajectory.json"))
+        .unwrap();
+    let frames: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
+    frames
+        .iter()
+        .map(|f| {
+            let m: Vec<Vec<f64>> = serde_json::from_value(f["world_from_cpf"].clone()).unwrap();
+            Affine3 {
+                matrix3: Mat3::from_cols_array_2d(&[
+                    [m[0][0], m[1][0], m[2][0]],
+                    [m[0][1], m[1][1], m[2][1]],
+                    [m[0][2], m[1][2], m[2][2]],
+                ]),
+                translation: Vec3::new(m[0][3], m[1][3], m[2][3]),
+            }
+        })
+        .collect()
+}
+
+/// How well the spline reconstructs a synthesized head between its samples (through every
+/// second frame, against the frames left out), and the trajectory rate's trade: how far a
+/// reader interpolating linearly between rows is from the spline, against rows per second.
+#[test]
+fn spline_accuracy_and_the_trajectory_rate_trade_on_a_take() {
+    let tmp = tempfile::tempdir().unwrap();
+    let take = make_take(tmp.path(), 20.0);
+    let poses = head_poses(&take, "crowd_00");
+    let even: Vec<Affine3> = poses.iter().step_by(2).copied().collect();
+    let half = PoseSpline::interpolate(20.0, &even).unwrap();
+    let (mut dp, mut dr) = (Vec::new(), Vec::new());
+    for (i, p) in poses.iter().enumerate().skip(1).step_by(2) {
+        if i + 1 >= poses.len() {
+            break;
+        }
+        let s = half.sample(i as f64 / 40.0).world_from_body;
+        dp.push((s.translation - p.translation).length());
+        dr.push(matrix_to_axis_angle(s.matrix3.transpose() * p.matrix3).length());
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        (v[v.len() / 2], v[v.len() - 1])
+    };
+    let (p50, pmax) = median(&mut dp);
+    let (r50, rmax) = median(&mut dr);
+    eprintln!("spline through 20 Hz vs the 40 Hz frames between: position median {p50:.2e} m, max {pmax:.2e} m; rotation median {r50:.2e} rad, max {rmax:.2e} rad");
+    assert!(p50 < 5e-3 && r50 < 5e-3);
+
+    let spline = PoseSpline::interpolate(40.0, &poses).unwrap();
+    let mut last = f64::INFINITY;
+    for rate in [100.0, 250.0, 500.0, 1000.0] {
+        let start = std::time::Instant::now();
+        let (csv, rows) = closed_loop_trajectory_csv(&spline, Affine3::IDENTITY, rate, "w");
+        let secs = start.elapsed().as_secs_f64();
+        // Linear interpolation halfway between rows, the worst place.
+        let dt = 1.0 / rate;
+        let mut worst = 0.0f64;
+        for k in 0..rows - 1 {
+            let (a, b) = (
+                spline.sample(k as f64 * dt),
+                spline.sample((k + 1) as f64 * dt),
+            );
+            let mid = spline
+                .sample((k as f64 + 0.5) * dt)
+                .world_from_body
+                .translation;
+            let lin = (a.world_from_body.translation + b.world_from_body.translation) * 0.5;
+            worst = worst.max((mid - lin).length());
+        }
+        eprintln!(
+            "trajectory at {rate} Hz: {rows} rows, {:.0} kB per second of take, written in {:.1} ms; linear interpolation off the spline by at most {worst:.2e} m",
+            csv.len() as f64 / 1e3 / spline.duration_s(),
+            secs * 1e3
+        );
+        assert!(worst < last);
+        last = worst;
+    }
+    assert!(last < 1e-4);
+}
+
+#[test]
+fn aria_export_writes_every_stream_of_a_take_and_refuses_bad_requests() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bin = env!("CARGO_BIN_EXE_egogen");
+    let run = |args: &[&str]| Command::new(bin).args(args).output().unwrap();
+    make_take(tmp.path(), 3.0);
     let take = tmp.path().join("take");
     let out = tmp.path().join("aria");
     let done = run(&[
@@ -408,5 +494,55 @@ fn aria_export_writes_every_stream_of_a_take_and_refuses_bad_requests() {
             "{extra:?}: {err}"
         );
         assert!(!dest.exists() && !tmp.path().join(format!("bad{k}.partial")).exists());
+    }
+}
+
+#[test]
+fn render_aria_config_errors_name_the_key_and_stage_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let base = r#"
+[body]
+betas = []
+[motion]
+source = "scripted_walk"
+duration_s = 1.0
+frame_rate_hz = 40.0
+[output]
+dir = "out"
+[render]
+RIG
+[render.aria]
+"#;
+    let cases = [
+        ("", "streams = [\"gaze\"]", "render.aria.streams", "unknown stream `gaze`"),
+        ("", "streams = [\"imu\"]\ntrajectory_rate_hz = -5.0", "render.aria", "trajectory_rate_hz = -5"),
+        (
+            "rig = \"RIGS/hololens2.json\"\ncameras = [\"pv\"]",
+            "streams = [\"imu\"]",
+            "render.aria",
+            "has no IMUs",
+        ),
+        (
+            "",
+            "streams = [\"imu\"]\n[render.aria.imu.imu-left]\naccelerometer = { noise_density = -1.0, bias_random_walk = 0.0, turn_on_bias_sigma = 0.0, saturation = 10.0 }\ngyroscope = { noise_density = 0.0, bias_random_walk = 0.0, turn_on_bias_sigma = 0.0, saturation = 10.0 }",
+            "render.aria",
+            "imu.imu-left.accelerometer.noise_density = -1",
+        ),
+    ];
+    for (k, (rig, aria, key, message)) in cases.iter().enumerate() {
+        let config = tmp.path().join(format!("c{k}.toml"));
+        let rig = rig.replace("RIGS", &root().join("camera_rigs").display().to_string());
+        std::fs::write(&config, format!("{}{aria}\n", base.replace("RIG", &rig))).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+            .arg(&config)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "case {k} accepted");
+        assert!(
+            err.contains(key) && err.contains(message),
+            "case {k}: {err}"
+        );
+        assert!(!tmp.path().join("out").exists() && !tmp.path().join("out.partial").exists());
     }
 }

@@ -106,7 +106,9 @@ const ALLOWED: &[(&str, &[&str])] = &[
     // Checked run plans: made by cli, carried out by supervisor.
     (
         "plan",
-        &["render", "rig", "camera", "math", "scene", "synth"],
+        &[
+            "render", "rig", "camera", "math", "scene", "synth", "export",
+        ],
     ),
     // Turning a run plan into a dataset.
     (

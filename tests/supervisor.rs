@@ -27,6 +27,8 @@ resolution_scale = 0.1
 every_n_frames = 2
 samples = 2
 frames_per_shard = 2
+[render.aria]
+streams = ["trajectory", "calibration", "imu"]
 [supervisor]
 workers = 1
 retries = 40
@@ -188,6 +190,19 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         .filter(|f| f.path.ends_with(".exr"))
         .count();
     assert_eq!(frames, 20);
+    // The wearer's Aria streams are part of the dataset (and compared below, file for file).
+    for f in [
+        "aria/agent_0/slam/closed_loop_trajectory.csv",
+        "aria/agent_0/slam/online_calibration.jsonl",
+        "aria/agent_0/device_calibration.json",
+        "aria/agent_0/imu/imu-left.csv",
+        "aria/agent_0/imu/imu-right.csv",
+    ] {
+        assert!(
+            reference.files.iter().any(|e| e.path == f),
+            "{f} not in the manifest"
+        );
+    }
 
     // Faulty: workers killed ≥ 10 times; the supervisor killed once and resumed.
     let (dir, config) = setup();

@@ -164,6 +164,27 @@ pub struct RawRender {
     /// `[render.skin]`: how each agent's skin tone is drawn (default: any of the ten Monk
     /// tones, seed 0).
     pub skin: Option<RawSkin>,
+    /// `[render.aria]`: each wearer's Project Aria streams (docs/ARIA.md); none by default.
+    pub aria: Option<RawAria>,
+}
+
+/// `[render.aria]` (docs/ARIA.md).
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawAria {
+    /// Any of `trajectory`, `calibration`, `imu` (default: none).
+    pub streams: Option<Vec<String>>,
+    /// Rows per second of the device trajectory (default 1000).
+    pub trajectory_rate_hz: Option<f64>,
+    /// The IMUs' errors on (default) or ideal sensors.
+    pub imu_errors: Option<bool>,
+    /// Draws the IMU errors (default 0).
+    pub seed: Option<u64>,
+    /// Seconds between online calibration lines (default 1).
+    pub calibration_every_s: Option<f64>,
+    /// Error models per IMU name, replacing the Aria gen1 defaults of that IMU.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub imu: std::collections::BTreeMap<String, crate::export::imu::ImuErrors>,
 }
 
 /// `[render.skin]` (docs/RENDERING.md).

@@ -403,6 +403,12 @@ fn resolve_render(
         depth_noise.iter().any(Option::is_some),
         config_path,
     )?;
+    let aria = r
+        .aria
+        .as_ref()
+        .map(|a| aria_settings(a, &rig, &bad))
+        .transpose()?
+        .flatten();
     Ok(RenderPlan {
         rig,
         cameras,
@@ -421,7 +427,35 @@ fn resolve_render(
         skin,
         passes,
         device: r.device.unwrap_or_default(),
+        aria,
     })
+}
+
+/// `[render.aria]`: the streams asked (none: `None`), checked against the rig.
+fn aria_settings(
+    raw: &super::config::RawAria,
+    rig: &Rig,
+    bad: Bad,
+) -> Result<Option<crate::export::aria::AriaSettings>, ConfigError> {
+    use crate::export::aria::{AriaSettings, AriaStreams};
+    let streams = AriaStreams::parse(raw.streams.as_deref().unwrap_or_default())
+        .map_err(|m| bad("render.aria.streams", m))?;
+    if !streams.any() {
+        return Ok(None);
+    }
+    let d = AriaSettings::default();
+    let settings = AriaSettings {
+        streams,
+        trajectory_rate_hz: raw.trajectory_rate_hz.unwrap_or(d.trajectory_rate_hz),
+        imu_errors: raw.imu_errors.unwrap_or(d.imu_errors),
+        imu_error_overrides: raw.imu.clone(),
+        seed: raw.seed.unwrap_or(d.seed),
+        calibration_every_s: raw.calibration_every_s.unwrap_or(d.calibration_every_s),
+    };
+    match settings.problem(rig) {
+        Some(p) => Err(bad("render.aria", p)),
+        None => Ok(Some(settings)),
+    }
 }
 
 /// The rig of `[render] rig` and the cameras `[render] cameras` names from it, at

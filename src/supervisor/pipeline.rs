@@ -17,6 +17,7 @@ use super::pool::ShardPool;
 use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
+use crate::export::aria::{write_wearer_streams, Wearer};
 use crate::motion::MotionSequence;
 use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
@@ -158,6 +159,7 @@ pub fn run_pipeline(
     if !sequence.exists() {
         write_sequence(&sequence, &motion, &agents, model, plan)?;
     }
+    write_aria(&staging, render, &agents, &wearers)?;
     let (bodies, scratch) = write_body_inputs(&staging.join("work"), &agents, model, render)?;
     let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
         .step_by(render.every_n_frames)
@@ -322,6 +324,65 @@ fn write_sequence(
             world, take, about, ..
         } => write_crowd_dir(sequence, world, model, take, None, about.clone()).map(drop),
     }
+}
+
+/// Each wearer's Aria streams (`[render.aria]`) into `aria/<wearer>/`, built in
+/// `aria.partial/` and renamed; kept as they are when a resumed run finds them.
+fn write_aria(
+    staging: &Path,
+    render: &RenderPlan,
+    agents: &[RenderedAgent],
+    wearers: &[usize],
+) -> Result<()> {
+    let Some(settings) = &render.aria else {
+        return Ok(());
+    };
+    let dir = staging.join("aria");
+    if dir.is_dir() {
+        return Ok(());
+    }
+    let partial = staging.join("aria.partial");
+    if partial.exists() {
+        std::fs::remove_dir_all(&partial).with_context(|| {
+            format!("removing {}, left by an interrupted run", partial.display())
+        })?;
+    }
+    for (index, &w) in wearers.iter().enumerate() {
+        let agent = &agents[w];
+        let poses: Vec<crate::math::Affine3> = agent
+            .track
+            .frames
+            .iter()
+            .map(|f| f.world_from_cpf)
+            .collect();
+        let cpf_from_headset = render
+            .headset_wear
+            .map_or(crate::math::Affine3::IDENTITY, |h| {
+                h.draw(w).cpf_from_headset()
+            });
+        let wearer = Wearer {
+            name: &agent.name,
+            index,
+            frame_rate_hz: agent.motion.frame_rate_hz,
+            world_from_cpf: &poses,
+            cpf_from_headset,
+        };
+        let written =
+            write_wearer_streams(&partial.join(&agent.name), &render.rig, settings, &wearer)?;
+        eprintln!(
+            "egogen-run: Aria streams of {}: {} files ({} trajectory rows, {} IMU samples)",
+            agent.name,
+            written.files.len(),
+            written.trajectory_rows,
+            written.imu_samples
+        );
+        if let Some(note) = written.device_calibration_note {
+            eprintln!("egogen-run: {note}");
+        }
+    }
+    std::fs::rename(&partial, &dir)
+        .with_context(|| format!("renaming {} to {}", partial.display(), dir.display()))?;
+    Ok(())
 }
 
 /// Writes what Blender reads of each body into `work` (a PC2 cache, faces, rest vertices),
