@@ -465,7 +465,10 @@ fn aria_export_writes_every_stream_of_a_take_and_refuses_bad_requests() {
     assert!(!again.status.success());
     assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
     let cases: [(&[&str], &str); 4] = [
-        (&["--streams", "trajectory,gaze"], "unknown stream `gaze`"),
+        (
+            &["--streams", "trajectory,odometry"],
+            "unknown stream `odometry`",
+        ),
         (&["--wearer", "nobody"], "has no agent `nobody`"),
         (&["--trajectory-rate-hz", "0"], "trajectory_rate_hz = 0"),
         (
@@ -514,7 +517,7 @@ RIG
 [render.aria]
 "#;
     let cases = [
-        ("", "streams = [\"gaze\"]", "render.aria.streams", "unknown stream `gaze`"),
+        ("", "streams = [\"odometry\"]", "render.aria.streams", "unknown stream `odometry`"),
         ("", "streams = [\"imu\"]\ntrajectory_rate_hz = -5.0", "render.aria", "trajectory_rate_hz = -5"),
         (
             "rig = \"RIGS/hololens2.json\"\ncameras = [\"pv\"]",
@@ -545,4 +548,113 @@ RIG
         );
         assert!(!tmp.path().join("out").exists() && !tmp.path().join("out.partial").exists());
     }
+}
+
+mod gaze {
+    use super::*;
+    use egogen::export::gaze::{fixations, gaze_samples, GazeTarget, GazeWorld};
+
+    fn world<'a>(head: &'a PoseSpline, others: Vec<&'a [Affine3]>) -> GazeWorld<'a> {
+        GazeWorld {
+            head,
+            others,
+            frame_rate_hz: 40.0,
+            goals: &[],
+            rays: None,
+        }
+    }
+
+    #[test]
+    fn fixations_and_saccades_follow_the_modelled_statistics() {
+        let head = PoseSpline::interpolate(40.0, &walking_head(600.0, Vec3::ZERO, None)).unwrap();
+        let w = world(&head, Vec::new());
+        let fix = fixations(&w, 11);
+        let mut durations: Vec<f64> = fix.iter().map(|f| f.end_s - f.start_s).collect();
+        durations.sort_by(f64::total_cmp);
+        let median = durations[durations.len() / 2];
+        let mean = durations.iter().sum::<f64>() / durations.len() as f64;
+        eprintln!(
+            "{} fixations in 10 min: median {median:.3} s, mean {mean:.3} s",
+            fix.len()
+        );
+        assert!((median / 0.28 - 1.0).abs() < 0.05 && (mean / 0.31 - 1.0).abs() < 0.05);
+        for f in fix.iter().skip(1) {
+            let (start, amplitude) = f.saccade.unwrap();
+            let want = 0.021 + 0.0022 * amplitude.to_degrees();
+            assert!((f.start_s - start - want).abs() < 1e-12);
+        }
+        let samples = gaze_samples(&w, &fix, 30.0);
+        assert!(samples
+            .iter()
+            .all(|s| s.eccentricity_rad <= 30f64.to_radians() + 1e-12));
+        assert!(samples
+            .iter()
+            .all(|s| s.depth_m.is_finite() && s.depth_m > 0.0));
+        // Seeded: the same seed, the same gaze; another, another.
+        assert_eq!(fixations(&w, 11), fix);
+        assert_ne!(fixations(&w, 12), fix);
+    }
+
+    #[test]
+    fn a_person_ahead_draws_half_the_fixations_and_is_followed() {
+        let still = walking_head(0.0, Vec3::ZERO, None)[0];
+        let me = PoseSpline::interpolate(40.0, &vec![still; 40 * 60 + 1]).unwrap();
+        // Someone 2 m straight ahead, walking across at 0.5 m/s.
+        let ahead = still.transform_point3(Vec3::new(0.0, 0.0, 2.0));
+        let other: Vec<Affine3> = (0..=40 * 60)
+            .map(|i| {
+                Affine3::from_translation(
+                    ahead + Vec3::new(0.0, 0.5, 0.0) * ((i as f64 / 40.0) % 4.0 - 2.0),
+                )
+            })
+            .collect();
+        let w = world(&me, vec![&other]);
+        let fix = fixations(&w, 3);
+        let at_person = fix
+            .iter()
+            .filter(|f| matches!(f.target, GazeTarget::Person(0)))
+            .count();
+        let share = at_person as f64 / fix.len() as f64;
+        eprintln!(
+            "{at_person} of {} fixations on the person ({share:.2})",
+            fix.len()
+        );
+        assert!((share - 0.5).abs() < 0.06);
+        // A standing wearer otherwise looks 3 m ahead, within ±15°; depths are the targets'.
+        let samples = gaze_samples(&w, &fix, 30.0);
+        for s in &samples {
+            assert!(s.yaw_rad.abs() < 30f64.to_radians() + 1e-9);
+            assert!(s.depth_m > 1.0 && s.depth_m < 3.5, "{}", s.depth_m);
+        }
+    }
+}
+
+#[test]
+fn gaze_rays_meet_the_apartment() {
+    use egogen::scene::mesh_distance::SceneRays;
+    let mesh =
+        egogen::scene::load_scene(&root().join("assets/scenes/apartment.glb"), None).unwrap();
+    let rays = SceneRays::new(&mesh).unwrap();
+    // From standing eye height above the floor of a room (the crowd's start region), straight
+    // down to the floor, and level towards a wall: both within the apartment.
+    let eyes = Vec3::new(-1.0, 1.0, 1.6);
+    let down = rays.first_hit(eyes, Vec3::NEG_Z, 10.0).unwrap();
+    assert!((down - 1.6).abs() < 0.01, "floor {down} m below the eyes");
+    // Level lines of sight at knee height end at walls or furniture in most directions (the
+    // apartment's walls have openings higher up).
+    let hits: Vec<f64> = (0..16)
+        .filter_map(|k| {
+            let a = k as f64 * std::f64::consts::PI / 8.0;
+            rays.first_hit(
+                Vec3::new(-1.0, 1.0, 0.5),
+                Vec3::new(a.cos(), a.sin(), 0.0),
+                50.0,
+            )
+        })
+        .collect();
+    assert!(
+        hits.len() >= 10 && hits.iter().all(|d| *d > 0.05 && *d < 12.0),
+        "{hits:?}"
+    );
+    assert_eq!(rays.first_hit(eyes, Vec3::Z, 0.5), None);
 }

@@ -28,7 +28,7 @@ every_n_frames = 2
 samples = 2
 frames_per_shard = 2
 [render.aria]
-streams = ["trajectory", "calibration", "imu"]
+streams = ["trajectory", "calibration", "imu", "gaze"]
 [supervisor]
 workers = 1
 retries = 40
@@ -197,6 +197,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         "aria/agent_0/device_calibration.json",
         "aria/agent_0/imu/imu-left.csv",
         "aria/agent_0/imu/imu-right.csv",
+        "aria/agent_0/eye_gaze/general_eye_gaze.csv",
     ] {
         assert!(
             reference.files.iter().any(|e| e.path == f),

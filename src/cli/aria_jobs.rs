@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use crate::export::aria::{write_wearer_streams, AriaSettings, AriaStreams, Wearer};
+use crate::export::gaze::GazeGoal;
 use crate::math::Affine3;
 use crate::rig::Rig;
 
@@ -22,11 +23,11 @@ pub struct AriaExportArgs {
     /// The new folder to write (must not exist): `OUT/<wearer>/…` and `OUT/manifest.json`.
     #[arg(long)]
     pub out: PathBuf,
-    /// Streams to write (comma-separated): trajectory, calibration, imu.
+    /// Streams to write (comma-separated): trajectory, calibration, imu, gaze.
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "trajectory,calibration,imu"
+        default_value = "trajectory,calibration,imu,gaze"
     )]
     pub streams: Vec<String>,
     /// Agents that wear the device (repeat or comma-separate); default: a dataset's wearers,
@@ -39,9 +40,12 @@ pub struct AriaExportArgs {
     /// Ideal IMUs: no noise, no bias, no saturation, an identity calibration.
     #[arg(long)]
     pub ideal_imu: bool,
-    /// Seed of the IMU errors.
+    /// Seed of the IMU errors and the gaze.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Eye gaze samples per second.
+    #[arg(long, default_value_t = 30.0)]
+    pub gaze_rate_hz: f64,
 }
 
 /// One agent's head through a take, as read from its folder.
@@ -50,6 +54,7 @@ struct TakeHead {
     frame_rate_hz: f64,
     world_from_cpf: Vec<Affine3>,
     cpf_from_headset: Affine3,
+    goals: Vec<GazeGoal>,
 }
 
 /// Runs `egogen aria export`.
@@ -72,6 +77,7 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
         trajectory_rate_hz: args.trajectory_rate_hz,
         imu_errors: !args.ideal_imu,
         seed: args.seed,
+        gaze_rate_hz: args.gaze_rate_hz,
         ..Default::default()
     };
     if let Some(p) = settings.problem(&rig) {
@@ -90,7 +96,23 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
             staging.display()
         );
     }
-    let heads = read_take_heads(&args.take, &args.wearer)?;
+    let (heads, everyone) = read_take_heads(&args.take, &args.wearer)?;
+    let rays = if settings.streams.gaze {
+        match take_scene(&args.take)? {
+            Some(path) => {
+                let mesh = crate::scene::load_scene(&path, None)?;
+                crate::scene::mesh_distance::SceneRays::new(&mesh)
+            }
+            None => {
+                eprintln!(
+                    "egogen aria export: the take names no scene; gaze depths are to the fixated targets"
+                );
+                None
+            }
+        }
+    } else {
+        None
+    };
     std::fs::create_dir_all(&staging).with_context(|| format!("creating {}", staging.display()))?;
     let started = std::time::Instant::now();
     for (index, head) in heads.iter().enumerate() {
@@ -100,6 +122,13 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
             frame_rate_hz: head.frame_rate_hz,
             world_from_cpf: &head.world_from_cpf,
             cpf_from_headset: head.cpf_from_headset,
+            others: everyone
+                .iter()
+                .filter(|o| o.name != head.name)
+                .map(|o| o.world_from_cpf.as_slice())
+                .collect(),
+            goals: head.goals.clone(),
+            rays: rays.as_ref(),
         };
         let written = write_wearer_streams(&staging.join(&head.name), &rig, &settings, &wearer)?;
         let bytes: u64 = written.files.iter().map(|f| f.1).sum();
@@ -128,18 +157,61 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
     Ok(())
 }
 
-/// The agents' heads of a take folder, the `wanted` ones (all, or a dataset's wearers, when
-/// empty).
-fn read_take_heads(take: &Path, wanted: &[String]) -> Result<Vec<TakeHead>> {
+/// The take's folder of motion: a dataset's `sequence/`, else the take itself.
+fn motion_root(take: &Path) -> PathBuf {
+    if take.join("sequence").is_dir() {
+        take.join("sequence")
+    } else {
+        take.to_path_buf()
+    }
+}
+
+/// The scene a take was made in (`summary.json`'s `about.scene`), if it names one.
+fn take_scene(take: &Path) -> Result<Option<PathBuf>> {
+    let path = motion_root(take).join("summary.json");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(None);
+    };
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+    Ok(v["about"]["scene"].as_str().map(PathBuf::from))
+}
+
+/// Each agent's goals from `summary.json` (`agents[].goals[]`: `goal` [x, y], `end_frame`).
+fn take_goals(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>)>> {
+    let path = motion_root(take).join("summary.json");
+    let Ok(text) = std::fs::read_to_string(&path) else {
+        return Ok(Vec::new());
+    };
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
+    let mut out = Vec::new();
+    for a in v["agents"].as_array().into_iter().flatten() {
+        let name = a["name"].as_str().unwrap_or_default().to_string();
+        let goals = a["goals"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .filter_map(|g| {
+                Some(GazeGoal {
+                    xy: [g["goal"][0].as_f64()?, g["goal"][1].as_f64()?],
+                    until_frame: g["end_frame"].as_u64()? as usize,
+                })
+            })
+            .collect();
+        out.push((name, goals));
+    }
+    Ok(out)
+}
+
+/// The agents' heads of a take folder: the `wanted` ones (all, or a dataset's wearers, when
+/// empty), and everyone's.
+fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<TakeHead>, Vec<TakeHead>)> {
     if !take.is_dir() {
         bail!("take {}: not a folder", take.display());
     }
     let dataset_wear = read_dataset_wear(take)?;
-    let root = if take.join("sequence").is_dir() {
-        take.join("sequence")
-    } else {
-        take.to_path_buf()
-    };
+    let root = motion_root(take);
     let mut found: Vec<(String, PathBuf)> = Vec::new();
     if root.join("agents").is_dir() {
         let mut entries: Vec<PathBuf> = std::fs::read_dir(root.join("agents"))
@@ -171,20 +243,23 @@ fn read_take_heads(take: &Path, wanted: &[String]) -> Result<Vec<TakeHead>> {
     } else {
         found.iter().map(|f| f.0.clone()).collect()
     };
-    names
+    for name in &names {
+        if !found.iter().any(|f| &f.0 == name) {
+            bail!(
+                "--wearer {name}: take {} has no agent `{name}`; it has {}",
+                take.display(),
+                found
+                    .iter()
+                    .map(|f| f.0.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
+    }
+    let goals = take_goals(take)?;
+    let everyone = found
         .iter()
-        .map(|name| {
-            let (_, path) = found.iter().find(|f| &f.0 == name).with_context(|| {
-                format!(
-                    "--wearer {name}: take {} has no agent `{name}`; it has {}",
-                    take.display(),
-                    found
-                        .iter()
-                        .map(|f| f.0.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )
-            })?;
+        .map(|(name, path)| {
             let (frame_rate_hz, world_from_cpf) = read_cpf_trajectory(path)?;
             let cpf_from_headset = dataset_wear
                 .iter()
@@ -195,9 +270,26 @@ fn read_take_heads(take: &Path, wanted: &[String]) -> Result<Vec<TakeHead>> {
                 frame_rate_hz,
                 world_from_cpf,
                 cpf_from_headset,
+                goals: goals
+                    .iter()
+                    .find(|g| &g.0 == name)
+                    .map(|g| g.1.clone())
+                    .unwrap_or_default(),
             })
         })
-        .collect()
+        .collect::<Result<Vec<TakeHead>>>()?;
+    let wearers = names
+        .iter()
+        .filter_map(|n| everyone.iter().find(|h| &h.name == n))
+        .map(|h| TakeHead {
+            name: h.name.clone(),
+            frame_rate_hz: h.frame_rate_hz,
+            world_from_cpf: h.world_from_cpf.clone(),
+            cpf_from_headset: h.cpf_from_headset,
+            goals: h.goals.clone(),
+        })
+        .collect();
+    Ok((wearers, everyone))
 }
 
 /// A dataset's wearers with their headset offsets (`cameras/*/annotations.json`), in the

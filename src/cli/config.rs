@@ -172,7 +172,7 @@ pub struct RawRender {
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RawAria {
-    /// Any of `trajectory`, `calibration`, `imu` (default: none).
+    /// Any of `trajectory`, `calibration`, `imu`, `gaze` (default: none).
     pub streams: Option<Vec<String>>,
     /// Rows per second of the device trajectory (default 1000).
     pub trajectory_rate_hz: Option<f64>,
@@ -182,6 +182,8 @@ pub struct RawAria {
     pub seed: Option<u64>,
     /// Seconds between online calibration lines (default 1).
     pub calibration_every_s: Option<f64>,
+    /// Eye gaze samples per second (default 30).
+    pub gaze_rate_hz: Option<f64>,
     /// Error models per IMU name, replacing the Aria gen1 defaults of that IMU.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub imu: std::collections::BTreeMap<String, crate::export::imu::ImuErrors>,

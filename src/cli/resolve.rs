@@ -451,6 +451,7 @@ fn aria_settings(
         imu_error_overrides: raw.imu.clone(),
         seed: raw.seed.unwrap_or(d.seed),
         calibration_every_s: raw.calibration_every_s.unwrap_or(d.calibration_every_s),
+        gaze_rate_hz: raw.gaze_rate_hz.unwrap_or(d.gaze_rate_hz),
     };
     match settings.problem(rig) {
         Some(p) => Err(bad("render.aria", p)),

@@ -3,7 +3,8 @@
 //! (`slam/closed_loop_trajectory.csv`, `mps.read_closed_loop_trajectory`), the calibration
 //! (`slam/online_calibration.jsonl`, `mps.read_online_calibration`; `device_calibration.json`,
 //! `calibration.device_calibration_from_json`, for rigs on an Aria device frame) and the IMU
-//! streams (`imu/<label>.csv`). Every stream is sampled from one C² spline through the
+//! streams (`imu/<label>.csv`), and where the wearer looks (`eye_gaze/general_eye_gaze.csv`,
+//! `mps.read_eyegaze`; a model: `export::gaze`). Every stream is sampled from one C² spline through the
 //! wearer's head poses (`math::pose_spline`), so positions, velocities, accelerations and the
 //! IMUs agree with each other; the trajectory passes through every head pose exactly.
 //!
@@ -18,12 +19,14 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde_json::json;
 
+use super::gaze::{eye_gaze_csv, fixations, gaze_samples, Fixation, GazeGoal, GazeWorld};
 use super::imu::{sample_times_ns, simulate_imu, ImuErrors, ImuSample, GRAVITY_WORLD};
 use crate::atomic_file::write_atomically;
 use crate::camera::Camera;
 use crate::math::pose_spline::PoseSpline;
 use crate::math::{Affine3, Mat3, Real};
 use crate::rig::{aria_build_of_device, ImuCalibration, Rig};
+use crate::scene::mesh_distance::SceneRays;
 
 /// Which streams to write; each is off unless asked.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -31,11 +34,12 @@ pub struct AriaStreams {
     pub trajectory: bool,
     pub calibration: bool,
     pub imu: bool,
+    pub gaze: bool,
 }
 
 impl AriaStreams {
     /// Names as configs and the command line spell them.
-    pub const NAMES: [&'static str; 3] = ["trajectory", "calibration", "imu"];
+    pub const NAMES: [&'static str; 4] = ["trajectory", "calibration", "imu", "gaze"];
 
     /// The streams named in `names`, or an error naming the unknown one.
     pub fn parse<S: AsRef<str>>(names: &[S]) -> Result<Self, String> {
@@ -45,6 +49,7 @@ impl AriaStreams {
                 "trajectory" => s.trajectory = true,
                 "calibration" => s.calibration = true,
                 "imu" => s.imu = true,
+                "gaze" => s.gaze = true,
                 other => {
                     return Err(format!(
                         "unknown stream `{other}`, expected any of {}",
@@ -57,7 +62,7 @@ impl AriaStreams {
     }
 
     pub fn any(&self) -> bool {
-        self.trajectory || self.calibration || self.imu
+        self.trajectory || self.calibration || self.imu || self.gaze
     }
 }
 
@@ -76,6 +81,8 @@ pub struct AriaSettings {
     pub seed: u64,
     /// An `online_calibration.jsonl` line every this many seconds (MPS writes about 1 Hz).
     pub calibration_every_s: Real,
+    /// Eye gaze samples per second (Aria's eye-tracking cameras run at 10–90 Hz).
+    pub gaze_rate_hz: Real,
 }
 
 impl Default for AriaSettings {
@@ -87,6 +94,7 @@ impl Default for AriaSettings {
             imu_error_overrides: BTreeMap::new(),
             seed: 0,
             calibration_every_s: 1.0,
+            gaze_rate_hz: 30.0,
         }
     }
 }
@@ -101,6 +109,12 @@ impl AriaSettings {
         if !(r.is_finite() && r > 0.0 && r <= MAX_TRAJECTORY_RATE_HZ) {
             return Some(format!(
                 "trajectory_rate_hz = {r}: expected Hz in (0, {MAX_TRAJECTORY_RATE_HZ}]"
+            ));
+        }
+        let g = self.gaze_rate_hz;
+        if !(g.is_finite() && g > 0.0 && g <= MAX_TRAJECTORY_RATE_HZ) {
+            return Some(format!(
+                "gaze_rate_hz = {g}: expected Hz in (0, {MAX_TRAJECTORY_RATE_HZ}]"
             ));
         }
         let c = self.calibration_every_s;
@@ -157,8 +171,8 @@ impl AriaSettings {
     }
 }
 
-/// One wearer's head through the take.
-#[derive(Debug, Clone, Copy)]
+/// One wearer's head through the take, and what it may look at.
+#[derive(Clone)]
 pub struct Wearer<'a> {
     pub name: &'a str,
     /// Its index among the take's wearers (it seeds the IMU errors).
@@ -168,6 +182,12 @@ pub struct Wearer<'a> {
     pub world_from_cpf: &'a [Affine3],
     /// How the headset sits on this head (identity: as the rig says).
     pub cpf_from_headset: Affine3,
+    /// The other agents' eyes (`world_from_cpf` per frame), for the gaze.
+    pub others: Vec<&'a [Affine3]>,
+    /// The wearer's goals in order, for the gaze.
+    pub goals: Vec<GazeGoal>,
+    /// The scene, for gaze depths.
+    pub rays: Option<&'a SceneRays>,
 }
 
 /// What was written for a wearer.
@@ -181,6 +201,8 @@ pub struct AriaWritten {
     pub spline_residual_rad: Real,
     /// Why `device_calibration.json` was not written, when `calibration` was asked.
     pub device_calibration_note: Option<String>,
+    /// The gaze's fixations, when `gaze` was asked.
+    pub fixations: Vec<Fixation>,
 }
 
 /// The headset's trajectory through the wearer's head poses.
@@ -286,10 +308,44 @@ pub fn write_wearer_streams(
             )?;
         }
     }
+    if settings.streams.gaze {
+        let world = GazeWorld {
+            head: &spline,
+            others: wearer.others.clone(),
+            frame_rate_hz: wearer.frame_rate_hz,
+            goals: &wearer.goals,
+            rays: wearer.rays,
+        };
+        let fixations = fixations(&world, gaze_seed(settings.seed, wearer.index));
+        let samples = gaze_samples(&world, &fixations, settings.gaze_rate_hz);
+        put(
+            "eye_gaze/general_eye_gaze.csv",
+            eye_gaze_csv(&samples, &session_uid(wearer.name)).as_bytes(),
+        )?;
+        out.fixations = fixations;
+    }
     out.trajectory_rows = rows;
     out.imu_samples = samples;
     out.device_calibration_note = note;
     Ok(out)
+}
+
+/// The seed of a wearer's gaze: the run's seed and the wearer (apart from the IMUs').
+fn gaze_seed(seed: u64, wearer: usize) -> u64 {
+    imu_seed(seed, wearer, 0xFFFF)
+}
+
+/// A name as MPS CSV text fields take it: no commas, quotes or spaces.
+fn session_uid(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// The seed of one IMU's errors: the run's seed, the wearer, the IMU.

@@ -46,15 +46,7 @@ impl MeshDistance {
                 *key_of.entry(k).or_insert(n)
             })
             .collect();
-        let tris: Vec<[u32; 3]> = mesh
-            .triangles
-            .iter()
-            .copied()
-            .filter(|t| {
-                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-                (b - a).cross(c - a).length_squared() > 0.0
-            })
-            .collect();
+        let tris = non_degenerate_triangles(mesh);
         if tris.is_empty() {
             return None;
         }
@@ -94,13 +86,7 @@ impl MeshDistance {
             .map(|t| t.map(|i| vertex_sum[welded[i as usize] as usize]))
             .collect();
         let orientation = part_orientation(&tris, &welded, &mesh.vertices, key_of.len());
-        // parry has its own glam version: convert through arrays.
-        let verts: Vec<PVec3> = mesh
-            .vertices
-            .iter()
-            .map(|v| PVec3::from_array(v.to_array()))
-            .collect();
-        let trimesh = TriMesh::new(verts, tris).ok()?;
+        let trimesh = parry_trimesh(mesh, tris)?;
         Some(Self {
             trimesh,
             face_normals,
@@ -191,4 +177,56 @@ fn part_orientation(
             (!bad_root[r]).then(|| if volume[r] >= 0.0 { 1.0 } else { -1.0 })
         })
         .collect()
+}
+
+/// The mesh's triangles with a non-zero area.
+fn non_degenerate_triangles(mesh: &SceneMesh) -> Vec<[u32; 3]> {
+    mesh.triangles
+        .iter()
+        .copied()
+        .filter(|t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            (b - a).cross(c - a).length_squared() > 0.0
+        })
+        .collect()
+}
+
+/// parry's triangle mesh of `tris` (parry has its own glam version: converted through arrays).
+fn parry_trimesh(mesh: &SceneMesh, tris: Vec<[u32; 3]>) -> Option<TriMesh> {
+    let verts: Vec<PVec3> = mesh
+        .vertices
+        .iter()
+        .map(|v| PVec3::from_array(v.to_array()))
+        .collect();
+    TriMesh::new(verts, tris).ok()
+}
+
+/// First hits of rays against the scene's triangles (parry3d's BVH), both sides of every
+/// triangle: what a line of sight meets first.
+pub struct SceneRays {
+    trimesh: TriMesh,
+}
+
+impl SceneRays {
+    /// `None` if the mesh has no non-degenerate triangle.
+    pub fn new(mesh: &SceneMesh) -> Option<Self> {
+        let tris = non_degenerate_triangles(mesh);
+        if tris.is_empty() {
+            return None;
+        }
+        Some(Self {
+            trimesh: parry_trimesh(mesh, tris)?,
+        })
+    }
+
+    /// Distance along the unit direction `dir` from `origin` to the first triangle, within
+    /// `max_m`.
+    pub fn first_hit(&self, origin: Vec3, dir: Vec3, max_m: f64) -> Option<f64> {
+        use parry3d_f64::query::{Ray, RayCast};
+        let ray = Ray::new(
+            PVec3::from_array(origin.to_array()),
+            PVec3::from_array(dir.to_array()),
+        );
+        self.trimesh.cast_local_ray(&ray, max_m, false)
+    }
 }

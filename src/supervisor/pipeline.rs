@@ -18,6 +18,7 @@ use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::export::aria::{write_wearer_streams, Wearer};
+use crate::export::gaze::GazeGoal;
 use crate::motion::MotionSequence;
 use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
@@ -159,7 +160,7 @@ pub fn run_pipeline(
     if !sequence.exists() {
         write_sequence(&sequence, &motion, &agents, model, plan)?;
     }
-    write_aria(&staging, render, &agents, &wearers)?;
+    write_aria(&staging, render, &agents, &wearers, &motion, &scene)?;
     let (bodies, scratch) = write_body_inputs(&staging.join("work"), &agents, model, render)?;
     let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
         .step_by(render.every_n_frames)
@@ -333,6 +334,8 @@ fn write_aria(
     render: &RenderPlan,
     agents: &[RenderedAgent],
     wearers: &[usize],
+    motion: &RunMotion,
+    scene: &crate::scene::SceneMesh,
 ) -> Result<()> {
     let Some(settings) = &render.aria else {
         return Ok(());
@@ -347,14 +350,29 @@ fn write_aria(
             format!("removing {}, left by an interrupted run", partial.display())
         })?;
     }
+    let rays = if settings.streams.gaze {
+        crate::scene::mesh_distance::SceneRays::new(scene)
+    } else {
+        None
+    };
+    let eyes: Vec<Vec<crate::math::Affine3>> = agents
+        .iter()
+        .map(|a| a.track.frames.iter().map(|f| f.world_from_cpf).collect())
+        .collect();
     for (index, &w) in wearers.iter().enumerate() {
         let agent = &agents[w];
-        let poses: Vec<crate::math::Affine3> = agent
-            .track
-            .frames
-            .iter()
-            .map(|f| f.world_from_cpf)
-            .collect();
+        let poses = &eyes[w];
+        let goals = match motion {
+            RunMotion::Agents { take, .. } => take.agents[w]
+                .goals
+                .iter()
+                .map(|g| GazeGoal {
+                    xy: g.goal,
+                    until_frame: g.end_frame,
+                })
+                .collect(),
+            RunMotion::Placed(_) => Vec::new(),
+        };
         let cpf_from_headset = render
             .headset_wear
             .map_or(crate::math::Affine3::IDENTITY, |h| {
@@ -364,8 +382,14 @@ fn write_aria(
             name: &agent.name,
             index,
             frame_rate_hz: agent.motion.frame_rate_hz,
-            world_from_cpf: &poses,
+            world_from_cpf: poses,
             cpf_from_headset,
+            others: (0..agents.len())
+                .filter(|&k| k != w)
+                .map(|k| eyes[k].as_slice())
+                .collect(),
+            goals,
+            rays: rays.as_ref(),
         };
         let written =
             write_wearer_streams(&partial.join(&agent.name), &render.rig, settings, &wearer)?;

@@ -133,3 +133,20 @@ def test_cpf_of_the_device_calibration_is_the_rigs(take):
         t = device.get_transform_cpf_sensor(cam["name"]).to_matrix()
         assert np.allclose(t[:3, 3], cam["cpf_from_cam"]["translation_m"], atol=1e-9)
         assert np.allclose(t[:3, :3], np.array(cam["cpf_from_cam"]["rotation"]), atol=1e-9)
+
+
+def test_eye_gaze_reads_and_points_where_the_depth_says(take):
+    agent = agents(take / "take")[0]
+    gaze = mps.read_eyegaze(str(take / "ideal" / agent / "eye_gaze" / "general_eye_gaze.csv"))
+    assert len(gaze) == int(np.floor(head_poses(take / "take", agent)[-1][0] * 30 + 1e-9)) + 1
+    yaw = np.array([g.yaw for g in gaze])
+    pitch = np.array([g.pitch for g in gaze])
+    depth = np.array([g.depth for g in gaze])
+    assert gaze[0].session_uid == agent
+    # Within the eyes' range (30° from straight ahead), at a surface in the apartment.
+    d = np.stack([np.tan(yaw), np.tan(pitch), np.ones_like(yaw)], axis=1)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    assert np.degrees(np.arccos(d[:, 2])).max() < 30.0 + 1e-4  # read as float32
+    assert 0.1 < depth.min() and depth.max() < 20.0
+    point = np.array(mps.get_eyegaze_point_at_depth(gaze[10].yaw, gaze[10].pitch, gaze[10].depth))
+    assert abs(np.linalg.norm(point) - gaze[10].depth) < 1e-4
