@@ -98,6 +98,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "math",
             "camera",
             "rig",
+            "scene",
             "atomic_file",
             "manifest",
             "preview",

@@ -65,7 +65,15 @@ pub enum PoseSplineError {
         index + 1
     )]
     TurnTooFast { index: usize, angle_rad: Real },
+    #[error(
+        "the rotations turn too fast between samples for an interpolating spline: it misses a \
+         pose by {residual_rad:.1e} rad (sample the motion faster)"
+    )]
+    NotInterpolated { residual_rad: Real },
 }
+
+/// Largest miss of a given rotation the solve accepts (rad).
+pub const MAX_ROTATION_RESIDUAL_RAD: Real = 1e-9;
 
 /// An interpolating C² trajectory through poses at `frame_rate_hz`, from time 0.
 #[derive(Debug, Clone)]
@@ -137,6 +145,11 @@ impl PoseSpline {
             for (q, d) in control.iter_mut().zip(&deltas) {
                 *q = nearest_rotation(*q * axis_angle_to_matrix(*d));
             }
+        }
+        if spline.residual_rad > MAX_ROTATION_RESIDUAL_RAD {
+            return Err(PoseSplineError::NotInterpolated {
+                residual_rad: spline.residual_rad,
+            });
         }
         Ok(spline)
     }
