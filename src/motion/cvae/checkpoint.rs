@@ -21,7 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sha2::Digest;
 
-use super::train::TrainError;
+use super::train_error::TrainError;
 
 /// Where the run stood when the checkpoint was written.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

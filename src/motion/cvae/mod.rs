@@ -28,6 +28,7 @@ pub mod rig;
 pub mod rollout;
 pub mod sampler;
 pub mod train;
+pub mod train_error;
 pub mod weights;
 
 pub use control::{CemSettings, LatentController, PaceTarget};

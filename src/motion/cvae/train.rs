@@ -29,6 +29,7 @@ use super::net::{ArchConfig, PrimitiveVae};
 use super::pool::SeedPool;
 use super::rig::{RigGeometry, TensorRig};
 use super::rollout::next_seed;
+pub use super::train_error::TrainError;
 use super::{checkpoint, weights};
 use crate::body::BodyModel;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
@@ -130,34 +131,6 @@ pub struct TrainReport {
     pub seconds: f64,
     pub final_loss: f64,
     pub held_out_mpjpe_mm: Option<f64>,
-}
-
-/// Why training stopped.
-#[derive(Debug, thiserror::Error)]
-pub enum TrainError {
-    #[error(transparent)]
-    Model(#[from] crate::body::ModelFileError),
-    #[error(transparent)]
-    Motion(#[from] crate::motion::MotionFileError),
-    #[error(transparent)]
-    Primitive(#[from] crate::motion::primitive::PrimitiveError),
-    #[error(transparent)]
-    Pose(#[from] crate::body::PoseError),
-    #[error(transparent)]
-    Weights(#[from] weights::WeightsError),
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("{0}")]
-    Data(String),
-    #[error("training diverged: loss is {loss} at {phase} step {step}")]
-    Diverged {
-        phase: &'static str,
-        step: usize,
-        loss: f64,
-    },
 }
 
 /// Loads the clips of a plan and splits them into training and held-out parts.
