@@ -35,7 +35,7 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use glam::DQuat;
 
-use super::dataset::{CameraWork, Dataset};
+use super::staged::{CameraWork, Dataset};
 use crate::atomic_file::write_atomically;
 use crate::camera::{Camera, CameraModel, Fisheye624, Pixel};
 use crate::math::{Affine3, Real, Vec3};

@@ -1,6 +1,6 @@
-//! A rendered dataset on disk and the work that makes it: which frames of which camera,
-//! grouped into shards; the shard specs Blender receives; turning a shard's raw renders into
-//! validated frame files; per-camera annotations.
+//! A rendered dataset on disk: turning a shard's raw renders into validated frame files,
+//! checking the frames an interrupted run left, per-camera annotations. The work itself
+//! (cameras, shards, paths, specs) is `staged`.
 //!
 //! Layout of a dataset folder (built in `<dir>.partial/`, renamed to `<dir>` when complete):
 //! - `sequence/` — the synthesized sequence (motion, CPF trajectory, meshes, preview).
@@ -22,144 +22,16 @@ use super::annotations::{
     AgentSkin, CameraAnnotations, Conventions, SegmentationId, ANNOTATIONS_VERSION,
 };
 use super::frame_record::{FileFacts, FrameRecord, JOINT_OCCLUSION_TOLERANCE_M};
-use crate::camera::CameraModel;
-use crate::exr_file::ExrContents;
-use crate::math::{Affine3, Real, Vec3};
-use crate::motion::MotionSequence;
-use crate::render::depth_noise::{DepthNoise, NoiseSeed};
-use crate::render::frame_file::{
-    assemble_frame, validate_frame_contents, FrameFileError, FrameImage,
-};
+use super::staged::{CameraWork, Dataset};
+use crate::math::{Real, Vec3};
+use crate::render::depth_noise::NoiseSeed;
+use crate::render::frame_file::{assemble_frame, FrameImage};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
-use crate::render::passes::Passes;
 use crate::render::render_camera::RenderCamera;
-use crate::render::shard_plan::{raw_frame_paths, shard_camera, RawRenders};
-use crate::render::ShardSpec;
+use crate::render::shard_plan::raw_frame_paths;
 use crate::rig::{Rig, RigCamera};
-use crate::synth::BodyTrack;
-
-/// One camera's share of the work.
-#[derive(Debug, Clone)]
-pub struct CameraWork {
-    pub camera: RigCamera,
-    pub render: RenderCamera,
-    /// Depth-noise model and seed, for a `depth_noisy.Z` channel.
-    pub depth_noise: Option<(DepthNoise, u64)>,
-    /// OpenCV `world_from_cam` for every frame of the sequence (the headset's offset on
-    /// the wearer's head applied).
-    pub world_from_cam: Vec<Affine3>,
-    /// The rig's offset on the wearer's head, when drawn.
-    pub headset_wear: Option<crate::rig::wear::WearOffset>,
-    /// Frames to render.
-    pub frames: Vec<u32>,
-    /// The agent wearing the camera (index into the run's agents).
-    pub wearer: usize,
-}
-
-/// One Blender process's work: some frames of one camera.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Shard {
-    pub id: usize,
-    pub camera: usize,
-    pub frames: Vec<u32>,
-}
-
-/// Everything needed to render and finish a dataset.
-#[derive(Debug, Clone)]
-pub struct Dataset {
-    /// Where the dataset is built (`<dir>.partial`).
-    pub staging: PathBuf,
-    /// Everything of the shard spec but its cameras.
-    pub base_spec: ShardSpec,
-    pub cameras: Vec<CameraWork>,
-    /// What the dataset holds (`[render] passes`).
-    pub passes: Passes,
-    pub keys_per_frame: u32,
-    pub frames_per_shard: usize,
-    pub near_clip_m: f64,
-    /// Every body in the scene (the annotations list them all).
-    pub agents: Vec<RenderedAgent>,
-    /// Which start of the run this is (1 for the first, one more for every `--resume`): each
-    /// start keeps its logs in its own folder, so a resume never overwrites what an earlier
-    /// start wrote (an error message may name those logs).
-    pub start: u32,
-}
 
 impl Dataset {
-    /// The frame file of a camera's frame.
-    pub fn frame_path(&self, camera: usize, frame: u32) -> PathBuf {
-        self.staging
-            .join("cameras")
-            .join(&self.cameras[camera].camera.name)
-            .join(format!("frame_{frame:05}.exr"))
-    }
-
-    pub fn raw_dir(&self) -> PathBuf {
-        self.staging.join("work/raw")
-    }
-
-    /// Which of Blender's two renders this dataset's passes need.
-    pub fn raw_renders(&self) -> RawRenders {
-        RawRenders {
-            colour: self.base_spec.rgb.is_some(),
-            ground_truth: !self.base_spec.ground_truth_passes.is_empty(),
-        }
-    }
-
-    /// The raw renders a camera's frame is made from (one or two files).
-    pub fn raw_frame_files(&self, camera: usize, frame: u32) -> Vec<PathBuf> {
-        let name = &self.cameras[camera].camera.name;
-        let (rgb, gt) = raw_frame_paths(&self.raw_dir(), name, frame, self.raw_renders());
-        rgb.into_iter().chain(gt).collect()
-    }
-
-    /// The channels a camera's frame files hold.
-    pub fn frame_channels(&self, camera: usize) -> Vec<&'static str> {
-        let work = &self.cameras[camera];
-        self.passes
-            .frame_channels(work.camera.monochrome, work.depth_noise.is_some())
-    }
-
-    /// Checks a camera's frame file, read from disk or about to be written (`bytes`, named
-    /// by `path`): it opens, holds exactly the camera's channels at its size, all finite.
-    pub fn validate_frame_bytes(
-        &self,
-        camera: usize,
-        path: &std::path::Path,
-        bytes: &[u8],
-    ) -> Result<ExrContents, FrameFileError> {
-        let res = self.cameras[camera].camera.model.resolution();
-        validate_frame_contents(
-            ExrContents::from_bytes(path, bytes)?,
-            res.width_px,
-            res.height_px,
-            &self.frame_channels(camera),
-        )
-    }
-
-    /// A path inside the dataset as the pool report records it: relative to the dataset folder,
-    /// so it stays true after `<dir>.partial` is renamed to `<dir>`.
-    pub fn relative(&self, path: &std::path::Path) -> String {
-        path.strip_prefix(&self.staging)
-            .unwrap_or(path)
-            .display()
-            .to_string()
-    }
-
-    /// This start's logs: `logs/start_<n>/`.
-    pub fn logs_dir(&self) -> PathBuf {
-        self.staging
-            .join("logs")
-            .join(format!("start_{:02}", self.start))
-    }
-
-    /// Whether a frame is done: its file exists. A frame file appears only by a rename after it
-    /// validated and its record was kept; [`Dataset::check_finished_frames`] clears any damaged
-    /// since, before planning.
-    pub fn frame_done(&self, camera: usize, frame: u32) -> bool {
-        self.frame_path(camera, frame).is_file()
-    }
-
     /// Reads every frame file of the plan that exists: one that does not validate (a damaged
     /// or truncated frame left by an interrupted run, or changed since) is removed, so that it
     /// is rendered again; one whose record is missing or does not match it gets its record
@@ -190,54 +62,6 @@ impl Dataset {
             }
         }
         Ok(removed)
-    }
-
-    /// Shards covering the frames not done yet, `frames_per_shard` consecutive planned frames
-    /// of one camera each.
-    pub fn pending_shards(&self) -> Vec<Shard> {
-        let mut shards = Vec::new();
-        for (c, work) in self.cameras.iter().enumerate() {
-            for block in work.frames.chunks(self.frames_per_shard) {
-                let frames: Vec<u32> = block
-                    .iter()
-                    .copied()
-                    .filter(|&f| !self.frame_done(c, f))
-                    .collect();
-                if !frames.is_empty() {
-                    shards.push(Shard {
-                        id: shards.len(),
-                        camera: c,
-                        frames,
-                    });
-                }
-            }
-        }
-        shards
-    }
-
-    /// Total planned frames over all cameras.
-    pub fn total_frames(&self) -> usize {
-        self.cameras.iter().map(|c| c.frames.len()).sum()
-    }
-
-    /// The spec rendering `frames` of a shard's camera.
-    pub fn shard_spec(&self, camera: usize, frames: &[u32]) -> ShardSpec {
-        let work = &self.cameras[camera];
-        let mut cam = shard_camera(
-            &work.camera.name,
-            &work.render,
-            &work.world_from_cam,
-            frames,
-            self.keys_per_frame,
-            self.base_spec.ground_truth_frame_step,
-            &self.raw_dir(),
-            self.raw_renders(),
-        );
-        cam.clip_start_m = self.near_clip_m;
-        ShardSpec {
-            cameras: vec![cam],
-            ..self.base_spec.clone()
-        }
     }
 
     /// Turns a frame's raw renders into its frame file: assembled, encoded, validated and
@@ -296,37 +120,6 @@ impl Dataset {
         }
         Ok(out)
     }
-}
-
-/// The number of the next start of a run staged in `staging`: one more than the highest
-/// `logs/start_<n>` folder there.
-pub fn next_start(staging: &std::path::Path) -> u32 {
-    std::fs::read_dir(staging.join("logs"))
-        .map(|entries| {
-            entries
-                .flatten()
-                .filter_map(|e| {
-                    e.file_name()
-                        .to_str()?
-                        .strip_prefix("start_")?
-                        .parse::<u32>()
-                        .ok()
-                })
-                .max()
-                .unwrap_or(0)
-        })
-        .unwrap_or(0)
-        + 1
-}
-
-/// One body in the rendered scene.
-#[derive(Debug, Clone)]
-pub struct RenderedAgent {
-    pub name: String,
-    /// Segmentation id.
-    pub id: u32,
-    pub motion: MotionSequence,
-    pub track: BodyTrack,
 }
 
 /// Writes `cameras/<camera>/annotations.json` for every camera (OpenCV conventions) from the

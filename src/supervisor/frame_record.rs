@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use super::annotations::{AgentAnnotation, FrameAnnotation, JointVisibility, SmplxParams};
 use super::colmap::image_name;
-use super::dataset::{CameraWork, Dataset, RenderedAgent};
+use super::staged::{CameraWork, Dataset, RenderedAgent};
 use crate::atomic_file::write_atomically;
 use crate::camera::CameraModel;
 use crate::exr_file::ExrContents;

@@ -15,11 +15,11 @@ use indicatif::ProgressBar;
 use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::sync::watch;
 
-use super::dataset::{Dataset, Shard};
 use super::pool::{
     frames_bar, setup_failure, Attempt, FrameTries, Outcome, PoolReport, ShardPool, ShardReport,
     EXIT_SETUP_FAILED,
 };
+use super::staged::{Dataset, Shard};
 use crate::render::shard::worker_command;
 use crate::render::BlenderRuntime;
 

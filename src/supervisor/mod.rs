@@ -12,10 +12,11 @@ pub mod manifest;
 pub mod pipeline;
 pub mod pool;
 pub mod slurm;
+pub mod staged;
 
-pub use dataset::{CameraWork, Dataset, RenderedAgent, Shard};
 pub use local::{LocalPool, PoolSettings};
 pub use manifest::{build_manifest, verify, write_manifest, Manifest, VerifyReport};
 pub use pipeline::{run_pipeline, RunMotion, RunOptions, RunSummary};
 pub use pool::{PoolReport, ShardPool};
 pub use slurm::{SlurmPool, SlurmSettings};
+pub use staged::{CameraWork, Dataset, RenderedAgent, Shard};

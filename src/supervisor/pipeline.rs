@@ -10,11 +10,12 @@ use std::time::Duration;
 use anyhow::{bail, Context, Result};
 
 use super::colmap::write_colmap;
-use super::dataset::{next_start, write_annotations, CameraWork, Dataset, RenderedAgent};
+use super::dataset::write_annotations;
 use super::local::{LocalPool, PoolSettings};
 use super::manifest::{remove_temporaries, sha256_hex, write_manifest_with, MANIFEST};
 use super::pool::ShardPool;
 use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
+use super::staged::{next_start, CameraWork, Dataset, RenderedAgent};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::export::aria::{write_wearer_streams, Wearer};

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use serde::Serialize;
 
-use super::dataset::{Dataset, Shard};
+use super::staged::{Dataset, Shard};
 use crate::render::BlenderRuntime;
 
 /// Where shards run: renders `shards` of `dataset` (`already_done` frames finished before) and

@@ -17,11 +17,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 
-use super::dataset::{Dataset, Shard};
 use super::pool::{
     frames_bar, setup_failure, Attempt, FrameTries, Outcome, PoolReport, ShardPool, ShardReport,
     EXIT_SETUP_FAILED,
 };
+use super::staged::{Dataset, Shard};
 use crate::atomic_file::write_atomically;
 use crate::plan::SlurmPlan;
 use crate::render::shard::worker_command;
