@@ -6,27 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::render::render_camera::FisheyeRendering;
 
-/// Makes the error for a bad value: the key as the config names it, and what was wrong. Config
-/// checks split by section take one, so that every error names the same file.
-pub type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
-
-/// A config file that could not be used, with the file named.
-#[derive(Debug, thiserror::Error)]
-pub enum ConfigError {
-    #[error("config {path}: cannot read ({source})")]
-    Read {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-    #[error("config {path}: {message}")]
-    Parse { path: PathBuf, message: String },
-    #[error("config {path}: key `{key}`: {message}")]
-    Value {
-        path: PathBuf,
-        key: String,
-        message: String,
-    },
-}
+pub use super::config_file::{load_toml, Bad, ConfigError};
 
 /// `[body]`: which body model and shape.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
@@ -316,19 +296,6 @@ impl RawRun {
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         load_toml(path)
     }
-}
-
-/// Reads and strictly parses a TOML config file; errors name the file, key and what was
-/// expected.
-pub fn load_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ConfigError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
-        path: path.into(),
-        source,
-    })?;
-    toml::from_str(&text).map_err(|e| ConfigError::Parse {
-        path: path.into(),
-        message: e.to_string(),
-    })
 }
 
 #[cfg(test)]

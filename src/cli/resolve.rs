@@ -1,6 +1,6 @@
 //! Turns a [`RawRun`] into a [`RunPlan`]: paths resolved, values range-checked.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::config::{
     Backend, Bad, ConfigError, MotionSource, RawDepthNoise, RawMotion, RawRender, RawRun, RawSlurm,
@@ -13,8 +13,7 @@ use crate::render::render_camera::RenderCamera;
 use crate::render::skin::SkinPlan;
 use crate::rig::{Rig, RigCamera};
 
-/// Default body model, relative to the crate root.
-pub const DEFAULT_BODY_MODEL: &str = "assets/body/SMPLX_NEUTRAL.npz";
+pub use super::config_file::{crate_root, resolve_body_model, DEFAULT_BODY_MODEL};
 /// Default scene, relative to the crate root.
 pub const DEFAULT_SCENE: &str = "assets/scenes/apartment.glb";
 /// Default rig, relative to the crate root.
@@ -792,22 +791,4 @@ fn resolve_slurm(
         poll_interval_s,
         sbatch_args,
     })
-}
-
-/// A body model path from a config (relative to its folder `base`), else the shipped default;
-/// the error says which file is missing.
-pub fn resolve_body_model(path: Option<PathBuf>, base: &Path) -> Result<PathBuf, String> {
-    let body_model = match path {
-        Some(p) => base.join(p),
-        None => crate_root().join(DEFAULT_BODY_MODEL),
-    };
-    match body_model.is_file() {
-        true => Ok(body_model),
-        false => Err(format!("file {} not found", body_model.display())),
-    }
-}
-
-/// The folder shipped data is found in: `EGOGEN_HOME` if set, else the crate's source root.
-pub fn crate_root() -> PathBuf {
-    crate::paths::crate_root()
 }

@@ -13,8 +13,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use super::config::{load_toml, Bad, ConfigError};
-use super::resolve::{crate_root, resolve_body_model};
+use super::config_file::{crate_root, resolve_body_model};
+use super::config_file::{load_toml, Bad, ConfigError};
 use crate::math::random::normal_samples;
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::plan::{AgentDraft, SynthPlan};

@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use super::config::{load_toml, Bad, ConfigError};
-use super::resolve::resolve_body_model;
+use super::config_file::resolve_body_model;
+use super::config_file::{load_toml, Bad, ConfigError};
 use crate::motion::cvae::loss::{LossWeights, PriorWeights};
 use crate::motion::cvae::train::{ClipSpec, PhasePlan, PriorPlan, TrainPlan};
 use crate::motion::cvae::ArchConfig;

@@ -1,0 +1,61 @@
+//! What every config file of egogen shares, below the files that read their sections: the
+//! error that names the file and key, strict TOML loading, and where shipped files (the default
+//! body model) are found. `config`, `synth`, `train` and `resolve` build on it.
+
+use std::path::{Path, PathBuf};
+
+/// Makes the error for a bad value: the key as the config names it, and what was wrong. Config
+/// checks split by section take one, so that every error names the same file.
+pub type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
+
+/// A config file that could not be used, with the file named.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    #[error("config {path}: cannot read ({source})")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("config {path}: {message}")]
+    Parse { path: PathBuf, message: String },
+    #[error("config {path}: key `{key}`: {message}")]
+    Value {
+        path: PathBuf,
+        key: String,
+        message: String,
+    },
+}
+
+/// Reads and strictly parses a TOML config file; errors name the file, key and what was
+/// expected.
+pub fn load_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ConfigError> {
+    let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
+        path: path.into(),
+        source,
+    })?;
+    toml::from_str(&text).map_err(|e| ConfigError::Parse {
+        path: path.into(),
+        message: e.to_string(),
+    })
+}
+
+/// The shipped body model, relative to [`crate_root`].
+pub const DEFAULT_BODY_MODEL: &str = "assets/body/SMPLX_NEUTRAL.npz";
+
+/// A body model path from a config (relative to its folder `base`), else the shipped default;
+/// the error says which file is missing.
+pub fn resolve_body_model(path: Option<PathBuf>, base: &Path) -> Result<PathBuf, String> {
+    let body_model = match path {
+        Some(p) => base.join(p),
+        None => crate_root().join(DEFAULT_BODY_MODEL),
+    };
+    match body_model.is_file() {
+        true => Ok(body_model),
+        false => Err(format!("file {} not found", body_model.display())),
+    }
+}
+
+/// The folder shipped data is found in: `EGOGEN_HOME` if set, else the crate's source root.
+pub fn crate_root() -> PathBuf {
+    crate::paths::crate_root()
+}
