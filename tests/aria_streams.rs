@@ -334,23 +334,10 @@ fn make_take(dir: &std::path::Path, seconds: f64) -> PathBuf {
 
 /// `world_from_cpf` per frame of an agent of a take.
 fn head_poses(take: &std::path::Path, agent: &str) -> Vec<Affine3> {
-    let text = std::fs::read_to_string(take.join("agents").join(agent).join("cpf_trajectory.json"))
-        .unwrap();
-    let frames: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
-    frames
-        .iter()
-        .map(|f| {
-            let m: Vec<Vec<f64>> = serde_json::from_value(f["world_from_cpf"].clone()).unwrap();
-            Affine3 {
-                matrix3: Mat3::from_cols_array_2d(&[
-                    [m[0][0], m[1][0], m[2][0]],
-                    [m[0][1], m[1][1], m[2][1]],
-                    [m[0][2], m[1][2], m[2][2]],
-                ]),
-                translation: Vec3::new(m[0][3], m[1][3], m[2][3]),
-            }
-        })
-        .collect()
+    let path = take.join("agents").join(agent).join("cpf_trajectory.json");
+    egogen::synth::sequence_dir::read_cpf_trajectory(&path)
+        .unwrap()
+        .1
 }
 
 /// How well the spline reconstructs a synthesized head between its samples (through every

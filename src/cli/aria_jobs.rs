@@ -7,8 +7,9 @@ use anyhow::{bail, Context, Result};
 
 use crate::export::aria::{write_wearer_streams, AriaSettings, AriaStreams, Wearer};
 use crate::export::gaze::GazeGoal;
-use crate::math::Affine3;
+use crate::math::{affine_from_row_major, Affine3};
 use crate::rig::Rig;
+use crate::synth::sequence_dir::read_cpf_trajectory;
 
 /// What `egogen aria export` was asked.
 #[derive(Debug, Clone, clap::Args)]
@@ -96,7 +97,7 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
             staging.display()
         );
     }
-    let (heads, everyone) = read_take_heads(&args.take, &args.wearer)?;
+    let (wearers, everyone) = read_take_heads(&args.take, &args.wearer)?;
     let rays = if settings.streams.gaze {
         match take_scene(&args.take)? {
             Some(path) => {
@@ -115,7 +116,7 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
     };
     std::fs::create_dir_all(&staging).with_context(|| format!("creating {}", staging.display()))?;
     let started = std::time::Instant::now();
-    for (index, head) in heads.iter().enumerate() {
+    for (index, head) in wearers.iter().map(|&w| &everyone[w]).enumerate() {
         let wearer = Wearer {
             name: &head.name,
             index,
@@ -151,7 +152,7 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
     println!(
         "wrote {} ({} wearers in {:.2} s)",
         args.out.display(),
-        heads.len(),
+        wearers.len(),
         started.elapsed().as_secs_f64()
     );
     Ok(())
@@ -205,8 +206,8 @@ fn take_goals(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>)>> {
 }
 
 /// The agents' heads of a take folder: the `wanted` ones (all, or a dataset's wearers, when
-/// empty), and everyone's.
-fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<TakeHead>, Vec<TakeHead>)> {
+/// empty) as indices into everyone's.
+fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<usize>, Vec<TakeHead>)> {
     if !take.is_dir() {
         bail!("take {}: not a folder", take.display());
     }
@@ -280,14 +281,7 @@ fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<TakeHead>, Vec
         .collect::<Result<Vec<TakeHead>>>()?;
     let wearers = names
         .iter()
-        .filter_map(|n| everyone.iter().find(|h| &h.name == n))
-        .map(|h| TakeHead {
-            name: h.name.clone(),
-            frame_rate_hz: h.frame_rate_hz,
-            world_from_cpf: h.world_from_cpf.clone(),
-            cpf_from_headset: h.cpf_from_headset,
-            goals: h.goals.clone(),
-        })
+        .filter_map(|n| everyone.iter().position(|h| &h.name == n))
         .collect();
     Ok((wearers, everyone))
 }
@@ -316,9 +310,13 @@ fn read_dataset_wear(take: &Path) -> Result<Vec<(String, Affine3)>> {
                 path.display()
             );
         };
-        let pose = match v["headset_wear"]["t_cpf_headset"].as_array() {
-            None => Affine3::IDENTITY,
-            Some(rows) => affine_from_rows(rows).with_context(|| {
+        let raw = &v["headset_wear"]["t_cpf_headset"];
+        let pose = match raw.is_null() {
+            true => Affine3::IDENTITY,
+            false => serde_json::from_value::<[[f64; 4]; 4]>(raw.clone())
+                .ok()
+                .and_then(|rows| affine_from_row_major(&rows))
+                .with_context(|| {
                 format!("{}: key `headset_wear.t_cpf_headset`: expected a row-major 4×4 rigid transform", path.display())
             })?,
         };
@@ -327,76 +325,4 @@ fn read_dataset_wear(take: &Path) -> Result<Vec<(String, Affine3)>> {
         }
     }
     Ok(wear)
-}
-
-fn affine_from_rows(rows: &[serde_json::Value]) -> Option<Affine3> {
-    let m: Vec<Vec<f64>> = rows
-        .iter()
-        .map(|r| {
-            r.as_array()
-                .map(|r| r.iter().filter_map(|x| x.as_f64()).collect())
-        })
-        .collect::<Option<Vec<_>>>()?;
-    if m.len() != 4 || m.iter().any(|r| r.len() != 4) {
-        return None;
-    }
-    let mut cols = [[0.0; 4]; 4];
-    for (i, row) in m.iter().enumerate() {
-        for (j, v) in row.iter().enumerate() {
-            cols[j][i] = *v;
-        }
-    }
-    let a = Affine3::from_mat4(glam::DMat4::from_cols_array_2d(&cols));
-    a.is_finite().then_some(a)
-}
-
-/// `cpf_trajectory.json`: its frame rate (from the frames' times) and poses.
-fn read_cpf_trajectory(path: &Path) -> Result<(f64, Vec<Affine3>)> {
-    #[derive(serde::Deserialize)]
-    struct Frame {
-        frame: usize,
-        time_s: f64,
-        world_from_cpf: Vec<serde_json::Value>,
-    }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let frames: Vec<Frame> = serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: expected a list of {{frame, time_s, world_from_cpf}}",
-            path.display()
-        )
-    })?;
-    if frames.is_empty() {
-        bail!("{}: no frames", path.display());
-    }
-    let mut poses = Vec::with_capacity(frames.len());
-    for (i, f) in frames.iter().enumerate() {
-        if f.frame != i {
-            bail!(
-                "{}: entry {i} is frame {}; expected frames 0, 1, 2, … in order",
-                path.display(),
-                f.frame
-            );
-        }
-        poses.push(affine_from_rows(&f.world_from_cpf).with_context(|| {
-            format!("{}: frame {i}: key `world_from_cpf`: expected a row-major 4×4 rigid transform of finite numbers", path.display())
-        })?);
-    }
-    let mut rate = if frames.len() > 1 {
-        1.0 / frames[1].time_s
-    } else {
-        40.0
-    };
-    // Times are written as i / rate: a whole rate comes back within rounding.
-    if (rate - rate.round()).abs() < 1e-9 * rate {
-        rate = rate.round();
-    }
-    if !(rate.is_finite() && rate > 0.0 && rate <= 10_000.0) {
-        bail!(
-            "{}: frame 1 at time_s = {}: expected a frame rate in (0, 10000] Hz",
-            path.display(),
-            frames[1].time_s
-        );
-    }
-    Ok((rate, poses))
 }

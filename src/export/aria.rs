@@ -24,7 +24,7 @@ use super::imu::{sample_times_ns, simulate_imu, ImuErrors, ImuSample, GRAVITY_WO
 use crate::atomic_file::write_atomically;
 use crate::camera::Camera;
 use crate::math::pose_spline::PoseSpline;
-use crate::math::{Affine3, Mat3, Real};
+use crate::math::{mat3_rows, Affine3, Real};
 use crate::rig::{aria_build_of_device, ImuCalibration, Rig};
 use crate::scene::mesh_distance::SceneRays;
 
@@ -476,7 +476,6 @@ pub fn calibration_json(rig: &Rig, imu_errors: bool) -> serde_json::Value {
             } else {
                 ImuCalibration::IDEAL
             };
-            let rows = |m: Mat3| m.transpose().to_cols_array_2d();
             json!({
                 "Calibrated": true,
                 "Label": i.name,
@@ -484,14 +483,14 @@ pub fn calibration_json(rig: &Rig, imu_errors: bool) -> serde_json::Value {
                 "Accelerometer": {
                     "TimeOffsetSec_Device_Accel": 0.0,
                     "Bias": {"Name": "Constant", "Offset": c.accel_bias.to_array()},
-                    "Model": {"Name": "UpperTriagonalLinear", "RectificationMatrix": rows(c.accel_rectification)},
+                    "Model": {"Name": "UpperTriagonalLinear", "RectificationMatrix": mat3_rows(c.accel_rectification)},
                 },
                 "Gyroscope": {
                     "TimeOffsetSec_Device_Gyro": 0.0,
                     "Bias": {"Name": "Constant", "Offset": c.gyro_bias.to_array()},
                     "Model": {
                         "Name": "LinearGSensitivity",
-                        "RectificationMatrix": rows(c.gyro_rectification),
+                        "RectificationMatrix": mat3_rows(c.gyro_rectification),
                         "GSensitivityMatrix": [[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0]],
                     },
                 },

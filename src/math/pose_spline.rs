@@ -193,11 +193,7 @@ impl PoseSpline {
         let acceleration = combine(ddb) * inv_dt2;
 
         // Cumulative basis B̃₁..B̃₃ and their derivatives in u.
-        let cb = [
-            (5.0 + 3.0 * u - 3.0 * u * u + u * u * u) / 6.0,
-            (1.0 + 3.0 * u + 3.0 * u * u - 2.0 * u * u * u) / 6.0,
-            u * u * u / 6.0,
-        ];
+        let cb = cumulative_basis(u);
         let dcb = [
             um * um / 2.0,
             (1.0 + 2.0 * u - 2.0 * u * u) / 2.0,
@@ -237,11 +233,7 @@ impl PoseSpline {
         } else {
             (segments - 1, 1.0)
         };
-        let cb = [
-            (5.0 + 3.0 * u - 3.0 * u * u + u * u * u) / 6.0,
-            (1.0 + 3.0 * u + 3.0 * u * u - 2.0 * u * u * u) / 6.0,
-            u * u * u / 6.0,
-        ];
+        let cb = cumulative_basis(u);
         let mut r = self.rotations[seg];
         for (j, w) in cb.iter().enumerate() {
             r *= axis_angle_to_matrix(self.increments[seg + j] * *w);
@@ -266,6 +258,15 @@ impl PoseSpline {
             .map(|w| matrix_to_axis_angle(w[0].transpose() * w[1]))
             .collect();
     }
+}
+
+/// The cumulative cubic B-spline basis `B̃₁..B̃₃` at `u` in [0, 1] (B̃₀ = 1).
+fn cumulative_basis(u: Real) -> [Real; 3] {
+    [
+        (5.0 + 3.0 * u - 3.0 * u * u + u * u * u) / 6.0,
+        (1.0 + 3.0 * u + 3.0 * u * u - 2.0 * u * u * u) / 6.0,
+        u * u * u / 6.0,
+    ]
 }
 
 /// Control points `c₋₁ … c_N` of the natural cubic B-spline through `p₀ … p_{N−1}` (N ≥ 2):

@@ -16,11 +16,6 @@ pub fn world_from_blender_cam(world_from_cam_opencv: Affine3) -> Affine3 {
     }
 }
 
-/// Row-major 4×4 of an affine transform.
-pub fn row_major(m: Affine3) -> [[f64; 4]; 4] {
-    glam::DMat4::from(m).transpose().to_cols_array_2d()
-}
-
 /// Blender lens for a pinhole camera with square pixels: (focal_mm, sensor_width_mm, shift_x,
 /// shift_y) with the sensor fitted horizontally. Shifts are in units of the larger image side,
 /// as Blender defines them; +y shift moves the image content down, so the principal point's

@@ -27,7 +27,7 @@ use super::error::RigError;
 use super::pose::nearest_rotation;
 use super::{ImuCalibration, Rig, RigCamera, RigImu};
 use crate::camera::{Camera, Fisheye624, Resolution};
-use crate::math::{Affine3, Mat3, Real, Vec3};
+use crate::math::{mat3_from_rows, Affine3, Mat3, Real, Vec3};
 
 /// Image size of Aria's RGB camera: full sensor (the calibration's own) or the 1408×1408
 /// recording mode (crop 32 px each side, then scale 0.5, as projectaria-tools rescales it).
@@ -386,11 +386,10 @@ pub(super) fn rig_from_aria_value(
             .map_err(|e| RigError::field(path, &hint, e.to_string()))?;
         let device_from_imu = se3(&imu.t_device_imu)
             .map_err(|m| RigError::field(path, format!("{hint}.T_Device_Imu"), m))?;
-        let m = |r: &[[Real; 3]; 3]| Mat3::from_cols_array_2d(r).transpose();
         let calibration = ImuCalibration {
-            accel_rectification: m(&imu.accelerometer.model.rectification_matrix),
+            accel_rectification: mat3_from_rows(&imu.accelerometer.model.rectification_matrix),
             accel_bias: Vec3::from_array(imu.accelerometer.bias.offset),
-            gyro_rectification: m(&imu.gyroscope.model.rectification_matrix),
+            gyro_rectification: mat3_from_rows(&imu.gyroscope.model.rectification_matrix),
             gyro_bias: Vec3::from_array(imu.gyroscope.bias.offset),
         };
         if cameras.iter().any(|c| c.name == imu.label) || imus.iter().any(|o| o.name == imu.label) {

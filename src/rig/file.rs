@@ -10,7 +10,7 @@ use super::error::RigError;
 use super::pose::{checked_rotation, NotRotation};
 use super::{ImuCalibration, Rig, RigCamera, RigImu};
 use crate::camera::{Camera, Fisheye624, KannalaBrandt4, Pinhole, Resolution};
-use crate::math::{Affine3, Mat3, Real, Vec3};
+use crate::math::{mat3_from_rows, mat3_rows, Affine3, Mat3, Real, Vec3};
 
 /// Value of the `egogen_rig` key this version reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
@@ -61,19 +61,18 @@ struct RawImuCalibration {
 impl RawImuCalibration {
     fn from_calibration(c: &ImuCalibration) -> Self {
         RawImuCalibration {
-            accel_rectification: c.accel_rectification.transpose().to_cols_array_2d(),
+            accel_rectification: mat3_rows(c.accel_rectification),
             accel_bias_m_s2: c.accel_bias.to_array(),
-            gyro_rectification: c.gyro_rectification.transpose().to_cols_array_2d(),
+            gyro_rectification: mat3_rows(c.gyro_rectification),
             gyro_bias_rad_s: c.gyro_bias.to_array(),
         }
     }
 
     fn build(&self) -> Result<ImuCalibration, String> {
-        let m = |r: &[[Real; 3]; 3]| Mat3::from_cols_array_2d(r).transpose();
         let c = ImuCalibration {
-            accel_rectification: m(&self.accel_rectification),
+            accel_rectification: mat3_from_rows(&self.accel_rectification),
             accel_bias: Vec3::from_array(self.accel_bias_m_s2),
-            gyro_rectification: m(&self.gyro_rectification),
+            gyro_rectification: mat3_from_rows(&self.gyro_rectification),
             gyro_bias: Vec3::from_array(self.gyro_bias_rad_s),
         };
         let finite = c.accel_rectification.is_finite()
@@ -387,7 +386,7 @@ fn build_pose(raw: &RawPose) -> Result<Affine3, String> {
         ));
     }
     let r = raw.rotation;
-    let m = Mat3::from_cols_array_2d(&r).transpose();
+    let m = mat3_from_rows(&r);
     if !m.is_finite() {
         return Err(format!("rotation {r:?} must hold finite numbers"));
     }
@@ -512,7 +511,7 @@ pub(super) fn rig_to_json(rig: &Rig) -> String {
 fn raw_pose(pose: &Affine3) -> RawPose {
     RawPose {
         translation_m: pose.translation.to_array(),
-        rotation: pose.matrix3.transpose().to_cols_array_2d(),
+        rotation: mat3_rows(pose.matrix3),
     }
 }
 

@@ -281,7 +281,7 @@ fn frame_annotation(
         frame: f,
         time_s: f as f64 / agents[0].motion.frame_rate_hz,
         file: format!("frame_{f:05}.exr"),
-        t_world_cam: crate::render::camera_setup::row_major(world_from_cam),
+        t_world_cam: crate::math::row_major(world_from_cam),
         colour_exposure: None,
         agents: listed,
     }

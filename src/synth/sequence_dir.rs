@@ -29,7 +29,7 @@ pub struct SequenceOutputs {
     pub files: Vec<(String, u64)>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, serde::Deserialize)]
 struct CpfFrame {
     frame: usize,
     time_s: f64,
@@ -48,10 +48,61 @@ pub(crate) fn cpf_trajectory_json(
         .map(|(i, m)| CpfFrame {
             frame: i,
             time_s: i as f64 / rate_hz,
-            world_from_cpf: glam::DMat4::from(*m).transpose().to_cols_array_2d(),
+            world_from_cpf: crate::math::row_major(*m),
         })
         .collect();
     Ok(serde_json::to_vec_pretty(&cpf)?)
+}
+
+/// Reads a `cpf_trajectory.json`: its frame rate (from the frames' times) and poses; errors
+/// name the file, the frame and the key.
+pub fn read_cpf_trajectory(path: &Path) -> Result<(f64, Vec<crate::math::Affine3>)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let frames: Vec<CpfFrame> = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: expected a list of {{frame, time_s, world_from_cpf (row-major 4×4)}}",
+            path.display()
+        )
+    })?;
+    if frames.is_empty() {
+        bail!("{}: no frames", path.display());
+    }
+    let mut poses = Vec::with_capacity(frames.len());
+    for (i, f) in frames.iter().enumerate() {
+        if f.frame != i {
+            bail!(
+                "{}: entry {i} is frame {}; expected frames 0, 1, 2, … in order",
+                path.display(),
+                f.frame
+            );
+        }
+        poses.push(
+            crate::math::affine_from_row_major(&f.world_from_cpf).with_context(|| {
+                format!(
+                    "{}: frame {i}: key `world_from_cpf`: expected finite numbers",
+                    path.display()
+                )
+            })?,
+        );
+    }
+    let mut rate = if frames.len() > 1 {
+        1.0 / frames[1].time_s
+    } else {
+        40.0
+    };
+    // Times are written as i / rate: a whole rate comes back within rounding.
+    if (rate - rate.round()).abs() < 1e-9 * rate {
+        rate = rate.round();
+    }
+    if !(rate.is_finite() && rate > 0.0 && rate <= 10_000.0) {
+        bail!(
+            "{}: frame 1 at time_s = {}: expected a frame rate in (0, 10000] Hz",
+            path.display(),
+            frames[1].time_s
+        );
+    }
+    Ok((rate, poses))
 }
 
 /// Posed meshes every `every_n` frames (none for 0), with a progress bar.
