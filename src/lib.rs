@@ -12,6 +12,7 @@
 pub mod atomic_file;
 pub mod body;
 pub mod camera;
+pub mod campaign;
 pub mod cli;
 pub mod eval;
 pub mod export;

@@ -11,10 +11,10 @@ use anyhow::{Context, Result};
 
 use crate::body::BodyModel;
 use crate::cli::overrides::{effective_config_toml, resume_fingerprint, RunOverrides};
+use crate::cli::synth::Synthesized;
 use crate::cli::{resolve_run, MotionPlan, RawRun, RunPlan};
 use crate::motion::scripted::WalkCycle;
 use crate::motion::MotionSequence;
-use crate::plan::SynthPlan;
 use crate::supervisor::{run_pipeline, RunMotion, RunOptions, RunSummary};
 use crate::synth::{pose_meshes, track_body, write_sequence_dir};
 
@@ -27,13 +27,27 @@ pub struct RunRequest {
     pub blender: Option<PathBuf>,
 }
 
-/// Runs the config at `config` with `overrides` (see the module docs).
-pub fn run(config: &Path, overrides: &RunOverrides, request: RunRequest) -> Result<()> {
+/// A run config resolved with the command line's overrides: its plan, its body model, and
+/// what the dataset records of it.
+pub struct PreparedRun {
+    pub plan: RunPlan,
+    pub model: BodyModel,
+    pub options: RunOptions,
+    /// The config file it came from.
+    pub config: PathBuf,
+}
+
+/// Reads `config`, applies `overrides` to it as written (so its checks apply to them too),
+/// resolves it and loads its body model.
+pub fn prepare(
+    config: &Path,
+    overrides: &RunOverrides,
+    request: &RunRequest,
+) -> Result<PreparedRun> {
     let mut raw = RawRun::load(config)?;
-    // Overrides go into the config as written, so its checks apply to them too.
     overrides
         .apply(&mut raw)
-        .context("resolving a path given on the command line")?;
+        .with_context(|| format!("applying the command line to {}", config.display()))?;
     let config_toml = effective_config_toml(&raw, config, overrides)
         .context("writing out the effective config")?;
     let resume_fingerprint = resume_fingerprint(&raw).context("fingerprinting the config")?;
@@ -46,7 +60,7 @@ pub fn run(config: &Path, overrides: &RunOverrides, request: RunRequest) -> Resu
     }
     let options = RunOptions {
         resume: request.resume,
-        blender: request.blender,
+        blender: request.blender.clone(),
         config_toml,
         resume_fingerprint,
     };
@@ -60,53 +74,142 @@ pub fn run(config: &Path, overrides: &RunOverrides, request: RunRequest) -> Resu
             model.num_betas()
         );
     }
-    let motion = match &plan.motion {
-        MotionPlan::Agents { synth, wearers } => {
-            return run_agents(&plan, synth, wearers, &model, config, &options)
+    Ok(PreparedRun {
+        plan,
+        model,
+        options,
+        config: config.to_path_buf(),
+    })
+}
+
+/// A take's motion, made: agents walked through the scene, or one motion (a scripted walk or a
+/// motion file).
+pub enum TakeMotion {
+    Agents {
+        walked: Synthesized,
+        wearers: Vec<usize>,
+    },
+    One(MotionSequence),
+}
+
+impl PreparedRun {
+    /// Makes the take's motion: agents walk the scene (as `egogen synth`), a scripted walk,
+    /// or a motion file read.
+    pub fn make_motion(&self) -> Result<TakeMotion> {
+        let (plan, model) = (&self.plan, &self.model);
+        Ok(match &plan.motion {
+            MotionPlan::Agents { synth, wearers } => {
+                let walked = crate::cli::synth::synthesize(synth, model, true)?;
+                let reached: usize = walked
+                    .take
+                    .agents
+                    .iter()
+                    .map(|a| a.goals.iter().filter(|g| g.reached).count())
+                    .sum();
+                eprintln!(
+                    "egogen-run: {} agents walked {} frames at {} Hz ({reached} goals reached) in {:.1} s",
+                    walked.take.agents.len(),
+                    walked.take.frames,
+                    walked.take.frame_rate_hz,
+                    walked.wall_s
+                );
+                TakeMotion::Agents {
+                    walked,
+                    wearers: wearers.clone(),
+                }
+            }
+            MotionPlan::ScriptedWalk {
+                duration_s,
+                frame_rate_hz,
+                speed_m_per_s,
+            } => {
+                let shaped = model.shape(&plan.betas, &[])?;
+                let walk = WalkCycle {
+                    speed_m_per_s: *speed_m_per_s,
+                    ..Default::default()
+                };
+                TakeMotion::One(walk.sequence(
+                    *duration_s,
+                    *frame_rate_hz,
+                    &plan.betas,
+                    shaped.rest_joints[0],
+                    shaped.rest_sole_y(),
+                ))
+            }
+            MotionPlan::File { path } => TakeMotion::One(MotionSequence::read(path)?),
+        })
+    }
+
+    /// The motion as the supervisor renders it.
+    pub fn run_motion<'a>(&'a self, motion: &'a TakeMotion) -> RunMotion<'a> {
+        match (motion, &self.plan.motion) {
+            (TakeMotion::Agents { walked, wearers }, MotionPlan::Agents { synth, .. }) => {
+                RunMotion::Agents {
+                    world: &walked.world,
+                    obstacles: &synth.solids,
+                    take: &walked.take,
+                    wearers,
+                    about: walked.about.clone(),
+                }
+            }
+            (TakeMotion::One(m), _) => RunMotion::Placed(m),
+            (TakeMotion::Agents { .. }, _) => unreachable!("agents are made from an agents plan"),
         }
-        MotionPlan::ScriptedWalk {
-            duration_s,
-            frame_rate_hz,
-            speed_m_per_s,
-        } => {
-            let shaped = model.shape(&plan.betas, &[])?;
-            let walk = WalkCycle {
-                speed_m_per_s: *speed_m_per_s,
-                ..Default::default()
-            };
-            walk.sequence(
-                *duration_s,
-                *frame_rate_hz,
-                &plan.betas,
-                shaped.rest_joints[0],
-                shaped.rest_sole_y(),
-            )
-        }
-        MotionPlan::File { path } => MotionSequence::read(path)?,
-    };
-    eprintln!(
-        "egogen-run: {} frames at {} Hz, body {} ({} vertices)",
-        motion.len(),
-        motion.frame_rate_hz,
-        plan.body_model.display(),
-        model.num_vertices()
-    );
+    }
+}
+
+/// Runs the config at `config` with `overrides` (see the module docs).
+pub fn run(config: &Path, overrides: &RunOverrides, request: RunRequest) -> Result<()> {
+    let run = prepare(config, overrides, &request)?;
+    let (plan, model) = (&run.plan, &run.model);
+    if plan.render.is_none() && matches!(plan.motion, MotionPlan::Agents { .. }) {
+        crate::synth::crowd_dir::check_out_dir(&plan.output_dir)?;
+    }
+    let motion = run.make_motion()?;
+    if let TakeMotion::One(m) = &motion {
+        eprintln!(
+            "egogen-run: {} frames at {} Hz, body {} ({} vertices)",
+            m.len(),
+            m.frame_rate_hz,
+            plan.body_model.display(),
+            model.num_vertices()
+        );
+    }
     if let Some(render) = &plan.render {
-        let motion = RunMotion::Placed(&motion);
         report(&run_pipeline(
-            &plan, render, motion, &model, config, &options,
+            plan,
+            render,
+            run.run_motion(&motion),
+            model,
+            config,
+            &run.options,
         )?);
         return Ok(());
     }
-    let track = track_body(&model, &motion)?;
-    let meshes = pose_meshes(&model, &motion, plan.mesh_every_n_frames)?;
-    let out = write_sequence_dir(&plan.output_dir, &model, &motion, &track, &meshes)?;
-    eprintln!(
-        "egogen-run: wrote {} ({} files, {} meshes)",
-        out.dir.display(),
-        out.files.len(),
-        out.meshes
-    );
+    match &motion {
+        TakeMotion::Agents { walked, .. } => {
+            let out = crate::synth::crowd_dir::write_crowd_dir(
+                &plan.output_dir,
+                &walked.world,
+                model,
+                &walked.take,
+                Some(walked.wall_s),
+                walked.about.clone(),
+            )?;
+            eprintln!("egogen-run: wrote {}", out.dir.display());
+        }
+        TakeMotion::One(motion) => {
+            let track = track_body(model, motion)?;
+            let meshes = pose_meshes(model, motion, plan.mesh_every_n_frames)?;
+            let out = write_sequence_dir(&plan.output_dir, model, motion, &track, &meshes)?;
+            eprintln!(
+                "egogen-run: wrote {} ({} files, {} meshes)",
+                out.dir.display(),
+                out.files.len(),
+                out.meshes
+            );
+        }
+    }
     Ok(())
 }
 
@@ -131,57 +234,4 @@ fn report(summary: &RunSummary) {
         summary.rendered_now,
         summary.files
     );
-}
-
-/// Agents walk the scene (as `egogen synth`), then the take is rendered, or written alone
-/// without `[render]`.
-fn run_agents(
-    plan: &RunPlan,
-    synth: &SynthPlan,
-    wearers: &[usize],
-    model: &BodyModel,
-    config: &Path,
-    options: &RunOptions,
-) -> Result<()> {
-    if plan.render.is_none() {
-        crate::synth::crowd_dir::check_out_dir(&plan.output_dir)?;
-    }
-    let s = crate::cli::synth::synthesize(synth, model, true)?;
-    let reached: usize = s
-        .take
-        .agents
-        .iter()
-        .map(|a| a.goals.iter().filter(|g| g.reached).count())
-        .sum();
-    eprintln!(
-        "egogen-run: {} agents walked {} frames at {} Hz ({reached} goals reached) in {:.1} s",
-        s.take.agents.len(),
-        s.take.frames,
-        s.take.frame_rate_hz,
-        s.wall_s
-    );
-    match &plan.render {
-        Some(render) => {
-            let motion = RunMotion::Agents {
-                world: &s.world,
-                obstacles: &synth.solids,
-                take: &s.take,
-                wearers,
-                about: s.about,
-            };
-            report(&run_pipeline(plan, render, motion, model, config, options)?);
-        }
-        None => {
-            let out = crate::synth::crowd_dir::write_crowd_dir(
-                &plan.output_dir,
-                &s.world,
-                model,
-                &s.take,
-                Some(s.wall_s),
-                s.about,
-            )?;
-            eprintln!("egogen-run: wrote {}", out.dir.display());
-        }
-    }
-    Ok(())
 }

@@ -166,6 +166,22 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "export",
         ],
     ),
+    // Many takes of egogen-run's job through one pool, indexed.
+    (
+        "campaign",
+        &[
+            "atomic_file",
+            "cli",
+            "manifest",
+            "motion",
+            "plan",
+            "policy",
+            "render",
+            "run_job",
+            "supervisor",
+            "synth",
+        ],
+    ),
     // egogen-run's job: a config (cli) through the supervisor to a dataset.
     (
         "run_job",

@@ -170,3 +170,30 @@ fn a_slurm_array_survives_a_cancelled_task_and_matches_the_local_backend() {
         .unwrap()
         .ends_with(&format!("_{task}.log")));
 }
+
+#[test]
+fn a_campaign_on_slurm_matches_the_local_pool() {
+    if !slurm_cluster() {
+        return;
+    }
+    // The tiny campaign on the local pool, moved aside; then the same campaign, in the same
+    // place, its takes' shards as Slurm arrays (a bound of 2 tasks in flight).
+    let dir = tempfile::tempdir().unwrap();
+    let campaign = common::tiny_campaign(dir.path(), true);
+    let out = dir.path().join("out");
+    common::succeeds(egogen_run().arg(&campaign).args(["--backend", "local"]));
+    let local = common::campaign_digest(&out);
+    std::fs::rename(&out, dir.path().join("local")).unwrap();
+    let run = common::succeeds(egogen_run().arg(&campaign));
+    let said = String::from_utf8_lossy(&run.stderr);
+    assert!(said.contains("Slurm array job"), "{said}");
+    assert_eq!(common::campaign_digest(&out), local, "{said}");
+    let script = std::fs::read_to_string(out.join("work/slurm/round_001/array.sh")).unwrap();
+    assert!(script.contains("%2"), "{script}");
+    // One array for all three takes' shards.
+    let tasks = script
+        .lines()
+        .filter(|l| l.contains("render_shard"))
+        .count();
+    assert!(tasks >= 6, "{tasks} tasks: {script}");
+}

@@ -54,24 +54,6 @@ fn kill_once_staged(mut child: Child, partial: &Path) {
     child.wait().unwrap();
 }
 
-/// Pids of processes whose command line contains every needle.
-fn pids_with(needles: &[&str]) -> Vec<i32> {
-    let mut out = Vec::new();
-    for e in std::fs::read_dir("/proc").unwrap().flatten() {
-        let Ok(pid) = e.file_name().to_string_lossy().parse::<i32>() else {
-            continue;
-        };
-        let Ok(cmd) = std::fs::read(e.path().join("cmdline")) else {
-            continue;
-        };
-        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
-        if needles.iter().all(|n| cmd.contains(n)) {
-            out.push(pid);
-        }
-    }
-    out
-}
-
 fn kill9(pid: i32) -> bool {
     Command::new("kill")
         .args(["-9", &pid.to_string()])
@@ -107,7 +89,7 @@ fn run_with_kills(
             return (status, kills);
         }
         if kills < target && Instant::now() >= next {
-            for pid in pids_with(&["render_shard.py", &needle]) {
+            for pid in common::pids_with(&["render_shard.py", &needle]) {
                 if kill9(pid) {
                     kills += 1;
                 }
@@ -143,7 +125,7 @@ fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
             .unwrap_or(0);
         if done > seen {
             seen = done;
-            for pid in pids_with(&["render_shard.py", &needle]) {
+            for pid in common::pids_with(&["render_shard.py", &needle]) {
                 if kill9(pid) {
                     kills += 1;
                 }
@@ -226,7 +208,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
                 .unwrap_or(0);
             if kills < 3 {
                 std::thread::sleep(Duration::from_millis(rng.millis(500, 2000)));
-                for pid in pids_with(&["render_shard.py", &needle]) {
+                for pid in common::pids_with(&["render_shard.py", &needle]) {
                     if kill9(pid) {
                         kills += 1;
                     }

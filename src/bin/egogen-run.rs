@@ -1,7 +1,9 @@
 //! `egogen-run`: the pipeline — config in, dataset out (`egogen::run_job`). Agents walking the
 //! scene, a scripted walk or a motion file, rendered by the rig's cameras through Blender
 //! workers into a dataset folder with a `[render]` section, else written as a motion folder.
-//! `egogen-run verify DATASET` re-checks a finished dataset. This file only parses arguments.
+//! `egogen-run verify DATASET` re-checks a finished dataset; `egogen-run CAMPAIGN.toml` (a file
+//! with a `[campaign]` section) makes many takes (`egogen::campaign`). This file only parses
+//! arguments.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -40,6 +42,15 @@ struct Args {
     /// Camera rig to render with, overriding `render.rig`.
     #[arg(long)]
     rig: Option<PathBuf>,
+    /// Scene to walk and render (glTF/GLB, OBJ or PLY), overriding `scene.path`.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// People in the crowd, overriding `crowd.count` (a config with a `[crowd]`).
+    #[arg(long)]
+    crowd_count: Option<usize>,
+    /// Seconds of motion, overriding `motion.duration_s`.
+    #[arg(long = "duration")]
+    duration_s: Option<f64>,
     /// Where shards run, overriding `supervisor.backend`: `local` (Blender processes here) or
     /// `slurm` (a job array; resources in `[supervisor.slurm]`).
     #[arg(long, value_enum)]
@@ -51,6 +62,13 @@ struct Args {
     /// else the managed install.
     #[arg(long)]
     blender: Option<PathBuf>,
+    /// A campaign: state its takes, frames, disk and time, and render nothing.
+    #[arg(long)]
+    dry_run: bool,
+    /// A campaign: estimate its time and disk from the pool reports and datasets of this
+    /// campaign or dataset folder (default: the campaign's own earlier starts).
+    #[arg(long)]
+    throughput_from: Option<PathBuf>,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -85,16 +103,43 @@ fn run(args: Args) -> Result<()> {
     let Some(config) = args.config else {
         anyhow::bail!("no config given: egogen-run CONFIG (e.g. configs/default.toml), or egogen-run verify DATASET");
     };
+    let backend = args.backend.map(|b| match b {
+        BackendArg::Local => Backend::Local,
+        BackendArg::Slurm => Backend::Slurm,
+    });
     let overrides = RunOverrides {
         out: args.out,
         seed: args.seed,
         rig: args.rig,
+        scene: args.scene,
+        crowd_count: args.crowd_count,
+        duration_s: args.duration_s,
         workers: args.workers,
-        backend: args.backend.map(|b| match b {
-            BackendArg::Local => Backend::Local,
-            BackendArg::Slurm => Backend::Slurm,
-        }),
+        backend,
     };
+    if egogen::campaign::is_campaign(&config) {
+        if let Some(flag) = overrides.take_flags().first() {
+            anyhow::bail!(
+                "{flag} sets one take; a campaign ({}) says what varies per take in its [campaign] section",
+                config.display()
+            );
+        }
+        let request = egogen::campaign::CampaignRequest {
+            resume: args.resume,
+            dry_run: args.dry_run,
+            blender: args.blender,
+            workers: args.workers,
+            backend,
+            throughput_from: args.throughput_from,
+        };
+        return egogen::campaign::run(&config, &request);
+    }
+    if args.dry_run || args.throughput_from.is_some() {
+        anyhow::bail!(
+            "--dry-run and --throughput-from are for campaigns; {} has no [campaign] section",
+            config.display()
+        );
+    }
     let request = RunRequest {
         resume: args.resume,
         blender: args.blender,

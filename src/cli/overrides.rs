@@ -18,6 +18,12 @@ pub struct RunOverrides {
     pub seed: Option<u64>,
     /// `render.rig`.
     pub rig: Option<PathBuf>,
+    /// `scene.path`.
+    pub scene: Option<PathBuf>,
+    /// `crowd.count` (a config with a `[crowd]`).
+    pub crowd_count: Option<usize>,
+    /// `motion.duration_s`.
+    pub duration_s: Option<f64>,
     /// `supervisor.workers`.
     pub workers: Option<usize>,
     /// `supervisor.backend`.
@@ -27,12 +33,31 @@ pub struct RunOverrides {
 impl RunOverrides {
     /// Applies the overrides to a config as written; paths given on the command line are made
     /// absolute (the config's own stay relative to its folder).
-    pub fn apply(&self, raw: &mut RawRun) -> std::io::Result<()> {
+    pub fn apply(&self, raw: &mut RawRun) -> anyhow::Result<()> {
+        use anyhow::Context;
+        let absolute = |p: &Path| {
+            std::path::absolute(p)
+                .with_context(|| format!("resolving {} given on the command line", p.display()))
+        };
         if let Some(out) = &self.out {
-            raw.output.dir = std::path::absolute(out)?;
+            raw.output.dir = absolute(out)?;
         }
         if let Some(rig) = &self.rig {
-            raw.render.get_or_insert_with(Default::default).rig = Some(std::path::absolute(rig)?);
+            raw.render.get_or_insert_with(Default::default).rig = Some(absolute(rig)?);
+        }
+        if let Some(scene) = &self.scene {
+            raw.scene.path = Some(absolute(scene)?);
+        }
+        if let Some(count) = self.crowd_count {
+            let Some(crowd) = raw.crowd.as_mut() else {
+                anyhow::bail!(
+                    "--crowd-count {count}: the config has no [crowd] section to set `crowd.count` in"
+                );
+            };
+            crowd.count = count;
+        }
+        if let Some(d) = self.duration_s {
+            raw.motion.duration_s = Some(d);
         }
         if let Some(seed) = self.seed {
             // Agents draw from the motion's seed; a single motion is placed by the scene's.
@@ -68,11 +93,29 @@ impl RunOverrides {
         Ok(())
     }
 
+    /// The flags given that change what is rendered (all but `--workers` and `--backend`).
+    pub fn take_flags(&self) -> Vec<&'static str> {
+        [
+            ("--out", self.out.is_some()),
+            ("--seed", self.seed.is_some()),
+            ("--rig", self.rig.is_some()),
+            ("--scene", self.scene.is_some()),
+            ("--crowd-count", self.crowd_count.is_some()),
+            ("--duration", self.duration_s.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, on)| on.then_some(flag))
+        .collect()
+    }
+
     /// Whether anything is overridden.
     pub fn is_empty(&self) -> bool {
         self.out.is_none()
             && self.seed.is_none()
             && self.rig.is_none()
+            && self.scene.is_none()
+            && self.crowd_count.is_none()
+            && self.duration_s.is_none()
             && self.workers.is_none()
             && self.backend.is_none()
     }
@@ -100,13 +143,13 @@ pub fn effective_config_toml(
         || source.display().to_string(),
         |n| n.to_string_lossy().into_owned(),
     );
-    let changed = overrides.out.is_some() || overrides.seed.is_some() || overrides.rig.is_some();
+    let given = overrides.take_flags();
     Ok(format!(
         "# The effective config of this dataset: {name}{}, without [supervisor];\n# relative paths are relative to the folder {name} was in.\n\n{body}",
-        if changed {
-            " with the command line's --out, --seed or --rig applied"
+        if given.is_empty() {
+            String::new()
         } else {
-            ""
+            format!(" with the command line's {} applied", given.join(", "))
         },
     ))
 }

@@ -16,11 +16,10 @@ use serde::{Deserialize, Serialize};
 use super::config_file::{crate_root, resolve_body_model};
 use super::config_file::{load_toml, Bad, ConfigError};
 use crate::math::random::normal_samples;
-use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::plan::{AgentDraft, SynthPlan};
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableMap};
 use crate::synth::crowd::{
-    run_crowd, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering, NEW_FRAMES,
+    run_crowd, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering,
 };
 
 /// Most agents in one take.
@@ -261,11 +260,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
             format!("expected a length in (0, {MAX_DURATION_S}] s, got {duration_s}"),
         ));
     }
-    let frames = (duration_s * PRIMITIVE_RATE_HZ).round() as usize;
-    let primitives = frames
-        .saturating_sub(SEED_FRAMES)
-        .div_ceil(NEW_FRAMES)
-        .max(1);
+    let primitives = crate::synth::crowd::primitives_for(duration_s);
     let settings = crowd_settings(m, primitives, &bad)?;
     let mut agents = listed_agents(&raw.agents, &bad)?;
     if let Some(c) = &raw.crowd {

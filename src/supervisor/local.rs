@@ -1,9 +1,11 @@
-//! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard,
-//! starts Blender on its spec, finishes frames as their raw files are reported, and retries a
-//! failed or timed-out attempt on the frames still missing until one frame has failed more
-//! than the configured count (retries count frames, not attempts: `run_shard`); each
-//! attempt's stderr goes to `logs/`. Ctrl-C kills the workers and leaves every finished frame in
-//! place, so `--resume` continues.
+//! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard (of
+//! any take the feed has staged; a worker that finds none left stages the next take), starts
+//! Blender on its spec, finishes frames as their raw files are reported, and retries a failed
+//! or timed-out attempt on the frames still missing until one frame has failed more than the
+//! configured count (retries count frames, not attempts: `run_shard`); each attempt's stderr
+//! goes to its take's `logs/`. A take whose shards are all done goes back to the feed to be
+//! finished while the workers render the next. Ctrl-C kills the workers and leaves every
+//! finished frame in place, so `--resume` continues.
 
 use std::collections::{BTreeSet, VecDeque};
 use std::process::Stdio;
@@ -16,8 +18,8 @@ use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::sync::watch;
 
 use super::pool::{
-    frames_bar, setup_failure, Attempt, FrameTries, Outcome, PoolReport, ShardPool, ShardReport,
-    EXIT_SETUP_FAILED,
+    frames_bar, setup_failure, shard_failure_message, Attempt, FrameTries, Outcome, PoolReport,
+    PoolRun, PoolTake, ShardPool, ShardReport, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
 };
 use super::staged::{Dataset, Shard};
 use crate::render::shard::worker_command;
@@ -32,17 +34,34 @@ pub struct PoolSettings {
 }
 
 /// The local backend: renders shards with a pool of local Blender workers; returns when all
-/// are done, one has failed past its retries, or Ctrl-C was pressed (both errors).
+/// are done, or Ctrl-C was pressed, or (when the run says so) one has failed past its retries
+/// (both errors).
 #[derive(Debug, Clone, Copy)]
 pub struct LocalPool(pub PoolSettings);
 
+/// A staged take in the pool: its shards not yet handed back, and whether it failed.
+struct TakeInPool {
+    take: PoolTake,
+    shards_left: usize,
+    failed: bool,
+}
+
 struct Shared {
-    dataset: Arc<Dataset>,
+    feed: Arc<Mutex<dyn TakeFeed>>,
     runtime: BlenderRuntime,
     settings: PoolSettings,
-    queue: Mutex<VecDeque<Shard>>,
+    stop_on_failure: bool,
+    takes: Mutex<Vec<TakeInPool>>,
+    /// (take, shard) in the order they are rendered.
+    queue: Mutex<VecDeque<(usize, Shard)>>,
+    /// The feed has no takes left.
+    feed_done: Mutex<bool>,
+    /// One worker stages a take at a time; the others render meanwhile.
+    staging: tokio::sync::Mutex<()>,
     reports: Mutex<Vec<ShardReport>>,
     failed: Mutex<Option<String>>,
+    failed_takes: Mutex<Vec<TakeFailure>>,
+    busy_seconds: Mutex<Vec<f64>>,
     states: Mutex<Vec<String>>,
     bar: ProgressBar,
     stop: watch::Receiver<bool>,
@@ -51,21 +70,19 @@ struct Shared {
 impl ShardPool for LocalPool {
     fn run(
         &self,
-        dataset: Arc<Dataset>,
+        feed: Arc<Mutex<dyn TakeFeed>>,
         runtime: BlenderRuntime,
-        shards: Vec<Shard>,
-        already_done: usize,
+        run: &PoolRun,
     ) -> Result<PoolReport> {
-        run_local(dataset, runtime, shards, self.0, already_done)
+        run_local(feed, runtime, self.0, run)
     }
 }
 
 fn run_local(
-    dataset: Arc<Dataset>,
+    feed: Arc<Mutex<dyn TakeFeed>>,
     runtime: BlenderRuntime,
-    shards: Vec<Shard>,
     settings: PoolSettings,
-    already_done: usize,
+    run: &PoolRun,
 ) -> Result<PoolReport> {
     let rt = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
@@ -74,17 +91,23 @@ fn run_local(
         .context("starting the worker pool")?;
     rt.block_on(async move {
         let started = Instant::now();
-        let total = dataset.total_frames() as u64;
-        let bar = frames_bar(total, already_done as u64)?;
+        let (total, done) = feed.lock().unwrap().frames();
+        let bar = frames_bar(total as u64, done as u64)?;
         let (stop_tx, stop_rx) = watch::channel(false);
-        let workers = settings.workers.min(shards.len()).max(1);
+        let workers = settings.workers.max(1);
         let shared = Arc::new(Shared {
-            dataset,
+            feed,
             runtime,
             settings,
-            queue: Mutex::new(shards.into()),
+            stop_on_failure: run.stop_on_failure,
+            takes: Mutex::new(Vec::new()),
+            queue: Mutex::new(VecDeque::new()),
+            feed_done: Mutex::new(false),
+            staging: tokio::sync::Mutex::new(()),
             reports: Mutex::new(Vec::new()),
             failed: Mutex::new(None),
+            failed_takes: Mutex::new(Vec::new()),
+            busy_seconds: Mutex::new(vec![0.0; workers]),
             states: Mutex::new(vec!["idle".into(); workers]),
             bar: bar.clone(),
             stop: stop_rx,
@@ -103,20 +126,27 @@ fn run_local(
         interrupt.abort();
         bar.finish_and_clear();
         let mut reports = std::mem::take(&mut *shared.reports.lock().unwrap());
-        reports.sort_by_key(|r| r.shard);
+        reports.sort_by(|a, b| (&a.take, a.shard).cmp(&(&b.take, b.shard)));
         let frames_finished = reports
             .iter()
             .flat_map(|r| r.attempts.iter())
             .map(|a| a.finished)
             .sum();
+        let wall_seconds = started.elapsed().as_secs_f64();
+        let busy_seconds = shared.busy_seconds.lock().unwrap().clone();
         let report = PoolReport {
             shards: reports,
             frames_finished,
-            wall_seconds: started.elapsed().as_secs_f64(),
+            wall_seconds,
+            workers,
+            utilisation: busy_seconds.iter().sum::<f64>()
+                / (workers as f64 * wall_seconds).max(1e-9),
+            busy_seconds,
+            failed_takes: shared.failed_takes.lock().unwrap().clone(),
         };
         // Written whatever happened: an interrupted or failed start's report is the one a
         // user reads first.
-        report.write(&shared.dataset)?;
+        report.write(run)?;
         if *shared.stop.borrow() {
             bail!("interrupted: finished frames are kept; rerun with --resume to continue");
         }
@@ -139,34 +169,148 @@ fn set_state(shared: &Shared, w: usize, state: String) {
     shared.bar.set_message(msg);
 }
 
+/// What a worker does next.
+enum Next {
+    Render(usize, Arc<Dataset>, Shard),
+    /// Nothing queued: stage a take (or find none left).
+    Stage,
+    Stop,
+}
+
+fn next_work(shared: &Shared) -> Next {
+    if *shared.stop.borrow() || shared.failed.lock().unwrap().is_some() {
+        return Next::Stop;
+    }
+    loop {
+        let Some((t, shard)) = shared.queue.lock().unwrap().pop_front() else {
+            return if *shared.feed_done.lock().unwrap() {
+                Next::Stop
+            } else {
+                Next::Stage
+            };
+        };
+        let takes = shared.takes.lock().unwrap();
+        if !takes[t].failed {
+            return Next::Render(t, takes[t].take.dataset.clone(), shard);
+        }
+    }
+}
+
 async fn worker(shared: Arc<Shared>, w: usize) {
     loop {
-        if *shared.stop.borrow() || shared.failed.lock().unwrap().is_some() {
-            break;
-        }
-        let Some(shard) = shared.queue.lock().unwrap().pop_front() else {
-            break;
+        let (t, dataset, shard) = match next_work(&shared) {
+            Next::Stop => break,
+            Next::Stage => {
+                let _one = shared.staging.lock().await;
+                if shared.queue.lock().unwrap().is_empty() && !*shared.feed_done.lock().unwrap() {
+                    set_state(&shared, w, "staging a take".into());
+                    stage_next(&shared).await;
+                }
+                continue;
+            }
+            Next::Render(t, dataset, shard) => (t, dataset, shard),
         };
-        let (report, failure) = run_shard(&shared, w, &shard).await;
+        let began = Instant::now();
+        let (mut report, failure) = run_shard(&shared, &dataset, w, &shard).await;
+        shared.busy_seconds.lock().unwrap()[w] += began.elapsed().as_secs_f64();
+        let name = shared.takes.lock().unwrap()[t].take.name.clone();
+        report.take = name.clone();
         if let Some(failure) = failure.filter(|_| !*shared.stop.borrow()) {
-            let last = report.attempts.last();
-            let mut f = shared.failed.lock().unwrap();
-            f.get_or_insert(format!(
-                "shard {} ({} frames {:?}): {failure} after {} attempt(s); last: {} (log: {})",
-                report.shard,
-                report.camera,
-                report.frames,
-                report.attempts.len(),
-                last.map_or_else(|| "none".into(), |a| a.outcome.to_string()),
-                last.map_or_else(
-                    || "none".into(),
-                    |a| shared.dataset.staging.join(&a.log).display().to_string()
-                )
-            ));
+            let message = shard_failure_message(&dataset, &report, &failure);
+            if shared.stop_on_failure {
+                shared.failed.lock().unwrap().get_or_insert(message);
+            } else {
+                fail_take(&shared, t, message).await;
+            }
+        } else if !*shared.stop.borrow() {
+            let rendered = {
+                let mut takes = shared.takes.lock().unwrap();
+                takes[t].shards_left -= 1;
+                takes[t].shards_left == 0 && !takes[t].failed
+            };
+            if rendered {
+                set_state(&shared, w, format!("finishing take {name}"));
+                take_rendered(&shared, t).await;
+            }
         }
         shared.reports.lock().unwrap().push(report);
     }
     set_state(&shared, w, "done".into());
+}
+
+/// Stages the feed's next take and queues its shards (a take with none left is handed back
+/// at once); a take that cannot be staged is recorded (or stops the run).
+async fn stage_next(shared: &Arc<Shared>) {
+    let feed = shared.feed.clone();
+    let next = tokio::task::spawn_blocking(move || feed.lock().unwrap().next_take())
+        .await
+        .unwrap_or_else(|e| {
+            Some(Err(TakeFailure {
+                take: "?".into(),
+                reason: format!("staging panicked: {e}"),
+            }))
+        });
+    match next {
+        None => *shared.feed_done.lock().unwrap() = true,
+        Some(Err(failure)) => record_failure(shared, failure),
+        Some(Ok(take)) => {
+            // Staging makes a take's frame count exact.
+            let feed = shared.feed.clone();
+            if let Ok((total, _)) =
+                tokio::task::spawn_blocking(move || feed.lock().unwrap().frames()).await
+            {
+                shared.bar.set_length(total as u64);
+            }
+            let shards = take.shards.clone();
+            let t = {
+                let mut takes = shared.takes.lock().unwrap();
+                takes.push(TakeInPool {
+                    shards_left: shards.len(),
+                    take,
+                    failed: false,
+                });
+                takes.len() - 1
+            };
+            if shards.is_empty() {
+                take_rendered(shared, t).await;
+            }
+            shared
+                .queue
+                .lock()
+                .unwrap()
+                .extend(shards.into_iter().map(|s| (t, s)));
+        }
+    }
+}
+
+/// Hands a rendered take back to the feed to be finished; a take that cannot be finished is
+/// recorded as failed.
+async fn take_rendered(shared: &Arc<Shared>, t: usize) {
+    let take = shared.takes.lock().unwrap()[t].take.clone();
+    let feed = shared.feed.clone();
+    let name = take.name.clone();
+    let finished = tokio::task::spawn_blocking(move || feed.lock().unwrap().take_rendered(&take))
+        .await
+        .map_err(|e| anyhow::anyhow!("finishing panicked: {e}"))
+        .and_then(|r| r);
+    if let Err(e) = finished {
+        fail_take(shared, t, format!("finishing take {name}: {e:#}")).await;
+    }
+}
+
+/// Gives a take up: its queued shards are skipped, the feed records why.
+async fn fail_take(shared: &Arc<Shared>, t: usize, reason: String) {
+    let failure = {
+        let mut takes = shared.takes.lock().unwrap();
+        takes[t].failed = true;
+        TakeFailure {
+            take: takes[t].take.name.clone(),
+            reason,
+        }
+    };
+    record_failure(shared, failure.clone());
+    let feed = shared.feed.clone();
+    let _ = tokio::task::spawn_blocking(move || feed.lock().unwrap().take_failed(&failure)).await;
 }
 
 /// Renders a shard's missing frames, retrying on the frames still missing. Retries are
@@ -175,10 +319,15 @@ async fn worker(shared: Arc<Shared>, w: usize) {
 /// writing its frames costs nothing, and the shard fails only when some frame has failed
 /// `retries + 1` times (or the scene could not be set up, which fails the same way every
 /// time). Returns the report and, when frames are left, why.
-async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> (ShardReport, Option<String>) {
-    let dataset = &shared.dataset;
+async fn run_shard(
+    shared: &Shared,
+    dataset: &Arc<Dataset>,
+    w: usize,
+    shard: &Shard,
+) -> (ShardReport, Option<String>) {
     let camera = dataset.cameras[shard.camera].camera.name.clone();
     let mut report = ShardReport {
+        take: String::new(),
         shard: shard.id,
         camera: camera.clone(),
         frames: shard.frames.clone(),
@@ -213,10 +362,11 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> (ShardReport, Op
         let log = dataset
             .logs_dir()
             .join(format!("shard_{:04}_attempt_{attempt}.log", shard.id));
-        let (finished, outcome) = match attempt_shard(shared, shard.camera, &missing, &log).await {
-            Ok(n) => (n, Outcome::Ok),
-            Err((n, outcome)) => (n, outcome),
-        };
+        let (finished, outcome) =
+            match attempt_shard(shared, dataset, shard.camera, &missing, &log).await {
+                Ok(n) => (n, Outcome::Ok),
+                Err((n, outcome)) => (n, outcome),
+            };
         let ok = outcome.is_ok();
         let setup_failed = outcome.repeats();
         report.attempts.push(Attempt {
@@ -257,11 +407,11 @@ async fn run_shard(shared: &Shared, w: usize, shard: &Shard) -> (ShardReport, Op
 /// One Blender run over `frames`; returns frames finished, or (finished, reason).
 async fn attempt_shard(
     shared: &Shared,
+    dataset: &Arc<Dataset>,
     camera: usize,
     frames: &[u32],
     log: &std::path::Path,
 ) -> std::result::Result<usize, (usize, Outcome)> {
-    let dataset = shared.dataset.clone();
     let fail = |n: usize, reason: String| (n, Outcome::Failed { reason });
     let spec = dataset.shard_spec(camera, frames);
     let spec_path = log.with_extension("json");
@@ -357,4 +507,16 @@ async fn attempt_shard(
         ));
     }
     Ok(finished)
+}
+
+/// Lists a failed take in the report; it stops the run when the run says so.
+fn record_failure(shared: &Shared, failure: TakeFailure) {
+    if shared.stop_on_failure {
+        shared
+            .failed
+            .lock()
+            .unwrap()
+            .get_or_insert(failure.reason.clone());
+    }
+    shared.failed_takes.lock().unwrap().push(failure);
 }

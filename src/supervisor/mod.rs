@@ -16,7 +16,9 @@ pub mod staged;
 
 pub use local::{LocalPool, PoolSettings};
 pub use manifest::{build_manifest, verify, write_manifest, Manifest, VerifyReport};
-pub use pipeline::{run_pipeline, RunMotion, RunOptions, RunSummary};
-pub use pool::{PoolReport, ShardPool};
+pub use pipeline::{
+    run_pipeline, shard_pool, stage_take, RunMotion, RunOptions, RunSummary, Staged, StagedTake,
+};
+pub use pool::{PoolReport, PoolRun, PoolTake, ShardPool, TakeFailure, TakeFeed};
 pub use slurm::{SlurmPool, SlurmSettings};
 pub use staged::{CameraWork, Dataset, RenderedAgent, Shard};

@@ -4,7 +4,7 @@
 //! is byte-identical; otherwise nothing is touched.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
@@ -13,7 +13,7 @@ use super::colmap::write_colmap;
 use super::dataset::write_annotations;
 use super::local::{LocalPool, PoolSettings};
 use super::manifest::{remove_temporaries, sha256_hex, write_manifest_with, MANIFEST};
-use super::pool::ShardPool;
+use super::pool::{OneTake, PoolRun, PoolTake, ShardPool};
 use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use super::staged::{next_start, CameraWork, Dataset, RenderedAgent};
 use crate::atomic_file::write_atomically;
@@ -100,12 +100,8 @@ pub enum RunMotion<'a> {
 }
 
 /// Runs the pipeline for a plan with a render section; `config_path` is hashed so that a
-/// resumed run is known to be the same run.
-///
-/// `work/run.json`, [`RunState`], says which run a `.partial` folder holds. The steps, in
-/// order: check the output folder and what a resume continues; everything that can fail on bad
-/// input before anything is staged; stage the run; write the sequence and Blender's inputs;
-/// plan the cameras and the scene's objects; render what is missing; finish the dataset.
+/// resumed run is known to be the same run: [`stage_take`], the missing frames rendered on the
+/// plan's backend, [`StagedTake::finish`].
 pub fn run_pipeline(
     plan: &RunPlan,
     render: &RenderPlan,
@@ -114,6 +110,141 @@ pub fn run_pipeline(
     config_path: &Path,
     opts: &RunOptions,
 ) -> Result<RunSummary> {
+    // A new run fails on a missing Blender or Slurm before anything is staged.
+    let mut runtime = None;
+    let before_staging = || -> Result<()> {
+        runtime = Some(BlenderRuntime::resolve(opts.blender.as_deref())?);
+        if plan.supervisor.backend == Backend::Slurm {
+            check_slurm_tools()?;
+        }
+        Ok(())
+    };
+    let staged = match stage_take(
+        plan,
+        render,
+        motion,
+        model,
+        config_path,
+        opts,
+        before_staging,
+    )? {
+        Staged::Complete(dir) => {
+            eprintln!(
+                "egogen-run: {} is already complete; nothing to do",
+                dir.display()
+            );
+            return Ok(RunSummary {
+                dir,
+                frames: 0,
+                rendered_now: 0,
+                files: 0,
+            });
+        }
+        Staged::Take(take) => take,
+    };
+    let dataset = staged.dataset.clone();
+    let total = dataset.total_frames();
+    let shards = dataset.pending_shards();
+    let pending: usize = shards.iter().map(|s| s.frames.len()).sum();
+    eprintln!(
+        "egogen-run: {} camera(s) × {} frames = {total} frames; {pending} to render in {} shard(s) on {} worker(s)",
+        render.cameras.len(),
+        total / dataset.cameras.len().max(1),
+        shards.len(),
+        plan.supervisor.workers
+    );
+    let mut rendered_now = 0;
+    if !shards.is_empty() {
+        let runtime = match runtime {
+            Some(r) => r,
+            None => BlenderRuntime::resolve(opts.blender.as_deref())?,
+        };
+        let take = PoolTake {
+            name: String::new(),
+            dataset: dataset.clone(),
+            shards,
+        };
+        let run = PoolRun {
+            logs_dir: dataset.logs_dir(),
+            work_dir: dataset.staging.join("work"),
+            stop_on_failure: true,
+        };
+        let feed = Arc::new(Mutex::new(OneTake::new(take, total - pending)));
+        let report = shard_pool(&plan.supervisor).run(feed, runtime, &run)?;
+        let retried = report
+            .shards
+            .iter()
+            .filter(|s| s.attempts.len() > 1)
+            .count();
+        eprintln!(
+            "egogen-run: rendered {} frames in {:.1} s ({retried} shard(s) retried)",
+            report.frames_finished, report.wall_seconds
+        );
+        rendered_now = report.frames_finished;
+    }
+    let files = staged.finish()?;
+    Ok(RunSummary {
+        dir: plan.output_dir.clone(),
+        frames: total,
+        rendered_now,
+        files,
+    })
+}
+
+/// The backend the supervisor settings name, as a pool.
+pub fn shard_pool(sup: &crate::plan::SupervisorPlan) -> Box<dyn ShardPool> {
+    let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
+    match sup.backend {
+        Backend::Local => Box::new(LocalPool(PoolSettings {
+            workers: sup.workers,
+            shard_timeout,
+            retries: sup.retries,
+        })),
+        Backend::Slurm => Box::new(SlurmPool(SlurmSettings {
+            plan: sup.slurm.clone(),
+            max_running: sup.workers,
+            shard_timeout,
+            retries: sup.retries,
+        })),
+    }
+}
+
+/// What staging a take found.
+pub enum Staged {
+    /// Its output folder is this run's finished dataset (under `--resume`).
+    Complete(PathBuf),
+    /// Staged in `<dir>.partial`, with its frames left to render.
+    Take(Box<StagedTake>),
+}
+
+/// A take staged in `<dir>.partial`: what its shards render and what finishing it needs.
+pub struct StagedTake {
+    pub dataset: Arc<Dataset>,
+    /// The finished dataset's folder.
+    pub dir: PathBuf,
+    rig: crate::rig::Rig,
+    colmap: bool,
+    object_ids: Vec<(String, u32)>,
+    /// Files only Blender reads (body inputs), removed when the take is finished.
+    scratch: Vec<PathBuf>,
+}
+
+/// Stages a take: checks the output folder and what a resume continues; everything that can
+/// fail on bad input before anything is staged (then `before_staging`, for a new take only:
+/// Blender and the backend's tools are there); stages the run; writes the sequence, the Aria
+/// streams and Blender's inputs; plans the cameras and the scene's objects; repairs what an
+/// interrupted run left (damaged frames, missing records).
+///
+/// `work/run.json`, [`RunState`], says which run a `.partial` folder holds.
+pub fn stage_take(
+    plan: &RunPlan,
+    render: &RenderPlan,
+    motion: RunMotion,
+    model: &BodyModel,
+    config_path: &Path,
+    opts: &RunOptions,
+    before_staging: impl FnOnce() -> Result<()>,
+) -> Result<Staged> {
     let dir = &plan.output_dir;
     let staging = PathBuf::from(format!("{}.partial", dir.display()));
     let state = RunState {
@@ -123,36 +254,17 @@ pub fn run_pipeline(
         rig_sha256: Some(sha256_hex(render.rig.to_json().as_bytes())),
     };
     let fresh = match check_output(dir, &staging, &state, opts)? {
-        OutputState::Complete => {
-            eprintln!(
-                "egogen-run: {} is already complete; nothing to do",
-                dir.display()
-            );
-            return Ok(RunSummary {
-                dir: dir.clone(),
-                frames: 0,
-                rendered_now: 0,
-                files: 0,
-            });
-        }
+        OutputState::Complete => return Ok(Staged::Complete(dir.clone())),
         OutputState::Fresh => true,
         OutputState::Resume => false,
     };
 
-    // Everything that can fail on bad input or a missing Blender, before anything is staged:
-    // the scene, where the motion happens in it, and (for a new run) the renderer.
+    // Everything that can fail on bad input, before anything is staged: the scene, where the
+    // motion happens in it.
     let scene = load_scene(&plan.scene, None)?;
     let (agents, wearers) = rendered_agents(plan, &scene, &motion, model)?;
-    let runtime = if fresh {
-        Some(BlenderRuntime::resolve(opts.blender.as_deref())?)
-    } else {
-        None
-    };
-    if plan.supervisor.backend == Backend::Slurm {
-        check_slurm_tools()?;
-    }
-
     if fresh {
+        before_staging()?;
         stage_run(&staging, &state, opts)?;
     } else {
         eprintln!("egogen-run: resuming {}", staging.display());
@@ -180,14 +292,15 @@ pub fn run_pipeline(
         agents,
         start: next_start(&staging),
     });
-    let rendered_now = render_missing(&dataset, plan, render, runtime, opts)?;
-    let files = finish_dataset(&dataset, render, &objects.ids, &scratch, dir)?;
-    Ok(RunSummary {
+    repair(&dataset)?;
+    Ok(Staged::Take(Box::new(StagedTake {
+        dataset,
         dir: dir.clone(),
-        frames: dataset.total_frames(),
-        rendered_now,
-        files,
-    })
+        rig: render.rig.clone(),
+        colmap: render.passes.has(Pass::Colmap),
+        object_ids: objects.ids,
+        scratch,
+    })))
 }
 
 /// What the output folder holds for a run.
@@ -648,15 +761,9 @@ fn base_spec(
     })
 }
 
-/// Repairs what an interrupted run left (damaged frames, missing records), then renders the
-/// frames not done yet on the plan's backend; returns how many were rendered.
-fn render_missing(
-    dataset: &Arc<Dataset>,
-    plan: &RunPlan,
-    render: &RenderPlan,
-    runtime: Option<BlenderRuntime>,
-    opts: &RunOptions,
-) -> Result<usize> {
+/// Repairs what an interrupted run left (damaged frames, missing records) and says how a
+/// camera with Cycles' polynomial fisheye differs from its model.
+fn repair(dataset: &Dataset) -> Result<()> {
     for work in &dataset.cameras {
         if let RenderCamera::PolynomialFisheye(lens) = &work.render {
             let e = native_error(&work.camera.model, lens, ERROR_GRID);
@@ -672,84 +779,42 @@ fn render_missing(
             path.display()
         );
     }
-    let total = dataset.total_frames();
-    let shards = dataset.pending_shards();
-    let pending: usize = shards.iter().map(|s| s.frames.len()).sum();
-    eprintln!(
-        "egogen-run: {} camera(s) × {} frames = {total} frames; {pending} to render in {} shard(s) on {} worker(s)",
-        render.cameras.len(),
-        total / dataset.cameras.len().max(1),
-        shards.len(),
-        plan.supervisor.workers
-    );
-    if shards.is_empty() {
-        return Ok(0);
-    }
-    let runtime = match runtime {
-        Some(r) => r,
-        None => BlenderRuntime::resolve(opts.blender.as_deref())?,
-    };
-    let sup = &plan.supervisor;
-    let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
-    let pool: Box<dyn ShardPool> = match sup.backend {
-        Backend::Local => Box::new(LocalPool(PoolSettings {
-            workers: sup.workers,
-            shard_timeout,
-            retries: sup.retries,
-        })),
-        Backend::Slurm => Box::new(SlurmPool(SlurmSettings {
-            plan: sup.slurm.clone(),
-            max_running: sup.workers,
-            shard_timeout,
-            retries: sup.retries,
-        })),
-    };
-    let report = pool.run(dataset.clone(), runtime, shards, total - pending)?;
-    let retried = report
-        .shards
-        .iter()
-        .filter(|s| s.attempts.len() > 1)
-        .count();
-    eprintln!(
-        "egogen-run: rendered {} frames in {:.1} s ({retried} shard(s) retried)",
-        report.frames_finished, report.wall_seconds
-    );
-    Ok(report.frames_finished)
+    Ok(())
 }
 
-/// Writes the annotations and the COLMAP model from the frames' records, removes the scratch
-/// only Blender read (raw renders, body inputs) and the temporaries of killed writes, writes
-/// the manifest and renames `<dir>.partial` to `<dir>`; returns how many files it lists.
-fn finish_dataset(
-    dataset: &Dataset,
-    render: &RenderPlan,
-    object_ids: &[(String, u32)],
-    scratch: &[PathBuf],
-    dir: &Path,
-) -> Result<usize> {
-    let staging = &dataset.staging;
-    let records = dataset.records()?;
-    write_annotations(dataset, &render.rig, &records, object_ids)?;
-    if render.passes.has(Pass::Colmap) {
-        write_colmap(dataset)?;
+impl StagedTake {
+    /// Writes the annotations and the COLMAP model from the frames' records, removes the
+    /// scratch only Blender read (raw renders, body inputs) and the temporaries of killed
+    /// writes, writes the manifest and renames `<dir>.partial` to `<dir>`; returns how many
+    /// files it lists.
+    pub fn finish(&self) -> Result<usize> {
+        let dataset = &self.dataset;
+        let staging = &dataset.staging;
+        let records = dataset.records()?;
+        write_annotations(dataset, &self.rig, &records, &self.object_ids)?;
+        if self.colmap {
+            write_colmap(dataset)?;
+        }
+        let _ = std::fs::remove_dir_all(dataset.raw_dir());
+        for f in &self.scratch {
+            let _ = std::fs::remove_file(f);
+        }
+        for p in remove_temporaries(staging)? {
+            eprintln!(
+                "egogen-run: removed {}, left by an interrupted run",
+                p.display()
+            );
+        }
+        let manifest = write_manifest_with(staging, &dataset.recorded_files(&records))?;
+        let dir = &self.dir;
+        if dir.exists() {
+            std::fs::remove_dir(dir)
+                .with_context(|| format!("replacing empty {}", dir.display()))?;
+        }
+        std::fs::rename(staging, dir)
+            .with_context(|| format!("renaming {} to {}", staging.display(), dir.display()))?;
+        Ok(manifest.files.len())
     }
-    let _ = std::fs::remove_dir_all(dataset.raw_dir());
-    for f in scratch {
-        let _ = std::fs::remove_file(f);
-    }
-    for p in remove_temporaries(staging)? {
-        eprintln!(
-            "egogen-run: removed {}, left by an interrupted run",
-            p.display()
-        );
-    }
-    let manifest = write_manifest_with(staging, &dataset.recorded_files(&records))?;
-    if dir.exists() {
-        std::fs::remove_dir(dir).with_context(|| format!("replacing empty {}", dir.display()))?;
-    }
-    std::fs::rename(staging, dir)
-        .with_context(|| format!("renaming {} to {}", staging.display(), dir.display()))?;
-    Ok(manifest.files.len())
 }
 
 /// The `[[obstacles]]` as boxes on the floor at `floor_z_m`, named `obstacle_NN` with ids

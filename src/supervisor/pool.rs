@@ -1,8 +1,10 @@
 //! What every backend shares: the [`ShardPool`] interface the pipeline runs shards through
-//! (local processes or a Slurm array), the report of what each shard attempt did, and the
-//! rendering progress bar.
+//! (local processes or a Slurm array), the [`TakeFeed`] that hands a pool its takes (one for
+//! `egogen-run`, many staged on demand for a campaign) and takes them back when rendered, the
+//! report of what each shard attempt did, and the rendering progress bar.
 
-use std::sync::Arc;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
@@ -11,16 +13,92 @@ use serde::Serialize;
 use super::staged::{Dataset, Shard};
 use crate::render::BlenderRuntime;
 
-/// Where shards run: renders `shards` of `dataset` (`already_done` frames finished before) and
-/// reports every attempt; an error when a shard fails past its retries or the run is stopped.
+/// Where shards run: renders the shards of every take `feed` hands out and reports every
+/// attempt; an error when the run is stopped, or (with [`PoolRun::stop_on_failure`]) when a
+/// shard fails past its retries.
 pub trait ShardPool {
     fn run(
         &self,
-        dataset: Arc<Dataset>,
+        feed: Arc<Mutex<dyn TakeFeed>>,
         runtime: BlenderRuntime,
-        shards: Vec<Shard>,
-        already_done: usize,
+        run: &PoolRun,
     ) -> Result<PoolReport>;
+}
+
+/// One staged take as a pool renders it: its dataset and the shards still to render.
+#[derive(Debug, Clone)]
+pub struct PoolTake {
+    /// The take's name in reports and messages (empty for `egogen-run`'s single take).
+    pub name: String,
+    pub dataset: Arc<Dataset>,
+    pub shards: Vec<Shard>,
+}
+
+/// A take that could not be staged, rendered or finished, and why.
+#[derive(Debug, Clone, Serialize, PartialEq, Eq)]
+pub struct TakeFailure {
+    pub take: String,
+    pub reason: String,
+}
+
+/// Where a pool's takes come from and where they go: staged when a worker runs out of shards
+/// (so motion is made ahead of rendering but scratch is held only for takes in flight), and
+/// handed back when all their frames are rendered, or when they failed.
+pub trait TakeFeed: Send {
+    /// Frames planned over all takes, and those finished before this start (the progress bar).
+    fn frames(&self) -> (usize, usize);
+    /// Stages the next take; `None` when none is left. An error is that take's failure: the
+    /// pool records it and goes on (or stops, with [`PoolRun::stop_on_failure`]).
+    fn next_take(&mut self) -> Option<Result<PoolTake, TakeFailure>>;
+    /// Every frame of `take` is rendered: finish it (annotations, exports, manifest).
+    fn take_rendered(&mut self, take: &PoolTake) -> Result<()>;
+    /// `take` failed; the pool renders no more of it.
+    fn take_failed(&mut self, failure: &TakeFailure);
+}
+
+/// A feed of one staged take, finished by its caller after the pool returns.
+pub struct OneTake {
+    take: Option<PoolTake>,
+    total: usize,
+    done: usize,
+}
+
+impl OneTake {
+    /// `take`, with `done` of its dataset's frames finished before this start.
+    pub fn new(take: PoolTake, done: usize) -> Self {
+        let total = take.dataset.total_frames();
+        OneTake {
+            take: Some(take),
+            total,
+            done,
+        }
+    }
+}
+
+impl TakeFeed for OneTake {
+    fn frames(&self) -> (usize, usize) {
+        (self.total, self.done)
+    }
+    fn next_take(&mut self) -> Option<Result<PoolTake, TakeFailure>> {
+        self.take.take().map(Ok)
+    }
+    fn take_rendered(&mut self, _: &PoolTake) -> Result<()> {
+        Ok(())
+    }
+    fn take_failed(&mut self, _: &TakeFailure) {}
+}
+
+/// Where a pool run keeps its records, and what a failed take does to it.
+#[derive(Debug, Clone)]
+pub struct PoolRun {
+    /// `pool_report.json` and Slurm's task logs: the dataset's (or the campaign's)
+    /// `logs/start_<n>/`.
+    pub logs_dir: PathBuf,
+    /// Scratch of the backend (Slurm's specs and array scripts under `slurm/`).
+    pub work_dir: PathBuf,
+    /// A shard failed past its retries stops the whole run (`egogen-run`'s one take), or only
+    /// its take, recorded in the report while the others go on (a campaign).
+    pub stop_on_failure: bool,
 }
 
 /// One attempt at a shard.
@@ -39,6 +117,9 @@ pub struct Attempt {
 /// What happened to a shard.
 #[derive(Debug, Clone, Serialize)]
 pub struct ShardReport {
+    /// The take the shard belongs to (absent for `egogen-run`'s single take).
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub take: String,
     pub shard: usize,
     pub camera: String,
     pub frames: Vec<u32>,
@@ -51,17 +132,51 @@ pub struct PoolReport {
     pub shards: Vec<ShardReport>,
     pub frames_finished: usize,
     pub wall_seconds: f64,
+    /// Workers of the pool (Slurm: array tasks at once).
+    pub workers: usize,
+    /// Seconds each local worker spent in Blender attempts (empty for Slurm, whose tasks'
+    /// times are in their attempts).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub busy_seconds: Vec<f64>,
+    /// Busy time over `workers × wall_seconds` (local pool; 0 for Slurm).
+    pub utilisation: f64,
+    /// Takes given up (a campaign goes on without them).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub failed_takes: Vec<TakeFailure>,
 }
 
 impl PoolReport {
-    /// Writes `logs/start_<n>/pool_report.json`.
-    pub fn write(&self, dataset: &Dataset) -> Result<()> {
-        let path = dataset.logs_dir().join("pool_report.json");
-        std::fs::create_dir_all(dataset.logs_dir())
-            .with_context(|| format!("creating {}", dataset.logs_dir().display()))?;
+    /// Writes `pool_report.json` into the run's logs folder.
+    pub fn write(&self, run: &PoolRun) -> Result<()> {
+        let path = run.logs_dir.join("pool_report.json");
+        std::fs::create_dir_all(&run.logs_dir)
+            .with_context(|| format!("creating {}", run.logs_dir.display()))?;
         crate::atomic_file::write_atomically(&path, &serde_json::to_vec_pretty(self)?)
             .with_context(|| format!("writing {}", path.display()))
     }
+}
+
+/// The message of a shard given up: which shard of which take, why, and its last attempt
+/// with its log.
+pub fn shard_failure_message(dataset: &Dataset, report: &ShardReport, why: &str) -> String {
+    let last = report.attempts.last();
+    format!(
+        "{}shard {} ({} frames {:?}): {why} after {} attempt(s); last: {} (log: {})",
+        if report.take.is_empty() {
+            String::new()
+        } else {
+            format!("take {}: ", report.take)
+        },
+        report.shard,
+        report.camera,
+        report.frames,
+        report.attempts.len(),
+        last.map_or_else(|| "none".into(), |a| a.outcome.to_string()),
+        last.map_or_else(
+            || "none".into(),
+            |a| dataset.staging.join(&a.log).display().to_string()
+        )
+    )
 }
 
 /// The rendering progress bar: frames done of all planned, ETA, and a status message.

@@ -1,25 +1,27 @@
-//! The Slurm backend: each round writes one spec per pending shard and an `sbatch` array
+//! The Slurm backend: the feed's takes are all staged first (a campaign's too); each round
+//! writes one spec per pending shard of any take and an `sbatch` array
 //! script (one task per shard, resources from `[supervisor.slurm]`), submits it with
 //! `sbatch --parsable`, and polls `squeue` until the array has left the queue, finishing frames
 //! here as the tasks' raw renders appear (the dataset folder is on a filesystem shared with the
 //! nodes). Each task's outcome comes from `scontrol` (or `sacct` once the controller has
 //! forgotten the job); shards that still miss frames — failed, timed out, cancelled, killed
 //! node — go into the next round, up to the retry count. Ctrl-C cancels the array and leaves a
-//! resumable state; a resumed run first cancels the arrays its predecessor left behind.
+//! resumable state; a resumed run first cancels the arrays its predecessor left behind. A take
+//! whose frames are all finished goes back to the feed after the round that finished it.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 
 use super::pool::{
-    frames_bar, setup_failure, Attempt, FrameTries, Outcome, PoolReport, ShardPool, ShardReport,
-    EXIT_SETUP_FAILED,
+    frames_bar, setup_failure, shard_failure_message, Attempt, FrameTries, Outcome, PoolReport,
+    PoolRun, PoolTake, ShardPool, ShardReport, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
 };
 use super::staged::{Dataset, Shard};
 use crate::atomic_file::write_atomically;
@@ -47,103 +49,165 @@ pub struct TaskEnd {
 }
 
 struct ShardState {
+    /// Index of the shard's take in the run's takes.
+    take: usize,
     shard: Shard,
     report: ShardReport,
     /// Failed tries charged to each frame (retries count frames, not attempts).
     tries: FrameTries,
 }
 
+/// A staged take in the run, and whether it is done with (finished or given up).
+struct TakeInRun {
+    take: PoolTake,
+    closed: bool,
+}
+
 /// The Slurm backend: renders shards as Slurm array tasks; returns when every frame is
-/// finished, or fails when a shard has failed past its retries or Ctrl-C was pressed.
+/// finished, or fails when Ctrl-C was pressed or (when the run says so) a shard has failed
+/// past its retries.
 #[derive(Debug, Clone)]
 pub struct SlurmPool(pub SlurmSettings);
 
 impl ShardPool for SlurmPool {
     fn run(
         &self,
-        dataset: Arc<Dataset>,
+        feed: Arc<Mutex<dyn TakeFeed>>,
         runtime: BlenderRuntime,
-        shards: Vec<Shard>,
-        already_done: usize,
+        run: &PoolRun,
     ) -> Result<PoolReport> {
-        run_slurm(dataset, runtime, shards, self.0.clone(), already_done)
+        run_slurm(feed, runtime, self.0.clone(), run)
+    }
+}
+
+/// Stages every take the feed has (rounds submit all their shards at once, bounded by
+/// `max_running` tasks in flight); takes that cannot be staged are recorded.
+fn stage_all(feed: &Mutex<dyn TakeFeed>, failed: &mut Vec<TakeFailure>) -> Vec<TakeInRun> {
+    let mut takes = Vec::new();
+    loop {
+        let next = feed.lock().unwrap().next_take();
+        match next {
+            None => return takes,
+            Some(Ok(take)) => takes.push(TakeInRun {
+                take,
+                closed: false,
+            }),
+            Some(Err(f)) => failed.push(f),
+        }
     }
 }
 
 fn run_slurm(
-    dataset: Arc<Dataset>,
+    feed: Arc<Mutex<dyn TakeFeed>>,
     runtime: BlenderRuntime,
-    shards: Vec<Shard>,
     settings: SlurmSettings,
-    already_done: usize,
+    run: &PoolRun,
 ) -> Result<PoolReport> {
     let started = Instant::now();
     check_slurm_tools()?;
-    let slurm_dir = dataset.staging.join("work/slurm");
+    let slurm_dir = run.work_dir.join("slurm");
     std::fs::create_dir_all(&slurm_dir)
         .with_context(|| format!("creating {}", slurm_dir.display()))?;
-    std::fs::create_dir_all(dataset.logs_dir())
-        .with_context(|| format!("creating {}", dataset.logs_dir().display()))?;
+    std::fs::create_dir_all(&run.logs_dir)
+        .with_context(|| format!("creating {}", run.logs_dir.display()))?;
     let jobs_path = slurm_dir.join("jobs.txt");
     cancel_previous_jobs(&jobs_path);
 
     let stop = ctrl_c_flag();
 
-    let bar = frames_bar(dataset.total_frames() as u64, already_done as u64)?;
-    let mut states: Vec<ShardState> = shards
-        .into_iter()
-        .map(|shard| ShardState {
-            report: ShardReport {
-                shard: shard.id,
-                camera: dataset.cameras[shard.camera].camera.name.clone(),
-                frames: shard.frames.clone(),
-                attempts: Vec::new(),
-            },
-            shard,
-            tries: FrameTries::default(),
+    let (total, done) = feed.lock().unwrap().frames();
+    let bar = frames_bar(total as u64, done as u64)?;
+    let mut failed_takes = Vec::new();
+    let mut takes = stage_all(&feed, &mut failed_takes);
+    if run.stop_on_failure {
+        if let Some(f) = failed_takes.first() {
+            bail!("{}", f.reason);
+        }
+    }
+    let mut states: Vec<ShardState> = takes
+        .iter()
+        .enumerate()
+        .flat_map(|(t, take)| {
+            let take = &take.take;
+            take.shards.iter().map(move |shard| ShardState {
+                take: t,
+                report: ShardReport {
+                    take: take.name.clone(),
+                    shard: shard.id,
+                    camera: take.dataset.cameras[shard.camera].camera.name.clone(),
+                    frames: shard.frames.clone(),
+                    attempts: Vec::new(),
+                },
+                shard: shard.clone(),
+                tries: FrameTries::default(),
+            })
         })
         .collect();
     let mut round = 0u32;
     let mut frames_finished = 0usize;
+    let report_of = |states: &[ShardState], frames_finished, failed: &[TakeFailure]| {
+        report_of(
+            states,
+            frames_finished,
+            started,
+            settings.max_running,
+            failed,
+        )
+    };
     loop {
+        close_rendered_takes(&feed, &mut takes, &states, &mut failed_takes, run)?;
         let todo: Vec<usize> = (0..states.len())
-            .filter(|&i| !missing_frames(&dataset, &states[i].shard).is_empty())
+            .filter(|&i| {
+                !takes[states[i].take].closed
+                    && !missing_frames(&takes[states[i].take].take.dataset, &states[i].shard)
+                        .is_empty()
+            })
             .collect();
         if todo.is_empty() {
             break;
         }
         // A frame past its retries, or failed in a way that repeats (the scene does not load).
-        if let Some(&i) = todo.iter().find(|&&i| {
-            let attempts = &states[i].report.attempts;
-            states[i].tries.exhausted(settings.retries).is_some()
-                || attempts.last().is_some_and(|a| a.outcome.repeats())
-        }) {
-            bar.finish_and_clear();
-            report_of(&states, frames_finished, started).write(&dataset)?;
-            let r = &states[i].report;
-            let last = r
-                .attempts
-                .last()
-                .expect("a shard past its retries has attempts");
-            let worst = states[i].tries.exhausted(settings.retries);
-            bail!(
-                "shard {} ({} frames {:?}): {} after {} attempt(s); last: {} (log: {})",
-                r.shard,
-                r.camera,
-                r.frames,
-                worst.map_or_else(
+        let given_up: Vec<usize> = todo
+            .iter()
+            .copied()
+            .filter(|&i| {
+                let attempts = &states[i].report.attempts;
+                states[i].tries.exhausted(settings.retries).is_some()
+                    || attempts.last().is_some_and(|a| a.outcome.repeats())
+            })
+            .collect();
+        if !given_up.is_empty() {
+            for &i in &given_up {
+                let t = states[i].take;
+                if takes[t].closed {
+                    continue;
+                }
+                let worst = states[i].tries.exhausted(settings.retries);
+                let why = worst.map_or_else(
                     || "the scene could not be set up".into(),
-                    |(f, t)| format!("frame {f} failed {t} time(s)")
-                ),
-                r.attempts.len(),
-                last.outcome,
-                dataset.staging.join(&last.log).display()
-            );
+                    |(f, n)| format!("frame {f} failed {n} time(s)"),
+                );
+                let message =
+                    shard_failure_message(&takes[t].take.dataset, &states[i].report, &why);
+                if run.stop_on_failure {
+                    bar.finish_and_clear();
+                    report_of(&states, frames_finished, &failed_takes).write(run)?;
+                    bail!("{message}");
+                }
+                let failure = TakeFailure {
+                    take: takes[t].take.name.clone(),
+                    reason: message,
+                };
+                feed.lock().unwrap().take_failed(&failure);
+                failed_takes.push(failure);
+                takes[t].closed = true;
+            }
+            continue;
         }
         round += 1;
         let round_dir = slurm_dir.join(format!("round_{round:03}"));
         let (job, tasks, script_path) =
-            submit_round(&dataset, &runtime, &settings, &states, &todo, &round_dir)?;
+            submit_round(&takes, &runtime, &settings, &states, &todo, &round_dir, run)?;
         append_job(&jobs_path, &job)?;
         bar.suspend(|| {
             eprintln!(
@@ -155,7 +219,7 @@ fn run_slurm(
 
         let poll = Duration::from_secs_f64(settings.plan.poll_interval_s);
         loop {
-            frames_finished += finish_ready_frames(&dataset, &states, &todo, &bar)?;
+            frames_finished += finish_ready_frames(&takes, &states, &todo, &bar)?;
             let live = queued_tasks(&job)?;
             if live.is_empty() {
                 break;
@@ -168,24 +232,58 @@ fn run_slurm(
             if sleep_unless_stopped(poll, &stop) {
                 let _ = slurm_tool("scancel", &[&job]);
                 bar.finish_and_clear();
-                report_of(&states, frames_finished, started).write(&dataset)?;
+                report_of(&states, frames_finished, &failed_takes).write(run)?;
                 bail!(
                     "interrupted: Slurm job {job} cancelled; finished frames are kept; rerun with --resume to continue"
                 );
             }
         }
-        frames_finished += finish_ready_frames(&dataset, &states, &todo, &bar)?;
-        record_attempts(&dataset, &mut states, tasks, &job);
+        frames_finished += finish_ready_frames(&takes, &states, &todo, &bar)?;
+        record_attempts(&takes, &mut states, tasks, &job, run);
         if stop.load(Ordering::SeqCst) {
             bar.finish_and_clear();
-            report_of(&states, frames_finished, started).write(&dataset)?;
+            report_of(&states, frames_finished, &failed_takes).write(run)?;
             bail!("interrupted: finished frames are kept; rerun with --resume to continue");
         }
     }
     bar.finish_and_clear();
-    let report = report_of(&states, frames_finished, started);
-    report.write(&dataset)?;
+    let report = report_of(&states, frames_finished, &failed_takes);
+    report.write(run)?;
     Ok(report)
+}
+
+/// Hands every take whose frames are all finished back to the feed; one that cannot be
+/// finished is given up (or fails the run).
+fn close_rendered_takes(
+    feed: &Mutex<dyn TakeFeed>,
+    takes: &mut [TakeInRun],
+    states: &[ShardState],
+    failed: &mut Vec<TakeFailure>,
+    run: &PoolRun,
+) -> Result<()> {
+    for (t, take) in takes.iter_mut().enumerate() {
+        if take.closed
+            || states
+                .iter()
+                .filter(|s| s.take == t)
+                .any(|s| !missing_frames(&take.take.dataset, &s.shard).is_empty())
+        {
+            continue;
+        }
+        take.closed = true;
+        if let Err(e) = feed.lock().unwrap().take_rendered(&take.take) {
+            let failure = TakeFailure {
+                take: take.take.name.clone(),
+                reason: format!("finishing take {}: {e:#}", take.take.name),
+            };
+            if run.stop_on_failure {
+                bail!("{}", failure.reason);
+            }
+            feed.lock().unwrap().take_failed(&failure);
+            failed.push(failure);
+        }
+    }
+    Ok(())
 }
 
 /// A flag raised by Ctrl-C (a thread waits for the signal).
@@ -214,18 +312,20 @@ type Task = (usize, Vec<u32>, PathBuf);
 /// Writes one round's specs (the missing frames of the shards `todo`) and its array script
 /// into `round_dir`, and submits it; returns the job id, the tasks and the script.
 fn submit_round(
-    dataset: &Dataset,
+    takes: &[TakeInRun],
     runtime: &BlenderRuntime,
     settings: &SlurmSettings,
     states: &[ShardState],
     todo: &[usize],
     round_dir: &Path,
+    run: &PoolRun,
 ) -> Result<(String, Vec<Task>, PathBuf)> {
     std::fs::create_dir_all(round_dir)
         .with_context(|| format!("creating {}", round_dir.display()))?;
     let mut tasks = Vec::new();
     for (t, &i) in todo.iter().enumerate() {
         let shard = &states[i].shard;
+        let dataset = &takes[states[i].take].take.dataset;
         let frames = missing_frames(dataset, shard);
         let spec_path = round_dir.join(format!("task_{t:04}.json"));
         let spec = dataset.shard_spec(shard.camera, &frames);
@@ -235,7 +335,7 @@ fn submit_round(
     let script = array_script(
         runtime,
         settings,
-        &dataset.logs_dir(),
+        &run.logs_dir,
         &tasks.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
     );
     let script_path = round_dir.join("array.sh");
@@ -251,14 +351,21 @@ fn submit_round(
 }
 
 /// Adds each task's attempt of a round that has left the queue to its shard's report.
-fn record_attempts(dataset: &Dataset, states: &mut [ShardState], tasks: Vec<Task>, job: &str) {
+fn record_attempts(
+    takes: &[TakeInRun],
+    states: &mut [ShardState],
+    tasks: Vec<Task>,
+    job: &str,
+    run: &PoolRun,
+) {
     let ends = task_ends(job);
     for (t, (i, frames, _)) in tasks.into_iter().enumerate() {
         let state = &mut states[i];
+        let dataset = &takes[state.take].take.dataset;
         let left = missing_frames(dataset, &state.shard);
         let still_missing = left.len();
         let end = ends.get(&(t as u32));
-        let log = dataset.logs_dir().join(format!("slurm_{job}_{t}.log"));
+        let log = run.logs_dir.join(format!("slurm_{job}_{t}.log"));
         let outcome = task_outcome(end, still_missing, &log);
         if let Some(&first_left) = left.first().filter(|_| !outcome.is_ok()) {
             state.tries.charge(first_left);
@@ -287,7 +394,7 @@ fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
 /// writes each under a temporary name and renames it). Raw renders that do not assemble are
 /// removed so the frame is rendered again.
 fn finish_ready_frames(
-    dataset: &Dataset,
+    takes: &[TakeInRun],
     states: &[ShardState],
     todo: &[usize],
     bar: &indicatif::ProgressBar,
@@ -295,6 +402,7 @@ fn finish_ready_frames(
     let mut finished = 0;
     for &i in todo {
         let shard = &states[i].shard;
+        let dataset = &takes[states[i].take].take.dataset;
         let name = &dataset.cameras[shard.camera].camera.name;
         for f in missing_frames(dataset, shard) {
             let raw = dataset.raw_frame_files(shard.camera, f);
@@ -321,13 +429,23 @@ fn finish_ready_frames(
 }
 
 /// The pool report of the shards so far.
-fn report_of(states: &[ShardState], frames_finished: usize, started: Instant) -> PoolReport {
+fn report_of(
+    states: &[ShardState],
+    frames_finished: usize,
+    started: Instant,
+    workers: usize,
+    failed_takes: &[TakeFailure],
+) -> PoolReport {
     let mut shards: Vec<ShardReport> = states.iter().map(|s| s.report.clone()).collect();
-    shards.sort_by_key(|r| r.shard);
+    shards.sort_by(|a, b| (&a.take, a.shard).cmp(&(&b.take, b.shard)));
     PoolReport {
         shards,
         frames_finished,
         wall_seconds: started.elapsed().as_secs_f64(),
+        workers,
+        busy_seconds: Vec::new(),
+        utilisation: 0.0,
+        failed_takes: failed_takes.to_vec(),
     }
 }
 

@@ -55,6 +55,21 @@ pub const STUCK_STEP_M: f64 = 0.05;
 /// New frames per primitive (the seed frames are the previous primitive's last).
 pub const NEW_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 
+/// Primitives a take of `duration_s` walks (at least one): enough for its frames at
+/// [`PRIMITIVE_RATE_HZ`] after the seed frames.
+pub fn primitives_for(duration_s: f64) -> usize {
+    let frames = (duration_s * crate::motion::primitive::PRIMITIVE_RATE_HZ).round() as usize;
+    frames
+        .saturating_sub(SEED_FRAMES)
+        .div_ceil(NEW_FRAMES)
+        .max(1)
+}
+
+/// Frames of a take of `primitives` primitives.
+pub fn frames_of(primitives: usize) -> usize {
+    SEED_FRAMES + primitives * NEW_FRAMES
+}
+
 /// How an agent chooses its next primitive.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]

@@ -310,3 +310,184 @@ pub fn safetensors_tensors(path: &Path) -> std::collections::BTreeMap<String, Ve
         })
         .collect()
 }
+
+/// A tiny campaign in `dir` (`campaign.toml` → `dir/out`): 3 takes over the shipped apartment
+/// and one generated floor plan, 1 or 2 people, the SLAM-left camera at 1/10 size, colour,
+/// depth and segmentation; its shards on the local pool, or with `slurm` on Slurm.
+pub fn tiny_campaign(dir: &Path, slurm: bool) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let supervisor = if slurm {
+        "backend = \"slurm\"\n[supervisor.slurm]\ncpus_per_task = 1\nmem_gb = 1.0\npoll_interval_s = 0.5\n"
+    } else {
+        ""
+    };
+    std::fs::write(
+        dir.join("run.toml"),
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 1.0
+[crowd]
+count = 2
+layout = "random"
+wander = true
+[output]
+dir = "single"
+mesh_every_n_frames = 0
+[render]
+cameras = ["camera-slam-left"]
+resolution_scale = 0.1
+every_n_frames = 10
+samples = 2
+frames_per_shard = 2
+passes = ["colour", "depth", "segmentation"]
+[supervisor]
+workers = 2
+retries = 40
+"#
+        .to_string()
+            + supervisor,
+    )
+    .unwrap();
+    let campaign = dir.join("campaign.toml");
+    std::fs::write(
+        &campaign,
+        format!(
+            r#"
+[campaign]
+run = "run.toml"
+out = "out"
+takes = 3
+scenes = ["{}"]
+floor_plans = [5]
+crowd_count = [1, 2]
+min_free_disk_gb = 0.0
+"#,
+            root.join("assets/scenes/apartment.glb").display()
+        ),
+    )
+    .unwrap();
+    campaign
+}
+
+/// Every file of a campaign's finished takes with its bytes' SHA-256, and the index's.
+pub fn campaign_digest(out: &Path) -> Vec<(String, String)> {
+    let mut files = vec![(
+        "index.parquet".to_string(),
+        egogen::manifest::sha256_file(&out.join("index.parquet")).unwrap(),
+    )];
+    let mut takes: Vec<PathBuf> = std::fs::read_dir(out.join("takes"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    takes.sort();
+    for take in takes {
+        let name = take.file_name().unwrap().to_string_lossy().into_owned();
+        files.push((
+            format!("{name}/manifest.json"),
+            egogen::manifest::sha256_file(&take.join("manifest.json")).unwrap(),
+        ));
+    }
+    files
+}
+
+/// A Python with what the reader package (`python/`) and its tests need (numpy, OpenEXR,
+/// pyarrow, pytest): a virtual environment of the egogen cache made on first use (the reader
+/// itself goes in with [`install_reader`]); an error when PyPI cannot be reached.
+pub fn reader_python() -> Result<PathBuf, String> {
+    let venv = egogen::render::blender_runtime::cache_dir().join("python-reader-2");
+    let python = venv.join("bin/python");
+    let ok = |c: &mut std::process::Command| c.status().map(|s| s.success()).unwrap_or(false);
+    if !python.is_file() {
+        let partial = PathBuf::from(format!("{}.partial", venv.display()));
+        let _ = std::fs::remove_dir_all(&partial);
+        std::fs::create_dir_all(partial.parent().unwrap()).map_err(|e| e.to_string())?;
+        if !ok(std::process::Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&partial))
+        {
+            return Err("python3 -m venv failed".into());
+        }
+        let packages = [
+            "numpy",
+            "OpenEXR==3.5.3",
+            "pyarrow",
+            "pytest",
+            "setuptools",
+            "wheel",
+        ];
+        if !ok(std::process::Command::new(partial.join("bin/python"))
+            .args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
+            .args(packages))
+        {
+            return Err(format!("pip install {} failed", packages.join(" ")));
+        }
+        std::fs::rename(&partial, &venv).map_err(|e| e.to_string())?;
+    }
+    Ok(python)
+}
+
+/// Installs the reader package as the checkout has it now into `python`'s environment (built
+/// in a temporary folder: nothing is left in the checkout); panics when pip cannot.
+pub fn install_reader(python: &Path) {
+    let build = tempfile::tempdir().unwrap();
+    let src = build.path().join("python");
+    copy_dir(&Path::new(env!("CARGO_MANIFEST_DIR")).join("python"), &src).unwrap();
+    let out = std::process::Command::new(python)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "-q",
+            "--disable-pip-version-check",
+            "--no-deps",
+            "--no-build-isolation",
+            "--force-reinstall",
+        ])
+        .arg(&src)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "pip install python/ failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn copy_dir(from: &Path, to: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(to)?;
+    for e in std::fs::read_dir(from)? {
+        let e = e?;
+        let name = e.file_name();
+        if name == "__pycache__" || name == "build" || name.to_string_lossy().ends_with(".egg-info")
+        {
+            continue;
+        }
+        if e.file_type()?.is_dir() {
+            copy_dir(&e.path(), &to.join(&name))?;
+        } else {
+            std::fs::copy(e.path(), to.join(&name))?;
+        }
+    }
+    Ok(())
+}
+
+/// Pids of processes whose command line contains every needle.
+pub fn pids_with(needles: &[&str]) -> Vec<i32> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir("/proc").unwrap().flatten() {
+        let Ok(pid) = e.file_name().to_string_lossy().parse::<i32>() else {
+            continue;
+        };
+        let Ok(cmd) = std::fs::read(e.path().join("cmdline")) else {
+            continue;
+        };
+        let cmd = String::from_utf8_lossy(&cmd).replace('\0', " ");
+        if needles.iter().all(|n| cmd.contains(n)) {
+            out.push(pid);
+        }
+    }
+    out
+}

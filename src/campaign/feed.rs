@@ -1,0 +1,221 @@
+//! The campaign's [`TakeFeed`]: stages takes one at a time as the pool's workers run short of
+//! shards (motion made ahead of rendering, scratch held only for takes in flight), pauses
+//! staging while free disk is below the campaign's floor, finishes each take when the pool
+//! hands it back (manifest, index rows), and records every change in `campaign.json`. A take
+//! that cannot be staged or finished is recorded with its reason; the others go on.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Duration;
+
+use anyhow::Result;
+
+use super::index::{keep_rows, take_rows};
+use super::plan::CampaignPlan;
+use super::state::{CampaignState, TakeStatus};
+use crate::run_job::{prepare, RunRequest};
+use crate::supervisor::{stage_take, PoolTake, Staged, StagedTake, TakeFailure, TakeFeed};
+
+/// Feeds a campaign's takes to one pool.
+pub struct CampaignFeed {
+    pub plan: CampaignPlan,
+    pub state: CampaignState,
+    /// Blender and the backend, as the command line gave them.
+    pub request: RunRequest,
+    pub workers: Option<usize>,
+    pub backend: Option<crate::plan::Backend>,
+    /// The next take to look at.
+    next: usize,
+    staged: HashMap<String, Box<StagedTake>>,
+    /// Frames of each take: estimated until staged.
+    frames: Vec<usize>,
+    done_before: usize,
+    /// Seconds between free-disk checks while paused.
+    pub disk_poll: Duration,
+}
+
+impl CampaignFeed {
+    /// A feed over `plan`'s takes not complete in `state`; `frames` estimates each take's
+    /// frames (exact once staged), `done_before` of them finished in earlier starts.
+    pub fn new(
+        plan: CampaignPlan,
+        state: CampaignState,
+        request: RunRequest,
+        frames: Vec<usize>,
+        done_before: usize,
+    ) -> Self {
+        CampaignFeed {
+            plan,
+            state,
+            request,
+            workers: None,
+            backend: None,
+            next: 0,
+            staged: HashMap::new(),
+            frames,
+            done_before,
+            disk_poll: Duration::from_secs(30),
+        }
+    }
+
+    fn save(&self) {
+        if let Err(e) = self.state.write(&self.plan.out) {
+            eprintln!("egogen-run: {e:#}");
+        }
+    }
+
+    fn say(&self, what: &str) {
+        let s = &self.state;
+        eprintln!(
+            "egogen-run: campaign: {what} ({} of {} takes complete, {} failed)",
+            s.count(TakeStatus::Complete),
+            s.takes.len(),
+            s.count(TakeStatus::Failed)
+        );
+    }
+
+    /// Waits while the campaign folder's file system has less free space than the floor.
+    fn wait_for_disk(&self) {
+        let mut said = false;
+        while let Some(free) = free_bytes(&self.plan.out) {
+            if free >= self.plan.min_free_disk_bytes {
+                if said {
+                    eprintln!("egogen-run: campaign: free disk is back above the floor; going on");
+                }
+                return;
+            }
+            if !said {
+                eprintln!(
+                    "egogen-run: campaign: paused: {:.2} GB free under {} < the floor of {:.2} GB (`campaign.min_free_disk_gb`); free some space and it goes on",
+                    free as f64 / 1e9,
+                    self.plan.out.display(),
+                    self.plan.min_free_disk_bytes as f64 / 1e9
+                );
+                said = true;
+            }
+            std::thread::sleep(self.disk_poll);
+        }
+    }
+
+    /// Stages take `k`: `None` when it is already finished.
+    fn stage(&mut self, k: usize) -> Result<Option<PoolTake>> {
+        let def = self.state.takes[k].def.clone();
+        let mut overrides = def.overrides(&self.plan.out.join("takes"));
+        overrides.workers = self.workers;
+        overrides.backend = self.backend;
+        let run = prepare(&self.plan.run, &overrides, &self.request)?;
+        let Some(render) = &run.plan.render else {
+            anyhow::bail!("{} has no [render] section", self.plan.run.display());
+        };
+        let motion = run.make_motion()?;
+        let staged = stage_take(
+            &run.plan,
+            render,
+            run.run_motion(&motion),
+            &run.model,
+            &self.plan.run,
+            &run.options,
+            || Ok(()),
+        )?;
+        match staged {
+            Staged::Complete(_) => {
+                self.completed(k)?;
+                Ok(None)
+            }
+            Staged::Take(take) => {
+                let dataset = take.dataset.clone();
+                self.frames[k] = dataset.total_frames();
+                self.staged.insert(def.id.clone(), take);
+                Ok(Some(PoolTake {
+                    name: def.id,
+                    shards: dataset.pending_shards(),
+                    dataset,
+                }))
+            }
+        }
+    }
+
+    /// Records take `k` as complete with its index rows.
+    fn completed(&mut self, k: usize) -> Result<()> {
+        let def = self.state.takes[k].def.clone();
+        let dir = self.plan.out.join("takes").join(&def.id);
+        let rows = take_rows(&def, &dir, &self.plan.out)?;
+        keep_rows(&self.plan.out, &def.id, &rows)?;
+        let t = &mut self.state.takes[k];
+        t.status = TakeStatus::Complete;
+        t.reason = None;
+        t.frames = Some(rows.len());
+        self.save();
+        self.say(&format!("take {} complete, {} frames", def.id, rows.len()));
+        Ok(())
+    }
+
+    fn position(&self, id: &str) -> Option<usize> {
+        self.state.takes.iter().position(|t| t.def.id == id)
+    }
+}
+
+impl TakeFeed for CampaignFeed {
+    fn frames(&self) -> (usize, usize) {
+        (self.frames.iter().sum(), self.done_before)
+    }
+
+    fn next_take(&mut self) -> Option<Result<PoolTake, TakeFailure>> {
+        while self.next < self.state.takes.len() {
+            let k = self.next;
+            self.next += 1;
+            if self.state.takes[k].status == TakeStatus::Complete {
+                continue;
+            }
+            self.wait_for_disk();
+            match self.stage(k) {
+                Ok(None) => continue,
+                Ok(Some(take)) => return Some(Ok(take)),
+                Err(e) => {
+                    let failure = TakeFailure {
+                        take: self.state.takes[k].def.id.clone(),
+                        reason: format!("{e:#}"),
+                    };
+                    self.take_failed(&failure);
+                    return Some(Err(failure));
+                }
+            }
+        }
+        None
+    }
+
+    fn take_rendered(&mut self, take: &PoolTake) -> Result<()> {
+        let staged = self
+            .staged
+            .remove(&take.name)
+            .ok_or_else(|| anyhow::anyhow!("take {} was not staged here", take.name))?;
+        staged.finish()?;
+        match self.position(&take.name) {
+            Some(k) => self.completed(k),
+            None => Ok(()),
+        }
+    }
+
+    fn take_failed(&mut self, failure: &TakeFailure) {
+        self.staged.remove(&failure.take);
+        if let Some(k) = self.position(&failure.take) {
+            let t = &mut self.state.takes[k];
+            t.status = TakeStatus::Failed;
+            t.reason = Some(failure.reason.clone());
+            self.save();
+            self.say(&format!("take {} failed: {}", failure.take, failure.reason));
+        }
+    }
+}
+
+/// Free bytes for an unprivileged user on the file system holding `path`.
+pub fn free_bytes(path: &Path) -> Option<u64> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).ok()?;
+    let mut s: libc::statvfs = unsafe { std::mem::zeroed() };
+    // SAFETY: `c` is a valid NUL-terminated path and `s` a writable statvfs.
+    if unsafe { libc::statvfs(c.as_ptr(), &mut s) } != 0 {
+        return None;
+    }
+    Some(s.f_bavail as u64 * s.f_frsize as u64)
+}

@@ -1,0 +1,265 @@
+//! Campaigns: a dataset of many takes across scenes in one command (`egogen-run CAMPAIGN.toml`).
+//! A campaign file (`plan`) names the run config every take starts from and what varies per
+//! take; each take is a complete dataset of `egogen-run`'s form in `takes/<id>/`, the same
+//! bytes as that take rendered alone (its command is in `campaign.json`). All takes' shards go
+//! to one pool (local workers or Slurm), takes staged on demand (`feed`); `campaign.json`
+//! (`state`) is rewritten at every change and `--resume` continues a killed campaign; the
+//! frames of every finished take are listed in `index.parquet` (`index`). The budget (takes,
+//! frames, disk, core-hours from measured throughput) is stated before any work (`budget`).
+
+pub mod budget;
+pub mod feed;
+pub mod index;
+pub mod plan;
+pub mod state;
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use anyhow::{bail, Context, Result};
+
+use crate::plan::Backend;
+use crate::render::BlenderRuntime;
+use crate::run_job::{prepare, RunRequest};
+use crate::supervisor::{shard_pool, PoolRun};
+pub use plan::{is_campaign, plan_campaign, CampaignPlan, TakeDef};
+pub use state::{CampaignState, TakeStatus, STATE_FILE};
+
+/// How a campaign runs, beside its file.
+#[derive(Debug, Clone, Default)]
+pub struct CampaignRequest {
+    /// Continue the campaign in `campaign.out`.
+    pub resume: bool,
+    /// State the plan and budget; render nothing, write nothing.
+    pub dry_run: bool,
+    pub blender: Option<PathBuf>,
+    pub workers: Option<usize>,
+    pub backend: Option<Backend>,
+    /// A campaign or dataset folder whose pool reports give the throughput for the budget
+    /// (default: this campaign's earlier starts).
+    pub throughput_from: Option<PathBuf>,
+}
+
+/// What a campaign start did.
+#[derive(Debug, Clone)]
+pub struct CampaignSummary {
+    pub out: PathBuf,
+    pub complete: usize,
+    pub failed: Vec<(String, String)>,
+    pub frames_indexed: usize,
+}
+
+/// The index file's name in the campaign folder.
+pub const INDEX_FILE: &str = "index.parquet";
+
+/// Runs (or, with `dry_run`, plans) the campaign at `path`.
+pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSummary> {
+    let plan = plan_campaign(path)?;
+    let out = plan.out.clone();
+    let earlier = check_out(&plan, request)?;
+    let run_request = RunRequest {
+        resume: true,
+        blender: request.blender.clone(),
+    };
+    // The first take's plan carries what every take shares: render settings and supervisor.
+    let mut first = plan.takes[0].overrides(&out.join("takes"));
+    first.workers = request.workers;
+    first.backend = request.backend;
+    let shared = prepare(&plan.run, &first, &run_request)
+        .with_context(|| format!("the campaign's first take ({})", plan.takes[0].id))?;
+    let estimate = budget::estimate(&plan, &shared.plan, request.throughput_from.as_deref())?;
+    for line in estimate.lines() {
+        eprintln!("egogen-run: campaign: {line}");
+    }
+    if request.dry_run {
+        return Ok(CampaignSummary {
+            out,
+            complete: 0,
+            failed: Vec::new(),
+            frames_indexed: 0,
+        });
+    }
+    let runtime = BlenderRuntime::resolve(request.blender.as_deref())?;
+    if shared.plan.supervisor.backend == Backend::Slurm {
+        crate::supervisor::slurm::check_slurm_tools()?;
+    }
+    std::fs::create_dir_all(out.join("takes"))
+        .with_context(|| format!("creating {}", out.display()))?;
+    let mut state = CampaignState::new(&plan);
+    if let Some(earlier) = earlier {
+        // Keep what an earlier start recorded of failures until the take is tried again.
+        for (t, e) in state.takes.iter_mut().zip(earlier.takes) {
+            t.reason = e.reason;
+        }
+    }
+    state.write(&out)?;
+    plan::write_floor_plans(&plan)?;
+    let done_before = check_finished_takes(&plan, &mut state)?;
+    state.write(&out)?;
+    let mut feed = feed::CampaignFeed::new(
+        plan.clone(),
+        state,
+        run_request,
+        estimate.frames_per_take.clone(),
+        done_before,
+    );
+    feed.workers = request.workers;
+    feed.backend = request.backend;
+    let feed = Arc::new(Mutex::new(feed));
+    let start = crate::supervisor::staged::next_start(&out);
+    let run = PoolRun {
+        logs_dir: out.join("logs").join(format!("start_{start:02}")),
+        work_dir: out.join("work"),
+        stop_on_failure: false,
+    };
+    let pool = shard_pool(&shared.plan.supervisor);
+    let report = pool.run(feed.clone(), runtime, &run);
+    let feed = feed.lock().unwrap();
+    // The index lists what is finished, also after an interrupted start.
+    let frames_indexed = write_campaign_index(&plan, &feed.state)?;
+    let report = report?;
+    eprintln!(
+        "egogen-run: campaign: rendered {} frames in {:.1} s on {} worker(s), utilisation {:.0} %",
+        report.frames_finished,
+        report.wall_seconds,
+        report.workers,
+        100.0 * report.utilisation
+    );
+    let failed: Vec<(String, String)> = feed
+        .state
+        .takes
+        .iter()
+        .filter(|t| t.status == TakeStatus::Failed)
+        .map(|t| (t.def.id.clone(), t.reason.clone().unwrap_or_default()))
+        .collect();
+    Ok(CampaignSummary {
+        out,
+        complete: feed.state.count(TakeStatus::Complete),
+        failed,
+        frames_indexed,
+    })
+}
+
+/// `egogen-run CAMPAIGN.toml`: runs the campaign and says what it made; an error when any take
+/// failed (after all the others were made), naming each with its reason.
+pub fn run(path: &Path, request: &CampaignRequest) -> Result<()> {
+    let summary = run_campaign(path, request)?;
+    if request.dry_run {
+        return Ok(());
+    }
+    eprintln!(
+        "egogen-run: campaign {}: {} take(s) complete, {} frames in {}",
+        summary.out.display(),
+        summary.complete,
+        summary.frames_indexed,
+        summary.out.join(INDEX_FILE).display()
+    );
+    if !summary.failed.is_empty() {
+        let list: Vec<String> = summary
+            .failed
+            .iter()
+            .map(|(id, why)| format!("  {id}: {why}"))
+            .collect();
+        bail!(
+            "{} take(s) failed (recorded in {}; --resume tries them again):\n{}",
+            summary.failed.len(),
+            summary.out.join(STATE_FILE).display(),
+            list.join("\n")
+        );
+    }
+    Ok(())
+}
+
+/// Checks the campaign folder: absent or empty for a new campaign; with `--resume`, a campaign
+/// of the same takes (returned). Nothing is touched either way.
+fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<CampaignState>> {
+    let out = &plan.out;
+    if out.exists() && !out.is_dir() {
+        bail!(
+            "campaign folder {} exists and is a file; choose another `campaign.out` (nothing was written)",
+            out.display()
+        );
+    }
+    if out.join(STATE_FILE).is_file() {
+        let found = CampaignState::read(out)?;
+        if !request.resume && !request.dry_run {
+            bail!(
+                "{} holds a campaign; rerun with --resume to continue it, or choose another `campaign.out` (nothing was written)",
+                out.display()
+            );
+        }
+        if found.fingerprint != plan.fingerprint {
+            bail!(
+                "{} holds a campaign of other takes than {} defines (its run config, scenes, seeds, crowds, durations or rigs differ); resuming would mix two campaigns (nothing was touched)",
+                out.display(),
+                plan.config.display()
+            );
+        }
+        return Ok(Some(found));
+    }
+    if std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some()) {
+        bail!(
+            "campaign folder {} already exists and is not empty; choose another `campaign.out` (nothing was written)",
+            out.display()
+        );
+    }
+    Ok(None)
+}
+
+/// Checks every finished take against its manifest: a take that matches is complete (its
+/// index rows kept); one that does not is recorded as failed and left as it is. Returns the
+/// frames of the complete takes.
+fn check_finished_takes(plan: &CampaignPlan, state: &mut CampaignState) -> Result<usize> {
+    let mut frames = 0;
+    for t in state.takes.iter_mut() {
+        let dir = plan.out.join("takes").join(&t.def.id);
+        if !dir.join(crate::supervisor::manifest::MANIFEST).is_file() {
+            continue;
+        }
+        match crate::supervisor::verify(&dir) {
+            Ok(_) => {
+                let rows = match index::kept_rows(&plan.out, &t.def.id) {
+                    Some(rows) => rows,
+                    None => {
+                        let rows = index::take_rows(&t.def, &dir, &plan.out)?;
+                        index::keep_rows(&plan.out, &t.def.id, &rows)?;
+                        rows
+                    }
+                };
+                frames += rows.len();
+                t.status = TakeStatus::Complete;
+                t.reason = None;
+                t.frames = Some(rows.len());
+            }
+            Err(e) => {
+                t.status = TakeStatus::Failed;
+                t.reason = Some(format!(
+                    "{} does not match its manifest ({e:#}); left as it is: move it away and --resume renders it again",
+                    dir.display()
+                ));
+            }
+        }
+    }
+    Ok(frames)
+}
+
+/// Writes `index.parquet` from the complete takes' rows, in take order; returns the rows.
+fn write_campaign_index(plan: &CampaignPlan, state: &CampaignState) -> Result<usize> {
+    let mut rows = Vec::new();
+    for t in state
+        .takes
+        .iter()
+        .filter(|t| t.status == TakeStatus::Complete)
+    {
+        match index::kept_rows(&plan.out, &t.def.id) {
+            Some(r) => rows.extend(r),
+            None => bail!(
+                "take {}: its index rows ({}) are missing",
+                t.def.id,
+                index::rows_path(&plan.out, &t.def.id).display()
+            ),
+        }
+    }
+    index::write_index(&plan.out.join(INDEX_FILE), &rows)?;
+    Ok(rows.len())
+}

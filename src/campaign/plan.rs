@@ -1,0 +1,382 @@
+//! A campaign config (`[campaign]`) and the takes it defines: the run config every take starts
+//! from, and what varies per take — scene (paths, globs, generated floor plans), seed, crowd
+//! size, duration, rig. Each take is that run config with `egogen-run`'s command-line
+//! overrides, so a take rendered alone is the same command; its id is derived from what
+//! defines it.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use rand_core::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+use crate::cli::config_file::load_toml;
+use crate::cli::overrides::{resume_fingerprint, RunOverrides};
+use crate::cli::RawRun;
+use crate::supervisor::manifest::sha256_hex;
+
+/// A campaign config file: `[campaign]` only.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCampaignFile {
+    pub campaign: RawCampaign,
+}
+
+/// `[campaign]`. Paths are relative to the campaign file's folder.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawCampaign {
+    /// The run config every take starts from (it needs a `[render]` section).
+    pub run: PathBuf,
+    /// The campaign folder: `takes/<id>/`, `index.parquet`, `campaign.json`, `logs/`.
+    pub out: PathBuf,
+    /// How many takes.
+    pub takes: usize,
+    /// Take k has seed `first_seed + k` (every seed of the run: motion, lighting, wear, skin).
+    #[serde(default)]
+    pub first_seed: u64,
+    /// Scene files or globs (`rooms/*.obj`); take k walks scene k mod (number of scenes),
+    /// the globs' matches in name order, then the floor plans.
+    #[serde(default)]
+    pub scenes: Vec<String>,
+    /// Generated four-room dwellings, by seed (as `egogen policy rooms --seed S --count 1
+    /// --obj-dir`), written to `scenes/plan_<seed>.obj` in the campaign folder.
+    #[serde(default)]
+    pub floor_plans: Vec<u64>,
+    /// People per take, drawn uniformly in `[lo, hi]` from the take's seed (default: the run
+    /// config's `crowd.count`).
+    pub crowd_count: Option<[usize; 2]>,
+    /// Seconds of motion per take, drawn uniformly in `[lo, hi]` (0.1 s steps) from the take's
+    /// seed (default: the run config's).
+    pub duration_s: Option<[f64; 2]>,
+    /// Camera rigs, take k wearing rig k mod (number of rigs) (default: the run config's).
+    #[serde(default)]
+    pub rigs: Vec<PathBuf>,
+    /// Takes are staged only while the campaign folder's file system has this much free
+    /// space; below it the campaign pauses (and says so) until space is freed (default 1 GB).
+    pub min_free_disk_gb: Option<f64>,
+}
+
+/// A checked campaign.
+#[derive(Debug, Clone)]
+pub struct CampaignPlan {
+    /// The campaign file.
+    pub config: PathBuf,
+    /// The run config every take starts from.
+    pub run: PathBuf,
+    pub out: PathBuf,
+    pub takes: Vec<TakeDef>,
+    pub min_free_disk_bytes: u64,
+    /// Floor plans to write before the first take (seed, file).
+    pub floor_plans: Vec<(u64, PathBuf)>,
+    /// SHA-256 of what defines the campaign (its takes' definitions): a resume must match.
+    pub fingerprint: String,
+}
+
+/// One take: the run config with these overrides.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct TakeDef {
+    /// Position in the campaign (index order).
+    pub index: usize,
+    /// `<scene>-s<seed>[-n<count>]-<8 hex>`: the hex from the take's effective config.
+    pub id: String,
+    pub scene: PathBuf,
+    pub seed: u64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crowd_count: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub duration_s: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rig: Option<PathBuf>,
+}
+
+impl TakeDef {
+    /// The take's overrides of the run config, output in `takes_dir/<id>`.
+    pub fn overrides(&self, takes_dir: &Path) -> RunOverrides {
+        RunOverrides {
+            out: Some(takes_dir.join(&self.id)),
+            seed: Some(self.seed),
+            rig: self.rig.clone(),
+            scene: Some(self.scene.clone()),
+            crowd_count: self.crowd_count,
+            duration_s: self.duration_s,
+            workers: None,
+            backend: None,
+        }
+    }
+
+    /// The `egogen-run` command that renders this take alone, byte for byte the same.
+    pub fn command(&self, run: &Path, takes_dir: &Path) -> String {
+        let o = self.overrides(takes_dir);
+        let mut c = format!("egogen-run {}", quote(run));
+        if let Some(out) = &o.out {
+            c += &format!(" --out {}", quote(out));
+        }
+        c += &format!(" --seed {}", self.seed);
+        c += &format!(" --scene {}", quote(&self.scene));
+        if let Some(n) = self.crowd_count {
+            c += &format!(" --crowd-count {n}");
+        }
+        if let Some(d) = self.duration_s {
+            c += &format!(" --duration {d}");
+        }
+        if let Some(r) = &self.rig {
+            c += &format!(" --rig {}", quote(r));
+        }
+        c
+    }
+}
+
+fn quote(p: &Path) -> String {
+    let s = p.display().to_string();
+    if s.chars()
+        .all(|c| c.is_ascii_alphanumeric() || "/._-+:".contains(c))
+    {
+        s
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
+}
+
+/// Whether a TOML file is a campaign (it has a `[campaign]` table).
+pub fn is_campaign(path: &Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| t.parse::<toml::Table>().ok())
+        .is_some_and(|t| t.contains_key("campaign"))
+}
+
+/// Reads and checks a campaign file and defines its takes.
+pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
+    let raw: RawCampaignFile = load_toml(path)?;
+    let c = raw.campaign;
+    let bad = |key: &str, what: String| -> anyhow::Error {
+        anyhow::anyhow!("campaign {}: key `campaign.{key}`: {what}", path.display())
+    };
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let at = |p: &Path| lexical(&std::path::absolute(dir.join(p)).unwrap_or_else(|_| dir.join(p)));
+    let run = at(&c.run);
+    if !run.is_file() {
+        return Err(bad("run", format!("{} is not a file", run.display())));
+    }
+    let out = at(&c.out);
+    if c.takes == 0 {
+        return Err(bad("takes", "expected at least 1 take".into()));
+    }
+    const MAX_TAKES: usize = 1_000_000;
+    if c.takes > MAX_TAKES {
+        return Err(bad(
+            "takes",
+            format!("{}: at most {MAX_TAKES} takes in one campaign", c.takes),
+        ));
+    }
+    if c.first_seed.checked_add(c.takes as u64).is_none() || c.first_seed > i64::MAX as u64 {
+        return Err(bad(
+            "first_seed",
+            format!("{}: the takes' seeds must stay below 2^63", c.first_seed),
+        ));
+    }
+    let mut scenes: Vec<PathBuf> = Vec::new();
+    for s in &c.scenes {
+        let pattern = dir.join(s);
+        if s.contains(['*', '?', '[']) {
+            let mut found: Vec<PathBuf> = glob::glob(&pattern.to_string_lossy())
+                .map_err(|e| bad("scenes", format!("{s:?} is not a valid glob: {e}")))?
+                .filter_map(|p| p.ok())
+                .filter(|p| p.is_file())
+                .collect();
+            if found.is_empty() {
+                return Err(bad("scenes", format!("{s:?} matches no file")));
+            }
+            found.sort();
+            scenes.extend(found.into_iter().map(|p| at(&p)));
+        } else {
+            let p = at(Path::new(s));
+            if !p.is_file() {
+                return Err(bad("scenes", format!("{} is not a file", p.display())));
+            }
+            scenes.push(p);
+        }
+    }
+    let floor_plans: Vec<(u64, PathBuf)> = c
+        .floor_plans
+        .iter()
+        .map(|&s| (s, out.join("scenes").join(format!("plan_{s}.obj"))))
+        .collect();
+    scenes.extend(floor_plans.iter().map(|(_, p)| p.clone()));
+    let base = RawRun::load(&run)?;
+    if base.render.is_none() {
+        return Err(bad(
+            "run",
+            format!(
+                "{} has no [render] section: a campaign renders its takes",
+                run.display()
+            ),
+        ));
+    }
+    if scenes.is_empty() {
+        // The run config's own scene.
+        scenes.push(match &base.scene.path {
+            Some(p) => at(&run.parent().unwrap_or(Path::new(".")).join(p)),
+            None => crate::cli::config_file::crate_root().join("assets/scenes/apartment.glb"),
+        });
+    }
+    if let Some([lo, hi]) = c.crowd_count {
+        if lo == 0 || lo > hi {
+            return Err(bad(
+                "crowd_count",
+                format!("expected [lo, hi] with 1 <= lo <= hi, got [{lo}, {hi}]"),
+            ));
+        }
+        if base.crowd.is_none() {
+            return Err(bad(
+                "crowd_count",
+                format!("{} has no [crowd] section to vary", run.display()),
+            ));
+        }
+    }
+    if let Some([lo, hi]) = c.duration_s {
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi && hi <= 3600.0) {
+            return Err(bad(
+                "duration_s",
+                format!("expected [lo, hi] seconds with 0 < lo <= hi <= 3600, got [{lo}, {hi}]"),
+            ));
+        }
+    }
+    let rigs: Vec<PathBuf> = c.rigs.iter().map(|r| at(r)).collect();
+    for r in &rigs {
+        if !r.is_file() {
+            return Err(bad("rigs", format!("{} is not a file", r.display())));
+        }
+    }
+    let min_free_disk_gb = c.min_free_disk_gb.unwrap_or(1.0);
+    if !(min_free_disk_gb.is_finite() && min_free_disk_gb >= 0.0) {
+        return Err(bad(
+            "min_free_disk_gb",
+            format!("expected a size >= 0, got {min_free_disk_gb}"),
+        ));
+    }
+    let mut takes = Vec::with_capacity(c.takes);
+    for k in 0..c.takes {
+        let seed = c.first_seed + k as u64;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x6361_6d70_6169_676e);
+        let crowd_count = c
+            .crowd_count
+            .map(|[lo, hi]| lo + (rng.next_u64() % (hi - lo + 1) as u64) as usize);
+        let duration_s = c.duration_s.map(|[lo, hi]| {
+            let steps = ((hi - lo) * 10.0).round() as u64;
+            let step = if steps == 0 {
+                0
+            } else {
+                rng.next_u64() % (steps + 1)
+            };
+            ((lo * 10.0).round() + step as f64) / 10.0
+        });
+        let mut take = TakeDef {
+            index: k,
+            id: String::new(),
+            scene: scenes[k % scenes.len()].clone(),
+            seed,
+            crowd_count,
+            duration_s,
+            rig: (!rigs.is_empty()).then(|| rigs[k % rigs.len()].clone()),
+        };
+        take.id = take_id(&take, &base)?;
+        takes.push(take);
+    }
+    let mut ids: Vec<&str> = takes.iter().map(|t| t.id.as_str()).collect();
+    ids.sort_unstable();
+    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+        bail!(
+            "campaign {}: two takes are the same take ({}): vary the seed, scene or crowd",
+            path.display(),
+            w[0]
+        );
+    }
+    let fingerprint = sha256_hex(
+        serde_json::to_string(&(&run, &takes))
+            .context("fingerprinting the campaign")?
+            .as_bytes(),
+    );
+    Ok(CampaignPlan {
+        config: path.to_path_buf(),
+        run,
+        out,
+        takes,
+        min_free_disk_bytes: (min_free_disk_gb * 1e9) as u64,
+        floor_plans,
+        fingerprint,
+    })
+}
+
+/// An absolute path with `.` and `..` taken out by name (the path need not exist).
+fn lexical(p: &Path) -> PathBuf {
+    use std::path::Component;
+    let mut out = PathBuf::new();
+    for c in p.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                out.pop();
+            }
+            other => out.push(other),
+        }
+    }
+    out
+}
+
+/// `<scene stem>-s<seed>[-n<count>]-<8 hex>`, the hex of the take's effective config (the run
+/// config with the take's overrides but its output folder; the rig file's path included).
+fn take_id(take: &TakeDef, base: &RawRun) -> Result<String> {
+    let mut raw = base.clone();
+    let mut o = take.overrides(Path::new("."));
+    o.out = None;
+    o.apply(&mut raw)?;
+    let text = resume_fingerprint(&raw).context("fingerprinting a take")?;
+    let hash = sha256_hex(format!("{text}\n{:?}", take.rig).as_bytes());
+    let stem: String = take
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into())
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .take(40)
+        .collect();
+    Ok(format!(
+        "{stem}-s{}{}-{}",
+        take.seed,
+        take.crowd_count
+            .map_or_else(String::new, |n| format!("-n{n}")),
+        &hash[..8]
+    ))
+}
+
+/// Writes the campaign's floor plans that are not there yet (a resumed campaign keeps them).
+pub fn write_floor_plans(plan: &CampaignPlan) -> Result<()> {
+    use crate::policy::room_scene::{RoomScene, RoomSettings};
+    let settings = RoomSettings::default();
+    for (seed, file) in &plan.floor_plans {
+        if file.is_file() {
+            continue;
+        }
+        let dir = file.parent().expect("a floor plan lies in scenes/");
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(*seed);
+        let scene = RoomScene::sample(&settings, &mut rng);
+        let tmp = file.with_extension("obj.tmp");
+        scene
+            .params
+            .scene_mesh(&settings)
+            .write_obj(&tmp)
+            .with_context(|| format!("writing {}", tmp.display()))?;
+        std::fs::rename(&tmp, file).with_context(|| format!("writing {}", file.display()))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,232 @@
+//! Campaigns against real Blender workers: a tiny campaign (3 takes over the apartment and a
+//! generated floor plan, two crowd sizes, one camera) on the local pool. Its `--dry-run` writes
+//! nothing; every take is finished and listed in `campaign.json`; `index.parquet` lists every
+//! frame file; a take is byte-identical to the same take rendered alone with its recorded
+//! command; a campaign whose supervisor is killed with SIGKILL several times (and a Blender
+//! worker once) and resumed ends with the same manifests and index as the uninterrupted one;
+//! the Python reader (`python/`, installed with pip) reads it under pytest.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use parquet::file::reader::{FileReader, SerializedFileReader};
+use parquet::record::RowAccessor;
+
+mod common;
+
+fn egogen_run() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+}
+
+fn state(out: &Path) -> egogen::campaign::CampaignState {
+    egogen::campaign::CampaignState::read(out).unwrap()
+}
+
+/// (take, camera, frame, file) of every index row.
+fn index_rows(out: &Path) -> Vec<(String, String, i32, String)> {
+    let file = std::fs::File::open(out.join("index.parquet")).unwrap();
+    let reader = SerializedFileReader::new(file).unwrap();
+    let names: Vec<String> = reader
+        .metadata()
+        .file_metadata()
+        .schema_descr()
+        .columns()
+        .iter()
+        .map(|c| c.name().to_string())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "take",
+            "scene",
+            "seed",
+            "camera",
+            "wearer",
+            "frame",
+            "time_s",
+            "file",
+            "agents_in_view",
+            "colour_exposure"
+        ]
+    );
+    reader
+        .get_row_iter(None)
+        .unwrap()
+        .map(|r| {
+            let r = r.unwrap();
+            (
+                r.get_string(0).unwrap().clone(),
+                r.get_string(3).unwrap().clone(),
+                r.get_int(5).unwrap(),
+                r.get_string(7).unwrap().clone(),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn a_campaign_renders_indexes_resumes_and_reads_back() {
+    let a = tempfile::tempdir().unwrap();
+    let campaign = common::tiny_campaign(a.path(), false);
+    let out = a.path().join("out");
+
+    // The budget before work: takes and frames, nothing written.
+    let dry = common::succeeds(egogen_run().arg(&campaign).arg("--dry-run"));
+    let said = String::from_utf8_lossy(&dry.stderr);
+    assert!(said.contains("3 takes over 2 scene(s)"), "{said}");
+    assert!(!out.exists(), "--dry-run wrote {}", out.display());
+
+    let run = common::succeeds(egogen_run().arg(&campaign));
+    let said = String::from_utf8_lossy(&run.stderr);
+    let s = state(&out);
+    assert_eq!(s.takes.len(), 3);
+    assert!(
+        s.takes
+            .iter()
+            .all(|t| t.status == egogen::campaign::TakeStatus::Complete),
+        "{said}"
+    );
+    let counts: std::collections::BTreeSet<usize> =
+        s.takes.iter().filter_map(|t| t.def.crowd_count).collect();
+    assert_eq!(counts.len(), 2, "two crowd sizes: {counts:?}");
+    assert!(s.takes.iter().any(|t| t.def.scene.ends_with("plan_5.obj")));
+    for t in &s.takes {
+        egogen::supervisor::verify(&out.join("takes").join(&t.def.id)).unwrap();
+    }
+
+    // The index lists every frame file, once, in take order.
+    let rows = index_rows(&out);
+    let mut files: Vec<String> = glob::glob(&out.join("takes/*/cameras/*/*.exr").to_string_lossy())
+        .unwrap()
+        .map(|p| p.unwrap().strip_prefix(&out).unwrap().display().to_string())
+        .collect();
+    files.sort();
+    let mut listed: Vec<String> = rows.iter().map(|r| r.3.clone()).collect();
+    listed.sort();
+    assert_eq!(listed, files);
+    let order: Vec<&str> = s.takes.iter().map(|t| t.def.id.as_str()).collect();
+    let mut seen: Vec<&str> = rows.iter().map(|r| r.0.as_str()).collect();
+    seen.dedup();
+    assert_eq!(seen, order);
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("logs/start_01/pool_report.json")).unwrap(),
+    )
+    .unwrap();
+    assert!(report["utilisation"].as_f64().unwrap() > 0.0, "{report}");
+    let baseline = common::campaign_digest(&out);
+
+    // A take rendered alone with its recorded flags is the same bytes.
+    let take = &s.takes[1];
+    let dir = out.join("takes").join(&take.def.id);
+    let moved = a.path().join("campaign_take");
+    std::fs::rename(&dir, &moved).unwrap();
+    let mut alone = egogen_run();
+    alone
+        .arg(a.path().join("run.toml"))
+        .arg("--out")
+        .arg(&dir)
+        .args(["--seed", &take.def.seed.to_string(), "--scene"])
+        .arg(&take.def.scene)
+        .args(["--crowd-count", &take.def.crowd_count.unwrap().to_string()]);
+    assert!(take.command.contains("--crowd-count"), "{}", take.command);
+    common::succeeds(&mut alone);
+    assert_eq!(
+        std::fs::read(dir.join("manifest.json")).unwrap(),
+        std::fs::read(moved.join("manifest.json")).unwrap(),
+        "the take alone differs from the campaign's"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::rename(&moved, &dir).unwrap();
+
+    // A second start of a finished campaign needs --resume, and then does nothing new.
+    let again = egogen_run().arg(&campaign).output().unwrap();
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("--resume"));
+    common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+    assert_eq!(common::campaign_digest(&out), baseline);
+
+    // The same campaign again in the same place (the uninterrupted one moved aside), its
+    // supervisor killed with SIGKILL three times at random moments (a worker once), resumed.
+    std::fs::rename(&out, a.path().join("uninterrupted")).unwrap();
+    let campaign_b = &campaign;
+    let out_b = &out;
+    let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        rng
+    };
+    let mut kills = 0;
+    let mut worker_killed = false;
+    let deadline = Instant::now() + Duration::from_secs(600);
+    loop {
+        assert!(Instant::now() < deadline, "the campaign never finished");
+        let mut cmd = egogen_run();
+        cmd.arg(campaign_b);
+        if out_b.join("campaign.json").is_file() {
+            cmd.arg("--resume");
+        }
+        let mut child = cmd
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .unwrap();
+        if kills < 3 {
+            let wait = Duration::from_millis(1500 + next() % 4000);
+            let started = Instant::now();
+            while started.elapsed() < wait {
+                if !worker_killed {
+                    let out_b = out_b.display().to_string();
+                    if let Some(&pid) = common::pids_with(&["render_shard.py", &out_b]).first() {
+                        std::thread::sleep(Duration::from_millis(next() % 800));
+                        let _ = Command::new("kill").args(["-9", &pid.to_string()]).status();
+                        worker_killed = true;
+                    }
+                }
+                if child.try_wait().unwrap().is_some() {
+                    break;
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            if child.try_wait().unwrap().is_none() {
+                child.kill().unwrap();
+                kills += 1;
+            }
+            child.wait().unwrap();
+            continue;
+        }
+        let status = child.wait().unwrap();
+        if status.success() {
+            break;
+        }
+    }
+    // Orphaned Blender workers of the killed supervisors finish writing raw renders only.
+    assert_eq!(common::campaign_digest(out_b), baseline);
+
+    // The Python reader, pip-installed from the checkout, reads the campaign.
+    let python = match common::reader_python() {
+        Ok(p) => p,
+        Err(e) if std::env::var_os("EGOGEN_REQUIRE_SYSTEM_TOOLS").is_none() => {
+            eprintln!("SKIPPED the Python reader: {e}");
+            return;
+        }
+        Err(e) => panic!("{e}"),
+    };
+    common::install_reader(&python);
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let pytest = Command::new(&python)
+        .args(["-m", "pytest", "-q", "-p", "no:cacheprovider"])
+        .arg(root.join("python/tests"))
+        .env("EGOGEN_CAMPAIGN", &out)
+        .current_dir(a.path())
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&pytest.stdout);
+    assert!(pytest.status.success(), "pytest failed:\n{text}");
+    assert!(
+        text.contains(" passed") && !text.contains("skipped"),
+        "{text}"
+    );
+}
