@@ -94,6 +94,13 @@ fn a_campaign_renders_indexes_resumes_and_reads_back() {
     for t in &s.takes {
         egogen::supervisor::verify(&out.join("takes").join(&t.def.id)).unwrap();
     }
+    // One tile per take on the contact sheet (cells of 176 px, two to a row for three takes).
+    let sheet = std::fs::read(out.join("contact_sheet.png")).unwrap();
+    let (w, h) = (
+        u32::from_be_bytes(sheet[16..20].try_into().unwrap()),
+        u32::from_be_bytes(sheet[20..24].try_into().unwrap()),
+    );
+    assert_eq!((w, h), (2 * 176, 2 * 176));
 
     // The index lists every frame file, once, in take order.
     let rows = index_rows(&out);

@@ -172,6 +172,9 @@ const ALLOWED: &[(&str, &[&str])] = &[
         &[
             "atomic_file",
             "cli",
+            "exr_file",
+            "inspect",
+            "preview",
             "manifest",
             "motion",
             "plan",

@@ -6,7 +6,7 @@
 
 use std::collections::HashMap;
 use std::path::Path;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use anyhow::Result;
 
@@ -32,7 +32,14 @@ pub struct CampaignFeed {
     done_before: usize,
     /// Seconds between free-disk checks while paused.
     pub disk_poll: Duration,
+    /// When `campaign.json` was last rewritten (it is rewritten at most every
+    /// [`STATE_EVERY`]: a campaign of many takes would otherwise spend its time rewriting it).
+    saved: Option<Instant>,
 }
+
+/// How often `campaign.json` is rewritten while takes change (and always at the end). A kill
+/// loses at most this much of its record; `--resume` rebuilds it from the takes' folders.
+pub const STATE_EVERY: Duration = Duration::from_secs(2);
 
 impl CampaignFeed {
     /// A feed over `plan`'s takes not complete in `state`; `frames` estimates each take's
@@ -55,13 +62,24 @@ impl CampaignFeed {
             frames,
             done_before,
             disk_poll: Duration::from_secs(30),
+            saved: None,
         }
     }
 
-    fn save(&self) {
+    /// Rewrites `campaign.json` if [`STATE_EVERY`] has passed since the last time.
+    fn save(&mut self) {
+        if self.saved.is_some_and(|t| t.elapsed() < STATE_EVERY) {
+            return;
+        }
+        self.save_now();
+    }
+
+    /// Rewrites `campaign.json` now.
+    pub fn save_now(&mut self) {
         if let Err(e) = self.state.write(&self.plan.out) {
             eprintln!("egogen-run: {e:#}");
         }
+        self.saved = Some(Instant::now());
     }
 
     fn say(&self, what: &str) {

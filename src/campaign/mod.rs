@@ -4,13 +4,15 @@
 //! bytes as that take rendered alone (its command is in `campaign.json`). All takes' shards go
 //! to one pool (local workers or Slurm), takes staged on demand (`feed`); `campaign.json`
 //! (`state`) is rewritten at every change and `--resume` continues a killed campaign; the
-//! frames of every finished take are listed in `index.parquet` (`index`). The budget (takes,
+//! frames of every finished take are listed in `index.parquet` (`index`) and shown on
+//! `contact_sheet.png` (`sheet`). The budget (takes,
 //! frames, disk, core-hours from measured throughput) is stated before any work (`budget`).
 
 pub mod budget;
 pub mod feed;
 pub mod index;
 pub mod plan;
+pub mod sheet;
 pub mod state;
 
 use std::path::{Path, PathBuf};
@@ -114,7 +116,8 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
     };
     let pool = shard_pool(&shared.plan.supervisor);
     let report = pool.run(feed.clone(), runtime, &run);
-    let feed = feed.lock().unwrap();
+    let mut feed = feed.lock().unwrap();
+    feed.save_now();
     // The index lists what is finished, also after an interrupted start.
     let frames_indexed = write_campaign_index(&plan, &feed.state)?;
     let report = report?;
@@ -243,7 +246,8 @@ fn check_finished_takes(plan: &CampaignPlan, state: &mut CampaignState) -> Resul
     Ok(frames)
 }
 
-/// Writes `index.parquet` from the complete takes' rows, in take order; returns the rows.
+/// Writes `index.parquet` from the complete takes' rows, in take order, and the contact sheet
+/// of their frames; returns the rows.
 fn write_campaign_index(plan: &CampaignPlan, state: &CampaignState) -> Result<usize> {
     let mut rows = Vec::new();
     for t in state
@@ -261,5 +265,6 @@ fn write_campaign_index(plan: &CampaignPlan, state: &CampaignState) -> Result<us
         }
     }
     index::write_index(&plan.out.join(INDEX_FILE), &rows)?;
+    sheet::write_contact_sheet(&plan.out, &rows)?;
     Ok(rows.len())
 }

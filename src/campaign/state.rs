@@ -1,4 +1,5 @@
-//! `campaign.json`: the campaign's state, rewritten atomically whenever a take changes — what
+//! `campaign.json`: the campaign's state, rewritten atomically as takes change (at most every
+//! two seconds, and at the end) — what
 //! defines the campaign (so `--resume` continues only the same one), and each take's
 //! definition, status (planned, complete, failed and why) and the command that renders it
 //! alone. A finished take's own marker is its folder `takes/<id>/` with its manifest: it

@@ -36,6 +36,33 @@ impl RgbImage {
         out
     }
 
+    /// The image shrunk by a whole factor (box-averaged) so that its longer side fits
+    /// `max_px`; the image itself when it fits already.
+    pub fn downscaled_to(&self, max_px: usize) -> RgbImage {
+        let factor = self.width.max(self.height).div_ceil(max_px.max(1)).max(1);
+        if factor == 1 {
+            return self.clone();
+        }
+        let (w, h) = (self.width / factor, self.height / factor);
+        let mut out = RgbImage::new(w.max(1), h.max(1), [0, 0, 0]);
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = [0u32; 3];
+                for dy in 0..factor {
+                    for dx in 0..factor {
+                        let p = self.pixels[(y * factor + dy) * self.width + x * factor + dx];
+                        for c in 0..3 {
+                            sum[c] += p[c] as u32;
+                        }
+                    }
+                }
+                let n = (factor * factor) as u32;
+                out.pixels[y * out.width + x] = sum.map(|s| ((s + n / 2) / n) as u8);
+            }
+        }
+        out
+    }
+
     /// `images` centred in square cells of `cell_px` (a larger one cropped to its cell),
     /// `per_row` (≥ 1) to a row, on `fill`; one blank cell when there are none.
     pub fn contact_sheet(

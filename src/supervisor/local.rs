@@ -1,5 +1,6 @@
 //! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard (of
-//! any take the feed has staged; a worker that finds none left stages the next take), starts
+//! any take the feed has staged; the next take is staged in the background when fewer shards
+//! than workers are queued, or by a worker that finds none left), starts
 //! Blender on its spec, finishes frames as their raw files are reported, and retries a failed
 //! or timed-out attempt on the frames still missing until one frame has failed more than the
 //! configured count (retries count frames, not attempts: `run_shard`); each attempt's stderr
@@ -56,8 +57,9 @@ struct Shared {
     queue: Mutex<VecDeque<(usize, Shard)>>,
     /// The feed has no takes left.
     feed_done: Mutex<bool>,
-    /// One worker stages a take at a time; the others render meanwhile.
-    staging: tokio::sync::Mutex<()>,
+    /// One take is staged at a time, ahead of need when the queue runs short (`prefetch`);
+    /// the workers render meanwhile.
+    staging: Arc<tokio::sync::Mutex<()>>,
     reports: Mutex<Vec<ShardReport>>,
     failed: Mutex<Option<String>>,
     failed_takes: Mutex<Vec<TakeFailure>>,
@@ -103,7 +105,7 @@ fn run_local(
             takes: Mutex::new(Vec::new()),
             queue: Mutex::new(VecDeque::new()),
             feed_done: Mutex::new(false),
-            staging: tokio::sync::Mutex::new(()),
+            staging: Arc::new(tokio::sync::Mutex::new(())),
             reports: Mutex::new(Vec::new()),
             failed: Mutex::new(None),
             failed_takes: Mutex::new(Vec::new()),
@@ -210,6 +212,7 @@ async fn worker(shared: Arc<Shared>, w: usize) {
             }
             Next::Render(t, dataset, shard) => (t, dataset, shard),
         };
+        prefetch(&shared);
         let began = Instant::now();
         let (mut report, failure) = run_shard(&shared, &dataset, w, &shard).await;
         shared.busy_seconds.lock().unwrap()[w] += began.elapsed().as_secs_f64();
@@ -236,6 +239,23 @@ async fn worker(shared: Arc<Shared>, w: usize) {
         shared.reports.lock().unwrap().push(report);
     }
     set_state(&shared, w, "done".into());
+}
+
+/// Stages the next take in the background when fewer shards are queued than there are
+/// workers, so that no worker waits for a take's motion at another take's tail.
+fn prefetch(shared: &Arc<Shared>) {
+    let short = shared.queue.lock().unwrap().len() < shared.settings.workers.max(1);
+    if !short || *shared.feed_done.lock().unwrap() {
+        return;
+    }
+    let Ok(one) = shared.staging.clone().try_lock_owned() else {
+        return;
+    };
+    let shared = shared.clone();
+    tokio::spawn(async move {
+        stage_next(&shared).await;
+        drop(one);
+    });
 }
 
 /// Stages the feed's next take and queues its shards (a take with none left is handed back

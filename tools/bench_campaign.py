@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Campaign against a loop of single runs, side by side in one run (docs/CAMPAIGNS.md).
+
+    cargo build --release && python3 tools/bench_campaign.py [--takes 6] [--workers 2] [--out DIR]
+
+Makes the same takes twice on this machine: once as one campaign (`egogen-run CAMPAIGN.toml`,
+all takes' shards in one pool), once as a shell-style loop of `egogen-run RUN.toml --seed …
+--scene … --crowd-count …` (each take's own pool, started and drained in turn). Then a second
+campaign of as many other takes, budgeted with `--throughput-from` the first, to compare the
+budget's estimate with its wall time. Prints one table (wall seconds, worker utilisation from
+the pool reports, frames) and writes it as JSON beside the runs.
+"""
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+BIN = ROOT / "target/release/egogen-run"
+
+RUN = """
+[body]
+[motion]
+source = "agents"
+duration_s = 2.0
+[crowd]
+count = 2
+layout = "random"
+wander = true
+[output]
+dir = "single"
+mesh_every_n_frames = 0
+[render]
+cameras = ["camera-slam-left"]
+resolution_scale = 0.25
+every_n_frames = 4
+samples = 4
+frames_per_shard = 5
+passes = ["colour", "depth", "segmentation"]
+[supervisor]
+workers = {workers}
+"""
+
+CAMPAIGN = """
+[campaign]
+run = "run.toml"
+out = "{out}"
+takes = {takes}
+first_seed = {first_seed}
+scenes = ["{apartment}"]
+floor_plans = [5]
+crowd_count = [1, 3]
+min_free_disk_gb = 0.0
+"""
+
+
+def run(cmd, log):
+    t = time.monotonic()
+    with open(log, "w") as f:
+        subprocess.run([str(c) for c in cmd], check=True, stderr=f, stdout=f)
+    return time.monotonic() - t
+
+
+def utilisation(reports):
+    busy = wall = 0.0
+    for r in reports:
+        rep = json.loads(Path(r).read_text())
+        busy += sum(rep.get("busy_seconds", []))
+        wall += rep["wall_seconds"] * rep["workers"]
+    return busy / wall if wall else 0.0
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--takes", type=int, default=6)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", type=Path, default=None)
+    a = ap.parse_args()
+    work = a.out or Path(tempfile.mkdtemp(prefix="egogen-bench-campaign-"))
+    work.mkdir(parents=True, exist_ok=True)
+    (work / "run.toml").write_text(RUN.format(workers=a.workers))
+    apartment = ROOT / "assets/scenes/apartment.glb"
+    for name, first in [("campaign", 0), ("budgeted", 1000)]:
+        (work / f"{name}.toml").write_text(
+            CAMPAIGN.format(out=name, takes=a.takes, first_seed=first, apartment=apartment)
+        )
+
+    campaign_s = run([BIN, work / "campaign.toml"], work / "campaign.log")
+    state = json.loads((work / "campaign/campaign.json").read_text())
+    frames = sum(t["frames"] for t in state["takes"])
+    camp_util = utilisation((work / "campaign/logs").glob("start_*/pool_report.json"))
+
+    loop_s = 0.0
+    loop_reports = []
+    for t in state["takes"]:
+        out = work / "loop" / t["id"]
+        cmd = [BIN, work / "run.toml", "--out", out, "--seed", str(t["seed"]), "--scene", t["scene"]]
+        if "crowd_count" in t:
+            cmd += ["--crowd-count", str(t["crowd_count"])]
+        loop_s += run(cmd, work / f"loop_{t['id']}.log")
+        loop_reports += list(out.glob("logs/start_*/pool_report.json"))
+    loop_util = utilisation(loop_reports)
+
+    dry = subprocess.run(
+        [BIN, work / "budgeted.toml", "--dry-run", "--throughput-from", work / "campaign"],
+        capture_output=True, text=True, check=True,
+    ).stderr
+    m = re.search(r"([0-9.]+) min on", dry)
+    estimate_s = float(m.group(1)) * 60 if m else float("nan")
+    budgeted_s = run([BIN, work / "budgeted.toml"], work / "budgeted.log")
+    budgeted_util = utilisation((work / "budgeted/logs").glob("start_*/pool_report.json"))
+
+    result = {
+        "takes": a.takes,
+        "workers": a.workers,
+        "frames": frames,
+        "campaign_wall_s": round(campaign_s, 1),
+        "campaign_utilisation": round(camp_util, 3),
+        "loop_wall_s": round(loop_s, 1),
+        "loop_utilisation": round(loop_util, 3),
+        "loop_over_campaign": round(loop_s / campaign_s, 2),
+        "budget_estimate_s": round(estimate_s, 1),
+        "budgeted_wall_s": round(budgeted_s, 1),
+        "budgeted_utilisation": round(budgeted_util, 3),
+        "budget_error": round(estimate_s / budgeted_s - 1, 3),
+    }
+    (work / "bench_campaign.json").write_text(json.dumps(result, indent=2))
+    print(f"{'':28}{'wall s':>9}{'utilisation':>13}")
+    print(f"{'campaign':28}{campaign_s:9.1f}{camp_util:13.0%}")
+    print(f"{'loop of single runs':28}{loop_s:9.1f}{loop_util:13.0%}")
+    print(f"loop / campaign: {loop_s / campaign_s:.2f}x ({a.takes} takes, {frames} frames, {a.workers} workers)")
+    print(f"budget of another {a.takes} takes: estimated {estimate_s:.0f} s, took {budgeted_s:.0f} s "
+          f"({100 * (estimate_s / budgeted_s - 1):+.0f} %)")
+    print(f"details: {work}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
