@@ -47,15 +47,31 @@ def add_body(scene, body):
     cache = obj.modifiers.new("egogen_cache", "MESH_CACHE")
     cache.cache_format = "PC2"
     cache.filepath = body["pc2"]
-    cache.frame_start = body["cache_frame_start"]
-    cache.frame_scale = body["samples_per_frame"]
     cache.interpolation = "LINEAR"
+    # The cache's samples played back by keys (it may hold the rendered times only).
+    cache.play_mode = "CUSTOM"
+    cache.time_mode = "FRAME"
+    key_cache(obj, body["cache_keys"], 1)
     cache.forward_axis = "POS_Y"
     cache.up_axis = "POS_Z"
     obj.cycles.use_motion_blur = True
     obj.cycles.use_deform_motion = True
     obj.cycles.motion_steps = body["motion_steps"]
     return obj
+
+
+def key_cache(obj, keys, frame_step):
+    """Plays a sparse cache: sample `key[1]` at frame `key[0] / frame_step`, linearly between
+    keys (held before the first and after the last)."""
+    obj.animation_data_clear()
+    cache = obj.modifiers["egogen_cache"]
+    path = 'modifiers["egogen_cache"].eval_frame'
+    for frame, sample in keys:
+        cache.eval_frame = sample
+        obj.keyframe_insert(path, frame=frame / frame_step)
+    for fcurve in action_fcurves(obj.animation_data.action):
+        for point in fcurve.keyframe_points:
+            point.interpolation = "LINEAR"
 
 
 def add_uv_layer(mesh, uvs, path):
@@ -381,7 +397,7 @@ def set_frame_step(cam, cam_spec, bodies, obstacles, spec, frame_step):
     then reach the previous and next saved frame."""
     key_camera(cam, cam_spec["keys"], frame_step)
     for obj, body in zip(bodies, spec["bodies"]):
-        obj.modifiers["egogen_cache"].frame_scale = body["samples_per_frame"] * frame_step
+        key_cache(obj, body["cache_keys"], frame_step)
     for obj, ob in zip(obstacles, spec.get("obstacles", [])):
         key_obstacle(obj, ob["keys"], frame_step)
 

@@ -5,8 +5,7 @@
 //!
 //! PC2 layout (little endian): `"POINTCACHE2\0"`, i32 version 1, i32 points, f32 start frame,
 //! f32 sample rate, i32 samples, then `samples × points × 3` f32. Blender ignores the header's
-//! start and rate; the modifier's `frame_start`/`frame_scale` place the samples in time, which is
-//! what `render::ShardBody` carries.
+//! start and rate; playback keys (`render::ShardBody::cache_keys`) place the samples in time.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -29,7 +29,9 @@ use egogen::render::{
 };
 use egogen::rig::Rig;
 use egogen::scene::{load_scene, sample_start_goals, walkable_map, WalkableSettings};
-use egogen::synth::body_cache;
+use egogen::synth::body_cache::{
+    body_cache, body_cache_at, playback_keys, rendered_sample_indices,
+};
 use egogen::vertex_cache::{
     write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy, PointCache,
 };
@@ -40,7 +42,9 @@ const SAMPLES_PER_FRAME: u32 = 4;
 const CAMERA_HEIGHT_M: f64 = 2.3;
 const CAMERA_STEP_M: f64 = 0.02;
 const RENDERED: [u32; 2] = [2, 3];
-const PROBE_FRAMES: [f64; 6] = [0.0, 0.125, 0.25, 1.0, 2.5, 5.0];
+/// Times the renders of `RENDERED` read the bodies at: shutter ends and centres, the flow's
+/// neighbours, and sub-frames in between inside the shutter.
+const PROBE_FRAMES: [f64; 8] = [1.0, 1.75, 1.875, 2.0, 2.25, 2.75, 3.125, 4.0];
 /// The body's one skin region: green wherever its UV has u < 1/2 (a mask written here).
 const GREEN_REGION: [f64; 3] = [0.05, 0.6, 0.05];
 
@@ -109,13 +113,18 @@ fn render_scene() -> Rendered {
     }
 
     let dir = tempfile::tempdir().unwrap();
+    // Blender gets the times the renders read only (as egogen-run writes it); the full cache
+    // is the reference it must play back the same as.
     let cache = body_cache(&model, &motion, SAMPLES_PER_FRAME).unwrap();
+    let read = rendered_sample_indices(&RENDERED, 1, 0.5, SAMPLES_PER_FRAME, FRAMES);
+    let sparse = body_cache_at(&model, &motion, SAMPLES_PER_FRAME, Some(&read)).unwrap();
+    assert!(sparse.samples.len() < cache.samples.len() / 2);
     let pc2 = dir.path().join("body.pc2");
     let faces = dir.path().join("faces.npy");
     let vertices = dir.path().join("vertices.npy");
-    cache.write(&pc2).unwrap();
+    sparse.write(&pc2).unwrap();
     write_faces_npy(&faces, &model.faces).unwrap();
-    write_rest_vertices_npy(&vertices, &cache).unwrap();
+    write_rest_vertices_npy(&vertices, &sparse).unwrap();
     let uvs = dir.path().join("uvs.npy");
     write_corner_uvs_npy(&uvs, &model.uvs.as_ref().unwrap().per_corner()).unwrap();
     let mask = dir.path().join("u_below_half.png");
@@ -187,8 +196,8 @@ fn render_scene() -> Rendered {
             faces_npy: faces,
             vertices_npy: vertices,
             pc2,
-            cache_frame_start: 0.0,
             samples_per_frame: SAMPLES_PER_FRAME,
+            cache_keys: playback_keys(&read, SAMPLES_PER_FRAME),
             motion_steps: 2,
             skin: SkinPlan::default().draw(0),
             uvs_npy: Some(uvs),
@@ -316,7 +325,7 @@ fn frame(r: &Rendered, cam: usize, frame: u32) -> ExrContents {
 }
 
 #[test]
-fn blender_plays_the_vertex_cache_back_at_whole_and_sub_frames() {
+fn blender_plays_a_cache_of_the_rendered_times_back_as_the_full_cache() {
     let r = rendered();
     let text = std::fs::read_to_string(&r.probe).unwrap();
     let probe: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();

@@ -74,8 +74,8 @@ pub struct ShardCamera {
     pub frames: Vec<ShardFrame>,
 }
 
-/// A body: topology (`faces_npy`, int32 F×3), vertices (`vertices_npy`) and a PC2 vertex cache. Cache sample `k` is the
-/// body at scene frame `cache_frame_start + k / samples_per_frame`.
+/// A body: topology (`faces_npy`, int32 F×3), vertices (`vertices_npy`) and a PC2 vertex
+/// cache, played back by `cache_keys`.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShardBody {
@@ -86,8 +86,13 @@ pub struct ShardBody {
     /// The mesh's vertices before the cache plays (float32 N×3, the cache's first sample).
     pub vertices_npy: PathBuf,
     pub pc2: PathBuf,
-    pub cache_frame_start: f64,
+    /// The grid the cache's samples lie on: `samples_per_frame` a frame.
     pub samples_per_frame: u32,
+    /// How the cache plays: `(frame, sample)` keys, linear between them, held before the
+    /// first and after the last (`synth::body_cache::playback_keys`). A cache of the rendered
+    /// times only (`synth::body_cache::rendered_sample_indices`) has a run of keys around each
+    /// rendered frame; a full cache two keys.
+    pub cache_keys: Vec<[f64; 2]>,
     /// Cycles deformation motion steps (each step doubles the time samples minus one).
     pub motion_steps: u32,
     /// Its skin material ([`super::skin`]).

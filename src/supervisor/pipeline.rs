@@ -34,10 +34,11 @@ use crate::render::{BlenderRuntime, ShardBody, ShardRgb, ShardSpec};
 use crate::scene::ceiling::ceiling_to_add;
 use crate::scene::{load_scene, walkable_map, WalkableSettings};
 use crate::scene::{Obstacle2, ObstacleSolid};
+use crate::synth::body_cache::{body_cache_at, playback_keys, rendered_sample_indices};
 use crate::synth::crowd::{CrowdTake, CrowdWorld};
 use crate::synth::crowd_dir::write_crowd_dir;
 use crate::synth::placement::place_motion;
-use crate::synth::{body_cache, pose_meshes, track_body, write_sequence_dir};
+use crate::synth::{pose_meshes, track_body, write_sequence_dir};
 use crate::vertex_cache::{write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy};
 
 /// Command-line choices that are not in the config, and the effective config.
@@ -274,10 +275,11 @@ pub fn stage_take(
         write_sequence(&sequence, &motion, &agents, model, plan)?;
     }
     write_aria(&staging, render, &agents, &wearers, &motion, &scene)?;
-    let (bodies, scratch) = write_body_inputs(&staging.join("work"), &agents, model, render)?;
     let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
         .step_by(render.every_n_frames)
         .collect();
+    let (bodies, scratch) =
+        write_body_inputs(&staging.join("work"), &agents, model, render, &frames)?;
     let cameras = camera_work(render, &agents, &wearers, &frames);
     let objects = scene_objects(plan, &scene, &motion, &agents);
     let base_spec = base_spec(plan, render, &scene, &agents[wearers[0]], bodies, &objects)?;
@@ -523,14 +525,16 @@ fn write_aria(
     Ok(())
 }
 
-/// Writes what Blender reads of each body into `work` (a PC2 cache, faces, rest vertices),
-/// rewritten identically on every (re)start; returns the bodies as shard specs name them and
-/// the files written (scratch, removed when the dataset is finished).
+/// Writes what Blender reads of each body into `work` (a PC2 cache of the times the renders
+/// of `frames` read, faces, rest vertices), rewritten identically on every (re)start; returns
+/// the bodies as shard specs name them and the files written (scratch, removed when the
+/// dataset is finished).
 fn write_body_inputs(
     work: &Path,
     agents: &[RenderedAgent],
     model: &BodyModel,
     render: &RenderPlan,
+    frames: &[u32],
 ) -> Result<(Vec<ShardBody>, Vec<PathBuf>)> {
     std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
     let masks = skin_region_masks(model)?;
@@ -550,7 +554,26 @@ fn write_body_inputs(
         let pc2 = work.join(format!("agent_{k}.pc2"));
         let faces = work.join(format!("agent_{k}_faces.npy"));
         let vertices = work.join(format!("agent_{k}_vertices.npy"));
-        let cache = body_cache(model, &a.motion, render.cache_samples_per_frame)?;
+        // Only what is rendered: the shutter around each rendered frame, the neighbours the
+        // flow reads (with the colour pass off, no shutter).
+        let shutter = if render.passes.needs_colour_render() {
+            render.shutter_frames
+        } else {
+            0.0
+        };
+        let indices = rendered_sample_indices(
+            frames,
+            render.every_n_frames as u32,
+            shutter,
+            render.cache_samples_per_frame,
+            a.motion.len(),
+        );
+        let cache = body_cache_at(
+            model,
+            &a.motion,
+            render.cache_samples_per_frame,
+            Some(&indices),
+        )?;
         cache.write(&pc2)?;
         write_faces_npy(&faces, &model.faces)?;
         write_rest_vertices_npy(&vertices, &cache)?;
@@ -569,8 +592,8 @@ fn write_body_inputs(
             faces_npy: std::fs::canonicalize(&faces)?,
             vertices_npy: std::fs::canonicalize(&vertices)?,
             pc2: std::fs::canonicalize(&pc2)?,
-            cache_frame_start: 0.0,
             samples_per_frame: render.cache_samples_per_frame,
+            cache_keys: playback_keys(&indices, render.cache_samples_per_frame),
             motion_steps: 2,
             skin,
             uvs_npy: uvs_npy.clone(),
