@@ -4,6 +4,9 @@
 //! Plain timing harness (medians of repeated runs): the 3D SDF builds take seconds each, too
 //! slow for criterion's sampling.
 
+mod common;
+use common::median_s;
+
 use std::path::Path;
 use std::time::Instant;
 
@@ -16,18 +19,6 @@ use egogen::scene::{
 };
 use egogen::sensing::{EgoPose2, EgoSensor, LocalMap, RayScan, SensingWorld};
 use glam::DVec2;
-
-fn median_s(mut f: impl FnMut(), reps: usize) -> f64 {
-    let mut t: Vec<f64> = (0..reps)
-        .map(|_| {
-            let s = Instant::now();
-            f();
-            s.elapsed().as_secs_f64()
-        })
-        .collect();
-    t.sort_by(f64::total_cmp);
-    t[reps / 2]
-}
 
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

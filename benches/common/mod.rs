@@ -1,5 +1,5 @@
 //! Running `egogen-run` from a bench: a config in a temporary folder, the Blender attempt's time
-//! read from the pool report.
+//! read from the pool report; and a plain median-of-runs timer.
 #![allow(dead_code)]
 
 use std::path::PathBuf;
@@ -81,4 +81,18 @@ pub fn egogen_run_with(config: &str, args: &[&str]) -> Run {
         report,
         wall_seconds,
     }
+}
+
+/// The median wall time of `reps` runs of `f`, in seconds (a plain timing harness for work too
+/// slow for criterion's sampling).
+pub fn median_s(mut f: impl FnMut(), reps: usize) -> f64 {
+    let mut t: Vec<f64> = (0..reps)
+        .map(|_| {
+            let s = std::time::Instant::now();
+            f();
+            s.elapsed().as_secs_f64()
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[reps / 2]
 }
