@@ -102,7 +102,12 @@ fn main() {
         );
         let rows = rows_of(&state, 100);
         let index = out.join("index.parquet");
-        let index_w = median_s(|| write_index(&index, &rows).unwrap(), 3);
+        let index_w = median_s(
+            || {
+                write_index(&index, rows.chunks(100).map(|c| Ok(c.to_vec()))).unwrap();
+            },
+            3,
+        );
         let index_r = median_s(
             || {
                 use parquet::file::reader::{FileReader, SerializedFileReader};

@@ -222,6 +222,38 @@ property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_he
     fuzz("room.ply", ply, 10, |p| load_scene(p, None));
 }
 
+/// Random bytes under a scene's name are refused with what the file should have been, not
+/// only the parser's words.
+#[test]
+fn random_bytes_as_a_scene_say_what_the_file_should_be() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut x = 0x2545_f491_4f6c_dd1du64;
+    let bytes: Vec<u8> = (0..4096)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x as u8
+        })
+        .collect();
+    for (name, format) in [
+        ("scan.glb", "glTF"),
+        ("scan.gltf", "glTF"),
+        ("scan.obj", "Wavefront OBJ"),
+        ("scan.ply", "PLY"),
+    ] {
+        let path = dir.path().join(name);
+        std::fs::write(&path, &bytes).unwrap();
+        let msg = load_scene(&path, None).unwrap_err().to_string();
+        assert!(
+            msg.contains(&path.display().to_string())
+                && msg.contains(&format!("not a valid {format} file"))
+                && msg.contains("check that the file is complete"),
+            "{name}: {msg}"
+        );
+    }
+}
+
 #[test]
 fn exr() {
     use exr::prelude::*;

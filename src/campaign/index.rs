@@ -112,63 +112,112 @@ pub fn kept_rows(campaign: &Path, take: &str) -> Option<Vec<IndexRow>> {
     serde_json::from_str(&text).ok()
 }
 
-/// Writes `rows` as a Parquet file (one row group, uncompressed: the bytes depend on the rows
-/// only), atomically.
-pub fn write_index(path: &Path, rows: &[IndexRow]) -> Result<()> {
+/// Writes the index as a Parquet file from `groups` (each take's rows, in order): whole takes
+/// gathered into row groups of at least [`GROUP_ROWS`] rows, uncompressed, so the bytes depend
+/// on the rows only and about one group is in memory at a time. Written under a temporary name and renamed. Returns the rows written.
+pub fn write_index<I>(path: &Path, groups: I) -> Result<usize>
+where
+    I: IntoIterator<Item = Result<Vec<IndexRow>>>,
+{
+    let tmp = path.with_extension("parquet.tmp");
+    match write_groups(&tmp, groups) {
+        Ok(n) => {
+            std::fs::rename(&tmp, path)
+                .with_context(|| format!("renaming {} to {}", tmp.display(), path.display()))?;
+            Ok(n)
+        }
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            Err(e.context(format!("writing {}", path.display())))
+        }
+    }
+}
+
+fn write_groups<I>(tmp: &Path, groups: I) -> Result<usize>
+where
+    I: IntoIterator<Item = Result<Vec<IndexRow>>>,
+{
     let schema = Arc::new(parquet::schema::parser::parse_message_type(SCHEMA)?);
     let props = Arc::new(
         WriterProperties::builder()
             .set_created_by("egogen".into())
             .build(),
     );
-    let mut bytes = Vec::new();
-    {
-        let mut writer = SerializedFileWriter::new(&mut bytes, schema, props)?;
-        let mut group = writer.next_row_group()?;
-        let text = |f: fn(&IndexRow) -> &str| -> Vec<ByteArray> {
-            rows.iter().map(|r| ByteArray::from(f(r))).collect()
-        };
-        let mut column = 0;
-        while let Some(mut col) = group.next_column()? {
-            match column {
-                0 => write_text(&mut col, &text(|r| &r.take))?,
-                1 => write_text(&mut col, &text(|r| &r.scene))?,
-                2 => {
-                    let v: Vec<i64> = rows.iter().map(|r| r.seed as i64).collect();
-                    col.typed::<Int64Type>().write_batch(&v, None, None)?;
-                }
-                3 => write_text(&mut col, &text(|r| &r.camera))?,
-                4 => write_text(&mut col, &text(|r| &r.wearer))?,
-                5 => {
-                    let v: Vec<i32> = rows.iter().map(|r| r.frame as i32).collect();
-                    col.typed::<Int32Type>().write_batch(&v, None, None)?;
-                }
-                6 => {
-                    let v: Vec<f64> = rows.iter().map(|r| r.time_s).collect();
-                    col.typed::<DoubleType>().write_batch(&v, None, None)?;
-                }
-                7 => write_text(&mut col, &text(|r| &r.file))?,
-                8 => {
-                    let v: Vec<i32> = rows.iter().map(|r| r.agents_in_view as i32).collect();
-                    col.typed::<Int32Type>().write_batch(&v, None, None)?;
-                }
-                _ => {
-                    let v: Vec<f32> = rows.iter().filter_map(|r| r.colour_exposure).collect();
-                    let def: Vec<i16> = rows
-                        .iter()
-                        .map(|r| i16::from(r.colour_exposure.is_some()))
-                        .collect();
-                    col.typed::<FloatType>().write_batch(&v, Some(&def), None)?;
-                }
-            }
-            col.close()?;
-            column += 1;
+    let file = std::fs::File::create(tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let mut writer = SerializedFileWriter::new(std::io::BufWriter::new(file), schema, props)?;
+    let mut total = 0;
+    let mut pending: Vec<IndexRow> = Vec::new();
+    for rows in groups {
+        pending.extend(rows?);
+        if pending.len() >= GROUP_ROWS {
+            total += pending.len();
+            write_group(&mut writer, &pending)?;
+            pending.clear();
         }
-        group.close()?;
-        writer.close()?;
     }
-    crate::atomic_file::write_atomically(path, &bytes)
-        .with_context(|| format!("writing {}", path.display()))
+    if !pending.is_empty() {
+        total += pending.len();
+        write_group(&mut writer, &pending)?;
+    }
+    let file = writer.into_inner()?;
+    file.into_inner()
+        .map_err(|e| e.into_error())?
+        .sync_all()
+        .with_context(|| format!("writing {}", tmp.display()))?;
+    Ok(total)
+}
+
+/// Rows per row group at least (whole takes are added until a group has this many): groups
+/// large enough for Parquet's per-group overhead to vanish, small enough to bound memory.
+const GROUP_ROWS: usize = 65_536;
+
+/// Writes `rows` as one row group.
+fn write_group<W: std::io::Write + Send>(
+    writer: &mut SerializedFileWriter<W>,
+    rows: &[IndexRow],
+) -> Result<()> {
+    let mut group = writer.next_row_group()?;
+    let text = |f: fn(&IndexRow) -> &str| -> Vec<ByteArray> {
+        rows.iter().map(|r| ByteArray::from(f(r))).collect()
+    };
+    let mut column = 0;
+    while let Some(mut col) = group.next_column()? {
+        match column {
+            0 => write_text(&mut col, &text(|r| &r.take))?,
+            1 => write_text(&mut col, &text(|r| &r.scene))?,
+            2 => {
+                let v: Vec<i64> = rows.iter().map(|r| r.seed as i64).collect();
+                col.typed::<Int64Type>().write_batch(&v, None, None)?;
+            }
+            3 => write_text(&mut col, &text(|r| &r.camera))?,
+            4 => write_text(&mut col, &text(|r| &r.wearer))?,
+            5 => {
+                let v: Vec<i32> = rows.iter().map(|r| r.frame as i32).collect();
+                col.typed::<Int32Type>().write_batch(&v, None, None)?;
+            }
+            6 => {
+                let v: Vec<f64> = rows.iter().map(|r| r.time_s).collect();
+                col.typed::<DoubleType>().write_batch(&v, None, None)?;
+            }
+            7 => write_text(&mut col, &text(|r| &r.file))?,
+            8 => {
+                let v: Vec<i32> = rows.iter().map(|r| r.agents_in_view as i32).collect();
+                col.typed::<Int32Type>().write_batch(&v, None, None)?;
+            }
+            _ => {
+                let v: Vec<f32> = rows.iter().filter_map(|r| r.colour_exposure).collect();
+                let def: Vec<i16> = rows
+                    .iter()
+                    .map(|r| i16::from(r.colour_exposure.is_some()))
+                    .collect();
+                col.typed::<FloatType>().write_batch(&v, Some(&def), None)?;
+            }
+        }
+        col.close()?;
+        column += 1;
+    }
+    group.close()?;
+    Ok(())
 }
 
 fn write_text(

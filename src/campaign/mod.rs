@@ -246,25 +246,28 @@ fn check_finished_takes(plan: &CampaignPlan, state: &mut CampaignState) -> Resul
     Ok(frames)
 }
 
-/// Writes `index.parquet` from the complete takes' rows, in take order, and the contact sheet
-/// of their frames; returns the rows.
+/// Writes `index.parquet` from the complete takes' kept rows, one take at a time in take
+/// order, and the contact sheet of their middle frames; returns the rows.
 fn write_campaign_index(plan: &CampaignPlan, state: &CampaignState) -> Result<usize> {
-    let mut rows = Vec::new();
-    for t in state
+    let mut middles = Vec::new();
+    let groups = state
         .takes
         .iter()
         .filter(|t| t.status == TakeStatus::Complete)
-    {
-        match index::kept_rows(&plan.out, &t.def.id) {
-            Some(r) => rows.extend(r),
-            None => bail!(
-                "take {}: its index rows ({}) are missing",
-                t.def.id,
-                index::rows_path(&plan.out, &t.def.id).display()
-            ),
-        }
-    }
-    index::write_index(&plan.out.join(INDEX_FILE), &rows)?;
-    sheet::write_contact_sheet(&plan.out, &rows)?;
-    Ok(rows.len())
+        .map(|t| {
+            let rows = index::kept_rows(&plan.out, &t.def.id).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "take {}: its index rows ({}) are missing",
+                    t.def.id,
+                    index::rows_path(&plan.out, &t.def.id).display()
+                )
+            })?;
+            if let Some(m) = sheet::middle_frame(&rows) {
+                middles.push(m.clone());
+            }
+            Ok(rows)
+        });
+    let n = index::write_index(&plan.out.join(INDEX_FILE), groups)?;
+    sheet::write_contact_sheet(&plan.out, &middles)?;
+    Ok(n)
 }

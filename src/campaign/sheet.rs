@@ -17,20 +17,18 @@ pub const SHEET_FILE: &str = "contact_sheet.png";
 const MAX_TAKES: usize = 48;
 const CELL_PX: usize = 176;
 
-/// Writes `contact_sheet.png` from the index rows (in take order); `None` when no take is
-/// finished.
-pub fn write_contact_sheet(campaign: &Path, rows: &[IndexRow]) -> Result<Option<PathBuf>> {
+/// The frame of a take's rows on the sheet: the middle one of its first camera.
+pub fn middle_frame(rows: &[IndexRow]) -> Option<&IndexRow> {
+    let camera = &rows.first()?.camera;
+    let of_camera: Vec<&IndexRow> = rows.iter().filter(|r| &r.camera == camera).collect();
+    Some(of_camera[of_camera.len() / 2])
+}
+
+/// Writes `contact_sheet.png` from each take's frame ([`middle_frame`], in take order; the
+/// first 48); `None` when there is none.
+pub fn write_contact_sheet(campaign: &Path, frames: &[IndexRow]) -> Result<Option<PathBuf>> {
     let mut tiles = Vec::new();
-    let mut start = 0;
-    while start < rows.len() && tiles.len() < MAX_TAKES {
-        let take = &rows[start].take;
-        let end = start + rows[start..].iter().take_while(|r| &r.take == take).count();
-        let camera = &rows[start].camera;
-        let of_camera: Vec<&IndexRow> = rows[start..end]
-            .iter()
-            .filter(|r| &r.camera == camera)
-            .collect();
-        let row = of_camera[of_camera.len() / 2];
+    for row in frames.iter().take(MAX_TAKES) {
         let path = campaign.join(&row.file);
         let contents =
             ExrContents::read(&path).with_context(|| format!("reading {}", path.display()))?;
@@ -42,7 +40,6 @@ pub fn write_contact_sheet(campaign: &Path, rows: &[IndexRow]) -> Result<Option<
             let image = pass_preview_exposed(&contents, colour, row.colour_exposure.unwrap_or(1.0));
             tiles.push(image.downscaled_to(CELL_PX - 4));
         }
-        start = end;
     }
     if tiles.is_empty() {
         return Ok(None);

@@ -96,10 +96,19 @@ pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneErr
     if !path.is_file() {
         return Err(read_err("file not found".into()));
     }
+    // What the reader said, and what the file should have been: a damaged or mislabelled file
+    // says so rather than only quoting the parser.
+    let not_a = |format: &'static str| {
+        move |message: String| {
+            read_err(format!(
+                "not a valid {format} file: {message}; check that the file is complete and is {format} (the format follows the extension)"
+            ))
+        }
+    };
     let parts = match extension(path).as_str() {
-        "glb" | "gltf" => read_gltf(path).map_err(read_err)?,
-        "obj" => read_obj(path).map_err(read_err)?,
-        "ply" => read_ply(path).map_err(read_err)?,
+        "glb" | "gltf" => read_gltf(path).map_err(not_a("glTF"))?,
+        "obj" => read_obj(path).map_err(not_a("Wavefront OBJ"))?,
+        "ply" => read_ply(path).map_err(not_a("PLY"))?,
         ext => {
             return Err(SceneError::Unsupported {
                 path: path.to_owned(),
