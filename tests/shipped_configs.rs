@@ -59,3 +59,21 @@ fn the_shipped_policy_config_writes_the_shipped_policy() {
     let shipped = std::fs::canonicalize(root.join(egogen::policy::ppo::SHIPPED_POLICY)).unwrap();
     assert_eq!(written, shipped);
 }
+
+#[test]
+fn the_shipped_campaign_plans_its_takes() {
+    let root = common::repo_root();
+    let plan = egogen::campaign::plan_campaign(&root.join("configs/campaign.toml"))
+        .unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(plan.takes.len(), 12);
+    let scenes: std::collections::BTreeSet<_> = plan.takes.iter().map(|t| &t.scene).collect();
+    assert_eq!(scenes.len(), 3, "the apartment and two floor plans");
+    assert!(plan.takes.iter().all(|t| {
+        let n = t.crowd_count.unwrap();
+        let d = t.duration_s.unwrap();
+        (2..=4).contains(&n) && (6.0..=10.0).contains(&d)
+    }));
+    // Ids are stable: planned twice, the same.
+    let again = egogen::campaign::plan_campaign(&root.join("configs/campaign.toml")).unwrap();
+    assert_eq!(plan.fingerprint, again.fingerprint);
+}

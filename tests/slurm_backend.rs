@@ -177,23 +177,45 @@ fn a_campaign_on_slurm_matches_the_local_pool() {
         return;
     }
     // The tiny campaign on the local pool, moved aside; then the same campaign, in the same
-    // place, its takes' shards as Slurm arrays (a bound of 2 tasks in flight).
+    // place, its takes' shards as Slurm arrays with one task in flight: takes are staged on
+    // demand (4 shards a task pending), so the third take goes out in a later array.
     let dir = tempfile::tempdir().unwrap();
     let campaign = common::tiny_campaign(dir.path(), true);
     let out = dir.path().join("out");
     common::succeeds(egogen_run().arg(&campaign).args(["--backend", "local"]));
     let local = common::campaign_digest(&out);
     std::fs::rename(&out, dir.path().join("local")).unwrap();
-    let run = common::succeeds(egogen_run().arg(&campaign));
+    let run = common::succeeds(egogen_run().arg(&campaign).args(["--workers", "1"]));
     let said = String::from_utf8_lossy(&run.stderr);
     assert!(said.contains("Slurm array job"), "{said}");
     assert_eq!(common::campaign_digest(&out), local, "{said}");
     let script = std::fs::read_to_string(out.join("work/slurm/round_001/array.sh")).unwrap();
-    assert!(script.contains("%2"), "{script}");
-    // One array for all three takes' shards.
-    let tasks = script
-        .lines()
-        .filter(|l| l.contains("render_shard"))
-        .count();
-    assert!(tasks >= 6, "{tasks} tasks: {script}");
+    assert!(script.contains("%1"), "{script}");
+    // Which takes each round's task specs render.
+    let takes_of = |round: &str| -> std::collections::BTreeSet<String> {
+        let dir = out.join("work/slurm").join(round);
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .flatten()
+            .filter(|e| e.file_name().to_string_lossy().starts_with("task_"))
+            .flat_map(|e| {
+                let spec = std::fs::read_to_string(e.path()).unwrap();
+                let state = egogen::campaign::CampaignState::read(&out).unwrap();
+                state
+                    .takes
+                    .into_iter()
+                    .map(|t| t.def.id)
+                    .filter(move |id| spec.contains(&format!("takes/{id}.partial")))
+            })
+            .collect()
+    };
+    let state = egogen::campaign::CampaignState::read(&out).unwrap();
+    let ids: Vec<String> = state.takes.iter().map(|t| t.def.id.clone()).collect();
+    assert_eq!(
+        takes_of("round_001"),
+        ids[..2].iter().cloned().collect(),
+        "two takes staged for the first array"
+    );
+    // (A task that failed in the first array would be retried in the second too.)
+    assert!(takes_of("round_002").contains(&ids[2]));
 }

@@ -1,5 +1,6 @@
-//! The Slurm backend: the feed's takes are all staged first (a campaign's too); each round
-//! writes one spec per pending shard of any take and an `sbatch` array
+//! The Slurm backend: the feed's takes are staged on demand, before each round until a few
+//! arrays' worth of shards is pending (scratch only for takes in flight); each round writes
+//! one spec per pending shard of any staged take and an `sbatch` array
 //! script (one task per shard, resources from `[supervisor.slurm]`), submits it with
 //! `sbatch --parsable`, and polls `squeue` until the array has left the queue, finishing frames
 //! here as the tasks' raw renders appear (the dataset folder is on a filesystem shared with the
@@ -80,19 +81,53 @@ impl ShardPool for SlurmPool {
     }
 }
 
-/// Stages every take the feed has (rounds submit all their shards at once, bounded by
-/// `max_running` tasks in flight); takes that cannot be staged are recorded.
-fn stage_all(feed: &Mutex<dyn TakeFeed>, failed: &mut Vec<TakeFailure>) -> Vec<TakeInRun> {
-    let mut takes = Vec::new();
+/// Shards pending per task Slurm may run at once before staging stops: takes are staged on
+/// demand, enough to fill a few arrays, so scratch is held for the takes in flight only.
+const STAGED_SHARDS_PER_TASK: usize = 4;
+
+/// Stages takes until `want` shards of open takes are pending or the feed is out (then it
+/// says so); takes that cannot be staged are recorded.
+fn stage_more(
+    feed: &Mutex<dyn TakeFeed>,
+    takes: &mut Vec<TakeInRun>,
+    states: &mut Vec<ShardState>,
+    failed: &mut Vec<TakeFailure>,
+    want: usize,
+) -> bool {
     loop {
+        let pending = states
+            .iter()
+            .filter(|s| {
+                !takes[s.take].closed
+                    && !missing_frames(&takes[s.take].take.dataset, &s.shard).is_empty()
+            })
+            .count();
+        if pending >= want {
+            return false;
+        }
         let next = feed.lock().unwrap().next_take();
         match next {
-            None => return takes,
-            Some(Ok(take)) => takes.push(TakeInRun {
-                take,
-                closed: false,
-            }),
+            None => return true,
             Some(Err(f)) => failed.push(f),
+            Some(Ok(take)) => {
+                let t = takes.len();
+                states.extend(take.shards.iter().map(|shard| ShardState {
+                    take: t,
+                    report: ShardReport {
+                        take: take.name.clone(),
+                        shard: shard.id,
+                        camera: take.dataset.cameras[shard.camera].camera.name.clone(),
+                        frames: shard.frames.clone(),
+                        attempts: Vec::new(),
+                    },
+                    shard: shard.clone(),
+                    tries: FrameTries::default(),
+                }));
+                takes.push(TakeInRun {
+                    take,
+                    closed: false,
+                });
+            }
         }
     }
 }
@@ -118,31 +153,10 @@ fn run_slurm(
     let (total, done) = feed.lock().unwrap().frames();
     let bar = frames_bar(total as u64, done as u64)?;
     let mut failed_takes = Vec::new();
-    let mut takes = stage_all(&feed, &mut failed_takes);
-    if run.stop_on_failure {
-        if let Some(f) = failed_takes.first() {
-            bail!("{}", f.reason);
-        }
-    }
-    let mut states: Vec<ShardState> = takes
-        .iter()
-        .enumerate()
-        .flat_map(|(t, take)| {
-            let take = &take.take;
-            take.shards.iter().map(move |shard| ShardState {
-                take: t,
-                report: ShardReport {
-                    take: take.name.clone(),
-                    shard: shard.id,
-                    camera: take.dataset.cameras[shard.camera].camera.name.clone(),
-                    frames: shard.frames.clone(),
-                    attempts: Vec::new(),
-                },
-                shard: shard.clone(),
-                tries: FrameTries::default(),
-            })
-        })
-        .collect();
+    let mut takes: Vec<TakeInRun> = Vec::new();
+    let mut states: Vec<ShardState> = Vec::new();
+    let window = settings.max_running.max(1) * STAGED_SHARDS_PER_TASK;
+    let mut feed_done = false;
     let mut round = 0u32;
     let mut frames_finished = 0usize;
     let report_of = |states: &[ShardState], frames_finished, failed: &[TakeFailure]| {
@@ -155,6 +169,16 @@ fn run_slurm(
         )
     };
     loop {
+        if !feed_done {
+            feed_done = stage_more(&feed, &mut takes, &mut states, &mut failed_takes, window);
+            if run.stop_on_failure {
+                if let Some(f) = failed_takes.first() {
+                    bar.finish_and_clear();
+                    bail!("{}", f.reason);
+                }
+            }
+            bar.set_length(feed.lock().unwrap().frames().0 as u64);
+        }
         close_rendered_takes(&feed, &mut takes, &states, &mut failed_takes, run)?;
         let todo: Vec<usize> = (0..states.len())
             .filter(|&i| {
@@ -164,7 +188,10 @@ fn run_slurm(
             })
             .collect();
         if todo.is_empty() {
-            break;
+            if feed_done {
+                break;
+            }
+            continue;
         }
         // A frame past its retries, or failed in a way that repeats (the scene does not load).
         let given_up: Vec<usize> = todo
