@@ -32,6 +32,8 @@ pub struct CampaignFeed {
     done_before: usize,
     /// Seconds between free-disk checks while paused.
     pub disk_poll: Duration,
+    /// Each take's position by id.
+    positions: HashMap<String, usize>,
     /// When `campaign.json` was last rewritten (it is rewritten at most every
     /// [`STATE_EVERY`]: a campaign of many takes would otherwise spend its time rewriting it).
     saved: Option<Instant>,
@@ -51,6 +53,12 @@ impl CampaignFeed {
         frames: Vec<usize>,
         done_before: usize,
     ) -> Self {
+        let positions = state
+            .takes
+            .iter()
+            .enumerate()
+            .map(|(k, t)| (t.def.id.clone(), k))
+            .collect();
         CampaignFeed {
             plan,
             state,
@@ -63,6 +71,7 @@ impl CampaignFeed {
             done_before,
             disk_poll: Duration::from_secs(30),
             saved: None,
+            positions,
         }
     }
 
@@ -168,8 +177,9 @@ impl CampaignFeed {
         Ok(())
     }
 
+    /// Where take `id` is in the campaign.
     fn position(&self, id: &str) -> Option<usize> {
-        self.state.takes.iter().position(|t| t.def.id == id)
+        self.positions.get(id).copied()
     }
 }
 

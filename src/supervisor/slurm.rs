@@ -94,14 +94,15 @@ fn stage_more(
     failed: &mut Vec<TakeFailure>,
     want: usize,
 ) -> bool {
+    // Counted once from disk; a newly staged take adds its shards (all pending).
+    let mut pending = states
+        .iter()
+        .filter(|s| {
+            !takes[s.take].closed
+                && !missing_frames(&takes[s.take].take.dataset, &s.shard).is_empty()
+        })
+        .count();
     loop {
-        let pending = states
-            .iter()
-            .filter(|s| {
-                !takes[s.take].closed
-                    && !missing_frames(&takes[s.take].take.dataset, &s.shard).is_empty()
-            })
-            .count();
         if pending >= want {
             return false;
         }
@@ -110,6 +111,7 @@ fn stage_more(
             None => return true,
             Some(Err(f)) => failed.push(f),
             Some(Ok(take)) => {
+                pending += take.shards.len();
                 let t = takes.len();
                 states.extend(take.shards.iter().map(|shard| ShardState {
                     take: t,
