@@ -9,11 +9,15 @@ pixel centre) with the spec's passes (position, normal, object index, motion vec
 asks for any. The ground truth runs on a timeline scaled by `ground_truth_frame_step`, so that
 motion vectors reach the previous and next *saved* frame. Each file is written to
 `<output>.partial.exr` and renamed, so a killed worker never leaves a half-written file under
-the final name. Prints one `EGOGEN_DONE <path>` line per finished file.
+the final name. Prints one `EGOGEN_DONE <path>` line per finished file, and
+`EGOGEN_TIMING <stage> <seconds>` lines saying where the time goes (`ready` once `bpy` is
+imported; then scene import, camera set-up, each frame's scene update and render; the
+supervisor adds them up per attempt, docs/RENDERING.md "Where a frame's time goes").
 """
 import json
 import os
 import sys
+import time
 
 import bpy
 import numpy as np
@@ -315,6 +319,10 @@ def build_scene(spec):
     scene.render.fps = spec["fps"]
     scene.render.fps_base = spec["fps_base"]
     scene.render.engine = "CYCLES"
+    # Keep Cycles' scene between the shard's renders: only what changes (the bodies, the
+    # camera) is synced again, not the static scene's BVH or the world light's importance map
+    # (with an HDRI that rebuild alone took 1.2 s of every render, docs/RENDERING.md).
+    scene.render.use_persistent_data = True
     set_device(scene, spec.get("device", "cpu"))
     scene.world = bpy.data.worlds.new("egogen_world")
     scene.world.color = tuple(spec["lighting"]["world_rgb"])
@@ -407,6 +415,7 @@ def set_rgb_mode(scene, rgb):
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, False)
     scene.cycles.samples = rgb["samples"]
+    scene.cycles.max_bounces = 12  # Blender's default (the ground truth sets 0)
     scene.cycles.use_adaptive_sampling = rgb["adaptive_threshold"] > 0
     if rgb["adaptive_threshold"] > 0:
         scene.cycles.adaptive_threshold = rgb["adaptive_threshold"]
@@ -425,6 +434,8 @@ def set_ground_truth_mode(scene, passes):
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, p in passes)
     scene.cycles.samples = 1
+    # Every pass it keeps is of the first hit: no light paths beyond it.
+    scene.cycles.max_bounces = 0
     scene.cycles.use_adaptive_sampling = False
     scene.cycles.use_denoising = False
     # One sample exactly at the pixel centre.
@@ -438,16 +449,26 @@ def set_ground_truth_mode(scene, passes):
 PARENT = os.getppid()
 
 
-def write_frame(scene, frame, out):
+def timing(stage, seconds):
+    print("EGOGEN_TIMING", stage, f"{seconds:.6f}", flush=True)
+
+
+def write_frame(scene, frame, out, kind):
+    """Renders one (sub)frame to `out`; `kind` (colour or ground_truth) names its timings."""
     if os.getppid() != PARENT:
         sys.exit("render_shard.py: the egogen supervisor is gone; stopping")
     os.makedirs(os.path.dirname(out), exist_ok=True)
     partial = out + ".partial.exr"
     scene.render.filepath = partial
     whole = int(np.floor(frame))
+    t0 = time.perf_counter()
     scene.frame_set(whole, subframe=frame - whole)
+    t1 = time.perf_counter()
     bpy.ops.render.render(write_still=True)
+    t2 = time.perf_counter()
     os.replace(partial, out)
+    timing(kind + "_frame_update", t1 - t0)
+    timing(kind + "_render", t2 - t1)
     print("EGOGEN_DONE", out, flush=True)
 
 
@@ -476,27 +497,35 @@ EXIT_SETUP_FAILED = 3
 
 
 def main():
+    timing("ready", 0.0)
     spec = load_spec()
+    t0 = time.perf_counter()
     try:
         scene, bodies, obstacles = build_scene(spec)
     except Exception as e:  # noqa: BLE001 - any setup failure is reported the same way
         print(f"EGOGEN_SETUP_FAILED {type(e).__name__}: {e}", file=sys.stderr, flush=True)
         sys.exit(EXIT_SETUP_FAILED)
+    timing("scene_import", time.perf_counter() - t0)
     if spec.get("body_probe"):
         probe_bodies(scene, bodies, spec["body_probe"])
     step = spec["ground_truth_frame_step"]
     for cam_spec in spec["cameras"]:
+        t0 = time.perf_counter()
         cam = make_camera(scene, cam_spec)
+        timing("camera_setup", time.perf_counter() - t0)
         if spec["rgb"] is not None:
             set_rgb_mode(scene, spec["rgb"])
             for frame in cam_spec["frames"]:
-                write_frame(scene, frame["frame"], frame["rgb_exr"])
+                write_frame(scene, frame["frame"], frame["rgb_exr"], "colour")
         if spec["ground_truth_passes"]:
+            t0 = time.perf_counter()
             set_ground_truth_mode(scene, spec["ground_truth_passes"])
             if step != 1:
                 set_frame_step(cam, cam_spec, bodies, obstacles, spec, step)
+            timing("camera_setup", time.perf_counter() - t0)
             for frame in cam_spec["frames"]:
-                write_frame(scene, frame["frame"] / step, frame["ground_truth_exr"])
+                write_frame(
+                    scene, frame["frame"] / step, frame["ground_truth_exr"], "ground_truth")
             if step != 1:
                 set_frame_step(cam, cam_spec, bodies, obstacles, spec, 1)
 

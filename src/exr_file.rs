@@ -34,6 +34,8 @@ pub struct ExrContents {
     pub parts: usize,
     pub channels: Vec<ExrChannel>,
     pub passes: Vec<Pass>,
+    /// The headers' text attributes by name (e.g. Blender's `cycles.ViewLayer.render_time`).
+    pub attributes: std::collections::BTreeMap<String, String>,
 }
 
 /// Statistics of one channel over its finite values.
@@ -116,7 +118,14 @@ impl ExrContents {
                 message: e.to_string(),
             })?;
         let mut channels = Vec::new();
+        let mut attributes = std::collections::BTreeMap::new();
+        let text = |(name, value): (&Text, &AttributeValue)| match value {
+            AttributeValue::Text(t) => Some((name.to_string(), t.to_string())),
+            _ => None,
+        };
+        attributes.extend(image.attributes.other.iter().filter_map(text));
         for layer in &image.layer_data {
+            attributes.extend(layer.attributes.other.iter().filter_map(text));
             let (width, height) = (layer.size.width(), layer.size.height());
             let prefix = layer.attributes.layer_name.as_ref().map(|n| n.to_string());
             let compression = format!("{:?}", layer.encoding.compression);
@@ -152,6 +161,7 @@ impl ExrContents {
             parts: image.layer_data.len(),
             channels,
             passes,
+            attributes,
         })
     }
 

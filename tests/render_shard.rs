@@ -169,6 +169,11 @@ fn render_scene() -> Rendered {
             Camera::Fisheye624(tiny_slam),
             FisheyeRendering::Native,
         ),
+        (
+            "slam_equidistant",
+            Camera::Fisheye624(tiny_slam),
+            FisheyeRendering::Equidistant,
+        ),
     ]
     .into_iter()
     .map(|(n, c, mode)| {
@@ -653,44 +658,62 @@ fn flow_reaches_the_next_saved_frame_and_only_asked_passes_are_rendered() {
     assert!(worst < 0.02, "{name}: {worst} px");
 }
 
+/// The Fisheye624 camera remapped from the fitted polynomial source (the default) and from
+/// the wide equidistant render: every surface pixel's point lies on the exact model's ray of
+/// its pixel within the nearest lookup's reach (≤ 0.71 of a raw pixel's angle there).
 #[test]
 fn fisheye_frames_follow_the_exact_model() {
     let r = rendered();
-    let (_, target, render) = &r.cameras[1];
-    assert!(!render.is_identity());
-    let exr = frame(r, 1, 3);
-    let valid = plane(&exr, "valid.V");
-    let depth = plane(&exr, "depth.Z");
-    let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
-    let res = target.resolution();
-    let cam_from_world = r.poses[3].inverse();
-    let raw_res = render.resolution();
-    // Nearest-neighbour lookups: within ~0.71 raw pixels of the exact ray.
-    let RenderCamera::EquidistantFisheye { size_px, fov_rad } = *render else {
-        unreachable!()
-    };
-    let raw_px_rad = fov_rad / size_px as f64;
-    let (mut worst, mut count) = (0.0f64, 0);
-    for y in 0..res.height_px as usize {
-        for x in 0..res.width_px as usize {
-            let i = y * res.width_px as usize + x;
-            let ray = target.unproject(Pixel::new(x as f64, y as f64));
-            assert_eq!(valid[i] > 0.5, ray.is_some(), "valid mask at ({x}, {y})");
-            if depth[i] <= 0.0 {
-                continue;
-            }
-            let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
-            let seen = cam_from_world.transform_point3(p).normalize();
-            worst = worst.max(seen.angle_between(ray.unwrap()) / raw_px_rad);
-            count += 1;
+    for cam in [1, 3] {
+        let (name, target, render) = &r.cameras[cam];
+        assert!(!render.is_identity());
+        match (cam, render) {
+            (1, RenderCamera::PolynomialSource(_))
+            | (3, RenderCamera::EquidistantFisheye { .. }) => {}
+            _ => panic!("{name}: {render:?}"),
         }
+        let exr = frame(r, cam, 3);
+        let valid = plane(&exr, "valid.V");
+        let depth = plane(&exr, "depth.Z");
+        let pos = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("position.{c}")));
+        let res = target.resolution();
+        let cam_from_world = r.poses[3].inverse();
+        let raw_res = render.resolution();
+        // A raw pixel's angle where the ray lands: the larger of its two sides.
+        let raw_px_rad = |ray: Vec3| {
+            let q = render.ray_to_pixel(ray).unwrap();
+            let at = |d: Pixel| render.pixel_to_ray(q + d).unwrap();
+            at(Pixel::ZERO)
+                .angle_between(at(Pixel::new(1.0, 0.0)))
+                .max(at(Pixel::ZERO).angle_between(at(Pixel::new(0.0, 1.0))))
+        };
+        let (mut worst, mut count) = (0.0f64, 0);
+        for y in 0..res.height_px as usize {
+            for x in 0..res.width_px as usize {
+                let i = y * res.width_px as usize + x;
+                let ray = target.unproject(Pixel::new(x as f64, y as f64));
+                assert_eq!(
+                    valid[i] > 0.5,
+                    ray.is_some(),
+                    "{name}: valid mask at ({x}, {y})"
+                );
+                if depth[i] <= 0.0 {
+                    continue;
+                }
+                let ray = ray.unwrap();
+                let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
+                let seen = cam_from_world.transform_point3(p).normalize();
+                worst = worst.max(seen.angle_between(ray) / raw_px_rad(ray));
+                count += 1;
+            }
+        }
+        eprintln!(
+            "{name} {}×{} from a {}×{} render: {count} px, worst {worst:.3} raw px",
+            res.width_px, res.height_px, raw_res.width_px, raw_res.height_px
+        );
+        assert!(count > 1000, "{name}: {count}");
+        assert!(worst < 0.75, "{name}: {worst} raw pixels");
     }
-    eprintln!(
-        "fisheye {}×{} from a {}×{} equidistant render: {count} px, worst {worst:.3} raw px",
-        res.width_px, res.height_px, raw_res.width_px, raw_res.height_px
-    );
-    assert!(count > 1000);
-    assert!(worst < 0.75, "{worst} raw pixels");
 }
 
 #[test]

@@ -122,9 +122,10 @@ pub struct RawRender {
     pub frames_per_shard: Option<usize>,
     /// Near clipping distance of head cameras, keeping the wearer's own head out (default 0.12 m).
     pub near_clip_m: Option<f64>,
-    /// How Fisheye624 cameras render: `exact` (default; a wider equidistant render remapped to
-    /// the model) or `native` (Cycles' polynomial fisheye fitted to the model; faster, off by
-    /// the fit's pixel error, see docs/RENDERING.md).
+    /// How distorted cameras render: `exact` (default; remapped to the model from the tightest
+    /// lens Cycles has for it), `equidistant` (remapped from a wider equidistant render, the
+    /// earlier default) or `native` (Fisheye624 by Cycles' polynomial fisheye fitted to the
+    /// model, unremapped; off by the fit's pixel error, see docs/RENDERING.md).
     pub fisheye: Option<FisheyeRendering>,
     /// `[render.depth_noise]`: a noisy depth channel for some cameras (default: none).
     pub depth_noise: Option<RawDepthNoise>,

@@ -84,6 +84,9 @@ pub struct FrameImage {
     pub flow_backward: Option<Vec<[f32; 2]>>,
     /// `depth` through a sensor noise model, where the camera has one.
     pub depth_noisy: Option<Vec<f32>>,
+    /// Cycles' own seconds for the raw renders (`colour_sync`, `colour_path_tracing`, …), as
+    /// their headers say; not written to the frame file.
+    pub render_seconds: Vec<(&'static str, f64)>,
 }
 
 /// Rec. 709 luminance of linear RGB: how a monochrome camera's colour is stored.
@@ -162,6 +165,46 @@ impl Raw {
     }
 }
 
+/// Which raw render a header belongs to.
+#[derive(Clone, Copy)]
+enum Kind {
+    Colour,
+    GroundTruth,
+}
+
+/// Cycles' own times of a raw render, from the header Blender writes
+/// (`cycles.ViewLayer.synchronization_time` and `.render_time`, `mm:ss.cc`): the scene's sync
+/// (BVH build included) and path tracing, as stages `<kind>_sync`, `<kind>_path_tracing`.
+fn cycles_seconds(contents: &ExrContents, kind: Kind) -> Vec<(&'static str, f64)> {
+    let (sync, path_tracing) = match kind {
+        Kind::Colour => ("colour_sync", "colour_path_tracing"),
+        Kind::GroundTruth => ("ground_truth_sync", "ground_truth_path_tracing"),
+    };
+    let read = |key: &str| {
+        contents
+            .attributes
+            .get(&format!("cycles.ViewLayer.{key}"))
+            .and_then(|t| blender_duration_seconds(t))
+    };
+    [
+        (sync, "synchronization_time"),
+        (path_tracing, "render_time"),
+    ]
+    .into_iter()
+    .filter_map(|(stage, key)| read(key).map(|s| (stage, s)))
+    .collect()
+}
+
+/// Seconds of Blender's `[[hh:]mm:]ss.cc` duration.
+pub fn blender_duration_seconds(text: &str) -> Option<f64> {
+    text.trim()
+        .split(':')
+        .try_fold(0.0, |acc, part| {
+            Some(acc * 60.0 + part.parse::<f64>().ok()?)
+        })
+        .filter(|s| s.is_finite() && *s >= 0.0)
+}
+
 /// Builds a frame from Blender's raw colour and ground-truth renders of `render` (each where
 /// it was rendered), for the rig camera `target` whose pose at this frame is `world_from_cam`
 /// (OpenCV axes). The ground truth holds the planes of the passes its render had: `Position`
@@ -175,6 +218,12 @@ pub fn assemble_frame(
 ) -> Result<FrameImage, FrameFileError> {
     let rgb = rgb_exr.map(|p| Raw::read(p, render)).transpose()?;
     let gt = ground_truth_exr.map(|p| Raw::read(p, render)).transpose()?;
+    let mut render_seconds = Vec::new();
+    for (raw, kind) in [(&rgb, Kind::Colour), (&gt, Kind::GroundTruth)] {
+        if let Some(raw) = raw {
+            render_seconds.extend(cycles_seconds(&raw.contents, kind));
+        }
+    }
     let colour = rgb
         .as_ref()
         .map(|r| r.planes("Combined", ["R", "G", "B", "A"]))
@@ -218,6 +267,7 @@ pub fn assemble_frame(
         flow_forward: vec.map(|_| vec![[0.0; 2]; n_px]),
         flow_backward: vec.map(|_| vec![[0.0; 2]; n_px]),
         depth_noisy: None,
+        render_seconds,
     };
     // Target pixel of a rendered pixel (continuous), through its ray.
     let to_target = |q: Pixel| {

@@ -137,6 +137,122 @@ impl LensPolynomial {
         Self::fit(&cam, crate::render::render_camera::max_theta_in_image(&cam))
     }
 
+    /// The fit as the *source* of an exact remap to `target` (`[render] fisheye = "exact"`):
+    /// scaled so that no target pixel is finer than a source pixel (`oversample` = 1) and put on
+    /// an image just large enough to hold every valid target pixel's ray plus `margin_px` (room
+    /// for bilinear lookups). The remap (`frame_file::assemble_frame`) is then exact, as from the
+    /// wide equidistant render, while Cycles path-traces about the target's own pixel count.
+    pub fn remap_source(
+        target: &Camera,
+        oversample: Real,
+        margin_px: Real,
+    ) -> Result<Self, LensFitError> {
+        let Camera::Fisheye624(model) = target else {
+            return Err(LensFitError::Model(target.model_name()));
+        };
+        let max_theta = crate::render::render_camera::max_theta_in_image(target);
+        let fit = Self::fit(target, max_theta)?;
+        let res = model.resolution();
+        let (w, h) = (res.width_px as Real, res.height_px as Real);
+        // Source pixels per target pixel: the smallest singular value of the Jacobian of
+        // target pixel → fitted pixel, on a 64 × 64 grid of the valid field of view.
+        let to_fit = |p: Pixel| target.unproject(p).and_then(|r| fit.ray_to_pixel(r));
+        let mut coarsest: Real = Real::INFINITY;
+        const GRID: usize = 64;
+        for j in 0..GRID {
+            for i in 0..GRID {
+                let p = Pixel::new(
+                    (i as Real + 0.5) / GRID as Real * w - 0.5,
+                    (j as Real + 0.5) / GRID as Real * h - 0.5,
+                );
+                let (Some(q), Some(qx), Some(qy)) = (
+                    to_fit(p),
+                    to_fit(p + Pixel::new(0.25, 0.0)),
+                    to_fit(p + Pixel::new(0.0, 0.25)),
+                ) else {
+                    continue;
+                };
+                let jac = glam::DMat2::from_cols((qx - q) * 4.0, (qy - q) * 4.0);
+                coarsest = coarsest.min(smallest_singular_value(jac));
+            }
+        }
+        let scale = oversample / coarsest;
+        let theta_coeffs = std::array::from_fn(|i| fit.theta_coeffs[i] / scale.powi(i as i32 + 1));
+        let scaled = Self {
+            resolution: res,
+            centre_px: Pixel::ZERO,
+            theta_coeffs,
+            max_radius_px: fit.max_radius_px * scale,
+        };
+        // Where the valid target pixels land (centre at the origin): the image of the valid
+        // region's boundary — pixel centres along the image border, and the valid circle
+        // where it cuts the image — bounds the image of the region.
+        let (mut lo, mut hi) = (Pixel::splat(Real::INFINITY), Pixel::splat(-Real::INFINITY));
+        let mut needed: Real = 0.0;
+        let mut include = |ray: Vec3| {
+            if let Some(q) = scaled.ray_to_pixel(ray) {
+                lo = lo.min(q);
+                hi = hi.max(q);
+                needed = needed.max(q.length());
+            }
+        };
+        let steps = 4 * (res.width_px + res.height_px) as usize;
+        for k in 0..=steps {
+            let t = k as Real / steps as Real;
+            for p in [
+                Pixel::new(t * (w - 1.0), 0.0),
+                Pixel::new(t * (w - 1.0), h - 1.0),
+                Pixel::new(0.0, t * (h - 1.0)),
+                Pixel::new(w - 1.0, t * (h - 1.0)),
+            ] {
+                if let Some(ray) = target.unproject(p) {
+                    include(ray);
+                }
+            }
+        }
+        let rim = CameraModel::max_theta_rad(model);
+        if rim <= max_theta + 1e-9 {
+            for k in 0..4 * steps {
+                let phi = k as Real / (4 * steps) as Real * std::f64::consts::TAU;
+                let ray = Vec3::new(rim.sin() * phi.cos(), rim.sin() * phi.sin(), rim.cos());
+                let inside = target.project_unbounded(ray).is_some_and(|p| {
+                    (0.0..=w - 1.0).contains(&p.x) && (0.0..=h - 1.0).contains(&p.y)
+                });
+                if inside {
+                    include(ray);
+                }
+            }
+        }
+        let centre = Pixel::splat(margin_px) - lo;
+        let size = (hi - lo + Pixel::splat(2.0 * margin_px + 1.0)).ceil();
+        let mut source = Self {
+            resolution: Resolution {
+                width_px: size.x as u32,
+                height_px: size.y as u32,
+            },
+            centre_px: centre,
+            ..scaled
+        };
+        let corner = [
+            Pixel::ZERO,
+            Pixel::new(size.x, 0.0),
+            Pixel::new(0.0, size.y),
+            size,
+        ]
+        .iter()
+        .map(|&c| (c - Pixel::splat(0.5) - centre).length())
+        .fold(0.0, Real::max);
+        source.max_radius_px = source.increasing_limit(corner);
+        let needed_px = needed + margin_px * std::f64::consts::SQRT_2;
+        if source.max_radius_px < needed_px.min(corner) {
+            return Err(LensFitError::NotMonotonic {
+                turn_px: source.max_radius_px,
+                needed_px,
+            });
+        }
+        Ok(source)
+    }
+
     /// `(θ, dθ/dρ)` at radius `rho_px`.
     pub fn theta_with_slope(&self, rho_px: Real) -> (Real, Real) {
         let [c1, c2, c3, c4] = self.theta_coeffs;
@@ -218,6 +334,16 @@ impl LensPolynomial {
         let shift_y = (self.centre_px.y - 0.5 * (h - 1.0)) / h;
         (SENSOR_WIDTH_MM, k, shift_x, shift_y)
     }
+}
+
+/// Smallest singular value of a 2 × 2 matrix.
+fn smallest_singular_value(m: glam::DMat2) -> Real {
+    // Eigenvalues of mᵀm: (t ± √(t² − 4d)) / 2 with t its trace, d its determinant.
+    let mtm = m.transpose() * m;
+    let (t, d) = (mtm.x_axis.x + mtm.y_axis.y, mtm.determinant());
+    (0.5 * (t - (t * t - 4.0 * d).max(0.0).sqrt()))
+        .max(0.0)
+        .sqrt()
 }
 
 /// Pixel error of the polynomial lens against the exact model: for the rays of a grid of
@@ -320,6 +446,72 @@ mod tests {
         let r = (px - centre).length() * mm;
         let theta = -(k[0] + k[1] * r + k[2] * r * r + k[3] * r.powi(3) + k[4] * r.powi(4));
         assert!((theta - theta_of(lens.pixel_to_ray(px).unwrap())).abs() < 1e-12);
+    }
+
+    /// Every valid pixel of the Aria cameras (full size and the default run's quarter/half
+    /// size) finds its ray inside the remap source with room for a bilinear lookup, no finer
+    /// than a source pixel, and the source path-traces little more than the target's pixels.
+    #[test]
+    fn the_remap_source_holds_every_valid_pixel_at_the_target_resolution() {
+        for (name, scale) in [
+            ("camera-rgb", 1.0),
+            ("camera-slam-left", 1.0),
+            ("camera-slam-right", 1.0),
+            ("camera-rgb", 0.25),
+            ("camera-slam-left", 0.25),
+        ] {
+            let target = Camera::Fisheye624(aria(name)).scaled(scale).unwrap();
+            let source = LensPolynomial::remap_source(&target, 1.0, 2.0).unwrap();
+            let (res, src) = (target.resolution(), source.resolution);
+            let step = if scale < 1.0 { 1 } else { 3 };
+            let (mut least_room, mut coarsest, mut valid) = (Real::INFINITY, Real::INFINITY, 0);
+            for y in (0..res.height_px).step_by(step) {
+                for x in (0..res.width_px).step_by(step) {
+                    let p = Pixel::new(x as Real, y as Real);
+                    let Some(ray) = target.unproject(p) else {
+                        continue;
+                    };
+                    valid += 1;
+                    let q = source.ray_to_pixel(ray).unwrap();
+                    assert!(source.renders(q), "{name} ({x}, {y}) → {q:?}");
+                    let room =
+                        q.x.min(q.y)
+                            .min(src.width_px as Real - 1.0 - q.x)
+                            .min(src.height_px as Real - 1.0 - q.y);
+                    least_room = least_room.min(room);
+                    let (Some(rx), Some(ry)) = (
+                        target.unproject(p + Pixel::new(0.25, 0.0)),
+                        target.unproject(p + Pixel::new(0.0, 0.25)),
+                    ) else {
+                        continue;
+                    };
+                    let jac = glam::DMat2::from_cols(
+                        (source.ray_to_pixel(rx).unwrap() - q) * 4.0,
+                        (source.ray_to_pixel(ry).unwrap() - q) * 4.0,
+                    );
+                    coarsest = coarsest.min(smallest_singular_value(jac));
+                }
+            }
+            let ratio =
+                (src.width_px * src.height_px) as Real / (res.width_px * res.height_px) as Real;
+            eprintln!(
+                "{name} × {scale}: {}×{} from {}×{} ({ratio:.3}× the pixels); {valid} px, least room {least_room:.2} px, source px per target px ≥ {coarsest:.4}",
+                res.width_px, res.height_px, src.width_px, src.height_px
+            );
+            assert!(valid > 10_000);
+            assert!(least_room >= 1.99, "{name}: {least_room}");
+            assert!(coarsest >= 0.995, "{name}: {coarsest}");
+            assert!(ratio < 1.2, "{name}: {ratio}");
+        }
+    }
+
+    #[test]
+    fn smallest_singular_values() {
+        let m = glam::DMat2::from_cols(glam::DVec2::new(3.0, 0.0), glam::DVec2::new(0.0, 0.5));
+        assert!((smallest_singular_value(m) - 0.5).abs() < 1e-12);
+        let r = glam::DMat2::from_angle(0.7) * m;
+        assert!((smallest_singular_value(r) - 0.5).abs() < 1e-12);
+        assert_eq!(smallest_singular_value(glam::DMat2::ZERO), 0.0);
     }
 
     #[test]

@@ -1,9 +1,13 @@
 //! The ideal camera Blender renders for a rig camera. A square-pixel pinhole is rendered as
-//! itself; every distorted model (Fisheye624, Kannala-Brandt) is rendered by Cycles'
-//! equidistant fisheye, covering the model's field of view at least at the model's own angular
-//! resolution, and remapped to the exact model in Rust (`frame_file::assemble_frame`). With
-//! [`FisheyeRendering::Native`] a Fisheye624 camera is instead rendered directly by Cycles'
-//! polynomial fisheye fitted to it ([`LensPolynomial`]), at the target resolution, unremapped.
+//! itself; every distorted model is rendered by a lens Cycles has and remapped to the exact
+//! model in Rust (`frame_file::assemble_frame`): a Fisheye624 camera by Cycles' polynomial
+//! fisheye fitted to it, scaled and padded to hold the camera's field of view at least at its
+//! own resolution ([`LensPolynomial::remap_source`]: about the target's pixel count), any other
+//! (Kannala-Brandt, or a Fisheye624 the polynomial cannot follow) by Cycles' equidistant fisheye
+//! covering the model's widest ray at its largest angular resolution (a square around the
+//! image circle: 1.5–3× the target's pixels for the Aria cameras). With
+//! [`FisheyeRendering::Native`] a Fisheye624 camera is rendered by the fitted polynomial at the
+//! target resolution and not remapped (off the model by the fit's error).
 //!
 //! Pixel convention as in [`crate::camera`]: OpenCV, centre of the top-left pixel at (0, 0).
 //! Cycles' equidistant fisheye (measured with the position pass, `tests/render_passes.rs`):
@@ -23,9 +27,13 @@ const FOV_MARGIN_PX: Real = 2.0;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FisheyeRendering {
-    /// A wider equidistant fisheye remapped to the exact model in Rust.
+    /// The exact model, remapped in Rust from the tightest lens Cycles can render for it: the
+    /// fitted polynomial fisheye (Fisheye624), else a wider equidistant fisheye.
     #[default]
     Exact,
+    /// The exact model, remapped from a wider equidistant fisheye for every distorted camera
+    /// (egogen's earlier default; path-traces 1.5–3× the Aria cameras' pixels).
+    Equidistant,
     /// Cycles' polynomial fisheye fitted to the model, rendered at the target resolution:
     /// faster, off the exact model by the fit's error (`docs/RENDERING.md`).
     Native,
@@ -47,6 +55,8 @@ pub enum RenderCamera {
     },
     /// Cycles' polynomial fisheye, the image itself (no remap).
     PolynomialFisheye(LensPolynomial),
+    /// Cycles' polynomial fisheye fitted to the camera, scaled and padded, remapped exactly.
+    PolynomialSource(LensPolynomial),
 }
 
 impl RenderCamera {
@@ -61,14 +71,25 @@ impl RenderCamera {
             (FisheyeRendering::Native, Camera::Fisheye624(m)) => Ok(
                 RenderCamera::PolynomialFisheye(LensPolynomial::for_fisheye624(m)?),
             ),
+            (FisheyeRendering::Equidistant, _) => Ok(Self::equidistant(target, oversample)),
             _ => Ok(Self::exact(target, oversample)),
         }
     }
 
-    /// The render that is remapped exactly to `target` (a pinhole with square pixels renders as
-    /// itself); `oversample` scales the fisheye's pixels per radian over the target's largest
-    /// (1 = same angular resolution).
+    /// The tightest render that is remapped exactly to `target`: the fitted polynomial fisheye
+    /// for a Fisheye624 camera where it can follow the model, else [`Self::equidistant`];
+    /// `oversample` scales the source's pixels over the target's (1 = never coarser).
     pub fn exact(target: &Camera, oversample: Real) -> Self {
+        match LensPolynomial::remap_source(target, oversample, FOV_MARGIN_PX) {
+            Ok(lens) => RenderCamera::PolynomialSource(lens),
+            Err(_) => Self::equidistant(target, oversample),
+        }
+    }
+
+    /// The wide equidistant render remapped exactly to `target` (a pinhole with square pixels
+    /// renders as itself); `oversample` scales the fisheye's pixels per radian over the
+    /// target's largest (1 = same angular resolution).
+    pub fn equidistant(target: &Camera, oversample: Real) -> Self {
         if let Camera::Pinhole(p) = target {
             let [fx, fy, cx, cy] = p.params();
             if (fx - fy).abs() <= 1e-9 * fx {
@@ -105,7 +126,9 @@ impl RenderCamera {
                 width_px: size_px,
                 height_px: size_px,
             },
-            RenderCamera::PolynomialFisheye(lens) => lens.resolution,
+            RenderCamera::PolynomialFisheye(lens) | RenderCamera::PolynomialSource(lens) => {
+                lens.resolution
+            }
         }
     }
 
@@ -138,7 +161,7 @@ impl RenderCamera {
             RenderCamera::EquidistantFisheye { size_px, fov_rad } => {
                 ShardLens::EquidistantFisheye { size_px, fov_rad }
             }
-            RenderCamera::PolynomialFisheye(lens) => {
+            RenderCamera::PolynomialFisheye(lens) | RenderCamera::PolynomialSource(lens) => {
                 let (sensor_width_mm, k, shift_x, shift_y) = lens.blender();
                 ShardLens::PolynomialFisheye {
                     width_px: lens.resolution.width_px,
@@ -162,7 +185,9 @@ impl RenderCamera {
                 let c = 0.5 * (size_px as Real - 1.0);
                 (px - Pixel::new(c, c)).length() <= 0.5 * size_px as Real
             }
-            RenderCamera::PolynomialFisheye(lens) => lens.renders(px),
+            RenderCamera::PolynomialFisheye(lens) | RenderCamera::PolynomialSource(lens) => {
+                lens.renders(px)
+            }
         }
     }
 
@@ -188,7 +213,9 @@ impl RenderCamera {
                 let s = theta.sin() / rho;
                 Some(Vec3::new(d.x * s, d.y * s, theta.cos()))
             }
-            RenderCamera::PolynomialFisheye(lens) => lens.pixel_to_ray(px),
+            RenderCamera::PolynomialFisheye(lens) | RenderCamera::PolynomialSource(lens) => {
+                lens.pixel_to_ray(px)
+            }
         }
     }
 
@@ -208,7 +235,9 @@ impl RenderCamera {
                 let rho = f * theta;
                 Some(Pixel::new(c + rho * ray.x / r_xy, c + rho * ray.y / r_xy))
             }
-            RenderCamera::PolynomialFisheye(lens) => lens.ray_to_pixel(ray),
+            RenderCamera::PolynomialFisheye(lens) | RenderCamera::PolynomialSource(lens) => {
+                lens.ray_to_pixel(ray)
+            }
         }
     }
 }

@@ -67,7 +67,8 @@ impl Dataset {
     /// Turns a frame's raw renders into its frame file: assembled, encoded, validated and
     /// recorded (annotation, COLMAP image, checksum: [`super::frame_record`]) from the bytes
     /// in memory, written under a temporary name and renamed; then the raw files are removed.
-    pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<PathBuf> {
+    pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<FinishedFrame> {
+        let started = std::time::Instant::now();
         let work = &self.cameras[camera];
         let (rgb, gt) = raw_frame_paths(
             &self.raw_dir(),
@@ -82,6 +83,7 @@ impl Dataset {
             &work.camera.model,
             work.world_from_cam[frame as usize],
         )?;
+        let assembled = std::time::Instant::now();
         image.monochrome = work.camera.monochrome;
         // A camera has a noise model only when the run asks for the depth_noise pass.
         if let Some((model, seed)) = &work.depth_noise {
@@ -118,8 +120,19 @@ impl Dataset {
         for raw in self.raw_frame_files(camera, frame) {
             let _ = std::fs::remove_file(raw);
         }
-        Ok(out)
+        let mut seconds = image.render_seconds.clone();
+        seconds.push(("assemble", (assembled - started).as_secs_f64()));
+        seconds.push(("finish", assembled.elapsed().as_secs_f64()));
+        Ok(FinishedFrame { path: out, seconds })
     }
+}
+
+/// A frame file written by [`Dataset::finish_frame`], and where its time went (stages of
+/// [`super::pool::StageSeconds`]).
+#[derive(Debug, Clone)]
+pub struct FinishedFrame {
+    pub path: PathBuf,
+    pub seconds: Vec<(&'static str, f64)>,
 }
 
 /// Writes `cameras/<camera>/annotations.json` for every camera (OpenCV conventions) from the

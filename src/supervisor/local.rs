@@ -19,8 +19,9 @@ use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::sync::watch;
 
 use super::pool::{
-    frames_bar, setup_failure, shard_failure_message, Attempt, FrameTries, Outcome, PoolReport,
-    PoolRun, PoolTake, ShardPool, ShardReport, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
+    add_stage, frames_bar, setup_failure, shard_failure_message, Attempt, FrameTries, Outcome,
+    PoolReport, PoolRun, PoolTake, ShardPool, ShardReport, StageSeconds, TakeFailure, TakeFeed,
+    EXIT_SETUP_FAILED,
 };
 use super::staged::{Dataset, Shard};
 use crate::render::shard::worker_command;
@@ -382,8 +383,9 @@ async fn run_shard(
         let log = dataset
             .logs_dir()
             .join(format!("shard_{:04}_attempt_{attempt}.log", shard.id));
+        let mut stages = StageSeconds::new();
         let (finished, outcome) =
-            match attempt_shard(shared, dataset, shard.camera, &missing, &log).await {
+            match attempt_shard(shared, dataset, shard.camera, &missing, &log, &mut stages).await {
                 Ok(n) => (n, Outcome::Ok),
                 Err((n, outcome)) => (n, outcome),
             };
@@ -396,6 +398,7 @@ async fn run_shard(
             outcome,
             seconds: started.elapsed().as_secs_f64(),
             log: dataset.relative(&log),
+            stages,
         });
         let left = missing_now();
         let Some(&first_left) = left.first() else {
@@ -424,14 +427,17 @@ async fn run_shard(
     }
 }
 
-/// One Blender run over `frames`; returns frames finished, or (finished, reason).
+/// One Blender run over `frames`; returns frames finished, or (finished, reason). Adds where
+/// its time went to `stages`.
 async fn attempt_shard(
     shared: &Shared,
     dataset: &Arc<Dataset>,
     camera: usize,
     frames: &[u32],
     log: &std::path::Path,
+    stages: &mut StageSeconds,
 ) -> std::result::Result<usize, (usize, Outcome)> {
+    let spawned = Instant::now();
     let fail = |n: usize, reason: String| (n, Outcome::Failed { reason });
     let spec = dataset.shard_spec(camera, frames);
     let spec_path = log.with_extension("json");
@@ -462,6 +468,18 @@ async fn attempt_shard(
             line = lines.next_line() => {
                 match line {
                     Ok(Some(line)) => {
+                        if let Some(timing) = line.strip_prefix("EGOGEN_TIMING ") {
+                            match timing.split_once(' ') {
+                                Some(("ready", _)) => add_stage(stages, "blender_start_up", spawned.elapsed().as_secs_f64()),
+                                Some((stage, s)) => {
+                                    if let Ok(s) = s.trim().parse::<f64>() {
+                                        add_stage(stages, stage, s);
+                                    }
+                                }
+                                None => {}
+                            }
+                            continue;
+                        }
                         let Some(path) = line.strip_prefix("EGOGEN_DONE ") else { continue };
                         reported.insert(path.into());
                         for &f in frames {
@@ -473,7 +491,10 @@ async fn attempt_shard(
                                 let result = tokio::task::spawn_blocking(move || ds.finish_frame(camera, f))
                                     .await
                                     .map_err(|e| fail(finished, format!("finishing frame {f}: {e}")))?;
-                                result.map_err(|e| fail(finished, format!("frame {f}: {e:#}")))?;
+                                let done = result.map_err(|e| fail(finished, format!("frame {f}: {e:#}")))?;
+                                for (stage, s) in done.seconds {
+                                    add_stage(stages, stage, s);
+                                }
                                 finished += 1;
                                 shared.bar.inc(1);
                             }

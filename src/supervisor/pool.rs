@@ -112,6 +112,22 @@ pub struct Attempt {
     pub seconds: f64,
     /// The attempt's log, relative to the dataset folder.
     pub log: String,
+    /// Where its seconds went, stage by stage (local pool only; docs/RENDERING.md, "Where a
+    /// frame's time goes").
+    #[serde(skip_serializing_if = "StageSeconds::is_empty")]
+    pub stages: StageSeconds,
+}
+
+/// Seconds per stage of an attempt, summed over its frames: `blender_start_up` (process start
+/// to `bpy` imported), `scene_import`, `camera_setup`, per render kind (`colour`,
+/// `ground_truth`) `_frame_update` (Blender's scene update), `_render` (the whole render call)
+/// and within it Cycles' own `_sync` and `_path_tracing` (from the raw file's header), and
+/// Rust's `assemble` (read, remap) and `finish` (encode, check, record, write).
+pub type StageSeconds = std::collections::BTreeMap<String, f64>;
+
+/// Adds `seconds` to `stage`.
+pub fn add_stage(stages: &mut StageSeconds, stage: &str, seconds: f64) {
+    *stages.entry(stage.to_owned()).or_default() += seconds;
 }
 
 /// What happened to a shard.

@@ -406,6 +406,7 @@ fn record_attempts(
             outcome,
             seconds: end.map_or(0.0, |e| e.seconds),
             log: dataset.relative(&log),
+            stages: Default::default(),
         });
     }
 }
