@@ -322,7 +322,8 @@ def build_scene(spec):
     # Keep Cycles' scene between the shard's renders: only what changes (the bodies, the
     # camera) is synced again, not the static scene's BVH or the world light's importance map
     # (with an HDRI that rebuild alone took 1.2 s of every render, docs/RENDERING.md).
-    scene.render.use_persistent_data = True
+    # EGOGEN_BLENDER_PERSISTENT_DATA=0 turns it off (for `cargo bench --bench render_cost`).
+    scene.render.use_persistent_data = os.environ.get("EGOGEN_BLENDER_PERSISTENT_DATA") != "0"
     set_device(scene, spec.get("device", "cpu"))
     scene.world = bpy.data.worlds.new("egogen_world")
     scene.world.color = tuple(spec["lighting"]["world_rgb"])

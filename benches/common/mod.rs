@@ -51,6 +51,11 @@ pub fn egogen_run(config: &str) -> Run {
 
 /// Runs `egogen-run` on a config whose output folder is `out`, with further arguments.
 pub fn egogen_run_with(config: &str, args: &[&str]) -> Run {
+    egogen_run_env(config, args, &[])
+}
+
+/// [`egogen_run_with`] with environment variables set for it (and its Blender workers).
+pub fn egogen_run_env(config: &str, args: &[&str], envs: &[(&str, &str)]) -> Run {
     let dir = tempfile::tempdir().unwrap();
     let cfg = dir.path().join("run.toml");
     std::fs::write(&cfg, config).unwrap();
@@ -58,6 +63,7 @@ pub fn egogen_run_with(config: &str, args: &[&str]) -> Run {
     let out = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
         .arg(&cfg)
         .args(args)
+        .envs(envs.iter().copied())
         .output()
         .unwrap();
     let wall_seconds = started.elapsed().as_secs_f64();
@@ -81,6 +87,37 @@ pub fn egogen_run_with(config: &str, args: &[&str]) -> Run {
         report,
         wall_seconds,
     }
+}
+
+/// The shipped default run (`configs/default.toml`) with its output in `out`, its `[render]`
+/// keys `samples`, `denoise` and `frames_per_shard` and its `[supervisor]` key `workers`
+/// dropped, and the
+/// lines of `render` and `supervisor` added to those tables.
+pub fn default_run_config(render: &str, supervisor: &str) -> String {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("configs/default.toml")).unwrap();
+    let mut out = String::new();
+    for line in text.lines() {
+        let key = line.split('=').next().unwrap_or("").trim();
+        if matches!(key, "samples" | "denoise" | "frames_per_shard" | "workers") {
+            continue;
+        }
+        if key == "dir" {
+            out.push_str("dir = \"out\"\n");
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+        if line.trim() == "[render]" {
+            out.push_str(render);
+            out.push('\n');
+        }
+        if line.trim() == "[supervisor]" {
+            out.push_str(supervisor);
+            out.push('\n');
+        }
+    }
+    out
 }
 
 /// The median wall time of `reps` runs of `f`, in seconds (a plain timing harness for work too

@@ -1,0 +1,186 @@
+//! Where a rendered frame's time goes, and what each change to the renderer bought, in one run:
+//! the shipped default run (`configs/default.toml`: three people in the apartment, the Aria rig,
+//! RGB 352×352 and SLAM 160×120, HDRI and lamp, shutter ½ frame, 2 workers) cut to
+//! `DURATION_S`, rendered by `egogen-run` under each variant in turn:
+//!
+//! 1. the renderer as it was: Fisheye624 from the wide equidistant render, Cycles' scene built
+//!    afresh for every render, 16 samples;
+//! 2. Fisheye624 remapped from the fitted polynomial fisheye (about the delivered pixels);
+//! 3. and Cycles' scene kept between a shard's renders (persistent data);
+//! 4. and the shipped colour settings (`SHIPPED`);
+//! 5. the limit: the shipped settings with `fisheye = "native"` — Cycles path-tracing exactly the
+//!    delivered pixels, nothing remapped.
+//!
+//! Per camera and variant: seconds per frame of each stage (the attempts' `stages` in the pool
+//! report: Blender start-up and scene import, scene update, Cycles' sync and path tracing of the
+//! colour and the ground truth, the rest of each render call, Rust's assembly and finishing, and
+//! what no stage accounts for), frames per core-hour (frames over the attempts' seconds: with as
+//! many workers as cores each worker has one core), and what is "ours": everything but the
+//! limit's colour path tracing per frame.
+//!
+//! `cargo bench --bench render_cost` (about 10 minutes on 2 cores)
+
+use std::collections::BTreeMap;
+
+mod common;
+use common::{default_run_config, egogen_run_env};
+
+/// Seconds of motion rendered (every 4th frame at 40 Hz: 10 frames per second per camera).
+const DURATION_S: &str = "0.5";
+/// The shipped colour settings (configs/default.toml).
+const SHIPPED: &str = "samples = 4\ndenoise = true";
+
+struct Variant {
+    name: &'static str,
+    render: &'static str,
+    persistent: bool,
+    /// Renders the colour as the limit does (same samples): "ours" is measured against it.
+    as_limit: bool,
+}
+
+const VARIANTS: [Variant; 5] = [
+    Variant {
+        name: "as it was (equidistant, no persistent data, 16 spp)",
+        render: "samples = 16\nfisheye = \"equidistant\"",
+        persistent: false,
+        as_limit: false,
+    },
+    Variant {
+        name: "+ polynomial source",
+        render: "samples = 16",
+        persistent: false,
+        as_limit: false,
+    },
+    Variant {
+        name: "+ persistent data",
+        render: "samples = 16",
+        persistent: true,
+        as_limit: false,
+    },
+    Variant {
+        name: "+ shipped colour (4 spp + OIDN)",
+        render: SHIPPED,
+        persistent: true,
+        as_limit: true,
+    },
+    Variant {
+        name: "limit: native fisheye, shipped colour",
+        render: "samples = 4\ndenoise = true\nfisheye = \"native\"",
+        persistent: true,
+        as_limit: true,
+    },
+];
+
+/// Stages as the table shows them, each a sum of the report's stages.
+const COLUMNS: [(&str, &[&str]); 9] = [
+    (
+        "start-up + import",
+        &["blender_start_up", "scene_import", "camera_setup"],
+    ),
+    (
+        "scene update",
+        &["colour_frame_update", "ground_truth_frame_update"],
+    ),
+    ("colour sync", &["colour_sync"]),
+    ("colour path tracing", &["colour_path_tracing"]),
+    ("colour rest", &["colour_render_rest"]),
+    ("ground truth sync", &["ground_truth_sync"]),
+    ("ground truth path tracing", &["ground_truth_path_tracing"]),
+    ("ground truth rest", &["ground_truth_render_rest"]),
+    ("Rust assemble + finish", &["assemble", "finish"]),
+];
+
+/// Per camera: (frames, attempt seconds, stage seconds).
+type PerCamera = BTreeMap<String, (f64, f64, BTreeMap<String, f64>)>;
+
+fn per_camera(report: &serde_json::Value) -> PerCamera {
+    let mut out = PerCamera::new();
+    for shard in report["shards"].as_array().unwrap() {
+        let camera = shard["camera"].as_str().unwrap().to_owned();
+        let entry = out.entry(camera).or_default();
+        for attempt in shard["attempts"].as_array().unwrap() {
+            entry.0 += attempt["finished"].as_f64().unwrap();
+            entry.1 += attempt["seconds"].as_f64().unwrap();
+            for (stage, s) in attempt["stages"].as_object().unwrap() {
+                *entry.2.entry(stage.clone()).or_default() += s.as_f64().unwrap();
+            }
+        }
+    }
+    // The rest of a render call: what Cycles' own sync and path tracing do not cover (film,
+    // denoising, compositing, writing the EXR).
+    for (_, _, stages) in out.values_mut() {
+        for kind in ["colour", "ground_truth"] {
+            let get = |k: &str| stages.get(&format!("{kind}_{k}")).copied().unwrap_or(0.0);
+            let rest = get("render") - get("sync") - get("path_tracing");
+            stages.insert(format!("{kind}_render_rest"), rest);
+        }
+    }
+    out
+}
+
+fn main() {
+    let mut results: Vec<(&Variant, PerCamera, f64)> = Vec::new();
+    for v in &VARIANTS {
+        let config = default_run_config(v.render, "workers = 2");
+        let envs: &[(&str, &str)] = if v.persistent {
+            &[]
+        } else {
+            &[("EGOGEN_BLENDER_PERSISTENT_DATA", "0")]
+        };
+        let run = egogen_run_env(&config, &["--duration", DURATION_S], envs);
+        eprintln!("{}: {:.1} s", v.name, run.wall_seconds);
+        results.push((v, per_camera(&run.report), run.wall_seconds));
+    }
+    let limit = &results.last().unwrap().1;
+    let before = &results[0].1;
+    println!("## Seconds per frame by stage (default run, {DURATION_S} s of motion, 2 workers)\n");
+    let header: Vec<&str> = COLUMNS.iter().map(|c| c.0).collect();
+    println!(
+        "| camera | variant | {} | unaccounted | total s/frame | frames per core-hour | × as it was | ours: all but the limit's path tracing |",
+        header.join(" | ")
+    );
+    println!("|{}", "---|".repeat(COLUMNS.len() + 7));
+    for camera in limit.keys() {
+        for (v, cams, _) in &results {
+            let (frames, seconds, stages) = &cams[camera];
+            let per = |s: f64| s / frames;
+            let cols: Vec<f64> = COLUMNS
+                .iter()
+                .map(|(_, keys)| {
+                    keys.iter()
+                        .map(|k| stages.get(*k).copied().unwrap_or(0.0))
+                        .sum()
+                })
+                .collect();
+            let accounted: f64 = cols.iter().sum();
+            let fph = 3600.0 * frames / seconds;
+            let fph_before = 3600.0 * before[camera].0 / before[camera].1;
+            let limit_pt = limit[camera]
+                .2
+                .get("colour_path_tracing")
+                .copied()
+                .unwrap_or(0.0)
+                / limit[camera].0;
+            let total = per(*seconds);
+            let cells: Vec<String> = cols.iter().map(|c| format!("{:.3}", per(*c))).collect();
+            let ours = if v.as_limit {
+                format!("{:.0} %", 100.0 * (total - limit_pt).max(0.0) / total)
+            } else {
+                "—".into()
+            };
+            println!(
+                "| {camera} | {} | {} | {:.3} | {total:.3} | {fph:.0} | {:.2} | {ours} |",
+                v.name,
+                cells.join(" | "),
+                per(seconds - accounted),
+                fph / fph_before,
+            );
+        }
+    }
+    println!("\n## Whole runs\n");
+    println!("| variant | egogen-run wall s |");
+    println!("|---|---|");
+    for (v, _, wall) in &results {
+        println!("| {} | {wall:.1} |", v.name);
+    }
+}

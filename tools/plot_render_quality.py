@@ -1,0 +1,73 @@
+"""Colour quality against time from `cargo bench --bench render_quality`'s JSON: PSNR and SSIM
+of each setting against the high-sample reference, over the colour render's seconds per frame,
+one panel pair per camera; plain path tracing and OpenImageDenoise as two lines labelled with
+their sample counts, adaptive sampling as separate points, the shipped setting circled.
+
+    python tools/plot_render_quality.py target/render_quality_0.25.json --out docs/render_quality.png
+
+Needs numpy and matplotlib (pip install matplotlib).
+"""
+import argparse
+import json
+
+import matplotlib
+import matplotlib.ticker
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("json", help="render_quality_<scale>.json written by the bench")
+    ap.add_argument("--out", required=True, help="PNG to write")
+    ap.add_argument("--shipped", default="4,denoise", help="samples[,denoise] to circle")
+    args = ap.parse_args()
+    rows = json.load(open(args.json))
+    shipped_samples, *rest = args.shipped.split(",")
+    shipped = (int(shipped_samples), "denoise" in rest)
+    cameras = sorted({r["camera"] for r in rows}, key=lambda c: [r["camera"] for r in rows].index(c))
+    fig, axes = plt.subplots(2, len(cameras), figsize=(5.5 * len(cameras), 7.5), squeeze=False)
+    for col, camera in enumerate(cameras):
+        mine = [r for r in rows if r["camera"] == camera]
+        size = f'{mine[0]["width"]}×{mine[0]["height"]}'
+        for row, (key, label) in enumerate([("psnr_db", "PSNR (dB)"), ("ssim", "SSIM")]):
+            ax = axes[row][col]
+            for denoise, colour, name in [(False, "tab:blue", "path tracing"), (True, "tab:orange", "+ OIDN")]:
+                line = sorted(
+                    (r for r in mine if r["denoise"] == denoise and r["adaptive_threshold"] == 0),
+                    key=lambda r: r["samples"],
+                )
+                xs = [r["colour_seconds_per_frame"] for r in line]
+                ys = [r[key] for r in line]
+                ax.plot(xs, ys, "o-", color=colour, label=name)
+                for r in line:
+                    ax.annotate(str(r["samples"]), (r["colour_seconds_per_frame"], r[key]),
+                                textcoords="offset points", xytext=(4, -10), fontsize=8, color=colour)
+            adaptive = [r for r in mine if r["adaptive_threshold"] > 0]
+            for r in adaptive:
+                ax.plot(r["colour_seconds_per_frame"], r[key], "s", color="tab:green")
+                ax.annotate(f'{r["samples"]}, adaptive {r["adaptive_threshold"]}'
+                            + (" + OIDN" if r["denoise"] else ""),
+                            (r["colour_seconds_per_frame"], r[key]), textcoords="offset points",
+                            xytext=(4, 4), fontsize=7, color="tab:green")
+            for r in mine:
+                if (r["samples"], r["denoise"]) == shipped and r["adaptive_threshold"] == 0:
+                    ax.plot(r["colour_seconds_per_frame"], r[key], "o", ms=14, mfc="none",
+                            mec="black", label="shipped")
+            ax.set_xscale("log")
+            ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+            ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+            ax.set_xlabel("colour render call, seconds (one frame, 2 cores)")
+            ax.set_ylabel(label)
+            ax.set_title(f"{camera} {size}")
+            ax.grid(True, alpha=0.3)
+            if row == 0:
+                ax.legend(loc="lower right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(args.out, dpi=110)
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
