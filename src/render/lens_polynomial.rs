@@ -1,6 +1,8 @@
-//! Cycles' polynomial fisheye ("Fisheye Lens Polynomial" panorama) as egogen's fast stand-in for
-//! a Fisheye624 camera: the least-squares fit of its radial map, both directions of the
-//! polynomial lens, Blender's numbers for it, and the pixel error against the exact model.
+//! Cycles' polynomial fisheye ("Fisheye Lens Polynomial" panorama) for a Fisheye624 camera: the
+//! least-squares fit of its radial map, both directions of the polynomial lens, Blender's numbers
+//! for it, the pixel error against the exact model when it stands in for the camera
+//! (`fisheye = "native"`), and the scaled, padded source an exact remap reads
+//! ([`LensPolynomial::remap_source`], the default).
 //!
 //! Measured with the position pass of a camera inside a sphere (bpy 4.5.15, square pixels,
 //! `sensor_fit = HORIZONTAL`): Cycles images the ray at angle

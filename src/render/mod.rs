@@ -1,7 +1,10 @@
 //! Rendering: the Blender runtime egogen drives (PyPI `bpy` 4.5 LTS in a managed virtual
-//! environment, or a user's own), and — as rendering lands — the backend trait and the wire
-//! protocol of shard specs. `render` knows nothing of bodies, motion or policies: bodies reach it
-//! as files (`crate::vertex_cache`) that `synth` writes.
+//! environment, or a user's own), the wire protocol of shard specs (`protocol`) and how they
+//! are planned (`shard_plan`, `camera_setup`), what Blender renders for each rig camera
+//! (`render_camera`, `lens_polynomial`), the drawn appearance it is given (`lighting`, `skin`),
+//! and turning its raw renders into frame files (`frame_file`, `passes`, `depth_noise`).
+//! `render` knows nothing of bodies, motion or policies: bodies reach it as files
+//! (`crate::vertex_cache`) that `synth` writes.
 
 pub mod blender_runtime;
 pub mod camera_setup;

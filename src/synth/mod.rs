@@ -1,5 +1,7 @@
 //! Synth: motion + body → per-frame posed bodies and eye-anchor (CPF) trajectories, and the
-//! sequence folder they are written to. (Scenes and the learned policy join here later.)
+//! sequence folder they are written to: crowds of agents steered through a scene (`crowd`),
+//! placing a motion in it (`placement`), the penetration tests (`penetration`), and the body
+//! caches Blender plays (`body_cache`).
 
 pub mod body_cache;
 pub mod body_track;
