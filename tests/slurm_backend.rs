@@ -147,6 +147,19 @@ fn a_slurm_array_survives_a_cancelled_task_and_matches_the_local_backend() {
     let report = dataset.join("logs/start_01/pool_report.json");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    // Each task that ended well says where its time went (the worker's timings in its log).
+    for attempt in report["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["attempts"].as_array().unwrap())
+        .filter(|a| a["outcome"] == "ok")
+    {
+        assert!(
+            attempt["stages"]["scene_import"].as_f64().unwrap() > 0.0,
+            "{attempt}"
+        );
+    }
     let retried: Vec<&serde_json::Value> = report["shards"]
         .as_array()
         .unwrap()

@@ -158,6 +158,21 @@ fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
         .filter(|a| a["outcome"] != "ok" && a["finished"] == a["frames"])
         .count();
     assert!(killed_after_frame >= 1, "{pool}");
+    // An attempt that finished frames says where its time went, Blender's and Rust's.
+    for attempt in pool["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["attempts"].as_array().unwrap())
+        .filter(|a| a["finished"].as_u64().unwrap() > 0)
+    {
+        for stage in ["blender_start_up", "scene_import", "assemble", "finish"] {
+            assert!(
+                attempt["stages"][stage].as_f64().unwrap() > 0.0,
+                "{stage}: {attempt}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -19,9 +19,9 @@ use tokio::io::{AsyncBufReadExt, BufReader};
 use tokio::sync::watch;
 
 use super::pool::{
-    add_stage, frames_bar, setup_failure, shard_failure_message, Attempt, FrameTries, Outcome,
-    PoolReport, PoolRun, PoolTake, ShardPool, ShardReport, StageSeconds, TakeFailure, TakeFeed,
-    EXIT_SETUP_FAILED,
+    add_stage, frames_bar, setup_failure, shard_failure_message, worker_timing, Attempt,
+    FrameTries, Outcome, PoolReport, PoolRun, PoolTake, ShardPool, ShardReport, StageSeconds,
+    TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
 };
 use super::staged::{Dataset, Shard};
 use crate::render::shard::worker_command;
@@ -468,15 +468,10 @@ async fn attempt_shard(
             line = lines.next_line() => {
                 match line {
                     Ok(Some(line)) => {
-                        if let Some(timing) = line.strip_prefix("EGOGEN_TIMING ") {
-                            match timing.split_once(' ') {
-                                Some(("ready", _)) => add_stage(stages, "blender_start_up", spawned.elapsed().as_secs_f64()),
-                                Some((stage, s)) => {
-                                    if let Ok(s) = s.trim().parse::<f64>() {
-                                        add_stage(stages, stage, s);
-                                    }
-                                }
-                                None => {}
+                        if let Some((stage, s)) = worker_timing(&line) {
+                            match stage {
+                                "ready" => add_stage(stages, "blender_start_up", spawned.elapsed().as_secs_f64()),
+                                _ => add_stage(stages, stage, s),
                             }
                             continue;
                         }

@@ -112,8 +112,8 @@ pub struct Attempt {
     pub seconds: f64,
     /// The attempt's log, relative to the dataset folder.
     pub log: String,
-    /// Where its seconds went, stage by stage (local pool only; docs/RENDERING.md, "Where a
-    /// frame's time goes").
+    /// Where its seconds went, stage by stage (docs/RENDERING.md, "Where a frame's time
+    /// goes"); on Slurm the worker's own stages from its log, without start-up and Rust's.
     #[serde(skip_serializing_if = "StageSeconds::is_empty")]
     pub stages: StageSeconds,
 }
@@ -128,6 +128,24 @@ pub type StageSeconds = std::collections::BTreeMap<String, f64>;
 /// Adds `seconds` to `stage`.
 pub fn add_stage(stages: &mut StageSeconds, stage: &str, seconds: f64) {
     *stages.entry(stage.to_owned()).or_default() += seconds;
+}
+
+/// A worker's `EGOGEN_TIMING <stage> <seconds>` line, if `line` is one: `Some((stage,
+/// seconds))` (`ready` comes with 0: the supervisor times the start-up itself).
+pub fn worker_timing(line: &str) -> Option<(&str, f64)> {
+    let (stage, seconds) = line.strip_prefix("EGOGEN_TIMING ")?.split_once(' ')?;
+    Some((stage, seconds.trim().parse().ok()?))
+}
+
+/// The stages a worker reported in its log (a Slurm task's), its start-up excepted.
+pub fn stages_from_worker_log(text: &str) -> StageSeconds {
+    let mut stages = StageSeconds::new();
+    for (stage, seconds) in text.lines().filter_map(worker_timing) {
+        if stage != "ready" {
+            add_stage(&mut stages, stage, seconds);
+        }
+    }
+    stages
 }
 
 /// What happened to a shard.
@@ -288,4 +306,22 @@ pub fn setup_failure(log: &std::path::Path) -> Outcome {
         })
         .unwrap_or_else(|| format!("exit status {EXIT_SETUP_FAILED}"));
     Outcome::SetupFailed { reason }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn worker_timing_lines_add_up_by_stage() {
+        let log = "Fra:1 Mem:8M | Sample 1/4\nEGOGEN_TIMING ready 0.000000\n\
+                   EGOGEN_TIMING colour_render 1.500000\nEGOGEN_DONE /x.exr\n\
+                   EGOGEN_TIMING colour_render 0.250000\nEGOGEN_TIMING scene_import x\n\
+                   EGOGEN_TIMING\n";
+        let stages = stages_from_worker_log(log);
+        assert_eq!(stages.len(), 1, "{stages:?}");
+        assert!((stages["colour_render"] - 1.75).abs() < 1e-12);
+        assert_eq!(worker_timing("EGOGEN_TIMING ready 0"), Some(("ready", 0.0)));
+        assert_eq!(worker_timing("EGOGEN_DONE /x.exr"), None);
+    }
 }

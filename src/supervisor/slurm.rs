@@ -21,8 +21,9 @@ use std::time::{Duration, Instant};
 use anyhow::{bail, Context, Result};
 
 use super::pool::{
-    frames_bar, setup_failure, shard_failure_message, Attempt, FrameTries, Outcome, PoolReport,
-    PoolRun, PoolTake, ShardPool, ShardReport, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
+    frames_bar, setup_failure, shard_failure_message, stages_from_worker_log, Attempt, FrameTries,
+    Outcome, PoolReport, PoolRun, PoolTake, ShardPool, ShardReport, TakeFailure, TakeFeed,
+    EXIT_SETUP_FAILED,
 };
 use super::staged::{Dataset, Shard};
 use crate::atomic_file::write_atomically;
@@ -406,7 +407,9 @@ fn record_attempts(
             outcome,
             seconds: end.map_or(0.0, |e| e.seconds),
             log: dataset.relative(&log),
-            stages: Default::default(),
+            stages: std::fs::read_to_string(&log)
+                .map(|t| stages_from_worker_log(&t))
+                .unwrap_or_default(),
         });
     }
 }
