@@ -165,38 +165,26 @@ impl Raw {
     }
 }
 
-/// Which raw render a header belongs to.
-#[derive(Clone, Copy)]
-enum Kind {
-    Colour,
-    GroundTruth,
-}
-
 /// Cycles' own times of a raw render, from the header Blender writes
 /// (`cycles.ViewLayer.synchronization_time` and `.render_time`, `mm:ss.cc`): the scene's sync
-/// (BVH build included) and path tracing, as stages `<kind>_sync`, `<kind>_path_tracing`.
-fn cycles_seconds(contents: &ExrContents, kind: Kind) -> Vec<(&'static str, f64)> {
-    let (sync, path_tracing) = match kind {
-        Kind::Colour => ("colour_sync", "colour_path_tracing"),
-        Kind::GroundTruth => ("ground_truth_sync", "ground_truth_path_tracing"),
-    };
-    let read = |key: &str| {
-        contents
-            .attributes
-            .get(&format!("cycles.ViewLayer.{key}"))
-            .and_then(|t| blender_duration_seconds(t))
-    };
-    [
-        (sync, "synchronization_time"),
-        (path_tracing, "render_time"),
-    ]
-    .into_iter()
-    .filter_map(|(stage, key)| read(key).map(|s| (stage, s)))
-    .collect()
+/// (BVH build included) and path tracing, under the stage names `[sync, path_tracing]`.
+fn cycles_seconds<'a>(
+    contents: &'a ExrContents,
+    stages: [&'static str; 2],
+) -> impl Iterator<Item = (&'static str, f64)> + 'a {
+    stages
+        .into_iter()
+        .zip(["synchronization_time", "render_time"])
+        .filter_map(|(stage, key)| {
+            let text = contents
+                .attributes
+                .get(&format!("cycles.ViewLayer.{key}"))?;
+            Some((stage, blender_duration_seconds(text)?))
+        })
 }
 
 /// Seconds of Blender's `[[hh:]mm:]ss.cc` duration.
-pub fn blender_duration_seconds(text: &str) -> Option<f64> {
+fn blender_duration_seconds(text: &str) -> Option<f64> {
     text.trim()
         .split(':')
         .try_fold(0.0, |acc, part| {
@@ -219,9 +207,12 @@ pub fn assemble_frame(
     let rgb = rgb_exr.map(|p| Raw::read(p, render)).transpose()?;
     let gt = ground_truth_exr.map(|p| Raw::read(p, render)).transpose()?;
     let mut render_seconds = Vec::new();
-    for (raw, kind) in [(&rgb, Kind::Colour), (&gt, Kind::GroundTruth)] {
+    for (raw, stages) in [
+        (&rgb, ["colour_sync", "colour_path_tracing"]),
+        (&gt, ["ground_truth_sync", "ground_truth_path_tracing"]),
+    ] {
         if let Some(raw) = raw {
-            render_seconds.extend(cycles_seconds(&raw.contents, kind));
+            render_seconds.extend(cycles_seconds(&raw.contents, stages));
         }
     }
     let colour = rgb
@@ -549,4 +540,18 @@ fn check_channels(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blender_durations_read_as_seconds() {
+        assert_eq!(blender_duration_seconds("00:00.20"), Some(0.2));
+        assert_eq!(blender_duration_seconds("01:02:03.50"), Some(3723.5));
+        assert_eq!(blender_duration_seconds(" 00:13.25 "), Some(13.25));
+        assert_eq!(blender_duration_seconds("00:xx"), None);
+        assert_eq!(blender_duration_seconds(""), None);
+    }
 }
