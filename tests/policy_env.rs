@@ -965,3 +965,47 @@ fn floor_plans_and_evaluated_walks_are_drawn_and_existing_pictures_kept() {
     assert!(!both.status.success());
     assert!(String::from_utf8_lossy(&both.stderr).contains("--paths-png"));
 }
+
+#[test]
+fn with_an_arrival_radius_walks_go_on_and_are_scored_where_they_end() {
+    env_parts!(body, ctx, model, bank, prior);
+    let b = 3;
+    // Every start lies within 100 m of its goal.
+    let scored_at_100m = |arrival_m| EnvSettings {
+        success_m: 100.0,
+        arrival_m,
+        ..EnvSettings::default()
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut run = |settings: EnvSettings| {
+        let mut env = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 11).unwrap();
+        let l = env.latent_dim();
+        let mut ended = Vec::new();
+        for _ in 0..settings.max_primitives {
+            let z = normal_samples(&mut rng, b * l);
+            ended.extend(env.step(&z).unwrap().finished);
+        }
+        ended.retain(|s| s.id < b as u64);
+        ended
+    };
+    // Without one, a walk ends as soon as it is within the success radius: the first primitive.
+    let at_once = run(scored_at_100m(None));
+    assert_eq!(at_once.len(), b);
+    assert!(at_once
+        .iter()
+        .all(|s| s.primitives == 1 && matches!(s.ending, Ending::Success)));
+    // With one no walk reaches (0 m), each walks all its primitives and, ending within the
+    // success radius, succeeds.
+    let settings = scored_at_100m(Some(0.0));
+    let walked_on = run(settings);
+    assert_eq!(walked_on.len(), b);
+    assert!(walked_on
+        .iter()
+        .all(|s| s.primitives == settings.max_primitives && matches!(s.ending, Ending::Success)));
+    // Scored at 0 m instead, the same walks time out.
+    let missed = run(EnvSettings {
+        success_m: 0.0,
+        ..settings
+    });
+    assert!(missed.iter().all(|s| matches!(s.ending, Ending::Timeout)));
+}

@@ -9,6 +9,7 @@ pub mod lbs;
 pub mod markers;
 pub mod model;
 pub mod model_file;
+pub mod occupancy;
 pub mod skeleton;
 pub mod volume;
 
@@ -17,5 +18,6 @@ pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody, CORRE
 pub use markers::{farthest_point_markers, MarkerFrame, NUM_MARKERS};
 pub use model::{BodyModel, BodyUvs};
 pub use model_file::ModelFileError;
+pub use occupancy::BodyOccupancy;
 pub use skeleton::{joint, JOINT_NAMES, NUM_JOINTS, PARENTS, POSE_DIM};
 pub use volume::CapsuleVolume;

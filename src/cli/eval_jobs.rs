@@ -12,9 +12,11 @@ use anyhow::{bail, Context, Result};
 
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
-use crate::eval::report::table1_markdown;
-use crate::eval::scenarios::Scenario;
+use crate::eval::files::{read_json, KeptRows, PolicyRow, PolicyRowsFile, RowsFile};
+use crate::eval::report::results_markdown;
+use crate::eval::scenarios::{Scenario, ARRIVAL_M, SUCCESS_M};
 use crate::eval::suite::{run_table, Controller};
+use crate::eval::suite::{TABLE2_MAX_PRIMITIVES, TABLE2_PAIR_DISTANCE_M, TABLE2_SCENE};
 use crate::policy::EnvSettings;
 
 /// What `egogen eval` is asked.
@@ -22,7 +24,8 @@ use crate::policy::EnvSettings;
 pub struct EvalArgs {
     /// Which table: table1 (scenarios with moving obstacles and people), table2 (the apartment:
     /// egocentric sensing against a local map), table3 (ablations) or speed (the policy
-    /// against sampling with K = 4, 8, 16, 32 latents, accuracy and time).
+    /// against sampling with K = 4, 8, 16, 32 latents, accuracy and time); report rewrites
+    /// OUT/RESULTS.md from the results already in OUT/results and runs nothing.
     #[arg(long, default_value = "table1")]
     pub suite: String,
     /// Episodes per row (table1: per scenario and controller; table2 and table3: per policy,
@@ -165,12 +168,6 @@ const TABLE2_POLICIES: [(&str, &str, &str); 10] = [
     ),
 ];
 
-/// Table 2's apartment: held-out start/goal pairs this far apart (m), and EgoGen's 13
-/// primitives per walk.
-const TABLE2_SCENE: &str = "assets/scenes/apartment.glb";
-const TABLE2_PAIR_DISTANCE_M: (f64, f64) = (2.0, 7.0);
-const TABLE2_MAX_PRIMITIVES: usize = 13;
-
 /// The speed suite's ray-count knob: policies trained with the budget and settings of
 /// `configs/train_policy.toml` (whose policy is the 32-ray row), differing only in the rays
 /// per scan. Label, weights, config.
@@ -244,34 +241,6 @@ fn suite_files(out: &Path, suite: &str) -> Vec<PathBuf> {
 /// The speed suite's scenarios unless `--scenarios` names others, and its sampling K.
 const SPEED_SCENARIOS: [&str; 2] = ["moving_obstacle", "circle_4"];
 const SPEED_KS: [usize; 4] = [4, 8, 16, 32];
-
-/// `results/table1.json` and `results/speed.json`: scenario × controller rows.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct RowsFile {
-    command: String,
-    episodes: usize,
-    seed: u64,
-    policy: String,
-    /// Latents per primitive of Table 1's sampling and path-following rows.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    k: Option<usize>,
-    wall_s: f64,
-    rows: Vec<crate::eval::metrics::Row>,
-    /// Rows kept from earlier runs (`--keep-other-rows`), grouped by the run that measured
-    /// them; `rows` holds them too, `wall_s` is this run's own.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    kept: Vec<KeptRows>,
-}
-
-/// Rows of `table1.json` that `--keep-other-rows` kept from the run that measured them.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct KeptRows {
-    command: String,
-    policy: String,
-    wall_s: f64,
-    /// `scenario/controller` of each row kept.
-    rows: Vec<String>,
-}
 
 /// The rows and episodes of an earlier `table1.json` that a run keeps.
 struct KeptTable {
@@ -406,87 +375,14 @@ fn kept_table1_rows(
     })
 }
 
-/// One row of Table 2 or 3: a controller (a policy with sampled or mean actions, or the
-/// sampling controller) on a set of held-out episodes.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct PolicyRow {
-    policy: String,
-    weights: String,
-    config: String,
-    set: String,
-    actions: String,
-    episodes: usize,
-    success_rate: f64,
-    contact: f64,
-    penetration_share: f64,
-    /// Share of frames with ≥ 40 body vertices inside the scene (paper Eq. 11; Table 2).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    scene_penetration_share: Option<f64>,
-    view_cos: f64,
-    #[serde(deserialize_with = "null_as_nan")]
-    final_distance_median_m: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    final_distance_mean_m: Option<f64>,
-    /// NaN (JSON null) when no episode succeeded.
-    #[serde(deserialize_with = "null_as_nan")]
-    speed_successful_median_m_s: f64,
-    wall_s: f64,
-    /// Time to load the scene and build its 3D SDF (the SDF-resolution rows).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    setup_s: Option<f64>,
-}
-
-/// A number written as JSON null (serde_json writes NaN so) read back as NaN.
-fn null_as_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
-    use serde::Deserialize;
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-}
-
-impl PolicyRow {
-    fn new(
-        (policy, weights, config): (&str, &str, &str),
-        set: &str,
-        actions: &str,
-        report: &crate::policy::evaluate::EvalReport,
-        scene: bool,
-    ) -> Self {
-        Self {
-            policy: policy.into(),
-            weights: weights.into(),
-            config: config.into(),
-            set: set.into(),
-            actions: actions.into(),
-            episodes: report.episodes,
-            success_rate: report.success_rate,
-            contact: report.contact_mean,
-            penetration_share: report.penetration_share_mean,
-            scene_penetration_share: scene.then_some(report.scene_penetration_share_mean),
-            view_cos: report.view_cos_mean,
-            final_distance_median_m: report.final_distance_m.p50,
-            final_distance_mean_m: scene.then_some(report.final_distance_m.mean),
-            speed_successful_median_m_s: report.speed_successful_m_s.p50,
-            wall_s: report.wall_s,
-            setup_s: None,
-        }
-    }
-}
-
-/// `results/table2.json` and `results/table3.json`.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-struct PolicyRowsFile {
-    command: String,
-    episodes: usize,
-    seed: u64,
-    wall_s: f64,
-    rows: Vec<PolicyRow>,
-}
-
 /// The motion model, body, pose prior and the held-out seed poses every suite uses.
 struct Common {
     body: BodyModel,
     model: crate::motion::cvae::MotionModel,
     prior: crate::policy::PosePrior,
     bank: crate::policy::SeedBank,
+    /// The pose embedding norm on the paper's scale, calibrated on the held-out mocap.
+    pose_norm: Option<crate::eval::files::PoseNormCalibration>,
 }
 
 fn load_common() -> Result<Common> {
@@ -501,11 +397,16 @@ fn load_common() -> Result<Common> {
     // Held-out seeds: whole clips never trained on.
     let (_, held_out) = evaluation_sets(&train_plan, &body, true)?;
     let bank = crate::policy::SeedBank::from_set(&held_out);
+    let pose_norm = crate::eval::files::PoseNormCalibration::new(
+        &prior,
+        &crate::policy::tasks::set_frames(&held_out),
+    );
     Ok(Common {
         body,
         model,
         prior,
         bank,
+        pose_norm,
     })
 }
 
@@ -521,12 +422,21 @@ fn bar(args: &EvalArgs, total: usize, unit: &str) -> indicatif::ProgressBar {
 pub fn run_eval(args: &EvalArgs) -> Result<()> {
     if !matches!(
         args.suite.as_str(),
-        "table1" | "table2" | "table3" | "speed"
+        "table1" | "table2" | "table3" | "speed" | "report"
     ) {
         bail!(
-            "--suite {}: expected \"table1\", \"table2\", \"table3\" or \"speed\"",
+            "--suite {}: expected \"table1\", \"table2\", \"table3\", \"speed\" or \"report\"",
             args.suite
         );
+    }
+    if args.suite == "report" {
+        if !args.out.join("results").is_dir() {
+            bail!(
+                "--suite report: {} has no results/ folder to report (run a suite first)",
+                args.out.display()
+            );
+        }
+        return write_results_markdown(&args.out);
     }
     if args.episodes == 0 || args.k == 0 {
         bail!("--episodes and --k must be at least 1");
@@ -559,9 +469,14 @@ pub fn run_eval(args: &EvalArgs) -> Result<()> {
         "table2" => table2(args, &common, &results)?,
         _ => table3(args, &common, &results)?,
     }
-    let md = results_markdown(&args.out)?;
-    write_atomically(&args.out.join("RESULTS.md"), md.as_bytes())?;
-    println!("wrote {}", args.out.join("RESULTS.md").display());
+    write_results_markdown(&args.out)
+}
+
+/// Rewrites OUT/RESULTS.md from the results in OUT/results.
+fn write_results_markdown(out: &Path) -> Result<()> {
+    let md = results_markdown(out)?;
+    write_atomically(&out.join("RESULTS.md"), md.as_bytes())?;
+    println!("wrote {}", out.join("RESULTS.md").display());
     Ok(())
 }
 
@@ -790,7 +705,7 @@ fn sdf_rows(
         progress.inc(1);
     }
     progress.finish_and_clear();
-    write_policy_rows(&results.join("sdf.json"), args, t0, rows)
+    write_policy_rows(&results.join("sdf.json"), args, c, t0, rows)
 }
 
 /// The rows run now beside those kept, in the table's order: scenarios as
@@ -906,6 +821,7 @@ fn policy_rows(
 fn write_policy_rows(
     path: &Path,
     args: &EvalArgs,
+    c: &Common,
     t0: std::time::Instant,
     rows: Vec<PolicyRow>,
 ) -> Result<()> {
@@ -915,6 +831,7 @@ fn write_policy_rows(
         seed: args.seed,
         wall_s: t0.elapsed().as_secs_f64(),
         rows,
+        pose_norm: c.pose_norm,
     };
     write_atomically(path, serde_json::to_string_pretty(&file)?.as_bytes())?;
     println!("{} rows in {:.0} s", file.rows.len(), file.wall_s);
@@ -933,10 +850,12 @@ fn table2_scene(args: &EvalArgs, voxel_m: f64) -> Result<crate::policy::env::Fix
     )
 }
 
-/// Table 2's episodes: success within 0.3 m, EgoGen's 13 primitives in the apartment.
+/// Table 2's episodes: walks going on to 0.1 m, success within 0.3 m where they end, EgoGen's
+/// 13 primitives in the apartment.
 fn table2_settings() -> EnvSettings {
     EnvSettings {
-        success_m: 0.3,
+        success_m: SUCCESS_M,
+        arrival_m: Some(ARRIVAL_M),
         max_primitives: TABLE2_MAX_PRIMITIVES,
         ..EnvSettings::default()
     }
@@ -1003,7 +922,7 @@ fn table2(args: &EvalArgs, c: &Common, results: &Path) -> Result<()> {
     progress.inc(1);
     rows.push(path_follow_row(args, c, &fixed)?);
     progress.finish_and_clear();
-    write_policy_rows(&results.join("table2.json"), args, t0, rows)
+    write_policy_rows(&results.join("table2.json"), args, c, t0, rows)
 }
 
 /// The evaluation's parts for held-out box scenes and crossings.
@@ -1020,14 +939,16 @@ fn box_scene_parts<'m>(
     }
 }
 
-/// Held-out box scenes and held-out crossings, success within 0.3 m.
+/// Held-out box scenes and held-out crossings, walks going on to 0.1 m, success within 0.3 m
+/// where they end.
 fn box_and_crossing_sets() -> Vec<(&'static str, EnvSettings)> {
     [("box scenes", 0.0), ("crossings", 1.0)]
         .into_iter()
         .map(|(set, crossing_share)| {
             let defaults = EnvSettings::default();
             let settings = EnvSettings {
-                success_m: 0.3,
+                success_m: SUCCESS_M,
+                arrival_m: Some(ARRIVAL_M),
                 crossing: crate::policy::crossing_scene::CrossingSettings {
                     share: crossing_share,
                     ..defaults.crossing
@@ -1083,7 +1004,8 @@ fn path_follow_row(
                 steering: Steering::PathFollow { k: args.k },
             };
             let settings = CrowdSettings {
-                success_m: 0.3,
+                success_m: SUCCESS_M,
+                arrival_m: Some(ARRIVAL_M),
                 max_primitives_per_goal: TABLE2_MAX_PRIMITIVES,
                 primitives: TABLE2_MAX_PRIMITIVES,
                 stop_when_done: true,
@@ -1123,6 +1045,7 @@ fn path_follow_row(
         view_cos: mean(&|a| a.view_cos),
         final_distance_median_m: distance.p50,
         final_distance_mean_m: Some(distance.mean),
+        pose_norm_max_mean: None,
         speed_successful_median_m_s: speed.p50,
         wall_s: t0.elapsed().as_secs_f64(),
         setup_s: None,
@@ -1159,7 +1082,7 @@ fn box_and_crossing_rows(
         &progress,
     )?;
     progress.finish_and_clear();
-    write_policy_rows(file, args, t0, rows)
+    write_policy_rows(file, args, c, t0, rows)
 }
 
 /// A path as shown in the report: relative to the crate's folder when it is inside it.
@@ -1168,414 +1091,4 @@ fn relative(path: &Path) -> String {
         .unwrap_or(path)
         .display()
         .to_string()
-}
-
-fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<T>> {
-    if !path.is_file() {
-        return Ok(None);
-    }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    Ok(Some(serde_json::from_str(&text).with_context(|| {
-        format!("{}: not a results file of this egogen", path.display())
-    })?))
-}
-
-/// What `--keep-other-rows` kept, for the table's header: nothing when it kept nothing. Rows
-/// are named by controller, with the scenarios of each (once for all when they share them).
-fn kept_rows_markdown(kept: &[KeptRows]) -> String {
-    let code = |names: &[&str]| {
-        names
-            .iter()
-            .map(|n| format!("`{n}`"))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    kept.iter()
-        .filter(|k| !k.rows.is_empty())
-        .map(|k| {
-            let mut by_controller: Vec<(&str, Vec<&str>)> = Vec::new();
-            for key in &k.rows {
-                let (scenario, controller) = key.split_once('/').unwrap_or((key, ""));
-                match by_controller.iter_mut().find(|(c, _)| *c == controller) {
-                    Some((_, scenarios)) => scenarios.push(scenario),
-                    None => by_controller.push((controller, vec![scenario])),
-                }
-            }
-            let shared = by_controller.windows(2).all(|w| w[0].1 == w[1].1);
-            let rows = if shared {
-                let controllers: Vec<&str> = by_controller.iter().map(|(c, _)| *c).collect();
-                format!(
-                    "The {} rows of {}",
-                    code(&controllers),
-                    code(&by_controller[0].1)
-                )
-            } else {
-                let each: Vec<String> = by_controller
-                    .iter()
-                    .map(|(c, scenarios)| format!("`{c}` of {}", code(scenarios)))
-                    .collect();
-                format!("The rows {}", each.join("; "))
-            };
-            format!(
-                " {rows} are kept from an earlier run (`--keep-other-rows`): `{}`, policy `{}`, \
-                 {:.0} s of wall time for all its rows.",
-                k.command, k.policy, k.wall_s
-            )
-        })
-        .collect()
-}
-
-/// A scenario's label in the tables (its name where none is known).
-fn scenario_label(name: &str) -> String {
-    Scenario::table1()
-        .iter()
-        .find(|s| s.name() == name)
-        .map_or(name.to_string(), |s| s.label())
-}
-
-/// `RESULTS.md` from the results files in `out/results/`.
-fn results_markdown(out: &Path) -> Result<String> {
-    let results = out.join("results");
-    let mut md = String::from(
-        "# Results: the paper's evaluation on egogen\n\n\
-         Written by `egogen eval` from the files in `results/` — do not edit by hand; each \
-         table names the command that reproduces it. Wall times are of the machine that ran it \
-         (2 cores; episodes run two at a time).\n\n",
-    );
-    if let Some(t) = read_json::<RowsFile>(&results.join("table1.json"))? {
-        let labels = scenario_label;
-        md.push_str(&format!(
-            "## Table 1: avoiding moving obstacles and other people\n\n```\n{}\n```\n\n\
-             {} episodes per row, seed {}, policy `{}`, K = {} latents per primitive for the \
-             sampling controller and the path-following baseline; {:.0} s of wall time.{}\n\n",
-            t.command,
-            t.episodes,
-            t.seed,
-            t.policy,
-            t.k.map_or("?".into(), |k| k.to_string()),
-            t.wall_s,
-            kept_rows_markdown(&t.kept),
-        ));
-        md.push_str(&table1_markdown(&t.rows, &labels));
-        md.push_str(TABLE1_NOTES);
-        md.push_str("\n### Paths (episode 0; every episode of the static box)\n");
-        let mut last = String::new();
-        for r in &t.rows {
-            let file = format!("table1_{}_{}.png", r.scenario, r.controller);
-            if !results.join(&file).is_file() {
-                continue;
-            }
-            if r.scenario != last {
-                md.push_str(&format!("\n**{}**\n\n", labels(&r.scenario)));
-                last = r.scenario.clone();
-            }
-            md.push_str(&format!(
-                "![{} {}](results/{file})\n",
-                r.scenario, r.controller
-            ));
-        }
-        md.push('\n');
-    }
-    if let Some(t) = read_json::<RowsFile>(&results.join("speed.json"))? {
-        md.push_str(&format!(
-            "## Speed and accuracy: the policy against sampling with K latents\n\n```\n{}\n```\n\n\
-             {} episodes per row, seed {}, policy `{}`; {:.0} s of wall time. Wall per episode \
-             is the episode's own time (two episodes run at once on the 2 cores); the ratio is \
-             to the policy with sampled actions in the same scenario.\n\n",
-            t.command, t.episodes, t.seed, t.policy, t.wall_s
-        ));
-        md.push_str(&speed_markdown(&t.rows, &scenario_label));
-        md.push('\n');
-    }
-    if let Some(t) = read_json::<PolicyRowsFile>(&results.join("rays.json"))? {
-        md.push_str(&knob_markdown(
-            "Rays per scan",
-            "differing only in the rays of their scan (`[policy.sensing] num_rays`, same ±90° \
-             fan and 7 m)",
-            &t,
-        ));
-    }
-    if let Some(t) = read_json::<PolicyRowsFile>(&results.join("width.json"))? {
-        md.push_str(&knob_markdown(
-            "Policy width",
-            "differing only in the width of their networks (`[policy] hidden` = H: GRU \
-             encoders H wide, actor and critic MLPs 2H + 4F; EgoGen's is 512)",
-            &t,
-        ));
-    }
-    if let Some(t) = read_json::<PolicyRowsFile>(&results.join("sdf.json"))? {
-        md.push_str(&sdf_markdown(&t));
-    }
-    if let Some(t) = read_json::<PolicyRowsFile>(&results.join("table2.json"))? {
-        md.push_str(&table2_markdown(&t));
-    }
-    if let Some(t) = read_json::<PolicyRowsFile>(&results.join("table3.json"))? {
-        md.push_str(&format!(
-            "## Table 3: ablations\n\n```\n{}\n```\n\n\
-             Each policy trained from scratch with the budget of `configs/train_policy.toml` \
-             (2.0 M environment steps, seed 0; the shipped policy is that run's, fine-tuned \
-             further in the apartment, docs/POLICY.md), evaluated on the first {} held-out box \
-             scenes and crossings (seed {}; success within 0.3 m, 11 primitives, episodes not \
-             ended by penetration); {:.0} s of wall time.\n\n",
-            t.command, t.episodes, t.seed, t.wall_s
-        ));
-        md.push_str(&box_rows_markdown(
-            &t.rows,
-            "speed, successful (median)",
-            &|r| format!("{:.2} m/s", r.speed_successful_median_m_s),
-        ));
-        md.push_str(TABLE3_NOTES);
-    }
-    Ok(md)
-}
-
-/// The speed suite's rows of a knob (`title`) whose policies differ as `differing` says.
-fn knob_markdown(title: &str, differing: &str, t: &PolicyRowsFile) -> String {
-    let mut md = format!(
-        "### {title}\n\nThe same run: policies trained with the budget and settings of \
-         `configs/train_policy.toml` (2.0 M environment steps, seed 0), {differing}, on the \
-         first {} held-out box scenes and crossings (success within 0.3 m, 11 primitives, 50 \
-         episodes at once); {:.0} s. Wall: the row's episodes, one decode batch of 50 at a \
-         time.\n\n",
-        t.episodes, t.wall_s
-    );
-    md.push_str(&box_rows_markdown(&t.rows, "wall (s)", &|r| {
-        format!("{:.2}", r.wall_s)
-    }));
-    md.push('\n');
-    md
-}
-
-/// Rows of policies on box scenes and crossings, `last` naming the column before the config.
-fn box_rows_markdown(
-    rows: &[PolicyRow],
-    last: &str,
-    value: &dyn Fn(&PolicyRow) -> String,
-) -> String {
-    let mut md = format!(
-        "| policy | set | actions | success | foot contact | penetration | cos(view, goal) | final distance (median) | {last} | trained by |\n\
-         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n"
-    );
-    for r in rows {
-        md.push_str(&format!(
-            "| {} | {} | {} | {:.1} % | {:.3} | {:.2} % | {:.3} | {:.2} m | {} | `{}` |\n",
-            r.policy,
-            r.set,
-            r.actions,
-            100.0 * r.success_rate,
-            r.contact,
-            100.0 * r.penetration_share,
-            r.view_cos,
-            r.final_distance_median_m,
-            value(r),
-            r.config
-        ));
-    }
-    md
-}
-
-/// The speed suite's SDF-resolution rows.
-fn sdf_markdown(t: &PolicyRowsFile) -> String {
-    let mut md = format!(
-        "### SDF resolution\n\nThe same run: the shipped policy (mean action) on Table 2's \
-         first {} apartment pairs, scene penetration (paper Eq. 11: ≥ 40 of 13 380 vertices \
-         inside the scene) measured on the apartment's 3D SDF at each voxel size; {:.0} s. \
-         Set-up: loading the scene, drawing the pairs and building the SDF; wall: the \
-         episodes, 50 at once.\n\n\
-         | SDF voxel | scene penetration (Eq. 11) | success | set-up (s) | wall (s) |\n\
-         | --- | --- | --- | --- | --- |\n",
-        t.episodes, t.wall_s
-    );
-    for r in &t.rows {
-        md.push_str(&format!(
-            "| {} | {:.2} % | {:.1} % | {:.1} | {:.1} |\n",
-            r.set.trim_start_matches("apartment, SDF voxel "),
-            100.0 * r.scene_penetration_share.unwrap_or(f64::NAN),
-            100.0 * r.success_rate,
-            r.setup_s.unwrap_or(f64::NAN),
-            r.wall_s
-        ));
-    }
-    md.push('\n');
-    md
-}
-
-/// Table 2's section of `RESULTS.md`.
-fn table2_markdown(t: &PolicyRowsFile) -> String {
-    let (lo, hi) = TABLE2_PAIR_DISTANCE_M;
-    let mut md = format!(
-        "## Table 2: egocentric sensing against a local map (the apartment)\n\n```\n{}\n```\n\n\
-         The first {} held-out start/goal pairs {lo}–{hi} m apart inside the walls of \
-         `{TABLE2_SCENE}` (seed {}; 0.4 m from anything blocking), {TABLE2_MAX_PRIMITIVES} \
-         primitives per walk as EgoGen's apartment, success within 0.3 m; {:.0} s of wall \
-         time. The apartment is closed: the ground around its walls is blocked in the map \
-         the walker senses, as `egogen synth` has it; only the doors-closed policy and those \
-         that continue it (the floor-plan rows, the shipped one among them, and the Eq. 11 \
-         rows) were fine-tuned \
-         so (the others learnt the apartment with its outer doors open). The first three \
-         policies were trained with the same recipe and budget — the box-and-crossing \
-         stages, then the apartment stages (2.0 M + 0.8 M environment steps) — and differ \
-         only in what they observe (`[policy.sensing]`): the paper's 32 rays over ±90°, 7 m, \
-         or a body-centred occupancy patch reaching 0.8 m (16 × 16 cells of 0.1 m, DIMOS's \
-         walkability map) or 7 m (32 × 32 cells of 0.44 m) in every direction. The guided \
-         row is not the paper's method: where a wall hides the goal, the walker is shown the \
-         point 2 m along an A* path round it instead (docs/POLICY.md, \"A guide round \
-         walls\"); EgoGen's 95 % is without a path.\n\n",
-        t.command, t.episodes, t.seed, t.wall_s
-    );
-    md.push_str(
-        "| policy | actions | success | final distance (mean / median) | foot contact | scene penetration (Eq. 11) | cos(view, goal) | speed, successful (median) | trained by |\n\
-         | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n\
-         | EgoGen (paper Tab. 2), egocentric sensing | | 95 % | 0.12 m | | | | | |\n",
-    );
-    for r in &t.rows {
-        md.push_str(&format!(
-            "| {} | {} | {:.1} % | {:.2} / {:.2} m | {:.3} | {} | {:.3} | {:.2} m/s | `{}` |\n",
-            r.policy,
-            r.actions,
-            100.0 * r.success_rate,
-            r.final_distance_mean_m.unwrap_or(f64::NAN),
-            r.final_distance_median_m,
-            r.contact,
-            r.scene_penetration_share
-                .map_or("–".into(), |v| format!("{:.2} %", 100.0 * v)),
-            r.view_cos,
-            r.speed_successful_median_m_s,
-            r.config
-        ));
-    }
-    md.push_str(
-        "\nScene penetration: share of frames with at least 40 of the body's 13 380 vertices \
-         inside the scene (negative 3D SDF, paper Eq. 11). Foot contact: paper Eq. 12 with 3-D \
-         foot-marker speed. The baselines use no policy: the sampling controller keeps the \
-         best of K latents by the reward, the A* path follower (GAMMA*/DIMOS* in spirit) the \
-         one that follows a path planned on the walkable map, replanned every primitive; the \
-         latter walks through the crowd stepping of Table 1 (its own seed poses; Eq. 11 not \
-         measured). The paper's local-map rows are not set beside these: they could not be \
-         read on the machine that wrote this file.\n\n",
-    );
-    md
-}
-
-const TABLE3_NOTES: &str = "
-Penetration: share of frames with a body marker inside the box's or the other person's
-footprint. Foot contact: paper Eq. 12 with 3-D foot-marker speed. The paper's own Table 3
-values are not set beside these: they could not be read on the machine that wrote this file.
-";
-
-/// The speed suite's rows: accuracy beside the wall time per episode and its ratio to the
-/// policy's (sampled actions) in the same scenario.
-fn speed_markdown(rows: &[crate::eval::metrics::Row], labels: &dyn Fn(&str) -> String) -> String {
-    let mut md = String::from(
-        "| scenario | controller | SR | Dist (m) | Cont | Pene-S | Pene-H | wall per episode (s) | × policy |\n\
-         | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
-    );
-    let pct = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1} %", 100.0 * v));
-    for r in rows {
-        let per = r.wall_s / r.episodes.max(1) as f64;
-        let policy = rows
-            .iter()
-            .find(|p| p.scenario == r.scenario && p.controller == "policy")
-            .map(|p| p.wall_s / p.episodes.max(1) as f64);
-        md.push_str(&format!(
-            "| {} | {} | {} | {:.2} | {:.3} | {} | {} | {:.2} | {} |\n",
-            labels(&r.scenario),
-            r.controller,
-            pct(Some(r.success_rate)),
-            r.final_distance_m,
-            r.contact,
-            pct(r.obstacle_penetration_share),
-            pct(r.human_penetration_share),
-            per,
-            policy.map_or("–".into(), |p| format!("{:.2}", per / p)),
-        ));
-    }
-    md
-}
-
-const TABLE1_NOTES: &str = "
-Scenarios (`src/eval/scenarios.rs`), each on an open 14 × 14 m floor, starts on the held-out
-mocap clips' seed poses: **moving obstacle** — one person walks 5 m; a box of side 0.5–1 m
-crosses the line at right angles (± 30°) at 0.5–1 m/s through a point 35–65 % of the way,
-timed to meet a walker at 0.7 m/s (± 1 s); **N people** — evenly on a circle (random phase),
-each walking to the opposite point, as EgoGen's `main_crowd_eval.py`, each seeing the others
-where they will stand when its primitive ends (egogen's crowd stepping, docs/SYNTH.md, 'Seeing
-the others ahead'; `--controllers policy_as_placed,policy_mean_as_placed` adds the policy in
-EgoGen's loop, the others where they were last put); **static box** — one
-person walks 5 m along the x axis past a 1 × 1 m box at the midpoint, the same scene every
-episode. Each person may take as many primitives as the longest walk needs at 0.5 m/s, plus
-2 s.
-
-Measures (`src/eval/metrics.rs`), means over every person of every episode: **SR** pelvis
-within 0.3 m of the goal; **Dist** final pelvis–goal distance; **Cont** paper Eq. 12 with
-3-D foot-marker speed (EgoGen's and DIMOS's code); **Pene-S** share of frames with a body
-marker inside an obstacle's footprint; **Pene-H** share of person-frames (every 4th frame)
-with a body vertex inside another body's volume, modelled as capsules along the skeleton's
-bones with radius the median skin distance (`body::volume`, a lower bound); **2D overlap**
-share of person-frames with a marker inside another person's 2D box (what the policy
-senses); **Std** the standard deviation over episodes of the lateral offset from the
-start–goal line at 9 stations (10–90 % of the way), averaged, and **left** the share of
-walks passing the box on the left; **cos** between the viewing direction and the goal
-direction at primitive ends; **pose score** the pose prior's −ln p / 63 (lower is more
-plausible; its limit is −0.874, docs/POLICY.md); **speed** of the people who reached the
-goal; **wall** the row's episodes' wall times summed (two episodes run at once, so the row
-took about half of it).
-
-Controllers: **policy** actions sampled from the shipped policy, **policy_mean** its mean
-action; **sampling_kK** the best of K random latents by the training reward; **path_follow_kK**
-the baseline in the spirit of GAMMA*/DIMOS*: an A* path on the 0.1 m walkable grid around
-the other people's current 2D boxes and the moving obstacles where they stand (0.3 m
-clearance), replanned every primitive, and of K random latents the one whose primitive ends
-nearest the point 0.8 m ahead on it (+1 m for a primitive that penetrates). Same motion
-model, no policy.
-
-The paper's own Table 1 values are not set beside these: they could not be read on the
-machine that wrote this file.
-";
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn kept(rows: &[&str]) -> KeptRows {
-        KeptRows {
-            command: "egogen eval --suite table1 --out docs".into(),
-            policy: "assets/policy/rooms/policy.safetensors".into(),
-            wall_s: 3035.4,
-            rows: rows.iter().map(|r| r.to_string()).collect(),
-        }
-    }
-
-    #[test]
-    fn kept_rows_are_named_by_controller_once_for_shared_scenarios() {
-        let shared = kept_rows_markdown(&[kept(&[
-            "circle_2/sampling_k16",
-            "circle_2/path_follow_k16",
-            "static_box/sampling_k16",
-            "static_box/path_follow_k16",
-        ])]);
-        assert!(
-            shared.contains(
-                "The `sampling_k16`, `path_follow_k16` rows of `circle_2`, `static_box` are kept"
-            ),
-            "{shared}"
-        );
-        assert!(shared.contains("3035 s of wall time"), "{shared}");
-        let apart = kept_rows_markdown(&[kept(&[
-            "circle_2/sampling_k16",
-            "static_box/sampling_k16",
-            "static_box/path_follow_k16",
-        ])]);
-        assert!(
-            apart.contains(
-                "The rows `sampling_k16` of `circle_2`, `static_box`; `path_follow_k16` of \
-                 `static_box` are kept"
-            ),
-            "{apart}"
-        );
-        // Nothing kept, nothing said.
-        assert_eq!(kept_rows_markdown(&[]), "");
-        assert_eq!(kept_rows_markdown(&[kept(&[])]), "");
-    }
 }

@@ -350,6 +350,7 @@ fn crowd_settings(
     let defaults = CrowdSettings::default();
     let settings = CrowdSettings {
         success_m: m.success_m.unwrap_or(defaults.success_m),
+        arrival_m: defaults.arrival_m,
         max_primitives_per_goal: m
             .max_primitives_per_goal
             .unwrap_or(defaults.max_primitives_per_goal),

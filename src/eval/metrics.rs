@@ -1,8 +1,10 @@
 //! Per-episode measures of a crowd take and their means over a table row (paper S4.2):
 //! success (pelvis within the goal radius), final distance, foot contact (Eq. 12 with 3-D foot
 //! speed), Pene-S (frames with a body marker inside an obstacle's footprint), Pene-H (body
-//! vertices inside another body's capsule volume, [`crate::synth::penetration`]), view
-//! cos, pose-prior score, walking speed, and the spread of repeated paths (diversity).
+//! vertices inside another body: its capsule volume, a lower bound, and exactly its posed mesh,
+//! [`crate::synth::penetration`]), view cos, pose-prior score, walking speed, and the spread
+//! of repeated paths (diversity: lateral offsets at stations, and the paper's standard
+//! deviation of pelvis locations at each time).
 
 use glam::DVec2;
 use serde::Serialize;
@@ -41,8 +43,14 @@ pub struct EpisodeResult {
     pub episode: u64,
     pub agents: Vec<AgentResult>,
     /// Share of (person, frame) pairs, every [`PENE_H_EVERY_N_FRAMES`]-th frame, with a vertex
-    /// inside another body; `None` with one person.
+    /// inside another body's capsules; `None` with one person.
     pub human_penetration_share: Option<f64>,
+    /// The same with a vertex inside another body's posed mesh (exact); `None` with one person.
+    #[serde(default)]
+    pub human_mesh_penetration_share: Option<f64>,
+    /// Mean number of vertices inside other bodies' meshes per checked (person, frame).
+    #[serde(default)]
+    pub human_mesh_vertices_inside_mean: Option<f64>,
     /// Share of (person, frame) pairs with a marker inside another person's 2D box.
     pub human_overlap_share: Option<f64>,
     /// The first person's pelvis path (horizontal, every 4th frame) where a scenario's
@@ -90,8 +98,12 @@ pub fn measure(
         })
         .collect();
     let crowd = take.agents.len() > 1;
-    let human_penetration_share = if crowd {
-        Some(human_penetration(body, &take.agents, PENE_H_EVERY_N_FRAMES)?.penetrating_share)
+    let penetration = if crowd {
+        Some(human_penetration(
+            body,
+            &take.agents,
+            PENE_H_EVERY_N_FRAMES,
+        )?)
     } else {
         None
     };
@@ -100,7 +112,9 @@ pub fn measure(
         controller,
         episode,
         agents,
-        human_penetration_share,
+        human_penetration_share: penetration.map(|p| p.penetrating_share),
+        human_mesh_penetration_share: penetration.map(|p| p.mesh_penetrating_share),
+        human_mesh_vertices_inside_mean: penetration.map(|p| p.mesh_vertices_inside_mean),
         human_overlap_share: crowd.then(|| human_overlap_share(&take.agents)),
         pelvis_path: take.agents[0]
             .pelvis_xy
@@ -167,6 +181,50 @@ pub fn path_diversity(paths: &[&[[f64; 2]]], start: DVec2, goal: DVec2) -> Optio
     Some((stds.iter().sum::<f64>() / stds.len() as f64, left))
 }
 
+/// Path diversity the paper's way (S5.1: "the standard deviation of pelvis locations for the
+/// same start–target pairs"), as read here: at each time of the walks (the paths' common
+/// sampling, a walk that has stopped staying where it stopped), the standard deviation of the
+/// walks' horizontal pelvis locations (root of the summed per-axis variances), averaged over
+/// the times; `None` with fewer than two walks.
+pub fn location_spread(paths: &[&[[f64; 2]]]) -> Option<f64> {
+    let paths: Vec<&[[f64; 2]]> = paths.iter().copied().filter(|p| !p.is_empty()).collect();
+    let n = paths.len();
+    let times = paths.iter().map(|p| p.len()).max()?;
+    if n < 2 {
+        return None;
+    }
+    let at = |p: &[[f64; 2]], t: usize| DVec2::from_array(p[t.min(p.len() - 1)]);
+    let total: f64 = (0..times)
+        .map(|t| {
+            let mean = paths.iter().map(|p| at(p, t)).sum::<DVec2>() / n as f64;
+            let var = paths
+                .iter()
+                .map(|p| at(p, t).distance_squared(mean))
+                .sum::<f64>()
+                / (n - 1) as f64;
+            var.sqrt()
+        })
+        .sum();
+    Some(total / times as f64)
+}
+
+/// The literal reading of the paper's diversity: the standard deviation of every pelvis
+/// location of every walk pooled (root of the summed per-axis variances), which grows with the
+/// walk's length as much as with how the walks differ (one straight 5 m walk at an even pace
+/// alone gives 5 / √12 = 1.44 m); `None` with fewer than two locations.
+pub fn pooled_location_std(paths: &[&[[f64; 2]]]) -> Option<f64> {
+    let all: Vec<DVec2> = paths
+        .iter()
+        .flat_map(|p| p.iter().map(|&q| DVec2::from_array(q)))
+        .collect();
+    if all.len() < 2 {
+        return None;
+    }
+    let mean = all.iter().sum::<DVec2>() / all.len() as f64;
+    let var = all.iter().map(|q| q.distance_squared(mean)).sum::<f64>() / (all.len() - 1) as f64;
+    Some(var.sqrt())
+}
+
 /// A table row: the means over every person of every episode of one scenario and controller.
 #[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct Row {
@@ -180,12 +238,25 @@ pub struct Row {
     pub contact: f64,
     /// Pene-S (share of frames), scenarios with obstacles.
     pub obstacle_penetration_share: Option<f64>,
-    /// Pene-H (share of person-frames), scenarios with several people.
+    /// Pene-H (share of person-frames), scenarios with several people: a vertex inside another
+    /// body's capsules (a lower bound) …
     pub human_penetration_share: Option<f64>,
+    /// … and inside another body's posed mesh (exact; absent in rows written before it).
+    #[serde(default)]
+    pub human_mesh_penetration_share: Option<f64>,
+    /// Mean vertices inside other bodies' meshes per checked person-frame.
+    #[serde(default)]
+    pub human_mesh_vertices_inside_mean: Option<f64>,
     pub human_overlap_share: Option<f64>,
     /// Std of the paths (m) and the share passing left (static box only).
     pub path_std_m: Option<f64>,
     pub path_left_share: Option<f64>,
+    /// The paper's diversity: std of pelvis locations at each time ([`location_spread`]).
+    #[serde(default)]
+    pub path_location_std_m: Option<f64>,
+    /// The literal reading: every location pooled ([`pooled_location_std`]).
+    #[serde(default)]
+    pub path_pooled_std_m: Option<f64>,
     pub view_cos: f64,
     pub pose_score: f64,
     /// Mean walking speed of the people who reached their goal (m/s).
@@ -204,10 +275,8 @@ fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
 /// of a scenario whose episodes all walk the same line (path diversity).
 pub fn row(episodes: &[EpisodeResult], line: Option<(DVec2, DVec2)>) -> Row {
     let people = || episodes.iter().flat_map(|e| e.agents.iter());
-    let diversity = line.and_then(|(s, g)| {
-        let paths: Vec<&[[f64; 2]]> = episodes.iter().map(|e| e.pelvis_path.as_slice()).collect();
-        path_diversity(&paths, s, g)
-    });
+    let paths: Vec<&[[f64; 2]]> = episodes.iter().map(|e| e.pelvis_path.as_slice()).collect();
+    let diversity = line.and_then(|(s, g)| path_diversity(&paths, s, g));
     Row {
         scenario: episodes
             .first()
@@ -224,14 +293,55 @@ pub fn row(episodes: &[EpisodeResult], line: Option<(DVec2, DVec2)>) -> Row {
         contact: mean(people().map(|a| a.contact)).unwrap_or(f64::NAN),
         obstacle_penetration_share: mean(people().filter_map(|a| a.obstacle_penetration_share)),
         human_penetration_share: mean(episodes.iter().filter_map(|e| e.human_penetration_share)),
+        human_mesh_penetration_share: mean(
+            episodes
+                .iter()
+                .filter_map(|e| e.human_mesh_penetration_share),
+        ),
+        human_mesh_vertices_inside_mean: mean(
+            episodes
+                .iter()
+                .filter_map(|e| e.human_mesh_vertices_inside_mean),
+        ),
         human_overlap_share: mean(episodes.iter().filter_map(|e| e.human_overlap_share)),
         path_std_m: diversity.map(|d| d.0),
         path_left_share: diversity.map(|d| d.1),
+        path_location_std_m: line.and_then(|_| location_spread(&paths)),
+        path_pooled_std_m: line.and_then(|_| pooled_location_std(&paths)),
         view_cos: mean(people().map(|a| a.view_cos)).unwrap_or(f64::NAN),
         pose_score: mean(people().map(|a| a.pose_score)).unwrap_or(f64::NAN),
         speed_successful_m_s: mean(people().filter(|a| a.reached).map(|a| a.speed_m_s)),
         fallen: people().filter(|a| a.fell).count(),
         decoder_failures: people().filter(|a| a.decoder_failure).count(),
         wall_s: episodes.iter().map(|e| e.wall_s).sum(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_location_spread_of_mirrored_walks_is_their_distance_apart_over_root_two() {
+        // Two walks mirrored about the x axis, 1 m apart in y at every time: each time's
+        // std is sqrt((0.5² + 0.5²) / 1) = 1/√2.
+        let up: Vec<[f64; 2]> = (0..5).map(|t| [t as f64, 0.5]).collect();
+        let down: Vec<[f64; 2]> = (0..5).map(|t| [t as f64, -0.5]).collect();
+        let s = location_spread(&[&up, &down]).unwrap();
+        assert!((s - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-12, "{s}");
+        // A walk that stops early stays where it stopped: the later times see it behind.
+        let short: Vec<[f64; 2]> = (0..3).map(|t| [t as f64, 0.5]).collect();
+        let same: Vec<[f64; 2]> = (0..5).map(|t| [t as f64, 0.5]).collect();
+        let s = location_spread(&[&short, &same]).unwrap();
+        // Times 3 and 4: 1 m and 2 m apart along x, std 1/√2 and 2/√2; the rest 0.
+        let expected = (1.0 + 2.0) * std::f64::consts::FRAC_1_SQRT_2 / 5.0;
+        assert!((s - expected).abs() < 1e-12, "{s} {expected}");
+        assert_eq!(location_spread(&[&up]), None);
+        // Pooled: one straight walk at an even pace, 0..=4 m in steps of 1 m: the sample std
+        // of 0, 1, 2, 3, 4 is √2.5.
+        let line: Vec<[f64; 2]> = (0..5).map(|t| [t as f64, 0.0]).collect();
+        let pooled = pooled_location_std(&[&line]).unwrap();
+        assert!((pooled - 2.5f64.sqrt()).abs() < 1e-12, "{pooled}");
+        assert_eq!(location_spread(&[]), None);
     }
 }

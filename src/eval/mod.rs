@@ -3,7 +3,9 @@
 //! controller and a path-planning baseline on the same motion model. Uses `synth` to walk and
 //! `preview` to draw; writes nothing itself (the `egogen eval` command does).
 
+pub mod files;
 pub mod metrics;
+pub mod paper;
 pub mod report;
 pub mod scenarios;
 pub mod suite;

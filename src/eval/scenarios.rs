@@ -16,6 +16,14 @@ use crate::math::random::uniform_open01;
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 use crate::synth::crowd::{AgentPlan, CrowdSettings, CrowdWorld, Steering};
 
+/// A person has reached the goal when the walk ends this close to it (m; paper S4.2's SR).
+pub const SUCCESS_M: f64 = 0.3;
+
+/// A walk ends when the pelvis comes this close to the goal (m): the paper's goal threshold,
+/// where its environment ends an episode (EgoGen's `goal_thresh`, the success reward's
+/// radius, Eq. 10), so Dist is measured where its walkers stop.
+pub const ARRIVAL_M: f64 = 0.1;
+
 /// Side of the open floor every scenario stands on (m).
 pub const FLOOR_M: f64 = 14.0;
 
@@ -204,7 +212,8 @@ pub fn episode(
         },
         agents,
         settings: CrowdSettings {
-            success_m: 0.3,
+            success_m: SUCCESS_M,
+            arrival_m: Some(ARRIVAL_M),
             max_primitives_per_goal: scenario.max_primitives(),
             primitives: scenario.max_primitives(),
             stop_when_done: true,

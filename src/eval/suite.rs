@@ -224,3 +224,9 @@ pub fn run_table(
     out.wall_s = t0.elapsed().as_secs_f64();
     Ok(out)
 }
+
+/// Table 2's apartment: held-out start/goal pairs this far apart (m), and EgoGen's 13
+/// primitives per walk.
+pub const TABLE2_SCENE: &str = "assets/scenes/apartment.glb";
+pub const TABLE2_PAIR_DISTANCE_M: (f64, f64) = (2.0, 7.0);
+pub const TABLE2_MAX_PRIMITIVES: usize = 13;

@@ -72,6 +72,11 @@ pub struct EnvSettings {
     pub indoor_weights: WeightChanges,
     /// Success radius around the goal (m, horizontal; EgoGen's 0.1).
     pub success_m: f64,
+    /// Evaluation as the paper's tables: `Some(r)` ends an episode (and pays the success
+    /// term) only when the pelvis comes within `r` m, and an episode that times out within
+    /// `success_m` still succeeds — walks go on to EgoGen's goal threshold and are scored at
+    /// the tables' radius. `None` (default): both at `success_m`.
+    pub arrival_m: Option<f64>,
     /// Primitives before the episode times out (EgoGen's box scenes: 11).
     pub max_primitives: usize,
     /// End the episode when the body penetrates (fine-tuning).
@@ -124,6 +129,7 @@ impl Default for EnvSettings {
             box_weights: WeightChanges::default(),
             indoor_weights: WeightChanges::default(),
             success_m: 0.1,
+            arrival_m: None,
             max_primitives: 11,
             terminate_on_penetration: false,
             penetration_cells: crate::policy::reward::EQ7_PENETRATION_CELLS,
@@ -322,6 +328,9 @@ pub struct EpisodeSummary {
     pub pelvis_off_floor_frames: usize,
     /// The pelvis's floor position at the end (m, world).
     pub end_xy: [f64; 2],
+    /// The mean over its primitives of each one's largest pose embedding norm (EgoGen's
+    /// ‖VP‖₂ role, [`super::PosePrior::embedding_norm`]; comparable with mocap primitives').
+    pub pose_norm_max: f64,
 }
 
 impl EpisodeSummary {
@@ -352,6 +361,7 @@ impl EpisodeSummary {
             scene_vertices_inside_max: w.totals.scene_vertices_inside_max,
             pelvis_off_floor_frames: w.totals.pelvis_off_floor_frames,
             end_xy: w.view.pelvis.to_array(),
+            pose_norm_max: w.totals.pose_norm_max_sum / n,
         }
     }
 }
@@ -726,7 +736,7 @@ impl<'m> PolicyEnv<'m> {
         let zs: Vec<Vec<f32>> = latents.chunks(l).map(<[f32]>::to_vec).collect();
         let decoded = self.model.decode_each(self.body, &seeds, &zs)?;
         let limits = Limits {
-            success_m: self.settings.success_m,
+            success_m: self.settings.arrival_m.unwrap_or(self.settings.success_m),
             penetration_cells: self.settings.penetration_cells,
             people_every_frame: self.settings.people_every_frame,
             box_every_frame: self.settings.box_every_frame,
@@ -810,7 +820,13 @@ impl<'m> PolicyEnv<'m> {
                     } else if j.penetrated && terminate_on_penetration {
                         Some(Ending::Penetration)
                     } else if w.steps >= max_primitives {
-                        Some(Ending::Timeout)
+                        let within = self.settings.arrival_m.is_some()
+                            && w.distance_m < self.settings.success_m;
+                        Some(if within {
+                            Ending::Success
+                        } else {
+                            Ending::Timeout
+                        })
                     } else {
                         None
                     }

@@ -49,6 +49,9 @@ pub struct EvalReport {
     pub pelvis_over_wall_episode_rate: f64,
     pub pelvis_over_wall_share_mean: f64,
     pub final_distance_m: Quantiles,
+    /// The mean over episodes of their primitives' largest pose embedding norms (Table 3's
+    /// ‖VP‖₂).
+    pub pose_norm_max_mean: f64,
     pub speed_successful_m_s: Quantiles,
     pub primitives: Quantiles,
     pub reward_mean: f64,
@@ -118,6 +121,7 @@ impl EvalReport {
                     / (s.primitives * (PRIMITIVE_FRAMES - SEED_FRAMES)).max(1) as f64
             }),
             final_distance_m: Quantiles::of(summaries.iter().map(|s| s.final_distance_m)),
+            pose_norm_max_mean: mean(|s| s.pose_norm_max),
             speed_successful_m_s: Quantiles::of(
                 summaries
                     .iter()
@@ -181,6 +185,7 @@ mod tests {
             scene_vertices_inside_max: 0,
             pelvis_off_floor_frames: 0,
             end_xy: [0.0, 0.0],
+            pose_norm_max: 1.0,
         }
     }
 

@@ -101,17 +101,21 @@ fn log_gauss_with(x: &[f64], mean: &[f64], var: &[f64], ln_var: &[f64]) -> f64 {
 struct PriorLogs {
     weight: Vec<f64>,
     variance: Vec<Vec<f64>>,
+    /// Per component: the sum of its variances' logarithms.
+    variance_sum: Vec<f64>,
 }
 
 impl PriorLogs {
     fn of(prior: &PosePrior) -> Self {
+        let variance: Vec<Vec<f64>> = prior
+            .components
+            .iter()
+            .map(|c| c.variance.iter().map(|v| v.ln()).collect())
+            .collect();
         Self {
             weight: prior.components.iter().map(|c| c.weight.ln()).collect(),
-            variance: prior
-                .components
-                .iter()
-                .map(|c| c.variance.iter().map(|v| v.ln()).collect())
-                .collect(),
+            variance_sum: variance.iter().map(|v| v.iter().sum()).collect(),
+            variance,
         }
     }
 }
@@ -231,6 +235,12 @@ impl PosePrior {
     }
 
     fn nll_with(&self, values: &[f64; PRIOR_DIM], logs: &PriorLogs) -> f64 {
+        self.scores_with(values, logs).0
+    }
+
+    /// The score and the embedding norm ([`Self::embedding_norm`]) together: the norm is read
+    /// off the terms of the score (a component's log-density holds its Mahalanobis distance).
+    fn scores_with(&self, values: &[f64; PRIOR_DIM], logs: &PriorLogs) -> (f64, f64) {
         let terms: Vec<f64> = self
             .components
             .iter()
@@ -241,7 +251,37 @@ impl PosePrior {
                     - 0.5 * PRIOR_DIM as f64 * std::f64::consts::TAU.ln()
             })
             .collect();
-        -log_sum_exp(&terms) / PRIOR_DIM as f64
+        let half_ln_tau = 0.5 * PRIOR_DIM as f64 * std::f64::consts::TAU.ln();
+        let norm = terms
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map_or(f64::NAN, |(k, t)| {
+                // t = ln w − ½ (Σ (x − μ)² / σ² + Σ ln σ²) − ½ d ln 2π.
+                let squared = -2.0 * (t - logs.weight[k] + half_ln_tau) - logs.variance_sum[k];
+                squared.max(0.0).sqrt()
+            });
+        (-log_sum_exp(&terms) / PRIOR_DIM as f64, norm)
+    }
+
+    /// A pose's embedding norm, in VPoser's role (EgoGen's ‖VP‖₂: the norm of the pose's
+    /// latent code, near 0 for likely poses): the Mahalanobis distance of the body-joint
+    /// rotations from the mixture component most responsible for them, i.e. the norm of the
+    /// pose whitened by that component (63 values).
+    pub fn embedding_norm(&self, params: &BodyParams) -> f64 {
+        self.scores_with(&prior_values(params), &PriorLogs::of(self))
+            .1
+    }
+
+    /// The mean score of `frames` ([`Self::mean_pose_nll`], the same bits) and the largest
+    /// embedding norm among them ([`Self::embedding_norm`]); (0, 0) for none.
+    pub fn mean_nll_and_max_norm(&self, frames: &[BodyParams]) -> (f64, f64) {
+        let logs = PriorLogs::of(self);
+        let (sum, max) = frames.iter().fold((0.0, 0.0f64), |(sum, max), f| {
+            let (nll, norm) = self.scores_with(&prior_values(f), &logs);
+            (sum + nll, max.max(norm))
+        });
+        (sum / frames.len().max(1) as f64, max)
     }
 
     /// [`Self::nll`] of a body's pose.
@@ -342,5 +382,37 @@ mod tests {
             );
         }
         assert_eq!(prior.mean_pose_nll(&[]), 0.0);
+        // Score and norm together: the same score bits, the largest frame's norm.
+        let (mean, max) = prior.mean_nll_and_max_norm(&frames);
+        assert_eq!(mean.to_bits(), frame_by_frame.to_bits());
+        let norms: Vec<f64> = frames.iter().map(|f| prior.embedding_norm(f)).collect();
+        assert_eq!(max, norms.iter().copied().fold(0.0, f64::max));
+    }
+
+    #[test]
+    fn the_embedding_norm_is_the_whitened_distance_from_the_nearest_component() {
+        let c = |m: f64, v: f64, w: f64| Component {
+            weight: w,
+            mean: vec![m; PRIOR_DIM],
+            variance: vec![v; PRIOR_DIM],
+        };
+        let prior = PosePrior {
+            source: String::new(),
+            frames: 0,
+            plausible_max_nll: 0.0,
+            plausible_quantile: 0.0,
+            components: vec![c(0.0, 0.01, 0.5), c(1.0, 0.04, 0.5)],
+        };
+        let at = |x: f64| {
+            let mut p = BodyParams::default();
+            p.pose[3..3 + PRIOR_DIM].fill(x);
+            p
+        };
+        let d = PRIOR_DIM as f64;
+        // At a component's mean the norm is 0; 0.1 rad off every value of the first (σ = 0.1)
+        // it is √63; near the second (σ = 0.2), 0.1 off is √63 / 2.
+        assert!(prior.embedding_norm(&at(0.0)) < 1e-6);
+        assert!((prior.embedding_norm(&at(0.1)) - d.sqrt()).abs() < 1e-6);
+        assert!((prior.embedding_norm(&at(0.9)) - 0.5 * d.sqrt()).abs() < 1e-6);
     }
 }

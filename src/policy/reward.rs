@@ -230,6 +230,8 @@ pub struct Judged {
     pub contact: f64,
     /// Mean pose-prior score of the frames.
     pub pose_nll: f64,
+    /// The largest pose embedding norm among them ([`PosePrior::embedding_norm`]).
+    pub pose_norm_max: f64,
     /// New frames (after the seed) in which a body marker stands inside the obstacle's
     /// footprint.
     pub frames_in_obstacle: usize,
@@ -425,7 +427,7 @@ pub fn judge(
         .map(|m| foot_markers.iter().map(|&k| m[k].to_array()).collect())
         .collect();
     let (floor, skate) = contact_terms(&feet, p.floor_z);
-    let pose_nll = prior.mean_pose_nll(&p.world);
+    let (pose_nll, pose_norm_max) = prior.mean_nll_and_max_norm(&p.world);
     let last = PRIMITIVE_FRAMES - 1;
     let joints = &p.joints[last];
     let pelvis = DVec2::new(joints[joint::PELVIS].x, joints[joint::PELVIS].y);
@@ -515,6 +517,7 @@ pub fn judge(
         penetrated,
         contact: floor * skate,
         pose_nll,
+        pose_norm_max,
         frames_in_obstacle,
         view_cos: view.dot(to_goal),
         view_off_travel_rad,

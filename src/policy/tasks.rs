@@ -20,7 +20,8 @@ use crate::motion::cvae::{BodyContext, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
 /// Frames of every primitive of a set, as poses.
-fn set_frames(set: &PrimitiveSet) -> Vec<Vec<BodyParams>> {
+/// Every primitive of a set as its frames' body parameters (no shape).
+pub fn set_frames(set: &PrimitiveSet) -> Vec<Vec<BodyParams>> {
     (0..set.len())
         .map(|i| {
             set.item(i)

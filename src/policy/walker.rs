@@ -223,6 +223,10 @@ pub struct Totals {
     /// Sum of the primitives' mean pose-prior scores.
     #[serde(default)]
     pub pose_score: f64,
+    /// Sum of the primitives' largest pose embedding norms
+    /// ([`super::PosePrior::embedding_norm`]).
+    #[serde(default)]
+    pub pose_norm_max_sum: f64,
     /// Frames penetrating the scene by paper Eq. 11, and the most body vertices inside it in
     /// a frame (0 where the scene has no 3D SDF).
     #[serde(default)]
@@ -358,6 +362,7 @@ impl Walker {
             self.totals.view_off_travel_rad.push(j.view_off_travel_rad);
         }
         self.totals.pose_score += j.pose_nll;
+        self.totals.pose_norm_max_sum += j.pose_norm_max;
         self.totals.frames += p.joints.len() - SEED_FRAMES;
         self.totals.frames_in_obstacle += j.frames_in_obstacle;
         self.totals.scene_penetrating_frames += j.scene_penetrating_frames;

@@ -140,6 +140,11 @@ pub struct AgentPlan {
 pub struct CrowdSettings {
     /// A goal is reached when the pelvis comes this close (m, horizontal).
     pub success_m: f64,
+    /// Where the walk to a goal ends: `None` (default) as soon as it is reached; `Some(r)` only
+    /// once the pelvis comes within `r` m (or the goal's primitives run out), the goal counting
+    /// as reached if the walk ends within `success_m` — EgoGen's evaluation, whose walkers go
+    /// on to its training threshold of 0.1 m and are scored at 0.3 m.
+    pub arrival_m: Option<f64>,
     /// Primitives an agent spends on one goal before it is missed.
     pub max_primitives_per_goal: usize,
     /// Policy steering: when the chosen primitive ends with the body's 2D box on more than 3
@@ -186,6 +191,7 @@ impl Default for CrowdSettings {
     fn default() -> Self {
         Self {
             success_m: 0.3,
+            arrival_m: None,
             max_primitives_per_goal: 20,
             penetration_redraws: 4,
             primitives: 20,
@@ -795,7 +801,8 @@ impl<'m> Agent<'m> {
             return;
         }
         let reached = j.distance_m < settings.success_m;
-        if !reached && self.goal_steps < settings.max_primitives_per_goal {
+        let arrived = settings.arrival_m.map_or(reached, |r| j.distance_m < r);
+        if !arrived && self.goal_steps < settings.max_primitives_per_goal {
             return;
         }
         self.track.goals.push(GoalRecord {

@@ -1,14 +1,16 @@
 //! Human–human penetration of a take: how often, and how deep, one body's surface enters
-//! another's volume. Every `every_n_frames`-th frame, for every agent, its posed vertices are
-//! tested against the capsule volumes ([`CapsuleVolume`]) of every other agent whose pelvis is
-//! within 1.5 m; a vertex inside a capsule is inside the other body (capsules lie inside the
-//! skin, so the counts are lower bounds).
+//! another. Every `every_n_frames`-th frame, for every agent, its posed vertices are tested
+//! against every other agent whose pelvis is within 1.5 m, twice: against the other's capsule
+//! volume ([`CapsuleVolume`]: capsules lie inside the skin, so those counts are lower bounds),
+//! and exactly, against the other's posed mesh ([`BodyOccupancy`]: a vertex is inside when the
+//! mesh's winding number about it is not zero).
 
 use rayon::prelude::*;
 use serde::Serialize;
 
 use super::crowd::AgentTrack;
-use crate::body::{BodyModel, CapsuleVolume, PoseError};
+use crate::body::{BodyModel, BodyOccupancy, CapsuleVolume, PoseError};
+use crate::math::Vec3;
 
 /// Pelvis distance beyond which two bodies cannot touch (m).
 const NEAR_M: f64 = 1.5;
@@ -19,11 +21,23 @@ pub struct HumanPenetration {
     pub every_n_frames: usize,
     /// (agent, frame) pairs checked.
     pub agent_frames: usize,
-    /// Share of them with at least one vertex inside another body.
+    /// Share of them with at least one vertex inside another body's capsules.
     pub penetrating_share: f64,
-    /// Mean number of vertices inside other bodies, over all checked (agent, frame) pairs.
+    /// Mean number of vertices inside other bodies' capsules, over all checked pairs.
     pub vertices_inside_mean: f64,
     pub vertices_inside_max: usize,
+    /// Share of them with at least one vertex inside another body's posed mesh (exact).
+    pub mesh_penetrating_share: f64,
+    /// Mean number of vertices inside other bodies' posed meshes, over all checked pairs.
+    pub mesh_vertices_inside_mean: f64,
+    pub mesh_vertices_inside_max: usize,
+}
+
+/// Vertices of one agent in one frame inside the others: (by capsules, by meshes).
+type Counts = (usize, usize);
+
+fn inside(lo: Vec3, hi: Vec3, v: Vec3) -> bool {
+    v.cmpge(lo).all() && v.cmple(hi).all()
 }
 
 /// Measures a take (see the module docs).
@@ -42,12 +56,12 @@ pub fn human_penetration(
         .iter()
         .map(|s| CapsuleVolume::new(model, s))
         .collect();
-    let per_frame: Vec<Vec<usize>> = (0..frames)
+    let per_frame: Vec<Vec<Counts>> = (0..frames)
         .step_by(every)
         .collect::<Vec<_>>()
         .into_par_iter()
         .map(|f| {
-            let joints: Vec<Vec<crate::math::Vec3>> = agents
+            let joints: Vec<Vec<Vec3>> = agents
                 .iter()
                 .zip(&shaped)
                 .map(|(a, s)| {
@@ -55,43 +69,95 @@ pub fn human_penetration(
                         .map(|k| k.joints.to_vec())
                 })
                 .collect::<Result<_, _>>()?;
-            (0..agents.len())
+            let near: Vec<Vec<usize>> = (0..agents.len())
                 .map(|i| {
-                    let near: Vec<usize> = (0..agents.len())
+                    (0..agents.len())
                         .filter(|&k| k != i && joints[k][0].distance(joints[i][0]) < NEAR_M)
-                        .collect();
-                    if near.is_empty() {
-                        return Ok(0);
+                        .collect()
+                })
+                .collect();
+            // Posed meshes of everyone near someone; a mesh's BVH only where a vertex of
+            // another body falls inside its bounds.
+            let bodies: Vec<Option<Vec<Vec3>>> = (0..agents.len())
+                .map(|i| {
+                    if near[i].is_empty() {
+                        return Ok(None);
                     }
                     let a = &agents[i].frames[f];
-                    let body = shaped[i].pose(&a.pose, a.transl)?;
-                    let bounds: Vec<_> = near
+                    Ok(Some(shaped[i].pose(&a.pose, a.transl)?.vertices))
+                })
+                .collect::<Result<_, PoseError>>()?;
+            let occupancy: Vec<std::sync::OnceLock<BodyOccupancy>> =
+                (0..agents.len()).map(|_| Default::default()).collect();
+            let mesh_of = |k: usize| {
+                occupancy[k].get_or_init(|| {
+                    BodyOccupancy::new(bodies[k].as_deref().unwrap_or(&[]), &model.faces)
+                })
+            };
+            let bounds: Vec<Option<(Vec3, Vec3)>> = bodies
+                .iter()
+                .map(|b| {
+                    b.as_ref().map(|v| {
+                        v.iter().fold(
+                            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
+                            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+                        )
+                    })
+                })
+                .collect();
+            Ok((0..agents.len())
+                .map(|i| {
+                    let Some(vertices) = &bodies[i] else {
+                        return (0, 0);
+                    };
+                    let capsule_bounds: Vec<_> = near[i]
                         .iter()
                         .map(|&k| volumes[k].bounds(&joints[k]))
                         .collect();
-                    Ok(body
-                        .vertices
+                    let by_capsules = vertices
                         .iter()
-                        .filter(|v| {
-                            near.iter().zip(&bounds).any(|(&k, (lo, hi))| {
-                                v.cmpge(*lo).all()
-                                    && v.cmple(*hi).all()
-                                    && volumes[k].contains(&joints[k], **v)
+                        .filter(|&&v| {
+                            near[i].iter().zip(&capsule_bounds).any(|(&k, &(lo, hi))| {
+                                inside(lo, hi, v) && volumes[k].contains(&joints[k], v)
                             })
                         })
-                        .count())
+                        .count();
+                    let by_meshes = vertices
+                        .iter()
+                        .filter(|&&v| {
+                            near[i].iter().any(|&k| {
+                                bounds[k].is_some_and(|(lo, hi)| inside(lo, hi, v))
+                                    && mesh_of(k).contains(v)
+                            })
+                        })
+                        .count();
+                    (by_capsules, by_meshes)
                 })
-                .collect::<Result<Vec<usize>, PoseError>>()
+                .collect())
         })
-        .collect::<Result<_, _>>()?;
-    let counts: Vec<usize> = per_frame.into_iter().flatten().collect();
+        .collect::<Result<_, PoseError>>()?;
+    let counts: Vec<Counts> = per_frame.into_iter().flatten().collect();
     let n = counts.len().max(1) as f64;
+    let summary = |pick: fn(&Counts) -> usize| {
+        let values = counts.iter().map(pick);
+        (
+            values.clone().filter(|&c| c > 0).count() as f64 / n,
+            values.clone().sum::<usize>() as f64 / n,
+            values.max().unwrap_or(0),
+        )
+    };
+    let (penetrating_share, vertices_inside_mean, vertices_inside_max) = summary(|c| c.0);
+    let (mesh_penetrating_share, mesh_vertices_inside_mean, mesh_vertices_inside_max) =
+        summary(|c| c.1);
     Ok(HumanPenetration {
         every_n_frames: every,
         agent_frames: counts.len(),
-        penetrating_share: counts.iter().filter(|&&c| c > 0).count() as f64 / n,
-        vertices_inside_mean: counts.iter().sum::<usize>() as f64 / n,
-        vertices_inside_max: counts.iter().copied().max().unwrap_or(0),
+        penetrating_share,
+        vertices_inside_mean,
+        vertices_inside_max,
+        mesh_penetrating_share,
+        mesh_vertices_inside_mean,
+        mesh_vertices_inside_max,
     })
 }
 
@@ -151,5 +217,11 @@ mod tests {
             brushing.vertices_inside_mean < inside.vertices_inside_mean,
             "{brushing:?}"
         );
+        // The exact test sees what the capsules see and more: the capsules lie inside the skin.
+        assert_eq!(apart.mesh_penetrating_share, 0.0);
+        assert_eq!(brushing.mesh_penetrating_share, 1.0);
+        assert_eq!(inside.mesh_penetrating_share, 1.0);
+        assert!(brushing.mesh_vertices_inside_mean >= brushing.vertices_inside_mean);
+        assert!(inside.mesh_vertices_inside_mean > inside.vertices_inside_mean);
     }
 }
