@@ -245,6 +245,57 @@ mod tests {
         );
     }
 
+    /// The generalised winding number by summing every triangle's solid angle (Van Oosterom
+    /// & Strackee), the slow reference.
+    fn solid_angle_winding(p: Vec3, v: &[Vec3], f: &[[u32; 3]]) -> f64 {
+        f.iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| v[i as usize] - p);
+                let (la, lb, lc) = (a.length(), b.length(), c.length());
+                let det = a.dot(b.cross(c));
+                let div = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+                2.0 * det.atan2(div)
+            })
+            .sum::<f64>()
+            / (4.0 * std::f64::consts::PI)
+    }
+
+    #[test]
+    fn the_ray_count_equals_the_solid_angle_sum_on_two_overlapping_bodies() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let model = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+        // The rest body and a copy 0.12 m in front of it, as one surface passing through
+        // itself: winding 2 where they overlap.
+        let n = model.v_template.len() as u32;
+        let mut v = model.v_template.clone();
+        v.extend(
+            model
+                .v_template
+                .iter()
+                .map(|p| *p + Vec3::new(0.0, 0.0, 0.12)),
+        );
+        let mut f = model.faces.clone();
+        f.extend(model.faces.iter().map(|t| t.map(|i| i + n)));
+        let occ = BodyOccupancy::new(&v, &f);
+        let (lo, hi) = occ.bounds();
+        // A fixed scatter over the bounds (a Halton-like sequence), denser near the torso.
+        let mut counts = [0usize; 3];
+        for k in 0..400 {
+            let frac = |b: f64| ((k as f64 + 0.5) * b).fract();
+            let u = Vec3::new(frac(0.618_034), frac(0.754_878), frac(0.569_840));
+            let p = lo + (hi - lo) * u;
+            let exact = occ.winding_number(p);
+            let reference = solid_angle_winding(p, &v, &f);
+            assert!(
+                (reference - exact as f64).abs() < 1e-6,
+                "{p:?}: rays {exact}, solid angles {reference}"
+            );
+            counts[exact.clamp(0, 2) as usize] += 1;
+        }
+        // Every case was met: outside, inside one body, inside both.
+        assert!(counts.iter().all(|&c| c > 0), "{counts:?}");
+    }
+
     fn vertex_normals(v: &[Vec3], f: &[[u32; 3]]) -> Vec<Vec3> {
         let mut n = vec![Vec3::ZERO; v.len()];
         for t in f {

@@ -114,7 +114,8 @@ pub fn results_markdown(out: &Path) -> Result<String> {
     let mut md = String::from(
         "# Results: the paper's evaluation on egogen\n\n\
          Written by `egogen eval` from the files in `results/` — do not edit by hand; each \
-         table names the command that reproduces it. Wall times are of the machine that ran it \
+         table names the command that reproduces it, and `egogen eval --suite report --out \
+         docs` rewrites this file from them alone. Wall times are of the machine that ran it \
          (2 cores; episodes run two at a time).\n\n",
     );
     md.push_str(&paper_beside_markdown(&results)?);

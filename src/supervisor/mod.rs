@@ -1,7 +1,9 @@
-//! The supervisor: from a checked run plan to a finished dataset. Synthesizes the sequence,
-//! places it in the scene, plans shards (camera × frame block), runs them on a backend,
-//! finishes and validates frames, writes annotations, the COLMAP export and the manifest, and
-//! resumes an interrupted run where it stopped.
+//! The supervisor: from a checked run plan and its motion (made by `synth`, handed over by
+//! `run_job`) to a finished dataset. Stages a take (`pipeline`: its sequence folder, the
+//! bodies' caches, the rendering work of `staged`), plans shards (camera × frame block), runs
+//! them on a pool (`local` or `slurm`; one take's shards or many takes' through one feed,
+//! `pool`), finishes and validates frames (`dataset`, `frame_record`), writes annotations, the
+//! COLMAP export and the manifest, and resumes an interrupted run where it stopped.
 
 pub mod annotations;
 pub mod colmap;
