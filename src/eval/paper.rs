@@ -244,7 +244,11 @@ here):
   walks take both sides.
 - The paper's GAMMA* and DIMOS* are the published methods with path planning redone every step;
   ours beside them (`sampling_k16`, `path_follow_k16`) are baselines in their spirit on our
-  motion model (the notes under Table 1 below), not those methods.
+  motion model (the notes under Table 1 below), not those methods. Walking on to 0.1 m hurts
+  them most: with no policy to stop them, most pass the goal and end far from it. With walks
+  ending at 0.3 m instead (this table's run of 2026-11-26, git history of
+  `docs/results/table1.json`) the same baselines reached 24–72 % of their goals (sampling 47.5–72
+  %, path following 24.0–42.0 %) at a final distance of 0.71–2.35 m.
 ";
 
 /// The paper's Table 2 rows (SR %, Dist m) and the label of our policy trained the same way.
