@@ -52,10 +52,9 @@ impl BodyOccupancy {
                 )
             })
             .collect();
-        let bounds = triangles.iter().flatten().fold(
-            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), &v| (lo.min(v), hi.max(v)),
-        );
+        // Empty: bounds no point lies in.
+        let bounds = crate::math::point_bounds(triangles.iter().flatten())
+            .unwrap_or((Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)));
         Self {
             bvh: Bvh::from_leaves(BvhBuildStrategy::Binned, &aabbs),
             triangles,

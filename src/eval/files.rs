@@ -162,10 +162,14 @@ pub struct PoseNormCalibration {
 impl PoseNormCalibration {
     /// Calibrates on held-out mocap primitives (each a list of frames).
     pub fn new(prior: &PosePrior, primitives: &[Vec<BodyParams>]) -> Option<Self> {
-        let mut norms: Vec<f64> = primitives
+        let each: Vec<Vec<f64>> = primitives
+            .iter()
+            .map(|p| prior.embedding_norms(p))
+            .collect();
+        let mut norms: Vec<f64> = each
             .iter()
             .flatten()
-            .map(|f| prior.embedding_norm(f))
+            .copied()
             .filter(|n| n.is_finite())
             .collect();
         norms.sort_by(f64::total_cmp);
@@ -175,10 +179,10 @@ impl PoseNormCalibration {
             return None;
         }
         let scale = PAPER_ABNORMAL_VP / at;
-        let maxima: Vec<f64> = primitives
+        let maxima: Vec<f64> = each
             .iter()
-            .filter(|p| !p.is_empty())
-            .map(|p| prior.mean_nll_and_max_norm(p).1)
+            .filter(|n| !n.is_empty())
+            .map(|n| n.iter().copied().fold(0.0, f64::max))
             .collect();
         Some(Self {
             frames: norms.len(),

@@ -5,6 +5,7 @@
 
 use super::files::{PolicyRow, PoseNormCalibration, ABNORMAL_QUANTILE, PAPER_ABNORMAL_VP};
 use super::metrics::Row;
+use super::suite::{TABLE2_POLICIES, TABLE3_POLICIES};
 
 /// The paper's Table 1 columns.
 const TABLE1_METHODS: [&str; 3] = ["GAMMA* (paper)", "DIMOS* (paper)", "EgoGen (paper)"];
@@ -251,29 +252,28 @@ here):
   %, path following 24.0–42.0 %) at a final distance of 0.71–2.35 m.
 ";
 
-/// The paper's Table 2 rows (SR %, Dist m) and the label of our policy trained the same way.
+/// The paper's Table 2 rows (SR %, Dist m) and the label of our policy trained the same way
+/// ([`TABLE2_POLICIES`]: the 32-ray policy, the two local maps, and the shipped one).
 const TABLE2: [(&str, f64, f64, &str); 4] = [
-    ("Local map [131] (0.8 m)", 78.0, 0.35, "local map 0.8 m"),
-    ("Local map* (7 m)", 4.0, 3.04, "local map 7 m"),
+    ("Local map [131] (0.8 m)", 78.0, 0.35, TABLE2_POLICIES[1].0),
+    ("Local map* (7 m)", 4.0, 3.04, TABLE2_POLICIES[2].0),
     (
         "Egocentric sensing (ours) (7 m)",
         95.0,
         0.12,
-        "egocentric sensing (32 rays)",
+        TABLE2_POLICIES[0].0,
     ),
     (
         "Egocentric sensing (ours) (7 m) — our shipped policy",
         95.0,
         0.12,
-        "(shipped)",
+        TABLE2_POLICIES[8].0,
     ),
 ];
 
 fn find<'r>(rows: &'r [PolicyRow], label: &str, actions: &str) -> Option<&'r PolicyRow> {
-    rows.iter().find(|r| {
-        r.actions == actions
-            && (r.policy == label || (label.starts_with('(') && r.policy.ends_with(label)))
-    })
+    rows.iter()
+        .find(|r| r.actions == actions && r.policy == label)
 }
 
 fn pair(a: Option<f64>, b: Option<f64>, f: impl Fn(f64) -> String) -> String {
@@ -321,21 +321,21 @@ first three policies were trained alike and differ only in what they observe, as
 /// The paper's Table 3 rows (SR %, ‖VP‖₂, cos(v, a)) and our policy of the same ablation.
 const TABLE3: [(&str, f64, f64, f64, Option<&str>); 4] = [
     ("Egocentric depth", 8.0, 13.64, 0.049, None),
-    ("No pretraining", 90.0, 28.77, 0.918, Some("no pretraining")),
+    (
+        "No pretraining",
+        90.0,
+        28.77,
+        0.918,
+        Some(TABLE3_POLICIES[1].0),
+    ),
     (
         "No attention reward",
         90.0,
         12.26,
         0.891,
-        Some("no attention reward"),
+        Some(TABLE3_POLICIES[2].0),
     ),
-    (
-        "Our policy",
-        92.0,
-        10.57,
-        0.940,
-        Some("full (pretraining + attention reward)"),
-    ),
+    ("Our policy", 92.0, 10.57, 0.940, Some(TABLE3_POLICIES[0].0)),
 ];
 
 /// Table 3 of the paper beside ours: our SR, pose embedding norm (on the paper's scale with

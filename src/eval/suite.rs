@@ -230,3 +230,82 @@ pub fn run_table(
 pub const TABLE2_SCENE: &str = "assets/scenes/apartment.glb";
 pub const TABLE2_PAIR_DISTANCE_M: (f64, f64) = (2.0, 7.0);
 pub const TABLE2_MAX_PRIMITIVES: usize = 13;
+
+/// Table 2's policies (paper Tab. 2: egocentric sensing against a local map, in the
+/// apartment): the shipped policy's apartment stage and the same two runs observing a local
+/// map instead of the rays; then the continuations that led to the shipped policy (pace,
+/// crowds, doors closed, then floor plans with or without the cost for looking off the goal,
+/// with one set of weights or weights by scene) and the Eq. 11 one beside them. Label,
+/// weights, configs.
+pub const TABLE2_POLICIES: [(&str, &str, &str); 10] = [
+    (
+        "egocentric sensing (32 rays)",
+        "assets/policy/apartment/policy.safetensors",
+        "configs/train_policy.toml, then configs/train_policy_apartment.toml",
+    ),
+    (
+        "local map 0.8 m",
+        "assets/policy/table2/local_map_0.8m.safetensors",
+        "configs/table2/local_map_0.8m.toml, then configs/table2/local_map_0.8m_apartment.toml",
+    ),
+    (
+        "local map 7 m",
+        "assets/policy/table2/local_map_7m.safetensors",
+        "configs/table2/local_map_7m.toml, then configs/table2/local_map_7m_apartment.toml",
+    ),
+    (
+        "egocentric sensing, + pace",
+        "assets/policy/pace/policy.safetensors",
+        "the 32-ray policy's configs, then configs/train_policy_pace.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds",
+        "assets/policy/crowd/policy.safetensors",
+        "the pace policy's configs, then configs/train_policy_crowd.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed",
+        "assets/policy/indoors/policy.safetensors",
+        "the crowd policy's configs, then configs/train_policy_indoors.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + floor plans",
+        "assets/policy/rooms/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_rooms.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + floor plans, looking at the goal",
+        "assets/policy/gaze/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_gaze.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + floor plans, looking at the goal, weights by scene (shipped)",
+        "assets/policy/scene_weights/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_scene_weights.toml",
+    ),
+    (
+        "egocentric sensing, + pace + crowds + doors closed + Eq. 11",
+        "assets/policy/eq11/policy.safetensors",
+        "the doors-closed policy's configs, then configs/train_policy_eq11.toml",
+    ),
+];
+
+/// The shipped policy's training run and its ablations (paper Tab. 3), each trained with the
+/// same budget: label, weights, the config that trains them.
+pub const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
+    (
+        "full (pretraining + attention reward)",
+        "assets/policy/policy.safetensors",
+        "configs/train_policy.toml",
+    ),
+    (
+        "no pretraining",
+        "assets/policy/ablations/no_pretraining.safetensors",
+        "configs/ablations/no_pretraining.toml",
+    ),
+    (
+        "no attention reward",
+        "assets/policy/ablations/no_attention.safetensors",
+        "configs/ablations/no_attention.toml",
+    ),
+];

@@ -26,6 +26,13 @@ pub type Affine3 = glam::DAffine3;
 
 pub use rotation::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d, rot6d_to_matrix};
 
+/// Axis-aligned bounds (min, max) of `points`; `None` for none.
+pub fn point_bounds<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Option<(Vec3, Vec3)> {
+    let mut points = points.into_iter();
+    let first = *points.next()?;
+    Some(points.fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+}
+
 /// A 3×3 matrix from its rows (the form egogen's and Aria's JSON files write matrices in).
 pub fn mat3_from_rows(rows: &[[f64; 3]; 3]) -> Mat3 {
     Mat3::from_cols_array_2d(rows).transpose()

@@ -231,11 +231,7 @@ impl PosePrior {
 
     /// Negative log-density per value, `−ln p(θ)/63` (lower is more plausible).
     pub fn nll(&self, values: &[f64; PRIOR_DIM]) -> f64 {
-        self.nll_with(values, &PriorLogs::of(self))
-    }
-
-    fn nll_with(&self, values: &[f64; PRIOR_DIM], logs: &PriorLogs) -> f64 {
-        self.scores_with(values, logs).0
+        self.scores_with(values, &PriorLogs::of(self)).0
     }
 
     /// The score and the embedding norm ([`Self::embedding_norm`]) together: the norm is read
@@ -269,8 +265,16 @@ impl PosePrior {
     /// rotations from the mixture component most responsible for them, i.e. the norm of the
     /// pose whitened by that component (63 values).
     pub fn embedding_norm(&self, params: &BodyParams) -> f64 {
-        self.scores_with(&prior_values(params), &PriorLogs::of(self))
-            .1
+        self.embedding_norms(std::slice::from_ref(params))[0]
+    }
+
+    /// [`Self::embedding_norm`] of each of `frames`, the prior's logarithms taken once.
+    pub fn embedding_norms(&self, frames: &[BodyParams]) -> Vec<f64> {
+        let logs = PriorLogs::of(self);
+        frames
+            .iter()
+            .map(|f| self.scores_with(&prior_values(f), &logs).1)
+            .collect()
     }
 
     /// The mean score of `frames` ([`Self::mean_pose_nll`], the same bits) and the largest
@@ -293,12 +297,7 @@ impl PosePrior {
     /// primitive, the prior's logarithms taken once for all its frames (the same bits as
     /// averaging `pose_nll` frame by frame).
     pub fn mean_pose_nll(&self, frames: &[BodyParams]) -> f64 {
-        let logs = PriorLogs::of(self);
-        frames
-            .iter()
-            .map(|f| self.nll_with(&prior_values(f), &logs))
-            .sum::<f64>()
-            / frames.len().max(1) as f64
+        self.mean_nll_and_max_norm(frames).0
     }
 
     /// Writes the prior as JSON (atomically).

@@ -130,11 +130,6 @@ impl SceneMesh {
 
     /// Axis-aligned bounds of all vertices, or `None` for an empty mesh.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let first = *self.vertices.first()?;
-        Some(
-            self.vertices
-                .iter()
-                .fold((first, first), |(lo, hi), v| (lo.min(*v), hi.max(*v))),
-        )
+        crate::math::point_bounds(&self.vertices)
     }
 }

@@ -96,14 +96,7 @@ pub fn human_penetration(
             };
             let bounds: Vec<Option<(Vec3, Vec3)>> = bodies
                 .iter()
-                .map(|b| {
-                    b.as_ref().map(|v| {
-                        v.iter().fold(
-                            (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),
-                            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-                        )
-                    })
-                })
+                .map(|b| b.as_deref().and_then(crate::math::point_bounds))
                 .collect();
             Ok((0..agents.len())
                 .map(|i| {
