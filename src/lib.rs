@@ -20,6 +20,7 @@ pub mod exr_file;
 pub mod inspect;
 pub mod manifest;
 pub mod math;
+pub mod memory;
 pub mod motion;
 pub mod npz;
 pub mod parser_guard;

@@ -334,14 +334,9 @@ fn point_cache() {
     );
 }
 
-/// Sizes that scale memory are refused by key, before anything is allocated — never an abort
-/// (`memory allocation failed`, which ends this test process): a policy file whose header
-/// claims a huge network, training configs asking for one or for huge batches, a synth crowd of
-/// 10¹³ people or 10¹² shape coefficients, `policy eval --episodes 1e12`.
-#[test]
-fn sizes_that_would_exhaust_memory_are_refused_by_key() {
-    let dir = tempfile::tempdir().unwrap();
-    // The shipped policy with its header's architecture claiming hidden = 10⁹.
+/// The error of loading the shipped policy written to `dir/name.safetensors` with its header's
+/// architecture changed by `claims`.
+fn load_policy_claiming(dir: &Path, name: &str, claims: &[(&str, u64)]) -> String {
     let good = read("assets/policy/policy.safetensors");
     let n = u64::from_le_bytes(good[..8].try_into().unwrap()) as usize;
     let mut header: serde_json::Value = serde_json::from_slice(&good[8..8 + n]).unwrap();
@@ -350,21 +345,34 @@ fn sizes_that_would_exhaust_memory_are_refused_by_key() {
         .unwrap()
         .to_owned();
     let mut arch: serde_json::Value = serde_json::from_str(&arch).unwrap();
-    arch["hidden"] = serde_json::json!(1_000_000_000u64);
+    for (key, value) in claims {
+        arch[*key] = serde_json::json!(value);
+    }
     header["__metadata__"]["egogen.policy_arch"] = serde_json::json!(arch.to_string());
     let mut bytes = serde_json::to_vec(&header).unwrap();
     let mut file = (bytes.len() as u64).to_le_bytes().to_vec();
     file.append(&mut bytes);
     file.extend_from_slice(&good[8 + n..]);
-    let huge = dir.path().join("huge_policy.safetensors");
-    std::fs::write(&huge, file).unwrap();
-    let err = match egogen::policy::ppo::load_policy::<egogen::motion::cvae::infer::InferBackend>(
-        &huge,
+    let path = dir.join(format!("{name}.safetensors"));
+    std::fs::write(&path, file).unwrap();
+    match egogen::policy::ppo::load_policy::<egogen::motion::cvae::infer::InferBackend>(
+        &path,
         &Default::default(),
     ) {
-        Ok(_) => panic!("a policy of hidden = 1e9 was loaded"),
+        Ok(_) => panic!("{name}: a policy claiming {claims:?} was loaded"),
         Err(e) => e.to_string(),
-    };
+    }
+}
+
+/// Sizes that scale memory are refused by key, before anything is allocated — never an abort
+/// (`memory allocation failed`, which ends this test process): a policy file whose header
+/// claims a huge network, training configs asking for one or for huge batches, a synth crowd of
+/// 10¹³ people or 10¹² shape coefficients, `policy eval --episodes 1e12`.
+#[test]
+fn sizes_that_would_exhaust_memory_are_refused_by_key() {
+    let dir = tempfile::tempdir().unwrap();
+    // The shipped policy with its header's architecture claiming hidden = 10⁹.
+    let err = load_policy_claiming(dir.path(), "huge_policy", &[("hidden", 1_000_000_000)]);
     assert!(
         err.contains("huge_policy.safetensors") && err.contains("hidden"),
         "{err}"
@@ -428,4 +436,103 @@ fn sizes_that_would_exhaust_memory_are_refused_by_key() {
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--episodes"), "{err}");
+}
+
+/// Sizes each within its key's fixed limit whose product would not fit in memory are refused
+/// before anything is allocated, naming the key, what they need and the budget: a training
+/// rollout, a policy file's network, a synth crowd and a scene's walkable map under a small
+/// `EGOGEN_MEMORY_GB`.
+#[test]
+fn sizes_within_their_limits_that_would_not_fit_in_memory_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    // 65 536 environments × 4 096 steps: each key within its limit, the rollout hundreds of GB.
+    let text = training_config();
+    let config = dir.path().join("train_rollout.toml");
+    let body: String = text
+        .lines()
+        .filter(|l| !l.starts_with("envs =") && !l.starts_with("steps_per_env ="))
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(
+        &config,
+        body.replacen("[ppo]", "[ppo]\nenvs = 65536\nsteps_per_env = 4096", 1),
+    )
+    .unwrap();
+    let err = egogen::cli::train_policy::load_policy_plan(&config)
+        .expect_err("a rollout of 2.7e8 steps was accepted")
+        .to_string();
+    assert!(
+        err.contains("ppo.envs") && err.contains("train_rollout.toml") && err.contains("GB"),
+        "{err}"
+    );
+
+    // A policy file whose header asks for hidden = 4 096 with 64 residual blocks (each within
+    // its limit): a network of 69 GB.
+    let err = load_policy_claiming(
+        dir.path(),
+        "wide_policy",
+        &[("hidden", 4096), ("residual_blocks", 64)],
+    );
+    assert!(
+        err.contains("wide_policy.safetensors") && err.contains("hidden = 4096"),
+        "{err}"
+    );
+
+    // A crowd of 32 agents for 10 minutes under a 1 GB budget; a budget that is not a number.
+    let synth = |budget: &str| {
+        let config = dir.path().join("synth_memory.toml");
+        std::fs::write(
+            &config,
+            "[scene]\nfloor_m = 8.0\n[motion]\nduration_s = 600.0\n[crowd]\ncount = 32\nbetas_count = 300\nlayout = \"random\"\nsteering = \"sampling\"\nk = 2\n[output]\ndir = \"out\"\n",
+        )
+        .unwrap();
+        std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+            .args(["synth", "--quiet"])
+            .arg(&config)
+            .env("EGOGEN_MEMORY_GB", budget)
+            .output()
+            .unwrap()
+    };
+    let out = synth("1");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("motion.duration_s")
+            && err.contains("32 agents × 24014 frames")
+            && err.contains("EGOGEN_MEMORY_GB"),
+        "{err}"
+    );
+    let out = synth("lots");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("EGOGEN_MEMORY_GB = \"lots\""),
+        "{err}"
+    );
+
+    // A 300 m square floor scene: its walkable map (9 · 10⁶ cells, within the cell limit) needs
+    // 279 MB, refused under 0.1 GB naming the scene file.
+    std::fs::write(
+        dir.path().join("floor.obj"),
+        "v -150 -150 0\nv 150 -150 0\nv 150 150 0\nv -150 150 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let config = dir.path().join("synth_floor.toml");
+    std::fs::write(
+        &config,
+        "[scene]\npath = \"floor.obj\"\n[motion]\nduration_s = 1.0\n[crowd]\ncount = 1\nlayout = \"random\"\nsteering = \"sampling\"\nk = 2\n[output]\ndir = \"out\"\n",
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["synth", "--quiet"])
+        .arg(&config)
+        .env("EGOGEN_MEMORY_GB", "0.1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("floor.obj") && err.contains("3002 × 3002 cells") && err.contains("279 MB"),
+        "{err}"
+    );
+    assert!(!dir.path().join("out").exists() && !dir.path().join("out.partial").exists());
 }

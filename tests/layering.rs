@@ -16,6 +16,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("paths", &[]),
     ("atomic_file", &[]),
     ("parser_guard", &[]),
+    ("memory", &[]),
     ("npz", &[]),
     ("exr_file", &[]),
     ("progress", &[]),
@@ -24,7 +25,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     // Things in the world.
     ("camera", &["math"]),
     ("body", &["math", "npz", "atomic_file"]),
-    ("scene", &["math", "parser_guard", "atomic_file"]),
+    ("scene", &["math", "parser_guard", "atomic_file", "memory"]),
     ("rig", &["math", "camera", "atomic_file"]),
     ("sensing", &["math", "scene"]),
     ("preview", &["math", "scene", "atomic_file"]),
@@ -45,6 +46,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         "policy",
         &[
             "math",
+            "memory",
             "body",
             "motion",
             "scene",
@@ -142,6 +144,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         "cli",
         &[
             "math",
+            "memory",
             "paths",
             "atomic_file",
             "npz",

@@ -1,7 +1,8 @@
 //! The supervisor against real Blender workers: an uninterrupted run, and a run whose Blender
-//! workers are killed with SIGKILL at random moments (and the supervisor itself once), then
-//! resumed — the two datasets must be identical file for file (SHA-256), no partial file may be
-//! listed, and `egogen-run verify` must pass (and fail on a tampered file).
+//! workers are killed with SIGKILL at random moments, some right after a frame is written (at
+//! least 10 kills a run), and the supervisor itself twice, then resumed once more — ten seeds in
+//! a row, each dataset identical to the uninterrupted one file for file (SHA-256); no partial
+//! file may be listed, and `egogen-run verify` must pass (and fail on a tampered file).
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command};
@@ -70,33 +71,6 @@ impl Lcg {
             .wrapping_mul(6364136223846793005)
             .wrapping_add(1442695040888963407);
         lo + (self.0 >> 33) % (hi - lo)
-    }
-}
-
-/// Waits for `child`, killing its Blender workers (found by the run's folder) after random
-/// delays until `kills` is reached; returns the exit status and the kills made.
-fn run_with_kills(
-    mut child: Child,
-    run_dir: &Path,
-    mut kills: usize,
-    target: usize,
-    rng: &mut Lcg,
-) -> (std::process::ExitStatus, usize) {
-    let needle = run_dir.display().to_string();
-    let mut next = Instant::now() + Duration::from_millis(rng.millis(300, 1200));
-    loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            return (status, kills);
-        }
-        if kills < target && Instant::now() >= next {
-            for pid in common::pids_with(&["render_shard.py", &needle]) {
-                if kill9(pid) {
-                    kills += 1;
-                }
-            }
-            next = Instant::now() + Duration::from_millis(rng.millis(200, 1000));
-        }
-        std::thread::sleep(Duration::from_millis(20));
     }
 }
 
@@ -175,8 +149,102 @@ fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
     }
 }
 
+/// How many frame files a run has finished so far (temporaries not counted).
+fn frames_done(run_dir: &Path) -> usize {
+    std::fs::read_dir(run_dir.join("out.partial/cameras/camera-slam-left"))
+        .map(|d| {
+            d.flatten()
+                .filter(|e| e.path().extension().is_some_and(|x| x == "exr"))
+                .count()
+        })
+        .unwrap_or(0)
+}
+
+/// When the next worker kill is due.
+enum NextKill {
+    At(Instant),
+    /// Right after the next frame file appears.
+    OnFrame,
+}
+
+/// What one interrupted start did.
+struct Chaos {
+    status: std::process::ExitStatus,
+    worker_kills: usize,
+    supervisor_killed: bool,
+}
+
+/// One start of `egogen-run` (a `--resume` when `resume`) whose Blender workers are killed at
+/// random moments — after a random delay, or right after a frame file appears — `worker_kills`
+/// times; then, once this start has finished a frame, the supervisor itself is killed.
+fn chaotic_start(
+    config: &Path,
+    run_dir: &Path,
+    resume: bool,
+    worker_kills: usize,
+    rng: &mut Lcg,
+) -> Chaos {
+    let mut command = egogen_run();
+    command.arg(config);
+    if resume {
+        command.arg("--resume");
+    }
+    let mut child = command.stderr(std::process::Stdio::null()).spawn().unwrap();
+    let needle = run_dir.display().to_string();
+    let at_start = frames_done(run_dir);
+    let mut seen = at_start;
+    let mut kills = 0;
+    let mut next = NextKill::At(Instant::now() + Duration::from_millis(rng.millis(100, 800)));
+    let deadline = Instant::now() + Duration::from_secs(300);
+    loop {
+        assert!(Instant::now() < deadline, "a start is stuck");
+        if let Some(status) = child.try_wait().unwrap() {
+            return Chaos {
+                status,
+                worker_kills: kills,
+                supervisor_killed: false,
+            };
+        }
+        let done = frames_done(run_dir);
+        if kills < worker_kills {
+            let due = match next {
+                NextKill::At(t) => Instant::now() >= t,
+                NextKill::OnFrame => done > seen,
+            };
+            if due {
+                let killed = common::pids_with(&["render_shard.py", &needle])
+                    .into_iter()
+                    .filter(|&pid| kill9(pid))
+                    .count();
+                kills += killed;
+                if killed > 0 || matches!(next, NextKill::OnFrame) {
+                    next = match rng.millis(0, 3) {
+                        0 => NextKill::OnFrame,
+                        _ => NextKill::At(
+                            Instant::now() + Duration::from_millis(rng.millis(100, 800)),
+                        ),
+                    };
+                }
+            }
+        } else if done > at_start {
+            assert!(kill9(child.id() as i32));
+            let status = child.wait().unwrap();
+            return Chaos {
+                status,
+                worker_kills: kills,
+                supervisor_killed: true,
+            };
+        }
+        seen = done;
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Ten seeds in a row: each run's workers are killed at random moments at least 10 times (some
+/// right after a frame was written) and its supervisor twice (the first start and the first
+/// resume); one more `--resume` then finishes a dataset identical to the uninterrupted one.
 #[test]
-fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
+fn killed_workers_and_killed_supervisors_still_give_the_same_dataset_ten_seeds_in_a_row() {
     // Reference: uninterrupted.
     let (ref_dir, ref_config) = setup();
     common::succeeds(egogen_run().arg(&ref_config));
@@ -202,67 +270,60 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         );
     }
 
-    // Faulty: workers killed ≥ 10 times; the supervisor killed once and resumed.
-    let (dir, config) = setup();
-    let mut rng = Lcg(7);
-    let child = egogen_run().arg(&config).spawn().unwrap();
-    // Let it finish at least one frame, kill workers three times, then kill the supervisor.
-    let (status, mut kills) = {
-        let mut child = child;
-        let needle = dir.path().display().to_string();
-        let mut kills = 0;
-        let deadline = Instant::now() + Duration::from_secs(300);
-        let frames_dir = dir.path().join("out.partial/cameras/camera-slam-left");
-        loop {
-            assert!(Instant::now() < deadline, "first run stuck");
-            if let Some(s) = child.try_wait().unwrap() {
-                break (Some(s), kills);
-            }
-            let done = std::fs::read_dir(&frames_dir)
-                .map(|d| d.count())
-                .unwrap_or(0);
-            if kills < 3 {
-                std::thread::sleep(Duration::from_millis(rng.millis(500, 2000)));
-                for pid in common::pids_with(&["render_shard.py", &needle]) {
-                    if kill9(pid) {
-                        kills += 1;
-                    }
-                }
-            } else if done >= 1 {
-                assert!(kill9(child.id() as i32));
-                let s = child.wait().unwrap();
-                break (Some(s), kills);
-            }
-            std::thread::sleep(Duration::from_millis(20));
+    let mut last = None;
+    for seed in 0..10u64 {
+        let (dir, config) = setup();
+        let mut rng = Lcg(seed * 7919 + 7);
+        // The first start: workers killed 3-5 times, then the supervisor.
+        let first = chaotic_start(
+            &config,
+            dir.path(),
+            false,
+            rng.millis(3, 6) as usize,
+            &mut rng,
+        );
+        assert!(
+            first.supervisor_killed,
+            "seed {seed}: the first start finished first"
+        );
+        assert!(!first.status.success());
+        assert!(dir.path().join("out.partial").is_dir());
+        assert!(!dir.path().join("out").exists());
+        if seed == 0 {
+            // Without --resume nothing is touched.
+            let refused = egogen_run().arg(&config).output().unwrap();
+            assert!(!refused.status.success());
+            assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
         }
-    };
-    let status = status.unwrap();
-    assert!(!status.success(), "the supervisor was killed");
-    assert!(dir.path().join("out.partial").is_dir());
-    assert!(!dir.path().join("out").exists());
-    // Without --resume nothing is touched.
-    let refused = egogen_run().arg(&config).output().unwrap();
-    assert!(!refused.status.success());
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("--resume"));
-    // Resume, killing workers until at least 10 kills in all.
-    for attempt in 0.. {
-        assert!(attempt < 4, "resumed runs keep failing");
-        let child = egogen_run().arg(&config).arg("--resume").spawn().unwrap();
-        let (status, k) = run_with_kills(child, dir.path(), kills, 10, &mut rng);
-        kills = k;
-        if status.success() {
-            break;
-        }
+        // The first resume: workers killed until 10 kills in all, then the supervisor again.
+        let second = chaotic_start(
+            &config,
+            dir.path(),
+            true,
+            10usize.saturating_sub(first.worker_kills),
+            &mut rng,
+        );
+        assert!(
+            second.supervisor_killed,
+            "seed {seed}: the first resume finished first"
+        );
+        let kills = first.worker_kills + second.worker_kills;
+        assert!(kills >= 10, "seed {seed}: {kills} worker kills");
+        let left = frames - frames_done(dir.path());
+        // One more resume finishes it.
+        common::succeeds(egogen_run().arg(&config).arg("--resume"));
+        let dataset = dir.path().join("out");
+        let faulty = common::read_manifest(&dataset);
+        assert_eq!(faulty, reference, "seed {seed}: datasets differ");
+        assert!(faulty
+            .files
+            .iter()
+            .all(|f| !f.path.contains(".partial") && !f.path.ends_with(".tmp")));
+        eprintln!("seed {seed}: {kills} worker kills, 2 supervisor kills, {left} frames left for the last resume");
+        last = Some((dir, faulty));
     }
-    eprintln!("workers and supervisor killed {kills} times in all");
-    assert!(kills >= 10);
+    let (dir, faulty) = last.unwrap();
     let dataset = dir.path().join("out");
-    let faulty = common::read_manifest(&dataset);
-    assert_eq!(faulty, reference, "datasets differ");
-    assert!(faulty
-        .files
-        .iter()
-        .all(|f| !f.path.contains(".partial") && !f.path.ends_with(".tmp")));
     // Some shard attempts failed and were retried (their logs are kept).
     // Every start keeps its own logs: the killed first start's, then each resume's.
     let starts: Vec<_> = std::fs::read_dir(dataset.join("logs"))
@@ -270,7 +331,7 @@ fn killed_workers_and_a_killed_supervisor_still_give_the_same_dataset() {
         .flatten()
         .map(|e| e.path())
         .collect();
-    assert!(starts.len() >= 2, "{starts:?}");
+    assert!(starts.len() >= 3, "{starts:?}");
     assert!(dataset.join("logs/start_01").is_dir());
     let logs: usize = starts
         .iter()

@@ -276,6 +276,19 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         ));
     }
     check_agent_names(&agents, &bad)?;
+    let frames = crate::synth::crowd::frames_of(primitives);
+    let betas = agents.iter().map(|a| a.betas.len()).max().unwrap_or(0);
+    let bytes =
+        agents.len() as f64 * frames as f64 * crate::synth::crowd::bytes_per_agent_frame(betas);
+    crate::memory::check_fits(
+        &format!(
+            "{} agents × {frames} frames (motion.duration_s = {duration_s} s) with {betas} shape \
+             coefficients",
+            agents.len()
+        ),
+        bytes,
+    )
+    .map_err(|m| bad("motion.duration_s", m))?;
     let policy = if agents
         .iter()
         .any(|a| matches!(a.steering, Steering::Policy { .. }))

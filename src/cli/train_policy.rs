@@ -158,6 +158,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
     if let Some(problem) = arch.problem() {
         return Err(bad("policy", problem));
     }
+    check_training_memory(&arch, &p, &bad)?;
     Ok(PolicyTrainPlan {
         seed: raw.seed,
         body_model,
@@ -184,6 +185,37 @@ const MAX_ENVS: usize = 65_536;
 const MAX_STEPS_PER_ENV: usize = 4096;
 const MAX_EPOCHS: usize = 1000;
 const MAX_VALIDATION_EPISODES: usize = 100_000;
+
+/// What a training run holds at least, against the memory it may use: the network with its
+/// gradients and the optimiser's two moments, and an update's rollout (each environment's
+/// observation, action, log-probability, value, reward and end flag at each step).
+fn check_training_memory(arch: &PolicyArch, p: &PpoSettings, bad: Bad) -> Result<(), ConfigError> {
+    let f32_bytes = std::mem::size_of::<f32>() as f64;
+    let network = 4.0 * arch.parameter_count() * f32_bytes;
+    let obs = crate::policy::walker::ObsLayout::of(&arch.sensing).dim();
+    let per_step = (obs + arch.latent_dim + 4) as f64 * f32_bytes;
+    let rollout = p.envs as f64 * p.steps_per_env as f64 * per_step;
+    let (key, what) = match network > rollout {
+        true => (
+            "policy.hidden",
+            format!(
+                "the network (hidden = {}, residual_blocks = {}) with its gradients and the \
+                 optimiser's moments",
+                arch.hidden, arch.residual_blocks
+            ),
+        ),
+        false => (
+            "ppo.envs",
+            format!(
+                "an update's rollout (ppo.envs = {} × ppo.steps_per_env = {} steps × {} values)",
+                p.envs,
+                p.steps_per_env,
+                obs + arch.latent_dim + 4
+            ),
+        ),
+    };
+    crate::memory::check_fits(&what, network + rollout).map_err(|m| bad(key, m))
+}
 
 /// The whole numbers, shares and weights of `[ppo]`, `[policy]` and `[validation]`.
 fn check_numbers(raw: &RawTrainPolicy, bad: Bad) -> Result<(), ConfigError> {

@@ -91,6 +91,18 @@ impl PolicyArch {
             .or_else(|| self.sensing.problem())
     }
 
+    /// Weights and biases of the network [`Self::init`] builds (two GRUs, the actor's and the
+    /// critic's residual MLPs).
+    pub fn parameter_count(&self) -> f64 {
+        let (h, w) = (self.hidden as f64, self.mlp_width() as f64);
+        let gru = |inputs: f64| inputs * 3.0 * h + 3.0 * h + h * 3.0 * h + 3.0 * h;
+        let mlp = |out: f64| self.residual_blocks as f64 * 2.0 * (w * w + w) + w * out + out;
+        gru(STATE_FRAME_DIM as f64)
+            + gru(self.sensing.dim() as f64)
+            + mlp(2.0 * self.latent_dim as f64)
+            + mlp(1.0)
+    }
+
     /// Width `W` of the actor's and critic's MLPs.
     pub fn mlp_width(&self) -> usize {
         2 * self.hidden + 4 * self.pe_frequencies
@@ -314,4 +326,28 @@ pub fn kl_to_standard<B: Backend>(mean: Tensor<B, 2>, logvar: Tensor<B, 2>) -> T
 /// Parameters of a network.
 pub fn parameter_count<B: Backend>(net: &ActorCritic<B>) -> usize {
     net.num_params()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use burn::module::Module;
+
+    #[test]
+    fn the_parameter_count_is_what_init_builds() {
+        type B = burn::backend::Flex;
+        for arch in [
+            PolicyArch::default(),
+            PolicyArch {
+                hidden: 7,
+                pe_frequencies: 0,
+                residual_blocks: 3,
+                latent_dim: 5,
+                sensing: SensingSpec::default(),
+            },
+        ] {
+            let net = arch.init::<B>(&Default::default());
+            assert_eq!(arch.parameter_count(), net.num_params() as f64, "{arch:?}");
+        }
+    }
 }

@@ -183,6 +183,19 @@ pub fn load_policy<B: Backend>(
             ),
         });
     }
+    let weights_bytes = arch.parameter_count() * std::mem::size_of::<f32>() as f64;
+    crate::memory::check_fits(
+        &format!(
+            "the network its header's `{POLICY_ARCH_KEY}` asks for (hidden = {}, \
+             residual_blocks = {})",
+            arch.hidden, arch.residual_blocks
+        ),
+        weights_bytes,
+    )
+    .map_err(|message| WeightsError::Store {
+        path: path.into(),
+        message,
+    })?;
     let mut net = arch.init::<B>(device);
     weights::load_into(path, &mut net, &format!("{arch:?}"))?;
     Ok((arch, net))

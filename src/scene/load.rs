@@ -78,6 +78,8 @@ pub enum SceneError {
         cell_m: f64,
         gb: f64,
     },
+    #[error("scene {path}: {message}; use a larger cell size")]
+    MapOutOfMemory { path: PathBuf, message: String },
 }
 
 fn extension(path: &Path) -> String {
@@ -355,6 +357,10 @@ pub fn walkable_map(
             ny,
             cell_m,
             gb: nx * ny * super::walkable::MAP_BYTES_PER_CELL / 1e9,
+        },
+        WalkableError::OutOfMemory(message) => SceneError::MapOutOfMemory {
+            path: path.to_owned(),
+            message,
         },
     })
 }

@@ -56,7 +56,7 @@ pub struct WalkableMap {
 }
 
 /// Why no map could be built (the caller adds the file name).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum WalkableError {
     NoFloor,
     NoWalkable {
@@ -71,6 +71,9 @@ pub enum WalkableError {
         ny: f64,
         cell_m: f64,
     },
+    /// The grid is within [`MAX_MAP_CELLS`] but would not fit in the memory this run may use
+    /// (what it needs against the budget, [`crate::memory`]).
+    OutOfMemory(String),
 }
 
 /// Most cells a walkable map may have (about 1.5 GB with the distance transform's scratch).
@@ -97,6 +100,11 @@ impl WalkableMap {
                 cell_m: cell,
             });
         }
+        crate::memory::check_fits(
+            &format!("a walkable map of {fx} × {fy} cells of {cell} m"),
+            fx * fy * MAP_BYTES_PER_CELL,
+        )
+        .map_err(WalkableError::OutOfMemory)?;
         let (nx, ny) = (fx as usize, fy as usize);
         let mut map = WalkableMap {
             origin,

@@ -70,6 +70,21 @@ pub fn frames_of(primitives: usize) -> usize {
     SEED_FRAMES + primitives * NEW_FRAMES
 }
 
+/// Bytes a take holds per agent and frame while it walks, at least: the body parameters (its
+/// `betas` shape coefficients copied into each frame), the CPF pose, the body markers, the
+/// pelvis and the joints of the tracks made from it. What memory checks multiply by agents ×
+/// [`frames_of`].
+pub fn bytes_per_agent_frame(betas: usize) -> f64 {
+    use std::mem::size_of;
+    (size_of::<BodyParams>()
+        + betas * size_of::<f64>()
+        + size_of::<Affine3>()
+        + size_of::<Vec<Vec3>>()
+        + crate::body::markers::NUM_MARKERS * size_of::<Vec3>()
+        + size_of::<DVec2>()
+        + size_of::<crate::synth::body_track::TrackFrame>()) as f64
+}
+
 /// How an agent chooses its next primitive.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
