@@ -201,7 +201,7 @@ fn bench(c: &mut Criterion) {
         .decode(&ctx, std::slice::from_ref(&view_seed), &z)
         .unwrap()
         .remove(0);
-    let feet = egogen::motion::cvae::rig::RigGeometry::new(&body, &[])
+    let feet = egogen::motion::cvae::tensor_body::RigGeometry::new(&body, &[])
         .unwrap()
         .foot_markers;
     let situation = walker.situation(&around, DVec2::new(2.0, 0.0), 0.0);

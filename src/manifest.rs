@@ -1,6 +1,6 @@
 //! The manifest of an output folder (`manifest.json`): every file with its size and SHA-256,
 //! scratch folders and temporaries left out. Datasets and sequence folders both carry one;
-//! `supervisor::manifest::verify` re-checks a dataset against it.
+//! `supervisor::verify::verify` re-checks a dataset against it.
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -5,13 +5,10 @@ use std::path::PathBuf;
 
 use serde::Deserialize;
 
-use glam::DVec2;
-
 use crate::render::depth_noise::DepthNoise;
 use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
-use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid};
-use crate::synth::crowd::{CrowdSettings, Steering};
+pub use crate::synth::take::{AgentDraft, MotionPlan, SynthPlan};
 
 /// Where shards run.
 #[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq, Eq)]
@@ -45,7 +42,7 @@ pub struct RenderPlan {
     /// How the sequence's lighting is drawn.
     pub lighting: crate::render::lighting::LightingPlan,
     /// How each agent's skin is drawn.
-    pub skin: crate::render::skin::SkinPlan,
+    pub skin: crate::render::skin_tone::SkinPlan,
     /// What the dataset holds.
     pub passes: crate::render::passes::Passes,
     /// Where Cycles renders.
@@ -72,61 +69,6 @@ pub struct SlurmPlan {
     pub mem_gb: f64,
     pub poll_interval_s: f64,
     pub sbatch_args: Vec<String>,
-}
-
-/// Where agents come from before the map is known: given, or to be sampled.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AgentDraft {
-    pub name: String,
-    pub betas: Vec<f64>,
-    /// Drawn by `[crowd]` (cut to what the body model has) rather than given (checked).
-    pub betas_drawn: bool,
-    pub start: Option<DVec2>,
-    pub facing_rad: Option<f64>,
-    pub goals: Vec<DVec2>,
-    pub wander: bool,
-    pub steering: Steering,
-}
-
-/// A checked synth config.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SynthPlan {
-    pub config: PathBuf,
-    pub body_model: PathBuf,
-    pub scene: Option<PathBuf>,
-    pub floor_m: f64,
-    pub indoors: bool,
-    pub weights: PathBuf,
-    pub policy: Option<PathBuf>,
-    pub pose_prior: PathBuf,
-    pub train_config: PathBuf,
-    pub settings: CrowdSettings,
-    pub duration_s: f64,
-    pub agents: Vec<AgentDraft>,
-    pub obstacles: Vec<Obstacle2>,
-    pub moving: Vec<MovingObstacle>,
-    /// Every `[[obstacles]]` box as a solid, in config order (what a rendered run draws).
-    pub solids: Vec<ObstacleSolid>,
-    pub out_dir: PathBuf,
-}
-
-/// Where a run's motion comes from, checked.
-#[derive(Debug, Clone, PartialEq)]
-pub enum MotionPlan {
-    ScriptedWalk {
-        duration_s: f64,
-        frame_rate_hz: f64,
-        speed_m_per_s: f64,
-    },
-    File {
-        path: PathBuf,
-    },
-    /// Agents steered through the scene (`egogen synth`'s crowd), the cameras on the
-    /// `wearers` (indices into the plan's agents).
-    Agents {
-        synth: Box<SynthPlan>,
-        wearers: Vec<usize>,
-    },
 }
 
 /// A checked run.

@@ -11,11 +11,9 @@ use anyhow::{Context, Result};
 
 use crate::body::BodyModel;
 use crate::cli::overrides::{effective_config_toml, resume_fingerprint, RunOverrides};
-use crate::cli::synth::Synthesized;
 use crate::cli::{resolve_run, MotionPlan, RawRun, RunPlan};
-use crate::motion::scripted::WalkCycle;
-use crate::motion::MotionSequence;
 use crate::supervisor::{run_pipeline, RunMotion, RunOptions, RunSummary};
+use crate::synth::take::{make_motion, TakeMotion};
 use crate::synth::{pose_meshes, track_body, write_sequence_dir};
 
 /// How the job runs, beside its config.
@@ -82,62 +80,27 @@ pub fn prepare(
     })
 }
 
-/// A take's motion, made: agents walked through the scene, or one motion (a scripted walk or a
-/// motion file).
-pub enum TakeMotion {
-    Agents {
-        walked: Synthesized,
-        wearers: Vec<usize>,
-    },
-    One(MotionSequence),
-}
-
 impl PreparedRun {
-    /// Makes the take's motion: agents walk the scene (as `egogen synth`), a scripted walk,
-    /// or a motion file read.
+    /// Makes the take's motion ([`crate::synth::take::make_motion`]) and says what the agents
+    /// did.
     pub fn make_motion(&self) -> Result<TakeMotion> {
-        let (plan, model) = (&self.plan, &self.model);
-        Ok(match &plan.motion {
-            MotionPlan::Agents { synth, wearers } => {
-                let walked = crate::cli::synth::synthesize(synth, model, true)?;
-                let reached: usize = walked
-                    .take
-                    .agents
-                    .iter()
-                    .map(|a| a.goals.iter().filter(|g| g.reached).count())
-                    .sum();
-                eprintln!(
-                    "egogen-run: {} agents walked {} frames at {} Hz ({reached} goals reached) in {:.1} s",
-                    walked.take.agents.len(),
-                    walked.take.frames,
-                    walked.take.frame_rate_hz,
-                    walked.wall_s
-                );
-                TakeMotion::Agents {
-                    walked,
-                    wearers: wearers.clone(),
-                }
-            }
-            MotionPlan::ScriptedWalk {
-                duration_s,
-                frame_rate_hz,
-                speed_m_per_s,
-            } => {
-                let shaped = model.shape(&plan.betas, &[])?;
-                let walk = WalkCycle {
-                    speed_m_per_s: *speed_m_per_s,
-                    ..Default::default()
-                };
-                TakeMotion::One(walk.sequence(
-                    *duration_s,
-                    *frame_rate_hz,
-                    &plan.betas,
-                    shaped.rest_joints[0],
-                    shaped.rest_sole_y(),
-                ))
-            }
-            MotionPlan::File { path } => TakeMotion::One(MotionSequence::read(path)?),
-        })
+        let motion = make_motion(&self.plan.motion, &self.plan.betas, &self.model)?;
+        if let TakeMotion::Agents { walked, .. } = &motion {
+            let reached: usize = walked
+                .take
+                .agents
+                .iter()
+                .map(|a| a.goals.iter().filter(|g| g.reached).count())
+                .sum();
+            eprintln!(
+                "egogen-run: {} agents walked {} frames at {} Hz ({reached} goals reached) in {:.1} s",
+                walked.take.agents.len(),
+                walked.take.frames,
+                walked.take.frame_rate_hz,
+                walked.wall_s
+            );
+        }
+        Ok(motion)
     }
 
     /// The motion as the supervisor renders it.

@@ -422,7 +422,7 @@ fn sizes_that_would_exhaust_memory_are_refused_by_key() {
             ),
         )
         .unwrap();
-        let err = egogen::cli::synth::load_synth_plan(&config)
+        let err = egogen::cli::synth_config::load_synth_plan(&config)
             .err()
             .unwrap_or_else(|| panic!("{line} accepted"))
             .to_string();

@@ -176,9 +176,9 @@ fn decoded_chains_export_as_amass_npz_that_reads_back() {
 #[test]
 fn shipped_training_primitives_walk_at_a_human_pace() {
     use egogen::motion::cvae::pace::set_paces;
-    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+    use egogen::motion::cvae::tensor_body::{RigGeometry, TensorRig};
     use egogen::motion::cvae::train::evaluation_sets;
-    let plan = egogen::cli::train::load_train_plan(
+    let plan = egogen::cli::train_primitive::load_train_plan(
         &common::repo_root().join("configs/train_primitive.toml"),
     )
     .unwrap();

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use egogen::cli::train::load_train_plan;
+use egogen::cli::train_primitive::load_train_plan;
 use egogen::motion::cvae::loss::{LossWeights, PriorWeights};
 use egogen::motion::cvae::train::{ClipSpec, PhasePlan, PriorPlan, TrainPlan};
 use egogen::motion::cvae::{train, ArchConfig, MotionModel};
@@ -134,7 +134,7 @@ fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
     {
         use egogen::body::BodyModel;
         use egogen::motion::cvae::eval::latent_spread_mm;
-        use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+        use egogen::motion::cvae::tensor_body::{RigGeometry, TensorRig};
         use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
         use rand_core::SeedableRng;
         let body = BodyModel::load(common::default_model_path()).unwrap();
@@ -488,8 +488,8 @@ fn fifty_chained_primitives_stay_finite_and_rigid() {
 #[test]
 fn a_goal_costs_its_weight_per_metre_left_to_walk() {
     use egogen::body::BodyModel;
-    use egogen::motion::cvae::rig::RigGeometry;
     use egogen::motion::cvae::sampler::plausibility;
+    use egogen::motion::cvae::tensor_body::RigGeometry;
     use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
     use egogen::motion::cvae::{goal_ahead, goal_toward, BodyContext, PlausibilityRules};
     use rand_core::SeedableRng;
@@ -545,8 +545,8 @@ fn a_goal_costs_its_weight_per_metre_left_to_walk() {
 #[test]
 fn best_of_k_keeps_the_most_plausible_of_its_draws() {
     use egogen::body::BodyModel;
-    use egogen::motion::cvae::rig::RigGeometry;
     use egogen::motion::cvae::sampler::plausibility;
+    use egogen::motion::cvae::tensor_body::RigGeometry;
     use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
     use egogen::motion::cvae::{BestOfK, BodyContext, PlausibilityRules};
     use rand_core::SeedableRng;
@@ -608,7 +608,7 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
     use egogen::motion::cvae::eval::set_batch;
     use egogen::motion::cvae::features::{FRAME_DIM, TRANSL_OFFSET};
     use egogen::motion::cvae::loss::{plausible_range, prior_loss, PriorWeights};
-    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
+    use egogen::motion::cvae::tensor_body::{RigGeometry, TensorRig};
 
     let body = BodyModel::load(common::default_model_path()).unwrap();
     let seq =
@@ -863,8 +863,8 @@ fn training_chains_seed_the_next_primitive_as_inference_does() {
     use burn::backend::Flex;
     use burn::prelude::*;
     use egogen::body::BodyModel;
-    use egogen::motion::cvae::rig::{RigGeometry, TensorRig};
     use egogen::motion::cvae::rollout::next_seed;
+    use egogen::motion::cvae::tensor_body::{RigGeometry, TensorRig};
     use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
     use egogen::motion::cvae::{BodyContext, CanonicalSeed};
     use rand_core::SeedableRng;

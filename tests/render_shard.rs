@@ -22,7 +22,7 @@ use egogen::render::shard::render_shard;
 use egogen::render::shard_plan::{
     blender_fps, raw_frame_paths, shard_camera, RawRenders, AGENT_ID_BASE,
 };
-use egogen::render::skin::{RegionPaint, SkinPlan};
+use egogen::render::skin_tone::{RegionPaint, SkinPlan};
 use egogen::render::{
     BlenderRuntime, BodyProbe, PointLight, RenderDevice, ShardBody, ShardLighting, ShardRgb,
     ShardSpec,

@@ -39,7 +39,7 @@ fn every_shipped_policy_and_synth_config_loads() {
         } else if (table.contains_key("crowd") || table.contains_key("agents"))
             && !table.contains_key("render")
         {
-            egogen::cli::synth::load_synth_plan(&path).unwrap_or_else(|e| panic!("{e}"));
+            egogen::cli::synth_config::load_synth_plan(&path).unwrap_or_else(|e| panic!("{e}"));
             synths += 1;
         }
     }

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use egogen::body::{BodyModel, JOINT_NAMES};
 use egogen::math::Vec3;
-use egogen::render::skin::SKIN_REGIONS;
+use egogen::render::skin_tone::SKIN_REGIONS;
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

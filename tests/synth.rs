@@ -9,8 +9,9 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use egogen::cli::synth::{load_synth_plan, run_synth};
+use egogen::cli::synth_config::load_synth_plan;
 use egogen::motion::MotionSequence;
+use egogen::synth::take::run_synth;
 
 fn egogen() -> Command {
     Command::new(env!("CARGO_BIN_EXE_egogen"))
@@ -216,7 +217,7 @@ fn wandering_agents_stay_upright_on_the_floor() {
     let config = wandering_in_the_apartment(3, 30.0, 5, "");
     let (dir, path) = common::run_dir(&config);
     let plan = load_synth_plan(&path).unwrap();
-    let map = egogen::cli::synth::synth_map(&plan).unwrap();
+    let map = egogen::synth::take::synth_map(&plan).unwrap();
     let out = run_synth(&plan, false).unwrap();
     let body = egogen::body::BodyModel::load(common::default_model_path()).unwrap();
     assert_eq!(out.summary.agents.len(), 3);
@@ -821,10 +822,10 @@ workers = 1
     assert!((1..=10).contains(&tone), "{skin}");
     assert_eq!(doc_a["skins"][0]["name"], "agent_0");
     // The shipped model's masks lie beside it: every region is tinted, in its colour on this skin.
-    let drawn: egogen::render::skin::Skin = serde_json::from_value(skin.clone()).unwrap();
-    let regions: Vec<egogen::render::skin::RegionPaint> =
+    let drawn: egogen::render::skin_tone::Skin = serde_json::from_value(skin.clone()).unwrap();
+    let regions: Vec<egogen::render::skin_tone::RegionPaint> =
         serde_json::from_value(doc_a["skins"][0]["regions"].clone()).unwrap();
-    let expected: Vec<_> = egogen::render::skin::SKIN_REGIONS
+    let expected: Vec<_> = egogen::render::skin_tone::SKIN_REGIONS
         .iter()
         .map(|r| r.paint(&drawn))
         .collect();

@@ -373,8 +373,8 @@ fn run(cli: Cli) -> Result<()> {
         Command::Policy(cmd) => run_policy(cmd)?,
         Command::Eval(args) => egogen::cli::eval_jobs::run_eval(&args)?,
         Command::Synth { config, quiet } => {
-            let plan = egogen::cli::synth::load_synth_plan(&config)?;
-            let out = egogen::cli::synth::run_synth(&plan, !quiet)?;
+            let plan = egogen::cli::synth_config::load_synth_plan(&config)?;
+            let out = egogen::synth::take::run_synth(&plan, !quiet)?;
             let t = &out.summary.totals;
             println!(
                 "{} agents, {:.1} s of motion each: {}/{} goals reached, {} fell, contact {:.3}, human overlap {:.2}%, {:.0} agent-s of motion per wall s",
@@ -402,7 +402,7 @@ fn run(cli: Cli) -> Result<()> {
             quiet,
             resume,
         }) => {
-            let plan = egogen::cli::train::load_train_plan(&config)?;
+            let plan = egogen::cli::train_primitive::load_train_plan(&config)?;
             let report = egogen::motion::cvae::train(&plan, !quiet, resume)?;
             println!(
                 "trained on {} primitives ({} chains) in {:.0} s; final loss {:.4}; held-out marker error {}",

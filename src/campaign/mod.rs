@@ -216,7 +216,7 @@ fn check_finished_takes(plan: &CampaignPlan, state: &mut CampaignState) -> Resul
     let mut frames = 0;
     for t in state.takes.iter_mut() {
         let dir = plan.out.join("takes").join(&t.def.id);
-        if !dir.join(crate::supervisor::manifest::MANIFEST).is_file() {
+        if !dir.join(crate::manifest::MANIFEST).is_file() {
             continue;
         }
         match crate::supervisor::verify(&dir) {

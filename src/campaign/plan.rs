@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::cli::config_file::load_toml;
 use crate::cli::overrides::{resume_fingerprint, RunOverrides};
 use crate::cli::RawRun;
-use crate::supervisor::manifest::sha256_hex;
+use crate::manifest::sha256_hex;
 
 /// A campaign config file: `[campaign]` only.
 #[derive(Debug, Clone, Deserialize, Serialize)]

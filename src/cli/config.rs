@@ -285,11 +285,11 @@ pub struct RawRun {
     #[serde(default)]
     pub supervisor: RawSupervisor,
     /// With `motion.source = "agents"`: as in `egogen synth` configs.
-    pub crowd: Option<super::synth::RawCrowd>,
+    pub crowd: Option<super::synth_config::RawCrowd>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub agents: Vec<super::synth::RawAgent>,
+    pub agents: Vec<super::synth_config::RawAgent>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub obstacles: Vec<super::synth::RawObstacle>,
+    pub obstacles: Vec<super::synth_config::RawObstacle>,
 }
 
 impl RawRun {

@@ -316,7 +316,8 @@ fn load_common() -> Result<Common> {
         crate::motion::cvae::MotionModel::load(crate::motion::cvae::train::shipped_weights_path())?;
     let prior =
         crate::policy::PosePrior::load(&crate::policy::pose_prior::shipped_pose_prior_path())?;
-    let train_plan = super::train::load_train_plan(&root.join("configs/train_primitive.toml"))?;
+    let train_plan =
+        super::train_primitive::load_train_plan(&root.join("configs/train_primitive.toml"))?;
     // Held-out seeds: whole clips never trained on.
     let (_, held_out) = evaluation_sets(&train_plan, &body, true)?;
     let bank = crate::policy::SeedBank::from_set(&held_out);
@@ -493,7 +494,7 @@ fn run_rows(
     } else {
         None
     };
-    let net = super::policy_jobs::load_policy_for(&policy_path, &c.model)?;
+    let net = crate::policy::ppo::load_policy_for(&policy_path, &c.model)?;
     let actor = crate::policy::Actor::of(&net);
     let parts = crate::synth::crowd::CrowdParts {
         model: &c.model,
@@ -694,7 +695,7 @@ fn table_policy(
             path.display()
         );
     }
-    super::policy_jobs::load_policy_for(&path, &c.model)
+    Ok(crate::policy::ppo::load_policy_for(&path, &c.model)?)
 }
 
 /// Every policy on every set of episodes, with sampled and with mean actions: a row each.

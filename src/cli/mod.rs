@@ -15,9 +15,9 @@ pub mod overrides;
 pub mod policy_jobs;
 pub mod resolve;
 pub mod scene_jobs;
-pub mod synth;
-pub mod train;
+pub mod synth_config;
 pub mod train_policy;
+pub mod train_primitive;
 
 pub use config::{ConfigError, RawRun};
 

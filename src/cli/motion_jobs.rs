@@ -70,7 +70,7 @@ pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> R
     use crate::motion::cvae::eval::{
         latent_spread_mm, long_rollout, marker_mpjpe_mm, random_latent_contact,
     };
-    use crate::motion::cvae::rig::{RigGeometry, TensorRig};
+    use crate::motion::cvae::tensor_body::{RigGeometry, TensorRig};
     use crate::motion::cvae::train::{evaluation_sets, normal_samples};
     use crate::motion::cvae::{
         BestOfK, BodyContext, MotionModel, PlausibilityRules, PrimitiveSeed,
@@ -78,7 +78,7 @@ pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> R
     use rand_chacha::ChaCha8Rng;
     use rand_core::SeedableRng;
 
-    let plan = crate::cli::train::load_train_plan(config)?;
+    let plan = crate::cli::train_primitive::load_train_plan(config)?;
     use burn::tensor::FloatDType;
     let model = match precision {
         Precision::F32 => MotionModel::load(weights)?,
@@ -254,9 +254,9 @@ pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> R
 /// `egogen motion stats`: pace and turn distributions of a config's primitives.
 pub fn motion_stats(config: &Path, json: Option<&Path>) -> Result<()> {
     use crate::motion::cvae::pace::{set_paces, PaceSummary};
-    use crate::motion::cvae::rig::{RigGeometry, TensorRig};
+    use crate::motion::cvae::tensor_body::{RigGeometry, TensorRig};
     use crate::motion::cvae::train::evaluation_sets;
-    let plan = crate::cli::train::load_train_plan(config)?;
+    let plan = crate::cli::train_primitive::load_train_plan(config)?;
     let body = BodyModel::load(&plan.body_model)?;
     let (train, held) = evaluation_sets(&plan, &body, true)?;
     let (train_all, _) = evaluation_sets(&plan, &body, false)?;
@@ -351,7 +351,7 @@ pub fn motion_control(opts: &MotionControlOptions) -> Result<()> {
     use crate::motion::cvae::control::chain_sequence;
     use crate::motion::cvae::pace::{PaceSummary, PACE_SPAN_S};
     use crate::motion::cvae::reach::{sustained_walk, turn};
-    use crate::motion::cvae::rig::{RigGeometry, TensorRig};
+    use crate::motion::cvae::tensor_body::{RigGeometry, TensorRig};
     use crate::motion::cvae::train::evaluation_sets;
     use crate::motion::cvae::{BodyContext, CemSettings, LatentController, MotionModel};
     use rand_chacha::ChaCha8Rng;
@@ -401,7 +401,7 @@ pub fn motion_control(opts: &MotionControlOptions) -> Result<()> {
             refuse_existing(&dir.join(n))?;
         }
     }
-    let plan = crate::cli::train::load_train_plan(config)?;
+    let plan = crate::cli::train_primitive::load_train_plan(config)?;
     let model = MotionModel::load(weights)?;
     let body = BodyModel::load(&plan.body_model)?;
     let ctx = BodyContext::new(&body, &[])?;

@@ -168,7 +168,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if !(0.0..=1.0).contains(&quantile) || components == 0 {
                 bail!("--quantile must lie in [0, 1] and --components be at least 1");
             }
-            let plan = crate::cli::train::load_train_plan(&config)?;
+            let plan = crate::cli::train_primitive::load_train_plan(&config)?;
             let body = BodyModel::load(&plan.body_model)?;
             let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
             let (train, held) = evaluation_sets(&plan, &body, true)?;
@@ -297,7 +297,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if !(guide_lookahead_m.is_finite() && guide_lookahead_m >= 0.0) {
                 bail!("--guide-lookahead-m: expected a distance ≥ 0 m, got {guide_lookahead_m}");
             }
-            let plan = crate::cli::train::load_train_plan(&config)?;
+            let plan = crate::cli::train_primitive::load_train_plan(&config)?;
             let body = BodyModel::load(&plan.body_model)?;
             let ctx = BodyContext::new(&body, &[])?;
             let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
@@ -379,7 +379,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             use crate::policy::tasks::{evaluate_with_paths, Controller, EvalParts};
             let loaded = match &policy {
                 None => None,
-                Some(path) => Some(load_policy_for(path, &model)?),
+                Some(path) => Some(crate::policy::ppo::load_policy_for(path, &model)?),
             };
             let mut runs: Vec<(serde_json::Value, Controller<InferBackend>)> = k
                 .iter()
@@ -482,7 +482,7 @@ pub(crate) fn held_out_scene(
 fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
     let path = &spec.path;
     let mesh = crate::scene::load_scene(path, None)?;
-    let (map, region) = crate::cli::synth::indoor_map(
+    let (map, region) = crate::synth::take::indoor_map(
         crate::scene::walkable_map(&mesh, path, Default::default())?,
         spec.indoors,
     );
@@ -524,26 +524,6 @@ fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene
     })
 }
 
-/// A trained policy that acts in `model`'s latent space, or an error naming the file.
-pub fn load_policy_for(
-    path: &Path,
-    model: &crate::motion::cvae::MotionModel,
-) -> Result<crate::policy::net::ActorCritic<crate::motion::cvae::infer::InferBackend>> {
-    let (arch, net) = crate::policy::ppo::load_policy::<crate::motion::cvae::infer::InferBackend>(
-        path,
-        &Default::default(),
-    )?;
-    if arch.latent_dim != model.latent_dim() {
-        bail!(
-            "{}: the policy acts in {} latent dimensions, the motion model has {}",
-            path.display(),
-            arch.latent_dim,
-            model.latent_dim()
-        );
-    }
-    Ok(net)
-}
-
 pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Result<()> {
     use crate::motion::cvae::train::evaluation_sets;
     use crate::motion::cvae::{BodyContext, MotionModel};
@@ -555,7 +535,7 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Re
     let model = MotionModel::load(&plan.motion_weights)?;
     plan.arch.latent_dim = model.latent_dim();
     let prior = PosePrior::load(&plan.pose_prior)?;
-    let motion_plan = crate::cli::train::load_train_plan(&plan.motion_config)?;
+    let motion_plan = crate::cli::train_primitive::load_train_plan(&plan.motion_config)?;
     let (train_set, _) = evaluation_sets(&motion_plan, &body, true)?;
     let bank = SeedBank::from_set(&train_set);
     // The scene's 3D SDF only where a stage tests penetration by Eq. 11.

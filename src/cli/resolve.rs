@@ -10,7 +10,7 @@ use crate::render::depth_noise::DepthNoise;
 use crate::render::lighting::{LightingPlan, WorldChoice, SHIPPED_HDRIS};
 use crate::render::passes::{Pass, Passes};
 use crate::render::render_camera::RenderCamera;
-use crate::render::skin::SkinPlan;
+use crate::render::skin_tone::SkinPlan;
 use crate::rig::{Rig, RigCamera};
 
 pub use super::config_file::{crate_root, resolve_body_model, DEFAULT_BODY_MODEL};
@@ -188,7 +188,7 @@ fn agents_motion(
             "not used when motion.source = \"agents\": give each agent its betas in [[agents]] (or let [crowd] draw them)".into(),
         ));
     }
-    use super::synth::{RawSynth, RawSynthMotion, RawSynthOutput, RawSynthScene};
+    use super::synth_config::{RawSynth, RawSynthMotion, RawSynthOutput, RawSynthScene};
     let synth = RawSynth {
         body_model: raw.body.model.clone(),
         scene: RawSynthScene {
@@ -220,7 +220,7 @@ fn agents_motion(
             dir: raw.output.dir.clone(),
         },
     };
-    let synth = super::synth::resolve_synth(synth, config_path, "")?;
+    let synth = super::synth_config::resolve_synth(synth, config_path, "")?;
     let wearers = wearer_indices(&synth, raw.render.as_ref(), bad)?;
     Ok(MotionPlan::Agents {
         synth: Box::new(synth),

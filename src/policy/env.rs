@@ -39,7 +39,7 @@ use crate::math::Vec3;
 use crate::motion::cvae::data::PrimitiveSet;
 use crate::motion::cvae::features::{frame_params, FRAME_DIM};
 use crate::motion::cvae::infer::DecodeError;
-use crate::motion::cvae::rig::RigGeometry;
+use crate::motion::cvae::tensor_body::RigGeometry;
 use crate::motion::cvae::{
     BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed,
 };

@@ -201,6 +201,26 @@ pub fn load_policy<B: Backend>(
     Ok((arch, net))
 }
 
+/// A trained policy that acts in `model`'s latent space, or an error naming the file.
+pub fn load_policy_for(
+    path: &Path,
+    model: &crate::motion::cvae::MotionModel,
+) -> Result<ActorCritic<crate::motion::cvae::infer::InferBackend>, WeightsError> {
+    let (arch, net) =
+        load_policy::<crate::motion::cvae::infer::InferBackend>(path, &Default::default())?;
+    if arch.latent_dim != model.latent_dim() {
+        return Err(WeightsError::Store {
+            path: path.into(),
+            message: format!(
+                "the policy acts in {} latent dimensions, the motion model has {}",
+                arch.latent_dim,
+                model.latent_dim()
+            ),
+        });
+    }
+    Ok(net)
+}
+
 /// Writes a policy atomically, its architecture in the header.
 pub fn save_policy<B: Backend>(
     net: &ActorCritic<B>,

@@ -17,7 +17,7 @@ pub mod protocol;
 pub mod render_camera;
 pub mod shard;
 pub mod shard_plan;
-pub mod skin;
+pub mod skin_tone;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
 pub use protocol::{

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
-pub use super::skin::{RegionPaint, Skin};
+pub use super::skin_tone::{RegionPaint, Skin};
 
 /// How Blender's camera images: either the rig camera itself (a pinhole) or the wider ideal
 /// camera that egogen remaps to a distorted model afterwards.
@@ -95,13 +95,13 @@ pub struct ShardBody {
     pub cache_keys: Vec<[f64; 2]>,
     /// Cycles deformation motion steps (each step doubles the time samples minus one).
     pub motion_steps: u32,
-    /// Its skin material ([`super::skin`]).
+    /// Its skin material ([`super::skin_tone`]).
     pub skin: Skin,
     /// Texture coordinates per triangle corner (float32 (F·3)×2, corner for corner with
     /// `faces_npy`), when the body model has UVs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uvs_npy: Option<PathBuf>,
-    /// Skin regions painted through masks in that UV layout ([`super::skin::SKIN_REGIONS`]).
+    /// Skin regions painted through masks in that UV layout ([`super::skin_tone::SKIN_REGIONS`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub skin_regions: Vec<ShardSkinRegion>,
 }

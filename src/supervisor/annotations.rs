@@ -73,15 +73,15 @@ pub struct FrameAnnotation {
     pub agents: Vec<AgentAnnotation>,
 }
 
-/// An agent's skin ([`crate::render::skin`]).
+/// An agent's skin ([`crate::render::skin_tone`]).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AgentSkin {
     pub name: String,
-    pub skin: crate::render::skin::Skin,
+    pub skin: crate::render::skin_tone::Skin,
     /// The regions painted through the body model's masks (empty: none; absent in files
     /// written before regions).
     #[serde(default)]
-    pub regions: Vec<crate::render::skin::RegionPaint>,
+    pub regions: Vec<crate::render::skin_tone::RegionPaint>,
 }
 
 /// Where a joint is in the image.

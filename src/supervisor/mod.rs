@@ -10,17 +10,18 @@ pub mod colmap;
 pub mod dataset;
 pub mod frame_record;
 pub mod local;
-pub mod manifest;
 pub mod pipeline;
 pub mod pool;
 pub mod slurm;
 pub mod staged;
+pub mod verify;
 
+pub use crate::manifest::{build_manifest, write_manifest, Manifest};
 pub use local::{LocalPool, PoolSettings};
-pub use manifest::{build_manifest, verify, write_manifest, Manifest, VerifyReport};
 pub use pipeline::{
     run_pipeline, shard_pool, stage_take, RunMotion, RunOptions, RunSummary, Staged, StagedTake,
 };
 pub use pool::{PoolReport, PoolRun, PoolTake, ShardPool, TakeFailure, TakeFeed};
 pub use slurm::{SlurmPool, SlurmSettings};
 pub use staged::{CameraWork, Dataset, RenderedAgent, Shard};
+pub use verify::{verify, VerifyReport};

@@ -34,7 +34,7 @@ use crate::body::{joint, BodyModel, BodyParams};
 use crate::math::random::{normal_samples, uniform_open01};
 use crate::math::{Affine3, Vec3};
 use crate::motion::cvae::infer::DecodeError;
-use crate::motion::cvae::rig::RigGeometry;
+use crate::motion::cvae::tensor_body::RigGeometry;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;

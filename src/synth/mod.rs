@@ -1,6 +1,6 @@
 //! Synth: motion + body → per-frame posed bodies and eye-anchor (CPF) trajectories, and the
 //! sequence folder they are written to: crowds of agents steered through a scene (`crowd`),
-//! placing a motion in it (`placement`), the penetration tests (`penetration`), and the body
+//! placing a motion in it (`placement`), a take of agents from its plan (`take`), the penetration tests (`penetration`), and the body
 //! caches Blender plays (`body_cache`).
 
 pub mod body_cache;
@@ -10,6 +10,7 @@ pub mod crowd_dir;
 pub mod penetration;
 pub mod placement;
 pub mod sequence_dir;
+pub mod take;
 
 pub use body_cache::body_cache;
 pub use body_track::{track_body, BodyTrack, TrackFrame};

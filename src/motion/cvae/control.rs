@@ -20,8 +20,8 @@ use serde::Serialize;
 
 use super::infer::{BodyContext, DecodeError, DecodedPrimitive, MotionModel, PrimitiveSeed};
 use super::pace::{heading_rad, wrap_rad, Pace, PACE_SPAN_S};
-use super::rig::RigGeometry;
 use super::sampler::{plausibility, Plausibility, PlausibilityRules};
+use super::tensor_body::RigGeometry;
 use crate::body::joint;
 use crate::math::random::normal_samples;
 use crate::motion::primitive::SEED_FRAMES;

@@ -9,7 +9,7 @@ use crate::motion::MotionSequence;
 use super::contact::contact_score;
 use super::features::{primitive_features, FRAME_DIM};
 use super::net::InputStats;
-use super::rig::RigGeometry;
+use super::tensor_body::RigGeometry;
 
 /// Values of one primitive.
 pub const PRIMITIVE_VALUES: usize = PRIMITIVE_FRAMES * FRAME_DIM;

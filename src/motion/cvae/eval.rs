@@ -10,7 +10,7 @@ use super::features::FRAME_DIM;
 use super::loss::pose_frames;
 pub use super::net::decode_raw;
 use super::net::PrimitiveVae;
-use super::rig::TensorRig;
+use super::tensor_body::TensorRig;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 
 /// Items `range` of a single-primitive set as raw features `[B, T, F]` and floors `[B]`.
@@ -281,7 +281,7 @@ pub fn long_rollout(
     use crate::math::rotation::orthonormality_error;
     let started = std::time::Instant::now();
     let rest = body.shaped.rest_joints;
-    let foot = super::rig::RigGeometry::new(body.model, &body.betas)?.foot_markers;
+    let foot = super::tensor_body::RigGeometry::new(body.model, &body.betas)?.foot_markers;
     let mut seed = seed;
     let mut out = Vec::with_capacity(primitives);
     let mut r = ChainReport {
@@ -324,7 +324,7 @@ pub fn long_rollout(
             upright &= UPRIGHT_PELVIS_M.contains(&(joints[0].z - p.floor_z));
             r.pelvis_z_min_m = r.pelvis_z_min_m.min(joints[0].z);
             r.pelvis_z_max_m = r.pelvis_z_max_m.max(joints[0].z);
-            for j in 1..super::rig::BODY_JOINTS {
+            for j in 1..super::tensor_body::BODY_JOINTS {
                 let parent = PARENTS[j].unwrap_or(0);
                 let posed = joints[j].distance(joints[parent]);
                 let rest_len = rest[j].distance(rest[parent]);

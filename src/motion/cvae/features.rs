@@ -10,7 +10,7 @@ use crate::math::rotation::{matrices_to_axis_angles, rot6d_to_matrices};
 use crate::math::{axis_angle_to_matrix, matrix_to_rot6d};
 use crate::motion::primitive::Primitive;
 
-use super::rig::BODY_JOINTS;
+use super::tensor_body::BODY_JOINTS;
 
 /// Values per frame.
 pub const FRAME_DIM: usize = BODY_JOINTS * 6 + 3;

@@ -11,7 +11,7 @@ use super::decoder_f32::DecoderF32;
 use super::features::{frame_features, frame_params, FRAME_DIM};
 use super::net::decode_raw;
 use super::net::{ArchConfig, PrimitiveVae};
-use super::rig::BODY_JOINTS;
+use super::tensor_body::BODY_JOINTS;
 use super::weights::{self, WeightsError};
 use crate::body::{
     joint, BodyModel, BodyParams, CpfCalibration, PoseError, PosedSkeleton, ShapedBody,

@@ -5,7 +5,7 @@ use burn::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::features::TRANSL_OFFSET;
-use super::rig::{matrix_to_rot6d, rot6d_to_matrix, TensorRig, BODY_JOINTS};
+use super::tensor_body::{matrix_to_rot6d, rot6d_to_matrix, TensorRig, BODY_JOINTS};
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
 
 /// Weight of each loss term.

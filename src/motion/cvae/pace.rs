@@ -13,7 +13,7 @@ use serde::Serialize;
 use super::data::PrimitiveSet;
 use super::eval::set_batch;
 use super::loss::pose_frames;
-use super::rig::TensorRig;
+use super::tensor_body::TensorRig;
 use crate::body::joint;
 use crate::math::Vec3;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};

@@ -13,7 +13,7 @@
 use burn::prelude::*;
 
 use super::features::TRANSL_OFFSET;
-use super::rig::{matrix_to_rot6d, rot6d_to_matrix, TensorRig, BODY_JOINTS};
+use super::tensor_body::{matrix_to_rot6d, rot6d_to_matrix, TensorRig, BODY_JOINTS};
 use crate::body::joint;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 

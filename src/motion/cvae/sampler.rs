@@ -13,7 +13,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::contact::contact_score;
 use super::infer::{BodyContext, DecodeError, DecodedPrimitive, MotionModel, PrimitiveSeed};
-use super::rig::RigGeometry;
+use super::tensor_body::RigGeometry;
 use crate::body::joint;
 use crate::math::random::normal_samples;
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};

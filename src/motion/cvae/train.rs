@@ -27,8 +27,8 @@ use super::loss::{
 };
 use super::net::{ArchConfig, PrimitiveVae};
 use super::pool::SeedPool;
-use super::rig::{RigGeometry, TensorRig};
 use super::rollout::next_seed;
+use super::tensor_body::{RigGeometry, TensorRig};
 pub use super::train_error::TrainError;
 use super::{checkpoint, weights};
 use crate::body::BodyModel;

@@ -6,11 +6,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 
 use crate::exr_file::ExrContents;
-pub use crate::manifest::{
-    build_manifest, build_manifest_with, dataset_files, is_temporary, remove_temporaries,
-    sha256_file, sha256_hex, write_manifest, write_manifest_with, Manifest, ManifestEntry,
-    MANIFEST, SCRATCH_DIRS,
-};
+use crate::manifest::{dataset_files, sha256_file, Manifest, MANIFEST};
 use crate::render::frame_file::{check_frame_channels, FrameFileError};
 
 /// What `verify` checked.
@@ -103,6 +99,7 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::manifest::{build_manifest, remove_temporaries, write_manifest, ManifestEntry};
 
     fn dataset_with(files: &[(&str, &[u8])]) -> tempfile::TempDir {
         let dir = tempfile::tempdir().unwrap();

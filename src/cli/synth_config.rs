@@ -3,11 +3,11 @@
 //! by one (`[[agents]]`) and/or made by `[crowd]` (on a circle walking to the opposite points,
 //! or at sampled places), static and moving 2D obstacles, and the output folder. Parsed
 //! strictly (unknown keys refused), checked value by value with the key named, then resolved
-//! into a [`SynthPlan`]; [`run_synth`] loads the parts and writes the take.
+//! into a [`SynthPlan`] (the primitive training config whose clips seed the agents read with
+//! it); [`crate::synth::take`] walks the plan and writes the take.
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -17,10 +17,8 @@ use super::config_file::{crate_root, resolve_body_model};
 use super::config_file::{load_toml, Bad, ConfigError};
 use crate::math::random::normal_samples;
 use crate::plan::{AgentDraft, SynthPlan};
-use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableMap};
-use crate::synth::crowd::{
-    run_crowd, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering,
-};
+use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid};
+use crate::synth::crowd::{CrowdSettings, Steering};
 
 /// Most agents in one take.
 pub const MAX_AGENTS: usize = 32;
@@ -311,7 +309,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         weights,
         policy,
         pose_prior,
-        train_config,
+        seed_clips: super::train_primitive::load_train_plan(&train_config)?,
         settings,
         duration_s,
         agents,
@@ -632,260 +630,4 @@ fn synth_obstacles(
         }
     }
     Ok((obstacles, moving, solids))
-}
-
-/// The walkable map of the plan's scene, or its open floor.
-pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
-    match &plan.scene {
-        Some(path) => {
-            let mesh = crate::scene::load_scene(path, None)?;
-            Ok(crate::scene::walkable_map(&mesh, path, Default::default())?)
-        }
-        None => {
-            let cell = 0.1;
-            let n = (plan.floor_m / cell).round().max(1.0) as usize;
-            let origin = DVec2::splat(-(n as f64) * cell / 2.0);
-            Ok(WalkableMap::from_walkable(
-                origin,
-                cell,
-                n,
-                n,
-                vec![true; n * n],
-            ))
-        }
-    }
-}
-
-/// Share of a cell's rays that must meet something for it to count as inside the walls.
-pub const MIN_ENCLOSED: f64 = 0.75;
-
-/// A scene's map as its people walk it: with `indoors`, when the scene encloses anything
-/// ([`WalkableMap::indoor_cells`] at [`MIN_ENCLOSED`]), the region inside the walls where
-/// starts and goals are drawn, and the map with the ground around the walls blocked
-/// ([`WalkableMap::restricted_to`]: without it agents leave through the outer doors); else the
-/// map as it is and no region (anywhere walkable).
-pub fn indoor_map(map: WalkableMap, indoors: bool) -> (WalkableMap, Option<Vec<bool>>) {
-    match indoors.then(|| map.indoor_cells(MIN_ENCLOSED)).flatten() {
-        Some(region) => (map.restricted_to(&region), Some(region)),
-        None => (map, None),
-    }
-}
-
-/// The agents with every start and goal placed: sampled ones on the walkable map (in
-/// `region` when given, with the clearance, at least 1 m from every other start); given ones
-/// checked to stand on it.
-pub fn place_agents(
-    plan: &SynthPlan,
-    map: &WalkableMap,
-    region: Option<&[bool]>,
-) -> Result<Vec<AgentPlan>> {
-    let s = &plan.settings;
-    let mut rng = ChaCha8Rng::seed_from_u64(s.seed ^ 0x57A27);
-    let mut out: Vec<AgentPlan> = Vec::with_capacity(plan.agents.len());
-    let on_map = |p: DVec2| map.is_walkable_at(p);
-    // `[[obstacles]]` where they stand when the take starts (the still ones and the moving
-    // ones at time 0), by config order among the still ones first.
-    let at_start: Vec<Obstacle2> = plan
-        .obstacles
-        .iter()
-        .copied()
-        .chain(plan.moving.iter().map(|m| m.at(0.0)))
-        .collect();
-    let inside_obstacle = |p: DVec2, clearance_m: f64| {
-        at_start
-            .iter()
-            .position(|o| o.grown(clearance_m).contains(p))
-    };
-    let floor = if region.is_some() {
-        "walkable floor inside the walls ([scene] indoors = false walks outside too)"
-    } else {
-        "walkable floor"
-    };
-    for a in &plan.agents {
-        let start = match a.start {
-            Some(p) => {
-                if !on_map(p) {
-                    anyhow::bail!(
-                        "{}: agent {}: start [{}, {}] is not on the {floor}",
-                        plan.config.display(),
-                        a.name,
-                        p.x,
-                        p.y
-                    );
-                }
-                if inside_obstacle(p, 0.0).is_some() {
-                    anyhow::bail!(
-                        "{}: agent {}: start [{}, {}] lies inside an [[obstacles]] box (where it \
-                         stands when the take starts); move the start or the obstacle",
-                        plan.config.display(),
-                        a.name,
-                        p.x,
-                        p.y
-                    );
-                }
-                p
-            }
-            None => {
-                let mut found = None;
-                for _ in 0..200 {
-                    let Some(p) = sample_point(map, region, s.clearance_m, &mut rng) else {
-                        break;
-                    };
-                    if out.iter().all(|o| o.start.distance(p) >= 1.0)
-                        && inside_obstacle(p, s.clearance_m).is_none()
-                    {
-                        found = Some(p);
-                        break;
-                    }
-                }
-                found.with_context(|| {
-                    format!(
-                        "{}: agent {}: no free start on the walkable floor ({} m clearance, 1 m from the other agents)",
-                        plan.config.display(),
-                        a.name,
-                        s.clearance_m
-                    )
-                })?
-            }
-        };
-        for g in &a.goals {
-            if !on_map(*g) {
-                anyhow::bail!(
-                    "{}: agent {}: goal [{}, {}] is not on the {floor}",
-                    plan.config.display(),
-                    a.name,
-                    g.x,
-                    g.y
-                );
-            }
-            if plan.obstacles.iter().any(|o| o.contains(*g)) {
-                anyhow::bail!(
-                    "{}: agent {}: goal [{}, {}] lies inside a standing [[obstacles]] box; \
-                     move the goal or the obstacle",
-                    plan.config.display(),
-                    a.name,
-                    g.x,
-                    g.y
-                );
-            }
-        }
-        out.push(AgentPlan {
-            name: a.name.clone(),
-            betas: a.betas.clone(),
-            start,
-            facing_rad: a.facing_rad,
-            goals: a.goals.clone(),
-            wander: a.wander,
-            steering: a.steering,
-        });
-    }
-    Ok(out)
-}
-
-/// A synthesized take and the world it was walked in.
-pub struct Synthesized {
-    pub world: CrowdWorld,
-    pub take: crate::synth::crowd::CrowdTake,
-    pub wall_s: f64,
-    /// What was asked, for the take's summary.
-    pub about: serde_json::Value,
-}
-
-/// Loads the parts and writes the take (see [`crate::synth::crowd_dir`]).
-pub fn run_synth(
-    plan: &SynthPlan,
-    progress: bool,
-) -> Result<crate::synth::crowd_dir::CrowdOutputs> {
-    crate::synth::crowd_dir::check_out_dir(&plan.out_dir)?;
-    let body = crate::body::BodyModel::load(&plan.body_model)?;
-    let s = synthesize(plan, &body, progress)?;
-    crate::synth::crowd_dir::write_crowd_dir(
-        &plan.out_dir,
-        &s.world,
-        &body,
-        &s.take,
-        Some(s.wall_s),
-        s.about,
-    )
-}
-
-/// Loads the motion model, policy, pose prior and start poses, places the agents and walks
-/// the take (nothing is written).
-pub fn synthesize(
-    plan: &SynthPlan,
-    body: &crate::body::BodyModel,
-    progress: bool,
-) -> Result<Synthesized> {
-    use crate::motion::cvae::MotionModel;
-    use crate::policy::{PosePrior, SeedBank};
-    let (map, region) = indoor_map(synth_map(plan)?, plan.indoors);
-    let agents = place_agents(plan, &map, region.as_deref())?;
-    for (a, draft) in agents.iter().zip(&plan.agents) {
-        if !draft.betas_drawn && a.betas.len() > body.num_betas() {
-            anyhow::bail!(
-                "{}: agent {}: {} betas given, the body model {} has {}",
-                plan.config.display(),
-                a.name,
-                a.betas.len(),
-                plan.body_model.display(),
-                body.num_betas()
-            );
-        }
-    }
-    // Drawn shapes keep the coefficients the model has.
-    let agents: Vec<AgentPlan> = agents
-        .into_iter()
-        .map(|mut a| {
-            a.betas.truncate(body.num_betas());
-            a
-        })
-        .collect();
-    let model = MotionModel::load(&plan.weights)?;
-    let prior = PosePrior::load(&plan.pose_prior)?;
-    let actor = match &plan.policy {
-        Some(p) => Some(crate::policy::Actor::of(
-            &super::policy_jobs::load_policy_for(p, &model)?,
-        )),
-        None => None,
-    };
-    let train_plan = super::train::load_train_plan(&plan.train_config)?;
-    let (train_set, _) = crate::motion::cvae::train::evaluation_sets(&train_plan, body, true)?;
-    let bank = SeedBank::from_set(&train_set);
-    let parts = CrowdParts {
-        model: &model,
-        body_model: body,
-        prior: &prior,
-        bank: &bank,
-        policy: actor.as_ref(),
-    };
-    let world = CrowdWorld {
-        map: std::sync::Arc::new(map),
-        region,
-        obstacles: plan.obstacles.clone(),
-        moving: plan.moving.clone(),
-    };
-    let bar = crate::synth::crowd_dir::progress_bar(progress, plan.settings.primitives);
-    let started = std::time::Instant::now();
-    let take = run_crowd(&parts, &world, &agents, &plan.settings, |done, _| {
-        bar.set_position(done as u64)
-    })
-    .with_context(|| format!("{}", plan.config.display()))?;
-    let wall_s = started.elapsed().as_secs_f64();
-    bar.finish_and_clear();
-    let about = serde_json::json!({
-        "config": plan.config,
-        "scene": plan.scene,
-        "floor_m": plan.scene.is_none().then_some(plan.floor_m),
-        "motion_weights": plan.weights,
-        "policy": plan.policy,
-        "pose_prior": plan.pose_prior,
-        "duration_s": plan.duration_s,
-        "settings": plan.settings,
-    });
-    Ok(Synthesized {
-        world,
-        take,
-        wall_s,
-        about,
-    })
 }
