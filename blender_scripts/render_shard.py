@@ -304,10 +304,65 @@ def vertex_colour_material(attribute):
     return mat
 
 
+def split_scene(split):
+    """Splits the one mesh a scan's PLY imports as into the scene's objects: each face goes to
+    the object Rust's loader put it in (`split["face_objects"]`: an index into
+    `split["names"]` per face of the file, in file order, as Blender keeps it), by material
+    slot and Blender's own separate-by-material (which renumbers the slots: each part is named
+    from a face attribute instead)."""
+    import numpy as np
+
+    names = split["names"]
+    faces = np.load(split["face_objects"]).reshape(-1).astype(np.int64)
+    meshes = [o for o in bpy.context.scene.objects if o.type == "MESH"]
+    if len(meshes) != 1 or len(meshes[0].data.polygons) != len(faces):
+        raise RuntimeError(
+            f"the scene imported as {len(meshes)} meshes with "
+            f"{[len(o.data.polygons) for o in meshes]} faces; its object ids name {len(faces)}"
+        )
+    obj = meshes[0]
+    mesh = obj.data
+    material = mesh.materials[0] if mesh.materials else None
+    # One slot per object (faces of none: the last slot, left under the file's name).
+    rest = len(names)
+    slot = np.where((faces >= 0) & (faces < rest), faces, rest).astype(np.int32)
+    mesh.materials.clear()
+    for _ in range(rest + 1):
+        mesh.materials.append(material)
+    mesh.polygons.foreach_set("material_index", slot)
+    # Separating renumbers the slots; the part each face belongs to travels as an attribute.
+    part_of = mesh.attributes.new("egogen_part", "INT", "FACE")
+    part_of.data.foreach_set("value", slot)
+    mesh.update()
+    bpy.ops.object.select_all(action="DESELECT")
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.mode_set(mode="EDIT")
+    bpy.ops.mesh.select_all(action="SELECT")
+    bpy.ops.mesh.separate(type="MATERIAL")
+    bpy.ops.object.mode_set(mode="OBJECT")
+    for part in [o for o in bpy.context.scene.objects if o.type == "MESH"]:
+        if not part.data.polygons:
+            continue
+        k = part.data.attributes["egogen_part"].data[0].value
+        part.data.attributes.remove(part.data.attributes["egogen_part"])
+        if k < rest:
+            part.name = names[k]
+            part.data.name = names[k]
+        # One slot is enough once split.
+        part.data.materials.clear()
+        part.data.materials.append(material)
+        part.data.polygons.foreach_set(
+            "material_index", np.zeros(len(part.data.polygons), dtype=np.int32)
+        )
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
     import_scene_file(spec["scene_file"], spec["scene_up_axis"])
+    if spec.get("scene_split"):
+        split_scene(spec["scene_split"])
     scene = bpy.context.scene
     if spec.get("ceiling"):
         add_ceiling(scene, spec["ceiling"])

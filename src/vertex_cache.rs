@@ -137,6 +137,16 @@ pub fn write_corner_uvs_npy(path: &Path, uvs: &[[f32; 2]]) -> Result<(), CacheEr
     write_npy_rows(path, uvs.iter().copied())
 }
 
+/// Writes an object index per face of a scene file as an int32 `.npy` of shape F×1
+/// (atomically; `u32::MAX`, a face that made no triangle, as −1): how Blender splits a scan it
+/// imports as one mesh into the scene's objects.
+pub fn write_face_objects_npy(path: &Path, objects: &[u32]) -> Result<(), CacheError> {
+    write_npy_rows(
+        path,
+        objects.iter().map(|&o| [i32::try_from(o).unwrap_or(-1)]),
+    )
+}
+
 /// Rows of `C` values as an `.npy` of shape N×C, written atomically.
 fn write_npy_rows<T: npyz::Serialize + npyz::AutoSerialize + Copy, const C: usize>(
     path: &Path,

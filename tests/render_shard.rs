@@ -258,6 +258,7 @@ fn render_scene() -> Rendered {
         }),
         ceiling: None,
         obstacles: Vec::new(),
+        scene_split: None,
     };
     let runtime = BlenderRuntime::resolve(None).expect("Blender 4.5 (managed PyPI bpy)");
     let done = render_shard(&runtime, &spec, &dir.path().join("shard.json")).unwrap();

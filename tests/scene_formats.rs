@@ -3,7 +3,8 @@
 //! colour, and a PLY scan-like mesh with vertex colours. Each scene's objects keep their own
 //! names in the segmentation id table, their pixels carry those ids, and the colours the files
 //! hold are the colours rendered (a red/blue checker on the OBJ's floor, a green wall; the PLY's
-//! green floor and red wall).
+//! green floor and red wall); a PLY whose faces carry object ids is split by id, with the
+//! labels of Replica's `info_semantic.json`.
 
 mod common;
 
@@ -117,6 +118,28 @@ fn id_of(ids: &[(String, u32)], name: &str) -> u32 {
         .1
 }
 
+/// The pixels of the floor's and the wall's ids, each many, each lying on its own geometry
+/// (position pass: the floor at z = 0, the wall at x 3.0–3.2).
+fn floor_and_wall(pixels: &[Pixel], floor_id: u32, wall_id: u32) -> (Vec<&Pixel>, Vec<&Pixel>) {
+    let floor: Vec<&Pixel> = pixels.iter().filter(|p| p.id == floor_id).collect();
+    let wall: Vec<&Pixel> = pixels.iter().filter(|p| p.id == wall_id).collect();
+    assert!(
+        floor.len() > 50 && wall.len() > 50,
+        "{} floor, {} wall pixels",
+        floor.len(),
+        wall.len()
+    );
+    assert!(
+        floor.iter().all(|p| p.xyz[2].abs() < 0.01),
+        "a floor pixel off the floor"
+    );
+    assert!(
+        wall.iter().all(|p| (2.99..=3.21).contains(&p.xyz[0])),
+        "a wall pixel off the wall"
+    );
+    (floor, wall)
+}
+
 /// Share of `pixels` whose colour channel `c` exceeds both others by half again.
 fn dominated_by(pixels: &[&Pixel], c: usize) -> f64 {
     let n = pixels
@@ -170,17 +193,7 @@ fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
 
     let (ids, pixels) = rendered(&dir.path().join("out"));
     let (floor_id, wall_id) = (id_of(&ids, "floor"), id_of(&ids, "wall"));
-    let floor: Vec<&Pixel> = pixels.iter().filter(|p| p.id == floor_id).collect();
-    let wall: Vec<&Pixel> = pixels.iter().filter(|p| p.id == wall_id).collect();
-    assert!(
-        floor.len() > 50 && wall.len() > 50,
-        "{} floor, {} wall pixels",
-        floor.len(),
-        wall.len()
-    );
-    // Every pixel of an object lies on it (position pass).
-    assert!(floor.iter().all(|p| p.xyz[2].abs() < 0.01));
-    assert!(wall.iter().all(|p| (2.99..=3.21).contains(&p.xyz[0])));
+    let (floor, wall) = floor_and_wall(&pixels, floor_id, wall_id);
     // The texture: red and blue squares on the floor; the wall green.
     let (red, blue) = (dominated_by(&floor, 0), dominated_by(&floor, 2));
     assert!(
@@ -241,4 +254,95 @@ fn a_ply_scan_renders_with_its_vertex_colours() {
         "floor green {green:.2}, wall red {red:.2}"
     );
     assert!(egogen::supervisor::verify(&dir.path().join("out")).is_ok());
+}
+
+/// A Replica-style scan: a PLY whose faces carry an `object_id` (the floor 3, the wall's faces
+/// 7) with Replica's `info_semantic.json` beside it naming their classes. The loader and Blender
+/// split it into one object per id (`scan_3`, `scan_7`), the id table carries each object's
+/// label, each object's pixels lie on its own geometry, and the vertex colours still show.
+#[test]
+fn a_ply_scan_with_object_ids_is_split_and_labelled() {
+    let dir = tempfile::tempdir().unwrap();
+    let (v, floor, wall) = room();
+    let colour = |k: usize| if k < 4 { [30, 200, 30] } else { [200, 30, 30] };
+    let faces: Vec<([usize; 4], i32)> = floor
+        .iter()
+        .map(|q| (*q, 3))
+        .chain(wall.iter().map(|q| (*q, 7)))
+        .collect();
+    let mut ply = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\nelement face {}\n\
+         property list uchar int vertex_indices\nproperty int object_id\nend_header\n",
+        v.len(),
+        faces.len()
+    );
+    for (k, p) in v.iter().enumerate() {
+        let c = colour(k);
+        ply += &format!("{} {} {} {} {} {}\n", p[0], p[1], p[2], c[0], c[1], c[2]);
+    }
+    for (q, id) in &faces {
+        ply += &format!(
+            "4 {} {} {} {} {id}\n",
+            q[0] - 1,
+            q[1] - 1,
+            q[2] - 1,
+            q[3] - 1
+        );
+    }
+    let scene = dir.path().join("scan.ply");
+    std::fs::write(&scene, ply).unwrap();
+    std::fs::write(
+        dir.path().join("info_semantic.json"),
+        r#"{"classes": [], "objects": [{"id": 3, "class_name": "floor"}, {"id": 7, "class_name": "wall"}]}"#,
+    )
+    .unwrap();
+    // The loader's objects, before any render.
+    let mesh = egogen::scene::load_scene(&scene, None).unwrap();
+    let loaded: Vec<(&str, Option<&str>)> = mesh
+        .objects
+        .iter()
+        .map(|o| (o.name.as_str(), o.label.as_deref()))
+        .collect();
+    assert_eq!(
+        loaded,
+        [("scan_3", Some("floor")), ("scan_7", Some("wall"))]
+    );
+    assert_eq!(
+        mesh.file_face_objects.as_deref(),
+        Some(&[0, 1, 1, 1, 1, 1, 1][..])
+    );
+
+    let config = dir.path().join("run.toml");
+    std::fs::write(&config, self::config(&scene)).unwrap();
+    common::egogen_run_ok(&config);
+    let out = dir.path().join("out");
+    let (ids, pixels) = rendered(&out);
+    let (floor_id, wall_id) = (id_of(&ids, "scan_3"), id_of(&ids, "scan_7"));
+    assert_ne!(floor_id, wall_id);
+    let doc: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("cameras/camera-rgb/annotations.json")).unwrap(),
+    )
+    .unwrap();
+    let label = |name: &str| {
+        doc["segmentation_ids"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|i| i["name"] == name)
+            .map(|i| i["label"].clone())
+            .unwrap()
+    };
+    assert_eq!(label("scan_3"), "floor");
+    assert_eq!(label("scan_7"), "wall");
+    assert!(label("wearer").is_null(), "agents have no label");
+    let (floor, wall) = floor_and_wall(&pixels, floor_id, wall_id);
+    let (green, red) = (dominated_by(&floor, 1), dominated_by(&wall, 0));
+    assert!(
+        green > 0.8 && red > 0.8,
+        "floor green {green:.2}, wall red {red:.2}"
+    );
+    // Blender's input is scratch: gone from the finished dataset.
+    assert!(!out.join("work/scene_face_objects.npy").exists());
+    assert!(egogen::supervisor::verify(&out).is_ok());
 }

@@ -241,3 +241,37 @@ fn the_hollow_inside_of_a_closed_wall_is_not_floor() {
         map.component.iter().copied().filter(|&c| c > 0).collect();
     assert_eq!(regions.len(), 2, "{regions:?}");
 }
+
+/// A scan whose vertices carry `objectId` (as some scanners write it) splits into one object per
+/// id, a face taking its first vertex's id; each object holds only the vertices it uses. A
+/// Replica `info_semantic.json` beside the file that is not what it should be is refused by name.
+#[test]
+fn a_ply_with_vertex_object_ids_splits_by_id() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = "ply\nformat ascii 1.0\nelement vertex 7\nproperty float x\nproperty float y\nproperty float z\n\
+property int objectId\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+-2 -2 0 5\n2 -2 0 5\n2 2 0 5\n-2 2 0 5\n0 0 0 9\n0.2 0 1.5 9\n0 0.2 1.5 9\n4 0 1 2 3\n3 4 5 6\n";
+    let path = write(dir.path(), "scan.ply", ply);
+    let mesh = load_scene(&path, None).unwrap();
+    let objects: Vec<(&str, Option<&str>)> = mesh
+        .objects
+        .iter()
+        .map(|o| (o.name.as_str(), o.label.as_deref()))
+        .collect();
+    assert_eq!(objects, [("scan_5", None), ("scan_9", None)]);
+    assert_eq!(mesh.vertices.len(), 7, "each vertex copied once");
+    assert_eq!(mesh.triangles.len(), 3);
+    assert_eq!(mesh.file_face_objects.as_deref(), Some(&[0, 1][..]));
+    assert!(walkable_map(&mesh, &path, WalkableSettings::default()).is_ok());
+
+    write(
+        dir.path(),
+        "info_semantic.json",
+        r#"{"objects": [{"id": "five", "class_name": 3}]}"#,
+    );
+    let err = load_scene(&path, None).unwrap_err().to_string();
+    assert!(
+        err.contains("info_semantic.json") && err.contains("objects[0]"),
+        "{err}"
+    );
+}

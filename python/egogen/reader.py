@@ -150,6 +150,12 @@ class Take:
         doc = self.annotations(camera or self.cameras[0])
         return {e["id"]: e["name"] for e in doc["segmentation_ids"]}
 
+    def segmentation_labels(self, camera: Optional[str] = None) -> dict:
+        """Segmentation id -> class label, for the objects whose scene file names one (a
+        Replica scan's `info_semantic.json`); ids without a label are left out."""
+        doc = self.annotations(camera or self.cameras[0])
+        return {e["id"]: e["label"] for e in doc["segmentation_ids"] if "label" in e}
+
     def __len__(self):
         return sum(len(self.annotations(c)["frames"]) for c in self.cameras)
 

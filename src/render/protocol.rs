@@ -205,6 +205,19 @@ pub struct ShardSpec {
     /// Boxes egogen adds for the run's `[[obstacles]]`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub obstacles: Vec<ShardObstacle>,
+    /// A PLY scan whose faces or vertices carry object ids, imported as one mesh, split into
+    /// the scene loader's objects.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_split: Option<ShardSceneSplit>,
+}
+
+/// How to split a scene file Blender imports as one mesh into the scene's objects: an int32
+/// `.npy` with an index into `names` for each face of the file, in file order (−1: none).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardSceneSplit {
+    pub face_objects: PathBuf,
+    pub names: Vec<String>,
 }
 
 /// A box standing on the floor, still or moving in a straight line (an `[[obstacles]]` entry

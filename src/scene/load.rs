@@ -107,9 +107,9 @@ pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneErr
             ))
         }
     };
-    let parts = match extension(path).as_str() {
-        "glb" | "gltf" => read_gltf(path).map_err(not_a("glTF"))?,
-        "obj" => read_obj(path).map_err(not_a("Wavefront OBJ"))?,
+    let (parts, face_parts) = match extension(path).as_str() {
+        "glb" | "gltf" => (read_gltf(path).map_err(not_a("glTF"))?, None),
+        "obj" => (read_obj(path).map_err(not_a("Wavefront OBJ"))?, None),
         "ply" => read_ply(path).map_err(not_a("PLY"))?,
         ext => {
             return Err(SceneError::Unsupported {
@@ -118,8 +118,15 @@ pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneErr
             })
         }
     };
+    let labels = match face_parts.is_some() {
+        true => replica_labels(path)?,
+        false => Default::default(),
+    };
     let mut mesh = SceneMesh::default();
+    // Object index of each part (none when it made no triangle).
+    let mut part_object = Vec::with_capacity(parts.len());
     for part in parts {
+        part_object.push(u32::MAX);
         if let Some(i) = part
             .positions
             .iter()
@@ -148,8 +155,18 @@ pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneErr
             continue;
         }
         let verts: Vec<Vec3> = part.positions.iter().map(|&p| up.to_z_up(p)).collect();
-        mesh.add_object(part.name, &verts, &part.triangles);
+        let id = mesh.add_object(part.name, &verts, &part.triangles);
+        *part_object.last_mut().expect("pushed above") = id.0 - 1;
+        if let Some(file_id) = part.file_id {
+            mesh.objects[id.0 as usize - 1].label = labels.get(&file_id).cloned();
+        }
     }
+    mesh.file_face_objects = face_parts.map(|faces| {
+        faces
+            .iter()
+            .map(|&p| part_object.get(p as usize).copied().unwrap_or(u32::MAX))
+            .collect()
+    });
     if mesh.triangles.is_empty() {
         return Err(SceneError::Empty {
             path: path.to_owned(),
@@ -163,6 +180,40 @@ struct Part {
     name: String,
     positions: Vec<[f64; 3]>,
     triangles: Vec<[u32; 3]>,
+    /// The object id the file gives it (a PLY's `object_id`), when it gives one.
+    file_id: Option<i64>,
+}
+
+/// Class names of a Replica scan's object ids, from the `info_semantic.json` beside it
+/// (`objects: [{"id", "class_name"}, …]`); none when there is no such file.
+fn replica_labels(path: &Path) -> Result<std::collections::HashMap<i64, String>, SceneError> {
+    let file = path.with_file_name("info_semantic.json");
+    let Ok(text) = std::fs::read_to_string(&file) else {
+        return Ok(Default::default());
+    };
+    let bad = |message: String| {
+        SceneError::Read {
+        path: file.clone(),
+        message: format!("{message}; expected Replica's `objects: [{{\"id\": N, \"class_name\": \"…\"}}]` (labels of the scan's object ids)"),
+    }
+    };
+    let doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    let objects = doc["objects"]
+        .as_array()
+        .ok_or_else(|| bad("no `objects` list".into()))?;
+    objects
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| !o["class_name"].is_null())
+        .map(
+            |(k, o)| match (o["id"].as_i64(), o["class_name"].as_str()) {
+                (Some(id), Some(name)) => Ok((id, name.to_owned())),
+                _ => Err(bad(format!(
+                    "objects[{k}]: no integer `id` or string `class_name`"
+                ))),
+            },
+        )
+        .collect()
 }
 
 fn read_gltf(path: &Path) -> Result<Vec<Part>, String> {
@@ -196,6 +247,7 @@ fn read_gltf_parts(path: &Path) -> Result<Vec<Part>, String> {
             name,
             positions: Vec::new(),
             triangles: Vec::new(),
+            file_id: None,
         };
         for prim in mesh.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
@@ -245,6 +297,7 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
                 name: m.name,
                 positions: Vec::new(),
                 triangles: Vec::new(),
+                file_id: None,
             });
             parts.len() - 1
         });
@@ -266,7 +319,11 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
     Ok(parts)
 }
 
-fn read_ply(path: &Path) -> Result<Vec<Part>, String> {
+/// A PLY file as one part, or, when its faces carry an `object_id` (Replica) or its vertices
+/// an `object_id` / `objectId` (a face takes its first vertex's), one part per id in
+/// ascending order, named `<file stem>_<id>`, with the part of each face of the file.
+#[allow(clippy::type_complexity)]
+fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
     use ply_rs_bw::parser::Parser;
     use ply_rs_bw::ply::{DefaultElement, Property};
     let mut f = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| e.to_string())?);
@@ -297,15 +354,25 @@ fn read_ply(path: &Path) -> Result<Vec<Part>, String> {
             },
         )
         .collect::<Result<Vec<_>, _>>()?;
+    let whole = |v: f64| (v.fract() == 0.0 && v.abs() < 9e15).then_some(v as i64);
+    let vertex_id = |i: usize, key: &str| -> Result<Option<i64>, String> {
+        match verts[i].get(key) {
+            None => Ok(None),
+            p => num(p)
+                .and_then(whole)
+                .map(Some)
+                .ok_or(format!("vertex {i}: `{key}` is not a whole number")),
+        }
+    };
+    let vertex_key = ["object_id", "objectId"]
+        .into_iter()
+        .find(|k| verts.first().is_some_and(|v| v.contains_key(*k)));
     let mut triangles = Vec::new();
-    for (fi, face) in ply
-        .payload
-        .get("face")
-        .map(|f| f.as_slice())
-        .unwrap_or(&[])
-        .iter()
-        .enumerate()
-    {
+    // Each face's object id and the file face of each triangle, when ids are given.
+    let mut face_ids: Vec<i64> = Vec::new();
+    let mut triangle_face: Vec<u32> = Vec::new();
+    let faces = ply.payload.get("face").map(|f| f.as_slice()).unwrap_or(&[]);
+    for (fi, face) in faces.iter().enumerate() {
         let list = face
             .get("vertex_indices")
             .or_else(|| face.get("vertex_index"))
@@ -319,19 +386,82 @@ fn read_ply(path: &Path) -> Result<Vec<Part>, String> {
             Property::ListUShort(v) => v.iter().map(|&i| i as u32).collect(),
             _ => return Err(format!("face {fi}: vertex_indices is not an integer list")),
         };
+        let id = match (face.get("object_id"), vertex_key) {
+            (Some(p), _) => Some(
+                num(Some(p))
+                    .and_then(whole)
+                    .ok_or(format!("face {fi}: `object_id` is not a whole number"))?,
+            ),
+            (None, Some(key)) => match idx.first() {
+                Some(&v) if (v as usize) < verts.len() => vertex_id(v as usize, key)?,
+                _ => Some(-1),
+            },
+            (None, None) => None,
+        };
+        if let Some(id) = id {
+            face_ids.push(id);
+        }
         for k in 1..idx.len().saturating_sub(1) {
             triangles.push([idx[0], idx[k], idx[k + 1]]);
+            triangle_face.push(fi as u32);
         }
     }
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "ply".into());
-    Ok(vec![Part {
-        name,
-        positions,
-        triangles,
-    }])
+    if face_ids.len() != faces.len() || faces.is_empty() {
+        return Ok((
+            vec![Part {
+                name,
+                positions,
+                triangles,
+                file_id: None,
+            }],
+            None,
+        ));
+    }
+    // One part per id, ascending, each with the vertices its triangles use.
+    let mut ids: Vec<i64> = face_ids.clone();
+    ids.sort_unstable();
+    ids.dedup();
+    let part_of = |id: i64| ids.binary_search(&id).expect("every id is listed") as u32;
+    let face_part: Vec<u32> = face_ids.iter().map(|&id| part_of(id)).collect();
+    let mut parts: Vec<Part> = ids
+        .iter()
+        .map(|&id| Part {
+            name: format!("{name}_{id}"),
+            positions: Vec::new(),
+            triangles: Vec::new(),
+            file_id: Some(id),
+        })
+        .collect();
+    let mut local: Vec<(u32, u32)> = vec![(u32::MAX, 0); positions.len()];
+    // Part by part (stable: each part's triangles in file order), so a vertex is copied once
+    // into each part that uses it.
+    let mut order: Vec<usize> = (0..triangles.len()).collect();
+    order.sort_by_key(|&t| face_part[triangle_face[t] as usize]);
+    for t in order {
+        let (t, fi) = (&triangles[t], triangle_face[t]);
+        let p = face_part[fi as usize];
+        let part = &mut parts[p as usize];
+        let mut out = [0u32; 3];
+        for (o, &v) in out.iter_mut().zip(t) {
+            let Some(slot) = local.get_mut(v as usize) else {
+                return Err(format!(
+                    "face {fi}: vertex index {v} beyond the {} vertices",
+                    positions.len()
+                ));
+            };
+            if slot.0 != p {
+                *slot = (p, part.positions.len() as u32);
+                part.positions.push(positions[v as usize]);
+            }
+            *o = slot.1;
+        }
+        part.triangles.push(out);
+    }
+    Ok((parts, Some(face_part)))
 }
 
 /// Builds the walkable map of a loaded scene, naming the file in errors.

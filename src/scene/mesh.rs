@@ -6,11 +6,14 @@ use crate::math::Vec3;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ObjectId(pub u32);
 
-/// A named part of the scene (a glTF node, an OBJ object, a PLY file).
+/// A named part of the scene (a glTF node, an OBJ object, a PLY file or, in a PLY whose faces
+/// or vertices carry object ids, the faces of one id).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneObject {
     pub id: ObjectId,
     pub name: String,
+    /// Its class where the file says (a Replica scan's `info_semantic.json`); else none.
+    pub label: Option<String>,
 }
 
 /// World-space triangles (metres, z up) with the object each belongs to.
@@ -21,6 +24,11 @@ pub struct SceneMesh {
     /// Object of each triangle.
     pub triangle_object: Vec<ObjectId>,
     pub objects: Vec<SceneObject>,
+    /// For a PLY split by the object ids its faces or vertices carry: the object (an index
+    /// into [`Self::objects`]) of each face of the file, in file order and before its
+    /// polygons are cut into triangles — what Blender, which imports the file as one mesh,
+    /// needs to split it the same way. `u32::MAX` for a face that made no triangle.
+    pub file_face_objects: Option<Vec<u32>>,
 }
 
 impl SceneMesh {
@@ -35,6 +43,7 @@ impl SceneMesh {
         self.objects.push(SceneObject {
             id,
             name: name.into(),
+            label: None,
         });
         let base = self.vertices.len() as u32;
         self.vertices.extend_from_slice(vertices);

@@ -53,6 +53,9 @@ pub struct Conventions {
 pub struct SegmentationId {
     pub name: String,
     pub id: u32,
+    /// The object's class where the scene file says (a Replica scan's `info_semantic.json`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
 }
 
 /// One rendered frame.

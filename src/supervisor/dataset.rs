@@ -142,6 +142,7 @@ pub fn write_annotations(
     rig: &Rig,
     records: &[Vec<FrameRecord>],
     object_ids: &[(String, u32)],
+    object_labels: &std::collections::BTreeMap<u32, String>,
 ) -> Result<()> {
     let agents = &dataset.agents;
     for (work, records) in dataset.cameras.iter().zip(records) {
@@ -152,11 +153,13 @@ pub fn write_annotations(
             .map(|(name, id)| SegmentationId {
                 name: name.clone(),
                 id: *id,
+                label: object_labels.get(id).cloned(),
             })
             .collect();
         segmentation_ids.extend(agents.iter().map(|a| SegmentationId {
             name: a.name.clone(),
             id: a.id,
+            label: None,
         }));
         let doc = CameraAnnotations {
             egogen_annotations: ANNOTATIONS_VERSION,

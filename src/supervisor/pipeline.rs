@@ -25,7 +25,7 @@ use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::passes::Pass;
 use crate::render::protocol::{
-    ObstacleKey, ShardCeiling, ShardObstacle, ShardSkinRegion, CEILING_OBJECT,
+    ObstacleKey, ShardCeiling, ShardObstacle, ShardSceneSplit, ShardSkinRegion, CEILING_OBJECT,
 };
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
@@ -226,6 +226,8 @@ pub struct StagedTake {
     rig: crate::rig::Rig,
     colmap: bool,
     object_ids: Vec<(String, u32)>,
+    /// The class of each scene object's id where the scene file says.
+    object_labels: std::collections::BTreeMap<u32, String>,
     /// Files only Blender reads (body inputs), removed when the take is finished.
     scratch: Vec<PathBuf>,
 }
@@ -278,11 +280,25 @@ pub fn stage_take(
     let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
         .step_by(render.every_n_frames)
         .collect();
-    let (bodies, scratch) =
+    let (bodies, mut scratch) =
         write_body_inputs(&staging.join("work"), &agents, model, render, &frames)?;
+    let scene_split = match &scene.file_face_objects {
+        Some(faces) => {
+            let path = staging.join("work/scene_face_objects.npy");
+            crate::vertex_cache::write_face_objects_npy(&path, faces)?;
+            let split = ShardSceneSplit {
+                face_objects: std::fs::canonicalize(&path)?,
+                names: scene.objects.iter().map(|o| o.name.clone()).collect(),
+            };
+            scratch.push(path);
+            Some(split)
+        }
+        None => None,
+    };
     let cameras = camera_work(render, &agents, &wearers, &frames);
     let objects = scene_objects(plan, &scene, &motion, &agents);
-    let base_spec = base_spec(plan, render, &scene, &agents[wearers[0]], bodies, &objects)?;
+    let mut base_spec = base_spec(plan, render, &scene, &agents[wearers[0]], bodies, &objects)?;
+    base_spec.scene_split = scene_split;
     let dataset = Arc::new(Dataset {
         staging: std::fs::canonicalize(&staging)?,
         base_spec,
@@ -301,6 +317,11 @@ pub fn stage_take(
         rig: render.rig.clone(),
         colmap: render.passes.has(Pass::Colmap),
         object_ids: objects.ids,
+        object_labels: scene
+            .objects
+            .iter()
+            .filter_map(|o| Some((o.id.0, o.label.clone()?)))
+            .collect(),
         scratch,
     })))
 }
@@ -781,6 +802,7 @@ fn base_spec(
         body_probe: None,
         ceiling: objects.ceiling,
         obstacles: objects.obstacles.clone(),
+        scene_split: None,
     })
 }
 
@@ -814,7 +836,13 @@ impl StagedTake {
         let dataset = &self.dataset;
         let staging = &dataset.staging;
         let records = dataset.records()?;
-        write_annotations(dataset, &self.rig, &records, &self.object_ids)?;
+        write_annotations(
+            dataset,
+            &self.rig,
+            &records,
+            &self.object_ids,
+            &self.object_labels,
+        )?;
         if self.colmap {
             write_colmap(dataset)?;
         }
