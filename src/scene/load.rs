@@ -319,84 +319,162 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
     Ok(parts)
 }
 
+/// A number of any PLY scalar type.
+fn ply_number(p: &ply_rs_bw::ply::Property) -> Option<f64> {
+    use ply_rs_bw::ply::Property;
+    match *p {
+        Property::Float(v) => Some(v as f64),
+        Property::Double(v) => Some(v),
+        Property::Int(v) => Some(v as f64),
+        Property::UInt(v) => Some(v as f64),
+        Property::Short(v) => Some(v as f64),
+        Property::UShort(v) => Some(v as f64),
+        Property::Char(v) => Some(v as f64),
+        Property::UChar(v) => Some(v as f64),
+        _ => None,
+    }
+}
+
+/// A PLY vertex as read: its position and object id (`object_id` or `objectId`), each none
+/// when absent or not a number. Typed elements keep a scan of 10⁶ triangles in tens of MB
+/// instead of a map of properties per element.
+#[derive(Default)]
+struct PlyVertex {
+    xyz: [Option<f64>; 3],
+    id: Option<Option<f64>>,
+}
+
+impl ply_rs_bw::ply::PropertyAccess for PlyVertex {
+    fn new() -> Self {
+        Self::default()
+    }
+    fn set_property(
+        &mut self,
+        key: &str,
+        property: ply_rs_bw::ply::Property,
+    ) -> ply_rs_bw::ply::PropertyAccessResult {
+        match key {
+            "x" => self.xyz[0] = ply_number(&property),
+            "y" => self.xyz[1] = ply_number(&property),
+            "z" => self.xyz[2] = ply_number(&property),
+            "object_id" | "objectId" => self.id = Some(ply_number(&property)),
+            _ => return ply_rs_bw::ply::PropertyAccessResult::Ignored,
+        }
+        ply_rs_bw::ply::PropertyAccessResult::Set
+    }
+}
+
+/// A PLY face as read: its vertex indices (none when the list is missing or not of integers)
+/// and its `object_id`.
+#[derive(Default)]
+struct PlyFace {
+    indices: Option<Vec<u32>>,
+    id: Option<Option<f64>>,
+}
+
+impl ply_rs_bw::ply::PropertyAccess for PlyFace {
+    fn new() -> Self {
+        Self::default()
+    }
+    fn set_property(
+        &mut self,
+        key: &str,
+        property: ply_rs_bw::ply::Property,
+    ) -> ply_rs_bw::ply::PropertyAccessResult {
+        use ply_rs_bw::ply::Property;
+        match key {
+            "vertex_indices" | "vertex_index" => {
+                self.indices = match property {
+                    Property::ListInt(v) => Some(v.iter().map(|&i| i.max(0) as u32).collect()),
+                    Property::ListUInt(v) => Some(v),
+                    Property::ListUChar(v) => Some(v.iter().map(|&i| i as u32).collect()),
+                    Property::ListChar(v) => Some(v.iter().map(|&i| i.max(0) as u32).collect()),
+                    Property::ListShort(v) => Some(v.iter().map(|&i| i.max(0) as u32).collect()),
+                    Property::ListUShort(v) => Some(v.iter().map(|&i| i as u32).collect()),
+                    _ => None,
+                }
+            }
+            "object_id" => self.id = Some(ply_number(&property)),
+            _ => return ply_rs_bw::ply::PropertyAccessResult::Ignored,
+        }
+        ply_rs_bw::ply::PropertyAccessResult::Set
+    }
+}
+
+/// An element egogen does not read (edges, materials, …), skipped.
+struct PlySkipped;
+
+impl ply_rs_bw::ply::PropertyAccess for PlySkipped {
+    fn new() -> Self {
+        Self
+    }
+}
+
 /// A PLY file as one part, or, when its faces carry an `object_id` (Replica) or its vertices
 /// an `object_id` / `objectId` (a face takes its first vertex's), one part per id in
 /// ascending order, named `<file stem>_<id>`, with the part of each face of the file.
 #[allow(clippy::type_complexity)]
 fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
-    use ply_rs_bw::parser::Parser;
-    use ply_rs_bw::ply::{DefaultElement, Property};
-    let mut f = std::io::BufReader::new(std::fs::File::open(path).map_err(|e| e.to_string())?);
-    let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut f)
+    use ply_rs_bw::parser::{Parser, Reader};
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut reader = Reader::new(std::io::BufReader::new(file));
+    let header = Parser::<PlySkipped>::new()
+        .read_header(&mut reader)
         .map_err(|e| e.to_string())?;
-    let num = |p: Option<&Property>| -> Option<f64> {
-        match p? {
-            Property::Float(v) => Some(*v as f64),
-            Property::Double(v) => Some(*v),
-            Property::Int(v) => Some(*v as f64),
-            Property::UInt(v) => Some(*v as f64),
-            Property::Short(v) => Some(*v as f64),
-            Property::UShort(v) => Some(*v as f64),
-            Property::Char(v) => Some(*v as f64),
-            Property::UChar(v) => Some(*v as f64),
-            _ => None,
+    let (mut verts, mut faces) = (None, Vec::new());
+    for element in header.elements.values() {
+        match element.name.as_str() {
+            "vertex" => {
+                verts = Some(
+                    Parser::<PlyVertex>::new()
+                        .read_payload_for_element(&mut reader, element, &header)
+                        .map_err(|e| e.to_string())?,
+                )
+            }
+            "face" => {
+                faces = Parser::<PlyFace>::new()
+                    .read_payload_for_element(&mut reader, element, &header)
+                    .map_err(|e| e.to_string())?
+            }
+            _ => {
+                Parser::<PlySkipped>::new()
+                    .read_payload_for_element(&mut reader, element, &header)
+                    .map_err(|e| e.to_string())?;
+            }
         }
-    };
-    let verts = ply.payload.get("vertex").ok_or("no `vertex` element")?;
+    }
+    let verts = verts.ok_or("no `vertex` element")?;
     let positions = verts
         .iter()
         .enumerate()
-        .map(
-            |(i, v)| match (num(v.get("x")), num(v.get("y")), num(v.get("z"))) {
-                (Some(x), Some(y), Some(z)) => Ok([x, y, z]),
-                _ => Err(format!("vertex {i} lacks numeric x, y, z")),
-            },
-        )
+        .map(|(i, v)| match v.xyz {
+            [Some(x), Some(y), Some(z)] => Ok([x, y, z]),
+            _ => Err(format!("vertex {i} lacks numeric x, y, z")),
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let whole = |v: f64| (v.fract() == 0.0 && v.abs() < 9e15).then_some(v as i64);
-    let vertex_id = |i: usize, key: &str| -> Result<Option<i64>, String> {
-        match verts[i].get(key) {
-            None => Ok(None),
-            p => num(p)
-                .and_then(whole)
-                .map(Some)
-                .ok_or(format!("vertex {i}: `{key}` is not a whole number")),
-        }
-    };
-    let vertex_key = ["object_id", "objectId"]
-        .into_iter()
-        .find(|k| verts.first().is_some_and(|v| v.contains_key(*k)));
+    let vertex_ids = verts.first().is_some_and(|v| v.id.is_some());
     let mut triangles = Vec::new();
     // Each face's object id and the file face of each triangle, when ids are given.
     let mut face_ids: Vec<i64> = Vec::new();
     let mut triangle_face: Vec<u32> = Vec::new();
-    let faces = ply.payload.get("face").map(|f| f.as_slice()).unwrap_or(&[]);
     for (fi, face) in faces.iter().enumerate() {
-        let list = face
-            .get("vertex_indices")
-            .or_else(|| face.get("vertex_index"))
-            .ok_or(format!("face {fi} lacks vertex_indices"))?;
-        let idx: Vec<u32> = match list {
-            Property::ListInt(v) => v.iter().map(|&i| i.max(0) as u32).collect(),
-            Property::ListUInt(v) => v.clone(),
-            Property::ListUChar(v) => v.iter().map(|&i| i as u32).collect(),
-            Property::ListChar(v) => v.iter().map(|&i| i.max(0) as u32).collect(),
-            Property::ListShort(v) => v.iter().map(|&i| i.max(0) as u32).collect(),
-            Property::ListUShort(v) => v.iter().map(|&i| i as u32).collect(),
-            _ => return Err(format!("face {fi}: vertex_indices is not an integer list")),
-        };
-        let id = match (face.get("object_id"), vertex_key) {
-            (Some(p), _) => Some(
-                num(Some(p))
-                    .and_then(whole)
+        let idx = face.indices.as_ref().ok_or(format!(
+            "face {fi} lacks vertex_indices (a list of integers)"
+        ))?;
+        let id = match (face.id, vertex_ids) {
+            (Some(id), _) => Some(
+                id.and_then(whole)
                     .ok_or(format!("face {fi}: `object_id` is not a whole number"))?,
             ),
-            (None, Some(key)) => match idx.first() {
-                Some(&v) if (v as usize) < verts.len() => vertex_id(v as usize, key)?,
-                _ => Some(-1),
+            (None, true) => match idx.first().and_then(|&v| verts.get(v as usize)) {
+                Some(v) => Some(v.id.flatten().and_then(whole).ok_or(format!(
+                    "vertex {}: its object id is not a whole number",
+                    idx[0]
+                ))?),
+                None => Some(-1),
             },
-            (None, None) => None,
+            (None, false) => None,
         };
         if let Some(id) = id {
             face_ids.push(id);
@@ -406,11 +484,14 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
             triangle_face.push(fi as u32);
         }
     }
+    let face_count = faces.len();
+    drop(verts);
+    drop(faces);
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "ply".into());
-    if face_ids.len() != faces.len() || faces.is_empty() {
+    if face_ids.len() != face_count || face_count == 0 {
         return Ok((
             vec![Part {
                 name,
