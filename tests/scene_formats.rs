@@ -4,7 +4,8 @@
 //! names in the segmentation id table, their pixels carry those ids, and the colours the files
 //! hold are the colours rendered (a red/blue checker on the OBJ's floor, a green wall; the PLY's
 //! green floor and red wall); a PLY whose faces carry object ids is split by id, with the
-//! labels of Replica's `info_semantic.json`.
+//! labels of Replica's `info_semantic.json`; a glTF with an image texture and a mesh of two
+//! materials.
 
 mod common;
 
@@ -69,6 +70,7 @@ fn room() -> (Vec<[f64; 3]>, Vec<[usize; 4]>, Vec<[usize; 4]>) {
 }
 
 /// Every frame's pixels: segmentation id, colour (R, G, B) and world position.
+#[derive(Clone, Copy)]
 struct Pixel {
     id: u32,
     rgb: [f32; 3],
@@ -149,23 +151,49 @@ fn dominated_by(pixels: &[&Pixel], c: usize) -> f64 {
     n as f64 / pixels.len().max(1) as f64
 }
 
-#[test]
-fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
-    let dir = tempfile::tempdir().unwrap();
-    // A 4 × 4 texel checker, red and blue, repeated four times across the floor.
-    let png = dir.path().join("checker.png");
+/// `checker.png` in `dir`: a 4 × 4 texel checker, red and blue (the floors' texture, repeated
+/// four times across them).
+fn write_checker_png(dir: &Path) {
     let mut img = egogen::preview::RgbImage::new(4, 4, [0, 0, 0]);
     for y in 0..4 {
         for x in 0..4 {
-            let c = if (x + y) % 2 == 0 {
+            img.pixels[y * 4 + x] = if (x + y) % 2 == 0 {
                 [230, 20, 20]
             } else {
                 [20, 20, 230]
             };
-            img.pixels[y * 4 + x] = c;
         }
     }
-    img.write_png(&png).unwrap();
+    img.write_png(&dir.join("checker.png")).unwrap();
+}
+
+/// Renders `scene` (a room of `floor` and `wall` objects whose floor carries the checker),
+/// checks the dataset, the objects' pixels and the floor's two colours; the floor's and the
+/// wall's pixels.
+fn render_checkered_room(dir: &Path, scene: &Path) -> (Vec<Pixel>, Vec<Pixel>) {
+    let config = dir.join("run.toml");
+    std::fs::write(&config, self::config(scene)).unwrap();
+    common::egogen_run_ok(&config);
+    let out = dir.join("out");
+    assert!(egogen::supervisor::verify(&out).is_ok());
+    let (ids, pixels) = rendered(&out);
+    let (floor_id, wall_id) = (id_of(&ids, "floor"), id_of(&ids, "wall"));
+    let (floor, wall) = floor_and_wall(&pixels, floor_id, wall_id);
+    let (red, blue) = (dominated_by(&floor, 0), dominated_by(&floor, 2));
+    assert!(
+        red > 0.2 && blue > 0.2,
+        "floor red {red:.2}, blue {blue:.2}"
+    );
+    (
+        floor.into_iter().copied().collect(),
+        wall.into_iter().copied().collect(),
+    )
+}
+
+#[test]
+fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
+    let dir = tempfile::tempdir().unwrap();
+    write_checker_png(dir.path());
     std::fs::write(
         dir.path().join("room.mtl"),
         "newmtl checker\nKd 1 1 1\nmap_Kd checker.png\nnewmtl green\nKd 0.05 0.8 0.05\n",
@@ -187,22 +215,11 @@ fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
     }
     let scene = dir.path().join("room.obj");
     std::fs::write(&scene, obj).unwrap();
-    let config = dir.path().join("run.toml");
-    std::fs::write(&config, self::config(&scene)).unwrap();
-    common::egogen_run_ok(&config);
-
-    let (ids, pixels) = rendered(&dir.path().join("out"));
-    let (floor_id, wall_id) = (id_of(&ids, "floor"), id_of(&ids, "wall"));
-    let (floor, wall) = floor_and_wall(&pixels, floor_id, wall_id);
-    // The texture: red and blue squares on the floor; the wall green.
-    let (red, blue) = (dominated_by(&floor, 0), dominated_by(&floor, 2));
-    assert!(
-        red > 0.2 && blue > 0.2,
-        "floor red {red:.2}, blue {blue:.2}"
-    );
-    let green = dominated_by(&wall, 1);
+    let pixels = render_checkered_room(dir.path(), &scene);
+    let (_, wall) = &pixels;
+    // The wall green.
+    let green = dominated_by(&wall.iter().collect::<Vec<_>>(), 1);
     assert!(green > 0.8, "wall green {green:.2}");
-    assert!(egogen::supervisor::verify(&dir.path().join("out")).is_ok());
 }
 
 #[test]
@@ -345,4 +362,114 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
     // Blender's input is scratch: gone from the finished dataset.
     assert!(!out.join("work/scene_face_objects.npy").exists());
     assert!(egogen::supervisor::verify(&out).is_ok());
+}
+
+/// A glTF room whose floor has an image texture (the PNG beside it) and whose wall is one mesh
+/// with two materials — green on the face the walker looks at, grey elsewhere: the object names
+/// are the nodes', the floor shows the texture and the wall's near face its own material.
+#[test]
+fn a_gltf_scene_renders_with_its_textures_and_several_materials() {
+    let dir = tempfile::tempdir().unwrap();
+    write_checker_png(dir.path());
+    let (v, floor, wall) = room();
+    // glTF is y up: a z-up point (x, y, z) is (x, z, −y) in the file.
+    let gl = |p: &[f64; 3]| [p[0] as f32, p[2] as f32, -p[1] as f32];
+    let triangles = |quads: &[[usize; 4]], base: usize| -> Vec<u16> {
+        quads
+            .iter()
+            .flat_map(|q| {
+                let q = q.map(|i| (i - 1 - base) as u16);
+                [q[0], q[1], q[2], q[0], q[2], q[3]]
+            })
+            .collect()
+    };
+    // The wall's face at x = 3 (towards the walker) and the rest of its box.
+    let (near, rest): (Vec<[usize; 4]>, Vec<[usize; 4]>) = wall
+        .iter()
+        .partition(|q| q.iter().all(|&i| v[i - 1][0] == 3.0));
+    let floor_pos: Vec<[f32; 3]> = v[..4].iter().map(gl).collect();
+    let wall_pos: Vec<[f32; 3]> = v[4..].iter().map(gl).collect();
+    let uv: [[f32; 2]; 4] = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]];
+    // One buffer: each array in its own view, 4-byte aligned.
+    let mut bin: Vec<u8> = Vec::new();
+    let mut views = Vec::new();
+    let mut push = |bytes: Vec<u8>| {
+        views.push((bin.len(), bytes.len()));
+        bin.extend(&bytes);
+        while !bin.len().is_multiple_of(4) {
+            bin.push(0);
+        }
+        views.len() - 1
+    };
+    let f32s = |rows: &[[f32; 3]]| -> Vec<u8> {
+        rows.iter()
+            .flatten()
+            .flat_map(|f| f.to_le_bytes())
+            .collect()
+    };
+    let u16s = |ix: &[u16]| -> Vec<u8> { ix.iter().flat_map(|i| i.to_le_bytes()).collect() };
+    let bounds = |rows: &[[f32; 3]]| {
+        let lo = (0..3).map(|k| rows.iter().map(|r| r[k]).fold(f32::MAX, f32::min));
+        let hi = (0..3).map(|k| rows.iter().map(|r| r[k]).fold(f32::MIN, f32::max));
+        (lo.collect::<Vec<_>>(), hi.collect::<Vec<_>>())
+    };
+    let floor_ix = triangles(&floor, 0);
+    let (near_ix, rest_ix) = (triangles(&near, 4), triangles(&rest, 4));
+    let bv = [
+        push(f32s(&floor_pos)),
+        push(uv.iter().flatten().flat_map(|f| f.to_le_bytes()).collect()),
+        push(u16s(&floor_ix)),
+        push(f32s(&wall_pos)),
+        push(u16s(&near_ix)),
+        push(u16s(&rest_ix)),
+    ];
+    std::fs::write(dir.path().join("room.bin"), &bin).unwrap();
+    let ((flo, fhi), (wlo, whi)) = (bounds(&floor_pos), bounds(&wall_pos));
+    let json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"name": "floor", "mesh": 0}, {"name": "wall", "mesh": 1}],
+        "meshes": [
+            {"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]},
+            {"primitives": [
+                {"attributes": {"POSITION": 3}, "indices": 4, "material": 1},
+                {"attributes": {"POSITION": 3}, "indices": 5, "material": 2}
+            ]}
+        ],
+        "materials": [
+            {"name": "checker", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}},
+            {"name": "green", "pbrMetallicRoughness": {"baseColorFactor": [0.05, 0.8, 0.05, 1.0], "metallicFactor": 0.0}},
+            {"name": "grey", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0}}
+        ],
+        "textures": [{"source": 0, "sampler": 0}],
+        "samplers": [{"wrapS": 10497, "wrapT": 10497, "magFilter": 9728}],
+        "images": [{"uri": "checker.png"}],
+        "accessors": [
+            {"bufferView": bv[0], "componentType": 5126, "count": 4, "type": "VEC3", "min": flo, "max": fhi},
+            {"bufferView": bv[1], "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": bv[2], "componentType": 5123, "count": floor_ix.len(), "type": "SCALAR"},
+            {"bufferView": bv[3], "componentType": 5126, "count": 8, "type": "VEC3", "min": wlo, "max": whi},
+            {"bufferView": bv[4], "componentType": 5123, "count": near_ix.len(), "type": "SCALAR"},
+            {"bufferView": bv[5], "componentType": 5123, "count": rest_ix.len(), "type": "SCALAR"}
+        ],
+        "bufferViews": views.iter().map(|(offset, len)| serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": len})).collect::<Vec<_>>(),
+        "buffers": [{"uri": "room.bin", "byteLength": bin.len()}]
+    });
+    let scene = dir.path().join("room.gltf");
+    std::fs::write(&scene, serde_json::to_string_pretty(&json).unwrap()).unwrap();
+    let (_, wall) = &render_checkered_room(dir.path(), &scene);
+    // The near face green; any other face of the wall in view grey (no channel dominates).
+    let near: Vec<&Pixel> = wall.iter().filter(|p| p.xyz[0] < 3.01).collect();
+    let other: Vec<&Pixel> = wall.iter().filter(|p| p.xyz[0] > 3.01).collect();
+    assert!(near.len() > 50, "{} near-face pixels", near.len());
+    let green = dominated_by(&near, 1);
+    assert!(green > 0.8, "near face green {green:.2}");
+    let coloured = (0..3).map(|c| dominated_by(&other, c)).sum::<f64>();
+    assert!(
+        coloured < 0.2,
+        "other faces coloured {coloured:.2} of {}",
+        other.len()
+    );
+    assert!(egogen::supervisor::verify(&dir.path().join("out")).is_ok());
 }
