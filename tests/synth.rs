@@ -1021,3 +1021,68 @@ dir = "{out}"
         .unwrap();
     assert!(reported as usize >= crossed, "{reported} < {crossed}");
 }
+
+/// A building of two storeys (the ground floor, and above it a 0.2 m slab whose top is the
+/// upper floor at 3 m): agents walk the lowest floor, or the upper one when `[scene]
+/// floor_z_m` asks for it — their feet on that floor, the walkable map at its height.
+#[test]
+fn agents_walk_the_storey_whose_floor_height_is_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let quad = |z: f64| format!("v -5 -5 {z}\nv 5 -5 {z}\nv 5 5 {z}\nv -5 5 {z}\n");
+    // Ground floor (z = 0), the slab's underside (2.8, facing down) and its top (3.0).
+    let obj = format!(
+        "o ground\n{}f 1 2 3 4\no slab\n{}{}f 5 8 7 6\nf 9 10 11 12\n",
+        quad(0.0),
+        quad(2.8),
+        quad(3.0)
+    );
+    std::fs::write(dir.path().join("two_storeys.obj"), obj).unwrap();
+    let walk = |name: &str, floor: &str| {
+        let config = dir.path().join(format!("{name}.toml"));
+        std::fs::write(
+            &config,
+            format!(
+                "[scene]\npath = \"two_storeys.obj\"\nindoors = false\n{floor}\n[motion]\nduration_s = 2.0\n\
+                 [[agents]]\nname = \"a\"\nstart = [-2.0, 0.0]\ngoals = [[2.0, 0.0]]\nsteering = \"sampling\"\nk = 4\n\
+                 [output]\ndir = \"{name}\"\n"
+            ),
+        )
+        .unwrap();
+        let plan = load_synth_plan(&config).unwrap();
+        assert_eq!(
+            egogen::synth::take::synth_map(&plan).unwrap().floor_z_m,
+            if floor.is_empty() { 0.0 } else { 3.0 }
+        );
+        run_synth(&plan, false).unwrap();
+        let markers = npyz::NpyFile::new(
+            std::fs::File::open(dir.path().join(name).join("agents/a/markers.npy")).unwrap(),
+        )
+        .unwrap()
+        .into_vec::<f32>()
+        .unwrap();
+        markers.chunks(3).map(|m| m[2]).fold(f32::MAX, f32::min)
+    };
+    let ground = walk("ground", "");
+    let upper = walk("upper", "floor_z_m = 3.0");
+    assert!(
+        ground.abs() < 0.05,
+        "lowest marker {ground} m on the ground floor"
+    );
+    assert!(
+        (upper - 3.0).abs() < 0.05,
+        "lowest marker {upper} m on the upper floor"
+    );
+    // A height with no floor is refused by the map, naming the scene.
+    let config = dir.path().join("air.toml");
+    std::fs::write(
+        &config,
+        "[scene]\npath = \"two_storeys.obj\"\nindoors = false\nfloor_z_m = 1.5\n[motion]\nduration_s = 1.0\n\
+         [[agents]]\nname = \"a\"\n[output]\ndir = \"air\"\n",
+    )
+    .unwrap();
+    let err = run_synth(&load_synth_plan(&config).unwrap(), false)
+        .map(|_| ())
+        .expect_err("a floor in mid-air was walked")
+        .to_string();
+    assert!(err.contains("two_storeys.obj"), "{err}");
+}

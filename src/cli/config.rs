@@ -94,6 +94,9 @@ pub struct RawScene {
     /// Close a scene that has no ceiling with one at the top of its walls when rendering
     /// (default true; a scene with its own ceiling is left as it is).
     pub ceiling: Option<bool>,
+    /// Walk the floor at this height (m): a building's upper storey (default: the lowest
+    /// floor holding a quarter of the largest floor area).
+    pub floor_z_m: Option<f64>,
 }
 
 /// `[render]`: which cameras render what, and how well.

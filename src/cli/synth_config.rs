@@ -41,6 +41,9 @@ pub struct RawSynthScene {
     /// the map the agents sense (default true): the ground around a building is not where its
     /// people walk.
     pub indoors: Option<bool>,
+    /// Walk the floor at this height (m): a building's upper storey (default: the lowest
+    /// floor holding a quarter of the largest floor area).
+    pub floor_z_m: Option<f64>,
 }
 
 /// `[motion]`.
@@ -306,6 +309,7 @@ pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPl
         scene,
         floor_m,
         indoors: raw.scene.indoors.unwrap_or(true),
+        floor_z_m: raw.scene.floor_z_m,
         weights,
         policy,
         pose_prior,
@@ -342,6 +346,14 @@ fn synth_scene(
             "scene.floor_m",
             format!("expected 1–200 m, got {floor_m}"),
         ));
+    }
+    if let Some(z) = raw.floor_z_m {
+        if !(z.is_finite() && scene.is_some()) {
+            return Err(bad(
+                "scene.floor_z_m",
+                format!("expected a finite height (m) with a scene `path`, got {z}"),
+            ));
+        }
     }
     if scene.is_some() && raw.floor_m.is_some() {
         return Err(bad(

@@ -20,6 +20,9 @@ pub struct WalkableSettings {
     pub head_height_m: f64,
     /// Upward-facing triangles within this distance (m) of the floor height count as floor.
     pub floor_tolerance_m: f64,
+    /// Walk the floor at this height (m: a building's upper storey) instead of the lowest
+    /// floor holding a quarter of the largest floor area.
+    pub floor_z_m: Option<f64>,
 }
 
 impl Default for WalkableSettings {
@@ -29,6 +32,7 @@ impl Default for WalkableSettings {
             step_height_m: 0.1,
             head_height_m: 1.8,
             floor_tolerance_m: 0.05,
+            floor_z_m: None,
         }
     }
 }
@@ -85,7 +89,10 @@ pub const MAP_BYTES_PER_CELL: f64 = 31.0;
 impl WalkableMap {
     /// Builds the map of a scene.
     pub fn build(mesh: &SceneMesh, settings: WalkableSettings) -> Result<Self, WalkableError> {
-        let floor_z = detect_floor_z(mesh).ok_or(WalkableError::NoFloor)?;
+        let floor_z = match settings.floor_z_m {
+            Some(z) => z,
+            None => detect_floor_z(mesh).ok_or(WalkableError::NoFloor)?,
+        };
         let (lo, hi) = mesh.bounds().ok_or(WalkableError::NoFloor)?;
         let cell = settings.cell_m;
         let origin = DVec2::new(lo.x, lo.y) - DVec2::splat(cell);

@@ -411,7 +411,11 @@ fn rendered_agents(
 ) -> Result<(Vec<RenderedAgent>, Vec<usize>)> {
     match motion {
         RunMotion::Placed(m) => {
-            let map = walkable_map(scene, &plan.scene, WalkableSettings::default())?;
+            let settings = WalkableSettings {
+                floor_z_m: plan.floor_z_m,
+                ..Default::default()
+            };
+            let map = walkable_map(scene, &plan.scene, settings)?;
             let (placed, _) = place_motion(model, m, &map, plan.scene_seed)
                 .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
             let track = track_body(model, &placed)?;
