@@ -90,7 +90,17 @@ const ALLOWED: &[(&str, &[&str])] = &[
     (
         "eval",
         &[
-            "math", "body", "motion", "scene", "sensing", "policy", "synth", "preview",
+            "math",
+            "body",
+            "motion",
+            "scene",
+            "sensing",
+            "policy",
+            "synth",
+            "preview",
+            "atomic_file",
+            "paths",
+            "progress",
         ],
     ),
     ("inspect", &["exr_file", "preview", "math", "atomic_file"]),

@@ -9,8 +9,6 @@ use clap::Subcommand;
 
 use super::motion_jobs::refuse_existing;
 use crate::body::BodyModel;
-use crate::policy::env::FixedScene;
-use crate::policy::ppo::TrainScene;
 use crate::preview::RgbImage;
 
 #[derive(Subcommand, Debug)]
@@ -356,7 +354,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     if !(lo >= 0.0 && hi >= lo) {
                         bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
                     }
-                    Some(held_out_scene(
+                    Some(crate::policy::fixed_scene::held_out_scene(
                         path,
                         episodes,
                         (lo, hi),
@@ -450,80 +448,6 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
     Ok(())
 }
 
-/// A scene for evaluation: `pairs` start/goal pairs `pair_distance_m` apart, 0.4 m from
-/// anything blocking, drawn under `seed` with another stream than training's pairs, its 3D SDF
-/// built with `sdf_voxel_m` voxels so that paper Eq. 11 is measured.
-pub(crate) fn held_out_scene(
-    path: &Path,
-    pairs: usize,
-    pair_distance_m: (f64, f64),
-    indoors: bool,
-    seed: u64,
-    sdf_voxel_m: f64,
-) -> Result<FixedScene> {
-    fixed_scene(
-        &TrainScene {
-            path: path.into(),
-            pairs,
-            pair_distance_m,
-            clearance_m: 0.4,
-            indoors,
-            seed: seed ^ 0x5CE7E,
-        },
-        Some(sdf_voxel_m),
-    )
-}
-
-/// A fixed scene loaded, with its start/goal pairs drawn as `spec` says (with `spec.indoors`,
-/// when the scene encloses anything: inside the walls, on a map whose ground around them is
-/// blocked); too few pairs is an error. With
-/// `sdf_voxel_m` its 3D SDF is built too with voxels that size (`docs/SCENES.md`), so that
-/// scene penetration (paper Eq. 11) is measured.
-fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
-    let path = &spec.path;
-    let mesh = crate::scene::load_scene(path, None)?;
-    let (map, region) = crate::synth::take::indoor_map(
-        crate::scene::walkable_map(&mesh, path, Default::default())?,
-        spec.indoors,
-    );
-    let (lo, hi) = spec.pair_distance_m;
-    let pairs = crate::policy::tasks::scene_pairs(
-        &map,
-        region.as_deref(),
-        spec.pairs,
-        lo,
-        hi,
-        spec.clearance_m,
-        spec.seed,
-    );
-    if pairs.len() < spec.pairs {
-        bail!(
-            "{}: only {} start/goal pairs {lo}–{hi} m apart with {} m clearance{} (asked for {})",
-            path.display(),
-            pairs.len(),
-            spec.clearance_m,
-            if region.is_some() {
-                " inside the walls"
-            } else {
-                ""
-            },
-            spec.pairs
-        );
-    }
-    let sdf = if let Some(voxel_m) = sdf_voxel_m {
-        let sdf = crate::scene::SceneSdf::build(&mesh, voxel_m, crate::scene::sdf3d::MARGIN_M)
-            .with_context(|| format!("{}: no triangles to build a 3D SDF from", path.display()))?;
-        Some(std::sync::Arc::new(sdf))
-    } else {
-        None
-    };
-    Ok(FixedScene {
-        map: std::sync::Arc::new(map),
-        pairs,
-        sdf,
-    })
-}
-
 pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Result<()> {
     use crate::motion::cvae::train::evaluation_sets;
     use crate::motion::cvae::{BodyContext, MotionModel};
@@ -547,7 +471,7 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Re
     let fixed = plan
         .scene
         .as_ref()
-        .map(|s| fixed_scene(s, sdf_voxel_m))
+        .map(|s| crate::policy::fixed_scene::fixed_scene(s, sdf_voxel_m))
         .transpose()?;
     let parts = Parts {
         model: &model,

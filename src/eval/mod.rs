@@ -1,9 +1,12 @@
-//! The paper's evaluation on this engine (issue: Tables 1–3): the scenarios of Table 1 as crowd
-//! takes, their measures (paper S4.2) and the tables, for the trained policy, the sampling
-//! controller and a path-planning baseline on the same motion model. Uses `synth` to walk and
-//! `preview` to draw; writes nothing itself (the `egogen eval` command does).
+//! The paper's evaluation on this engine: the scenarios of Table 1 as crowd takes, their
+//! measures (paper S4.2), the suites that run Tables 1–3 and the speed table for the trained
+//! policy, the sampling controller and a path-planning baseline on the same motion model
+//! (`jobs`), their result files (`files`), `RESULTS.md` (`report`) and the paper's own figures
+//! beside ours (`paper`). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
+//! `egogen eval`'s arguments and loads the shipped parts.
 
 pub mod files;
+pub mod jobs;
 pub mod metrics;
 pub mod paper;
 pub mod report;

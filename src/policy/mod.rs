@@ -11,6 +11,7 @@ pub mod box_scene;
 pub mod crossing_scene;
 pub mod env;
 pub mod evaluate;
+pub mod fixed_scene;
 pub mod net;
 pub mod pose_prior;
 pub mod ppo;

@@ -27,4 +27,4 @@ pub use penetration::{blocked_cells_in_box, sdf_penetration, CollisionModel, Pen
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
 pub use scenario::{scenario, Scenario, ScenarioKind};
 pub use sdf3d::SceneSdf;
-pub use walkable::{WalkableMap, WalkableSettings};
+pub use walkable::{indoor_map, WalkableMap, WalkableSettings, MIN_ENCLOSED};

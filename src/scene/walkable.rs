@@ -549,6 +549,21 @@ fn convex_overlaps_rect(p: &[DVec2], lo: DVec2, hi: DVec2, margin: f64, closed: 
     true
 }
 
+/// Share of a cell's rays that must meet something for it to count as inside the walls.
+pub const MIN_ENCLOSED: f64 = 0.75;
+
+/// A scene's map as its people walk it: with `indoors`, when the scene encloses anything
+/// ([`WalkableMap::indoor_cells`] at [`MIN_ENCLOSED`]), the region inside the walls where
+/// starts and goals are drawn, and the map with the ground around the walls blocked
+/// ([`WalkableMap::restricted_to`]: without it agents leave through the outer doors); else the
+/// map as it is and no region (anywhere walkable).
+pub fn indoor_map(map: WalkableMap, indoors: bool) -> (WalkableMap, Option<Vec<bool>>) {
+    match indoors.then(|| map.indoor_cells(MIN_ENCLOSED)).flatten() {
+        Some(region) => (map.restricted_to(&region), Some(region)),
+        None => (map, None),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -86,21 +86,6 @@ pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
     }
 }
 
-/// Share of a cell's rays that must meet something for it to count as inside the walls.
-pub const MIN_ENCLOSED: f64 = 0.75;
-
-/// A scene's map as its people walk it: with `indoors`, when the scene encloses anything
-/// ([`WalkableMap::indoor_cells`] at [`MIN_ENCLOSED`]), the region inside the walls where
-/// starts and goals are drawn, and the map with the ground around the walls blocked
-/// ([`WalkableMap::restricted_to`]: without it agents leave through the outer doors); else the
-/// map as it is and no region (anywhere walkable).
-pub fn indoor_map(map: WalkableMap, indoors: bool) -> (WalkableMap, Option<Vec<bool>>) {
-    match indoors.then(|| map.indoor_cells(MIN_ENCLOSED)).flatten() {
-        Some(region) => (map.restricted_to(&region), Some(region)),
-        None => (map, None),
-    }
-}
-
 /// The agents with every start and goal placed: sampled ones on the walkable map (in
 /// `region` when given, with the clearance, at least 1 m from every other start); given ones
 /// checked to stand on it.
@@ -311,7 +296,7 @@ pub fn synthesize(
 ) -> Result<Synthesized> {
     use crate::motion::cvae::MotionModel;
     use crate::policy::{PosePrior, SeedBank};
-    let (map, region) = indoor_map(synth_map(plan)?, plan.indoors);
+    let (map, region) = crate::scene::indoor_map(synth_map(plan)?, plan.indoors);
     let agents = place_agents(plan, &map, region.as_deref())?;
     for (a, draft) in agents.iter().zip(&plan.agents) {
         if !draft.betas_drawn && a.betas.len() > body.num_betas() {
