@@ -308,8 +308,8 @@ def split_scene(split):
     """Splits the one mesh a scan's PLY imports as into the scene's objects: each face goes to
     the object Rust's loader put it in (`split["face_objects"]`: an index into
     `split["names"]` per face of the file, in file order, as Blender keeps it). Each part is
-    built from the imported mesh's arrays (positions, corners, colour attributes, flat
-    shading), so a scan of 10^6 triangles splits in about a second (Blender's own
+    built from the imported mesh's arrays (positions, corners, colour attributes, texture
+    coordinates, flat shading), so a scan of 10^6 triangles splits in about a second (Blender's own
     separate-by-material took 6.9 s on one, docs/SCENES.md)."""
     import numpy as np
 
@@ -340,6 +340,11 @@ def split_scene(split):
         values = np.empty(n * 4, np.float32)
         ca.data.foreach_get("color", values)
         colours.append((ca.name, ca.data_type, ca.domain, values.reshape(-1, 4)))
+    uv_layers = []
+    for uv in mesh.uv_layers:
+        values = np.empty(nl * 2, np.float32)
+        uv.data.foreach_get("uv", values)
+        uv_layers.append((uv.name, values.reshape(-1, 2)))
     sharp = None
     if "sharp_face" in mesh.attributes:
         sharp = np.empty(nf, bool)
@@ -372,6 +377,8 @@ def split_scene(split):
             ca.data.foreach_set(
                 "color", (values[used] if domain == "POINT" else values[loops]).ravel()
             )
+        for uv_name, values in uv_layers:
+            part.uv_layers.new(name=uv_name).data.foreach_set("uv", values[loops].ravel())
         if sharp is not None:
             part.attributes.new("sharp_face", "BOOLEAN", "FACE").data.foreach_set(
                 "value", sharp[sel]

@@ -440,8 +440,8 @@ fn sizes_that_would_exhaust_memory_are_refused_by_key() {
 
 /// Sizes each within its key's fixed limit whose product would not fit in memory are refused
 /// before anything is allocated, naming the key, what they need and the budget: a training
-/// rollout, a policy file's network, a synth crowd and a scene's walkable map under a small
-/// `EGOGEN_MEMORY_GB`.
+/// rollout, a policy file's network, a synth crowd, a scene's walkable map and `egogen-run`'s
+/// scripted walk under a small `EGOGEN_MEMORY_GB`.
 #[test]
 fn sizes_within_their_limits_that_would_not_fit_in_memory_are_refused() {
     let dir = tempfile::tempdir().unwrap();
@@ -535,4 +535,25 @@ fn sizes_within_their_limits_that_would_not_fit_in_memory_are_refused() {
         "{err}"
     );
     assert!(!dir.path().join("out").exists() && !dir.path().join("out.partial").exists());
+
+    // egogen-run's scripted walk at its frame limit (10⁶ frames) under a 1 GB budget.
+    let config = dir.path().join("walk.toml");
+    std::fs::write(
+        &config,
+        "[body]\nbetas = []\n[motion]\nsource = \"scripted_walk\"\nduration_s = 25000.0\n\
+         frame_rate_hz = 40.0\n[output]\ndir = \"walk\"\n",
+    )
+    .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(&config)
+        .env("EGOGEN_MEMORY_GB", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("motion.duration_s") && err.contains("a scripted walk of 1000000 frames"),
+        "{err}"
+    );
+    assert!(!dir.path().join("walk").exists() && !dir.path().join("walk.partial").exists());
 }

@@ -299,6 +299,14 @@ fn scripted_motion(m: &RawMotion, bad: Bad) -> Result<MotionPlan, ConfigError> {
             ),
         ));
     }
+    // The walk's poses and the track made from them (joints and eye frame per frame).
+    let per_frame = std::mem::size_of::<crate::body::BodyParams>()
+        + std::mem::size_of::<crate::synth::TrackFrame>();
+    crate::memory::check_fits(
+        &format!("a scripted walk of {frames:.0} frames ({duration_s} s at {frame_rate_hz} Hz)"),
+        frames * per_frame as f64,
+    )
+    .map_err(|m| bad("motion.duration_s", m))?;
     let speed_m_per_s = m.speed_m_per_s.unwrap_or(1.2);
     if !(speed_m_per_s.is_finite() && (0.0..=10.0).contains(&speed_m_per_s)) {
         return Err(bad(
