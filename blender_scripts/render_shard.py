@@ -391,6 +391,11 @@ def split_scene(split):
         collection.objects.link(new)
 
 
+def blender_name(name):
+    """The name Blender keeps for an object called `name`: at most 63 bytes of UTF-8."""
+    return name.encode("utf-8")[:63].decode("utf-8", "ignore")
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
@@ -400,7 +405,8 @@ def build_scene(spec):
     scene = bpy.context.scene
     if spec.get("ceiling"):
         add_ceiling(scene, spec["ceiling"])
-    ids = dict(spec["object_ids"])
+    # Blender cuts object names at 63 bytes of UTF-8: match the names as it keeps them.
+    ids = {blender_name(name): i for name, i in spec["object_ids"]}
     for obj in scene.objects:
         obj.pass_index = ids.get(obj.name, 0)
     bodies = [add_body(scene, b) for b in spec["bodies"]]

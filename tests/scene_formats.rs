@@ -151,6 +151,10 @@ fn dominated_by(pixels: &[&Pixel], c: usize) -> f64 {
     n as f64 / pixels.len().max(1) as f64
 }
 
+/// The OBJ's wall: a name longer than the 63 bytes Blender keeps, which must still get its id.
+const LONG_WALL: &str =
+    "wall_between_the_living_room_and_the_kitchen_of_the_flat_on_the_first_floor";
+
 /// `checker.png` in `dir`: a 4 × 4 texel checker, red and blue (the floors' texture, repeated
 /// four times across them).
 fn write_checker_png(dir: &Path) {
@@ -167,17 +171,17 @@ fn write_checker_png(dir: &Path) {
     img.write_png(&dir.join("checker.png")).unwrap();
 }
 
-/// Renders `scene` (a room of `floor` and `wall` objects whose floor carries the checker),
+/// Renders `scene` (a room of a `floor` object that carries the checker and a `wall` one),
 /// checks the dataset, the objects' pixels and the floor's two colours; the floor's and the
 /// wall's pixels.
-fn render_checkered_room(dir: &Path, scene: &Path) -> (Vec<Pixel>, Vec<Pixel>) {
+fn render_checkered_room(dir: &Path, scene: &Path, wall: &str) -> (Vec<Pixel>, Vec<Pixel>) {
     let config = dir.join("run.toml");
     std::fs::write(&config, self::config(scene)).unwrap();
     common::egogen_run_ok(&config);
     let out = dir.join("out");
     assert!(egogen::supervisor::verify(&out).is_ok());
     let (ids, pixels) = rendered(&out);
-    let (floor_id, wall_id) = (id_of(&ids, "floor"), id_of(&ids, "wall"));
+    let (floor_id, wall_id) = (id_of(&ids, "floor"), id_of(&ids, wall));
     let (floor, wall) = floor_and_wall(&pixels, floor_id, wall_id);
     let (red, blue) = (dominated_by(&floor, 0), dominated_by(&floor, 2));
     assert!(
@@ -209,13 +213,13 @@ fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
     for q in &floor {
         obj += &format!("f {}/1 {}/2 {}/3 {}/4\n", q[0], q[1], q[2], q[3]);
     }
-    obj += "o wall\nusemtl green\n";
+    obj += &format!("o {LONG_WALL}\nusemtl green\n");
     for q in &wall {
         obj += &format!("f {} {} {} {}\n", q[0], q[1], q[2], q[3]);
     }
     let scene = dir.path().join("room.obj");
     std::fs::write(&scene, obj).unwrap();
-    let pixels = render_checkered_room(dir.path(), &scene);
+    let pixels = render_checkered_room(dir.path(), &scene, LONG_WALL);
     let (_, wall) = &pixels;
     // The wall green.
     let green = dominated_by(&wall.iter().collect::<Vec<_>>(), 1);
@@ -307,7 +311,9 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
             q[3] - 1
         );
     }
-    let scene = dir.path().join("scan.ply");
+    // A stem longer than Blender keeps (63 bytes): the objects' names are cut before their ids.
+    let stem = "scan_of_a_room_from_a_scanner_that_writes_long_file_names_like_this_one";
+    let scene = dir.path().join(format!("{stem}.ply"));
     std::fs::write(&scene, ply).unwrap();
     std::fs::write(
         dir.path().join("info_semantic.json"),
@@ -321,9 +327,13 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
         .iter()
         .map(|o| (o.name.as_str(), o.label.as_deref()))
         .collect();
+    let (floor_name, wall_name) = (format!("{}_3", &stem[..61]), format!("{}_7", &stem[..61]));
     assert_eq!(
         loaded,
-        [("scan_3", Some("floor")), ("scan_7", Some("wall"))]
+        [
+            (floor_name.as_str(), Some("floor")),
+            (wall_name.as_str(), Some("wall"))
+        ]
     );
     assert_eq!(
         mesh.file_face_objects.as_deref(),
@@ -335,7 +345,7 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
     common::egogen_run_ok(&config);
     let out = dir.path().join("out");
     let (ids, pixels) = rendered(&out);
-    let (floor_id, wall_id) = (id_of(&ids, "scan_3"), id_of(&ids, "scan_7"));
+    let (floor_id, wall_id) = (id_of(&ids, &floor_name), id_of(&ids, &wall_name));
     assert_ne!(floor_id, wall_id);
     let doc: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("cameras/camera-rgb/annotations.json")).unwrap(),
@@ -350,8 +360,8 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
             .map(|i| i["label"].clone())
             .unwrap()
     };
-    assert_eq!(label("scan_3"), "floor");
-    assert_eq!(label("scan_7"), "wall");
+    assert_eq!(label(&floor_name), "floor");
+    assert_eq!(label(&wall_name), "wall");
     assert!(label("wearer").is_null(), "agents have no label");
     let (floor, wall) = floor_and_wall(&pixels, floor_id, wall_id);
     let (green, red) = (dominated_by(&floor, 1), dominated_by(&wall, 0));
@@ -458,7 +468,7 @@ fn a_gltf_scene_renders_with_its_textures_and_several_materials() {
     });
     let scene = dir.path().join("room.gltf");
     std::fs::write(&scene, serde_json::to_string_pretty(&json).unwrap()).unwrap();
-    let (_, wall) = &render_checkered_room(dir.path(), &scene);
+    let (_, wall) = &render_checkered_room(dir.path(), &scene, "wall");
     // The near face green; any other face of the wall in view grey (no channel dominates).
     let near: Vec<&Pixel> = wall.iter().filter(|p| p.xyz[0] < 3.01).collect();
     let other: Vec<&Pixel> = wall.iter().filter(|p| p.xyz[0] > 3.01).collect();

@@ -319,6 +319,22 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
     Ok(parts)
 }
 
+/// Longest object name Blender keeps (bytes of UTF-8); it cuts longer ones.
+pub const BLENDER_NAME_BYTES: usize = 63;
+
+/// `<stem>_<id>`, the stem cut (at a character boundary) so that the whole fits in
+/// [`BLENDER_NAME_BYTES`]: the id that tells a scan's objects apart survives in Blender.
+fn split_name(stem: &str, id: i64) -> String {
+    let suffix = format!("_{id}");
+    let mut end = BLENDER_NAME_BYTES
+        .saturating_sub(suffix.len())
+        .min(stem.len());
+    while !stem.is_char_boundary(end) {
+        end -= 1;
+    }
+    format!("{}{suffix}", &stem[..end])
+}
+
 /// A number of any PLY scalar type.
 fn ply_number(p: &ply_rs_bw::ply::Property) -> Option<f64> {
     use ply_rs_bw::ply::Property;
@@ -511,7 +527,7 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
     let mut parts: Vec<Part> = ids
         .iter()
         .map(|&id| Part {
-            name: format!("{name}_{id}"),
+            name: split_name(&name, id),
             positions: Vec::new(),
             triangles: Vec::new(),
             file_id: Some(id),
