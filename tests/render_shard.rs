@@ -5,7 +5,7 @@
 //! depth, camera-frame normals of the floor, the body's segmentation, and optical flow of the
 //! known camera motion.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use egogen::body::BodyModel;
 use egogen::camera::{Camera, CameraModel, Pinhole, Pixel, Resolution};
@@ -18,7 +18,7 @@ use egogen::render::lens_polynomial::native_error;
 use egogen::render::passes::{Pass, Passes};
 use egogen::render::protocol::ShardSkinRegion;
 use egogen::render::render_camera::{FisheyeRendering, RenderCamera};
-use egogen::render::shard::render_shard;
+use egogen::render::shard::worker_command;
 use egogen::render::shard_plan::{
     blender_fps, raw_frame_paths, shard_camera, RawRenders, AGENT_ID_BASE,
 };
@@ -35,6 +35,35 @@ use egogen::synth::body_cache::{
 use egogen::vertex_cache::{
     write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy, PointCache,
 };
+
+/// Runs one shard through Blender directly (no pool): writes the spec, runs the worker to its
+/// end and returns the EXR files it reported done, in order; a failure quotes Blender's
+/// standard error.
+fn render_shard(
+    runtime: &BlenderRuntime,
+    spec: &ShardSpec,
+    spec_path: &Path,
+) -> Result<Vec<PathBuf>, String> {
+    std::fs::write(spec_path, serde_json::to_vec_pretty(spec).unwrap()).unwrap();
+    let output = worker_command(runtime, spec_path)
+        .output()
+        .map_err(|e| e.to_string())?;
+    let done: Vec<PathBuf> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|l| l.strip_prefix("EGOGEN_DONE "))
+        .map(PathBuf::from)
+        .collect();
+    match output.status.success() && done.len() == spec.num_outputs() {
+        true => Ok(done),
+        false => Err(format!(
+            "Blender {} after {} of {} frames:\n{}",
+            output.status,
+            done.len(),
+            spec.num_outputs(),
+            String::from_utf8_lossy(&output.stderr)
+        )),
+    }
+}
 
 const FRAMES: usize = 6;
 const RATE_HZ: f64 = 40.0;
