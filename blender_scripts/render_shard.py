@@ -356,8 +356,13 @@ def split_scene(split):
     slot = np.where((faces >= 0) & (faces < rest), faces, rest)
     part_names = names + [obj.name]
     bpy.data.objects.remove(obj)
-    for k in np.unique(slot):
-        sel = np.nonzero(slot == k)[0]
+    # Faces grouped by part once (stable: each part's faces in file order), not one scan of
+    # every face per part: a scan of thousands of objects stays linear.
+    order = np.argsort(slot, kind="stable")
+    parts, first = np.unique(slot[order], return_index=True)
+    ends = np.append(first[1:], len(order))
+    for k, lo, hi in zip(parts, first, ends):
+        sel = order[lo:hi]
         totals = loop_total[sel]
         starts = np.cumsum(totals) - totals
         loops = np.repeat(loop_start[sel], totals) + (
