@@ -45,6 +45,8 @@ pub struct RenderPlan {
     pub skin: crate::render::skin_tone::SkinPlan,
     /// What the dataset holds.
     pub passes: crate::render::passes::Passes,
+    /// Whether the take gets the COLMAP export (`images/`, `colmap/`).
+    pub colmap: bool,
     /// Where Cycles renders.
     pub device: crate::render::RenderDevice,
     /// `[render.aria]`: each wearer's Aria streams; `None` writes none.

@@ -371,7 +371,7 @@ fn triangulate(
     let (rig_camera, frames) = ground_truth(dataset, camera);
     for (name, q, t, _) in result.images.values() {
         let frame = &frames[name];
-        let (q0, t0) = egogen::supervisor::colmap::colmap_pose(frame.world_from_cam);
+        let (q0, t0) = egogen::export::colmap::colmap_pose(frame.world_from_cam);
         for k in 0..4 {
             assert!((q[k] - q0[k]).abs() < 1e-9, "{name}: qvec {q:?} vs {q0:?}");
         }

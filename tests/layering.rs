@@ -104,7 +104,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
         ],
     ),
     ("inspect", &["exr_file", "preview", "math", "atomic_file"]),
-    // Outputs made from a finished take's trajectories (Aria streams).
+    // Every output of a take beside its frame files: annotations, COLMAP, the manifest (through
+    // one seam, fed by the finished take), the Aria streams (from trajectories).
     (
         "export",
         &[
@@ -115,6 +116,12 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "atomic_file",
             "manifest",
             "preview",
+            "exr_file",
+            "inspect",
+            "render",
+            "motion",
+            "synth",
+            "body",
         ],
     ),
     // Checked run plans: made by cli, carried out by supervisor.
@@ -196,6 +203,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "run_job",
             "supervisor",
             "synth",
+            "export",
         ],
     ),
     // egogen-run's job: a config (cli) through the supervisor to a dataset.

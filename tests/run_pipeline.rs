@@ -454,8 +454,12 @@ fn unknown_or_inconsistent_passes() {
         &["render.passes", "\"colour\"", "found \"rgb\""],
     );
     expect_config_error(
-        &with_render("passes = [\"depth\", \"colmap\"]"),
-        &["render.passes", "add \"colour\""],
+        &with_render("passes = [\"colour\", \"colmap\"]"),
+        &["render.passes", "not a pass", "[render] colmap"],
+    );
+    expect_config_error(
+        &with_render("passes = [\"depth\"]\ncolmap = true"),
+        &["render.colmap", "list \"colour\""],
     );
     expect_config_error(
         &with_render("passes = []"),
@@ -474,7 +478,7 @@ fn unknown_or_inconsistent_passes() {
 /// `passes = ["depth"]` renders only the ground truth's position pass: the frame files hold
 /// `depth.Z` and `valid.V` only, there are no COLMAP images, annotations say occlusion is not
 /// known, and `verify` accepts the dataset. The Aria SLAM camera asked for colour stores one
-/// grey channel, and its COLMAP image is grey.
+/// grey channel, and its COLMAP image (written by default with colour) is grey.
 #[test]
 fn only_the_asked_passes_are_rendered_and_monochrome_cameras_store_grey() {
     use egogen::inspect::ExrContents;
@@ -514,7 +518,7 @@ fn only_the_asked_passes_are_rendered_and_monochrome_cameras_store_grey() {
     assert!(!ann.contains("\"occluded\"") && !ann.contains("\"visible\""));
     verify(&seq);
 
-    let mono = run("cameras = [\"camera-slam-left\"]\nresolution_scale = 0.1\nsamples = 1\nevery_n_frames = 2\npasses = [\"colour\", \"colmap\"]");
+    let mono = run("cameras = [\"camera-slam-left\"]\nresolution_scale = 0.1\nsamples = 1\nevery_n_frames = 2\npasses = [\"colour\"]");
     let seq = mono.path().join("seq");
     assert_eq!(
         channels(&seq.join("cameras/camera-slam-left/frame_00000.exr")),

@@ -481,7 +481,7 @@ workers = 1
             .unwrap();
     assert_eq!(doc["wearer"], "wearer");
     // The file reads back into its types.
-    let typed: egogen::supervisor::annotations::CameraAnnotations =
+    let typed: egogen::export::annotations::CameraAnnotations =
         serde_json::from_value(doc.clone()).unwrap();
     assert_eq!(typed.egogen_annotations, 1);
     assert!(typed.frames.iter().all(|f| f.agents.len() == 2

@@ -14,7 +14,7 @@ use parquet::file::writer::SerializedFileWriter;
 use serde::{Deserialize, Serialize};
 
 use super::plan::TakeDef;
-use crate::supervisor::annotations::CameraAnnotations;
+use crate::export::annotations::CameraAnnotations;
 
 /// One frame of the campaign.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -139,10 +139,13 @@ pub struct RawRender {
     pub headset_wear: Option<RawHeadsetWear>,
     /// `[render.lighting]`: the world light and the lamp (default: a grey world, 300 W).
     pub lighting: Option<RawLighting>,
-    /// What the dataset holds: any of `colour`, `depth`, `normals`, `segmentation`,
-    /// `position`, `flow`, `depth_noise`, `colmap` (default: all, `depth_noise` where
+    /// What the frame files hold: any of `colour`, `depth`, `normals`, `segmentation`,
+    /// `position`, `flow`, `depth_noise` (default: all, `depth_noise` where
     /// `[render.depth_noise]` is given). Only these are rendered, assembled and listed.
     pub passes: Option<Vec<String>>,
+    /// Whether to write the COLMAP export (`images/`, `colmap/`; needs the `colour` pass;
+    /// default: when the colour pass is rendered).
+    pub colmap: Option<bool>,
     /// `cpu` (default) or `gpu` (Cycles on a GPU as Blender finds one).
     pub device: Option<crate::render::RenderDevice>,
     /// `[render.skin]`: how each agent's skin tone is drawn (default: any of the ten Monk

@@ -420,6 +420,7 @@ fn resolve_render(
         depth_noise.iter().any(Option::is_some),
         config_path,
     )?;
+    let colmap = resolve_colmap(r.colmap, passes, config_path)?;
     let aria = r
         .aria
         .as_ref()
@@ -443,6 +444,7 @@ fn resolve_render(
         lighting,
         skin,
         passes,
+        colmap,
         device: r.device.unwrap_or_default(),
         aria,
     })
@@ -590,6 +592,12 @@ fn resolve_passes(
         key: "render.passes".into(),
         message,
     };
+    // COLMAP was a pass before it became an export of its own.
+    if names.is_some_and(|n| n.iter().any(|n| n == "colmap")) {
+        return Err(bad(
+            "\"colmap\" is not a pass: the COLMAP export is `[render] colmap = true` (the default whenever \"colour\" is listed); drop it from the list".into(),
+        ));
+    }
     let Some(names) = names else {
         let all = Passes::default();
         return Ok(if has_depth_noise {
@@ -620,11 +628,6 @@ fn resolve_passes(
             known()
         )));
     }
-    if passes.has(Pass::Colmap) && !passes.has(Pass::Colour) {
-        return Err(bad(
-            "\"colmap\" exports the colour images: add \"colour\" or drop \"colmap\"".into(),
-        ));
-    }
     if passes.has(Pass::DepthNoise) != has_depth_noise {
         return Err(bad(if has_depth_noise {
             "[render.depth_noise] is given but \"depth_noise\" is not listed: add it, or drop the section".into()
@@ -633,6 +636,25 @@ fn resolve_passes(
         }));
     }
     Ok(passes)
+}
+
+/// `[render] colmap`: asked for, or by default whenever the colour pass is rendered; it
+/// exports the colour images, so it needs them.
+fn resolve_colmap(
+    colmap: Option<bool>,
+    passes: Passes,
+    config_path: &Path,
+) -> Result<bool, ConfigError> {
+    let colour = passes.has(Pass::Colour);
+    match colmap {
+        None => Ok(colour),
+        Some(true) if !colour => Err(ConfigError::Value {
+            path: config_path.into(),
+            key: "render.colmap".into(),
+            message: "the COLMAP export is made of the colour images: list \"colour\" in `passes`, or set `colmap = false`".into(),
+        }),
+        Some(asked) => Ok(asked),
+    }
 }
 
 /// `[render.lighting]`, checked.

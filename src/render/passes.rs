@@ -1,6 +1,7 @@
-//! Which outputs a run asks for (`[render] passes`), and what each costs to make: which of
-//! Blender's two renders it needs, which raw passes, which frame-file channels it becomes.
-//! Only what is asked is rendered, assembled, validated and listed.
+//! Which images a run's frame files hold (`[render] passes`), and what each costs to make:
+//! which of Blender's two renders it needs, which raw passes, which frame-file channels it
+//! becomes. Only what is asked is rendered, assembled, validated and listed. Outputs made from
+//! the frames (annotations, COLMAP) are `export`'s.
 
 use serde::{Deserialize, Serialize};
 
@@ -22,13 +23,11 @@ pub enum Pass {
     Flow,
     /// Depth through a sensor noise model (`depth_noisy.Z`, cameras of `[render.depth_noise]`).
     DepthNoise,
-    /// The COLMAP export (`images/`, `colmap/`), made from the colour.
-    Colmap,
 }
 
 impl Pass {
     /// Every pass, in config order.
-    pub const ALL: [Pass; 8] = [
+    pub const ALL: [Pass; 7] = [
         Pass::Colour,
         Pass::Depth,
         Pass::Normals,
@@ -36,7 +35,6 @@ impl Pass {
         Pass::Position,
         Pass::Flow,
         Pass::DepthNoise,
-        Pass::Colmap,
     ];
 
     /// Its name in a config.
@@ -49,7 +47,6 @@ impl Pass {
             Pass::Position => "position",
             Pass::Flow => "flow",
             Pass::DepthNoise => "depth_noise",
-            Pass::Colmap => "colmap",
         }
     }
 

@@ -9,21 +9,20 @@ use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 
-use super::colmap::write_colmap;
-use super::dataset::write_annotations;
 use super::local::{LocalPool, PoolSettings};
 use super::pool::{OneTake, PoolRun, PoolTake, ShardPool};
 use super::slurm::{check_slurm_tools, SlurmPool, SlurmSettings};
 use super::staged::{next_start, CameraWork, Dataset, RenderedAgent};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
+use crate::export::annotations::SegmentationId;
 use crate::export::aria::{write_wearer_streams, Wearer};
 use crate::export::gaze::GazeGoal;
-use crate::manifest::{remove_temporaries, sha256_hex, write_manifest_with, MANIFEST};
+use crate::export::{take_exports, FinishedTake};
+use crate::manifest::{dataset_files, remove_temporaries, sha256_hex, MANIFEST};
 use crate::motion::MotionSequence;
 use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
-use crate::render::passes::Pass;
 use crate::render::protocol::{
     ObstacleKey, ShardCeiling, ShardObstacle, ShardSceneSplit, ShardSkinRegion, CEILING_OBJECT,
 };
@@ -224,10 +223,8 @@ pub struct StagedTake {
     /// The finished dataset's folder.
     pub dir: PathBuf,
     rig: crate::rig::Rig,
-    colmap: bool,
-    object_ids: Vec<(String, u32)>,
-    /// The class of each scene object's id where the scene file says.
-    object_labels: std::collections::BTreeMap<u32, String>,
+    /// The scene's objects' segmentation ids, with the class where the scene file says.
+    scene_ids: Vec<SegmentationId>,
     /// Files only Blender reads (body inputs), removed when the take is finished.
     scratch: Vec<PathBuf>,
 }
@@ -308,6 +305,7 @@ pub fn stage_take(
         frames_per_shard: render.frames_per_shard,
         near_clip_m: render.near_clip_m,
         agents,
+        exports: take_exports(render.colmap),
         start: next_start(&staging),
     });
     repair(&dataset)?;
@@ -315,13 +313,7 @@ pub fn stage_take(
         dataset,
         dir: dir.clone(),
         rig: render.rig.clone(),
-        colmap: render.passes.has(Pass::Colmap),
-        object_ids: objects.ids,
-        object_labels: scene
-            .objects
-            .iter()
-            .filter_map(|o| Some((o.id.0, o.label.clone()?)))
-            .collect(),
+        scene_ids: segmentation_ids(&objects.ids, &scene),
         scratch,
     })))
 }
@@ -832,24 +824,14 @@ fn repair(dataset: &Dataset) -> Result<()> {
 }
 
 impl StagedTake {
-    /// Writes the annotations and the COLMAP model from the frames' records, removes the
-    /// scratch only Blender read (raw renders, body inputs) and the temporaries of killed
-    /// writes, writes the manifest and renames `<dir>.partial` to `<dir>`; returns how many
-    /// files it lists.
+    /// Removes the scratch only Blender read (raw renders, body inputs) and the temporaries of
+    /// killed writes, writes the take's outputs from the frames' records (annotations, the
+    /// COLMAP model, the manifest last: `export::take_exports`) and renames `<dir>.partial` to
+    /// `<dir>`; returns how many files the manifest lists.
     pub fn finish(&self) -> Result<usize> {
         let dataset = &self.dataset;
         let staging = &dataset.staging;
         let records = dataset.records()?;
-        write_annotations(
-            dataset,
-            &self.rig,
-            &records,
-            &self.object_ids,
-            &self.object_labels,
-        )?;
-        if self.colmap {
-            write_colmap(dataset)?;
-        }
         let _ = std::fs::remove_dir_all(dataset.raw_dir());
         for f in &self.scratch {
             let _ = std::fs::remove_file(f);
@@ -860,7 +842,21 @@ impl StagedTake {
                 p.display()
             );
         }
-        let manifest = write_manifest_with(staging, &dataset.recorded_files(&records))?;
+        let take = FinishedTake {
+            folder: staging,
+            rig: &self.rig,
+            cameras: &dataset.cameras,
+            agents: &dataset.agents,
+            records: &records,
+            scene_ids: &self.scene_ids,
+            spec: &dataset.base_spec,
+        };
+        for export in dataset.exports.iter() {
+            export.finish(&take).with_context(|| {
+                format!("writing the {} of {}", export.name(), staging.display())
+            })?;
+        }
+        let files = dataset_files(staging)?.len();
         let dir = &self.dir;
         if dir.exists() {
             std::fs::remove_dir(dir)
@@ -868,8 +864,25 @@ impl StagedTake {
         }
         std::fs::rename(staging, dir)
             .with_context(|| format!("renaming {} to {}", staging.display(), dir.display()))?;
-        Ok(manifest.files.len())
+        Ok(files)
     }
+}
+
+/// The scene objects' segmentation ids (the added ceiling and obstacles among them), each with
+/// its class where the scene file gives one.
+fn segmentation_ids(ids: &[(String, u32)], scene: &crate::scene::SceneMesh) -> Vec<SegmentationId> {
+    let labels: std::collections::BTreeMap<u32, &String> = scene
+        .objects
+        .iter()
+        .filter_map(|o| Some((o.id.0, o.label.as_ref()?)))
+        .collect();
+    ids.iter()
+        .map(|(name, id)| SegmentationId {
+            name: name.clone(),
+            id: *id,
+            label: labels.get(id).map(|l| l.to_string()),
+        })
+        .collect()
 }
 
 /// The `[[obstacles]]` as boxes on the floor at `floor_z_m`, named `obstacle_NN` with ids

@@ -1,40 +1,18 @@
-//! A staged take's rendering work, as data: which frames of which camera, grouped into
-//! shards, where each frame's files live, and the shard specs Blender receives. Finishing
-//! frames into files and records (`dataset`, `frame_record`) and the exports (`colmap`,
-//! annotations) build on it; it uses none of them.
+//! A staged take's rendering work, as data: which frames of which camera (the take's cameras
+//! and bodies as `export::take` describes them), grouped into shards, where each frame's files
+//! live, the shard specs Blender receives, and the outputs the take is finished into.
+//! Finishing frames into files and records (`dataset`, `frame_record`) builds on it.
 
 use std::path::PathBuf;
 
 use crate::camera::CameraModel;
+use crate::export::take::{frame_file_path, TakeExports};
+pub use crate::export::take::{CameraWork, RenderedAgent};
 use crate::exr_file::ExrContents;
-use crate::math::Affine3;
-use crate::motion::MotionSequence;
-use crate::render::depth_noise::DepthNoise;
 use crate::render::frame_file::{validate_frame_contents, FrameFileError};
 use crate::render::passes::Passes;
-use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{raw_frame_paths, shard_camera, RawRenders};
 use crate::render::ShardSpec;
-use crate::rig::RigCamera;
-use crate::synth::BodyTrack;
-
-/// One camera's share of the work.
-#[derive(Debug, Clone)]
-pub struct CameraWork {
-    pub camera: RigCamera,
-    pub render: RenderCamera,
-    /// Depth-noise model and seed, for a `depth_noisy.Z` channel.
-    pub depth_noise: Option<(DepthNoise, u64)>,
-    /// OpenCV `world_from_cam` for every frame of the sequence (the headset's offset on
-    /// the wearer's head applied).
-    pub world_from_cam: Vec<Affine3>,
-    /// The rig's offset on the wearer's head, when drawn.
-    pub headset_wear: Option<crate::rig::wear::WearOffset>,
-    /// Frames to render.
-    pub frames: Vec<u32>,
-    /// The agent wearing the camera (index into the run's agents).
-    pub wearer: usize,
-}
 
 /// One Blender process's work: some frames of one camera.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -59,6 +37,8 @@ pub struct Dataset {
     pub near_clip_m: f64,
     /// Every body in the scene (the annotations list them all).
     pub agents: Vec<RenderedAgent>,
+    /// What the take is finished into (annotations, COLMAP, manifest, …), in order.
+    pub exports: TakeExports,
     /// Which start of the run this is (1 for the first, one more for every `--resume`): each
     /// start keeps its logs in its own folder, so a resume never overwrites what an earlier
     /// start wrote (an error message may name those logs).
@@ -69,9 +49,7 @@ impl Dataset {
     /// The frame file of a camera's frame.
     pub fn frame_path(&self, camera: usize, frame: u32) -> PathBuf {
         self.staging
-            .join("cameras")
-            .join(&self.cameras[camera].camera.name)
-            .join(format!("frame_{frame:05}.exr"))
+            .join(frame_file_path(&self.cameras[camera].camera.name, frame))
     }
 
     pub fn raw_dir(&self) -> PathBuf {
@@ -208,14 +186,4 @@ pub fn next_start(staging: &std::path::Path) -> u32 {
         })
         .unwrap_or(0)
         + 1
-}
-
-/// One body in the rendered scene.
-#[derive(Debug, Clone)]
-pub struct RenderedAgent {
-    pub name: String,
-    /// Segmentation id.
-    pub id: u32,
-    pub motion: MotionSequence,
-    pub track: BodyTrack,
 }

@@ -1,5 +1,5 @@
 //! The per-camera annotation file (`cameras/<camera>/annotations.json`) as types: what a
-//! dataset promises its users, written and read back by the same structs. The schema, with
+//! dataset promises its users, written (`annotate`) and read back by the same structs. The schema, with
 //! units, is in docs/ANNOTATIONS.md; [`ANNOTATIONS_VERSION`] changes when it does.
 
 use serde::{Deserialize, Serialize};

@@ -1,5 +1,5 @@
-//! The dataset's COLMAP export: per camera a COLMAP text model of the rendered frames with
-//! their ground-truth poses and intrinsics, and the colour images COLMAP can read.
+//! A take's COLMAP export (`[render] colmap`): per camera a COLMAP text model of the rendered
+//! frames with their ground-truth poses and intrinsics, and the colour images COLMAP can read.
 //!
 //! Layout (inside the dataset folder):
 //! - `images/<camera>/frame_NNNNN.png` — the colour of each frame file (`rgb.R/G/B`, or
@@ -7,8 +7,8 @@
 //!   (`inspect::preview::auto_exposure`, `colour_exposure` in the annotations), linear →
 //!   sRGB, clamped to [0, 1], 8-bit RGB (grey for
 //!   a monochrome camera). COLMAP cannot read the multilayer EXR. Written only when the run
-//!   asks for the `colmap` pass (which needs `colour`), as each frame is finished
-//!   ([`super::frame_record`]).
+//!   asks for it (`[render] colmap`, which needs the `colour` pass), as each frame is finished
+//!   ([`TakeExport::frame_file`]).
 //! - `colmap/<camera>/cameras.txt` — one camera, id 1, in the COLMAP model that reproduces the
 //!   rig's model exactly (see [`colmap_camera`]).
 //! - `colmap/<camera>/images.txt` — one image per rendered frame, ids 1, 2, … in frame order,
@@ -30,14 +30,16 @@
 //! numbers images from 1 in sorted name order), as `point_triangulator` requires.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use glam::DQuat;
 
-use super::staged::{CameraWork, Dataset};
+use super::annotate::colour_pass;
+use super::take::{CameraWork, FinishedFrame, FinishedTake, TakeExport};
 use crate::atomic_file::write_atomically;
 use crate::camera::{Camera, CameraModel, Fisheye624, Pixel};
+use crate::inspect::preview::pass_preview_exposed;
 use crate::math::{Affine3, Real, Vec3};
 
 /// A camera as COLMAP's `cameras.txt` spells it.
@@ -302,13 +304,47 @@ fn write_model(dir: &Path, cameras: &str, images: &str) -> Result<()> {
     Ok(())
 }
 
-/// Writes `colmap/<camera>/` for every camera of a dataset whose frames are finished (their
-/// images, `images/<camera>/*.png`, were written with the frames: see
-/// [`super::frame_record`]).
-pub fn write_colmap(dataset: &Dataset) -> Result<()> {
-    for work in &dataset.cameras {
+/// The COLMAP export: each frame's image as the frame is finished, the models when the take is.
+pub struct Colmap;
+
+impl TakeExport for Colmap {
+    fn name(&self) -> &'static str {
+        "colmap"
+    }
+
+    fn frame_file_path(&self, camera: &CameraWork, frame: u32) -> Option<PathBuf> {
+        Some(
+            Path::new("images")
+                .join(&camera.camera.name)
+                .join(image_name(frame)),
+        )
+    }
+
+    /// The frame's colour times its exposure as an 8-bit PNG.
+    fn frame_file(&self, frame: &FinishedFrame) -> Result<Vec<u8>> {
+        let contents = frame.contents;
+        match (colour_pass(contents), frame.annotation.colour_exposure) {
+            (Some(colour), Some(exposure)) => {
+                Ok(pass_preview_exposed(contents, colour, exposure).encode_png()?)
+            }
+            _ => anyhow::bail!(
+                "{}: no colour (`rgb` or `gray`) for the COLMAP image",
+                contents.path.display()
+            ),
+        }
+    }
+
+    fn finish(&self, take: &FinishedTake) -> Result<()> {
+        write_colmap(take.folder, take.cameras)
+    }
+}
+
+/// Writes `colmap/<camera>/` for every camera of a take in `folder` whose frames are finished
+/// (their images, `images/<camera>/*.png`, were written with the frames).
+fn write_colmap(folder: &Path, cameras: &[CameraWork]) -> Result<()> {
+    for work in cameras {
         let name = &work.camera.name;
-        let model_dir = dataset.staging.join("colmap").join(name);
+        let model_dir = folder.join("colmap").join(name);
         let images = images_txt(work);
         let exact = colmap_camera(&work.camera.model);
         write_model(&model_dir, &cameras_txt(&exact, ""), &images)?;

@@ -1,0 +1,259 @@
+//! Computing and writing the annotations: each finished frame's annotation from its pixels
+//! while they are in memory ([`annotate_frame`]: agents in view, 2D joints and their
+//! visibility, boxes, the colour's exposure), and the output writing
+//! `cameras/<camera>/annotations.json` of a finished take ([`Annotations`]). The file's types
+//! are `annotations`.
+
+use anyhow::{Context, Result};
+use serde_json::json;
+
+use super::annotations::{
+    AgentAnnotation, AgentSkin, CameraAnnotations, Conventions, FrameAnnotation, JointVisibility,
+    SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
+};
+use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
+use crate::camera::CameraModel;
+use crate::exr_file::ExrContents;
+use crate::render::lens_polynomial::{native_error, ERROR_GRID};
+use crate::render::render_camera::RenderCamera;
+use crate::rig::{Rig, RigCamera};
+
+/// A joint is occluded when the rendered surface at its pixel is nearer than this (m): joints
+/// lie inside the body, up to about this deep under its surface.
+pub const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
+
+/// `cameras/<camera>/annotations.json` for every camera (OpenCV conventions), from the
+/// frames' records.
+pub struct Annotations;
+
+impl TakeExport for Annotations {
+    fn name(&self) -> &'static str {
+        "annotations"
+    }
+
+    fn finish(&self, take: &FinishedTake) -> Result<()> {
+        write_annotations(take)
+    }
+}
+
+fn write_annotations(take: &FinishedTake) -> Result<()> {
+    let agents = take.agents;
+    for (work, records) in take.cameras.iter().zip(take.records) {
+        let model_json = camera_json(take.rig, &work.camera)?;
+        let frames = records.iter().map(|r| r.annotation.clone()).collect();
+        let mut segmentation_ids: Vec<SegmentationId> = take.scene_ids.to_vec();
+        segmentation_ids.extend(agents.iter().map(|a| SegmentationId {
+            name: a.name.clone(),
+            id: a.id,
+            label: None,
+        }));
+        let doc = CameraAnnotations {
+            egogen_annotations: ANNOTATIONS_VERSION,
+            conventions: Conventions {
+                world: "metres, z up".into(),
+                camera_frame: "OpenCV: x right, y down, z forward".into(),
+                pixels: "centre of the top-left pixel at (0, 0)".into(),
+                t_world_cam: "row-major 4x4 mapping camera-frame points to the world".into(),
+                depth: "planar: z of the surface point in the camera frame (m); 0 = no surface".into(),
+                joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view) | in_view (inside it; occlusion not known: the run rendered no depth or no segmentation)"),
+                bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices; null without the segmentation pass".into(),
+            },
+            camera: model_json,
+            image_model: image_model(work),
+            depth_noise: work.depth_noise.map(|(model, seed)| json!({
+                "channel": "depth_noisy.Z",
+                "model": "sigma = a + b (z - c)^2 + d theta^2 / (sqrt(z) (pi/2 - theta)^2), Nguyen et al. 2012; 0 = no measurement",
+                "parameters": model,
+                "seed": seed,
+            })),
+            wearer: agents[work.wearer].name.clone(),
+            headset_wear: work.headset_wear,
+            lighting: take.spec.lighting.clone(),
+            skins: take
+                .spec
+                .bodies
+                .iter()
+                .map(|b| AgentSkin {
+                    name: b.name.clone(),
+                    skin: b.skin,
+                    regions: b.skin_regions.iter().map(|r| r.paint.clone()).collect(),
+                })
+                .collect(),
+            frame_rate_hz: agents[0].motion.frame_rate_hz,
+            segmentation_ids,
+            frames,
+        };
+        let path = take
+            .folder
+            .join("cameras")
+            .join(&work.camera.name)
+            .join("annotations.json");
+        crate::atomic_file::write_atomically(&path, serde_json::to_string_pretty(&doc)?.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// What lens the image was rendered with: `exact` (the camera model itself), or Cycles'
+/// polynomial fisheye standing in for it, with its pixel error against the camera model.
+fn image_model(work: &CameraWork) -> serde_json::Value {
+    match &work.render {
+        RenderCamera::PolynomialFisheye(lens) => json!({
+            "kind": "cycles_polynomial_fisheye",
+            "note": "rendered by this radially symmetric lens instead of `camera`: pixel channels (depth, normals, position, segmentation, flow) follow the image; 2D joints follow `camera`, off the image by `error_vs_camera_px`",
+            "centre_px": [lens.centre_px.x, lens.centre_px.y],
+            "theta_rad_of_radius_px": lens.theta_coeffs,
+            "max_radius_px": lens.max_radius_px,
+            "error_vs_camera_px": native_error(&work.camera.model, lens, ERROR_GRID),
+        }),
+        _ => json!({"kind": "exact"}),
+    }
+}
+
+fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
+    let one = Rig {
+        cameras: vec![camera.clone()],
+        ..rig.clone()
+    };
+    let mut value: serde_json::Value = serde_json::from_str(&one.to_json())?;
+    Ok(value["cameras"][0].take())
+}
+
+/// A frame file's colour: `rgb`, or `gray` of a monochrome camera.
+pub fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::Pass> {
+    contents
+        .passes
+        .iter()
+        .find(|p| p.name == "rgb" || p.name == "gray")
+}
+
+/// A finished frame's annotation, from its validated `contents` (the frame file's channels):
+/// the camera's pose, the agents' bodies and, where the frame holds them, its depth and
+/// segmentation planes (joint visibility, boxes) and its colour (the exposure).
+pub fn annotate_frame(
+    work: &CameraWork,
+    frame: u32,
+    agents: &[RenderedAgent],
+    contents: &ExrContents,
+) -> FrameAnnotation {
+    let plane = |name: &str| contents.channel(name).map(|c| c.values.as_slice());
+    let mut annotation = frame_annotation(
+        work,
+        frame,
+        agents,
+        plane("depth.Z"),
+        plane("segmentation.id"),
+    );
+    annotation.colour_exposure =
+        colour_pass(contents).map(|p| crate::inspect::preview::auto_exposure(contents, p));
+    annotation
+}
+
+/// A frame's annotation from the camera's pose, the agents' bodies and, where the frame holds
+/// them, its depth and segmentation planes (joint visibility, boxes). `colour_exposure` is
+/// left for the caller.
+fn frame_annotation(
+    work: &CameraWork,
+    f: u32,
+    agents: &[RenderedAgent],
+    depth: Option<&[f32]>,
+    ids: Option<&[f32]>,
+) -> FrameAnnotation {
+    let i = f as usize;
+    let res = work.camera.model.resolution();
+    let w = res.width_px as usize;
+    let world_from_cam = work.world_from_cam[i];
+    let cam_from_world = world_from_cam.inverse();
+    let pelvis = |a: &RenderedAgent| a.track.frames[i].joints[0];
+    let listed = agents
+        .iter()
+        .enumerate()
+        .map(|(k, a)| {
+            let joints = &a.track.frames[i].joints;
+            let mut joints_2d = Vec::with_capacity(joints.len());
+            let mut visibility = Vec::with_capacity(joints.len());
+            for j in joints {
+                let p = cam_from_world.transform_point3(*j);
+                match work.camera.model.project(p) {
+                    Some(px) => {
+                        let (x, y) = (px.x.round() as usize, px.y.round() as usize);
+                        let at = y.min(res.height_px as usize - 1) * w + x.min(w - 1);
+                        joints_2d.push(Some([px.x, px.y]));
+                        visibility.push(match (depth, ids) {
+                            (Some(depth), Some(ids)) => {
+                                let d = depth[at] as f64;
+                                // Hidden when the pixel shows something else, nearer than the
+                                // joint; the agent's own surface over its joint is the joint seen.
+                                if ids[at] as u32 != a.id
+                                    && d > 0.0
+                                    && d < p.z - JOINT_OCCLUSION_TOLERANCE_M
+                                {
+                                    JointVisibility::Occluded
+                                } else {
+                                    JointVisibility::Visible
+                                }
+                            }
+                            _ => JointVisibility::InView,
+                        });
+                    }
+                    None => {
+                        joints_2d.push(None);
+                        visibility.push(JointVisibility::Outside);
+                    }
+                }
+            }
+            let bbox = ids.and_then(|ids| bbox_of(ids, w, a.id));
+            // With segmentation: its pixels are in the image; without: a joint is.
+            let in_view = match ids {
+                Some(_) => bbox.is_some(),
+                None => joints_2d.iter().any(Option::is_some),
+            };
+            // Distance to the nearest other agent (pelvis to pelvis); none alone.
+            let nearest = agents
+                .iter()
+                .enumerate()
+                .filter(|(o, _)| *o != k)
+                .map(|(_, o)| pelvis(o).distance(pelvis(a)))
+                .fold(None, |m: Option<f64>, d| Some(m.map_or(d, |m| m.min(d))));
+            AgentAnnotation {
+                name: a.name.clone(),
+                id: a.id,
+                wearer: k == work.wearer,
+                in_view,
+                smplx: SmplxParams::new(
+                    &a.motion.betas,
+                    &a.motion.poses[i],
+                    a.motion.trans[i].to_array(),
+                ),
+                joints_3d: joints.iter().map(|j| j.to_array()).collect(),
+                joints_2d,
+                joint_visibility: visibility,
+                bbox_xyxy: bbox,
+                interaction_distance_m: nearest,
+            }
+        })
+        .collect();
+    FrameAnnotation {
+        frame: f,
+        time_s: f as f64 / agents[0].motion.frame_rate_hz,
+        file: format!("frame_{f:05}.exr"),
+        t_world_cam: crate::math::row_major(world_from_cam),
+        colour_exposure: None,
+        agents: listed,
+    }
+}
+
+/// Inclusive pixel box of the pixels labelled `id`, if any.
+fn bbox_of(ids: &[f32], width: usize, id: u32) -> Option<[usize; 4]> {
+    let mut b: Option<[usize; 4]> = None;
+    for (i, &v) in ids.iter().enumerate() {
+        if v as u32 == id {
+            let (x, y) = (i % width, i / width);
+            b = Some(match b {
+                None => [x, y, x, y],
+                Some([x0, y0, x1, y1]) => [x0.min(x), y0.min(y), x1.max(x), y1.max(y)],
+            });
+        }
+    }
+    b
+}
