@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use egogen::body::BodyModel;
 use egogen::motion::cvae::control::{chain_sequence, CemSettings, LatentController, PaceTarget};
-use egogen::motion::cvae::eval::{contact_score, contact_score_horizontal};
+use egogen::motion::cvae::measure::{contact_score, contact_score_horizontal};
 use egogen::motion::cvae::pace::{Pace, PaceSummary};
 use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};

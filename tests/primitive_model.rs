@@ -133,7 +133,7 @@ fn tiny_training_run_lowers_the_loss_and_writes_loadable_weights() {
     // Random latents spread the decoded primitives; one latent for every draw does not.
     {
         use egogen::body::BodyModel;
-        use egogen::motion::cvae::eval::latent_spread_mm;
+        use egogen::motion::cvae::measure::latent_spread_mm;
         use egogen::motion::cvae::tensor_body::{RigGeometry, TensorRig};
         use egogen::motion::cvae::train::{evaluation_sets, normal_samples};
         use rand_core::SeedableRng;
@@ -453,7 +453,7 @@ fn shipped_weights_decode_a_batch_of_finite_rigid_bodies() {
 #[test]
 fn fifty_chained_primitives_stay_finite_and_rigid() {
     use egogen::body::BodyModel;
-    use egogen::motion::cvae::eval::long_rollout;
+    use egogen::motion::cvae::measure::long_rollout;
     use egogen::motion::cvae::train::shipped_weights_path;
     use egogen::motion::cvae::{BestOfK, BodyContext, PlausibilityRules};
     use rand_core::SeedableRng;
@@ -605,9 +605,9 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
     use burn::prelude::*;
     use egogen::body::BodyModel;
     use egogen::motion::cvae::data::{build_set, ClipPart};
-    use egogen::motion::cvae::eval::set_batch;
     use egogen::motion::cvae::features::{FRAME_DIM, TRANSL_OFFSET};
     use egogen::motion::cvae::loss::{plausible_range, prior_loss, PriorWeights};
+    use egogen::motion::cvae::measure::set_batch;
     use egogen::motion::cvae::tensor_body::{RigGeometry, TensorRig};
 
     let body = BodyModel::load(common::default_model_path()).unwrap();

@@ -67,7 +67,7 @@ pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> R
     for out in [&opts.export_npz, &opts.pace_json].into_iter().flatten() {
         refuse_existing(out)?;
     }
-    use crate::motion::cvae::eval::{
+    use crate::motion::cvae::measure::{
         latent_spread_mm, long_rollout, marker_mpjpe_mm, random_latent_contact,
     };
     use crate::motion::cvae::tensor_body::{RigGeometry, TensorRig};
@@ -517,12 +517,12 @@ fn walk_to_goal(
     lookahead: usize,
     rng: &mut rand_chacha::ChaCha8Rng,
 ) -> Result<(
-    crate::motion::cvae::eval::ChainReport,
+    crate::motion::cvae::measure::ChainReport,
     Vec<crate::motion::cvae::DecodedPrimitive>,
     f64,
 )> {
     use crate::body::joint;
-    use crate::motion::cvae::eval::long_rollout;
+    use crate::motion::cvae::measure::long_rollout;
     use crate::motion::cvae::{BestOfK, PlausibilityRules};
     let rules = PlausibilityRules {
         goal_xy: Some(goal),

@@ -56,7 +56,7 @@ impl PolicyRow {
         (policy, weights, config): (&str, &str, &str),
         set: &str,
         actions: &str,
-        report: &crate::policy::evaluate::EvalReport,
+        report: &crate::policy::held_out::EvalReport,
         scene: bool,
     ) -> Self {
         Self {

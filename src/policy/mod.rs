@@ -5,13 +5,23 @@
 //!
 //! Depends on `motion::cvae` (decoding), `body` (markers, CPF), `scene` (walkable map,
 //! collision) and `sensing` (rays). Nothing here renders.
+//!
+//! By when it runs:
+//! - acting (every take): `walker` (one body as a controller sees it), `actor` and
+//!   `row_product` (the policy on the CPU in f32), `sampling` (best of K latents), the
+//!   environment's observation and reward (`env`, `reward`, `pose_prior`);
+//! - training: `net` (the actor-critic in burn), `ppo` (its stages and checkpoints) over the
+//!   environment's scenes — `box_scene`, `crossing_scene`, `room_scene` (floor plans, also
+//!   drawn by campaigns and evaluations) and `fixed_scene` (a scene file with start/goal pairs);
+//! - evaluation: `held_out` (a controller over held-out episodes) and `tasks` (the `egogen
+//!   policy` commands' jobs); the paper's tables are `crate::eval`'s.
 
 pub mod actor;
 pub mod box_scene;
 pub mod crossing_scene;
 pub mod env;
-pub mod evaluate;
 pub mod fixed_scene;
+pub mod held_out;
 pub mod net;
 pub mod pose_prior;
 pub mod ppo;

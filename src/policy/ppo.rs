@@ -441,7 +441,7 @@ fn validate(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut kl_sum = 0.0;
     let mut kl_n = 0usize;
-    let (summaries, _) = super::evaluate::run_episodes(
+    let (summaries, _) = super::held_out::run_episodes(
         &mut env,
         episodes,
         |e| {

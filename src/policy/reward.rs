@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use super::pose_prior::PosePrior;
 use crate::body::joint;
 use crate::math::Vec3;
-use crate::motion::cvae::eval::contact_terms;
+use crate::motion::cvae::measure::contact_terms;
 use crate::motion::cvae::DecodedPrimitive;
 use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::scene::{blocked_cells_in_box, MovingObstacle, Obstacle2, WalkableMap};

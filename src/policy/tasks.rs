@@ -7,7 +7,7 @@ use rand_core::{Rng, SeedableRng};
 use serde::Serialize;
 
 use super::env::{EnvSettings, PolicyEnv, SeedBank};
-use super::evaluate::{run_episodes, EvalReport, HELD_OUT_BASE};
+use super::held_out::{run_episodes, EvalReport, HELD_OUT_BASE};
 use super::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 use super::sampling::sampling_step;
 use crate::body::BodyParams;

@@ -8,18 +8,21 @@
 //! fine-tuning), weights files, the inference API (burn's decoder beside a plain f32 one for
 //! few primitives at a time, reading f16 weights for one alone), best-of-K random-latent sampling, the pace
 //! and turn of primitives, and latents chosen for a target velocity and heading (`control`);
-//! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s.
+//! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s. A trained
+//! model's measurements (held-out marker error, contact of batches and chains, long rollouts)
+//! are `measure`; the paper's evaluation of controllers is `crate::eval`, a controller over
+//! held-out episodes `policy::held_out`.
 
 pub mod checkpoint;
 pub mod contact;
 pub mod control;
 pub mod data;
 pub mod decoder_f32;
-pub mod eval;
 pub mod features;
 pub mod half_matvec;
 pub mod infer;
 pub mod loss;
+pub mod measure;
 pub mod net;
 pub mod pace;
 pub mod pool;

@@ -5,14 +5,14 @@
 //! Heading is the yaw of the way the body faces: the horizontal normal of the left hip → right
 //! hip line (the canonical frame's y axis), in radians counter-clockwise from world +x, seen from
 //! above (z up). A primitive's pace is measured from the last seed frame to its last frame
-//! (18 frames, 0.45 s at 40 Hz), as [`super::eval::ChainReport`] measures it.
+//! (18 frames, 0.45 s at 40 Hz), as [`super::measure::ChainReport`] measures it.
 
 use burn::prelude::*;
 use serde::Serialize;
 
 use super::data::PrimitiveSet;
-use super::eval::set_batch;
 use super::loss::pose_frames;
+use super::measure::set_batch;
 use super::tensor_body::TensorRig;
 use crate::body::joint;
 use crate::math::Vec3;

@@ -20,11 +20,11 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 
 use super::data::{build_set, ClipPart, ContactFilter, PrimitiveSet, PRIMITIVE_VALUES};
-use super::eval::{decode_raw, marker_mpjpe_mm, UPRIGHT_PELVIS_M};
 use super::loss::{
     pelvis_and_trunk, plausible_range, pose_frames, primitive_loss, prior_loss, LossWeights,
     PlausibleRange, PriorWeights,
 };
+use super::measure::{decode_raw, marker_mpjpe_mm, UPRIGHT_PELVIS_M};
 use super::net::{ArchConfig, PrimitiveVae};
 use super::pool::SeedPool;
 use super::rollout::next_seed;
@@ -1033,7 +1033,7 @@ fn finish_training(
 fn training_range(set: &PrimitiveSet, geo: &RigGeometry, q: f64) -> PlausibleRange {
     let device = Default::default();
     let rig = TensorRig::<Flex>::new(geo, &device);
-    let (x, floors) = super::eval::set_batch::<Flex>(set, 0..set.len(), &device);
+    let (x, floors) = super::measure::set_batch::<Flex>(set, 0..set.len(), &device);
     let floor = Tensor::from_data(TensorData::new(floors.clone(), [floors.len()]), &device);
     plausible_range(&rig, x, floor, q)
 }
