@@ -150,6 +150,64 @@ fn a_campaign_renders_indexes_resumes_and_reads_back() {
     let again = egogen_run().arg(&campaign).output().unwrap();
     assert!(!again.status.success());
     assert!(String::from_utf8_lossy(&again.stderr).contains("--resume"));
+    let resumed = egogen_run()
+        .arg(&campaign)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&resumed.stderr);
+    assert!(resumed.status.success(), "{said}");
+    assert!(
+        said.contains(
+            "3 finished take(s): 3 unchanged since they were finished, 0 verified in full"
+        ),
+        "a finished take was read again: {said}"
+    );
+    assert_eq!(common::campaign_digest(&out), baseline);
+
+    // A frame damaged without changing its size or modification time is not seen by the
+    // stamps; --rehash finds it, records the take as failed (not complete) and leaves it as it
+    // is; put back, the take is complete again.
+    let first = &state(&out).takes[0].def.id;
+    let cameras = out.join("takes").join(first).join("cameras");
+    let camera = std::fs::read_dir(&cameras)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let frame = std::fs::read_dir(camera)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .find(|p| p.extension().is_some_and(|x| x == "exr"))
+        .unwrap();
+    let kept = a.path().join("kept.exr");
+    common::succeeds(Command::new("cp").arg("-p").arg(&frame).arg(&kept));
+    let mut bytes = std::fs::read(&frame).unwrap();
+    let middle = bytes.len() / 2;
+    bytes[middle] ^= 0xff;
+    std::fs::write(&frame, &bytes).unwrap();
+    common::succeeds(Command::new("touch").arg("-r").arg(&kept).arg(&frame));
+    common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+    let rehashed = egogen_run()
+        .arg(&campaign)
+        .args(["--resume", "--rehash"])
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&rehashed.stderr);
+    assert!(!rehashed.status.success(), "{said}");
+    assert!(
+        said.contains("does not match its manifest") && said.contains(first.as_str()),
+        "{said}"
+    );
+    let failed = &state(&out).takes[0];
+    assert_eq!(failed.status, egogen::campaign::TakeStatus::Failed);
+    assert_eq!(
+        std::fs::read(&frame).unwrap(),
+        bytes,
+        "the damaged take was touched"
+    );
+    common::succeeds(Command::new("cp").arg("-p").arg(&kept).arg(&frame));
     common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
     assert_eq!(common::campaign_digest(&out), baseline);
 

@@ -31,6 +31,10 @@ struct Args {
     /// Continue the interrupted run in `<output.dir>.partial` (same config only).
     #[arg(long)]
     resume: bool,
+    /// With `--resume` of a campaign: verify every finished take in full (every checksum,
+    /// every frame file opened), not only those whose files changed since they were finished.
+    #[arg(long, requires = "resume")]
+    rehash: bool,
     /// Output folder, overriding `output.dir`.
     #[arg(long)]
     out: Option<PathBuf>,
@@ -126,6 +130,7 @@ fn run(args: Args) -> Result<()> {
         }
         let request = egogen::campaign::CampaignRequest {
             resume: args.resume,
+            rehash: args.rehash,
             dry_run: args.dry_run,
             blender: args.blender,
             workers: args.workers,
@@ -134,9 +139,9 @@ fn run(args: Args) -> Result<()> {
         };
         return egogen::campaign::run(&config, &request);
     }
-    if args.dry_run || args.throughput_from.is_some() {
+    if args.dry_run || args.throughput_from.is_some() || args.rehash {
         anyhow::bail!(
-            "--dry-run and --throughput-from are for campaigns; {} has no [campaign] section",
+            "--dry-run, --throughput-from and --rehash are for campaigns; {} has no [campaign] section",
             config.display()
         );
     }

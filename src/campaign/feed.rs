@@ -192,7 +192,8 @@ impl TakeFeed for CampaignFeed {
         while self.next < self.state.takes.len() {
             let k = self.next;
             self.next += 1;
-            if self.state.takes[k].status == TakeStatus::Complete {
+            // Complete, or a finished folder that does not match its manifest (left as it is).
+            if self.state.takes[k].status != TakeStatus::Planned {
                 continue;
             }
             self.wait_for_disk();
@@ -218,6 +219,8 @@ impl TakeFeed for CampaignFeed {
             .remove(&take.name)
             .ok_or_else(|| anyhow::anyhow!("take {} was not staged here", take.name))?;
         staged.finish()?;
+        // Its checksums came from the frames' bytes in memory: a resume need not read it again.
+        super::stamp::write_stamp(&self.plan.out, &take.name, &staged.dir)?;
         match self.position(&take.name) {
             Some(k) => self.completed(k),
             None => Ok(()),

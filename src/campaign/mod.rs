@@ -3,7 +3,8 @@
 //! take; each take is a complete dataset of `egogen-run`'s form in `takes/<id>/`, the same
 //! bytes as that take rendered alone (its command is in `campaign.json`). All takes' shards go
 //! to one pool (local workers or Slurm), takes staged on demand (`feed`); `campaign.json`
-//! (`state`) is rewritten at every change and `--resume` continues a killed campaign; the
+//! (`state`) is rewritten at every change and `--resume` continues a killed campaign (a
+//! finished take checked by its `stamp`, or in full when it changed or with `--rehash`); the
 //! frames of every finished take are listed in `index.parquet` (`index`) and shown on
 //! `contact_sheet.png` (`sheet`). The budget (takes,
 //! frames, disk, core-hours from measured throughput) is stated before any work (`budget`).
@@ -13,6 +14,7 @@ pub mod feed;
 pub mod index;
 pub mod plan;
 pub mod sheet;
+pub mod stamp;
 pub mod state;
 
 use std::path::{Path, PathBuf};
@@ -32,6 +34,9 @@ pub use state::{CampaignState, TakeStatus, STATE_FILE};
 pub struct CampaignRequest {
     /// Continue the campaign in `campaign.out`.
     pub resume: bool,
+    /// With `resume`: verify every finished take in full (every checksum, every frame file
+    /// opened) instead of only the ones whose files changed since they were finished.
+    pub rehash: bool,
     /// State the plan and budget; render nothing, write nothing.
     pub dry_run: bool,
     pub blender: Option<PathBuf>,
@@ -96,7 +101,7 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
     }
     state.write(&out)?;
     plan::write_floor_plans(&plan)?;
-    let done_before = check_finished_takes(&plan, &mut state)?;
+    let done_before = check_finished_takes(&plan, &mut state, request.rehash)?;
     state.write(&out)?;
     let mut feed = feed::CampaignFeed::new(
         plan.clone(),
@@ -210,17 +215,32 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
 }
 
 /// Checks every finished take against its manifest: a take that matches is complete (its
-/// index rows kept); one that does not is recorded as failed and left as it is. Returns the
-/// frames of the complete takes.
-fn check_finished_takes(plan: &CampaignPlan, state: &mut CampaignState) -> Result<usize> {
+/// index rows kept); one that does not is recorded as failed and left as it is. A take whose
+/// files are as they were when it was finished or last verified (`stamp`) is taken as it is,
+/// unless `rehash`; every other one is verified in full, and stamped when it matches. Returns
+/// the frames of the complete takes.
+fn check_finished_takes(
+    plan: &CampaignPlan,
+    state: &mut CampaignState,
+    rehash: bool,
+) -> Result<usize> {
     let mut frames = 0;
+    let (mut unchanged, mut verified) = (0, 0);
     for t in state.takes.iter_mut() {
         let dir = plan.out.join("takes").join(&t.def.id);
         if !dir.join(crate::manifest::MANIFEST).is_file() {
             continue;
         }
-        match crate::supervisor::verify(&dir) {
-            Ok(_) => {
+        let checked = if !rehash && stamp::stamp_matches(&plan.out, &t.def.id, &dir) {
+            unchanged += 1;
+            Ok(())
+        } else {
+            verified += 1;
+            crate::supervisor::verify(&dir)
+                .and_then(|_| stamp::write_stamp(&plan.out, &t.def.id, &dir))
+        };
+        match checked {
+            Ok(()) => {
                 let rows = match index::kept_rows(&plan.out, &t.def.id) {
                     Some(rows) => rows,
                     None => {
@@ -242,6 +262,13 @@ fn check_finished_takes(plan: &CampaignPlan, state: &mut CampaignState) -> Resul
                 ));
             }
         }
+    }
+    if unchanged + verified > 0 {
+        eprintln!(
+            "egogen-run: campaign: {} finished take(s): {unchanged} unchanged since they were finished, {verified} verified in full{}",
+            unchanged + verified,
+            if rehash { " (--rehash)" } else { "" }
+        );
     }
     Ok(frames)
 }
