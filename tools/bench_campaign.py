@@ -2,6 +2,7 @@
 """Campaign against a loop of single runs, side by side in one run (docs/CAMPAIGNS.md).
 
     cargo build --release && python3 tools/bench_campaign.py [--takes 6] [--workers 2] [--out DIR]
+    python3 tools/bench_campaign.py --backend slurm --against OTHER_EGOGEN_RUN [--out DIR]
 
 Makes the same takes twice on this machine: once as one campaign (`egogen-run CAMPAIGN.toml`,
 all takes' shards in one pool), once as a shell-style loop of `egogen-run RUN.toml --seed …
@@ -9,6 +10,10 @@ all takes' shards in one pool), once as a shell-style loop of `egogen-run RUN.to
 campaign of as many other takes, budgeted with `--throughput-from` the first, to compare the
 budget's estimate with its wall time. Prints one table (wall seconds, worker utilisation from
 the pool reports, frames) and writes it as JSON beside the runs.
+
+With `--against BIN`, only the campaign is made, by this checkout's `egogen-run` and by BIN
+(another build), alternating, to compare two versions of the pool (e.g. `--backend slurm` on
+the single-node cluster of `tools/slurm_single_node.sh`).
 """
 
 import argparse
@@ -42,8 +47,13 @@ every_n_frames = 4
 samples = 4
 frames_per_shard = 5
 passes = ["colour", "depth", "segmentation"]
+colmap = false
 [supervisor]
 workers = {workers}
+[supervisor.slurm]
+cpus_per_task = 1
+mem_gb = 1.0
+poll_interval_s = 0.5
 """
 
 CAMPAIGN = """
@@ -70,8 +80,11 @@ def utilisation(reports):
     busy = wall = 0.0
     for r in reports:
         rep = json.loads(Path(r).read_text())
-        busy += sum(rep.get("busy_seconds", []))
-        wall += rep["wall_seconds"] * rep["workers"]
+        places = rep["wall_seconds"] * rep["workers"]
+        # Slurm tasks' run times, for pool reports that did not sum them themselves.
+        attempts = sum(a["seconds"] for sh in rep["shards"] for a in sh["attempts"])
+        busy += rep["utilisation"] * places or attempts
+        wall += places
     return busy / wall if wall else 0.0
 
 
@@ -80,7 +93,10 @@ def main():
     ap.add_argument("--takes", type=int, default=6)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--backend", choices=["local", "slurm"], default="local")
+    ap.add_argument("--against", type=Path, default=None)
     a = ap.parse_args()
+    backend = ["--backend", a.backend]
     work = a.out or Path(tempfile.mkdtemp(prefix="egogen-bench-campaign-"))
     work.mkdir(parents=True, exist_ok=True)
     (work / "run.toml").write_text(RUN.format(workers=a.workers))
@@ -90,7 +106,10 @@ def main():
             CAMPAIGN.format(out=name, takes=a.takes, first_seed=first, apartment=apartment)
         )
 
-    campaign_s = run([BIN, work / "campaign.toml"], work / "campaign.log")
+    if a.against:
+        return compare(a, work, backend)
+
+    campaign_s = run([BIN, work / "campaign.toml", *backend], work / "campaign.log")
     state = json.loads((work / "campaign/campaign.json").read_text())
     frames = sum(t["frames"] for t in state["takes"])
     camp_util = utilisation((work / "campaign/logs").glob("start_*/pool_report.json"))
@@ -99,7 +118,7 @@ def main():
     loop_reports = []
     for t in state["takes"]:
         out = work / "loop" / t["id"]
-        cmd = [BIN, work / "run.toml", "--out", out, "--seed", str(t["seed"]), "--scene", t["scene"]]
+        cmd = [BIN, work / "run.toml", "--out", out, "--seed", str(t["seed"]), "--scene", t["scene"], *backend]
         if "crowd_count" in t:
             cmd += ["--crowd-count", str(t["crowd_count"])]
         loop_s += run(cmd, work / f"loop_{t['id']}.log")
@@ -107,12 +126,12 @@ def main():
     loop_util = utilisation(loop_reports)
 
     dry = subprocess.run(
-        [BIN, work / "budgeted.toml", "--dry-run", "--throughput-from", work / "campaign"],
+        [BIN, work / "budgeted.toml", "--dry-run", "--throughput-from", work / "campaign", *backend],
         capture_output=True, text=True, check=True,
     ).stderr
     m = re.search(r"([0-9.]+) min on", dry)
     estimate_s = float(m.group(1)) * 60 if m else float("nan")
-    budgeted_s = run([BIN, work / "budgeted.toml"], work / "budgeted.log")
+    budgeted_s = run([BIN, work / "budgeted.toml", *backend], work / "budgeted.log")
     budgeted_util = utilisation((work / "budgeted/logs").glob("start_*/pool_report.json"))
 
     result = {
@@ -136,6 +155,30 @@ def main():
     print(f"loop / campaign: {loop_s / campaign_s:.2f}x ({a.takes} takes, {frames} frames, {a.workers} workers)")
     print(f"budget of another {a.takes} takes: estimated {estimate_s:.0f} s, took {budgeted_s:.0f} s "
           f"({100 * (estimate_s / budgeted_s - 1):+.0f} %)")
+    print(f"details: {work}")
+
+
+def compare(a, work, backend):
+    """The same campaign by this checkout's binary and by `a.against`, alternating."""
+    rows = []
+    for rnd in range(2):
+        for name, binary in [("this", BIN), ("against", a.against)]:
+            out = f"{name}_{rnd}"
+            (work / f"{out}.toml").write_text(
+                CAMPAIGN.format(out=out, takes=a.takes, first_seed=0,
+                                apartment=ROOT / "assets/scenes/apartment.glb")
+            )
+            wall = run([binary, work / f"{out}.toml", *backend], work / f"{out}.log")
+            util = utilisation((work / out / "logs").glob("start_*/pool_report.json"))
+            rows.append((name, rnd, wall, util))
+            print(f"{name:8} round {rnd}: {wall:7.1f} s, utilisation {util:.0%}", flush=True)
+    (work / "bench_campaign_compare.json").write_text(json.dumps(
+        [{"binary": n, "round": r, "wall_s": round(w, 1), "utilisation": round(u, 3)}
+         for n, r, w, u in rows], indent=2))
+    for name in ["this", "against"]:
+        w = [r[2] for r in rows if r[0] == name]
+        u = [r[3] for r in rows if r[0] == name]
+        print(f"{name:8} mean {sum(w) / len(w):7.1f} s, utilisation {sum(u) / len(u):.0%}")
     print(f"details: {work}")
 
 

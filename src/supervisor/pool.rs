@@ -172,7 +172,8 @@ pub struct PoolReport {
     /// times are in their attempts).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub busy_seconds: Vec<f64>,
-    /// Busy time over `workers × wall_seconds` (local pool; 0 for Slurm).
+    /// Busy time over `workers × wall_seconds`: the local workers' Blender attempts, or the
+    /// Slurm tasks' run times as Slurm reports them (whole seconds).
     pub utilisation: f64,
     /// Takes given up (a campaign goes on without them).
     #[serde(skip_serializing_if = "Vec::is_empty")]

@@ -1,14 +1,17 @@
-//! The Slurm backend: the feed's takes are staged on demand, before each round until a few
-//! arrays' worth of shards is pending (scratch only for takes in flight); each round writes
-//! one spec per pending shard of any staged take and an `sbatch` array
-//! script (one task per shard, resources from `[supervisor.slurm]`), submits it with
-//! `sbatch --parsable`, and polls `squeue` until the array has left the queue, finishing frames
+//! The Slurm backend: the feed's takes are staged on demand, until a few arrays' worth of
+//! shards is pending (scratch only for takes in flight). Arrays overlap, at most `workers` of
+//! their tasks running: each array is throttled (`%N`); places an array's tail leaves free go to
+//! an array with tasks waiting (its throttle raised with `scontrol update`), else a round
+//! writes one spec per pending shard of any staged take and an `sbatch` array script (one task
+//! per shard, resources from `[supervisor.slurm]`) throttled to the free places and submits it
+//! with `sbatch --parsable`, so no round waits for its slowest task. One `squeue` call per poll follows every array in flight; frames are finished
 //! here as the tasks' raw renders appear (the dataset folder is on a filesystem shared with the
-//! nodes). Each task's outcome comes from `scontrol` (or `sacct` once the controller has
-//! forgotten the job); shards that still miss frames — failed, timed out, cancelled, killed
-//! node — go into the next round, up to the retry count. Ctrl-C cancels the array and leaves a
-//! resumable state; a resumed run first cancels the arrays its predecessor left behind. A take
-//! whose frames are all finished goes back to the feed after the round that finished it.
+//! nodes). When an array has left the queue, each task's outcome comes from `scontrol` (or
+//! `sacct` once the controller has forgotten the job); shards that still miss frames — failed,
+//! timed out, cancelled, killed node — go out again, up to the retry count. Ctrl-C cancels the
+//! arrays in flight and leaves a resumable state; a resumed run first cancels the arrays its
+//! predecessor left behind. A take whose frames are all finished goes back to the feed at the
+//! next poll.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -171,31 +174,58 @@ fn run_slurm(
             failed,
         )
     };
+    // Arrays in the queue, and the shards they render.
+    let mut in_flight: Vec<InFlight> = Vec::new();
+    let mut busy: std::collections::BTreeSet<usize> = std::collections::BTreeSet::new();
+    let poll = Duration::from_secs_f64(settings.plan.poll_interval_s);
     loop {
         if !feed_done {
             feed_done = stage_more(&feed, &mut takes, &mut states, &mut failed_takes, window);
             if run.stop_on_failure {
                 if let Some(f) = failed_takes.first() {
+                    cancel_all(&in_flight);
                     bar.finish_and_clear();
                     bail!("{}", f.reason);
                 }
             }
             bar.set_length(feed.lock().unwrap().frames().0 as u64);
         }
+        // Frames of every array in flight; arrays that left the queue give their attempts.
+        let flying: Vec<usize> = busy.iter().copied().collect();
+        frames_finished += finish_ready_frames(&takes, &states, &flying, &bar)?;
+        let queues = queued_tasks_of(&in_flight)?;
+        let (mut live, mut running) = (0, 0);
+        let mut still = Vec::new();
+        for (mut array, queue) in in_flight.drain(..).zip(queues) {
+            array.live = queue.len();
+            if queue.is_empty() {
+                frames_finished += finish_ready_frames(&takes, &states, &array.shards(), &bar)?;
+                for i in array.shards() {
+                    busy.remove(&i);
+                }
+                record_attempts(&takes, &mut states, array.tasks, &array.job, run);
+            } else {
+                live += queue.len();
+                running += queue.values().filter(|s| s.as_str() == "RUNNING").count();
+                still.push(array);
+            }
+        }
+        in_flight = still;
         close_rendered_takes(&feed, &mut takes, &states, &mut failed_takes, run)?;
+        if stop.load(Ordering::SeqCst) {
+            cancel_all(&in_flight);
+            bar.finish_and_clear();
+            report_of(&states, frames_finished, &failed_takes).write(run)?;
+            bail!("interrupted: Slurm jobs cancelled; finished frames are kept; rerun with --resume to continue");
+        }
         let todo: Vec<usize> = (0..states.len())
             .filter(|&i| {
-                !takes[states[i].take].closed
+                !busy.contains(&i)
+                    && !takes[states[i].take].closed
                     && !missing_frames(&takes[states[i].take].take.dataset, &states[i].shard)
                         .is_empty()
             })
             .collect();
-        if todo.is_empty() {
-            if feed_done {
-                break;
-            }
-            continue;
-        }
         // A frame past its retries, or failed in a way that repeats (the scene does not load).
         let given_up: Vec<usize> = todo
             .iter()
@@ -220,6 +250,7 @@ fn run_slurm(
                 let message =
                     shard_failure_message(&takes[t].take.dataset, &states[i].report, &why);
                 if run.stop_on_failure {
+                    cancel_all(&in_flight);
                     bar.finish_and_clear();
                     report_of(&states, frames_finished, &failed_takes).write(run)?;
                     bail!("{message}");
@@ -234,46 +265,65 @@ fn run_slurm(
             }
             continue;
         }
-        round += 1;
-        let round_dir = slurm_dir.join(format!("round_{round:03}"));
-        let (job, tasks, script_path) =
-            submit_round(&takes, &runtime, &settings, &states, &todo, &round_dir, run)?;
-        append_job(&jobs_path, &job)?;
-        bar.suspend(|| {
-            eprintln!(
-                "egogen-run: round {round}: Slurm array job {job}, {} task(s) ({})",
-                tasks.len(),
-                script_path.display()
-            )
-        });
-
-        let poll = Duration::from_secs_f64(settings.plan.poll_interval_s);
-        loop {
-            frames_finished += finish_ready_frames(&takes, &states, &todo, &bar)?;
-            let live = queued_tasks(&job)?;
-            if live.is_empty() {
+        if todo.is_empty() && in_flight.is_empty() {
+            if feed_done {
                 break;
             }
-            let running = live.values().filter(|s| s.as_str() == "RUNNING").count();
-            bar.set_message(format!(
-                "job {job}: {running} running, {} queued",
-                live.len() - running
-            ));
-            if sleep_unless_stopped(poll, &stop) {
-                let _ = slurm_tool("scancel", &[&job]);
-                bar.finish_and_clear();
-                report_of(&states, frames_finished, &failed_takes).write(run)?;
-                bail!(
-                    "interrupted: Slurm job {job} cancelled; finished frames are kept; rerun with --resume to continue"
-                );
+            continue;
+        }
+        // Arrays overlap, at most `workers` tasks of them running: a place an array's tail
+        // leaves free goes to an array with tasks waiting (its throttle raised), else to a new
+        // array of the pending shards, so no round waits for its slowest task.
+        let mut free = settings.max_running.max(1).saturating_sub(
+            in_flight
+                .iter()
+                .map(|a| a.live.min(a.throttle))
+                .sum::<usize>(),
+        );
+        for array in in_flight.iter_mut() {
+            let more = free.min(array.live.saturating_sub(array.throttle));
+            if more > 0 && raise_throttle(&array.job, array.throttle + more) {
+                array.throttle += more;
+                free -= more;
             }
         }
-        frames_finished += finish_ready_frames(&takes, &states, &todo, &bar)?;
-        record_attempts(&takes, &mut states, tasks, &job, run);
-        if stop.load(Ordering::SeqCst) {
+        if free > 0 && !todo.is_empty() {
+            let shards = &todo[..];
+            let throttle = free.min(shards.len());
+            round += 1;
+            let round_dir = slurm_dir.join(format!("round_{round:03}"));
+            let (job, tasks, script_path) = submit_round(
+                &takes, &runtime, &settings, &states, shards, throttle, &round_dir, run,
+            )?;
+            append_job(&jobs_path, &job)?;
+            bar.suspend(|| {
+                eprintln!(
+                    "egogen-run: round {round}: Slurm array job {job}, {} task(s) ({})",
+                    tasks.len(),
+                    script_path.display()
+                )
+            });
+            busy.extend(shards.iter().copied());
+            in_flight.push(InFlight {
+                job,
+                live: tasks.len(),
+                tasks,
+                throttle,
+            });
+            continue;
+        }
+        bar.set_message(format!(
+            "{} array(s): {running} task(s) running, {} queued",
+            in_flight.len(),
+            live - running
+        ));
+        if sleep_unless_stopped(poll, &stop) {
+            cancel_all(&in_flight);
             bar.finish_and_clear();
             report_of(&states, frames_finished, &failed_takes).write(run)?;
-            bail!("interrupted: finished frames are kept; rerun with --resume to continue");
+            bail!(
+                "interrupted: Slurm jobs cancelled; finished frames are kept; rerun with --resume to continue"
+            );
         }
     }
     bar.finish_and_clear();
@@ -341,12 +391,14 @@ type Task = (usize, Vec<u32>, PathBuf);
 
 /// Writes one round's specs (the missing frames of the shards `todo`) and its array script
 /// into `round_dir`, and submits it; returns the job id, the tasks and the script.
+#[allow(clippy::too_many_arguments)]
 fn submit_round(
     takes: &[TakeInRun],
     runtime: &BlenderRuntime,
     settings: &SlurmSettings,
     states: &[ShardState],
     todo: &[usize],
+    throttle: usize,
     round_dir: &Path,
     run: &PoolRun,
 ) -> Result<(String, Vec<Task>, PathBuf)> {
@@ -367,6 +419,7 @@ fn submit_round(
         settings,
         &run.logs_dir,
         &tasks.iter().map(|t| t.2.clone()).collect::<Vec<_>>(),
+        throttle,
     );
     let script_path = round_dir.join("array.sh");
     write_atomically(&script_path, script.as_bytes())?;
@@ -471,13 +524,21 @@ fn report_of(
 ) -> PoolReport {
     let mut shards: Vec<ShardReport> = states.iter().map(|s| s.report.clone()).collect();
     shards.sort_by(|a, b| (&a.take, a.shard).cmp(&(&b.take, b.shard)));
+    let wall_seconds = started.elapsed().as_secs_f64();
+    // The tasks' run times as Slurm reports them (whole seconds), over the places they had.
+    let busy: f64 = shards
+        .iter()
+        .flat_map(|s| &s.attempts)
+        .map(|a| a.seconds)
+        .sum();
+    let places = workers.max(1) as f64 * wall_seconds;
     PoolReport {
         shards,
         frames_finished,
-        wall_seconds: started.elapsed().as_secs_f64(),
+        wall_seconds,
         workers,
         busy_seconds: Vec::new(),
-        utilisation: 0.0,
+        utilisation: if places > 0.0 { busy / places } else { 0.0 },
         failed_takes: failed_takes.to_vec(),
     }
 }
@@ -511,6 +572,7 @@ pub fn array_script(
     settings: &SlurmSettings,
     logs_dir: &Path,
     specs: &[PathBuf],
+    throttle: usize,
 ) -> String {
     let plan = &settings.plan;
     let minutes = settings.shard_timeout.as_secs().div_ceil(60).max(1);
@@ -519,11 +581,7 @@ pub fn array_script(
         let _ = writeln!(s, "#SBATCH {o}");
     };
     opt("--job-name=egogen".into());
-    opt(format!(
-        "--array=0-{}%{}",
-        specs.len() - 1,
-        settings.max_running.max(1)
-    ));
+    opt(format!("--array=0-{}%{}", specs.len() - 1, throttle.max(1)));
     opt(format!(
         "--output={}",
         logs_dir.join("slurm_%A_%a.log").display()
@@ -594,6 +652,94 @@ fn slurm_tool(program: &str, args: &[&str]) -> Result<String> {
         );
     }
     Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// An array job in the queue and its tasks.
+struct InFlight {
+    job: String,
+    tasks: Vec<Task>,
+    /// How many of its tasks Slurm may run at once (`%N`, raised as places free up).
+    throttle: usize,
+    /// Its tasks in the queue at the last poll (pending or running).
+    live: usize,
+}
+
+impl InFlight {
+    /// The shards its tasks render.
+    fn shards(&self) -> Vec<usize> {
+        self.tasks.iter().map(|t| t.0).collect()
+    }
+}
+
+/// Lets Slurm run up to `throttle` tasks of an array at once; false when it refused (the
+/// places then stay free until the next poll tries again).
+fn raise_throttle(job: &str, throttle: usize) -> bool {
+    slurm_tool(
+        "scontrol",
+        &[
+            "update",
+            &format!("JobId={job}"),
+            &format!("ArrayTaskThrottle={throttle}"),
+        ],
+    )
+    .is_ok()
+}
+
+/// Cancels every array in flight (Ctrl-C, or a run stopped by a failure).
+fn cancel_all(in_flight: &[InFlight]) {
+    for a in in_flight {
+        let _ = slurm_tool("scancel", &[&a.job]);
+    }
+}
+
+/// Each array's tasks still in the queue, in the order of `in_flight`: one `squeue` call for
+/// all of them (one per array only when the controller has purged one of them).
+fn queued_tasks_of(in_flight: &[InFlight]) -> Result<Vec<BTreeMap<u32, String>>> {
+    if in_flight.is_empty() {
+        return Ok(Vec::new());
+    }
+    let jobs: Vec<&str> = in_flight.iter().map(|a| a.job.as_str()).collect();
+    let list = jobs.join(",");
+    let out = Command::new("squeue")
+        .args([
+            "--noheader",
+            "--array",
+            "--jobs",
+            &list,
+            "--format=%F %K %T",
+        ])
+        .output()
+        .context("running `squeue`")?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        if err.contains("Invalid job id") {
+            return jobs.iter().map(|j| queued_tasks(j)).collect();
+        }
+        bail!("`squeue --jobs {list}` failed: {}", err.trim());
+    }
+    let by_job = parse_squeue_jobs(&String::from_utf8_lossy(&out.stdout));
+    Ok(jobs
+        .iter()
+        .map(|j| by_job.get(*j).cloned().unwrap_or_default())
+        .collect())
+}
+
+/// Parses `squeue --array --format="%F %K %T"` lines: array job, task, state.
+pub fn parse_squeue_jobs(text: &str) -> BTreeMap<String, BTreeMap<u32, String>> {
+    let mut out: BTreeMap<String, BTreeMap<u32, String>> = BTreeMap::new();
+    for l in text.lines() {
+        let mut it = l.split_whitespace();
+        let (Some(job), Some(task), Some(state)) = (it.next(), it.next(), it.next()) else {
+            continue;
+        };
+        let Ok(task) = task.parse() else {
+            continue;
+        };
+        out.entry(job.to_string())
+            .or_default()
+            .insert(task, state.to_string());
+    }
+    out
 }
 
 /// The array's tasks still in the queue (pending, running, completing), by task id.
@@ -782,6 +928,12 @@ mod tests {
         let q = parse_squeue("3 RUNNING\n1 PENDING\n\nbogus\n");
         assert_eq!(q.len(), 2);
         assert_eq!(q[&1], "PENDING");
+        let j =
+            parse_squeue_jobs("12 3 RUNNING\n12 1 PENDING\n15 0 RUNNING\n\nbogus\n12 x PENDING\n");
+        assert_eq!(j.len(), 2);
+        assert_eq!(j["12"].len(), 2);
+        assert_eq!(j["12"][&1], "PENDING");
+        assert_eq!(j["15"][&0], "RUNNING");
         let s = parse_scontrol(
             "JobId=6 ArrayJobId=3 ArrayTaskId=2 JobState=COMPLETED Reason=None ExitCode=0:0 RunTime=00:00:09\n\
              JobId=3 ArrayJobId=3 ArrayTaskId=3 JobState=FAILED Reason=NonZeroExitCode ExitCode=3:0 RunTime=1-00:01:11\n\
