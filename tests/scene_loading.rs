@@ -242,6 +242,54 @@ fn the_hollow_inside_of_a_closed_wall_is_not_floor() {
     assert_eq!(regions.len(), 2, "{regions:?}");
 }
 
+/// Each object's name and label.
+fn names_and_labels(mesh: &egogen::scene::SceneMesh) -> Vec<(&str, Option<&str>)> {
+    mesh.objects
+        .iter()
+        .map(|o| (o.name.as_str(), o.label.as_deref()))
+        .collect()
+}
+
+/// A ScanNet scan (`*_vh_clean_2.labels.ply`: vertex colours and the vertex's NYU40 class as
+/// `label`) splits into one object per class, each labelled with the class's name; a vertex
+/// `object_id` beside `label` wins (the ids are objects, the classes then unknown).
+#[test]
+fn a_scannet_ply_splits_by_its_nyu40_labels() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = |id: &str| {
+        format!("ply\nformat ascii 1.0\nelement vertex 7\nproperty float x\nproperty float y\nproperty float z\n\
+property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n{id}property ushort label\n\
+element face 3\nproperty list uchar int vertex_indices\nend_header\n")
+    };
+    let body = "-2 -2 0 9 9 9 255 2\n2 -2 0 9 9 9 255 2\n2 2 0 9 9 9 255 2\n-2 2 0 9 9 9 255 2\n\
+0 0 0 200 10 10 255 5\n0.2 0 1.5 200 10 10 255 5\n0 0.2 1.5 200 10 10 255 5\n3 0 1 2\n3 0 2 3\n3 4 5 6\n";
+    let path = write(
+        dir.path(),
+        "scene0000_00_vh_clean_2.labels.ply",
+        &(header("") + body),
+    );
+    let mesh = load_scene(&path, None).unwrap();
+    let objects = names_and_labels(&mesh);
+    assert_eq!(
+        objects,
+        [
+            ("scene0000_00_vh_clean_2.labels_2", Some("floor")),
+            ("scene0000_00_vh_clean_2.labels_5", Some("chair")),
+        ]
+    );
+    assert_eq!(mesh.file_face_objects.as_deref(), Some(&[0, 0, 1][..]));
+    assert!(walkable_map(&mesh, &path, WalkableSettings::default()).is_ok());
+
+    // With object ids on the vertices, those split the scan (no class known).
+    let with_ids = header("property int object_id\n")
+        + "-2 -2 0 9 9 9 255 11 2\n2 -2 0 9 9 9 255 11 2\n2 2 0 9 9 9 255 11 2\n-2 2 0 9 9 9 255 11 2\n\
+0 0 0 200 10 10 255 12 5\n0.2 0 1.5 200 10 10 255 12 5\n0 0.2 1.5 200 10 10 255 12 5\n3 0 1 2\n3 0 2 3\n3 4 5 6";
+    let path = write(dir.path(), "ids.ply", &(with_ids + "\n"));
+    let mesh = load_scene(&path, None).unwrap();
+    let objects = names_and_labels(&mesh);
+    assert_eq!(objects, [("ids_11", None), ("ids_12", None)]);
+}
+
 /// A scan whose vertices carry `objectId` (as some scanners write it) splits into one object per
 /// id, a face taking its first vertex's id; each object holds only the vertices it uses. A
 /// Replica `info_semantic.json` beside the file that is not what it should be is refused by name.
@@ -253,11 +301,7 @@ property int objectId\nelement face 2\nproperty list uchar int vertex_indices\ne
 -2 -2 0 5\n2 -2 0 5\n2 2 0 5\n-2 2 0 5\n0 0 0 9\n0.2 0 1.5 9\n0 0.2 1.5 9\n4 0 1 2 3\n3 4 5 6\n";
     let path = write(dir.path(), "scan.ply", ply);
     let mesh = load_scene(&path, None).unwrap();
-    let objects: Vec<(&str, Option<&str>)> = mesh
-        .objects
-        .iter()
-        .map(|o| (o.name.as_str(), o.label.as_deref()))
-        .collect();
+    let objects = names_and_labels(&mesh);
     assert_eq!(objects, [("scan_5", None), ("scan_9", None)]);
     assert_eq!(mesh.vertices.len(), 7, "each vertex copied once");
     assert_eq!(mesh.triangles.len(), 3);

@@ -118,9 +118,13 @@ pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneErr
             })
         }
     };
-    let labels = match face_parts.is_some() {
-        true => replica_labels(path)?,
-        false => Default::default(),
+    let labels = match &face_parts {
+        Some((_, PlyIds::Objects)) => replica_labels(path)?,
+        Some((_, PlyIds::Nyu40Classes)) => (0..)
+            .zip(NYU40_CLASSES)
+            .map(|(id, name)| (id, name.to_owned()))
+            .collect(),
+        None => Default::default(),
     };
     let mut mesh = SceneMesh::default();
     // Object index of each part (none when it made no triangle).
@@ -161,7 +165,7 @@ pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneErr
             mesh.objects[id.0 as usize - 1].label = labels.get(&file_id).cloned();
         }
     }
-    mesh.file_face_objects = face_parts.map(|faces| {
+    mesh.file_face_objects = face_parts.map(|(faces, _)| {
         faces
             .iter()
             .map(|&p| part_object.get(p as usize).copied().unwrap_or(u32::MAX))
@@ -358,6 +362,8 @@ fn ply_number(p: &ply_rs_bw::ply::Property) -> Option<f64> {
 struct PlyVertex {
     xyz: [Option<f64>; 3],
     id: Option<Option<f64>>,
+    /// ScanNet's `label`: the NYU40 class of the vertex.
+    class: Option<Option<f64>>,
 }
 
 impl ply_rs_bw::ply::PropertyAccess for PlyVertex {
@@ -374,11 +380,67 @@ impl ply_rs_bw::ply::PropertyAccess for PlyVertex {
             "y" => self.xyz[1] = ply_number(&property),
             "z" => self.xyz[2] = ply_number(&property),
             "object_id" | "objectId" => self.id = Some(ply_number(&property)),
+            "label" => self.class = Some(ply_number(&property)),
             _ => return ply_rs_bw::ply::PropertyAccessResult::Ignored,
         }
         ply_rs_bw::ply::PropertyAccessResult::Set
     }
 }
+
+/// What a PLY's per-face ids are: object ids (Replica's `object_id`, a scanner's `objectId`;
+/// classes from `info_semantic.json` beside the file) or classes (ScanNet's vertex `label`,
+/// NYU40 ids).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum PlyIds {
+    Objects,
+    Nyu40Classes,
+}
+
+/// The 40 classes of NYU Depth v2 as ScanNet's `label` numbers them (1–40; 0: unannotated),
+/// spelled as ScanNet's label tables spell them.
+const NYU40_CLASSES: [&str; 41] = [
+    "unannotated",
+    "wall",
+    "floor",
+    "cabinet",
+    "bed",
+    "chair",
+    "sofa",
+    "table",
+    "door",
+    "window",
+    "bookshelf",
+    "picture",
+    "counter",
+    "blinds",
+    "desk",
+    "shelves",
+    "curtain",
+    "dresser",
+    "pillow",
+    "mirror",
+    "floor mat",
+    "clothes",
+    "ceiling",
+    "books",
+    "refridgerator",
+    "television",
+    "paper",
+    "towel",
+    "shower curtain",
+    "box",
+    "whiteboard",
+    "person",
+    "night stand",
+    "toilet",
+    "sink",
+    "lamp",
+    "bathtub",
+    "bag",
+    "otherstructure",
+    "otherfurniture",
+    "otherprop",
+];
 
 /// A PLY face as read: its vertex indices (none when the list is missing or not of integers)
 /// and its `object_id`.
@@ -427,10 +489,11 @@ impl ply_rs_bw::ply::PropertyAccess for PlySkipped {
 }
 
 /// A PLY file as one part, or, when its faces carry an `object_id` (Replica) or its vertices
-/// an `object_id` / `objectId` (a face takes its first vertex's), one part per id in
-/// ascending order, named `<file stem>_<id>`, with the part of each face of the file.
+/// an `object_id` / `objectId` or, without those, ScanNet's class `label` (a face takes its
+/// first vertex's), one part per id in ascending order, named `<file stem>_<id>`, with the
+/// part of each face of the file and what the ids are.
 #[allow(clippy::type_complexity)]
-fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
+fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<(Vec<u32>, PlyIds)>), String> {
     use ply_rs_bw::parser::{Parser, Reader};
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let mut reader = Reader::new(std::io::BufReader::new(file));
@@ -470,6 +533,11 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
         .collect::<Result<Vec<_>, _>>()?;
     let whole = |v: f64| (v.fract() == 0.0 && v.abs() < 9e15).then_some(v as i64);
     let vertex_ids = verts.first().is_some_and(|v| v.id.is_some());
+    let vertex_classes = !vertex_ids && verts.first().is_some_and(|v| v.class.is_some());
+    let kind = match faces.first().is_some_and(|f| f.id.is_some()) || !vertex_classes {
+        true => PlyIds::Objects,
+        false => PlyIds::Nyu40Classes,
+    };
     let mut triangles = Vec::new();
     // Each face's object id and the file face of each triangle, when ids are given.
     let mut face_ids: Vec<i64> = Vec::new();
@@ -490,6 +558,15 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
                 ))?),
                 None => Some(-1),
             },
+            (None, false) if vertex_classes => {
+                match idx.first().and_then(|&v| verts.get(v as usize)) {
+                    Some(v) => Some(v.class.flatten().and_then(whole).ok_or(format!(
+                        "vertex {}: its `label` is not a whole number",
+                        idx[0]
+                    ))?),
+                    None => Some(-1),
+                }
+            }
             (None, false) => None,
         };
         if let Some(id) = id {
@@ -558,7 +635,7 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<Vec<u32>>), String> {
         }
         part.triangles.push(out);
     }
-    Ok((parts, Some(face_part)))
+    Ok((parts, Some((face_part, kind))))
 }
 
 /// Builds the walkable map of a loaded scene, naming the file in errors.
