@@ -105,11 +105,11 @@ fn bench(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("synth_dwelling");
     g.sample_size(10);
-    let rooms = egogen::policy::room_scene::RoomSettings {
+    let rooms = egogen::scene::generated::room_scene::RoomSettings {
         wall_m: 0.24,
         ..Default::default()
     };
-    let dwelling = egogen::policy::room_scene::RoomScene::sample(
+    let dwelling = egogen::scene::generated::room_scene::RoomScene::sample(
         &rooms,
         &mut <rand_chacha::ChaCha8Rng as rand_core::SeedableRng>::seed_from_u64(1004),
     );

@@ -198,12 +198,12 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "manifest",
             "motion",
             "plan",
-            "policy",
             "render",
             "run_job",
             "supervisor",
             "synth",
             "export",
+            "scene",
         ],
     ),
     // egogen-run's job: a config (cli) through the supervisor to a dataset.

@@ -9,11 +9,11 @@ mod common;
 use egogen::body::BodyModel;
 use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
-use egogen::policy::box_scene::{BoxScene, BoxSceneSettings};
 use egogen::policy::env::{Ending, STATE_FRAME_DIM};
 use egogen::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 use egogen::policy::sampling::sampling_step;
 use egogen::policy::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};
+use egogen::scene::generated::box_scene::{BoxScene, BoxSceneSettings};
 
 /// The paper's observation layout (32 rays), which environments use unless told otherwise.
 const LAYOUT: ObsLayout = ObsLayout::PAPER;
@@ -595,7 +595,7 @@ fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
 
 #[test]
 fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
-    use egogen::policy::crossing_scene::CrossingSettings;
+    use egogen::scene::generated::crossing_scene::CrossingSettings;
     env_parts!(body, ctx, model, bank, prior);
     let crossing = |share: f64| EnvSettings {
         crossing: CrossingSettings {
@@ -685,7 +685,7 @@ fn every_frame_counts(end_only: EnvSettings, every: EnvSettings, rng_seed: u64) 
 
 #[test]
 fn people_tested_in_every_frame_penetrate_exactly_when_a_marker_enters_their_box() {
-    use egogen::policy::crossing_scene::CrossingSettings;
+    use egogen::scene::generated::crossing_scene::CrossingSettings;
     // Four wide people: bodies meet them often within a few primitives.
     let settings = |people_every_frame: bool| EnvSettings {
         crossing: CrossingSettings {
@@ -739,7 +739,7 @@ fn a_body_walking_on_looks_about_the_way_it_walks() {
 /// never how a primitive is judged.
 #[test]
 fn people_seen_ahead_change_the_rays_only_and_not_for_people_standing_still() {
-    use egogen::policy::crossing_scene::CrossingSettings;
+    use egogen::scene::generated::crossing_scene::CrossingSettings;
     env_parts!(body, ctx, model, bank, prior);
     let settings = |ahead: bool, speed_m_s: (f64, f64)| EnvSettings {
         crossing: CrossingSettings {
@@ -809,7 +809,7 @@ fn a_box_tested_in_every_frame_penetrates_exactly_when_a_marker_enters_it() {
 /// directions (towards the way round), and the same distance and rays.
 #[test]
 fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
-    use egogen::policy::room_scene::RoomSettings;
+    use egogen::scene::generated::room_scene::RoomSettings;
     use egogen::scene::{line_is_clear, GUIDE_CLEARANCE_M};
     env_parts!(body, ctx, model, bank, prior);
     let rooms = |guide_lookahead_m: f64| EnvSettings {
@@ -852,7 +852,7 @@ fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
 
 #[test]
 fn floor_plan_episodes_see_walls_time_out_after_13_primitives_and_restore_from_snapshots() {
-    use egogen::policy::room_scene::RoomSettings;
+    use egogen::scene::generated::room_scene::RoomSettings;
     env_parts!(body, ctx, model, bank, prior);
     let rooms = EnvSettings {
         rooms: RoomSettings {

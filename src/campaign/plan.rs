@@ -360,7 +360,7 @@ fn take_id(take: &TakeDef, base: &RawRun) -> Result<String> {
 
 /// Writes the campaign's floor plans that are not there yet (a resumed campaign keeps them).
 pub fn write_floor_plans(plan: &CampaignPlan) -> Result<()> {
-    use crate::policy::room_scene::{RoomScene, RoomSettings};
+    use crate::scene::generated::room_scene::{RoomScene, RoomSettings};
     let settings = RoomSettings::default();
     for (seed, file) in &plan.floor_plans {
         if file.is_file() {

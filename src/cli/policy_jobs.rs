@@ -206,7 +206,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             obj_dir,
             wall_m,
         } => {
-            use crate::policy::room_scene::RoomSettings;
+            use crate::scene::generated::room_scene::RoomSettings;
             refuse_existing(&out)?;
             if count == 0 {
                 bail!("--count must be at least 1");
@@ -317,10 +317,10 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 [lo, hi] => (lo, hi),
                 _ => bail!("--crossing-people: expected N or MIN,MAX"),
             };
-            if !crate::policy::crossing_scene::people_in_range(people) {
+            if !crate::scene::generated::crossing_scene::people_in_range(people) {
                 bail!(
                     "--crossing-people: expected 1 ≤ MIN ≤ MAX ≤ {}, got {},{}",
-                    crate::policy::crossing_scene::MAX_PEOPLE,
+                    crate::scene::generated::crossing_scene::MAX_PEOPLE,
                     people.0,
                     people.1
                 );
@@ -328,12 +328,12 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             let settings = EnvSettings {
                 success_m,
                 max_primitives: max_primitives.unwrap_or(defaults.max_primitives),
-                crossing: crate::policy::crossing_scene::CrossingSettings {
+                crossing: crate::scene::generated::crossing_scene::CrossingSettings {
                     share: crossing_share,
                     people,
                     ..defaults.crossing
                 },
-                rooms: crate::policy::room_scene::RoomSettings {
+                rooms: crate::scene::generated::room_scene::RoomSettings {
                     share: rooms_share,
                     max_primitives: max_primitives.unwrap_or(defaults.rooms.max_primitives),
                     ..defaults.rooms
@@ -512,20 +512,20 @@ const MAX_ROOM_PLANS: usize = 1000;
 
 /// Plans `seed`, `seed + 1`, … drawn with `settings`.
 fn room_plans(
-    settings: &crate::policy::room_scene::RoomSettings,
+    settings: &crate::scene::generated::room_scene::RoomSettings,
     count: usize,
     seed: u64,
-) -> Vec<crate::policy::room_scene::RoomScene> {
+) -> Vec<crate::scene::generated::room_scene::RoomScene> {
     use rand_core::SeedableRng;
     (0..count as u64)
         .map(|k| {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed.wrapping_add(k));
-            crate::policy::room_scene::RoomScene::sample(settings, &mut rng)
+            crate::scene::generated::room_scene::RoomScene::sample(settings, &mut rng)
         })
         .collect()
 }
 
-fn rooms_sheet(plans: &[crate::policy::room_scene::RoomScene]) -> RgbImage {
+fn rooms_sheet(plans: &[crate::scene::generated::room_scene::RoomScene]) -> RgbImage {
     use crate::preview::map::MapPicture;
     let tiles: Vec<RgbImage> = plans
         .iter()

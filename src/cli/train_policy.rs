@@ -370,11 +370,11 @@ fn resolve_stage(
         && c.walker_speed_m_s > 0.0
         && c.timing_jitter_s >= 0.0
         && c.cross_angle_rad.abs() < std::f64::consts::FRAC_PI_2
-        && crate::policy::crossing_scene::people_in_range(c.people))
+        && crate::scene::generated::crossing_scene::people_in_range(c.people))
     {
         return Err(bad(
                 &key("env.crossing"),
-                format!("expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0, |cross_angle_rad| < π/2 and 1 ≤ people.0 ≤ people.1 ≤ {}", crate::policy::crossing_scene::MAX_PEOPLE),
+                format!("expected share in [0, 1], 0 < MIN ≤ MAX ranges (distance_m, speed_m_s, footprint_m), a floor longer than the longest start–goal distance, walker_speed_m_s > 0, timing_jitter_s ≥ 0, |cross_angle_rad| < π/2 and 1 ≤ people.0 ≤ people.1 ≤ {}", crate::scene::generated::crossing_scene::MAX_PEOPLE),
             ));
     }
     if !e.rooms.is_valid() {

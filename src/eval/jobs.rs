@@ -810,7 +810,7 @@ fn box_and_crossing_sets() -> Vec<(&'static str, EnvSettings)> {
             let settings = EnvSettings {
                 success_m: SUCCESS_M,
                 arrival_m: Some(ARRIVAL_M),
-                crossing: crate::policy::crossing_scene::CrossingSettings {
+                crossing: crate::scene::generated::crossing_scene::CrossingSettings {
                     share: crossing_share,
                     ..defaults.crossing
                 },

@@ -24,13 +24,10 @@ use rand_core::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
-use super::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use super::pose_prior::PosePrior;
 use super::reward::{
     judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest, WeightChanges,
 };
-use super::room_scene::{RoomParams, RoomScene, RoomSettings};
 use super::walker::{frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker};
 pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
@@ -44,6 +41,9 @@ use crate::motion::cvae::{
     BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed,
 };
 use crate::motion::primitive::SEED_FRAMES;
+use crate::scene::generated::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
+use crate::scene::generated::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
+use crate::scene::generated::room_scene::{RoomParams, RoomScene, RoomSettings};
 use crate::scene::{
     blocked_cells_in_box, guide_aim, MovingObstacle, Obstacle2, SceneSdf, StartGoal, WalkableMap,
     GUIDE_CLEARANCE_M,

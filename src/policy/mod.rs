@@ -11,14 +11,12 @@
 //!   `row_product` (the policy on the CPU in f32), `sampling` (best of K latents), the
 //!   environment's observation and reward (`env`, `reward`, `pose_prior`);
 //! - training: `net` (the actor-critic in burn), `ppo` (its stages and checkpoints) over the
-//!   environment's scenes — `box_scene`, `crossing_scene`, `room_scene` (floor plans, also
-//!   drawn by campaigns and evaluations) and `fixed_scene` (a scene file with start/goal pairs);
+//!   environment's scenes — generated ones (`crate::scene::generated`: box scenes, crossings,
+//!   floor plans) and `fixed_scene` (a scene file with start/goal pairs);
 //! - evaluation: `held_out` (a controller over held-out episodes) and `tasks` (the `egogen
 //!   policy` commands' jobs); the paper's tables are `crate::eval`'s.
 
 pub mod actor;
-pub mod box_scene;
-pub mod crossing_scene;
 pub mod env;
 pub mod fixed_scene;
 pub mod held_out;
@@ -26,7 +24,6 @@ pub mod net;
 pub mod pose_prior;
 pub mod ppo;
 pub mod reward;
-pub mod room_scene;
 pub mod row_product;
 pub mod sampling;
 pub mod tasks;

@@ -7,6 +7,7 @@
 
 pub mod ceiling;
 pub mod floor;
+pub mod generated;
 pub mod load;
 pub mod mesh;
 pub mod mesh_distance;
@@ -14,17 +15,16 @@ pub mod obstacle;
 pub mod path_plan;
 pub mod penetration;
 pub mod sampler;
-pub mod scenario;
 pub mod sdf2d;
 pub mod sdf3d;
 pub mod walkable;
 
+pub use generated::scenario::{scenario, Scenario, ScenarioKind};
 pub use load::{load_scene, walkable_map, SceneError, UpAxis};
 pub use mesh::{ObjectId, SceneMesh, SceneObject};
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{guide_aim, line_is_clear, plan_path, PlannedPath, GUIDE_CLEARANCE_M};
 pub use penetration::{blocked_cells_in_box, sdf_penetration, CollisionModel, Penetration};
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
-pub use scenario::{scenario, Scenario, ScenarioKind};
 pub use sdf3d::SceneSdf;
 pub use walkable::{indoor_map, WalkableMap, WalkableSettings, MIN_ENCLOSED};

@@ -3,9 +3,9 @@
 
 use glam::DVec2;
 
-use super::mesh::SceneMesh;
-use super::obstacle::{MovingObstacle, Obstacle2};
 use crate::math::Vec3;
+use crate::scene::mesh::SceneMesh;
+use crate::scene::obstacle::{MovingObstacle, Obstacle2};
 
 /// A procedural scene: static mesh plus moving obstacles.
 #[derive(Debug, Clone)]
