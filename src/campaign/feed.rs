@@ -220,7 +220,13 @@ impl TakeFeed for CampaignFeed {
             .ok_or_else(|| anyhow::anyhow!("take {} was not staged here", take.name))?;
         staged.finish()?;
         // Its checksums came from the frames' bytes in memory: a resume need not read it again.
-        super::stamp::write_stamp(&self.plan.out, &take.name, &staged.dir)?;
+        // Without a stamp (it could not be written) a resume verifies the take in full.
+        if let Err(e) = super::stamp::write_stamp(&self.plan.out, &take.name, &staged.dir) {
+            self.say(&format!(
+                "take {}: no stamp ({e:#}); a resume will verify it in full",
+                take.name
+            ));
+        }
         match self.position(&take.name) {
             Some(k) => self.completed(k),
             None => Ok(()),

@@ -236,8 +236,14 @@ fn check_finished_takes(
             Ok(())
         } else {
             verified += 1;
-            crate::supervisor::verify(&dir)
-                .and_then(|_| stamp::write_stamp(&plan.out, &t.def.id, &dir))
+            crate::supervisor::verify(&dir).map(|_| {
+                if let Err(e) = stamp::write_stamp(&plan.out, &t.def.id, &dir) {
+                    eprintln!(
+                        "egogen-run: campaign: take {}: no stamp ({e:#}); the next resume verifies it in full again",
+                        t.def.id
+                    );
+                }
+            })
         };
         match checked {
             Ok(()) => {
