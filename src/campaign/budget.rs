@@ -34,7 +34,7 @@ impl Budget {
     }
 
     /// Estimated worker-seconds of rendering.
-    pub fn worker_seconds(&self) -> Option<f64> {
+    pub(crate) fn worker_seconds(&self) -> Option<f64> {
         let (spf, _, _) = self.seconds_per_frame.as_ref()?;
         let mean = spf.values().sum::<f64>() / spf.len().max(1) as f64;
         let per_camera_frames =

@@ -17,7 +17,7 @@ use crate::run_job::{prepare, RunRequest};
 use crate::supervisor::{stage_take, PoolTake, Staged, StagedTake, TakeFailure, TakeFeed};
 
 /// Feeds a campaign's takes to one pool.
-pub struct CampaignFeed {
+pub(crate) struct CampaignFeed {
     pub plan: CampaignPlan,
     pub state: CampaignState,
     /// Blender and the backend, as the command line gave them.
@@ -41,7 +41,7 @@ pub struct CampaignFeed {
 
 /// How often `campaign.json` is rewritten while takes change (and always at the end). A kill
 /// loses at most this much of its record; `--resume` rebuilds it from the takes' folders.
-pub const STATE_EVERY: Duration = Duration::from_secs(2);
+pub(crate) const STATE_EVERY: Duration = Duration::from_secs(2);
 
 impl CampaignFeed {
     /// A feed over `plan`'s takes not complete in `state`; `frames` estimates each take's
@@ -84,7 +84,7 @@ impl CampaignFeed {
     }
 
     /// Rewrites `campaign.json` now.
-    pub fn save_now(&mut self) {
+    pub(crate) fn save_now(&mut self) {
         if let Err(e) = self.state.write(&self.plan.out) {
             eprintln!("egogen-run: {e:#}");
         }
@@ -246,7 +246,7 @@ impl TakeFeed for CampaignFeed {
 }
 
 /// Free bytes for an unprivileged user on the file system holding `path`.
-pub fn free_bytes(path: &Path) -> Option<u64> {
+pub(crate) fn free_bytes(path: &Path) -> Option<u64> {
     use std::os::unix::ffi::OsStrExt;
     let c = std::ffi::CString::new(path.as_os_str().as_bytes()).ok()?;
     let mut s: libc::statvfs = unsafe { std::mem::zeroed() };

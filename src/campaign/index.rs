@@ -35,7 +35,7 @@ pub struct IndexRow {
 }
 
 /// The Parquet schema of `index.parquet`.
-pub const SCHEMA: &str = "message egogen_index {
+pub(crate) const SCHEMA: &str = "message egogen_index {
   REQUIRED BYTE_ARRAY take (UTF8);
   REQUIRED BYTE_ARRAY scene (UTF8);
   REQUIRED INT64 seed;
@@ -49,7 +49,7 @@ pub const SCHEMA: &str = "message egogen_index {
 }";
 
 /// The rows of a finished take, read from its cameras' annotations.
-pub fn take_rows(take: &TakeDef, take_dir: &Path, campaign: &Path) -> Result<Vec<IndexRow>> {
+pub(crate) fn take_rows(take: &TakeDef, take_dir: &Path, campaign: &Path) -> Result<Vec<IndexRow>> {
     let cameras = take_dir.join("cameras");
     let mut names: Vec<String> = std::fs::read_dir(&cameras)
         .with_context(|| format!("reading {}", cameras.display()))?
@@ -93,12 +93,12 @@ pub fn take_rows(take: &TakeDef, take_dir: &Path, campaign: &Path) -> Result<Vec
 }
 
 /// Where a finished take's rows are kept.
-pub fn rows_path(campaign: &Path, take: &str) -> PathBuf {
+pub(crate) fn rows_path(campaign: &Path, take: &str) -> PathBuf {
     campaign.join("work/index").join(format!("{take}.json"))
 }
 
 /// Keeps a finished take's rows for the index.
-pub fn keep_rows(campaign: &Path, take: &str, rows: &[IndexRow]) -> Result<()> {
+pub(crate) fn keep_rows(campaign: &Path, take: &str, rows: &[IndexRow]) -> Result<()> {
     let path = rows_path(campaign, take);
     std::fs::create_dir_all(path.parent().unwrap())
         .with_context(|| format!("creating {}", path.parent().unwrap().display()))?;
@@ -107,7 +107,7 @@ pub fn keep_rows(campaign: &Path, take: &str, rows: &[IndexRow]) -> Result<()> {
 }
 
 /// Reads a finished take's kept rows (`None` when they are not kept).
-pub fn kept_rows(campaign: &Path, take: &str) -> Option<Vec<IndexRow>> {
+pub(crate) fn kept_rows(campaign: &Path, take: &str) -> Option<Vec<IndexRow>> {
     let text = std::fs::read_to_string(rows_path(campaign, take)).ok()?;
     serde_json::from_str(&text).ok()
 }

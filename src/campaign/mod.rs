@@ -49,7 +49,7 @@ pub struct CampaignRequest {
 
 /// What a campaign start did.
 #[derive(Debug, Clone)]
-pub struct CampaignSummary {
+pub(crate) struct CampaignSummary {
     pub out: PathBuf,
     pub complete: usize,
     pub failed: Vec<(String, String)>,
@@ -57,10 +57,10 @@ pub struct CampaignSummary {
 }
 
 /// The index file's name in the campaign folder.
-pub const INDEX_FILE: &str = "index.parquet";
+pub(crate) const INDEX_FILE: &str = "index.parquet";
 
 /// Runs (or, with `dry_run`, plans) the campaign at `path`.
-pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSummary> {
+pub(crate) fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSummary> {
     let plan = plan_campaign(path)?;
     let out = plan.out.clone();
     let earlier = check_out(&plan, request)?;

@@ -18,14 +18,14 @@ use crate::manifest::sha256_hex;
 /// A campaign config file: `[campaign]` only.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct RawCampaignFile {
+pub(crate) struct RawCampaignFile {
     pub campaign: RawCampaign,
 }
 
 /// `[campaign]`. Paths are relative to the campaign file's folder.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct RawCampaign {
+pub(crate) struct RawCampaign {
     /// The run config every take starts from (it needs a `[render]` section).
     pub run: PathBuf,
     /// The campaign folder: `takes/<id>/`, `index.parquet`, `campaign.json`, `logs/`.
@@ -359,7 +359,7 @@ fn take_id(take: &TakeDef, base: &RawRun) -> Result<String> {
 }
 
 /// Writes the campaign's floor plans that are not there yet (a resumed campaign keeps them).
-pub fn write_floor_plans(plan: &CampaignPlan) -> Result<()> {
+pub(crate) fn write_floor_plans(plan: &CampaignPlan) -> Result<()> {
     use crate::scene::generated::room_scene::{RoomScene, RoomSettings};
     let settings = RoomSettings::default();
     for (seed, file) in &plan.floor_plans {

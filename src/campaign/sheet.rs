@@ -12,13 +12,13 @@ use crate::inspect::preview::pass_preview_exposed;
 use crate::preview::RgbImage;
 
 /// The sheet's name in the campaign folder.
-pub const SHEET_FILE: &str = "contact_sheet.png";
+pub(crate) const SHEET_FILE: &str = "contact_sheet.png";
 /// Takes on the sheet at most, and its cell size.
 const MAX_TAKES: usize = 48;
 const CELL_PX: usize = 176;
 
 /// The frame of a take's rows on the sheet: the middle one of its first camera.
-pub fn middle_frame(rows: &[IndexRow]) -> Option<&IndexRow> {
+pub(crate) fn middle_frame(rows: &[IndexRow]) -> Option<&IndexRow> {
     let camera = &rows.first()?.camera;
     let of_camera: Vec<&IndexRow> = rows.iter().filter(|r| &r.camera == camera).collect();
     Some(of_camera[of_camera.len() / 2])
@@ -26,7 +26,7 @@ pub fn middle_frame(rows: &[IndexRow]) -> Option<&IndexRow> {
 
 /// Writes `contact_sheet.png` from each take's frame ([`middle_frame`], in take order; the
 /// first 48); `None` when there is none.
-pub fn write_contact_sheet(campaign: &Path, frames: &[IndexRow]) -> Result<Option<PathBuf>> {
+pub(crate) fn write_contact_sheet(campaign: &Path, frames: &[IndexRow]) -> Result<Option<PathBuf>> {
     let mut tiles = Vec::new();
     for row in frames.iter().take(MAX_TAKES) {
         let path = campaign.join(&row.file);

@@ -16,7 +16,7 @@ use crate::manifest::{dataset_files, sha256_hex, Manifest, MANIFEST};
 
 /// A finished take's files as they were when it was stamped.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct TakeStamp {
+pub(crate) struct TakeStamp {
     /// SHA-256 of the take's `manifest.json`.
     pub manifest_sha256: String,
     /// Every file the manifest lists, in its order: `[path, bytes, modified (ns since the
@@ -25,7 +25,7 @@ pub struct TakeStamp {
 }
 
 /// Where a take's stamp is kept.
-pub fn stamp_path(campaign: &Path, take: &str) -> PathBuf {
+pub(crate) fn stamp_path(campaign: &Path, take: &str) -> PathBuf {
     campaign.join("work/stamps").join(format!("{take}.json"))
 }
 

@@ -20,7 +20,7 @@ use crate::rig::{Rig, RigCamera};
 
 /// A joint is occluded when the rendered surface at its pixel is nearer than this (m): joints
 /// lie inside the body, up to about this deep under its surface.
-pub const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
+pub(crate) const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
 
 /// `cameras/<camera>/annotations.json` for every camera (OpenCV conventions), from the
 /// frames' records.
@@ -120,7 +120,7 @@ fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
 }
 
 /// A frame file's colour: `rgb`, or `gray` of a monochrome camera.
-pub fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::Pass> {
+pub(crate) fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::Pass> {
     contents
         .passes
         .iter()

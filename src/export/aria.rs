@@ -39,7 +39,7 @@ pub struct AriaStreams {
 
 impl AriaStreams {
     /// Names as configs and the command line spell them.
-    pub const NAMES: [&'static str; 4] = ["trajectory", "calibration", "imu", "gaze"];
+    pub(crate) const NAMES: [&'static str; 4] = ["trajectory", "calibration", "imu", "gaze"];
 
     /// The streams named in `names`, or an error naming the unknown one.
     pub fn parse<S: AsRef<str>>(names: &[S]) -> Result<Self, String> {
@@ -100,7 +100,7 @@ impl Default for AriaSettings {
 }
 
 /// Highest trajectory rate accepted (Hz): one row per microsecond, the format's resolution.
-pub const MAX_TRAJECTORY_RATE_HZ: Real = 1e6;
+pub(crate) const MAX_TRAJECTORY_RATE_HZ: Real = 1e6;
 
 impl AriaSettings {
     /// Why these settings cannot be used with `rig`, naming the key, or `None`.
@@ -163,7 +163,7 @@ impl AriaSettings {
     }
 
     /// The error model of `rig`'s IMU `name` (label) in this run.
-    pub fn imu_errors_of(&self, name: &str) -> ImuErrors {
+    pub(crate) fn imu_errors_of(&self, name: &str) -> ImuErrors {
         self.imu_error_overrides
             .get(name)
             .copied()
@@ -173,7 +173,7 @@ impl AriaSettings {
 
 /// One wearer's head through the take, and what it may look at.
 #[derive(Clone)]
-pub struct Wearer<'a> {
+pub(crate) struct Wearer<'a> {
     pub name: &'a str,
     /// Its index among the take's wearers (it seeds the IMU errors).
     pub index: usize,
@@ -192,7 +192,7 @@ pub struct Wearer<'a> {
 
 /// What was written for a wearer.
 #[derive(Debug, Clone, Default)]
-pub struct AriaWritten {
+pub(crate) struct AriaWritten {
     /// Paths relative to the wearer's folder, with their sizes.
     pub files: Vec<(String, u64)>,
     pub trajectory_rows: usize,
@@ -206,7 +206,7 @@ pub struct AriaWritten {
 }
 
 /// The headset's trajectory through the wearer's head poses.
-pub fn headset_spline(wearer: &Wearer) -> Result<PoseSpline> {
+pub(crate) fn headset_spline(wearer: &Wearer) -> Result<PoseSpline> {
     let poses: Vec<Affine3> = wearer
         .world_from_cpf
         .iter()
@@ -217,7 +217,7 @@ pub fn headset_spline(wearer: &Wearer) -> Result<PoseSpline> {
 }
 
 /// Writes the asked streams of `wearer` into `dir` (created; each file written atomically).
-pub fn write_wearer_streams(
+pub(crate) fn write_wearer_streams(
     dir: &Path,
     rig: &Rig,
     settings: &AriaSettings,
@@ -431,7 +431,7 @@ fn calibration_times_us(duration_s: Real, every_s: Real) -> Vec<i64> {
 /// `{"tracking_timestamp_us": 0, "utc_timestamp_ns": -1, "CameraCalibrations": […],
 /// "ImuCalibrations": […]}` of the rig, every pose relative to the device frame. With
 /// `imu_errors` off the IMUs' calibrations are the identity (the streams are ideal).
-pub fn calibration_json(rig: &Rig, imu_errors: bool) -> serde_json::Value {
+pub(crate) fn calibration_json(rig: &Rig, imu_errors: bool) -> serde_json::Value {
     let device_from_cpf = rig.cpf_from_device().inverse();
     let cameras: Vec<serde_json::Value> = rig
         .cameras
@@ -517,7 +517,7 @@ fn se3_json(pose: Affine3) -> serde_json::Value {
 
 /// The IMU CSV header: device time (ns), specific force (m/s²) and angular rate (rad/s) in the
 /// IMU frame, raw as the device reports them.
-pub const IMU_HEADER: &str = "tracking_timestamp_ns,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2,\
+pub(crate) const IMU_HEADER: &str = "tracking_timestamp_ns,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2,\
 gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s";
 
 fn imu_csv(stream: &[ImuSample]) -> String {

@@ -55,7 +55,7 @@ pub struct ColmapCamera {
 
 /// How well a fitted COLMAP model reproduces egogen's, over the valid field of view.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FitError {
+pub(crate) struct FitError {
     pub max_px: Real,
     pub mean_px: Real,
     /// Pixels of the fitting grid inside the valid field of view.
@@ -100,7 +100,7 @@ pub fn colmap_camera(camera: &Camera) -> ColmapCamera {
 /// COLMAP's `THIN_PRISM_FISHEYE` projection of a camera-frame point (COLMAP pixels): the
 /// equidistant point `(u, v) = θ·(x, y)/ρ`, then radial `k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸`,
 /// tangential `p1 p2` and thin prism `sx1 sy1` on `(u, v)` itself.
-pub fn thin_prism_fisheye_project(params: &[Real; 12], p: Vec3) -> Pixel {
+pub(crate) fn thin_prism_fisheye_project(params: &[Real; 12], p: Vec3) -> Pixel {
     let [fx, fy, cx, cy, ..] = *params;
     let (u, v) = equidistant(p);
     let [du, dv] = thin_prism_terms(u, v);
@@ -152,7 +152,7 @@ fn thin_prism_terms(u: Real, v: Real) -> [[Real; 8]; 2] {
 /// least-squares problem over every pixel centre in the valid field of view (each pixel's
 /// exact ray must land on that pixel). Returns the parameters and the pixel error over the
 /// same pixels.
-pub fn fit_thin_prism_fisheye(camera: &Fisheye624) -> ([Real; 12], FitError) {
+pub(crate) fn fit_thin_prism_fisheye(camera: &Fisheye624) -> ([Real; 12], FitError) {
     let q = camera.params();
     let (f, cx, cy) = (q[0], q[1] + 0.5, q[2] + 0.5);
     let res = camera.resolution();
@@ -239,7 +239,7 @@ pub fn colmap_pose(world_from_cam: Affine3) -> ([Real; 4], Vec3) {
 }
 
 /// The image name of a frame in `images.txt` (and its file in `images/<camera>/`).
-pub fn image_name(frame: u32) -> String {
+pub(crate) fn image_name(frame: u32) -> String {
     format!("frame_{frame:05}.png")
 }
 
@@ -305,7 +305,7 @@ fn write_model(dir: &Path, cameras: &str, images: &str) -> Result<()> {
 }
 
 /// The COLMAP export: each frame's image as the frame is finished, the models when the take is.
-pub struct Colmap;
+pub(crate) struct Colmap;
 
 impl TakeExport for Colmap {
     fn name(&self) -> &'static str {

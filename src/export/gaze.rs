@@ -298,11 +298,12 @@ pub fn gaze_samples(world: &GazeWorld, fixations: &[Fixation], rate_hz: Real) ->
 }
 
 /// The legacy MPS eye-gaze header (projectaria-tools reads it by name; no other column).
-pub const EYE_GAZE_HEADER: &str = "tracking_timestamp_us,yaw_rads_cpf,pitch_rads_cpf,depth_m,\
+pub(crate) const EYE_GAZE_HEADER: &str =
+    "tracking_timestamp_us,yaw_rads_cpf,pitch_rads_cpf,depth_m,\
 yaw_low_rads_cpf,pitch_low_rads_cpf,yaw_high_rads_cpf,pitch_high_rads_cpf,session_uid";
 
 /// The samples as `general_eye_gaze.csv`.
-pub fn eye_gaze_csv(samples: &[GazeSample], session: &str) -> String {
+pub(crate) fn eye_gaze_csv(samples: &[GazeSample], session: &str) -> String {
     let mut text = String::with_capacity(samples.len() * 120 + 200);
     text.push_str(EYE_GAZE_HEADER);
     text.push('\n');

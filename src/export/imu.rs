@@ -118,7 +118,7 @@ pub struct ImuSample {
 }
 
 /// The true specific force and angular rate of a frame in the state `s` (both in that frame).
-pub fn true_measurement(s: &PoseSample) -> (Vec3, Vec3) {
+pub(crate) fn true_measurement(s: &PoseSample) -> (Vec3, Vec3) {
     let frame_from_world = s.world_from_body.matrix3.transpose();
     (
         frame_from_world * (s.acceleration_world - GRAVITY_WORLD),
@@ -127,7 +127,7 @@ pub fn true_measurement(s: &PoseSample) -> (Vec3, Vec3) {
 }
 
 /// Sample times of a stream at `rate_hz` over `[0, duration_s]`, in whole nanoseconds.
-pub fn sample_times_ns(rate_hz: Real, duration_s: Real) -> Vec<i64> {
+pub(crate) fn sample_times_ns(rate_hz: Real, duration_s: Real) -> Vec<i64> {
     let count = (duration_s * rate_hz + 1e-9).floor() as i64 + 1;
     (0..count)
         .map(|k| (k as Real * 1e9 / rate_hz).round() as i64)

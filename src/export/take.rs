@@ -54,7 +54,7 @@ pub struct RenderedAgent {
 }
 
 /// A camera's frame file, relative to the take's folder: `cameras/<camera>/frame_NNNNN.exr`.
-pub fn frame_file_path(camera: &str, frame: u32) -> PathBuf {
+pub(crate) fn frame_file_path(camera: &str, frame: u32) -> PathBuf {
     Path::new("cameras")
         .join(camera)
         .join(format!("frame_{frame:05}.exr"))
@@ -118,7 +118,7 @@ pub struct FinishedTake<'a> {
 impl FinishedTake<'_> {
     /// The manifest entries the frames' records vouch for (frame files and the files outputs
     /// made of them), so that the manifest need not hash those files again.
-    pub fn recorded_files(&self) -> Vec<ManifestEntry> {
+    pub(crate) fn recorded_files(&self) -> Vec<ManifestEntry> {
         let mut entries = Vec::new();
         for (work, records) in self.cameras.iter().zip(self.records) {
             for (&f, r) in work.frames.iter().zip(records) {
@@ -142,7 +142,7 @@ fn entry(path: &str, facts: &FileFacts) -> ManifestEntry {
 }
 
 /// A relative path as records and the manifest write it: `/`-separated.
-pub fn slashed(path: &Path) -> String {
+pub(crate) fn slashed(path: &Path) -> String {
     path.components()
         .map(|c| c.as_os_str().to_string_lossy())
         .collect::<Vec<_>>()

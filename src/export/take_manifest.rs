@@ -8,7 +8,7 @@ use super::take::{FinishedTake, TakeExport};
 use crate::manifest::write_manifest_with;
 
 /// The take's manifest.
-pub struct TakeManifest;
+pub(crate) struct TakeManifest;
 
 impl TakeExport for TakeManifest {
     fn name(&self) -> &'static str {

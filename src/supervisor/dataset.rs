@@ -30,7 +30,7 @@ impl Dataset {
     /// or truncated frame left by an interrupted run, or changed since) is removed, so that it
     /// is rendered again; one whose record is missing or does not match it gets its record
     /// again. Returns each removed file with the reason it failed.
-    pub fn check_finished_frames(&self) -> Result<Vec<(PathBuf, String)>> {
+    pub(crate) fn check_finished_frames(&self) -> Result<Vec<(PathBuf, String)>> {
         let mut removed = Vec::new();
         for (c, work) in self.cameras.iter().enumerate() {
             for &f in &work.frames {

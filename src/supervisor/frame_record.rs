@@ -23,7 +23,7 @@ use crate::exr_file::ExrContents;
 
 impl Dataset {
     /// Where a camera's frame record is kept.
-    pub fn record_path(&self, camera: usize, frame: u32) -> PathBuf {
+    pub(crate) fn record_path(&self, camera: usize, frame: u32) -> PathBuf {
         self.staging
             .join("work/frames")
             .join(&self.cameras[camera].camera.name)
@@ -33,7 +33,7 @@ impl Dataset {
     /// Computes a frame's record from its validated `contents` (what the frame file holds,
     /// whose own facts are `frame_file`), writes the files the take's outputs make of it, and
     /// keeps the record.
-    pub fn record_frame(
+    pub(crate) fn record_frame(
         &self,
         camera: usize,
         frame: u32,
@@ -73,7 +73,7 @@ impl Dataset {
     }
 
     /// A finished frame's record.
-    pub fn load_record(&self, camera: usize, frame: u32) -> Result<FrameRecord> {
+    pub(crate) fn load_record(&self, camera: usize, frame: u32) -> Result<FrameRecord> {
         let path = self.record_path(camera, frame);
         let text = std::fs::read_to_string(&path)
             .with_context(|| format!("reading {}", path.display()))?;
@@ -84,7 +84,7 @@ impl Dataset {
     /// Whether a finished frame's record is there and matches what is on disk: the frame
     /// file's `facts`, and exactly the files the take's outputs make of the frame, each at the
     /// size recorded.
-    pub fn record_matches(&self, camera: usize, frame: u32, facts: &FileFacts) -> bool {
+    pub(crate) fn record_matches(&self, camera: usize, frame: u32, facts: &FileFacts) -> bool {
         let Ok(record) = self.load_record(camera, frame) else {
             return false;
         };

@@ -57,7 +57,7 @@ pub trait TakeFeed: Send {
 }
 
 /// A feed of one staged take, finished by its caller after the pool returns.
-pub struct OneTake {
+pub(crate) struct OneTake {
     take: Option<PoolTake>,
     total: usize,
     done: usize,
@@ -126,19 +126,19 @@ pub struct Attempt {
 pub type StageSeconds = std::collections::BTreeMap<String, f64>;
 
 /// Adds `seconds` to `stage`.
-pub fn add_stage(stages: &mut StageSeconds, stage: &str, seconds: f64) {
+pub(crate) fn add_stage(stages: &mut StageSeconds, stage: &str, seconds: f64) {
     *stages.entry(stage.to_owned()).or_default() += seconds;
 }
 
 /// A worker's `EGOGEN_TIMING <stage> <seconds>` line, if `line` is one: `Some((stage,
 /// seconds))` (`ready` comes with 0: the supervisor times the start-up itself).
-pub fn worker_timing(line: &str) -> Option<(&str, f64)> {
+pub(crate) fn worker_timing(line: &str) -> Option<(&str, f64)> {
     let (stage, seconds) = line.strip_prefix("EGOGEN_TIMING ")?.split_once(' ')?;
     Some((stage, seconds.trim().parse().ok()?))
 }
 
 /// The stages a worker reported in its log (a Slurm task's), its start-up excepted.
-pub fn stages_from_worker_log(text: &str) -> StageSeconds {
+pub(crate) fn stages_from_worker_log(text: &str) -> StageSeconds {
     let mut stages = StageSeconds::new();
     for (stage, seconds) in text.lines().filter_map(worker_timing) {
         if stage != "ready" {
@@ -193,7 +193,7 @@ impl PoolReport {
 
 /// The message of a shard given up: which shard of which take, why, and its last attempt
 /// with its log.
-pub fn shard_failure_message(dataset: &Dataset, report: &ShardReport, why: &str) -> String {
+pub(crate) fn shard_failure_message(dataset: &Dataset, report: &ShardReport, why: &str) -> String {
     let last = report.attempts.last();
     format!(
         "{}shard {} ({} frames {:?}): {why} after {} attempt(s); last: {} (log: {})",
@@ -215,7 +215,7 @@ pub fn shard_failure_message(dataset: &Dataset, report: &ShardReport, why: &str)
 }
 
 /// The rendering progress bar: frames done of all planned, ETA, and a status message.
-pub fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
+pub(crate) fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
     Ok(crate::progress::progress_bar(
         "egogen-run",
         "rendering",
@@ -227,22 +227,22 @@ pub fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
 
 /// Exit status of `render_shard.py` when the spec or the scene cannot be loaded: a failure
 /// that would repeat on every try.
-pub const EXIT_SETUP_FAILED: i32 = 3;
+pub(crate) const EXIT_SETUP_FAILED: i32 = 3;
 /// Failed tries charged to the frames of a shard: retries count frames, not attempts. A failed
 /// attempt charges one try to the first frame it left unfinished (the one it was rendering
 /// when it died), so an attempt killed after writing its frames costs nothing; the shard is
 /// given up when a frame has failed more than `retries` times. Both backends use it.
 #[derive(Debug, Default, Clone)]
-pub struct FrameTries(std::collections::BTreeMap<u32, u32>);
+pub(crate) struct FrameTries(std::collections::BTreeMap<u32, u32>);
 
 impl FrameTries {
     /// Charges a failed attempt to `frame`, the first it left unfinished.
-    pub fn charge(&mut self, frame: u32) {
+    pub(crate) fn charge(&mut self, frame: u32) {
         *self.0.entry(frame).or_insert(0) += 1;
     }
 
     /// The frame that has failed more than `retries` times (the most tried), with its count.
-    pub fn exhausted(&self, retries: u32) -> Option<(u32, u32)> {
+    pub(crate) fn exhausted(&self, retries: u32) -> Option<(u32, u32)> {
         self.0
             .iter()
             .map(|(&f, &t)| (f, t))
@@ -298,7 +298,7 @@ impl Serialize for Outcome {
 
 /// The outcome of an attempt that exited with [`EXIT_SETUP_FAILED`], with the reason the
 /// worker wrote to its log (`EGOGEN_SETUP_FAILED <reason>`).
-pub fn setup_failure(log: &std::path::Path) -> Outcome {
+pub(crate) fn setup_failure(log: &std::path::Path) -> Outcome {
     let reason = std::fs::read_to_string(log)
         .ok()
         .and_then(|t| {

@@ -47,7 +47,7 @@ pub struct SlurmSettings {
 
 /// How a finished array task ended, as Slurm reports it.
 #[derive(Debug, Clone, PartialEq)]
-pub struct TaskEnd {
+pub(crate) struct TaskEnd {
     pub state: String,
     pub exit_code: String,
     pub seconds: f64,
@@ -567,7 +567,7 @@ fn task_outcome(end: Option<&TaskEnd>, still_missing: usize, log: &Path) -> Outc
 }
 
 /// The array script: Slurm options, then one exact worker command per task.
-pub fn array_script(
+pub(crate) fn array_script(
     runtime: &BlenderRuntime,
     settings: &SlurmSettings,
     logs_dir: &Path,
@@ -630,7 +630,7 @@ fn shell_quote(s: &str) -> String {
 
 /// Runs a Slurm client command; its stdout, or an error with its stderr.
 /// Whether Slurm's client commands are here (checked before a run stages anything).
-pub fn check_slurm_tools() -> Result<()> {
+pub(crate) fn check_slurm_tools() -> Result<()> {
     slurm_tool("sbatch", &["--version"]).context(
         "the Slurm backend needs Slurm's client commands (sbatch, squeue, scancel) on PATH; \
          install them or use `supervisor.backend = \"local\"`",
@@ -725,7 +725,7 @@ fn queued_tasks_of(in_flight: &[InFlight]) -> Result<Vec<BTreeMap<u32, String>>>
 }
 
 /// Parses `squeue --array --format="%F %K %T"` lines: array job, task, state.
-pub fn parse_squeue_jobs(text: &str) -> BTreeMap<String, BTreeMap<u32, String>> {
+pub(crate) fn parse_squeue_jobs(text: &str) -> BTreeMap<String, BTreeMap<u32, String>> {
     let mut out: BTreeMap<String, BTreeMap<u32, String>> = BTreeMap::new();
     for l in text.lines() {
         let mut it = l.split_whitespace();
@@ -760,7 +760,7 @@ fn queued_tasks(job: &str) -> Result<BTreeMap<u32, String>> {
 }
 
 /// Parses `squeue --array --format="%K %T"` lines.
-pub fn parse_squeue(text: &str) -> BTreeMap<u32, String> {
+pub(crate) fn parse_squeue(text: &str) -> BTreeMap<u32, String> {
     text.lines()
         .filter_map(|l| {
             let mut it = l.split_whitespace();
@@ -796,7 +796,7 @@ fn task_ends(job: &str) -> BTreeMap<u32, TaskEnd> {
 }
 
 /// Parses `scontrol --oneliner show job` (one line per array task).
-pub fn parse_scontrol(text: &str) -> BTreeMap<u32, TaskEnd> {
+pub(crate) fn parse_scontrol(text: &str) -> BTreeMap<u32, TaskEnd> {
     text.lines()
         .filter_map(|line| {
             let field = |key: &str| {
@@ -817,7 +817,7 @@ pub fn parse_scontrol(text: &str) -> BTreeMap<u32, TaskEnd> {
 }
 
 /// Parses `sacct --parsable2 --format=JobID,State,ExitCode,ElapsedRaw` (`JOB_TASK|…`).
-pub fn parse_sacct(text: &str) -> BTreeMap<u32, TaskEnd> {
+pub(crate) fn parse_sacct(text: &str) -> BTreeMap<u32, TaskEnd> {
     text.lines()
         .filter_map(|line| {
             let f: Vec<&str> = line.split('|').collect();

@@ -47,7 +47,7 @@ pub struct Dataset {
 
 impl Dataset {
     /// The frame file of a camera's frame.
-    pub fn frame_path(&self, camera: usize, frame: u32) -> PathBuf {
+    pub(crate) fn frame_path(&self, camera: usize, frame: u32) -> PathBuf {
         self.staging
             .join(frame_file_path(&self.cameras[camera].camera.name, frame))
     }
@@ -57,7 +57,7 @@ impl Dataset {
     }
 
     /// Which of Blender's two renders this dataset's passes need.
-    pub fn raw_renders(&self) -> RawRenders {
+    pub(crate) fn raw_renders(&self) -> RawRenders {
         RawRenders {
             colour: self.base_spec.rgb.is_some(),
             ground_truth: !self.base_spec.ground_truth_passes.is_empty(),
@@ -65,7 +65,7 @@ impl Dataset {
     }
 
     /// The raw renders a camera's frame is made from (one or two files).
-    pub fn raw_frame_files(&self, camera: usize, frame: u32) -> Vec<PathBuf> {
+    pub(crate) fn raw_frame_files(&self, camera: usize, frame: u32) -> Vec<PathBuf> {
         let name = &self.cameras[camera].camera.name;
         let (rgb, gt) = raw_frame_paths(&self.raw_dir(), name, frame, self.raw_renders());
         rgb.into_iter().chain(gt).collect()
@@ -80,7 +80,7 @@ impl Dataset {
 
     /// Checks a camera's frame file, read from disk or about to be written (`bytes`, named
     /// by `path`): it opens, holds exactly the camera's channels at its size, all finite.
-    pub fn validate_frame_bytes(
+    pub(crate) fn validate_frame_bytes(
         &self,
         camera: usize,
         path: &std::path::Path,
@@ -105,7 +105,7 @@ impl Dataset {
     }
 
     /// This start's logs: `logs/start_<n>/`.
-    pub fn logs_dir(&self) -> PathBuf {
+    pub(crate) fn logs_dir(&self) -> PathBuf {
         self.staging
             .join("logs")
             .join(format!("start_{:02}", self.start))
@@ -114,13 +114,13 @@ impl Dataset {
     /// Whether a frame is done: its file exists. A frame file appears only by a rename after it
     /// validated and its record was kept; [`Dataset::check_finished_frames`] clears any damaged
     /// since, before planning.
-    pub fn frame_done(&self, camera: usize, frame: u32) -> bool {
+    pub(crate) fn frame_done(&self, camera: usize, frame: u32) -> bool {
         self.frame_path(camera, frame).is_file()
     }
 
     /// Shards covering the frames not done yet, `frames_per_shard` consecutive planned frames
     /// of one camera each.
-    pub fn pending_shards(&self) -> Vec<Shard> {
+    pub(crate) fn pending_shards(&self) -> Vec<Shard> {
         let mut shards = Vec::new();
         for (c, work) in self.cameras.iter().enumerate() {
             for block in work.frames.chunks(self.frames_per_shard) {
@@ -142,12 +142,12 @@ impl Dataset {
     }
 
     /// Total planned frames over all cameras.
-    pub fn total_frames(&self) -> usize {
+    pub(crate) fn total_frames(&self) -> usize {
         self.cameras.iter().map(|c| c.frames.len()).sum()
     }
 
     /// The spec rendering `frames` of a shard's camera.
-    pub fn shard_spec(&self, camera: usize, frames: &[u32]) -> ShardSpec {
+    pub(crate) fn shard_spec(&self, camera: usize, frames: &[u32]) -> ShardSpec {
         let work = &self.cameras[camera];
         let mut cam = shard_camera(
             &work.camera.name,
@@ -169,7 +169,7 @@ impl Dataset {
 
 /// The number of the next start of a run staged in `staging`: one more than the highest
 /// `logs/start_<n>` folder there.
-pub fn next_start(staging: &std::path::Path) -> u32 {
+pub(crate) fn next_start(staging: &std::path::Path) -> u32 {
     std::fs::read_dir(staging.join("logs"))
         .map(|entries| {
             entries
