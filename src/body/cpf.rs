@@ -46,7 +46,7 @@ impl CpfCalibration {
     }
 
     /// Angle (radians) by which the rest eye-plane normal points below the level gaze.
-    pub fn rest_tilt_down_rad(&self) -> f64 {
+    pub(crate) fn rest_tilt_down_rad(&self) -> f64 {
         // The plane normal in CPF coordinates is the z column of cpf_from_eye_plane.
         let normal_in_cpf = self.eye_plane_from_cpf.transpose().z_axis;
         (-normal_in_cpf.y).atan2(normal_in_cpf.z)

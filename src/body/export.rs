@@ -6,7 +6,7 @@ use std::path::Path;
 use crate::math::Vec3;
 
 /// Writes a triangle mesh as OBJ (metres, the coordinates as given), atomically.
-pub fn write_obj(path: &Path, vertices: &[Vec3], faces: &[[u32; 3]]) -> std::io::Result<()> {
+pub(crate) fn write_obj(path: &Path, vertices: &[Vec3], faces: &[[u32; 3]]) -> std::io::Result<()> {
     let tmp = path.with_extension("obj.partial");
     {
         let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);

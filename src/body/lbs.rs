@@ -238,7 +238,7 @@ impl BodyModel {
 
 impl ShapedBody<'_> {
     /// Height of the soles at rest: the lowest shaped rest vertex's y (the model's y-up frame).
-    pub fn rest_sole_y(&self) -> Real {
+    pub(crate) fn rest_sole_y(&self) -> Real {
         self.v_shaped
             .iter()
             .map(|v| v.y)

@@ -7,10 +7,10 @@ use super::skeleton::{NUM_JOINTS, PARENTS};
 use crate::math::{Real, Vec3};
 
 /// Number of pose-corrective features: 54 non-root joints × 9 matrix entries.
-pub const POSE_FEATURES: usize = (NUM_JOINTS - 1) * 9;
+pub(crate) const POSE_FEATURES: usize = (NUM_JOINTS - 1) * 9;
 
 /// A sparse row: (index, weight) pairs with non-zero weight.
-pub type SparseRow = Vec<(u32, Real)>;
+pub(crate) type SparseRow = Vec<(u32, Real)>;
 
 /// An SMPL-X–layout body model (our CC0 default or the official SMPL-X files).
 ///
@@ -154,7 +154,7 @@ impl BodyModel {
     /// ([`farthest_point_markers`](super::farthest_point_markers)). They depend on the
     /// template alone, not on a body's shape: chosen once per loaded model (about 1 ms for
     /// SMPL-X's 10 475 vertices), then shared by every body shaped from it.
-    pub fn marker_ids(&self) -> &[u32] {
+    pub(crate) fn marker_ids(&self) -> &[u32] {
         self.marker_ids
             .get_or_init(|| super::farthest_point_markers(self, super::NUM_MARKERS))
     }

@@ -160,7 +160,7 @@ impl<R: Read + Seek> ModelArchive<R> {
     }
 
     /// [`Self::read`] for a key the format allows to be absent: `None` when it is.
-    pub fn read_optional(
+    pub(crate) fn read_optional(
         &mut self,
         key: &str,
         expected: &[Option<u64>],

@@ -75,7 +75,7 @@ impl BodyOccupancy {
 
     /// The surface's winding number about `p`: 1 inside a closed outward-wound surface, 0
     /// outside, 2 where it overlaps itself.
-    pub fn winding_number(&self, p: Vec3) -> i32 {
+    pub(crate) fn winding_number(&self, p: Vec3) -> i32 {
         for d in DIRECTIONS {
             if let Some(n) = self.signed_crossings(p, Vec3::from_array(d)) {
                 return n;

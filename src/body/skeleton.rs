@@ -3,7 +3,7 @@
 /// Number of SMPL-X joints.
 pub const NUM_JOINTS: usize = 55;
 /// Number of body joints driven by the motion model (pelvis + 21).
-pub const NUM_BODY_JOINTS: usize = 22;
+pub(crate) const NUM_BODY_JOINTS: usize = 22;
 /// Length of a full SMPL-X pose vector (55 joints × axis-angle 3).
 pub const POSE_DIM: usize = NUM_JOINTS * 3;
 
@@ -18,12 +18,12 @@ pub mod joint {
     pub const RIGHT_ANKLE: usize = 8;
     pub const LEFT_FOOT: usize = 10;
     pub const RIGHT_FOOT: usize = 11;
-    pub const NECK: usize = 12;
+    pub(crate) const NECK: usize = 12;
     pub const HEAD: usize = 15;
     pub const LEFT_SHOULDER: usize = 16;
-    pub const RIGHT_SHOULDER: usize = 17;
+    pub(crate) const RIGHT_SHOULDER: usize = 17;
     pub const LEFT_ELBOW: usize = 18;
-    pub const RIGHT_ELBOW: usize = 19;
+    pub(crate) const RIGHT_ELBOW: usize = 19;
     pub const LEFT_WRIST: usize = 20;
     pub const RIGHT_WRIST: usize = 21;
     pub const JAW: usize = 22;

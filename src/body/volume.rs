@@ -71,7 +71,7 @@ impl CapsuleVolume {
     }
 
     /// The largest radius.
-    pub fn max_radius_m(&self) -> f64 {
+    pub(crate) fn max_radius_m(&self) -> f64 {
         self.bones.iter().map(|b| b.2).fold(0.0, f64::max)
     }
 

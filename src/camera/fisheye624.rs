@@ -35,7 +35,7 @@ use crate::math::{Real, Vec3};
 use glam::{DMat2, DVec2};
 
 /// Number of parameters: `[f, cx, cy, k0..k5, p0, p1, s0..s3]`.
-pub const NUM_PARAMS: usize = 15;
+pub(crate) const NUM_PARAMS: usize = 15;
 
 /// Fisheye624 intrinsics plus the limits of the valid field of view.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -184,7 +184,7 @@ impl Fisheye624 {
     }
 
     /// Pixel of a point without the field-of-view checks (for `z ≤ 0` too; the angle decides).
-    pub fn project_unchecked(&self, p: Vec3) -> Pixel {
+    pub(crate) fn project_unchecked(&self, p: Vec3) -> Pixel {
         let rho = p.x.hypot(p.y);
         let xr = if rho > 0.0 {
             let theta = rho.atan2(p.z);

@@ -64,7 +64,7 @@ impl KannalaBrandt4 {
     }
 
     /// Pixel of a point without the field-of-view checks.
-    pub fn project_unchecked(&self, p: Vec3) -> Pixel {
+    pub(crate) fn project_unchecked(&self, p: Vec3) -> Pixel {
         let rho = p.x.hypot(p.y);
         let xd = if rho > 0.0 {
             DVec2::new(p.x, p.y) * (self.radial.eval(rho.atan2(p.z)) / rho)

@@ -21,7 +21,7 @@ impl<const N: usize> ThetaPolynomial<N> {
     }
 
     /// `(θ_d(θ), dθ_d/dθ)`, Horner in θ².
-    pub fn eval_with_slope(&self, theta: Real) -> (Real, Real) {
+    pub(crate) fn eval_with_slope(&self, theta: Real) -> (Real, Real) {
         let t2 = theta * theta;
         let mut poly = 0.0;
         let mut slope = 0.0;
@@ -34,7 +34,7 @@ impl<const N: usize> ThetaPolynomial<N> {
 
     /// The first angle in `(0, upper]` at which the slope stops being positive, or `upper` if
     /// it stays positive there. Scans `upper` in 4096 steps, then bisects the crossing.
-    pub fn increasing_limit(&self, upper: Real) -> Real {
+    pub(crate) fn increasing_limit(&self, upper: Real) -> Real {
         const STEPS: usize = 4096;
         let mut prev = 0.0;
         for i in 1..=STEPS {
@@ -60,7 +60,7 @@ impl<const N: usize> ThetaPolynomial<N> {
     /// `θ_d(theta_max)` or the iteration does not converge. The polynomial must increase on
     /// `[0, theta_max]`. Newton from `θ = θ_d`, falling back to bisection whenever a step would
     /// leave the bracket, until a step is below [`THETA_STEP_TOLERANCE`].
-    pub fn invert(&self, theta_d: Real, theta_max: Real) -> Option<Real> {
+    pub(crate) fn invert(&self, theta_d: Real, theta_max: Real) -> Option<Real> {
         if !(theta_d >= 0.0) {
             return None;
         }

@@ -133,7 +133,7 @@ fn content_table(raw: &RawRun) -> Result<toml::Table, toml::ser::Error> {
 /// overrides applied, `[supervisor]` left out (the logs record how the shards ran), relative
 /// paths still relative to the original config's folder. The header names the file but not
 /// where it lay, so the same config run from two folders gives the same dataset.
-pub fn effective_config_toml(
+pub(crate) fn effective_config_toml(
     raw: &RawRun,
     source: &Path,
     overrides: &RunOverrides,
@@ -157,7 +157,7 @@ pub fn effective_config_toml(
 /// What a resume must find unchanged: the effective config without `[supervisor]` (how many
 /// workers, which backend and how retries go do not change what is rendered) and without the
 /// rig's path (the pipeline compares the rig itself, wherever its file lies).
-pub fn resume_fingerprint(raw: &RawRun) -> Result<String, toml::ser::Error> {
+pub(crate) fn resume_fingerprint(raw: &RawRun) -> Result<String, toml::ser::Error> {
     let mut r = raw.clone();
     if let Some(render) = r.render.as_mut() {
         render.rig = None;

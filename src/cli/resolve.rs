@@ -15,17 +15,17 @@ use crate::rig::{Rig, RigCamera};
 
 pub use super::config_file::{crate_root, resolve_body_model, DEFAULT_BODY_MODEL};
 /// Default scene, relative to the crate root.
-pub const DEFAULT_SCENE: &str = "assets/scenes/apartment.glb";
+pub(crate) const DEFAULT_SCENE: &str = "assets/scenes/apartment.glb";
 /// Default rig, relative to the crate root.
-pub const DEFAULT_RIG: &str = "camera_rigs/aria_gen1.json";
+pub(crate) const DEFAULT_RIG: &str = "camera_rigs/aria_gen1.json";
 
 pub use crate::plan::{MotionPlan, RenderPlan, RunPlan, SlurmPlan, SupervisorPlan};
 
 /// Most frames a scripted walk may have (about 7 h at 40 Hz).
-pub const MAX_SCRIPTED_FRAMES: f64 = 1e6;
+pub(crate) const MAX_SCRIPTED_FRAMES: f64 = 1e6;
 
 /// Largest shape coefficient a config may ask for (standard deviations).
-pub const MAX_ABS_BETA: f64 = 10.0;
+pub(crate) const MAX_ABS_BETA: f64 = 10.0;
 
 /// Resolves paths against the config's folder and checks value ranges.
 pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigError> {

@@ -21,18 +21,18 @@ use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid};
 use crate::synth::crowd::{CrowdSettings, Steering};
 
 /// Most agents in one take.
-pub const MAX_AGENTS: usize = 32;
+pub(crate) const MAX_AGENTS: usize = 32;
 
 /// Most shape coefficients drawn per agent (SMPL-X's files hold 300; a body model uses as many
 /// as it has).
-pub const MAX_BETAS: usize = 400;
+pub(crate) const MAX_BETAS: usize = 400;
 /// Longest take (s).
-pub const MAX_DURATION_S: f64 = 3600.0;
+pub(crate) const MAX_DURATION_S: f64 = 3600.0;
 
 /// `[scene]`.
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawSynthScene {
+pub(crate) struct RawSynthScene {
     /// Scene file (glTF, OBJ, PLY), relative to the config's folder; absent: an open floor.
     pub path: Option<PathBuf>,
     /// Side of the open square floor centred on the origin (m, default 8).
@@ -49,7 +49,7 @@ pub struct RawSynthScene {
 /// `[motion]`.
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawSynthMotion {
+pub(crate) struct RawSynthMotion {
     pub weights: Option<PathBuf>,
     pub policy: Option<PathBuf>,
     pub pose_prior: Option<PathBuf>,
@@ -158,7 +158,7 @@ pub struct RawObstacle {
 /// `[output]`.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawSynthOutput {
+pub(crate) struct RawSynthOutput {
     /// Must not exist yet (or be empty).
     pub dir: PathBuf,
 }
@@ -166,7 +166,7 @@ pub struct RawSynthOutput {
 /// The whole config, as written.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawSynth {
+pub(crate) struct RawSynth {
     pub body_model: Option<PathBuf>,
     #[serde(default)]
     pub scene: RawSynthScene,
@@ -219,7 +219,11 @@ pub fn load_synth_plan(path: &Path) -> Result<SynthPlan, ConfigError> {
 
 /// Checks a synth config read from `path` (relative paths resolve against its folder); keys
 /// are named with `prefix` before the synth config's own names (`""` for a synth config).
-pub fn resolve_synth(raw: RawSynth, path: &Path, prefix: &str) -> Result<SynthPlan, ConfigError> {
+pub(crate) fn resolve_synth(
+    raw: RawSynth,
+    path: &Path,
+    prefix: &str,
+) -> Result<SynthPlan, ConfigError> {
     let base = path.parent().unwrap_or(Path::new("."));
     let bad = |key: &str, message: String| ConfigError::Value {
         path: path.into(),

@@ -15,7 +15,7 @@ use crate::sensing::SensingSpec;
 /// `[[stages]]`: one training stage.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawStage {
+pub(crate) struct RawStage {
     pub name: String,
     pub env_steps: usize,
     #[serde(default)]
@@ -25,7 +25,7 @@ pub struct RawStage {
 /// `[validation]`.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawValidation {
+pub(crate) struct RawValidation {
     pub every_updates: usize,
     pub episodes: usize,
     /// Weights are selected only where the validation's mean KL(π ‖ N(0, I)) is at most this.
@@ -36,7 +36,7 @@ pub struct RawValidation {
 /// `[output]`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawPolicyOutput {
+pub(crate) struct RawPolicyOutput {
     pub weights: PathBuf,
     pub log: PathBuf,
     pub checkpoint_every_s: Option<f64>,
@@ -45,7 +45,7 @@ pub struct RawPolicyOutput {
 /// `[policy]`: the network's sizes.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawPolicyArch {
+pub(crate) struct RawPolicyArch {
     pub hidden: usize,
     pub pe_frequencies: usize,
     pub residual_blocks: usize,
@@ -56,7 +56,7 @@ pub struct RawPolicyArch {
 /// `[scene]`: a fixed scene some episodes walk (each stage's `env.fixed_share`).
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawTrainScene {
+pub(crate) struct RawTrainScene {
     pub path: PathBuf,
     /// How many start/goal pairs are drawn.
     pub pairs: usize,
@@ -71,7 +71,7 @@ pub struct RawTrainScene {
 /// The whole config, as written.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawTrainPolicy {
+pub(crate) struct RawTrainPolicy {
     pub seed: u64,
     pub body_model: Option<PathBuf>,
     pub motion_weights: PathBuf,

@@ -14,7 +14,7 @@ use crate::motion::cvae::ArchConfig;
 /// `[[clips]]`: one training clip (AMASS-style `.npz` at 40 Hz).
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawClip {
+pub(crate) struct RawClip {
     /// Relative to the config's folder.
     pub path: PathBuf,
     /// Hold the whole clip out of training (evaluation only).
@@ -27,7 +27,7 @@ pub struct RawClip {
 /// `[primitive]` and `[rollout]`: one training phase.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawPhase {
+pub(crate) struct RawPhase {
     pub steps: usize,
     pub batch_size: usize,
     pub learning_rate: f64,
@@ -36,7 +36,7 @@ pub struct RawPhase {
 /// `[rollout]`: a phase over chains of primitives.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawRollout {
+pub(crate) struct RawRollout {
     pub steps: usize,
     pub batch_size: usize,
     pub learning_rate: f64,
@@ -47,7 +47,7 @@ pub struct RawRollout {
 /// `[prior]`: fine-tuning on chains decoded from random latents.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawPrior {
+pub(crate) struct RawPrior {
     pub steps: usize,
     /// Random chains per step (and as many mocap chains reconstructed, `rollout.primitives` long).
     pub batch_size: usize,
@@ -76,7 +76,7 @@ pub struct RawPrior {
 /// `[data]`.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawData {
+pub(crate) struct RawData {
     /// Frames between the starts of consecutive training primitives.
     pub stride_frames: usize,
     /// Add left-right mirrored copies of the training clips.
@@ -91,7 +91,7 @@ pub struct RawData {
 /// `[output]`.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawTrainOutput {
+pub(crate) struct RawTrainOutput {
     /// Weights file (safetensors), written atomically; relative to the config's folder.
     pub weights: PathBuf,
     /// Loss log (JSON lines), relative to the config's folder.
@@ -103,7 +103,7 @@ pub struct RawTrainOutput {
 /// The whole training config, as written.
 #[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct RawTrainPrimitive {
+pub(crate) struct RawTrainPrimitive {
     /// Seed of weights, batches and noise.
     pub seed: u64,
     /// Body model (default: the shipped CC0 model).

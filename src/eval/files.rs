@@ -13,7 +13,7 @@ use crate::policy::PosePrior;
 /// One row of Table 2 or 3: a controller (a policy with sampled or mean actions, or the
 /// sampling controller) on a set of held-out episodes.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct PolicyRow {
+pub(crate) struct PolicyRow {
     pub policy: String,
     pub weights: String,
     pub config: String,
@@ -83,7 +83,7 @@ impl PolicyRow {
 
 /// `results/table2.json` and `results/table3.json`.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct PolicyRowsFile {
+pub(crate) struct PolicyRowsFile {
     pub command: String,
     pub episodes: usize,
     pub seed: u64,
@@ -97,7 +97,7 @@ pub struct PolicyRowsFile {
 
 /// `results/table1.json` and `results/speed.json`: scenario × controller rows.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct RowsFile {
+pub(crate) struct RowsFile {
     pub command: String,
     pub episodes: usize,
     pub seed: u64,
@@ -115,7 +115,7 @@ pub struct RowsFile {
 
 /// Rows of `table1.json` that `--keep-other-rows` kept from the run that measured them.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub struct KeptRows {
+pub(crate) struct KeptRows {
     pub command: String,
     pub policy: String,
     pub wall_s: f64,
@@ -124,7 +124,7 @@ pub struct KeptRows {
 }
 
 /// A results file of this egogen, `None` where there is none.
-pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<T>> {
+pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<Option<T>> {
     if !path.is_file() {
         return Ok(None);
     }

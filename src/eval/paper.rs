@@ -178,7 +178,7 @@ fn cell(v: Option<f64>, m: Measure) -> String {
 
 /// Table 1 of the paper beside ours: one line per block and measure, the paper's three
 /// methods, then each of our controllers found in `rows` (in their order).
-pub fn table1_beside(rows: &[Row]) -> String {
+pub(crate) fn table1_beside(rows: &[Row]) -> String {
     let mut controllers: Vec<&str> = Vec::new();
     for r in rows {
         if !controllers.contains(&r.controller.as_str()) {
@@ -282,7 +282,7 @@ fn pair(a: Option<f64>, b: Option<f64>, f: impl Fn(f64) -> String) -> String {
 }
 
 /// Table 2 of the paper beside ours (the apartment stands for Replica's rooms).
-pub fn table2_beside(rows: &[PolicyRow]) -> String {
+pub(crate) fn table2_beside(rows: &[PolicyRow]) -> String {
     let mut md = String::from(
         "| the paper's row | SR (%) paper | Dist. (m) paper | our policy | SR (%) ours, sampled / mean | Dist. (m) ours, sampled / mean |\n\
          | --- | --- | --- | --- | --- | --- |\n",
@@ -340,7 +340,7 @@ const TABLE3: [(&str, f64, f64, f64, Option<&str>); 4] = [
 
 /// Table 3 of the paper beside ours: our SR, pose embedding norm (on the paper's scale with
 /// `pose_norm`) and cos(view, goal) over the box scenes and crossings together.
-pub fn table3_beside(rows: &[PolicyRow], pose_norm: Option<&PoseNormCalibration>) -> String {
+pub(crate) fn table3_beside(rows: &[PolicyRow], pose_norm: Option<&PoseNormCalibration>) -> String {
     let mut md = String::from(
         "| the paper's row | SR (%) paper | ‖VP‖₂ paper | cos(v, a) paper | our policy | SR (%) ours, sampled / mean | pose norm ours, sampled / mean | cos(view, goal) ours, sampled / mean |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- |\n",

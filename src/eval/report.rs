@@ -23,7 +23,7 @@ fn num(v: Option<f64>, digits: usize) -> String {
 }
 
 /// Table 1 as a markdown table (header included).
-pub fn table1_markdown(rows: &[Row], labels: &dyn Fn(&str) -> String) -> String {
+pub(crate) fn table1_markdown(rows: &[Row], labels: &dyn Fn(&str) -> String) -> String {
     let mut md = String::from(
         "| scenario | controller | SR | Dist (m) | Cont | Pene-S | Pene-H capsules | Pene-H mesh | 2D overlap | Std (m) | at each time (m) | pooled (m) | left | cos(view, goal) | pose score | speed (m/s) | people × episodes | fell | wall (s) |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
@@ -109,7 +109,7 @@ fn scenario_label(name: &str) -> String {
 }
 
 /// `RESULTS.md` from the result files in `out/results` (those present).
-pub fn results_markdown(out: &Path) -> Result<String> {
+pub(crate) fn results_markdown(out: &Path) -> Result<String> {
     let results = out.join("results");
     let mut md = String::from(
         "# Results: the paper's evaluation on egogen\n\n\

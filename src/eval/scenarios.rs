@@ -17,15 +17,15 @@ use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 use crate::synth::crowd::{AgentPlan, CrowdSettings, CrowdWorld, Steering};
 
 /// A person has reached the goal when the walk ends this close to it (m; paper S4.2's SR).
-pub const SUCCESS_M: f64 = 0.3;
+pub(crate) const SUCCESS_M: f64 = 0.3;
 
 /// A walk ends when the pelvis comes this close to the goal (m): the paper's goal threshold,
 /// where its environment ends an episode (EgoGen's `goal_thresh`, the success reward's
 /// radius, Eq. 10), so Dist is measured where its walkers stop.
-pub const ARRIVAL_M: f64 = 0.1;
+pub(crate) const ARRIVAL_M: f64 = 0.1;
 
 /// Side of the open floor every scenario stands on (m).
-pub const FLOOR_M: f64 = 14.0;
+pub(crate) const FLOOR_M: f64 = 14.0;
 
 /// Start–goal distance of the one-person scenarios (m).
 pub const WALK_M: f64 = 5.0;
@@ -118,7 +118,7 @@ pub struct Episode {
 }
 
 /// The open floor every scenario stands on, built once.
-pub fn open_floor() -> Arc<WalkableMap> {
+pub(crate) fn open_floor() -> Arc<WalkableMap> {
     let cell = 0.1;
     let n = (FLOOR_M / cell).round() as usize;
     Arc::new(WalkableMap::from_walkable(

@@ -15,7 +15,7 @@ use crate::synth::crowd::{
 
 /// A named way of steering every person of a scenario.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Controller {
+pub(crate) struct Controller {
     pub name: String,
     pub steering: Steering,
     /// How each person sees the others ([`CrowdSettings::anticipate_people`]; `false`:
@@ -55,7 +55,7 @@ impl Controller {
     /// The policy with sampled actions (`policy_as_placed`) and with the mean action
     /// (`policy_mean_as_placed`) in EgoGen's crowd loop: each person sees the others where they
     /// were last put ([`CrowdSettings::anticipate_people`] off).
-    pub fn policies_as_placed() -> Vec<Controller> {
+    pub(crate) fn policies_as_placed() -> Vec<Controller> {
         Controller::policies()
             .into_iter()
             .map(|c| Controller {
@@ -76,7 +76,7 @@ impl Controller {
     }
 
     /// The policy's sampled actions with their standard deviation scaled by `spread`.
-    pub fn policy_spread(name: &str, spread: f32) -> Controller {
+    pub(crate) fn policy_spread(name: &str, spread: f32) -> Controller {
         Controller::new(
             name.into(),
             Steering::Policy {
@@ -94,7 +94,7 @@ impl Controller {
 
 /// Takes kept for pictures: episode 0 of a scenario and controller (every episode of the
 /// static box, whose paths are drawn together).
-pub struct Picture {
+pub(crate) struct Picture {
     pub scenario: Scenario,
     pub controller: String,
     pub world: CrowdWorld,
@@ -102,7 +102,7 @@ pub struct Picture {
 }
 
 /// A finished table.
-pub struct TableRun {
+pub(crate) struct TableRun {
     pub rows: Vec<Row>,
     pub episodes: Vec<EpisodeResult>,
     pub pictures: Vec<Picture>,
@@ -111,7 +111,7 @@ pub struct TableRun {
 
 /// Why a table could not be run.
 #[derive(Debug, thiserror::Error)]
-pub enum EvalError {
+pub(crate) enum EvalError {
     #[error("{scenario}, {controller}, episode {episode}: {source}")]
     Crowd {
         scenario: String,
@@ -140,7 +140,7 @@ fn diversity_line(s: Scenario) -> Option<(glam::DVec2, glam::DVec2)> {
 
 /// Runs `episodes` episodes of every scenario with every controller; `progress(done, total)`
 /// after each scenario × controller.
-pub fn run_table(
+pub(crate) fn run_table(
     parts: &CrowdParts,
     body: &BodyModel,
     scenarios: &[Scenario],
@@ -227,9 +227,9 @@ pub fn run_table(
 
 /// Table 2's apartment: held-out start/goal pairs this far apart (m), and EgoGen's 13
 /// primitives per walk.
-pub const TABLE2_SCENE: &str = "assets/scenes/apartment.glb";
-pub const TABLE2_PAIR_DISTANCE_M: (f64, f64) = (2.0, 7.0);
-pub const TABLE2_MAX_PRIMITIVES: usize = 13;
+pub(crate) const TABLE2_SCENE: &str = "assets/scenes/apartment.glb";
+pub(crate) const TABLE2_PAIR_DISTANCE_M: (f64, f64) = (2.0, 7.0);
+pub(crate) const TABLE2_MAX_PRIMITIVES: usize = 13;
 
 /// Table 2's policies (paper Tab. 2: egocentric sensing against a local map, in the
 /// apartment): the shipped policy's apartment stage and the same two runs observing a local
@@ -237,7 +237,7 @@ pub const TABLE2_MAX_PRIMITIVES: usize = 13;
 /// crowds, doors closed, then floor plans with or without the cost for looking off the goal,
 /// with one set of weights or weights by scene) and the Eq. 11 one beside them. Label,
 /// weights, configs.
-pub const TABLE2_POLICIES: [(&str, &str, &str); 10] = [
+pub(crate) const TABLE2_POLICIES: [(&str, &str, &str); 10] = [
     (
         "egocentric sensing (32 rays)",
         "assets/policy/apartment/policy.safetensors",
@@ -292,7 +292,7 @@ pub const TABLE2_POLICIES: [(&str, &str, &str); 10] = [
 
 /// The shipped policy's training run and its ablations (paper Tab. 3), each trained with the
 /// same budget: label, weights, the config that trains them.
-pub const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
+pub(crate) const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
     (
         "full (pretraining + attention reward)",
         "assets/policy/policy.safetensors",

@@ -27,30 +27,30 @@ pub type Affine3 = glam::DAffine3;
 pub use rotation::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d, rot6d_to_matrix};
 
 /// Axis-aligned bounds (min, max) of `points`; `None` for none.
-pub fn point_bounds<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Option<(Vec3, Vec3)> {
+pub(crate) fn point_bounds<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Option<(Vec3, Vec3)> {
     let mut points = points.into_iter();
     let first = *points.next()?;
     Some(points.fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
 }
 
 /// A 3×3 matrix from its rows (the form egogen's and Aria's JSON files write matrices in).
-pub fn mat3_from_rows(rows: &[[f64; 3]; 3]) -> Mat3 {
+pub(crate) fn mat3_from_rows(rows: &[[f64; 3]; 3]) -> Mat3 {
     Mat3::from_cols_array_2d(rows).transpose()
 }
 
 /// The rows of a 3×3 matrix.
-pub fn mat3_rows(m: Mat3) -> [[f64; 3]; 3] {
+pub(crate) fn mat3_rows(m: Mat3) -> [[f64; 3]; 3] {
     m.transpose().to_cols_array_2d()
 }
 
 /// Row-major 4×4 of an affine transform (the form egogen's JSON files write transforms in).
-pub fn row_major(m: Affine3) -> [[f64; 4]; 4] {
+pub(crate) fn row_major(m: Affine3) -> [[f64; 4]; 4] {
     glam::DMat4::from(m).transpose().to_cols_array_2d()
 }
 
 /// The affine transform of a row-major 4×4 (its last row is not read), or `None` if it holds
 /// a non-finite number.
-pub fn affine_from_row_major(rows: &[[f64; 4]; 4]) -> Option<Affine3> {
+pub(crate) fn affine_from_row_major(rows: &[[f64; 4]; 4]) -> Option<Affine3> {
     let a = Affine3::from_mat4(glam::DMat4::from_cols_array_2d(rows).transpose());
     a.is_finite().then_some(a)
 }

@@ -73,7 +73,7 @@ pub enum PoseSplineError {
 }
 
 /// Largest miss of a given rotation the solve accepts (rad).
-pub const MAX_ROTATION_RESIDUAL_RAD: Real = 1e-9;
+pub(crate) const MAX_ROTATION_RESIDUAL_RAD: Real = 1e-9;
 
 /// An interpolating C² trajectory through poses at `frame_rate_hz`, from time 0.
 #[derive(Debug, Clone)]

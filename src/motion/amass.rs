@@ -22,7 +22,7 @@ use crate::npz::{fortran_to_c, read_as_f64, ReadError};
 /// A sequence of SMPL-X bodies sampled at a fixed rate.
 /// Highest frame rate a motion file may declare (Hz): mocap runs at 30–480 Hz; a rate far
 /// beyond it is a damaged file, and resampling it would allocate without bound.
-pub const MAX_FRAME_RATE_HZ: f64 = 10_000.0;
+pub(crate) const MAX_FRAME_RATE_HZ: f64 = 10_000.0;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct MotionSequence {

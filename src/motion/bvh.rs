@@ -157,7 +157,7 @@ impl BvhClip {
     }
 
     /// Rest-pose joint positions (all rotations zero, root at its offset).
-    pub fn rest_positions(&self) -> Vec<Vec3> {
+    pub(crate) fn rest_positions(&self) -> Vec<Vec3> {
         let mut out: Vec<Vec3> = Vec::with_capacity(self.joints.len());
         for j in &self.joints {
             out.push(j.parent.map_or(j.offset, |p| out[p] + j.offset));

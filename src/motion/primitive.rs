@@ -11,7 +11,7 @@ pub const PRIMITIVE_FRAMES: usize = 20;
 /// Seed frames at the start of each primitive.
 pub const SEED_FRAMES: usize = 2;
 /// Frame rate of primitives (Hz).
-pub const PRIMITIVE_RATE_HZ: f64 = 40.0;
+pub(crate) const PRIMITIVE_RATE_HZ: f64 = 40.0;
 
 /// A primitive expressed in its canonical frame.
 #[derive(Debug, Clone)]
@@ -32,7 +32,7 @@ pub enum PrimitiveError {
 }
 
 /// Canonical frame from posed joints (z-up world).
-pub fn canonical_frame(joints: &[Vec3]) -> Result<Affine3, PrimitiveError> {
+pub(crate) fn canonical_frame(joints: &[Vec3]) -> Result<Affine3, PrimitiveError> {
     let hips = joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP];
     let horizontal = Vec3::new(hips.x, hips.y, 0.0);
     let len = horizontal.length();

@@ -44,7 +44,7 @@ pub const CMU_TO_SMPLX: [(usize, &str, Option<usize>); NUM_BODY_JOINTS] = [
 ];
 
 /// CMU metres per file unit (the cgspeed conversion's scale).
-pub const CMU_UNIT_M: f64 = 0.056444;
+pub(crate) const CMU_UNIT_M: f64 = 0.056444;
 
 /// What went wrong retargeting.
 #[derive(Debug, thiserror::Error)]
@@ -161,7 +161,7 @@ pub(crate) fn sequence_from_body_rotations(
 
 /// Shifts a z-up sequence vertically so its lowest foot joint (ankle or ball) is as high
 /// above z = 0 as it is above the soles in the rest pose.
-pub fn lift_to_floor(
+pub(crate) fn lift_to_floor(
     seq: &mut MotionSequence,
     model: &BodyModel,
 ) -> Result<(), crate::body::PoseError> {

@@ -31,7 +31,7 @@ impl Default for WalkCycle {
 impl WalkCycle {
     /// Pose of the walk at time `t_s`, for a body whose rest pelvis is `rest_pelvis` and whose
     /// soles are at height `rest_sole_y` (both in the model's y-up frame).
-    pub fn params_at(
+    pub(crate) fn params_at(
         &self,
         t_s: f64,
         betas: &[f64],

@@ -155,7 +155,7 @@ pub struct SeedBank {
 
 impl SeedBank {
     /// The seeds of every primitive of a set.
-    pub fn from_set(set: &PrimitiveSet) -> Self {
+    pub(crate) fn from_set(set: &PrimitiveSet) -> Self {
         let seeds = (0..set.len())
             .map(|i| {
                 let v = set.item(i);
@@ -368,7 +368,7 @@ impl EpisodeSummary {
 
 /// Mean of a measure taken at each primitive's end, without the arrival (the last primitive
 /// of an episode that succeeded); NaN when nothing is left.
-pub fn mean_before_arrival(each: &[f64], ending: Ending) -> f64 {
+pub(crate) fn mean_before_arrival(each: &[f64], ending: Ending) -> f64 {
     let walking = match ending {
         Ending::Success => &each[..each.len().saturating_sub(1)],
         _ => each,

@@ -12,7 +12,7 @@ use super::ppo::TrainScene;
 /// A scene for evaluation: `pairs` start/goal pairs `pair_distance_m` apart, 0.4 m from
 /// anything blocking, drawn under `seed` with another stream than training's pairs, its 3D SDF
 /// built with `sdf_voxel_m` voxels so that paper Eq. 11 is measured.
-pub fn held_out_scene(
+pub(crate) fn held_out_scene(
     path: &Path,
     pairs: usize,
     pair_distance_m: (f64, f64),
@@ -38,7 +38,7 @@ pub fn held_out_scene(
 /// blocked); too few pairs is an error. With
 /// `sdf_voxel_m` its 3D SDF is built too with voxels that size (`docs/SCENES.md`), so that
 /// scene penetration (paper Eq. 11) is measured.
-pub fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
+pub(crate) fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
     let path = &spec.path;
     let mesh = crate::scene::load_scene(path, None)?;
     let (map, region) = crate::scene::indoor_map(

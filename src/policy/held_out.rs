@@ -14,11 +14,11 @@ use crate::motion::cvae::pace::Quantiles;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
 /// Episode base of held-out evaluation episodes (training bases are small integers).
-pub const HELD_OUT_BASE: u64 = 0xE7A1_0000_0000;
+pub(crate) const HELD_OUT_BASE: u64 = 0xE7A1_0000_0000;
 
 /// The measures of a set of episodes.
 #[derive(Debug, Clone, Serialize)]
-pub struct EvalReport {
+pub(crate) struct EvalReport {
     pub episodes: usize,
     pub success_rate: f64,
     pub timeout_rate: f64,
@@ -138,7 +138,7 @@ impl EvalReport {
 
 /// Runs `step` on `env` until its first `episodes` episodes have ended; their summaries in id
 /// order and the number of environment steps taken. `progress` is told of each finished one.
-pub fn run_episodes(
+pub(crate) fn run_episodes(
     env: &mut PolicyEnv,
     episodes: usize,
     mut step: impl FnMut(&mut PolicyEnv) -> Result<StepOutput, EnvError>,

@@ -58,11 +58,11 @@ impl Default for PolicyArch {
 /// Largest sizes a policy may have (a GRU of width 4 096 already holds about 0.4 G weights):
 /// a config or a weights file's header asking for more is refused before anything is
 /// allocated.
-pub const MAX_HIDDEN: usize = 4096;
-pub const MAX_PE_FREQUENCIES: usize = 64;
-pub const MAX_RESIDUAL_BLOCKS: usize = 64;
-pub const MAX_LATENT_DIM: usize = 4096;
-pub const MAX_SENSING_DIM: usize = 65_536;
+pub(crate) const MAX_HIDDEN: usize = 4096;
+pub(crate) const MAX_PE_FREQUENCIES: usize = 64;
+pub(crate) const MAX_RESIDUAL_BLOCKS: usize = 64;
+pub(crate) const MAX_LATENT_DIM: usize = 4096;
+pub(crate) const MAX_SENSING_DIM: usize = 65_536;
 
 impl PolicyArch {
     /// What is wrong with the sizes, naming the field and its limit (`None`: usable).
@@ -104,7 +104,7 @@ impl PolicyArch {
     }
 
     /// Width `W` of the actor's and critic's MLPs.
-    pub fn mlp_width(&self) -> usize {
+    pub(crate) fn mlp_width(&self) -> usize {
         2 * self.hidden + 4 * self.pe_frequencies
     }
 
@@ -142,7 +142,7 @@ impl PolicyArch {
 
 /// A single-layer GRU (PyTorch's equations) run over a short sequence.
 #[derive(Module, Debug)]
-pub struct Gru<B: Backend> {
+pub(crate) struct Gru<B: Backend> {
     pub(super) input: Linear<B>,
     pub(super) hidden: Linear<B>,
 }
@@ -174,7 +174,7 @@ impl<B: Backend> Gru<B> {
 
 /// Residual blocks then a linear output layer.
 #[derive(Module, Debug)]
-pub struct ResidualMlp<B: Backend> {
+pub(crate) struct ResidualMlp<B: Backend> {
     pub(super) blocks: Vec<[Linear<B>; 2]>,
     pub(super) out: Linear<B>,
 }

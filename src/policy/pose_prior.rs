@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::body::BodyParams;
 
 /// Body joints the prior covers (SMPL-X joints 1..=21).
-pub const PRIOR_JOINTS: usize = 21;
+pub(crate) const PRIOR_JOINTS: usize = 21;
 /// Values per pose.
 pub const PRIOR_DIM: usize = 3 * PRIOR_JOINTS;
 
@@ -269,7 +269,7 @@ impl PosePrior {
     }
 
     /// [`Self::embedding_norm`] of each of `frames`, the prior's logarithms taken once.
-    pub fn embedding_norms(&self, frames: &[BodyParams]) -> Vec<f64> {
+    pub(crate) fn embedding_norms(&self, frames: &[BodyParams]) -> Vec<f64> {
         let logs = PriorLogs::of(self);
         frames
             .iter()
@@ -279,7 +279,7 @@ impl PosePrior {
 
     /// The mean score of `frames` ([`Self::mean_pose_nll`], the same bits) and the largest
     /// embedding norm among them ([`Self::embedding_norm`]); (0, 0) for none.
-    pub fn mean_nll_and_max_norm(&self, frames: &[BodyParams]) -> (f64, f64) {
+    pub(crate) fn mean_nll_and_max_norm(&self, frames: &[BodyParams]) -> (f64, f64) {
         let logs = PriorLogs::of(self);
         let (sum, max) = frames.iter().fold((0.0, 0.0f64), |(sum, max), f| {
             let (nll, norm) = self.scores_with(&prior_values(f), &logs);
@@ -296,7 +296,7 @@ impl PosePrior {
     /// The mean of [`Self::pose_nll`] over `frames` (0 for none): the reward's pose score of a
     /// primitive, the prior's logarithms taken once for all its frames (the same bits as
     /// averaging `pose_nll` frame by frame).
-    pub fn mean_pose_nll(&self, frames: &[BodyParams]) -> f64 {
+    pub(crate) fn mean_pose_nll(&self, frames: &[BodyParams]) -> f64 {
         self.mean_nll_and_max_norm(frames).0
     }
 
@@ -339,7 +339,7 @@ impl PosePrior {
 }
 
 /// Default path of the shipped prior, relative to the crate root.
-pub const SHIPPED_POSE_PRIOR: &str = "assets/policy/pose_prior.json";
+pub(crate) const SHIPPED_POSE_PRIOR: &str = "assets/policy/pose_prior.json";
 
 /// The shipped prior's path.
 pub fn shipped_pose_prior_path() -> std::path::PathBuf {

@@ -38,7 +38,7 @@ use crate::motion::cvae::weights::{self, WeightsError};
 use crate::motion::cvae::{BodyContext, MotionModel};
 
 /// Metadata key of the policy architecture in its weights file.
-pub const POLICY_ARCH_KEY: &str = "egogen.policy_arch";
+pub(crate) const POLICY_ARCH_KEY: &str = "egogen.policy_arch";
 
 /// PPO settings (paper Tab. S3 and EgoGen's box run by default).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -161,12 +161,12 @@ pub const SHIPPED_POLICY: &str = "assets/policy/scene_weights/policy.safetensors
 pub const SHIPPED_POLICY_CONFIG: &str = "configs/train_policy_scene_weights.toml";
 
 /// Where the shipped policy is.
-pub fn shipped_policy_path() -> PathBuf {
+pub(crate) fn shipped_policy_path() -> PathBuf {
     crate::paths::crate_root().join(SHIPPED_POLICY)
 }
 
 /// Episode base of validation episodes.
-pub const VALIDATION_BASE: u64 = 0x7A11_0000;
+pub(crate) const VALIDATION_BASE: u64 = 0x7A11_0000;
 
 /// Loads a policy written by [`save_policy`].
 pub fn load_policy<B: Backend>(
@@ -202,7 +202,7 @@ pub fn load_policy<B: Backend>(
 }
 
 /// A trained policy that acts in `model`'s latent space, or an error naming the file.
-pub fn load_policy_for(
+pub(crate) fn load_policy_for(
     path: &Path,
     model: &crate::motion::cvae::MotionModel,
 ) -> Result<ActorCritic<crate::motion::cvae::infer::InferBackend>, WeightsError> {
@@ -286,7 +286,7 @@ pub fn clip_global_norm<B: AutodiffBackend, M: AutodiffModule<B>>(
 
 /// One update's log line.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct UpdateLog {
+pub(crate) struct UpdateLog {
     pub stage: String,
     pub update: usize,
     pub env_steps: usize,
@@ -319,7 +319,7 @@ pub struct UpdateLog {
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
-pub struct Validation {
+pub(crate) struct Validation {
     pub episode_return: f64,
     pub success_rate: f64,
     pub kl_prior: f64,

@@ -94,7 +94,7 @@ pub struct WeightChanges {
 
 impl WeightChanges {
     /// `base` with these changes.
-    pub fn applied_to(&self, base: RewardWeights) -> RewardWeights {
+    pub(crate) fn applied_to(&self, base: RewardWeights) -> RewardWeights {
         RewardWeights {
             floor: self.floor.unwrap_or(base.floor),
             skate: self.skate.unwrap_or(base.skate),
@@ -111,7 +111,7 @@ impl WeightChanges {
 }
 
 /// Value of the penetration and pose terms when they hold (EgoGen's 0.05).
-pub const BINARY_TERM: f64 = 0.05;
+pub(crate) const BINARY_TERM: f64 = 0.05;
 
 /// The reward terms of one primitive, unweighted.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
@@ -142,7 +142,7 @@ impl RewardTerms {
 
     /// The weighted sum, with the pace bonus for a success with `primitives_left` primitives
     /// before the timeout.
-    pub fn total_with_arrival(&self, w: &RewardWeights, primitives_left: usize) -> f64 {
+    pub(crate) fn total_with_arrival(&self, w: &RewardWeights, primitives_left: usize) -> f64 {
         self.total(w) + w.arrival * self.success * primitives_left as f64
     }
 }
@@ -183,7 +183,7 @@ pub struct Limits {
 
 /// Blocked cells in the body's 2D box beyond which a primitive penetrates (paper Eq. 7: more
 /// than 3).
-pub const EQ7_PENETRATION_CELLS: usize = 3;
+pub(crate) const EQ7_PENETRATION_CELLS: usize = 3;
 
 impl Limits {
     /// EgoGen's test: success within `success_m`, penetration by Eq. 7's cells at the
@@ -325,7 +325,7 @@ impl SceneTest {
 impl Judged {
     /// Judges penetration by another test (Eq. 11 where a scene has a 3D SDF): the
     /// termination and the penetration reward term follow it.
-    pub fn set_penetrated(&mut self, penetrated: bool) {
+    pub(crate) fn set_penetrated(&mut self, penetrated: bool) {
         self.penetrated = penetrated;
         self.terms.penetration = if penetrated { 0.0 } else { BINARY_TERM };
     }
@@ -334,7 +334,7 @@ impl Judged {
 /// Cells of a `cell_m` grid laid over an oriented box (centre, half extents, yaw) whose centres
 /// lie inside any of `obstacles`: Eq. 7's blocked-cell count for obstacles that are not in the
 /// walkable map.
-pub fn cells_in_obstacles(
+pub(crate) fn cells_in_obstacles(
     obstacles: &[Obstacle2],
     centre: DVec2,
     half: DVec2,

@@ -21,7 +21,7 @@ use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
 /// Frames of every primitive of a set, as poses.
 /// Every primitive of a set as its frames' body parameters (no shape).
-pub fn set_frames(set: &PrimitiveSet) -> Vec<Vec<BodyParams>> {
+pub(crate) fn set_frames(set: &PrimitiveSet) -> Vec<Vec<BodyParams>> {
     (0..set.len())
         .map(|i| {
             set.item(i)
@@ -37,7 +37,7 @@ const BENT_JOINTS: [usize; 9] = [1, 2, 3, 4, 5, 16, 17, 18, 19];
 
 /// Per-primitive mean scores of three groups, and how many of each exceed the limit.
 #[derive(Debug, Clone, Serialize)]
-pub struct PriorSeparation {
+pub(crate) struct PriorSeparation {
     pub plausible_max_nll: f64,
     pub held_out_mocap: Quantiles,
     pub random_latent: Quantiles,
@@ -50,7 +50,7 @@ pub struct PriorSeparation {
 }
 
 #[derive(Debug, Clone, Serialize)]
-pub struct PriorScores {
+pub(crate) struct PriorScores {
     pub held_out_mocap: Vec<f64>,
     pub random_latent: Vec<f64>,
     pub bent_joint: Vec<f64>,
@@ -60,7 +60,7 @@ pub struct PriorScores {
 /// per-primitive means) and measures how it separates held-out mocap from primitives decoded
 /// from random latents (training seeds, z ~ N(0, I)) and from held-out mocap with one joint
 /// bent by 90° about a random axis in every frame.
-pub fn fit_pose_prior(
+pub(crate) fn fit_pose_prior(
     train: &PrimitiveSet,
     held_out: &PrimitiveSet,
     model: &MotionModel,
@@ -150,7 +150,7 @@ pub fn fit_pose_prior(
 /// Start/goal pairs of a fixed scene for evaluation: `count` pairs between `min_m` and
 /// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, on the cells of
 /// `region` when given, drawn with `seed`.
-pub fn scene_pairs(
+pub(crate) fn scene_pairs(
     map: &crate::scene::WalkableMap,
     region: Option<&[bool]>,
     count: usize,
@@ -167,7 +167,7 @@ pub fn scene_pairs(
 }
 
 /// What chooses the latents in an evaluation.
-pub enum Controller<'a, B: burn::prelude::Backend> {
+pub(crate) enum Controller<'a, B: burn::prelude::Backend> {
     /// The best of `k` random latents by the reward.
     Sampling { k: usize },
     /// The trained policy: actions sampled from π (as EgoGen's test collector does) or its
@@ -181,7 +181,7 @@ pub enum Controller<'a, B: burn::prelude::Backend> {
 }
 
 /// The loaded parts an evaluation steps.
-pub struct EvalParts<'m> {
+pub(crate) struct EvalParts<'m> {
     pub model: &'m MotionModel,
     pub body: &'m BodyContext<'m>,
     pub bank: &'m SeedBank,
@@ -191,7 +191,7 @@ pub struct EvalParts<'m> {
 }
 
 /// A controller on the first `episodes` held-out episodes, `envs` at a time.
-pub fn evaluate<B: burn::prelude::Backend>(
+pub(crate) fn evaluate<B: burn::prelude::Backend>(
     parts: &EvalParts,
     settings: EnvSettings,
     controller: &Controller<B>,
@@ -261,7 +261,7 @@ impl PathRecorder {
 }
 
 /// [`evaluate`], keeping the walks of the first `paths` episodes ([`EpisodePath`], by id).
-pub fn evaluate_with_paths<B: burn::prelude::Backend>(
+pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     parts: &EvalParts,
     settings: EnvSettings,
     controller: &Controller<B>,

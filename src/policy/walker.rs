@@ -62,19 +62,19 @@ impl ObsLayout {
 
 /// Time (s) of frame `f` of the primitive taken at step `steps` of a clock that starts with
 /// frame 0 of the first seed at 0.
-pub fn frame_time_s(steps: usize, f: usize) -> f64 {
+pub(crate) fn frame_time_s(steps: usize, f: usize) -> f64 {
     (steps * (PRIMITIVE_FRAMES - SEED_FRAMES) + f) as f64 / PRIMITIVE_RATE_HZ
 }
 
 /// Length of one primitive's new motion (s).
-pub const PRIMITIVE_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PRIMITIVE_RATE_HZ;
+pub(crate) const PRIMITIVE_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PRIMITIVE_RATE_HZ;
 
 /// Obstacles as a walker sees them ahead: each standing where it will be when the primitive
 /// taken at `t0_s` ends (how the crowd stepping shows the other people, and the training
 /// environment with [`EnvSettings::people_seen_ahead`]).
 ///
 /// [`EnvSettings::people_seen_ahead`]: super::env::EnvSettings::people_seen_ahead
-pub fn seen_ahead<'a, I: IntoIterator<Item = &'a MovingObstacle>>(
+pub(crate) fn seen_ahead<'a, I: IntoIterator<Item = &'a MovingObstacle>>(
     moving: I,
     t0_s: f64,
 ) -> impl Iterator<Item = MovingObstacle> + use<'a, I> {
@@ -345,7 +345,7 @@ impl Walker {
     }
 
     /// Takes a judged primitive: totals, distance, and the next seed.
-    pub fn advance(&mut self, p: &DecodedPrimitive, j: &Judged, reward: f64) {
+    pub(crate) fn advance(&mut self, p: &DecodedPrimitive, j: &Judged, reward: f64) {
         self.steps += 1;
         self.totals.reward += reward;
         let first = p.joints[SEED_FRAMES - 1][joint::PELVIS];

@@ -11,7 +11,7 @@ const OCCUPIED: [u8; 3] = [60, 60, 70];
 const NO_FLOOR: [u8; 3] = [170, 170, 175];
 
 /// A top view of the map (x right, y up) with `px_per_cell` pixels per cell.
-pub struct MapPicture<'a> {
+pub(crate) struct MapPicture<'a> {
     pub map: &'a WalkableMap,
     pub image: RgbImage,
     px_per_cell: usize,
@@ -46,7 +46,7 @@ impl<'a> MapPicture<'a> {
     }
 
     /// Paints the cells where `mask` holds (row-major, the map's grid) in `rgb`.
-    pub fn shade_cells(&mut self, mask: &[bool], rgb: [u8; 3]) {
+    pub(crate) fn shade_cells(&mut self, mask: &[bool], rgb: [u8; 3]) {
         let (map, px) = (self.map, self.px_per_cell);
         for j in 0..map.ny {
             for i in 0..map.nx {

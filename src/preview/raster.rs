@@ -24,7 +24,7 @@ impl RgbImage {
     }
 
     /// Places `other` side by side to the right of `self` (tops aligned).
-    pub fn hconcat(&self, other: &RgbImage, fill: [u8; 3]) -> RgbImage {
+    pub(crate) fn hconcat(&self, other: &RgbImage, fill: [u8; 3]) -> RgbImage {
         let height = self.height.max(other.height);
         let mut out = RgbImage::new(self.width + other.width, height, fill);
         for (img, x0) in [(self, 0), (other, self.width)] {
@@ -38,7 +38,7 @@ impl RgbImage {
 
     /// The image shrunk by a whole factor (box-averaged) so that its longer side fits
     /// `max_px`; the image itself when it fits already.
-    pub fn downscaled_to(&self, max_px: usize) -> RgbImage {
+    pub(crate) fn downscaled_to(&self, max_px: usize) -> RgbImage {
         let factor = self.width.max(self.height).div_ceil(max_px.max(1)).max(1);
         if factor == 1 {
             return self.clone();
@@ -93,7 +93,7 @@ impl RgbImage {
     }
 
     /// The image as PNG bytes (8-bit RGB).
-    pub fn encode_png(&self) -> std::io::Result<Vec<u8>> {
+    pub(crate) fn encode_png(&self) -> std::io::Result<Vec<u8>> {
         let mut encoded = Vec::new();
         {
             let mut enc = png::Encoder::new(&mut encoded, self.width as u32, self.height as u32);
@@ -116,7 +116,7 @@ pub struct MeshView {
 impl MeshView {
     /// Looking along `-forward`… i.e. the camera sits at `+back` and looks towards the origin,
     /// with `up` pointing up in the image.
-    pub fn looking_from(back: Vec3, up: Vec3) -> Self {
+    pub(crate) fn looking_from(back: Vec3, up: Vec3) -> Self {
         let z = back.normalize();
         let x = up.cross(z).normalize();
         let y = z.cross(x);

@@ -3,7 +3,7 @@
 use crate::math::Vec3;
 
 /// A closed square prism around each segment (`radius` = half side), as one triangle mesh.
-pub fn bone_mesh(segments: &[(Vec3, Vec3)], radius: f64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+pub(crate) fn bone_mesh(segments: &[(Vec3, Vec3)], radius: f64) -> (Vec<Vec3>, Vec<[u32; 3]>) {
     let mut verts = Vec::with_capacity(segments.len() * 8);
     let mut tris = Vec::with_capacity(segments.len() * 12);
     for &(a, b) in segments {

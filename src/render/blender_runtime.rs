@@ -13,7 +13,7 @@ use std::process::Command;
 /// The Blender series egogen is tested with.
 pub const SUPPORTED_SERIES: &str = "4.5";
 /// The PyPI requirement the managed environment installs.
-pub const BPY_REQUIREMENT: &str = "bpy==4.5.*";
+pub(crate) const BPY_REQUIREMENT: &str = "bpy==4.5.*";
 
 /// How to run Blender.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -8,7 +8,7 @@ use crate::render::protocol::CameraKey;
 
 /// Blender's camera axes expressed in the OpenCV camera frame: x right, y up, z backwards
 /// (`opencv_from_blender = diag(1, −1, −1)`).
-pub fn world_from_blender_cam(world_from_cam_opencv: Affine3) -> Affine3 {
+pub(crate) fn world_from_blender_cam(world_from_cam_opencv: Affine3) -> Affine3 {
     let flip = Mat3::from_diagonal(Vec3::new(1.0, -1.0, -1.0));
     Affine3 {
         matrix3: world_from_cam_opencv.matrix3 * flip,
@@ -20,7 +20,7 @@ pub fn world_from_blender_cam(world_from_cam_opencv: Affine3) -> Affine3 {
 /// shift_y) with the sensor fitted horizontally. Shifts are in units of the larger image side,
 /// as Blender defines them; +y shift moves the image content down, so the principal point's
 /// vertical offset (pixels, y down) changes sign.
-pub fn blender_lens(
+pub(crate) fn blender_lens(
     width_px: u32,
     height_px: u32,
     f_px: f64,
@@ -38,7 +38,7 @@ pub fn blender_lens(
 
 /// Pose keys for Blender from OpenCV `world_from_cam` poses at (sub)frames, quaternion signs
 /// kept continuous so Blender's linear interpolation takes the short way.
-pub fn camera_keys(poses: &[(f64, Affine3)]) -> Vec<CameraKey> {
+pub(crate) fn camera_keys(poses: &[(f64, Affine3)]) -> Vec<CameraKey> {
     let mut keys: Vec<CameraKey> = Vec::with_capacity(poses.len());
     let mut last: Option<DQuat> = None;
     for &(frame, world_from_cam) in poses {

@@ -457,7 +457,7 @@ pub fn validate_frame(
 
 /// [`validate_frame`] of a frame file already read (from disk, or from the bytes about to be
 /// written).
-pub fn validate_frame_contents(
+pub(crate) fn validate_frame_contents(
     contents: ExrContents,
     width: u32,
     height: u32,
@@ -482,7 +482,7 @@ pub fn validate_frame_contents(
 /// Checks a frame file without knowing the run that made it (`verify`): `valid.V` is there,
 /// every channel belongs to a frame file's channel group ([`CHANNEL_GROUPS`]) and every group
 /// present is whole, and all values are finite.
-pub fn check_frame_channels(contents: &ExrContents) -> Result<(), FrameFileError> {
+pub(crate) fn check_frame_channels(contents: &ExrContents) -> Result<(), FrameFileError> {
     let path = &contents.path;
     let mut expected: Vec<&str> = Vec::new();
     for c in &contents.channels {

@@ -27,7 +27,7 @@ use crate::math::{Real, Vec3};
 /// Sensor width Blender is given (mm); any value works, this is Blender's default.
 const SENSOR_WIDTH_MM: Real = 36.0;
 /// Grid (per image side) on which egogen reports a stand-in's error ([`native_error`]).
-pub const ERROR_GRID: usize = 256;
+pub(crate) const ERROR_GRID: usize = 256;
 /// Azimuths × angles sampled for the fit.
 const FIT_AZIMUTHS: usize = 64;
 const FIT_ANGLES: usize = 256;
@@ -256,7 +256,7 @@ impl LensPolynomial {
     }
 
     /// `(θ, dθ/dρ)` at radius `rho_px`.
-    pub fn theta_with_slope(&self, rho_px: Real) -> (Real, Real) {
+    pub(crate) fn theta_with_slope(&self, rho_px: Real) -> (Real, Real) {
         let [c1, c2, c3, c4] = self.theta_coeffs;
         let r = rho_px;
         (

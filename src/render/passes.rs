@@ -27,7 +27,7 @@ pub enum Pass {
 
 impl Pass {
     /// Every pass, in config order.
-    pub const ALL: [Pass; 7] = [
+    pub(crate) const ALL: [Pass; 7] = [
         Pass::Colour,
         Pass::Depth,
         Pass::Normals,
@@ -51,7 +51,7 @@ impl Pass {
     }
 
     /// The pass a config names, if any.
-    pub fn from_name(name: &str) -> Option<Pass> {
+    pub(crate) fn from_name(name: &str) -> Option<Pass> {
         Pass::ALL.into_iter().find(|p| p.name() == name)
     }
 }
@@ -68,7 +68,7 @@ impl Default for Passes {
 }
 
 impl Passes {
-    pub const NONE: Passes = Passes(0);
+    pub(crate) const NONE: Passes = Passes(0);
 
     pub fn of(passes: impl IntoIterator<Item = Pass>) -> Self {
         Passes(passes.into_iter().fold(0, |m, p| m | 1 << p as u16))
@@ -92,7 +92,7 @@ impl Passes {
     }
 
     /// Whether Blender renders the blurred colour image.
-    pub fn needs_colour_render(self) -> bool {
+    pub(crate) fn needs_colour_render(self) -> bool {
         self.has(Pass::Colour)
     }
 
@@ -159,7 +159,7 @@ impl Passes {
 
 /// Groups of channels a frame file may hold: a file holds each group whole or not at all, and
 /// `valid.V` always (how `verify` checks a file without the run's config).
-pub const CHANNEL_GROUPS: [&[&str]; 9] = [
+pub(crate) const CHANNEL_GROUPS: [&[&str]; 9] = [
     &["valid.V"],
     &["rgb.A", "rgb.B", "rgb.G", "rgb.R"],
     &["gray.Y"],

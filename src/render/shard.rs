@@ -7,7 +7,7 @@ use std::process::Command;
 use super::blender_runtime::{BlenderKind, BlenderRuntime};
 
 /// The worker script shipped with egogen.
-pub fn render_script() -> PathBuf {
+pub(crate) fn render_script() -> PathBuf {
     crate::paths::crate_root().join("blender_scripts/render_shard.py")
 }
 

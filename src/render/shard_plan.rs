@@ -24,7 +24,7 @@ pub fn blender_fps(rate_hz: f64) -> (u32, f64) {
 
 /// The pose at a fractional frame, interpolated between per-frame poses (rotation slerp,
 /// translation lerp), held constant outside the sequence.
-pub fn pose_at(poses: &[Affine3], frame: f64) -> Affine3 {
+pub(crate) fn pose_at(poses: &[Affine3], frame: f64) -> Affine3 {
     let last = poses.len() - 1;
     let t = frame.clamp(0.0, last as f64);
     let i = (t.floor() as usize).min(last);

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::math::random::uniform_open01;
 
 /// The Monk Skin Tone scale's swatches, sRGB (8-bit), tone 1 (lightest) to 10 (darkest).
-pub const MONK_SKIN_TONES_SRGB: [[u8; 3]; 10] = [
+pub(crate) const MONK_SKIN_TONES_SRGB: [[u8; 3]; 10] = [
     [0xf6, 0xed, 0xe4],
     [0xf3, 0xe7, 0xdb],
     [0xf7, 0xea, 0xd0],
@@ -29,7 +29,7 @@ pub const MONK_SKIN_TONES_SRGB: [[u8; 3]; 10] = [
 ];
 
 /// An 8-bit sRGB value as linear light (IEC 61966-2-1).
-pub fn srgb_to_linear(v: u8) -> f64 {
+pub(crate) fn srgb_to_linear(v: u8) -> f64 {
     let c = v as f64 / 255.0;
     if c <= 0.04045 {
         c / 12.92

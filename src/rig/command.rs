@@ -136,7 +136,7 @@ pub fn run_command(cmd: &RigCommand, out: &mut dyn Write) -> Result<()> {
 }
 
 /// The `rig check` report.
-pub fn write_check(rig: &Rig, out: &mut dyn Write) -> std::io::Result<()> {
+pub(crate) fn write_check(rig: &Rig, out: &mut dyn Write) -> std::io::Result<()> {
     writeln!(
         out,
         "rig `{}` ({}): {} camera(s)",

@@ -103,7 +103,7 @@ impl RawImuCalibration {
 }
 
 /// Highest IMU rate a rig may give (Hz); devices sample at 100 Hz – a few kHz.
-pub const MAX_IMU_RATE_HZ: Real = 100_000.0;
+pub(crate) const MAX_IMU_RATE_HZ: Real = 100_000.0;
 
 /// One camera, as written (the model and pose are parsed separately so errors name them).
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -366,7 +366,7 @@ fn build_model(
 
 /// Farthest a rig's camera may sit from the eyes (CPF) it is mounted on (m): head-mounted
 /// devices keep their cameras within centimetres; one a metre away is a unit mistake (mm).
-pub const MAX_CAMERA_OFFSET_M: Real = 1.0;
+pub(crate) const MAX_CAMERA_OFFSET_M: Real = 1.0;
 
 fn build_pose(raw: &RawPose) -> Result<Affine3, String> {
     let t = Vec3::from_array(raw.translation_m);

@@ -4,7 +4,7 @@
 use crate::math::{matrix_to_axis_angle, Mat3, Real, Vec3};
 
 /// Largest deviation of `RᵀR` from the identity (per entry) accepted as a rotation.
-pub const ORTHONORMAL_TOLERANCE: Real = 1e-6;
+pub(crate) const ORTHONORMAL_TOLERANCE: Real = 1e-6;
 
 /// Why a matrix is not a rotation.
 #[derive(Debug, Clone, PartialEq)]
@@ -17,7 +17,7 @@ pub enum NotRotation {
 
 /// Checks `m` is a rotation within [`ORTHONORMAL_TOLERANCE`] and returns the rotation nearest
 /// to it (`m` itself when it is orthonormal to within 1e-14).
-pub fn checked_rotation(m: Mat3) -> Result<Mat3, NotRotation> {
+pub(crate) fn checked_rotation(m: Mat3) -> Result<Mat3, NotRotation> {
     let gram = m.transpose() * m - Mat3::IDENTITY;
     let dev = gram
         .to_cols_array()
@@ -76,7 +76,7 @@ impl YawPitchRoll {
 }
 
 /// Axis-angle vector of a rotation (angle = norm, radians).
-pub fn axis_angle(m: Mat3) -> Vec3 {
+pub(crate) fn axis_angle(m: Mat3) -> Vec3 {
     matrix_to_axis_angle(m)
 }
 

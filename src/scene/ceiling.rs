@@ -6,11 +6,11 @@ use super::floor::{detect_floor_z, UP_FACING_MIN_NZ};
 use super::mesh::SceneMesh;
 
 /// Horizontal faces above this height over the floor count as ceiling (m).
-pub const CEILING_MIN_HEIGHT_M: f64 = 2.0;
+pub(crate) const CEILING_MIN_HEIGHT_M: f64 = 2.0;
 
 /// A ceiling to add: a rectangle over the scene's extent at the top of its walls.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AddedCeiling {
+pub(crate) struct AddedCeiling {
     pub z_m: f64,
     pub min_xy: [f64; 2],
     pub max_xy: [f64; 2],
@@ -18,7 +18,7 @@ pub struct AddedCeiling {
 
 /// Areas (m²) of the floor (up-facing faces at the floor height) and of the ceiling
 /// (down-facing faces at least [`CEILING_MIN_HEIGHT_M`] above the floor).
-pub fn floor_and_ceiling_m2(mesh: &SceneMesh, floor_z: f64) -> (f64, f64) {
+pub(crate) fn floor_and_ceiling_m2(mesh: &SceneMesh, floor_z: f64) -> (f64, f64) {
     let (mut floor, mut ceiling) = (0.0, 0.0);
     for t in 0..mesh.triangles.len() {
         let [a, b, c] = mesh.triangle(t);
@@ -45,7 +45,7 @@ const WALL_MAX_NZ: f64 = 0.3;
 /// [`CEILING_MIN_HEIGHT_M`] above the floor, the top height (in 1 cm bins) at which the
 /// largest area of them ends — walls, not a stair, a lamp or a tall shelf rising above them;
 /// `highest` (the scene's top) when there are none.
-pub fn wall_top_z(mesh: &SceneMesh, floor_z: f64, highest: f64) -> f64 {
+pub(crate) fn wall_top_z(mesh: &SceneMesh, floor_z: f64, highest: f64) -> f64 {
     let mut tops: std::collections::BTreeMap<i64, (f64, f64)> = Default::default();
     for t in 0..mesh.triangles.len() {
         let [a, b, c] = mesh.triangle(t);
@@ -71,7 +71,7 @@ pub fn wall_top_z(mesh: &SceneMesh, floor_z: f64, highest: f64) -> f64 {
 /// The ceiling to add to a scene whose ceiling covers less than half its floor: at the top
 /// of its walls ([`wall_top_z`]), over its horizontal extent. `None` when the scene has a
 /// ceiling, no floor, or nothing rises [`CEILING_MIN_HEIGHT_M`] above the floor.
-pub fn ceiling_to_add(mesh: &SceneMesh) -> Option<AddedCeiling> {
+pub(crate) fn ceiling_to_add(mesh: &SceneMesh) -> Option<AddedCeiling> {
     let floor_z = detect_floor_z(mesh)?;
     let (lo, hi) = mesh.bounds()?;
     let (floor, ceiling) = floor_and_ceiling_m2(mesh, floor_z);

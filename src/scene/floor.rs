@@ -3,11 +3,11 @@
 use super::mesh::SceneMesh;
 
 /// Upward-facing means a unit normal with z above this.
-pub const UP_FACING_MIN_NZ: f64 = 0.95;
+pub(crate) const UP_FACING_MIN_NZ: f64 = 0.95;
 
 /// Floor height (m): area-weighted histogram (1 cm bins) of upward-facing triangles; the
 /// lowest bin holding at least a quarter of the largest bin's area. `None` if nothing faces up.
-pub fn detect_floor_z(mesh: &SceneMesh) -> Option<f64> {
+pub(crate) fn detect_floor_z(mesh: &SceneMesh) -> Option<f64> {
     let mut bins: std::collections::BTreeMap<i64, (f64, f64)> = Default::default();
     for t in 0..mesh.triangles.len() {
         let [a, b, c] = mesh.triangle(t);

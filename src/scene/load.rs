@@ -20,7 +20,7 @@ pub enum UpAxis {
 
 impl UpAxis {
     /// The default for a file, from its extension.
-    pub fn default_for(path: &Path) -> UpAxis {
+    pub(crate) fn default_for(path: &Path) -> UpAxis {
         match extension(path).as_str() {
             "gltf" | "glb" => UpAxis::Y,
             _ => UpAxis::Z,
@@ -324,7 +324,7 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
 }
 
 /// Longest object name Blender keeps (bytes of UTF-8); it cuts longer ones.
-pub const BLENDER_NAME_BYTES: usize = 63;
+pub(crate) const BLENDER_NAME_BYTES: usize = 63;
 
 /// `<stem>_<id>`, the stem cut (at a character boundary) so that the whole fits in
 /// [`BLENDER_NAME_BYTES`]: the id that tells a scan's objects apart survives in Blender.

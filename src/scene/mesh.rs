@@ -81,7 +81,7 @@ impl SceneMesh {
 
     /// Adds a box standing on the floor plane, turned about z: its footprint (centre, half
     /// extents along its own axes, yaw in rad) from height `z0` to `z1`; returns its id.
-    pub fn add_turned_box(
+    pub(crate) fn add_turned_box(
         &mut self,
         name: impl Into<String>,
         centre: glam::DVec2,
@@ -105,7 +105,7 @@ impl SceneMesh {
 
     /// Writes the mesh as Wavefront OBJ (metres, z up, as [`super::load_scene`] reads an OBJ
     /// by default), one `o` object per scene object, atomically.
-    pub fn write_obj(&self, path: &std::path::Path) -> std::io::Result<()> {
+    pub(crate) fn write_obj(&self, path: &std::path::Path) -> std::io::Result<()> {
         use std::fmt::Write as _;
         let mut text = format!(
             "# egogen scene: {} objects, {} vertices, {} triangles; metres, z up\n",

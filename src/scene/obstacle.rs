@@ -18,7 +18,7 @@ pub enum Obstacle2 {
 
 impl Obstacle2 {
     /// The same obstacle moved by `offset`.
-    pub fn translated(self, offset: DVec2) -> Self {
+    pub(crate) fn translated(self, offset: DVec2) -> Self {
         match self {
             Obstacle2::Box {
                 centre,

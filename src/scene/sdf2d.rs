@@ -3,7 +3,7 @@
 
 /// Squared distance (in cells²) from every cell centre to the nearest `target` cell centre;
 /// `f64::INFINITY` where there is no target at all.
-pub fn squared_edt(target: &[bool], nx: usize, ny: usize) -> Vec<f64> {
+pub(crate) fn squared_edt(target: &[bool], nx: usize, ny: usize) -> Vec<f64> {
     let mut d: Vec<f64> = target
         .iter()
         .map(|&t| if t { 0.0 } else { f64::INFINITY })

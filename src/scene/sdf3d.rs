@@ -11,10 +11,10 @@ use crate::math::Vec3;
 
 /// Voxel size of the default trade: under a second to build for the apartment, 2 cm
 /// worst-case error (`docs/SCENES.md`).
-pub const DEFAULT_VOXEL_M: f64 = 0.05;
+pub(crate) const DEFAULT_VOXEL_M: f64 = 0.05;
 /// Free space kept around the scene's bounds (m), so that lookups clamped to the grid stay
 /// positive.
-pub const MARGIN_M: f64 = 0.2;
+pub(crate) const MARGIN_M: f64 = 0.2;
 
 /// Signed distances (m) on a regular grid; voxel `(i, j, k)` centre at
 /// `origin + (i, j, k)·voxel_m`. Stored as `f32` (error < 1e-6 m at scene scale).

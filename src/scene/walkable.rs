@@ -84,7 +84,7 @@ pub enum WalkableError {
 pub const MAX_MAP_CELLS: f64 = 5e7;
 
 /// Bytes a map needs per cell, scratch included (flags, signed distance, component, EDT).
-pub const MAP_BYTES_PER_CELL: f64 = 31.0;
+pub(crate) const MAP_BYTES_PER_CELL: f64 = 31.0;
 
 impl WalkableMap {
     /// Builds the map of a scene.

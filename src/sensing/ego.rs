@@ -19,7 +19,7 @@ pub struct EgoPose2 {
 impl EgoPose2 {
     /// From `world_from_cpf` (z-up world): the CPF origin and the floor projection of its
     /// viewing direction (CPF +z). A gaze straight up or down keeps heading 0.
-    pub fn from_world_from_cpf(world_from_cpf: &Affine3) -> Self {
+    pub(crate) fn from_world_from_cpf(world_from_cpf: &Affine3) -> Self {
         let f = world_from_cpf.matrix3.z_axis;
         let heading_rad = if f.x == 0.0 && f.y == 0.0 {
             0.0
@@ -42,7 +42,7 @@ pub struct SensingWorld<'a> {
 
 impl SensingWorld<'_> {
     /// Free distance along a ray (≤ `max_t`): static geometry and dynamic obstacles.
-    pub fn cast(&self, ray: Ray2, max_t: f64) -> Option<f64> {
+    pub(crate) fn cast(&self, ray: Ray2, max_t: f64) -> Option<f64> {
         let mut best = hit_grid(self.map, ray, max_t);
         for o in self.obstacles {
             if let Some(t) = hit_obstacle(o, ray, best.unwrap_or(max_t)) {

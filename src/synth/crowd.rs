@@ -57,7 +57,7 @@ pub const NEW_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 
 /// Primitives a take of `duration_s` walks (at least one): enough for its frames at
 /// [`PRIMITIVE_RATE_HZ`] after the seed frames.
-pub fn primitives_for(duration_s: f64) -> usize {
+pub(crate) fn primitives_for(duration_s: f64) -> usize {
     let frames = (duration_s * crate::motion::primitive::PRIMITIVE_RATE_HZ).round() as usize;
     frames
         .saturating_sub(SEED_FRAMES)
@@ -66,7 +66,7 @@ pub fn primitives_for(duration_s: f64) -> usize {
 }
 
 /// Frames of a take of `primitives` primitives.
-pub fn frames_of(primitives: usize) -> usize {
+pub(crate) fn frames_of(primitives: usize) -> usize {
     SEED_FRAMES + primitives * NEW_FRAMES
 }
 
@@ -74,7 +74,7 @@ pub fn frames_of(primitives: usize) -> usize {
 /// `betas` shape coefficients copied into each frame), the CPF pose, the body markers, the
 /// pelvis and the joints of the tracks made from it. What memory checks multiply by agents ×
 /// [`frames_of`].
-pub fn bytes_per_agent_frame(betas: usize) -> f64 {
+pub(crate) fn bytes_per_agent_frame(betas: usize) -> f64 {
     use std::mem::size_of;
     (size_of::<BodyParams>()
         + betas * size_of::<f64>()
@@ -114,7 +114,7 @@ impl Steering {
         spread: 1.0,
     };
     /// The trained policy's mean action.
-    pub const POLICY_MEAN: Steering = Steering::Policy {
+    pub(crate) const POLICY_MEAN: Steering = Steering::Policy {
         mean_action: true,
         spread: 1.0,
     };
@@ -130,7 +130,7 @@ pub const PATH_LOOKAHEAD_M: f64 = 0.8;
 
 /// Free space the planned path keeps from walls and other people (m, about half a body's
 /// width).
-pub const PATH_CLEARANCE_M: f64 = 0.3;
+pub(crate) const PATH_CLEARANCE_M: f64 = 0.3;
 
 /// What a penetrating primitive costs the path follower, as extra distance (m).
 pub const PATH_PENETRATION_COST_M: f64 = 1.0;
@@ -316,7 +316,7 @@ pub struct AgentTrack {
 
 impl AgentTrack {
     /// The agent's frames as a motion sequence (neutral gender; the body model's).
-    pub fn motion_sequence(&self, frame_rate_hz: f64) -> crate::motion::MotionSequence {
+    pub(crate) fn motion_sequence(&self, frame_rate_hz: f64) -> crate::motion::MotionSequence {
         crate::motion::MotionSequence {
             frame_rate_hz,
             betas: self.betas.clone(),
@@ -381,7 +381,7 @@ pub fn sample_point(
 
 /// A goal on the walkable map, in the same connected region as `from`, `distance_m` away,
 /// with `clearance_m` of free space; `None` when the map has none after many draws.
-pub fn sample_goal(
+pub(crate) fn sample_goal(
     map: &WalkableMap,
     region: Option<&[bool]>,
     from: DVec2,
@@ -878,7 +878,7 @@ impl<'m> Agent<'m> {
 
 /// Draws from the motion model's prior when every redraw of a primitive would take the pelvis
 /// over a wall ([`CrowdSettings::scene_every_frame`]), before the body holds its pose.
-pub const WALL_PRIOR_DRAWS: usize = 32;
+pub(crate) const WALL_PRIOR_DRAWS: usize = 32;
 
 /// `p` with its new frames all the seed's last frame: the body holding its pose for a
 /// primitive (what an agent does when every draw would walk it through a wall).

@@ -83,7 +83,7 @@ pub struct TakeChecks {
 }
 
 /// Checks every frame of a take.
-pub fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
+pub(crate) fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
     let floor = world.map.floor_z_m;
     let mut c = TakeChecks {
         non_finite_frames: 0,
@@ -153,7 +153,7 @@ pub struct TakeSummary {
 
 /// Refuses an output folder that exists and is not empty (nothing is overwritten), or a
 /// `.partial` folder beside it that is not a take's leftover.
-pub fn check_out_dir(dir: &Path) -> Result<()> {
+pub(crate) fn check_out_dir(dir: &Path) -> Result<()> {
     if dir.exists()
         && std::fs::read_dir(dir)
             .map(|mut d| d.next().is_some())
@@ -185,7 +185,7 @@ fn is_take_leftover(dir: &Path) -> bool {
 }
 
 /// A progress bar over the take's rounds (hidden when `show` is false).
-pub fn progress_bar(show: bool, rounds: usize) -> indicatif::ProgressBar {
+pub(crate) fn progress_bar(show: bool, rounds: usize) -> indicatif::ProgressBar {
     match show {
         true => crate::progress::progress_bar(
             "egogen synth",
@@ -268,7 +268,7 @@ fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
 /// obstacles dark red, moving ones at the first take's start (light) and end (dark), per
 /// agent its pelvis path, start (dot in a ring), goals (dots; a white centre: missed) and end
 /// (a disc; black: fell or failed). Several takes of one world draw over each other.
-pub fn paths_picture<'a>(
+pub(crate) fn paths_picture<'a>(
     world: &'a CrowdWorld,
     takes: &[&CrowdTake],
     max_side_px: usize,
@@ -331,7 +331,7 @@ pub fn paths_picture<'a>(
 
 /// Writes a take folder (see the module docs); `dir` must pass [`check_out_dir`]. `wall_s`:
 /// the seconds the walk took, when the summary should record them.
-pub fn write_crowd_dir(
+pub(crate) fn write_crowd_dir(
     dir: &Path,
     world: &CrowdWorld,
     body: &BodyModel,

@@ -41,7 +41,7 @@ fn inside(lo: Vec3, hi: Vec3, v: Vec3) -> bool {
 }
 
 /// Measures a take (see the module docs).
-pub fn human_penetration(
+pub(crate) fn human_penetration(
     model: &BodyModel,
     agents: &[AgentTrack],
     every_n_frames: usize,

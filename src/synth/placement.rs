@@ -7,14 +7,14 @@ use crate::motion::MotionSequence;
 use crate::scene::{sample_start_goals, WalkableMap};
 
 /// Distance kept from obstacles along the path (m).
-pub const PATH_CLEARANCE_M: f64 = 0.35;
+pub(crate) const PATH_CLEARANCE_M: f64 = 0.35;
 /// Free floor required beyond the path's end along the heading (m), so that head cameras look
 /// into the room rather than at a wall or out of a window.
-pub const LOOK_AHEAD_M: f64 = 2.0;
+pub(crate) const LOOK_AHEAD_M: f64 = 2.0;
 
 /// Why no placement was found.
 #[derive(Debug, thiserror::Error)]
-pub enum PlacementError {
+pub(crate) enum PlacementError {
     #[error("no straight path of {length_m:.2} m with {clearance_m} m clearance found in the scene's walkable area (tried {tried} starts × 32 headings); use a shorter motion or another scene")]
     NoRoom {
         length_m: f64,
@@ -27,7 +27,7 @@ pub enum PlacementError {
 
 /// Moves `motion` so that its pelvis path (floor projection) starts at a seeded free spot and
 /// keeps `PATH_CLEARANCE_M` from obstacles, inside the largest connected walkable region. Returns the moved motion and the move.
-pub fn place_motion(
+pub(crate) fn place_motion(
     model: &BodyModel,
     motion: &MotionSequence,
     map: &WalkableMap,

@@ -89,7 +89,7 @@ pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
 /// The agents with every start and goal placed: sampled ones on the walkable map (in
 /// `region` when given, with the clearance, at least 1 m from every other start); given ones
 /// checked to stand on it.
-pub fn place_agents(
+pub(crate) fn place_agents(
     plan: &SynthPlan,
     map: &WalkableMap,
     region: Option<&[bool]>,
@@ -289,7 +289,7 @@ pub fn run_synth(
 
 /// Loads the motion model, policy, pose prior and start poses, places the agents and walks
 /// the take (nothing is written).
-pub fn synthesize(
+pub(crate) fn synthesize(
     plan: &SynthPlan,
     body: &crate::body::BodyModel,
     progress: bool,

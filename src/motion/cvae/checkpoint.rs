@@ -69,7 +69,7 @@ impl CheckpointState {
 }
 
 /// The checkpoint folder of a run writing `weights_out`.
-pub fn checkpoint_dir(weights_out: &Path) -> PathBuf {
+pub(crate) fn checkpoint_dir(weights_out: &Path) -> PathBuf {
     let mut name = weights_out
         .file_name()
         .map(|n| n.to_os_string())
@@ -85,7 +85,7 @@ pub fn exists(dir: &Path) -> bool {
 
 /// Whether a run may start (`resume` false) or resume (`resume` true) given the checkpoint
 /// folder: a leftover checkpoint is never overwritten, and resuming needs one.
-pub fn check_resume(dir: &Path, resume: bool) -> Result<(), TrainError> {
+pub(crate) fn check_resume(dir: &Path, resume: bool) -> Result<(), TrainError> {
     match (resume, exists(dir)) {
         (false, true) => Err(TrainError::Data(format!(
             "an interrupted run left a checkpoint in {}: pass --resume to continue it, or \
@@ -101,7 +101,7 @@ pub fn check_resume(dir: &Path, resume: bool) -> Result<(), TrainError> {
 }
 
 /// SHA-256 of a plan's debug form.
-pub fn plan_fingerprint(plan: &impl std::fmt::Debug) -> String {
+pub(crate) fn plan_fingerprint(plan: &impl std::fmt::Debug) -> String {
     hex(&sha2::Sha256::digest(format!("{plan:?}").as_bytes()))
 }
 
@@ -121,7 +121,7 @@ fn recorder_error(path: &Path, e: impl std::fmt::Display) -> TrainError {
 }
 
 /// The random generator's position as (seed hex, stream, word position).
-pub fn rng_position(rng: &ChaCha8Rng) -> (String, u64, String) {
+pub(crate) fn rng_position(rng: &ChaCha8Rng) -> (String, u64, String) {
     (
         hex(&rng.get_seed()),
         rng.get_stream(),

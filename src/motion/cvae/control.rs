@@ -225,7 +225,7 @@ impl LatentController {
 }
 
 /// `|z|/√L`: the length of a latent relative to the typical length of a draw from N(0, I).
-pub fn relative_norm(z: &[f32]) -> f64 {
+pub(crate) fn relative_norm(z: &[f32]) -> f64 {
     let l = z.len().max(1) as f64;
     z.iter().map(|&x| (x as f64).powi(2)).sum::<f64>().sqrt() / l.sqrt()
 }
@@ -258,7 +258,7 @@ pub fn chain_sequence(prims: &[&DecodedPrimitive], betas: &[f64]) -> MotionSeque
 }
 
 /// Mean pelvis speed (m/s) of a chain: horizontal displacement start → end over its time.
-pub fn chain_speed_m_s(prims: &[&DecodedPrimitive]) -> f64 {
+pub(crate) fn chain_speed_m_s(prims: &[&DecodedPrimitive]) -> f64 {
     let (Some(a), Some(b)) = (prims.first(), prims.last()) else {
         return f64::NAN;
     };

@@ -12,9 +12,9 @@ use super::net::InputStats;
 use super::tensor_body::RigGeometry;
 
 /// Values of one primitive.
-pub const PRIMITIVE_VALUES: usize = PRIMITIVE_FRAMES * FRAME_DIM;
+pub(crate) const PRIMITIVE_VALUES: usize = PRIMITIVE_FRAMES * FRAME_DIM;
 /// Frames by which consecutive primitives of a chain advance (the seed overlaps).
-pub const CHAIN_STRIDE: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
+pub(crate) const CHAIN_STRIDE: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 
 /// Primitives (or chains of `chain_len` primitives) as flat features, plus the floor height of
 /// each primitive in its canonical frame (the clips' floor is world z = 0).
@@ -116,7 +116,7 @@ impl PrimitiveSet {
     }
 
     /// Mean and spread of features and floors (spreads floored at `min_std`).
-    pub fn input_stats(&self, min_std: f32) -> InputStats {
+    pub(crate) fn input_stats(&self, min_std: f32) -> InputStats {
         let (feature_mean, feature_std) = self.feature_stats(min_std);
         let n = self.floor_z.len().max(1) as f64;
         let mean = self.floor_z.iter().map(|&f| f as f64).sum::<f64>() / n;
@@ -134,7 +134,7 @@ impl PrimitiveSet {
     }
 
     /// Per-value mean and standard deviation over all frames (spread floored at `min_std`).
-    pub fn feature_stats(&self, min_std: f32) -> ([f32; FRAME_DIM], [f32; FRAME_DIM]) {
+    pub(crate) fn feature_stats(&self, min_std: f32) -> ([f32; FRAME_DIM], [f32; FRAME_DIM]) {
         let frames = self.features.len() / FRAME_DIM;
         let mut mean = [0f64; FRAME_DIM];
         let mut sq = [0f64; FRAME_DIM];

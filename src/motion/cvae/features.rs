@@ -33,7 +33,7 @@ pub fn frame_features(params: &BodyParams) -> [f32; FRAME_DIM] {
 }
 
 /// SMPL-X parameters of one frame of features (hands, jaw, eyes at rest).
-pub fn frame_params(features: &[f32], betas: &[f64]) -> BodyParams {
+pub(crate) fn frame_params(features: &[f32], betas: &[f64]) -> BodyParams {
     let mut p = BodyParams {
         betas: betas.to_vec(),
         ..BodyParams::default()
@@ -56,6 +56,6 @@ pub fn frame_params(features: &[f32], betas: &[f64]) -> BodyParams {
 }
 
 /// Features of every frame of a primitive, flattened `[frames × FRAME_DIM]`.
-pub fn primitive_features(p: &Primitive) -> Vec<f32> {
+pub(crate) fn primitive_features(p: &Primitive) -> Vec<f32> {
     p.frames.iter().flat_map(frame_features).collect()
 }

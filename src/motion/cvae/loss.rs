@@ -36,7 +36,7 @@ const CONTACT_SPEED_M_PER_S: f64 = 0.3;
 
 /// A posed batch of primitives: `[B, T, ...]`.
 #[derive(Debug, Clone)]
-pub struct Posed<B: Backend> {
+pub(crate) struct Posed<B: Backend> {
     /// Gram-Schmidt'ed 6D `[B, T, 22, 6]`.
     pub rot6d: Tensor<B, 4>,
     /// `[B, T, 3]`.
@@ -48,7 +48,7 @@ pub struct Posed<B: Backend> {
 }
 
 /// Poses raw features `[B, T, F]`.
-pub fn pose_frames<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Posed<B> {
+pub(crate) fn pose_frames<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Posed<B> {
     let [b, t, _] = x.dims();
     let rot: Tensor<B, 5> =
         rot6d_to_matrix(
@@ -79,7 +79,7 @@ pub struct LossTerms<B: Backend> {
 
 /// Losses of predicted primitives `pred` against `target` (raw features `[B, T, F]`, the seed
 /// frames included), with floors `[B]` in each canonical frame and KL terms `(mu, logvar)`.
-pub fn primitive_loss<B: Backend>(
+pub(crate) fn primitive_loss<B: Backend>(
     rig: &TensorRig<B>,
     weights: &LossWeights,
     pred: Tensor<B, 3>,
@@ -272,7 +272,7 @@ pub fn plausible_range<B: Backend>(
 
 /// Mean L1 distance of the root features (global-orient 6D and `transl`) of the decoded frames
 /// of raw primitives `pred` and `anchor` (`[B, T, F]`, the seed first).
-pub fn root_distance<B: Backend>(pred: Tensor<B, 3>, anchor: Tensor<B, 3>) -> Tensor<B, 1> {
+pub(crate) fn root_distance<B: Backend>(pred: Tensor<B, 3>, anchor: Tensor<B, 3>) -> Tensor<B, 1> {
     let t = pred.dims()[1];
     let diff = (pred - anchor)
         .narrow(1, SEED_FRAMES, t - SEED_FRAMES)

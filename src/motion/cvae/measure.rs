@@ -24,7 +24,7 @@ pub fn set_batch<B: Backend>(
 }
 
 /// Items `items` of a single-primitive set as raw features `[B, T, F]` and floors `[B]`.
-pub fn pick_batch<B: Backend>(
+pub(crate) fn pick_batch<B: Backend>(
     set: &PrimitiveSet,
     items: &[usize],
     device: &B::Device,
@@ -50,7 +50,7 @@ fn floor_tensor<B: Backend>(floors: &[f32], device: &B::Device) -> Tensor<B, 1> 
 
 /// Posterior mean latents `[B, L]` of raw primitives `[B, T, F]`, in their precision (the
 /// network runs in its own).
-pub fn posterior_mean<B: Backend>(net: &PrimitiveVae<B>, x: Tensor<B, 3>) -> Tensor<B, 2> {
+pub(crate) fn posterior_mean<B: Backend>(net: &PrimitiveVae<B>, x: Tensor<B, 3>) -> Tensor<B, 2> {
     let io = FloatDType::from(x.dtype());
     let dt = FloatDType::from(net.dtype());
     net.encode(net.normalize(x.cast(dt))).0.cast(io)
@@ -58,7 +58,7 @@ pub fn posterior_mean<B: Backend>(net: &PrimitiveVae<B>, x: Tensor<B, 3>) -> Ten
 
 /// Mean marker error (mm) over the decoded frames of every primitive of `set`, each decoded
 /// from its own seed and its posterior mean latent.
-pub fn marker_mpjpe_mm<B: Backend>(
+pub(crate) fn marker_mpjpe_mm<B: Backend>(
     net: &PrimitiveVae<B>,
     rig: &TensorRig<B>,
     set: &PrimitiveSet,
@@ -84,7 +84,7 @@ pub fn marker_mpjpe_mm<B: Backend>(
 }
 
 /// Contact scores (3-D, horizontal) of a batch of raw primitives `[B, T, F]` with floors `[B]`.
-pub fn contact_scores<B: Backend>(
+pub(crate) fn contact_scores<B: Backend>(
     rig: &TensorRig<B>,
     x: Tensor<B, 3>,
     floors: &[f32],
@@ -118,7 +118,7 @@ pub fn contact_scores<B: Backend>(
 
 /// Foot-contact scores of random latents against the mocap's own.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct ContactReport {
+pub(crate) struct ContactReport {
     /// Primitives scored.
     pub count: usize,
     /// Mean score of primitives decoded from real seeds with z ~ N(0, I).
@@ -136,7 +136,7 @@ pub struct ContactReport {
 
 /// Scores `count` primitives decoded from the seeds of evenly spread items of `set` with
 /// latents drawn by `latents` (`[count × L]`), next to the score of those mocap primitives.
-pub fn random_latent_contact<B: Backend>(
+pub(crate) fn random_latent_contact<B: Backend>(
     net: &PrimitiveVae<B>,
     rig: &TensorRig<B>,
     set: &PrimitiveSet,
@@ -216,11 +216,11 @@ pub fn latent_spread_mm<B: Backend>(
 }
 
 /// Pelvis heights above the floor (m) counted as upright for [`ChainReport`].
-pub const UPRIGHT_PELVIS_M: std::ops::Range<f64> = 0.5..1.3;
+pub(crate) const UPRIGHT_PELVIS_M: std::ops::Range<f64> = 0.5..1.3;
 
 /// Distance (m) of the lowest foot marker from the floor within which [`ChainReport`] counts a
 /// frame as standing on the floor.
-pub const FOOT_ON_FLOOR_M: f64 = 0.1;
+pub(crate) const FOOT_ON_FLOOR_M: f64 = 0.1;
 
 /// Mean horizontal pelvis speed over a primitive (m/s) from which [`ChainReport`] counts it as
 /// moving.

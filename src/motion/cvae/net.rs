@@ -19,7 +19,7 @@ use super::features::FRAME_DIM;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
 /// Frames the decoder writes per primitive.
-pub const DECODED_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
+pub(crate) const DECODED_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 
 /// Architecture of the C-VAE (saved inside the weights file).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -146,7 +146,7 @@ impl<B: Backend> PrimitiveVae<B> {
 
     /// The decoder as plain f32 arrays, for inference without burn; `None` unless the
     /// weights are f32.
-    pub fn decoder_f32(&self) -> Option<DecoderF32> {
+    pub(crate) fn decoder_f32(&self) -> Option<DecoderF32> {
         fn values<B: Backend>(t: Tensor<B, 1>) -> Option<Vec<f32>> {
             t.into_data().to_vec::<f32>().ok()
         }
@@ -184,7 +184,7 @@ impl<B: Backend> PrimitiveVae<B> {
     }
 
     /// Normalised features `[.., F]` → raw.
-    pub fn denormalize<const D: usize>(&self, x: Tensor<B, D>) -> Tensor<B, D> {
+    pub(crate) fn denormalize<const D: usize>(&self, x: Tensor<B, D>) -> Tensor<B, D> {
         let (mean, std) = self.stats::<D>();
         x * std + mean
     }
@@ -206,7 +206,7 @@ impl<B: Backend> PrimitiveVae<B> {
     }
 
     /// Canonical floor heights `[B]` (m) → normalised `[B, 1]`.
-    pub fn normalize_floor(&self, floor: Tensor<B, 1>) -> Tensor<B, 2> {
+    pub(crate) fn normalize_floor(&self, floor: Tensor<B, 1>) -> Tensor<B, 2> {
         let stats = self.floor_mean_std.val().detach();
         let mean = stats.clone().narrow(0, 0, 1);
         let std = stats.narrow(0, 1, 1);

@@ -19,7 +19,7 @@ use crate::math::Vec3;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 
 /// Seconds between the last seed frame and the last frame of a primitive.
-pub const PACE_SPAN_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PRIMITIVE_RATE_HZ;
+pub(crate) const PACE_SPAN_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PRIMITIVE_RATE_HZ;
 
 /// Heading (rad, counter-clockwise from world +x) of a body from its posed joints (z up).
 pub fn heading_rad(joints: &[Vec3]) -> f64 {
@@ -29,7 +29,7 @@ pub fn heading_rad(joints: &[Vec3]) -> f64 {
 }
 
 /// Wraps an angle to (−π, π].
-pub fn wrap_rad(a: f64) -> f64 {
+pub(crate) fn wrap_rad(a: f64) -> f64 {
     let w = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
     if w <= -std::f64::consts::PI {
         w + std::f64::consts::TAU
@@ -76,7 +76,7 @@ pub fn set_paces<B: Backend>(rig: &TensorRig<B>, set: &PrimitiveSet, batch: usiz
 }
 
 /// Paces of raw primitives `[B, T, F]` (canonical features).
-pub fn raw_paces<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Vec<Pace> {
+pub(crate) fn raw_paces<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Vec<Pace> {
     let [b, t, _] = x.dims();
     // Only the last seed frame and the last frame are posed.
     let ends = Tensor::cat(

@@ -21,12 +21,12 @@ use crate::motion::primitive::SEED_FRAMES;
 const SEED_VALUES: usize = SEED_FRAMES * FRAME_DIM;
 
 /// Chain ends the `Recent` pool keeps (oldest dropped first).
-pub const RECENT_CAPACITY: usize = 4096;
+pub(crate) const RECENT_CAPACITY: usize = 4096;
 
 /// A seed (`[S × F]` raw features), its canonical floor (m) and how many random primitives
 /// separate it from the mocap seed its chain started from.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct PoolSeed {
+pub(crate) struct PoolSeed {
     pub frames: Vec<f32>,
     pub floor: f32,
     pub depth: usize,
@@ -34,7 +34,7 @@ pub struct PoolSeed {
 
 /// Seeds of the random chains (see the module docs).
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
-pub enum SeedPool {
+pub(crate) enum SeedPool {
     Recent(VecDeque<PoolSeed>),
     /// `None`: the slot starts from a fresh mocap seed when next drawn.
     Slots(Vec<Option<PoolSeed>>),
@@ -121,7 +121,7 @@ impl SeedPool {
     /// Takes the ends of the chains of `draw`, `primitives` long: `ends` `[B × S × F]`,
     /// `floors` `[B]`; `keep[i]` false drops chain `i`'s end (a `Slots` slot then restarts
     /// from mocap). Non-finite ends are always dropped.
-    pub fn accept(
+    pub(crate) fn accept(
         &mut self,
         draw: &Draw,
         ends: &[f32],

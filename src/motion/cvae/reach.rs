@@ -11,7 +11,7 @@ use super::pace::{wrap_rad, Pace, Quantiles, PACE_SPAN_S};
 
 /// A straight walk asked for one pace.
 #[derive(Debug, Clone, Serialize)]
-pub struct WalkReport {
+pub(crate) struct WalkReport {
     pub target_speed_m_s: f64,
     pub primitives: usize,
     /// Seconds of decoded motion.
@@ -56,13 +56,13 @@ pub struct TurnReport {
 
 /// The primitive walking nearest 1.0 m/s straight ahead (where walks and turns start), by
 /// index into `paces`; None when there are none.
-pub fn steady_walk_index(paces: &[Pace]) -> Option<usize> {
+pub(crate) fn steady_walk_index(paces: &[Pace]) -> Option<usize> {
     let cost = |p: &Pace| (p.speed_m_s - 1.0).abs() + p.turn_deg.abs() / 30.0;
     (0..paces.len()).min_by(|&a, &b| cost(&paces[a]).total_cmp(&cost(&paces[b])))
 }
 
 /// Heading error (degrees) under which a turn counts as done.
-pub const TURN_TOLERANCE_DEG: f64 = 15.0;
+pub(crate) const TURN_TOLERANCE_DEG: f64 = 15.0;
 
 fn contact_stats(steps: &[Controlled]) -> (f64, f64, usize) {
     let q = Quantiles::of(steps.iter().map(|s| s.plausibility.contact));
@@ -75,7 +75,7 @@ fn contact_stats(steps: &[Controlled]) -> (f64, f64, usize) {
 
 /// A walk of `primitives` from `seed` asked to keep `speed_m_s` along the heading the seed
 /// faces.
-pub fn sustained_walk(
+pub(crate) fn sustained_walk(
     controller: &LatentController,
     model: &MotionModel,
     body: &BodyContext,

@@ -13,7 +13,7 @@ use crate::body::{joint, BodyModel, PoseError, PARENTS};
 use crate::math::Vec3;
 
 /// Joints the motion model drives: pelvis (global orient) and the 21 body joints.
-pub const BODY_JOINTS: usize = 22;
+pub(crate) const BODY_JOINTS: usize = 22;
 
 /// Joints whose markers count as foot markers (ankles and feet).
 const FOOT_JOINTS: [usize; 4] = [

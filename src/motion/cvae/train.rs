@@ -38,7 +38,7 @@ use crate::motion::MotionSequence;
 use super::features::FRAME_DIM;
 
 /// The loss log gets every this many steps (and each phase's last).
-pub const LOG_EVERY_STEPS: usize = 10;
+pub(crate) const LOG_EVERY_STEPS: usize = 10;
 
 /// Backend of training (CPU, reverse-mode autodiff).
 pub type TrainBackend = Autodiff<Flex>;
@@ -134,7 +134,7 @@ pub struct TrainReport {
 }
 
 /// Loads the clips of a plan and splits them into training and held-out parts.
-pub fn load_clips(plan: &TrainPlan) -> Result<(Vec<ClipPart>, Vec<ClipPart>), TrainError> {
+pub(crate) fn load_clips(plan: &TrainPlan) -> Result<(Vec<ClipPart>, Vec<ClipPart>), TrainError> {
     let mut train = Vec::new();
     let mut held_out = Vec::new();
     for spec in &plan.clips {
@@ -351,7 +351,7 @@ fn prior_chain_loss<B: AutodiffBackend>(
 
 /// Trunk lean (degrees from vertical, pelvis → neck) beyond which a persistent pool drops a
 /// chain's end: the body is falling.
-pub const POOL_TRUNK_TILT_MAX_DEG: f64 = 60.0;
+pub(crate) const POOL_TRUNK_TILT_MAX_DEG: f64 = 60.0;
 
 /// Whether the last frame of each primitive (raw features `[B, T, F]` over floors `[B]`) is
 /// upright (see [`prior_chain_loss`]).
@@ -1058,7 +1058,7 @@ pub fn evaluation_sets(
 }
 
 /// Default path of the shipped weights, relative to the crate root.
-pub const SHIPPED_WEIGHTS: &str = "assets/motion/primitive_cvae.safetensors";
+pub(crate) const SHIPPED_WEIGHTS: &str = "assets/motion/primitive_cvae.safetensors";
 
 /// The shipped weights' path.
 pub fn shipped_weights_path() -> PathBuf {

@@ -43,7 +43,7 @@ pub fn read_arch(path: &Path) -> Result<ArchConfig, WeightsError> {
 }
 
 /// Reads the JSON value under metadata `key` of a safetensors file's header.
-pub fn read_metadata<A: serde::de::DeserializeOwned>(
+pub(crate) fn read_metadata<A: serde::de::DeserializeOwned>(
     path: &Path,
     key: &'static str,
 ) -> Result<A, WeightsError> {
@@ -92,7 +92,7 @@ pub fn load<B: Backend>(
 
 /// Loads every tensor of `net` (built for the architecture `described`) from a safetensors
 /// file, refusing missing, extra and misshapen tensors.
-pub fn load_into<B: Backend, M: burn::module::Module<B>>(
+pub(crate) fn load_into<B: Backend, M: burn::module::Module<B>>(
     path: &Path,
     net: &mut M,
     described: &str,
@@ -151,7 +151,7 @@ pub fn save<B: Backend>(
 }
 
 /// Writes a module atomically with `metadata` (JSON) under `key` in the header.
-pub fn save_module<B: Backend, M: burn::module::Module<B>>(
+pub(crate) fn save_module<B: Backend, M: burn::module::Module<B>>(
     net: &M,
     key: &str,
     metadata: &impl serde::Serialize,

@@ -17,11 +17,11 @@ use crate::math::random::uniform_open01;
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 
 /// Most other people a crossing scene may have (a config's `people` is checked against it).
-pub const MAX_PEOPLE: usize = 16;
+pub(crate) const MAX_PEOPLE: usize = 16;
 
 /// Whether `(MIN, MAX)` other people is a count a crossing scene draws from:
 /// 1 ≤ MIN ≤ MAX ≤ [`MAX_PEOPLE`].
-pub fn people_in_range((lo, hi): (usize, usize)) -> bool {
+pub(crate) fn people_in_range((lo, hi): (usize, usize)) -> bool {
     (1..=hi).contains(&lo) && hi <= MAX_PEOPLE
 }
 

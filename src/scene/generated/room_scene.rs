@@ -81,7 +81,7 @@ impl Default for RoomSettings {
 impl RoomSettings {
     /// Whether the ranges can be drawn from: shares in [0, 1], MIN ≤ MAX, positive sizes, a
     /// room count ≥ 1, at least one 0.1 m of floor per room.
-    pub fn is_valid(&self) -> bool {
+    pub(crate) fn is_valid(&self) -> bool {
         let range = |(lo, hi): (f64, f64)| lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi;
         (0.0..=1.0).contains(&self.share)
             && range(self.size_m)
@@ -119,7 +119,7 @@ pub struct Wall {
 
 impl Wall {
     /// The doorway's centre.
-    pub fn door_centre(&self) -> DVec2 {
+    pub(crate) fn door_centre(&self) -> DVec2 {
         if self.along_x {
             DVec2::new(self.door_m, self.at_m)
         } else {
@@ -175,8 +175,8 @@ pub struct RoomScene {
 }
 
 /// Heights of a floor plan's mesh ([`RoomParams::scene_mesh`], m).
-pub const PLAN_WALL_HEIGHT_M: f64 = 2.5;
-pub const PLAN_FURNITURE_HEIGHT_M: f64 = 0.8;
+pub(crate) const PLAN_WALL_HEIGHT_M: f64 = 2.5;
+pub(crate) const PLAN_FURNITURE_HEIGHT_M: f64 = 0.8;
 /// Thickness of the floor slab under the dwelling (its top at z = 0) and of the outer walls.
 const PLAN_SLAB_M: f64 = 0.1;
 
@@ -186,7 +186,7 @@ impl RoomParams {
     /// wall as boxes either side of its doorway (`wall_m` thick), and the furniture as boxes
     /// [`PLAN_FURNITURE_HEIGHT_M`] high — a multi-room dwelling as a scene file would hold it,
     /// one object per part (`floor`, `outer_wall_k`, `wall_k_a`/`_b`, `furniture_k`).
-    pub fn scene_mesh(&self, settings: &RoomSettings) -> crate::scene::SceneMesh {
+    pub(crate) fn scene_mesh(&self, settings: &RoomSettings) -> crate::scene::SceneMesh {
         use crate::math::Vec3;
         let mut mesh = crate::scene::SceneMesh::default();
         let half = DVec2::from_array(self.size_m) / 2.0;

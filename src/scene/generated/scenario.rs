@@ -25,7 +25,7 @@ pub enum ScenarioKind {
 }
 
 /// Side of the square floor of every scenario (m), centred on the origin.
-pub const FLOOR_SIZE_M: f64 = 16.0;
+pub(crate) const FLOOR_SIZE_M: f64 = 16.0;
 
 fn floor(mesh: &mut SceneMesh) {
     let h = FLOOR_SIZE_M / 2.0;

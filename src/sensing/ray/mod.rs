@@ -17,7 +17,7 @@ pub struct Ray2 {
 }
 
 /// Something a ray can hit, described in its own local frame.
-pub trait RayTarget {
+pub(crate) trait RayTarget {
     /// `world_from_local` rotation angle (rad) and translation of the target's frame.
     fn local_frame(&self) -> (f64, DVec2);
     /// First `t` in `[0, max_t]` where the local ray meets the closed shape; `Some(0)` when the

@@ -6,7 +6,7 @@ use super::{Ray2, RayTarget};
 
 /// A box (closed) with centre, half extents along its axes and yaw.
 #[derive(Debug, Clone, Copy)]
-pub struct OrientedBox {
+pub(crate) struct OrientedBox {
     pub centre: DVec2,
     pub half_extents: DVec2,
     pub yaw_rad: f64,
