@@ -380,94 +380,15 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
 #[test]
 fn a_gltf_scene_renders_with_its_textures_and_several_materials() {
     let dir = tempfile::tempdir().unwrap();
-    write_checker_png(dir.path());
-    let (v, floor, wall) = room();
-    // glTF is y up: a z-up point (x, y, z) is (x, z, −y) in the file.
-    let gl = |p: &[f64; 3]| [p[0] as f32, p[2] as f32, -p[1] as f32];
-    let triangles = |quads: &[[usize; 4]], base: usize| -> Vec<u16> {
-        quads
-            .iter()
-            .flat_map(|q| {
-                let q = q.map(|i| (i - 1 - base) as u16);
-                [q[0], q[1], q[2], q[0], q[2], q[3]]
-            })
-            .collect()
-    };
-    // The wall's face at x = 3 (towards the walker) and the rest of its box.
-    let (near, rest): (Vec<[usize; 4]>, Vec<[usize; 4]>) = wall
-        .iter()
-        .partition(|q| q.iter().all(|&i| v[i - 1][0] == 3.0));
-    let floor_pos: Vec<[f32; 3]> = v[..4].iter().map(gl).collect();
-    let wall_pos: Vec<[f32; 3]> = v[4..].iter().map(gl).collect();
-    let uv: [[f32; 2]; 4] = [[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0]];
-    // One buffer: each array in its own view, 4-byte aligned.
-    let mut bin: Vec<u8> = Vec::new();
-    let mut views = Vec::new();
-    let mut push = |bytes: Vec<u8>| {
-        views.push((bin.len(), bytes.len()));
-        bin.extend(&bytes);
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        views.len() - 1
-    };
-    let f32s = |rows: &[[f32; 3]]| -> Vec<u8> {
-        rows.iter()
-            .flatten()
-            .flat_map(|f| f.to_le_bytes())
-            .collect()
-    };
-    let u16s = |ix: &[u16]| -> Vec<u8> { ix.iter().flat_map(|i| i.to_le_bytes()).collect() };
-    let bounds = |rows: &[[f32; 3]]| {
-        let lo = (0..3).map(|k| rows.iter().map(|r| r[k]).fold(f32::MAX, f32::min));
-        let hi = (0..3).map(|k| rows.iter().map(|r| r[k]).fold(f32::MIN, f32::max));
-        (lo.collect::<Vec<_>>(), hi.collect::<Vec<_>>())
-    };
-    let floor_ix = triangles(&floor, 0);
-    let (near_ix, rest_ix) = (triangles(&near, 4), triangles(&rest, 4));
-    let bv = [
-        push(f32s(&floor_pos)),
-        push(uv.iter().flatten().flat_map(|f| f.to_le_bytes()).collect()),
-        push(u16s(&floor_ix)),
-        push(f32s(&wall_pos)),
-        push(u16s(&near_ix)),
-        push(u16s(&rest_ix)),
-    ];
-    std::fs::write(dir.path().join("room.bin"), &bin).unwrap();
-    let ((flo, fhi), (wlo, whi)) = (bounds(&floor_pos), bounds(&wall_pos));
-    let json = serde_json::json!({
-        "asset": {"version": "2.0"},
-        "scene": 0,
-        "scenes": [{"nodes": [0, 1]}],
-        "nodes": [{"name": "floor", "mesh": 0}, {"name": "wall", "mesh": 1}],
-        "meshes": [
-            {"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]},
-            {"primitives": [
-                {"attributes": {"POSITION": 3}, "indices": 4, "material": 1},
-                {"attributes": {"POSITION": 3}, "indices": 5, "material": 2}
-            ]}
-        ],
-        "materials": [
-            {"name": "checker", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0}},
-            {"name": "green", "pbrMetallicRoughness": {"baseColorFactor": [0.05, 0.8, 0.05, 1.0], "metallicFactor": 0.0}},
-            {"name": "grey", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.5, 0.5, 1.0], "metallicFactor": 0.0}}
-        ],
-        "textures": [{"source": 0, "sampler": 0}],
-        "samplers": [{"wrapS": 10497, "wrapT": 10497, "magFilter": 9728}],
-        "images": [{"uri": "checker.png"}],
-        "accessors": [
-            {"bufferView": bv[0], "componentType": 5126, "count": 4, "type": "VEC3", "min": flo, "max": fhi},
-            {"bufferView": bv[1], "componentType": 5126, "count": 4, "type": "VEC2"},
-            {"bufferView": bv[2], "componentType": 5123, "count": floor_ix.len(), "type": "SCALAR"},
-            {"bufferView": bv[3], "componentType": 5126, "count": 8, "type": "VEC3", "min": wlo, "max": whi},
-            {"bufferView": bv[4], "componentType": 5123, "count": near_ix.len(), "type": "SCALAR"},
-            {"bufferView": bv[5], "componentType": 5123, "count": rest_ix.len(), "type": "SCALAR"}
-        ],
-        "bufferViews": views.iter().map(|(offset, len)| serde_json::json!({"buffer": 0, "byteOffset": offset, "byteLength": len})).collect::<Vec<_>>(),
-        "buffers": [{"uri": "room.bin", "byteLength": bin.len()}]
-    });
+    // The room as `tools/make_textured_gltf.py` writes it (the one docs/RENDERING.md shows):
+    // `room()`'s floor and wall, glTF y up, the checker PNG beside it.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    common::succeeds(
+        std::process::Command::new("python3")
+            .arg(root.join("tools/make_textured_gltf.py"))
+            .arg(dir.path()),
+    );
     let scene = dir.path().join("room.gltf");
-    std::fs::write(&scene, serde_json::to_string_pretty(&json).unwrap()).unwrap();
     let (_, wall) = &render_checkered_room(dir.path(), &scene, "wall");
     // The near face green; any other face of the wall in view grey (no channel dominates).
     let near: Vec<&Pixel> = wall.iter().filter(|p| p.xyz[0] < 3.01).collect();

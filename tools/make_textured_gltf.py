@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A small textured glTF room, as tests/scene_formats.rs builds it, for looking at.
+"""A small textured glTF room: the one tests/scene_formats.rs renders and docs/RENDERING.md shows.
 
     python3 tools/make_textured_gltf.py DIR
 
