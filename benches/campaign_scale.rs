@@ -8,9 +8,8 @@
 //! Plain timing harness (medians of repeated runs).
 
 mod common;
-use common::median_s;
+use common::{campaign_file, median_s};
 
-use std::path::Path;
 use std::time::Instant;
 
 use egogen::campaign::index::{write_index, IndexRow};
@@ -22,21 +21,6 @@ fn rss_bytes() -> u64 {
         .ok()
         .and_then(|t| t.split_whitespace().nth(1)?.parse::<u64>().ok())
         .map_or(0, |pages| pages * 4096)
-}
-
-fn campaign_file(dir: &Path, takes: usize) -> std::path::PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let path = dir.join(format!("campaign_{takes}.toml"));
-    std::fs::write(
-        &path,
-        format!(
-            "[campaign]\nrun = \"{}\"\nout = \"out_{takes}\"\ntakes = {takes}\nscenes = [\"{}\"]\nfloor_plans = [1, 2, 3]\ncrowd_count = [1, 4]\nduration_s = [4.0, 12.0]\n",
-            root.join("configs/default.toml").display(),
-            root.join("assets/scenes/apartment.glb").display()
-        ),
-    )
-    .unwrap();
-    path
 }
 
 fn rows_of(state: &CampaignState, per_take: usize) -> Vec<IndexRow> {

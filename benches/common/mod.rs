@@ -133,3 +133,20 @@ pub fn median_s(mut f: impl FnMut(), reps: usize) -> f64 {
     t.sort_by(f64::total_cmp);
     t[reps / 2]
 }
+
+/// A campaign file of `takes` takes in `dir` (output `out_<takes>`): the default run over the
+/// apartment and three floor plans, 1–4 people, 4–12 s.
+pub fn campaign_file(dir: &std::path::Path, takes: usize) -> PathBuf {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let path = dir.join(format!("campaign_{takes}.toml"));
+    std::fs::write(
+        &path,
+        format!(
+            "[campaign]\nrun = \"{}\"\nout = \"out_{takes}\"\ntakes = {takes}\nscenes = [\"{}\"]\nfloor_plans = [1, 2, 3]\ncrowd_count = [1, 4]\nduration_s = [4.0, 12.0]\n",
+            root.join("configs/default.toml").display(),
+            root.join("assets/scenes/apartment.glb").display()
+        ),
+    )
+    .unwrap();
+    path
+}

@@ -10,25 +10,24 @@ use std::time::{Duration, Instant};
 
 use anyhow::Result;
 
-use super::index::{keep_rows, take_rows};
+use super::index::keep_rows;
 use super::plan::CampaignPlan;
 use super::state::{CampaignState, TakeStatus};
-use crate::run_job::{prepare, RunRequest};
-use crate::supervisor::{stage_take, PoolTake, Staged, StagedTake, TakeFailure, TakeFeed};
+use super::takes::TakeMaker;
+use crate::supervisor::{PoolTake, TakeFailure, TakeFeed};
 
 /// Feeds a campaign's takes to one pool.
 pub(crate) struct CampaignFeed {
     pub plan: CampaignPlan,
     pub state: CampaignState,
-    /// Blender and the backend, as the command line gave them.
-    pub request: RunRequest,
-    pub workers: Option<usize>,
-    pub backend: Option<crate::plan::Backend>,
+    /// Stages and finishes the takes.
+    maker: Box<dyn TakeMaker>,
     /// The next take to look at.
     next: usize,
-    staged: HashMap<String, Box<StagedTake>>,
     /// Frames of each take: estimated until staged.
     frames: Vec<usize>,
+    /// Their sum.
+    frames_total: usize,
     done_before: usize,
     /// Seconds between free-disk checks while paused.
     pub disk_poll: Duration,
@@ -49,7 +48,7 @@ impl CampaignFeed {
     pub fn new(
         plan: CampaignPlan,
         state: CampaignState,
-        request: RunRequest,
+        maker: Box<dyn TakeMaker>,
         frames: Vec<usize>,
         done_before: usize,
     ) -> Self {
@@ -62,11 +61,9 @@ impl CampaignFeed {
         CampaignFeed {
             plan,
             state,
-            request,
-            workers: None,
-            backend: None,
+            maker,
             next: 0,
-            staged: HashMap::new(),
+            frames_total: frames.iter().sum(),
             frames,
             done_before,
             disk_poll: Duration::from_secs(30),
@@ -127,37 +124,16 @@ impl CampaignFeed {
     /// Stages take `k`: `None` when it is already finished.
     fn stage(&mut self, k: usize) -> Result<Option<PoolTake>> {
         let def = self.state.takes[k].def.clone();
-        let mut overrides = def.overrides(&self.plan.out.join("takes"));
-        overrides.workers = self.workers;
-        overrides.backend = self.backend;
-        let run = prepare(&self.plan.run, &overrides, &self.request)?;
-        let Some(render) = &run.plan.render else {
-            anyhow::bail!("{} has no [render] section", self.plan.run.display());
-        };
-        let motion = run.make_motion()?;
-        let staged = stage_take(
-            &run.plan,
-            render,
-            run.run_motion(&motion),
-            &run.model,
-            &self.plan.run,
-            &run.options,
-            || Ok(()),
-        )?;
-        match staged {
-            Staged::Complete(_) => {
+        match self.maker.stage(&def)? {
+            None => {
                 self.completed(k)?;
                 Ok(None)
             }
-            Staged::Take(take) => {
-                let dataset = take.dataset.clone();
-                self.frames[k] = dataset.total_frames();
-                self.staged.insert(def.id.clone(), take);
-                Ok(Some(PoolTake {
-                    name: def.id,
-                    shards: dataset.pending_shards(),
-                    dataset,
-                }))
+            Some(take) => {
+                let frames = take.dataset.total_frames();
+                self.frames_total = self.frames_total - self.frames[k] + frames;
+                self.frames[k] = frames;
+                Ok(Some(take))
             }
         }
     }
@@ -165,8 +141,7 @@ impl CampaignFeed {
     /// Records take `k` as complete with its index rows.
     fn completed(&mut self, k: usize) -> Result<()> {
         let def = self.state.takes[k].def.clone();
-        let dir = self.plan.out.join("takes").join(&def.id);
-        let rows = take_rows(&def, &dir, &self.plan.out)?;
+        let rows = self.maker.rows(&def)?;
         keep_rows(&self.plan.out, &def.id, &rows)?;
         let t = &mut self.state.takes[k];
         t.status = TakeStatus::Complete;
@@ -185,7 +160,7 @@ impl CampaignFeed {
 
 impl TakeFeed for CampaignFeed {
     fn frames(&self) -> (usize, usize) {
-        (self.frames.iter().sum(), self.done_before)
+        (self.frames_total, self.done_before)
     }
 
     fn next_take(&mut self) -> Option<Result<PoolTake, TakeFailure>> {
@@ -214,19 +189,7 @@ impl TakeFeed for CampaignFeed {
     }
 
     fn take_rendered(&mut self, take: &PoolTake) -> Result<()> {
-        let staged = self
-            .staged
-            .remove(&take.name)
-            .ok_or_else(|| anyhow::anyhow!("take {} was not staged here", take.name))?;
-        staged.finish()?;
-        // Its checksums came from the frames' bytes in memory: a resume need not read it again.
-        // Without a stamp (it could not be written) a resume verifies the take in full.
-        if let Err(e) = super::stamp::write_stamp(&self.plan.out, &take.name, &staged.dir) {
-            self.say(&format!(
-                "take {}: no stamp ({e:#}); a resume will verify it in full",
-                take.name
-            ));
-        }
+        self.maker.finish(&take.name)?;
         match self.position(&take.name) {
             Some(k) => self.completed(k),
             None => Ok(()),
@@ -234,7 +197,7 @@ impl TakeFeed for CampaignFeed {
     }
 
     fn take_failed(&mut self, failure: &TakeFailure) {
-        self.staged.remove(&failure.take);
+        self.maker.forget(&failure.take);
         if let Some(k) = self.position(&failure.take) {
             let t = &mut self.state.takes[k];
             t.status = TakeStatus::Failed;

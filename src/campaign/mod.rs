@@ -16,6 +16,7 @@ pub mod plan;
 pub mod sheet;
 pub mod stamp;
 pub mod state;
+pub mod takes;
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -49,18 +50,22 @@ pub struct CampaignRequest {
 
 /// What a campaign start did.
 #[derive(Debug, Clone)]
-pub(crate) struct CampaignSummary {
+pub struct CampaignSummary {
     pub out: PathBuf,
+    /// Takes complete, and those given up (id, reason).
     pub complete: usize,
     pub failed: Vec<(String, String)>,
+    /// Rows of `index.parquet`.
     pub frames_indexed: usize,
+    /// The pool's report of this start (`None` for a dry run).
+    pub report: Option<crate::supervisor::PoolReport>,
 }
 
 /// The index file's name in the campaign folder.
 pub(crate) const INDEX_FILE: &str = "index.parquet";
 
 /// Runs (or, with `dry_run`, plans) the campaign at `path`.
-pub(crate) fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSummary> {
+pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSummary> {
     let plan = plan_campaign(path)?;
     let out = plan.out.clone();
     let earlier = check_out(&plan, request)?;
@@ -84,6 +89,7 @@ pub(crate) fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<Cam
             complete: 0,
             failed: Vec::new(),
             frames_indexed: 0,
+            report: None,
         });
     }
     let runtime = BlenderRuntime::resolve(request.blender.as_deref())?;
@@ -103,16 +109,9 @@ pub(crate) fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<Cam
     plan::write_floor_plans(&plan)?;
     let done_before = check_finished_takes(&plan, &mut state, request.rehash)?;
     state.write(&out)?;
-    let mut feed = feed::CampaignFeed::new(
-        plan.clone(),
-        state,
-        run_request,
-        estimate.frames_per_take.clone(),
-        done_before,
-    );
-    feed.workers = request.workers;
-    feed.backend = request.backend;
-    let feed = Arc::new(Mutex::new(feed));
+    let mut maker = takes::StagedTakes::new(out.clone(), plan.run.clone(), run_request);
+    maker.workers = request.workers;
+    maker.backend = request.backend;
     let start = crate::supervisor::staged::next_start(&out);
     let run = PoolRun {
         logs_dir: out.join("logs").join(format!("start_{start:02}")),
@@ -120,11 +119,44 @@ pub(crate) fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<Cam
         stop_on_failure: false,
     };
     let pool = shard_pool(&shared.plan.supervisor);
-    let report = pool.run(feed.clone(), runtime, &run);
+    let frames = estimate.frames_per_take.clone();
+    let (summary, middles) = render_takes(
+        &plan,
+        state,
+        Box::new(maker),
+        frames,
+        done_before,
+        &*pool,
+        runtime,
+        &run,
+    )?;
+    sheet::write_contact_sheet(&out, &middles)?;
+    Ok(summary)
+}
+
+/// Renders every take of `state` not yet complete through one `pool`, made by `maker`
+/// (`frames`: each take's estimated frames, `done_before` of them finished in earlier starts);
+/// keeps `campaign.json` and each finished take's index rows, then writes `index.parquet` over
+/// every complete take (also after an interrupted start, before its error). Returns what was
+/// made and the middle frame of each complete take (the contact sheet's).
+#[allow(clippy::too_many_arguments)]
+pub fn render_takes(
+    plan: &CampaignPlan,
+    state: CampaignState,
+    maker: Box<dyn takes::TakeMaker>,
+    frames: Vec<usize>,
+    done_before: usize,
+    pool: &dyn crate::supervisor::ShardPool,
+    runtime: BlenderRuntime,
+    run: &PoolRun,
+) -> Result<(CampaignSummary, Vec<index::IndexRow>)> {
+    let feed = feed::CampaignFeed::new(plan.clone(), state, maker, frames, done_before);
+    let feed = Arc::new(Mutex::new(feed));
+    let report = pool.run(feed.clone(), runtime, run);
     let mut feed = feed.lock().unwrap();
     feed.save_now();
     // The index lists what is finished, also after an interrupted start.
-    let frames_indexed = write_campaign_index(&plan, &feed.state)?;
+    let (frames_indexed, middles) = write_campaign_index(plan, &feed.state)?;
     let report = report?;
     eprintln!(
         "egogen-run: campaign: rendered {} frames in {:.1} s on {} worker(s), utilisation {:.0} %",
@@ -140,12 +172,16 @@ pub(crate) fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<Cam
         .filter(|t| t.status == TakeStatus::Failed)
         .map(|t| (t.def.id.clone(), t.reason.clone().unwrap_or_default()))
         .collect();
-    Ok(CampaignSummary {
-        out,
-        complete: feed.state.count(TakeStatus::Complete),
-        failed,
-        frames_indexed,
-    })
+    Ok((
+        CampaignSummary {
+            out: plan.out.clone(),
+            complete: feed.state.count(TakeStatus::Complete),
+            failed,
+            frames_indexed,
+            report: Some(report),
+        },
+        middles,
+    ))
 }
 
 /// `egogen-run CAMPAIGN.toml`: runs the campaign and says what it made; an error when any take
@@ -280,8 +316,11 @@ fn check_finished_takes(
 }
 
 /// Writes `index.parquet` from the complete takes' kept rows, one take at a time in take
-/// order, and the contact sheet of their middle frames; returns the rows.
-fn write_campaign_index(plan: &CampaignPlan, state: &CampaignState) -> Result<usize> {
+/// order; returns its rows and the middle frame of each take.
+fn write_campaign_index(
+    plan: &CampaignPlan,
+    state: &CampaignState,
+) -> Result<(usize, Vec<index::IndexRow>)> {
     let mut middles = Vec::new();
     let groups = state
         .takes
@@ -301,6 +340,5 @@ fn write_campaign_index(plan: &CampaignPlan, state: &CampaignState) -> Result<us
             Ok(rows)
         });
     let n = index::write_index(&plan.out.join(INDEX_FILE), groups)?;
-    sheet::write_contact_sheet(&plan.out, &middles)?;
-    Ok(n)
+    Ok((n, middles))
 }

@@ -18,6 +18,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
+use super::pool::{RenderTake, WrittenFrame};
 use super::staged::Dataset;
 use crate::export::take::FileFacts;
 use crate::math::{Real, Vec3};
@@ -62,7 +63,7 @@ impl Dataset {
     /// recorded (annotation, the outputs' files of it such as COLMAP's image, checksum:
     /// [`super::frame_record`]) from the bytes
     /// in memory, written under a temporary name and renamed; then the raw files are removed.
-    pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<FinishedFrame> {
+    pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<WrittenFrame> {
         let started = std::time::Instant::now();
         let work = &self.cameras[camera];
         let (rgb, gt) = raw_frame_paths(
@@ -118,14 +119,33 @@ impl Dataset {
         let mut seconds = image.render_seconds.clone();
         seconds.push(("assemble", (assembled - started).as_secs_f64()));
         seconds.push(("finish", assembled.elapsed().as_secs_f64()));
-        Ok(FinishedFrame { path: out, seconds })
+        Ok(WrittenFrame { path: out, seconds })
     }
 }
 
-/// A frame file written by [`Dataset::finish_frame`], and where its time went (stages of
-/// [`super::pool::StageSeconds`]).
-#[derive(Debug, Clone)]
-pub struct FinishedFrame {
-    pub path: PathBuf,
-    pub seconds: Vec<(&'static str, f64)>,
+impl RenderTake for Dataset {
+    fn folder(&self) -> &std::path::Path {
+        &self.staging
+    }
+    fn logs_dir(&self) -> PathBuf {
+        Dataset::logs_dir(self)
+    }
+    fn camera_name(&self, camera: usize) -> &str {
+        &self.cameras[camera].camera.name
+    }
+    fn total_frames(&self) -> usize {
+        Dataset::total_frames(self)
+    }
+    fn shard_spec_json(&self, camera: usize, frames: &[u32]) -> Result<Vec<u8>> {
+        Ok(serde_json::to_vec_pretty(&self.shard_spec(camera, frames))?)
+    }
+    fn raw_frame_files(&self, camera: usize, frame: u32) -> Vec<PathBuf> {
+        Dataset::raw_frame_files(self, camera, frame)
+    }
+    fn frame_done(&self, camera: usize, frame: u32) -> bool {
+        Dataset::frame_done(self, camera, frame)
+    }
+    fn finish_frame(&self, camera: usize, frame: u32) -> Result<WrittenFrame> {
+        Dataset::finish_frame(self, camera, frame)
+    }
 }

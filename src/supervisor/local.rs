@@ -20,10 +20,10 @@ use tokio::sync::watch;
 
 use super::pool::{
     add_stage, frames_bar, setup_failure, shard_failure_message, worker_timing, Attempt,
-    FrameTries, Outcome, PoolReport, PoolRun, PoolTake, ShardPool, ShardReport, StageSeconds,
-    TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
+    FrameTries, Outcome, PoolReport, PoolRun, PoolTake, RenderTake, ShardPool, ShardReport,
+    StageSeconds, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
 };
-use super::staged::{Dataset, Shard};
+use super::staged::Shard;
 use crate::render::shard::worker_command;
 use crate::render::BlenderRuntime;
 
@@ -41,9 +41,12 @@ pub struct PoolSettings {
 #[derive(Debug, Clone, Copy)]
 pub struct LocalPool(pub PoolSettings);
 
-/// A staged take in the pool: its shards not yet handed back, and whether it failed.
+/// A staged take in the pool: its shards not yet handed back, and whether it failed. The take
+/// itself is let go once it is handed back or given up, so the pool holds only the takes in
+/// flight however many a campaign has.
 struct TakeInPool {
-    take: PoolTake,
+    name: String,
+    take: Option<PoolTake>,
     shards_left: usize,
     failed: bool,
 }
@@ -174,7 +177,7 @@ fn set_state(shared: &Shared, w: usize, state: String) {
 
 /// What a worker does next.
 enum Next {
-    Render(usize, Arc<Dataset>, Shard),
+    Render(usize, Arc<dyn RenderTake>, Shard),
     /// Nothing queued: stage a take (or find none left).
     Stage,
     Stop,
@@ -193,8 +196,8 @@ fn next_work(shared: &Shared) -> Next {
             };
         };
         let takes = shared.takes.lock().unwrap();
-        if !takes[t].failed {
-            return Next::Render(t, takes[t].take.dataset.clone(), shard);
+        if let Some(take) = takes[t].take.as_ref().filter(|_| !takes[t].failed) {
+            return Next::Render(t, take.dataset.clone(), shard);
         }
     }
 }
@@ -217,10 +220,10 @@ async fn worker(shared: Arc<Shared>, w: usize) {
         let began = Instant::now();
         let (mut report, failure) = run_shard(&shared, &dataset, w, &shard).await;
         shared.busy_seconds.lock().unwrap()[w] += began.elapsed().as_secs_f64();
-        let name = shared.takes.lock().unwrap()[t].take.name.clone();
+        let name = shared.takes.lock().unwrap()[t].name.clone();
         report.take = name.clone();
         if let Some(failure) = failure.filter(|_| !*shared.stop.borrow()) {
-            let message = shard_failure_message(&dataset, &report, &failure);
+            let message = shard_failure_message(&*dataset, &report, &failure);
             if shared.stop_on_failure {
                 shared.failed.lock().unwrap().get_or_insert(message);
             } else {
@@ -286,8 +289,9 @@ async fn stage_next(shared: &Arc<Shared>) {
             let t = {
                 let mut takes = shared.takes.lock().unwrap();
                 takes.push(TakeInPool {
+                    name: take.name.clone(),
                     shards_left: shards.len(),
-                    take,
+                    take: Some(take),
                     failed: false,
                 });
                 takes.len() - 1
@@ -307,7 +311,9 @@ async fn stage_next(shared: &Arc<Shared>) {
 /// Hands a rendered take back to the feed to be finished; a take that cannot be finished is
 /// recorded as failed.
 async fn take_rendered(shared: &Arc<Shared>, t: usize) {
-    let take = shared.takes.lock().unwrap()[t].take.clone();
+    let Some(take) = shared.takes.lock().unwrap()[t].take.take() else {
+        return;
+    };
     let feed = shared.feed.clone();
     let name = take.name.clone();
     let finished = tokio::task::spawn_blocking(move || feed.lock().unwrap().take_rendered(&take))
@@ -324,8 +330,9 @@ async fn fail_take(shared: &Arc<Shared>, t: usize, reason: String) {
     let failure = {
         let mut takes = shared.takes.lock().unwrap();
         takes[t].failed = true;
+        takes[t].take = None;
         TakeFailure {
-            take: takes[t].take.name.clone(),
+            take: takes[t].name.clone(),
             reason,
         }
     };
@@ -342,11 +349,11 @@ async fn fail_take(shared: &Arc<Shared>, t: usize, reason: String) {
 /// time). Returns the report and, when frames are left, why.
 async fn run_shard(
     shared: &Shared,
-    dataset: &Arc<Dataset>,
+    dataset: &Arc<dyn RenderTake>,
     w: usize,
     shard: &Shard,
 ) -> (ShardReport, Option<String>) {
-    let camera = dataset.cameras[shard.camera].camera.name.clone();
+    let camera = dataset.camera_name(shard.camera).to_owned();
     let mut report = ShardReport {
         take: String::new(),
         shard: shard.id,
@@ -431,7 +438,7 @@ async fn run_shard(
 /// its time went to `stages`.
 async fn attempt_shard(
     shared: &Shared,
-    dataset: &Arc<Dataset>,
+    dataset: &Arc<dyn RenderTake>,
     camera: usize,
     frames: &[u32],
     log: &std::path::Path,
@@ -439,11 +446,13 @@ async fn attempt_shard(
 ) -> std::result::Result<usize, (usize, Outcome)> {
     let spawned = Instant::now();
     let fail = |n: usize, reason: String| (n, Outcome::Failed { reason });
-    let spec = dataset.shard_spec(camera, frames);
+    let spec = dataset
+        .shard_spec_json(camera, frames)
+        .map_err(|e| fail(0, format!("preparing the shard: {e:#}")))?;
     let spec_path = log.with_extension("json");
     let io = |e: std::io::Error| fail(0, format!("preparing the shard: {e}"));
     std::fs::create_dir_all(dataset.logs_dir()).map_err(io)?;
-    std::fs::write(&spec_path, serde_json::to_vec_pretty(&spec).unwrap()).map_err(io)?;
+    std::fs::write(&spec_path, spec).map_err(io)?;
     let stderr = std::fs::File::create(log).map_err(io)?;
     let mut cmd = tokio::process::Command::from(worker_command(&shared.runtime, &spec_path));
     cmd.stdout(Stdio::piped())

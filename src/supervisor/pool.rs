@@ -3,14 +3,14 @@
 //! `egogen-run`, many staged on demand for a campaign) and takes them back when rendered, the
 //! report of what each shard attempt did, and the rendering progress bar.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use serde::Serialize;
 
-use super::staged::{Dataset, Shard};
+use super::staged::Shard;
 use crate::render::BlenderRuntime;
 
 /// Where shards run: renders the shards of every take `feed` hands out and reports every
@@ -25,12 +25,51 @@ pub trait ShardPool {
     ) -> Result<PoolReport>;
 }
 
-/// One staged take as a pool renders it: its dataset and the shards still to render.
+/// What a pool needs of a staged take to render it: the spec a worker receives for some
+/// frames of a camera, the raw renders each frame is made from, whether a frame is done, and
+/// finishing a frame from its raw renders. [`super::Dataset`] is every real take; a stand-in
+/// measures the pools and a campaign's bookkeeping alone (`benches/campaign_farm.rs`).
+pub trait RenderTake: Send + Sync + std::fmt::Debug {
+    /// The take's folder while it is made (attempt logs are named relative to it).
+    fn folder(&self) -> &Path;
+    /// This start's logs folder.
+    fn logs_dir(&self) -> PathBuf;
+    /// The name of camera `camera`.
+    fn camera_name(&self, camera: usize) -> &str;
+    /// Planned frames over all cameras.
+    fn total_frames(&self) -> usize;
+    /// The spec file a worker renders `frames` of `camera` from (JSON bytes).
+    fn shard_spec_json(&self, camera: usize, frames: &[u32]) -> Result<Vec<u8>>;
+    /// The raw renders a frame is made from; the worker names each on a `EGOGEN_DONE` line
+    /// once it is in place.
+    fn raw_frame_files(&self, camera: usize, frame: u32) -> Vec<PathBuf>;
+    /// Whether a frame is finished.
+    fn frame_done(&self, camera: usize, frame: u32) -> bool;
+    /// Finishes a frame whose raw renders are all in place.
+    fn finish_frame(&self, camera: usize, frame: u32) -> Result<WrittenFrame>;
+    /// A path inside the take as the pool report records it: relative to its folder.
+    fn relative(&self, path: &Path) -> String {
+        path.strip_prefix(self.folder())
+            .unwrap_or(path)
+            .display()
+            .to_string()
+    }
+}
+
+/// A frame file written by [`RenderTake::finish_frame`], and where its time went (stages of
+/// [`StageSeconds`]).
+#[derive(Debug, Clone)]
+pub struct WrittenFrame {
+    pub path: PathBuf,
+    pub seconds: Vec<(&'static str, f64)>,
+}
+
+/// One staged take as a pool renders it: its frames' work and the shards still to render.
 #[derive(Debug, Clone)]
 pub struct PoolTake {
     /// The take's name in reports and messages (empty for `egogen-run`'s single take).
     pub name: String,
-    pub dataset: Arc<Dataset>,
+    pub dataset: Arc<dyn RenderTake>,
     pub shards: Vec<Shard>,
 }
 
@@ -193,7 +232,11 @@ impl PoolReport {
 
 /// The message of a shard given up: which shard of which take, why, and its last attempt
 /// with its log.
-pub(crate) fn shard_failure_message(dataset: &Dataset, report: &ShardReport, why: &str) -> String {
+pub(crate) fn shard_failure_message(
+    dataset: &dyn RenderTake,
+    report: &ShardReport,
+    why: &str,
+) -> String {
     let last = report.attempts.last();
     format!(
         "{}shard {} ({} frames {:?}): {why} after {} attempt(s); last: {} (log: {})",
@@ -209,7 +252,7 @@ pub(crate) fn shard_failure_message(dataset: &Dataset, report: &ShardReport, why
         last.map_or_else(|| "none".into(), |a| a.outcome.to_string()),
         last.map_or_else(
             || "none".into(),
-            |a| dataset.staging.join(&a.log).display().to_string()
+            |a| dataset.folder().join(&a.log).display().to_string()
         )
     )
 }

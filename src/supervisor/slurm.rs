@@ -25,10 +25,10 @@ use anyhow::{bail, Context, Result};
 
 use super::pool::{
     frames_bar, setup_failure, shard_failure_message, stages_from_worker_log, Attempt, FrameTries,
-    Outcome, PoolReport, PoolRun, PoolTake, ShardPool, ShardReport, TakeFailure, TakeFeed,
-    EXIT_SETUP_FAILED,
+    Outcome, PoolReport, PoolRun, PoolTake, RenderTake, ShardPool, ShardReport, TakeFailure,
+    TakeFeed, EXIT_SETUP_FAILED,
 };
-use super::staged::{Dataset, Shard};
+use super::staged::Shard;
 use crate::atomic_file::write_atomically;
 use crate::plan::SlurmPlan;
 use crate::render::shard::worker_command;
@@ -62,10 +62,63 @@ struct ShardState {
     tries: FrameTries,
 }
 
-/// A staged take in the run, and whether it is done with (finished or given up).
+/// A staged take in the run, and whether it is done with (finished or given up). The take
+/// itself is let go once it is closed and none of its shards is in flight, so the run holds
+/// only the takes in flight however many a campaign has.
 struct TakeInRun {
-    take: PoolTake,
+    name: String,
+    take: Option<PoolTake>,
     closed: bool,
+    /// Its shards' indices in the run's shard states.
+    shards: Vec<usize>,
+}
+
+impl TakeInRun {
+    /// The take's work: held while it is open or any of its shards is in flight.
+    fn dataset(&self) -> &dyn RenderTake {
+        &*self
+            .take
+            .as_ref()
+            .expect("a take is held while open or in flight")
+            .dataset
+    }
+}
+
+/// The takes of a run, and which of them are open (in staging order).
+#[derive(Default)]
+struct Takes {
+    all: Vec<TakeInRun>,
+    open: Vec<usize>,
+    /// Closed takes still held (some of their shards were in flight when they closed).
+    held: Vec<usize>,
+}
+
+impl Takes {
+    /// Closes take `t`.
+    fn close(&mut self, t: usize) {
+        self.all[t].closed = true;
+        self.open.retain(|&o| o != t);
+        self.held.push(t);
+    }
+
+    /// Shards of open takes, in staging order.
+    fn open_shards(&self) -> impl Iterator<Item = usize> + '_ {
+        self.open
+            .iter()
+            .flat_map(move |&t| self.all[t].shards.iter().copied())
+    }
+
+    /// Lets go of closed takes none of whose shards is in flight.
+    fn release(&mut self, busy: &std::collections::BTreeSet<usize>) {
+        let all = &mut self.all;
+        self.held.retain(|&t| {
+            if all[t].shards.iter().any(|i| busy.contains(i)) {
+                return true;
+            }
+            all[t].take = None;
+            false
+        });
+    }
 }
 
 /// The Slurm backend: renders shards as Slurm array tasks; returns when every frame is
@@ -93,17 +146,17 @@ const STAGED_SHARDS_PER_TASK: usize = 4;
 /// says so); takes that cannot be staged are recorded.
 fn stage_more(
     feed: &Mutex<dyn TakeFeed>,
-    takes: &mut Vec<TakeInRun>,
+    takes: &mut Takes,
     states: &mut Vec<ShardState>,
     failed: &mut Vec<TakeFailure>,
     want: usize,
 ) -> bool {
     // Counted once from disk; a newly staged take adds its shards (all pending).
-    let mut pending = states
-        .iter()
-        .filter(|s| {
-            !takes[s.take].closed
-                && !missing_frames(&takes[s.take].take.dataset, &s.shard).is_empty()
+    let mut pending = takes
+        .open_shards()
+        .filter(|&i| {
+            let s = &states[i];
+            !missing_frames(takes.all[s.take].dataset(), &s.shard).is_empty()
         })
         .count();
     loop {
@@ -116,23 +169,27 @@ fn stage_more(
             Some(Err(f)) => failed.push(f),
             Some(Ok(take)) => {
                 pending += take.shards.len();
-                let t = takes.len();
+                let t = takes.all.len();
+                let first = states.len();
                 states.extend(take.shards.iter().map(|shard| ShardState {
                     take: t,
                     report: ShardReport {
                         take: take.name.clone(),
                         shard: shard.id,
-                        camera: take.dataset.cameras[shard.camera].camera.name.clone(),
+                        camera: take.dataset.camera_name(shard.camera).to_owned(),
                         frames: shard.frames.clone(),
                         attempts: Vec::new(),
                     },
                     shard: shard.clone(),
                     tries: FrameTries::default(),
                 }));
-                takes.push(TakeInRun {
-                    take,
+                takes.all.push(TakeInRun {
+                    name: take.name.clone(),
+                    shards: (first..states.len()).collect(),
+                    take: Some(take),
                     closed: false,
                 });
+                takes.open.push(t);
             }
         }
     }
@@ -159,7 +216,7 @@ fn run_slurm(
     let (total, done) = feed.lock().unwrap().frames();
     let bar = frames_bar(total as u64, done as u64)?;
     let mut failed_takes = Vec::new();
-    let mut takes: Vec<TakeInRun> = Vec::new();
+    let mut takes = Takes::default();
     let mut states: Vec<ShardState> = Vec::new();
     let window = settings.max_running.max(1) * STAGED_SHARDS_PER_TASK;
     let mut feed_done = false;
@@ -218,11 +275,12 @@ fn run_slurm(
             report_of(&states, frames_finished, &failed_takes).write(run)?;
             bail!("interrupted: Slurm jobs cancelled; finished frames are kept; rerun with --resume to continue");
         }
-        let todo: Vec<usize> = (0..states.len())
+        takes.release(&busy);
+        let todo: Vec<usize> = takes
+            .open_shards()
             .filter(|&i| {
                 !busy.contains(&i)
-                    && !takes[states[i].take].closed
-                    && !missing_frames(&takes[states[i].take].take.dataset, &states[i].shard)
+                    && !missing_frames(takes.all[states[i].take].dataset(), &states[i].shard)
                         .is_empty()
             })
             .collect();
@@ -239,7 +297,7 @@ fn run_slurm(
         if !given_up.is_empty() {
             for &i in &given_up {
                 let t = states[i].take;
-                if takes[t].closed {
+                if takes.all[t].closed {
                     continue;
                 }
                 let worst = states[i].tries.exhausted(settings.retries);
@@ -248,7 +306,7 @@ fn run_slurm(
                     |(f, n)| format!("frame {f} failed {n} time(s)"),
                 );
                 let message =
-                    shard_failure_message(&takes[t].take.dataset, &states[i].report, &why);
+                    shard_failure_message(takes.all[t].dataset(), &states[i].report, &why);
                 if run.stop_on_failure {
                     cancel_all(&in_flight);
                     bar.finish_and_clear();
@@ -256,12 +314,12 @@ fn run_slurm(
                     bail!("{message}");
                 }
                 let failure = TakeFailure {
-                    take: takes[t].take.name.clone(),
+                    take: takes.all[t].name.clone(),
                     reason: message,
                 };
                 feed.lock().unwrap().take_failed(&failure);
                 failed_takes.push(failure);
-                takes[t].closed = true;
+                takes.close(t);
             }
             continue;
         }
@@ -336,25 +394,32 @@ fn run_slurm(
 /// finished is given up (or fails the run).
 fn close_rendered_takes(
     feed: &Mutex<dyn TakeFeed>,
-    takes: &mut [TakeInRun],
+    takes: &mut Takes,
     states: &[ShardState],
     failed: &mut Vec<TakeFailure>,
     run: &PoolRun,
 ) -> Result<()> {
-    for (t, take) in takes.iter_mut().enumerate() {
-        if take.closed
-            || states
+    let rendered: Vec<usize> = takes
+        .open
+        .iter()
+        .copied()
+        .filter(|&t| {
+            let take = &takes.all[t];
+            take.shards
                 .iter()
-                .filter(|s| s.take == t)
-                .any(|s| !missing_frames(&take.take.dataset, &s.shard).is_empty())
-        {
+                .all(|&i| missing_frames(take.dataset(), &states[i].shard).is_empty())
+        })
+        .collect();
+    for t in rendered {
+        takes.close(t);
+        let take = &takes.all[t];
+        let Some(pool_take) = take.take.as_ref() else {
             continue;
-        }
-        take.closed = true;
-        if let Err(e) = feed.lock().unwrap().take_rendered(&take.take) {
+        };
+        if let Err(e) = feed.lock().unwrap().take_rendered(pool_take) {
             let failure = TakeFailure {
-                take: take.take.name.clone(),
-                reason: format!("finishing take {}: {e:#}", take.take.name),
+                take: take.name.clone(),
+                reason: format!("finishing take {}: {e:#}", take.name),
             };
             if run.stop_on_failure {
                 bail!("{}", failure.reason);
@@ -393,7 +458,7 @@ type Task = (usize, Vec<u32>, PathBuf);
 /// into `round_dir`, and submits it; returns the job id, the tasks and the script.
 #[allow(clippy::too_many_arguments)]
 fn submit_round(
-    takes: &[TakeInRun],
+    takes: &Takes,
     runtime: &BlenderRuntime,
     settings: &SlurmSettings,
     states: &[ShardState],
@@ -407,11 +472,11 @@ fn submit_round(
     let mut tasks = Vec::new();
     for (t, &i) in todo.iter().enumerate() {
         let shard = &states[i].shard;
-        let dataset = &takes[states[i].take].take.dataset;
+        let dataset = takes.all[states[i].take].dataset();
         let frames = missing_frames(dataset, shard);
         let spec_path = round_dir.join(format!("task_{t:04}.json"));
-        let spec = dataset.shard_spec(shard.camera, &frames);
-        write_atomically(&spec_path, &serde_json::to_vec_pretty(&spec)?)?;
+        let spec = dataset.shard_spec_json(shard.camera, &frames)?;
+        write_atomically(&spec_path, &spec)?;
         tasks.push((i, frames, spec_path));
     }
     let script = array_script(
@@ -435,7 +500,7 @@ fn submit_round(
 
 /// Adds each task's attempt of a round that has left the queue to its shard's report.
 fn record_attempts(
-    takes: &[TakeInRun],
+    takes: &Takes,
     states: &mut [ShardState],
     tasks: Vec<Task>,
     job: &str,
@@ -444,7 +509,7 @@ fn record_attempts(
     let ends = task_ends(job);
     for (t, (i, frames, _)) in tasks.into_iter().enumerate() {
         let state = &mut states[i];
-        let dataset = &takes[state.take].take.dataset;
+        let dataset = takes.all[state.take].dataset();
         let left = missing_frames(dataset, &state.shard);
         let still_missing = left.len();
         let end = ends.get(&(t as u32));
@@ -467,7 +532,7 @@ fn record_attempts(
     }
 }
 
-fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
+fn missing_frames(dataset: &dyn RenderTake, shard: &Shard) -> Vec<u32> {
     shard
         .frames
         .iter()
@@ -480,7 +545,7 @@ fn missing_frames(dataset: &Dataset, shard: &Shard) -> Vec<u32> {
 /// writes each under a temporary name and renames it). Raw renders that do not assemble are
 /// removed so the frame is rendered again.
 fn finish_ready_frames(
-    takes: &[TakeInRun],
+    takes: &Takes,
     states: &[ShardState],
     todo: &[usize],
     bar: &indicatif::ProgressBar,
@@ -488,8 +553,8 @@ fn finish_ready_frames(
     let mut finished = 0;
     for &i in todo {
         let shard = &states[i].shard;
-        let dataset = &takes[states[i].take].take.dataset;
-        let name = &dataset.cameras[shard.camera].camera.name;
+        let dataset = takes.all[states[i].take].dataset();
+        let name = dataset.camera_name(shard.camera);
         for f in missing_frames(dataset, shard) {
             let raw = dataset.raw_frame_files(shard.camera, f);
             if !raw.iter().all(|r| r.is_file()) {

@@ -95,15 +95,6 @@ impl Dataset {
         )
     }
 
-    /// A path inside the dataset as the pool report records it: relative to the dataset folder,
-    /// so it stays true after `<dir>.partial` is renamed to `<dir>`.
-    pub fn relative(&self, path: &std::path::Path) -> String {
-        path.strip_prefix(&self.staging)
-            .unwrap_or(path)
-            .display()
-            .to_string()
-    }
-
     /// This start's logs: `logs/start_<n>/`.
     pub(crate) fn logs_dir(&self) -> PathBuf {
         self.staging
