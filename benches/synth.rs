@@ -56,8 +56,8 @@ fn bench(c: &mut Criterion) {
         .collect();
     let bank = SeedBank::from_world_seeds(&ctx, &seeds).unwrap();
     let prior = PosePrior::load(&shipped_pose_prior_path()).unwrap();
-    let (_, policy) = egogen::policy::ppo::load_policy::<InferBackend>(
-        &root.join(egogen::policy::ppo::SHIPPED_POLICY),
+    let (_, policy) = egogen::policy::weights::load_policy::<InferBackend>(
+        &root.join(egogen::policy::weights::SHIPPED_POLICY),
         &Default::default(),
     )
     .unwrap();

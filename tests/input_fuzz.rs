@@ -285,7 +285,7 @@ fn weights_files() {
         &read("assets/policy/policy.safetensors"),
         13,
         |p| {
-            egogen::policy::ppo::load_policy::<egogen::motion::cvae::infer::InferBackend>(
+            egogen::policy::weights::load_policy::<egogen::motion::cvae::infer::InferBackend>(
                 p, &device,
             )
         },
@@ -355,7 +355,7 @@ fn load_policy_claiming(dir: &Path, name: &str, claims: &[(&str, u64)]) -> Strin
     file.extend_from_slice(&good[8 + n..]);
     let path = dir.join(format!("{name}.safetensors"));
     std::fs::write(&path, file).unwrap();
-    match egogen::policy::ppo::load_policy::<egogen::motion::cvae::infer::InferBackend>(
+    match egogen::policy::weights::load_policy::<egogen::motion::cvae::infer::InferBackend>(
         &path,
         &Default::default(),
     ) {

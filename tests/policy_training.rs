@@ -156,10 +156,11 @@ fn first_actions_are_close_to_the_standard_normal() {
 /// Steering draws the same actions as training's `act`, without the critic.
 #[test]
 fn steering_actions_are_the_actions_act_draws() {
-    use egogen::policy::ppo::{act, actions, load_policy};
+    use egogen::policy::ppo::{act, actions};
+    use egogen::policy::weights::load_policy;
     use rand_core::SeedableRng;
     let device = Default::default();
-    let shipped = common::repo_root().join(egogen::policy::ppo::SHIPPED_POLICY);
+    let shipped = common::repo_root().join(egogen::policy::weights::SHIPPED_POLICY);
     let (_, net) = load_policy::<TrainBackend>(&shipped, &device).unwrap();
     let obs: Vec<f32> = (0..3 * OBS_DIM)
         .map(|k| ((k as f32) * 0.618).fract() * 2.0 - 1.0)
@@ -387,7 +388,7 @@ fn bad_policy_configs_name_the_file_and_the_key() {
 
 #[test]
 fn a_policy_keeps_its_sensing_in_its_weights_file() {
-    use egogen::policy::ppo::{load_policy, save_policy};
+    use egogen::policy::weights::{load_policy, save_policy};
     use egogen::sensing::SensingSpec;
     let device = Default::default();
     let dir = tempfile::tempdir().unwrap();
@@ -425,7 +426,7 @@ fn a_policy_keeps_its_sensing_in_its_weights_file() {
 
 #[test]
 fn damaged_policy_weights_are_refused_with_their_path() {
-    use egogen::policy::ppo::{load_policy, save_policy};
+    use egogen::policy::weights::{load_policy, save_policy};
     let device = Default::default();
     let arch = tiny_arch();
     let net = arch.init::<TrainBackend>(&device).valid();
@@ -495,13 +496,14 @@ fn the_prior_kl_penalty_holds_the_policy_near_the_standard_normal() {
 #[test]
 fn plain_f32_actor_equals_burn_bit_for_bit() {
     use egogen::motion::cvae::infer::InferBackend;
-    use egogen::policy::ppo::{action_distribution, actions, load_policy};
+    use egogen::policy::ppo::{action_distribution, actions};
+    use egogen::policy::weights::load_policy;
     use egogen::policy::Actor;
     use rand_core::SeedableRng;
     let device = Default::default();
     let root = common::repo_root();
     for file in [
-        egogen::policy::ppo::SHIPPED_POLICY,
+        egogen::policy::weights::SHIPPED_POLICY,
         "assets/policy/knobs/width_64.safetensors",
         "assets/policy/knobs/width_256.safetensors",
         "assets/policy/table2/local_map_0.8m.safetensors",
@@ -548,12 +550,12 @@ fn plain_f32_actor_equals_burn_bit_for_bit() {
 #[test]
 fn action_spread_scales_the_sampled_actions_about_the_mean() {
     use egogen::motion::cvae::infer::InferBackend;
-    use egogen::policy::ppo::load_policy;
+    use egogen::policy::weights::load_policy;
     use egogen::policy::Actor;
     use rand_core::SeedableRng;
     let root = common::repo_root();
     let (_, net) = load_policy::<InferBackend>(
-        &root.join(egogen::policy::ppo::SHIPPED_POLICY),
+        &root.join(egogen::policy::weights::SHIPPED_POLICY),
         &Default::default(),
     )
     .unwrap();

@@ -52,11 +52,12 @@ fn every_shipped_policy_and_synth_config_loads() {
 fn the_shipped_policy_config_writes_the_shipped_policy() {
     let root = common::repo_root();
     let plan = egogen::cli::train_policy::load_policy_plan(
-        &root.join(egogen::policy::ppo::SHIPPED_POLICY_CONFIG),
+        &root.join(egogen::policy::weights::SHIPPED_POLICY_CONFIG),
     )
     .unwrap();
     let written = std::fs::canonicalize(&plan.weights_out).unwrap();
-    let shipped = std::fs::canonicalize(root.join(egogen::policy::ppo::SHIPPED_POLICY)).unwrap();
+    let shipped =
+        std::fs::canonicalize(root.join(egogen::policy::weights::SHIPPED_POLICY)).unwrap();
     assert_eq!(written, shipped);
 }
 

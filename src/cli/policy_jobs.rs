@@ -377,7 +377,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             use crate::policy::tasks::{evaluate_with_paths, Controller, EvalParts};
             let loaded = match &policy {
                 None => None,
-                Some(path) => Some(crate::policy::ppo::load_policy_for(path, &model)?),
+                Some(path) => Some(crate::policy::weights::load_policy_for(path, &model)?),
             };
             let mut runs: Vec<(serde_json::Value, Controller<InferBackend>)> = k
                 .iter()

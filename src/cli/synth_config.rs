@@ -301,7 +301,7 @@ pub(crate) fn resolve_synth(
         Some(file(
             "motion.policy",
             &m.policy,
-            crate::policy::ppo::SHIPPED_POLICY,
+            crate::policy::weights::SHIPPED_POLICY,
         )?)
     } else {
         None

@@ -419,7 +419,7 @@ fn run_rows(
     let policy_path = args
         .policy
         .clone()
-        .unwrap_or_else(crate::policy::ppo::shipped_policy_path);
+        .unwrap_or_else(crate::policy::weights::shipped_policy_path);
     let keep = if args.keep_other_rows {
         Some(kept_table1_rows(
             args,
@@ -431,7 +431,7 @@ fn run_rows(
     } else {
         None
     };
-    let net = crate::policy::ppo::load_policy_for(&policy_path, &c.model)?;
+    let net = crate::policy::weights::load_policy_for(&policy_path, &c.model)?;
     let actor = crate::policy::Actor::of(&net);
     let parts = crate::synth::crowd::CrowdParts {
         model: &c.model,
@@ -526,8 +526,8 @@ fn sdf_rows(
     use crate::motion::cvae::infer::InferBackend;
     use crate::policy::tasks::{evaluate, Controller as PolicyController, EvalParts};
     let t0 = std::time::Instant::now();
-    let shipped = crate::policy::ppo::SHIPPED_POLICY;
-    let config = crate::policy::ppo::SHIPPED_POLICY_CONFIG;
+    let shipped = crate::policy::weights::SHIPPED_POLICY;
+    let config = crate::policy::weights::SHIPPED_POLICY_CONFIG;
     let net = table_policy(c, (shipped, config))?;
     let controller: PolicyController<InferBackend> = PolicyController::Policy {
         net: &net,
@@ -632,7 +632,7 @@ fn table_policy(
             path.display()
         );
     }
-    Ok(crate::policy::ppo::load_policy_for(&path, &c.model)?)
+    Ok(crate::policy::weights::load_policy_for(&path, &c.model)?)
 }
 
 /// Every policy on every set of episodes, with sampled and with mean actions: a row each.

@@ -7,8 +7,8 @@
 //! collision) and `sensing` (rays). Nothing here renders.
 //!
 //! By when it runs:
-//! - acting (every take): `walker` (one body as a controller sees it), `actor` and
-//!   `row_product` (the policy on the CPU in f32), `sampling` (best of K latents), the
+//! - acting (every take): `weights` (the shipped policy, loading and saving), `walker` (one
+//!   body as a controller sees it), `actor` and `row_product` (the policy on the CPU in f32), `sampling` (best of K latents), the
 //!   environment's observation and reward (`env`, `reward`, `pose_prior`);
 //! - training: `net` (the actor-critic in burn), `ppo` (its stages and checkpoints) over the
 //!   environment's scenes — generated ones (`crate::scene::generated`: box scenes, crossings,
@@ -28,6 +28,7 @@ pub mod row_product;
 pub mod sampling;
 pub mod tasks;
 pub mod walker;
+pub mod weights;
 
 pub use actor::Actor;
 pub use env::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};

@@ -39,6 +39,7 @@ use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
 use crate::policy::reward::{judge, path_leaves_floor, Judged, Limits, RewardWeights};
+use crate::policy::sampling::best_of;
 use crate::policy::walker::{
     frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Walker, PRIMITIVE_S,
 };
@@ -647,7 +648,7 @@ impl<'m> Agent<'m> {
         };
         let weights = RewardWeights::default();
         let situation = self.walker.situation(judged, self.goal, t0_s);
-        let mut best: Option<(DecodedPrimitive, Judged, f64, f64)> = None;
+        let mut judged = Vec::with_capacity(decoded.len());
         for d in decoded {
             match d {
                 Ok(p) => {
@@ -672,14 +673,13 @@ impl<'m> Agent<'m> {
                         f64::NEG_INFINITY
                     };
                     let r = if r.is_finite() { r } else { 0.0 };
-                    if best.as_ref().is_none_or(|b| score > b.3) {
-                        best = Some((p, j, r, score));
-                    }
+                    judged.push(((p, j, r, score), Some(score)));
                 }
                 Err(DecodeError::NonFinite { .. }) => {}
                 Err(e) => return Err(e.into()),
             }
         }
+        let mut best: Option<(DecodedPrimitive, Judged, f64, f64)> = best_of(judged);
         // A policy primitive that walks into something (Eq. 7), that steps into another
         // person's box, or that ends with the pelvis off the walkable floor (a closed doorway,
         // furniture): more actions from the same output. Of draws that all do, one that ends on

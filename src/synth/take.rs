@@ -322,7 +322,7 @@ pub(crate) fn synthesize(
     let prior = PosePrior::load(&plan.pose_prior)?;
     let actor = match &plan.policy {
         Some(p) => Some(crate::policy::Actor::of(
-            &crate::policy::ppo::load_policy_for(p, &model)?,
+            &crate::policy::weights::load_policy_for(p, &model)?,
         )),
         None => None,
     };
