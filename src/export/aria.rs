@@ -21,6 +21,7 @@ use serde_json::json;
 
 use super::gaze::{eye_gaze_csv, fixations, gaze_samples, Fixation, GazeGoal, GazeWorld};
 use super::imu::{sample_times_ns, simulate_imu, ImuErrors, ImuSample, GRAVITY_WORLD};
+use super::take::{FinishedTake, TakeExport};
 use crate::atomic_file::write_atomically;
 use crate::camera::Camera;
 use crate::math::pose_spline::PoseSpline;
@@ -188,6 +189,86 @@ pub(crate) struct Wearer<'a> {
     pub goals: Vec<GazeGoal>,
     /// The scene, for gaze depths.
     pub rays: Option<&'a SceneRays>,
+}
+
+/// The Aria streams as a take's output (`[render.aria]`): each wearer's streams into
+/// `aria/<wearer>/` when the take is finished, from the bodies' head poses; built in
+/// `aria.partial/` and renamed, and kept as they are when a resumed run finds them.
+pub struct AriaExport {
+    pub settings: AriaSettings,
+    /// The agents wearing the rig, in order.
+    pub wearers: Vec<AriaWearer>,
+    /// The scene, for gaze depths (when the gaze is asked).
+    pub rays: Option<SceneRays>,
+}
+
+/// An agent wearing the rig, as its streams need it beside its head poses.
+#[derive(Debug, Clone)]
+pub struct AriaWearer {
+    /// Index into the take's agents.
+    pub agent: usize,
+    /// Where it walks, in order (the gaze looks ahead to it).
+    pub goals: Vec<GazeGoal>,
+    /// How the headset sits on its head.
+    pub cpf_from_headset: Affine3,
+}
+
+impl TakeExport for AriaExport {
+    fn name(&self) -> &'static str {
+        "Aria streams"
+    }
+
+    fn finish(&self, take: &FinishedTake) -> Result<()> {
+        let dir = take.folder.join("aria");
+        if dir.is_dir() {
+            return Ok(());
+        }
+        let partial = take.folder.join("aria.partial");
+        if partial.exists() {
+            std::fs::remove_dir_all(&partial).with_context(|| {
+                format!("removing {}, left by an interrupted run", partial.display())
+            })?;
+        }
+        let eyes: Vec<Vec<Affine3>> = take
+            .agents
+            .iter()
+            .map(|a| a.track.frames.iter().map(|f| f.world_from_cpf).collect())
+            .collect();
+        for (index, w) in self.wearers.iter().enumerate() {
+            let agent = &take.agents[w.agent];
+            let wearer = Wearer {
+                name: &agent.name,
+                index,
+                frame_rate_hz: agent.motion.frame_rate_hz,
+                world_from_cpf: &eyes[w.agent],
+                cpf_from_headset: w.cpf_from_headset,
+                others: (0..take.agents.len())
+                    .filter(|&k| k != w.agent)
+                    .map(|k| eyes[k].as_slice())
+                    .collect(),
+                goals: w.goals.clone(),
+                rays: self.rays.as_ref(),
+            };
+            let written = write_wearer_streams(
+                &partial.join(&agent.name),
+                take.rig,
+                &self.settings,
+                &wearer,
+            )?;
+            eprintln!(
+                "egogen-run: Aria streams of {}: {} files ({} trajectory rows, {} IMU samples)",
+                agent.name,
+                written.files.len(),
+                written.trajectory_rows,
+                written.imu_samples
+            );
+            if let Some(note) = written.device_calibration_note {
+                eprintln!("egogen-run: {note}");
+            }
+        }
+        std::fs::rename(&partial, &dir)
+            .with_context(|| format!("renaming {} to {}", partial.display(), dir.display()))
+    }
 }
 
 /// What was written for a wearer.

@@ -1,13 +1,13 @@
 //! Every output of a take beside its frame files, in one place. Two kinds:
 //! - made from a finished take through one seam, [`take::TakeExport`] (`take`: what a take is
 //!   to its outputs; [`take_exports`] lists them): the per-camera annotations (`annotate`
-//!   writes them, `annotations` is the file's types), the COLMAP export (`colmap`) and, last,
-//!   the manifest (`take_manifest`);
-//! - made from the take's trajectories alone, before anything renders: what a device on a
-//!   wearer's head would have recorded, the Project Aria streams (`aria`: device trajectory,
-//!   calibration, IMU and eye gaze in the formats projectaria-tools reads), built on the IMU
-//!   measurement and error model (`imu`) and the gaze model (`gaze`); each a function of the
-//!   wearer's head poses and the rig, none reading images.
+//!   writes them, `annotations` is the file's types), the COLMAP export (`colmap`), the
+//!   Project Aria streams (`aria`) and, last, the manifest (`take_manifest`);
+//! - the models the Aria streams are made with: what a device on a wearer's head would have
+//!   recorded (`aria`: device trajectory, calibration, IMU and eye gaze in the formats
+//!   projectaria-tools reads), built on the IMU measurement and error model (`imu`) and the
+//!   gaze model (`gaze`); each a function of the wearer's head poses and the rig, none reading
+//!   images (`egogen aria` makes them of a finished dataset too).
 
 pub mod annotate;
 pub mod annotations;
@@ -21,11 +21,15 @@ pub mod take_manifest;
 pub use take::{FinishedTake, TakeExport, TakeExports};
 
 /// A take's outputs in the order they are written: its annotations, its COLMAP export when
-/// `colmap` (`[render] colmap`), and last its manifest (which lists what the others wrote).
-pub fn take_exports(colmap: bool) -> TakeExports {
+/// `colmap` (`[render] colmap`), the Aria streams when asked (`[render.aria]`), and last its
+/// manifest (which lists what the others wrote).
+pub fn take_exports(colmap: bool, aria: Option<aria::AriaExport>) -> TakeExports {
     let mut list: Vec<Box<dyn TakeExport>> = vec![Box::new(annotate::Annotations)];
     if colmap {
         list.push(Box::new(colmap::Colmap));
+    }
+    if let Some(aria) = aria {
+        list.push(Box::new(aria));
     }
     list.push(Box::new(take_manifest::TakeManifest));
     TakeExports::new(list)

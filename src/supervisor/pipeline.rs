@@ -16,7 +16,7 @@ use super::staged::{next_start, CameraWork, Dataset, RenderedAgent};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::export::annotations::SegmentationId;
-use crate::export::aria::{write_wearer_streams, Wearer};
+use crate::export::aria::{AriaExport, AriaWearer};
 use crate::export::gaze::GazeGoal;
 use crate::export::{take_exports, FinishedTake};
 use crate::manifest::{dataset_files, remove_temporaries, sha256_hex, MANIFEST};
@@ -273,7 +273,7 @@ pub fn stage_take(
     if !sequence.exists() {
         write_sequence(&sequence, &motion, &agents, model, plan)?;
     }
-    write_aria(&staging, render, &agents, &wearers, &motion, &scene)?;
+    let aria = aria_export(render, &wearers, &motion, &scene)?;
     let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
         .step_by(render.every_n_frames)
         .collect();
@@ -305,7 +305,7 @@ pub fn stage_take(
         frames_per_shard: render.frames_per_shard,
         near_clip_m: render.near_clip_m,
         agents,
-        exports: take_exports(render.colmap),
+        exports: take_exports(render.colmap, aria),
         start: next_start(&staging),
     });
     repair(&dataset)?;
@@ -460,86 +460,52 @@ fn write_sequence(
     }
 }
 
-/// Each wearer's Aria streams (`[render.aria]`) into `aria/<wearer>/`, built in
-/// `aria.partial/` and renamed; kept as they are when a resumed run finds them.
-fn write_aria(
-    staging: &Path,
+/// The Aria streams' output of the take (`[render.aria]`), written when it is finished: each
+/// wearer with its goals and headset offset, and the scene's rays when the gaze is asked.
+/// Settings the rig cannot serve fail here, before anything renders.
+fn aria_export(
     render: &RenderPlan,
-    agents: &[RenderedAgent],
     wearers: &[usize],
     motion: &RunMotion,
     scene: &crate::scene::SceneMesh,
-) -> Result<()> {
+) -> Result<Option<AriaExport>> {
     let Some(settings) = &render.aria else {
-        return Ok(());
+        return Ok(None);
     };
-    let dir = staging.join("aria");
-    if dir.is_dir() {
-        return Ok(());
+    if let Some(p) = settings.problem(&render.rig) {
+        bail!("aria streams: {p}");
     }
-    let partial = staging.join("aria.partial");
-    if partial.exists() {
-        std::fs::remove_dir_all(&partial).with_context(|| {
-            format!("removing {}, left by an interrupted run", partial.display())
-        })?;
-    }
-    let rays = if settings.streams.gaze {
-        crate::scene::mesh_distance::SceneRays::new(scene)
-    } else {
-        None
-    };
-    let eyes: Vec<Vec<crate::math::Affine3>> = agents
+    let wearers = wearers
         .iter()
-        .map(|a| a.track.frames.iter().map(|f| f.world_from_cpf).collect())
+        .map(|&w| AriaWearer {
+            agent: w,
+            goals: match motion {
+                RunMotion::Agents { take, .. } => take.agents[w]
+                    .goals
+                    .iter()
+                    .map(|g| GazeGoal {
+                        xy: g.goal,
+                        until_frame: g.end_frame,
+                    })
+                    .collect(),
+                RunMotion::Placed(_) => Vec::new(),
+            },
+            cpf_from_headset: render
+                .headset_wear
+                .map_or(crate::math::Affine3::IDENTITY, |h| {
+                    h.draw(w).cpf_from_headset()
+                }),
+        })
         .collect();
-    for (index, &w) in wearers.iter().enumerate() {
-        let agent = &agents[w];
-        let poses = &eyes[w];
-        let goals = match motion {
-            RunMotion::Agents { take, .. } => take.agents[w]
-                .goals
-                .iter()
-                .map(|g| GazeGoal {
-                    xy: g.goal,
-                    until_frame: g.end_frame,
-                })
-                .collect(),
-            RunMotion::Placed(_) => Vec::new(),
-        };
-        let cpf_from_headset = render
-            .headset_wear
-            .map_or(crate::math::Affine3::IDENTITY, |h| {
-                h.draw(w).cpf_from_headset()
-            });
-        let wearer = Wearer {
-            name: &agent.name,
-            index,
-            frame_rate_hz: agent.motion.frame_rate_hz,
-            world_from_cpf: poses,
-            cpf_from_headset,
-            others: (0..agents.len())
-                .filter(|&k| k != w)
-                .map(|k| eyes[k].as_slice())
-                .collect(),
-            goals,
-            rays: rays.as_ref(),
-        };
-        let written =
-            write_wearer_streams(&partial.join(&agent.name), &render.rig, settings, &wearer)?;
-        eprintln!(
-            "egogen-run: Aria streams of {}: {} files ({} trajectory rows, {} IMU samples)",
-            agent.name,
-            written.files.len(),
-            written.trajectory_rows,
-            written.imu_samples
-        );
-        if let Some(note) = written.device_calibration_note {
-            eprintln!("egogen-run: {note}");
-        }
-    }
-    std::fs::rename(&partial, &dir)
-        .with_context(|| format!("renaming {} to {}", partial.display(), dir.display()))?;
-    Ok(())
+    Ok(Some(AriaExport {
+        settings: settings.clone(),
+        wearers,
+        rays: settings
+            .streams
+            .gaze
+            .then(|| crate::scene::mesh_distance::SceneRays::new(scene))
+            .flatten(),
+    }))
 }
 
 /// Writes what Blender reads of each body into `work` (a PC2 cache of the times the renders
