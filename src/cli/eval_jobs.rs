@@ -109,7 +109,7 @@ fn load_common() -> Result<SuiteParts> {
     let bank = crate::policy::SeedBank::from_set(&held_out);
     let pose_norm = crate::eval::files::PoseNormCalibration::new(
         &prior,
-        &crate::policy::tasks::set_frames(&held_out),
+        &crate::eval::policy_tasks::set_frames(&held_out),
     );
     Ok(SuiteParts {
         body,

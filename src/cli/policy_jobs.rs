@@ -170,7 +170,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             let body = BodyModel::load(&plan.body_model)?;
             let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
             let (train, held) = evaluation_sets(&plan, &body, true)?;
-            let (prior, sep) = crate::policy::tasks::fit_pose_prior(
+            let (prior, sep) = crate::eval::policy_tasks::fit_pose_prior(
                 &train,
                 &held,
                 &model,
@@ -373,8 +373,8 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
                 }
             }
+            use crate::eval::policy_tasks::{evaluate_with_paths, Controller, EvalParts};
             use crate::motion::cvae::infer::InferBackend;
-            use crate::policy::tasks::{evaluate_with_paths, Controller, EvalParts};
             let loaded = match &policy {
                 None => None,
                 Some(path) => Some(crate::policy::weights::load_policy_for(path, &model)?),
@@ -541,7 +541,7 @@ fn rooms_sheet(plans: &[crate::scene::generated::room_scene::RoomScene]) -> RgbI
 }
 
 /// Evaluated walks over their courses (see `--paths-png`), three to a row.
-fn paths_sheet(walks: &[crate::policy::tasks::EpisodePath]) -> RgbImage {
+fn paths_sheet(walks: &[crate::eval::policy_tasks::EpisodePath]) -> RgbImage {
     use crate::policy::env::Ending;
     use crate::preview::map::MapPicture;
     let tiles: Vec<RgbImage> = walks

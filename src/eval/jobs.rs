@@ -523,8 +523,8 @@ fn sdf_rows(
     ctx: &crate::motion::cvae::BodyContext,
     results: &Path,
 ) -> Result<()> {
+    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController, EvalParts};
     use crate::motion::cvae::infer::InferBackend;
-    use crate::policy::tasks::{evaluate, Controller as PolicyController, EvalParts};
     let t0 = std::time::Instant::now();
     let shipped = crate::policy::weights::SHIPPED_POLICY;
     let config = crate::policy::weights::SHIPPED_POLICY_CONFIG;
@@ -639,13 +639,13 @@ fn table_policy(
 fn policy_rows(
     args: &EvalJob,
     c: &SuiteParts,
-    parts: &crate::policy::tasks::EvalParts,
+    parts: &crate::eval::policy_tasks::EvalParts,
     policies: &[(&str, &str, &str)],
     sets: &[(&str, EnvSettings)],
     progress: &indicatif::ProgressBar,
 ) -> Result<Vec<PolicyRow>> {
+    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController};
     use crate::motion::cvae::infer::InferBackend;
-    use crate::policy::tasks::{evaluate, Controller as PolicyController};
     let mut rows = Vec::new();
     for &(label, weights, config) in policies {
         let net = table_policy(c, (weights, config))?;
@@ -725,8 +725,8 @@ fn table2_settings() -> EnvSettings {
 /// Table 2: the apartment's held-out start/goal pairs, walked by each policy of
 /// [`TABLE2_POLICIES`] and by the sampling controller (`--k` latents, no policy).
 fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
+    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController, EvalParts};
     use crate::motion::cvae::infer::InferBackend;
-    use crate::policy::tasks::{evaluate, Controller as PolicyController, EvalParts};
     let t0 = std::time::Instant::now();
     let ctx = crate::motion::cvae::BodyContext::new(&c.body, &[])?;
     let fixed = table2_scene(args, crate::scene::sdf3d::DEFAULT_VOXEL_M)?;
@@ -790,8 +790,8 @@ fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
 fn box_scene_parts<'m>(
     c: &'m SuiteParts,
     ctx: &'m crate::motion::cvae::BodyContext<'m>,
-) -> crate::policy::tasks::EvalParts<'m> {
-    crate::policy::tasks::EvalParts {
+) -> crate::eval::policy_tasks::EvalParts<'m> {
+    crate::eval::policy_tasks::EvalParts {
         model: &c.model,
         body: ctx,
         bank: &c.bank,

@@ -46,7 +46,7 @@ pub(crate) fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result
         spec.indoors,
     );
     let (lo, hi) = spec.pair_distance_m;
-    let pairs = super::tasks::scene_pairs(
+    let pairs = scene_pairs(
         &map,
         region.as_deref(),
         spec.pairs,
@@ -81,4 +81,23 @@ pub(crate) fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result
         pairs,
         sdf,
     })
+}
+
+/// Start/goal pairs of a fixed scene for evaluation: `count` pairs between `min_m` and
+/// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, on the cells of
+/// `region` when given, drawn with `seed`.
+pub(crate) fn scene_pairs(
+    map: &crate::scene::WalkableMap,
+    region: Option<&[bool]>,
+    count: usize,
+    min_m: f64,
+    max_m: f64,
+    clearance_m: f64,
+    seed: u64,
+) -> Vec<crate::scene::StartGoal> {
+    crate::scene::sample_start_goals_in(map, region, seed, count * 8, clearance_m, min_m)
+        .into_iter()
+        .filter(|p| p.start.distance(p.goal) <= max_m)
+        .take(count)
+        .collect()
 }

@@ -13,8 +13,9 @@
 //! - training: `net` (the actor-critic in burn), `ppo` (its stages and checkpoints) over the
 //!   environment's scenes — generated ones (`crate::scene::generated`: box scenes, crossings,
 //!   floor plans) and `fixed_scene` (a scene file with start/goal pairs);
-//! - evaluation: `held_out` (a controller over held-out episodes) and `tasks` (the `egogen
-//!   policy` commands' jobs); the paper's tables are `crate::eval`'s.
+//! - evaluation: `held_out` (a controller over held-out episodes, training's validation
+//!   among them); the `egogen policy` commands' jobs are `crate::eval::policy_tasks`, the
+//!   paper's tables `crate::eval`'s.
 
 pub mod actor;
 pub mod env;
@@ -26,7 +27,6 @@ pub mod ppo;
 pub mod reward;
 pub mod row_product;
 pub mod sampling;
-pub mod tasks;
 pub mod walker;
 pub mod weights;
 

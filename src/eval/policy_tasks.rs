@@ -1,15 +1,11 @@
 //! Whole jobs the `egogen policy` commands run: fitting and checking the pose prior, and
-//! evaluating the sampling controller on held-out episodes. Each takes loaded parts and
+//! evaluating a controller (the policy or the sampling controller) on held-out episodes. Each takes loaded parts and
 //! returns a report; the binary only parses arguments and prints.
 
 use rand_chacha::ChaCha8Rng;
 use rand_core::{Rng, SeedableRng};
 use serde::Serialize;
 
-use super::env::{EnvSettings, PolicyEnv, SeedBank};
-use super::held_out::{run_episodes, EvalReport, HELD_OUT_BASE};
-use super::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
-use super::sampling::sampling_step;
 use crate::body::BodyParams;
 use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Vec3};
 use crate::motion::cvae::data::PrimitiveSet;
@@ -18,6 +14,10 @@ use crate::motion::cvae::pace::Quantiles;
 use crate::motion::cvae::train::normal_samples;
 use crate::motion::cvae::{BodyContext, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
+use crate::policy::env::{EnvSettings, PolicyEnv, SeedBank};
+use crate::policy::held_out::{run_episodes, EvalReport, HELD_OUT_BASE};
+use crate::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
+use crate::policy::sampling::sampling_step;
 
 /// Frames of every primitive of a set, as poses.
 /// Every primitive of a set as its frames' body parameters (no shape).
@@ -147,25 +147,6 @@ pub(crate) fn fit_pose_prior(
     (prior, sep)
 }
 
-/// Start/goal pairs of a fixed scene for evaluation: `count` pairs between `min_m` and
-/// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, on the cells of
-/// `region` when given, drawn with `seed`.
-pub(crate) fn scene_pairs(
-    map: &crate::scene::WalkableMap,
-    region: Option<&[bool]>,
-    count: usize,
-    min_m: f64,
-    max_m: f64,
-    clearance_m: f64,
-    seed: u64,
-) -> Vec<crate::scene::StartGoal> {
-    crate::scene::sample_start_goals_in(map, region, seed, count * 8, clearance_m, min_m)
-        .into_iter()
-        .filter(|p| p.start.distance(p.goal) <= max_m)
-        .take(count)
-        .collect()
-}
-
 /// What chooses the latents in an evaluation.
 pub(crate) enum Controller<'a, B: burn::prelude::Backend> {
     /// The best of `k` random latents by the reward.
@@ -173,7 +154,7 @@ pub(crate) enum Controller<'a, B: burn::prelude::Backend> {
     /// The trained policy: actions sampled from π (as EgoGen's test collector does) or its
     /// mean.
     Policy {
-        net: &'a super::net::ActorCritic<B>,
+        net: &'a crate::policy::net::ActorCritic<B>,
         mean_action: bool,
         /// Scale of the sampled actions' standard deviation (1: as trained).
         spread: f32,
@@ -187,7 +168,7 @@ pub(crate) struct EvalParts<'m> {
     pub bank: &'m SeedBank,
     pub prior: &'m PosePrior,
     /// Box scenes when `None`.
-    pub fixed: Option<&'m super::env::FixedScene>,
+    pub fixed: Option<&'m crate::policy::env::FixedScene>,
 }
 
 /// A controller on the first `episodes` held-out episodes, `envs` at a time.
@@ -196,8 +177,8 @@ pub(crate) fn evaluate<B: burn::prelude::Backend>(
     settings: EnvSettings,
     controller: &Controller<B>,
     run: (usize, usize, u64),
-    progress: impl FnMut(&super::env::EpisodeSummary),
-) -> Result<(EvalReport, Vec<super::env::EpisodeSummary>), super::env::EnvError> {
+    progress: impl FnMut(&crate::policy::env::EpisodeSummary),
+) -> Result<(EvalReport, Vec<crate::policy::env::EpisodeSummary>), crate::policy::env::EnvError> {
     let (report, summaries, _) =
         evaluate_with_paths(parts, settings, controller, run, 0, progress)?;
     Ok((report, summaries))
@@ -208,9 +189,9 @@ pub(crate) fn evaluate<B: burn::prelude::Backend>(
 #[derive(Debug, Clone)]
 pub struct EpisodePath {
     pub id: u64,
-    pub course: super::env::CourseView,
+    pub course: crate::policy::env::CourseView,
     pub pelvis_xy: Vec<glam::DVec2>,
-    pub ending: Option<super::env::Ending>,
+    pub ending: Option<crate::policy::env::Ending>,
 }
 
 /// Records the walks of the episodes numbered below `count` as an evaluation steps.
@@ -242,7 +223,7 @@ impl PathRecorder {
     }
 
     /// After a step: where the walkers now stand (a finished walk's end from its summary).
-    fn after(&mut self, env: &PolicyEnv, ids_before: &[u64], out: &super::env::StepOutput) {
+    fn after(&mut self, env: &PolicyEnv, ids_before: &[u64], out: &crate::policy::env::StepOutput) {
         let now = env.pelvis_positions();
         for (k, &id) in ids_before.iter().enumerate() {
             if !out.done[k] {
@@ -267,14 +248,14 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     controller: &Controller<B>,
     (episodes, envs, seed): (usize, usize, u64),
     paths: usize,
-    progress: impl FnMut(&super::env::EpisodeSummary),
+    progress: impl FnMut(&crate::policy::env::EpisodeSummary),
 ) -> Result<
     (
         EvalReport,
-        Vec<super::env::EpisodeSummary>,
+        Vec<crate::policy::env::EpisodeSummary>,
         Vec<EpisodePath>,
     ),
-    super::env::EnvError,
+    crate::policy::env::EnvError,
 > {
     let t0 = std::time::Instant::now();
     let mut env = PolicyEnv::with_scene(
@@ -294,7 +275,7 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     // The policy acts through its f32 actor (burn's actions, bit for bit, without the cost
     // per tensor operation).
     let actor = match controller {
-        Controller::Policy { net, .. } => Some(super::Actor::of(*net)),
+        Controller::Policy { net, .. } => Some(crate::policy::Actor::of(*net)),
         Controller::Sampling { .. } => None,
     };
     let mut recorder = PathRecorder {
