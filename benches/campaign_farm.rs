@@ -301,6 +301,7 @@ fn run_size(takes: usize, slurm: bool, settings: &Settings) -> Result<SizeResult
         &*pool,
         runtime.clone(),
         &run(1),
+        false,
     );
     let first_start_s = t.elapsed().as_secs_f64();
     match first {
@@ -321,7 +322,7 @@ fn run_size(takes: usize, slurm: bool, settings: &Settings) -> Result<SizeResult
         done_before >= takes / 2 * FRAMES_PER_TAKE as usize,
         "only {done_before} frames recorded complete after the first start"
     );
-    let (summary, _) = render_takes(
+    let summary = render_takes(
         &plan,
         state,
         Box::new(maker(None)),
@@ -330,6 +331,7 @@ fn run_size(takes: usize, slurm: bool, settings: &Settings) -> Result<SizeResult
         &*pool,
         runtime,
         &run(2),
+        false,
     )?;
     let resume_s = t.elapsed().as_secs_f64();
     anyhow::ensure!(

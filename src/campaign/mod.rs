@@ -120,7 +120,7 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
     };
     let pool = shard_pool(&shared.plan.supervisor);
     let frames = estimate.frames_per_take.clone();
-    let (summary, middles) = render_takes(
+    render_takes(
         &plan,
         state,
         Box::new(maker),
@@ -129,16 +129,15 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
         &*pool,
         runtime,
         &run,
-    )?;
-    sheet::write_contact_sheet(&out, &middles)?;
-    Ok(summary)
+        true,
+    )
 }
 
 /// Renders every take of `state` not yet complete through one `pool`, made by `maker`
 /// (`frames`: each take's estimated frames, `done_before` of them finished in earlier starts);
 /// keeps `campaign.json` and each finished take's index rows, then writes `index.parquet` over
-/// every complete take (also after an interrupted start, before its error). Returns what was
-/// made and the middle frame of each complete take (the contact sheet's).
+/// every complete take (also after an interrupted start, before its error) and, with
+/// `contact_sheet`, `contact_sheet.png` of their middle frames. Returns what was made.
 #[allow(clippy::too_many_arguments)]
 pub fn render_takes(
     plan: &CampaignPlan,
@@ -149,7 +148,8 @@ pub fn render_takes(
     pool: &dyn crate::supervisor::ShardPool,
     runtime: BlenderRuntime,
     run: &PoolRun,
-) -> Result<(CampaignSummary, Vec<index::IndexRow>)> {
+    contact_sheet: bool,
+) -> Result<CampaignSummary> {
     let feed = feed::CampaignFeed::new(plan.clone(), state, maker, frames, done_before);
     let feed = Arc::new(Mutex::new(feed));
     let report = pool.run(feed.clone(), runtime, run);
@@ -157,6 +157,9 @@ pub fn render_takes(
     feed.save_now();
     // The index lists what is finished, also after an interrupted start.
     let (frames_indexed, middles) = write_campaign_index(plan, &feed.state)?;
+    if contact_sheet {
+        sheet::write_contact_sheet(&plan.out, &middles)?;
+    }
     let report = report?;
     eprintln!(
         "egogen-run: campaign: rendered {} frames in {:.1} s on {} worker(s), utilisation {:.0} %",
@@ -172,16 +175,13 @@ pub fn render_takes(
         .filter(|t| t.status == TakeStatus::Failed)
         .map(|t| (t.def.id.clone(), t.reason.clone().unwrap_or_default()))
         .collect();
-    Ok((
-        CampaignSummary {
-            out: plan.out.clone(),
-            complete: feed.state.count(TakeStatus::Complete),
-            failed,
-            frames_indexed,
-            report: Some(report),
-        },
-        middles,
-    ))
+    Ok(CampaignSummary {
+        out: plan.out.clone(),
+        complete: feed.state.count(TakeStatus::Complete),
+        failed,
+        frames_indexed,
+        report: Some(report),
+    })
 }
 
 /// `egogen-run CAMPAIGN.toml`: runs the campaign and says what it made; an error when any take
