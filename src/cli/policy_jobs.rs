@@ -373,8 +373,9 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
                 }
             }
-            use crate::eval::policy_tasks::{evaluate_with_paths, Controller, EvalParts};
+            use crate::eval::policy_tasks::{evaluate_with_paths, Controller};
             use crate::motion::cvae::infer::InferBackend;
+            use crate::policy::env::EnvParts;
             let loaded = match &policy {
                 None => None,
                 Some(path) => Some(crate::policy::weights::load_policy_for(path, &model)?),
@@ -404,7 +405,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     },
                 ));
             }
-            let parts = EvalParts {
+            let parts = EnvParts {
                 model: &model,
                 body: &ctx,
                 bank: &bank,
@@ -451,7 +452,8 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
 pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Result<()> {
     use crate::motion::cvae::train::evaluation_sets;
     use crate::motion::cvae::{BodyContext, MotionModel};
-    use crate::policy::ppo::{train_policy, Parts};
+    use crate::policy::env::EnvParts;
+    use crate::policy::ppo::train_policy;
     use crate::policy::{PosePrior, SeedBank};
     let mut plan = crate::cli::train_policy::load_policy_plan(config)?;
     let body = BodyModel::load(&plan.body_model)?;
@@ -473,7 +475,7 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Re
         .as_ref()
         .map(|s| crate::policy::fixed_scene::fixed_scene(s, sdf_voxel_m))
         .transpose()?;
-    let parts = Parts {
+    let parts = EnvParts {
         model: &model,
         body: &ctx,
         bank: &bank,

@@ -523,8 +523,9 @@ fn sdf_rows(
     ctx: &crate::motion::cvae::BodyContext,
     results: &Path,
 ) -> Result<()> {
-    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController, EvalParts};
+    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController};
     use crate::motion::cvae::infer::InferBackend;
+    use crate::policy::env::EnvParts;
     let t0 = std::time::Instant::now();
     let shipped = crate::policy::weights::SHIPPED_POLICY;
     let config = crate::policy::weights::SHIPPED_POLICY_CONFIG;
@@ -540,7 +541,7 @@ fn sdf_rows(
         let built = std::time::Instant::now();
         let fixed = table2_scene(args, voxel_m)?;
         let setup_s = built.elapsed().as_secs_f64();
-        let parts = EvalParts {
+        let parts = EnvParts {
             model: &c.model,
             body: ctx,
             bank: &c.bank,
@@ -639,7 +640,7 @@ fn table_policy(
 fn policy_rows(
     args: &EvalJob,
     c: &SuiteParts,
-    parts: &crate::eval::policy_tasks::EvalParts,
+    parts: &crate::policy::env::EnvParts,
     policies: &[(&str, &str, &str)],
     sets: &[(&str, EnvSettings)],
     progress: &indicatif::ProgressBar,
@@ -725,12 +726,13 @@ fn table2_settings() -> EnvSettings {
 /// Table 2: the apartment's held-out start/goal pairs, walked by each policy of
 /// [`TABLE2_POLICIES`] and by the sampling controller (`--k` latents, no policy).
 fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
-    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController, EvalParts};
+    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController};
     use crate::motion::cvae::infer::InferBackend;
+    use crate::policy::env::EnvParts;
     let t0 = std::time::Instant::now();
     let ctx = crate::motion::cvae::BodyContext::new(&c.body, &[])?;
     let fixed = table2_scene(args, crate::scene::sdf3d::DEFAULT_VOXEL_M)?;
-    let parts = EvalParts {
+    let parts = EnvParts {
         model: &c.model,
         body: &ctx,
         bank: &c.bank,
@@ -790,8 +792,8 @@ fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
 fn box_scene_parts<'m>(
     c: &'m SuiteParts,
     ctx: &'m crate::motion::cvae::BodyContext<'m>,
-) -> crate::eval::policy_tasks::EvalParts<'m> {
-    crate::eval::policy_tasks::EvalParts {
+) -> crate::policy::env::EnvParts<'m> {
+    crate::policy::env::EnvParts {
         model: &c.model,
         body: ctx,
         bank: &c.bank,

@@ -12,9 +12,9 @@ use crate::motion::cvae::data::PrimitiveSet;
 use crate::motion::cvae::features::{frame_params, FRAME_DIM};
 use crate::motion::cvae::pace::Quantiles;
 use crate::motion::cvae::train::normal_samples;
-use crate::motion::cvae::{BodyContext, MotionModel};
+use crate::motion::cvae::MotionModel;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
-use crate::policy::env::{EnvSettings, PolicyEnv, SeedBank};
+use crate::policy::env::{EnvParts, EnvSettings, PolicyEnv};
 use crate::policy::held_out::{run_episodes, EvalReport, HELD_OUT_BASE};
 use crate::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 use crate::policy::sampling::sampling_step;
@@ -161,19 +161,9 @@ pub(crate) enum Controller<'a, B: burn::prelude::Backend> {
     },
 }
 
-/// The loaded parts an evaluation steps.
-pub(crate) struct EvalParts<'m> {
-    pub model: &'m MotionModel,
-    pub body: &'m BodyContext<'m>,
-    pub bank: &'m SeedBank,
-    pub prior: &'m PosePrior,
-    /// Box scenes when `None`.
-    pub fixed: Option<&'m crate::policy::env::FixedScene>,
-}
-
 /// A controller on the first `episodes` held-out episodes, `envs` at a time.
 pub(crate) fn evaluate<B: burn::prelude::Backend>(
-    parts: &EvalParts,
+    parts: &EnvParts,
     settings: EnvSettings,
     controller: &Controller<B>,
     run: (usize, usize, u64),
@@ -243,7 +233,7 @@ impl PathRecorder {
 
 /// [`evaluate`], keeping the walks of the first `paths` episodes ([`EpisodePath`], by id).
 pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
-    parts: &EvalParts,
+    parts: &EnvParts,
     settings: EnvSettings,
     controller: &Controller<B>,
     (episodes, envs, seed): (usize, usize, u64),
@@ -258,16 +248,7 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     crate::policy::env::EnvError,
 > {
     let t0 = std::time::Instant::now();
-    let mut env = PolicyEnv::with_scene(
-        parts.model,
-        parts.body,
-        parts.bank,
-        parts.prior,
-        parts.fixed,
-        settings,
-        envs.clamp(1, episodes.max(1)),
-        HELD_OUT_BASE,
-    )?;
+    let mut env = parts.env(settings, envs.clamp(1, episodes.max(1)), HELD_OUT_BASE)?;
     if let Controller::Policy { net, .. } = controller {
         env = env.with_sensing(&net.sensing());
     }

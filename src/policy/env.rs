@@ -444,6 +444,39 @@ fn episode_rng(base: u64, id: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(base.rotate_left(32) ^ id.wrapping_mul(0x9E37_79B9_7F4A_7C15))
 }
 
+/// What an environment is built from: the motion model, the body, the seeds episodes start
+/// from, the pose prior, and the fixed scene (box scenes, crossings and floor plans when
+/// `None`). Training, its validation and the held-out evaluations build theirs from one.
+#[derive(Clone, Copy)]
+pub struct EnvParts<'m> {
+    pub model: &'m MotionModel,
+    pub body: &'m BodyContext<'m>,
+    pub bank: &'m SeedBank,
+    pub prior: &'m PosePrior,
+    pub fixed: Option<&'m FixedScene>,
+}
+
+impl<'m> EnvParts<'m> {
+    /// `envs` episodes at a time under `episode_base` ([`PolicyEnv::with_scene`]).
+    pub fn env(
+        &self,
+        settings: EnvSettings,
+        envs: usize,
+        episode_base: u64,
+    ) -> Result<PolicyEnv<'m>, EnvError> {
+        PolicyEnv::with_scene(
+            self.model,
+            self.body,
+            self.bank,
+            self.prior,
+            self.fixed,
+            settings,
+            envs,
+            episode_base,
+        )
+    }
+}
+
 impl<'m> PolicyEnv<'m> {
     /// `envs` episodes, numbered from 0 under `episode_base`.
     pub fn new(

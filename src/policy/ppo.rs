@@ -29,14 +29,12 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use super::env::{EnvError, EnvSettings, EnvSnapshot, FixedScene, PolicyEnv, SeedBank};
+use super::env::{EnvError, EnvParts, EnvSettings, EnvSnapshot, PolicyEnv};
 use super::net::{entropy, kl_to_standard, log_prob, ActorCritic, PolicyArch};
-use super::pose_prior::PosePrior;
 use super::weights::{load_policy, save_policy};
 use crate::motion::cvae::checkpoint::{self, CheckpointState};
 use crate::motion::cvae::train::{normal_samples, TrainBackend, TrainError};
 use crate::motion::cvae::weights::WeightsError;
-use crate::motion::cvae::{BodyContext, MotionModel};
 
 /// PPO settings (paper Tab. S3 and EgoGen's box run by default).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -338,24 +336,16 @@ pub fn action_distribution<B: Backend>(
 /// Runs validation episodes with the sampled policy.
 fn validate(
     net: &ActorCritic<<TrainBackend as AutodiffBackend>::InnerBackend>,
-    parts: &Parts,
+    parts: &EnvParts,
     settings: EnvSettings,
     episodes: usize,
     seed: u64,
 ) -> Result<Validation, EnvError> {
     let device = Default::default();
     let envs = episodes.clamp(1, 64);
-    let mut env = PolicyEnv::with_scene(
-        parts.model,
-        parts.body,
-        parts.bank,
-        parts.prior,
-        parts.fixed,
-        settings,
-        envs,
-        VALIDATION_BASE,
-    )?
-    .with_sensing(&net.sensing());
+    let mut env = parts
+        .env(settings, envs, VALIDATION_BASE)?
+        .with_sensing(&net.sensing());
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut kl_sum = 0.0;
     let mut kl_n = 0usize;
@@ -383,16 +373,6 @@ fn validate(
     })
 }
 
-/// The loaded parts a run steps.
-pub struct Parts<'m> {
-    pub model: &'m MotionModel,
-    pub body: &'m BodyContext<'m>,
-    pub bank: &'m SeedBank,
-    pub prior: &'m PosePrior,
-    /// The plan's training scene, loaded, with its start/goal pairs.
-    pub fixed: Option<&'m FixedScene>,
-}
-
 fn stage_last_path(weights_out: &Path, stage: &str) -> PathBuf {
     let mut name = weights_out
         .file_stem()
@@ -408,7 +388,7 @@ fn stage_last_path(weights_out: &Path, stage: &str) -> PathBuf {
 /// or a weight that goes non-finite stops the run with the update and the term.
 pub fn train_policy(
     plan: &PolicyTrainPlan,
-    parts: &Parts,
+    parts: &EnvParts,
     show_progress: bool,
     resume: bool,
     force: bool,
@@ -487,18 +467,10 @@ pub fn train_policy(
     let mut env_steps_total = global_update * ppo.envs * ppo.steps_per_env;
     while stage < plan.stages.len() {
         let sp = &plan.stages[stage];
-        let mut env = PolicyEnv::with_scene(
-            parts.model,
-            parts.body,
-            parts.bank,
-            parts.prior,
-            parts.fixed,
-            sp.env,
-            ppo.envs,
-            stage as u64 + 1,
-        )
-        .map_err(env_error)?
-        .with_sensing(&plan.arch.sensing);
+        let mut env = parts
+            .env(sp.env, ppo.envs, stage as u64 + 1)
+            .map_err(env_error)?
+            .with_sensing(&plan.arch.sensing);
         if let Some(s) = run_state.take() {
             env.restore(&s.env).map_err(env_error)?;
         }
