@@ -1009,3 +1009,58 @@ fn with_an_arrival_radius_walks_go_on_and_are_scored_where_they_end() {
     });
     assert!(missed.iter().all(|s| matches!(s.ending, Ending::Timeout)));
 }
+
+#[test]
+fn paid_along_the_way_round_walls_only_the_goal_terms_change_and_only_indoors() {
+    use egogen::scene::generated::room_scene::RoomSettings;
+    env_parts!(body, ctx, model, bank, prior);
+    let b = 8;
+    let terms = |settings: EnvSettings, z: &[f32]| {
+        let env = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 21).unwrap();
+        env.propose(z, 1)
+            .unwrap()
+            .into_iter()
+            .map(|c| c.judged.expect("decoded").terms)
+            .collect::<Vec<_>>()
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let probe = PolicyEnv::new(&model, &ctx, &bank, &prior, EnvSettings::default(), b, 21).unwrap();
+    let z = normal_samples(&mut rng, b * probe.latent_dim());
+    // Box scenes: the setting changes nothing.
+    let by_path = |s: EnvSettings| EnvSettings {
+        goal_by_path: true,
+        ..s
+    };
+    let boxes = EnvSettings::default();
+    assert_eq!(terms(boxes, &z), terms(by_path(boxes), &z));
+    // Floor plans: the goal's terms move, every other term stays.
+    let rooms = EnvSettings {
+        rooms: RoomSettings {
+            share: 1.0,
+            ..RoomSettings::default()
+        },
+        ..EnvSettings::default()
+    };
+    let (straight, along) = (terms(rooms, &z), terms(by_path(rooms), &z));
+    let mut moved = 0;
+    for (s, a) in straight.iter().zip(&along) {
+        assert_eq!(
+            (s.floor, s.skate, s.penetration, s.pose, s.success),
+            (a.floor, a.skate, a.penetration, a.pose, a.success)
+        );
+        assert!(a.goal.is_finite() && (0.0..=1.0).contains(&a.orientation));
+        moved += usize::from(s.goal != a.goal);
+    }
+    assert!(moved > 0, "no floor plan's goal term changed");
+    // A restored environment pays the same (the field is rebuilt from the plan).
+    let mut env = PolicyEnv::new(&model, &ctx, &bank, &prior, by_path(rooms), b, 21).unwrap();
+    env.step(&z).unwrap();
+    let mut twin = PolicyEnv::new(&model, &ctx, &bank, &prior, by_path(rooms), b, 21).unwrap();
+    twin.restore(&env.snapshot()).unwrap();
+    let rewards =
+        |c: Vec<egogen::policy::env::Candidate>| c.iter().map(|c| c.reward).collect::<Vec<_>>();
+    assert_eq!(
+        rewards(env.propose(&z, 1).unwrap()),
+        rewards(twin.propose(&z, 1).unwrap())
+    );
+}

@@ -128,6 +128,59 @@ fn shipped_apartment_loads_like_a_floor_plan() {
     assert!((40.0..120.0).contains(&area), "walkable area {area} m²");
 }
 
+/// A shipped scene: its object count, some of its names, the height of its top (floor at 0)
+/// and the range of its walkable area (m²).
+fn check_shipped_scene(file: &str, objects: usize, names: &[&str], top_z: f64, area: (f64, f64)) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/scenes")
+        .join(file);
+    let mesh = load_scene(&path, None).unwrap();
+    assert_eq!(mesh.objects.len(), objects, "{file}");
+    for name in names {
+        assert!(
+            mesh.objects.iter().any(|o| o.name == *name),
+            "{file}: {name}"
+        );
+    }
+    let (lo, hi) = mesh.bounds().unwrap();
+    assert!(
+        (hi.z - top_z).abs() < 0.05 && lo.z.abs() < 0.01,
+        "{file}: top at {top_z} m, floor at 0: {lo:?} {hi:?}"
+    );
+    let map = walkable_map(&mesh, &path, WalkableSettings::default()).unwrap();
+    let walkable = map.walkable_count() as f64 * 0.01;
+    assert!(
+        (area.0..area.1).contains(&walkable),
+        "{file}: walkable area {walkable} m²"
+    );
+}
+
+#[test]
+fn shipped_held_out_houses_load_with_their_rooms_and_furniture_named() {
+    let small_house = [
+        "FloorB_01_001",
+        "HouseWallB_01_001",
+        "RoomWall_01_001",
+        "Bed_01_001",
+        "FoldingDoor_01_001",
+        "Ball_01_003",
+    ];
+    check_shipped_scene("small_house.glb", 87, &small_house, 3.0, (120.0, 170.0));
+    let turtlebot3_house = [
+        "floor",
+        "turtlebot3_house",
+        "turtlebot3_house::cafe_table",
+        "turtlebot3_house::bookshelf_1",
+    ];
+    check_shipped_scene(
+        "turtlebot3_house.glb",
+        15,
+        &turtlebot3_house,
+        2.5,
+        (130.0, 170.0),
+    );
+}
+
 fn expect_err(name: &str, text: &str, needle: &str) {
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), name, text);

@@ -26,7 +26,7 @@ use serde::{Deserialize, Serialize};
 
 use super::pose_prior::PosePrior;
 use super::reward::{
-    judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest, WeightChanges,
+    judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges,
 };
 use super::walker::{frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker};
 pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
@@ -45,8 +45,8 @@ use crate::scene::generated::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use crate::scene::generated::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use crate::scene::generated::room_scene::{RoomParams, RoomScene, RoomSettings};
 use crate::scene::{
-    blocked_cells_in_box, guide_aim, MovingObstacle, Obstacle2, SceneSdf, StartGoal, WalkableMap,
-    GUIDE_CLEARANCE_M,
+    blocked_cells_in_box, guide_aim, MovingObstacle, Obstacle2, PathField, SceneSdf, StartGoal,
+    WalkableMap, GUIDE_CLEARANCE_M,
 };
 use crate::sensing::{EgoSensor, SensingSpec, Sensor};
 
@@ -104,6 +104,11 @@ pub struct EnvSettings {
     /// Largest angle between the seed's facing and the goal direction (rad; EgoGen's box
     /// environment: 0.2π).
     pub seed_yaw_jitter_rad: f64,
+    /// Whether indoor episodes (floor plans and the fixed scene's pairs) pay the goal term by
+    /// the walking distance round walls (`scene::PathField`), orientation and attention facing
+    /// the way it leads, instead of by the straight distance (not EgoGen's: a training signal
+    /// for goals behind walls; observations, success and evaluation measures stay straight).
+    pub goal_by_path: bool,
     /// With a fixed scene: the share of episodes that walk one of its pairs (drawn at random),
     /// the others box scenes and crossings as without one; 1 walks only its pairs, in turn.
     pub fixed_share: f64,
@@ -138,6 +143,7 @@ impl Default for EnvSettings {
             people_seen_ahead: false,
             guide_lookahead_m: 0.0,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
+            goal_by_path: false,
             fixed_share: 1.0,
             fixed_max_primitives: None,
             scene_test_vertices: 0,
@@ -206,6 +212,8 @@ struct Course {
     max_primitives: usize,
     /// The scene's 3D SDF, where Eq. 11 is measured.
     sdf: Option<Arc<SceneSdf>>,
+    /// The walking distance to the goal, with [`EnvSettings::goal_by_path`] indoors.
+    goal_field: Option<Arc<PathField>>,
 }
 
 /// A fixed scene (e.g. the apartment) and the start/goal pairs its episodes walk, in turn.
@@ -590,12 +598,12 @@ impl<'m> PolicyEnv<'m> {
             pair: None,
             max_primitives: self.settings.max_primitives,
             sdf: None,
+            goal_field: None,
         }
     }
 
     fn room_course(&self, scene: RoomScene) -> Course {
         Course {
-            map: Arc::new(scene.map),
             obstacle: None,
             moving: Vec::new(),
             start: scene.start,
@@ -606,6 +614,8 @@ impl<'m> PolicyEnv<'m> {
             pair: None,
             max_primitives: self.settings.rooms.max_primitives,
             sdf: None,
+            goal_field: self.goal_field(&scene.map, scene.goal),
+            map: Arc::new(scene.map),
         }
     }
 
@@ -622,6 +632,7 @@ impl<'m> PolicyEnv<'m> {
             pair: None,
             max_primitives: self.settings.max_primitives,
             sdf: None,
+            goal_field: None,
         }
     }
 
@@ -641,7 +652,16 @@ impl<'m> PolicyEnv<'m> {
                 .fixed_max_primitives
                 .unwrap_or(self.settings.max_primitives),
             sdf: f.sdf.clone(),
+            goal_field: self.goal_field(&f.map, f.pairs[pair].goal),
         }
+    }
+
+    /// The walking-distance field of an indoor goal, when the settings ask for one.
+    fn goal_field(&self, map: &WalkableMap, goal: DVec2) -> Option<Arc<PathField>> {
+        self.settings
+            .goal_by_path
+            .then(|| PathField::to_goal(map, goal).map(Arc::new))
+            .flatten()
     }
 
     /// The course of episode `id`: the next pair of the fixed scene (or, with a fixed share
@@ -784,11 +804,14 @@ impl<'m> PolicyEnv<'m> {
                 let e = &self.episodes[env];
                 match d {
                     Ok(p) => {
-                        let s = e.walker.situation(
-                            &e.course.surroundings(),
-                            e.course.goal,
-                            frame_time_s(e.walker.steps, 0),
-                        );
+                        let s = Situation {
+                            goal_field: e.course.goal_field.as_deref(),
+                            ..e.walker.situation(
+                                &e.course.surroundings(),
+                                e.course.goal,
+                                frame_time_s(e.walker.steps, 0),
+                            )
+                        };
                         let mut j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
                         let pose_error = |e| EnvError::Decode(DecodeError::Pose(e));
                         match (e.course.sdf.as_deref(), &self.scene_test) {

@@ -6,6 +6,9 @@
 //! - floor `exp(−mean_t |lowest foot marker − floor − 0.02|)` and skate
 //!   `exp(−mean_t max(0, slowest foot-marker 3-D speed − 0.075))` (the two factors of Eq. 12);
 //! - goal: decrease of the pelvis's horizontal distance to the goal over the primitive (m);
+//!   with a walking-distance field ([`Situation::goal_field`], not EgoGen's), the decrease of
+//!   the walking distance round walls instead, and orientation and attention face the way
+//!   that distance falls;
 //! - orientation `(b·u + 1)/2`, `b` the body's forward (z × hip line) at the last frame and `u`
 //!   the unit direction from the pelvis to the goal; attention `(e·u + 1)/2` with `e` the floor
 //!   projection of the CPF's viewing direction at the last frame;
@@ -31,7 +34,7 @@ use crate::math::Vec3;
 use crate::motion::cvae::measure::contact_terms;
 use crate::motion::cvae::DecodedPrimitive;
 use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
-use crate::scene::{blocked_cells_in_box, MovingObstacle, Obstacle2, WalkableMap};
+use crate::scene::{blocked_cells_in_box, MovingObstacle, Obstacle2, PathField, WalkableMap};
 
 /// Weights of the reward terms (paper Tab. S2; penetration 1 in pretraining, 0.1 in
 /// fine-tuning).
@@ -159,6 +162,10 @@ pub struct Situation<'a> {
     pub goal: DVec2,
     /// Horizontal pelvis–goal distance at the end of the previous primitive (m).
     pub distance_m: f64,
+    /// The walking distance to the goal round walls, where the goal term should pay progress
+    /// along it (and orientation and attention face the way it leads) instead of straight at
+    /// the goal (`EnvSettings::goal_by_path`); `None`: straight, as EgoGen.
+    pub goal_field: Option<&'a PathField>,
 }
 
 /// Limits the terms are judged by.
@@ -431,14 +438,22 @@ pub fn judge(
     let last = PRIMITIVE_FRAMES - 1;
     let joints = &p.joints[last];
     let pelvis = DVec2::new(joints[joint::PELVIS].x, joints[joint::PELVIS].y);
-    let to_goal = (s.goal - pelvis).normalize_or_zero();
+    let from = {
+        let q = p.joints[SEED_FRAMES - 1][joint::PELVIS];
+        DVec2::new(q.x, q.y)
+    };
+    // Along the walking distance where one is given and tells both ends, else straight.
+    let along = s
+        .goal_field
+        .and_then(|f| Some((f.at(from)? - f.at(pelvis)?, f.way_at(pelvis))));
+    let to_goal = match along {
+        Some((_, Some(way))) => way,
+        _ => (s.goal - pelvis).normalize_or_zero(),
+    };
     let forward = unit_xy(Vec3::Z.cross(joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP]));
     let view = unit_xy(p.world_from_cpf[last].matrix3.z_axis);
     let distance_m = pelvis.distance(s.goal);
-    let travel = {
-        let from = p.joints[SEED_FRAMES - 1][joint::PELVIS];
-        pelvis - DVec2::new(from.x, from.y)
-    };
+    let travel = pelvis - from;
     let view_off_travel_rad = match travel.length() >= TRAVEL_MIN_M {
         true => view.dot(travel.normalize()).clamp(-1.0, 1.0).acos(),
         false => f64::NAN,
@@ -496,7 +511,10 @@ pub fn judge(
     let terms = RewardTerms {
         floor,
         skate,
-        goal: s.distance_m - distance_m,
+        goal: match along {
+            Some((progress, _)) => progress,
+            None => s.distance_m - distance_m,
+        },
         orientation: (forward.dot(to_goal) + 1.0) / 2.0,
         attention: (view.dot(to_goal) + 1.0) / 2.0,
         penetration: if penetrated { 0.0 } else { BINARY_TERM },

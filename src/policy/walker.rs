@@ -341,6 +341,7 @@ impl Walker {
             t0_s,
             goal,
             distance_m: self.distance_m,
+            goal_field: None,
         }
     }
 

@@ -19,6 +19,18 @@ pub const GUIDE_CLEARANCE_M: f64 = 0.3;
 const STRAIGHT: u32 = 1000;
 const DIAGONAL: u32 = 1414;
 
+/// A cell's eight neighbours, straight ones first.
+const NEIGHBOURS: [(i64, i64); 8] = [
+    (-1, 0),
+    (1, 0),
+    (0, -1),
+    (0, 1),
+    (-1, -1),
+    (-1, 1),
+    (1, -1),
+    (1, 1),
+];
+
 /// A planned path: points from the start to the goal (cell centres between them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlannedPath {
@@ -86,16 +98,7 @@ pub fn plan_path(
     };
     let successors = |&(i, j): &(usize, usize)| {
         let mut next = Vec::with_capacity(8);
-        for (di, dj) in [
-            (-1i64, 0i64),
-            (1, 0),
-            (0, -1),
-            (0, 1),
-            (-1, -1),
-            (-1, 1),
-            (1, -1),
-            (1, 1),
-        ] {
+        for (di, dj) in NEIGHBOURS {
             let (ni, nj) = (i as i64 + di, j as i64 + dj);
             if ni < 0 || nj < 0 || ni >= map.nx as i64 || nj >= map.ny as i64 {
                 continue;
@@ -186,5 +189,156 @@ pub fn guide_aim(
         path.point_along(lookahead_m)
     } else {
         goal
+    }
+}
+
+/// Walking distance to one goal from every cell of a map: Dijkstra from the goal's cell over
+/// walkable cells (8-connected, octile steps, no cut corners), for a reward that pays the
+/// progress a walk makes along the way round walls rather than straight at the goal.
+#[derive(Debug, Clone)]
+pub struct PathField {
+    origin: DVec2,
+    cell_m: f64,
+    nx: usize,
+    ny: usize,
+    /// Metres from the cell's centre to the goal; infinite where the goal cannot be reached.
+    distance_m: Vec<f32>,
+}
+
+impl PathField {
+    /// The field of `goal` on `map`; `None` when the goal lies off the grid or not on a
+    /// walkable cell.
+    pub fn to_goal(map: &WalkableMap, goal: DVec2) -> Option<PathField> {
+        use std::cmp::Reverse;
+        use std::collections::BinaryHeap;
+
+        let (gi, gj) = map.cell_of(goal)?;
+        if !map.walkable[gj * map.nx + gi] {
+            return None;
+        }
+        let free = |i: i64, j: i64| !map.blocked(i, j);
+        let mut cost = vec![u32::MAX; map.nx * map.ny];
+        let mut heap = BinaryHeap::new();
+        // The goal's cell and its free neighbours start at their straight distance to the goal.
+        let to_cost = |d: f64| (d / map.cell_m * STRAIGHT as f64).round() as u32;
+        for (di, dj) in std::iter::once((0, 0)).chain(NEIGHBOURS) {
+            let (i, j) = (gi as i64 + di, gj as i64 + dj);
+            if free(i, j) {
+                let c = to_cost(goal.distance(map.centre(i as usize, j as usize)));
+                cost[j as usize * map.nx + i as usize] = c;
+                heap.push(Reverse((c, i as u32, j as u32)));
+            }
+        }
+        while let Some(Reverse((c, i, j))) = heap.pop() {
+            let (i, j) = (i as i64, j as i64);
+            if c > cost[j as usize * map.nx + i as usize] {
+                continue;
+            }
+            for (di, dj) in NEIGHBOURS {
+                let (ni, nj) = (i + di, j + dj);
+                let diagonal = di != 0 && dj != 0;
+                if !free(ni, nj) || (diagonal && !(free(ni, j) && free(i, nj))) {
+                    continue;
+                }
+                let next = c + if diagonal { DIAGONAL } else { STRAIGHT };
+                let k = nj as usize * map.nx + ni as usize;
+                if next < cost[k] {
+                    cost[k] = next;
+                    heap.push(Reverse((next, ni as u32, nj as u32)));
+                }
+            }
+        }
+        let distance_m = cost
+            .iter()
+            .map(|&c| match c {
+                u32::MAX => f32::INFINITY,
+                c => (c as f64 / STRAIGHT as f64 * map.cell_m) as f32,
+            })
+            .collect();
+        Some(PathField {
+            origin: map.origin,
+            cell_m: map.cell_m,
+            nx: map.nx,
+            ny: map.ny,
+            distance_m,
+        })
+    }
+
+    /// Walking distance (m) from a point to the goal, bilinear between the four nearest cell
+    /// centres that reach the goal; `None` where none of them does.
+    pub fn at(&self, p: DVec2) -> Option<f64> {
+        if !p.is_finite() {
+            return None;
+        }
+        let q = (p - self.origin) / self.cell_m - DVec2::splat(0.5);
+        let (i0, j0) = (q.x.floor(), q.y.floor());
+        let (fx, fy) = (q.x - i0, q.y - j0);
+        let (mut sum, mut weight) = (0.0, 0.0);
+        for (di, dj, w) in [
+            (0.0, 0.0, (1.0 - fx) * (1.0 - fy)),
+            (1.0, 0.0, fx * (1.0 - fy)),
+            (0.0, 1.0, (1.0 - fx) * fy),
+            (1.0, 1.0, fx * fy),
+        ] {
+            let (i, j) = (i0 + di, j0 + dj);
+            if i < 0.0 || j < 0.0 || i >= self.nx as f64 || j >= self.ny as f64 || w <= 0.0 {
+                continue;
+            }
+            let d = self.distance_m[j as usize * self.nx + i as usize];
+            if d.is_finite() {
+                sum += w * d as f64;
+                weight += w;
+            }
+        }
+        (weight > 0.0).then(|| sum / weight)
+    }
+
+    /// The way to the goal from a point: the unit direction in which the walking distance
+    /// falls fastest (central differences over one cell); `None` where it cannot be told.
+    pub fn way_at(&self, p: DVec2) -> Option<DVec2> {
+        let h = self.cell_m;
+        let dx = self.at(p + DVec2::X * h)? - self.at(p - DVec2::X * h)?;
+        let dy = self.at(p + DVec2::Y * h)? - self.at(p - DVec2::Y * h)?;
+        let down = -DVec2::new(dx, dy);
+        (down.length() > 1e-9).then(|| down.normalize())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 4 m × 3 m room split by a wall at x = 2 m with a doorway at its top end.
+    fn split_room() -> WalkableMap {
+        let (nx, ny, cell) = (40usize, 30usize, 0.1);
+        let walkable: Vec<bool> = (0..nx * ny)
+            .map(|k| {
+                let (i, j) = (k % nx, k / nx);
+                !(i == 20 && j < 24)
+            })
+            .collect();
+        WalkableMap::from_walkable(DVec2::ZERO, cell, nx, ny, walkable)
+    }
+
+    #[test]
+    fn the_walking_distance_goes_round_the_wall_and_points_to_the_doorway() {
+        let map = split_room();
+        let goal = DVec2::new(3.0, 0.5);
+        let field = PathField::to_goal(&map, goal).expect("the goal stands on the floor");
+        assert!(field.at(goal).unwrap() < 0.1);
+        // Across the wall: 2 m apart in a straight line, about 1.9 + 2 + 1.9 m round it.
+        let start = DVec2::new(1.0, 0.5);
+        let round = field.at(start).unwrap();
+        assert!(round > 4.5 && round < 6.0, "{round}");
+        // The way from the start leads up, to the doorway, not across the wall to the goal.
+        let way = field.way_at(start).unwrap();
+        assert!(way.y > 0.9, "{way:?}");
+        // Beside the goal, in its own half, the way leads at it.
+        let way = field.way_at(DVec2::new(3.0, 1.5)).unwrap();
+        assert!(way.y < -0.9, "{way:?}");
+        // Off the grid and on the wall's cells: no distance there, but beside it there is.
+        assert!(field.at(DVec2::new(-5.0, 0.5)).is_none());
+        assert!(field.at(DVec2::new(2.05, 0.5)).is_some());
+        assert!(PathField::to_goal(&map, DVec2::new(2.05, 0.5)).is_none());
     }
 }
