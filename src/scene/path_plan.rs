@@ -3,7 +3,9 @@
 //! obstacles (other people, moving boxes where they stand now). The planner of the
 //! path-following baseline (`synth::crowd`, steering `path_follow`), in the spirit of
 //! GAMMA's and DIMOS's A* paths, and of the guide ([`guide_aim`]) that shows a policy where
-//! to head when a wall hides its goal.
+//! to head when a wall hides its goal. Also the walking distance to one goal from every cell
+//! ([`PathField`], Dijkstra on the same grid without clearance), which a training reward can
+//! pay progress along (`EnvSettings::goal_by_path`).
 
 use glam::DVec2;
 use pathfinding::prelude::astar;
