@@ -33,6 +33,22 @@ const NEIGHBOURS: [(i64, i64); 8] = [
     (1, 1),
 ];
 
+/// The steps from cell `(i, j)` to those of its eight neighbours that `free` allows, with
+/// their costs: straight ones, and diagonal ones only where both cells beside the diagonal are
+/// free (a step may not cut a blocked corner). `free` is asked about cells off the grid too.
+fn steps(
+    i: i64,
+    j: i64,
+    free: impl Fn(i64, i64) -> bool,
+) -> impl Iterator<Item = ((i64, i64), u32)> {
+    NEIGHBOURS.into_iter().filter_map(move |(di, dj)| {
+        let (ni, nj) = (i + di, j + dj);
+        let diagonal = di != 0 && dj != 0;
+        (free(ni, nj) && (!diagonal || (free(ni, j) && free(i, nj))))
+            .then_some(((ni, nj), if diagonal { DIAGONAL } else { STRAIGHT }))
+    })
+}
+
 /// A planned path: points from the start to the goal (cell centres between them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlannedPath {
@@ -98,29 +114,13 @@ pub fn plan_path(
         let (lo, hi) = (dx.min(dy), dx.max(dy));
         DIAGONAL * lo + STRAIGHT * (hi - lo)
     };
+    let in_grid = |i: i64, j: i64| i >= 0 && j >= 0 && i < map.nx as i64 && j < map.ny as i64;
     let successors = |&(i, j): &(usize, usize)| {
-        let mut next = Vec::with_capacity(8);
-        for (di, dj) in NEIGHBOURS {
-            let (ni, nj) = (i as i64 + di, j as i64 + dj);
-            if ni < 0 || nj < 0 || ni >= map.nx as i64 || nj >= map.ny as i64 {
-                continue;
-            }
-            let c = (ni as usize, nj as usize);
-            // A diagonal step may not cut a blocked corner.
-            let corner_free =
-                di == 0 || dj == 0 || (free((ni as usize, j)) && free((i, nj as usize)));
-            if free(c) && corner_free {
-                next.push((
-                    c,
-                    if di != 0 && dj != 0 {
-                        DIAGONAL
-                    } else {
-                        STRAIGHT
-                    },
-                ));
-            }
-        }
-        next
+        steps(i as i64, j as i64, |i, j| {
+            in_grid(i, j) && free((i as usize, j as usize))
+        })
+        .map(|((i, j), cost)| ((i as usize, j as usize), cost))
+        .collect::<Vec<_>>()
     };
     match astar(&start, successors, octile, |c| *c == goal) {
         Some((cells, _)) => {
@@ -236,13 +236,8 @@ impl PathField {
             if c > cost[j as usize * map.nx + i as usize] {
                 continue;
             }
-            for (di, dj) in NEIGHBOURS {
-                let (ni, nj) = (i + di, j + dj);
-                let diagonal = di != 0 && dj != 0;
-                if !free(ni, nj) || (diagonal && !(free(ni, j) && free(i, nj))) {
-                    continue;
-                }
-                let next = c + if diagonal { DIAGONAL } else { STRAIGHT };
+            for ((ni, nj), step) in steps(i, j, free) {
+                let next = c + step;
                 let k = nj as usize * map.nx + ni as usize;
                 if next < cost[k] {
                     cost[k] = next;
