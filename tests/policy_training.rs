@@ -358,6 +358,16 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "sonar",
         ),
         (
+            "residual_blocks = 1",
+            "residual_blocks = 1\n[policy.sensing]\nkind = \"depth_image\"\nhalf_fov_v_rad = 2.0",
+            "policy.sensing",
+        ),
+        (
+            "residual_blocks = 1",
+            "residual_blocks = 1\n[policy.sensing]\nkind = \"depth_image\"\nrows = 12",
+            "rows and cols must be multiples of 8",
+        ),
+        (
             "[stages.env]",
             "[stages.env]\nscene_test_vertices = 1024",
             "stages[1].env.scene_test_vertices",
@@ -406,6 +416,7 @@ fn a_policy_keeps_its_sensing_in_its_weights_file() {
             }),
             8,
         ),
+        (SensingSpec::DepthImage(Default::default()), 16 * 32),
     ] {
         let arch = PolicyArch {
             sensing,
@@ -421,6 +432,19 @@ fn a_policy_keeps_its_sensing_in_its_weights_file() {
         let b = 3;
         let out = net.forward(Tensor::zeros([b, layout.dim()], &device));
         assert_eq!(out.mean.dims(), [b, arch.latent_dim]);
+        // Every weight comes back (the depth image's CNN too): the same actions.
+        let obs: Vec<f32> = (0..b * layout.dim())
+            .map(|k| ((k as f32) * 0.618_034).fract() * 2.0 - 1.0)
+            .collect();
+        let before = arch.init::<TrainBackend>(&device);
+        save_policy(&before, &arch, &path).unwrap();
+        let (_, after) = load_policy::<TrainBackend>(&path, &device).unwrap();
+        let act = |net: &egogen::policy::net::ActorCritic<TrainBackend>| {
+            let t = Tensor::<TrainBackend, 1>::from_floats(obs.as_slice(), &device)
+                .reshape([b, layout.dim()]);
+            net.forward(t).mean.into_data().to_vec::<f32>().unwrap()
+        };
+        assert_eq!(act(&before), act(&after), "{sensing:?}");
     }
 }
 
@@ -492,7 +516,8 @@ fn the_prior_kl_penalty_holds_the_policy_near_the_standard_normal() {
 
 /// The f32 actor that acting uses (`policy::Actor`) gives burn's actions bit for bit: mean and
 /// sampled, one observation and batches (the batch sizes cross burn's threshold for threaded
-/// products), for policies of three widths and both kinds of sensing.
+/// products), for policies of three widths and all three kinds of sensing (the depth image's
+/// CNN on a freshly initialised network).
 #[test]
 fn plain_f32_actor_equals_burn_bit_for_bit() {
     use egogen::motion::cvae::infer::InferBackend;
@@ -502,13 +527,24 @@ fn plain_f32_actor_equals_burn_bit_for_bit() {
     use rand_core::SeedableRng;
     let device = Default::default();
     let root = common::repo_root();
-    for file in [
+    let depth = PolicyArch {
+        sensing: egogen::sensing::SensingSpec::DepthImage(Default::default()),
+        ..Default::default()
+    };
+    let mut nets: Vec<(String, egogen::policy::net::ActorCritic<InferBackend>)> = [
         egogen::policy::weights::SHIPPED_POLICY,
         "assets/policy/knobs/width_64.safetensors",
         "assets/policy/knobs/width_256.safetensors",
         "assets/policy/table2/local_map_0.8m.safetensors",
-    ] {
+    ]
+    .into_iter()
+    .map(|file| {
         let (_, net) = load_policy::<InferBackend>(&root.join(file), &device).unwrap();
+        (file.to_string(), net)
+    })
+    .collect();
+    nets.push(("a depth image's CNN".into(), depth.init(&device)));
+    for (file, net) in nets {
         let actor = Actor::of(&net);
         let d = actor.obs_layout().dim();
         assert_eq!(actor.latent_dim(), net.latent_dim());

@@ -19,7 +19,7 @@ use burn::prelude::*;
 use rand_chacha::ChaCha8Rng;
 
 use super::env::{ObsLayout, STATE_FRAME_DIM};
-use super::net::{ActorCritic, Gru, LEAKY_SLOPE, LOGVAR_RANGE};
+use super::net::{ActorCritic, Gru, DEPTH_CNN, LEAKY_SLOPE, LOGVAR_RANGE};
 use super::row_product::RowMatrix;
 use crate::math::random::normal_samples;
 use crate::motion::primitive::SEED_FRAMES;
@@ -214,11 +214,66 @@ impl GruF32 {
     }
 }
 
+/// A depth image's CNN ([`super::net::DepthCnn`]) in plain f32 arrays.
+#[derive(Debug, Clone)]
+struct DepthCnnF32 {
+    layers: Vec<Dense>,
+    rows: usize,
+    cols: usize,
+}
+
+impl DepthCnnF32 {
+    /// Features `[n × F]` of `n` images, image `j` at `x[j·stride ..]` (row-major).
+    fn forward(&self, n: usize, x: &[f32], stride: usize) -> Vec<f32> {
+        let (mut rows, mut cols, mut channels) = (self.rows, self.cols, 1);
+        let mut grid = Vec::with_capacity(n * rows * cols);
+        for j in 0..n {
+            grid.extend_from_slice(&x[j * stride..j * stride + rows * cols]);
+        }
+        for (layer, &(k, out)) in self.layers.iter().zip(&DEPTH_CNN) {
+            let p = patches(&grid, n, rows, cols, channels, k);
+            grid = layer.forward(p.len() / layer.inputs, &p, layer.inputs);
+            leaky(&mut grid);
+            (rows, cols, channels) = (rows / k, cols / k, out);
+        }
+        grid
+    }
+}
+
+/// The `k × k` patches of `n` grids `[R, C, Ch]` as rows of `k·k·Ch`, in the order of `(n,
+/// patch row, patch column)`, each patch's values row by row, channels innermost (as
+/// [`super::net`]'s `patches`).
+fn patches(x: &[f32], n: usize, r: usize, c: usize, ch: usize, k: usize) -> Vec<f32> {
+    let mut out = Vec::with_capacity(x.len());
+    for j in 0..n {
+        for pr in 0..r / k {
+            for pc in 0..c / k {
+                for dy in 0..k {
+                    let at = ((j * r + pr * k + dy) * c + pc * k) * ch;
+                    out.extend_from_slice(&x[at..at + k * ch]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// LeakyReLU in place, as burn's.
+fn leaky(v: &mut [f32]) {
+    let slope = LEAKY_SLOPE as f32;
+    for x in v.iter_mut() {
+        if *x < 0.0 {
+            *x *= slope;
+        }
+    }
+}
+
 /// The actor of a policy network in plain f32 arrays.
 #[derive(Debug, Clone)]
 pub struct Actor {
     state_gru: GruF32,
     ray_gru: GruF32,
+    depth_cnn: Option<DepthCnnF32>,
     blocks: Vec<[Dense; 2]>,
     out: Dense,
     pe_frequencies: usize,
@@ -232,6 +287,11 @@ impl Actor {
         Self {
             state_gru: GruF32::of(&net.state_gru),
             ray_gru: GruF32::of(&net.ray_gru),
+            depth_cnn: net.depth_cnn.as_ref().map(|cnn| DepthCnnF32 {
+                layers: cnn.layers.iter().map(Dense::of).collect(),
+                rows: cnn.rows,
+                cols: cnn.cols,
+            }),
             blocks: net
                 .actor
                 .blocks
@@ -275,9 +335,29 @@ impl Actor {
         let state = self
             .state_gru
             .forward(m, obs, d, SEED_FRAMES, STATE_FRAME_DIM);
-        let rays = self
-            .ray_gru
-            .forward(m, &obs[layout.sensing_offset()..], d, SEED_FRAMES, s);
+        let rays = match &self.depth_cnn {
+            Some(cnn) => {
+                // Each seed frame's image; image `i·T + t` is row i's frame t.
+                let images: Vec<f32> = (0..m)
+                    .flat_map(|i| {
+                        let at = i * d + layout.sensing_offset();
+                        obs[at..at + SEED_FRAMES * s].iter().copied()
+                    })
+                    .collect();
+                let features = cnn.forward(m * SEED_FRAMES, &images, s);
+                let per_frame = features.len() / (m * SEED_FRAMES).max(1);
+                self.ray_gru.forward(
+                    m,
+                    &features,
+                    SEED_FRAMES * per_frame,
+                    SEED_FRAMES,
+                    per_frame,
+                )
+            }
+            None => self
+                .ray_gru
+                .forward(m, &obs[layout.sensing_offset()..], d, SEED_FRAMES, s),
+        };
         let hs = self.state_gru.hidden.inputs;
         let hr = self.ray_gru.hidden.inputs;
         let width = hs + hr + 4 * f;
@@ -296,14 +376,6 @@ impl Actor {
                 h.extend(freqs.iter().map(|q| (x * q).cos()));
             }
         }
-        let slope = LEAKY_SLOPE as f32;
-        let leaky = |v: &mut Vec<f32>| {
-            for x in v.iter_mut() {
-                if *x < 0.0 {
-                    *x *= slope;
-                }
-            }
-        };
         for [a, b] in &self.blocks {
             let mut y = a.forward(m, &h, width);
             leaky(&mut y);

@@ -1,7 +1,8 @@
 //! The actor-critic network (EgoGen's `GAMMAPolicyBase`, actor and critic), in burn.
 //!
 //! Two GRUs read the two seed frames: one the marker state (67 × 6 per frame), one the sensing
-//! (the paper's ray scan: 32 per frame; the architecture's [`SensingSpec`]); their last hidden states (`H` each) join sinusoidal positional encodings of
+//! (the paper's ray scan: 32 per frame; the architecture's [`SensingSpec`]; a depth image is
+//! first encoded by a small CNN, `DepthCnn`); their last hidden states (`H` each) join sinusoidal positional encodings of
 //! `1/(1 + d)` and `1 − t/T` (`2F` values each: sin and cos at frequencies `2^k·π`,
 //! k < F). The actor, a residual MLP (two blocks `W → W → W` with LeakyReLU, `W = 2H + 4F`,
 //! then a linear layer), writes the mean and log-variance of the latent (log-variance clamped
@@ -19,6 +20,15 @@ use serde::{Deserialize, Serialize};
 use super::env::{ObsLayout, STATE_FRAME_DIM};
 use crate::motion::primitive::SEED_FRAMES;
 use crate::sensing::SensingSpec;
+
+/// The depth image's CNN (paper Tab. 3, "Egocentric depth"): convolutions whose stride equals
+/// their kernel, `(kernel, channels)` in order, each followed by LeakyReLU: 4 × 4 patches of
+/// the image into 16 channels, then 2 × 2 of those into 32. A 16 × 32 image becomes 2 × 4 × 32
+/// = 256 features per frame for the sensing GRU.
+pub(crate) const DEPTH_CNN: [(usize, usize); 2] = [(4, 16), (2, 32)];
+
+/// How much a depth image's side shrinks through [`DEPTH_CNN`] (its strides' product).
+const DEPTH_CNN_STRIDE: usize = DEPTH_CNN[0].0 * DEPTH_CNN[1].0;
 
 /// Bounds of the actor's log-variance.
 pub const LOGVAR_RANGE: (f32, f32) = (-2.5, 2.5);
@@ -89,18 +99,65 @@ impl PolicyArch {
             .find(|(_, v, lo, hi)| !(lo..=hi).contains(&v))
             .map(|(name, v, lo, hi)| format!("{name} = {v}: expected {lo}–{hi}"))
             .or_else(|| self.sensing.problem())
+            .or_else(|| match self.sensing {
+                SensingSpec::DepthImage(d)
+                    if d.rows % DEPTH_CNN_STRIDE != 0 || d.cols % DEPTH_CNN_STRIDE != 0 =>
+                {
+                    Some(format!(
+                        "the depth image's rows and cols must be multiples of \
+                         {DEPTH_CNN_STRIDE} (its CNN's strides), got {} × {}",
+                        d.rows, d.cols
+                    ))
+                }
+                _ => None,
+            })
+    }
+
+    /// Values per frame that the sensing GRU reads: the sensing itself, or the depth CNN's
+    /// features.
+    pub(crate) fn sensing_features(&self) -> usize {
+        match self.sensing {
+            SensingSpec::DepthImage(d) => {
+                (d.rows / DEPTH_CNN_STRIDE) * (d.cols / DEPTH_CNN_STRIDE) * DEPTH_CNN[1].1
+            }
+            _ => self.sensing.dim(),
+        }
+    }
+
+    /// The depth CNN's layers as `(inputs, outputs)` (none for other sensing).
+    fn depth_cnn_layers(&self) -> Vec<(usize, usize)> {
+        match self.sensing {
+            SensingSpec::DepthImage(_) => {
+                let mut channels = 1;
+                DEPTH_CNN
+                    .iter()
+                    .map(|&(k, out)| {
+                        let inputs = k * k * channels;
+                        channels = out;
+                        (inputs, out)
+                    })
+                    .collect()
+            }
+            _ => Vec::new(),
+        }
     }
 
     /// Weights and biases of the network [`Self::init`] builds (two GRUs, the actor's and the
-    /// critic's residual MLPs).
+    /// critic's residual MLPs, a depth image's CNN).
     pub fn parameter_count(&self) -> f64 {
         let (h, w) = (self.hidden as f64, self.mlp_width() as f64);
         let gru = |inputs: f64| inputs * 3.0 * h + 3.0 * h + h * 3.0 * h + 3.0 * h;
         let mlp = |out: f64| self.residual_blocks as f64 * 2.0 * (w * w + w) + w * out + out;
+        let cnn: f64 = self
+            .depth_cnn_layers()
+            .iter()
+            .map(|&(i, o)| (i * o + o) as f64)
+            .sum();
         gru(STATE_FRAME_DIM as f64)
-            + gru(self.sensing.dim() as f64)
+            + gru(self.sensing_features() as f64)
             + mlp(2.0 * self.latent_dim as f64)
             + mlp(1.0)
+            + cnn
     }
 
     /// Width `W` of the actor's and critic's MLPs.
@@ -130,7 +187,19 @@ impl PolicyArch {
         };
         ActorCritic {
             state_gru: Gru::new(STATE_FRAME_DIM, h, device),
-            ray_gru: Gru::new(self.sensing.dim(), h, device),
+            ray_gru: Gru::new(self.sensing_features(), h, device),
+            depth_cnn: match self.sensing {
+                SensingSpec::DepthImage(d) => Some(DepthCnn {
+                    layers: self
+                        .depth_cnn_layers()
+                        .into_iter()
+                        .map(|(i, o)| linear(i, o))
+                        .collect(),
+                    rows: d.rows,
+                    cols: d.cols,
+                }),
+                _ => None,
+            },
             actor: mlp(2 * self.latent_dim, 0.01),
             critic: mlp(1, 1.0),
             pe_frequencies: self.pe_frequencies,
@@ -172,6 +241,41 @@ impl<B: Backend> Gru<B> {
     }
 }
 
+/// The depth image's CNN ([`DEPTH_CNN`]): each convolution, its stride equal to its kernel, is
+/// one linear layer applied to every patch (the patch's values row by row, channels innermost).
+#[derive(Module, Debug)]
+pub(crate) struct DepthCnn<B: Backend> {
+    pub(super) layers: Vec<Linear<B>>,
+    pub(super) rows: usize,
+    pub(super) cols: usize,
+}
+
+impl<B: Backend> DepthCnn<B> {
+    /// Features `[N, F]` of images `[N, rows·cols]` (row-major): the last layer's grid row by
+    /// row, channels innermost.
+    fn forward(&self, images: Tensor<B, 2>) -> Tensor<B, 2> {
+        let n = images.dims()[0];
+        let (mut rows, mut cols, mut channels) = (self.rows, self.cols, 1);
+        let mut x = images.reshape([n, rows, cols, channels]);
+        for (layer, &(k, out)) in self.layers.iter().zip(&DEPTH_CNN) {
+            let y = leaky_relu(layer.forward(patches(x, k)), LEAKY_SLOPE);
+            (rows, cols, channels) = (rows / k, cols / k, out);
+            x = y.reshape([n, rows, cols, channels]);
+        }
+        x.reshape([n, rows * cols * channels])
+    }
+}
+
+/// The `k × k` patches of a grid `[N, R, C, Ch]` as rows `[N·(R/k)·(C/k), k·k·Ch]`, in the
+/// order of `(n, patch row, patch column)`, each patch's values row by row, channels
+/// innermost.
+fn patches<B: Backend>(x: Tensor<B, 4>, k: usize) -> Tensor<B, 2> {
+    let [n, r, c, ch] = x.dims();
+    x.reshape([n * r / k, k, c / k, k * ch])
+        .swap_dims(1, 2)
+        .reshape([n * (r / k) * (c / k), k * k * ch])
+}
+
 /// Residual blocks then a linear output layer.
 #[derive(Module, Debug)]
 pub(crate) struct ResidualMlp<B: Backend> {
@@ -196,6 +300,8 @@ pub struct ActorCritic<B: Backend> {
     pub(super) state_gru: Gru<B>,
     /// The sensing GRU, of whatever [`SensingSpec`] (its name is its weights' key).
     pub(super) ray_gru: Gru<B>,
+    /// A depth image's encoder (only for [`SensingSpec::DepthImage`]).
+    pub(super) depth_cnn: Option<DepthCnn<B>>,
     pub(super) actor: ResidualMlp<B>,
     critic: ResidualMlp<B>,
     pub(super) pe_frequencies: usize,
@@ -240,8 +346,15 @@ impl<B: Backend> ActorCritic<B> {
             .reshape([b, SEED_FRAMES, STATE_FRAME_DIM]);
         let sensing = obs
             .clone()
-            .narrow(1, layout.sensing_offset(), SEED_FRAMES * s)
-            .reshape([b, SEED_FRAMES, s]);
+            .narrow(1, layout.sensing_offset(), SEED_FRAMES * s);
+        let sensing = match &self.depth_cnn {
+            Some(cnn) => {
+                let features = cnn.forward(sensing.reshape([b * SEED_FRAMES, s]));
+                let f = features.dims()[1];
+                features.reshape([b, SEED_FRAMES, f])
+            }
+            None => sensing.reshape([b, SEED_FRAMES, s]),
+        };
         let dist = obs.clone().narrow(1, layout.dist_offset(), 1);
         let time = obs.narrow(1, layout.dist_offset() + 1, 1);
         Tensor::cat(
@@ -344,6 +457,11 @@ mod tests {
                 residual_blocks: 3,
                 latent_dim: 5,
                 sensing: SensingSpec::default(),
+            },
+            PolicyArch {
+                hidden: 9,
+                sensing: SensingSpec::DepthImage(Default::default()),
+                ..PolicyArch::default()
             },
         ] {
             let net = arch.init::<B>(&Default::default());

@@ -1,19 +1,22 @@
 //! What a policy observes of its surroundings, as written in its config and saved in its
-//! weights: the paper's ray scan (any number of rays) or the local-map alternative of the
-//! paper's Tab. 2. [`SensingSpec::sensor`] builds the sensor that produces the observation.
+//! weights: the paper's ray scan (any number of rays), the local-map alternative of the
+//! paper's Tab. 2 or the egocentric depth image of its Tab. 3. [`SensingSpec::sensor`] builds the sensor that produces the observation.
 
 use serde::{Deserialize, Serialize};
 
+use super::depth_image::{DepthImage, DepthImageSettings};
 use super::ego::{EgoPose2, EgoSensor, RayScan, RayScanSettings, SensingWorld};
 use super::local_map::{LocalMap, LocalMapSettings};
 
-/// A sensor's kind and settings (TOML: `kind = "rays"` or `kind = "local_map"`, then the
-/// settings of [`RayScanSettings`] or [`LocalMapSettings`], each defaulted).
+/// A sensor's kind and settings (TOML: `kind = "rays"`, `kind = "local_map"` or `kind =
+/// "depth_image"`, then the settings of [`RayScanSettings`], [`LocalMapSettings`] or
+/// [`DepthImageSettings`], each defaulted).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum SensingSpec {
     Rays(RayScanSettings),
     LocalMap(LocalMapSettings),
+    DepthImage(DepthImageSettings),
 }
 
 impl Default for SensingSpec {
@@ -40,6 +43,7 @@ impl SensingSpec {
         match self {
             Self::Rays(s) => s.num_rays,
             Self::LocalMap(s) => s.rows * s.cols,
+            Self::DepthImage(s) => s.rows * s.cols,
         }
     }
 
@@ -76,6 +80,7 @@ impl SensingSpec {
                     format!("behind_m must be ≥ 0, got {}", s.behind_m),
                 )
             }),
+            Self::DepthImage(s) => s.problem(),
         }
     }
 
@@ -84,15 +89,17 @@ impl SensingSpec {
         match *self {
             Self::Rays(s) => Sensor::Rays(RayScan::new(s)),
             Self::LocalMap(settings) => Sensor::LocalMap(LocalMap { settings }),
+            Self::DepthImage(settings) => Sensor::DepthImage(DepthImage { settings }),
         }
     }
 }
 
-/// A built sensor of either kind.
+/// A built sensor of any kind.
 #[derive(Debug, Clone)]
 pub enum Sensor {
     Rays(RayScan),
     LocalMap(LocalMap),
+    DepthImage(DepthImage),
 }
 
 impl Default for Sensor {
@@ -106,6 +113,7 @@ impl EgoSensor for Sensor {
         match self {
             Self::Rays(s) => s.dim(),
             Self::LocalMap(s) => s.dim(),
+            Self::DepthImage(s) => s.dim(),
         }
     }
 
@@ -113,6 +121,7 @@ impl EgoSensor for Sensor {
         match self {
             Self::Rays(s) => s.observe_into(world, pose, out),
             Self::LocalMap(s) => s.observe_into(world, pose, out),
+            Self::DepthImage(s) => s.observe_into(world, pose, out),
         }
     }
 }
