@@ -368,7 +368,9 @@ fn table2_markdown(t: &PolicyRowsFile) -> String {
 
 const TABLE3_NOTES: &str = "
 Penetration: share of frames with a body marker inside the box's or the other person's
-footprint. Foot contact: paper Eq. 12 with 3-D foot-marker speed. The paper's rows: \"The
+footprint. Foot contact: paper Eq. 12 with 3-D foot-marker speed. The egocentric-depth policy
+observes a 16 × 32 depth image ray cast from the same world as the rays, through a small CNN
+(docs/POLICY.md, \"Network\"), the others the paper's 32 rays. The paper's rows: \"The
 paper beside ours\" above.
 ";
 

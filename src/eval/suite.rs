@@ -292,7 +292,7 @@ pub(crate) const TABLE2_POLICIES: [(&str, &str, &str); 10] = [
 
 /// The shipped policy's training run and its ablations (paper Tab. 3), each trained with the
 /// same budget: label, weights, the config that trains them.
-pub(crate) const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
+pub(crate) const TABLE3_POLICIES: [(&str, &str, &str); 4] = [
     (
         "full (pretraining + attention reward)",
         "assets/policy/policy.safetensors",
@@ -307,5 +307,10 @@ pub(crate) const TABLE3_POLICIES: [(&str, &str, &str); 3] = [
         "no attention reward",
         "assets/policy/ablations/no_attention.safetensors",
         "configs/ablations/no_attention.toml",
+    ),
+    (
+        "egocentric depth (16 × 32 depth image, CNN)",
+        "assets/policy/ablations/egocentric_depth.safetensors",
+        "configs/ablations/egocentric_depth.toml",
     ),
 ];
