@@ -98,27 +98,47 @@ impl DepthImageSettings {
 }
 
 /// The depth-image sensor.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct DepthImage {
     pub settings: DepthImageSettings,
+    /// Per row: the sine and cosine of its elevation (the same for every observation).
+    rows: Vec<(f64, f64)>,
+    /// Per column: its direction relative to the heading.
+    cols: Vec<DVec2>,
+}
+
+impl Default for DepthImage {
+    fn default() -> Self {
+        Self::new(DepthImageSettings::default())
+    }
 }
 
 impl DepthImage {
+    pub fn new(settings: DepthImageSettings) -> Self {
+        Self {
+            settings,
+            rows: (0..settings.rows)
+                .map(|r| settings.elevation(r).sin_cos())
+                .collect(),
+            cols: (0..settings.cols)
+                .map(|c| DVec2::from_angle(settings.azimuth(c)))
+                .collect(),
+        }
+    }
+
     /// Ray length (m) per pixel, row-major, `max_range_m` where nothing is hit within range.
     pub fn ranges(&self, world: &SensingWorld, pose: EgoPose2) -> Vec<f64> {
         let s = self.settings;
         let heading = DVec2::from_angle(pose.heading_rad);
         let mut out = vec![0.0; s.rows * s.cols];
-        for c in 0..s.cols {
+        for (c, offset) in self.cols.iter().enumerate() {
             let ray = Ray2 {
                 origin: pose.position,
-                dir: heading.rotate(DVec2::from_angle(s.azimuth(c))),
+                dir: heading.rotate(*offset),
             };
             // The wall a column meets first, by horizontal distance.
             let wall = world.cast(ray, s.max_range_m);
-            for r in 0..s.rows {
-                let e = s.elevation(r);
-                let (sin_e, cos_e) = e.sin_cos();
+            for (r, &(sin_e, cos_e)) in self.rows.iter().enumerate() {
                 // Horizontal distance to the floor (looking down) and to the wall where the
                 // ray still passes below its top.
                 let floor = (sin_e < 0.0).then(|| s.eye_height_m * cos_e / -sin_e);
@@ -266,7 +286,7 @@ mod tests {
             },
         ] {
             assert_eq!(settings.problem(), None);
-            let sensor = DepthImage { settings };
+            let sensor = DepthImage::new(settings);
             for position in [DVec2::ZERO, DVec2::new(9.9, -9.9)] {
                 let v = sensor.observe(
                     &world,

@@ -89,7 +89,7 @@ impl SensingSpec {
         match *self {
             Self::Rays(s) => Sensor::Rays(RayScan::new(s)),
             Self::LocalMap(settings) => Sensor::LocalMap(LocalMap { settings }),
-            Self::DepthImage(settings) => Sensor::DepthImage(DepthImage { settings }),
+            Self::DepthImage(settings) => Sensor::DepthImage(DepthImage::new(settings)),
         }
     }
 }
