@@ -372,3 +372,45 @@ property int objectId\nelement face 2\nproperty list uchar int vertex_indices\ne
         "{err}"
     );
 }
+
+/// `egogen scene inspect --depth-images` draws each sample agent's depth image to the right of
+/// the map (one per agent, framed in its start's colour); without the flag the picture is the
+/// map alone.
+#[test]
+fn scene_inspect_draws_depth_images_beside_the_map_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let size = |path: &Path| {
+        let decoder =
+            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+        let reader = decoder.read_info().unwrap();
+        let info = reader.info();
+        (info.width as usize, info.height as usize)
+    };
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+            .args([
+                "scene",
+                "inspect",
+                "scenario:single_box",
+                "--agents",
+                "2",
+                "--out",
+            ])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            status.status.success(),
+            "{}",
+            String::from_utf8_lossy(&status.stderr)
+        );
+        size(&out)
+    };
+    let (plain_w, plain_h) = run("plain.png", &[]);
+    let (w, h) = run("depth.png", &["--depth-images"]);
+    // The depth images' column: 32 × 8 px plus a 3 px frame each side and 16 px of margin.
+    assert_eq!(w, plain_w + 32 * 8 + 6 + 16);
+    assert!(h >= plain_h, "{h} < {plain_h}");
+}

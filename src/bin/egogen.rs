@@ -253,6 +253,10 @@ enum SceneCommand {
         /// Seed for the sample agents.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Also draw each sample agent's egocentric depth image (16 × 32, looking at its
+        /// goal; Table 3's ablation sees it), to the right of the map.
+        #[arg(long)]
+        depth_images: bool,
     },
 }
 
@@ -491,6 +495,7 @@ fn run(cli: Cli) -> Result<()> {
             out,
             agents,
             seed,
+            depth_images,
         }) => {
             refuse_existing(&out)?;
             egogen::cli::scene_jobs::scene_inspect(
@@ -500,6 +505,7 @@ fn run(cli: Cli) -> Result<()> {
                 &out,
                 agents,
                 seed,
+                depth_images,
             )?;
         }
         Command::Body(BodyCommand::Info { model }) => body_jobs::body_info(&model_path(model))?,

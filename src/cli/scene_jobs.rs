@@ -1,12 +1,16 @@
 //! `egogen scene inspect`: a scene loaded, its walkable map built and summarised, and a PNG of
-//! the map with sampled starts, goals and their sensing rays.
+//! the map with sampled starts, goals and their sensing rays (and, when asked, each start's
+//! egocentric depth image beside it).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 
 /// Prints the summary of `scene` (a file, or `scenario:NAME`) and draws its map with `agents`
-/// sampled start/goal pairs (from `seed`) and their rays to `out`.
+/// sampled start/goal pairs (from `seed`) and their rays to `out`; with `depth_images`, each
+/// start's egocentric depth image (Table 3's ablation, looking at its goal) to the right of
+/// the map, framed in the colour of its start.
+#[allow(clippy::too_many_arguments)]
 pub fn scene_inspect(
     scene: &str,
     up: Option<&str>,
@@ -14,13 +18,14 @@ pub fn scene_inspect(
     out: &Path,
     agents: usize,
     seed: u64,
+    depth_images: bool,
 ) -> Result<()> {
     use crate::preview::map::MapPicture;
     use crate::scene::{
         load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind, UpAxis,
         WalkableSettings,
     };
-    use crate::sensing::{EgoPose2, RayScan, SensingWorld};
+    use crate::sensing::{DepthImage, EgoPose2, RayScan, SensingWorld};
 
     if !(cell_m.is_finite() && cell_m > 0.0) {
         bail!("--cell-m must be a positive number of metres, got {cell_m}");
@@ -81,7 +86,12 @@ pub fn scene_inspect(
     for o in &obstacles {
         pic.obstacle(o, [200, 60, 40]);
     }
-    for sg in sample_start_goals(&map, seed, agents, 0.3, 1.0) {
+    let depth = DepthImage::default();
+    let mut pictures = Vec::new();
+    for (k, sg) in sample_start_goals(&map, seed, agents, 0.3, 1.0)
+        .into_iter()
+        .enumerate()
+    {
         let heading = (sg.goal - sg.start).to_angle();
         let pose = EgoPose2 {
             position: sg.start,
@@ -96,10 +106,64 @@ pub fn scene_inspect(
             };
             pic.line(pose.position, end, colour);
         }
-        pic.dot(sg.start, 4, [30, 80, 200]);
+        let start_colour = if depth_images {
+            AGENT_COLOURS[k % AGENT_COLOURS.len()]
+        } else {
+            [30, 80, 200]
+        };
+        pic.dot(sg.start, 4, start_colour);
         pic.dot(sg.goal, 4, [200, 30, 160]);
+        if depth_images {
+            pictures.push(depth_picture(
+                &depth,
+                &depth.ranges(&world, pose),
+                start_colour,
+            ));
+        }
     }
-    pic.image.write_png(out)?;
+    let image = if depth_images {
+        let cell = pictures.iter().map(|p| p.width).max().unwrap_or(1) + 16;
+        let column =
+            crate::preview::raster::RgbImage::contact_sheet(&pictures, cell, 1, [255, 255, 255]);
+        pic.image.hconcat(&column, [255, 255, 255])
+    } else {
+        pic.image
+    };
+    image.write_png(out)?;
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// Colours of the sample agents' starts when their depth images are drawn.
+const AGENT_COLOURS: [[u8; 3]; 6] = [
+    [30, 80, 200],
+    [220, 130, 0],
+    [0, 150, 140],
+    [150, 40, 170],
+    [120, 120, 0],
+    [200, 40, 40],
+];
+
+/// A depth image as grey levels (near bright, nothing within range black), each pixel 8 × 8,
+/// framed 3 px wide in `frame`.
+fn depth_picture(
+    depth: &crate::sensing::DepthImage,
+    ranges: &[f64],
+    frame: [u8; 3],
+) -> crate::preview::raster::RgbImage {
+    const SCALE: usize = 8;
+    const BORDER: usize = 3;
+    let s = depth.settings;
+    let (w, h) = (s.cols * SCALE + 2 * BORDER, s.rows * SCALE + 2 * BORDER);
+    let mut image = crate::preview::raster::RgbImage::new(w, h, frame);
+    for y in 0..s.rows * SCALE {
+        for x in 0..s.cols * SCALE {
+            let range = ranges[(y / SCALE) * s.cols + x / SCALE];
+            let grey = (255.0 * (1.0 - range / s.max_range_m))
+                .round()
+                .clamp(0.0, 255.0) as u8;
+            image.pixels[(y + BORDER) * w + x + BORDER] = [grey; 3];
+        }
+    }
+    image
 }
