@@ -6,6 +6,9 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 
+use crate::preview::raster::RgbImage;
+use crate::sensing::DepthImage;
+
 /// Prints the summary of `scene` (a file, or `scenario:NAME`) and draws its map with `agents`
 /// sampled start/goal pairs (from `seed`) and their rays to `out`; with `depth_images`, each
 /// start's egocentric depth image (Table 3's ablation, looking at its goal) to the right of
@@ -25,7 +28,7 @@ pub fn scene_inspect(
         load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind, UpAxis,
         WalkableSettings,
     };
-    use crate::sensing::{DepthImage, EgoPose2, RayScan, SensingWorld};
+    use crate::sensing::{EgoPose2, RayScan, SensingWorld};
 
     if !(cell_m.is_finite() && cell_m > 0.0) {
         bail!("--cell-m must be a positive number of metres, got {cell_m}");
@@ -123,8 +126,7 @@ pub fn scene_inspect(
     }
     let image = if depth_images {
         let cell = pictures.iter().map(|p| p.width).max().unwrap_or(1) + 16;
-        let column =
-            crate::preview::raster::RgbImage::contact_sheet(&pictures, cell, 1, [255, 255, 255]);
+        let column = RgbImage::contact_sheet(&pictures, cell, 1, [255, 255, 255]);
         pic.image.hconcat(&column, [255, 255, 255])
     } else {
         pic.image
@@ -146,16 +148,12 @@ const AGENT_COLOURS: [[u8; 3]; 6] = [
 
 /// A depth image as grey levels (near bright, nothing within range black), each pixel 8 × 8,
 /// framed 3 px wide in `frame`.
-fn depth_picture(
-    depth: &crate::sensing::DepthImage,
-    ranges: &[f64],
-    frame: [u8; 3],
-) -> crate::preview::raster::RgbImage {
+fn depth_picture(depth: &DepthImage, ranges: &[f64], frame: [u8; 3]) -> RgbImage {
     const SCALE: usize = 8;
     const BORDER: usize = 3;
-    let s = depth.settings;
+    let s = depth.settings();
     let (w, h) = (s.cols * SCALE + 2 * BORDER, s.rows * SCALE + 2 * BORDER);
-    let mut image = crate::preview::raster::RgbImage::new(w, h, frame);
+    let mut image = RgbImage::new(w, h, frame);
     for y in 0..s.rows * SCALE {
         for x in 0..s.cols * SCALE {
             let range = ranges[(y / SCALE) * s.cols + x / SCALE];

@@ -100,7 +100,7 @@ impl DepthImageSettings {
 /// The depth-image sensor.
 #[derive(Debug, Clone)]
 pub struct DepthImage {
-    pub settings: DepthImageSettings,
+    settings: DepthImageSettings,
     /// Per row: the sine and cosine of its elevation (the same for every observation).
     rows: Vec<(f64, f64)>,
     /// Per column: its direction relative to the heading.
@@ -126,11 +126,22 @@ impl DepthImage {
         }
     }
 
+    /// Its settings (fixed at [`Self::new`]: the angles are computed from them once).
+    pub fn settings(&self) -> DepthImageSettings {
+        self.settings
+    }
+
     /// Ray length (m) per pixel, row-major, `max_range_m` where nothing is hit within range.
     pub fn ranges(&self, world: &SensingWorld, pose: EgoPose2) -> Vec<f64> {
+        let mut out = vec![0.0; self.settings.rows * self.settings.cols];
+        self.each_range(world, pose, |k, range| out[k] = range);
+        out
+    }
+
+    /// Calls `put(pixel, range)` for every pixel (row-major index, ray length in m).
+    fn each_range(&self, world: &SensingWorld, pose: EgoPose2, mut put: impl FnMut(usize, f64)) {
         let s = self.settings;
         let heading = DVec2::from_angle(pose.heading_rad);
-        let mut out = vec![0.0; s.rows * s.cols];
         for (c, offset) in self.cols.iter().enumerate() {
             let ray = Ray2 {
                 origin: pose.position,
@@ -148,11 +159,12 @@ impl DepthImage {
                     (Some(f), Some(w)) => Some(f.min(w)),
                     (f, w) => f.or(w),
                 };
-                out[r * s.cols + c] =
-                    horizontal.map_or(s.max_range_m, |h| (h / cos_e).min(s.max_range_m));
+                put(
+                    r * s.cols + c,
+                    horizontal.map_or(s.max_range_m, |h| (h / cos_e).min(s.max_range_m)),
+                );
             }
         }
-        out
     }
 }
 
@@ -163,9 +175,9 @@ impl EgoSensor for DepthImage {
 
     fn observe_into(&self, world: &SensingWorld, pose: EgoPose2, out: &mut [f32]) {
         let range = self.settings.max_range_m;
-        for (o, d) in out.iter_mut().zip(self.ranges(world, pose)) {
-            *o = (-1.0 + 2.0 * d / range) as f32;
-        }
+        self.each_range(world, pose, |k, d| {
+            out[k] = (-1.0 + 2.0 * d / range) as f32;
+        });
     }
 }
 
@@ -189,7 +201,7 @@ mod tests {
             yaw_rad: 0.0,
         };
         let sensor = DepthImage::default();
-        let s = sensor.settings;
+        let s = sensor.settings();
         let world = SensingWorld {
             map: &map,
             obstacles: std::slice::from_ref(&wall),
@@ -246,7 +258,7 @@ mod tests {
             obstacles: std::slice::from_ref(&post),
         };
         let sensor = DepthImage::default();
-        let s = sensor.settings;
+        let s = sensor.settings();
         // Facing +x the post is 90° to the left: column 0's side. Facing +y it is ahead.
         let left = sensor.ranges(
             &world,
