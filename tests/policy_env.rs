@@ -11,6 +11,7 @@ use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::policy::env::{Ending, STATE_FRAME_DIM};
 use egogen::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
+use egogen::policy::reward::Judged;
 use egogen::policy::sampling::sampling_step;
 use egogen::policy::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};
 use egogen::scene::generated::box_scene::{BoxScene, BoxSceneSettings};
@@ -530,6 +531,7 @@ fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
         success: Some(f * w.success),
         arrival: Some(f * w.arrival),
         attention_gap: Some(f * w.attention_gap),
+        penetration_cost: Some(f * w.penetration_cost),
     };
     let reweighted = EnvSettings {
         indoor_weights: scaled(2.0),
@@ -647,39 +649,51 @@ fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
     assert!(seen_nearer > 0, "the other person was never in view");
 }
 
-/// Walks the same random primitives in two environments, one testing an obstacle in every
-/// frame (`every`) and one Eq. 7's cells alone (`end_only`), and checks that the test adds
-/// exactly the primitives with a marker inside an obstacle; returns how many met one and how
-/// many only the test caught. Scenes with one kind of obstacle: people or a box.
-fn every_frame_counts(end_only: EnvSettings, every: EnvSettings, rng_seed: u64) -> (usize, usize) {
+/// Walks the same random primitives (`steps` of them, `per` candidates each) in two
+/// environments, episode base `env_seed`, and hands each candidate's two judgements to `check`:
+/// `end_only`'s, then `every`'s.
+fn judged_in_lockstep(
+    (end_only, every): (EnvSettings, EnvSettings),
+    (env_seed, rng_seed, steps): (u64, u64, usize),
+    mut check: impl FnMut(&Judged, &Judged),
+) {
     env_parts!(body, ctx, model, bank, prior);
     let (b, per) = (4, 8);
-    let mut end_only = PolicyEnv::new(&model, &ctx, &bank, &prior, end_only, b, 3).unwrap();
-    let mut every = PolicyEnv::new(&model, &ctx, &bank, &prior, every, b, 3).unwrap();
+    let mut end_only = PolicyEnv::new(&model, &ctx, &bank, &prior, end_only, b, env_seed).unwrap();
+    let mut every = PolicyEnv::new(&model, &ctx, &bank, &prior, every, b, env_seed).unwrap();
     let l = end_only.latent_dim();
     let mut rng = ChaCha8Rng::seed_from_u64(rng_seed);
-    let (mut touching, mut only_within) = (0, 0);
-    for _ in 0..4 {
+    for _ in 0..steps {
         let z = normal_samples(&mut rng, b * per * l);
         let (a, e) = (
             end_only.propose(&z, per).unwrap(),
             every.propose(&z, per).unwrap(),
         );
         for (a, e) in a.iter().zip(&e) {
-            let (Some(a), Some(e)) = (a.judged, e.judged) else {
-                continue;
-            };
-            // The same primitive, judged alike but for the every-frame test.
-            assert_eq!(a.frames_in_obstacle, e.frames_in_obstacle);
-            assert_eq!(a.blocked_cells, e.blocked_cells);
-            assert_eq!(e.penetrated, a.penetrated || a.frames_in_obstacle > 0);
-            touching += usize::from(a.frames_in_obstacle > 0);
-            only_within += usize::from(e.penetrated && !a.penetrated);
+            if let (Some(a), Some(e)) = (&a.judged, &e.judged) {
+                check(a, e);
+            }
         }
         let z = normal_samples(&mut rng, b * l);
         end_only.step(&z).unwrap();
         every.step(&z).unwrap();
     }
+}
+
+/// Walks the same random primitives in two environments, one testing an obstacle in every
+/// frame (`every`) and one Eq. 7's cells alone (`end_only`), and checks that the test adds
+/// exactly the primitives with a marker inside an obstacle; returns how many met one and how
+/// many only the test caught. Scenes with one kind of obstacle: people or a box.
+fn every_frame_counts(end_only: EnvSettings, every: EnvSettings, rng_seed: u64) -> (usize, usize) {
+    let (mut touching, mut only_within) = (0, 0);
+    judged_in_lockstep((end_only, every), (3, rng_seed, 4), |a, e| {
+        // The same primitive, judged alike but for the every-frame test.
+        assert_eq!(a.frames_in_obstacle, e.frames_in_obstacle);
+        assert_eq!(a.blocked_cells, e.blocked_cells);
+        assert_eq!(e.penetrated, a.penetrated || a.frames_in_obstacle > 0);
+        touching += usize::from(a.frames_in_obstacle > 0);
+        only_within += usize::from(e.penetrated && !a.penetrated);
+    });
     (touching, only_within)
 }
 
@@ -902,6 +916,36 @@ fn floor_plan_episodes_see_walls_time_out_after_13_primitives_and_restore_from_s
             assert_eq!(s.primitives, 13, "{s:?}");
         }
     }
+}
+
+/// `scene_every_frame` in training: floor-plan primitives judged alike but for the swept scene
+/// test, which adds exactly those whose body box lies on blocked cells in some frame or whose
+/// pelvis passes over a wall — and some that the cells at the primitive's end let through.
+#[test]
+fn the_scene_tested_in_every_frame_adds_exactly_the_primitives_that_pass_through_walls() {
+    use egogen::scene::generated::room_scene::RoomSettings;
+    let settings = |scene_every_frame: bool| EnvSettings {
+        rooms: RoomSettings {
+            share: 1.0,
+            ..RoomSettings::default()
+        },
+        scene_every_frame,
+        ..EnvSettings::default()
+    };
+    let (mut through, mut only_within) = (0, 0);
+    judged_in_lockstep((settings(false), settings(true)), (9, 5, 8), |a, e| {
+        assert_eq!(a.blocked_cells, e.blocked_cells);
+        assert_eq!(a.pelvis_off_floor_frames, e.pelvis_off_floor_frames);
+        let swept = e.blocked_cells_swept_max > 3 || e.pelvis_off_floor_frames > 0;
+        assert_eq!(e.penetrated, a.penetrated || swept);
+        through += usize::from(e.pelvis_off_floor_frames > 0);
+        only_within += usize::from(e.penetrated && !a.penetrated);
+    });
+    assert!(through > 0, "no primitive's pelvis passed over a wall");
+    assert!(
+        only_within > 0,
+        "every primitive through a wall was caught by the cells at its end"
+    );
 }
 
 /// Width and height of a PNG file.

@@ -91,6 +91,12 @@ pub struct EnvSettings {
     /// too (the eval's penetration measure; Eq. 7 looks at the primitive's last frame only);
     /// false: Eq. 7 alone, as EgoGen.
     pub box_every_frame: bool,
+    /// Whether the scene is tested at every frame of a primitive, as `egogen synth` judges its
+    /// agents ([`Limits::scene_every_frame`]: the body's box on blocked cells in any frame, or
+    /// the pelvis's path over a cell that is not walkable, penetrates); false: Eq. 7 at the
+    /// primitive's end alone, as EgoGen — which lets a 0.6 m step pass through a 0.15 m wall
+    /// unseen.
+    pub scene_every_frame: bool,
     /// Whether the walker's rays see each other person (a crossing's moving box) standing
     /// where that person will be when the walker's primitive ends, as `egogen synth`'s crowd
     /// stepping shows them (`CrowdSettings::anticipate_people`); the primitive is still judged
@@ -140,6 +146,7 @@ impl Default for EnvSettings {
             penetration_cells: crate::policy::reward::EQ7_PENETRATION_CELLS,
             people_every_frame: false,
             box_every_frame: false,
+            scene_every_frame: false,
             people_seen_ahead: false,
             guide_lookahead_m: 0.0,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
@@ -793,7 +800,7 @@ impl<'m> PolicyEnv<'m> {
             penetration_cells: self.settings.penetration_cells,
             people_every_frame: self.settings.people_every_frame,
             box_every_frame: self.settings.box_every_frame,
-            scene_every_frame: false,
+            scene_every_frame: self.settings.scene_every_frame,
         };
         decoded
             .into_par_iter()

@@ -20,7 +20,9 @@
 //!   in a box scene's box;
 //! - pose: 0.05 while the mean pose-prior score of the 20 frames is at most the prior's
 //!   plausibility limit, else 0 (EgoGen: VPoser latent norm ≤ 11);
-//! - success: 1 when the pelvis ends within `success_m` of the goal.
+//! - success: 1 when the pelvis ends within `success_m` of the goal;
+//! - beyond Tab. S2 (weights 0 by default): pace (`arrival`), looking away (`attention_gap`)
+//!   and walking into the scene (`penetration_cost`: −1 for a primitive that penetrates).
 //!
 //! Distances are horizontal (EgoGen's code measures 3-D distance to a goal placed at the
 //! start's pelvis height; the goal here lies on the floor plane).
@@ -58,6 +60,11 @@ pub struct RewardWeights {
     /// every primitive walked, so weighting it more pays for walking slowly; this one costs
     /// for every primitive spent looking off the goal.
     pub attention_gap: f64,
+    /// Walking into the scene (not in Tab. S2, 0 there): every primitive that penetrates
+    /// costs this much. Tab. S2's penetration term pays 0.05 for every primitive clear of the
+    /// scene, so weighting it more pays for every primitive walked — for loitering instead of
+    /// arriving — where this one costs only the primitives that penetrate.
+    pub penetration_cost: f64,
 }
 
 impl Default for RewardWeights {
@@ -73,6 +80,7 @@ impl Default for RewardWeights {
             success: 0.5,
             arrival: 0.0,
             attention_gap: 0.0,
+            penetration_cost: 0.0,
         }
     }
 }
@@ -93,6 +101,7 @@ pub struct WeightChanges {
     pub success: Option<f64>,
     pub arrival: Option<f64>,
     pub attention_gap: Option<f64>,
+    pub penetration_cost: Option<f64>,
 }
 
 impl WeightChanges {
@@ -109,6 +118,7 @@ impl WeightChanges {
             success: self.success.unwrap_or(base.success),
             arrival: self.arrival.unwrap_or(base.arrival),
             attention_gap: self.attention_gap.unwrap_or(base.attention_gap),
+            penetration_cost: self.penetration_cost.unwrap_or(base.penetration_cost),
         }
     }
 }
@@ -141,6 +151,7 @@ impl RewardTerms {
             + w.pose * self.pose
             + w.success * self.success
             + w.attention_gap * (self.attention - 1.0)
+            + w.penetration_cost * (self.penetration / BINARY_TERM - 1.0)
     }
 
     /// The weighted sum, with the pace bonus for a success with `primitives_left` primitives
@@ -668,6 +679,27 @@ mod tests {
         for (attention, cost) in [(1.0, 0.0), (0.5, 1.0), (0.0, 2.0)] {
             let d = terms(attention).total(&tab_s2) - terms(attention).total(&gap);
             assert!((d - cost).abs() < 1e-12, "{attention}: {d}");
+        }
+    }
+
+    #[test]
+    fn walking_into_the_scene_costs_its_weight_and_a_clear_primitive_nothing() {
+        let terms = |penetration: f64| RewardTerms {
+            penetration,
+            goal: 0.4,
+            skate: 0.9,
+            ..RewardTerms::default()
+        };
+        let tab_s2 = RewardWeights::default();
+        let cost = RewardWeights {
+            penetration_cost: 2.0,
+            ..tab_s2
+        };
+        // Clear (the term holds): no cost; penetrating: the whole weight, beside Tab. S2's
+        // term, which pays nothing then.
+        for (penetration, c) in [(BINARY_TERM, 0.0), (0.0, 2.0)] {
+            let d = terms(penetration).total(&tab_s2) - terms(penetration).total(&cost);
+            assert!((d - c).abs() < 1e-12, "{penetration}: {d}");
         }
     }
 
