@@ -948,6 +948,37 @@ fn the_scene_tested_in_every_frame_adds_exactly_the_primitives_that_pass_through
     );
 }
 
+/// `no_progress_through_walls`: a primitive that penetrates earns no progress towards its goal,
+/// every other term and every clear primitive as before.
+#[test]
+fn a_primitive_through_a_wall_earns_no_progress_when_asked() {
+    use egogen::scene::generated::room_scene::RoomSettings;
+    let settings = |no_progress_through_walls: bool| EnvSettings {
+        rooms: RoomSettings {
+            share: 1.0,
+            ..RoomSettings::default()
+        },
+        scene_every_frame: true,
+        no_progress_through_walls,
+        ..EnvSettings::default()
+    };
+    let mut gained_through = 0;
+    judged_in_lockstep((settings(false), settings(true)), (9, 5, 8), |a, e| {
+        assert_eq!(a.penetrated, e.penetrated);
+        let goal = match a.penetrated {
+            true => a.terms.goal.min(0.0),
+            false => a.terms.goal,
+        };
+        assert_eq!(e.terms.goal, goal);
+        assert_eq!(
+            (a.terms.skate, a.terms.attention),
+            (e.terms.skate, e.terms.attention)
+        );
+        gained_through += usize::from(a.penetrated && a.terms.goal > 0.0);
+    });
+    assert!(gained_through > 0, "no penetrating primitive gained ground");
+}
+
 /// Width and height of a PNG file.
 fn png_size(path: &std::path::Path) -> (u32, u32) {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));

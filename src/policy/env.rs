@@ -115,6 +115,10 @@ pub struct EnvSettings {
     /// the way it leads, instead of by the straight distance (not EgoGen's: a training signal
     /// for goals behind walls; observations, success and evaluation measures stay straight).
     pub goal_by_path: bool,
+    /// Whether a primitive that penetrates earns no progress towards the goal (its goal term
+    /// at most 0): paid along the way round walls, one step through a wall would otherwise
+    /// gain the whole way round at once. false: the goal term as measured, as EgoGen.
+    pub no_progress_through_walls: bool,
     /// With a fixed scene: the share of episodes that walk one of its pairs (drawn at random),
     /// the others box scenes and crossings as without one; 1 walks only its pairs, in turn.
     pub fixed_share: f64,
@@ -151,6 +155,7 @@ impl Default for EnvSettings {
             guide_lookahead_m: 0.0,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
             goal_by_path: false,
+            no_progress_through_walls: false,
             fixed_share: 1.0,
             fixed_max_primitives: None,
             scene_test_vertices: 0,
@@ -838,6 +843,9 @@ impl<'m> PolicyEnv<'m> {
                                     scene_penetration(self.body, &p, sdf).map_err(pose_error)?;
                             }
                             (None, _) => {}
+                        }
+                        if self.settings.no_progress_through_walls && j.penetrated {
+                            j.terms.goal = j.terms.goal.min(0.0);
                         }
                         let left = e.course.max_primitives.saturating_sub(e.walker.steps + 1);
                         let reward = j.terms.total_with_arrival(&self.weights(&e.course), left);
