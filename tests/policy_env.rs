@@ -979,14 +979,6 @@ fn a_primitive_through_a_wall_earns_no_progress_when_asked() {
     assert!(gained_through > 0, "no penetrating primitive gained ground");
 }
 
-/// Width and height of a PNG file.
-fn png_size(path: &std::path::Path) -> (u32, u32) {
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let reader = decoder.read_info().unwrap();
-    let info = reader.info();
-    (info.width, info.height)
-}
-
 #[test]
 fn floor_plans_and_evaluated_walks_are_drawn_and_existing_pictures_kept() {
     use std::process::Command;
@@ -1000,7 +992,7 @@ fn floor_plans_and_evaluated_walks_are_drawn_and_existing_pictures_kept() {
             .arg(&plans),
     );
     // Three tiles of 320 px to a row, two rows.
-    assert_eq!(png_size(&plans), (960, 640));
+    assert_eq!(common::png_size(&plans), (960, 640));
     let walks = dir.path().join("walks.png");
     let eval = |png: &std::path::Path| {
         let mut cmd = Command::new(bin);
@@ -1028,7 +1020,7 @@ fn floor_plans_and_evaluated_walks_are_drawn_and_existing_pictures_kept() {
     let out = common::succeeds(&mut eval(&walks));
     let report = String::from_utf8_lossy(&out.stdout);
     assert!(report.contains("\"report\""), "{report}");
-    assert_eq!(png_size(&walks), (640, 320));
+    assert_eq!(common::png_size(&walks), (640, 320));
     // An existing picture is not overwritten; two controllers cannot share one picture.
     let before = std::fs::read(&walks).unwrap();
     assert!(!eval(&walks).output().unwrap().status.success());

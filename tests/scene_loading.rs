@@ -1,6 +1,8 @@
 //! Scene files: OBJ, PLY and glTF load with names, metres and z up; bad scenes fail with the
 //! file named and a reason.
 
+mod common;
+
 use std::path::Path;
 
 use egogen::scene::{load_scene, walkable_map, SceneError, UpAxis, WalkableSettings};
@@ -379,13 +381,6 @@ property int objectId\nelement face 2\nproperty list uchar int vertex_indices\ne
 #[test]
 fn scene_inspect_draws_depth_images_beside_the_map_when_asked() {
     let dir = tempfile::tempdir().unwrap();
-    let size = |path: &Path| {
-        let decoder =
-            png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-        let reader = decoder.read_info().unwrap();
-        let info = reader.info();
-        (info.width as usize, info.height as usize)
-    };
     let run = |name: &str, extra: &[&str]| {
         let out = dir.path().join(name);
         let status = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
@@ -406,7 +401,7 @@ fn scene_inspect_draws_depth_images_beside_the_map_when_asked() {
             "{}",
             String::from_utf8_lossy(&status.stderr)
         );
-        size(&out)
+        common::png_size(&out)
     };
     let (plain_w, plain_h) = run("plain.png", &[]);
     let (w, h) = run("depth.png", &["--depth-images"]);

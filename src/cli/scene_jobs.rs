@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
 
+use crate::preview::map::AGENT_COLOURS;
 use crate::preview::raster::RgbImage;
 use crate::sensing::DepthImage;
 
@@ -135,16 +136,6 @@ pub fn scene_inspect(
     println!("wrote {}", out.display());
     Ok(())
 }
-
-/// Colours of the sample agents' starts when their depth images are drawn.
-const AGENT_COLOURS: [[u8; 3]; 6] = [
-    [30, 80, 200],
-    [220, 130, 0],
-    [0, 150, 140],
-    [150, 40, 170],
-    [120, 120, 0],
-    [200, 40, 40],
-];
 
 /// A depth image as grey levels (near bright, nothing within range black), each pixel 8 × 8,
 /// framed 3 px wide in `frame`.

@@ -125,3 +125,15 @@ impl<'a> MapPicture<'a> {
         }
     }
 }
+
+/// Colours of agents (their paths, starts and pictures), in turn.
+pub const AGENT_COLOURS: [[u8; 3]; 8] = [
+    [31, 119, 180],
+    [214, 39, 40],
+    [44, 160, 44],
+    [148, 103, 189],
+    [255, 127, 14],
+    [23, 190, 207],
+    [227, 119, 194],
+    [140, 86, 75],
+];

@@ -19,7 +19,7 @@ use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::manifest::{build_manifest, MANIFEST};
 use crate::policy::walker::footprint;
-use crate::preview::map::MapPicture;
+use crate::preview::map::{MapPicture, AGENT_COLOURS};
 use crate::scene::Obstacle2;
 
 /// What a finished take folder holds.
@@ -247,18 +247,6 @@ fn markers_npy(track: &AgentTrack) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// Colours of agents' paths, in turn.
-const PALETTE: [[u8; 3]; 8] = [
-    [31, 119, 180],
-    [214, 39, 40],
-    [44, 160, 44],
-    [148, 103, 189],
-    [255, 127, 14],
-    [23, 190, 207],
-    [227, 119, 194],
-    [140, 86, 75],
-];
-
 fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
     paths_picture(world, &[take], 900).image.write_png(path)?;
     Ok(())
@@ -297,7 +285,7 @@ pub(crate) fn paths_picture<'a>(
         pic.line(m.at(0.0).centre(), m.at(end_s).centre(), [200, 150, 150]);
     }
     for (i, a) in takes.iter().flat_map(|t| t.agents.iter().enumerate()) {
-        let c = PALETTE[i % PALETTE.len()];
+        let c = AGENT_COLOURS[i % AGENT_COLOURS.len()];
         for w in a.pelvis_xy.windows(2) {
             pic.line(w[0], w[1], c);
         }

@@ -491,3 +491,11 @@ pub fn pids_with(needles: &[&str]) -> Vec<i32> {
     }
     out
 }
+
+/// Width and height of a PNG file.
+pub fn png_size(path: &std::path::Path) -> (u32, u32) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let reader = decoder.read_info().unwrap();
+    let info = reader.info();
+    (info.width, info.height)
+}
