@@ -18,7 +18,10 @@
 //! many workers as cores each worker has one core), and what is "ours": everything but the
 //! limit's colour path tracing per frame.
 //!
-//! `cargo bench --bench render_cost` (about 10 minutes on 2 cores)
+//! `cargo bench --bench render_cost` (about 10 minutes on 2 cores).
+//! `EGOGEN_RENDER_COST_SCALE=1 cargo bench --bench render_cost` renders the cameras at that
+//! resolution scale instead of the default run's 0.25 (1 = full Aria size: RGB 1408×1408,
+//! SLAM 640×480), the shipped colour and the limit only (about 20 minutes on 2 cores).
 
 use std::collections::BTreeMap;
 
@@ -119,9 +122,19 @@ fn per_camera(report: &serde_json::Value) -> PerCamera {
 }
 
 fn main() {
+    let scale = std::env::var("EGOGEN_RENDER_COST_SCALE").ok();
+    let variants: Vec<&Variant> = match scale {
+        Some(_) => VARIANTS.iter().filter(|v| v.as_limit).collect(),
+        None => VARIANTS.iter().collect(),
+    };
     let mut results: Vec<(&Variant, PerCamera, f64)> = Vec::new();
-    for v in &VARIANTS {
-        let config = default_run_config(v.render, "workers = 2");
+    for v in variants {
+        let mut config = default_run_config(v.render, "workers = 2");
+        if let Some(scale) = &scale {
+            const SHIPPED_SCALE: &str = "resolution_scale = 0.25";
+            assert!(config.contains(SHIPPED_SCALE), "{config}");
+            config = config.replace(SHIPPED_SCALE, &format!("resolution_scale = {scale}"));
+        }
         let envs: &[(&str, &str)] = if v.persistent {
             &[]
         } else {
@@ -133,10 +146,13 @@ fn main() {
     }
     let limit = &results.last().unwrap().1;
     let before = &results[0].1;
-    println!("## Seconds per frame by stage (default run, {DURATION_S} s of motion, 2 workers)\n");
+    let scale = scale.as_deref().unwrap_or("0.25");
+    println!(
+        "## Seconds per frame by stage (default run, resolution scale {scale}, {DURATION_S} s of motion, 2 workers)\n"
+    );
     let header: Vec<&str> = COLUMNS.iter().map(|c| c.0).collect();
     println!(
-        "| camera | variant | {} | unaccounted | total s/frame | frames per core-hour | × as it was | ours: all but the limit's path tracing |",
+        "| camera | variant | {} | unaccounted | total s/frame | frames per core-hour | × the first variant | ours: all but the limit's path tracing |",
         header.join(" | ")
     );
     println!("|{}", "---|".repeat(COLUMNS.len() + 7));

@@ -649,6 +649,17 @@ fn crossing_episodes_see_the_other_person_and_restore_from_snapshots() {
     assert!(seen_nearer > 0, "the other person was never in view");
 }
 
+/// Settings whose every episode walks a floor plan of its own.
+fn floor_plans_only() -> EnvSettings {
+    EnvSettings {
+        rooms: egogen::scene::generated::room_scene::RoomSettings {
+            share: 1.0,
+            ..Default::default()
+        },
+        ..EnvSettings::default()
+    }
+}
+
 /// Walks the same random primitives (`steps` of them, `per` candidates each) in two
 /// environments, episode base `env_seed`, and hands each candidate's two judgements to `check`:
 /// `end_only`'s, then `every`'s.
@@ -823,16 +834,11 @@ fn a_box_tested_in_every_frame_penetrates_exactly_when_a_marker_enters_it() {
 /// directions (towards the way round), and the same distance and rays.
 #[test]
 fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
-    use egogen::scene::generated::room_scene::RoomSettings;
     use egogen::scene::{line_is_clear, GUIDE_CLEARANCE_M};
     env_parts!(body, ctx, model, bank, prior);
     let rooms = |guide_lookahead_m: f64| EnvSettings {
-        rooms: RoomSettings {
-            share: 1.0,
-            ..RoomSettings::default()
-        },
         guide_lookahead_m,
-        ..EnvSettings::default()
+        ..floor_plans_only()
     };
     let b = 12;
     let plain = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(0.0), b, 8).unwrap();
@@ -866,14 +872,9 @@ fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
 
 #[test]
 fn floor_plan_episodes_see_walls_time_out_after_13_primitives_and_restore_from_snapshots() {
-    use egogen::scene::generated::room_scene::RoomSettings;
     env_parts!(body, ctx, model, bank, prior);
     let rooms = EnvSettings {
-        rooms: RoomSettings {
-            share: 1.0,
-            ..RoomSettings::default()
-        },
-        ..EnvSettings::default()
+        ..floor_plans_only()
     };
     let b = 4;
     let mut env = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms, b, 9).unwrap();
@@ -918,19 +919,81 @@ fn floor_plan_episodes_see_walls_time_out_after_13_primitives_and_restore_from_s
     }
 }
 
+/// Evaluations measure how far each indoor goal lies on foot: the walking distance round walls
+/// is at least the straight distance, longer where a wall stands between, and absent in box
+/// scenes (their box is not on the map) and unless asked. Asked to, an indoor episode has time
+/// for its way round: it times out after as many primitives as the way round needs at the
+/// given metres per primitive, never fewer than its own limit.
+#[test]
+fn floor_plans_measure_the_way_round_walls_and_may_have_time_for_it() {
+    env_parts!(body, ctx, model, bank, prior);
+    let rooms = EnvSettings {
+        ..floor_plans_only()
+    };
+    let finished = |settings: EnvSettings, measure: bool, steps: usize| {
+        let b = 8;
+        let mut env = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 9).unwrap();
+        if measure {
+            env = env.measuring_way_round();
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let mut ended = Vec::new();
+        for _ in 0..steps {
+            let z = normal_samples(&mut rng, b * env.latent_dim());
+            ended.extend(env.step(&z).unwrap().finished);
+        }
+        ended
+    };
+    let measured = finished(rooms, true, 14);
+    assert!(measured.len() >= 8);
+    let mut behind_a_wall = 0;
+    for s in &measured {
+        let way = s.way_round_m.unwrap_or_else(|| panic!("{s:?}"));
+        assert!(
+            way >= s.start_distance_m - 1e-3,
+            "{way} < {}",
+            s.start_distance_m
+        );
+        behind_a_wall += usize::from(way > s.start_distance_m + 1.0);
+    }
+    assert!(
+        behind_a_wall > 0,
+        "no goal behind a wall in {} plans",
+        measured.len()
+    );
+    assert!(finished(rooms, false, 14)
+        .iter()
+        .all(|s| s.way_round_m.is_none()));
+    let boxes = finished(EnvSettings::default(), true, 12);
+    assert!(!boxes.is_empty());
+    assert!(boxes.iter().all(|s| s.way_round_m.is_none()));
+
+    // 0.3 m a primitive: a way round longer than 3.9 m is given more than 13 primitives.
+    let timed = EnvSettings {
+        time_by_way_round_m: 0.3,
+        ..rooms
+    };
+    let mut longer = 0;
+    for s in finished(timed, true, 30)
+        .iter()
+        .filter(|s| s.ending == Ending::Timeout)
+    {
+        let way = s.way_round_m.unwrap();
+        let expected = ((way / 0.3).ceil() as usize).max(13);
+        assert_eq!(s.primitives, expected, "{s:?}");
+        longer += usize::from(expected > 13);
+    }
+    assert!(longer > 0);
+}
+
 /// `scene_every_frame` in training: floor-plan primitives judged alike but for the swept scene
 /// test, which adds exactly those whose body box lies on blocked cells in some frame or whose
 /// pelvis passes over a wall — and some that the cells at the primitive's end let through.
 #[test]
 fn the_scene_tested_in_every_frame_adds_exactly_the_primitives_that_pass_through_walls() {
-    use egogen::scene::generated::room_scene::RoomSettings;
     let settings = |scene_every_frame: bool| EnvSettings {
-        rooms: RoomSettings {
-            share: 1.0,
-            ..RoomSettings::default()
-        },
         scene_every_frame,
-        ..EnvSettings::default()
+        ..floor_plans_only()
     };
     let (mut through, mut only_within) = (0, 0);
     judged_in_lockstep((settings(false), settings(true)), (9, 5, 8), |a, e| {
@@ -952,15 +1015,10 @@ fn the_scene_tested_in_every_frame_adds_exactly_the_primitives_that_pass_through
 /// every other term and every clear primitive as before.
 #[test]
 fn a_primitive_through_a_wall_earns_no_progress_when_asked() {
-    use egogen::scene::generated::room_scene::RoomSettings;
     let settings = |no_progress_through_walls: bool| EnvSettings {
-        rooms: RoomSettings {
-            share: 1.0,
-            ..RoomSettings::default()
-        },
         scene_every_frame: true,
         no_progress_through_walls,
-        ..EnvSettings::default()
+        ..floor_plans_only()
     };
     let mut gained_through = 0;
     judged_in_lockstep((settings(false), settings(true)), (9, 5, 8), |a, e| {
@@ -1079,7 +1137,6 @@ fn with_an_arrival_radius_walks_go_on_and_are_scored_where_they_end() {
 
 #[test]
 fn paid_along_the_way_round_walls_only_the_goal_terms_change_and_only_indoors() {
-    use egogen::scene::generated::room_scene::RoomSettings;
     env_parts!(body, ctx, model, bank, prior);
     let b = 8;
     let terms = |settings: EnvSettings, z: &[f32]| {
@@ -1102,11 +1159,7 @@ fn paid_along_the_way_round_walls_only_the_goal_terms_change_and_only_indoors() 
     assert_eq!(terms(boxes, &z), terms(by_path(boxes), &z));
     // Floor plans: the goal's terms move, every other term stays.
     let rooms = EnvSettings {
-        rooms: RoomSettings {
-            share: 1.0,
-            ..RoomSettings::default()
-        },
-        ..EnvSettings::default()
+        ..floor_plans_only()
     };
     let (straight, along) = (terms(rooms, &z), terms(by_path(rooms), &z));
     let mut moved = 0;

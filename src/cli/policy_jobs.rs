@@ -11,6 +11,8 @@ use super::motion_jobs::refuse_existing;
 use crate::body::BodyModel;
 use crate::preview::RgbImage;
 
+// Parsed once per command; the evaluation's many options make its variant the largest.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
 pub enum PolicyCommand {
     /// Fit the pose prior of the reward's pose term on a config's training primitives, and
@@ -115,6 +117,11 @@ pub enum PolicyCommand {
         /// metres along the shortest path (0, the default: the goal itself, as EgoGen).
         #[arg(long, default_value_t = 0.0)]
         guide_lookahead_m: f64,
+        /// Give each indoor episode time for its way round walls: at least (walking distance
+        /// round walls) / M primitives, never fewer than --max-primitives (7/13 ≈ 0.54: the
+        /// time 13 primitives give a 7 m straight walk). Not given: --max-primitives alone.
+        #[arg(long, value_name = "M")]
+        time_by_way_round_m: Option<f64>,
         /// Show the walker the crossing people where they will stand when its primitive ends,
         /// as `egogen synth`'s crowds do (a policy trained with `people_seen_ahead`).
         #[arg(long)]
@@ -265,6 +272,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             rooms_share,
             crossing_people,
             guide_lookahead_m,
+            time_by_way_round_m,
             people_seen_ahead,
         } => {
             if let Some(f) = &episodes_jsonl {
@@ -291,6 +299,11 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             }
             if !(success_m.is_finite() && success_m > 0.0) {
                 bail!("--success-m: expected a radius > 0 m, got {success_m}");
+            }
+            if let Some(m) = time_by_way_round_m {
+                if !(m.is_finite() && m > 0.0) {
+                    bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
+                }
             }
             if !(guide_lookahead_m.is_finite() && guide_lookahead_m >= 0.0) {
                 bail!("--guide-lookahead-m: expected a distance ≥ 0 m, got {guide_lookahead_m}");
@@ -340,6 +353,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 },
                 guide_lookahead_m,
                 people_seen_ahead,
+                time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
                 ..defaults
             };
             if max_primitives == Some(0) {

@@ -248,7 +248,9 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     crate::policy::env::EnvError,
 > {
     let t0 = std::time::Instant::now();
-    let mut env = parts.env(settings, envs.clamp(1, episodes.max(1)), HELD_OUT_BASE)?;
+    let mut env = parts
+        .env(settings, envs.clamp(1, episodes.max(1)), HELD_OUT_BASE)?
+        .measuring_way_round();
     if let Controller::Policy { net, .. } = controller {
         env = env.with_sensing(&net.sensing());
     }

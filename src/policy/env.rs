@@ -132,6 +132,11 @@ pub struct EnvSettings {
     /// With `scene_test_vertices`: Eq. 7's cells still count there too, a primitive penetrating
     /// when either test says so.
     pub scene_test_keeps_cells: bool,
+    /// With M > 0, an indoor episode (a floor plan or a pair of the fixed scene) has time for
+    /// its way round walls: at least `way round / M` primitives (e.g. 7/13 m: the time 13
+    /// primitives give a 7 m straight walk), never fewer than its own limit. 0: the limit
+    /// alone, as EgoGen.
+    pub time_by_way_round_m: f64,
 }
 
 impl Default for EnvSettings {
@@ -160,6 +165,7 @@ impl Default for EnvSettings {
             fixed_max_primitives: None,
             scene_test_vertices: 0,
             scene_test_keeps_cells: false,
+            time_by_way_round_m: 0.0,
         }
     }
 }
@@ -264,6 +270,18 @@ impl Course {
         self.rooms.is_some() || self.pair.is_some()
     }
 
+    /// The walking distance from the start to the goal round what blocks walking on the map
+    /// (indoors only: a box scene's box and a crossing's person are not on the map).
+    fn way_round_m(&self) -> Option<f64> {
+        if !self.indoors() {
+            return None;
+        }
+        match &self.goal_field {
+            Some(f) => f.at(self.start),
+            None => PathField::to_goal(&self.map, self.goal)?.at(self.start),
+        }
+    }
+
     fn surroundings(&self) -> Surroundings<'_> {
         Surroundings {
             map: &self.map,
@@ -348,6 +366,13 @@ pub struct EpisodeSummary {
     pub pelvis_off_floor_frames: usize,
     /// The pelvis's floor position at the end (m, world).
     pub end_xy: [f64; 2],
+    /// The walking distance from the start to the goal round what blocks walking on the
+    /// course's map (m; `scene::PathField`: 8-connected 0.1 m cells, a lower bound on a walk
+    /// that keeps a body's width off the walls). Indoor courses, when the environment measures
+    /// it ([`PolicyEnv::measuring_way_round`]); `None` otherwise or where the goal cannot be
+    /// reached on the map.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub way_round_m: Option<f64>,
     /// The mean over its primitives of each one's largest pose embedding norm (EgoGen's
     /// ‖VP‖₂ role, [`super::PosePrior::embedding_norm`]; comparable with mocap primitives').
     pub pose_norm_max: f64,
@@ -382,6 +407,7 @@ impl EpisodeSummary {
             pelvis_off_floor_frames: w.totals.pelvis_off_floor_frames,
             end_xy: w.view.pelvis.to_array(),
             pose_norm_max: w.totals.pose_norm_max_sum / n,
+            way_round_m: None,
         }
     }
 }
@@ -457,6 +483,8 @@ pub struct PolicyEnv<'m> {
     episodes: Vec<Episode>,
     episode_base: u64,
     next_episode: u64,
+    /// Whether finished episodes' summaries carry their way round walls (evaluations).
+    measure_way_round: bool,
 }
 
 /// The generator of episode `id` under `base`.
@@ -549,6 +577,7 @@ impl<'m> PolicyEnv<'m> {
             episodes: Vec::with_capacity(envs),
             episode_base,
             next_episode: 0,
+            measure_way_round: false,
         };
         for _ in 0..envs {
             let e = env.start_episode()?;
@@ -561,6 +590,14 @@ impl<'m> PolicyEnv<'m> {
     /// [`super::net::ActorCritic::sensing`]).
     pub fn with_sensing(mut self, spec: &SensingSpec) -> Self {
         self.sensor = spec.sensor();
+        self
+    }
+
+    /// Summaries of finished indoor episodes carry the walking distance from start to goal
+    /// round walls ([`EpisodeSummary::way_round_m`]; a few milliseconds per episode, so
+    /// evaluations only).
+    pub fn measuring_way_round(mut self) -> Self {
+        self.measure_way_round = true;
         self
     }
 
@@ -615,7 +652,7 @@ impl<'m> PolicyEnv<'m> {
     }
 
     fn room_course(&self, scene: RoomScene) -> Course {
-        Course {
+        self.timed_for_way_round(Course {
             obstacle: None,
             moving: Vec::new(),
             start: scene.start,
@@ -628,7 +665,7 @@ impl<'m> PolicyEnv<'m> {
             sdf: None,
             goal_field: self.goal_field(&scene.map, scene.goal),
             map: Arc::new(scene.map),
-        }
+        })
     }
 
     fn crossing_course(&self, scene: CrossingScene) -> Course {
@@ -649,7 +686,7 @@ impl<'m> PolicyEnv<'m> {
     }
 
     fn fixed_course(&self, f: &FixedScene, pair: usize) -> Course {
-        Course {
+        self.timed_for_way_round(Course {
             map: f.map.clone(),
             obstacle: None,
             moving: Vec::new(),
@@ -665,7 +702,22 @@ impl<'m> PolicyEnv<'m> {
                 .unwrap_or(self.settings.max_primitives),
             sdf: f.sdf.clone(),
             goal_field: self.goal_field(&f.map, f.pairs[pair].goal),
+        })
+    }
+
+    /// An indoor course with time for its way round walls, when the settings ask for it
+    /// ([`EnvSettings::time_by_way_round_m`]).
+    fn timed_for_way_round(&self, mut course: Course) -> Course {
+        let per_primitive = self.settings.time_by_way_round_m;
+        if per_primitive > 0.0 {
+            if let Some(way) = course.way_round_m() {
+                let needed = (way / per_primitive).ceil();
+                if needed.is_finite() && needed > course.max_primitives as f64 {
+                    course.max_primitives = needed as usize;
+                }
+            }
         }
+        course
     }
 
     /// The walking-distance field of an indoor goal, when the settings ask for one.
@@ -911,8 +963,11 @@ impl<'m> PolicyEnv<'m> {
             out.done.push(ending.is_some());
             if let Some(ending) = ending {
                 let e = &self.episodes[i];
-                out.finished
-                    .push(EpisodeSummary::of(e.id, ending, &e.walker));
+                let mut summary = EpisodeSummary::of(e.id, ending, &e.walker);
+                if self.measure_way_round {
+                    summary.way_round_m = e.course.way_round_m();
+                }
+                out.finished.push(summary);
                 self.episodes[i] = self.start_episode()?;
             }
         }

@@ -16,6 +16,54 @@ use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 /// Episode base of held-out evaluation episodes (training bases are small integers).
 pub(crate) const HELD_OUT_BASE: u64 = 0xE7A1_0000_0000;
 
+/// Success among the episodes whose measure lies in `[from_m, to_m)`.
+#[derive(Debug, Clone, Serialize)]
+pub(crate) struct SuccessBin {
+    pub from_m: f64,
+    pub to_m: f64,
+    pub episodes: usize,
+    pub success_rate: f64,
+}
+
+/// Bins of the way round (m): the evaluations' goals lie 2–7 m away in a straight line, and
+/// 13 primitives of 0.45 s at a person's 1.2 m/s walk about 7 m.
+const WAY_ROUND_EDGES_M: [f64; 6] = [0.0, 3.0, 5.0, 7.0, 9.0, f64::INFINITY];
+/// Bins of the detour (m).
+const DETOUR_EDGES_M: [f64; 5] = [0.0, 0.5, 2.0, 4.0, f64::INFINITY];
+
+/// Success of the episodes with a measure (`None`: left out), binned by `edges`; empty when
+/// no episode has one.
+fn success_by(
+    summaries: &[EpisodeSummary],
+    measure: impl Fn(&EpisodeSummary) -> Option<f64>,
+    edges: &[f64],
+) -> Vec<SuccessBin> {
+    let measured: Vec<(f64, bool)> = summaries
+        .iter()
+        .filter_map(|s| measure(s).map(|m| (m, s.ending == Ending::Success)))
+        .collect();
+    if measured.is_empty() {
+        return Vec::new();
+    }
+    edges
+        .windows(2)
+        .map(|w| {
+            let inside: Vec<bool> = measured
+                .iter()
+                .filter(|(m, _)| *m >= w[0] && *m < w[1])
+                .map(|(_, ok)| *ok)
+                .collect();
+            SuccessBin {
+                from_m: w[0],
+                to_m: w[1],
+                episodes: inside.len(),
+                success_rate: inside.iter().filter(|ok| **ok).count() as f64
+                    / inside.len().max(1) as f64,
+            }
+        })
+        .collect()
+}
+
 /// The measures of a set of episodes.
 #[derive(Debug, Clone, Serialize)]
 pub(crate) struct EvalReport {
@@ -55,6 +103,15 @@ pub(crate) struct EvalReport {
     pub speed_successful_m_s: Quantiles,
     pub primitives: Quantiles,
     pub reward_mean: f64,
+    /// Success by the walking distance from start to goal round walls (indoor episodes whose
+    /// way round was measured; empty otherwise): how far a goal lies on foot, against the
+    /// time an episode has.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub success_by_way_round: Vec<SuccessBin>,
+    /// Success by the detour: the way round less the straight start–goal distance (a goal in
+    /// the open has none; one behind a wall, the way to and through its doorway).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub success_by_detour: Vec<SuccessBin>,
     /// Environment steps taken (all parallel episodes) and wall time (s).
     pub env_steps: usize,
     pub wall_s: f64,
@@ -130,6 +187,12 @@ impl EvalReport {
             ),
             primitives: Quantiles::of(summaries.iter().map(|s| s.primitives as f64)),
             reward_mean: mean(|s| s.reward),
+            success_by_way_round: success_by(summaries, |s| s.way_round_m, &WAY_ROUND_EDGES_M),
+            success_by_detour: success_by(
+                summaries,
+                |s| s.way_round_m.map(|w| (w - s.start_distance_m).max(0.0)),
+                &DETOUR_EDGES_M,
+            ),
             env_steps,
             wall_s,
         }
@@ -186,7 +249,49 @@ mod tests {
             pelvis_off_floor_frames: 0,
             end_xy: [0.0, 0.0],
             pose_norm_max: 1.0,
+            way_round_m: None,
         }
+    }
+
+    #[test]
+    fn success_is_binned_by_the_way_round_and_the_detour_of_measured_episodes_only() {
+        let with_way = |id, ending, way: Option<f64>| EpisodeSummary {
+            way_round_m: way,
+            ..summary(id, ending, vec![1.0])
+        };
+        // Straight distance 3 m: ways of 3.2 (no detour), 6 (3 m detour), 10 m (7 m).
+        let summaries = [
+            with_way(0, Ending::Success, Some(3.2)),
+            with_way(1, Ending::Timeout, Some(6.0)),
+            with_way(2, Ending::Success, Some(6.5)),
+            with_way(3, Ending::Timeout, Some(10.0)),
+            with_way(4, Ending::Timeout, None),
+        ];
+        let r = EvalReport::of(&summaries, 5, 1.0);
+        let bins: Vec<(f64, usize, f64)> = r
+            .success_by_way_round
+            .iter()
+            .map(|b| (b.from_m, b.episodes, b.success_rate))
+            .collect();
+        assert_eq!(
+            bins,
+            [
+                (0.0, 0, 0.0),
+                (3.0, 1, 1.0),
+                (5.0, 2, 0.5),
+                (7.0, 0, 0.0),
+                (9.0, 1, 0.0)
+            ]
+        );
+        let detours: Vec<(f64, usize)> = r
+            .success_by_detour
+            .iter()
+            .map(|b| (b.from_m, b.episodes))
+            .collect();
+        assert_eq!(detours, [(0.0, 1), (0.5, 0), (2.0, 2), (4.0, 1)]);
+        let unmeasured = EvalReport::of(&summaries[4..], 1, 1.0);
+        assert!(unmeasured.success_by_way_round.is_empty());
+        assert!(unmeasured.success_by_detour.is_empty());
     }
 
     #[test]
