@@ -511,7 +511,35 @@ def set_frame_step(cam, cam_spec, bodies, obstacles, spec, frame_step):
         key_obstacle(obj, ob["keys"], frame_step)
 
 
+# What lights the colour render, put out while the shard renders ground truth.
+_LIGHTS_OUT = {}
+
+
+def lights_out(scene):
+    """The ground truth renders unlit: every pass it keeps (depth, normal, position, object
+    index, vector, the alpha of what was hit) is of the first hit's geometry, and lighting it
+    was half of its path tracing (`tools/bench_ground_truth_lighting.py`). The world and the
+    lamps are put back for the next colour render; doing so re-syncs the world's importance
+    map once (about 1 s with an HDRI), once per camera of a shard."""
+    if _LIGHTS_OUT:
+        return
+    _LIGHTS_OUT["world"] = scene.world
+    _LIGHTS_OUT["lamps"] = [o for o in scene.objects if o.type == "LIGHT" and not o.hide_render]
+    scene.world = None
+    for obj in _LIGHTS_OUT["lamps"]:
+        obj.hide_render = True
+
+
+def lights_on(scene):
+    if not _LIGHTS_OUT:
+        return
+    scene.world = _LIGHTS_OUT.pop("world")
+    for obj in _LIGHTS_OUT.pop("lamps"):
+        obj.hide_render = False
+
+
 def set_rgb_mode(scene, rgb):
+    lights_on(scene)
     layer = scene.view_layers[0]
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, False)
@@ -531,6 +559,7 @@ def set_rgb_mode(scene, rgb):
 
 
 def set_ground_truth_mode(scene, passes):
+    lights_out(scene)
     layer = scene.view_layers[0]
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, p in passes)
