@@ -17,7 +17,8 @@ use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 /// Episode base of held-out evaluation episodes (training bases are small integers).
 pub(crate) const HELD_OUT_BASE: u64 = 0xE7A1_0000_0000;
 
-/// Success among the episodes whose measure lies in `[from_m, to_m)`.
+/// Success among the episodes whose measure lies in `[from_m, to_m)` (the last bin's `to_m` is
+/// infinite: `null` in the report's JSON).
 #[derive(Debug, Clone, Serialize)]
 pub(crate) struct SuccessBin {
     pub from_m: f64,
