@@ -1,13 +1,16 @@
 """What lighting costs the ground-truth render, and what turning it off per render costs back.
 
 The ground-truth render (`blender_scripts/render_shard.py`, `set_ground_truth_mode`: 1 sample,
-no bounces, the depth, normal, position, object-index and vector passes) keeps the scene's
-lamp and HDRI world, so its one sample still lights the first hit. This renders the shipped
+no bounces, the depth, normal, position, object-index and vector passes) kept the scene's
+lamp and HDRI world until 2026-11-28, so its one sample lit the first hit; a shard now puts
+them out once before its ground-truth renders (`lights_out`). This renders the shipped
 apartment under an HDRI shipped in Blender and a 300 W lamp, as the ground truth is rendered
 (Cycles, CPU, persistent data), and times each render call:
 
-- lit: the lights as they are, nothing changed between renders (the ground truth today);
-- unlit: the world's strength 0 and the lamp hidden, nothing changed between renders;
+- lit: the lights as they are, nothing changed between renders (the ground truth until
+  2026-11-28);
+- unlit: the world's strength 0 and the lamp hidden, nothing changed between renders (as a
+  shard renders its ground truth now, having put the lights out once);
 - lit / unlit in turn: what a shard would do to light the colour render and not the ground
   truth (every change re-syncs the world's importance map);
 - ray visibility off / on in turn: the same by the lights' ray visibility instead;
@@ -30,10 +33,9 @@ REPEATS = 3
 
 
 def world_hdri():
-    # The HDRIs shipped in the bpy wheel (CC0, Poly Haven).
-    base = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(bpy.__file__))))
-    folder = os.path.join(base, "datafiles", "studiolights", "world")
-    if not os.path.isdir(folder):
+    # The HDRIs shipped with Blender (CC0, Poly Haven), found as render_shard.py finds them.
+    folder = bpy.utils.system_resource("DATAFILES", path="studiolights/world")
+    if not folder or not os.path.isdir(folder):
         sys.exit(f"bench_ground_truth_lighting.py: no HDRI folder at {folder}")
     return os.path.join(folder, sorted(f for f in os.listdir(folder) if f.endswith(".exr"))[0])
 
@@ -98,10 +100,12 @@ def main():
     scene, world, background, lamp, layer = build()
     rows = []
     render()  # the first render syncs the whole scene
-    rows.append(("lit (the ground truth today)", [render() for _ in range(REPEATS)]))
+    rows.append(("lit (the ground truth until 2026-11-28)", [render() for _ in range(REPEATS)]))
     lights(world, background, lamp, False)
     render()
-    rows.append(("unlit (world 0, lamp hidden)", [render() for _ in range(REPEATS)]))
+    rows.append(
+        ("unlit: world 0, lamp hidden (the ground truth now)", [render() for _ in range(REPEATS)])
+    )
     lit, unlit = [], []
     for _ in range(REPEATS):
         lights(world, background, lamp, True)
