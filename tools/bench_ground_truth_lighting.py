@@ -9,8 +9,8 @@ apartment under an HDRI shipped in Blender and a 300 W lamp, as the ground truth
 
 - lit: the lights as they are, nothing changed between renders (the ground truth until
   2026-11-28);
-- unlit: the world's strength 0 and the lamp hidden, nothing changed between renders (as a
-  shard renders its ground truth now, having put the lights out once);
+- unlit: no world and the lamp hidden, nothing changed between renders (as a shard renders
+  its ground truth now, having put the lights out once with `render_shard.lights_out`);
 - lit / unlit in turn: what a shard would do to light the colour render and not the ground
   truth (every change re-syncs the world's importance map);
 - ray visibility off / on in turn: the same by the lights' ray visibility instead;
@@ -28,6 +28,10 @@ import time
 import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "blender_scripts"))
+import render_shard  # noqa: E402 - the shard script's own ground-truth settings and lights
+
+GROUND_TRUTH_PASSES = ["z", "normal", "object_index", "vector", "position"]
 SIZE = int(sys.argv[1]) if len(sys.argv) > 1 else 704
 REPEATS = 3
 
@@ -64,18 +68,11 @@ def build():
     lamp.data.energy = 300.0
     lamp.location = (0.0, 0.0, 2.4)
     scene.collection.objects.link(lamp)
+    # The ground truth's settings, from the shard script itself, then lit again to start.
+    render_shard.set_ground_truth_mode(scene, GROUND_TRUTH_PASSES)
+    render_shard.lights_on(scene)
     layer = scene.view_layers[0]
-    for p in ("z", "normal", "object_index", "vector", "position"):
-        setattr(layer, "use_pass_" + p, True)
-    # As set_ground_truth_mode.
-    scene.cycles.samples = 1
-    scene.cycles.max_bounces = 0
-    scene.cycles.use_adaptive_sampling = False
-    scene.cycles.use_denoising = False
-    scene.cycles.pixel_filter_type = "BOX"
-    scene.cycles.filter_width = 0.01
-    scene.render.film_transparent = True
-    return scene, world, background, lamp, layer
+    return scene, world, lamp, layer
 
 
 def render():
@@ -84,9 +81,12 @@ def render():
     return time.perf_counter() - t
 
 
-def lights(world, background, lamp, on):
-    background.inputs[1].default_value = 1.0 if on else 0.0
-    lamp.hide_render = not on
+def lights(scene, on):
+    """As a shard does: the world and the lamps out for the ground truth, back for colour."""
+    if on:
+        render_shard.lights_on(scene)
+    else:
+        render_shard.lights_out(scene)
 
 
 def visibility(world, lamp, on):
@@ -97,24 +97,24 @@ def visibility(world, lamp, on):
 
 
 def main():
-    scene, world, background, lamp, layer = build()
+    scene, world, lamp, layer = build()
     rows = []
     render()  # the first render syncs the whole scene
     rows.append(("lit (the ground truth until 2026-11-28)", [render() for _ in range(REPEATS)]))
-    lights(world, background, lamp, False)
+    lights(scene, False)
     render()
     rows.append(
-        ("unlit: world 0, lamp hidden (the ground truth now)", [render() for _ in range(REPEATS)])
+        ("unlit: no world, lamp hidden (the ground truth now)", [render() for _ in range(REPEATS)])
     )
     lit, unlit = [], []
     for _ in range(REPEATS):
-        lights(world, background, lamp, True)
+        lights(scene, True)
         lit.append(render())
-        lights(world, background, lamp, False)
+        lights(scene, False)
         unlit.append(render())
     rows.append(("lit, in turn with unlit", lit))
     rows.append(("unlit, in turn with lit", unlit))
-    lights(world, background, lamp, True)
+    lights(scene, True)
     render()
     on, off = [], []
     for _ in range(REPEATS):

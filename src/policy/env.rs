@@ -232,6 +232,9 @@ struct Course {
     sdf: Option<Arc<SceneSdf>>,
     /// The walking distance to the goal, with [`EnvSettings::goal_by_path`] indoors.
     goal_field: Option<Arc<PathField>>,
+    /// The walking distance from start to goal, found once when first asked
+    /// ([`Course::way_round_m`]).
+    way_round: std::sync::OnceLock<Option<f64>>,
 }
 
 /// A fixed scene (e.g. the apartment) and the start/goal pairs its episodes walk, in turn.
@@ -273,13 +276,15 @@ impl Course {
     /// The walking distance from the start to the goal round what blocks walking on the map
     /// (indoors only: a box scene's box and a crossing's person are not on the map).
     fn way_round_m(&self) -> Option<f64> {
-        if !self.indoors() {
-            return None;
-        }
-        match &self.goal_field {
-            Some(f) => f.at(self.start),
-            None => PathField::to_goal(&self.map, self.goal)?.at(self.start),
-        }
+        *self.way_round.get_or_init(|| {
+            if !self.indoors() {
+                return None;
+            }
+            match &self.goal_field {
+                Some(f) => f.at(self.start),
+                None => PathField::to_goal(&self.map, self.goal)?.at(self.start),
+            }
+        })
     }
 
     fn surroundings(&self) -> Surroundings<'_> {
@@ -648,6 +653,7 @@ impl<'m> PolicyEnv<'m> {
             max_primitives: self.settings.max_primitives,
             sdf: None,
             goal_field: None,
+            way_round: Default::default(),
         }
     }
 
@@ -664,6 +670,7 @@ impl<'m> PolicyEnv<'m> {
             max_primitives: self.settings.rooms.max_primitives,
             sdf: None,
             goal_field: self.goal_field(&scene.map, scene.goal),
+            way_round: Default::default(),
             map: Arc::new(scene.map),
         })
     }
@@ -682,6 +689,7 @@ impl<'m> PolicyEnv<'m> {
             max_primitives: self.settings.max_primitives,
             sdf: None,
             goal_field: None,
+            way_round: Default::default(),
         }
     }
 
@@ -702,6 +710,7 @@ impl<'m> PolicyEnv<'m> {
                 .unwrap_or(self.settings.max_primitives),
             sdf: f.sdf.clone(),
             goal_field: self.goal_field(&f.map, f.pairs[pair].goal),
+            way_round: Default::default(),
         })
     }
 
