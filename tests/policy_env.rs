@@ -870,6 +870,75 @@ fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
     assert!(hidden > 0, "no goal hidden by a wall in {b} floor plans");
 }
 
+/// The guide on memory (`guide_memory`): it plans only on what the walker's rays have shown
+/// it. A goal in plain view is shown as the goal; some goals behind a wall the walker has
+/// seen are shown as a way round it; only the goal directions change, never the rays, the
+/// distance or the time; the memory is part of an episode's snapshot, and a snapshot with a
+/// memory is refused by an environment whose walkers keep none.
+#[test]
+fn a_guide_on_memory_plans_on_what_the_walker_saw_and_restores_from_snapshots() {
+    use egogen::scene::{line_is_clear, GUIDE_CLEARANCE_M};
+    env_parts!(body, ctx, model, bank, prior);
+    let rooms = |guide_memory: bool| EnvSettings {
+        guide_lookahead_m: 2.0,
+        guide_memory,
+        ..floor_plans_only()
+    };
+    let plain_settings = EnvSettings {
+        guide_lookahead_m: 0.0,
+        ..rooms(false)
+    };
+    let b = 12;
+    let mut plain = PolicyEnv::new(&model, &ctx, &bank, &prior, plain_settings, b, 8).unwrap();
+    let mut memory = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(true), b, 8).unwrap();
+    let l = plain.latent_dim();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut shown_a_way = 0;
+    for step in 0..4 {
+        let (o, g) = (plain.observations(), memory.observations());
+        let pelvis = plain.pelvis_positions();
+        assert_eq!(pelvis, memory.pelvis_positions());
+        for i in 0..b {
+            let c = plain.course_view(i);
+            let (x, y) = (
+                &o[i * OBS_DIM..(i + 1) * OBS_DIM],
+                &g[i * OBS_DIM..(i + 1) * OBS_DIM],
+            );
+            let rays = OBS_RAYS_OFFSET..OBS_DIST_OFFSET;
+            assert_eq!(
+                x[rays.clone()],
+                y[rays],
+                "step {step}, episode {i}: the rays"
+            );
+            assert_eq!(x[OBS_DIST_OFFSET..], y[OBS_DIST_OFFSET..], "distance, time");
+            let at = pelvis[i].1;
+            if line_is_clear(&c.map, c.obstacle.as_slice(), GUIDE_CLEARANCE_M, at, c.goal) {
+                assert_eq!(x, y, "step {step}, episode {i}: its goal is in plain view");
+            } else if x != y {
+                shown_a_way += 1;
+            }
+        }
+        if step == 2 {
+            let snap = memory.snapshot();
+            let mut twin = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(true), b, 8).unwrap();
+            twin.restore(&snap).unwrap();
+            assert_eq!(twin.observations(), memory.observations());
+            let mut forgetful =
+                PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(false), b, 8).unwrap();
+            let err = forgetful.restore(&snap).unwrap_err().to_string();
+            assert!(err.contains("memory"), "{err}");
+        }
+        // Both walk the same primitives: one environment's latents, the other's the same.
+        let z = normal_samples(&mut rng, b * l);
+        plain.step(&z).unwrap();
+        memory.step(&z).unwrap();
+    }
+    assert!(
+        shown_a_way > 0,
+        "no walker was shown a way round a wall it saw"
+    );
+}
+
 #[test]
 fn floor_plan_episodes_see_walls_time_out_after_13_primitives_and_restore_from_snapshots() {
     env_parts!(body, ctx, model, bank, prior);

@@ -338,6 +338,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "stages[1].env.guide_lookahead_m",
         ),
         (
+            "[stages.env]",
+            "[stages.env]\nguide_memory = true",
+            "stages[1].env.guide_memory",
+        ),
+        (
             "[policy]",
             "[scene]\npath = \"missing.glb\"\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
             "scene.path",

@@ -305,6 +305,13 @@ fn a_guided_walker_goes_round_a_long_wall_to_its_hidden_goal() {
     let guided = take(&shipped);
     assert!(guided.goals[0].reached, "{:?}", guided.goals);
     assert_eq!(guided.penetration_share, 0.0);
+    // Planning only on what its rays have shown it, it goes round the wall it sees too.
+    let remembering = take(&shipped.replace(
+        "guide_lookahead_m = 2.0",
+        "guide_lookahead_m = 2.0\nguide_memory = true",
+    ));
+    assert!(remembering.goals[0].reached, "{:?}", remembering.goals);
+    assert_eq!(remembering.penetration_share, 0.0);
     let alone = take(&shipped.replace("guide_lookahead_m = 2.0", "guide_lookahead_m = 0.0"));
     assert_ne!(
         (alone.primitives, alone.goals[0].final_distance_m),
@@ -364,6 +371,10 @@ fn bad_configs_are_refused_by_key() {
         (
             "[motion]\nguide_lookahead_m=-2\n[[agents]]\n[output]\ndir='o'\n",
             "motion.guide_lookahead_m",
+        ),
+        (
+            "[motion]\nguide_memory=true\n[[agents]]\n[output]\ndir='o'\n",
+            "motion.guide_memory",
         ),
         (
             "[scene]\nfloor_m=6\n[[agents]]\nstart=[9.0, 0.0]\n[output]\ndir='o'\n",

@@ -59,6 +59,7 @@ pub struct RawMotion {
     pub wander_distance_m: Option<[f64; 2]>,
     pub clearance_m: Option<f64>,
     pub guide_lookahead_m: Option<f64>,
+    pub guide_memory: Option<bool>,
     pub anticipate_people: Option<bool>,
     pub scene_every_frame: Option<bool>,
     pub seed: Option<u64>,

@@ -117,6 +117,10 @@ pub enum PolicyCommand {
         /// metres along the shortest path (0, the default: the goal itself, as EgoGen).
         #[arg(long, default_value_t = 0.0)]
         guide_lookahead_m: f64,
+        /// With --guide-lookahead-m: the guide plans only on what the walker's own rays have
+        /// shown it so far (the unknown taken as open), not on the whole map.
+        #[arg(long)]
+        guide_memory: bool,
         /// Give each indoor episode time for its way round walls: at least (walking distance
         /// round walls) / M primitives, never fewer than --max-primitives (7/13 ≈ 0.54: the
         /// time 13 primitives give a 7 m straight walk). Not given: --max-primitives alone.
@@ -272,6 +276,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             rooms_share,
             crossing_people,
             guide_lookahead_m,
+            guide_memory,
             time_by_way_round_m,
             people_seen_ahead,
         } => {
@@ -307,6 +312,9 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             }
             if !(guide_lookahead_m.is_finite() && guide_lookahead_m >= 0.0) {
                 bail!("--guide-lookahead-m: expected a distance ≥ 0 m, got {guide_lookahead_m}");
+            }
+            if guide_memory && guide_lookahead_m == 0.0 {
+                bail!("--guide-memory: give the guide a lookahead too (--guide-lookahead-m 2)");
             }
             let plan = crate::cli::train_primitive::load_train_plan(&config)?;
             let body = BodyModel::load(&plan.body_model)?;
@@ -352,6 +360,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     ..defaults.rooms
                 },
                 guide_lookahead_m,
+                guide_memory,
                 people_seen_ahead,
                 time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
                 ..defaults

@@ -72,6 +72,9 @@ pub(crate) struct RawSynthMotion {
     /// along the shortest path instead (2 reaches more far goals; default 0: the goal itself,
     /// as EgoGen).
     pub guide_lookahead_m: Option<f64>,
+    /// With a guide: whether it plans only on what each walker's own rays have shown it so
+    /// far (default false: on the whole walkable map).
+    pub guide_memory: Option<bool>,
     /// Whether each walker sees the others where they will stand when its primitive ends and
     /// judges its primitive against them moving (default true), or sees and judges them where
     /// they were last put (false: EgoGen's crowd loop).
@@ -391,6 +394,7 @@ fn crowd_settings(
             .map_or(defaults.wander_distance_m, |[a, b]| (a, b)),
         clearance_m: m.clearance_m.unwrap_or(defaults.clearance_m),
         guide_lookahead_m: m.guide_lookahead_m.unwrap_or(defaults.guide_lookahead_m),
+        guide_memory: m.guide_memory.unwrap_or(defaults.guide_memory),
         anticipate_people: m.anticipate_people.unwrap_or(defaults.anticipate_people),
         scene_every_frame: m.scene_every_frame.unwrap_or(defaults.scene_every_frame),
         seed: m.seed.unwrap_or(0),
@@ -402,6 +406,14 @@ fn crowd_settings(
                 "expected a distance ≥ 0 m, got {}",
                 settings.guide_lookahead_m
             ),
+        ));
+    }
+    if settings.guide_memory && settings.guide_lookahead_m == 0.0 {
+        return Err(bad(
+            "motion.guide_memory",
+            "a guide plans on memory only with a lookahead: set motion.guide_lookahead_m \
+             (e.g. 2)"
+                .to_string(),
         ));
     }
     if !(settings.success_m.is_finite() && settings.success_m > 0.0) {

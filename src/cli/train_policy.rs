@@ -349,6 +349,13 @@ fn resolve_stage(
             format!("expected a distance ≥ 0 m, got {}", e.guide_lookahead_m),
         ));
     }
+    if e.guide_memory && e.guide_lookahead_m == 0.0 {
+        return Err(bad(
+            &key("env.guide_memory"),
+            "a guide plans on memory only with a lookahead: set env.guide_lookahead_m (e.g. 2)"
+                .to_string(),
+        ));
+    }
     let (lo, hi) = e.scene.box_side_m;
     if !(lo > 0.0
         && hi >= lo

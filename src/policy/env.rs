@@ -28,7 +28,9 @@ use super::pose_prior::PosePrior;
 use super::reward::{
     judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges,
 };
-use super::walker::{frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker};
+use super::walker::{
+    frame_time_s, memory_scan, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker,
+};
 pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
 use crate::math::random::uniform_open01;
@@ -45,8 +47,8 @@ use crate::scene::generated::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use crate::scene::generated::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use crate::scene::generated::room_scene::{RoomParams, RoomScene, RoomSettings};
 use crate::scene::{
-    blocked_cells_in_box, guide_aim, MovingObstacle, Obstacle2, PathField, SceneSdf, StartGoal,
-    WalkableMap, GUIDE_CLEARANCE_M,
+    blocked_cells_in_box, guide_aim, MovingObstacle, Obstacle2, PathField, SceneSdf, SeenMap,
+    StartGoal, WalkableMap, GUIDE_CLEARANCE_M,
 };
 use crate::sensing::{EgoSensor, SensingSpec, Sensor};
 
@@ -107,6 +109,15 @@ pub struct EnvSettings {
     /// (`scene::guide_aim`; rewards, success and distance stay the goal's). 0: the goal, as
     /// EgoGen.
     pub guide_lookahead_m: f64,
+    /// With the guide on: it plans on what the walker's own rays have shown it so far in the
+    /// episode (`scene::SeenMap`, the unknown taken as open) instead of on the whole map — the
+    /// walker's memory of a dwelling it has never walked, not a map it was given. false: the
+    /// whole map.
+    pub guide_memory: bool,
+    /// With the guide on: only indoor episodes (floor plans and the fixed scene's pairs) are
+    /// guided; box scenes and crossings walk to their goals unguided, as the paper's tables
+    /// evaluate them. false: every episode.
+    pub guide_indoors_only: bool,
     /// Largest angle between the seed's facing and the goal direction (rad; EgoGen's box
     /// environment: 0.2π).
     pub seed_yaw_jitter_rad: f64,
@@ -158,6 +169,8 @@ impl Default for EnvSettings {
             scene_every_frame: false,
             people_seen_ahead: false,
             guide_lookahead_m: 0.0,
+            guide_memory: false,
+            guide_indoors_only: false,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
             goal_by_path: false,
             no_progress_through_walls: false,
@@ -265,6 +278,8 @@ struct Episode {
     id: u64,
     course: Course,
     walker: Walker,
+    /// What the walker has seen, where its guide plans on that ([`EnvSettings::guide_memory`]).
+    seen: Option<SeenMap>,
 }
 
 impl Course {
@@ -314,6 +329,9 @@ pub struct EpisodeSnapshot {
     distance_m: f64,
     start_distance_m: f64,
     totals: Totals,
+    /// What the walker has seen ([`SeenMap::to_bytes`]), where its guide plans on that.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    seen: Option<Vec<u8>>,
 }
 
 /// All episodes in progress and the next episode's number.
@@ -790,10 +808,22 @@ impl<'m> PolicyEnv<'m> {
             {
                 continue;
             }
+            let walker = Walker::new(view, scene.goal);
+            let seen = self.remembers(&scene).then(|| {
+                let mut seen = SeenMap::unseen(&scene.map);
+                walker.look(
+                    &memory_scan(&self.sensor),
+                    &scene.map,
+                    scene.obstacle.as_slice(),
+                    &mut seen,
+                );
+                seen
+            });
             return Ok(Episode {
                 id,
-                walker: Walker::new(view, scene.goal),
+                walker,
                 course: scene,
+                seen,
             });
         }
     }
@@ -808,15 +838,35 @@ impl<'m> PolicyEnv<'m> {
         out
     }
 
+    /// The guide's lookahead on a course (0: unguided).
+    fn guide_lookahead_m(&self, course: &Course) -> f64 {
+        if self.settings.guide_indoors_only && !course.indoors() {
+            0.0
+        } else {
+            self.settings.guide_lookahead_m
+        }
+    }
+
+    /// Whether the walker of a course remembers what it sees: its guide plans on it.
+    fn remembers(&self, course: &Course) -> bool {
+        self.settings.guide_memory && self.guide_lookahead_m(course) > 0.0
+    }
+
     fn observe_into(&self, e: &Episode, out: &mut [f32]) {
         let w = &e.walker;
+        // On memory, the box of a box scene is on the believed map where the rays met it.
+        let believed = e.seen.as_ref().map(SeenMap::believed);
         let goal = guide_aim(
-            &e.course.map,
-            e.course.obstacle.as_slice(),
+            believed.as_ref().unwrap_or(&e.course.map),
+            if believed.is_some() {
+                &[]
+            } else {
+                e.course.obstacle.as_slice()
+            },
             GUIDE_CLEARANCE_M,
             w.view.pelvis,
             e.course.goal,
-            self.settings.guide_lookahead_m,
+            self.guide_lookahead_m(&e.course),
         );
         let t0_s = frame_time_s(w.steps, 0);
         let around = e.course.surroundings();
@@ -939,14 +989,19 @@ impl<'m> PolicyEnv<'m> {
             done: Vec::with_capacity(chosen.len()),
             finished: Vec::new(),
         };
+        let scan = memory_scan(&self.sensor);
         for (i, c) in chosen.into_iter().enumerate() {
             debug_assert_eq!(c.env, i);
             let max_primitives = self.episodes[i].course.max_primitives;
             let terminate_on_penetration = self.settings.terminate_on_penetration;
-            let w = &mut self.episodes[i].walker;
+            let e = &mut self.episodes[i];
+            let w = &mut e.walker;
             let ending = match (c.primitive, c.judged) {
                 (Some(p), Some(j)) => {
                     w.advance(&p, &j, c.reward);
+                    if let Some(seen) = &mut e.seen {
+                        w.look(&scan, &e.course.map, e.course.obstacle.as_slice(), seen);
+                    }
                     if j.success {
                         Some(Ending::Success)
                     } else if j.penetrated && terminate_on_penetration {
@@ -1015,6 +1070,7 @@ impl<'m> PolicyEnv<'m> {
                     distance_m: e.walker.distance_m,
                     start_distance_m: e.walker.start_distance_m,
                     totals: e.walker.totals.clone(),
+                    seen: e.seen.as_ref().map(SeenMap::to_bytes),
                 })
                 .collect(),
         }
@@ -1076,8 +1132,29 @@ impl<'m> PolicyEnv<'m> {
             };
             let floor_z = course.map.floor_z_m;
             let view = SeedView::new(self.body, PrimitiveSeed { frames, floor_z })?;
+            let remembers = self.remembers(&course);
+            let seen = match (&s.seen, remembers) {
+                (Some(bytes), true) => {
+                    Some(SeenMap::from_bytes(&course.map, bytes).ok_or_else(|| {
+                        EnvError::Snapshot(format!(
+                            "episode {}: its memory does not fit its map",
+                            s.id
+                        ))
+                    })?)
+                }
+                (None, false) => None,
+                _ => {
+                    return Err(EnvError::Snapshot(format!(
+                        "episode {}: saved {} a memory, its walker here {}",
+                        s.id,
+                        if s.seen.is_some() { "with" } else { "without" },
+                        if remembers { "remembers" } else { "does not" }
+                    )))
+                }
+            };
             episodes.push(Episode {
                 id: s.id,
+                seen,
                 course,
                 walker: Walker {
                     view,

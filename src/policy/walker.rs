@@ -19,8 +19,17 @@ use crate::math::{Affine3, Mat3, Vec3};
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive, PrimitiveSeed};
 use crate::motion::primitive::{canonical_frame, PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
-use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
-use crate::sensing::{EgoPose2, EgoSensor, SensingWorld, Sensor};
+use crate::scene::{MovingObstacle, Obstacle2, SeenMap, WalkableMap};
+use crate::sensing::{EgoPose2, EgoSensor, RayScan, SensingWorld, Sensor};
+
+/// The rays a walker remembers what it saw with ([`Walker::look`]): the policy's own ray fan,
+/// or the paper's 32 rays where it senses otherwise.
+pub fn memory_scan(sensor: &Sensor) -> RayScan {
+    match sensor {
+        Sensor::Rays(scan) => scan.clone(),
+        _ => RayScan::default(),
+    }
+}
 
 /// Values per seed frame of the marker state: 67 canonical positions and 67 goal directions.
 pub const STATE_FRAME_DIM: usize = NUM_MARKERS * 6;
@@ -325,6 +334,24 @@ impl Walker {
         }
         out[layout.dist_offset()] = (1.0 / (1.0 + self.distance_m)) as f32;
         out[layout.dist_offset() + 1] = time_left as f32;
+    }
+
+    /// Adds to `seen` what `scan` shows from the eyes of both seed frames of the still scene:
+    /// the map and the obstacles that stand (`still`; people who move are left out: the policy
+    /// sees them itself).
+    pub fn look(&self, scan: &RayScan, map: &WalkableMap, still: &[Obstacle2], seen: &mut SeenMap) {
+        let world = SensingWorld {
+            map,
+            obstacles: still,
+        };
+        let range = scan.settings.max_range_m;
+        for cpf in &self.view.world_from_cpf {
+            let pose = EgoPose2::from_world_from_cpf(cpf);
+            for (k, t) in scan.distances(&world, pose).into_iter().enumerate() {
+                let hit = (t < range).then_some(t);
+                seen.record_ray(pose.position, scan.beam_dir(pose, k), hit, range);
+            }
+        }
     }
 
     /// Where the walker stands before its next primitive, for [`super::reward::judge`].

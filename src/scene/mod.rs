@@ -17,6 +17,7 @@ pub mod penetration;
 pub mod sampler;
 pub mod sdf2d;
 pub mod sdf3d;
+pub mod seen_map;
 pub mod walkable;
 
 pub use generated::scenario::{scenario, Scenario, ScenarioKind};
@@ -29,4 +30,5 @@ pub use path_plan::{
 pub use penetration::{blocked_cells_in_box, sdf_penetration, CollisionModel, Penetration};
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
 pub use sdf3d::SceneSdf;
+pub use seen_map::SeenMap;
 pub use walkable::{indoor_map, WalkableMap, WalkableSettings, MIN_ENCLOSED};

@@ -41,11 +41,11 @@ use crate::policy::env::SeedBank;
 use crate::policy::reward::{judge, path_leaves_floor, Judged, Limits, RewardWeights};
 use crate::policy::sampling::best_of;
 use crate::policy::walker::{
-    frame_time_s, place_seed, seen_ahead, SeedView, Surroundings, Walker, PRIMITIVE_S,
+    frame_time_s, memory_scan, place_seed, seen_ahead, SeedView, Surroundings, Walker, PRIMITIVE_S,
 };
 use crate::policy::{Actor, PosePrior};
 use crate::scene::{
-    guide_aim, plan_path, MovingObstacle, Obstacle2, WalkableMap, GUIDE_CLEARANCE_M,
+    guide_aim, plan_path, MovingObstacle, Obstacle2, SeenMap, WalkableMap, GUIDE_CLEARANCE_M,
 };
 use crate::sensing::Sensor;
 
@@ -185,6 +185,11 @@ pub struct CrowdSettings {
     /// walkable map round the standing obstacles ([`guide_aim`]; people and moving obstacles
     /// are left to the policy). 0 (default): the goal itself, as EgoGen.
     pub guide_lookahead_m: f64,
+    /// With the guide on: it plans on what the agent's own rays have shown it so far in the
+    /// take (`scene::SeenMap`, the unknown taken as open; kept from goal to goal) instead of
+    /// on the whole map — a walker's memory of a dwelling, not a map it was given. false
+    /// (default): the whole map.
+    pub guide_memory: bool,
     /// How the walker whose turn it is sees and judges the others (paper Alg. 1 steps them one
     /// at a time). `true` (default): its rays see each other person's 2D box where that person
     /// will stand when the walker's primitive ends — where the primitive it took earlier in the
@@ -215,6 +220,7 @@ impl Default for CrowdSettings {
             wander_distance_m: (2.0, 5.0),
             clearance_m: 0.4,
             guide_lookahead_m: 0.0,
+            guide_memory: false,
             anticipate_people: true,
             scene_every_frame: true,
             seed: 0,
@@ -343,6 +349,9 @@ struct Agent<'m> {
     foot_markers: Vec<usize>,
     standing_head_m: f64,
     walker: Walker,
+    /// What the agent has seen, where its guide plans on that
+    /// ([`CrowdSettings::guide_memory`]).
+    seen: Option<SeenMap>,
     goal: DVec2,
     goal_steps: usize,
     next_goal: usize,
@@ -541,6 +550,7 @@ impl<'m> Agent<'m> {
             foot_markers,
             standing_head_m,
             walker,
+            seen: None,
             goal,
             goal_steps: 0,
             next_goal: 1,
@@ -584,9 +594,18 @@ impl<'m> Agent<'m> {
                 let mut obs = vec![0f32; actor.obs_layout().dim()];
                 let time_left =
                     1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
+                // On memory, the standing obstacles are on the believed map where the rays met
+                // them.
+                let believed =
+                    (settings.guide_memory && settings.guide_lookahead_m > 0.0).then(|| {
+                        let seen = self.seen.get_or_insert_with(|| SeenMap::unseen(around.map));
+                        self.walker
+                            .look(&memory_scan(sensor), around.map, standing, seen);
+                        seen.believed()
+                    });
                 let aim = guide_aim(
-                    around.map,
-                    standing,
+                    believed.as_ref().unwrap_or(around.map),
+                    if believed.is_some() { &[] } else { standing },
                     GUIDE_CLEARANCE_M,
                     self.walker.view.pelvis,
                     self.goal,

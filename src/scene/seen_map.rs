@@ -1,0 +1,174 @@
+//! What a walker has seen of a walkable map: the cells its rays crossed (open) and the cells
+//! they ended on (blocked), every other cell unknown. A guide plans on it with the unknown
+//! taken as open ([`SeenMap::believed`]; optimistic planning, as frontier explorers and D* Lite
+//! navigators plan): it heads round the walls the walker has seen, never round walls it has not,
+//! and plans anew as it sees more. The walker's memory of a dwelling it walks for the first
+//! time, in place of the whole map a guide would otherwise be given.
+
+use glam::DVec2;
+
+use super::walkable::WalkableMap;
+
+/// What is known of one cell.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+enum Seen {
+    Unknown = 0,
+    Open = 1,
+    Blocked = 2,
+}
+
+/// A walker's memory of a map's grid (same origin, cell size and extent as the map it walks).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeenMap {
+    origin: DVec2,
+    cell_m: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Seen>,
+}
+
+impl SeenMap {
+    /// Nothing seen yet of `map`'s grid.
+    pub fn unseen(map: &WalkableMap) -> Self {
+        Self {
+            origin: map.origin,
+            cell_m: map.cell_m,
+            nx: map.nx,
+            ny: map.ny,
+            cells: vec![Seen::Unknown; map.nx * map.ny],
+        }
+    }
+
+    fn index(&self, p: DVec2) -> Option<usize> {
+        let q = (p - self.origin) / self.cell_m;
+        (q.x >= 0.0 && q.y >= 0.0 && (q.x as usize) < self.nx && (q.y as usize) < self.ny)
+            .then(|| q.y as usize * self.nx + q.x as usize)
+    }
+
+    /// Records one ray from `origin` along the unit `dir`: the cells it crosses before
+    /// `hit_m` are open, the cell it enters at `hit_m` blocked; with no hit, open up to
+    /// `max_m`. The latest ray decides a cell (a person who stood there and left is forgotten
+    /// once a ray crosses the cell again). Points off the grid are not kept.
+    pub fn record_ray(&mut self, origin: DVec2, dir: DVec2, hit_m: Option<f64>, max_m: f64) {
+        if !(origin.is_finite() && dir.is_finite()) {
+            return;
+        }
+        let end = hit_m.unwrap_or(max_m).clamp(0.0, max_m.max(0.0));
+        let step = 0.25 * self.cell_m;
+        let mut t = 0.0;
+        while t < end {
+            if let Some(k) = self.index(origin + dir * t) {
+                self.cells[k] = Seen::Open;
+            }
+            t += step;
+        }
+        if let Some(hit) = hit_m {
+            if let Some(k) = self.index(origin + dir * (hit + 0.01 * self.cell_m)) {
+                self.cells[k] = Seen::Blocked;
+            }
+        }
+    }
+
+    /// The map as the walker believes it: every cell walkable but those seen blocked (cells
+    /// off the grid block, as on every map).
+    pub fn believed(&self) -> WalkableMap {
+        let mut map = WalkableMap::from_walkable(
+            self.origin,
+            self.cell_m,
+            self.nx,
+            self.ny,
+            self.cells.iter().map(|&c| c != Seen::Blocked).collect(),
+        );
+        // Nothing seen blocked: no boundary to measure from; the grid's diagonal stands in for
+        // the infinite distance (bilinear reads of infinity give NaN).
+        let far = (self.nx as f64).hypot(self.ny as f64) * self.cell_m;
+        map.sdf_m
+            .iter_mut()
+            .filter(|d| !d.is_finite())
+            .for_each(|d| *d = far);
+        map
+    }
+
+    /// Cells seen open and seen blocked.
+    pub fn seen_cells(&self) -> (usize, usize) {
+        let count = |s: Seen| self.cells.iter().filter(|&&c| c == s).count();
+        (count(Seen::Open), count(Seen::Blocked))
+    }
+
+    /// The memory as bytes, one a cell (0 unknown, 1 open, 2 blocked), row-major: what a
+    /// checkpoint keeps.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        self.cells.iter().map(|&c| c as u8).collect()
+    }
+
+    /// A memory of `map`'s grid from [`Self::to_bytes`]; `None` when the bytes do not fit
+    /// the grid.
+    pub fn from_bytes(map: &WalkableMap, bytes: &[u8]) -> Option<Self> {
+        let mut seen = Self::unseen(map);
+        if bytes.len() != seen.cells.len() {
+            return None;
+        }
+        for (c, &b) in seen.cells.iter_mut().zip(bytes) {
+            *c = match b {
+                0 => Seen::Unknown,
+                1 => Seen::Open,
+                2 => Seen::Blocked,
+                _ => return None,
+            };
+        }
+        Some(seen)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::path_plan::{guide_aim, GUIDE_CLEARANCE_M};
+
+    /// A 6 × 4 m room split by a wall at x = 3 m with a 1 m doorway at its top (y 3–4 m).
+    fn split_room() -> WalkableMap {
+        let (nx, ny) = (60, 40);
+        let walkable = (0..nx * ny)
+            .map(|k| {
+                let (i, j) = (k % nx, k / nx);
+                !((29..31).contains(&i) && j < 30)
+            })
+            .collect();
+        WalkableMap::from_walkable(DVec2::ZERO, 0.1, nx, ny, walkable)
+    }
+
+    fn look(seen: &mut SeenMap, map: &WalkableMap, at: DVec2, heading: f64) {
+        for k in 0..32 {
+            let a = heading - std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * k as f64 / 31.0;
+            let dir = DVec2::from_angle(a);
+            let ray = crate::sensing::Ray2 { origin: at, dir };
+            let hit = crate::sensing::ray::grid::hit_grid(map, ray, 7.0);
+            seen.record_ray(at, dir, hit, 7.0);
+        }
+    }
+
+    #[test]
+    fn a_guide_on_what_was_seen_goes_round_seen_walls_only() {
+        let map = split_room();
+        let (at, goal) = (DVec2::new(1.0, 1.0), DVec2::new(5.0, 1.0));
+        let mut seen = SeenMap::unseen(&map);
+        // Nothing seen: the goal straight ahead, through the wall the walker has not seen.
+        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, at, goal, 2.0);
+        assert_eq!(aim, goal);
+        // Looking at the wall: round its end seen open at the top, not through it.
+        look(&mut seen, &map, at, 0.0);
+        let (open, blocked) = seen.seen_cells();
+        assert!(open > 100 && blocked > 5, "{open} open, {blocked} blocked");
+        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, at, goal, 2.0);
+        assert!(aim != goal && aim.y > at.y + 0.5, "aim {aim}");
+        // The whole map's guide agrees on the side.
+        let full = guide_aim(&map, &[], GUIDE_CLEARANCE_M, at, goal, 2.0);
+        assert!((aim - full).length() < 0.8, "{aim} against {full}");
+        // A memory survives its bytes.
+        let back = SeenMap::from_bytes(&map, &seen.to_bytes()).unwrap();
+        assert_eq!(back, seen);
+        assert!(SeenMap::from_bytes(&map, &[0; 3]).is_none());
+        assert!(SeenMap::from_bytes(&map, &vec![7; 2400]).is_none());
+    }
+}
