@@ -142,8 +142,10 @@ mod tests {
         for k in 0..32 {
             let a = heading - std::f64::consts::FRAC_PI_2 + std::f64::consts::PI * k as f64 / 31.0;
             let dir = DVec2::from_angle(a);
-            let ray = crate::sensing::Ray2 { origin: at, dir };
-            let hit = crate::sensing::ray::grid::hit_grid(map, ray, 7.0);
+            // The first blocked cell along the ray, marched in hundredths of a cell.
+            let hit = (0..7000)
+                .map(|k| k as f64 * 0.001)
+                .find(|&t| !map.is_walkable_at(at + dir * t));
             seen.record_ray(at, dir, hit, 7.0);
         }
     }
