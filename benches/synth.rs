@@ -7,7 +7,10 @@
 //! `synth_dwelling`: three people wander 20 s through a generated four-room dwelling (0.24 m
 //! walls, `egogen policy rooms --seed 1004 --wall-m 0.24`), each primitive tested against the
 //! scene at every frame (`swept`, the default: redraws, then holding still, instead of stepping
-//! through a wall) or at its end alone (`end_only`, EgoGen's test): what the swept test costs.
+//! through a wall) or at its end alone (`end_only`, EgoGen's test): what the swept test costs;
+//! and swept with the guide round walls 2 m ahead, planned on the whole map
+//! (`swept_guided_by_map`) or on what each walker's rays have shown it (`swept_guided_on_memory`,
+//! `guide_memory`): what the memory costs.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use egogen::body::BodyModel;
@@ -131,11 +134,18 @@ fn bench(c: &mut Criterion) {
             steering: steer,
         })
         .collect();
-    for (name, swept) in [("swept", true), ("end_only", false)] {
+    for (name, swept, guide_lookahead_m, guide_memory) in [
+        ("swept", true, 0.0, false),
+        ("end_only", false, 0.0, false),
+        ("swept_guided_by_map", true, 2.0, false),
+        ("swept_guided_on_memory", true, 2.0, true),
+    ] {
         let settings = CrowdSettings {
             primitives: 40,
             stop_when_done: false,
             scene_every_frame: swept,
+            guide_lookahead_m,
+            guide_memory,
             ..CrowdSettings::default()
         };
         g.throughput(Throughput::Elements((3 * 40 * NEW_FRAMES) as u64));
