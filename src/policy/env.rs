@@ -47,8 +47,8 @@ use crate::scene::generated::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use crate::scene::generated::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use crate::scene::generated::room_scene::{RoomParams, RoomScene, RoomSettings};
 use crate::scene::{
-    blocked_cells_in_box, guide_aim, MovingObstacle, Obstacle2, PathField, SceneSdf, SeenMap,
-    StartGoal, WalkableMap, GUIDE_CLEARANCE_M,
+    blocked_cells_in_box, guide_aim_remembered, MovingObstacle, Obstacle2, PathField, SceneSdf,
+    SeenMap, StartGoal, WalkableMap,
 };
 use crate::sensing::{EgoSensor, SensingSpec, Sensor};
 
@@ -854,16 +854,10 @@ impl<'m> PolicyEnv<'m> {
 
     fn observe_into(&self, e: &Episode, out: &mut [f32]) {
         let w = &e.walker;
-        // On memory, the box of a box scene is on the believed map where the rays met it.
-        let believed = e.seen.as_ref().map(SeenMap::believed);
-        let goal = guide_aim(
-            believed.as_ref().unwrap_or(&e.course.map),
-            if believed.is_some() {
-                &[]
-            } else {
-                e.course.obstacle.as_slice()
-            },
-            GUIDE_CLEARANCE_M,
+        let goal = guide_aim_remembered(
+            e.seen.as_ref(),
+            &e.course.map,
+            e.course.obstacle.as_slice(),
             w.view.pelvis,
             e.course.goal,
             self.guide_lookahead_m(&e.course),

@@ -30,5 +30,5 @@ pub use path_plan::{
 pub use penetration::{blocked_cells_in_box, sdf_penetration, CollisionModel, Penetration};
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
 pub use sdf3d::SceneSdf;
-pub use seen_map::SeenMap;
+pub use seen_map::{guide_aim_remembered, SeenMap};
 pub use walkable::{indoor_map, WalkableMap, WalkableSettings, MIN_ENCLOSED};

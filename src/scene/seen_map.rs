@@ -7,7 +7,33 @@
 
 use glam::DVec2;
 
+use super::obstacle::Obstacle2;
+use super::path_plan::{guide_aim, GUIDE_CLEARANCE_M};
 use super::walkable::WalkableMap;
+
+/// Where a walker at `at` bound for `goal` should head ([`guide_aim`], the guide's clearance):
+/// planned on its memory when it keeps one — what stands is there where its rays met it, so
+/// `obstacles` are not added — otherwise on the whole `map` round `obstacles`.
+pub fn guide_aim_remembered(
+    seen: Option<&SeenMap>,
+    map: &WalkableMap,
+    obstacles: &[Obstacle2],
+    at: DVec2,
+    goal: DVec2,
+    lookahead_m: f64,
+) -> DVec2 {
+    match seen {
+        Some(seen) if lookahead_m > 0.0 => guide_aim(
+            &seen.believed(),
+            &[],
+            GUIDE_CLEARANCE_M,
+            at,
+            goal,
+            lookahead_m,
+        ),
+        _ => guide_aim(map, obstacles, GUIDE_CLEARANCE_M, at, goal, lookahead_m),
+    }
+}
 
 /// What is known of one cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -124,7 +150,6 @@ impl SeenMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::path_plan::{guide_aim, GUIDE_CLEARANCE_M};
 
     /// A 6 × 4 m room split by a wall at x = 3 m with a 1 m doorway at its top (y 3–4 m).
     fn split_room() -> WalkableMap {

@@ -45,7 +45,7 @@ use crate::policy::walker::{
 };
 use crate::policy::{Actor, PosePrior};
 use crate::scene::{
-    guide_aim, plan_path, MovingObstacle, Obstacle2, SeenMap, WalkableMap, GUIDE_CLEARANCE_M,
+    guide_aim_remembered, plan_path, MovingObstacle, Obstacle2, SeenMap, WalkableMap,
 };
 use crate::sensing::Sensor;
 
@@ -182,7 +182,7 @@ pub struct CrowdSettings {
     pub clearance_m: f64,
     /// Policy steering: with L > 0 the policy is shown a guide's aim instead of its goal where
     /// a wall or obstacle hides the goal: the point L m along the shortest path on the
-    /// walkable map round the standing obstacles ([`guide_aim`]; people and moving obstacles
+    /// walkable map round the standing obstacles ([`crate::scene::guide_aim`]; people and moving obstacles
     /// are left to the policy). 0 (default): the goal itself, as EgoGen.
     pub guide_lookahead_m: f64,
     /// With the guide on: it plans on what the agent's own rays have shown it so far in the
@@ -594,19 +594,17 @@ impl<'m> Agent<'m> {
                 let mut obs = vec![0f32; actor.obs_layout().dim()];
                 let time_left =
                     1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
-                // On memory, the standing obstacles are on the believed map where the rays met
-                // them.
-                let believed =
+                let memory =
                     (settings.guide_memory && settings.guide_lookahead_m > 0.0).then(|| {
                         let seen = self.seen.get_or_insert_with(|| SeenMap::unseen(around.map));
                         self.walker
                             .look(&memory_scan(sensor), around.map, standing, seen);
-                        seen.believed()
+                        &*seen
                     });
-                let aim = guide_aim(
-                    believed.as_ref().unwrap_or(around.map),
-                    if believed.is_some() { &[] } else { standing },
-                    GUIDE_CLEARANCE_M,
+                let aim = guide_aim_remembered(
+                    memory,
+                    around.map,
+                    standing,
                     self.walker.view.pelvis,
                     self.goal,
                     settings.guide_lookahead_m,
