@@ -25,20 +25,24 @@ const REFERENCE_SAMPLES: u32 = 1024;
 const FRAMES: [u32; 1] = [0];
 const CAMERAS: [&str; 2] = ["camera-rgb", "camera-slam-left"];
 
-/// (samples, adaptive threshold, denoise)
-const SETTINGS: [(u32, f64, bool); 12] = [
-    (1, 0.0, false),
-    (4, 0.0, false),
-    (16, 0.0, false),
-    (64, 0.0, false),
-    (1, 0.0, true),
-    (2, 0.0, true),
-    (4, 0.0, true),
-    (8, 0.0, true),
-    (16, 0.0, true),
-    (64, 0.0, true),
-    (64, 0.05, false),
-    (16, 0.05, true),
+/// (samples, adaptive threshold, denoiser: `None` off, else its `denoise_prefilter`)
+const SETTINGS: [(u32, f64, Option<&str>); 16] = [
+    (1, 0.0, None),
+    (4, 0.0, None),
+    (16, 0.0, None),
+    (64, 0.0, None),
+    (1, 0.0, Some("accurate")),
+    (2, 0.0, Some("accurate")),
+    (4, 0.0, Some("accurate")),
+    (8, 0.0, Some("accurate")),
+    (16, 0.0, Some("accurate")),
+    (64, 0.0, Some("accurate")),
+    (1, 0.0, Some("fast")),
+    (2, 0.0, Some("fast")),
+    (4, 0.0, Some("fast")),
+    (8, 0.0, Some("fast")),
+    (64, 0.05, None),
+    (16, 0.05, Some("accurate")),
 ];
 
 /// A frame's linear colour (grey thrice for a monochrome camera), valid mask, size, and its
@@ -56,10 +60,14 @@ struct Frames {
     colour_seconds_per_frame: f64,
 }
 
-fn render(camera: &str, scale: &str, samples: u32, adaptive: f64, denoise: bool) -> Frames {
+fn render(camera: &str, scale: &str, samples: u32, adaptive: f64, denoise: Option<&str>) -> Frames {
+    let denoise = match denoise {
+        None => "denoise = false".to_string(),
+        Some(prefilter) => format!("denoise = true\ndenoise_prefilter = \"{prefilter}\""),
+    };
     let render = format!(
         "cameras = [\"{camera}\"]\nsamples = {samples}\nadaptive_threshold = {adaptive}\n\
-         denoise = {denoise}\npasses = [\"colour\"]\nevery_n_frames = 20\nresolution_scale = {scale}"
+         {denoise}\npasses = [\"colour\"]\nevery_n_frames = 20\nresolution_scale = {scale}"
     );
     let config = default_run_config(&render, "workers = 1")
         .replace("resolution_scale = 0.25     #", "#")
@@ -201,7 +209,7 @@ fn main() {
     let scale = std::env::var("EGOGEN_QUALITY_SCALE").unwrap_or_else(|_| "0.25".into());
     let mut json = Vec::new();
     for camera in CAMERAS {
-        let reference = render(camera, &scale, REFERENCE_SAMPLES, 0.0, false);
+        let reference = render(camera, &scale, REFERENCE_SAMPLES, 0.0, None);
         let (w, h) = (reference.images[0].width, reference.images[0].height);
         println!(
             "\n## {camera} {w}×{h} (reference: {REFERENCE_SAMPLES} samples, {:.1} s per frame)\n",
@@ -224,12 +232,16 @@ fn main() {
                 } else {
                     "off".into()
                 },
-                if denoise { "OIDN" } else { "off" },
+                match denoise {
+                    None => "off".to_string(),
+                    Some(prefilter) => format!("OIDN, {prefilter} prefilter"),
+                },
                 got.colour_seconds_per_frame
             );
             json.push(serde_json::json!({
                 "camera": camera, "width": w, "height": h, "samples": samples,
-                "adaptive_threshold": adaptive, "denoise": denoise,
+                "adaptive_threshold": adaptive, "denoise": denoise.is_some(),
+                "denoise_prefilter": denoise,
                 "colour_seconds_per_frame": got.colour_seconds_per_frame,
                 "psnr_db": psnr, "ssim": ssim,
             }));

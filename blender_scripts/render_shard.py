@@ -60,7 +60,8 @@ def add_body(scene, body):
     cache.up_axis = "POS_Z"
     obj.cycles.use_motion_blur = True
     obj.cycles.use_deform_motion = True
-    obj.cycles.motion_steps = body["motion_steps"]
+    # EGOGEN_BLENDER_MOTION_STEPS overrides the spec's (for `cargo bench --bench render_cost`).
+    obj.cycles.motion_steps = int(os.environ.get("EGOGEN_BLENDER_MOTION_STEPS", body["motion_steps"]))
     return obj
 
 
@@ -549,6 +550,8 @@ def set_rgb_mode(scene, rgb):
     if rgb["adaptive_threshold"] > 0:
         scene.cycles.adaptive_threshold = rgb["adaptive_threshold"]
     scene.cycles.use_denoising = rgb["denoise"]
+    if rgb["denoise"]:
+        scene.cycles.denoising_prefilter = rgb["denoise_prefilter"].upper()
     scene.cycles.pixel_filter_type = "BLACKMAN_HARRIS"
     scene.cycles.filter_width = 1.5
     scene.cycles.seed = rgb["seed"]

@@ -29,6 +29,7 @@ pub struct RenderPlan {
     pub samples: u32,
     pub adaptive_threshold: f64,
     pub denoise: bool,
+    pub denoise_prefilter: crate::render::DenoisePrefilter,
     pub shutter_frames: f64,
     pub cache_samples_per_frame: u32,
     pub frames_per_shard: usize,

@@ -232,7 +232,7 @@ fn render_scene() -> Rendered {
             pc2,
             samples_per_frame: SAMPLES_PER_FRAME,
             cache_keys: playback_keys(&read, SAMPLES_PER_FRAME),
-            motion_steps: 2,
+            motion_steps: egogen::render::shard_plan::deform_motion_steps(0.5, SAMPLES_PER_FRAME),
             skin: SkinPlan::default().draw(0),
             uvs_npy: Some(uvs),
             skin_regions: vec![ShardSkinRegion {
@@ -257,6 +257,7 @@ fn render_scene() -> Rendered {
             samples: 4,
             adaptive_threshold: 0.0,
             denoise: false,
+            denoise_prefilter: egogen::render::DenoisePrefilter::Accurate,
             shutter_frames: 0.5,
             seed: 0,
         }),

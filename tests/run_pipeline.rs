@@ -179,6 +179,23 @@ fn negative_shutter() {
 }
 
 #[test]
+fn a_denoise_prefilter_without_the_denoiser_or_unknown() {
+    expect_config_error(
+        &with_render("denoise_prefilter = \"fast\""),
+        &["render.denoise_prefilter", "denoise = true"],
+    );
+    expect_config_error(
+        &with_render("denoise = true\ndenoise_prefilter = \"quick\""),
+        &[
+            "denoise_prefilter",
+            "unknown variant `quick`",
+            "`accurate`",
+            "`fast`",
+        ],
+    );
+}
+
+#[test]
 fn unknown_fisheye_rendering() {
     expect_config_error(
         &with_render("fisheye = \"fast\""),

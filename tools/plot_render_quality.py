@@ -1,7 +1,8 @@
 """Colour quality against time from `cargo bench --bench render_quality`'s JSON: PSNR and SSIM
 of each setting against the high-sample reference, over the colour render's seconds per frame,
-one panel pair per camera; plain path tracing and OpenImageDenoise as two lines labelled with
-their sample counts, adaptive sampling as separate points, the shipped setting circled.
+one panel pair per camera; plain path tracing and OpenImageDenoise (with its accurate and its
+fast prefilter) as lines labelled with their sample counts, adaptive sampling as separate
+points, the shipped setting circled.
 
     python tools/plot_render_quality.py target/render_quality_0.25.json --out docs/render_quality.png
 
@@ -21,11 +22,14 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("json", help="render_quality_<scale>.json written by the bench")
     ap.add_argument("--out", required=True, help="PNG to write")
-    ap.add_argument("--shipped", default="4,denoise", help="samples[,denoise] to circle")
+    ap.add_argument("--shipped", default="4,fast",
+                    help="samples[,accurate|fast] to circle (no prefilter: plain path tracing)")
     args = ap.parse_args()
     rows = json.load(open(args.json))
+    for r in rows:  # JSON of earlier runs: no prefilter recorded, Cycles' default (accurate)
+        r.setdefault("denoise_prefilter", "accurate" if r["denoise"] else None)
     shipped_samples, *rest = args.shipped.split(",")
-    shipped = (int(shipped_samples), "denoise" in rest)
+    shipped = (int(shipped_samples), rest[0] if rest else None)
     cameras = sorted({r["camera"] for r in rows}, key=lambda c: [r["camera"] for r in rows].index(c))
     fig, axes = plt.subplots(2, len(cameras), figsize=(5.5 * len(cameras), 7.5), squeeze=False)
     for col, camera in enumerate(cameras):
@@ -33,9 +37,12 @@ def main():
         size = f'{mine[0]["width"]}×{mine[0]["height"]}'
         for row, (key, label) in enumerate([("psnr_db", "PSNR (dB)"), ("ssim", "SSIM")]):
             ax = axes[row][col]
-            for denoise, colour, name in [(False, "tab:blue", "path tracing"), (True, "tab:orange", "+ OIDN")]:
+            for prefilter, colour, name in [(None, "tab:blue", "path tracing"),
+                                            ("accurate", "tab:orange", "+ OIDN, accurate prefilter"),
+                                            ("fast", "tab:red", "+ OIDN, fast prefilter")]:
                 line = sorted(
-                    (r for r in mine if r["denoise"] == denoise and r["adaptive_threshold"] == 0),
+                    (r for r in mine
+                     if r["denoise_prefilter"] == prefilter and r["adaptive_threshold"] == 0),
                     key=lambda r: r["samples"],
                 )
                 xs = [r["colour_seconds_per_frame"] for r in line]
@@ -52,7 +59,7 @@ def main():
                             (r["colour_seconds_per_frame"], r[key]), textcoords="offset points",
                             xytext=(4, 4), fontsize=7, color="tab:green")
             for r in mine:
-                if (r["samples"], r["denoise"]) == shipped and r["adaptive_threshold"] == 0:
+                if (r["samples"], r["denoise_prefilter"]) == shipped and r["adaptive_threshold"] == 0:
                     ax.plot(r["colour_seconds_per_frame"], r[key], "o", ms=14, mfc="none",
                             mec="black", label="shipped")
             ax.set_xscale("log")

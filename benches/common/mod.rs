@@ -90,7 +90,7 @@ pub fn egogen_run_env(config: &str, args: &[&str], envs: &[(&str, &str)]) -> Run
 }
 
 /// The shipped default run (`configs/default.toml`) with its output in `out`, its `[render]`
-/// keys `samples`, `denoise` and `frames_per_shard` and its `[supervisor]` key `workers`
+/// keys `samples`, `denoise`, `denoise_prefilter` and `frames_per_shard` and its `[supervisor]` key `workers`
 /// dropped, and the
 /// lines of `render` and `supervisor` added to those tables.
 pub fn default_run_config(render: &str, supervisor: &str) -> String {
@@ -99,7 +99,10 @@ pub fn default_run_config(render: &str, supervisor: &str) -> String {
     let mut out = String::new();
     for line in text.lines() {
         let key = line.split('=').next().unwrap_or("").trim();
-        if matches!(key, "samples" | "denoise" | "frames_per_shard" | "workers") {
+        if matches!(
+            key,
+            "samples" | "denoise" | "denoise_prefilter" | "frames_per_shard" | "workers"
+        ) {
             continue;
         }
         if key == "dir" {

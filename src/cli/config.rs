@@ -118,6 +118,9 @@ pub struct RawRender {
     pub adaptive_threshold: Option<f64>,
     /// OpenImageDenoise on the colour image (default false).
     pub denoise: Option<bool>,
+    /// How OpenImageDenoise is guided: `accurate` (default: albedo and normal denoised first)
+    /// or `fast` (taken as they are); only with `denoise = true`.
+    pub denoise_prefilter: Option<crate::render::DenoisePrefilter>,
     /// Shutter open time in frames, centred on the frame; 0 = no motion blur (default 0.5).
     pub shutter_frames: Option<f64>,
     /// Body vertex-cache samples per frame (default 4).

@@ -397,6 +397,13 @@ fn resolve_render(
             format!("expected a noise threshold ≥ 0 (0 = off), found {adaptive_threshold}"),
         ));
     }
+    let denoise = r.denoise.unwrap_or(false);
+    if r.denoise_prefilter.is_some() && !denoise {
+        return Err(bad(
+            "render.denoise_prefilter",
+            "guides the denoiser, which is off: set `denoise = true` or leave the key out".into(),
+        ));
+    }
     let near_clip_m = r.near_clip_m.unwrap_or(0.12);
     if !(near_clip_m.is_finite() && near_clip_m > 0.0 && near_clip_m < 10.0) {
         return Err(bad(
@@ -435,7 +442,8 @@ fn resolve_render(
         every_n_frames,
         samples,
         adaptive_threshold,
-        denoise: r.denoise.unwrap_or(false),
+        denoise,
+        denoise_prefilter: r.denoise_prefilter.unwrap_or_default(),
         shutter_frames,
         cache_samples_per_frame,
         frames_per_shard,

@@ -21,6 +21,7 @@ pub mod skin_tone;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
 pub use protocol::{
-    BodyProbe, CameraKey, ObstacleKey, PointLight, RenderDevice, ShardBody, ShardCamera,
-    ShardFrame, ShardLens, ShardLighting, ShardObstacle, ShardRgb, ShardSpec, WorldHdri,
+    BodyProbe, CameraKey, DenoisePrefilter, ObstacleKey, PointLight, RenderDevice, ShardBody,
+    ShardCamera, ShardFrame, ShardLens, ShardLighting, ShardObstacle, ShardRgb, ShardSpec,
+    WorldHdri,
 };

@@ -93,7 +93,8 @@ pub struct ShardBody {
     /// times only (`synth::body_cache::rendered_sample_indices`) has a run of keys around each
     /// rendered frame; a full cache two keys.
     pub cache_keys: Vec<[f64; 2]>,
-    /// Cycles deformation motion steps (each step doubles the time samples minus one).
+    /// Cycles deformation motion steps: `2^steps + 1` time samples across the shutter
+    /// (`shard_plan::deform_motion_steps`).
     pub motion_steps: u32,
     /// Its skin material ([`super::skin_tone`]).
     pub skin: Skin,
@@ -122,6 +123,8 @@ pub struct ShardRgb {
     /// 0 turns adaptive sampling off.
     pub adaptive_threshold: f64,
     pub denoise: bool,
+    /// How the denoiser is guided (read only with `denoise`).
+    pub denoise_prefilter: DenoisePrefilter,
     /// Shutter open time in frames, centred on the frame; 0 turns motion blur off.
     pub shutter_frames: f64,
     pub seed: u32,
@@ -255,6 +258,20 @@ pub struct ShardCeiling {
 
 /// The name of the ceiling object in the rendered scene and its annotations.
 pub const CEILING_OBJECT: &str = "egogen_ceiling";
+
+/// How OpenImageDenoise is guided (`[render] denoise_prefilter`): Cycles' denoiser reads the
+/// colour with the first hit's albedo and normal, which at a few samples with motion blur are
+/// noisy themselves.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DenoisePrefilter {
+    /// The albedo and normal denoised first, each by its own OIDN filter (Cycles' default).
+    #[default]
+    Accurate,
+    /// The albedo and normal taken as they are: one OIDN filter instead of three, a fifth less
+    /// colour path tracing and denoising at the default run's size (docs/RENDERING.md).
+    Fast,
+}
 
 /// Where Cycles renders (`[render] device`).
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]

@@ -40,6 +40,24 @@ pub(crate) fn pose_at(poses: &[Affine3], frame: f64) -> Affine3 {
     }
 }
 
+/// Cycles' deformation motion steps for a body whose vertex cache holds
+/// `cache_samples_per_frame` samples a frame, under a shutter open `shutter_frames` frames:
+/// the fewest with Cycles' time samples (`2^steps + 1` across the shutter, evenly) at least
+/// as dense as the cache's. Cycles moves vertices linearly between its samples and the cache
+/// plays linearly between its own, so more steps only repeat what the cache's samples already
+/// say, at the price of an evaluation and a sync of every body per extra sample and frame.
+/// With the default shutter (½ frame) and cache (4 samples a frame) that is 1 step, 3 time
+/// samples, each on one of the cache's.
+pub fn deform_motion_steps(shutter_frames: f64, cache_samples_per_frame: u32) -> u32 {
+    let intervals = (shutter_frames.max(0.0) * cache_samples_per_frame as f64 - 1e-9).ceil();
+    let mut steps = 1;
+    // Cycles keeps at most 129 time samples (2^7 + 1).
+    while steps < 7 && f64::from(1u32 << steps) < intervals {
+        steps += 1;
+    }
+    steps
+}
+
 /// Which raw renders a frame needs (`render::passes::Passes` decides).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RawRenders {
@@ -112,5 +130,31 @@ pub fn shard_camera(
                 }
             })
             .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::deform_motion_steps;
+
+    #[test]
+    fn motion_steps_are_as_dense_as_the_cache_and_no_denser() {
+        // 2^steps + 1 time samples across the shutter against shutter × samples + 1 of the cache.
+        assert_eq!(deform_motion_steps(0.5, 4), 1); // 3 against 3 (the default run)
+        assert_eq!(deform_motion_steps(1.0, 4), 2); // 5 against 5
+        assert_eq!(deform_motion_steps(1.0, 8), 3); // 9 against 9
+        assert_eq!(deform_motion_steps(0.5, 5), 2); // 5 against 3.5: never sparser
+        assert_eq!(deform_motion_steps(0.25, 4), 1); // 3 against 2
+        assert_eq!(deform_motion_steps(0.0, 4), 1); // no blur: Cycles' least
+        assert_eq!(deform_motion_steps(1.0, 1000), 7); // Cycles' most: 129 samples
+        for spf in 1..=64 {
+            for tenth in 0..=10 {
+                let shutter = tenth as f64 / 10.0;
+                let steps = deform_motion_steps(shutter, spf);
+                let cycles = f64::from(1u32 << steps);
+                assert!(steps == 7 || cycles >= shutter * spf as f64 - 1e-9);
+                assert!(steps == 1 || cycles / 2.0 < shutter * spf as f64 - 1e-9);
+            }
+        }
     }
 }
