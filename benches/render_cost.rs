@@ -7,8 +7,11 @@
 //!    afresh for every render, 16 samples;
 //! 2. Fisheye624 remapped from the fitted polynomial fisheye (about the delivered pixels);
 //! 3. and Cycles' scene kept between a shard's renders (persistent data);
-//! 4. and the shipped colour settings (`SHIPPED`);
-//! 5. the limit: the shipped settings with `fisheye = "native"` — Cycles path-tracing exactly the
+//! 4. and 4 samples denoised by OIDN with its accurate prefilter (the default until 2026-11-28);
+//! 5. and the bodies' deformation blur in 1 motion step (3 time samples, on the cache's
+//!    samples) instead of 2 (5 time samples);
+//! 6. and the denoiser's fast prefilter: the shipped colour settings (`SHIPPED`);
+//! 7. the limit: the shipped settings with `fisheye = "native"` — Cycles path-tracing exactly the
 //!    delivered pixels, nothing remapped.
 //!
 //! Per camera and variant: seconds per frame of each stage (the attempts' `stages` in the pool
@@ -18,10 +21,10 @@
 //! many workers as cores each worker has one core), and what is "ours": everything but the
 //! limit's colour path tracing per frame.
 //!
-//! `cargo bench --bench render_cost` (about 10 minutes on 2 cores).
+//! `cargo bench --bench render_cost` (about 15 minutes on 2 cores).
 //! `EGOGEN_RENDER_COST_SCALE=1 cargo bench --bench render_cost` renders the cameras at that
 //! resolution scale instead of the default run's 0.25 (1 = full Aria size: RGB 1408×1408,
-//! SLAM 640×480), the shipped colour and the limit only (about 20 minutes on 2 cores).
+//! SLAM 640×480), variants 4, 6 and 7 only (about 30 minutes on 2 cores).
 
 use std::collections::BTreeMap;
 
@@ -31,46 +34,76 @@ use common::{default_run_config, egogen_run_env};
 /// Seconds of motion rendered (every 4th frame at 40 Hz: 10 frames per second per camera).
 const DURATION_S: &str = "0.5";
 /// The shipped colour settings (configs/default.toml).
-const SHIPPED: &str = "samples = 4\ndenoise = true";
+const SHIPPED: &str = "samples = 4\ndenoise = true\ndenoise_prefilter = \"fast\"";
+/// The colour settings shipped until 2026-11-28.
+const ACCURATE: &str = "samples = 4\ndenoise = true\ndenoise_prefilter = \"accurate\"";
+
+/// Environment of the worker: Cycles' scene rebuilt per render, 2 motion steps.
+const NO_PERSISTENT: &[(&str, &str)] = &[
+    ("EGOGEN_BLENDER_PERSISTENT_DATA", "0"),
+    ("EGOGEN_BLENDER_MOTION_STEPS", "2"),
+];
+const TWO_MOTION_STEPS: &[(&str, &str)] = &[("EGOGEN_BLENDER_MOTION_STEPS", "2")];
 
 struct Variant {
     name: &'static str,
     render: &'static str,
-    persistent: bool,
+    envs: &'static [(&'static str, &'static str)],
     /// Renders the colour as the limit does (same samples): "ours" is measured against it.
     as_limit: bool,
+    /// Run at full size too (`EGOGEN_RENDER_COST_SCALE`).
+    at_full_size: bool,
 }
 
-const VARIANTS: [Variant; 5] = [
+const VARIANTS: [Variant; 7] = [
     Variant {
         name: "as it was (equidistant, no persistent data, 16 spp)",
         render: "samples = 16\nfisheye = \"equidistant\"",
-        persistent: false,
+        envs: NO_PERSISTENT,
         as_limit: false,
+        at_full_size: false,
     },
     Variant {
         name: "+ polynomial source",
         render: "samples = 16",
-        persistent: false,
+        envs: NO_PERSISTENT,
         as_limit: false,
+        at_full_size: false,
     },
     Variant {
         name: "+ persistent data",
         render: "samples = 16",
-        persistent: true,
+        envs: TWO_MOTION_STEPS,
         as_limit: false,
+        at_full_size: false,
     },
     Variant {
-        name: "+ shipped colour (4 spp + OIDN)",
+        name: "+ 4 spp + OIDN, accurate prefilter",
+        render: ACCURATE,
+        envs: TWO_MOTION_STEPS,
+        as_limit: false,
+        at_full_size: true,
+    },
+    Variant {
+        name: "+ 1 motion step",
+        render: ACCURATE,
+        envs: &[],
+        as_limit: false,
+        at_full_size: false,
+    },
+    Variant {
+        name: "+ fast prefilter (shipped)",
         render: SHIPPED,
-        persistent: true,
+        envs: &[],
         as_limit: true,
+        at_full_size: true,
     },
     Variant {
         name: "limit: native fisheye, shipped colour",
-        render: "samples = 4\ndenoise = true\nfisheye = \"native\"",
-        persistent: true,
+        render: "samples = 4\ndenoise = true\ndenoise_prefilter = \"fast\"\nfisheye = \"native\"",
+        envs: &[],
         as_limit: true,
+        at_full_size: true,
     },
 ];
 
@@ -124,7 +157,7 @@ fn per_camera(report: &serde_json::Value) -> PerCamera {
 fn main() {
     let scale = std::env::var("EGOGEN_RENDER_COST_SCALE").ok();
     let variants: Vec<&Variant> = match scale {
-        Some(_) => VARIANTS.iter().filter(|v| v.as_limit).collect(),
+        Some(_) => VARIANTS.iter().filter(|v| v.at_full_size).collect(),
         None => VARIANTS.iter().collect(),
     };
     let mut results: Vec<(&Variant, PerCamera, f64)> = Vec::new();
@@ -135,12 +168,7 @@ fn main() {
             assert!(config.contains(SHIPPED_SCALE), "{config}");
             config = config.replace(SHIPPED_SCALE, &format!("resolution_scale = {scale}"));
         }
-        let envs: &[(&str, &str)] = if v.persistent {
-            &[]
-        } else {
-            &[("EGOGEN_BLENDER_PERSISTENT_DATA", "0")]
-        };
-        let run = egogen_run_env(&config, &["--duration", DURATION_S], envs);
+        let run = egogen_run_env(&config, &["--duration", DURATION_S], v.envs);
         eprintln!("{}: {:.1} s", v.name, run.wall_seconds);
         results.push((v, per_camera(&run.report), run.wall_seconds));
     }

@@ -42,6 +42,7 @@ resolution_scale = 0.5
 every_n_frames = 8
 samples = 16
 denoise = true
+denoise_prefilter = "fast"
 shutter_frames = 0.0
 frames_per_shard = 10
 [supervisor]
