@@ -549,9 +549,10 @@ def set_rgb_mode(scene, rgb):
     scene.cycles.use_adaptive_sampling = rgb["adaptive_threshold"] > 0
     if rgb["adaptive_threshold"] > 0:
         scene.cycles.adaptive_threshold = rgb["adaptive_threshold"]
-    scene.cycles.use_denoising = rgb["denoise"]
-    if rgb["denoise"]:
-        scene.cycles.denoising_prefilter = rgb["denoise_prefilter"].upper()
+    # `denoise`: the denoiser's prefilter ("accurate" or "fast"), or None for no denoiser.
+    scene.cycles.use_denoising = rgb["denoise"] is not None
+    if rgb["denoise"] is not None:
+        scene.cycles.denoising_prefilter = rgb["denoise"].upper()
     scene.cycles.pixel_filter_type = "BLACKMAN_HARRIS"
     scene.cycles.filter_width = 1.5
     scene.cycles.seed = rgb["seed"]

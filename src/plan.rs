@@ -28,8 +28,8 @@ pub struct RenderPlan {
     pub every_n_frames: usize,
     pub samples: u32,
     pub adaptive_threshold: f64,
-    pub denoise: bool,
-    pub denoise_prefilter: crate::render::DenoisePrefilter,
+    /// OpenImageDenoise on the colour, guided as it says; `None`: off.
+    pub denoise: Option<crate::render::DenoisePrefilter>,
     pub shutter_frames: f64,
     pub cache_samples_per_frame: u32,
     pub frames_per_shard: usize,

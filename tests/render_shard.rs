@@ -256,8 +256,7 @@ fn render_scene() -> Rendered {
         rgb: Some(ShardRgb {
             samples: 4,
             adaptive_threshold: 0.0,
-            denoise: false,
-            denoise_prefilter: egogen::render::DenoisePrefilter::Accurate,
+            denoise: None,
             shutter_frames: 0.5,
             seed: 0,
         }),

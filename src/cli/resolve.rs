@@ -397,8 +397,11 @@ fn resolve_render(
             format!("expected a noise threshold ≥ 0 (0 = off), found {adaptive_threshold}"),
         ));
     }
-    let denoise = r.denoise.unwrap_or(false);
-    if r.denoise_prefilter.is_some() && !denoise {
+    let denoise = r
+        .denoise
+        .unwrap_or(false)
+        .then(|| r.denoise_prefilter.unwrap_or_default());
+    if r.denoise_prefilter.is_some() && denoise.is_none() {
         return Err(bad(
             "render.denoise_prefilter",
             "guides the denoiser, which is off: set `denoise = true` or leave the key out".into(),
@@ -443,7 +446,6 @@ fn resolve_render(
         samples,
         adaptive_threshold,
         denoise,
-        denoise_prefilter: r.denoise_prefilter.unwrap_or_default(),
         shutter_frames,
         cache_samples_per_frame,
         frames_per_shard,

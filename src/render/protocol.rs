@@ -122,9 +122,8 @@ pub struct ShardRgb {
     pub samples: u32,
     /// 0 turns adaptive sampling off.
     pub adaptive_threshold: f64,
-    pub denoise: bool,
-    /// How the denoiser is guided (read only with `denoise`).
-    pub denoise_prefilter: DenoisePrefilter,
+    /// OpenImageDenoise, guided as it says; `None` leaves the colour undenoised.
+    pub denoise: Option<DenoisePrefilter>,
     /// Shutter open time in frames, centred on the frame; 0 turns motion blur off.
     pub shutter_frames: f64,
     pub seed: u32,

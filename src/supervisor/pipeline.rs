@@ -752,7 +752,6 @@ fn base_spec(
             samples: render.samples,
             adaptive_threshold: render.adaptive_threshold,
             denoise: render.denoise,
-            denoise_prefilter: render.denoise_prefilter,
             shutter_frames: render.shutter_frames,
             seed: 0,
         }),
