@@ -86,8 +86,8 @@ pub struct RunPlan {
     pub scene_seed: u64,
     /// Add a ceiling when rendering a scene that has none.
     pub ceiling: bool,
-    /// The height of the floor to walk (`[scene] floor_z_m`), else the lowest large floor.
-    pub floor_z_m: Option<f64>,
+    /// The walkable map's settings (`[scene] floor_z_m`, `floor_steps_m`).
+    pub walkable: crate::scene::WalkableSettings,
     pub render: Option<RenderPlan>,
     pub supervisor: SupervisorPlan,
 }

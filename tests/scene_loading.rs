@@ -409,3 +409,59 @@ fn scene_inspect_draws_depth_images_beside_the_map_when_asked() {
     assert_eq!(w, plain_w + 32 * 8 + 6 + 16);
     assert!(h >= plain_h, "{h} < {plain_h}");
 }
+
+/// The shipped stepped house is what `tools/make_stepped_house.py` writes, and its rooms are
+/// walked on their own floors with `floor_steps_m`: on one flat floor only the den (the lowest)
+/// is walkable; stepped, all four rooms and the middle step form one region, each cell on its
+/// room's floor.
+#[test]
+fn the_stepped_house_is_walked_on_each_rooms_floor() {
+    let root = common::repo_root();
+    let shipped = root.join("assets/scenes/stepped_house.obj");
+    let dir = tempfile::tempdir().unwrap();
+    let again = dir.path().join("stepped_house.obj");
+    let status = std::process::Command::new("python3")
+        .arg(root.join("tools/make_stepped_house.py"))
+        .arg(&again)
+        .status()
+        .expect("python3 runs");
+    assert!(status.success());
+    assert_eq!(
+        std::fs::read(&shipped).unwrap(),
+        std::fs::read(&again).unwrap(),
+        "assets/scenes/stepped_house.obj differs from the tool's output"
+    );
+    let mesh = load_scene(&shipped, None).unwrap();
+    let area = |m: &egogen::scene::WalkableMap| m.walkable_count() as f64 * m.cell_m * m.cell_m;
+    let flat = walkable_map(&mesh, &shipped, WalkableSettings::default()).unwrap();
+    assert!((flat.floor_z_m + 0.12).abs() < 1e-6, "{}", flat.floor_z_m);
+    assert!(area(&flat) < 20.0, "{} m² on one flat floor", area(&flat));
+    let map = walkable_map(
+        &mesh,
+        &shipped,
+        WalkableSettings {
+            floor_steps_m: Some(0.2),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(area(&map) > 75.0, "{} m² on stepped floors", area(&map));
+    let regions: std::collections::BTreeSet<u32> =
+        map.component.iter().copied().filter(|&c| c > 0).collect();
+    assert_eq!(regions.len(), 1);
+    for (x, y, floor) in [
+        (4.0, 4.0, 0.0),
+        (8.0, 6.0, 0.17),
+        (8.0, 2.0, -0.12),
+        (9.5, 3.7, 0.02),
+    ] {
+        let p = glam::DVec2::new(x, y);
+        let (i, j) = map.cell_of(p).unwrap();
+        assert!(map.is_walkable_at(p), "({x}, {y})");
+        assert!(
+            (map.cell_floor_m(j * map.nx + i) - floor).abs() < 1e-6,
+            "({x}, {y}): floor {} m, not {floor} m",
+            map.cell_floor_m(j * map.nx + i)
+        );
+    }
+}

@@ -1097,3 +1097,108 @@ fn agents_walk_the_storey_whose_floor_height_is_asked() {
         .to_string();
     assert!(err.contains("two_storeys.obj"), "{err}");
 }
+
+/// Rooms whose floors differ by a step: a floor at z = 0 and, east of x = 1, a platform
+/// 0.15 m high over it. On one flat floor the platform is furniture (a goal on it is
+/// refused); with `[scene] floor_steps_m = 0.2` the agent walks up onto it and its body follows
+/// the floor: the lowest marker on the floor before the step, 0.15 m up after it.
+#[test]
+fn agents_step_up_between_floors_with_floor_steps() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = egogen::math::Vec3::new;
+    let mut scene = egogen::scene::SceneMesh::default();
+    scene.add_box("slab", v(-5.0, -3.0, -0.1), v(5.0, 3.0, 0.0));
+    scene.add_box("platform", v(1.0, -3.0, 0.0), v(5.0, 3.0, 0.15));
+    scene.write_obj(&dir.path().join("step.obj")).unwrap();
+    let config = |name: &str, steps: &str| {
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(
+            &path,
+            format!(
+                "[scene]\npath = \"step.obj\"\nindoors = false\n{steps}\n[motion]\nduration_s = 6.0\n\
+                 [[agents]]\nname = \"a\"\nstart = [-2.0, 0.0]\ngoals = [[3.0, 0.0]]\nsteering = \"sampling\"\nk = 4\n\
+                 [output]\ndir = \"{name}\"\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    // One flat floor: the platform blocks, and the goal on it is refused.
+    let flat = load_synth_plan(&config("flat", "")).unwrap();
+    let err = run_synth(&flat, false)
+        .map(|_| ())
+        .expect_err("a goal on the platform was walked on a flat floor")
+        .to_string();
+    assert!(err.contains("goal"), "{err}");
+    // Bad steps name the key.
+    let err = load_synth_plan(&config("tall", "floor_steps_m = 0.8"))
+        .expect_err("a 0.8 m step was taken")
+        .to_string();
+    assert!(err.contains("scene.floor_steps_m"), "{err}");
+
+    let plan = load_synth_plan(&config("stepped", "floor_steps_m = 0.2")).unwrap();
+    run_synth(&plan, false).unwrap();
+    let markers = npyz::NpyFile::new(
+        std::fs::File::open(dir.path().join("stepped/agents/a/markers.npy")).unwrap(),
+    )
+    .unwrap();
+    let per_frame = markers.shape()[1] as usize * 3;
+    let values = markers.into_vec::<f32>().unwrap();
+    let (mut before, mut after) = (Vec::new(), Vec::new());
+    for frame in values.chunks(per_frame) {
+        let n = (per_frame / 3) as f32;
+        let x = frame.chunks(3).map(|m| m[0]).sum::<f32>() / n;
+        let lowest = frame.chunks(3).map(|m| m[2]).fold(f32::MAX, f32::min);
+        if x < 0.0 {
+            before.push(lowest);
+        } else if x > 1.8 {
+            after.push(lowest);
+        }
+    }
+    assert!(
+        before.len() > 10 && after.len() > 10,
+        "{} {}",
+        before.len(),
+        after.len()
+    );
+    for (floor, lows) in [(0.0, &before), (0.15, &after)] {
+        let mean = lows.iter().sum::<f32>() / lows.len() as f32;
+        assert!(
+            (mean - floor).abs() < 0.04,
+            "mean lowest marker {mean} m on the floor at {floor} m"
+        );
+        assert!(
+            lows.iter().all(|z| (z - floor).abs() < 0.1),
+            "lowest markers {lows:?} on the floor at {floor} m"
+        );
+    }
+    let summary: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("stepped/summary.json")).unwrap(),
+    )
+    .unwrap();
+    let gap = summary["totals"]["checks"]["max_lowest_marker_gap_m"]
+        .as_f64()
+        .unwrap();
+    // Against the floor under each marker itself (0.15 m east of x = 1): the body is lifted
+    // onto the step before a foot lands on it, so no foot enters the step's edge (lifted by the
+    // floor under the pelvis alone, one did by 0.054 m); the whole body leaves the floor below
+    // by up to the step's height for the 0.1 s before.
+    let under = |x: f32| if x >= 1.0 { 0.15f32 } else { 0.0 };
+    let (mut sunk, mut floated) = (0.0f32, 0.0f32);
+    for frame in values.chunks(per_frame) {
+        let lowest = frame
+            .chunks(3)
+            .map(|m| m[2] - under(m[0]))
+            .fold(f32::MAX, f32::min);
+        sunk = sunk.max(-lowest);
+        floated = floated.max(lowest);
+    }
+    assert!(
+        sunk < 0.03 && floated < 0.2,
+        "sunk {sunk} m, floated {floated} m"
+    );
+    assert!(
+        gap < 0.2,
+        "largest gap of the lowest marker to the floor under the pelvis {gap} m"
+    );
+}

@@ -244,6 +244,12 @@ enum SceneCommand {
         /// Walkable-map cell size (m).
         #[arg(long, default_value_t = 0.1)]
         cell_m: f64,
+        /// Walk the floor at this height (m: an upper storey), as `[scene] floor_z_m`.
+        #[arg(long)]
+        floor_z_m: Option<f64>,
+        /// Walk floors that step by at most this (m) as one floor, as `[scene] floor_steps_m`.
+        #[arg(long)]
+        floor_steps_m: Option<f64>,
         /// Output PNG (must not exist).
         #[arg(long)]
         out: PathBuf,
@@ -492,6 +498,8 @@ fn run(cli: Cli) -> Result<()> {
             scene,
             up,
             cell_m,
+            floor_z_m,
+            floor_steps_m,
             out,
             agents,
             seed,
@@ -501,7 +509,12 @@ fn run(cli: Cli) -> Result<()> {
             egogen::cli::scene_jobs::scene_inspect(
                 &scene,
                 up.as_deref(),
-                cell_m,
+                egogen::scene::WalkableSettings {
+                    cell_m,
+                    floor_z_m,
+                    floor_steps_m,
+                    ..Default::default()
+                },
                 &out,
                 agents,
                 seed,

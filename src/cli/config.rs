@@ -98,6 +98,10 @@ pub struct RawScene {
     /// Walk the floor at this height (m): a building's upper storey (default: the lowest
     /// floor holding a quarter of the largest floor area).
     pub floor_z_m: Option<f64>,
+    /// Walk floors that step up or down by at most this (m) from cell to cell as one floor:
+    /// steps between rooms, a sunken room, a ramp (0 < steps ≤ 0.5; default: one flat
+    /// floor). Bodies follow the floor under them.
+    pub floor_steps_m: Option<f64>,
 }
 
 /// `[render]`: which cameras render what, and how well.

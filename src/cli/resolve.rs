@@ -80,15 +80,11 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         scene,
         scene_seed: raw.scene.seed.unwrap_or(0),
         ceiling: raw.scene.ceiling.unwrap_or(true),
-        floor_z_m: match raw.scene.floor_z_m {
-            Some(z) if !z.is_finite() => {
-                return Err(bad(
-                    "scene.floor_z_m",
-                    format!("expected a finite height (m), got {z}"),
-                ))
-            }
-            z => z,
-        },
+        walkable: super::synth_config::floor_settings(
+            raw.scene.floor_z_m,
+            raw.scene.floor_steps_m,
+            &bad,
+        )?,
         render,
         supervisor: resolve_supervisor(raw.supervisor, config_path)?,
     })
@@ -206,6 +202,7 @@ fn agents_motion(
             floor_m: None,
             indoors: raw.scene.indoors,
             floor_z_m: raw.scene.floor_z_m,
+            floor_steps_m: raw.scene.floor_steps_m,
         },
         motion: RawSynthMotion {
             weights: m.weights.clone(),

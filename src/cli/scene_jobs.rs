@@ -18,7 +18,7 @@ use crate::sensing::DepthImage;
 pub fn scene_inspect(
     scene: &str,
     up: Option<&str>,
-    cell_m: f64,
+    settings: crate::scene::WalkableSettings,
     out: &Path,
     agents: usize,
     seed: u64,
@@ -27,12 +27,21 @@ pub fn scene_inspect(
     use crate::preview::map::MapPicture;
     use crate::scene::{
         load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind, UpAxis,
-        WalkableSettings,
     };
     use crate::sensing::{EgoPose2, RayScan, SensingWorld};
 
+    let cell_m = settings.cell_m;
     if !(cell_m.is_finite() && cell_m > 0.0) {
         bail!("--cell-m must be a positive number of metres, got {cell_m}");
+    }
+    if settings.floor_z_m.is_some_and(|z| !z.is_finite()) {
+        bail!("--floor-z-m must be a finite height (m)");
+    }
+    if let Some(s) = settings.floor_steps_m {
+        let most = crate::scene::walkable::MAX_FLOOR_STEPS_M;
+        if !(s.is_finite() && s > 0.0 && s <= most) {
+            bail!("--floor-steps-m must be more than 0 and at most {most} m, got {s}");
+        }
     }
     let (mesh, moving, path) = match scene.strip_prefix("scenario:") {
         Some(name) => {
@@ -48,14 +57,7 @@ pub fn scene_inspect(
         }
     };
     let t = std::time::Instant::now();
-    let map = walkable_map(
-        &mesh,
-        &path,
-        WalkableSettings {
-            cell_m,
-            ..Default::default()
-        },
-    )?;
+    let map = walkable_map(&mesh, &path, settings)?;
     let build_s = t.elapsed().as_secs_f64();
     let (lo, hi) = mesh.bounds().expect("non-empty scene");
     let components = map.component.iter().copied().max().unwrap_or(0);
@@ -69,7 +71,18 @@ pub fn scene_inspect(
         "bounds:     ({:.2}, {:.2}, {:.2}) .. ({:.2}, {:.2}, {:.2}) m",
         lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
     );
-    println!("floor:      z = {:.3} m", map.floor_z_m);
+    match (0..map.nx * map.ny)
+        .filter(|&k| map.has_floor[k])
+        .map(|k| map.cell_floor_m(k))
+        .fold(None, |r: Option<(f64, f64)>, z| {
+            Some(r.map_or((z, z), |(a, b)| (a.min(z), b.max(z))))
+        }) {
+        Some((lo, hi)) if !map.is_flat() => println!(
+            "floor:      z = {:.3} m, stepped floors from {lo:.3} to {hi:.3} m",
+            map.floor_z_m
+        ),
+        _ => println!("floor:      z = {:.3} m", map.floor_z_m),
+    }
     println!(
         "grid:       {} x {} cells of {} m (built in {:.3} s)",
         map.nx, map.ny, map.cell_m, build_s

@@ -6,6 +6,7 @@
 //! into a [`SynthPlan`] (the primitive training config whose clips seed the agents read with
 //! it); [`crate::synth::take`] walks the plan and writes the take.
 
+use crate::scene::WalkableSettings;
 use std::path::{Path, PathBuf};
 
 use glam::DVec2;
@@ -44,6 +45,10 @@ pub(crate) struct RawSynthScene {
     /// Walk the floor at this height (m): a building's upper storey (default: the lowest
     /// floor holding a quarter of the largest floor area).
     pub floor_z_m: Option<f64>,
+    /// Walk floors that step up or down by at most this (m) from cell to cell as one floor:
+    /// steps between rooms, a sunken room, a ramp (0 < steps ≤ 0.5; default: one flat
+    /// floor). Bodies follow the floor under them.
+    pub floor_steps_m: Option<f64>,
 }
 
 /// `[motion]`.
@@ -316,7 +321,7 @@ pub(crate) fn resolve_synth(
         scene,
         floor_m,
         indoors: raw.scene.indoors.unwrap_or(true),
-        floor_z_m: raw.scene.floor_z_m,
+        walkable: floor_settings(raw.scene.floor_z_m, raw.scene.floor_steps_m, &bad)?,
         weights,
         policy,
         pose_prior,
@@ -354,12 +359,14 @@ fn synth_scene(
             format!("expected 1–200 m, got {floor_m}"),
         ));
     }
-    if let Some(z) = raw.floor_z_m {
-        if !(z.is_finite() && scene.is_some()) {
-            return Err(bad(
-                "scene.floor_z_m",
-                format!("expected a finite height (m) with a scene `path`, got {z}"),
-            ));
+    if scene.is_none() {
+        for (key, given) in [
+            ("scene.floor_z_m", raw.floor_z_m.is_some()),
+            ("scene.floor_steps_m", raw.floor_steps_m.is_some()),
+        ] {
+            if given {
+                return Err(bad(key, "only with a scene `path`".into()));
+            }
         }
     }
     if scene.is_some() && raw.floor_m.is_some() {
@@ -369,6 +376,38 @@ fn synth_scene(
         ));
     }
     Ok((scene, floor_m))
+}
+
+/// The walkable map's settings from `[scene] floor_z_m` and `floor_steps_m`, checked.
+pub(crate) fn floor_settings(
+    floor_z_m: Option<f64>,
+    floor_steps_m: Option<f64>,
+    bad: Bad,
+) -> Result<WalkableSettings, ConfigError> {
+    if let Some(z) = floor_z_m {
+        if !z.is_finite() {
+            return Err(bad(
+                "scene.floor_z_m",
+                format!("expected a finite height (m), got {z}"),
+            ));
+        }
+    }
+    use crate::scene::walkable::MAX_FLOOR_STEPS_M;
+    if let Some(s) = floor_steps_m {
+        if !(s.is_finite() && s > 0.0 && s <= MAX_FLOOR_STEPS_M) {
+            return Err(bad(
+                "scene.floor_steps_m",
+                format!(
+                    "expected the highest step between floors, more than 0 and at most {MAX_FLOOR_STEPS_M} m, got {s}"
+                ),
+            ));
+        }
+    }
+    Ok(WalkableSettings {
+        floor_z_m,
+        floor_steps_m,
+        ..Default::default()
+    })
 }
 
 /// `[motion]`'s stepping settings for a take of `primitives` primitives.

@@ -5,8 +5,10 @@ use glam::DVec2;
 use super::RgbImage;
 use crate::scene::{Obstacle2, WalkableMap};
 
-/// Colours: walkable light, occupied dark, no floor mid grey.
+/// Colours: walkable light, occupied dark, no floor mid grey; on stepped floors walkable cells
+/// run from `WALKABLE` (the lowest floor) to `WALKABLE_HIGHEST` (the highest).
 const WALKABLE: [u8; 3] = [250, 250, 245];
+const WALKABLE_HIGHEST: [u8; 3] = [150, 200, 250];
 const OCCUPIED: [u8; 3] = [60, 60, 70];
 const NO_FLOOR: [u8; 3] = [170, 170, 175];
 
@@ -21,11 +23,28 @@ impl<'a> MapPicture<'a> {
     pub fn new(map: &'a WalkableMap, max_side_px: usize) -> Self {
         let px_per_cell = (max_side_px / map.nx.max(map.ny)).max(1);
         let mut image = RgbImage::new(map.nx * px_per_cell, map.ny * px_per_cell, NO_FLOOR);
+        let heights = (0..map.nx * map.ny)
+            .filter(|&k| map.walkable[k])
+            .map(|k| map.cell_floor_m(k));
+        let (lowest, highest) = heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
+            (a.min(z), b.max(z))
+        });
+        let walkable = |k: usize| {
+            let t = if highest - lowest > 1e-3 {
+                (map.cell_floor_m(k) - lowest) / (highest - lowest)
+            } else {
+                0.0
+            };
+            std::array::from_fn(|c| {
+                (WALKABLE[c] as f64 + t * (WALKABLE_HIGHEST[c] as f64 - WALKABLE[c] as f64)).round()
+                    as u8
+            })
+        };
         for j in 0..map.ny {
             for i in 0..map.nx {
                 let k = j * map.nx + i;
                 let c = if map.walkable[k] {
-                    WALKABLE
+                    walkable(k)
                 } else if map.occupied[k] {
                     OCCUPIED
                 } else {

@@ -105,7 +105,7 @@ impl SceneMesh {
 
     /// Writes the mesh as Wavefront OBJ (metres, z up, as [`super::load_scene`] reads an OBJ
     /// by default), one `o` object per scene object, atomically.
-    pub(crate) fn write_obj(&self, path: &std::path::Path) -> std::io::Result<()> {
+    pub fn write_obj(&self, path: &std::path::Path) -> std::io::Result<()> {
         use std::fmt::Write as _;
         let mut text = format!(
             "# egogen scene: {} objects, {} vertices, {} triangles; metres, z up\n",

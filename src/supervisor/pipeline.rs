@@ -31,7 +31,7 @@ use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
 use crate::render::skin_tone::{SkinRegion, SKIN_REGIONS};
 use crate::render::{BlenderRuntime, ShardBody, ShardRgb, ShardSpec};
 use crate::scene::ceiling::ceiling_to_add;
-use crate::scene::{load_scene, walkable_map, WalkableSettings};
+use crate::scene::{load_scene, walkable_map};
 use crate::scene::{Obstacle2, ObstacleSolid};
 use crate::synth::body_cache::{body_cache_at, playback_keys, rendered_sample_indices};
 use crate::synth::crowd::{CrowdTake, CrowdWorld};
@@ -403,11 +403,7 @@ fn rendered_agents(
 ) -> Result<(Vec<RenderedAgent>, Vec<usize>)> {
     match motion {
         RunMotion::Placed(m) => {
-            let settings = WalkableSettings {
-                floor_z_m: plan.floor_z_m,
-                ..Default::default()
-            };
-            let map = walkable_map(scene, &plan.scene, settings)?;
+            let map = walkable_map(scene, &plan.scene, plan.walkable)?;
             let (placed, _) = place_motion(model, m, &map, plan.scene_seed)
                 .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
             let track = track_body(model, &placed)?;
@@ -704,7 +700,7 @@ fn scene_objects(
         } => {
             let rate = agents[0].motion.frame_rate_hz;
             let frames = agents[0].motion.len() as f64;
-            obstacle_boxes(obstacles, world.map.floor_z_m, next_id(&ids), rate, frames)
+            obstacle_boxes(obstacles, &world.map, next_id(&ids), rate, frames)
         }
         RunMotion::Placed(_) => Vec::new(),
     };
@@ -854,12 +850,13 @@ fn segmentation_ids(ids: &[(String, u32)], scene: &crate::scene::SceneMesh) -> V
         .collect()
 }
 
-/// The `[[obstacles]]` as boxes on the floor at `floor_z_m`, named `obstacle_NN` with ids
+/// The `[[obstacles]]` as boxes standing on the map's floor under their centres (at its
+/// keys, for a moving one), named `obstacle_NN` with ids
 /// from `first_id`; a moving one keyed one frame before the take and one after its last frame
 /// (`frames` at `rate_hz`), so that blur and motion vectors see it move at the ends too.
 fn obstacle_boxes(
     solids: &[ObstacleSolid],
-    floor_z_m: f64,
+    map: &crate::scene::WalkableMap,
     first_id: u32,
     rate_hz: f64,
     frames: f64,
@@ -880,7 +877,7 @@ fn obstacle_boxes(
                 let c = s.motion.at(frame / rate_hz).centre();
                 ObstacleKey {
                     frame,
-                    centre: [c.x, c.y, floor_z_m + 0.5 * s.height_m],
+                    centre: [c.x, c.y, map.floor_under(c) + 0.5 * s.height_m],
                 }
             };
             let still = s.motion.velocity_m_per_s == glam::DVec2::ZERO;

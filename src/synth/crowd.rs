@@ -322,6 +322,59 @@ pub struct AgentTrack {
 }
 
 impl AgentTrack {
+    /// Lifts a track walked on the flat floor at the map's `floor_z_m` onto its stepped
+    /// floors ([`crate::scene::WalkableSettings::floor_steps_m`]), rigidly, frame by frame:
+    /// at least to the floor under the pelvis ([`WalkableMap::floor_under`]), and high
+    /// enough that no marker stands lower under the floor of its own cell than it stood under
+    /// the flat floor (a foot over a step up lifts the body onto it); that lift is the
+    /// largest within ±[`FLOOR_FOLLOW_FRAMES`] of each frame, averaged over as many, so the
+    /// body rises or sinks over 0.2 s and never puts a foot into a step. The motion model
+    /// walks a flat floor, so the body is lifted onto a step up to 0.1 s before its foot
+    /// lands there, and the other foot lifts off the floor below. Nothing changes on a flat
+    /// floor.
+    pub(crate) fn follow_floor(&mut self, map: &WalkableMap) {
+        if map.is_flat() {
+            return;
+        }
+        let z0 = map.floor_z_m;
+        let need: Vec<f64> = (0..self.frames.len())
+            .map(|f| {
+                self.markers[f]
+                    .iter()
+                    .filter_map(|m| {
+                        let under = map.cell_floor_at(DVec2::new(m.x, m.y))?;
+                        Some(under - z0 - (m.z - z0).max(0.0))
+                    })
+                    .fold(map.floor_under(self.pelvis_xy[f]) - z0, f64::max)
+            })
+            .collect();
+        let window = |v: &[f64], f: usize| {
+            let (a, b) = (
+                f.saturating_sub(FLOOR_FOLLOW_FRAMES),
+                (f + FLOOR_FOLLOW_FRAMES).min(v.len() - 1),
+            );
+            (a, b)
+        };
+        let most: Vec<f64> = (0..need.len())
+            .map(|f| {
+                let (a, b) = window(&need, f);
+                need[a..=b]
+                    .iter()
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max)
+            })
+            .collect();
+        for f in 0..self.frames.len() {
+            let (a, b) = window(&most, f);
+            let dz = most[a..=b].iter().sum::<f64>() / (b - a + 1) as f64;
+            self.frames[f].transl.z += dz;
+            self.world_from_cpf[f].translation.z += dz;
+            for m in &mut self.markers[f] {
+                m.z += dz;
+            }
+        }
+    }
+
     /// The agent's frames as a motion sequence (neutral gender; the body model's).
     pub(crate) fn motion_sequence(&self, frame_rate_hz: f64) -> crate::motion::MotionSequence {
         crate::motion::MotionSequence {
@@ -893,6 +946,10 @@ impl<'m> Agent<'m> {
     }
 }
 
+/// Frames either side over which [`AgentTrack::follow_floor`] takes the largest lift a frame
+/// needs and averages it (0.1 s at 40 Hz).
+pub(crate) const FLOOR_FOLLOW_FRAMES: usize = 4;
+
 /// Draws from the motion model's prior when every redraw of a primitive would take the pelvis
 /// over a wall ([`CrowdSettings::scene_every_frame`]), before the body holds its pose.
 pub(crate) const WALL_PRIOR_DRAWS: usize = 32;
@@ -1095,6 +1152,7 @@ pub fn run_crowd(
             .into_iter()
             .map(|a| {
                 let mut track = a.finish(frames);
+                track.follow_floor(&world.map);
                 track.pelvis_off_floor_frames = track
                     .pelvis_xy
                     .windows(2)

@@ -62,11 +62,15 @@ pub struct TakeTotals {
 pub struct TakeChecks {
     /// Frames with a non-finite pose, translation or marker.
     pub non_finite_frames: usize,
-    /// Lowest eye (CPF) height above the floor over all frames (m).
+    /// Lowest eye (CPF) height above the floor under the pelvis over all frames (m).
     pub min_eye_height_m: f64,
-    /// Largest distance of the lowest body marker from the floor over all frames (m): a body
-    /// floating or sinking shows here.
+    /// Largest distance of the lowest body marker from the floor under the pelvis over all
+    /// frames (m): a body floating or sinking shows here.
     pub max_lowest_marker_gap_m: f64,
+    /// Deepest any body marker went below the floor of the map cell under it, over all
+    /// frames (m; 0 when none did): a foot in a floor, or in the edge of a step it crosses
+    /// on stepped floors.
+    pub max_marker_below_floor_m: f64,
     /// Share of frames whose pelvis stands outside the region starts and goals are drawn in
     /// (0 without a region).
     pub outside_region_share: f64,
@@ -84,11 +88,11 @@ pub struct TakeChecks {
 
 /// Checks every frame of a take.
 pub(crate) fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
-    let floor = world.map.floor_z_m;
     let mut c = TakeChecks {
         non_finite_frames: 0,
         min_eye_height_m: f64::INFINITY,
         max_lowest_marker_gap_m: 0.0,
+        max_marker_below_floor_m: 0.0,
         outside_region_share: 0.0,
         outside_region_max_m: 0.0,
         pelvis_off_floor_frames: take.agents.iter().map(|a| a.pelvis_off_floor_frames).sum(),
@@ -111,6 +115,7 @@ pub(crate) fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
                 c.non_finite_frames += 1;
                 continue;
             }
+            let floor = world.map.floor_under(a.pelvis_xy[f]);
             c.min_eye_height_m = c
                 .min_eye_height_m
                 .min(a.world_from_cpf[f].translation.z - floor);
@@ -119,6 +124,11 @@ pub(crate) fn take_checks(world: &CrowdWorld, take: &CrowdTake) -> TakeChecks {
                 .map(|m| m.z)
                 .fold(f64::INFINITY, f64::min);
             c.max_lowest_marker_gap_m = c.max_lowest_marker_gap_m.max((lowest - floor).abs());
+            for m in &a.markers[f] {
+                if let Some(under) = world.map.cell_floor_at(DVec2::new(m.x, m.y)) {
+                    c.max_marker_below_floor_m = c.max_marker_below_floor_m.max(under - m.z);
+                }
+            }
             if let Some(region) = &world.region {
                 let inside = world
                     .map

@@ -26,7 +26,10 @@ pub(crate) enum PlacementError {
 }
 
 /// Moves `motion` so that its pelvis path (floor projection) starts at a seeded free spot and
-/// keeps `PATH_CLEARANCE_M` from obstacles, inside the largest connected walkable region. Returns the moved motion and the move.
+/// keeps `PATH_CLEARANCE_M` from obstacles, inside the largest connected walkable region, and
+/// raises each frame from the motion's floor (z = 0) to the map's floor under its pelvis
+/// ([`WalkableMap::floor_under`]: an upper storey, stepped floors). Returns the moved motion
+/// and the horizontal move.
 pub(crate) fn place_motion(
     model: &BodyModel,
     motion: &MotionSequence,
@@ -94,8 +97,10 @@ pub(crate) fn place_motion(
             let mut moved = motion.clone();
             for i in 0..motion.len() {
                 let params = motion.frame(i).moved_rigidly(new_from_old, rest_pelvis);
+                let pelvis = target + rot * path[i];
                 moved.poses[i] = params.pose;
-                moved.trans[i] = params.transl;
+                moved.trans[i] =
+                    params.transl + Vec3::Z * map.floor_under(glam::DVec2::new(pelvis.x, pelvis.y));
             }
             return Ok((moved, new_from_old));
         }

@@ -42,8 +42,8 @@ pub struct SynthPlan {
     pub scene: Option<PathBuf>,
     pub floor_m: f64,
     pub indoors: bool,
-    /// The height of the floor to walk (`[scene] floor_z_m`), else the lowest large floor.
-    pub floor_z_m: Option<f64>,
+    /// The walkable map's settings (`[scene] floor_z_m`, `floor_steps_m`).
+    pub walkable: crate::scene::WalkableSettings,
     pub weights: PathBuf,
     pub policy: Option<PathBuf>,
     pub pose_prior: PathBuf,
@@ -65,11 +65,7 @@ pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
     match &plan.scene {
         Some(path) => {
             let mesh = crate::scene::load_scene(path, None)?;
-            let settings = crate::scene::WalkableSettings {
-                floor_z_m: plan.floor_z_m,
-                ..Default::default()
-            };
-            Ok(crate::scene::walkable_map(&mesh, path, settings)?)
+            Ok(crate::scene::walkable_map(&mesh, path, plan.walkable)?)
         }
         None => {
             let cell = 0.1;
