@@ -196,6 +196,16 @@ fn a_denoise_prefilter_without_the_denoiser_or_unknown() {
 }
 
 #[test]
+fn floor_steps_out_of_range() {
+    for steps in ["0.0", "0.8", "nan"] {
+        expect_config_error(
+            &format!("{GOOD}\n[scene]\nfloor_steps_m = {steps}\n"),
+            &["scene.floor_steps_m", "at most 0.5 m"],
+        );
+    }
+}
+
+#[test]
 fn unknown_fisheye_rendering() {
     expect_config_error(
         &with_render("fisheye = \"fast\""),
