@@ -465,3 +465,55 @@ fn the_stepped_house_is_walked_on_each_rooms_floor() {
         );
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+
+    /// Stepped floors far from the origin (x, y to ±100 km, as georeferenced scans lie; the
+    /// floor to ±1 km): a platform `rise` m over a floor is walked on its own floor when the
+    /// steps allow it and blocked when they do not, and the floor a body follows is finite,
+    /// between the two floors and never falls across the step.
+    #[test]
+    fn stepped_floors_hold_far_from_the_origin(
+        ox in -1e5f64..1e5,
+        oy in -1e5f64..1e5,
+        oz in -1e3f64..1e3,
+        rise in 0.02f64..0.2,
+    ) {
+        use egogen::math::Vec3;
+        let mut mesh = egogen::scene::SceneMesh::default();
+        let at = |x: f64, y: f64, z: f64| Vec3::new(ox + x, oy + y, oz + z);
+        mesh.add_box("slab", at(-5.0, -3.0, -0.1), at(5.0, 3.0, 0.0));
+        mesh.add_box("platform", at(1.0, -3.0, 0.0), at(5.0, 3.0, rise));
+        let map = |steps: f64| {
+            egogen::scene::WalkableMap::build(
+                &mesh,
+                WalkableSettings { floor_steps_m: Some(steps), ..Default::default() },
+            )
+            .unwrap()
+        };
+        let p = |x: f64| glam::DVec2::new(ox + x, oy);
+        let stepped = map(0.2);
+        let floor = |x: f64| stepped.cell_floor_at(p(x)).unwrap();
+        proptest::prop_assert!((floor(-3.0) - oz).abs() < 1e-4, "{} {oz}", floor(-3.0));
+        proptest::prop_assert!((floor(3.0) - oz - rise).abs() < 1e-4, "{} {}", floor(3.0), oz + rise);
+        proptest::prop_assert!(stepped.is_walkable_at(p(-3.0)) && stepped.is_walkable_at(p(3.0)));
+        let region = |m: &egogen::scene::WalkableMap, x: f64| {
+            let (i, j) = m.cell_of(p(x)).unwrap();
+            m.component[j * m.nx + i]
+        };
+        proptest::prop_assert_eq!(region(&stepped, -3.0), region(&stepped, 3.0));
+        let mut last = f64::NEG_INFINITY;
+        for k in 0..=40 {
+            let z = stepped.floor_under(p(-1.0 + 0.05 * k as f64));
+            proptest::prop_assert!(z.is_finite() && z >= oz - 1e-4 && z <= oz + rise + 1e-4);
+            proptest::prop_assert!(z >= last - 1e-4, "the floor falls across the step: {last} then {z}");
+            last = z;
+        }
+        // Steps lower than the platform: it is furniture if higher than the 0.1 m any walker
+        // steps over (lower, a sill or a rug: walked over on the floor below).
+        let low = map(0.5 * rise);
+        proptest::prop_assert!(low.is_walkable_at(p(-3.0)));
+        proptest::prop_assert_eq!(low.is_walkable_at(p(3.0)), rise <= 0.1);
+    }
+}
