@@ -6,7 +6,6 @@
 //! into a [`SynthPlan`] (the primitive training config whose clips seed the agents read with
 //! it); [`crate::synth::take`] walks the plan and writes the take.
 
-use crate::scene::WalkableSettings;
 use std::path::{Path, PathBuf};
 
 use glam::DVec2;
@@ -18,7 +17,8 @@ use super::config_file::{crate_root, resolve_body_model};
 use super::config_file::{load_toml, Bad, ConfigError};
 use crate::math::random::normal_samples;
 use crate::plan::{AgentDraft, SynthPlan};
-use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid};
+use crate::scene::walkable::MAX_FLOOR_STEPS_M;
+use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableSettings};
 use crate::synth::crowd::{CrowdSettings, Steering};
 
 /// Most agents in one take.
@@ -392,7 +392,6 @@ pub(crate) fn floor_settings(
             ));
         }
     }
-    use crate::scene::walkable::MAX_FLOOR_STEPS_M;
     if let Some(s) = floor_steps_m {
         if !(s.is_finite() && s > 0.0 && s <= MAX_FLOOR_STEPS_M) {
             return Err(bad(

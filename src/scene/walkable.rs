@@ -121,9 +121,10 @@ pub const MAX_MAP_CELLS: f64 = 5e7;
 /// Bytes a map needs per cell, scratch included (flags, signed distance, component, EDT).
 pub(crate) const MAP_BYTES_PER_CELL: f64 = 31.0;
 
-/// Bytes stepped floors add per cell: its floor and their average, the candidates' index and
-/// about one candidate (cell and height) per surface over it.
-const STEPPED_BYTES_PER_CELL: f64 = 32.0;
+/// Bytes stepped floors add per cell: its floor and their average (4 + 4), the candidates'
+/// index (8), about one candidate (cell and height, 8) and its mark per surface over it, and
+/// the averaging's sums and counts (32).
+const STEPPED_BYTES_PER_CELL: f64 = 64.0;
 
 impl WalkableMap {
     /// Builds the map of a scene.

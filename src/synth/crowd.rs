@@ -348,16 +348,16 @@ impl AgentTrack {
                     .fold(map.floor_under(self.pelvis_xy[f]) - z0, f64::max)
             })
             .collect();
-        let window = |v: &[f64], f: usize| {
-            let (a, b) = (
+        let last = need.len() - 1;
+        let window = |f: usize| {
+            (
                 f.saturating_sub(FLOOR_FOLLOW_FRAMES),
-                (f + FLOOR_FOLLOW_FRAMES).min(v.len() - 1),
-            );
-            (a, b)
+                (f + FLOOR_FOLLOW_FRAMES).min(last),
+            )
         };
         let most: Vec<f64> = (0..need.len())
             .map(|f| {
-                let (a, b) = window(&need, f);
+                let (a, b) = window(f);
                 need[a..=b]
                     .iter()
                     .copied()
@@ -365,7 +365,7 @@ impl AgentTrack {
             })
             .collect();
         for f in 0..self.frames.len() {
-            let (a, b) = window(&most, f);
+            let (a, b) = window(f);
             let dz = most[a..=b].iter().sum::<f64>() / (b - a + 1) as f64;
             self.frames[f].transl.z += dz;
             self.world_from_cpf[f].translation.z += dz;

@@ -111,3 +111,39 @@ pub(crate) fn place_motion(
         tried: starts.len(),
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A walk placed on a floor at z = 1.3 m (an upper storey, a scan's own height) stands
+    /// 1.3 m higher at every frame than the same walk placed on a floor at z = 0.
+    #[test]
+    fn a_placed_walk_stands_on_the_scenes_floor() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let model = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+        let shaped = model.shape(&[], &[]).unwrap();
+        let walk = crate::motion::scripted::WalkCycle::default().sequence(
+            1.0,
+            40.0,
+            &[],
+            shaped.rest_joints[0],
+            shaped.rest_sole_y(),
+        );
+        let placed = |floor_z: f64| {
+            let mut scene = crate::scene::SceneMesh::default();
+            scene.add_box(
+                "slab",
+                Vec3::new(-6.0, -6.0, floor_z - 0.1),
+                Vec3::new(6.0, 6.0, floor_z),
+            );
+            let map = WalkableMap::build(&scene, Default::default()).unwrap();
+            place_motion(&model, &walk, &map, 0).unwrap().0
+        };
+        let (ground, upper) = (placed(0.0), placed(1.3));
+        for (a, b) in ground.trans.iter().zip(&upper.trans) {
+            assert!((b.z - a.z - 1.3).abs() < 1e-9, "{} against {}", b.z, a.z);
+            assert!((b.x - a.x).abs() < 1e-9 && (b.y - a.y).abs() < 1e-9);
+        }
+    }
+}
