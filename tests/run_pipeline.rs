@@ -631,5 +631,14 @@ fn out_of_range_options_and_an_output_that_is_a_file_are_refused_before_any_work
     assert!(
         !out.status.success() && err.contains("--action-spread") && !err.contains("-- -1"),
         "{err}"
+    ); // A held-out scene evaluates a policy: without one the error says to give it.
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["policy", "eval", "--scene", "assets/scenes/apartment.glb"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("give --policy FILE") && !err.contains("--k"),
+        "{err}"
     );
 }

@@ -368,6 +368,15 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if max_primitives == Some(0) {
                 bail!("--max-primitives must be at least 1");
             }
+            if scene.is_some() && !k.is_empty() {
+                match policy {
+                    None => bail!(
+                        "--scene evaluates a policy: give --policy FILE (the shipped one: {})",
+                        crate::policy::weights::SHIPPED_POLICY
+                    ),
+                    Some(_) => bail!("--scene evaluates --policy only (give no --k)"),
+                }
+            }
             let fixed = match &scene {
                 None => None,
                 Some(path) => {
@@ -387,9 +396,6 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     )?)
                 }
             };
-            if fixed.is_some() && !k.is_empty() {
-                bail!("--scene evaluates --policy only (give no --k)");
-            }
             if let Some(png) = &paths_png {
                 refuse_existing(png)?;
                 if k.len() + usize::from(policy.is_some()) != 1 || paths == 0 {
