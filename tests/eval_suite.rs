@@ -82,16 +82,16 @@ fn the_guide_shows_a_visible_goal_itself_and_a_hidden_one_along_the_way_round() 
     // Same side of the wall: the straight way is clear, the aim is the goal.
     let near = DVec2::new(-2.0, 1.0);
     assert!(line_is_clear(&map, &[], 0.3, from, near));
-    assert_eq!(guide_aim(&map, &[], 0.3, from, near, 2.0), near);
+    assert_eq!(guide_aim(&map, &[], 0.3, 0.0, from, near, 2.0), near);
     // No lookahead, no guide: the goal, hidden or not.
     assert_eq!(
-        guide_aim(&map, &[], 0.3, from, DVec2::new(2.0, -2.0), 0.0),
+        guide_aim(&map, &[], 0.3, 0.0, from, DVec2::new(2.0, -2.0), 0.0),
         DVec2::new(2.0, -2.0)
     );
     // Behind the wall: 2 m along the way round, which first heads up, away from the goal.
     let hidden = DVec2::new(2.0, -2.0);
     assert!(!line_is_clear(&map, &[], 0.3, from, hidden));
-    let aim = guide_aim(&map, &[], 0.3, from, hidden, 2.0);
+    let aim = guide_aim(&map, &[], 0.3, 0.0, from, hidden, 2.0);
     let path = plan_path(&map, &[], 0.3, from, hidden);
     assert_eq!(aim, path.point_along(2.0));
     assert!(
@@ -109,10 +109,10 @@ fn the_guide_shows_a_visible_goal_itself_and_a_hidden_one_along_the_way_round() 
         yaw_rad: 0.0,
     };
     assert!(!line_is_clear(&map, &[person], 0.3, from, near));
-    assert_ne!(guide_aim(&map, &[person], 0.3, from, near, 2.0), near);
+    assert_ne!(guide_aim(&map, &[person], 0.3, 0.0, from, near, 2.0), near);
     // A goal inside the wall: no way round, the goal itself.
     let walled = DVec2::new(0.0, -2.0);
-    assert_eq!(guide_aim(&map, &[], 0.3, from, walled, 2.0), walled);
+    assert_eq!(guide_aim(&map, &[], 0.3, 0.0, from, walled, 2.0), walled);
 }
 
 /// An open 6 × 6 m floor of 0.1 m cells with its corner at `origin`, a square box of half side
@@ -197,7 +197,7 @@ proptest::proptest! {
     ) {
         let (map, b, from, to) =
             far_floor_with_box(DVec2::new(-3.0e5, 7.0e4), (sx, sy), (gx, gy), (bx, by), half, yaw);
-        let aim = guide_aim(&map, &[b], 0.3, from, to, lookahead);
+        let aim = guide_aim(&map, &[b], 0.3, 0.0, from, to, lookahead);
         proptest::prop_assert!(aim.is_finite());
         if line_is_clear(&map, &[b], 0.3, from, to) {
             proptest::prop_assert_eq!(aim, to);

@@ -631,7 +631,8 @@ fn out_of_range_options_and_an_output_that_is_a_file_are_refused_before_any_work
     assert!(
         !out.status.success() && err.contains("--action-spread") && !err.contains("-- -1"),
         "{err}"
-    ); // A held-out scene evaluates a policy: without one the error says to give it.
+    );
+    // A held-out scene evaluates a policy: without one the error says to give it.
     let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
         .args(["policy", "eval", "--scene", "assets/scenes/apartment.glb"])
         .output()
@@ -639,6 +640,16 @@ fn out_of_range_options_and_an_output_that_is_a_file_are_refused_before_any_work
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
         !out.status.success() && err.contains("give --policy FILE") && !err.contains("--k"),
+        "{err}"
+    );
+    // Keeping to the middle of doorways is the guide's: without a lookahead it is refused.
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["policy", "eval", "--guide-centre-weight", "2"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--guide-centre-weight") && err.contains("lookahead"),
         "{err}"
     );
 }

@@ -60,6 +60,7 @@ pub struct RawMotion {
     pub clearance_m: Option<f64>,
     pub guide_lookahead_m: Option<f64>,
     pub guide_memory: Option<bool>,
+    pub guide_centre_weight: Option<f64>,
     pub anticipate_people: Option<bool>,
     pub scene_every_frame: Option<bool>,
     pub seed: Option<u64>,

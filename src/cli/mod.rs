@@ -31,4 +31,39 @@ pub fn exit_quietly_on_closed_pipe() {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
+/// What is wrong with a guide's settings, if anything: the setting's name (a config key's
+/// last part; a flag is it with dashes) and what was expected. One check for `egogen synth`,
+/// `egogen-run`, training configs and `egogen policy eval`.
+pub fn guide_settings_problem(
+    lookahead_m: f64,
+    memory: bool,
+    centre_weight: f64,
+) -> Option<(&'static str, String)> {
+    if !(lookahead_m.is_finite() && lookahead_m >= 0.0) {
+        return Some((
+            "guide_lookahead_m",
+            format!("expected a distance ≥ 0 m, got {lookahead_m}"),
+        ));
+    }
+    if !(centre_weight.is_finite() && centre_weight >= 0.0) {
+        return Some((
+            "guide_centre_weight",
+            format!("expected a weight ≥ 0, got {centre_weight}"),
+        ));
+    }
+    let needs_lookahead = |what: &str| {
+        format!("a guide {what} only with a lookahead > 0 m (e.g. 1 or 2): give one too")
+    };
+    if lookahead_m == 0.0 && memory {
+        return Some(("guide_memory", needs_lookahead("plans on memory")));
+    }
+    if lookahead_m == 0.0 && centre_weight > 0.0 {
+        return Some((
+            "guide_centre_weight",
+            needs_lookahead("keeps to the middle of doorways"),
+        ));
+    }
+    None
+}
+
 pub use resolve::{resolve_run, MotionPlan, RenderPlan, RunPlan, SlurmPlan, SupervisorPlan};

@@ -121,6 +121,10 @@ pub enum PolicyCommand {
         /// shown it so far (the unknown taken as open), not on the whole map.
         #[arg(long)]
         guide_memory: bool,
+        /// With --guide-lookahead-m: how strongly the guide's path keeps to the middle of
+        /// doorways and corridors (0, the default: the shortest path at 0.3 m from walls).
+        #[arg(long, default_value_t = 0.0)]
+        guide_centre_weight: f64,
         /// Give each indoor episode time for its way round walls: at least (walking distance
         /// round walls) / M primitives, never fewer than --max-primitives (7/13 ≈ 0.54: the
         /// time 13 primitives give a 7 m straight walk). Not given: --max-primitives alone.
@@ -277,6 +281,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             crossing_people,
             guide_lookahead_m,
             guide_memory,
+            guide_centre_weight,
             time_by_way_round_m,
             people_seen_ahead,
         } => {
@@ -310,11 +315,12 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
                 }
             }
-            if !(guide_lookahead_m.is_finite() && guide_lookahead_m >= 0.0) {
-                bail!("--guide-lookahead-m: expected a distance ≥ 0 m, got {guide_lookahead_m}");
-            }
-            if guide_memory && guide_lookahead_m == 0.0 {
-                bail!("--guide-memory: give the guide a lookahead too (--guide-lookahead-m 2)");
+            if let Some((field, what)) = crate::cli::guide_settings_problem(
+                guide_lookahead_m,
+                guide_memory,
+                guide_centre_weight,
+            ) {
+                bail!("--{}: {what}", field.replace('_', "-"));
             }
             let plan = crate::cli::train_primitive::load_train_plan(&config)?;
             let body = BodyModel::load(&plan.body_model)?;
@@ -361,6 +367,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 },
                 guide_lookahead_m,
                 guide_memory,
+                guide_centre_weight,
                 people_seen_ahead,
                 time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
                 ..defaults

@@ -154,6 +154,10 @@ fn check_unused_for_source(raw: &RawRun, bad: Bad) -> Result<(), ConfigError> {
         ("motion.clearance_m", m.clearance_m.is_some()),
         ("motion.guide_lookahead_m", m.guide_lookahead_m.is_some()),
         ("motion.guide_memory", m.guide_memory.is_some()),
+        (
+            "motion.guide_centre_weight",
+            m.guide_centre_weight.is_some(),
+        ),
         ("motion.anticipate_people", m.anticipate_people.is_some()),
         ("motion.scene_every_frame", m.scene_every_frame.is_some()),
         ("motion.seed", m.seed.is_some()),
@@ -218,6 +222,7 @@ fn agents_motion(
             clearance_m: m.clearance_m,
             guide_lookahead_m: m.guide_lookahead_m,
             guide_memory: m.guide_memory,
+            guide_centre_weight: m.guide_centre_weight,
             anticipate_people: m.anticipate_people,
             scene_every_frame: m.scene_every_frame,
             seed: m.seed,

@@ -80,6 +80,9 @@ pub(crate) struct RawSynthMotion {
     /// With a guide: whether it plans only on what each walker's own rays have shown it so
     /// far (default false: on the whole walkable map).
     pub guide_memory: Option<bool>,
+    /// With a guide: how strongly its path keeps to the middle of doorways and corridors
+    /// (default 0: the shortest path at 0.3 m from walls; 2 brushes 0.9 m door frames less).
+    pub guide_centre_weight: Option<f64>,
     /// Whether each walker sees the others where they will stand when its primitive ends and
     /// judges its primitive against them moving (default true), or sees and judges them where
     /// they were last put (false: EgoGen's crowd loop).
@@ -433,26 +436,19 @@ fn crowd_settings(
         clearance_m: m.clearance_m.unwrap_or(defaults.clearance_m),
         guide_lookahead_m: m.guide_lookahead_m.unwrap_or(defaults.guide_lookahead_m),
         guide_memory: m.guide_memory.unwrap_or(defaults.guide_memory),
+        guide_centre_weight: m
+            .guide_centre_weight
+            .unwrap_or(defaults.guide_centre_weight),
         anticipate_people: m.anticipate_people.unwrap_or(defaults.anticipate_people),
         scene_every_frame: m.scene_every_frame.unwrap_or(defaults.scene_every_frame),
         seed: m.seed.unwrap_or(0),
     };
-    if !(settings.guide_lookahead_m.is_finite() && settings.guide_lookahead_m >= 0.0) {
-        return Err(bad(
-            "motion.guide_lookahead_m",
-            format!(
-                "expected a distance ≥ 0 m, got {}",
-                settings.guide_lookahead_m
-            ),
-        ));
-    }
-    if settings.guide_memory && settings.guide_lookahead_m == 0.0 {
-        return Err(bad(
-            "motion.guide_memory",
-            "a guide plans on memory only with a lookahead: set motion.guide_lookahead_m \
-             (e.g. 2)"
-                .to_string(),
-        ));
+    if let Some((field, what)) = crate::cli::guide_settings_problem(
+        settings.guide_lookahead_m,
+        settings.guide_memory,
+        settings.guide_centre_weight,
+    ) {
+        return Err(bad(&format!("motion.{field}"), what));
     }
     if !(settings.success_m.is_finite() && settings.success_m > 0.0) {
         return Err(bad(

@@ -343,18 +343,12 @@ fn resolve_stage(
             format!("expected a radius > 0 m, got {}", e.success_m),
         ));
     }
-    if !(e.guide_lookahead_m.is_finite() && e.guide_lookahead_m >= 0.0) {
-        return Err(bad(
-            &key("env.guide_lookahead_m"),
-            format!("expected a distance ≥ 0 m, got {}", e.guide_lookahead_m),
-        ));
-    }
-    if e.guide_memory && e.guide_lookahead_m == 0.0 {
-        return Err(bad(
-            &key("env.guide_memory"),
-            "a guide plans on memory only with a lookahead: set env.guide_lookahead_m (e.g. 2)"
-                .to_string(),
-        ));
+    if let Some((field, what)) = crate::cli::guide_settings_problem(
+        e.guide_lookahead_m,
+        e.guide_memory,
+        e.guide_centre_weight,
+    ) {
+        return Err(bad(&key(&format!("env.{field}")), what));
     }
     let (lo, hi) = e.scene.box_side_m;
     if !(lo > 0.0

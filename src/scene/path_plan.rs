@@ -17,6 +17,10 @@ use super::walkable::WalkableMap;
 /// lane of 0.2 m.
 pub const GUIDE_CLEARANCE_M: f64 = 0.3;
 
+/// Distance from what blocks walking at which a centred guide's path stops paying for being
+/// near it ([`plan_path_centred`]): the middle of a 0.9 m doorway.
+pub const GUIDE_CENTRE_M: f64 = 0.45;
+
 /// Integer costs: one cell straight, √2 diagonal, in thousandths of a cell.
 const STRAIGHT: u32 = 1000;
 const DIAGONAL: u32 = 1414;
@@ -90,6 +94,23 @@ pub fn plan_path(
     from: DVec2,
     to: DVec2,
 ) -> PlannedPath {
+    plan_path_centred(map, obstacles, clearance_m, 0.0, from, to)
+}
+
+/// [`plan_path`], a step onto a cell closer than [`GUIDE_CENTRE_M`] to what blocks walking
+/// costing more, by up to `centre_weight` times its length at the clearance (in proportion to
+/// how far short of [`GUIDE_CENTRE_M`] the cell falls): the path keeps to the middle of a 0.9 m
+/// doorway or a corridor instead of grazing its side at the clearance, where a body's swinging
+/// hands brush the frame. 0: [`plan_path`]. The octile heuristic stays admissible (steps only
+/// cost more).
+pub fn plan_path_centred(
+    map: &WalkableMap,
+    obstacles: &[Obstacle2],
+    clearance_m: f64,
+    centre_weight: f64,
+    from: DVec2,
+    to: DVec2,
+) -> PlannedPath {
     let straight = PlannedPath {
         points: vec![from, to],
         found: false,
@@ -114,12 +135,24 @@ pub fn plan_path(
         let (lo, hi) = (dx.min(dy), dx.max(dy));
         DIAGONAL * lo + STRAIGHT * (hi - lo)
     };
+    let centre_m = GUIDE_CENTRE_M.max(clearance_m);
     let in_grid = |i: i64, j: i64| i >= 0 && j >= 0 && i < map.nx as i64 && j < map.ny as i64;
     let successors = |&(i, j): &(usize, usize)| {
         steps(i as i64, j as i64, |i, j| {
             in_grid(i, j) && free((i as usize, j as usize))
         })
-        .map(|((i, j), cost)| ((i as usize, j as usize), cost))
+        .map(|((i, j), cost)| {
+            let (i, j) = (i as usize, j as usize);
+            let short = if centre_m > clearance_m {
+                ((centre_m - map.sdf_m[j * map.nx + i]) / (centre_m - clearance_m)).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (
+                (i, j),
+                cost + (f64::from(cost) * centre_weight * short).round() as u32,
+            )
+        })
         .collect::<Vec<_>>()
     };
     match astar(&start, successors, octile, |c| *c == goal) {
@@ -174,11 +207,13 @@ pub fn line_is_clear(
 /// way to it is clear ([`line_is_clear`]); otherwise the point `lookahead_m` along the
 /// shortest path planned around what blocks it (pure pursuit), or the goal when no path is
 /// found. A lookahead of 0 (no guide) gives the goal. Stateless: the path is planned anew
-/// from where the walker stands.
+/// from where the walker stands. `centre_weight` > 0 plans it keeping to the middle of
+/// doorways ([`plan_path_centred`]).
 pub fn guide_aim(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
     clearance_m: f64,
+    centre_weight: f64,
     at: DVec2,
     goal: DVec2,
     lookahead_m: f64,
@@ -186,7 +221,7 @@ pub fn guide_aim(
     if !(lookahead_m > 0.0) || line_is_clear(map, obstacles, clearance_m, at, goal) {
         return goal;
     }
-    let path = plan_path(map, obstacles, clearance_m, at, goal);
+    let path = plan_path_centred(map, obstacles, clearance_m, centre_weight, at, goal);
     if path.found {
         path.point_along(lookahead_m)
     } else {
@@ -315,6 +350,53 @@ mod tests {
             })
             .collect();
         WalkableMap::from_walkable(DVec2::ZERO, cell, nx, ny, walkable)
+    }
+
+    /// Where a path crosses the line x = `x` (m), by linear interpolation between its points.
+    fn crossing_y(path: &PlannedPath, x: f64) -> f64 {
+        let w = path
+            .points
+            .windows(2)
+            .find(|w| (w[0].x - x) * (w[1].x - x) <= 0.0 && w[0].x != w[1].x)
+            .expect("the path crosses the line");
+        w[0].y + (w[1].y - w[0].y) * (x - w[0].x) / (w[1].x - w[0].x)
+    }
+
+    #[test]
+    fn a_centred_path_passes_a_doorway_in_its_middle() {
+        // A 6 m × 4 m room split at x = 3 m by a wall with a 0.9 m doorway, y in [1.5, 2.4].
+        let (nx, ny, cell) = (60usize, 40usize, 0.1);
+        let walkable: Vec<bool> = (0..nx * ny)
+            .map(|k| {
+                let (i, j) = (k % nx, k / nx);
+                i != 30 || (15..24).contains(&j)
+            })
+            .collect();
+        let map = WalkableMap::from_walkable(DVec2::ZERO, cell, nx, ny, walkable);
+        // From low on one side to high on the other: the shortest way grazes the doorway's
+        // lower frame at the clearance, the centred one keeps to its middle (y = 1.95).
+        let (from, to) = (DVec2::new(1.0, 0.5), DVec2::new(5.0, 3.5));
+        let shortest = plan_path(&map, &[], GUIDE_CLEARANCE_M, from, to);
+        let centred = plan_path_centred(&map, &[], GUIDE_CLEARANCE_M, 2.0, from, to);
+        assert!(shortest.found && centred.found);
+        let middle = 1.95;
+        let (y_short, y_centred) = (crossing_y(&shortest, 3.05), crossing_y(&centred, 3.05));
+        assert!(
+            (y_centred - middle).abs() < 0.1,
+            "centred crosses at {y_centred}"
+        );
+        assert!(
+            (y_short - middle).abs() > (y_centred - middle).abs() + 0.05,
+            "shortest at {y_short}, centred at {y_centred}"
+        );
+        // A little longer, never much: the detour is inside the doorway's approach.
+        assert!(centred.length_m() >= shortest.length_m() - 1e-9);
+        assert!(centred.length_m() < shortest.length_m() + 0.5);
+        // Weight 0 is the shortest path itself.
+        assert_eq!(
+            plan_path_centred(&map, &[], GUIDE_CLEARANCE_M, 0.0, from, to),
+            shortest
+        );
     }
 
     #[test]

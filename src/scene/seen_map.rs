@@ -11,9 +11,10 @@ use super::obstacle::Obstacle2;
 use super::path_plan::{guide_aim, GUIDE_CLEARANCE_M};
 use super::walkable::WalkableMap;
 
-/// Where a walker at `at` bound for `goal` should head ([`guide_aim`], the guide's clearance):
-/// planned on its memory when it keeps one — what stands is there where its rays met it, so
-/// `obstacles` are not added — otherwise on the whole `map` round `obstacles`.
+/// Where a walker at `at` bound for `goal` should head ([`guide_aim`], the guide's clearance,
+/// `centre_weight` keeping to the middle of doorways): planned on its memory when it keeps
+/// one — what stands is there where its rays met it, so `obstacles` are not added — otherwise
+/// on the whole `map` round `obstacles`.
 pub fn guide_aim_remembered(
     seen: Option<&SeenMap>,
     map: &WalkableMap,
@@ -21,17 +22,27 @@ pub fn guide_aim_remembered(
     at: DVec2,
     goal: DVec2,
     lookahead_m: f64,
+    centre_weight: f64,
 ) -> DVec2 {
     match seen {
         Some(seen) if lookahead_m > 0.0 => guide_aim(
             &seen.believed(),
             &[],
             GUIDE_CLEARANCE_M,
+            centre_weight,
             at,
             goal,
             lookahead_m,
         ),
-        _ => guide_aim(map, obstacles, GUIDE_CLEARANCE_M, at, goal, lookahead_m),
+        _ => guide_aim(
+            map,
+            obstacles,
+            GUIDE_CLEARANCE_M,
+            centre_weight,
+            at,
+            goal,
+            lookahead_m,
+        ),
     }
 }
 
@@ -181,16 +192,16 @@ mod tests {
         let (at, goal) = (DVec2::new(1.0, 1.0), DVec2::new(5.0, 1.0));
         let mut seen = SeenMap::unseen(&map);
         // Nothing seen: the goal straight ahead, through the wall the walker has not seen.
-        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, at, goal, 2.0);
+        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, 0.0, at, goal, 2.0);
         assert_eq!(aim, goal);
         // Looking at the wall: round its end seen open at the top, not through it.
         look(&mut seen, &map, at, 0.0);
         let (open, blocked) = seen.seen_cells();
         assert!(open > 100 && blocked > 5, "{open} open, {blocked} blocked");
-        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, at, goal, 2.0);
+        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, 0.0, at, goal, 2.0);
         assert!(aim != goal && aim.y > at.y + 0.5, "aim {aim}");
         // The whole map's guide agrees on the side.
-        let full = guide_aim(&map, &[], GUIDE_CLEARANCE_M, at, goal, 2.0);
+        let full = guide_aim(&map, &[], GUIDE_CLEARANCE_M, 0.0, at, goal, 2.0);
         assert!((aim - full).length() < 0.8, "{aim} against {full}");
         // A memory survives its bytes.
         let back = SeenMap::from_bytes(&map, &seen.to_bytes()).unwrap();

@@ -190,6 +190,9 @@ pub struct CrowdSettings {
     /// on the whole map — a walker's memory of a dwelling, not a map it was given. false
     /// (default): the whole map.
     pub guide_memory: bool,
+    /// With the guide on: how strongly its path keeps to the middle of doorways and corridors
+    /// ([`crate::scene::plan_path_centred`]; 0, default: the shortest path at its clearance).
+    pub guide_centre_weight: f64,
     /// How the walker whose turn it is sees and judges the others (paper Alg. 1 steps them one
     /// at a time). `true` (default): its rays see each other person's 2D box where that person
     /// will stand when the walker's primitive ends — where the primitive it took earlier in the
@@ -221,6 +224,7 @@ impl Default for CrowdSettings {
             clearance_m: 0.4,
             guide_lookahead_m: 0.0,
             guide_memory: false,
+            guide_centre_weight: 0.0,
             anticipate_people: true,
             scene_every_frame: true,
             seed: 0,
@@ -661,6 +665,7 @@ impl<'m> Agent<'m> {
                     self.walker.view.pelvis,
                     self.goal,
                     settings.guide_lookahead_m,
+                    settings.guide_centre_weight,
                 );
                 self.walker.observe_into(
                     &self.body,
