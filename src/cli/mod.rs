@@ -31,6 +31,7 @@ pub fn exit_quietly_on_closed_pipe() {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
+
 /// What is wrong with a guide's settings, if anything: the setting's name (a config key's
 /// last part; a flag is it with dashes) and what was expected. One check for `egogen synth`,
 /// `egogen-run`, training configs and `egogen policy eval`.
