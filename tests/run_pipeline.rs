@@ -203,6 +203,29 @@ fn floor_steps_out_of_range() {
             &["scene.floor_steps_m", "at most 0.5 m"],
         );
     }
+    expect_config_error(
+        &format!("{GOOD}\n[scene]\nfloor_z_m = inf\n"),
+        &["scene.floor_z_m", "finite height"],
+    );
+    // `egogen scene inspect` checks its flags the same way, before loading the scene.
+    let out = Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args([
+            "scene",
+            "inspect",
+            "assets/scenes/stepped_house.obj",
+            "--floor-steps-m",
+            "0.8",
+            "--out",
+            "never_written.png",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("--floor-steps-m") && err.contains("at most 0.5 m"),
+        "{err}"
+    );
+    assert!(!Path::new("never_written.png").exists());
 }
 
 #[test]

@@ -34,14 +34,8 @@ pub fn scene_inspect(
     if !(cell_m.is_finite() && cell_m > 0.0) {
         bail!("--cell-m must be a positive number of metres, got {cell_m}");
     }
-    if settings.floor_z_m.is_some_and(|z| !z.is_finite()) {
-        bail!("--floor-z-m must be a finite height (m)");
-    }
-    if let Some(s) = settings.floor_steps_m {
-        let most = crate::scene::walkable::MAX_FLOOR_STEPS_M;
-        if !(s.is_finite() && s > 0.0 && s <= most) {
-            bail!("--floor-steps-m must be more than 0 and at most {most} m, got {s}");
-        }
+    if let Some((field, what)) = settings.floor_problem() {
+        bail!("--{}: {what}", field.replace('_', "-"));
     }
     let (mesh, moving, path) = match scene.strip_prefix("scenario:") {
         Some(name) => {
@@ -71,12 +65,7 @@ pub fn scene_inspect(
         "bounds:     ({:.2}, {:.2}, {:.2}) .. ({:.2}, {:.2}, {:.2}) m",
         lo.x, lo.y, lo.z, hi.x, hi.y, hi.z
     );
-    match (0..map.nx * map.ny)
-        .filter(|&k| map.has_floor[k])
-        .map(|k| map.cell_floor_m(k))
-        .fold(None, |r: Option<(f64, f64)>, z| {
-            Some(r.map_or((z, z), |(a, b)| (a.min(z), b.max(z))))
-        }) {
+    match map.floor_range(|k| map.has_floor[k]) {
         Some((lo, hi)) if !map.is_flat() => println!(
             "floor:      z = {:.3} m, stepped floors from {lo:.3} to {hi:.3} m",
             map.floor_z_m

@@ -17,7 +17,6 @@ use super::config_file::{crate_root, resolve_body_model};
 use super::config_file::{load_toml, Bad, ConfigError};
 use crate::math::random::normal_samples;
 use crate::plan::{AgentDraft, SynthPlan};
-use crate::scene::walkable::MAX_FLOOR_STEPS_M;
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableSettings};
 use crate::synth::crowd::{CrowdSettings, Steering};
 
@@ -387,29 +386,15 @@ pub(crate) fn floor_settings(
     floor_steps_m: Option<f64>,
     bad: Bad,
 ) -> Result<WalkableSettings, ConfigError> {
-    if let Some(z) = floor_z_m {
-        if !z.is_finite() {
-            return Err(bad(
-                "scene.floor_z_m",
-                format!("expected a finite height (m), got {z}"),
-            ));
-        }
-    }
-    if let Some(s) = floor_steps_m {
-        if !(s.is_finite() && s > 0.0 && s <= MAX_FLOOR_STEPS_M) {
-            return Err(bad(
-                "scene.floor_steps_m",
-                format!(
-                    "expected the highest step between floors, more than 0 and at most {MAX_FLOOR_STEPS_M} m, got {s}"
-                ),
-            ));
-        }
-    }
-    Ok(WalkableSettings {
+    let settings = WalkableSettings {
         floor_z_m,
         floor_steps_m,
         ..Default::default()
-    })
+    };
+    match settings.floor_problem() {
+        Some((field, what)) => Err(bad(&format!("scene.{field}"), what)),
+        None => Ok(settings),
+    }
 }
 
 /// `[motion]`'s stepping settings for a take of `primitives` primitives.

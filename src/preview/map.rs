@@ -23,12 +23,9 @@ impl<'a> MapPicture<'a> {
     pub fn new(map: &'a WalkableMap, max_side_px: usize) -> Self {
         let px_per_cell = (max_side_px / map.nx.max(map.ny)).max(1);
         let mut image = RgbImage::new(map.nx * px_per_cell, map.ny * px_per_cell, NO_FLOOR);
-        let heights = (0..map.nx * map.ny)
-            .filter(|&k| map.walkable[k])
-            .map(|k| map.cell_floor_m(k));
-        let (lowest, highest) = heights.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), z| {
-            (a.min(z), b.max(z))
-        });
+        let (lowest, highest) = map
+            .floor_range(|k| map.walkable[k])
+            .unwrap_or((map.floor_z_m, map.floor_z_m));
         let walkable = |k: usize| {
             let t = if highest - lowest > 1e-3 {
                 (map.cell_floor_m(k) - lowest) / (highest - lowest)

@@ -50,6 +50,28 @@ impl WalkableSettings {
     pub fn stepped_over_m(&self) -> f64 {
         self.step_height_m.max(self.floor_steps_m.unwrap_or(0.0))
     }
+
+    /// What is wrong with the floor a run asks for, if anything: the setting's name
+    /// (`floor_z_m`, `floor_steps_m`; a config key's last part, a flag with dashes) and what
+    /// was expected. One check for run and synth configs and `egogen scene inspect`.
+    pub fn floor_problem(&self) -> Option<(&'static str, String)> {
+        if let Some(z) = self.floor_z_m.filter(|z| !z.is_finite()) {
+            return Some((
+                "floor_z_m",
+                format!("expected a finite height (m), got {z}"),
+            ));
+        }
+        match self.floor_steps_m {
+            Some(s) if !(s.is_finite() && s > 0.0 && s <= MAX_FLOOR_STEPS_M) => Some((
+                "floor_steps_m",
+                format!(
+                    "expected the highest step between floors, more than 0 and at most \
+                     {MAX_FLOOR_STEPS_M} m, got {s}"
+                ),
+            )),
+            _ => None,
+        }
+    }
 }
 
 /// Highest [`WalkableSettings::floor_steps_m`] a run accepts (m): a step a person takes, not
@@ -253,6 +275,17 @@ impl WalkableMap {
             Some(f) if !f.is_nan() => *f as f64,
             _ => self.floor_z_m,
         }
+    }
+
+    /// Lowest and highest floor (m, [`Self::cell_floor_m`]) of the cells `counted` keeps;
+    /// `None` when it keeps none.
+    pub fn floor_range(&self, counted: impl Fn(usize) -> bool) -> Option<(f64, f64)> {
+        (0..self.nx * self.ny)
+            .filter(|&k| counted(k))
+            .map(|k| self.cell_floor_m(k))
+            .fold(None, |r, z| {
+                Some(r.map_or((z, z), |(a, b): (f64, f64)| (a.min(z), b.max(z))))
+            })
     }
 
     /// Floor height (m) of the cell under `p`, when it has floor ([`Self::cell_floor_m`]).

@@ -337,7 +337,7 @@ impl AgentTrack {
     /// lands there, and the other foot lifts off the floor below. Nothing changes on a flat
     /// floor.
     pub(crate) fn follow_floor(&mut self, map: &WalkableMap) {
-        if map.is_flat() {
+        if map.is_flat() || self.frames.is_empty() {
             return;
         }
         let z0 = map.floor_z_m;
