@@ -23,7 +23,7 @@ use glam::DVec2;
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let path = root.join("assets/scenes/apartment.glb");
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     let map = walkable_map(&mesh, &path, WalkableSettings::default()).unwrap();
     let starts = sample_start_goals(&map, 1, 2000, 0.2, 0.5);
     let poses: Vec<EgoPose2> = starts

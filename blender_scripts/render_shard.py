@@ -15,13 +15,14 @@ imported; then scene import, camera set-up, each frame's scene update and render
 supervisor adds them up per attempt, docs/RENDERING.md "Where a frame's time goes").
 """
 import json
+import math
 import os
 import sys
 import time
 
 import bpy
 import numpy as np
-from mathutils import Quaternion, Vector
+from mathutils import Matrix, Quaternion, Vector
 
 
 def load_spec():
@@ -265,14 +266,20 @@ def set_device(scene, device):
     )
 
 
-def import_scene_file(path, up_axis):
+def import_scene_file(path, up_axis, unit_m=1.0):
     """Imports the scene with Blender's importer for its extension, turned so that z is up
-    (Rust says which axis of the file is up, as its own loader reads it)."""
+    (Rust says which axis of the file is up, as its own loader reads it) and scaled to metres
+    by `unit_m` (metres per unit of the file)."""
     ext = os.path.splitext(path)[1].lower()
     axes = {"z": ("Y", "Z"), "y": ("NEGATIVE_Z", "Y")}[up_axis]
+    # What the importer leaves to do: the scale to metres and, for a glTF file that is not y up
+    # as the specification says, turning back what the importer turned.
+    fix = Matrix.Scale(unit_m, 4)
     if ext in (".glb", ".gltf"):
-        # glTF is y up by specification; the importer turns it.
+        # glTF is y up by specification; the importer turns (x, y, z) to (x, -z, y).
         bpy.ops.import_scene.gltf(filepath=path)
+        if up_axis == "z":
+            fix = fix @ Matrix.Rotation(-math.pi / 2, 4, "X")
     elif ext == ".obj":
         # Objects and groups each become an object, as the Rust loader splits them; the MTL's
         # materials and image textures come with them.
@@ -287,6 +294,10 @@ def import_scene_file(path, up_axis):
         bpy.ops.wm.ply_import(filepath=path, forward_axis=axes[0], up_axis=axes[1])
     else:
         raise RuntimeError(f"unsupported scene file {path}")
+    if fix != Matrix.Identity(4):
+        for obj in bpy.context.scene.objects:
+            if obj.parent is None:
+                obj.matrix_world = fix @ obj.matrix_world
     for obj in bpy.context.scene.objects:
         if obj.type == "MESH" and not obj.data.materials and obj.data.color_attributes:
             obj.data.materials.append(vertex_colour_material(obj.data.color_attributes[0].name))
@@ -405,7 +416,7 @@ def blender_name(name):
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
-    import_scene_file(spec["scene_file"], spec["scene_up_axis"])
+    import_scene_file(spec["scene_file"], spec["scene_up_axis"], spec.get("scene_unit_m", 1.0))
     if spec.get("scene_split"):
         split_scene(spec["scene_split"])
     scene = bpy.context.scene

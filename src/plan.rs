@@ -83,6 +83,8 @@ pub struct RunPlan {
     pub output_dir: PathBuf,
     pub mesh_every_n_frames: usize,
     pub scene: PathBuf,
+    /// How the scene file's coordinates become the world's (`[scene] up_axis`, `unit_m`).
+    pub scene_frame: crate::scene::SceneFrame,
     pub scene_seed: u64,
     /// Add a ceiling when rendering a scene that has none.
     pub ceiling: bool,

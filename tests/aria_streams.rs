@@ -619,8 +619,11 @@ mod gaze {
 #[test]
 fn gaze_rays_meet_the_apartment() {
     use egogen::scene::mesh_distance::SceneRays;
-    let mesh =
-        egogen::scene::load_scene(&root().join("assets/scenes/apartment.glb"), None).unwrap();
+    let mesh = egogen::scene::load_scene(
+        &root().join("assets/scenes/apartment.glb"),
+        Default::default(),
+    )
+    .unwrap();
     let rays = SceneRays::new(&mesh).unwrap();
     // From standing eye height above the floor of a room (the crowd's start region), straight
     // down to the floor, and level towards a wall: both within the apartment.

@@ -211,15 +211,15 @@ fn deepmimic() {
 #[test]
 fn scenes() {
     fuzz("room.glb", &read("assets/scenes/apartment.glb"), 8, |p| {
-        load_scene(p, None)
+        load_scene(p, Default::default())
     });
     let obj = b"o floor\nv 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nf 1 2 3\nf 1 3 4\n\
 o box\nv 1 0 1\nv 2 0 1\nv 2 1 1\nf 5 6 7\n";
-    fuzz("room.obj", obj, 9, |p| load_scene(p, None));
+    fuzz("room.obj", obj, 9, |p| load_scene(p, Default::default()));
     let ply = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
 property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
 0 0 0\n4 0 0\n4 0 4\n0 0 4\n3 0 1 2\n3 0 2 3\n";
-    fuzz("room.ply", ply, 10, |p| load_scene(p, None));
+    fuzz("room.ply", ply, 10, |p| load_scene(p, Default::default()));
 }
 
 /// Random bytes under a scene's name are refused with what the file should have been, not
@@ -244,7 +244,9 @@ fn random_bytes_as_a_scene_say_what_the_file_should_be() {
     ] {
         let path = dir.path().join(name);
         std::fs::write(&path, &bytes).unwrap();
-        let msg = load_scene(&path, None).unwrap_err().to_string();
+        let msg = load_scene(&path, Default::default())
+            .unwrap_err()
+            .to_string();
         assert!(
             msg.contains(&path.display().to_string())
                 && msg.contains(&format!("not a valid {format} file"))

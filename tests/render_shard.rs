@@ -111,7 +111,7 @@ fn camera_poses(spot: Vec3) -> Vec<Affine3> {
 
 fn render_scene() -> Rendered {
     let glb = repo().join("assets/scenes/apartment.glb");
-    let mesh = load_scene(&glb, None).unwrap();
+    let mesh = load_scene(&glb, Default::default()).unwrap();
     let map = walkable_map(&mesh, &glb, WalkableSettings::default()).unwrap();
     let s = sample_start_goals(&map, 7, 1, 0.8, 0.0)[0].start;
     let spot = Vec3::new(s.x, s.y, 0.0);
@@ -217,6 +217,7 @@ fn render_scene() -> Rendered {
     let spec = ShardSpec {
         scene_file: glb,
         scene_up_axis: "y".into(),
+        scene_unit_m: 1.0,
         object_ids: mesh
             .objects
             .iter()

@@ -175,8 +175,26 @@ fn write_checker_png(dir: &Path) {
 /// checks the dataset, the objects' pixels and the floor's two colours; the floor's and the
 /// wall's pixels.
 fn render_checkered_room(dir: &Path, scene: &Path, wall: &str) -> (Vec<Pixel>, Vec<Pixel>) {
+    render_checkered_room_read_as(dir, scene, wall, "")
+}
+
+/// [`render_checkered_room`] with `scene_keys` added to the config's `[scene]` (how the file
+/// is read: `up_axis`, `unit_m`).
+fn render_checkered_room_read_as(
+    dir: &Path,
+    scene: &Path,
+    wall: &str,
+    scene_keys: &str,
+) -> (Vec<Pixel>, Vec<Pixel>) {
     let config = dir.join("run.toml");
-    std::fs::write(&config, self::config(scene)).unwrap();
+    std::fs::write(
+        &config,
+        self::config(scene).replace(
+            "ceiling = false\n",
+            &format!("ceiling = false\n{scene_keys}\n"),
+        ),
+    )
+    .unwrap();
     common::egogen_run_ok(&config);
     let out = dir.join("out");
     assert!(egogen::supervisor::verify(&out).is_ok());
@@ -194,18 +212,18 @@ fn render_checkered_room(dir: &Path, scene: &Path, wall: &str) -> (Vec<Pixel>, V
     )
 }
 
-#[test]
-fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
-    let dir = tempfile::tempdir().unwrap();
-    write_checker_png(dir.path());
+/// `room()` as an OBJ whose MTL gives the floor the checker and the wall (named `LONG_WALL`)
+/// green, each vertex written by `written` (the file's frame), beside `checker.png`.
+fn write_checkered_obj(dir: &Path, written: impl Fn([f64; 3]) -> [f64; 3]) -> std::path::PathBuf {
+    write_checker_png(dir);
     std::fs::write(
-        dir.path().join("room.mtl"),
+        dir.join("room.mtl"),
         "newmtl checker\nKd 1 1 1\nmap_Kd checker.png\nnewmtl green\nKd 0.05 0.8 0.05\n",
     )
     .unwrap();
     let (v, floor, wall) = room();
     let mut obj = String::from("mtllib room.mtl\n");
-    for p in &v {
+    for p in v.into_iter().map(written) {
         obj += &format!("v {} {} {}\n", p[0], p[1], p[2]);
     }
     obj += "vt 0 0\nvt 4 0\nvt 4 4\nvt 0 4\n";
@@ -217,11 +235,35 @@ fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
     for q in &wall {
         obj += &format!("f {} {} {} {}\n", q[0], q[1], q[2], q[3]);
     }
-    let scene = dir.path().join("room.obj");
+    let scene = dir.join("room.obj");
     std::fs::write(&scene, obj).unwrap();
+    scene
+}
+
+#[test]
+fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_checkered_obj(dir.path(), |p| p);
     let pixels = render_checkered_room(dir.path(), &scene, LONG_WALL);
     let (_, wall) = &pixels;
     // The wall green.
+    let green = dominated_by(&wall.iter().collect::<Vec<_>>(), 1);
+    assert!(green > 0.8, "wall green {green:.2}");
+}
+
+/// An OBJ written y up in centimetres (as many modelling tools write one) renders as the same
+/// room in metres, z up, when the config says how to read it: the floor's pixels at z = 0 and
+/// the wall's at x 3.0–3.2 in the position pass, both textures in place.
+#[test]
+fn an_obj_in_centimetres_y_up_renders_in_metres_when_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_checkered_obj(dir.path(), |[x, y, z]| [100.0 * x, 100.0 * z, -100.0 * y]);
+    let (_, wall) = &render_checkered_room_read_as(
+        dir.path(),
+        &scene,
+        LONG_WALL,
+        "up_axis = \"y\"\nunit_m = 0.01",
+    );
     let green = dominated_by(&wall.iter().collect::<Vec<_>>(), 1);
     assert!(green > 0.8, "wall green {green:.2}");
 }
@@ -321,7 +363,7 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
     )
     .unwrap();
     // The loader's objects, before any render.
-    let mesh = egogen::scene::load_scene(&scene, None).unwrap();
+    let mesh = egogen::scene::load_scene(&scene, Default::default()).unwrap();
     let loaded: Vec<(&str, Option<&str>)> = mesh
         .objects
         .iter()
@@ -377,18 +419,22 @@ fn a_ply_scan_with_object_ids_is_split_and_labelled() {
 /// A glTF room whose floor has an image texture (the PNG beside it) and whose wall is one mesh
 /// with two materials — green on the face the walker looks at, grey elsewhere: the object names
 /// are the nodes', the floor shows the texture and the wall's near face its own material.
-#[test]
-fn a_gltf_scene_renders_with_its_textures_and_several_materials() {
-    let dir = tempfile::tempdir().unwrap();
-    // The room as `tools/make_textured_gltf.py` writes it (the one docs/RENDERING.md shows):
-    // `room()`'s floor and wall, glTF y up, the checker PNG beside it.
+/// The room as `tools/make_textured_gltf.py` writes it (the one docs/RENDERING.md shows):
+/// `room()`'s floor and wall, glTF y up, the checker PNG beside it, in `dir`.
+fn write_textured_gltf(dir: &Path) -> std::path::PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     common::succeeds(
         std::process::Command::new("python3")
             .arg(root.join("tools/make_textured_gltf.py"))
-            .arg(dir.path()),
+            .arg(dir),
     );
-    let scene = dir.path().join("room.gltf");
+    dir.join("room.gltf")
+}
+
+#[test]
+fn a_gltf_scene_renders_with_its_textures_and_several_materials() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_textured_gltf(dir.path());
     let (_, wall) = &render_checkered_room(dir.path(), &scene, "wall");
     // The near face green; any other face of the wall in view grey (no channel dominates).
     let near: Vec<&Pixel> = wall.iter().filter(|p| p.xyz[0] < 3.01).collect();
@@ -403,4 +449,34 @@ fn a_gltf_scene_renders_with_its_textures_and_several_materials() {
         other.len()
     );
     assert!(egogen::supervisor::verify(&dir.path().join("out")).is_ok());
+}
+
+/// A glTF file that breaks its specification — z up, in millimetres, as some exporters write
+/// one — renders as the same room when the config says so: each node's matrix turns the
+/// y-up metres of `make_textured_gltf.py` into z-up millimetres, which `up_axis = "z"` and
+/// `unit_m = 0.001` turn back (Blender's importer turns every glTF as if y up; the run
+/// turns it back).
+#[test]
+fn a_z_up_gltf_in_millimetres_renders_in_metres_when_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write_textured_gltf(dir.path());
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    // Column-major: (x, y, z) ↦ 1000 (x, −z, y).
+    let to_z_up_mm = serde_json::json!([
+        1000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1000.0, 0.0, 0.0, -1000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0
+    ]);
+    for node in doc["nodes"].as_array_mut().unwrap() {
+        node["matrix"] = to_z_up_mm.clone();
+    }
+    std::fs::write(&scene, serde_json::to_string(&doc).unwrap()).unwrap();
+    let (_, wall) = &render_checkered_room_read_as(
+        dir.path(),
+        &scene,
+        "wall",
+        "up_axis = \"z\"\nunit_m = 0.001",
+    );
+    let near: Vec<&Pixel> = wall.iter().filter(|p| p.xyz[0] < 3.01).collect();
+    let green = dominated_by(&near, 1);
+    assert!(green > 0.8, "near face green {green:.2}");
 }

@@ -5,7 +5,7 @@ mod common;
 
 use std::path::Path;
 
-use egogen::scene::{load_scene, walkable_map, SceneError, UpAxis, WalkableSettings};
+use egogen::scene::{load_scene, walkable_map, SceneError, SceneFrame, UpAxis, WalkableSettings};
 
 const ROOM_OBJ: &str = "\
 o floor
@@ -35,7 +35,7 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
 fn obj_keeps_objects_and_builds_a_map() {
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), "room.obj", ROOM_OBJ);
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     let names: Vec<&str> = mesh.objects.iter().map(|o| o.name.as_str()).collect();
     assert_eq!(names, ["floor", "table"]);
     assert_eq!(mesh.triangles.len(), 6);
@@ -58,7 +58,7 @@ fn ply_and_y_up() {
 element face 2\nproperty list uchar int vertex_indices\nend_header\n\
 -2 0 -2\n2 0 -2\n2 0 2\n-2 0 2\n0 0 0\n0.2 1.5 0\n0 1.5 0.2\n4 3 2 1 0\n3 4 5 6\n";
     let path = write(dir.path(), "scan.ply", ply);
-    let mesh = load_scene(&path, Some(UpAxis::Y)).unwrap();
+    let mesh = load_scene(&path, SceneFrame::new(Some(UpAxis::Y), None).unwrap()).unwrap();
     let (lo, hi) = mesh.bounds().unwrap();
     assert!(
         (hi.z - 1.5).abs() < 1e-6 && lo.z.abs() < 1e-6,
@@ -67,7 +67,7 @@ element face 2\nproperty list uchar int vertex_indices\nend_header\n\
     assert!((lo.y + 2.0).abs() < 1e-6 && (hi.y - 2.0).abs() < 1e-6);
     assert!(walkable_map(&mesh, &path, WalkableSettings::default()).is_ok());
     // Read as z-up the floor stands vertical: no floor.
-    let as_z = load_scene(&path, Some(UpAxis::Z)).unwrap();
+    let as_z = load_scene(&path, SceneFrame::new(Some(UpAxis::Z), None).unwrap()).unwrap();
     let err = walkable_map(&as_z, &path, WalkableSettings::default()).unwrap_err();
     assert!(matches!(err, SceneError::NoFloor { .. }), "{err}");
     assert!(err.to_string().contains("scan.ply") && err.to_string().contains("up_axis"));
@@ -89,7 +89,7 @@ fn gltf_with_embedded_buffer_is_y_up() {
     );
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), "tri.gltf", &json);
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     assert_eq!(mesh.objects[0].name, "floor");
     // Node translation y = 0.5 (up) → world z = 0.5; glTF z = 1 → world y = −1.
     assert!(mesh.vertices.iter().all(|v| (v.z - 0.5).abs() < 1e-6));
@@ -117,7 +117,7 @@ fn base64_encode(data: &[u8]) -> String {
 #[test]
 fn shipped_apartment_loads_like_a_floor_plan() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/apartment.glb");
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     assert!(mesh.objects.iter().any(|o| o.name == "floor"));
     assert!(mesh.objects.iter().any(|o| o.name == "IKEA_sofa_EKTORP"));
     let (lo, hi) = mesh.bounds().unwrap();
@@ -136,7 +136,7 @@ fn check_shipped_scene(file: &str, objects: usize, names: &[&str], top_z: f64, a
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("assets/scenes")
         .join(file);
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     assert_eq!(mesh.objects.len(), objects, "{file}");
     for name in names {
         assert!(
@@ -186,7 +186,7 @@ fn shipped_held_out_houses_load_with_their_rooms_and_furniture_named() {
 fn expect_err(name: &str, text: &str, needle: &str) {
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), name, text);
-    let err = load_scene(&path, None)
+    let err = load_scene(&path, Default::default())
         .and_then(|m| walkable_map(&m, &path, WalkableSettings::default()).map(|_| ()))
         .unwrap_err();
     let msg = err.to_string();
@@ -213,7 +213,7 @@ fn bad_scenes_fail_clearly() {
     expect_err("covered.obj", covered, "no walkable cell");
     let dir = tempfile::tempdir().unwrap();
     let missing = dir.path().join("missing.obj");
-    assert!(load_scene(&missing, None)
+    assert!(load_scene(&missing, Default::default())
         .unwrap_err()
         .to_string()
         .contains("missing.obj"));
@@ -223,7 +223,7 @@ fn bad_scenes_fail_clearly() {
 fn a_map_too_fine_for_memory_is_refused_with_its_size() {
     let dir = tempfile::tempdir().unwrap();
     let path = write(dir.path(), "room.obj", ROOM_OBJ);
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     for cell_m in [1e-5, 0.0, -0.1, f64::NAN] {
         let settings = WalkableSettings {
             cell_m,
@@ -323,7 +323,7 @@ element face 3\nproperty list uchar int vertex_indices\nend_header\n")
         "scene0000_00_vh_clean_2.labels.ply",
         &(header("") + body),
     );
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     let objects = names_and_labels(&mesh);
     assert_eq!(
         objects,
@@ -340,7 +340,7 @@ element face 3\nproperty list uchar int vertex_indices\nend_header\n")
         + "-2 -2 0 9 9 9 255 11 2\n2 -2 0 9 9 9 255 11 2\n2 2 0 9 9 9 255 11 2\n-2 2 0 9 9 9 255 11 2\n\
 0 0 0 200 10 10 255 12 5\n0.2 0 1.5 200 10 10 255 12 5\n0 0.2 1.5 200 10 10 255 12 5\n3 0 1 2\n3 0 2 3\n3 4 5 6";
     let path = write(dir.path(), "ids.ply", &(with_ids + "\n"));
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     let objects = names_and_labels(&mesh);
     assert_eq!(objects, [("ids_11", None), ("ids_12", None)]);
 }
@@ -355,7 +355,7 @@ fn a_ply_with_vertex_object_ids_splits_by_id() {
 property int objectId\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
 -2 -2 0 5\n2 -2 0 5\n2 2 0 5\n-2 2 0 5\n0 0 0 9\n0.2 0 1.5 9\n0 0.2 1.5 9\n4 0 1 2 3\n3 4 5 6\n";
     let path = write(dir.path(), "scan.ply", ply);
-    let mesh = load_scene(&path, None).unwrap();
+    let mesh = load_scene(&path, Default::default()).unwrap();
     let objects = names_and_labels(&mesh);
     assert_eq!(objects, [("scan_5", None), ("scan_9", None)]);
     assert_eq!(mesh.vertices.len(), 7, "each vertex copied once");
@@ -368,7 +368,9 @@ property int objectId\nelement face 2\nproperty list uchar int vertex_indices\ne
         "info_semantic.json",
         r#"{"objects": [{"id": "five", "class_name": 3}]}"#,
     );
-    let err = load_scene(&path, None).unwrap_err().to_string();
+    let err = load_scene(&path, Default::default())
+        .unwrap_err()
+        .to_string();
     assert!(
         err.contains("info_semantic.json") && err.contains("objects[0]"),
         "{err}"
@@ -431,7 +433,7 @@ fn the_stepped_house_is_walked_on_each_rooms_floor() {
         std::fs::read(&again).unwrap(),
         "assets/scenes/stepped_house.obj differs from the tool's output"
     );
-    let mesh = load_scene(&shipped, None).unwrap();
+    let mesh = load_scene(&shipped, Default::default()).unwrap();
     let area = |m: &egogen::scene::WalkableMap| m.walkable_count() as f64 * m.cell_m * m.cell_m;
     let flat = walkable_map(&mesh, &shipped, WalkableSettings::default()).unwrap();
     assert!((flat.floor_z_m + 0.12).abs() < 1e-6, "{}", flat.floor_z_m);
@@ -515,5 +517,65 @@ proptest::proptest! {
         let low = map(0.5 * rise);
         proptest::prop_assert!(low.is_walkable_at(p(-3.0)));
         proptest::prop_assert_eq!(low.is_walkable_at(p(3.0)), rise <= 0.1);
+    }
+}
+
+/// `ROOM_OBJ` (z up, metres) written as another tool would: y up, in `unit_m` metres per unit
+/// (a z-up point (x, y, z) is the y-up point (x, z, −y)).
+fn room_obj_y_up(unit_m: f64) -> String {
+    ROOM_OBJ
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(rest) => {
+                let v: Vec<f64> = rest.split(' ').map(|c| c.parse().unwrap()).collect();
+                format!("v {} {} {}\n", v[0] / unit_m, v[2] / unit_m, -v[1] / unit_m)
+            }
+            None => format!("{l}\n"),
+        })
+        .collect()
+}
+
+#[test]
+fn a_file_in_centimetres_or_y_up_is_read_in_metres_z_up_when_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let metres = load_scene(&write(dir.path(), "m.obj", ROOM_OBJ), Default::default()).unwrap();
+    let reference = walkable_map(&metres, Path::new("m.obj"), Default::default()).unwrap();
+    for (name, unit_m) in [
+        ("y_up_m.obj", 1.0),
+        ("y_up_cm.obj", 0.01),
+        ("y_up_mm.obj", 0.001),
+    ] {
+        let path = write(dir.path(), name, &room_obj_y_up(unit_m));
+        let frame = SceneFrame::new(Some(UpAxis::Y), Some(unit_m)).unwrap();
+        let mesh = load_scene(&path, frame).unwrap();
+        assert_eq!(mesh.objects.len(), metres.objects.len());
+        let worst = mesh
+            .vertices
+            .iter()
+            .zip(&metres.vertices)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-6,
+            "{name}: a vertex {worst} m off (f32 in the file)"
+        );
+        let map = walkable_map(&mesh, &path, Default::default()).unwrap();
+        assert_eq!(map.walkable, reference.walkable, "{name}: another map");
+    }
+    // Read in its own units, a room in millimetres is 4 000 m across: the map's refusal says
+    // what to give.
+    let path = dir.path().join("y_up_mm.obj");
+    let mesh = load_scene(&path, SceneFrame::new(Some(UpAxis::Y), None).unwrap()).unwrap();
+    let err = walkable_map(&mesh, &path, Default::default()).unwrap_err();
+    assert!(matches!(err, SceneError::MapTooLarge { .. }), "{err}");
+    assert!(err.to_string().contains("unit_m"), "{err}");
+    // Read z up, its floor stands on edge: the refusal names the key that turns it.
+    let mesh = load_scene(&path, SceneFrame::new(None, Some(0.001)).unwrap()).unwrap();
+    let err = walkable_map(&mesh, &path, Default::default()).unwrap_err();
+    assert!(err.to_string().contains("up_axis"), "{err}");
+    // Units that are no length.
+    for bad in [0.0, -0.01, f64::NAN, f64::INFINITY, 1e4] {
+        let msg = SceneFrame::new(None, Some(bad)).unwrap_err();
+        assert!(msg.contains("0.01 for centimetres"), "{bad}: {msg}");
     }
 }

@@ -946,7 +946,7 @@ workers = 1
 /// pelvis from each agent's `motion.npz` (translation plus the shaped body's rest pelvis), the
 /// path sampled every centimetre against the walkable map built from the scene file.
 fn pelvis_frames_in_walls(take: &Path, scene: &Path) -> usize {
-    let mesh = egogen::scene::load_scene(scene, None).unwrap();
+    let mesh = egogen::scene::load_scene(scene, Default::default()).unwrap();
     let map = egogen::scene::WalkableMap::build(&mesh, Default::default()).unwrap();
     let body = egogen::body::BodyModel::load(common::default_model_path()).unwrap();
     let in_wall = |p: glam::DVec2| {
@@ -996,7 +996,7 @@ fn wanderers_in_a_dwelling_never_step_through_a_wall() {
         String::from_utf8_lossy(&out.stderr)
     );
     let scene = plans.join("plan_1004.obj");
-    let mesh = egogen::scene::load_scene(&scene, None).unwrap();
+    let mesh = egogen::scene::load_scene(&scene, Default::default()).unwrap();
     let names: Vec<&str> = mesh.objects.iter().map(|o| o.name.as_str()).collect();
     assert!(names.contains(&"floor") && names.iter().any(|n| n.starts_with("wall_")));
     let config = |swept: bool| {
@@ -1209,4 +1209,87 @@ fn agents_step_up_between_floors_with_floor_steps() {
         gap < 0.2,
         "largest gap of the lowest marker to the floor under the pelvis {gap} m"
     );
+}
+
+/// A scene file in another tool's frame — y up, centimetres — is walked as the same room in
+/// metres when `[scene] up_axis` and `unit_m` say so; the take records how it read the file
+/// (`egogen aria export` reads it again); keys that say nothing sensible are refused by name.
+#[test]
+fn a_y_up_scene_in_centimetres_is_walked_in_metres() {
+    let dir = tempfile::tempdir().unwrap();
+    // An 8 × 8 m floor and a 2.5 m wall at x 2.0–2.2 from y −4 to 1, written y up in cm: the
+    // z-up point (x, y, z) m is the file's (100 x, 100 z, −100 y).
+    let p = |x: f64, y: f64, z: f64| format!("v {} {} {}\n", 100.0 * x, 100.0 * z, -100.0 * y);
+    let mut obj = String::from("o floor\n");
+    for (x, y) in [(-4.0, -4.0), (4.0, -4.0), (4.0, 4.0), (-4.0, 4.0)] {
+        obj += &p(x, y, 0.0);
+    }
+    obj += "f 1 2 3 4\no wall\n";
+    for z in [0.0, 2.5] {
+        for (x, y) in [(2.0, -4.0), (2.2, -4.0), (2.2, 1.0), (2.0, 1.0)] {
+            obj += &p(x, y, z);
+        }
+    }
+    obj += "f 5 8 7 6\nf 9 10 11 12\nf 5 6 10 9\nf 6 7 11 10\nf 7 8 12 11\nf 8 5 9 12\n";
+    std::fs::write(dir.path().join("room_cm.obj"), obj).unwrap();
+    let write = |name: &str, scene_keys: &str| {
+        let config = dir.path().join(format!("{name}.toml"));
+        std::fs::write(
+            &config,
+            format!(
+                "[scene]\npath = \"room_cm.obj\"\nindoors = false\n{scene_keys}\n[motion]\nduration_s = 2.0\n\
+                 [[agents]]\nname = \"a\"\nstart = [0.0, -2.0]\ngoals = [[0.0, 2.0]]\nsteering = \"sampling\"\nk = 4\n\
+                 [output]\ndir = \"{name}\"\n"
+            ),
+        )
+        .unwrap();
+        config
+    };
+    let plan = load_synth_plan(&write("cm", "up_axis = \"y\"\nunit_m = 0.01")).unwrap();
+    let map = egogen::synth::take::synth_map(&plan).unwrap();
+    assert!((map.floor_z_m).abs() < 1e-9, "floor at {}", map.floor_z_m);
+    let walkable_m2 = map.walkable.iter().filter(|&&w| w).count() as f64 * map.cell_m.powi(2);
+    // 64 m² less the wall's 1 m² (and the cells its edges touch).
+    assert!(
+        (60.0..63.5).contains(&walkable_m2),
+        "{walkable_m2} m² walkable"
+    );
+    assert!(!map.is_walkable_at(glam::DVec2::new(2.1, 0.0)), "the wall");
+    assert!(
+        map.is_walkable_at(glam::DVec2::new(2.1, 2.0)),
+        "past the wall's end"
+    );
+    run_synth(&plan, false).unwrap();
+    let summary = summary(&dir.path().join("cm"));
+    assert_eq!(summary["about"]["scene_up_axis"], "y");
+    assert_eq!(summary["about"]["scene_unit_m"], 0.01);
+    let markers = npyz::NpyFile::new(
+        std::fs::File::open(dir.path().join("cm/agents/a/markers.npy")).unwrap(),
+    )
+    .unwrap()
+    .into_vec::<f32>()
+    .unwrap();
+    let lowest = markers.chunks(3).map(|m| m[2]).fold(f32::MAX, f32::min);
+    assert!(lowest.abs() < 0.05, "lowest marker {lowest} m");
+    // Read as the format's default (z up, metres), the file has no floor: the error names
+    // the scene and the key.
+    let err = run_synth(&load_synth_plan(&write("as_is", "")).unwrap(), false)
+        .map(|_| ())
+        .expect_err("a y-up file was walked z up")
+        .to_string();
+    assert!(
+        err.contains("room_cm.obj") && err.contains("up_axis"),
+        "{err}"
+    );
+    for (keys, key) in [
+        ("unit_m = 0.0", "scene.unit_m"),
+        ("unit_m = -1.0", "scene.unit_m"),
+        ("up_axis = \"x\"", "up_axis"),
+    ] {
+        let err = load_synth_plan(&write("bad", keys))
+            .expect_err(keys)
+            .to_string();
+        assert!(err.contains(key), "{keys}: {err}");
+    }
+    assert!(!dir.path().join("as_is").exists() && !dir.path().join("bad").exists());
 }

@@ -238,9 +238,12 @@ enum SceneCommand {
     Inspect {
         /// Scene file (.glb, .gltf, .obj, .ply) or `scenario:empty_floor|single_box|moving_box`.
         scene: String,
-        /// Up axis of the file (default: y for glTF, z otherwise).
+        /// Up axis of the file (default: y for glTF, z otherwise), as `[scene] up_axis`.
         #[arg(long, value_parser = ["y", "z"])]
         up: Option<String>,
+        /// Metres per unit of the file (default 1; 0.01 for centimetres), as `[scene] unit_m`.
+        #[arg(long)]
+        unit_m: Option<f64>,
         /// Walkable-map cell size (m).
         #[arg(long, default_value_t = 0.1)]
         cell_m: f64,
@@ -497,6 +500,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Scene(SceneCommand::Inspect {
             scene,
             up,
+            unit_m,
             cell_m,
             floor_z_m,
             floor_steps_m,
@@ -508,7 +512,7 @@ fn run(cli: Cli) -> Result<()> {
             refuse_existing(&out)?;
             egogen::cli::scene_jobs::scene_inspect(
                 &scene,
-                up.as_deref(),
+                egogen::cli::scene_jobs::scene_frame_flags(up.as_deref(), unit_m)?,
                 egogen::scene::WalkableSettings {
                     cell_m,
                     floor_z_m,

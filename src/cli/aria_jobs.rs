@@ -100,8 +100,8 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
     let (wearers, everyone) = read_take_heads(&args.take, &args.wearer)?;
     let rays = if settings.streams.gaze {
         match take_scene(&args.take)? {
-            Some(path) => {
-                let mesh = crate::scene::load_scene(&path, None)?;
+            Some((path, frame)) => {
+                let mesh = crate::scene::load_scene(&path, frame)?;
                 crate::scene::mesh_distance::SceneRays::new(&mesh)
             }
             None => {
@@ -168,14 +168,30 @@ fn motion_root(take: &Path) -> PathBuf {
 }
 
 /// The scene a take was made in (`summary.json`'s `about.scene`), if it names one.
-fn take_scene(take: &Path) -> Result<Option<PathBuf>> {
+fn take_scene(take: &Path) -> Result<Option<(PathBuf, crate::scene::SceneFrame)>> {
     let path = motion_root(take).join("summary.json");
     let Ok(text) = std::fs::read_to_string(&path) else {
         return Ok(None);
     };
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
-    Ok(v["about"]["scene"].as_str().map(PathBuf::from))
+    let about = &v["about"];
+    let Some(scene) = about["scene"].as_str() else {
+        return Ok(None);
+    };
+    // How the take read its scene file (absent: as its format says).
+    let up = match about["scene_up_axis"].as_str() {
+        None => None,
+        Some(name) => Some(crate::scene::UpAxis::from_name(name).ok_or_else(|| {
+            anyhow::anyhow!(
+                "{}: about.scene_up_axis is `{name}`; expected \"y\" or \"z\"",
+                path.display()
+            )
+        })?),
+    };
+    let frame = crate::scene::SceneFrame::new(up, about["scene_unit_m"].as_f64())
+        .map_err(|m| anyhow::anyhow!("{}: about.scene_unit_m: {m}", path.display()))?;
+    Ok(Some((PathBuf::from(scene), frame)))
 }
 
 /// Each agent's goals from `summary.json` (`agents[].goals[]`: `goal` [x, y], `end_frame`).

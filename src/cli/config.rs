@@ -103,6 +103,11 @@ pub struct RawScene {
     /// steps between rooms, a sunken room, a ramp (0 < steps ≤ 0.5; default: one flat
     /// floor). Bodies follow the floor under them.
     pub floor_steps_m: Option<f64>,
+    /// Which axis of the scene file points up, `"y"` or `"z"` (default: glTF y, OBJ and PLY z).
+    pub up_axis: Option<crate::scene::UpAxis>,
+    /// Metres per unit of the scene file (default 1; 0.01 for centimetres, 0.001 for
+    /// millimetres).
+    pub unit_m: Option<f64>,
 }
 
 /// `[render]`: which cameras render what, and how well.

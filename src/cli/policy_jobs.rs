@@ -92,9 +92,19 @@ pub enum PolicyCommand {
         /// instead of in box scenes.
         #[arg(long)]
         scene: Option<PathBuf>,
+        /// With --scene: up axis of the file (default: y for glTF, z otherwise).
+        #[arg(long, value_parser = ["y", "z"])]
+        up: Option<String>,
+        /// With --scene: metres per unit of the file (default 1; 0.01 for centimetres).
+        #[arg(long)]
+        unit_m: Option<f64>,
         /// Distance range of the scene's start/goal pairs (m).
         #[arg(long, value_delimiter = ',', default_value = "2,7")]
         pair_distance_m: Vec<f64>,
+        /// Measure --pair-distance-m on foot, as the walking distance round walls (the way round
+        /// the report bins by), instead of straight: every pair within the walk a horizon allows.
+        #[arg(long)]
+        pair_distance_on_foot: bool,
         /// Draw the scene's starts and goals anywhere walkable, not only inside the walls.
         #[arg(long)]
         anywhere: bool,
@@ -273,7 +283,10 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             mean_action,
             action_spread,
             scene,
+            up,
+            unit_m,
             pair_distance_m,
+            pair_distance_on_foot,
             anywhere,
             max_primitives,
             crossing_share,
@@ -384,6 +397,10 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     Some(_) => bail!("--scene evaluates --policy only (give no --k)"),
                 }
             }
+            if scene.is_none() && (up.is_some() || unit_m.is_some() || pair_distance_on_foot) {
+                bail!("--up, --unit-m and --pair-distance-on-foot are about a --scene file's pairs; give --scene FILE");
+            }
+            let frame = super::scene_jobs::scene_frame_flags(up.as_deref(), unit_m)?;
             let fixed = match &scene {
                 None => None,
                 Some(path) => {
@@ -395,8 +412,10 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     }
                     Some(crate::policy::fixed_scene::held_out_scene(
                         path,
+                        frame,
                         episodes,
                         (lo, hi),
+                        pair_distance_on_foot,
                         !anywhere,
                         seed,
                         crate::scene::sdf3d::DEFAULT_VOXEL_M,

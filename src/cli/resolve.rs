@@ -78,6 +78,7 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         output_dir: base.join(raw.output.dir),
         mesh_every_n_frames: raw.output.mesh_every_n_frames,
         scene,
+        scene_frame: super::synth_config::scene_frame(raw.scene.up_axis, raw.scene.unit_m, &bad)?,
         scene_seed: raw.scene.seed.unwrap_or(0),
         ceiling: raw.scene.ceiling.unwrap_or(true),
         walkable: super::synth_config::floor_settings(
@@ -207,6 +208,8 @@ fn agents_motion(
             indoors: raw.scene.indoors,
             floor_z_m: raw.scene.floor_z_m,
             floor_steps_m: raw.scene.floor_steps_m,
+            up_axis: raw.scene.up_axis,
+            unit_m: raw.scene.unit_m,
         },
         motion: RawSynthMotion {
             weights: m.weights.clone(),

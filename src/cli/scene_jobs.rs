@@ -10,14 +10,30 @@ use crate::preview::map::AGENT_COLOURS;
 use crate::preview::raster::RgbImage;
 use crate::sensing::DepthImage;
 
-/// Prints the summary of `scene` (a file, or `scenario:NAME`) and draws its map with `agents`
+/// How a scene file named on the command line is read: `--up y|z` (none: the format's default)
+/// and `--unit-m` (metres per unit of the file; none: 1), checked.
+pub fn scene_frame_flags(
+    up: Option<&str>,
+    unit_m: Option<f64>,
+) -> Result<crate::scene::SceneFrame> {
+    let up = match up {
+        None => None,
+        Some(name) => Some(
+            crate::scene::UpAxis::from_name(name)
+                .ok_or_else(|| anyhow::anyhow!("--up: expected y or z, got `{name}`"))?,
+        ),
+    };
+    crate::scene::SceneFrame::new(up, unit_m).map_err(|m| anyhow::anyhow!("--unit-m: {m}"))
+}
+
+/// Prints the summary of `scene` (a file, or `scenario:NAME`, read as `frame` says) and draws its map with `agents`
 /// sampled start/goal pairs (from `seed`) and their rays to `out`; with `depth_images`, each
 /// start's egocentric depth image (Table 3's ablation, looking at its goal) to the right of
 /// the map, framed in the colour of its start.
 #[allow(clippy::too_many_arguments)]
 pub fn scene_inspect(
     scene: &str,
-    up: Option<&str>,
+    frame: crate::scene::SceneFrame,
     settings: crate::scene::WalkableSettings,
     out: &Path,
     agents: usize,
@@ -25,9 +41,7 @@ pub fn scene_inspect(
     depth_images: bool,
 ) -> Result<()> {
     use crate::preview::map::MapPicture;
-    use crate::scene::{
-        load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind, UpAxis,
-    };
+    use crate::scene::{load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind};
     use crate::sensing::{EgoPose2, RayScan, SensingWorld};
 
     let cell_m = settings.cell_m;
@@ -46,8 +60,7 @@ pub fn scene_inspect(
         }
         None => {
             let path = PathBuf::from(scene);
-            let up = up.map(|u| if u == "y" { UpAxis::Y } else { UpAxis::Z });
-            (load_scene(&path, up)?, Vec::new(), path)
+            (load_scene(&path, frame)?, Vec::new(), path)
         }
     };
     let t = std::time::Instant::now();

@@ -48,6 +48,11 @@ pub(crate) struct RawSynthScene {
     /// steps between rooms, a sunken room, a ramp (0 < steps ≤ 0.5; default: one flat
     /// floor). Bodies follow the floor under them.
     pub floor_steps_m: Option<f64>,
+    /// Which axis of the scene file points up, `"y"` or `"z"` (default: glTF y, OBJ and PLY z).
+    pub up_axis: Option<crate::scene::UpAxis>,
+    /// Metres per unit of the scene file (default 1; 0.01 for centimetres, 0.001 for
+    /// millimetres).
+    pub unit_m: Option<f64>,
 }
 
 /// `[motion]`.
@@ -268,6 +273,7 @@ pub(crate) fn resolve_synth(
         "configs/train_primitive.toml",
     )?;
     let (scene, floor_m) = synth_scene(&raw.scene, base, &bad)?;
+    let scene_frame = scene_frame(raw.scene.up_axis, raw.scene.unit_m, &bad)?;
     let duration_s = m.duration_s.unwrap_or(20.0);
     if !(duration_s.is_finite() && duration_s > 0.0 && duration_s <= MAX_DURATION_S) {
         return Err(bad(
@@ -321,6 +327,7 @@ pub(crate) fn resolve_synth(
         config: path.into(),
         body_model,
         scene,
+        scene_frame,
         floor_m,
         indoors: raw.scene.indoors.unwrap_or(true),
         walkable: floor_settings(raw.scene.floor_z_m, raw.scene.floor_steps_m, &bad)?,
@@ -365,6 +372,8 @@ fn synth_scene(
         for (key, given) in [
             ("scene.floor_z_m", raw.floor_z_m.is_some()),
             ("scene.floor_steps_m", raw.floor_steps_m.is_some()),
+            ("scene.up_axis", raw.up_axis.is_some()),
+            ("scene.unit_m", raw.unit_m.is_some()),
         ] {
             if given {
                 return Err(bad(key, "only with a scene `path`".into()));
@@ -378,6 +387,15 @@ fn synth_scene(
         ));
     }
     Ok((scene, floor_m))
+}
+
+/// How the scene file is read, from `[scene] up_axis` and `unit_m`, checked.
+pub(crate) fn scene_frame(
+    up_axis: Option<crate::scene::UpAxis>,
+    unit_m: Option<f64>,
+    bad: Bad,
+) -> Result<crate::scene::SceneFrame, ConfigError> {
+    crate::scene::SceneFrame::new(up_axis, unit_m).map_err(|m| bad("scene.unit_m", m))
 }
 
 /// The walkable map's settings from `[scene] floor_z_m` and `floor_steps_m`, checked.

@@ -66,6 +66,10 @@ pub(crate) struct RawTrainScene {
     /// Starts and goals inside the walls only (default true).
     pub indoors: Option<bool>,
     pub seed: u64,
+    /// Which axis of the scene file points up, `"y"` or `"z"` (default: glTF y, OBJ and PLY z).
+    pub up_axis: Option<crate::scene::UpAxis>,
+    /// Metres per unit of the scene file (default 1; 0.01 for centimetres).
+    pub unit_m: Option<f64>,
 }
 
 /// The whole config, as written.
@@ -420,6 +424,8 @@ fn resolve_train_scene(
     }
     Ok(TrainScene {
         path,
+        frame: crate::scene::SceneFrame::new(sc.up_axis, sc.unit_m)
+            .map_err(|m| bad("scene.unit_m", m))?,
         pairs: sc.pairs,
         pair_distance_m: (lo, hi),
         clearance_m,

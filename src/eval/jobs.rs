@@ -704,8 +704,10 @@ fn write_policy_rows(
 fn table2_scene(args: &EvalJob, voxel_m: f64) -> Result<crate::policy::env::FixedScene> {
     crate::policy::fixed_scene::held_out_scene(
         &crate::paths::crate_root().join(TABLE2_SCENE),
+        Default::default(),
         args.episodes,
         TABLE2_PAIR_DISTANCE_M,
+        false,
         true,
         args.seed,
         voxel_m,

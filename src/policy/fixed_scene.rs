@@ -9,20 +9,25 @@ use anyhow::{bail, Context, Result};
 use super::env::FixedScene;
 use super::ppo::TrainScene;
 
-/// A scene for evaluation: `pairs` start/goal pairs `pair_distance_m` apart, 0.4 m from
+/// A scene for evaluation (its file read as `frame` says): `pairs` start/goal pairs
+/// `pair_distance_m` apart — straight, or with `on_foot` on foot round walls — 0.4 m from
 /// anything blocking, drawn under `seed` with another stream than training's pairs, its 3D SDF
 /// built with `sdf_voxel_m` voxels so that paper Eq. 11 is measured.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn held_out_scene(
     path: &Path,
+    frame: crate::scene::SceneFrame,
     pairs: usize,
     pair_distance_m: (f64, f64),
+    on_foot: bool,
     indoors: bool,
     seed: u64,
     sdf_voxel_m: f64,
 ) -> Result<FixedScene> {
-    fixed_scene(
+    scene_with_pairs(
         &TrainScene {
             path: path.into(),
+            frame,
             pairs,
             pair_distance_m,
             clearance_m: 0.4,
@@ -30,6 +35,7 @@ pub(crate) fn held_out_scene(
             seed: seed ^ 0x5CE7E,
         },
         Some(sdf_voxel_m),
+        on_foot,
     )
 }
 
@@ -39,8 +45,17 @@ pub(crate) fn held_out_scene(
 /// `sdf_voxel_m` its 3D SDF is built too with voxels that size (`docs/SCENES.md`), so that
 /// scene penetration (paper Eq. 11) is measured.
 pub(crate) fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result<FixedScene> {
+    scene_with_pairs(spec, sdf_voxel_m, false)
+}
+
+/// [`fixed_scene`], its pairs' distance range taken on foot round walls with `on_foot`.
+fn scene_with_pairs(
+    spec: &TrainScene,
+    sdf_voxel_m: Option<f64>,
+    on_foot: bool,
+) -> Result<FixedScene> {
     let path = &spec.path;
-    let mesh = crate::scene::load_scene(path, None)?;
+    let mesh = crate::scene::load_scene(path, spec.frame)?;
     let (map, region) = crate::scene::indoor_map(
         crate::scene::walkable_map(&mesh, path, Default::default())?,
         spec.indoors,
@@ -54,12 +69,14 @@ pub(crate) fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result
         hi,
         spec.clearance_m,
         spec.seed,
+        on_foot,
     );
     if pairs.len() < spec.pairs {
         bail!(
-            "{}: only {} start/goal pairs {lo}–{hi} m apart with {} m clearance{} (asked for {})",
+            "{}: only {} start/goal pairs {lo}–{hi} m apart{} with {} m clearance{} (asked for {})",
             path.display(),
             pairs.len(),
+            if on_foot { " on foot" } else { "" },
             spec.clearance_m,
             if region.is_some() {
                 " inside the walls"
@@ -84,8 +101,13 @@ pub(crate) fn fixed_scene(spec: &TrainScene, sdf_voxel_m: Option<f64>) -> Result
 }
 
 /// Start/goal pairs of a fixed scene for evaluation: `count` pairs between `min_m` and
-/// `max_m` apart (horizontal), at least `clearance_m` from anything blocking, on the cells of
-/// `region` when given, drawn with `seed`.
+/// `max_m` apart — horizontally, or with `on_foot` by the walking distance round what blocks
+/// walking (`scene::PathField`, the way round an evaluation reports) — at least `clearance_m`
+/// from anything blocking, on the cells of `region` when given, drawn with `seed`. Straight
+/// pairs are as they always were; pairs on foot are drawn from the same stream (a walk is never
+/// shorter than the straight line, so the straight minimum still applies), each kept when its
+/// way round lies in the range.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn scene_pairs(
     map: &crate::scene::WalkableMap,
     region: Option<&[bool]>,
@@ -94,10 +116,75 @@ pub(crate) fn scene_pairs(
     max_m: f64,
     clearance_m: f64,
     seed: u64,
+    on_foot: bool,
 ) -> Vec<crate::scene::StartGoal> {
-    crate::scene::sample_start_goals_in(map, region, seed, count * 8, clearance_m, min_m)
+    if !on_foot {
+        return crate::scene::sample_start_goals_in(
+            map,
+            region,
+            seed,
+            count * 8,
+            clearance_m,
+            min_m,
+        )
         .into_iter()
         .filter(|p| p.start.distance(p.goal) <= max_m)
         .take(count)
+        .collect();
+    }
+    let within = |p: &crate::scene::StartGoal| {
+        crate::scene::PathField::to_goal(map, p.goal)
+            .and_then(|f| f.at(p.start))
+            .is_some_and(|d| (min_m..=max_m).contains(&d))
+    };
+    crate::scene::sample_start_goals_in(map, region, seed, count * 32, clearance_m, 0.0)
+        .into_iter()
+        .filter(|p| p.start.distance(p.goal) <= max_m && within(p))
+        .take(count)
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec2;
+
+    /// Pairs on foot in a room split by a wall with a doorway at one end: every kept pair's
+    /// way round lies in the range, some of them across the wall (a short straight line, a
+    /// long walk), which a straight range of the same metres keeps out or lets in wrongly.
+    #[test]
+    fn pairs_on_foot_keep_the_way_round_in_range() {
+        let (nx, ny) = (80, 40);
+        // An 8 × 4 m room, a wall at x = 4 m with a 1 m doorway at its top (y 3–4 m).
+        let walkable = (0..nx * ny)
+            .map(|k| {
+                let (i, j) = (k % nx, k / nx);
+                !((39..41).contains(&i) && j < 30)
+            })
+            .collect();
+        let map = crate::scene::WalkableMap::from_walkable(DVec2::ZERO, 0.1, nx, ny, walkable);
+        let (lo, hi) = (4.0, 6.0);
+        let pairs = scene_pairs(&map, None, 40, lo, hi, 0.3, 7, true);
+        assert_eq!(pairs.len(), 40);
+        let mut across = 0;
+        for p in &pairs {
+            let way = crate::scene::PathField::to_goal(&map, p.goal)
+                .and_then(|f| f.at(p.start))
+                .unwrap();
+            assert!((lo..=hi).contains(&way), "way round {way} m");
+            if (p.start.x < 4.0) != (p.goal.x < 4.0) {
+                across += 1;
+                assert!(p.start.distance(p.goal) < way - 0.5, "{p:?}");
+            }
+        }
+        assert!(across > 0, "no pair across the wall");
+        // Straight pairs in the same range include walks beyond it.
+        let straight = scene_pairs(&map, None, 40, lo, hi, 0.3, 7, false);
+        assert!(straight.iter().any(|p| {
+            crate::scene::PathField::to_goal(&map, p.goal)
+                .and_then(|f| f.at(p.start))
+                .unwrap()
+                > hi
+        }));
+    }
 }

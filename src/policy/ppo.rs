@@ -97,6 +97,10 @@ pub struct StagePlan {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrainScene {
     pub path: PathBuf,
+    /// How the file's coordinates become the world's (`[scene] up_axis`, `unit_m`; left out
+    /// of the serialised plan when the format's own).
+    #[serde(skip_serializing_if = "crate::scene::SceneFrame::is_default")]
+    pub frame: crate::scene::SceneFrame,
     pub pairs: usize,
     /// Start–goal distance range (m, horizontal).
     pub pair_distance_m: (f64, f64),

@@ -170,6 +170,10 @@ pub struct BodyProbe {
     pub output_json: PathBuf,
 }
 
+fn one_metre() -> f64 {
+    1.0
+}
+
 /// A shard: one Blender process renders all of it.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -178,8 +182,12 @@ pub struct ShardSpec {
     /// (vertex colours kept), imported by Blender's own importer for its extension.
     pub scene_file: PathBuf,
     /// Which axis of the scene file points up (`"y"` or `"z"`), as the scene loader reads
-    /// it (`scene::UpAxis::default_for`): Blender turns the file so that z is up.
+    /// it (`scene::SceneFrame::up_for`): Blender turns the file so that z is up.
     pub scene_up_axis: String,
+    /// Metres per unit of the scene file (`scene::SceneFrame::unit_m`): Blender scales the
+    /// imported scene by it (1 in specs written before the key).
+    #[serde(default = "one_metre")]
+    pub scene_unit_m: f64,
     /// Object name → segmentation id (Blender's object pass index; 0 = none).
     pub object_ids: Vec<(String, u32)>,
     /// Scene frame rate as Blender stores it: `fps / fps_base`.

@@ -148,8 +148,11 @@ mod tests {
         assert_eq!(added.z_m, 2.5);
         // Walls of the shipped apartment end at its highest point: its ceiling is unchanged.
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let apartment =
-            crate::scene::load_scene(&root.join("assets/scenes/apartment.glb"), None).unwrap();
+        let apartment = crate::scene::load_scene(
+            &root.join("assets/scenes/apartment.glb"),
+            Default::default(),
+        )
+        .unwrap();
         let (_, hi) = apartment.bounds().unwrap();
         assert_eq!(ceiling_to_add(&apartment).unwrap().z_m, hi.z);
     }

@@ -3,7 +3,8 @@
 //!
 //! Up axis: glTF is y up by specification, so `.gltf`/`.glb` default to [`UpAxis::Y`]; OBJ and
 //! PLY default to [`UpAxis::Z`] (scanned scenes mostly are). A y-up point `(x, y, z)` becomes
-//! `(x, −z, y)` in the z-up world.
+//! `(x, −z, y)` in the z-up world. Units: metres by default (glTF's by specification); a file
+//! in other units is scaled by its [`SceneFrame::unit_m`] (0.01 for centimetres).
 
 use std::path::{Path, PathBuf};
 
@@ -11,7 +12,7 @@ use super::mesh::SceneMesh;
 use crate::math::Vec3;
 
 /// Which axis of the file points up.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum UpAxis {
     Y,
@@ -27,11 +28,80 @@ impl UpAxis {
         }
     }
 
+    /// The axis named `"y"` or `"z"`, as configs and flags name it; none for any other name.
+    pub fn from_name(name: &str) -> Option<UpAxis> {
+        match name {
+            "y" => Some(UpAxis::Y),
+            "z" => Some(UpAxis::Z),
+            _ => None,
+        }
+    }
+
+    /// The axis as configs and Blender's side name it: `"y"` or `"z"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            UpAxis::Y => "y",
+            UpAxis::Z => "z",
+        }
+    }
+
     fn to_z_up(self, p: [f64; 3]) -> Vec3 {
         match self {
             UpAxis::Z => Vec3::new(p[0], p[1], p[2]),
             UpAxis::Y => Vec3::new(p[0], -p[2], p[1]),
         }
+    }
+}
+
+/// How a scene file's coordinates become the world's (z up, metres): which of its axes points
+/// up (none given: the format's default, `UpAxis::default_for`) and how many metres one of
+/// its units is (`[scene] up_axis` and `unit_m` of synth and run configs).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SceneFrame {
+    pub up: Option<UpAxis>,
+    pub unit_m: f64,
+}
+
+impl Default for SceneFrame {
+    fn default() -> Self {
+        Self {
+            up: None,
+            unit_m: 1.0,
+        }
+    }
+}
+
+impl SceneFrame {
+    /// Smallest and largest `unit_m` taken: a micrometre to a kilometre per unit.
+    pub const UNIT_M_RANGE: (f64, f64) = (1e-6, 1e3);
+
+    /// The frame of a file whose up axis and unit are given where given (a config's keys, a
+    /// command's flags); a unit outside [`Self::UNIT_M_RANGE`] (or not finite) is the message
+    /// returned.
+    pub fn new(up: Option<UpAxis>, unit_m: Option<f64>) -> Result<Self, String> {
+        let unit_m = unit_m.unwrap_or(1.0);
+        let (lo, hi) = Self::UNIT_M_RANGE;
+        if !(unit_m.is_finite() && (lo..=hi).contains(&unit_m)) {
+            return Err(format!(
+                "expected metres per unit of the scene file between {lo} and {hi} (0.01 for centimetres, 0.001 for millimetres), got {unit_m}"
+            ));
+        }
+        Ok(Self { up, unit_m })
+    }
+
+    /// The file's up axis: the one given, else the format's default.
+    pub fn up_for(&self, path: &Path) -> UpAxis {
+        self.up.unwrap_or_else(|| UpAxis::default_for(path))
+    }
+
+    /// Whether the file is read as its format says (default up axis, metres): what plans
+    /// leave out of their serialised form, so that earlier plans read the same.
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    fn to_world(self, up: UpAxis, p: [f64; 3]) -> Vec3 {
+        up.to_z_up(p) * self.unit_m
     }
 }
 
@@ -57,7 +127,7 @@ pub enum SceneError {
         index: u32,
         count: usize,
     },
-    #[error("scene {path}: no floor found (no upward-facing horizontal surface); is the up axis right? (try the other `up_axis`)")]
+    #[error("scene {path}: no floor found (no upward-facing horizontal surface); is the up axis right? (give the other one: `[scene] up_axis = \"y\"` or `\"z\"` in a config, `--up y|z` on the command line)")]
     NoFloor { path: PathBuf },
     #[error("scene {path}: no walkable cell (floor at {floor_z_m:.2} m is covered everywhere between {lo:.2} and {hi:.2} m)")]
     NoWalkable {
@@ -68,7 +138,8 @@ pub enum SceneError {
     },
     #[error(
         "scene {path}: a walkable map of {nx} × {ny} cells of {cell_m} m would need about {gb:.1} GB; \
-         at most {} cells are allowed: use a larger cell size",
+         at most {} cells are allowed: use a larger cell size, or, if the file is not in metres, \
+         give its unit (`[scene] unit_m = 0.01` for centimetres, 0.001 for millimetres; `--unit-m`)",
         super::walkable::MAX_MAP_CELLS
     )]
     MapTooLarge {
@@ -88,9 +159,10 @@ fn extension(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-/// Loads a scene file (format from the extension) into world space, z up, metres.
-pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneError> {
-    let up = up.unwrap_or_else(|| UpAxis::default_for(path));
+/// Loads a scene file (format from the extension) into world space, z up, metres, its
+/// coordinates read as `frame` says.
+pub fn load_scene(path: &Path, frame: SceneFrame) -> Result<SceneMesh, SceneError> {
+    let up = frame.up_for(path);
     let read_err = |message: String| SceneError::Read {
         path: path.to_owned(),
         message,
@@ -158,7 +230,11 @@ pub fn load_scene(path: &Path, up: Option<UpAxis>) -> Result<SceneMesh, SceneErr
         if part.triangles.is_empty() {
             continue;
         }
-        let verts: Vec<Vec3> = part.positions.iter().map(|&p| up.to_z_up(p)).collect();
+        let verts: Vec<Vec3> = part
+            .positions
+            .iter()
+            .map(|&p| frame.to_world(up, p))
+            .collect();
         let id = mesh.add_object(part.name, &verts, &part.triangles);
         *part_object.last_mut().expect("pushed above") = id.0 - 1;
         if let Some(file_id) = part.file_id {

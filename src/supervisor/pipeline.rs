@@ -261,7 +261,7 @@ pub fn stage_take(
 
     // Everything that can fail on bad input, before anything is staged: the scene, where the
     // motion happens in it.
-    let scene = load_scene(&plan.scene, None)?;
+    let scene = load_scene(&plan.scene, plan.scene_frame)?;
     let (agents, wearers) = rendered_agents(plan, &scene, &motion, model)?;
     if fresh {
         before_staging()?;
@@ -732,11 +732,8 @@ fn base_spec(
     let mid = 0.5 * (track.frames[0].joints[0] + track.frames[track.frames.len() - 1].joints[0]);
     Ok(ShardSpec {
         scene_file: std::fs::canonicalize(&plan.scene)?,
-        scene_up_axis: match crate::scene::UpAxis::default_for(&plan.scene) {
-            crate::scene::UpAxis::Y => "y",
-            crate::scene::UpAxis::Z => "z",
-        }
-        .into(),
+        scene_up_axis: plan.scene_frame.up_for(&plan.scene).name().into(),
+        scene_unit_m: plan.scene_frame.unit_m,
         object_ids: objects.ids.clone(),
         fps,
         fps_base,

@@ -40,6 +40,8 @@ pub struct SynthPlan {
     pub config: PathBuf,
     pub body_model: PathBuf,
     pub scene: Option<PathBuf>,
+    /// How the scene file's coordinates become the world's (`[scene] up_axis`, `unit_m`).
+    pub scene_frame: crate::scene::SceneFrame,
     pub floor_m: f64,
     pub indoors: bool,
     /// The walkable map's settings (`[scene] floor_z_m`, `floor_steps_m`).
@@ -64,7 +66,7 @@ pub struct SynthPlan {
 pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
     match &plan.scene {
         Some(path) => {
-            let mesh = crate::scene::load_scene(path, None)?;
+            let mesh = crate::scene::load_scene(path, plan.scene_frame)?;
             Ok(crate::scene::walkable_map(&mesh, path, plan.walkable)?)
         }
         None => {
@@ -348,6 +350,10 @@ pub(crate) fn synthesize(
     let about = serde_json::json!({
         "config": plan.config,
         "scene": plan.scene,
+        // How the scene file was read, where not as its format says (`egogen aria export`
+        // reads the scene again for gaze depths).
+        "scene_up_axis": plan.scene_frame.up.map(crate::scene::UpAxis::name),
+        "scene_unit_m": (plan.scene_frame.unit_m != 1.0).then_some(plan.scene_frame.unit_m),
         "floor_m": plan.scene.is_none().then_some(plan.floor_m),
         "motion_weights": plan.weights,
         "policy": plan.policy,
