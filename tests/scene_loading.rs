@@ -569,7 +569,14 @@ fn a_file_in_centimetres_or_y_up_is_read_in_metres_z_up_when_told() {
     let err = walkable_map(&mesh, &path, Default::default()).unwrap_err();
     assert!(matches!(err, SceneError::MapTooLarge { .. }), "{err}");
     assert!(err.to_string().contains("unit_m"), "{err}");
-    // Read z up, its floor stands on edge: the refusal names the key that turns it.
+    // A y-up floor alone, read z up, stands on edge: the refusal names the key that turns it
+    // (the room's table, on its side, would be taken for a floor).
+    let floor_only: String = room_obj_y_up(0.001)
+        .lines()
+        .take(6)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let path = write(dir.path(), "floor_y_up_mm.obj", &floor_only);
     let mesh = load_scene(&path, SceneFrame::new(None, Some(0.001)).unwrap()).unwrap();
     let err = walkable_map(&mesh, &path, Default::default()).unwrap_err();
     assert!(err.to_string().contains("up_axis"), "{err}");
