@@ -77,4 +77,26 @@ fn the_shipped_campaign_plans_its_takes() {
     // Ids are stable: planned twice, the same.
     let again = egogen::campaign::plan_campaign(&root.join("configs/campaign.toml")).unwrap();
     assert_eq!(plan.fingerprint, again.fingerprint);
+    // A run config that reads its scenes in another frame would misread the floor plans
+    // (written z up in metres): refused by key, before anything is planned.
+    let dir = tempfile::tempdir().unwrap();
+    let run = std::fs::read_to_string(root.join("configs/default.toml"))
+        .unwrap()
+        .replace("[scene]\n", "[scene]\nunit_m = 0.01\n")
+        .replace("\"../", &format!("\"{}/", root.display()));
+    assert!(run.contains("unit_m = 0.01"));
+    std::fs::write(dir.path().join("cm.toml"), run).unwrap();
+    let campaign = std::fs::read_to_string(root.join("configs/campaign.toml"))
+        .unwrap()
+        .replace("run = \"default.toml\"", "run = \"cm.toml\"")
+        .replace("\"../", &format!("\"{}/", root.display()));
+    std::fs::write(dir.path().join("campaign.toml"), campaign).unwrap();
+    let err = egogen::campaign::plan_campaign(&dir.path().join("campaign.toml"))
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("campaign.floor_plans") && err.contains("unit_m"),
+        "{err}"
+    );
 }

@@ -36,7 +36,8 @@ pub(crate) struct RawCampaign {
     #[serde(default)]
     pub first_seed: u64,
     /// Scene files or globs (`rooms/*.obj`); take k walks scene k mod (number of scenes),
-    /// the globs' matches in name order, then the floor plans.
+    /// the globs' matches in name order, then the floor plans. Each is read as the run
+    /// config's `[scene] up_axis` and `unit_m` say (one frame for every scene of a campaign).
     #[serde(default)]
     pub scenes: Vec<String>,
     /// Generated four-room dwellings, by seed (as `egogen policy rooms --seed S --count 1
@@ -205,6 +206,16 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         .collect();
     scenes.extend(floor_plans.iter().map(|(_, p)| p.clone()));
     let base = RawRun::load(&run)?;
+    if !floor_plans.is_empty() && (base.scene.up_axis.is_some() || base.scene.unit_m.is_some()) {
+        // The run's `[scene] up_axis` / `unit_m` apply to every take's scene file.
+        return Err(bad(
+            "floor_plans",
+            format!(
+                "the floor plans are written z up in metres, but {} reads its scenes with `[scene] up_axis`/`unit_m`, which would misread them; give the floor plans a campaign of their own (a run config without those keys)",
+                run.display()
+            ),
+        ));
+    }
     if base.render.is_none() {
         return Err(bad(
             "run",
