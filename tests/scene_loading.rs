@@ -586,3 +586,37 @@ fn a_file_in_centimetres_or_y_up_is_read_in_metres_z_up_when_told() {
         assert!(msg.contains("0.01 for centimetres"), "{bad}: {msg}");
     }
 }
+
+/// `egogen scene inspect` warns when the floor it found lies high above the scene's lowest
+/// point — a room on its side, read with the wrong up axis, walked on a wall's end — and not
+/// when the file is read the right way up.
+#[test]
+fn scene_inspect_warns_of_a_scene_on_its_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = common::room_y_up_cm_obj();
+    let scene = write(dir.path(), "room_cm.obj", &obj);
+    let inspect = |up: Option<&str>, png: &str| {
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"));
+        cmd.args(["scene", "inspect"])
+            .arg(&scene)
+            .args(["--unit-m", "0.01", "--out"])
+            .arg(dir.path().join(png));
+        if let Some(up) = up {
+            cmd.args(["--up", up]);
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let sideways = inspect(None, "sideways.png");
+    assert!(
+        sideways.contains("warning") && sideways.contains("--up"),
+        "{sideways}"
+    );
+    let upright = inspect(Some("y"), "upright.png");
+    assert!(!upright.contains("warning"), "{upright}");
+}

@@ -499,3 +499,22 @@ pub fn png_size(path: &std::path::Path) -> (u32, u32) {
     let info = reader.info();
     (info.width, info.height)
 }
+
+/// An 8 × 8 m floor and a 2.5 m wall (x 2.0–2.2, y −4…1) as an OBJ written y up in
+/// centimetres, as a modelling tool writes one: the z-up point (x, y, z) m is the file's
+/// (100 x, 100 z, −100 y).
+pub fn room_y_up_cm_obj() -> String {
+    let p = |x: f64, y: f64, z: f64| format!("v {} {} {}\n", 100.0 * x, 100.0 * z, -100.0 * y);
+    let mut obj = String::from("o floor\n");
+    for (x, y) in [(-4.0, -4.0), (4.0, -4.0), (4.0, 4.0), (-4.0, 4.0)] {
+        obj += &p(x, y, 0.0);
+    }
+    obj += "f 1 2 3 4\no wall\n";
+    for z in [0.0, 2.5] {
+        for (x, y) in [(2.0, -4.0), (2.2, -4.0), (2.2, 1.0), (2.0, 1.0)] {
+            obj += &p(x, y, z);
+        }
+    }
+    obj += "f 5 8 7 6\nf 9 10 11 12\nf 5 6 10 9\nf 6 7 11 10\nf 7 8 12 11\nf 8 5 9 12\n";
+    obj
+}
