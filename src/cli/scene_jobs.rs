@@ -10,10 +10,6 @@ use crate::preview::map::AGENT_COLOURS;
 use crate::preview::raster::RgbImage;
 use crate::sensing::DepthImage;
 
-/// How far above a scene's lowest point the floor found may lie before `scene inspect` warns
-/// that the scene may be on its side (m): more than a floor slab or a few steps down.
-const FLOOR_ABOVE_LOWEST_WARN_M: f64 = 1.0;
-
 /// How a scene file named on the command line is read: `--up y|z` (none: the format's default)
 /// and `--unit-m` (metres per unit of the file; none: 1), checked.
 pub fn scene_frame_flags(
@@ -89,13 +85,8 @@ pub fn scene_inspect(
         ),
         _ => println!("floor:      z = {:.3} m", map.floor_z_m),
     }
-    // A floor found high above the scene's lowest point is most often a scene on its side
-    // (a wall's end or a table's side taken for a floor), unless a storey was asked for.
-    let above_m = map.floor_z_m - lo.z;
-    if settings.floor_z_m.is_none() && above_m > FLOOR_ABOVE_LOWEST_WARN_M {
-        eprintln!(
-            "warning: the floor found lies {above_m:.2} m above the scene's lowest point; if the scene lies on its side, give its up axis (--up y|z, `[scene] up_axis`) and unit (--unit-m, `[scene] unit_m`)"
-        );
+    if let Some(warning) = crate::scene::floor_height_warning(&mesh, &map, &path) {
+        eprintln!("{warning}");
     }
     println!(
         "grid:       {} x {} cells of {} m (built in {:.3} s)",

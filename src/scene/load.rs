@@ -714,6 +714,29 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<(Vec<u32>, PlyIds)>), Stri
     Ok((parts, Some((face_part, kind))))
 }
 
+/// How far above a scene's lowest point the floor found may lie before it is taken for a
+/// scene on its side (m): more than a floor slab or a few steps down.
+pub const FLOOR_HIGH_ABOVE_LOWEST_M: f64 = 1.0;
+
+/// A warning for a map whose floor lies more than [`FLOOR_HIGH_ABOVE_LOWEST_M`] above the
+/// scene's lowest point when no storey was asked for — most often a scene read on its side,
+/// walked on a wall's end or a table's side — naming the file and what to give; none
+/// otherwise.
+pub fn floor_height_warning(
+    mesh: &SceneMesh,
+    map: &super::WalkableMap,
+    path: &Path,
+) -> Option<String> {
+    let (lo, _) = mesh.bounds()?;
+    let above_m = map.floor_z_m - lo.z;
+    (map.settings.floor_z_m.is_none() && above_m > FLOOR_HIGH_ABOVE_LOWEST_M).then(|| {
+        format!(
+            "warning: scene {}: the floor found lies {above_m:.2} m above the scene's lowest point; if the scene lies on its side, give its up axis (`[scene] up_axis`, --up y|z) and unit (`[scene] unit_m`, --unit-m)",
+            path.display()
+        )
+    })
+}
+
 /// Builds the walkable map of a loaded scene, naming the file in errors.
 pub fn walkable_map(
     mesh: &SceneMesh,

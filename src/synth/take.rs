@@ -67,7 +67,11 @@ pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
     match &plan.scene {
         Some(path) => {
             let mesh = crate::scene::load_scene(path, plan.scene_frame)?;
-            Ok(crate::scene::walkable_map(&mesh, path, plan.walkable)?)
+            let map = crate::scene::walkable_map(&mesh, path, plan.walkable)?;
+            if let Some(warning) = crate::scene::floor_height_warning(&mesh, &map, path) {
+                eprintln!("{warning}");
+            }
+            Ok(map)
         }
         None => {
             let cell = 0.1;
