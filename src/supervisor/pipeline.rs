@@ -404,6 +404,9 @@ fn rendered_agents(
     match motion {
         RunMotion::Placed(m) => {
             let map = walkable_map(scene, &plan.scene, plan.walkable)?;
+            if let Some(warning) = crate::scene::floor_height_warning(scene, &map, &plan.scene) {
+                eprintln!("{warning}");
+            }
             let (placed, _) = place_motion(model, m, &map, plan.scene_seed)
                 .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
             let track = track_body(model, &placed)?;
