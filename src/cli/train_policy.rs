@@ -424,8 +424,7 @@ fn resolve_train_scene(
     }
     Ok(TrainScene {
         path,
-        frame: crate::scene::SceneFrame::new(sc.up_axis, sc.unit_m)
-            .map_err(|m| bad("scene.unit_m", m))?,
+        frame: super::synth_config::scene_frame(sc.up_axis, sc.unit_m, bad)?,
         pairs: sc.pairs,
         pair_distance_m: (lo, hi),
         clearance_m,
