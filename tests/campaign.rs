@@ -295,3 +295,91 @@ fn a_campaign_renders_indexes_resumes_and_reads_back() {
         "{text}"
     );
 }
+
+/// A campaign whose scenes lie in different frames: a y-up centimetre OBJ room given its frame
+/// in its `scenes` entry beside the apartment (glTF, metres). Both takes finish; the room's
+/// take walks it in metres (about 60 m² walkable of its 64 m² floor: read in its file's
+/// default frame it has no floor) and records the frame; rendered alone with its recorded
+/// command's flags (`--up y --unit-m 0.01`) it is the same bytes.
+#[test]
+fn a_campaign_reads_each_scene_in_the_frame_its_entry_gives() {
+    let a = tempfile::tempdir().unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    common::tiny_campaign(a.path(), false);
+    std::fs::write(a.path().join("room_cm.obj"), common::room_y_up_cm_obj()).unwrap();
+    let campaign = a.path().join("framed.toml");
+    std::fs::write(
+        &campaign,
+        format!(
+            r#"
+[campaign]
+run = "run.toml"
+out = "framed"
+takes = 2
+scenes = [{{ path = "room_cm.obj", up_axis = "y", unit_m = 0.01 }}, "{}"]
+crowd_count = [1, 1]
+min_free_disk_gb = 0.0
+"#,
+            root.join("assets/scenes/apartment.glb").display()
+        ),
+    )
+    .unwrap();
+    let out = a.path().join("framed");
+    let run = common::succeeds(egogen_run().arg(&campaign));
+    let said = String::from_utf8_lossy(&run.stderr);
+    let s = state(&out);
+    assert!(
+        s.takes
+            .iter()
+            .all(|t| t.status == egogen::campaign::TakeStatus::Complete),
+        "{said}"
+    );
+    let room = &s.takes[0];
+    assert!(room.def.scene.ends_with("room_cm.obj"));
+    assert!(
+        room.command.contains("--up y --unit-m 0.01"),
+        "{}",
+        room.command
+    );
+    assert!(
+        !s.takes[1].command.contains("--up"),
+        "{}",
+        s.takes[1].command
+    );
+    let dir = out.join("takes").join(&room.def.id);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("sequence/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["about"]["scene_up_axis"], "y", "{summary}");
+    assert_eq!(summary["about"]["scene_unit_m"], 0.01, "{summary}");
+    let walkable = summary["totals"]["checks"]["walkable_m2"].as_f64().unwrap();
+    assert!((55.0..64.0).contains(&walkable), "walkable {walkable} m²");
+
+    let moved = a.path().join("framed_take");
+    std::fs::rename(&dir, &moved).unwrap();
+    common::succeeds(
+        egogen_run()
+            .arg(a.path().join("run.toml"))
+            .arg("--out")
+            .arg(&dir)
+            .args(["--seed", &room.def.seed.to_string(), "--scene"])
+            .arg(&room.def.scene)
+            .args(["--up", "y", "--unit-m", "0.01", "--crowd-count", "1"]),
+    );
+    assert_eq!(
+        std::fs::read(dir.join("manifest.json")).unwrap(),
+        std::fs::read(moved.join("manifest.json")).unwrap(),
+        "the take alone differs from the campaign's"
+    );
+    // A bad flag is refused by name before anything is made.
+    let bad = egogen_run()
+        .arg(a.path().join("run.toml"))
+        .args(["--out"])
+        .arg(a.path().join("never"))
+        .args(["--unit-m", "0"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--unit-m"));
+    assert!(!a.path().join("never").exists());
+}

@@ -77,8 +77,17 @@ fn the_shipped_campaign_plans_its_takes() {
     // Ids are stable: planned twice, the same.
     let again = egogen::campaign::plan_campaign(&root.join("configs/campaign.toml")).unwrap();
     assert_eq!(plan.fingerprint, again.fingerprint);
-    // A run config that reads its scenes in another frame would misread the floor plans
-    // (written z up in metres): refused by key, before anything is planned.
+    // Planned as before: no take names a frame, so ids and the fingerprint stay those of
+    // campaigns planned before scene entries could give one.
+    assert!(plan
+        .takes
+        .iter()
+        .all(|t| t.up_axis.is_none() && t.unit_m.is_none()));
+
+    // Beside a run config that reads its scenes in centimetres, the floor plans (written z up
+    // in metres) are read in their own frame, said per take and in each take's command; a
+    // scene entry gives its own frame; the apartment, a plain path, is read as the run config
+    // says.
     let dir = tempfile::tempdir().unwrap();
     let run = std::fs::read_to_string(root.join("configs/default.toml"))
         .unwrap()
@@ -86,17 +95,74 @@ fn the_shipped_campaign_plans_its_takes() {
         .replace("\"../", &format!("\"{}/", root.display()));
     assert!(run.contains("unit_m = 0.01"));
     std::fs::write(dir.path().join("cm.toml"), run).unwrap();
-    let campaign = std::fs::read_to_string(root.join("configs/campaign.toml"))
-        .unwrap()
-        .replace("run = \"default.toml\"", "run = \"cm.toml\"")
-        .replace("\"../", &format!("\"{}/", root.display()));
-    std::fs::write(dir.path().join("campaign.toml"), campaign).unwrap();
-    let err = egogen::campaign::plan_campaign(&dir.path().join("campaign.toml"))
-        .map(|_| ())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        err.contains("campaign.floor_plans") && err.contains("unit_m"),
-        "{err}"
+    std::fs::write(dir.path().join("room_cm.obj"), common::room_y_up_cm_obj()).unwrap();
+    let write_campaign = |scenes: &str| {
+        let campaign = std::fs::read_to_string(root.join("configs/campaign.toml"))
+            .unwrap()
+            .replace("run = \"default.toml\"", "run = \"cm.toml\"")
+            .replace(
+                "scenes = [\"../assets/scenes/apartment.glb\"]",
+                &format!("scenes = {scenes}"),
+            )
+            .replace("\"../", &format!("\"{}/", root.display()));
+        assert!(campaign.contains(scenes), "{campaign}");
+        let path = dir.path().join("campaign.toml");
+        std::fs::write(&path, campaign).unwrap();
+        egogen::campaign::plan_campaign(&path).map_err(|e| format!("{e:#}"))
+    };
+    let apartment = root.join("assets/scenes/apartment.glb");
+    let plan = write_campaign(&format!(
+        "[\"{}\", {{ path = \"room_cm.obj\", up_axis = \"y\" }}, {{ path = \"room_*.obj\", unit_m = 0.001 }}]",
+        apartment.display()
+    ))
+    .unwrap();
+    let frames: Vec<(String, Option<&str>, Option<f64>)> = plan.takes[..5]
+        .iter()
+        .map(|t| {
+            let name = t.scene.file_name().unwrap().to_string_lossy().into_owned();
+            (name, t.up_axis.map(|u| u.name()), t.unit_m)
+        })
+        .collect();
+    assert_eq!(
+        frames,
+        [
+            ("apartment.glb".to_string(), None, None),
+            ("room_cm.obj".to_string(), Some("y"), None),
+            ("room_cm.obj".to_string(), None, Some(0.001)),
+            ("plan_1.obj".to_string(), Some("z"), Some(1.0)),
+            ("plan_2.obj".to_string(), Some("z"), Some(1.0)),
+        ]
     );
+    assert!(plan.takes[1]
+        .command(&plan.run, Path::new("t"))
+        .contains(" --up y"));
+    assert!(!plan.takes[1]
+        .command(&plan.run, Path::new("t"))
+        .contains("--unit-m"));
+    assert!(plan.takes[3]
+        .command(&plan.run, Path::new("t"))
+        .contains(" --up z --unit-m 1"));
+    // The same file in two frames is two takes' definitions, with two ids.
+    assert_ne!(plan.takes[1].id, plan.takes[2].id);
+
+    // Bad entries are refused by entry and key, before anything is planned.
+    for (scenes, says) in [
+        (
+            "[{ path = \"room_cm.obj\", unit_m = 0 }]",
+            "campaign.scenes[0]`: `unit_m`",
+        ),
+        (
+            "[\"room_cm.obj\", { path = \"room_cm.obj\", up_axis = \"x\" }]",
+            "campaign.scenes[1]`: `up_axis`",
+        ),
+        (
+            "[{ path = \"room_cm.obj\", units = 0.01 }]",
+            "unknown key `units`",
+        ),
+        ("[{ up_axis = \"y\" }]", "`path` is missing"),
+        ("[3]", "expected a path or a table"),
+    ] {
+        let err = write_campaign(scenes).map(|_| ()).unwrap_err();
+        assert!(err.contains(says), "{scenes}: {err}");
+    }
 }

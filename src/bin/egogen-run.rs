@@ -49,6 +49,14 @@ struct Args {
     /// Scene to walk and render (glTF/GLB, OBJ or PLY), overriding `scene.path`.
     #[arg(long)]
     scene: Option<PathBuf>,
+    /// Which axis of the scene file points up, `y` or `z`, overriding `scene.up_axis`
+    /// (default: glTF y, OBJ and PLY z).
+    #[arg(long)]
+    up: Option<String>,
+    /// Metres per unit of the scene file, overriding `scene.unit_m` (0.01 for centimetres,
+    /// 0.001 for millimetres; default 1).
+    #[arg(long)]
+    unit_m: Option<f64>,
     /// People in the crowd, overriding `crowd.count` (a config with a `[crowd]`).
     #[arg(long)]
     crowd_count: Option<usize>,
@@ -111,11 +119,15 @@ fn run(args: Args) -> Result<()> {
         BackendArg::Local => Backend::Local,
         BackendArg::Slurm => Backend::Slurm,
     });
+    // Checked here to name the flags; the config's own keys are checked as it is resolved.
+    let frame = egogen::cli::scene_jobs::scene_frame_flags(args.up.as_deref(), args.unit_m)?;
     let overrides = RunOverrides {
         out: args.out,
         seed: args.seed,
         rig: args.rig,
         scene: args.scene,
+        up_axis: frame.up,
+        unit_m: args.unit_m,
         crowd_count: args.crowd_count,
         duration_s: args.duration_s,
         workers: args.workers,

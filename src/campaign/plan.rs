@@ -14,6 +14,7 @@ use crate::cli::config_file::load_toml;
 use crate::cli::overrides::{resume_fingerprint, RunOverrides};
 use crate::cli::RawRun;
 use crate::manifest::sha256_hex;
+use crate::scene::{SceneFrame, UpAxis};
 
 /// A campaign config file: `[campaign]` only.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -36,10 +37,11 @@ pub(crate) struct RawCampaign {
     #[serde(default)]
     pub first_seed: u64,
     /// Scene files or globs (`rooms/*.obj`); take k walks scene k mod (number of scenes),
-    /// the globs' matches in name order, then the floor plans. Each is read as the run
-    /// config's `[scene] up_axis` and `unit_m` say (one frame for every scene of a campaign).
+    /// the globs' matches in name order, then the floor plans. An entry is a path, read as
+    /// the run config's `[scene] up_axis` and `unit_m` say, or a table `{ path = "…",
+    /// up_axis = "y", unit_m = 0.01 }` giving the frame its files are in ([`scene_entry`]).
     #[serde(default)]
-    pub scenes: Vec<String>,
+    pub scenes: Vec<toml::Value>,
     /// Generated four-room dwellings, by seed (as `egogen policy rooms --seed S --count 1
     /// --obj-dir`), written to `scenes/plan_<seed>.obj` in the campaign folder.
     #[serde(default)]
@@ -82,6 +84,13 @@ pub struct TakeDef {
     /// `<scene>-s<seed>[-n<count>]-<8 hex>`: the hex from the take's effective config.
     pub id: String,
     pub scene: PathBuf,
+    /// The scene file's up axis where its campaign entry gives one (else the run config's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up_axis: Option<UpAxis>,
+    /// The scene file's metres per unit where its campaign entry gives them (else the run
+    /// config's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unit_m: Option<f64>,
     pub seed: u64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub crowd_count: Option<usize>,
@@ -99,6 +108,8 @@ impl TakeDef {
             seed: Some(self.seed),
             rig: self.rig.clone(),
             scene: Some(self.scene.clone()),
+            up_axis: self.up_axis,
+            unit_m: self.unit_m,
             crowd_count: self.crowd_count,
             duration_s: self.duration_s,
             workers: None,
@@ -115,6 +126,12 @@ impl TakeDef {
         }
         c += &format!(" --seed {}", self.seed);
         c += &format!(" --scene {}", quote(&self.scene));
+        if let Some(up) = self.up_axis {
+            c += &format!(" --up {}", up.name());
+        }
+        if let Some(unit) = self.unit_m {
+            c += &format!(" --unit-m {unit}");
+        }
         if let Some(n) = self.crowd_count {
             c += &format!(" --crowd-count {n}");
         }
@@ -177,8 +194,11 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             format!("{}: the takes' seeds must stay below 2^63", c.first_seed),
         ));
     }
-    let mut scenes: Vec<PathBuf> = Vec::new();
-    for s in &c.scenes {
+    // Each scene file with the frame its entry gives (none: the run config's).
+    let mut scenes: Vec<(PathBuf, Framed)> = Vec::new();
+    for (i, entry) in c.scenes.iter().enumerate() {
+        let (s, frame) = scene_entry(entry).map_err(|m| bad(&format!("scenes[{i}]"), m))?;
+        let s = s.as_str();
         let pattern = dir.join(s);
         if s.contains(['*', '?', '[']) {
             let mut found: Vec<PathBuf> = glob::glob(&pattern.to_string_lossy())
@@ -190,13 +210,13 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
                 return Err(bad("scenes", format!("{s:?} matches no file")));
             }
             found.sort();
-            scenes.extend(found.into_iter().map(|p| at(&p)));
+            scenes.extend(found.into_iter().map(|p| (at(&p), frame)));
         } else {
             let p = at(Path::new(s));
             if !p.is_file() {
                 return Err(bad("scenes", format!("{} is not a file", p.display())));
             }
-            scenes.push(p);
+            scenes.push((p, frame));
         }
     }
     let floor_plans: Vec<(u64, PathBuf)> = c
@@ -204,18 +224,15 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         .iter()
         .map(|&s| (s, out.join("scenes").join(format!("plan_{s}.obj"))))
         .collect();
-    scenes.extend(floor_plans.iter().map(|(_, p)| p.clone()));
     let base = RawRun::load(&run)?;
-    if !floor_plans.is_empty() && (base.scene.up_axis.is_some() || base.scene.unit_m.is_some()) {
-        // The run's `[scene] up_axis` / `unit_m` apply to every take's scene file.
-        return Err(bad(
-            "floor_plans",
-            format!(
-                "the floor plans are written z up in metres, but {} reads its scenes with `[scene] up_axis`/`unit_m`, which would misread them; give the floor plans a campaign of their own (a run config without those keys)",
-                run.display()
-            ),
-        ));
-    }
+    // The floor plans are written z up in metres: said so per take where the run config reads
+    // its scenes in another frame.
+    let plan_frame = if base.scene.up_axis.is_some() || base.scene.unit_m.is_some() {
+        (Some(UpAxis::Z), Some(1.0))
+    } else {
+        (None, None)
+    };
+    scenes.extend(floor_plans.iter().map(|(_, p)| (p.clone(), plan_frame)));
     if base.render.is_none() {
         return Err(bad(
             "run",
@@ -227,10 +244,13 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
     }
     if scenes.is_empty() {
         // The run config's own scene.
-        scenes.push(match &base.scene.path {
-            Some(p) => at(&run.parent().unwrap_or(Path::new(".")).join(p)),
-            None => crate::cli::config_file::crate_root().join("assets/scenes/apartment.glb"),
-        });
+        scenes.push((
+            match &base.scene.path {
+                Some(p) => at(&run.parent().unwrap_or(Path::new(".")).join(p)),
+                None => crate::cli::config_file::crate_root().join("assets/scenes/apartment.glb"),
+            },
+            (None, None),
+        ));
     }
     if let Some([lo, hi]) = c.crowd_count {
         if lo == 0 || lo > hi {
@@ -283,10 +303,13 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             };
             ((lo * 10.0).round() + step as f64) / 10.0
         });
+        let (scene, (up_axis, unit_m)) = scenes[k % scenes.len()].clone();
         let mut take = TakeDef {
             index: k,
             id: String::new(),
-            scene: scenes[k % scenes.len()].clone(),
+            scene,
+            up_axis,
+            unit_m,
             seed,
             crowd_count,
             duration_s,
@@ -318,6 +341,64 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         floor_plans,
         fingerprint,
     })
+}
+
+/// The up axis and metres per unit a campaign's scene entry gives (none: the run config's).
+type Framed = (Option<UpAxis>, Option<f64>);
+
+/// One entry of `campaign.scenes`: a path or glob, or a table `{ path, up_axis, unit_m }`
+/// (both frame keys optional, checked as `[scene]`'s are). The message names what is wrong;
+/// the caller names the entry.
+fn scene_entry(entry: &toml::Value) -> Result<(String, Framed), String> {
+    let table = match entry {
+        toml::Value::String(s) => return Ok((s.clone(), (None, None))),
+        toml::Value::Table(t) => t,
+        other => {
+            return Err(format!(
+            "expected a path or a table {{ path = \"…\", up_axis = \"y\", unit_m = 0.01 }}, got {}",
+            other.type_str()
+        ))
+        }
+    };
+    if let Some(key) = table
+        .keys()
+        .find(|k| !["path", "up_axis", "unit_m"].contains(&k.as_str()))
+    {
+        return Err(format!(
+            "unknown key `{key}` (a scene entry has path, up_axis and unit_m)"
+        ));
+    }
+    let path = match table.get("path") {
+        Some(toml::Value::String(p)) => p.clone(),
+        Some(other) => {
+            return Err(format!(
+                "`path`: expected a string, got {}",
+                other.type_str()
+            ))
+        }
+        None => return Err("`path` is missing (the scene file or glob)".into()),
+    };
+    let up = match table.get("up_axis") {
+        None => None,
+        Some(v) => Some(
+            v.as_str()
+                .and_then(UpAxis::from_name)
+                .ok_or_else(|| format!("`up_axis`: expected \"y\" or \"z\", got {v}"))?,
+        ),
+    };
+    let unit_m = match table.get("unit_m") {
+        None => None,
+        Some(toml::Value::Float(f)) => Some(*f),
+        Some(toml::Value::Integer(i)) => Some(*i as f64),
+        Some(other) => {
+            return Err(format!(
+                "`unit_m`: expected metres per unit of the scene file, got {}",
+                other.type_str()
+            ))
+        }
+    };
+    SceneFrame::new(up, unit_m).map_err(|m| format!("`unit_m`: {m}"))?;
+    Ok((path, (up, unit_m)))
 }
 
 /// An absolute path with `.` and `..` taken out by name (the path need not exist).

@@ -20,6 +20,10 @@ pub struct RunOverrides {
     pub rig: Option<PathBuf>,
     /// `scene.path`.
     pub scene: Option<PathBuf>,
+    /// `scene.up_axis`: which axis of the scene file points up.
+    pub up_axis: Option<crate::scene::UpAxis>,
+    /// `scene.unit_m`: metres per unit of the scene file.
+    pub unit_m: Option<f64>,
     /// `crowd.count` (a config with a `[crowd]`).
     pub crowd_count: Option<usize>,
     /// `motion.duration_s`.
@@ -47,6 +51,12 @@ impl RunOverrides {
         }
         if let Some(scene) = &self.scene {
             raw.scene.path = Some(absolute(scene)?);
+        }
+        if let Some(up) = self.up_axis {
+            raw.scene.up_axis = Some(up);
+        }
+        if let Some(unit) = self.unit_m {
+            raw.scene.unit_m = Some(unit);
         }
         if let Some(count) = self.crowd_count {
             let Some(crowd) = raw.crowd.as_mut() else {
@@ -100,6 +110,8 @@ impl RunOverrides {
             ("--seed", self.seed.is_some()),
             ("--rig", self.rig.is_some()),
             ("--scene", self.scene.is_some()),
+            ("--up", self.up_axis.is_some()),
+            ("--unit-m", self.unit_m.is_some()),
             ("--crowd-count", self.crowd_count.is_some()),
             ("--duration", self.duration_s.is_some()),
         ]
@@ -114,6 +126,8 @@ impl RunOverrides {
             && self.seed.is_none()
             && self.rig.is_none()
             && self.scene.is_none()
+            && self.up_axis.is_none()
+            && self.unit_m.is_none()
             && self.crowd_count.is_none()
             && self.duration_s.is_none()
             && self.workers.is_none()
