@@ -179,7 +179,10 @@ fn a_slurm_array_survives_a_cancelled_task_and_matches_the_local_backend() {
         .iter()
         .position(|t| t["log"].as_str().unwrap().ends_with(&log))
         .unwrap();
-    if attempts[hit]["outcome"] == "ok" {
+    // Cancelled too late to matter: the task ended well, or Slurm recorded the cancel after
+    // the task had written all its frames (the supervisor says so and keeps them).
+    let outcome = attempts[hit]["outcome"].as_str().unwrap();
+    if outcome == "ok" || outcome.ends_with("after finishing its frames") {
         eprintln!("{cancelled} was cancelled after writing its frames: nothing to retry");
         assert_eq!(retried, 0, "{report:#}");
         return;
