@@ -1,8 +1,8 @@
 //! A campaign config (`[campaign]`) and the takes it defines: the run config every take starts
-//! from, and what varies per take — scene (paths, globs, generated floor plans), seed, crowd
-//! size, duration, rig. Each take is that run config with `egogen-run`'s command-line
-//! overrides, so a take rendered alone is the same command; its id is derived from what
-//! defines it.
+//! from, and what varies per take — scene (paths, globs, generated floor plans, each with the
+//! frame it is read in), seed, crowd size, duration, rig. Each take is that run config with
+//! `egogen-run`'s command-line overrides, so a take rendered alone is the same command; its id
+//! is derived from what defines it.
 
 use std::path::{Path, PathBuf};
 
@@ -202,19 +202,30 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         let pattern = dir.join(s);
         if s.contains(['*', '?', '[']) {
             let mut found: Vec<PathBuf> = glob::glob(&pattern.to_string_lossy())
-                .map_err(|e| bad("scenes", format!("{s:?} is not a valid glob: {e}")))?
+                .map_err(|e| {
+                    bad(
+                        &format!("scenes[{i}]"),
+                        format!("{s:?} is not a valid glob: {e}"),
+                    )
+                })?
                 .filter_map(|p| p.ok())
                 .filter(|p| p.is_file())
                 .collect();
             if found.is_empty() {
-                return Err(bad("scenes", format!("{s:?} matches no file")));
+                return Err(bad(
+                    &format!("scenes[{i}]"),
+                    format!("{s:?} matches no file"),
+                ));
             }
             found.sort();
             scenes.extend(found.into_iter().map(|p| (at(&p), frame)));
         } else {
             let p = at(Path::new(s));
             if !p.is_file() {
-                return Err(bad("scenes", format!("{} is not a file", p.display())));
+                return Err(bad(
+                    &format!("scenes[{i}]"),
+                    format!("{} is not a file", p.display()),
+                ));
             }
             scenes.push((p, frame));
         }
