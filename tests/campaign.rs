@@ -305,7 +305,7 @@ fn a_campaign_renders_indexes_resumes_and_reads_back() {
 fn a_campaign_reads_each_scene_in_the_frame_its_entry_gives() {
     let a = tempfile::tempdir().unwrap();
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    common::tiny_campaign(a.path(), false);
+    let run_config = common::tiny_campaign_run(a.path(), false);
     std::fs::write(a.path().join("room_cm.obj"), common::room_y_up_cm_obj()).unwrap();
     let campaign = a.path().join("framed.toml");
     std::fs::write(
@@ -359,7 +359,7 @@ min_free_disk_gb = 0.0
     std::fs::rename(&dir, &moved).unwrap();
     common::succeeds(
         egogen_run()
-            .arg(a.path().join("run.toml"))
+            .arg(&run_config)
             .arg("--out")
             .arg(&dir)
             .args(["--seed", &room.def.seed.to_string(), "--scene"])
@@ -373,7 +373,7 @@ min_free_disk_gb = 0.0
     );
     // A bad flag is refused by name before anything is made.
     let bad = egogen_run()
-        .arg(a.path().join("run.toml"))
+        .arg(&run_config)
         .args(["--out"])
         .arg(a.path().join("never"))
         .args(["--unit-m", "0"])

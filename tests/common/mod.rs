@@ -316,6 +316,31 @@ pub fn safetensors_tensors(path: &Path) -> std::collections::BTreeMap<String, Ve
 /// depth and segmentation; its shards on the local pool, or with `slurm` on Slurm.
 pub fn tiny_campaign(dir: &Path, slurm: bool) -> PathBuf {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    tiny_campaign_run(dir, slurm);
+    let campaign = dir.join("campaign.toml");
+    std::fs::write(
+        &campaign,
+        format!(
+            r#"
+[campaign]
+run = "run.toml"
+out = "out"
+takes = 3
+scenes = ["{}"]
+floor_plans = [5]
+crowd_count = [1, 2]
+min_free_disk_gb = 0.0
+"#,
+            root.join("assets/scenes/apartment.glb").display()
+        ),
+    )
+    .unwrap();
+    campaign
+}
+
+/// The run config of [`tiny_campaign`]'s takes, `dir/run.toml`: two wanderers for 1 s, one
+/// camera at 1/10 size, every 10th frame, 2 samples, on the local pool or on Slurm.
+pub fn tiny_campaign_run(dir: &Path, slurm: bool) -> PathBuf {
     let supervisor = if slurm {
         "backend = \"slurm\"\n[supervisor.slurm]\ncpus_per_task = 1\nmem_gb = 1.0\npoll_interval_s = 0.5\n"
     } else {
@@ -350,25 +375,7 @@ retries = 40
             + supervisor,
     )
     .unwrap();
-    let campaign = dir.join("campaign.toml");
-    std::fs::write(
-        &campaign,
-        format!(
-            r#"
-[campaign]
-run = "run.toml"
-out = "out"
-takes = 3
-scenes = ["{}"]
-floor_plans = [5]
-crowd_count = [1, 2]
-min_free_disk_gb = 0.0
-"#,
-            root.join("assets/scenes/apartment.glb").display()
-        ),
-    )
-    .unwrap();
-    campaign
+    dir.join("run.toml")
 }
 
 /// Every file of a campaign's finished takes with its bytes' SHA-256, and the index's.
