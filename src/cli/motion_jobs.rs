@@ -253,7 +253,7 @@ pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> R
 
 /// `egogen motion stats`: pace and turn distributions of a config's primitives.
 pub fn motion_stats(config: &Path, json: Option<&Path>) -> Result<()> {
-    use crate::motion::cvae::pace::{set_paces, PaceSummary};
+    use crate::motion::cvae::pace::{set_paces, speed_by_turn, PaceSummary};
     use crate::motion::cvae::tensor_body::{RigGeometry, TensorRig};
     use crate::motion::cvae::train::evaluation_sets;
     let plan = crate::cli::train_primitive::load_train_plan(config)?;
@@ -272,6 +272,7 @@ pub fn motion_stats(config: &Path, json: Option<&Path>) -> Result<()> {
                 "primitives": set.len(),
                 "seconds_of_motion": set.len() as f64 * plan.stride_frames as f64 / 40.0,
                 "summary": PaceSummary::of(&paces),
+                "speed_by_turn": speed_by_turn(&paces),
             })
         );
         doc[name] = serde_json::json!({

@@ -188,6 +188,48 @@ impl PaceSummary {
     }
 }
 
+/// Upper edges (degrees of |turn| per primitive) of [`speed_by_turn`]'s bins; the last bin is
+/// open above.
+pub const TURN_BIN_EDGES_DEG: [f64; 4] = [10.0, 20.0, 30.0, 45.0];
+
+/// Speeds of the primitives that turn within one range of angles.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SpeedAtTurn {
+    /// |turn| per primitive from this many degrees (inclusive) …
+    pub from_deg: f64,
+    /// … to this many (exclusive; `None`: no upper edge).
+    pub to_deg: Option<f64>,
+    pub speed_m_s: Quantiles,
+    /// Share of these primitives at a brisk walk or faster (≥ 1.2 m/s).
+    pub share_at_1_2_m_s: f64,
+}
+
+/// How fast the primitives move by how far they turn: whether a set turns at pace (bins of
+/// [`TURN_BIN_EDGES_DEG`]; bins with no primitive are left out).
+pub fn speed_by_turn(paces: &[Pace]) -> Vec<SpeedAtTurn> {
+    let mut edges = vec![0.0];
+    edges.extend(TURN_BIN_EDGES_DEG);
+    edges
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &from)| {
+            let to = edges.get(k + 1).copied();
+            let within: Vec<f64> = paces
+                .iter()
+                .filter(|p| p.turn_deg.abs() >= from && to.is_none_or(|t| p.turn_deg.abs() < t))
+                .map(|p| p.speed_m_s)
+                .collect();
+            (!within.is_empty()).then(|| SpeedAtTurn {
+                from_deg: from,
+                to_deg: to,
+                share_at_1_2_m_s: within.iter().filter(|&&v| v >= 1.2).count() as f64
+                    / within.len() as f64,
+                speed_m_s: Quantiles::of(within),
+            })
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -223,6 +265,39 @@ mod tests {
             assert!(w > -PI && w <= PI, "{a} -> {w}");
             assert!(((w - a) / std::f64::consts::TAU).fract().abs() < 1e-6 || (w - a).abs() < 1e-9);
         }
+    }
+
+    #[test]
+    fn speed_by_turn_bins_each_primitive_once_by_its_absolute_turn() {
+        let p = |speed_m_s, turn_deg| Pace {
+            speed_m_s,
+            turn_deg,
+        };
+        let paces = [
+            p(1.4, 2.0),
+            p(1.0, -9.99),
+            p(1.3, 10.0),
+            p(0.6, -35.0),
+            p(0.5, 90.0),
+            p(1.25, -180.0),
+        ];
+        let bins = speed_by_turn(&paces);
+        let got: Vec<(f64, Option<f64>, usize, f64)> = bins
+            .iter()
+            .map(|b| (b.from_deg, b.to_deg, b.speed_m_s.count, b.share_at_1_2_m_s))
+            .collect();
+        // 20–30° holds no primitive: left out.
+        assert_eq!(
+            got,
+            vec![
+                (0.0, Some(10.0), 2, 0.5),
+                (10.0, Some(20.0), 1, 1.0),
+                (30.0, Some(45.0), 1, 0.0),
+                (45.0, None, 2, 0.5),
+            ]
+        );
+        assert_eq!(bins[0].speed_m_s.max, 1.4);
+        assert!(speed_by_turn(&[]).is_empty());
     }
 
     #[test]
