@@ -192,6 +192,9 @@ impl PaceSummary {
 /// open above.
 pub const TURN_BIN_EDGES_DEG: [f64; 4] = [10.0, 20.0, 30.0, 45.0];
 
+/// A brisk walk (m/s): what [`SpeedAtTurn::share_at_1_2_m_s`] counts.
+pub const BRISK_WALK_M_S: f64 = 1.2;
+
 /// Speeds of the primitives that turn within one range of angles.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct SpeedAtTurn {
@@ -200,7 +203,7 @@ pub struct SpeedAtTurn {
     /// … to this many (exclusive; `None`: no upper edge).
     pub to_deg: Option<f64>,
     pub speed_m_s: Quantiles,
-    /// Share of these primitives at a brisk walk or faster (≥ 1.2 m/s).
+    /// Share of these primitives at a brisk walk or faster (≥ [`BRISK_WALK_M_S`]).
     pub share_at_1_2_m_s: f64,
 }
 
@@ -222,7 +225,7 @@ pub fn speed_by_turn(paces: &[Pace]) -> Vec<SpeedAtTurn> {
             (!within.is_empty()).then(|| SpeedAtTurn {
                 from_deg: from,
                 to_deg: to,
-                share_at_1_2_m_s: within.iter().filter(|&&v| v >= 1.2).count() as f64
+                share_at_1_2_m_s: within.iter().filter(|&&v| v >= BRISK_WALK_M_S).count() as f64
                     / within.len() as f64,
                 speed_m_s: Quantiles::of(within),
             })
