@@ -133,12 +133,9 @@ fn the_shipped_campaign_plans_its_takes() {
             ("plan_2.obj".to_string(), Some("z"), Some(1.0)),
         ]
     );
-    assert!(plan.takes[1]
-        .command(&plan.run, Path::new("t"))
-        .contains(" --up y"));
-    assert!(!plan.takes[1]
-        .command(&plan.run, Path::new("t"))
-        .contains("--unit-m"));
+    let room_y_up = plan.takes[1].command(&plan.run, Path::new("t"));
+    assert!(room_y_up.contains(" --up y"), "{room_y_up}");
+    assert!(!room_y_up.contains("--unit-m"), "{room_y_up}");
     assert!(plan.takes[3]
         .command(&plan.run, Path::new("t"))
         .contains(" --up z --unit-m 1"));

@@ -197,35 +197,25 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
     // Each scene file with the frame its entry gives (none: the run config's).
     let mut scenes: Vec<(PathBuf, Framed)> = Vec::new();
     for (i, entry) in c.scenes.iter().enumerate() {
-        let (s, frame) = scene_entry(entry).map_err(|m| bad(&format!("scenes[{i}]"), m))?;
+        let field = format!("scenes[{i}]");
+        let (s, frame) = scene_entry(entry).map_err(|m| bad(&field, m))?;
         let s = s.as_str();
         let pattern = dir.join(s);
         if s.contains(['*', '?', '[']) {
             let mut found: Vec<PathBuf> = glob::glob(&pattern.to_string_lossy())
-                .map_err(|e| {
-                    bad(
-                        &format!("scenes[{i}]"),
-                        format!("{s:?} is not a valid glob: {e}"),
-                    )
-                })?
+                .map_err(|e| bad(&field, format!("{s:?} is not a valid glob: {e}")))?
                 .filter_map(|p| p.ok())
                 .filter(|p| p.is_file())
                 .collect();
             if found.is_empty() {
-                return Err(bad(
-                    &format!("scenes[{i}]"),
-                    format!("{s:?} matches no file"),
-                ));
+                return Err(bad(&field, format!("{s:?} matches no file")));
             }
             found.sort();
             scenes.extend(found.into_iter().map(|p| (at(&p), frame)));
         } else {
             let p = at(Path::new(s));
             if !p.is_file() {
-                return Err(bad(
-                    &format!("scenes[{i}]"),
-                    format!("{} is not a file", p.display()),
-                ));
+                return Err(bad(&field, format!("{} is not a file", p.display())));
             }
             scenes.push((p, frame));
         }
