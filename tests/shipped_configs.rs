@@ -158,6 +158,11 @@ fn the_shipped_campaign_plans_its_takes() {
         ),
         ("[{ up_axis = \"y\" }]", "`path` is missing"),
         ("[3]", "expected a path or a table"),
+        (
+            "[\"room_cm.obj\", \"nowhere_*.obj\"]",
+            "campaign.scenes[1]`: \"nowhere_*.obj\" matches no file",
+        ),
+        ("[\"missing.obj\"]", "missing.obj is not a file"),
     ] {
         let err = write_campaign(scenes).map(|_| ()).unwrap_err();
         assert!(err.contains(says), "{scenes}: {err}");
