@@ -9,8 +9,17 @@ mod common;
 use std::process::Command;
 
 use egogen::eval::metrics::{lateral_offsets, path_diversity};
-use egogen::scene::{guide_aim, line_is_clear, plan_path, Obstacle2, WalkableMap};
+use egogen::scene::{guide_aim, line_is_clear, plan_path, Guide, Obstacle2, WalkableMap};
 use glam::DVec2;
+
+/// A guide aiming `lookahead_m` along the shortest path (no centring, the unknown not disliked).
+fn guide(lookahead_m: f64) -> Guide {
+    Guide {
+        lookahead_m,
+        centre_weight: 0.0,
+        unknown_cost: 0.0,
+    }
+}
 
 /// A 6 × 6 m room, a wall across x = 0 from y = −3 to y = 1.5: the way round is above it.
 fn walled_room() -> WalkableMap {
@@ -82,16 +91,16 @@ fn the_guide_shows_a_visible_goal_itself_and_a_hidden_one_along_the_way_round() 
     // Same side of the wall: the straight way is clear, the aim is the goal.
     let near = DVec2::new(-2.0, 1.0);
     assert!(line_is_clear(&map, &[], 0.3, from, near));
-    assert_eq!(guide_aim(&map, &[], 0.3, 0.0, from, near, 2.0), near);
+    assert_eq!(guide_aim(&map, &[], from, near, &guide(2.0), None), near);
     // No lookahead, no guide: the goal, hidden or not.
     assert_eq!(
-        guide_aim(&map, &[], 0.3, 0.0, from, DVec2::new(2.0, -2.0), 0.0),
+        guide_aim(&map, &[], from, DVec2::new(2.0, -2.0), &guide(0.0), None),
         DVec2::new(2.0, -2.0)
     );
     // Behind the wall: 2 m along the way round, which first heads up, away from the goal.
     let hidden = DVec2::new(2.0, -2.0);
     assert!(!line_is_clear(&map, &[], 0.3, from, hidden));
-    let aim = guide_aim(&map, &[], 0.3, 0.0, from, hidden, 2.0);
+    let aim = guide_aim(&map, &[], from, hidden, &guide(2.0), None);
     let path = plan_path(&map, &[], 0.3, from, hidden);
     assert_eq!(aim, path.point_along(2.0));
     assert!(
@@ -109,10 +118,16 @@ fn the_guide_shows_a_visible_goal_itself_and_a_hidden_one_along_the_way_round() 
         yaw_rad: 0.0,
     };
     assert!(!line_is_clear(&map, &[person], 0.3, from, near));
-    assert_ne!(guide_aim(&map, &[person], 0.3, 0.0, from, near, 2.0), near);
+    assert_ne!(
+        guide_aim(&map, &[person], from, near, &guide(2.0), None),
+        near
+    );
     // A goal inside the wall: no way round, the goal itself.
     let walled = DVec2::new(0.0, -2.0);
-    assert_eq!(guide_aim(&map, &[], 0.3, 0.0, from, walled, 2.0), walled);
+    assert_eq!(
+        guide_aim(&map, &[], from, walled, &guide(2.0), None),
+        walled
+    );
 }
 
 /// An open 6 × 6 m floor of 0.1 m cells with its corner at `origin`, a square box of half side
@@ -197,8 +212,11 @@ proptest::proptest! {
     ) {
         let (map, b, from, to) =
             far_floor_with_box(DVec2::new(-3.0e5, 7.0e4), (sx, sy), (gx, gy), (bx, by), half, yaw);
-        let aim = guide_aim(&map, &[b], 0.3, 0.0, from, to, lookahead);
+        let aim = guide_aim(&map, &[b], from, to, &guide(lookahead), None);
         proptest::prop_assert!(aim.is_finite());
+        // Ground disliked nowhere changes nothing.
+        let nowhere = vec![0f32; map.nx * map.ny];
+        proptest::prop_assert_eq!(guide_aim(&map, &[b], from, to, &guide(lookahead), Some(&nowhere)), aim);
         if line_is_clear(&map, &[b], 0.3, from, to) {
             proptest::prop_assert_eq!(aim, to);
         } else {

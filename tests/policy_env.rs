@@ -891,11 +891,22 @@ fn a_guide_on_memory_plans_on_what_the_walker_saw_and_restores_from_snapshots() 
     let b = 12;
     let mut plain = PolicyEnv::new(&model, &ctx, &bank, &prior, plain_settings, b, 8).unwrap();
     let mut memory = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(true), b, 8).unwrap();
+    // The same memory, ground never seen costing its guide twice as much to cross.
+    let wary_settings = EnvSettings {
+        guide_unknown_cost: 1.0,
+        ..rooms(true)
+    };
+    let mut wary = PolicyEnv::new(&model, &ctx, &bank, &prior, wary_settings, b, 8).unwrap();
     let l = plain.latent_dim();
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let mut shown_a_way = 0;
+    let mut wary_aims_elsewhere = 0;
     for step in 0..4 {
         let (o, g) = (plain.observations(), memory.observations());
+        let w = wary.observations();
+        wary_aims_elsewhere += (0..b)
+            .filter(|i| g[i * OBS_DIM..(i + 1) * OBS_DIM] != w[i * OBS_DIM..(i + 1) * OBS_DIM])
+            .count();
         let pelvis = plain.pelvis_positions();
         assert_eq!(pelvis, memory.pelvis_positions());
         for i in 0..b {
@@ -932,10 +943,15 @@ fn a_guide_on_memory_plans_on_what_the_walker_saw_and_restores_from_snapshots() 
         let z = normal_samples(&mut rng, b * l);
         plain.step(&z).unwrap();
         memory.step(&z).unwrap();
+        wary.step(&z).unwrap();
     }
     assert!(
         shown_a_way > 0,
         "no walker was shown a way round a wall it saw"
+    );
+    assert!(
+        wary_aims_elsewhere > 0,
+        "a cost of unseen ground changed no walker's aim"
     );
 }
 

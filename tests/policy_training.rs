@@ -348,6 +348,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "stages[1].env.guide_centre_weight",
         ),
         (
+            "[stages.env]",
+            "[stages.env]\nguide_lookahead_m = 1.0\nguide_unknown_cost = 1.0",
+            "stages[1].env.guide_unknown_cost",
+        ),
+        (
             "[policy]",
             "[scene]\npath = \"missing.glb\"\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
             "scene.path",

@@ -385,6 +385,14 @@ fn bad_configs_are_refused_by_key() {
             "motion.guide_centre_weight",
         ),
         (
+            "[motion]\nguide_lookahead_m=1\nguide_unknown_cost=1\n[[agents]]\n[output]\ndir='o'\n",
+            "motion.guide_unknown_cost",
+        ),
+        (
+            "[motion]\nguide_lookahead_m=1\nguide_memory=true\nguide_unknown_cost=-1\n[[agents]]\n[output]\ndir='o'\n",
+            "motion.guide_unknown_cost",
+        ),
+        (
             "[scene]\nfloor_m=6\n[[agents]]\nstart=[9.0, 0.0]\n[output]\ndir='o'\n",
             "not on the walkable floor",
         ),

@@ -61,6 +61,7 @@ pub struct RawMotion {
     pub guide_lookahead_m: Option<f64>,
     pub guide_memory: Option<bool>,
     pub guide_centre_weight: Option<f64>,
+    pub guide_unknown_cost: Option<f64>,
     pub anticipate_people: Option<bool>,
     pub scene_every_frame: Option<bool>,
     pub seed: Option<u64>,

@@ -36,10 +36,14 @@ pub fn exit_quietly_on_closed_pipe() {
 /// last part; a flag is it with dashes) and what was expected. One check for `egogen synth`,
 /// `egogen-run`, training configs and `egogen policy eval`.
 pub fn guide_settings_problem(
-    lookahead_m: f64,
+    guide: &crate::scene::Guide,
     memory: bool,
-    centre_weight: f64,
 ) -> Option<(&'static str, String)> {
+    let crate::scene::Guide {
+        lookahead_m,
+        centre_weight,
+        unknown_cost,
+    } = *guide;
     if !(lookahead_m.is_finite() && lookahead_m >= 0.0) {
         return Some((
             "guide_lookahead_m",
@@ -52,6 +56,12 @@ pub fn guide_settings_problem(
             format!("expected a weight ≥ 0, got {centre_weight}"),
         ));
     }
+    if !(unknown_cost.is_finite() && unknown_cost >= 0.0) {
+        return Some((
+            "guide_unknown_cost",
+            format!("expected a weight ≥ 0, got {unknown_cost}"),
+        ));
+    }
     let needs_lookahead = |what: &str| {
         format!("a guide {what} only with a lookahead > 0 m (e.g. 1 or 2): give one too")
     };
@@ -62,6 +72,14 @@ pub fn guide_settings_problem(
         return Some((
             "guide_centre_weight",
             needs_lookahead("keeps to the middle of doorways"),
+        ));
+    }
+    if unknown_cost > 0.0 && !memory {
+        return Some((
+            "guide_unknown_cost",
+            "a cost of unseen ground applies only to a guide that plans on the walker's memory: \
+             turn memory on too (with a lookahead > 0 m)"
+                .into(),
         ));
     }
     None

@@ -135,6 +135,11 @@ pub enum PolicyCommand {
         /// doorways and corridors (0, the default: the shortest path at 0.3 m from walls).
         #[arg(long, default_value_t = 0.0)]
         guide_centre_weight: f64,
+        /// With --guide-memory: a step onto ground the walker never saw costs this many times
+        /// its length more than one onto ground seen open: the way round prefers the doorways
+        /// its rays looked through (0, the default: the unknown taken as open).
+        #[arg(long, default_value_t = 0.0)]
+        guide_unknown_cost: f64,
         /// Give each indoor episode time for its way round walls: at least (walking distance
         /// round walls) / M primitives, never fewer than --max-primitives (7/13 ≈ 0.54: the
         /// time 13 primitives give a 7 m straight walk). Not given: --max-primitives alone.
@@ -295,6 +300,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             guide_lookahead_m,
             guide_memory,
             guide_centre_weight,
+            guide_unknown_cost,
             time_by_way_round_m,
             people_seen_ahead,
         } => {
@@ -329,9 +335,12 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 }
             }
             if let Some((field, what)) = crate::cli::guide_settings_problem(
-                guide_lookahead_m,
+                &crate::scene::Guide {
+                    lookahead_m: guide_lookahead_m,
+                    centre_weight: guide_centre_weight,
+                    unknown_cost: guide_unknown_cost,
+                },
                 guide_memory,
-                guide_centre_weight,
             ) {
                 bail!("--{}: {what}", field.replace('_', "-"));
             }
@@ -381,6 +390,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 guide_lookahead_m,
                 guide_memory,
                 guide_centre_weight,
+                guide_unknown_cost,
                 people_seen_ahead,
                 time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
                 ..defaults

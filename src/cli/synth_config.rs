@@ -87,6 +87,10 @@ pub(crate) struct RawSynthMotion {
     /// With a guide: how strongly its path keeps to the middle of doorways and corridors
     /// (default 0: the shortest path at 0.3 m from walls; 2 brushes 0.9 m door frames less).
     pub guide_centre_weight: Option<f64>,
+    /// With a guide on memory: how much dearer a step onto ground the agent never saw is
+    /// than one onto ground seen open (default 0: the unknown taken as open; 1 prefers the
+    /// doorways its rays looked through).
+    pub guide_unknown_cost: Option<f64>,
     /// Whether each walker sees the others where they will stand when its primitive ends and
     /// judges its primitive against them moving (default true), or sees and judges them where
     /// they were last put (false: EgoGen's crowd loop).
@@ -442,14 +446,18 @@ fn crowd_settings(
         guide_centre_weight: m
             .guide_centre_weight
             .unwrap_or(defaults.guide_centre_weight),
+        guide_unknown_cost: m.guide_unknown_cost.unwrap_or(defaults.guide_unknown_cost),
         anticipate_people: m.anticipate_people.unwrap_or(defaults.anticipate_people),
         scene_every_frame: m.scene_every_frame.unwrap_or(defaults.scene_every_frame),
         seed: m.seed.unwrap_or(0),
     };
     if let Some((field, what)) = crate::cli::guide_settings_problem(
-        settings.guide_lookahead_m,
+        &crate::scene::Guide {
+            lookahead_m: settings.guide_lookahead_m,
+            centre_weight: settings.guide_centre_weight,
+            unknown_cost: settings.guide_unknown_cost,
+        },
         settings.guide_memory,
-        settings.guide_centre_weight,
     ) {
         return Err(bad(&format!("motion.{field}"), what));
     }

@@ -348,9 +348,12 @@ fn resolve_stage(
         ));
     }
     if let Some((field, what)) = crate::cli::guide_settings_problem(
-        e.guide_lookahead_m,
+        &crate::scene::Guide {
+            lookahead_m: e.guide_lookahead_m,
+            centre_weight: e.guide_centre_weight,
+            unknown_cost: e.guide_unknown_cost,
+        },
         e.guide_memory,
-        e.guide_centre_weight,
     ) {
         return Err(bad(&key(&format!("env.{field}")), what));
     }

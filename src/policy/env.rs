@@ -47,8 +47,8 @@ use crate::scene::generated::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use crate::scene::generated::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
 use crate::scene::generated::room_scene::{RoomParams, RoomScene, RoomSettings};
 use crate::scene::{
-    blocked_cells_in_box, guide_aim_remembered, MovingObstacle, Obstacle2, PathField, SceneSdf,
-    SeenMap, StartGoal, WalkableMap,
+    blocked_cells_in_box, guide_aim_remembered, Guide, MovingObstacle, Obstacle2, PathField,
+    SceneSdf, SeenMap, StartGoal, WalkableMap,
 };
 use crate::sensing::{EgoSensor, SensingSpec, Sensor};
 
@@ -118,6 +118,11 @@ pub struct EnvSettings {
     /// (`scene::plan_path_centred`: a step nearer than 0.45 m to what blocks walking costs up to
     /// this many times more). 0: the shortest path at the guide's 0.3 m clearance.
     pub guide_centre_weight: f64,
+    /// With the guide on memory: a step onto ground the walker never saw costs this many
+    /// times its length more than one onto ground seen open: the way round prefers the
+    /// doorways its rays looked through (`scene::Guide::unknown_cost`). 0: the unknown taken
+    /// as open.
+    pub guide_unknown_cost: f64,
     /// With the guide on: only indoor episodes (floor plans and the fixed scene's pairs) are
     /// guided; box scenes and crossings walk to their goals unguided, as the paper's tables
     /// evaluate them. false: every episode.
@@ -175,6 +180,7 @@ impl Default for EnvSettings {
             guide_lookahead_m: 0.0,
             guide_memory: false,
             guide_centre_weight: 0.0,
+            guide_unknown_cost: 0.0,
             guide_indoors_only: false,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
             goal_by_path: false,
@@ -865,8 +871,11 @@ impl<'m> PolicyEnv<'m> {
             e.course.obstacle.as_slice(),
             w.view.pelvis,
             e.course.goal,
-            self.guide_lookahead_m(&e.course),
-            self.settings.guide_centre_weight,
+            &Guide {
+                lookahead_m: self.guide_lookahead_m(&e.course),
+                centre_weight: self.settings.guide_centre_weight,
+                unknown_cost: self.settings.guide_unknown_cost,
+            },
         );
         let t0_s = frame_time_s(w.steps, 0);
         let around = e.course.surroundings();

@@ -25,8 +25,8 @@ pub use load::{floor_height_warning, load_scene, walkable_map, SceneError, Scene
 pub use mesh::{ObjectId, SceneMesh, SceneObject};
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{
-    guide_aim, line_is_clear, plan_path, plan_path_centred, PathField, PlannedPath, GUIDE_CENTRE_M,
-    GUIDE_CLEARANCE_M,
+    guide_aim, line_is_clear, plan_path, plan_path_centred, plan_path_weighted, Guide, PathField,
+    PlannedPath, GUIDE_CENTRE_M, GUIDE_CLEARANCE_M,
 };
 pub use penetration::{blocked_cells_in_box, sdf_penetration, CollisionModel, Penetration};
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};

@@ -111,6 +111,22 @@ pub fn plan_path_centred(
     from: DVec2,
     to: DVec2,
 ) -> PlannedPath {
+    plan_path_weighted(map, obstacles, clearance_m, centre_weight, None, from, to)
+}
+
+/// [`plan_path_centred`], a step onto cell `k` (row-major, as the map's cells) costing
+/// `extra[k]` times its length more besides: a planner's dislike of some ground (a guide on
+/// memory, of cells the walker never saw: [`Guide::unknown_cost`]). `None`
+/// or all zeros: [`plan_path_centred`]. The heuristic stays admissible (steps only cost more).
+pub fn plan_path_weighted(
+    map: &WalkableMap,
+    obstacles: &[Obstacle2],
+    clearance_m: f64,
+    centre_weight: f64,
+    extra: Option<&[f32]>,
+    from: DVec2,
+    to: DVec2,
+) -> PlannedPath {
     let straight = PlannedPath {
         points: vec![from, to],
         found: false,
@@ -118,6 +134,8 @@ pub fn plan_path_centred(
     let (Some(start), Some(goal)) = (map.cell_of(from), map.cell_of(to)) else {
         return straight;
     };
+    debug_assert!(extra.is_none_or(|e| e.len() == map.nx * map.ny));
+    let extra = extra.filter(|e| e.len() == map.nx * map.ny);
     let grown: Vec<Obstacle2> = obstacles.iter().map(|o| o.grown(clearance_m)).collect();
     let free = |(i, j): (usize, usize)| {
         let k = j * map.nx + i;
@@ -148,9 +166,10 @@ pub fn plan_path_centred(
             } else {
                 0.0
             };
+            let dislike = extra.map_or(0.0, |e| f64::from(e[j * map.nx + i]));
             (
                 (i, j),
-                cost + (f64::from(cost) * centre_weight * short).round() as u32,
+                cost + (f64::from(cost) * (centre_weight * short + dislike)).round() as u32,
             )
         })
         .collect::<Vec<_>>()
@@ -203,30 +222,85 @@ pub fn line_is_clear(
         })
 }
 
-/// Where a walker at `at` bound for `goal` should head: the goal itself while the straight
-/// way to it is clear ([`line_is_clear`]); otherwise the point `lookahead_m` along the
-/// shortest path planned around what blocks it (pure pursuit), or the goal when no path is
-/// found. A lookahead of 0 (no guide) gives the goal. Stateless: the path is planned anew
-/// from where the walker stands. `centre_weight` > 0 plans it keeping to the middle of
-/// doorways ([`plan_path_centred`]).
+/// How a guide shows a walker the way round what hides its goal (the `guide_*` settings of
+/// training, `egogen policy eval`, `egogen synth` and `egogen-run`); its path keeps
+/// [`GUIDE_CLEARANCE_M`] from what blocks walking.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Guide {
+    /// The aim: the point this far (m) along the planned path; 0: no guide (the goal itself).
+    pub lookahead_m: f64,
+    /// How strongly the path keeps to the middle of doorways and corridors
+    /// ([`plan_path_centred`]); 0: the shortest path at the clearance.
+    pub centre_weight: f64,
+    /// On the walker's memory (`scene::SeenMap`): a step onto a cell it never saw costs this
+    /// many times its length more than one onto a cell seen open — the way round prefers the
+    /// doorways its rays looked through to walls it has not seen yet. 0: the unknown taken as
+    /// open at no extra cost. Unused on a whole map.
+    pub unknown_cost: f64,
+}
+
+/// Where a walker at `at` bound for `goal` should head, by `guide`: the goal itself while the
+/// straight way to it is clear ([`line_is_clear`] at [`GUIDE_CLEARANCE_M`]) and, where
+/// `dislike` makes some ground dearer (a half cell on cell `k` costing `1 + dislike[k]`), no
+/// dearer than the path planned on it; otherwise the point `guide.lookahead_m` along the path planned around
+/// what blocks it ([`plan_path_weighted`]; pure pursuit), or the goal when no path is found. A lookahead of 0 (no guide) gives the goal. Stateless: the path is planned
+/// anew from where the walker stands.
 pub fn guide_aim(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
-    clearance_m: f64,
-    centre_weight: f64,
     at: DVec2,
     goal: DVec2,
-    lookahead_m: f64,
+    guide: &Guide,
+    dislike: Option<&[f32]>,
 ) -> DVec2 {
-    if !(lookahead_m > 0.0) || line_is_clear(map, obstacles, clearance_m, at, goal) {
+    if !(guide.lookahead_m > 0.0) {
         return goal;
     }
-    let path = plan_path_centred(map, obstacles, clearance_m, centre_weight, at, goal);
-    if path.found {
-        path.point_along(lookahead_m)
+    let clear = line_is_clear(map, obstacles, GUIDE_CLEARANCE_M, at, goal);
+    if clear && dislike.is_none() {
+        return goal;
+    }
+    let path = plan_path_weighted(
+        map,
+        obstacles,
+        GUIDE_CLEARANCE_M,
+        guide.centre_weight,
+        dislike,
+        at,
+        goal,
+    );
+    // A clear straight way no dearer than the planned one (a disliked stretch on it not worth
+    // a detour): the goal itself.
+    let straight_is_cheaper = || {
+        let d = dislike.unwrap_or_default();
+        weighted_length(map, d, &[at, goal]) <= weighted_length(map, d, &path.points)
+    };
+    if path.found && !(clear && straight_is_cheaper()) {
+        path.point_along(guide.lookahead_m)
     } else {
         goal
     }
+}
+
+/// The length of a polyline with each stretch of it weighed by the ground it crosses: a half
+/// cell on cell `k` counts `1 + dislike[k]` times (1 off the grid or where `dislike` is empty).
+fn weighted_length(map: &WalkableMap, dislike: &[f32], points: &[DVec2]) -> f64 {
+    let weight = |p: DVec2| {
+        map.cell_of(p)
+            .and_then(|(i, j)| dislike.get(j * map.nx + i))
+            .map_or(1.0, |&c| 1.0 + f64::from(c))
+    };
+    points
+        .windows(2)
+        .map(|w| {
+            let length = w[0].distance(w[1]);
+            let n = (length / (0.5 * map.cell_m)).ceil().max(1.0) as usize;
+            (0..n)
+                .map(|k| weight(w[0].lerp(w[1], (k as f64 + 0.5) / n as f64)))
+                .sum::<f64>()
+                * (length / n as f64)
+        })
+        .sum()
 }
 
 /// Walking distance to one goal from every cell of a map: Dijkstra from the goal's cell over

@@ -2,47 +2,36 @@
 //! they ended on (blocked), every other cell unknown. A guide plans on it with the unknown
 //! taken as open ([`SeenMap::believed`]; optimistic planning, as frontier explorers and D* Lite
 //! navigators plan): it heads round the walls the walker has seen, never round walls it has not,
-//! and plans anew as it sees more. The walker's memory of a dwelling it walks for the first
-//! time, in place of the whole map a guide would otherwise be given.
+//! and plans anew as it sees more; a step onto ground never seen may cost more than one onto
+//! ground seen open ([`Guide::unknown_cost`]), so that the way round prefers the doorways the
+//! rays have looked through. The walker's memory of a dwelling it walks for the first time, in
+//! place of the whole map a guide would otherwise be given.
 
 use glam::DVec2;
 
 use super::obstacle::Obstacle2;
-use super::path_plan::{guide_aim, GUIDE_CLEARANCE_M};
+use super::path_plan::{guide_aim, Guide};
 use super::walkable::WalkableMap;
 
-/// Where a walker at `at` bound for `goal` should head ([`guide_aim`], the guide's clearance,
-/// `centre_weight` keeping to the middle of doorways): planned on its memory when it keeps
-/// one — what stands is there where its rays met it, so `obstacles` are not added — otherwise
-/// on the whole `map` round `obstacles`.
+/// Where a walker at `at` bound for `goal` should head ([`guide_aim`] by `guide`): planned on
+/// its memory when it keeps one — what stands is there where its rays met it, so `obstacles`
+/// are not added; ground never seen costs [`Guide::unknown_cost`] more — otherwise on the
+/// whole `map` round `obstacles`.
 pub fn guide_aim_remembered(
     seen: Option<&SeenMap>,
     map: &WalkableMap,
     obstacles: &[Obstacle2],
     at: DVec2,
     goal: DVec2,
-    lookahead_m: f64,
-    centre_weight: f64,
+    guide: &Guide,
 ) -> DVec2 {
     match seen {
-        Some(seen) if lookahead_m > 0.0 => guide_aim(
-            &seen.believed(),
-            &[],
-            GUIDE_CLEARANCE_M,
-            centre_weight,
-            at,
-            goal,
-            lookahead_m,
-        ),
-        _ => guide_aim(
-            map,
-            obstacles,
-            GUIDE_CLEARANCE_M,
-            centre_weight,
-            at,
-            goal,
-            lookahead_m,
-        ),
+        Some(seen) if guide.lookahead_m > 0.0 => {
+            let dislike =
+                (guide.unknown_cost > 0.0).then(|| seen.unknown_costs(guide.unknown_cost));
+            guide_aim(&seen.believed(), &[], at, goal, guide, dislike.as_deref())
+        }
+        _ => guide_aim(map, obstacles, at, goal, guide, None),
     }
 }
 
@@ -127,6 +116,21 @@ impl SeenMap {
         map
     }
 
+    /// The extra cost of a step onto each cell, row-major as the map's cells: `weight` where
+    /// nothing was seen, 0 elsewhere ([`Guide::unknown_cost`]).
+    fn unknown_costs(&self, weight: f64) -> Vec<f32> {
+        self.cells
+            .iter()
+            .map(|&c| {
+                if c == Seen::Unknown {
+                    weight as f32
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
     /// Cells seen open and seen blocked.
     pub fn seen_cells(&self) -> (usize, usize) {
         let count = |s: Seen| self.cells.iter().filter(|&&c| c == s).count();
@@ -186,22 +190,64 @@ mod tests {
         }
     }
 
+    /// A guide 2 m ahead on the shortest path, unknown ground costing `unknown_cost` more.
+    fn guide(unknown_cost: f64) -> Guide {
+        Guide {
+            lookahead_m: 2.0,
+            centre_weight: 0.0,
+            unknown_cost,
+        }
+    }
+
+    #[test]
+    fn a_guide_that_dislikes_the_unknown_keeps_to_ground_seen_open() {
+        // A 6 × 4 m floor, open but for a wall along its top edge; the walker has seen only a
+        // way round by the top (up, across, down), not the straight way from (1, 1) to (5, 1).
+        let walkable = (0..2400).map(|k| k / 60 < 39).collect();
+        let map = WalkableMap::from_walkable(DVec2::ZERO, 0.1, 60, 40, walkable);
+        let (at, goal) = (DVec2::new(1.0, 1.0), DVec2::new(5.0, 1.0));
+        let mut seen = SeenMap::unseen(&map);
+        let corners = [at, DVec2::new(1.0, 3.5), DVec2::new(5.0, 3.5), goal];
+        for w in corners.windows(2) {
+            let d = w[1] - w[0];
+            seen.record_ray(w[0], d.normalize(), None, d.length());
+        }
+        let aim_with = |seen: &SeenMap, cost: f64| {
+            guide_aim_remembered(Some(seen), &map, &[], at, goal, &guide(cost))
+        };
+        // Taken as open, the unknown straight way is the shortest: the goal itself.
+        assert_eq!(aim_with(&seen, 0.0), goal);
+        // Four times dearer, the 4 m unknown straight way (20 m) loses to the 9 m seen round
+        // the top: the aim is up the seen way.
+        let aim = aim_with(&seen, 4.0);
+        assert!(aim.y > 2.5 && (aim.x - 1.0).abs() < 0.3, "aim {aim}");
+        // A little dearer, the straight way still wins: the goal itself.
+        assert_eq!(aim_with(&seen, 0.1), goal);
+        // Once the straight way has been seen open (all but the goal's own cell), the planned
+        // way keeps to it and the goal itself is aimed at.
+        seen.record_ray(at, DVec2::X, None, 4.0);
+        assert_eq!(aim_with(&seen, 4.0), goal);
+        // On the whole map the cost changes nothing.
+        let whole = guide_aim_remembered(None, &map, &[], at, goal, &guide(4.0));
+        assert_eq!(whole, goal);
+    }
+
     #[test]
     fn a_guide_on_what_was_seen_goes_round_seen_walls_only() {
         let map = split_room();
         let (at, goal) = (DVec2::new(1.0, 1.0), DVec2::new(5.0, 1.0));
         let mut seen = SeenMap::unseen(&map);
         // Nothing seen: the goal straight ahead, through the wall the walker has not seen.
-        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, 0.0, at, goal, 2.0);
+        let aim = guide_aim(&seen.believed(), &[], at, goal, &guide(0.0), None);
         assert_eq!(aim, goal);
         // Looking at the wall: round its end seen open at the top, not through it.
         look(&mut seen, &map, at, 0.0);
         let (open, blocked) = seen.seen_cells();
         assert!(open > 100 && blocked > 5, "{open} open, {blocked} blocked");
-        let aim = guide_aim(&seen.believed(), &[], GUIDE_CLEARANCE_M, 0.0, at, goal, 2.0);
+        let aim = guide_aim(&seen.believed(), &[], at, goal, &guide(0.0), None);
         assert!(aim != goal && aim.y > at.y + 0.5, "aim {aim}");
         // The whole map's guide agrees on the side.
-        let full = guide_aim(&map, &[], GUIDE_CLEARANCE_M, 0.0, at, goal, 2.0);
+        let full = guide_aim(&map, &[], at, goal, &guide(0.0), None);
         assert!((aim - full).length() < 0.8, "{aim} against {full}");
         // A memory survives its bytes.
         let back = SeenMap::from_bytes(&map, &seen.to_bytes()).unwrap();

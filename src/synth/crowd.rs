@@ -45,7 +45,7 @@ use crate::policy::walker::{
 };
 use crate::policy::{Actor, PosePrior};
 use crate::scene::{
-    guide_aim_remembered, plan_path, MovingObstacle, Obstacle2, SeenMap, WalkableMap,
+    guide_aim_remembered, plan_path, Guide, MovingObstacle, Obstacle2, SeenMap, WalkableMap,
 };
 use crate::sensing::Sensor;
 
@@ -193,6 +193,11 @@ pub struct CrowdSettings {
     /// With the guide on: how strongly its path keeps to the middle of doorways and corridors
     /// ([`crate::scene::plan_path_centred`]; 0, default: the shortest path at its clearance).
     pub guide_centre_weight: f64,
+    /// With the guide on memory: a step onto ground the agent never saw costs this many times
+    /// its length more than one onto ground seen open: the way round prefers the doorways its
+    /// rays looked through ([`crate::scene::Guide::unknown_cost`]; 0, default: the unknown
+    /// taken as open).
+    pub guide_unknown_cost: f64,
     /// How the walker whose turn it is sees and judges the others (paper Alg. 1 steps them one
     /// at a time). `true` (default): its rays see each other person's 2D box where that person
     /// will stand when the walker's primitive ends — where the primitive it took earlier in the
@@ -225,6 +230,7 @@ impl Default for CrowdSettings {
             guide_lookahead_m: 0.0,
             guide_memory: false,
             guide_centre_weight: 0.0,
+            guide_unknown_cost: 0.0,
             anticipate_people: true,
             scene_every_frame: true,
             seed: 0,
@@ -664,8 +670,11 @@ impl<'m> Agent<'m> {
                     standing,
                     self.walker.view.pelvis,
                     self.goal,
-                    settings.guide_lookahead_m,
-                    settings.guide_centre_weight,
+                    &Guide {
+                        lookahead_m: settings.guide_lookahead_m,
+                        centre_weight: settings.guide_centre_weight,
+                        unknown_cost: settings.guide_unknown_cost,
+                    },
                 );
                 self.walker.observe_into(
                     &self.body,
