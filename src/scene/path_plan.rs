@@ -116,8 +116,8 @@ pub fn plan_path_centred(
 
 /// [`plan_path_centred`], a step onto cell `k` (row-major, as the map's cells) costing
 /// `extra[k]` times its length more besides: a planner's dislike of some ground (a guide on
-/// memory, of cells the walker never saw: [`Guide::unknown_cost`]). `None`
-/// or all zeros: [`plan_path_centred`]. The heuristic stays admissible (steps only cost more).
+/// memory, of cells the walker never saw: [`Guide::unknown_cost`]). `None` or all zeros:
+/// [`plan_path_centred`]. The heuristic stays admissible (steps only cost more).
 pub fn plan_path_weighted(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
@@ -242,8 +242,9 @@ pub struct Guide {
 /// Where a walker at `at` bound for `goal` should head, by `guide`: the goal itself while the
 /// straight way to it is clear ([`line_is_clear`] at [`GUIDE_CLEARANCE_M`]) and, where
 /// `dislike` makes some ground dearer (a half cell on cell `k` costing `1 + dislike[k]`), no
-/// dearer than the path planned on it; otherwise the point `guide.lookahead_m` along the path planned around
-/// what blocks it ([`plan_path_weighted`]; pure pursuit), or the goal when no path is found. A lookahead of 0 (no guide) gives the goal. Stateless: the path is planned
+/// dearer than the path planned on it; otherwise the point `guide.lookahead_m` along the path
+/// planned around what blocks it ([`plan_path_weighted`]; pure pursuit), or the goal when no
+/// path is found. A lookahead of 0 (no guide) gives the goal. Stateless: the path is planned
 /// anew from where the walker stands.
 pub fn guide_aim(
     map: &WalkableMap,
