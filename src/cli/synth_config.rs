@@ -451,14 +451,9 @@ fn crowd_settings(
         scene_every_frame: m.scene_every_frame.unwrap_or(defaults.scene_every_frame),
         seed: m.seed.unwrap_or(0),
     };
-    if let Some((field, what)) = crate::cli::guide_settings_problem(
-        &crate::scene::Guide {
-            lookahead_m: settings.guide_lookahead_m,
-            centre_weight: settings.guide_centre_weight,
-            unknown_cost: settings.guide_unknown_cost,
-        },
-        settings.guide_memory,
-    ) {
+    if let Some((field, what)) =
+        crate::cli::guide_settings_problem(&settings.guide(), settings.guide_memory)
+    {
         return Err(bad(&format!("motion.{field}"), what));
     }
     if !(settings.success_m.is_finite() && settings.success_m > 0.0) {

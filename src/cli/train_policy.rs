@@ -347,14 +347,7 @@ fn resolve_stage(
             format!("expected a radius > 0 m, got {}", e.success_m),
         ));
     }
-    if let Some((field, what)) = crate::cli::guide_settings_problem(
-        &crate::scene::Guide {
-            lookahead_m: e.guide_lookahead_m,
-            centre_weight: e.guide_centre_weight,
-            unknown_cost: e.guide_unknown_cost,
-        },
-        e.guide_memory,
-    ) {
+    if let Some((field, what)) = crate::cli::guide_settings_problem(&e.guide(), e.guide_memory) {
         return Err(bad(&key(&format!("env.{field}")), what));
     }
     let (lo, hi) = e.scene.box_side_m;

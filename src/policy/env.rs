@@ -159,6 +159,18 @@ pub struct EnvSettings {
     pub time_by_way_round_m: f64,
 }
 
+impl EnvSettings {
+    /// The guide these settings give every guided episode (`guide_*`; [`Self::guide_indoors_only`]
+    /// is the environment's to apply per course).
+    pub fn guide(&self) -> Guide {
+        Guide {
+            lookahead_m: self.guide_lookahead_m,
+            centre_weight: self.guide_centre_weight,
+            unknown_cost: self.guide_unknown_cost,
+        }
+    }
+}
+
 impl Default for EnvSettings {
     fn default() -> Self {
         Self {
@@ -873,8 +885,7 @@ impl<'m> PolicyEnv<'m> {
             e.course.goal,
             &Guide {
                 lookahead_m: self.guide_lookahead_m(&e.course),
-                centre_weight: self.settings.guide_centre_weight,
-                unknown_cost: self.settings.guide_unknown_cost,
+                ..self.settings.guide()
             },
         );
         let t0_s = frame_time_s(w.steps, 0);

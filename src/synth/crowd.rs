@@ -216,6 +216,17 @@ pub struct CrowdSettings {
     pub seed: u64,
 }
 
+impl CrowdSettings {
+    /// The guide these settings give each policy-steered agent (`guide_*`).
+    pub fn guide(&self) -> Guide {
+        Guide {
+            lookahead_m: self.guide_lookahead_m,
+            centre_weight: self.guide_centre_weight,
+            unknown_cost: self.guide_unknown_cost,
+        }
+    }
+}
+
 impl Default for CrowdSettings {
     fn default() -> Self {
         Self {
@@ -670,11 +681,7 @@ impl<'m> Agent<'m> {
                     standing,
                     self.walker.view.pelvis,
                     self.goal,
-                    &Guide {
-                        lookahead_m: settings.guide_lookahead_m,
-                        centre_weight: settings.guide_centre_weight,
-                        unknown_cost: settings.guide_unknown_cost,
-                    },
+                    &settings.guide(),
                 );
                 self.walker.observe_into(
                     &self.body,
