@@ -19,16 +19,16 @@ use egogen::motion::cvae::train::shipped_weights_path;
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::motion::MotionSequence;
 use egogen::policy::pose_prior::shipped_pose_prior_path;
-use egogen::policy::{PosePrior, SeedBank};
+use egogen::policy::{PosePrior, SeedBank, WalkerSettings};
 use egogen::scene::WalkableMap;
 use egogen::synth::crowd::{
-    run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering, NEW_FRAMES,
+    run_crowd, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld, NEW_FRAMES,
 };
 use glam::DVec2;
 
 const PRIMITIVES: usize = 8;
 
-fn circle(n: usize, radius_m: f64, steering: Steering) -> Vec<AgentPlan> {
+fn circle(n: usize, radius_m: f64, steering: Controller) -> Vec<AgentPlan> {
     (0..n)
         .map(|i| {
             let p = DVec2::from_angle(std::f64::consts::TAU * i as f64 / n as f64) * radius_m;
@@ -81,19 +81,22 @@ fn bench(c: &mut Criterion) {
         moving: Vec::new(),
     };
     let settings = CrowdSettings {
+        walker: WalkerSettings {
+            max_primitives_per_goal: 100,
+            ..Default::default()
+        },
         primitives: PRIMITIVES,
         stop_when_done: false,
-        max_primitives_per_goal: 100,
         ..CrowdSettings::default()
     };
     let mut g = c.benchmark_group("synth_crowd");
     g.sample_size(10);
-    let steer = Steering::POLICY;
+    let steer = Controller::POLICY;
     let cases = [
         ("policy", 1usize, steer),
         ("policy", 4, steer),
         ("policy", 16, steer),
-        ("sampling_k16", 1, Steering::Sampling { k: 16 }),
+        ("sampling_k16", 1, Controller::Sampling { k: 16 }),
     ];
     for (name, agents, steering) in cases {
         let plans = circle(agents, 4.0, steering);
@@ -141,11 +144,14 @@ fn bench(c: &mut Criterion) {
         ("swept_guided_on_memory", true, 2.0, true),
     ] {
         let settings = CrowdSettings {
+            walker: WalkerSettings {
+                scene_every_frame: swept,
+                guide_lookahead_m,
+                guide_memory,
+                ..Default::default()
+            },
             primitives: 40,
             stop_when_done: false,
-            scene_every_frame: swept,
-            guide_lookahead_m,
-            guide_memory,
             ..CrowdSettings::default()
         };
         g.throughput(Throughput::Elements((3 * 40 * NEW_FRAMES) as u64));

@@ -21,7 +21,7 @@ pub struct ExrChannel {
 
 /// A pass: channels sharing a prefix (`ViewLayer.Normal` → X, Y, Z).
 #[derive(Debug, Clone)]
-pub struct Pass {
+pub struct ExrPass {
     pub name: String,
     /// (component name, index into `ExrContents::channels`), in file order.
     pub components: Vec<(String, usize)>,
@@ -33,7 +33,7 @@ pub struct ExrContents {
     pub path: PathBuf,
     pub parts: usize,
     pub channels: Vec<ExrChannel>,
-    pub passes: Vec<Pass>,
+    pub passes: Vec<ExrPass>,
     /// The headers' text attributes by name (e.g. Blender's `cycles.ViewLayer.render_time`).
     pub attributes: std::collections::BTreeMap<String, String>,
 }
@@ -171,8 +171,8 @@ impl ExrContents {
     }
 }
 
-fn group_passes(channels: &[ExrChannel]) -> Vec<Pass> {
-    let mut passes: Vec<Pass> = Vec::new();
+fn group_passes(channels: &[ExrChannel]) -> Vec<ExrPass> {
+    let mut passes: Vec<ExrPass> = Vec::new();
     for (i, c) in channels.iter().enumerate() {
         let (pass, comp) = match c.name.rsplit_once('.') {
             Some((p, comp)) => (p.to_string(), comp.to_string()),
@@ -180,7 +180,7 @@ fn group_passes(channels: &[ExrChannel]) -> Vec<Pass> {
         };
         match passes.iter_mut().find(|p| p.name == pass) {
             Some(p) => p.components.push((comp, i)),
-            None => passes.push(Pass {
+            None => passes.push(ExrPass {
                 name: pass,
                 components: vec![(comp, i)],
             }),

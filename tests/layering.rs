@@ -349,8 +349,11 @@ fn modules_use_only_the_layers_below_them() {
 /// and the test fails when one is gone (so the list only shrinks). None today.
 const KNOWN_CYCLES: &[(&str, &str)] = &[];
 
-/// An import cycle among the files of one folder (through `super::x`, in every form), if any.
-fn import_cycle(dir: &Path) -> Option<Vec<String>> {
+/// An import cycle among the files of one folder, if any: through `super::x` and through
+/// `crate::<folder>::x` (the folder named from the crate's root, `folder` as
+/// `render` or `motion::cvae`), in every form.
+fn import_cycle(dir: &Path, folder: &str) -> Option<Vec<String>> {
+    let own = format!("crate::{folder}");
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
     for e in std::fs::read_dir(dir).unwrap().flatten() {
         let p = e.path();
@@ -362,7 +365,10 @@ fn import_cycle(dir: &Path) -> Option<Vec<String>> {
         }
         let text = std::fs::read_to_string(&p).unwrap();
         let uses = graph.entry(name.clone()).or_default();
-        for (_, used) in references(&text, "super") {
+        for (_, used) in references(&text, "super")
+            .into_iter()
+            .chain(references(&text, &own))
+        {
             if used != name {
                 uses.insert(used);
             }
@@ -425,8 +431,15 @@ fn no_folder_of_src_has_an_import_cycle() {
             .unwrap()
             .display()
             .to_string();
+        let folder = dir
+            .strip_prefix(&src)
+            .unwrap()
+            .components()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect::<Vec<_>>()
+            .join("::");
         let known = KNOWN_CYCLES.iter().find(|k| k.0 == rel);
-        match (import_cycle(&dir), known) {
+        match (import_cycle(&dir, &folder), known) {
             (Some(c), None) => problems.push(format!("{rel}: import cycle {}", c.join(" → "))),
             (None, Some((_, why))) => problems.push(format!(
                 "{rel} has no import cycle any more ({why}): remove it from KNOWN_CYCLES"
@@ -445,11 +458,33 @@ fn a_planted_cycle_is_found() {
     std::fs::write(dir.path().join("b.rs"), "use super::{\n    c::C,\n};\n").unwrap();
     std::fs::write(dir.path().join("c.rs"), "fn f() { super::a::g(); }\n").unwrap();
     assert_eq!(
-        import_cycle(dir.path()).unwrap(),
+        import_cycle(dir.path(), "x").unwrap(),
         ["a", "b", "c", "a"].map(String::from)
     );
     std::fs::write(dir.path().join("c.rs"), "// super::a::g();\n").unwrap();
-    assert_eq!(import_cycle(dir.path()), None);
+    assert_eq!(import_cycle(dir.path(), "x"), None);
+}
+
+/// A planted cycle through the folder's own name from the crate's root
+/// (`crate::<folder>::…`, plain and braced) is found as one through `super::`.
+#[test]
+fn a_planted_cycle_through_the_folders_own_path_is_found() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("a.rs"), "use crate::render::b::B;\n").unwrap();
+    std::fs::write(
+        dir.path().join("b.rs"),
+        "fn f() { crate::render::{\n    a::g,\n}(); }\n",
+    )
+    .unwrap();
+    assert_eq!(
+        import_cycle(dir.path(), "render").unwrap(),
+        ["a", "b", "a"].map(String::from)
+    );
+    // Another folder's path of the same file names is no cycle of this one.
+    assert_eq!(import_cycle(dir.path(), "scene"), None);
+    // Nor a nested folder's: `crate::render::cvae::a` is not `crate::render::a`.
+    std::fs::write(dir.path().join("b.rs"), "use crate::render::cvae::a;\n").unwrap();
+    assert_eq!(import_cycle(dir.path(), "render"), None);
 }
 
 /// The reference reader sees every import form: a planted use of each form is found.

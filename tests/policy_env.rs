@@ -1269,3 +1269,113 @@ fn paid_along_the_way_round_walls_only_the_goal_terms_change_and_only_indoors() 
         rewards(twin.propose(&z, 1).unwrap())
     );
 }
+
+/// One walker: the same seed, start, goal and policy give the same primitives through `egogen
+/// policy eval`'s environment (the f32 actor's mean actions stepping a [`PolicyEnv`], as
+/// `eval::policy_tasks` does) and through a take's agent (`synth::crowd::run_crowd`, steered
+/// by the policy's mean action), frame for frame, bit for bit: both choose by the one step
+/// (`policy::step::choose_primitive`).
+#[test]
+fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
+    use egogen::policy::env::FixedScene;
+    use egogen::scene::generated::crossing_scene::{CrossingScene, CrossingSettings};
+    use egogen::scene::StartGoal;
+    use egogen::synth::crowd::{
+        run_crowd, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld,
+    };
+    use std::sync::Arc;
+
+    env_parts!(body, ctx, model, bank, prior);
+    // One seed: both walkers start from it.
+    let bank = SeedBank {
+        seeds: vec![bank.seeds[1].clone()],
+    };
+    let actor = egogen::policy::Actor::of(
+        &egogen::policy::weights::load_policy_for(
+            &common::repo_root().join("assets/policy/policy.safetensors"),
+            &model,
+        )
+        .unwrap(),
+    );
+    let map = Arc::new(CrossingScene::floor(&CrossingSettings::default()));
+    let (start, goal) = (DVec2::new(-1.5, 0.3), DVec2::new(2.5, -0.4));
+    const PRIMITIVES: usize = 6;
+    const PER_GOAL: usize = 20;
+
+    // `egogen policy eval`: a fixed scene of one pair, facing the goal.
+    let fixed = FixedScene {
+        map: map.clone(),
+        pairs: vec![StartGoal { start, goal }],
+        sdf: None,
+    };
+    let settings = EnvSettings {
+        seed_yaw_jitter_rad: 0.0,
+        max_primitives: PER_GOAL,
+        success_m: 0.1,
+        ..EnvSettings::default()
+    };
+    let mut env = PolicyEnv::with_scene(&model, &ctx, &bank, &prior, Some(&fixed), settings, 1, 7)
+        .unwrap()
+        .with_sensing(&actor.sensing());
+    let mut eval_seeds = Vec::new();
+    for _ in 0..PRIMITIVES {
+        let a = actor.actions_with_spread(&env.observations(), None, 1.0);
+        let out = env.step(&a).unwrap();
+        assert!(!out.done[0], "the walk ends before the comparison does");
+        eval_seeds.push(env.snapshot().episodes[0].clone());
+    }
+
+    // A take: one agent, the same start, goal and time per goal.
+    let parts = CrowdParts {
+        model: &model,
+        body_model: &body,
+        prior: &prior,
+        bank: &bank,
+        policy: Some(&actor),
+    };
+    let world = CrowdWorld {
+        map,
+        region: None,
+        obstacles: vec![],
+        moving: vec![],
+    };
+    let plan = AgentPlan {
+        name: "walker".into(),
+        betas: vec![],
+        start,
+        facing_rad: None,
+        goals: vec![goal],
+        wander: false,
+        steering: Controller::Policy {
+            mean_action: true,
+            spread: 1.0,
+        },
+    };
+    let crowd = CrowdSettings {
+        walker: egogen::policy::WalkerSettings {
+            success_m: 0.1,
+            max_primitives_per_goal: PER_GOAL,
+            ..Default::default()
+        },
+        primitives: PRIMITIVES,
+        ..CrowdSettings::default()
+    };
+    let take = run_crowd(&parts, &world, &[plan], &crowd, |_, _| {}).unwrap();
+    let track = &take.agents[0];
+    assert_eq!(track.primitives, PRIMITIVES);
+    assert_eq!(track.held_primitives, 0);
+    for (k, snap) in eval_seeds.iter().enumerate() {
+        // The seed of the next primitive: the last two frames of primitive k.
+        let end = 2 + 18 * (k + 1);
+        for (f, frame) in track.frames[end - 2..end].iter().enumerate() {
+            let from_eval = &snap.seed_frames()[f];
+            let from_take: Vec<f64> = frame
+                .pose
+                .iter()
+                .copied()
+                .chain(frame.transl.to_array())
+                .collect();
+            assert_eq!(*from_eval, from_take, "primitive {k}, seed frame {f}");
+        }
+    }
+}

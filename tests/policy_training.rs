@@ -153,7 +153,7 @@ fn first_actions_are_close_to_the_standard_normal() {
     assert!(kl.iter().all(|&k| k < 0.5), "{kl:?}");
 }
 
-/// Steering draws the same actions as training's `act`, without the critic.
+/// Controller draws the same actions as training's `act`, without the critic.
 #[test]
 fn steering_actions_are_the_actions_act_draws() {
     use egogen::policy::ppo::{act, actions};

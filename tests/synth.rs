@@ -126,14 +126,17 @@ fn a_crossing_take_is_complete_and_deterministic_per_seed() {
     assert!(!dir.path().join("a.partial").exists());
 }
 
-/// `[motion] anticipate_people` reaches the crowd stepping: on by default, recorded in the
+/// `[walker] anticipate_people` reaches the crowd stepping: on by default, recorded in the
 /// summary, and the same crossing walked in EgoGen's loop (the others where they were last
 /// put) takes another way.
 #[test]
 fn the_crowd_loop_is_chosen_by_anticipate_people() {
     let ahead = crossing("ahead", 3);
     let as_placed = ahead
-        .replace("[motion]\n", "[motion]\nanticipate_people = false\n")
+        .replace(
+            "[motion]\n",
+            "[walker]\nanticipate_people = false\n[motion]\n",
+        )
         .replace("dir = \"ahead\"", "dir = \"placed\"");
     let (dir, path) = common::run_dir(&ahead);
     std::fs::write(dir.path().join("placed.toml"), &as_placed).unwrap();
@@ -141,8 +144,8 @@ fn the_crowd_loop_is_chosen_by_anticipate_people() {
         load_synth_plan(&path).unwrap(),
         load_synth_plan(&dir.path().join("placed.toml")).unwrap(),
     ];
-    assert!(plans[0].settings.anticipate_people);
-    assert!(!plans[1].settings.anticipate_people);
+    assert!(plans[0].settings.walker.anticipate_people);
+    assert!(!plans[1].settings.walker.anticipate_people);
     for plan in &plans {
         run_synth(plan, false).unwrap();
     }
@@ -270,11 +273,15 @@ fn wandering_agents_stay_upright_on_the_floor() {
 #[test]
 fn redrawn_primitives_walk_into_less() {
     let take = |redraws: usize| {
-        let config =
-            wandering_in_the_apartment(4, 15.0, 2, &format!("penetration_redraws = {redraws}"));
+        let config = wandering_in_the_apartment(
+            4,
+            15.0,
+            2,
+            &format!("[walker]\npenetration_redraws = {redraws}"),
+        );
         let (_dir, path) = common::run_dir(&config);
         let plan = load_synth_plan(&path).unwrap();
-        assert_eq!(plan.settings.penetration_redraws, redraws);
+        assert_eq!(plan.settings.walker.penetration_redraws, redraws);
         run_synth(&plan, false).unwrap().summary.totals
     };
     let (none, four) = (take(0), take(4));
@@ -369,28 +376,32 @@ fn bad_configs_are_refused_by_key() {
             "nope.safetensors",
         ),
         (
-            "[motion]\nguide_lookahead_m=-2\n[[agents]]\n[output]\ndir='o'\n",
-            "motion.guide_lookahead_m",
+            "[walker]\nguide_lookahead_m=-2\n[[agents]]\n[output]\ndir='o'\n",
+            "walker.guide_lookahead_m",
         ),
         (
-            "[motion]\nguide_memory=true\n[[agents]]\n[output]\ndir='o'\n",
-            "motion.guide_memory",
+            "[walker]\nguide_memory=true\n[[agents]]\n[output]\ndir='o'\n",
+            "walker.guide_memory",
         ),
         (
-            "[motion]\nguide_centre_weight=2\n[[agents]]\n[output]\ndir='o'\n",
-            "motion.guide_centre_weight",
+            "[walker]\nguide_centre_weight=2\n[[agents]]\n[output]\ndir='o'\n",
+            "walker.guide_centre_weight",
         ),
         (
-            "[motion]\nguide_lookahead_m=1\nguide_centre_weight=-1\n[[agents]]\n[output]\ndir='o'\n",
-            "motion.guide_centre_weight",
+            "[walker]\nguide_lookahead_m=1\nguide_centre_weight=-1\n[[agents]]\n[output]\ndir='o'\n",
+            "walker.guide_centre_weight",
         ),
         (
-            "[motion]\nguide_lookahead_m=1\nguide_unknown_cost=1\n[[agents]]\n[output]\ndir='o'\n",
-            "motion.guide_unknown_cost",
+            "[walker]\nguide_lookahead_m=1\nguide_unknown_cost=1\n[[agents]]\n[output]\ndir='o'\n",
+            "walker.guide_unknown_cost",
         ),
         (
-            "[motion]\nguide_lookahead_m=1\nguide_memory=true\nguide_unknown_cost=-1\n[[agents]]\n[output]\ndir='o'\n",
-            "motion.guide_unknown_cost",
+            "[walker]\nguide_lookahead_m=1\nguide_memory=true\nguide_unknown_cost=-1\n[[agents]]\n[output]\ndir='o'\n",
+            "walker.guide_unknown_cost",
+        ),
+        (
+            "[motion]\nanticipate_people=false\n[[agents]]\n[output]\ndir='o'\n",
+            "goes in the `[walker]` table",
         ),
         (
             "[scene]\nfloor_m=6\n[[agents]]\nstart=[9.0, 0.0]\n[output]\ndir='o'\n",
@@ -727,6 +738,21 @@ fn run_configs_with_agents_are_checked_by_key() {
             ),
             "motion.seed",
         ),
+        (
+            run(
+                "[walker]\nguide_lookahead_m = 1.0",
+                "source = \"scripted_walk\"\nduration_s = 1.0\nframe_rate_hz = 40.0",
+            ),
+            "walker.guide_lookahead_m",
+        ),
+        (
+            run("[[agents]]\n[walker]\nsuccess_m = 0.0", agents),
+            "walker.success_m",
+        ),
+        (
+            run("[[agents]]", "source = \"agents\"\nguide_memory = true"),
+            "goes in the `[walker]` table",
+        ),
         (run("", agents), "1–32 agents"),
         (
             run(
@@ -1016,6 +1042,7 @@ path = "{scene}"
 duration_s = 20.0
 stop_when_done = false
 seed = 1
+[walker]
 scene_every_frame = {swept}
 [crowd]
 count = 3

@@ -256,6 +256,32 @@ pub fn theta_of(point_in_cam: Vec3) -> Real {
     point_in_cam.x.hypot(point_in_cam.y).atan2(point_in_cam.z)
 }
 
+/// Largest angle from the optical axis that a valid pixel of the image sees (the image border
+/// and the valid circle bound it), at most the model's `max θ`.
+pub fn max_theta_in_image(cam: &Camera) -> Real {
+    let res = CameraModel::resolution(cam);
+    let (w, h) = (res.width_px as Real, res.height_px as Real);
+    let limit = CameraModel::max_theta_rad(cam).min(3.1);
+    let mut best: Real = 0.0;
+    let steps = 4 * (res.width_px + res.height_px);
+    for k in 0..=steps {
+        let t = k as Real / steps as Real;
+        for px in [
+            Pixel::new(-0.5 + t * w, -0.5),
+            Pixel::new(-0.5 + t * w, h - 0.5),
+            Pixel::new(-0.5, -0.5 + t * h),
+            Pixel::new(w - 0.5, -0.5 + t * h),
+        ] {
+            match CameraModel::unproject(cam, px) {
+                Some(ray) => best = best.max(theta_of(ray)),
+                // Border outside the valid circle: the circle bounds the view.
+                None => return limit,
+            }
+        }
+    }
+    best.min(limit)
+}
+
 /// Checks shared by every model: a finite positive focal length, a finite principal point
 /// on the sensor, a non-empty image.
 pub(crate) fn check_common(

@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::policy::WalkerSettings;
 use crate::render::render_camera::FisheyeRendering;
 
 pub use super::config_file::{load_toml, Bad, ConfigError};
@@ -53,17 +54,8 @@ pub struct RawMotion {
     pub pose_prior: Option<PathBuf>,
     pub train_config: Option<PathBuf>,
     pub stop_when_done: Option<bool>,
-    pub success_m: Option<f64>,
-    pub max_primitives_per_goal: Option<usize>,
-    pub penetration_redraws: Option<usize>,
     pub wander_distance_m: Option<[f64; 2]>,
     pub clearance_m: Option<f64>,
-    pub guide_lookahead_m: Option<f64>,
-    pub guide_memory: Option<bool>,
-    pub guide_centre_weight: Option<f64>,
-    pub guide_unknown_cost: Option<f64>,
-    pub anticipate_people: Option<bool>,
-    pub scene_every_frame: Option<bool>,
     pub seed: Option<u64>,
 }
 
@@ -305,6 +297,9 @@ pub struct RawRun {
     pub render: Option<RawRender>,
     #[serde(default)]
     pub supervisor: RawSupervisor,
+    /// With `motion.source = "agents"`: how every person steps, as in `egogen synth` configs.
+    #[serde(default, skip_serializing_if = "WalkerSettings::is_default")]
+    pub walker: WalkerSettings,
     /// With `motion.source = "agents"`: as in `egogen synth` configs.
     pub crowd: Option<super::synth_config::RawCrowd>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -35,8 +35,30 @@ pub fn load_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Confi
     })?;
     toml::from_str(&text).map_err(|e| ConfigError::Parse {
         path: path.into(),
-        message: e.to_string(),
+        message: with_walker_hint(e.to_string()),
     })
+}
+
+/// A parse error's message, with where a walker setting goes when the error is that key
+/// refused in another table (such as `[motion]`, where it once was).
+fn with_walker_hint(message: String) -> String {
+    let refused = message
+        .split("unknown field `")
+        .nth(1)
+        .and_then(|rest| rest.split('`').next());
+    match refused {
+        Some(key)
+            if crate::policy::WalkerSettings::keys()
+                .iter()
+                .any(|k| k == key) =>
+        {
+            format!(
+                "{message}`{key}` is a walker setting: it goes in the `[walker]` table \
+             (docs/SYNTH.md, \"Walker settings\")"
+            )
+        }
+        _ => message,
+    }
 }
 
 /// The shipped body model, relative to [`crate_root`].

@@ -334,7 +334,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
                 }
             }
-            if let Some((field, what)) = crate::cli::guide_settings_problem(
+            if let Some((field, what)) = crate::policy::walker_settings::guide_problem(
                 &crate::scene::Guide {
                     lookahead_m: guide_lookahead_m,
                     centre_weight: guide_centre_weight,
@@ -438,19 +438,19 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
                 }
             }
-            use crate::eval::policy_tasks::{evaluate_with_paths, Controller};
+            use crate::eval::policy_tasks::{evaluate_with_paths, HeldOutController};
             use crate::motion::cvae::infer::InferBackend;
             use crate::policy::env::EnvParts;
             let loaded = match &policy {
                 None => None,
                 Some(path) => Some(crate::policy::weights::load_policy_for(path, &model)?),
             };
-            let mut runs: Vec<(serde_json::Value, Controller<InferBackend>)> = k
+            let mut runs: Vec<(serde_json::Value, HeldOutController<InferBackend>)> = k
                 .iter()
                 .map(|&kk| {
                     (
                         serde_json::json!({"controller": "sampling", "k": kk}),
-                        Controller::Sampling { k: kk },
+                        HeldOutController::Sampling { k: kk },
                     )
                 })
                 .collect();
@@ -463,7 +463,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 }
                 runs.push((
                     about,
-                    Controller::Policy {
+                    HeldOutController::Policy {
                         net,
                         mean_action,
                         spread: action_spread,

@@ -136,33 +136,21 @@ fn check_unused_for_source(raw: &RawRun, bad: Bad) -> Result<(), ConfigError> {
         MotionSource::ScriptedWalk => "scripted_walk",
         _ => "file",
     };
+    let walker_key = raw
+        .walker
+        .changed_keys()
+        .first()
+        .map_or("walker".into(), |k| format!("walker.{k}"));
     for (key, present) in [
         ("motion.weights", m.weights.is_some()),
         ("motion.policy", m.policy.is_some()),
         ("motion.pose_prior", m.pose_prior.is_some()),
         ("motion.train_config", m.train_config.is_some()),
         ("motion.stop_when_done", m.stop_when_done.is_some()),
-        ("motion.success_m", m.success_m.is_some()),
-        (
-            "motion.max_primitives_per_goal",
-            m.max_primitives_per_goal.is_some(),
-        ),
-        (
-            "motion.penetration_redraws",
-            m.penetration_redraws.is_some(),
-        ),
         ("motion.wander_distance_m", m.wander_distance_m.is_some()),
         ("motion.clearance_m", m.clearance_m.is_some()),
-        ("motion.guide_lookahead_m", m.guide_lookahead_m.is_some()),
-        ("motion.guide_memory", m.guide_memory.is_some()),
-        (
-            "motion.guide_centre_weight",
-            m.guide_centre_weight.is_some(),
-        ),
-        ("motion.guide_unknown_cost", m.guide_unknown_cost.is_some()),
-        ("motion.anticipate_people", m.anticipate_people.is_some()),
-        ("motion.scene_every_frame", m.scene_every_frame.is_some()),
         ("motion.seed", m.seed.is_some()),
+        (walker_key.as_str(), !raw.walker.is_default()),
         ("crowd", raw.crowd.is_some()),
         ("agents", !raw.agents.is_empty()),
         ("obstacles", !raw.obstacles.is_empty()),
@@ -219,19 +207,11 @@ fn agents_motion(
             train_config: m.train_config.clone(),
             duration_s: m.duration_s,
             stop_when_done: Some(m.stop_when_done.unwrap_or(false)),
-            success_m: m.success_m,
-            max_primitives_per_goal: m.max_primitives_per_goal,
-            penetration_redraws: m.penetration_redraws,
             wander_distance_m: m.wander_distance_m,
             clearance_m: m.clearance_m,
-            guide_lookahead_m: m.guide_lookahead_m,
-            guide_memory: m.guide_memory,
-            guide_centre_weight: m.guide_centre_weight,
-            guide_unknown_cost: m.guide_unknown_cost,
-            anticipate_people: m.anticipate_people,
-            scene_every_frame: m.scene_every_frame,
             seed: m.seed,
         },
+        walker: raw.walker,
         crowd: raw.crowd.clone(),
         agents: raw.agents.clone(),
         obstacles: raw.obstacles.clone(),

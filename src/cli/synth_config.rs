@@ -17,8 +17,9 @@ use super::config_file::{crate_root, resolve_body_model};
 use super::config_file::{load_toml, Bad, ConfigError};
 use crate::math::random::normal_samples;
 use crate::plan::{AgentDraft, SynthPlan};
+use crate::policy::WalkerSettings;
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableSettings};
-use crate::synth::crowd::{CrowdSettings, Steering};
+use crate::synth::crowd::{Controller, CrowdSettings};
 
 /// Most agents in one take.
 pub(crate) const MAX_AGENTS: usize = 32;
@@ -68,37 +69,10 @@ pub(crate) struct RawSynthMotion {
     /// `stop_when_done = false`.
     pub duration_s: Option<f64>,
     pub stop_when_done: Option<bool>,
-    pub success_m: Option<f64>,
-    pub max_primitives_per_goal: Option<usize>,
-    /// Further actions drawn from the policy (then as many from the prior) when its primitive
-    /// walks into a wall, an obstacle or another person, or off the floor (default 4; 0: none).
-    pub penetration_redraws: Option<usize>,
     /// Distance range of wandering goals (m).
     pub wander_distance_m: Option<[f64; 2]>,
     /// Free space around sampled starts and goals (m).
     pub clearance_m: Option<f64>,
-    /// Policy steering: where a wall hides the goal, show the policy the point this far (m)
-    /// along the shortest path instead (2 reaches more far goals; default 0: the goal itself,
-    /// as EgoGen).
-    pub guide_lookahead_m: Option<f64>,
-    /// With a guide: whether it plans only on what each walker's own rays have shown it so
-    /// far (default false: on the whole walkable map).
-    pub guide_memory: Option<bool>,
-    /// With a guide: how strongly its path keeps to the middle of doorways and corridors
-    /// (default 0: the shortest path at 0.3 m from walls; 2 brushes 0.9 m door frames less).
-    pub guide_centre_weight: Option<f64>,
-    /// With a guide on memory: how much dearer a step onto ground the agent never saw is
-    /// than one onto ground seen open (default 0: the unknown taken as open; 1 prefers the
-    /// doorways its rays looked through).
-    pub guide_unknown_cost: Option<f64>,
-    /// Whether each walker sees the others where they will stand when its primitive ends and
-    /// judges its primitive against them moving (default true), or sees and judges them where
-    /// they were last put (false: EgoGen's crowd loop).
-    pub anticipate_people: Option<bool>,
-    /// Whether every primitive is tested against the scene at every frame it spans (default
-    /// true: no step passes through a wall), or at its end alone (false: EgoGen's test, to
-    /// measure what the swept test changes).
-    pub scene_every_frame: Option<bool>,
     pub seed: Option<u64>,
 }
 
@@ -191,6 +165,9 @@ pub(crate) struct RawSynth {
     pub scene: RawSynthScene,
     #[serde(default)]
     pub motion: RawSynthMotion,
+    /// How every person steps (the one walker schema).
+    #[serde(default)]
+    pub walker: WalkerSettings,
     pub crowd: Option<RawCrowd>,
     #[serde(default)]
     pub agents: Vec<RawAgent>,
@@ -199,7 +176,7 @@ pub(crate) struct RawSynth {
     pub output: RawSynthOutput,
 }
 
-fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<Steering, String> {
+fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<Controller, String> {
     match (name, spread) {
         (_, Some(x)) if !(x.is_finite() && x >= 0.0) => {
             return Err(format!("`action_spread`: expected a scale ≥ 0, got {x}"))
@@ -208,15 +185,15 @@ fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<Steerin
         _ => return Err("`action_spread` is for steering = \"policy\" only".into()),
     }
     match (name, k) {
-        ("policy", None) => Ok(Steering::Policy {
+        ("policy", None) => Ok(Controller::Policy {
             mean_action: false,
             spread: spread.unwrap_or(1.0),
         }),
-        ("policy_mean", None) => Ok(Steering::POLICY_MEAN),
+        ("policy_mean", None) => Ok(Controller::POLICY_MEAN),
         ("sampling" | "path_follow", k) => match (name, k.unwrap_or(16)) {
             (_, 0) => Err("`k` must be at least 1".into()),
-            ("sampling", k) => Ok(Steering::Sampling { k }),
-            (_, k) => Ok(Steering::PathFollow { k }),
+            ("sampling", k) => Ok(Controller::Sampling { k }),
+            (_, k) => Ok(Controller::PathFollow { k }),
         },
         ("policy" | "policy_mean", Some(_)) => {
             Err("`k` is for steering = \"sampling\" or \"path_follow\" only".into())
@@ -286,7 +263,7 @@ pub(crate) fn resolve_synth(
         ));
     }
     let primitives = crate::synth::crowd::primitives_for(duration_s);
-    let settings = crowd_settings(m, primitives, &bad)?;
+    let settings = crowd_settings(m, &raw.walker, primitives, &bad)?;
     let mut agents = listed_agents(&raw.agents, &bad)?;
     if let Some(c) = &raw.crowd {
         agents.extend(crowd_agents(c, settings.seed, &bad)?);
@@ -316,7 +293,7 @@ pub(crate) fn resolve_synth(
     .map_err(|m| bad("motion.duration_s", m))?;
     let policy = if agents
         .iter()
-        .any(|a| matches!(a.steering, Steering::Policy { .. }))
+        .any(|a| matches!(a.steering, Controller::Policy { .. }))
     {
         Some(file(
             "motion.policy",
@@ -419,54 +396,27 @@ pub(crate) fn floor_settings(
     }
 }
 
-/// `[motion]`'s stepping settings for a take of `primitives` primitives.
+/// `[motion]`'s and `[walker]`'s stepping settings for a take of `primitives` primitives.
 fn crowd_settings(
     m: &RawSynthMotion,
+    walker: &WalkerSettings,
     primitives: usize,
     bad: Bad,
 ) -> Result<CrowdSettings, ConfigError> {
     let defaults = CrowdSettings::default();
     let settings = CrowdSettings {
-        success_m: m.success_m.unwrap_or(defaults.success_m),
+        walker: *walker,
         arrival_m: defaults.arrival_m,
-        max_primitives_per_goal: m
-            .max_primitives_per_goal
-            .unwrap_or(defaults.max_primitives_per_goal),
-        penetration_redraws: m
-            .penetration_redraws
-            .unwrap_or(defaults.penetration_redraws),
         primitives,
         stop_when_done: m.stop_when_done.unwrap_or(true),
         wander_distance_m: m
             .wander_distance_m
             .map_or(defaults.wander_distance_m, |[a, b]| (a, b)),
         clearance_m: m.clearance_m.unwrap_or(defaults.clearance_m),
-        guide_lookahead_m: m.guide_lookahead_m.unwrap_or(defaults.guide_lookahead_m),
-        guide_memory: m.guide_memory.unwrap_or(defaults.guide_memory),
-        guide_centre_weight: m
-            .guide_centre_weight
-            .unwrap_or(defaults.guide_centre_weight),
-        guide_unknown_cost: m.guide_unknown_cost.unwrap_or(defaults.guide_unknown_cost),
-        anticipate_people: m.anticipate_people.unwrap_or(defaults.anticipate_people),
-        scene_every_frame: m.scene_every_frame.unwrap_or(defaults.scene_every_frame),
         seed: m.seed.unwrap_or(0),
     };
-    if let Some((field, what)) =
-        crate::cli::guide_settings_problem(&settings.guide(), settings.guide_memory)
-    {
-        return Err(bad(&format!("motion.{field}"), what));
-    }
-    if !(settings.success_m.is_finite() && settings.success_m > 0.0) {
-        return Err(bad(
-            "motion.success_m",
-            format!("expected a radius > 0 m, got {}", settings.success_m),
-        ));
-    }
-    if settings.max_primitives_per_goal == 0 {
-        return Err(bad(
-            "motion.max_primitives_per_goal",
-            "expected a whole number ≥ 1, got 0".into(),
-        ));
+    if let Some((field, what)) = walker.problem() {
+        return Err(bad(&format!("walker.{field}"), what));
     }
     let (lo, hi) = settings.wander_distance_m;
     if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi) {

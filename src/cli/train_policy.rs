@@ -347,7 +347,9 @@ fn resolve_stage(
             format!("expected a radius > 0 m, got {}", e.success_m),
         ));
     }
-    if let Some((field, what)) = crate::cli::guide_settings_problem(&e.guide(), e.guide_memory) {
+    if let Some((field, what)) =
+        crate::policy::walker_settings::guide_problem(&e.guide(), e.guide_memory)
+    {
         return Err(bad(&key(&format!("env.{field}")), what));
     }
     let (lo, hi) = e.scene.box_side_m;

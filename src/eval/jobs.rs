@@ -13,7 +13,7 @@ use anyhow::{bail, Context, Result};
 use super::files::{read_json, KeptRows, PolicyRow, PolicyRowsFile, RowsFile};
 use super::report::results_markdown;
 use super::scenarios::{Scenario, ARRIVAL_M, SUCCESS_M};
-use super::suite::{run_table, Controller};
+use super::suite::{run_table, NamedController};
 use super::suite::{
     TABLE2_MAX_PRIMITIVES, TABLE2_PAIR_DISTANCE_M, TABLE2_POLICIES, TABLE2_SCENE, TABLE3_POLICIES,
 };
@@ -157,7 +157,7 @@ fn kept_table1_rows(
     args: &EvalJob,
     results: &Path,
     scenarios: &[Scenario],
-    controllers: &[Controller],
+    controllers: &[NamedController],
     policy: &str,
 ) -> Result<KeptTable> {
     let json = results.join("table1.json");
@@ -366,8 +366,11 @@ fn chosen_scenarios(names: &[String]) -> Result<Vec<Scenario>> {
 /// suite's own, `policy_spread_S` names the policy with its sampled actions' standard deviation
 /// scaled by S (e.g. `policy_spread_0.5`; 1 is `policy`, 0 draws the mean), and
 /// `policy_as_placed` and `policy_mean_as_placed` the policy in EgoGen's crowd loop.
-fn chosen_controllers(mut all: Vec<Controller>, names: &[String]) -> Result<Vec<Controller>> {
-    for c in Controller::policies_as_placed() {
+fn chosen_controllers(
+    mut all: Vec<NamedController>,
+    names: &[String],
+) -> Result<Vec<NamedController>> {
+    for c in NamedController::policies_as_placed() {
         if names.contains(&c.name) && !all.iter().any(|a| a.name == c.name) {
             all.push(c);
         }
@@ -384,7 +387,7 @@ fn chosen_controllers(mut all: Vec<Controller>, names: &[String]) -> Result<Vec<
                 format!("--controllers: \"{name}\": expected policy_spread_S with a scale S ≥ 0")
             })?;
         if !all.iter().any(|c| &c.name == name) {
-            all.push(Controller::policy_spread(name, spread));
+            all.push(NamedController::policy_spread(name, spread));
         }
     }
     if let Some(name) = names.iter().find(|n| !all.iter().any(|c| &&c.name == n)) {
@@ -410,7 +413,7 @@ fn run_rows(
     args: &EvalJob,
     c: &SuiteParts,
     scenarios: &[Scenario],
-    controllers: &[Controller],
+    controllers: &[NamedController],
     results: &Path,
     name: &str,
     k: Option<usize>,
@@ -496,7 +499,7 @@ fn run_rows(
 }
 
 fn speed(args: &EvalJob, c: &SuiteParts, scenarios: &[Scenario], results: &Path) -> Result<()> {
-    let controllers = chosen_controllers(Controller::speed(&SPEED_KS), &args.controllers)?;
+    let controllers = chosen_controllers(NamedController::speed(&SPEED_KS), &args.controllers)?;
     run_rows(
         args,
         c,
@@ -523,14 +526,14 @@ fn sdf_rows(
     ctx: &crate::motion::cvae::BodyContext,
     results: &Path,
 ) -> Result<()> {
-    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController};
+    use crate::eval::policy_tasks::{evaluate, HeldOutController};
     use crate::motion::cvae::infer::InferBackend;
     use crate::policy::env::EnvParts;
     let t0 = std::time::Instant::now();
     let shipped = crate::policy::weights::SHIPPED_POLICY;
     let config = crate::policy::weights::SHIPPED_POLICY_CONFIG;
     let net = table_policy(c, (shipped, config))?;
-    let controller: PolicyController<InferBackend> = PolicyController::Policy {
+    let controller: HeldOutController<InferBackend> = HeldOutController::Policy {
         net: &net,
         mean_action: true,
         spread: 1.0,
@@ -571,7 +574,7 @@ fn sdf_rows(
 }
 
 /// The rows run now beside those kept, in the table's order: scenarios as
-/// `Scenario::table1`, controllers as `Controller::table1`, any others after.
+/// `Scenario::table1`, controllers as `NamedController::table1`, any others after.
 fn merged_rows(
     keep: Option<&KeptTable>,
     run: Vec<super::metrics::Row>,
@@ -581,7 +584,7 @@ fn merged_rows(
         return run;
     };
     let scenarios: Vec<String> = Scenario::table1().iter().map(|s| s.name()).collect();
-    let controllers: Vec<String> = Controller::table1(k.unwrap_or(16))
+    let controllers: Vec<String> = NamedController::table1(k.unwrap_or(16))
         .into_iter()
         .map(|c| c.name)
         .collect();
@@ -597,7 +600,7 @@ fn merged_rows(
 }
 
 fn table1(args: &EvalJob, c: &SuiteParts, scenarios: &[Scenario], results: &Path) -> Result<()> {
-    let controllers = chosen_controllers(Controller::table1(args.k), &args.controllers)?;
+    let controllers = chosen_controllers(NamedController::table1(args.k), &args.controllers)?;
     run_rows(
         args,
         c,
@@ -645,14 +648,14 @@ fn policy_rows(
     sets: &[(&str, EnvSettings)],
     progress: &indicatif::ProgressBar,
 ) -> Result<Vec<PolicyRow>> {
-    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController};
+    use crate::eval::policy_tasks::{evaluate, HeldOutController};
     use crate::motion::cvae::infer::InferBackend;
     let mut rows = Vec::new();
     for &(label, weights, config) in policies {
         let net = table_policy(c, (weights, config))?;
         for &(set, settings) in sets {
             for mean_action in [false, true] {
-                let controller: PolicyController<InferBackend> = PolicyController::Policy {
+                let controller: HeldOutController<InferBackend> = HeldOutController::Policy {
                     net: &net,
                     mean_action,
                     spread: 1.0,
@@ -728,7 +731,7 @@ fn table2_settings() -> EnvSettings {
 /// Table 2: the apartment's held-out start/goal pairs, walked by each policy of
 /// [`TABLE2_POLICIES`] and by the sampling controller (`--k` latents, no policy).
 fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
-    use crate::eval::policy_tasks::{evaluate, Controller as PolicyController};
+    use crate::eval::policy_tasks::{evaluate, HeldOutController};
     use crate::motion::cvae::infer::InferBackend;
     use crate::policy::env::EnvParts;
     let t0 = std::time::Instant::now();
@@ -765,7 +768,7 @@ fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
         &[("apartment", guided)],
         &progress,
     )?);
-    let sampling: PolicyController<InferBackend> = PolicyController::Sampling { k: args.k };
+    let sampling: HeldOutController<InferBackend> = HeldOutController::Sampling { k: args.k };
     let (report, _) = evaluate(
         &parts,
         settings,
@@ -837,7 +840,7 @@ fn path_follow_row(
     use super::metrics::AgentResult;
     use crate::motion::cvae::pace::Quantiles;
     use crate::synth::crowd::{
-        run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering,
+        run_crowd, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld,
     };
     use rayon::prelude::*;
     let t0 = std::time::Instant::now();
@@ -866,12 +869,15 @@ fn path_follow_row(
                 facing_rad: None,
                 goals: vec![pair.goal],
                 wander: false,
-                steering: Steering::PathFollow { k: args.k },
+                steering: Controller::PathFollow { k: args.k },
             };
             let settings = CrowdSettings {
-                success_m: SUCCESS_M,
+                walker: crate::policy::WalkerSettings {
+                    success_m: SUCCESS_M,
+                    max_primitives_per_goal: TABLE2_MAX_PRIMITIVES,
+                    ..Default::default()
+                },
                 arrival_m: Some(ARRIVAL_M),
-                max_primitives_per_goal: TABLE2_MAX_PRIMITIVES,
                 primitives: TABLE2_MAX_PRIMITIVES,
                 stop_when_done: true,
                 seed: args.seed.rotate_left(24) ^ n as u64,

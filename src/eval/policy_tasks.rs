@@ -148,7 +148,7 @@ pub(crate) fn fit_pose_prior(
 }
 
 /// What chooses the latents in an evaluation.
-pub(crate) enum Controller<'a, B: burn::prelude::Backend> {
+pub(crate) enum HeldOutController<'a, B: burn::prelude::Backend> {
     /// The best of `k` random latents by the reward.
     Sampling { k: usize },
     /// The trained policy: actions sampled from π (as EgoGen's test collector does) or its
@@ -165,7 +165,7 @@ pub(crate) enum Controller<'a, B: burn::prelude::Backend> {
 pub(crate) fn evaluate<B: burn::prelude::Backend>(
     parts: &EnvParts,
     settings: EnvSettings,
-    controller: &Controller<B>,
+    controller: &HeldOutController<B>,
     run: (usize, usize, u64),
     progress: impl FnMut(&crate::policy::env::EpisodeSummary),
 ) -> Result<(EvalReport, Vec<crate::policy::env::EpisodeSummary>), crate::policy::env::EnvError> {
@@ -235,7 +235,7 @@ impl PathRecorder {
 pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     parts: &EnvParts,
     settings: EnvSettings,
-    controller: &Controller<B>,
+    controller: &HeldOutController<B>,
     (episodes, envs, seed): (usize, usize, u64),
     paths: usize,
     progress: impl FnMut(&crate::policy::env::EpisodeSummary),
@@ -251,15 +251,15 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     let mut env = parts
         .env(settings, envs.clamp(1, episodes.max(1)), HELD_OUT_BASE)?
         .measuring_way_round();
-    if let Controller::Policy { net, .. } = controller {
+    if let HeldOutController::Policy { net, .. } = controller {
         env = env.with_sensing(&net.sensing());
     }
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     // The policy acts through its f32 actor (burn's actions, bit for bit, without the cost
     // per tensor operation).
     let actor = match controller {
-        Controller::Policy { net, .. } => Some(crate::policy::Actor::of(*net)),
-        Controller::Sampling { .. } => None,
+        HeldOutController::Policy { net, .. } => Some(crate::policy::Actor::of(*net)),
+        HeldOutController::Sampling { .. } => None,
     };
     let mut recorder = PathRecorder {
         count: paths as u64,
@@ -271,8 +271,8 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
         |e| {
             let ids = (paths > 0).then(|| recorder.before(e));
             let out = match controller {
-                Controller::Sampling { k } => sampling_step(e, *k, &mut rng),
-                Controller::Policy {
+                HeldOutController::Sampling { k } => sampling_step(e, *k, &mut rng),
+                HeldOutController::Policy {
                     mean_action,
                     spread,
                     ..

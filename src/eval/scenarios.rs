@@ -14,7 +14,7 @@ use serde::Serialize;
 
 use crate::math::random::uniform_open01;
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
-use crate::synth::crowd::{AgentPlan, CrowdSettings, CrowdWorld, Steering};
+use crate::synth::crowd::{AgentPlan, Controller, CrowdSettings, CrowdWorld};
 
 /// A person has reached the goal when the walk ends this close to it (m; paper S4.2's SR).
 pub(crate) const SUCCESS_M: f64 = 0.3;
@@ -138,7 +138,7 @@ fn unit(rng: &mut ChaCha8Rng) -> f64 {
 pub fn episode(
     scenario: Scenario,
     floor: &Arc<WalkableMap>,
-    steering: Steering,
+    steering: Controller,
     seed: u64,
     n: u64,
 ) -> Episode {
@@ -212,14 +212,17 @@ pub fn episode(
         },
         agents,
         settings: CrowdSettings {
-            success_m: SUCCESS_M,
+            walker: crate::policy::WalkerSettings {
+                success_m: SUCCESS_M,
+                max_primitives_per_goal: scenario.max_primitives(),
+                // The policy as trained, without synthesis's redraws.
+                penetration_redraws: 0,
+                ..Default::default()
+            },
             arrival_m: Some(ARRIVAL_M),
-            max_primitives_per_goal: scenario.max_primitives(),
             primitives: scenario.max_primitives(),
             stop_when_done: true,
             seed: episode_seed,
-            // The policy as trained, without synthesis's redraws.
-            penetration_redraws: 0,
             ..CrowdSettings::default()
         },
     }

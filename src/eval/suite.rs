@@ -10,55 +10,55 @@ use super::metrics::{measure, row, EpisodeResult, Row};
 use super::scenarios::{episode, open_floor, Scenario, WALK_M};
 use crate::body::BodyModel;
 use crate::synth::crowd::{
-    run_crowd, CrowdError, CrowdParts, CrowdSettings, CrowdTake, CrowdWorld, Steering,
+    run_crowd, Controller, CrowdError, CrowdParts, CrowdSettings, CrowdTake, CrowdWorld,
 };
 
 /// A named way of steering every person of a scenario.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub(crate) struct Controller {
+pub(crate) struct NamedController {
     pub name: String,
-    pub steering: Steering,
-    /// How each person sees the others ([`CrowdSettings::anticipate_people`]; `false`:
+    pub steering: Controller,
+    /// How each person sees the others ([`crate::policy::WalkerSettings::anticipate_people`]; `false`:
     /// EgoGen's crowd loop).
     pub anticipate_people: bool,
 }
 
-impl Controller {
+impl NamedController {
     /// Table 1's controllers: the policy (sampled actions and mean action), the sampling
     /// controller and the path-following baseline, both with `k` latents per primitive.
-    pub fn table1(k: usize) -> Vec<Controller> {
-        let mut out = Controller::policies();
-        out.push(Controller::sampling(k));
-        out.push(Controller::new(
+    pub fn table1(k: usize) -> Vec<NamedController> {
+        let mut out = NamedController::policies();
+        out.push(NamedController::sampling(k));
+        out.push(NamedController::new(
             format!("path_follow_k{k}"),
-            Steering::PathFollow { k },
+            Controller::PathFollow { k },
         ));
         out
     }
 
     /// The speed/accuracy trade of steering: the policy (sampled and mean action) against the
     /// sampling controller with each of `ks` latents per primitive.
-    pub fn speed(ks: &[usize]) -> Vec<Controller> {
-        let mut out = Controller::policies();
-        out.extend(ks.iter().map(|&k| Controller::sampling(k)));
+    pub fn speed(ks: &[usize]) -> Vec<NamedController> {
+        let mut out = NamedController::policies();
+        out.extend(ks.iter().map(|&k| NamedController::sampling(k)));
         out
     }
 
     /// The policy with sampled actions and with the mean action.
-    fn policies() -> Vec<Controller> {
+    fn policies() -> Vec<NamedController> {
         vec![
-            Controller::new("policy".into(), Steering::POLICY),
-            Controller::new("policy_mean".into(), Steering::POLICY_MEAN),
+            NamedController::new("policy".into(), Controller::POLICY),
+            NamedController::new("policy_mean".into(), Controller::POLICY_MEAN),
         ]
     }
 
     /// The policy with sampled actions (`policy_as_placed`) and with the mean action
     /// (`policy_mean_as_placed`) in EgoGen's crowd loop: each person sees the others where they
-    /// were last put ([`CrowdSettings::anticipate_people`] off).
-    pub(crate) fn policies_as_placed() -> Vec<Controller> {
-        Controller::policies()
+    /// were last put ([`crate::policy::WalkerSettings::anticipate_people`] off).
+    pub(crate) fn policies_as_placed() -> Vec<NamedController> {
+        NamedController::policies()
             .into_iter()
-            .map(|c| Controller {
+            .map(|c| NamedController {
                 name: format!("{}_as_placed", c.name),
                 anticipate_people: false,
                 ..c
@@ -67,19 +67,19 @@ impl Controller {
     }
 
     /// A controller with the others anticipated (egogen's default).
-    fn new(name: String, steering: Steering) -> Controller {
-        Controller {
+    fn new(name: String, steering: Controller) -> NamedController {
+        NamedController {
             name,
             steering,
-            anticipate_people: CrowdSettings::default().anticipate_people,
+            anticipate_people: CrowdSettings::default().walker.anticipate_people,
         }
     }
 
     /// The policy's sampled actions with their standard deviation scaled by `spread`.
-    pub(crate) fn policy_spread(name: &str, spread: f32) -> Controller {
-        Controller::new(
+    pub(crate) fn policy_spread(name: &str, spread: f32) -> NamedController {
+        NamedController::new(
             name.into(),
-            Steering::Policy {
+            Controller::Policy {
                 mean_action: false,
                 spread,
             },
@@ -87,8 +87,8 @@ impl Controller {
     }
 
     /// The sampling controller with `k` latents per primitive.
-    fn sampling(k: usize) -> Controller {
-        Controller::new(format!("sampling_k{k}"), Steering::Sampling { k })
+    fn sampling(k: usize) -> NamedController {
+        NamedController::new(format!("sampling_k{k}"), Controller::Sampling { k })
     }
 }
 
@@ -144,7 +144,7 @@ pub(crate) fn run_table(
     parts: &CrowdParts,
     body: &BodyModel,
     scenarios: &[Scenario],
-    controllers: &[Controller],
+    controllers: &[NamedController],
     episodes: usize,
     seed: u64,
     progress: impl Fn(usize, usize, &str),
@@ -165,7 +165,7 @@ pub(crate) fn run_table(
                 .into_par_iter()
                 .map(|n| {
                     let mut ep = episode(scenario, &floor, c.steering, seed, n);
-                    ep.settings.anticipate_people = c.anticipate_people;
+                    ep.settings.walker.anticipate_people = c.anticipate_people;
                     let t = Instant::now();
                     let take = run_crowd(parts, &ep.world, &ep.agents, &ep.settings, |_, _| {})
                         .map_err(|source| EvalError::Crowd {

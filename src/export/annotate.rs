@@ -120,7 +120,7 @@ fn camera_json(rig: &Rig, camera: &RigCamera) -> Result<serde_json::Value> {
 }
 
 /// A frame file's colour: `rgb`, or `gray` of a monochrome camera.
-pub(crate) fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::Pass> {
+pub(crate) fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::ExrPass> {
     contents
         .passes
         .iter()

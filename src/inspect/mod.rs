@@ -4,5 +4,5 @@
 
 pub mod preview;
 
-pub use crate::exr_file::{ExrChannel, ExrContents, InspectError, Pass};
+pub use crate::exr_file::{ExrChannel, ExrContents, ExrPass, InspectError};
 pub use preview::pass_preview;

@@ -8,7 +8,7 @@
 //! - flow (`Vector`, `Flow`): colour wheel, hue = direction, brightness = length / max length;
 //! - anything else: first component, min–max grey.
 
-use crate::exr_file::{ExrContents, Pass};
+use crate::exr_file::{ExrContents, ExrPass};
 use crate::preview::RgbImage;
 
 /// How a pass is drawn.
@@ -25,7 +25,7 @@ pub enum PreviewKind {
 }
 
 /// Picks the drawing for a pass from its names and sample type.
-pub fn preview_kind(contents: &ExrContents, pass: &Pass) -> PreviewKind {
+pub fn preview_kind(contents: &ExrContents, pass: &ExrPass) -> PreviewKind {
     let name = pass.name.to_lowercase();
     let comps: Vec<&str> = pass.components.iter().map(|(c, _)| c.as_str()).collect();
     let first = &contents.channels[pass.components[0].1];
@@ -53,7 +53,7 @@ pub const AUTO_EXPOSURE_KEY: f32 = 0.18;
 /// lone grey `Y`) to [`AUTO_EXPOSURE_KEY`] (Reinhard et al. 2002's key value), over the pixels
 /// of the camera's valid field of view (`valid.V` where the file has it): a frame's automatic
 /// exposure. Within [2⁻¹⁶, 2¹⁶]; 1 for an image without light.
-pub fn auto_exposure(contents: &ExrContents, pass: &Pass) -> f32 {
+pub fn auto_exposure(contents: &ExrContents, pass: &ExrPass) -> f32 {
     let named = |n: &str| {
         pass.components
             .iter()
@@ -93,12 +93,12 @@ pub fn auto_exposure(contents: &ExrContents, pass: &Pass) -> f32 {
 }
 
 /// Renders a pass as an 8-bit image (same size as the pass).
-pub fn pass_preview(contents: &ExrContents, pass: &Pass) -> RgbImage {
+pub fn pass_preview(contents: &ExrContents, pass: &ExrPass) -> RgbImage {
     pass_preview_exposed(contents, pass, 1.0)
 }
 
 /// [`pass_preview`] with colour multiplied by `exposure` before it is encoded.
-pub fn pass_preview_exposed(contents: &ExrContents, pass: &Pass, exposure: f32) -> RgbImage {
+pub fn pass_preview_exposed(contents: &ExrContents, pass: &ExrPass, exposure: f32) -> RgbImage {
     let ch = |k: usize| &contents.channels[pass.components[k.min(pass.components.len() - 1)].1];
     // EXR stores channels sorted by name (B, G, R): look colour components up by name.
     let named = |n: &str| {

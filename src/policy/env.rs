@@ -7,7 +7,8 @@
 //! [`CrossingScene`], where another person crosses the path as a moving 2D box
 //! that the rays see and the penetration test counts, on the episode's clock — a mocap seed
 //! (two frames of a training primitive) placed at the start facing the goal within ±`seed_yaw_jitter_rad`,
-//! the floor at z = 0. A step decodes the latent, judges the primitive ([`super::reward`]),
+//! the floor at z = 0. A step decodes the latent, judges the primitive and takes it by the
+//! walker's step every walker shares (`policy::step`: the reward of [`super::reward`]),
 //! and ends the episode on success, on penetration (when `terminate_on_penetration`), on a
 //! non-finite primitive, or after `max_primitives` (a timeout is terminal, as in EgoGen).
 //! Finished episodes are replaced by the next episode at once; episode `n` of an
@@ -25,8 +26,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::pose_prior::PosePrior;
-use super::reward::{
-    judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges,
+use super::reward::{Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges};
+use super::step::{
+    choose_primitive, finite_reward, Judge, Proposal, Redraws, SceneCheck, StepContext,
 };
 use super::walker::{
     frame_time_s, memory_scan, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker,
@@ -101,7 +103,7 @@ pub struct EnvSettings {
     pub scene_every_frame: bool,
     /// Whether the walker's rays see each other person (a crossing's moving box) standing
     /// where that person will be when the walker's primitive ends, as `egogen synth`'s crowd
-    /// stepping shows them (`CrowdSettings::anticipate_people`); the primitive is still judged
+    /// stepping shows them (`WalkerSettings::anticipate_people`); the primitive is still judged
     /// against them moving. false: where they are at each seed frame's time, as EgoGen.
     pub people_seen_ahead: bool,
     /// With L > 0, the walker observes a guide's aim instead of its goal where a wall hides
@@ -357,6 +359,13 @@ pub struct EpisodeSnapshot {
     seen: Option<Vec<u8>>,
 }
 
+impl EpisodeSnapshot {
+    /// The seed frames of the episode's next primitive: pose (165) and translation (3) each.
+    pub fn seed_frames(&self) -> &[Vec<f64>] {
+        &self.frames
+    }
+}
+
 /// All episodes in progress and the next episode's number.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct EnvSnapshot {
@@ -479,7 +488,11 @@ pub struct Candidate {
     /// `None`: the decoder produced a non-finite primitive.
     pub primitive: Option<DecodedPrimitive>,
     pub judged: Option<Judged>,
+    /// The reward as a walker adds it up (0 where not finite).
     pub reward: f64,
+    /// The reward as weighed, what a controller ranks candidates by (−∞ where the primitive
+    /// did not decode).
+    pub score: f64,
 }
 
 /// What a step returns.
@@ -532,6 +545,10 @@ pub struct PolicyEnv<'m> {
     /// Whether finished episodes' summaries carry their way round walls (evaluations).
     measure_way_round: bool,
 }
+
+/// Mixed into an episode's base for the generator of its redraws, a stream apart from the
+/// one that draws its course.
+const REDRAW_STREAM: u64 = 0x5EED_4ED4_A000_0000;
 
 /// The generator of episode `id` under `base`.
 fn episode_rng(base: u64, id: u64) -> ChaCha8Rng {
@@ -931,13 +948,6 @@ impl<'m> PolicyEnv<'m> {
             .collect();
         let zs: Vec<Vec<f32>> = latents.chunks(l).map(<[f32]>::to_vec).collect();
         let decoded = self.model.decode_each(self.body, &seeds, &zs)?;
-        let limits = Limits {
-            success_m: self.settings.arrival_m.unwrap_or(self.settings.success_m),
-            penetration_cells: self.settings.penetration_cells,
-            people_every_frame: self.settings.people_every_frame,
-            box_every_frame: self.settings.box_every_frame,
-            scene_every_frame: self.settings.scene_every_frame,
-        };
         decoded
             .into_par_iter()
             .zip(zs)
@@ -947,45 +957,14 @@ impl<'m> PolicyEnv<'m> {
                 let e = &self.episodes[env];
                 match d {
                     Ok(p) => {
-                        let s = Situation {
-                            goal_field: e.course.goal_field.as_deref(),
-                            ..e.walker.situation(
-                                &e.course.surroundings(),
-                                e.course.goal,
-                                frame_time_s(e.walker.steps, 0),
-                            )
-                        };
-                        let mut j = judge(&p, &s, &self.foot_markers, self.prior, &limits);
-                        let pose_error = |e| EnvError::Decode(DecodeError::Pose(e));
-                        match (e.course.sdf.as_deref(), &self.scene_test) {
-                            // Training: the fast test decides (beside the cells, if kept).
-                            (Some(sdf), Some(test)) => {
-                                let by_cells = self.settings.scene_test_keeps_cells && j.penetrated;
-                                j.set_penetrated(
-                                    by_cells
-                                        || test
-                                            .penetrates(self.body, &p, sdf)
-                                            .map_err(pose_error)?,
-                                );
-                            }
-                            // Evaluation: every vertex of every frame, measured.
-                            (Some(sdf), None) => {
-                                (j.scene_penetrating_frames, j.scene_vertices_inside_max) =
-                                    scene_penetration(self.body, &p, sdf).map_err(pose_error)?;
-                            }
-                            (None, _) => {}
-                        }
-                        if self.settings.no_progress_through_walls && j.penetrated {
-                            j.terms.goal = j.terms.goal.min(0.0);
-                        }
-                        let left = e.course.max_primitives.saturating_sub(e.walker.steps + 1);
-                        let reward = j.terms.total_with_arrival(&self.weights(&e.course), left);
+                        let (j, reward) = self.judge(e).judge(self.body, &p, &self.situation(e))?;
                         Ok(Candidate {
                             env,
                             latent,
                             primitive: Some(p),
                             judged: Some(j),
-                            reward: if reward.is_finite() { reward } else { 0.0 },
+                            score: reward,
+                            reward: finite_reward(reward),
                         })
                     }
                     Err(DecodeError::NonFinite { .. }) => Ok(Candidate {
@@ -994,8 +973,114 @@ impl<'m> PolicyEnv<'m> {
                         primitive: None,
                         judged: None,
                         reward: 0.0,
+                        score: f64::NEG_INFINITY,
                     }),
                     Err(e) => Err(EnvError::Decode(e)),
+                }
+            })
+            .collect()
+    }
+
+    /// The judge of an episode's primitives: the environment's limits, the course's weights,
+    /// its scene test.
+    fn judge<'a>(&'a self, e: &'a Episode) -> Judge<'a> {
+        let scene = match (e.course.sdf.as_deref(), &self.scene_test) {
+            // Training: the fast test decides (beside the cells, if kept).
+            (Some(sdf), Some(test)) => SceneCheck::Fast {
+                sdf,
+                test,
+                keeps_cells: self.settings.scene_test_keeps_cells,
+            },
+            // Evaluation: every vertex of every frame, measured.
+            (Some(sdf), None) => SceneCheck::Measure { sdf },
+            (None, _) => SceneCheck::Cells,
+        };
+        Judge {
+            limits: Limits {
+                success_m: self.settings.arrival_m.unwrap_or(self.settings.success_m),
+                penetration_cells: self.settings.penetration_cells,
+                people_every_frame: self.settings.people_every_frame,
+                box_every_frame: self.settings.box_every_frame,
+                scene_every_frame: self.settings.scene_every_frame,
+            },
+            weights: self.weights(&e.course),
+            primitives_left: e.course.max_primitives.saturating_sub(e.walker.steps + 1),
+            foot_markers: &self.foot_markers,
+            prior: self.prior,
+            scene,
+            no_progress_through_walls: self.settings.no_progress_through_walls,
+        }
+    }
+
+    /// Where an episode's walker stands before its next primitive.
+    fn situation<'a>(&self, e: &'a Episode) -> Situation<'a> {
+        Situation {
+            goal_field: e.course.goal_field.as_deref(),
+            ..e.walker.situation(
+                &e.course.surroundings(),
+                e.course.goal,
+                frame_time_s(e.walker.steps, 0),
+            )
+        }
+    }
+
+    /// The candidate each episode takes of `candidates` (`per` each, episode-major, as
+    /// [`Self::propose`] made them), by the one rule every walker chooses by
+    /// (`policy::step::choose_primitive`, no redraws); an episode none of whose candidates
+    /// decoded takes its first (and fails).
+    pub fn choose(&self, candidates: Vec<Candidate>) -> Result<Vec<Candidate>, EnvError> {
+        let mut per_episode: Vec<Vec<Candidate>> =
+            (0..self.episodes.len()).map(|_| Vec::new()).collect();
+        for c in candidates {
+            per_episode[c.env].push(c);
+        }
+        per_episode
+            .into_iter()
+            .enumerate()
+            .map(|(env, mut candidates)| {
+                let e = &self.episodes[env];
+                let first_failed = candidates
+                    .iter()
+                    .position(|c| c.primitive.is_none())
+                    .map(|k| candidates[k].clone());
+                let proposals: Vec<Proposal> = candidates
+                    .drain(..)
+                    .filter_map(|c| {
+                        Some(Proposal {
+                            latent: c.latent,
+                            primitive: c.primitive?,
+                            judged: c.judged?,
+                            reward: c.reward,
+                            score: c.score,
+                        })
+                    })
+                    .collect();
+                let (judge, situation) = (self.judge(e), self.situation(e));
+                let ctx = StepContext {
+                    model: self.model,
+                    body: self.body,
+                    seed: &e.walker.view.seed,
+                    judge: &judge,
+                    situation: &situation,
+                    pelvis: e.walker.view.pelvis,
+                };
+                // Unused without redraws; seeded by the episode and its step when they come.
+                let mut rng = episode_rng(self.episode_base ^ REDRAW_STREAM, e.id);
+                match choose_primitive(&ctx, proposals, &Redraws::NONE, &mut rng)? {
+                    Some(c) => Ok(Candidate {
+                        env,
+                        latent: c.latent,
+                        primitive: Some(c.primitive),
+                        judged: Some(c.judged),
+                        reward: c.reward,
+                        score: c.reward,
+                    }),
+                    None => first_failed.ok_or(EnvError::LatentShape {
+                        found: 0,
+                        envs: self.episodes.len(),
+                        per: 0,
+                        dim: self.latent_dim(),
+                    }),
                 }
             })
             .collect()
@@ -1061,7 +1146,8 @@ impl<'m> PolicyEnv<'m> {
     /// One primitive per episode from `latents` (`[B × L]`).
     pub fn step(&mut self, latents: &[f32]) -> Result<StepOutput, EnvError> {
         let c = self.propose(latents, 1)?;
-        self.commit(c)
+        let chosen = self.choose(c)?;
+        self.commit(chosen)
     }
 
     /// The episodes in progress as data.

@@ -8,8 +8,12 @@
 //!
 //! By when it runs:
 //! - acting (every take): `weights` (the shipped policy, loading and saving), `walker` (one
-//!   body as a controller sees it), `actor` and `row_product` (the policy on the CPU in f32), `sampling` (best of K latents), the
-//!   environment's observation and reward (`env`, `reward`, `pose_prior`);
+//!   body as a controller sees it), `walker_settings` (the one schema of a walker's settings,
+//!   `[walker]`), `step` (the walker's step: one judge of a primitive and
+//!   the one function by which every walker — training, evaluation, a take's agents — chooses
+//!   the primitive it takes), `actor` and `row_product` (the policy on the CPU in f32),
+//!   `sampling` (best of K latents), the environment's observation and reward (`env`,
+//!   `reward`, `pose_prior`);
 //! - training: `net` (the actor-critic in burn), `ppo` (its stages and checkpoints) over the
 //!   environment's scenes — generated ones (`crate::scene::generated`: box scenes, crossings,
 //!   floor plans) and `fixed_scene` (a scene file with start/goal pairs);
@@ -27,9 +31,12 @@ pub mod ppo;
 pub mod reward;
 pub mod row_product;
 pub mod sampling;
+pub(crate) mod step;
 pub mod walker;
+pub mod walker_settings;
 pub mod weights;
 
 pub use actor::Actor;
 pub use env::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};
 pub use pose_prior::PosePrior;
+pub use walker_settings::WalkerSettings;

@@ -21,7 +21,9 @@
 use glam::{DMat4, DVec4};
 
 use crate::camera::theta_poly::invert_increasing;
-use crate::camera::{theta_of, Camera, CameraModel, Fisheye624, Pixel, Resolution};
+use crate::camera::{
+    max_theta_in_image, theta_of, Camera, CameraModel, Fisheye624, Pixel, Resolution,
+};
 use crate::math::{Real, Vec3};
 
 /// Sensor width Blender is given (mm); any value works, this is Blender's default.
@@ -136,7 +138,7 @@ impl LensPolynomial {
     /// The fit for a Fisheye624 over its valid field of view.
     pub fn for_fisheye624(model: &Fisheye624) -> Result<Self, LensFitError> {
         let cam = Camera::Fisheye624(*model);
-        Self::fit(&cam, crate::render::render_camera::max_theta_in_image(&cam))
+        Self::fit(&cam, max_theta_in_image(&cam))
     }
 
     /// The fit as the *source* of an exact remap to `target` (`[render] fisheye = "exact"`):
@@ -152,7 +154,7 @@ impl LensPolynomial {
         let Camera::Fisheye624(model) = target else {
             return Err(LensFitError::Model(target.model_name()));
         };
-        let max_theta = crate::render::render_camera::max_theta_in_image(target);
+        let max_theta = max_theta_in_image(target);
         let fit = Self::fit(target, max_theta)?;
         let res = model.resolution();
         let (w, h) = (res.width_px as Real, res.height_px as Real);

@@ -14,7 +14,7 @@
 //! `θ = ρ / f` with `f = size / fov` pixels per radian, `ρ` the distance from the image centre
 //! `((size − 1) / 2, (size − 1) / 2)`, azimuth as in the image (x right, y down).
 
-use crate::camera::{Camera, CameraModel, Pixel, Resolution};
+use crate::camera::{max_theta_in_image, Camera, CameraModel, Pixel, Resolution};
 use crate::math::{Real, Vec3};
 use crate::render::camera_setup::blender_lens;
 use crate::render::lens_polynomial::{LensFitError, LensPolynomial};
@@ -240,32 +240,6 @@ impl RenderCamera {
             }
         }
     }
-}
-
-/// Largest angle from the optical axis that a valid pixel of the image sees (the image border
-/// and the valid circle bound it), at most the model's `max θ`.
-pub(crate) fn max_theta_in_image(cam: &Camera) -> Real {
-    let res = cam.resolution();
-    let (w, h) = (res.width_px as Real, res.height_px as Real);
-    let limit = cam.max_theta_rad().min(3.1);
-    let mut best: Real = 0.0;
-    let steps = 4 * (res.width_px + res.height_px);
-    for k in 0..=steps {
-        let t = k as Real / steps as Real;
-        for px in [
-            Pixel::new(-0.5 + t * w, -0.5),
-            Pixel::new(-0.5 + t * w, h - 0.5),
-            Pixel::new(-0.5, -0.5 + t * h),
-            Pixel::new(w - 0.5, -0.5 + t * h),
-        ] {
-            match cam.unproject(px) {
-                Some(ray) => best = best.max(crate::camera::theta_of(ray)),
-                // Border outside the valid circle: the circle bounds the view.
-                None => return limit,
-            }
-        }
-    }
-    best.min(limit)
 }
 
 /// Largest pixels-per-radian of a model up to `max_theta`, radially and tangentially, sampled

@@ -20,7 +20,7 @@ pub mod sdf3d;
 pub mod seen_map;
 pub mod walkable;
 
-pub use generated::scenario::{scenario, Scenario, ScenarioKind};
+pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};
 pub use load::{floor_height_warning, load_scene, walkable_map, SceneError, SceneFrame, UpAxis};
 pub use mesh::{ObjectId, SceneMesh, SceneObject};
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
@@ -28,7 +28,7 @@ pub use path_plan::{
     guide_aim, line_is_clear, plan_path, plan_path_centred, plan_path_weighted, Guide, PathField,
     PlannedPath, GUIDE_CENTRE_M, GUIDE_CLEARANCE_M,
 };
-pub use penetration::{blocked_cells_in_box, sdf_penetration, CollisionModel, Penetration};
+pub use penetration::{blocked_cells_in_box, sdf_penetration, Penetration};
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
 pub use sdf3d::SceneSdf;
 pub use seen_map::{guide_aim_remembered, SeenMap};

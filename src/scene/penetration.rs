@@ -59,23 +59,3 @@ pub fn blocked_cells_in_box(
 
 /// The paper's 2D collision rule: at least this many blocked cells in the body box.
 pub const BOX_COLLISION_MIN_CELLS: usize = 3;
-
-/// The collision model a scene needs.
-pub enum CollisionModel {
-    /// Sparse scenes: 2D box test on the walkable map.
-    Box2d,
-    /// Mesh scenes: 3D SDF.
-    Sdf3d(SceneSdf),
-}
-
-impl CollisionModel {
-    /// Procedural scenarios (floor + boxes) get the 2D box test and no 3D field; loaded mesh
-    /// scenes get a 3D SDF of `voxel_m` (0.05 m is the default trade, see docs/SCENES.md).
-    pub fn for_scene(mesh: &super::SceneMesh, procedural: bool, voxel_m: f64) -> Self {
-        match procedural {
-            true => CollisionModel::Box2d,
-            false => SceneSdf::build(mesh, voxel_m, super::sdf3d::MARGIN_M)
-                .map_or(CollisionModel::Box2d, CollisionModel::Sdf3d),
-        }
-    }
-}

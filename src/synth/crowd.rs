@@ -5,13 +5,15 @@
 //! will stand when its primitive ends (someone who stepped earlier in the round where that
 //! primitive ends, someone yet to step moved on at the velocity of their last primitive) and the
 //! primitive is judged against them moving; EgoGen's loop, every box where it was last put, is
-//! [`CrowdSettings::anticipate_people`] off. No multi-agent learning: every agent runs the
-//! single-agent controller. One guard beyond the paper: a policy primitive that ends with the
+//! [`WalkerSettings::anticipate_people`] off. No multi-agent learning: every agent runs the
+//! single-agent controller, and every agent chooses its primitive by the same step as the
+//! training environment and `egogen policy eval` (`policy::step`: one judge, the
+//! best of its controller's proposals, redraws, the hold). One guard beyond the paper: a policy primitive that ends with the
 //! body's box on blocked cells (Eq. 7: a wall, an obstacle, another person), that puts a body
 //! marker inside another person's box or an obstacle in any of its frames, or that ends with the
 //! pelvis off the walkable floor, is redrawn: up to `penetration_redraws` times from the same
 //! policy output, then as many times from the motion model's prior. The scene is tested at
-//! every frame a primitive spans ([`CrowdSettings::scene_every_frame`]), and a primitive whose
+//! every frame a primitive spans ([`WalkerSettings::scene_every_frame`]), and a primitive whose
 //! pelvis would pass over a wall is never taken: after the redraws, a batch from the prior,
 //! then the body holds its pose for the primitive.
 //!
@@ -38,14 +40,16 @@ use crate::motion::cvae::tensor_body::RigGeometry;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
-use crate::policy::reward::{judge, path_leaves_floor, Judged, Limits, RewardWeights};
-use crate::policy::sampling::best_of;
+use crate::policy::reward::{path_leaves_floor, Judged, Limits, RewardWeights};
+use crate::policy::step::{
+    choose_primitive, draw_action, finite_reward, Judge, Proposal, Redraws, SceneCheck, StepContext,
+};
 use crate::policy::walker::{
     frame_time_s, memory_scan, place_seed, seen_ahead, SeedView, Surroundings, Walker, PRIMITIVE_S,
 };
-use crate::policy::{Actor, PosePrior};
+use crate::policy::{Actor, PosePrior, WalkerSettings};
 use crate::scene::{
-    guide_aim_remembered, plan_path, Guide, MovingObstacle, Obstacle2, SeenMap, WalkableMap,
+    guide_aim_remembered, plan_path, MovingObstacle, Obstacle2, SeenMap, WalkableMap,
 };
 use crate::sensing::Sensor;
 
@@ -89,7 +93,7 @@ pub(crate) fn bytes_per_agent_frame(betas: usize) -> f64 {
 /// How an agent chooses its next primitive.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
-pub enum Steering {
+pub enum Controller {
     /// The trained policy: an action sampled from π, its standard deviation scaled by
     /// `spread` (1: as trained; smaller draws nearer the mean), or its mean.
     Policy {
@@ -108,14 +112,14 @@ pub enum Steering {
     PathFollow { k: usize },
 }
 
-impl Steering {
+impl Controller {
     /// The trained policy's sampled actions, as trained.
-    pub const POLICY: Steering = Steering::Policy {
+    pub const POLICY: Controller = Controller::Policy {
         mean_action: false,
         spread: 1.0,
     };
     /// The trained policy's mean action.
-    pub(crate) const POLICY_MEAN: Steering = Steering::Policy {
+    pub(crate) const POLICY_MEAN: Controller = Controller::Policy {
         mean_action: true,
         spread: 1.0,
     };
@@ -148,30 +152,20 @@ pub struct AgentPlan {
     pub goals: Vec<DVec2>,
     /// Draw new goals when the list runs out.
     pub wander: bool,
-    pub steering: Steering,
+    pub steering: Controller,
 }
 
-/// How a crowd walks.
+/// How a crowd walks: how each person steps ([`WalkerSettings`], `[walker]`), and the take
+/// around them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct CrowdSettings {
-    /// A goal is reached when the pelvis comes this close (m, horizontal).
-    pub success_m: f64,
+    #[serde(flatten)]
+    pub walker: WalkerSettings,
     /// Where the walk to a goal ends: `None` (default) as soon as it is reached; `Some(r)` only
     /// once the pelvis comes within `r` m (or the goal's primitives run out), the goal counting
     /// as reached if the walk ends within `success_m` — EgoGen's evaluation, whose walkers go
     /// on to its training threshold of 0.1 m and are scored at 0.3 m.
     pub arrival_m: Option<f64>,
-    /// Primitives an agent spends on one goal before it is missed.
-    pub max_primitives_per_goal: usize,
-    /// Policy steering: when the chosen primitive ends with the body's 2D box on more than 3
-    /// blocked cells (paper Eq. 7: walls, obstacles, the others' boxes), puts a body marker
-    /// inside another person's box or an obstacle in any frame, or ends with the pelvis off the
-    /// walkable floor, up to this many more actions are drawn from the same policy output, then
-    /// as many from the motion model's prior; the first that does none of these is taken, else
-    /// one ending on the floor, else the one ending nearest to it, then the one with the fewest
-    /// frames inside the others' boxes, then the one on the fewest blocked cells, then the one
-    /// with the most room around its end.
-    pub penetration_redraws: usize,
     /// Primitives per agent in the take (all agents step together).
     pub primitives: usize,
     /// Stop as soon as every agent is done (no goals left, fallen or failed).
@@ -180,70 +174,18 @@ pub struct CrowdSettings {
     pub wander_distance_m: (f64, f64),
     /// Free space around sampled goals (m to the nearest non-walkable cell).
     pub clearance_m: f64,
-    /// Policy steering: with L > 0 the policy is shown a guide's aim instead of its goal where
-    /// a wall or obstacle hides the goal: the point L m along the shortest path on the
-    /// walkable map round the standing obstacles ([`crate::scene::guide_aim`]; people and moving obstacles
-    /// are left to the policy). 0 (default): the goal itself, as EgoGen.
-    pub guide_lookahead_m: f64,
-    /// With the guide on: it plans on what the agent's own rays have shown it so far in the
-    /// take (`scene::SeenMap`, the unknown taken as open; kept from goal to goal) instead of
-    /// on the whole map — a walker's memory of a dwelling, not a map it was given. false
-    /// (default): the whole map.
-    pub guide_memory: bool,
-    /// With the guide on: how strongly its path keeps to the middle of doorways and corridors
-    /// ([`crate::scene::plan_path_centred`]; 0, default: the shortest path at its clearance).
-    pub guide_centre_weight: f64,
-    /// With the guide on memory: a step onto ground the agent never saw costs this many times
-    /// its length more than one onto ground seen open: the way round prefers the doorways its
-    /// rays looked through ([`crate::scene::Guide::unknown_cost`]; 0, default: the unknown
-    /// taken as open).
-    pub guide_unknown_cost: f64,
-    /// How the walker whose turn it is sees and judges the others (paper Alg. 1 steps them one
-    /// at a time). `true` (default): its rays see each other person's 2D box where that person
-    /// will stand when the walker's primitive ends — where the primitive it took earlier in the
-    /// round ends, or moved on at the velocity of its last primitive if it has yet to step —
-    /// and its primitive is judged (redraws, Eq. 7) against the boxes moving through it at those
-    /// velocities. `false`: every other box stands where it was last put, for both (EgoGen's
-    /// crowd loop: someone who stepped earlier in the round is where their primitive ends,
-    /// someone yet to step where they stand now). docs/SYNTH.md, "Seeing the others ahead".
-    pub anticipate_people: bool,
-    /// Whether each primitive is tested against the scene at every frame it spans, not only
-    /// at its end ([`Limits::scene_every_frame`]: the body's box on more than 3 blocked cells
-    /// in any frame, or the pelvis passing over a cell that is not walkable, penetrates and is
-    /// redrawn). `true` (default): no step passes through a wall. `false`: EgoGen's test at
-    /// the primitive's end alone, kept to measure what the swept test costs and changes.
-    pub scene_every_frame: bool,
     pub seed: u64,
-}
-
-impl CrowdSettings {
-    /// The guide these settings give each policy-steered agent (`guide_*`).
-    pub fn guide(&self) -> Guide {
-        Guide {
-            lookahead_m: self.guide_lookahead_m,
-            centre_weight: self.guide_centre_weight,
-            unknown_cost: self.guide_unknown_cost,
-        }
-    }
 }
 
 impl Default for CrowdSettings {
     fn default() -> Self {
         Self {
-            success_m: 0.3,
+            walker: WalkerSettings::default(),
             arrival_m: None,
-            max_primitives_per_goal: 20,
-            penetration_redraws: 4,
             primitives: 20,
             stop_when_done: true,
             wander_distance_m: (2.0, 5.0),
             clearance_m: 0.4,
-            guide_lookahead_m: 0.0,
-            guide_memory: false,
-            guide_centre_weight: 0.0,
-            guide_unknown_cost: 0.0,
-            anticipate_people: true,
-            scene_every_frame: true,
             seed: 0,
         }
     }
@@ -302,7 +244,7 @@ pub struct GoalRecord {
 pub struct AgentTrack {
     pub name: String,
     pub betas: Vec<f64>,
-    pub steering: Steering,
+    pub steering: Controller,
     #[serde(skip)]
     pub frames: Vec<BodyParams>,
     #[serde(skip)]
@@ -331,7 +273,7 @@ pub struct AgentTrack {
     /// the track as written ([`crate::policy::reward::path_leaves_floor`]).
     pub pelvis_off_floor_frames: usize,
     /// Primitives in which the body held its pose because every draw would have taken its
-    /// pelvis over a wall ([`CrowdSettings::scene_every_frame`]).
+    /// pelvis over a wall ([`WalkerSettings::scene_every_frame`]).
     pub held_primitives: usize,
     /// Horizontal walking speed over the primitives taken (m/s).
     pub speed_m_s: f64,
@@ -424,7 +366,7 @@ struct Agent<'m> {
     standing_head_m: f64,
     walker: Walker,
     /// What the agent has seen, where its guide plans on that
-    /// ([`CrowdSettings::guide_memory`]).
+    /// ([`WalkerSettings::guide_memory`]).
     seen: Option<SeenMap>,
     goal: DVec2,
     goal_steps: usize,
@@ -511,7 +453,7 @@ impl<'m> Agent<'m> {
         if parts.bank.seeds.is_empty() {
             return Err(err("the seed bank is empty".into()));
         }
-        if matches!(plan.steering, Steering::Policy { .. }) && parts.policy.is_none() {
+        if matches!(plan.steering, Controller::Policy { .. }) && parts.policy.is_none() {
             return Err(err("steered by the policy, but no policy was loaded".into()));
         }
         let body = BodyContext::new(parts.body_model, &plan.betas)
@@ -643,7 +585,7 @@ impl<'m> Agent<'m> {
     }
 
     /// Chooses, decodes and judges the next primitive: sensing `around`, judged against
-    /// `judged` (the same map, the others as [`CrowdSettings::anticipate_people`] says);
+    /// `judged` (the same map, the others as [`WalkerSettings::anticipate_people`] says);
     /// `standing`: the world's obstacles that do not move, which the guide plans round.
     #[allow(clippy::too_many_arguments)]
     fn choose(
@@ -660,28 +602,27 @@ impl<'m> Agent<'m> {
         // The policy's action distribution, kept for redraws.
         let mut policy_dist: Option<(Vec<f32>, Vec<f32>)> = None;
         let latents: Vec<Vec<f32>> = match self.plan.steering {
-            Steering::Policy {
+            Controller::Policy {
                 mean_action,
                 spread,
             } => {
                 let actor = parts.policy.expect("checked when the agent was made");
                 let mut obs = vec![0f32; actor.obs_layout().dim()];
                 let time_left =
-                    1.0 - self.goal_steps as f64 / settings.max_primitives_per_goal as f64;
-                let memory =
-                    (settings.guide_memory && settings.guide_lookahead_m > 0.0).then(|| {
-                        let seen = self.seen.get_or_insert_with(|| SeenMap::unseen(around.map));
-                        self.walker
-                            .look(&memory_scan(sensor), around.map, standing, seen);
-                        &*seen
-                    });
+                    1.0 - self.goal_steps as f64 / settings.walker.max_primitives_per_goal as f64;
+                let memory = settings.walker.remembers().then(|| {
+                    let seen = self.seen.get_or_insert_with(|| SeenMap::unseen(around.map));
+                    self.walker
+                        .look(&memory_scan(sensor), around.map, standing, seen);
+                    &*seen
+                });
                 let aim = guide_aim_remembered(
                     memory,
                     around.map,
                     standing,
                     self.walker.view.pelvis,
                     self.goal,
-                    &settings.guide(),
+                    &settings.walker.guide(),
                 );
                 self.walker.observe_into(
                     &self.body,
@@ -704,7 +645,7 @@ impl<'m> Agent<'m> {
                 policy_dist = Some((mean, std));
                 vec![a]
             }
-            Steering::Sampling { k } | Steering::PathFollow { k } => {
+            Controller::Sampling { k } | Controller::PathFollow { k } => {
                 normal_samples(&mut self.rng, k.max(1) * l)
                     .chunks(l)
                     .map(<[f32]>::to_vec)
@@ -713,7 +654,7 @@ impl<'m> Agent<'m> {
         };
         // The path follower's aim: a point ahead on a path planned now.
         let aim = match self.plan.steering {
-            Steering::PathFollow { .. } => {
+            Controller::PathFollow { .. } => {
                 let obstacles: Vec<Obstacle2> = around
                     .moving
                     .iter()
@@ -733,18 +674,27 @@ impl<'m> Agent<'m> {
         };
         let seeds = vec![self.walker.view.seed.clone(); latents.len()];
         let decoded = parts.model.decode_each(&self.body, &seeds, &latents)?;
-        let limits = match settings.scene_every_frame {
-            true => Limits::swept(settings.success_m),
-            false => Limits::eq7(settings.success_m),
+        let judge = Judge {
+            limits: match settings.walker.scene_every_frame {
+                true => Limits::swept(settings.walker.success_m),
+                false => Limits::eq7(settings.walker.success_m),
+            },
+            weights: RewardWeights::default(),
+            primitives_left: settings
+                .walker
+                .max_primitives_per_goal
+                .saturating_sub(self.goal_steps + 1),
+            foot_markers: &self.foot_markers,
+            prior: parts.prior,
+            scene: SceneCheck::Cells,
+            no_progress_through_walls: false,
         };
-        let weights = RewardWeights::default();
         let situation = self.walker.situation(judged, self.goal, t0_s);
-        let mut judged = Vec::with_capacity(decoded.len());
-        for d in decoded {
+        let mut proposals = Vec::with_capacity(decoded.len());
+        for (d, latent) in decoded.into_iter().zip(latents) {
             match d {
                 Ok(p) => {
-                    let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
-                    let r = j.terms.total(&weights);
+                    let (j, r) = judge.judge(&self.body, &p, &situation)?;
                     let score = match aim {
                         Some(aim) => {
                             let end = p.joints[p.joints.len() - 1][joint::PELVIS];
@@ -758,119 +708,37 @@ impl<'m> Agent<'m> {
                         }
                         None => r,
                     };
-                    let score = if score.is_finite() {
-                        score
-                    } else {
-                        f64::NEG_INFINITY
-                    };
-                    let r = if r.is_finite() { r } else { 0.0 };
-                    judged.push(((p, j, r, score), Some(score)));
+                    proposals.push(Proposal {
+                        latent,
+                        primitive: p,
+                        judged: j,
+                        reward: finite_reward(r),
+                        score,
+                    });
                 }
                 Err(DecodeError::NonFinite { .. }) => {}
                 Err(e) => return Err(e.into()),
             }
         }
-        let mut best: Option<(DecodedPrimitive, Judged, f64, f64)> = best_of(judged);
-        // A policy primitive that walks into something (Eq. 7), that steps into another
-        // person's box, or that ends with the pelvis off the walkable floor (a closed doorway,
-        // furniture): more actions from the same output. Of draws that all do, one that ends on
-        // the floor, else the one that ends nearest to it (the way back for a body already in a
-        // wall); then the fewest frames in the others' boxes, the fewest blocked cells, the most
-        // room around the end.
-        let end_xy = |p: &DecodedPrimitive| {
-            let end = p.joints[p.joints.len() - 1][joint::PELVIS];
-            DVec2::new(end.x, end.y)
+        let ctx = StepContext {
+            model: parts.model,
+            body: &self.body,
+            seed: &self.walker.view.seed,
+            judge: &judge,
+            situation: &situation,
+            pelvis: self.walker.view.pelvis,
         };
-        let off_floor = |p: &DecodedPrimitive| !around.map.is_walkable_at(end_xy(p));
-        let rank = |p: &DecodedPrimitive, j: &Judged| {
-            let room = around.map.sdf_at(end_xy(p));
-            (
-                // Swept: the fewest frames with the pelvis over a wall first.
-                match settings.scene_every_frame {
-                    true => j.pelvis_off_floor_frames,
-                    false => 0,
-                },
-                off_floor(p),
-                (-room).max(0.0),
-                j.frames_in_obstacle,
-                j.blocked_cells,
-                -room,
-            )
+        let redraws = Redraws {
+            count: settings.walker.penetration_redraws,
+            policy: policy_dist
+                .as_ref()
+                .map(|(mean, std)| (mean.as_slice(), std.as_slice())),
         };
-        let improves = |a: &(DecodedPrimitive, Judged, f64, f64),
-                        b: &(DecodedPrimitive, Judged)| {
-            rank(&b.0, &b.1) < rank(&a.0, &a.1)
-        };
-        // A redraw judged and kept when it ranks better than the best so far.
-        let offer = |best: &mut Option<(DecodedPrimitive, Judged, f64, f64)>,
-                     p: DecodedPrimitive| {
-            let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
-            let candidate = (p, j);
-            if best.as_ref().is_none_or(|b| improves(b, &candidate)) {
-                let (p, j) = candidate;
-                let r = j.terms.total(&weights);
-                let r = if r.is_finite() { r } else { 0.0 };
-                *best = Some((p, j, r, r));
-            }
-        };
-        if let Some((mean, std)) = &policy_dist {
-            // The policy's own draws first; then as many from the motion model's prior, whose
-            // walks go every way (the way back when the policy's all lead on into a wall).
-            for k in 0..2 * settings.penetration_redraws {
-                if best.as_ref().is_some_and(|b| {
-                    !b.1.penetrated && !off_floor(&b.0) && b.1.frames_in_obstacle == 0
-                }) {
-                    break;
-                }
-                let z = if k < settings.penetration_redraws {
-                    draw_action(mean, std, &mut self.rng)
-                } else {
-                    normal_samples(&mut self.rng, l)
-                };
-                let p = match parts.model.decode(
-                    &self.body,
-                    std::slice::from_ref(&self.walker.view.seed),
-                    &[z],
-                ) {
-                    Ok(mut d) => d.remove(0),
-                    Err(DecodeError::NonFinite { .. }) => continue,
-                    Err(e) => return Err(e.into()),
-                };
-                offer(&mut best, p);
-            }
+        let chosen = choose_primitive(&ctx, proposals, &redraws, &mut self.rng)?;
+        if chosen.as_ref().is_some_and(|c| c.held) {
+            self.track.held_primitives += 1;
         }
-        // Swept: a primitive whose pelvis would still pass over a wall is never taken. A batch
-        // of the motion model's prior (turning and slow walks among them), then, when every
-        // draw leads into the wall, the body holds its pose for a primitive.
-        let crosses = |j: &Judged| settings.scene_every_frame && j.pelvis_off_floor_frames > 0;
-        let start_on_floor = around.map.is_walkable_at(self.walker.view.pelvis);
-        if settings.penetration_redraws > 0
-            && start_on_floor
-            && best.as_ref().is_some_and(|b| crosses(&b.1))
-        {
-            let zs: Vec<Vec<f32>> = normal_samples(&mut self.rng, WALL_PRIOR_DRAWS * l)
-                .chunks(l)
-                .map(<[f32]>::to_vec)
-                .collect();
-            let seeds = vec![self.walker.view.seed.clone(); zs.len()];
-            for d in parts.model.decode_each(&self.body, &seeds, &zs)? {
-                let p = match d {
-                    Ok(p) => p,
-                    Err(DecodeError::NonFinite { .. }) => continue,
-                    Err(e) => return Err(e.into()),
-                };
-                offer(&mut best, p);
-            }
-            if let Some((p, _, _, _)) = best.take_if(|b| crosses(&b.1)) {
-                let p = held(&p);
-                let j = judge(&p, &situation, &self.foot_markers, parts.prior, &limits);
-                let r = j.terms.total(&weights);
-                let r = if r.is_finite() { r } else { 0.0 };
-                self.track.held_primitives += 1;
-                best = Some((p, j, r, r));
-            }
-        }
-        Ok(best.map(|(p, j, r, _)| (p, j, r)))
+        Ok(chosen.map(|c| (c.primitive, c.judged, c.reward)))
     }
 
     /// Takes the chosen primitive and moves on to the next goal when this one is over.
@@ -888,7 +756,7 @@ impl<'m> Agent<'m> {
         self.track.primitives += 1;
         // Stuck: hardly moving with the goal still ahead.
         if self.walker.view.pelvis.distance(before) < STUCK_STEP_M
-            && j.distance_m >= settings.success_m
+            && j.distance_m >= settings.walker.success_m
         {
             self.track.stuck_primitives += 1;
         }
@@ -906,9 +774,9 @@ impl<'m> Agent<'m> {
             self.stop(AgentState::Fell);
             return;
         }
-        let reached = j.distance_m < settings.success_m;
+        let reached = j.distance_m < settings.walker.success_m;
         let arrived = settings.arrival_m.map_or(reached, |r| j.distance_m < r);
-        if !arrived && self.goal_steps < settings.max_primitives_per_goal {
+        if !arrived && self.goal_steps < settings.walker.max_primitives_per_goal {
             return;
         }
         self.track.goals.push(GoalRecord {
@@ -970,33 +838,6 @@ impl<'m> Agent<'m> {
 /// Frames either side over which [`AgentTrack::follow_floor`] takes the largest lift a frame
 /// needs and averages it (0.1 s at 40 Hz).
 pub(crate) const FLOOR_FOLLOW_FRAMES: usize = 4;
-
-/// Draws from the motion model's prior when every redraw of a primitive would take the pelvis
-/// over a wall ([`CrowdSettings::scene_every_frame`]), before the body holds its pose.
-pub(crate) const WALL_PRIOR_DRAWS: usize = 32;
-
-/// `p` with its new frames all the seed's last frame: the body holding its pose for a
-/// primitive (what an agent does when every draw would walk it through a wall).
-fn held(p: &DecodedPrimitive) -> DecodedPrimitive {
-    let mut h = p.clone();
-    let last = SEED_FRAMES - 1;
-    for k in SEED_FRAMES..h.world.len() {
-        h.world[k] = h.world[last].clone();
-        h.markers[k] = h.markers[last].clone();
-        h.joints[k] = h.joints[last].clone();
-        h.world_from_cpf[k] = h.world_from_cpf[last];
-    }
-    h
-}
-
-/// An action `mean + std · ε`, ε ~ N(0, I) drawn from `rng`.
-fn draw_action(mean: &[f32], std: &[f32], rng: &mut ChaCha8Rng) -> Vec<f32> {
-    normal_samples(rng, mean.len())
-        .iter()
-        .zip(mean.iter().zip(std))
-        .map(|(e, (m, s))| m + s * e)
-        .collect()
-}
 
 /// An agent's box after a primitive of `primitive_s` seconds took its centre from `before` to
 /// `now`'s, at `t_now_s`: moving on at the primitive's velocity when `moving_on` (it still
@@ -1158,7 +999,7 @@ pub fn run_crowd(
                 a.walker.view.footprint(),
                 frame_time_s(step + 1, 0),
                 PRIMITIVE_S,
-                settings.anticipate_people && a.active(),
+                settings.walker.anticipate_people && a.active(),
             );
         }
         rounds = step + 1;

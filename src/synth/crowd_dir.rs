@@ -79,7 +79,7 @@ pub struct TakeChecks {
     pub outside_region_max_m: f64,
     /// Frames, over all agents, whose pelvis path from the frame before passes over a cell
     /// that is not walkable: the pelvis in or through a wall or furniture (0 with the swept
-    /// scene test, [`crate::synth::crowd::CrowdSettings::scene_every_frame`]).
+    /// scene test, [`crate::policy::WalkerSettings::scene_every_frame`]).
     pub pelvis_off_floor_frames: usize,
     /// Walkable floor, and the part of it starts and goals are drawn on (m²).
     pub walkable_m2: f64,

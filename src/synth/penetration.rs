@@ -159,7 +159,7 @@ mod tests {
     use super::*;
     use crate::body::BodyParams;
     use crate::math::Vec3;
-    use crate::synth::crowd::{AgentState, Steering};
+    use crate::synth::crowd::{AgentState, Controller};
 
     fn standing(name: &str, x: f64, frames: usize) -> AgentTrack {
         let f = BodyParams {
@@ -170,7 +170,7 @@ mod tests {
         AgentTrack {
             name: name.into(),
             betas: Vec::new(),
-            steering: Steering::Sampling { k: 1 },
+            steering: Controller::Sampling { k: 1 },
             frames: vec![f; frames],
             world_from_cpf: Vec::new(),
             markers: Vec::new(),

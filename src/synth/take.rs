@@ -17,7 +17,7 @@ use crate::motion::cvae::train::TrainPlan;
 use crate::motion::MotionSequence;
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableMap};
 use crate::synth::crowd::{
-    run_crowd, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, Steering,
+    run_crowd, sample_point, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld,
 };
 
 /// Where agents come from before the map is known: given, or to be sampled.
@@ -31,7 +31,7 @@ pub struct AgentDraft {
     pub facing_rad: Option<f64>,
     pub goals: Vec<DVec2>,
     pub wander: bool,
-    pub steering: Steering,
+    pub steering: Controller,
 }
 
 /// A checked synth config.

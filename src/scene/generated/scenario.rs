@@ -9,7 +9,7 @@ use crate::scene::obstacle::{MovingObstacle, Obstacle2};
 
 /// A procedural scene: static mesh plus moving obstacles.
 #[derive(Debug, Clone)]
-pub struct Scenario {
+pub struct ScenarioScene {
     pub name: &'static str,
     pub mesh: SceneMesh,
     pub moving: Vec<MovingObstacle>,
@@ -39,7 +39,7 @@ fn floor(mesh: &mut SceneMesh) {
 }
 
 /// Builds a scenario.
-pub fn scenario(kind: ScenarioKind) -> Scenario {
+pub fn scenario(kind: ScenarioKind) -> ScenarioScene {
     let mut mesh = SceneMesh::default();
     floor(&mut mesh);
     let mut moving = Vec::new();
@@ -61,5 +61,5 @@ pub fn scenario(kind: ScenarioKind) -> Scenario {
             "moving_box"
         }
     };
-    Scenario { name, mesh, moving }
+    ScenarioScene { name, mesh, moving }
 }

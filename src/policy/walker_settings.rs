@@ -1,0 +1,192 @@
+//! The one schema of a walker's settings: how every person of a take steps, the `[walker]`
+//! table of synth and run configs (and so of every campaign take), with its defaults and its
+//! checks. A new walker setting is a field here (its doc comment, its default, its check in
+//! [`WalkerSettings::problem`]) and the code that reads it.
+
+use serde::{Deserialize, Serialize};
+
+use crate::scene::Guide;
+
+/// How a walker steps (`[walker]`; docs/SYNTH.md "Walker settings"). Unknown keys are refused.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WalkerSettings {
+    /// A goal is reached when the pelvis comes this close (m, horizontal; default 0.3).
+    pub success_m: f64,
+    /// Primitives a walker spends on one goal before it is missed (default 20).
+    pub max_primitives_per_goal: usize,
+    /// When the chosen primitive walks into something — more than 3 blocked cells under the
+    /// body's 2D box at its end (paper Eq. 7: walls, obstacles, the others' boxes), a body
+    /// marker inside another person's box or an obstacle in any frame, the pelvis ending off
+    /// the walkable floor — up to this many more actions are drawn from the policy, then as
+    /// many from the motion model's prior (`policy::step`; default 4; 0: none, as trained).
+    pub penetration_redraws: usize,
+    /// Where a wall hides the goal, the policy is shown the point this far (m) along the
+    /// shortest path round what blocks the straight way (`scene::guide_aim`; rewards and
+    /// success stay the goal's). 0 (default): the goal itself, as EgoGen.
+    pub guide_lookahead_m: f64,
+    /// With a guide: it plans only on what the walker's own rays have shown it so far in the
+    /// take (`scene::SeenMap`, kept from goal to goal) instead of on the whole walkable map.
+    pub guide_memory: bool,
+    /// With a guide: how strongly its path keeps to the middle of doorways and corridors
+    /// (`scene::plan_path_centred`; 0, default: the shortest path at its clearance).
+    pub guide_centre_weight: f64,
+    /// With a guide on memory: how much dearer a step onto ground the walker never saw is
+    /// than one onto ground seen open (`scene::Guide::unknown_cost`; 0, default: the unknown
+    /// taken as open).
+    pub guide_unknown_cost: f64,
+    /// `true` (default): the walker sees each other person where that person will stand when
+    /// its primitive ends and judges its primitive against them moving; `false`: both where
+    /// they were last put (EgoGen's crowd loop; docs/SYNTH.md "Seeing the others ahead").
+    pub anticipate_people: bool,
+    /// `true` (default): every primitive is tested against the scene at every frame it spans
+    /// (no step passes through a wall); `false`: at its end alone (EgoGen's test).
+    pub scene_every_frame: bool,
+}
+
+impl Default for WalkerSettings {
+    fn default() -> Self {
+        Self {
+            success_m: 0.3,
+            max_primitives_per_goal: 20,
+            penetration_redraws: 4,
+            guide_lookahead_m: 0.0,
+            guide_memory: false,
+            guide_centre_weight: 0.0,
+            guide_unknown_cost: 0.0,
+            anticipate_people: true,
+            scene_every_frame: true,
+        }
+    }
+}
+
+impl WalkerSettings {
+    /// The guide these settings give a policy-steered walker (`guide_*`).
+    pub fn guide(&self) -> Guide {
+        Guide {
+            lookahead_m: self.guide_lookahead_m,
+            centre_weight: self.guide_centre_weight,
+            unknown_cost: self.guide_unknown_cost,
+        }
+    }
+
+    /// Whether the walker remembers what its rays saw: its guide plans on that.
+    pub fn remembers(&self) -> bool {
+        self.guide_memory && self.guide_lookahead_m > 0.0
+    }
+
+    /// What is wrong with these settings, if anything: the key and what was expected.
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        if let Some(p) = guide_problem(&self.guide(), self.guide_memory) {
+            return Some(p);
+        }
+        if !(self.success_m.is_finite() && self.success_m > 0.0) {
+            return Some((
+                "success_m",
+                format!("expected a radius > 0 m, got {}", self.success_m),
+            ));
+        }
+        if self.max_primitives_per_goal == 0 {
+            return Some((
+                "max_primitives_per_goal",
+                "expected a whole number ≥ 1, got 0".into(),
+            ));
+        }
+        None
+    }
+
+    /// The keys whose values differ from the defaults (what a config set), in alphabetical order.
+    pub fn changed_keys(&self) -> Vec<String> {
+        let table = |s: &WalkerSettings| match serde_json::to_value(s) {
+            Ok(serde_json::Value::Object(m)) => m,
+            _ => serde_json::Map::new(),
+        };
+        let default = table(&WalkerSettings::default());
+        table(self)
+            .into_iter()
+            .filter(|(k, v)| default.get(k) != Some(v))
+            .map(|(k, _)| k)
+            .collect()
+    }
+
+    /// Whether every setting is its default (a config that sets none).
+    pub fn is_default(&self) -> bool {
+        *self == WalkerSettings::default()
+    }
+
+    /// Every key of the schema.
+    pub fn keys() -> Vec<String> {
+        match serde_json::to_value(WalkerSettings::default()) {
+            Ok(serde_json::Value::Object(m)) => m.into_iter().map(|(k, _)| k).collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// What is wrong with a guide's settings, if anything: the setting's name (a config key's last
+/// part; a flag is it with dashes) and what was expected. One check for `[walker]`, training
+/// configs and `egogen policy eval`.
+pub fn guide_problem(guide: &Guide, memory: bool) -> Option<(&'static str, String)> {
+    let Guide {
+        lookahead_m,
+        centre_weight,
+        unknown_cost,
+    } = *guide;
+    if !(lookahead_m.is_finite() && lookahead_m >= 0.0) {
+        return Some((
+            "guide_lookahead_m",
+            format!("expected a distance ≥ 0 m, got {lookahead_m}"),
+        ));
+    }
+    if !(centre_weight.is_finite() && centre_weight >= 0.0) {
+        return Some((
+            "guide_centre_weight",
+            format!("expected a weight ≥ 0, got {centre_weight}"),
+        ));
+    }
+    if !(unknown_cost.is_finite() && unknown_cost >= 0.0) {
+        return Some((
+            "guide_unknown_cost",
+            format!("expected a weight ≥ 0, got {unknown_cost}"),
+        ));
+    }
+    let needs_lookahead = |what: &str| {
+        format!("a guide {what} only with a lookahead > 0 m (e.g. 1 or 2): give one too")
+    };
+    if lookahead_m == 0.0 && memory {
+        return Some(("guide_memory", needs_lookahead("plans on memory")));
+    }
+    if lookahead_m == 0.0 && centre_weight > 0.0 {
+        return Some((
+            "guide_centre_weight",
+            needs_lookahead("keeps to the middle of doorways"),
+        ));
+    }
+    if unknown_cost > 0.0 && !memory {
+        return Some((
+            "guide_unknown_cost",
+            "a cost of unseen ground applies only to a guide that plans on the walker's memory: \
+             turn memory on too (with a lookahead > 0 m)"
+                .into(),
+        ));
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn changed_keys_name_what_differs_from_the_defaults() {
+        assert!(WalkerSettings::default().changed_keys().is_empty());
+        let s = WalkerSettings {
+            guide_lookahead_m: 1.0,
+            guide_memory: true,
+            ..Default::default()
+        };
+        assert_eq!(s.changed_keys(), ["guide_lookahead_m", "guide_memory"]);
+        assert_eq!(WalkerSettings::keys().len(), 9);
+        assert!(WalkerSettings::keys().contains(&"scene_every_frame".to_string()));
+    }
+}
