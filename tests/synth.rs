@@ -313,10 +313,7 @@ fn a_guided_walker_goes_round_a_long_wall_to_its_hidden_goal() {
     assert!(guided.goals[0].reached, "{:?}", guided.goals);
     assert_eq!(guided.penetration_share, 0.0);
     // Planning only on what its rays have shown it, it goes round the wall it sees too.
-    let remembering = take(&shipped.replace(
-        "guide_lookahead_m = 2.0",
-        "guide_lookahead_m = 2.0\nguide_memory = true",
-    ));
+    let remembering = take(&shipped.replace("guide_memory = false", "guide_memory = true"));
     assert!(remembering.goals[0].reached, "{:?}", remembering.goals);
     assert_eq!(remembering.penetration_share, 0.0);
     let alone = take(&shipped.replace("guide_lookahead_m = 2.0", "guide_lookahead_m = 0.0"));
@@ -380,11 +377,7 @@ fn bad_configs_are_refused_by_key() {
             "walker.guide_lookahead_m",
         ),
         (
-            "[walker]\nguide_memory=true\n[[agents]]\n[output]\ndir='o'\n",
-            "walker.guide_memory",
-        ),
-        (
-            "[walker]\nguide_centre_weight=2\n[[agents]]\n[output]\ndir='o'\n",
+            "[walker]\nguide_lookahead_m=0\nguide_centre_weight=2\n[[agents]]\n[output]\ndir='o'\n",
             "walker.guide_centre_weight",
         ),
         (
@@ -392,7 +385,7 @@ fn bad_configs_are_refused_by_key() {
             "walker.guide_centre_weight",
         ),
         (
-            "[walker]\nguide_lookahead_m=1\nguide_unknown_cost=1\n[[agents]]\n[output]\ndir='o'\n",
+            "[walker]\nguide_memory=false\nguide_unknown_cost=1\n[[agents]]\n[output]\ndir='o'\n",
             "walker.guide_unknown_cost",
         ),
         (
@@ -740,7 +733,7 @@ fn run_configs_with_agents_are_checked_by_key() {
         ),
         (
             run(
-                "[walker]\nguide_lookahead_m = 1.0",
+                "[walker]\nguide_lookahead_m = 2.0",
                 "source = \"scripted_walk\"\nduration_s = 1.0\nframe_rate_hz = 40.0",
             ),
             "walker.guide_lookahead_m",
@@ -1044,6 +1037,7 @@ stop_when_done = false
 seed = 1
 [walker]
 scene_every_frame = {swept}
+guide_lookahead_m = 0.0
 [crowd]
 count = 3
 layout = "random"

@@ -875,7 +875,7 @@ fn path_follow_row(
                 walker: crate::policy::WalkerSettings {
                     success_m: SUCCESS_M,
                     max_primitives_per_goal: TABLE2_MAX_PRIMITIVES,
-                    ..Default::default()
+                    ..crate::policy::WalkerSettings::default().unguided()
                 },
                 arrival_m: Some(ARRIVAL_M),
                 primitives: TABLE2_MAX_PRIMITIVES,

@@ -215,9 +215,9 @@ pub fn episode(
             walker: crate::policy::WalkerSettings {
                 success_m: SUCCESS_M,
                 max_primitives_per_goal: scenario.max_primitives(),
-                // The policy as trained, without synthesis's redraws.
+                // The policy as trained and evaluated by the paper: no redraws, no guide.
                 penetration_redraws: 0,
-                ..Default::default()
+                ..crate::policy::WalkerSettings::default().unguided()
             },
             arrival_m: Some(ARRIVAL_M),
             primitives: scenario.max_primitives(),

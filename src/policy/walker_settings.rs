@@ -23,10 +23,13 @@ pub struct WalkerSettings {
     pub penetration_redraws: usize,
     /// Where a wall hides the goal, the policy is shown the point this far (m) along the
     /// shortest path round what blocks the straight way (`scene::guide_aim`; rewards and
-    /// success stay the goal's). 0 (default): the goal itself, as EgoGen.
+    /// success stay the goal's). Default 1 (with `guide_memory`: the way round what the
+    /// walker has seen; docs/SYNTH.md "In a real house never walked"); 0: the goal itself, as
+    /// EgoGen (and `guide_memory` then does nothing).
     pub guide_lookahead_m: f64,
     /// With a guide: it plans only on what the walker's own rays have shown it so far in the
-    /// take (`scene::SeenMap`, kept from goal to goal) instead of on the whole walkable map.
+    /// take (`scene::SeenMap`, kept from goal to goal; default true) instead of on the whole
+    /// walkable map (false: a map the walker is given).
     pub guide_memory: bool,
     /// With a guide: how strongly its path keeps to the middle of doorways and corridors
     /// (`scene::plan_path_centred`; 0, default: the shortest path at its clearance).
@@ -50,8 +53,8 @@ impl Default for WalkerSettings {
             success_m: 0.3,
             max_primitives_per_goal: 20,
             penetration_redraws: 4,
-            guide_lookahead_m: 0.0,
-            guide_memory: false,
+            guide_lookahead_m: 1.0,
+            guide_memory: true,
             guide_centre_weight: 0.0,
             guide_unknown_cost: 0.0,
             anticipate_people: true,
@@ -75,9 +78,22 @@ impl WalkerSettings {
         self.guide_memory && self.guide_lookahead_m > 0.0
     }
 
-    /// What is wrong with these settings, if anything: the key and what was expected.
+    /// EgoGen's walker: no guide (the goal itself, whatever hides it), the rest as these.
+    pub fn unguided(self) -> Self {
+        Self {
+            guide_lookahead_m: 0.0,
+            guide_memory: false,
+            guide_centre_weight: 0.0,
+            guide_unknown_cost: 0.0,
+            ..self
+        }
+    }
+
+    /// What is wrong with these settings, if anything: the key and what was expected. Memory
+    /// without a guide is no mistake here (it is on by default, and `guide_lookahead_m = 0`
+    /// turns the guide off).
     pub fn problem(&self) -> Option<(&'static str, String)> {
-        if let Some(p) = guide_problem(&self.guide(), self.guide_memory) {
+        if let Some(p) = guide_problem(&self.guide(), self.remembers()) {
             return Some(p);
         }
         if !(self.success_m.is_finite() && self.success_m > 0.0) {
@@ -181,11 +197,11 @@ mod tests {
     fn changed_keys_name_what_differs_from_the_defaults() {
         assert!(WalkerSettings::default().changed_keys().is_empty());
         let s = WalkerSettings {
-            guide_lookahead_m: 1.0,
-            guide_memory: true,
+            guide_lookahead_m: 2.0,
+            anticipate_people: false,
             ..Default::default()
         };
-        assert_eq!(s.changed_keys(), ["guide_lookahead_m", "guide_memory"]);
+        assert_eq!(s.changed_keys(), ["anticipate_people", "guide_lookahead_m"]);
         assert_eq!(WalkerSettings::keys().len(), 9);
         assert!(WalkerSettings::keys().contains(&"scene_every_frame".to_string()));
     }
