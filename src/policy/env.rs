@@ -27,9 +27,7 @@ use serde::{Deserialize, Serialize};
 
 use super::pose_prior::PosePrior;
 use super::reward::{Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges};
-use super::step::{
-    choose_primitive, finite_reward, Judge, Proposal, Redraws, SceneCheck, StepContext,
-};
+use super::step::{choose_primitive, finite_reward, Judge, Proposal, SceneCheck, StepContext};
 use super::walker::{
     frame_time_s, memory_scan, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker,
 };
@@ -546,10 +544,6 @@ pub struct PolicyEnv<'m> {
     measure_way_round: bool,
 }
 
-/// Mixed into an episode's base for the generator of its redraws, a stream apart from the
-/// one that draws its course.
-const REDRAW_STREAM: u64 = 0x5EED_4ED4_A000_0000;
-
 /// The generator of episode `id` under `base`.
 fn episode_rng(base: u64, id: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(base.rotate_left(32) ^ id.wrapping_mul(0x9E37_79B9_7F4A_7C15))
@@ -1064,9 +1058,7 @@ impl<'m> PolicyEnv<'m> {
                     situation: &situation,
                     pelvis: e.walker.view.pelvis,
                 };
-                // Unused without redraws; seeded by the episode and its step when they come.
-                let mut rng = episode_rng(self.episode_base ^ REDRAW_STREAM, e.id);
-                match choose_primitive(&ctx, proposals, &Redraws::NONE, &mut rng)? {
+                match choose_primitive(&ctx, proposals, None)? {
                     Some(c) => Ok(Candidate {
                         env,
                         latent: c.latent,

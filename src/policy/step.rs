@@ -117,14 +117,6 @@ pub(crate) struct Redraws<'a> {
     pub policy: Option<(&'a [f32], &'a [f32])>,
 }
 
-impl Redraws<'_> {
-    /// No redraws: the best proposal as it is (training, and EgoGen's protocol).
-    pub const NONE: Redraws<'static> = Redraws {
-        count: 0,
-        policy: None,
-    };
-}
-
 /// One proposal decoded, judged and scored by its controller (higher is better; a score that
 /// is not finite ranks last).
 pub(crate) struct Proposal {
@@ -160,12 +152,13 @@ pub(crate) struct StepContext<'a> {
 }
 
 /// The primitive a walker takes of its controller's `proposals` (decoded ones, in order):
-/// the best by score ([`best_of`]), then [`Redraws`]. `None` when there is no proposal.
+/// the best by score ([`best_of`]), then, given `redraws` and the generator they draw from,
+/// [`Redraws`] (none: the best proposal as it is, as training and EgoGen's protocol take it).
+/// `None` when there is no proposal.
 pub(crate) fn choose_primitive(
     ctx: &StepContext,
     proposals: Vec<Proposal>,
-    redraws: &Redraws,
-    rng: &mut ChaCha8Rng,
+    redraws: Option<(&Redraws, &mut ChaCha8Rng)>,
 ) -> Result<Option<Chosen>, DecodeError> {
     let mut best: Option<Chosen> = best_of(proposals.into_iter().map(|p| {
         let score = Some(p.score);
@@ -180,9 +173,9 @@ pub(crate) fn choose_primitive(
             score,
         )
     }));
-    if redraws.count == 0 {
+    let Some((redraws, rng)) = redraws.filter(|(r, _)| r.count > 0) else {
         return Ok(best);
-    }
+    };
     let map = ctx.situation.map;
     let swept = ctx.judge.limits.scene_every_frame;
     let l = ctx.model.latent_dim();

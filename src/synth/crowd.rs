@@ -734,7 +734,7 @@ impl<'m> Agent<'m> {
                 .as_ref()
                 .map(|(mean, std)| (mean.as_slice(), std.as_slice())),
         };
-        let chosen = choose_primitive(&ctx, proposals, &redraws, &mut self.rng)?;
+        let chosen = choose_primitive(&ctx, proposals, Some((&redraws, &mut self.rng)))?;
         if chosen.as_ref().is_some_and(|c| c.held) {
             self.track.held_primitives += 1;
         }
