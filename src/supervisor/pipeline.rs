@@ -381,16 +381,30 @@ fn check_output(
     Ok(OutputState::Resume)
 }
 
-/// Creates `<dir>.partial` with the effective config and `work/run.json`.
+/// Creates `<dir>.partial` with the effective config and `work/run.json`, whole or not at all:
+/// both are written into `<dir>.partial.new` and that folder renamed, so a run killed while
+/// staging never leaves a `.partial` that no `--resume` can read. A `<dir>.partial.new` left by
+/// such a run holds only those two files and is replaced.
 fn stage_run(staging: &Path, state: &RunState, opts: &RunOptions) -> Result<()> {
-    std::fs::create_dir_all(staging.join("work"))
-        .with_context(|| format!("creating {}", staging.display()))?;
-    write_atomically(&staging.join("config.toml"), opts.config_toml.as_bytes())
+    let fresh = PathBuf::from(format!("{}.new", staging.display()));
+    if fresh.exists() {
+        std::fs::remove_dir_all(&fresh).with_context(|| {
+            format!(
+                "removing {}, left by a run killed while staging",
+                fresh.display()
+            )
+        })?;
+    }
+    std::fs::create_dir_all(fresh.join("work"))
+        .with_context(|| format!("creating {}", fresh.display()))?;
+    write_atomically(&fresh.join("config.toml"), opts.config_toml.as_bytes())
         .with_context(|| format!("writing the effective config of {}", state.config))?;
     write_atomically(
-        &staging.join("work/run.json"),
+        &fresh.join("work/run.json"),
         serde_json::to_string_pretty(state)?.as_bytes(),
     )?;
+    std::fs::rename(&fresh, staging)
+        .with_context(|| format!("renaming {} to {}", fresh.display(), staging.display()))?;
     Ok(())
 }
 
@@ -909,6 +923,44 @@ fn scene_bounds(scene: &crate::scene::SceneMesh) -> (crate::math::Vec3, crate::m
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A start killed while staging left `<dir>.partial.new` (the config written, no
+    /// `work/run.json`) and no `.partial`: the next start stages afresh, and its `.partial`
+    /// is whole and resumable.
+    #[test]
+    fn staging_killed_half_way_leaves_nothing_a_resume_cannot_read() {
+        let a = tempfile::tempdir().unwrap();
+        let dir = a.path().join("take");
+        let staging = a.path().join("take.partial");
+        let left = a.path().join("take.partial.new");
+        std::fs::create_dir_all(left.join("work")).unwrap();
+        std::fs::write(left.join("config.toml"), "half").unwrap();
+        let state = RunState {
+            config: "run.toml".into(),
+            config_sha256: "abc".into(),
+            rig_sha256: None,
+        };
+        let opts = RunOptions {
+            resume: true,
+            blender: None,
+            config_toml: "[scene]\n".into(),
+            resume_fingerprint: "abc".into(),
+        };
+        assert!(matches!(
+            check_output(&dir, &staging, &state, &opts).unwrap(),
+            OutputState::Fresh
+        ));
+        stage_run(&staging, &state, &opts).unwrap();
+        assert!(!left.exists());
+        assert_eq!(
+            std::fs::read_to_string(staging.join("config.toml")).unwrap(),
+            "[scene]\n"
+        );
+        assert!(matches!(
+            check_output(&dir, &staging, &state, &opts).unwrap(),
+            OutputState::Resume
+        ));
+    }
 
     #[test]
     fn skin_masks_are_used_all_together_beside_a_model_with_uvs() {
