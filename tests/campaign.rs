@@ -225,6 +225,7 @@ fn a_campaign_renders_indexes_resumes_and_reads_back() {
     };
     let mut kills = 0;
     let mut worker_killed = false;
+    let mut failures_after_kills = 0;
     let deadline = Instant::now() + Duration::from_secs(600);
     loop {
         assert!(Instant::now() < deadline, "the campaign never finished");
@@ -262,8 +263,23 @@ fn a_campaign_renders_indexes_resumes_and_reads_back() {
             child.wait().unwrap();
             continue;
         }
+        // Killed no more: a resume that fails twice in a row is stuck, not unlucky.
         let status = child.wait().unwrap();
         if status.success() {
+            break;
+        }
+        failures_after_kills += 1;
+        if failures_after_kills >= 2 {
+            let again = egogen_run()
+                .arg(campaign_b)
+                .arg("--resume")
+                .output()
+                .unwrap();
+            assert!(
+                again.status.success(),
+                "a resume after the kills keeps failing:\n{}",
+                String::from_utf8_lossy(&again.stderr)
+            );
             break;
         }
     }
