@@ -4,11 +4,15 @@
 #   - CMU trials 01_01 and 01_03 (BVH, 120 fps) from Debian's assimp-testmodels;
 #   - DeepMimic humanoid3d clips (30 fps) from PyPI pybullet 3.2.7 (pybullet_data/data/motions);
 #   - the 83 CMU locomotion clips (BVH, 120 fps) in assets/mocap/cmu_locomotion.tar.xz (its
-#     README.md and MANIFEST.csv give provenance and terms), into assets/motion/cmu/.
+#     README.md and MANIFEST.csv give provenance and terms), into assets/motion/cmu/;
+#   - the 6 CMU activity clips (sit down and stand up at three seat heights, lift, pick up; BVH,
+#     30 fps) in assets/mocap/cmu_activities/ (its README.md and MANIFEST.csv), into
+#     assets/motion/activities/ (not training data: played by takes' activities, docs/ACTIVITIES.md).
 # Mirrored copies are made at training time (egogen::motion::resample::mirror), not stored.
 #
 #   bash tools/build_training_clips.sh        # needs root for apt-get (or the package installed)
 #   bash tools/build_training_clips.sh cmu    # only the CMU locomotion clips (no download)
+#   bash tools/build_training_clips.sh activities  # only the CMU activity clips (no download)
 # EGOGEN_BIN=path/to/egogen uses that binary instead of building a release one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,6 +29,18 @@ import() { # source output [extra args]
   rm -f "assets/motion/$name.npz"
   "$EGOGEN_BIN" motion import "$src" --out "assets/motion/$name.npz" --rate-hz 40 "$@"
 }
+# CMU activities: frame 0 of every file is the cgspeed T-pose calibration frame.
+if [ "$only" = all ] || [ "$only" = activities ]; then
+  mkdir -p assets/motion/activities
+  for bvh in assets/mocap/cmu_activities/*.bvh; do
+    trial=$(basename "$bvh" .bvh)
+    rm -f "docs/mocap_cmu_$trial.png"
+    strip=()
+    if [ "$trial" = 75_18 ] || [ "$trial" = 64_28 ]; then strip=(--strip "docs/mocap_cmu_$trial.png"); fi
+    import "$bvh" "activities/$trial" --skip-frames 1 "${strip[@]}"
+  done
+fi
+if [ "$only" = activities ]; then exit 0; fi
 # CMU locomotion: every clip's frame 0 is a T-pose calibration frame except 16_11's (a re-saved
 # copy of the trial without it).
 tar -xJf assets/mocap/cmu_locomotion.tar.xz -C "$tmp"
