@@ -620,3 +620,43 @@ fn scene_inspect_warns_of_a_scene_on_its_side() {
     let upright = inspect(Some("y"), "upright.png");
     assert!(!upright.contains("warning"), "{upright}");
 }
+
+/// `egogen scene inspect` lists the places to sit it finds: in the shipped apartment the sofa,
+/// the bed and chairs, never a table, and draws them on the map.
+#[test]
+fn scene_inspect_lists_the_apartments_seats() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("apartment.png");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["scene", "inspect"])
+        .arg(common::repo_root().join("assets/scenes/apartment.glb"))
+        .arg("--out")
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let seats: Vec<&str> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("seats:"))
+        .skip(1)
+        .take_while(|l| l.starts_with("            "))
+        .collect();
+    for object in [
+        "IKEA_sofa_EKTORP",
+        "IKEA_bed_FJELLSE",
+        "IKEA_chair_PELLO",
+        "IKEA_chair_STEFAN",
+    ] {
+        assert!(seats.iter().any(|l| l.contains(object)), "{object}: {text}");
+    }
+    assert!(
+        !seats.iter().any(|l| l.to_lowercase().contains("table")),
+        "{text}"
+    );
+    assert!(png.is_file());
+}

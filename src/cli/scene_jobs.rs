@@ -98,6 +98,31 @@ pub fn scene_inspect(
         map.walkable_count() as f64 * cell_m * cell_m,
         components
     );
+    let seats = crate::scene::find_seats(&mesh, &map, &crate::scene::SeatSettings::default());
+    println!(
+        "seats:      {} place(s) to sit on {} object(s) ({} named as seats)",
+        seats.len(),
+        seats
+            .iter()
+            .map(|s| s.object)
+            .collect::<std::collections::BTreeSet<_>>()
+            .len(),
+        seats
+            .iter()
+            .filter(|s| s.naming == crate::scene::seats::SeatNaming::Named)
+            .count()
+    );
+    for s in &seats {
+        println!(
+            "            {:<28} seat {:.2} m at ({:.2}, {:.2}), facing {:>4.0}°, {}",
+            s.object_name,
+            s.height_m,
+            s.pelvis_xy[0],
+            s.pelvis_xy[1],
+            s.facing_rad.to_degrees(),
+            if s.backed { "backed" } else { "no back" }
+        );
+    }
     let obstacles: Vec<_> = moving.iter().map(|m| m.at(0.0)).collect();
     let world = SensingWorld {
         map: &map,
@@ -107,6 +132,10 @@ pub fn scene_inspect(
     let mut pic = MapPicture::new(&map, 900);
     for o in &obstacles {
         pic.obstacle(o, [200, 60, 40]);
+    }
+    for s in &seats {
+        pic.line(s.pelvis(), s.stand(), [240, 170, 0]);
+        pic.dot(s.pelvis(), 5, [240, 170, 0]);
     }
     let depth = DepthImage::default();
     let mut pictures = Vec::new();

@@ -1,5 +1,6 @@
 //! Scenes: triangle meshes in metres (z up) with named objects, the floor, the walkable map
-//! (occupancy + 2D signed distance) and start/goal sampling; procedural scenario scenes.
+//! (occupancy + 2D signed distance), start/goal sampling, the places to sit (`seats`);
+//! procedural scenario scenes.
 //!
 //! Also owns body–scene collision terms (`penetration`: 3D SDF or the 2D box test). Hands
 //! off to `sensing` (rays over the walkable map).
@@ -17,6 +18,7 @@ pub mod penetration;
 pub mod sampler;
 pub mod sdf2d;
 pub mod sdf3d;
+pub mod seats;
 pub mod seen_map;
 pub mod walkable;
 
@@ -31,5 +33,6 @@ pub use path_plan::{
 pub use penetration::{blocked_cells_in_box, sdf_penetration, Penetration};
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
 pub use sdf3d::SceneSdf;
+pub use seats::{find_seats, Seat, SeatSettings};
 pub use seen_map::{guide_aim_remembered, SeenMap};
 pub use walkable::{indoor_map, WalkableMap, WalkableSettings, MIN_ENCLOSED};

@@ -383,7 +383,12 @@ impl WalkableMap {
 
     /// Calls `f(cell, z)` for every cell whose centre, moved by `offset`, the triangle's
     /// footprint covers, with the triangle's height over that point.
-    fn for_cells_under(&self, tri: [Vec3; 3], offset: DVec2, mut f: impl FnMut(usize, f64)) {
+    pub(super) fn for_cells_under(
+        &self,
+        tri: [Vec3; 3],
+        offset: DVec2,
+        mut f: impl FnMut(usize, f64),
+    ) {
         let p = tri.map(|v| DVec2::new(v.x, v.y));
         let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
         if area == 0.0 {
@@ -662,7 +667,11 @@ impl WalkableMap {
         self.walkable.iter().filter(|&&w| w).count()
     }
 
-    fn cell_range(&self, lo: DVec2, hi: DVec2) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+    pub(super) fn cell_range(
+        &self,
+        lo: DVec2,
+        hi: DVec2,
+    ) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
         let a = ((lo - self.origin) / self.cell_m).floor().max(DVec2::ZERO);
         let b = ((hi - self.origin) / self.cell_m).floor();
         let i1 = (b.x.max(-1.0) as i64 + 1).clamp(0, self.nx as i64) as usize;
@@ -787,7 +796,7 @@ impl WalkableMap {
 }
 
 /// Sutherland–Hodgman clip of a polygon against `z ≥ z0` (`keep_above`) or `z ≤ z0`.
-fn clip_z(poly: &[Vec3], z0: f64, keep_above: bool) -> Vec<Vec3> {
+pub(super) fn clip_z(poly: &[Vec3], z0: f64, keep_above: bool) -> Vec<Vec3> {
     let inside = |p: &Vec3| if keep_above { p.z >= z0 } else { p.z <= z0 };
     let mut out = Vec::with_capacity(poly.len() + 2);
     for k in 0..poly.len() {
@@ -808,7 +817,13 @@ fn clip_z(poly: &[Vec3], z0: f64, keep_above: bool) -> Vec<Vec3> {
 /// Separating-axis test between a convex polygon (possibly degenerate: a segment or a point)
 /// and the rectangle `[lo, hi]`. `closed`: touching counts as overlap. Otherwise the shapes
 /// must overlap by more than `margin` along every axis (interiors meet).
-fn convex_overlaps_rect(p: &[DVec2], lo: DVec2, hi: DVec2, margin: f64, closed: bool) -> bool {
+pub(super) fn convex_overlaps_rect(
+    p: &[DVec2],
+    lo: DVec2,
+    hi: DVec2,
+    margin: f64,
+    closed: bool,
+) -> bool {
     let separated = |amax: f64, bmin: f64| {
         if closed {
             amax < bmin
