@@ -414,6 +414,26 @@ fn bad_configs_are_refused_by_key() {
             "wander_distance_m",
         ),
         ("[[agents]]\ncolour='red'\n[output]\ndir='o'\n", "colour"),
+        (
+            "[activities]\nweights={walk=1, sit=-1}\n[[agents]]\n[output]\ndir='o'\n",
+            "activities.weights.sit",
+        ),
+        (
+            "[activities]\nweights={walk=0}\n[[agents]]\n[output]\ndir='o'\n",
+            "activities.weights",
+        ),
+        (
+            "[activities]\nweights={walk=1, dance=1}\n[[agents]]\n[output]\ndir='o'\n",
+            "dance",
+        ),
+        (
+            "[activities]\nsit_s=[10.0, 2.0]\n[[agents]]\n[output]\ndir='o'\n",
+            "activities.sit_s",
+        ),
+        (
+            "[activities]\nseat_fit_m=2\n[[agents]]\n[output]\ndir='o'\n",
+            "activities.seat_fit_m",
+        ),
         ("[[agents]]\nname='a b'\n[output]\ndir='o'\n", "agents.name"),
     ];
     for (config, expected) in cases {
@@ -1305,4 +1325,125 @@ fn a_y_up_scene_in_centimetres_is_walked_in_metres() {
         assert!(err.contains(key), "{keys}: {err}");
     }
     assert!(!dir.path().join("as_is").exists() && !dir.path().join("bad").exists());
+}
+
+/// People do more than walk in the apartment: they stand and look around, sit down on its
+/// seats and stand up again, pick things up — each transition joining the walk without a jump
+/// (joints turning no faster than in the clips themselves), seated on the seat's surface with
+/// the feet where the clip has them, nobody stepping through a wall, the same seed making the
+/// same take.
+#[test]
+fn people_sit_stand_and_pick_up_in_the_apartment() {
+    let config = wandering_in_the_apartment(3, 40.0, 0, "")
+        + "[activities]\nweights = { walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 1.0 }\n";
+    let (dir, path) = common::run_dir(&config);
+    let plan = load_synth_plan(&path).unwrap();
+    let out = run_synth(&plan, false).unwrap();
+    let summary = summary(&dir.path().join("take"));
+    let mut done = std::collections::BTreeMap::<String, usize>::new();
+    for a in summary["agents"].as_array().unwrap() {
+        let name = a["name"].as_str().unwrap();
+        assert_eq!(a["pelvis_off_floor_frames"], 0, "{name}");
+        let records = a["activities"].as_array().cloned().unwrap_or_default();
+        for r in &records {
+            let kind = r["activity"].as_str().unwrap().to_string();
+            *done.entry(kind.clone()).or_default() += 1;
+            let join = r["join_joint_speed_rad_s"].as_f64().unwrap();
+            assert!(
+                join.is_finite() && join < 10.0,
+                "{name} {kind}: joins at {join} rad/s"
+            );
+            if let Some(clip) = r["clip_joint_speed_rad_s"].as_f64() {
+                assert!(
+                    join <= clip,
+                    "{name} {kind}: joins at {join}, the clip itself {clip}"
+                );
+            }
+            if kind == "sit" {
+                assert!(r["seat_fit_m"].as_f64().unwrap().abs() <= 0.2 + 1e-9, "{r}");
+                assert!(r["foot_miss_m"].as_f64().unwrap() < 0.02, "{r}");
+                assert!(r["seat_penetration_m"].as_f64().unwrap() < 0.06, "{r}");
+            }
+        }
+        // Segments lie in order, each inside the take.
+        let segments = a["activity_segments"]
+            .as_array()
+            .cloned()
+            .unwrap_or_default();
+        let mut at = 0;
+        for s in &segments {
+            let (start, end) = (
+                s["start_frame"].as_u64().unwrap(),
+                s["end_frame"].as_u64().unwrap(),
+            );
+            assert!(
+                at <= start && start < end && end as usize <= out.summary.frames,
+                "{s}"
+            );
+            at = end;
+        }
+        // Seated, the pelvis is low; the feet stay on the floor throughout.
+        let m = read(&dir.path().join("take"), name);
+        let body = egogen::body::BodyModel::load(common::default_model_path()).unwrap();
+        let shaped = body.shape(&m.betas, &[]).unwrap();
+        for s in segments
+            .iter()
+            .filter(|s| s["activity"] == "sit" && s["phase"] == "hold")
+        {
+            let f = s["start_frame"].as_u64().unwrap() as usize;
+            let j = shaped.skeleton(&m.poses[f], m.trans[f]).unwrap().joints;
+            assert!(
+                j[0].z < 0.75,
+                "{name} seated at frame {f}: pelvis at {}",
+                j[0].z
+            );
+            let feet = j[7].z.min(j[8].z).min(j[10].z).min(j[11].z);
+            assert!(feet < 0.15, "{name} seated at frame {f}: feet at {feet}");
+        }
+    }
+    for kind in ["stand", "sit", "pick_up"] {
+        assert!(done.get(kind).is_some_and(|&n| n >= 1), "{kind}: {done:?}");
+    }
+    // The same config, the same take.
+    let (dir2, path2) = common::run_dir(&config);
+    run_synth(&load_synth_plan(&path2).unwrap(), false).unwrap();
+    assert_eq!(
+        summary["agents"],
+        self::summary(&dir2.path().join("take"))["agents"]
+    );
+}
+
+/// Sitting asked in a scene without a seat: a warning, every sit skipped with its reason, the
+/// take made.
+#[test]
+fn a_sit_without_a_seat_is_skipped_with_a_reason() {
+    let config = "[scene]\nfloor_m = 8.0\n[motion]\nduration_s = 12.0\nstop_when_done = false\n\
+        [activities]\nweights = { walk = 0.0, sit = 1.0 }\n\
+        [[agents]]\nstart = [0.0, 0.0]\ngoals = [[1.5, 0.0]]\nwander = true\nsteering = 'policy'\n\
+        [output]\ndir = 'take'\n";
+    let (dir, path) = common::run_dir(config);
+    let out = egogen()
+        .arg("synth")
+        .arg(&path)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("activities.weights.sit") && stderr.contains("no seat"),
+        "{stderr}"
+    );
+    let summary = summary(&dir.path().join("take"));
+    let skipped = summary["agents"][0]["skipped_activities"]
+        .as_array()
+        .unwrap();
+    assert!(!skipped.is_empty());
+    assert!(skipped
+        .iter()
+        .all(|s| s["activity"] == "sit" && s["reason"].as_str().unwrap().contains("no seat")));
 }

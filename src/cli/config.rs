@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::policy::WalkerSettings;
 use crate::render::render_camera::FisheyeRendering;
+use crate::synth::activity::ActivitySettings;
 
 pub use super::config_file::{load_toml, Bad, ConfigError};
 
@@ -300,6 +301,10 @@ pub struct RawRun {
     /// With `motion.source = "agents"`: how every person steps, as in `egogen synth` configs.
     #[serde(default, skip_serializing_if = "WalkerSettings::is_default")]
     pub walker: WalkerSettings,
+    /// With `motion.source = "agents"`: what people do besides walking, as in `egogen
+    /// synth` configs.
+    #[serde(default, skip_serializing_if = "ActivitySettings::is_default")]
+    pub activities: ActivitySettings,
     /// With `motion.source = "agents"`: as in `egogen synth` configs.
     pub crowd: Option<super::synth_config::RawCrowd>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -19,6 +19,7 @@ use crate::math::random::normal_samples;
 use crate::plan::{AgentDraft, SynthPlan};
 use crate::policy::WalkerSettings;
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableSettings};
+use crate::synth::activity::ActivitySettings;
 use crate::synth::crowd::{Controller, CrowdSettings};
 
 /// Most agents in one take.
@@ -168,6 +169,9 @@ pub(crate) struct RawSynth {
     /// How every person steps (the one walker schema).
     #[serde(default)]
     pub walker: WalkerSettings,
+    /// What people do besides walking (docs/ACTIVITIES.md).
+    #[serde(default)]
+    pub activities: ActivitySettings,
     pub crowd: Option<RawCrowd>,
     #[serde(default)]
     pub agents: Vec<RawAgent>,
@@ -304,6 +308,9 @@ pub(crate) fn resolve_synth(
         None
     };
     let (obstacles, moving, solids) = synth_obstacles(&raw.obstacles, &bad)?;
+    if let Some((field, what)) = raw.activities.problem() {
+        return Err(bad(&format!("activities.{field}"), what));
+    }
     Ok(SynthPlan {
         config: path.into(),
         body_model,
@@ -317,6 +324,7 @@ pub(crate) fn resolve_synth(
         pose_prior,
         seed_clips: super::train_primitive::load_train_plan(&train_config)?,
         settings,
+        activities: raw.activities,
         duration_s,
         agents,
         obstacles,

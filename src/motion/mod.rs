@@ -1,8 +1,10 @@
 //! Motion: SMPL-X pose sequences in time, the files they travel in, and real mocap turned
-//! into them (BVH reading, retargeting, resampling, mirroring).
+//! into them (BVH reading, retargeting, resampling, mirroring); activity clips and the pose
+//! tools that play them (`activity_clip`).
 //!
 //! Owns frame rates and sequences of body parameters; the body itself (skinning) is `body`'s.
 
+pub mod activity_clip;
 pub mod amass;
 pub mod bvh;
 pub mod cvae;

@@ -409,15 +409,21 @@ fn surfaces(map: &WalkableMap, top: &[f64], top_object: &[u32]) -> (Vec<usize>, 
     (region, regions)
 }
 
+/// Small scenes with seats, for tests.
 #[cfg(test)]
-mod tests {
+pub(crate) mod test_scenes {
     use super::*;
     use crate::math::Vec3;
-    use crate::scene::walkable::WalkableSettings;
 
     /// A 6 × 6 m floor with a seat (`name`, its top at `seat_h`, spanning `lo`..`hi`) and
     /// a backrest 5 cm deep and `back_h` high along its −y side.
-    fn floor_with_seat(name: &str, lo: DVec2, hi: DVec2, seat_h: f64, back_h: f64) -> SceneMesh {
+    pub(crate) fn floor_with_seat(
+        name: &str,
+        lo: DVec2,
+        hi: DVec2,
+        seat_h: f64,
+        back_h: f64,
+    ) -> SceneMesh {
         let mut m = SceneMesh::default();
         m.add_box(
             "floor",
@@ -438,10 +444,18 @@ mod tests {
     }
 
     /// A chair 0.5 m square (seat at `seat_h`, a backrest on its −y side) at (x, y).
-    fn room_with_chair(seat_h: f64, x: f64, y: f64, name: &str) -> SceneMesh {
+    pub(crate) fn room_with_chair(seat_h: f64, x: f64, y: f64, name: &str) -> SceneMesh {
         let c = DVec2::new(x, y);
         floor_with_seat(name, c - 0.25, c + 0.25, seat_h, 0.5)
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_scenes::{floor_with_seat, room_with_chair};
+    use super::*;
+    use crate::math::Vec3;
+    use crate::scene::walkable::WalkableSettings;
 
     fn map(mesh: &SceneMesh) -> WalkableMap {
         WalkableMap::build(mesh, WalkableSettings::default()).unwrap()

@@ -25,7 +25,15 @@
 //! runs out of goals: it stands still (its last pose held) for the rest of the take, still an
 //! obstacle to the others.
 //!
-//! Deterministic per seed: agent `i` draws from a generator seeded by `(seed, i)` alone.
+//! Where the take asks for activities ([`run_crowd_with_activities`], `[activities]`), what
+//! comes after each walk is drawn ([`crate::synth::activity`]): walk on, stand and look
+//! around, pick something up (played where the walk ended), or sit (walk to the nearest free
+//! seat first); an activity's frames are taken [`NEW_FRAMES`] a round, the others seeing the
+//! person where it is, and the walker takes over from its last two frames; a walk comes
+//! between two activities. An activity that would enter the scene is skipped with its reason.
+//!
+//! Deterministic per seed: agent `i` draws from a generator seeded by `(seed, i)` alone (and
+//! its activities from one of their own).
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
@@ -35,9 +43,11 @@ use serde::Serialize;
 use crate::body::{joint, BodyModel, BodyParams};
 use crate::math::random::{normal_samples, uniform_open01};
 use crate::math::{Affine3, Vec3};
+use crate::motion::activity_clip::max_joint_speed;
+use crate::motion::cvae::contact::contact_score;
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::tensor_body::RigGeometry;
-use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel};
+use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel, PrimitiveSeed};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
 use crate::policy::reward::{path_leaves_floor, Judged, Limits, RewardWeights};
@@ -52,6 +62,9 @@ use crate::scene::{
     guide_aim_remembered, plan_path, MovingObstacle, Obstacle2, SeenMap, WalkableMap,
 };
 use crate::sensing::Sensor;
+use crate::synth::activity::{
+    Activity, ActivityRecord, ActivitySegment, ActivityWorld, Performance, Phase, SkippedActivity,
+};
 
 /// A primitive moving the pelvis less than this (m, horizontal) with the goal still ahead
 /// counts as stuck (a walking primitive covers 0.2–0.7 m).
@@ -270,7 +283,8 @@ pub struct AgentTrack {
     pub penetration_share: f64,
     /// Frames of the take whose pelvis path from the frame before passes over a cell of the
     /// walkable map that is not walkable (a wall, furniture, a closed doorway), measured on
-    /// the track as written ([`crate::policy::reward::path_leaves_floor`]).
+    /// the track as written ([`crate::policy::reward::path_leaves_floor`]); frames sitting
+    /// down, seated or standing up (over the seat) not counted.
     pub pelvis_off_floor_frames: usize,
     /// Primitives in which the body held its pose because every draw would have taken its
     /// pelvis over a wall ([`WalkerSettings::scene_every_frame`]).
@@ -282,6 +296,15 @@ pub struct AgentTrack {
     pub view_cos: f64,
     /// Mean pose-prior score (−ln p / 63) over the primitives.
     pub pose_score: f64,
+    /// Activities done besides walking ([`crate::synth::activity`]), in order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub activities: Vec<ActivityRecord>,
+    /// Which frames each activity's phases span (frames in none: walking).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub activity_segments: Vec<ActivitySegment>,
+    /// Activities drawn but not done, with why.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub skipped_activities: Vec<SkippedActivity>,
 }
 
 impl AgentTrack {
@@ -373,6 +396,13 @@ struct Agent<'m> {
     next_goal: usize,
     rng: ChaCha8Rng,
     track: AgentTrack,
+    /// The activity being played and how many of its frames are taken.
+    acting: Option<(Performance, usize)>,
+    /// The seat being walked to (to sit on when reached) and the frame the walk began.
+    approaching: Option<(usize, usize)>,
+    /// Draws what comes after each walk: a stream of its own, so walking draws as without
+    /// activities.
+    activity_rng: ChaCha8Rng,
 }
 
 fn agent_rng(seed: u64, i: usize) -> ChaCha8Rng {
@@ -555,6 +585,9 @@ impl<'m> Agent<'m> {
             speed_m_s: 0.0,
             view_cos: 0.0,
             pose_score: 0.0,
+            activities: Vec::new(),
+            activity_segments: Vec::new(),
+            skipped_activities: Vec::new(),
         };
         track
             .frames
@@ -572,6 +605,9 @@ impl<'m> Agent<'m> {
             next_goal: 1,
             rng,
             track,
+            acting: None,
+            approaching: None,
+            activity_rng: agent_rng(settings.seed ^ 0xAC71_7117, index),
         })
     }
 
@@ -741,7 +777,8 @@ impl<'m> Agent<'m> {
         Ok(chosen.map(|c| (c.primitive, c.judged, c.reward)))
     }
 
-    /// Takes the chosen primitive and moves on to the next goal when this one is over.
+    /// Takes the chosen primitive and, when this goal is over, moves on: to what `acts`
+    /// draws (where the take asks for activities), else to the next goal.
     fn take(
         &mut self,
         p: DecodedPrimitive,
@@ -749,6 +786,7 @@ impl<'m> Agent<'m> {
         reward: f64,
         world: &CrowdWorld,
         settings: &CrowdSettings,
+        acts: Option<&mut ActivityWorld>,
     ) {
         let before = self.walker.view.pelvis;
         self.walker.advance(&p, &j, reward);
@@ -786,6 +824,16 @@ impl<'m> Agent<'m> {
             end_frame: frame,
             final_distance_m: j.distance_m,
         });
+        if let Some(acts) = acts {
+            if self.after_walk(acts, world) {
+                return;
+            }
+        }
+        self.next_goal(world, settings);
+    }
+
+    /// Walks on to the next goal given, or drawn when wandering, or stops: no goals left.
+    fn next_goal(&mut self, world: &CrowdWorld, settings: &CrowdSettings) {
         let next = match self.plan.goals.get(self.next_goal) {
             Some(&g) => Some(g),
             None if self.plan.wander => sample_goal(
@@ -809,6 +857,167 @@ impl<'m> Agent<'m> {
         }
     }
 
+    /// After a walk: sits down if it was the walk to a seat, else draws what comes next
+    /// from `acts`; whether an activity (or the walk to one) began — `false`: walk on.
+    fn after_walk(&mut self, acts: &mut ActivityWorld, world: &CrowdWorld) -> bool {
+        let frame = self.track.frames.len();
+        let floor_z = self.walker.view.seed.floor_z;
+        let last = self.track.frames[frame - 1].clone();
+        if let Some((s, began)) = self.approaching.take() {
+            self.track.activity_segments.push(ActivitySegment {
+                activity: Activity::Sit,
+                phase: Phase::Approach,
+                start_frame: began,
+                end_frame: frame,
+            });
+            let reached = self.track.goals.last().is_some_and(|g| g.reached);
+            let sat = if reached {
+                acts.sit(
+                    &self.body,
+                    &world.map,
+                    &last,
+                    s,
+                    floor_z,
+                    &mut self.activity_rng,
+                )
+            } else {
+                Err(format!(
+                    "the place in front of the seat of {} was not reached",
+                    acts.seats[s].object_name
+                ))
+            };
+            match sat {
+                Ok(p) => {
+                    self.perform(p);
+                    return true;
+                }
+                Err(reason) => {
+                    acts.taken[s] = false;
+                    self.skip(Activity::Sit, frame, reason);
+                }
+            }
+        }
+        let activity = acts.draw(&mut self.activity_rng);
+        let done = match activity {
+            Activity::Walk => return false,
+            Activity::Stand => acts.stand(
+                &self.body,
+                &world.map,
+                &last,
+                floor_z,
+                &mut self.activity_rng,
+            ),
+            Activity::PickUp => acts.pick_up(
+                &self.body,
+                &world.map,
+                &last,
+                floor_z,
+                &mut self.activity_rng,
+            ),
+            Activity::Sit => match acts.nearest_free_seat(&world.map, self.walker.view.pelvis) {
+                Some(s) => {
+                    acts.taken[s] = true;
+                    self.approaching = Some((s, frame));
+                    self.goal = acts.seats[s].stand();
+                    self.goal_steps = 0;
+                    self.walker.retarget(self.goal);
+                    return true;
+                }
+                None => Err(match acts.seats.is_empty() {
+                    true => "the scene has no seat (`egogen scene inspect` lists them)".into(),
+                    false => "every seat on this floor is taken".into(),
+                }),
+            },
+        };
+        match done {
+            Ok(p) => {
+                self.perform(p);
+                true
+            }
+            Err(reason) => {
+                self.skip(activity, frame, reason);
+                false
+            }
+        }
+    }
+
+    fn skip(&mut self, activity: Activity, frame: usize, reason: String) {
+        self.track.skipped_activities.push(SkippedActivity {
+            activity,
+            frame,
+            reason,
+        });
+    }
+
+    /// Begins playing `p` from the next frame.
+    fn perform(&mut self, mut p: Performance) {
+        let start = self.track.frames.len();
+        let mut k = start;
+        for &(phase, n) in &p.phases {
+            self.track.activity_segments.push(ActivitySegment {
+                activity: p.activity,
+                phase,
+                start_frame: k,
+                end_frame: k + n,
+            });
+            k += n;
+        }
+        p.record.start_frame = start;
+        p.record.end_frame = k;
+        self.track.activities.push(p.record.clone());
+        self.acting = Some((p, 0));
+    }
+
+    /// Takes the next [`NEW_FRAMES`] frames of the activity being played; when it ends,
+    /// gives its seat back and walks on to the next goal.
+    fn act(
+        &mut self,
+        acts: &mut ActivityWorld,
+        world: &CrowdWorld,
+        settings: &CrowdSettings,
+    ) -> Result<(), CrowdError> {
+        let Some((p, taken)) = self.acting.as_mut() else {
+            return Ok(());
+        };
+        let end = (*taken + NEW_FRAMES).min(p.frames.len());
+        let frames = p.frames[*taken..end].to_vec();
+        *taken = end;
+        let over = end == p.frames.len();
+        for f in frames {
+            let mf = self
+                .body
+                .shaped
+                .marker_frame(&f.pose, f.transl, &self.body.marker_ids)
+                .map_err(DecodeError::from)?;
+            let q = mf.skeleton.joints[joint::PELVIS];
+            self.track
+                .world_from_cpf
+                .push(self.body.cpf.world_from_cpf(&mf.skeleton));
+            self.track.markers.push(mf.markers);
+            self.track.pelvis_xy.push(DVec2::new(q.x, q.y));
+            self.track.frames.push(f);
+        }
+        let n = self.track.frames.len();
+        let seed = PrimitiveSeed {
+            frames: [
+                self.track.frames[n - 2].clone(),
+                self.track.frames[n - 1].clone(),
+            ],
+            floor_z: self.walker.view.seed.floor_z,
+        };
+        self.walker.view = SeedView::new(&self.body, seed)?;
+        if over {
+            if let Some((p, _)) = self.acting.take() {
+                if let Some(s) = p.seat {
+                    acts.taken[s] = false;
+                }
+            }
+            // A walk comes between two activities.
+            self.next_goal(world, settings);
+        }
+        Ok(())
+    }
+
     fn stop(&mut self, state: AgentState) {
         self.track.state = state;
         self.track.stopped_at_frame = Some(self.track.frames.len());
@@ -817,12 +1026,51 @@ impl<'m> Agent<'m> {
     /// Holds the last pose until the take has `frames` frames; closes the summary.
     fn finish(mut self, frames: usize) -> AgentTrack {
         let t = &mut self.track;
+        for seg in &mut t.activity_segments {
+            seg.end_frame = seg.end_frame.min(frames);
+        }
+        if let Some((_, began)) = self.approaching {
+            t.activity_segments.push(ActivitySegment {
+                activity: Activity::Sit,
+                phase: Phase::Approach,
+                start_frame: began,
+                end_frame: frames,
+            });
+        }
+        t.activity_segments
+            .retain(|seg| seg.start_frame < seg.end_frame);
+        for r in &mut t.activities {
+            r.end_frame = r.end_frame.min(frames);
+        }
         while t.frames.len() < frames {
             t.frames.push(t.frames[t.frames.len() - 1].clone());
             t.world_from_cpf
                 .push(t.world_from_cpf[t.world_from_cpf.len() - 1]);
             t.markers.push(t.markers[t.markers.len() - 1].clone());
             t.pelvis_xy.push(t.pelvis_xy[t.pelvis_xy.len() - 1]);
+        }
+        // How each activity moved: foot contact over its frames, the fastest joint turn where
+        // it joins the walk.
+        let floor_z = self.walker.view.seed.floor_z;
+        for r in &mut t.activities {
+            let (a, b) = (r.start_frame, r.end_frame.min(t.frames.len()));
+            let feet: Vec<Vec<[f64; 3]>> = (a..b)
+                .map(|f| {
+                    self.foot_markers
+                        .iter()
+                        .map(|&k| t.markers[f][k].to_array())
+                        .collect()
+                })
+                .collect();
+            let scores: Vec<f64> = (0..feet.len().saturating_sub(PRIMITIVE_FRAMES - 1))
+                .step_by(NEW_FRAMES)
+                .map(|s| contact_score(&feet[s..s + PRIMITIVE_FRAMES], floor_z))
+                .collect();
+            r.contact = scores.iter().sum::<f64>() / scores.len().max(1) as f64;
+            let join = |f: usize| {
+                max_joint_speed(&t.frames[f.saturating_sub(4)..(f + 4).min(t.frames.len())])
+            };
+            r.join_joint_speed_rad_s = join(a).max(join(b));
         }
         let w = &self.walker;
         let n = w.steps.max(1) as f64;
@@ -911,6 +1159,19 @@ pub fn run_crowd(
     world: &CrowdWorld,
     plans: &[AgentPlan],
     settings: &CrowdSettings,
+    progress: impl FnMut(usize, usize),
+) -> Result<CrowdTake, CrowdError> {
+    run_crowd_with_activities(parts, world, plans, settings, None, progress)
+}
+
+/// [`run_crowd`] where people do more than walk: what comes after each walk is drawn from
+/// `acts` ([`crate::synth::activity`]).
+pub fn run_crowd_with_activities(
+    parts: &CrowdParts,
+    world: &CrowdWorld,
+    plans: &[AgentPlan],
+    settings: &CrowdSettings,
+    mut acts: Option<ActivityWorld>,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<CrowdTake, CrowdError> {
     let neutral = BodyContext::new(parts.body_model, &[]).map_err(DecodeError::from)?;
@@ -979,6 +1240,17 @@ pub fn run_crowd(
                 ..around_seen
             };
             let a = &mut agents[i];
+            if let (Some(_), Some(acts)) = (&a.acting, acts.as_mut()) {
+                a.act(acts, world, settings)?;
+                boxes[i] = stepped_box(
+                    boxes[i].at(t0_s).centre(),
+                    a.walker.view.footprint(),
+                    frame_time_s(step + 1, 0),
+                    PRIMITIVE_S,
+                    false,
+                );
+                continue;
+            }
             match a.choose(
                 parts,
                 &sensor,
@@ -988,7 +1260,7 @@ pub fn run_crowd(
                 t0_s,
                 settings,
             )? {
-                Some((p, j, r)) => a.take(p, j, r, world, settings),
+                Some((p, j, r)) => a.take(p, j, r, world, settings, acts.as_mut()),
                 None => {
                     a.walker.fail(0.0);
                     a.stop(AgentState::DecoderFailure);
@@ -1015,10 +1287,19 @@ pub fn run_crowd(
             .map(|a| {
                 let mut track = a.finish(frames);
                 track.follow_floor(&world.map);
-                track.pelvis_off_floor_frames = track
-                    .pelvis_xy
-                    .windows(2)
-                    .filter(|w| path_leaves_floor(&world.map, w[0], w[1]))
+                // Sitting down, seated and standing up, the pelvis is over its seat.
+                let seated = |f: usize| {
+                    track.activity_segments.iter().any(|s| {
+                        s.activity == Activity::Sit
+                            && s.phase != Phase::Approach
+                            && (s.start_frame..s.end_frame).contains(&f)
+                    })
+                };
+                track.pelvis_off_floor_frames = (1..track.pelvis_xy.len())
+                    .filter(|&f| !seated(f))
+                    .filter(|&f| {
+                        path_leaves_floor(&world.map, track.pelvis_xy[f - 1], track.pelvis_xy[f])
+                    })
                     .count();
                 track
             })

@@ -1,8 +1,10 @@
 //! Synth: motion + body → per-frame posed bodies and eye-anchor (CPF) trajectories, and the
 //! sequence folder they are written to: crowds of agents steered through a scene (`crowd`),
+//! what they do besides walking (`activity`: standing and looking around, sitting, picking up),
 //! placing a motion in it (`placement`), a take of agents from its plan (`take`), the penetration tests (`penetration`), and the body
 //! caches Blender plays (`body_cache`).
 
+pub mod activity;
 pub mod body_cache;
 pub mod body_track;
 pub mod crowd;

@@ -187,6 +187,9 @@ mod tests {
             speed_m_s: 0.0,
             view_cos: 0.0,
             pose_score: 0.0,
+            activities: Vec::new(),
+            activity_segments: Vec::new(),
+            skipped_activities: Vec::new(),
         }
     }
 

@@ -17,7 +17,8 @@ use crate::motion::cvae::train::TrainPlan;
 use crate::motion::MotionSequence;
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableMap};
 use crate::synth::crowd::{
-    run_crowd, sample_point, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld,
+    run_crowd_with_activities, sample_point, AgentPlan, Controller, CrowdParts, CrowdSettings,
+    CrowdWorld,
 };
 
 /// Where agents come from before the map is known: given, or to be sampled.
@@ -53,6 +54,8 @@ pub struct SynthPlan {
     /// primitives (`motion.train_config`), read.
     pub seed_clips: TrainPlan,
     pub settings: CrowdSettings,
+    /// What people do besides walking (`[activities]`).
+    pub activities: crate::synth::activity::ActivitySettings,
     pub duration_s: f64,
     pub agents: Vec<AgentDraft>,
     pub obstacles: Vec<Obstacle2>,
@@ -64,6 +67,11 @@ pub struct SynthPlan {
 
 /// The walkable map of the plan's scene, or its open floor.
 pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
+    Ok(synth_scene(plan)?.0)
+}
+
+/// The walkable map of the plan's scene and the scene (`None`: an open floor).
+fn synth_scene(plan: &SynthPlan) -> Result<(WalkableMap, Option<crate::scene::SceneMesh>)> {
     match &plan.scene {
         Some(path) => {
             let mesh = crate::scene::load_scene(path, plan.scene_frame)?;
@@ -71,18 +79,15 @@ pub fn synth_map(plan: &SynthPlan) -> Result<WalkableMap> {
             if let Some(warning) = crate::scene::floor_height_warning(&mesh, &map, path) {
                 eprintln!("{warning}");
             }
-            Ok(map)
+            Ok((map, Some(mesh)))
         }
         None => {
             let cell = 0.1;
             let n = (plan.floor_m / cell).round().max(1.0) as usize;
             let origin = DVec2::splat(-(n as f64) * cell / 2.0);
-            Ok(WalkableMap::from_walkable(
-                origin,
-                cell,
-                n,
-                n,
-                vec![true; n * n],
+            Ok((
+                WalkableMap::from_walkable(origin, cell, n, n, vec![true; n * n]),
+                None,
             ))
         }
     }
@@ -298,7 +303,8 @@ pub(crate) fn synthesize(
 ) -> Result<Synthesized> {
     use crate::motion::cvae::MotionModel;
     use crate::policy::{PosePrior, SeedBank};
-    let (map, region) = crate::scene::indoor_map(synth_map(plan)?, plan.indoors);
+    let (map, mesh) = synth_scene(plan)?;
+    let (map, region) = crate::scene::indoor_map(map, plan.indoors);
     let agents = place_agents(plan, &map, region.as_deref())?;
     for (a, draft) in agents.iter().zip(&plan.agents) {
         if !draft.betas_drawn && a.betas.len() > body.num_betas() {
@@ -337,6 +343,26 @@ pub(crate) fn synthesize(
         bank: &bank,
         policy: actor.as_ref(),
     };
+    // Activities only where asked: the seats, clips and the scene's distances they need.
+    let acts = match plan.activities.walk_only() {
+        true => None,
+        false => Some(crate::synth::activity::ActivityWorld::new(
+            plan.activities,
+            mesh.map(std::sync::Arc::new),
+            &map,
+            &crate::motion::activity_clip::activity_clip_dir(),
+        )?),
+    };
+    if acts
+        .as_ref()
+        .is_some_and(|a| a.settings.weights.sit > 0.0 && a.seats.is_empty())
+    {
+        eprintln!(
+            "warning: {}: activities.weights.sit > 0 but the scene has no seat people can reach \
+             (`egogen scene inspect` lists what it finds); every sit drawn is skipped",
+            plan.config.display()
+        );
+    }
     let world = CrowdWorld {
         map: std::sync::Arc::new(map),
         region,
@@ -345,10 +371,11 @@ pub(crate) fn synthesize(
     };
     let bar = crate::synth::crowd_dir::progress_bar(progress, plan.settings.primitives);
     let started = std::time::Instant::now();
-    let take = run_crowd(&parts, &world, &agents, &plan.settings, |done, _| {
-        bar.set_position(done as u64)
-    })
-    .with_context(|| format!("{}", plan.config.display()))?;
+    let take =
+        run_crowd_with_activities(&parts, &world, &agents, &plan.settings, acts, |done, _| {
+            bar.set_position(done as u64)
+        })
+        .with_context(|| format!("{}", plan.config.display()))?;
     let wall_s = started.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let about = serde_json::json!({
@@ -365,6 +392,10 @@ pub(crate) fn synthesize(
         "duration_s": plan.duration_s,
         "settings": plan.settings,
     });
+    let mut about = about;
+    if !plan.activities.is_default() {
+        about["activities"] = serde_json::to_value(plan.activities)?;
+    }
     Ok(Synthesized {
         world,
         take,

@@ -1,0 +1,143 @@
+#!/usr/bin/env python3
+"""Measures activities over seeds: for each scene and seed, `egogen synth` makes a take of 3
+people wandering 60 s with the activity weights of configs/apartment_activities.toml (and, with
+--walk-only, the same take walking only), then prints per scene the figures of
+docs/ACTIVITIES.md "Measured": share of time per activity and phase, seats sat on, the seat fit
+(median, max), how far the feet stay from the clip's, the body's sink into the seat, foot
+contact (paper Eq. 12) of walking and of each activity, the fastest joint turn where activities
+join the walk beside the clips' own, frames with the pelvis over a wall, activities skipped.
+
+    python3 tools/measure_activities.py --bin target/release/egogen \
+        --scenes apartment small_house --seeds 0 1 2 3 4 5 --out out/measure_activities
+"""
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+from collections import Counter, defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+CONFIG = """
+[scene]
+path = "{scene}"
+[motion]
+duration_s = {duration}
+stop_when_done = false
+wander_distance_m = [2.0, 5.0]
+clearance_m = 0.4
+seed = {seed}
+[activities]
+weights = {weights}
+[crowd]
+count = 3
+layout = "random"
+steering = "policy"
+wander = true
+[output]
+dir = "{out}"
+"""
+
+WEIGHTS = "{ walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 1.0 }"
+
+
+def take(bin_, scene, seed, duration, weights, out):
+    out.parent.mkdir(parents=True, exist_ok=True)
+    if not (out / "summary.json").exists():
+        config = out.with_suffix(".toml")
+        config.write_text(
+            CONFIG.format(
+                scene=ROOT / "assets/scenes" / f"{scene}.glb",
+                duration=duration,
+                seed=seed,
+                weights=weights,
+                out=out.resolve(),
+            )
+        )
+        subprocess.run([bin_, "synth", str(config), "--quiet"], check=True)
+    return json.loads((out / "summary.json").read_text())
+
+
+def frames_of(segments, frames):
+    """Frames per (activity, phase); the rest walking."""
+    counts = Counter()
+    for s in segments:
+        counts[(s["activity"], s["phase"])] += s["end_frame"] - s["start_frame"]
+    counts[("walk", "")] = frames - sum(counts.values())
+    return counts
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--bin", default=str(ROOT / "target/release/egogen"))
+    ap.add_argument("--scenes", nargs="+", default=["apartment", "small_house"])
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2, 3, 4, 5])
+    ap.add_argument("--duration", type=float, default=60.0)
+    ap.add_argument("--walk-only", action="store_true", help="also the same takes walking only")
+    ap.add_argument("--out", default=str(ROOT / "out/measure_activities"))
+    args = ap.parse_args()
+    out = Path(args.out)
+    for scene in args.scenes:
+        counts, records, skipped = Counter(), [], Counter()
+        contact_walk, off_floor, agents = [], 0, 0
+        walk_only_contact = []
+        for seed in args.seeds:
+            s = take(args.bin, scene, seed, args.duration, WEIGHTS, out / scene / f"seed{seed}")
+            for a in s["agents"]:
+                agents += 1
+                counts += frames_of(a.get("activity_segments", []), s["frames"])
+                records += a.get("activities", [])
+                skipped.update(k["reason"].split(" (")[0] for k in a.get("skipped_activities", []))
+                contact_walk.append(a["contact"])
+                off_floor += a["pelvis_off_floor_frames"]
+            if args.walk_only:
+                w = take(args.bin, scene, seed, args.duration, "{ walk = 1.0 }",
+                         out / scene / f"seed{seed}_walk")
+                walk_only_contact += [a["contact"] for a in w["agents"]]
+        total = sum(counts.values())
+        print(f"## {scene}: {len(args.seeds)} seeds x {agents // len(args.seeds)} people x {args.duration:g} s")
+        by_activity = defaultdict(int)
+        for (a, _), n in counts.items():
+            by_activity[a] += n
+        print("time share: " + ", ".join(
+            f"{a} {100 * n / total:.1f} %" for a, n in sorted(by_activity.items(), key=lambda x: -x[1])))
+        print("  by phase: " + ", ".join(
+            f"{a}/{p} {100 * n / total:.1f} %" for (a, p), n in sorted(counts.items()) if p))
+        done = Counter(r["activity"] for r in records)
+        print("done: " + ", ".join(f"{k} {v}" for k, v in sorted(done.items())))
+        sits = [r for r in records if r["activity"] == "sit"]
+        if sits:
+            fit = [abs(r["seat_fit_m"]) for r in sits]
+            print(f"sits: {len(sits)} on {len(set(r['seat'] for r in sits))} seats "
+                  f"({', '.join(sorted(set(r['seat'] for r in sits)))}); clips "
+                  f"{dict(Counter(r['clip'] for r in sits))}")
+            print(f"  seat fit |m|: median {statistics.median(fit):.3f}, max {max(fit):.3f}; "
+                  f"feet off the clip's: max {max(r['foot_miss_m'] for r in sits) * 1000:.2f} mm; "
+                  f"sink into the seat: median {statistics.median(r['seat_penetration_m'] for r in sits) * 1000:.1f} mm, "
+                  f"max {max(r['seat_penetration_m'] for r in sits) * 1000:.1f} mm")
+            turns = [abs(r["turn_deg"]) for r in sits]
+            print(f"  turn before sitting: median {statistics.median(turns):.0f} deg, max {max(turns):.0f} deg")
+        # Contact of whole activities only (one cut short by the take's end scores its partial turn).
+        whole = [r for r in records if r["end_frame"] < s["frames"]]
+        print(f"foot contact (Eq. 12): walking {statistics.mean(contact_walk):.3f}"
+              + (f" (walking only: {statistics.mean(walk_only_contact):.3f})" if walk_only_contact else "")
+              + "; " + ", ".join(
+                  f"{k} {statistics.mean(r['contact'] for r in whole if r['activity'] == k):.3f}"
+                  for k in sorted(set(r["activity"] for r in whole))))
+        for k in sorted(set(r["activity"] for r in records)):
+            rs = [r for r in records if r["activity"] == k]
+            clip = [r["clip_joint_speed_rad_s"] for r in rs if r.get("clip_joint_speed_rad_s")]
+            print(f"fastest joint turn at the joins, {k}: max {max(r['join_joint_speed_rad_s'] for r in rs):.2f} rad/s, "
+                  f"median {statistics.median(r['join_joint_speed_rad_s'] for r in rs):.2f}"
+                  + (f" (in the clip itself: {max(clip):.2f})" if clip else ""))
+        print(f"pelvis over a wall (frames): {off_floor}")
+        print("skipped: " + (", ".join(f"{v} x {k}" for k, v in skipped.most_common()) or "none"))
+        print()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
