@@ -1447,3 +1447,34 @@ fn a_sit_without_a_seat_is_skipped_with_a_reason() {
         .iter()
         .all(|s| s["activity"] == "sit" && s["reason"].as_str().unwrap().contains("no seat")));
 }
+
+/// One primitive between two activities: goals 0.35–0.4 m away are reached in one step, so the
+/// walk between a pick-up and a look around is a single primitive; both joins stay smooth.
+#[test]
+fn one_primitive_between_two_activities_joins_smoothly() {
+    let config = "[scene]\nfloor_m = 8.0\n[motion]\nduration_s = 40.0\nstop_when_done = false\n\
+        wander_distance_m = [0.35, 0.4]\nseed = 3\n\
+        [activities]\nweights = { walk = 0.0, stand = 1.0, pick_up = 1.0 }\nstand_s = [1.0, 2.0]\n\
+        [[agents]]\nstart = [0.0, 0.0]\ngoals = [[0.0, 0.35]]\nwander = true\nsteering = 'policy'\n\
+        [output]\ndir = 'take'\n";
+    let (dir, path) = common::run_dir(config);
+    run_synth(&load_synth_plan(&path).unwrap(), false).unwrap();
+    let summary = summary(&dir.path().join("take"));
+    let records = summary["agents"][0]["activities"]
+        .as_array()
+        .unwrap()
+        .clone();
+    assert!(records.len() >= 4, "{records:?}");
+    let gaps: Vec<u64> = records
+        .windows(2)
+        .map(|w| w[1]["start_frame"].as_u64().unwrap() - w[0]["end_frame"].as_u64().unwrap())
+        .collect();
+    assert!(
+        gaps.contains(&18),
+        "walks between activities of {gaps:?} frames"
+    );
+    for r in &records {
+        let join = r["join_joint_speed_rad_s"].as_f64().unwrap();
+        assert!(join.is_finite() && join < 10.0, "{r}");
+    }
+}

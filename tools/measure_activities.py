@@ -9,6 +9,7 @@ join the walk beside the clips' own, frames with the pelvis over a wall, activit
 
     python3 tools/measure_activities.py --bin target/release/egogen \
         --scenes apartment small_house --seeds 0 1 2 3 4 5 --out out/measure_activities
+    python3 tools/measure_activities.py ... --set 'blend_s = 0.8' --out out/measure_blend08
 """
 
 import argparse
@@ -32,6 +33,7 @@ clearance_m = 0.4
 seed = {seed}
 [activities]
 weights = {weights}
+{extra}
 [crowd]
 count = 3
 layout = "random"
@@ -44,7 +46,7 @@ dir = "{out}"
 WEIGHTS = "{ walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 1.0 }"
 
 
-def take(bin_, scene, seed, duration, weights, out):
+def take(bin_, scene, seed, duration, weights, out, extra=""):
     out.parent.mkdir(parents=True, exist_ok=True)
     if not (out / "summary.json").exists():
         config = out.with_suffix(".toml")
@@ -54,6 +56,7 @@ def take(bin_, scene, seed, duration, weights, out):
                 duration=duration,
                 seed=seed,
                 weights=weights,
+                extra=extra,
                 out=out.resolve(),
             )
         )
@@ -77,6 +80,8 @@ def main():
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2, 3, 4, 5])
     ap.add_argument("--duration", type=float, default=60.0)
     ap.add_argument("--walk-only", action="store_true", help="also the same takes walking only")
+    ap.add_argument("--set", action="append", default=[],
+                    help="another [activities] key, e.g. --set 'blend_s = 0.8' (the knobs' trades)")
     ap.add_argument("--out", default=str(ROOT / "out/measure_activities"))
     args = ap.parse_args()
     out = Path(args.out)
@@ -85,7 +90,8 @@ def main():
         contact_walk, off_floor, agents = [], 0, 0
         walk_only_contact = []
         for seed in args.seeds:
-            s = take(args.bin, scene, seed, args.duration, WEIGHTS, out / scene / f"seed{seed}")
+            s = take(args.bin, scene, seed, args.duration, WEIGHTS, out / scene / f"seed{seed}",
+                     "\n".join(args.set))
             for a in s["agents"]:
                 agents += 1
                 counts += frames_of(a.get("activity_segments", []), s["frames"])
@@ -98,7 +104,8 @@ def main():
                          out / scene / f"seed{seed}_walk")
                 walk_only_contact += [a["contact"] for a in w["agents"]]
         total = sum(counts.values())
-        print(f"## {scene}: {len(args.seeds)} seeds x {agents // len(args.seeds)} people x {args.duration:g} s")
+        print(f"## {scene}: {len(args.seeds)} seeds x {agents // len(args.seeds)} people x {args.duration:g} s"
+              + (f" ({'; '.join(args.set)})" if args.set else ""))
         by_activity = defaultdict(int)
         for (a, _), n in counts.items():
             by_activity[a] += n

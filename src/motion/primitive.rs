@@ -10,6 +10,8 @@ use crate::math::{Affine3, Mat3, Vec3};
 pub const PRIMITIVE_FRAMES: usize = 20;
 /// Seed frames at the start of each primitive.
 pub const SEED_FRAMES: usize = 2;
+/// New frames per primitive (the seed frames are the previous primitive's last).
+pub const NEW_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 /// Frame rate of primitives (Hz).
 pub(crate) const PRIMITIVE_RATE_HZ: f64 = 40.0;
 

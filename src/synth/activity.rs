@@ -21,7 +21,7 @@ use crate::motion::activity_clip::{
     ActivityClip, ActivityClipError, ClipKind, ClipOnBody, Idle,
 };
 use crate::motion::cvae::BodyContext;
-use crate::motion::primitive::PRIMITIVE_RATE_HZ;
+use crate::motion::primitive::{NEW_FRAMES, PRIMITIVE_RATE_HZ};
 use crate::policy::reward::path_leaves_floor;
 use crate::scene::mesh_distance::MeshDistance;
 use crate::scene::{find_seats, SceneMesh, Seat, SeatSettings, WalkableMap};
@@ -229,7 +229,7 @@ pub struct SkippedActivity {
     pub reason: String,
 }
 
-/// An activity's frames, ready to be taken [`crate::synth::crowd::NEW_FRAMES`] at a time.
+/// An activity's frames, ready to be taken [`NEW_FRAMES`] at a time.
 #[derive(Debug, Clone)]
 pub struct Performance {
     pub activity: Activity,
@@ -710,7 +710,7 @@ fn record(activity: Activity, place: DVec2, turn_deg: f64) -> ActivityRecord {
 /// Frames of a hold of about `seconds` after `before` frames and before `after`, such that
 /// the whole is a whole number of primitives' new frames (at least one frame more).
 fn rounded_hold(before: usize, seconds: f64, after: usize) -> usize {
-    let per = crate::synth::crowd::NEW_FRAMES;
+    let per = NEW_FRAMES;
     let want = before + ((seconds * PRIMITIVE_RATE_HZ).round() as usize).max(1) + after;
     want.div_ceil(per) * per - before - after
 }
@@ -820,9 +820,10 @@ mod tests {
 
     #[test]
     fn bodies_of_extreme_shape_sit_on_low_and_high_seats_and_too_high_a_seat_is_refused() {
-        let model =
-            BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz"))
-                .unwrap();
+        let model = BodyModel::load(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
+        )
+        .unwrap();
         let n = model.num_betas().min(2);
         for betas in [vec![], vec![-3.0; n], vec![3.0; n]] {
             let body = BodyContext::new(&model, &betas).unwrap();
@@ -844,7 +845,7 @@ mod tests {
                 assert!(r.foot_miss_m.unwrap() < 0.02, "{r:?}");
                 assert!(r.seat_penetration_m.unwrap() < 0.08, "{r:?}");
                 assert!((r.turn_deg.abs() - 180.0).abs() < 30.0, "{r:?}");
-                assert_eq!(p.frames.len() % crate::synth::crowd::NEW_FRAMES, 0);
+                assert_eq!(p.frames.len() % NEW_FRAMES, 0);
                 assert_eq!(p.phases.iter().map(|x| x.1).sum::<usize>(), p.frames.len());
                 // Seated on the surface: the buttocks and thighs rest on it.
                 let hold_start = p.phases[0].1;
@@ -873,9 +874,10 @@ mod tests {
 
     #[test]
     fn a_sit_held_ten_minutes_keeps_the_body_on_its_seat() {
-        let model =
-            BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz"))
-                .unwrap();
+        let model = BodyModel::load(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
+        )
+        .unwrap();
         let body = BodyContext::new(&model, &[]).unwrap();
         let settings = ActivitySettings {
             sit_s: [600.0, 600.0],

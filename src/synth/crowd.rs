@@ -70,8 +70,7 @@ use crate::synth::activity::{
 /// counts as stuck (a walking primitive covers 0.2–0.7 m).
 pub const STUCK_STEP_M: f64 = 0.05;
 
-/// New frames per primitive (the seed frames are the previous primitive's last).
-pub const NEW_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
+pub use crate::motion::primitive::NEW_FRAMES;
 
 /// Primitives a take of `duration_s` walks (at least one): enough for its frames at
 /// [`PRIMITIVE_RATE_HZ`] after the seed frames.
