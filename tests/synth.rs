@@ -531,6 +531,8 @@ workers = 1
         serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
             .unwrap();
     assert_eq!(doc["wearer"], "wearer");
+    // People only walk here: no activity labels.
+    assert!(doc["frames"][0]["agents"][0].get("activity").is_none());
     // The file reads back into its types.
     let typed: egogen::export::annotations::CameraAnnotations =
         serde_json::from_value(doc.clone()).unwrap();
@@ -946,12 +948,8 @@ workers = 1
             .join("assets/scenes/apartment.glb")
             .display()
     );
-    let (dir, path) = common::run_dir(&config);
-    common::egogen_run_ok(&path);
+    let (dir, doc) = rendered_annotations(&config);
     let cam = dir.path().join("out/cameras/camera-rgb");
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
-            .unwrap();
     let id = doc["segmentation_ids"]
         .as_array()
         .unwrap()
@@ -1477,4 +1475,85 @@ fn one_primitive_between_two_activities_joins_smoothly() {
         let join = r["join_joint_speed_rad_s"].as_f64().unwrap();
         assert!(join.is_finite() && join < 10.0, "{r}");
     }
+}
+
+/// In a rendered take with activities every agent of every frame of a camera's annotations
+/// says what it does — the activity and phase its `sequence/summary.json` segments give that
+/// frame, `walk` elsewhere — and the file reads back into its types.
+#[test]
+fn annotations_label_every_frame_with_what_each_agent_does() {
+    let config = format!(
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 8.0
+seed = 2
+[activities]
+weights = {{ walk = 0.0, stand = 1.0 }}
+stand_s = [2.0, 2.0]
+[[agents]]
+name = "wearer"
+start = [-1.0, 0.0]
+goals = [[0.0, 0.0]]
+wander = true
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[scene]
+path = "{}"
+[render]
+cameras = ["camera-rgb"]
+resolution_scale = 0.125
+every_n_frames = 20
+samples = 1
+shutter_frames = 0.0
+passes = ["segmentation"]
+[supervisor]
+workers = 1
+"#,
+        common::repo_root()
+            .join("assets/scenes/apartment.glb")
+            .display()
+    );
+    let (dir, doc) = rendered_annotations(&config);
+    let out = dir.path().join("out");
+    let summary = summary(&out.join("sequence"));
+    let segments = summary["agents"][0]["activity_segments"]
+        .as_array()
+        .unwrap()
+        .clone();
+    assert!(!segments.is_empty(), "{summary}");
+    let mut seen = std::collections::BTreeSet::new();
+    for f in doc["frames"].as_array().unwrap() {
+        let frame = f["frame"].as_u64().unwrap();
+        let label = &f["agents"][0]["activity"];
+        let expected = segments.iter().find(|s| {
+            s["start_frame"].as_u64().unwrap() <= frame && frame < s["end_frame"].as_u64().unwrap()
+        });
+        match expected {
+            Some(s) => {
+                assert_eq!(label["activity"], s["activity"], "frame {frame}");
+                assert_eq!(label["phase"], s["phase"], "frame {frame}");
+            }
+            None => {
+                assert_eq!(label["activity"], "walk", "frame {frame}");
+                assert!(label.get("phase").is_none(), "frame {frame}");
+            }
+        }
+        seen.insert(label["activity"].as_str().unwrap().to_string());
+    }
+    assert!(seen.contains("stand") && seen.contains("walk"), "{seen:?}");
+    let _typed: egogen::export::annotations::CameraAnnotations =
+        serde_json::from_value(doc).unwrap();
+}
+
+/// Runs a rendered run config (`dir = "out"`, camera `camera-rgb`) and reads its camera's
+/// annotations.
+fn rendered_annotations(config: &str) -> (tempfile::TempDir, serde_json::Value) {
+    let (dir, path) = common::run_dir(config);
+    common::egogen_run_ok(&path);
+    let file = dir.path().join("out/cameras/camera-rgb/annotations.json");
+    let doc = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    (dir, doc)
 }

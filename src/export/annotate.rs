@@ -8,8 +8,8 @@ use anyhow::{Context, Result};
 use serde_json::json;
 
 use super::annotations::{
-    AgentAnnotation, AgentSkin, CameraAnnotations, Conventions, FrameAnnotation, JointVisibility,
-    SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
+    ActivityLabel, AgentAnnotation, AgentSkin, CameraAnnotations, Conventions, FrameAnnotation,
+    JointVisibility, SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
 use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
 use crate::camera::CameraModel;
@@ -17,6 +17,7 @@ use crate::exr_file::ExrContents;
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::render_camera::RenderCamera;
 use crate::rig::{Rig, RigCamera};
+use crate::synth::activity::ActivitySegment;
 
 /// A joint is occluded when the rendered surface at its pixel is nearer than this (m): joints
 /// lie inside the body, up to about this deep under its surface.
@@ -230,6 +231,10 @@ fn frame_annotation(
                 joint_visibility: visibility,
                 bbox_xyxy: bbox,
                 interaction_distance_m: nearest,
+                activity: a.activities.as_ref().map(|segments| {
+                    let (activity, phase) = ActivitySegment::at(segments, f as usize);
+                    ActivityLabel { activity, phase }
+                }),
             }
         })
         .collect();

@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::synth::activity::{Activity, Phase};
+
 /// Version of the annotation schema (`egogen_annotations` in the file).
 pub const ANNOTATIONS_VERSION: u32 = 1;
 
@@ -121,6 +123,19 @@ pub struct AgentAnnotation {
     pub bbox_xyxy: Option<[usize; 4]>,
     /// Pelvis distance to the nearest other agent (m); `None` for a single agent.
     pub interaction_distance_m: Option<f64>,
+    /// What it does in this frame, in a take with activities (docs/ACTIVITIES.md); absent
+    /// in a take where people only walk.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub activity: Option<ActivityLabel>,
+}
+
+/// What an agent does in a frame: `walk` (no phase), or an activity and its phase
+/// (`approach`, `transition`, `hold`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ActivityLabel {
+    pub activity: Activity,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phase: Option<Phase>,
 }
 
 /// SMPL-X parameters as the `smplx` package takes them (axis-angle, radians; m).

@@ -51,6 +51,8 @@ pub struct RenderedAgent {
     pub id: u32,
     pub motion: MotionSequence,
     pub track: BodyTrack,
+    /// Its activities' segments, in a take with activities; `None` where people only walk.
+    pub activities: Option<Vec<crate::synth::activity::ActivitySegment>>,
 }
 
 /// A camera's frame file, relative to the take's folder: `cameras/<camera>/frame_NNNNN.exr`.

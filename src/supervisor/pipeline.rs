@@ -429,10 +429,16 @@ fn rendered_agents(
                 id: AGENT_ID_BASE,
                 motion: placed,
                 track,
+                activities: None,
             };
             Ok((vec![agent], vec![0]))
         }
         RunMotion::Agents { take, wearers, .. } => {
+            // A take with activities labels every frame of every agent.
+            let with_activities = take
+                .agents
+                .iter()
+                .any(|a| !a.activity_segments.is_empty() || !a.skipped_activities.is_empty());
             let agents = take
                 .agents
                 .iter()
@@ -445,6 +451,7 @@ fn rendered_agents(
                         id: AGENT_ID_BASE + k as u32,
                         motion,
                         track,
+                        activities: with_activities.then(|| a.activity_segments.clone()),
                     })
                 })
                 .collect::<Result<Vec<_>>>()?;

@@ -153,7 +153,7 @@ impl ActivitySettings {
 }
 
 /// What a person does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Activity {
     Walk,
@@ -163,7 +163,7 @@ pub enum Activity {
 }
 
 /// Where in an activity a frame is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Phase {
     /// Walking to the activity's place (a seat).
@@ -181,6 +181,17 @@ pub struct ActivitySegment {
     pub phase: Phase,
     pub start_frame: usize,
     pub end_frame: usize,
+}
+
+impl ActivitySegment {
+    /// What frame `f` of an agent with these segments does: the segment's activity and phase,
+    /// or walking (no phase).
+    pub fn at(segments: &[ActivitySegment], f: usize) -> (Activity, Option<Phase>) {
+        segments
+            .iter()
+            .find(|s| (s.start_frame..s.end_frame).contains(&f))
+            .map_or((Activity::Walk, None), |s| (s.activity, Some(s.phase)))
+    }
 }
 
 /// One activity done, and how well it fitted its place.
@@ -870,6 +881,29 @@ mod tests {
             let err = acts.sit(&body, &map, &last, 0, 0.0, &mut rng).unwrap_err();
             assert!(err.contains("activities.seat_fit_m"), "{err}");
         }
+    }
+
+    #[test]
+    fn a_frame_is_labelled_by_the_segment_holding_it_or_walking() {
+        let seg = |activity, phase, start_frame, end_frame| ActivitySegment {
+            activity,
+            phase,
+            start_frame,
+            end_frame,
+        };
+        let segments = [
+            seg(Activity::Sit, Phase::Approach, 10, 20),
+            seg(Activity::Sit, Phase::Transition, 20, 30),
+            seg(Activity::Stand, Phase::Hold, 40, 41),
+        ];
+        let at = |f| ActivitySegment::at(&segments, f);
+        assert_eq!(at(9), (Activity::Walk, None));
+        assert_eq!(at(10), (Activity::Sit, Some(Phase::Approach)));
+        assert_eq!(at(20), (Activity::Sit, Some(Phase::Transition)));
+        assert_eq!(at(30), (Activity::Walk, None));
+        assert_eq!(at(40), (Activity::Stand, Some(Phase::Hold)));
+        assert_eq!(at(41), (Activity::Walk, None));
+        assert_eq!(ActivitySegment::at(&[], 5), (Activity::Walk, None));
     }
 
     #[test]
