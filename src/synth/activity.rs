@@ -349,17 +349,22 @@ impl ActivityWorld {
             .or_insert_with(|| match without {
                 None => MeshDistance::new(&mesh),
                 Some(name) => {
-                    let mut rest = SceneMesh::default();
-                    for o in mesh.objects.iter().filter(|o| o.name != name) {
-                        let tris: Vec<[u32; 3]> = mesh
-                            .triangles
-                            .iter()
-                            .zip(&mesh.triangle_object)
-                            .filter(|(_, t)| **t == o.id)
-                            .map(|(t, _)| *t)
-                            .collect();
-                        rest.add_object(o.name.clone(), &mesh.vertices, &tris);
-                    }
+                    // The same vertices, the triangles of every other object.
+                    let kept: Vec<usize> = (0..mesh.triangles.len())
+                        .filter(|&t| {
+                            let o = mesh.triangle_object[t].0 as usize;
+                            mesh.objects
+                                .get(o.wrapping_sub(1))
+                                .is_none_or(|o| o.name != name)
+                        })
+                        .collect();
+                    let rest = SceneMesh {
+                        vertices: mesh.vertices.clone(),
+                        triangles: kept.iter().map(|&t| mesh.triangles[t]).collect(),
+                        triangle_object: kept.iter().map(|&t| mesh.triangle_object[t]).collect(),
+                        objects: mesh.objects.clone(),
+                        file_face_objects: None,
+                    };
                     MeshDistance::new(&rest)
                 }
             })
