@@ -173,6 +173,9 @@ impl TakeMaker for StandInMaker {
                 file: format!("takes/{}/cameras/{CAMERA}/frame_{f:05}.exr", def.id),
                 agents_in_view: f % 3,
                 colour_exposure: Some(1.0),
+                activity: None,
+                activity_phase: None,
+                activities_in_view: None,
             })
             .collect())
     }

@@ -43,6 +43,9 @@ fn rows_of(state: &CampaignState, per_take: usize) -> Vec<IndexRow> {
                 ),
                 agents_in_view: (k % 3) as u32,
                 colour_exposure: Some(1.0 + k as f32 * 1e-3),
+                activity: None,
+                activity_phase: None,
+                activities_in_view: None,
             })
         })
         .collect()

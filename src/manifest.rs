@@ -12,6 +12,8 @@ use sha2::{Digest, Sha256};
 /// Folders of a dataset that are scratch, not data.
 pub const SCRATCH_DIRS: [&str; 2] = ["work", "logs"];
 pub const MANIFEST: &str = "manifest.json";
+/// The manifest format this egogen writes and reads (`egogen_manifest`).
+pub const MANIFEST_VERSION: u32 = 1;
 
 /// One file.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -120,7 +122,7 @@ pub fn build_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manife
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(Manifest {
-        egogen_manifest: 1,
+        egogen_manifest: MANIFEST_VERSION,
         files,
     })
 }

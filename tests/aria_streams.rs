@@ -485,6 +485,97 @@ fn aria_export_writes_every_stream_of_a_take_and_refuses_bad_requests() {
         );
         assert!(!dest.exists() && !tmp.path().join(format!("bad{k}.partial")).exists());
     }
+
+    // An export killed part-way leaves OUT.partial: the next one starts it again; a
+    // .partial folder holding anything an export does not write is left alone.
+    let killed = tmp.path().join("killed");
+    std::fs::create_dir_all(tmp.path().join("killed.partial/crowd_01/imu")).unwrap();
+    std::fs::write(
+        tmp.path().join("killed.partial/crowd_01/imu/imu-left.csv"),
+        "half",
+    )
+    .unwrap();
+    let again = run(&[
+        "aria",
+        "export",
+        take.to_str().unwrap(),
+        "--out",
+        killed.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(again.status.success(), "{err}");
+    assert!(
+        err.contains("left by an interrupted export; exporting again"),
+        "{err}"
+    );
+    assert!(killed.join("manifest.json").is_file() && !tmp.path().join("killed.partial").exists());
+    let foreign = tmp.path().join("foreign");
+    std::fs::create_dir_all(tmp.path().join("foreign.partial")).unwrap();
+    std::fs::write(tmp.path().join("foreign.partial/notes.txt"), "mine").unwrap();
+    let refused = run(&[
+        "aria",
+        "export",
+        take.to_str().unwrap(),
+        "--out",
+        foreign.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success()
+            && err.contains("holds files an export of this take does not write"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(tmp.path().join("foreign.partial/notes.txt")).unwrap(),
+        "mine"
+    );
+
+    // An export that fails part-way (a head turning half a turn between two frames, found
+    // while writing the streams) leaves nothing, and the same command runs again once fixed.
+    let cpf = take.join("agents/crowd_01/cpf_trajectory.json");
+    let good = std::fs::read_to_string(&cpf).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&good).unwrap();
+    let turn = axis_angle_to_matrix(Vec3::new(0.0, 3.1, 0.0));
+    for f in doc.as_array_mut().unwrap().iter_mut().skip(20) {
+        let m = &mut f["world_from_cpf"];
+        let r = Mat3::from_cols_array_2d(
+            &[0, 1, 2].map(|c| [0, 1, 2].map(|r| m[r][c].as_f64().unwrap())),
+        );
+        let turned = turn * r;
+        for r in 0..3 {
+            for c in 0..3 {
+                m[r][c] = turned.col(c)[r].into();
+            }
+        }
+    }
+    std::fs::write(&cpf, serde_json::to_string(&doc).unwrap()).unwrap();
+    let failed_out = tmp.path().join("failed");
+    let failed = run(&[
+        "aria",
+        "export",
+        take.to_str().unwrap(),
+        "--out",
+        failed_out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&failed.stderr);
+    assert!(
+        !failed.status.success() && err.contains("sample the motion faster"),
+        "{err}"
+    );
+    assert!(!failed_out.exists() && !tmp.path().join("failed.partial").exists());
+    std::fs::write(&cpf, good).unwrap();
+    let fixed = run(&[
+        "aria",
+        "export",
+        take.to_str().unwrap(),
+        "--out",
+        failed_out.to_str().unwrap(),
+    ]);
+    assert!(
+        fixed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fixed.stderr)
+    );
 }
 
 #[test]
@@ -547,6 +638,7 @@ mod gaze {
             others,
             frame_rate_hz: 40.0,
             goals: &[],
+            looks: &[],
             rays: None,
         }
     }
@@ -612,6 +704,78 @@ mod gaze {
         for s in &samples {
             assert!(s.yaw_rad.abs() < 30f64.to_radians() + 1e-9);
             assert!(s.depth_m > 1.0 && s.depth_m < 3.5, "{}", s.depth_m);
+        }
+    }
+
+    #[test]
+    fn an_activity_s_target_draws_most_fixations_while_it_lasts_and_no_others() {
+        use egogen::export::gaze::GazeLook;
+        let still = walking_head(0.0, Vec3::ZERO, None)[0];
+        let me = PoseSpline::interpolate(40.0, &vec![still; 40 * 60 + 1]).unwrap();
+        // A seat 1.5 m ahead, 0.3 m to one side and 0.6 m down (within the eyes' 30°), looked at over 20–40 s;
+        // behind the head over 40–60 s (not looked at: the head must turn first).
+        let seat = still.transform_point3(Vec3::new(0.3, -0.6, 1.5));
+        let behind = still.transform_point3(Vec3::new(0.0, -1.0, -1.5));
+        let looks = [
+            GazeLook {
+                point: seat,
+                from_frame: 800,
+                until_frame: 1600,
+            },
+            GazeLook {
+                point: behind,
+                from_frame: 1600,
+                until_frame: 2400,
+            },
+        ];
+        let plain = world(&me, Vec::new());
+        let w = GazeWorld {
+            looks: &looks,
+            ..world(&me, Vec::new())
+        };
+        let fix = fixations(&w, 5);
+        let before = fixations(&plain, 5);
+        // Before the first window the gaze is drawn as without activities, fixation for
+        // fixation.
+        let first = fix.iter().take_while(|f| f.start_s < 20.0).count();
+        assert!(first > 30);
+        assert_eq!(fix[..first - 1], before[..first - 1]);
+        let on = |p: Vec3, from: f64, to: f64| {
+            let during: Vec<_> = fix
+                .iter()
+                .filter(|f| f.start_s >= from && f.start_s < to)
+                .collect();
+            let hits = during
+                .iter()
+                .filter(|f| f.target == GazeTarget::Point(p))
+                .count();
+            hits as f64 / during.len() as f64
+        };
+        let share = on(seat, 20.0, 40.0);
+        eprintln!("{share:.2} of the fixations over 20–40 s on the seat");
+        assert!((share - 0.7).abs() < 0.1, "{share}");
+        assert_eq!(on(behind, 40.0, 60.0), 0.0);
+        assert_eq!(on(seat, 40.0, 60.0), 0.0);
+        // The samples on the seat point at it: its direction in the CPF, at its distance.
+        let samples = gaze_samples(&w, &fix, 30.0);
+        let at_seat = samples
+            .iter()
+            .filter(|s| {
+                let t = s.timestamp_us as f64 * 1e-6;
+                fix.iter()
+                    .any(|f| f.target == GazeTarget::Point(seat) && f.start_s <= t && t < f.end_s)
+            })
+            .count();
+        assert!(at_seat > 100);
+        let d = still.matrix3.transpose() * (seat - still.translation);
+        for s in samples.iter().filter(|s| {
+            let t = s.timestamp_us as f64 * 1e-6;
+            fix.iter()
+                .any(|f| f.target == GazeTarget::Point(seat) && f.start_s <= t && t < f.end_s)
+        }) {
+            assert!((s.yaw_rad - d.x.atan2(d.z)).abs() < 1e-9);
+            assert!((s.pitch_rad - d.y.atan2(d.z)).abs() < 1e-9);
+            assert!((s.depth_m - d.length()).abs() < 1e-9);
         }
     }
 }

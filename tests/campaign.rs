@@ -23,6 +23,20 @@ fn state(out: &Path) -> egogen::campaign::CampaignState {
     egogen::campaign::CampaignState::read(out).unwrap()
 }
 
+/// Runs a campaign to its end: every take complete (else what it said), its state.
+fn run_to_completion(campaign: &Path, out: &Path) -> egogen::campaign::CampaignState {
+    let run = common::succeeds(egogen_run().arg(campaign));
+    let s = state(out);
+    assert!(
+        s.takes
+            .iter()
+            .all(|t| t.status == egogen::campaign::TakeStatus::Complete),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    s
+}
+
 /// (take, camera, frame, file) of every index row.
 fn index_rows(out: &Path) -> Vec<(String, String, i32, String)> {
     let file = std::fs::File::open(out.join("index.parquet")).unwrap();
@@ -47,7 +61,10 @@ fn index_rows(out: &Path) -> Vec<(String, String, i32, String)> {
             "time_s",
             "file",
             "agents_in_view",
-            "colour_exposure"
+            "colour_exposure",
+            "activity",
+            "activity_phase",
+            "activities_in_view"
         ]
     );
     reader
@@ -333,15 +350,7 @@ min_free_disk_gb = 0.0
     )
     .unwrap();
     let out = a.path().join("framed");
-    let run = common::succeeds(egogen_run().arg(&campaign));
-    let said = String::from_utf8_lossy(&run.stderr);
-    let s = state(&out);
-    assert!(
-        s.takes
-            .iter()
-            .all(|t| t.status == egogen::campaign::TakeStatus::Complete),
-        "{said}"
-    );
+    let s = run_to_completion(&campaign, &out);
     let room = &s.takes[0];
     assert!(room.def.scene.ends_with("room_cm.obj"));
     assert!(
@@ -389,5 +398,217 @@ min_free_disk_gb = 0.0
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--unit-m"));
+    assert!(!a.path().join("never").exists());
+}
+
+/// A campaign varying what people do per take: take 0 walks only, take 1 stands and picks
+/// things up. `index.parquet` says what each frame's wearer does (as the take's own
+/// `summary.json` has it) and what the people in view do, nothing in a take where people only
+/// walk; the take's recorded command (with `--activity-weights`) renders it alone byte for
+/// byte; index rows kept before those columns existed are read again from the take.
+#[test]
+fn a_campaign_varies_the_activities_per_take_and_indexes_them() {
+    use parquet::record::Field;
+    let a = tempfile::tempdir().unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    std::fs::write(
+        a.path().join("run.toml"),
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 14.0
+[crowd]
+count = 2
+layout = "random"
+wander = true
+[output]
+dir = "single"
+mesh_every_n_frames = 0
+[render]
+cameras = ["camera-slam-left"]
+resolution_scale = 0.1
+every_n_frames = 20
+samples = 2
+frames_per_shard = 30
+passes = ["colour", "segmentation"]
+[supervisor]
+workers = 2
+"#,
+    )
+    .unwrap();
+    let campaign = a.path().join("acts.toml");
+    std::fs::write(
+        &campaign,
+        format!(
+            r#"
+[campaign]
+run = "run.toml"
+out = "acts"
+takes = 2
+scenes = ["{}"]
+activity_weights = [{{ walk = 1 }}, {{ stand = 1, pick_up = 1.5 }}]
+min_free_disk_gb = 0.0
+"#,
+            root.join("assets/scenes/apartment.glb").display()
+        ),
+    )
+    .unwrap();
+    let out = a.path().join("acts");
+    let s = run_to_completion(&campaign, &out);
+    assert!(
+        s.takes[0].command.ends_with("--activity-weights walk=1"),
+        "{}",
+        s.takes[0].command
+    );
+    assert!(
+        s.takes[1]
+            .command
+            .ends_with("--activity-weights stand=1,pick_up=1.5"),
+        "{}",
+        s.takes[1].command
+    );
+
+    // (take, wearer, frame, activity, phase, in view) of every row.
+    let read_index = || -> Vec<(String, String, i64, [Option<String>; 3])> {
+        let file = std::fs::File::open(out.join("index.parquet")).unwrap();
+        let reader = SerializedFileReader::new(file).unwrap();
+        let text = |f: &Field| match f {
+            Field::Str(s) => Some(s.clone()),
+            Field::Null => None,
+            other => panic!("{other:?}"),
+        };
+        reader
+            .get_row_iter(None)
+            .unwrap()
+            .map(|r| {
+                let r = r.unwrap();
+                let cols: Vec<&Field> = r.get_column_iter().map(|(_, f)| f).collect();
+                (
+                    r.get_string(0).unwrap().clone(),
+                    r.get_string(4).unwrap().clone(),
+                    r.get_int(5).unwrap() as i64,
+                    [text(cols[10]), text(cols[11]), text(cols[12])],
+                )
+            })
+            .collect()
+    };
+    let rows = read_index();
+    let summary = |take: &str| -> serde_json::Value {
+        let p = out.join("takes").join(take).join("sequence/summary.json");
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let mut acted = 0;
+    for t in &s.takes {
+        let sum = summary(&t.def.id);
+        let mine: Vec<_> = rows.iter().filter(|r| r.0 == t.def.id).collect();
+        assert!(mine.len() >= 10, "{}: {} rows", t.def.id, mine.len());
+        if t.def.index == 0 {
+            assert!(mine.iter().all(|r| r.3 == [None, None, None]), "{mine:?}");
+            assert!(sum["agents"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|a| a["activities"].as_array().is_none_or(|v| v.is_empty())));
+            continue;
+        }
+        for (_, wearer, frame, [activity, phase, in_view]) in mine {
+            let agent = sum["agents"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|a| a["name"] == wearer.as_str())
+                .unwrap();
+            let segment = agent["activity_segments"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .find(|s| {
+                    (s["start_frame"].as_i64().unwrap()..s["end_frame"].as_i64().unwrap())
+                        .contains(frame)
+                });
+            let want = segment.map_or(("walk".to_string(), None), |s| {
+                (
+                    s["activity"].as_str().unwrap().to_string(),
+                    Some(s["phase"].as_str().unwrap().to_string()),
+                )
+            });
+            assert_eq!(
+                (activity.clone().unwrap(), phase.clone()),
+                want,
+                "frame {frame}"
+            );
+            acted += usize::from(want.0 != "walk");
+            let in_view = in_view.as_ref().unwrap();
+            assert!(
+                in_view.is_empty()
+                    || in_view
+                        .split(',')
+                        .all(|n| ["walk", "stand", "pick_up"].contains(&n)),
+                "{in_view}"
+            );
+        }
+    }
+    assert!(
+        acted >= 2,
+        "the wearer of take 1 did no activity in its frames"
+    );
+
+    // Take 1 rendered alone with its recorded command, where the campaign put it: the same
+    // take.
+    let take = &s.takes[1];
+    let dir = out.join("takes").join(&take.def.id);
+    let moved = a.path().join("moved");
+    std::fs::rename(&dir, &moved).unwrap();
+    let weights = take.command.rsplit(' ').next().unwrap();
+    common::succeeds(
+        egogen_run()
+            .arg(a.path().join("run.toml"))
+            .arg("--out")
+            .arg(&dir)
+            .args(["--seed", &take.def.seed.to_string(), "--scene"])
+            .arg(&take.def.scene)
+            .args(["--activity-weights", weights]),
+    );
+    assert!(
+        std::fs::read(dir.join("manifest.json")).unwrap()
+            == std::fs::read(moved.join("manifest.json")).unwrap(),
+        "the take alone differs from the campaign's"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::rename(&moved, &dir).unwrap();
+
+    // Rows kept without the activity columns (an older egogen): a resume reads them again.
+    let before = std::fs::read(out.join("index.parquet")).unwrap();
+    let kept = out.join("work/index").join(format!("{}.json", take.def.id));
+    let mut old: Vec<serde_json::Value> =
+        serde_json::from_str(&std::fs::read_to_string(&kept).unwrap()).unwrap();
+    for row in &mut old {
+        let row = row.as_object_mut().unwrap();
+        for key in ["activity", "activity_phase", "activities_in_view"] {
+            assert!(row.remove(key).is_some());
+        }
+    }
+    std::fs::write(&kept, serde_json::to_vec(&old).unwrap()).unwrap();
+    std::fs::remove_file(out.join("index.parquet")).unwrap();
+    common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+    assert_eq!(std::fs::read(out.join("index.parquet")).unwrap(), before);
+
+    // A bad mix is refused by key before anything is made.
+    std::fs::write(
+        &campaign,
+        std::fs::read_to_string(&campaign)
+            .unwrap()
+            .replace("out = \"acts\"", "out = \"never\"")
+            .replace("pick_up = 1.5", "pick_up = -1"),
+    )
+    .unwrap();
+    let bad = egogen_run().arg(&campaign).output().unwrap();
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success());
+    assert!(
+        err.contains("campaign.activity_weights[1]") && err.contains("`pick_up`"),
+        "{err}"
+    );
     assert!(!a.path().join("never").exists());
 }

@@ -168,3 +168,32 @@ fn the_shipped_campaign_plans_its_takes() {
         assert!(err.contains(says), "{scenes}: {err}");
     }
 }
+
+#[test]
+fn a_campaign_s_seeds_stay_signed_64_bit_integers_to_the_last_take() {
+    let root = common::repo_root();
+    let dir = tempfile::tempdir().unwrap();
+    let plan = |first_seed: u64| {
+        let campaign = std::fs::read_to_string(root.join("configs/campaign.toml"))
+            .unwrap()
+            .replace("first_seed = 0", &format!("first_seed = {first_seed}"))
+            .replace(
+                "run = \"default.toml\"",
+                &format!("run = \"{}/configs/default.toml\"", root.display()),
+            )
+            .replace("\"../", &format!("\"{}/", root.display()));
+        let path = dir.path().join("campaign.toml");
+        std::fs::write(&path, campaign).unwrap();
+        egogen::campaign::plan_campaign(&path).map_err(|e| format!("{e:#}"))
+    };
+    // 12 takes: the last seed is first_seed + 11.
+    let last = i64::MAX as u64;
+    let p = plan(last - 11).unwrap();
+    assert_eq!(p.takes[11].seed, last);
+    let err = plan(last - 10).unwrap_err();
+    assert!(
+        err.contains("key `campaign.first_seed`: 9223372036854775797: the takes' seeds"),
+        "{err}"
+    );
+    assert!(err.contains("must stay below 2^63"), "{err}");
+}

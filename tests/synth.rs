@@ -1362,6 +1362,45 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
                 assert!(r["foot_miss_m"].as_f64().unwrap() < 0.02, "{r}");
                 assert!(r["seat_penetration_m"].as_f64().unwrap() < 0.06, "{r}");
             }
+            // What the gaze fixates while doing it: the seat's surface under the seated
+            // pelvis from the walk there until seated; the floor in front of the feet while
+            // picking up; nothing while standing.
+            let look = &r["look_at"];
+            let frames = |key: &str| look[key].as_u64().unwrap() as usize;
+            let (start, end) = (
+                r["start_frame"].as_u64().unwrap() as usize,
+                r["end_frame"].as_u64().unwrap() as usize,
+            );
+            let place = [
+                r["place"][0].as_f64().unwrap(),
+                r["place"][1].as_f64().unwrap(),
+            ];
+            let point: Vec<f64> = look["point"]
+                .as_array()
+                .map(|p| p.iter().map(|v| v.as_f64().unwrap()).collect())
+                .unwrap_or_default();
+            match kind.as_str() {
+                "sit" => {
+                    assert_eq!(&point[..2], &place[..], "{r}");
+                    let height = r["seat_height_m"].as_f64().unwrap();
+                    assert!((point[2] - height).abs() < 0.02, "{r}");
+                    assert!(
+                        frames("start_frame") < start && frames("end_frame") < end,
+                        "{r}"
+                    );
+                }
+                "pick_up" => {
+                    let reach =
+                        ((point[0] - place[0]).powi(2) + (point[1] - place[1]).powi(2)).sqrt();
+                    assert!((0.1..0.9).contains(&reach) && point[2].abs() < 0.02, "{r}");
+                    assert_eq!(
+                        (frames("start_frame"), frames("end_frame")),
+                        (start, end),
+                        "{r}"
+                    );
+                }
+                _ => assert!(look.is_null(), "{r}"),
+            }
         }
         // Segments lie in order, each inside the take.
         let segments = a["activity_segments"]

@@ -12,9 +12,10 @@
 A take is a folder with `manifest.json`, `cameras/<camera>/annotations.json` and one EXR per
 frame; a campaign is a folder with `campaign.json`, `index.parquet` and `takes/<id>/`.
 Conventions (OpenCV camera frame, planar depth, pixel centres) are in each annotations file.
+A damaged file raises `FormatError` (a ValueError) naming the file, the key and what was expected.
 """
 
-from .reader import Campaign, Frame, FrameDataset, Take, open, read_exr
+from .reader import Campaign, FormatError, Frame, FrameDataset, Take, open, read_exr
 
-__all__ = ["Campaign", "Frame", "FrameDataset", "Take", "open", "read_exr"]
+__all__ = ["Campaign", "FormatError", "Frame", "FrameDataset", "Take", "open", "read_exr"]
 __version__ = "0.1.0"

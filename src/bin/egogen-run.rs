@@ -14,6 +14,11 @@ use clap::Parser;
 use egogen::cli::config::Backend;
 use egogen::cli::overrides::RunOverrides;
 use egogen::run_job::RunRequest;
+use egogen::synth::activity::ActivityWeights;
+
+fn parse_activity_weights(text: &str) -> Result<ActivityWeights, String> {
+    ActivityWeights::parse(text)
+}
 
 /// Generate an egocentric dataset from a config file.
 #[derive(Parser, Debug)]
@@ -63,6 +68,10 @@ struct Args {
     /// Seconds of motion, overriding `motion.duration_s`.
     #[arg(long = "duration")]
     duration_s: Option<f64>,
+    /// What people do when a walk ends, overriding `activities.weights`: `walk=2,sit=1`
+    /// (weights not named are 0; docs/ACTIVITIES.md).
+    #[arg(long, value_parser = parse_activity_weights)]
+    activity_weights: Option<ActivityWeights>,
     /// Where shards run, overriding `supervisor.backend`: `local` (Blender processes here) or
     /// `slurm` (a job array; resources in `[supervisor.slurm]`).
     #[arg(long, value_enum)]
@@ -130,6 +139,7 @@ fn run(args: Args) -> Result<()> {
         unit_m: args.unit_m,
         crowd_count: args.crowd_count,
         duration_s: args.duration_s,
+        activity_weights: args.activity_weights,
         workers: args.workers,
         backend,
     };

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
 use super::plan::CampaignPlan;
 use crate::plan::{Backend, MotionPlan, RunPlan};
@@ -75,9 +75,50 @@ fn planned_frames(plan: &RunPlan, duration_s: Option<f64>) -> usize {
     motion_frames.div_ceil(render.every_n_frames) * render.cameras.len() * wearers
 }
 
+/// A pool report's attempts: camera, seconds, frames finished; why not, when the report is
+/// unreadable or holds an attempt that is not one (no camera, seconds not a finite number ≥ 0,
+/// no count of frames finished).
+fn report_attempts(path: &Path) -> std::result::Result<Vec<(String, f64, usize)>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("unreadable ({e})"))?;
+    let report: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("not JSON ({e})"))?;
+    let shards = report["shards"]
+        .as_array()
+        .ok_or("key `shards`: missing or not a list")?;
+    let mut out = Vec::new();
+    for (i, s) in shards.iter().enumerate() {
+        let camera = s["camera"]
+            .as_str()
+            .ok_or_else(|| format!("key `shards[{i}].camera`: missing or not a name"))?;
+        let attempts = s["attempts"]
+            .as_array()
+            .ok_or_else(|| format!("key `shards[{i}].attempts`: missing or not a list"))?;
+        for (j, a) in attempts.iter().enumerate() {
+            let key = format!("shards[{i}].attempts[{j}]");
+            let seconds = a["seconds"]
+                .as_f64()
+                .filter(|s| s.is_finite() && *s >= 0.0)
+                .ok_or_else(|| {
+                    format!(
+                        "key `{key}.seconds`: {}, expected seconds ≥ 0",
+                        a["seconds"]
+                    )
+                })?;
+            let finished = a["finished"].as_u64().ok_or_else(|| {
+                format!(
+                    "key `{key}.finished`: {}, expected a count of frames",
+                    a["finished"]
+                )
+            })?;
+            out.push((camera.to_string(), seconds, finished as usize));
+        }
+    }
+    Ok(out)
+}
+
 /// Every attempt in the pool reports under `dir` (`logs/start_*/pool_report.json`, also in
-/// `takes/*/`): camera, seconds, frames finished.
-fn attempts(dir: &Path) -> Vec<(String, f64, usize)> {
+/// `takes/*/`): camera, seconds, frames finished; and each report left out, with why.
+fn attempts(dir: &Path) -> (Vec<(String, f64, usize)>, Vec<String>) {
     let pattern = |p: &str| dir.join(p).to_string_lossy().into_owned();
     let mut found: Vec<PathBuf> = [
         "logs/start_*/pool_report.json",
@@ -88,25 +129,14 @@ fn attempts(dir: &Path) -> Vec<(String, f64, usize)> {
     .flat_map(|g| g.flatten())
     .collect();
     found.sort();
-    let mut out = Vec::new();
-    for report in found
-        .iter()
-        .filter_map(|p| std::fs::read_to_string(p).ok())
-        .filter_map(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-    {
-        let shards = report["shards"].as_array().cloned().unwrap_or_default();
-        for s in shards {
-            let camera = s["camera"].as_str().unwrap_or("?").to_string();
-            for a in s["attempts"].as_array().into_iter().flatten() {
-                out.push((
-                    camera.clone(),
-                    a["seconds"].as_f64().unwrap_or(0.0),
-                    a["finished"].as_u64().unwrap_or(0) as usize,
-                ));
-            }
+    let (mut out, mut skipped) = (Vec::new(), Vec::new());
+    for report in &found {
+        match report_attempts(report) {
+            Ok(a) => out.extend(a),
+            Err(why) => skipped.push(format!("{}: {why}", report.display())),
         }
     }
-    out
+    (out, skipped)
 }
 
 /// Seconds per frame per camera: every attempt's time over the frames it finished (failed
@@ -172,8 +202,18 @@ pub fn estimate(
         .as_ref()
         .map(|r| r.cameras.iter().map(|c| c.name.clone()).collect())
         .unwrap_or_default();
+    if let Some(dir) = throughput_from {
+        if !dir.is_dir() {
+            bail!(
+                "--throughput-from {}: {}; expected the folder of a campaign or of a dataset (its logs/start_*/pool_report.json and manifest.json are read)",
+                dir.display(),
+                if dir.exists() { "not a folder" } else { "no such folder" }
+            );
+        }
+    }
     let source = throughput_from.unwrap_or(&plan.out).to_path_buf();
-    let (spf, measured) = throughput(&attempts(&source));
+    let (found, skipped) = attempts(&source);
+    let (spf, measured) = throughput(&found);
     let sup = &first.supervisor;
     let workers = sup.workers.max(1);
     let cores_per_worker = match sup.backend {
@@ -234,6 +274,42 @@ pub fn estimate(
             source.display()
         ),
     });
+    for why in skipped {
+        text.push(format!("time: left out the pool report {why}"));
+    }
     budget.text = text;
     Ok(budget)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_damaged_or_negative_pool_report_is_left_out_and_said() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |start: &str, text: &str| {
+            let p = dir.path().join("logs").join(start);
+            std::fs::create_dir_all(&p).unwrap();
+            std::fs::write(p.join("pool_report.json"), text).unwrap();
+        };
+        let report = |seconds: &str| {
+            format!(
+                r#"{{"shards": [{{"camera": "rgb", "attempts": [{{"seconds": {seconds}, "finished": 10}}]}}]}}"#
+            )
+        };
+        write("start_1", &report("20.0"));
+        write("start_2", &report("-500.0"));
+        write("start_3", "{\"shards\": [");
+        let (found, skipped) = attempts(dir.path());
+        assert_eq!(found, [("rgb".to_string(), 20.0, 10)]);
+        assert_eq!(skipped.len(), 2, "{skipped:?}");
+        assert!(skipped[0].contains("start_2/pool_report.json: key `shards[0].attempts[0].seconds`: -500.0, expected seconds ≥ 0"), "{skipped:?}");
+        assert!(
+            skipped[1].contains("start_3/pool_report.json: not JSON"),
+            "{skipped:?}"
+        );
+        let (spf, frames) = throughput(&found);
+        assert_eq!((spf["rgb"], frames), (2.0, 10));
+    }
 }

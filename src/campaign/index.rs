@@ -1,6 +1,6 @@
 //! The campaign's index: one Parquet table (`index.parquet`) listing every rendered frame of
 //! every finished take — take, scene, seed, camera, frame, time, file, agents in view,
-//! exposure — the form ML data loaders open directly (pandas, pyarrow, polars). Each finished
+//! exposure, what the wearer and the people in view do — the form ML data loaders open directly (pandas, pyarrow, polars). Each finished
 //! take's rows are kept in `work/index/<id>.json` so the index is rewritten from small files,
 //! in take order, to the same bytes however the campaign was interrupted.
 
@@ -32,6 +32,18 @@ pub struct IndexRow {
     pub agents_in_view: u32,
     /// The automatic exposure of the frame's colour (absent without the colour pass).
     pub colour_exposure: Option<f32>,
+    /// What the wearer does (`walk`, `stand`, `sit`, `pick_up`), in a take with activities
+    /// (absent where people only walk). Required in kept rows, so rows kept before the column
+    /// existed are read again from the take's annotations.
+    #[serde(deserialize_with = "Option::deserialize")]
+    pub activity: Option<String>,
+    /// Its phase (`approach`, `transition`, `hold`; absent while walking).
+    #[serde(deserialize_with = "Option::deserialize")]
+    pub activity_phase: Option<String>,
+    /// What the agents in view do, each activity once, in name order, comma-separated
+    /// (`sit,walk`; empty with no one in view), in a take with activities.
+    #[serde(deserialize_with = "Option::deserialize")]
+    pub activities_in_view: Option<String>,
 }
 
 /// The Parquet schema of `index.parquet`.
@@ -46,6 +58,9 @@ pub(crate) const SCHEMA: &str = "message egogen_index {
   REQUIRED BYTE_ARRAY file (UTF8);
   REQUIRED INT32 agents_in_view;
   OPTIONAL FLOAT colour_exposure;
+  OPTIONAL BYTE_ARRAY activity (UTF8);
+  OPTIONAL BYTE_ARRAY activity_phase (UTF8);
+  OPTIONAL BYTE_ARRAY activities_in_view (UTF8);
 }";
 
 /// The rows of a finished take, read from its cameras' annotations.
@@ -70,6 +85,19 @@ pub(crate) fn take_rows(take: &TakeDef, take_dir: &Path, campaign: &Path) -> Res
         let doc: CameraAnnotations = serde_json::from_str(&text)
             .with_context(|| format!("{}: not an annotations file", path.display()))?;
         for f in &doc.frames {
+            let wearer = f.agents.iter().find(|a| a.wearer);
+            let labelled = f.agents.iter().any(|a| a.activity.is_some());
+            let in_view = labelled.then(|| {
+                let mut names: Vec<&str> = f
+                    .agents
+                    .iter()
+                    .filter(|a| a.in_view && !a.wearer)
+                    .map(|a| a.activity.map_or("walk", |l| l.activity.name()))
+                    .collect();
+                names.sort_unstable();
+                names.dedup();
+                names.join(",")
+            });
             rows.push(IndexRow {
                 take: take.id.clone(),
                 scene: take.scene.display().to_string(),
@@ -86,6 +114,14 @@ pub(crate) fn take_rows(take: &TakeDef, take_dir: &Path, campaign: &Path) -> Res
                     .to_string(),
                 agents_in_view: f.agents.iter().filter(|a| a.in_view && !a.wearer).count() as u32,
                 colour_exposure: f.colour_exposure,
+                activity: wearer
+                    .and_then(|a| a.activity)
+                    .map(|l| l.activity.name().to_string()),
+                activity_phase: wearer
+                    .and_then(|a| a.activity)
+                    .and_then(|l| l.phase)
+                    .map(|p| p.name().to_string()),
+                activities_in_view: in_view,
             });
         }
     }
@@ -204,7 +240,7 @@ fn write_group<W: std::io::Write + Send>(
                 let v: Vec<i32> = rows.iter().map(|r| r.agents_in_view as i32).collect();
                 col.typed::<Int32Type>().write_batch(&v, None, None)?;
             }
-            _ => {
+            9 => {
                 let v: Vec<f32> = rows.iter().filter_map(|r| r.colour_exposure).collect();
                 let def: Vec<i16> = rows
                     .iter()
@@ -212,11 +248,26 @@ fn write_group<W: std::io::Write + Send>(
                     .collect();
                 col.typed::<FloatType>().write_batch(&v, Some(&def), None)?;
             }
+            10 => write_optional_text(&mut col, rows, |r| r.activity.as_deref())?,
+            11 => write_optional_text(&mut col, rows, |r| r.activity_phase.as_deref())?,
+            _ => write_optional_text(&mut col, rows, |r| r.activities_in_view.as_deref())?,
         }
         col.close()?;
         column += 1;
     }
     group.close()?;
+    Ok(())
+}
+
+fn write_optional_text(
+    col: &mut parquet::file::writer::SerializedColumnWriter,
+    rows: &[IndexRow],
+    f: fn(&IndexRow) -> Option<&str>,
+) -> Result<()> {
+    let v: Vec<ByteArray> = rows.iter().filter_map(f).map(ByteArray::from).collect();
+    let def: Vec<i16> = rows.iter().map(|r| i16::from(f(r).is_some())).collect();
+    col.typed::<ByteArrayType>()
+        .write_batch(&v, Some(&def), None)?;
     Ok(())
 }
 

@@ -1,6 +1,6 @@
 //! A campaign config (`[campaign]`) and the takes it defines: the run config every take starts
 //! from, and what varies per take — scene (paths, globs, generated floor plans, each with the
-//! frame it is read in), seed, crowd size, duration, rig. Each take is that run config with
+//! frame it is read in), seed, crowd size, duration, rig, activity mix. Each take is that run config with
 //! `egogen-run`'s command-line overrides, so a take rendered alone is the same command; its id
 //! is derived from what defines it.
 
@@ -15,6 +15,7 @@ use crate::cli::overrides::{resume_fingerprint, RunOverrides};
 use crate::cli::RawRun;
 use crate::manifest::sha256_hex;
 use crate::scene::{SceneFrame, UpAxis};
+use crate::synth::activity::ActivityWeights;
 
 /// A campaign config file: `[campaign]` only.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -55,6 +56,11 @@ pub(crate) struct RawCampaign {
     /// Camera rigs, take k wearing rig k mod (number of rigs) (default: the run config's).
     #[serde(default)]
     pub rigs: Vec<PathBuf>,
+    /// What people do when a walk ends, take k using entry k mod (number of entries) as its
+    /// `activities.weights`, e.g. `[{ walk = 1 }, { walk = 1, sit = 1, stand = 1 }]`;
+    /// weights an entry does not name are 0 (default: the run config's).
+    #[serde(default)]
+    pub activity_weights: Vec<toml::Table>,
     /// Takes are staged only while the campaign folder's file system has this much free
     /// space; below it the campaign pauses (and says so) until space is freed (default 1 GB).
     pub min_free_disk_gb: Option<f64>,
@@ -98,6 +104,8 @@ pub struct TakeDef {
     pub duration_s: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rig: Option<PathBuf>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub activity_weights: Option<ActivityWeights>,
 }
 
 impl TakeDef {
@@ -112,6 +120,7 @@ impl TakeDef {
             unit_m: self.unit_m,
             crowd_count: self.crowd_count,
             duration_s: self.duration_s,
+            activity_weights: self.activity_weights,
             workers: None,
             backend: None,
         }
@@ -140,6 +149,9 @@ impl TakeDef {
         }
         if let Some(r) = &self.rig {
             c += &format!(" --rig {}", quote(r));
+        }
+        if let Some(w) = &self.activity_weights {
+            c += &format!(" --activity-weights {}", w.flag());
         }
         c
     }
@@ -188,10 +200,15 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             format!("{}: at most {MAX_TAKES} takes in one campaign", c.takes),
         ));
     }
-    if c.first_seed.checked_add(c.takes as u64).is_none() || c.first_seed > i64::MAX as u64 {
+    // Seeds are TOML integers in each take's config (signed 64-bit): the last take's too.
+    let last_seed = c.first_seed.checked_add(c.takes as u64 - 1);
+    if last_seed.is_none_or(|s| s > i64::MAX as u64) {
         return Err(bad(
             "first_seed",
-            format!("{}: the takes' seeds must stay below 2^63", c.first_seed),
+            format!(
+                "{}: the takes' seeds first_seed … first_seed + takes − 1 ({} takes) must stay below 2^63 = 9223372036854775808",
+                c.first_seed, c.takes
+            ),
         ));
     }
     // Each scene file with the frame its entry gives (none: the run config's).
@@ -281,6 +298,34 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             return Err(bad("rigs", format!("{} is not a file", r.display())));
         }
     }
+    let mut mixes = Vec::with_capacity(c.activity_weights.len());
+    for (i, entry) in c.activity_weights.iter().enumerate() {
+        let field = format!("activity_weights[{i}]");
+        let mut named = Vec::new();
+        for (name, v) in entry {
+            let v = match v {
+                toml::Value::Float(f) => *f,
+                toml::Value::Integer(n) => *n as f64,
+                other => {
+                    return Err(bad(
+                        &format!("{field}.{name}"),
+                        format!("expected a weight ≥ 0, got {}", other.type_str()),
+                    ))
+                }
+            };
+            named.push((name.as_str(), v));
+        }
+        mixes.push(ActivityWeights::from_named(named).map_err(|m| bad(&field, m))?);
+    }
+    if !mixes.is_empty() && base.motion.source != crate::cli::config::MotionSource::Agents {
+        return Err(bad(
+            "activity_weights",
+            format!(
+                "{} does not make agents (`motion.source = \"agents\"`): nobody to do activities",
+                run.display()
+            ),
+        ));
+    }
     let min_free_disk_gb = c.min_free_disk_gb.unwrap_or(1.0);
     if !(min_free_disk_gb.is_finite() && min_free_disk_gb >= 0.0) {
         return Err(bad(
@@ -315,6 +360,7 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             crowd_count,
             duration_s,
             rig: (!rigs.is_empty()).then(|| rigs[k % rigs.len()].clone()),
+            activity_weights: (!mixes.is_empty()).then(|| mixes[k % mixes.len()]),
         };
         take.id = take_id(&take, &base)?;
         takes.push(take);

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use crate::export::aria::{write_wearer_streams, AriaSettings, AriaStreams, Wearer};
-use crate::export::gaze::GazeGoal;
+use crate::export::gaze::{GazeGoal, GazeLook};
 use crate::math::{affine_from_row_major, Affine3};
 use crate::rig::Rig;
 use crate::synth::sequence_dir::read_cpf_trajectory;
@@ -56,6 +56,7 @@ struct TakeHead {
     world_from_cpf: Vec<Affine3>,
     cpf_from_headset: Affine3,
     goals: Vec<GazeGoal>,
+    looks: Vec<GazeLook>,
 }
 
 /// Runs `egogen aria export`.
@@ -91,13 +92,24 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
         );
     }
     let staging = PathBuf::from(format!("{}.partial", args.out.display()));
+    let (wearers, everyone) = read_take_heads(&args.take, &args.wearer)?;
     if staging.exists() {
-        bail!(
-            "{} is left from an interrupted export; delete it first (nothing was written)",
+        // Left by an export that was killed: started again when it holds only what an export
+        // of this take writes (a folder per wearer, the manifest); anything else is not ours.
+        let names: Vec<&str> = wearers.iter().map(|&w| everyone[w].name.as_str()).collect();
+        if !holds_only_export_entries(&staging, &names) {
+            bail!(
+                "{} exists and holds files an export of this take does not write; move it away first (nothing was written)",
+                staging.display()
+            );
+        }
+        eprintln!(
+            "egogen aria export: {} is left by an interrupted export; exporting again",
             staging.display()
         );
+        std::fs::remove_dir_all(&staging)
+            .with_context(|| format!("removing {}", staging.display()))?;
     }
-    let (wearers, everyone) = read_take_heads(&args.take, &args.wearer)?;
     let rays = if settings.streams.gaze {
         match take_scene(&args.take)? {
             Some((path, frame)) => {
@@ -115,6 +127,44 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
         None
     };
     std::fs::create_dir_all(&staging).with_context(|| format!("creating {}", staging.display()))?;
+    let exported = export_into(
+        &staging,
+        &args.out,
+        &rig,
+        &settings,
+        &wearers,
+        &everyone,
+        rays.as_ref(),
+    );
+    if exported.is_err() {
+        // Nothing half-written is left: the staging folder is this run's own.
+        let _ = std::fs::remove_dir_all(&staging);
+    }
+    exported
+}
+
+/// Whether `dir` holds only what an export of wearers `names` writes.
+fn holds_only_export_entries(dir: &Path, names: &[&str]) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    entries.flatten().all(|e| {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+        (is_dir && names.contains(&name.as_str())) || (!is_dir && name.starts_with("manifest.json"))
+    })
+}
+
+/// Writes every wearer's streams and the manifest into `staging`, then renames it to `out`.
+fn export_into(
+    staging: &Path,
+    out: &Path,
+    rig: &crate::rig::Rig,
+    settings: &AriaSettings,
+    wearers: &[usize],
+    everyone: &[TakeHead],
+    rays: Option<&crate::scene::mesh_distance::SceneRays>,
+) -> Result<()> {
     let started = std::time::Instant::now();
     for (index, head) in wearers.iter().map(|&w| &everyone[w]).enumerate() {
         let wearer = Wearer {
@@ -129,9 +179,10 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
                 .map(|o| o.world_from_cpf.as_slice())
                 .collect(),
             goals: head.goals.clone(),
-            rays: rays.as_ref(),
+            looks: head.looks.clone(),
+            rays,
         };
-        let written = write_wearer_streams(&staging.join(&head.name), &rig, &settings, &wearer)?;
+        let written = write_wearer_streams(&staging.join(&head.name), rig, settings, &wearer)?;
         let bytes: u64 = written.files.iter().map(|f| f.1).sum();
         eprintln!(
             "egogen aria export: {}: {} trajectory rows, {} IMU samples, {} files, {:.1} MB (spline off the head poses by at most {:.1e} rad)",
@@ -146,12 +197,12 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
             eprintln!("egogen aria export: {}: {note}", head.name);
         }
     }
-    crate::manifest::write_manifest(&staging)?;
-    std::fs::rename(&staging, &args.out)
-        .with_context(|| format!("renaming {} to {}", staging.display(), args.out.display()))?;
+    crate::manifest::write_manifest(staging)?;
+    std::fs::rename(staging, out)
+        .with_context(|| format!("renaming {} to {}", staging.display(), out.display()))?;
     println!(
         "wrote {} ({} wearers in {:.2} s)",
-        args.out.display(),
+        out.display(),
         wearers.len(),
         started.elapsed().as_secs_f64()
     );
@@ -194,8 +245,9 @@ fn take_scene(take: &Path) -> Result<Option<(PathBuf, crate::scene::SceneFrame)>
     Ok(Some((PathBuf::from(scene), frame)))
 }
 
-/// Each agent's goals from `summary.json` (`agents[].goals[]`: `goal` [x, y], `end_frame`).
-fn take_goals(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>)>> {
+/// Each agent's goals and what its activities act on, from `summary.json`
+/// (`agents[].goals[]`: `goal` [x, y], `end_frame`; `agents[].activities[].look_at`).
+fn take_targets(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>, Vec<GazeLook>)>> {
     let path = motion_root(take).join("summary.json");
     let Ok(text) = std::fs::read_to_string(&path) else {
         return Ok(Vec::new());
@@ -216,7 +268,21 @@ fn take_goals(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>)>> {
                 })
             })
             .collect();
-        out.push((name, goals));
+        let mut looks = Vec::new();
+        for (k, act) in a["activities"].as_array().into_iter().flatten().enumerate() {
+            if act.get("look_at").is_none() {
+                continue;
+            }
+            let look: crate::synth::activity::LookAt =
+                serde_json::from_value(act["look_at"].clone()).with_context(|| {
+                    format!(
+                        "{}: agent {name}: key activities[{k}].look_at: expected {{ point: [x, y, z], start_frame, end_frame }}",
+                        path.display()
+                    )
+                })?;
+            looks.push(GazeLook::of(&look));
+        }
+        out.push((name, goals, looks));
     }
     Ok(out)
 }
@@ -273,7 +339,7 @@ fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<usize>, Vec<Ta
             );
         }
     }
-    let goals = take_goals(take)?;
+    let targets = take_targets(take)?;
     let everyone = found
         .iter()
         .map(|(name, path)| {
@@ -287,10 +353,15 @@ fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<usize>, Vec<Ta
                 frame_rate_hz,
                 world_from_cpf,
                 cpf_from_headset,
-                goals: goals
+                goals: targets
                     .iter()
                     .find(|g| &g.0 == name)
                     .map(|g| g.1.clone())
+                    .unwrap_or_default(),
+                looks: targets
+                    .iter()
+                    .find(|g| &g.0 == name)
+                    .map(|g| g.2.clone())
                     .unwrap_or_default(),
             })
         })

@@ -28,6 +28,8 @@ pub struct RunOverrides {
     pub crowd_count: Option<usize>,
     /// `motion.duration_s`.
     pub duration_s: Option<f64>,
+    /// `activities.weights`: what people do when a walk ends.
+    pub activity_weights: Option<crate::synth::activity::ActivityWeights>,
     /// `supervisor.workers`.
     pub workers: Option<usize>,
     /// `supervisor.backend`.
@@ -68,6 +70,9 @@ impl RunOverrides {
         }
         if let Some(d) = self.duration_s {
             raw.motion.duration_s = Some(d);
+        }
+        if let Some(w) = self.activity_weights {
+            raw.activities.weights = w;
         }
         if let Some(seed) = self.seed {
             // Agents draw from the motion's seed; a single motion is placed by the scene's.
@@ -114,6 +119,7 @@ impl RunOverrides {
             ("--unit-m", self.unit_m.is_some()),
             ("--crowd-count", self.crowd_count.is_some()),
             ("--duration", self.duration_s.is_some()),
+            ("--activity-weights", self.activity_weights.is_some()),
         ]
         .into_iter()
         .filter_map(|(flag, on)| on.then_some(flag))
@@ -130,6 +136,7 @@ impl RunOverrides {
             && self.unit_m.is_none()
             && self.crowd_count.is_none()
             && self.duration_s.is_none()
+            && self.activity_weights.is_none()
             && self.workers.is_none()
             && self.backend.is_none()
     }

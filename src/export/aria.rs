@@ -19,7 +19,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde_json::json;
 
-use super::gaze::{eye_gaze_csv, fixations, gaze_samples, Fixation, GazeGoal, GazeWorld};
+use super::gaze::{eye_gaze_csv, fixations, gaze_samples, Fixation, GazeGoal, GazeLook, GazeWorld};
 use super::imu::{sample_times_ns, simulate_imu, ImuErrors, ImuSample, GRAVITY_WORLD};
 use super::take::{FinishedTake, TakeExport};
 use crate::atomic_file::write_atomically;
@@ -187,6 +187,8 @@ pub(crate) struct Wearer<'a> {
     pub others: Vec<&'a [Affine3]>,
     /// The wearer's goals in order, for the gaze.
     pub goals: Vec<GazeGoal>,
+    /// What its activities act on, for the gaze.
+    pub looks: Vec<GazeLook>,
     /// The scene, for gaze depths.
     pub rays: Option<&'a SceneRays>,
 }
@@ -209,6 +211,8 @@ pub struct AriaWearer {
     pub agent: usize,
     /// Where it walks, in order (the gaze looks ahead to it).
     pub goals: Vec<GazeGoal>,
+    /// What its activities act on (the gaze looks at it while it acts).
+    pub looks: Vec<GazeLook>,
     /// How the headset sits on its head.
     pub cpf_from_headset: Affine3,
 }
@@ -247,6 +251,7 @@ impl TakeExport for AriaExport {
                     .map(|k| eyes[k].as_slice())
                     .collect(),
                 goals: w.goals.clone(),
+                looks: w.looks.clone(),
                 rays: self.rays.as_ref(),
             };
             let written = write_wearer_streams(
@@ -395,6 +400,7 @@ pub(crate) fn write_wearer_streams(
             others: wearer.others.clone(),
             frame_rate_hz: wearer.frame_rate_hz,
             goals: &wearer.goals,
+            looks: &wearer.looks,
             rays: wearer.rays,
         };
         let fixations = fixations(&world, gaze_seed(settings.seed, wearer.index));

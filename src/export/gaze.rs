@@ -3,7 +3,11 @@
 //! measurement; each of its parts is a published regularity or a stated choice
 //! (docs/ARIA.md, "Eye gaze"):
 //!
-//! - Targets, chosen at each fixation's start: another person within 5 m and 40° of the head's
+//! - Targets, chosen at each fixation's start: while the wearer does an activity, what it acts
+//!   on (the seat from the walk to it until seated, the spot on the floor picked from while
+//!   bending; `synth::activity::LookAt`) with probability 0.7 when within 90° of the head's
+//!   forward direction (a choice after Land & Hayhoe, Vision Research 2001: in everyday
+//!   tasks the eyes fixate the object about to be acted on, ahead of the hands); else another person within 5 m and 40° of the head's
 //!   forward direction (with probability 0.5; the nearest), the current goal when it is within
 //!   4 m and 40° (probability 0.3), else the floor where the wearer's path will be 3–5 m on
 //!   (walkers fixate the path ahead, the farther the flatter the ground: Matthis, Yates &
@@ -21,7 +25,9 @@
 //!
 //! Angles are in the device's CPF (x left, y up, z forward): `yaw = atan2(x, z)`,
 //! `pitch = atan2(y, z)`, so projectaria-tools' `get_eyegaze_point_at_depth(yaw, pitch, depth)`
-//! gives back the fixated point. The model has no uncertainty: low = high = the value.
+//! gives back the fixated point. The CSV is MPS's vergence layout: each eye's yaw towards that
+//! point from eyes 63 mm apart, one pitch, the depth; projectaria-tools' reader combines the eyes'
+//! yaws back into the yaw. The model has no uncertainty: low = high = the value.
 
 use std::fmt::Write as _;
 
@@ -37,6 +43,8 @@ use crate::scene::mesh_distance::SceneRays;
 const PERSON_RANGE_M: Real = 5.0;
 const PERSON_PROBABILITY: Real = 0.5;
 const GOAL_RANGE_M: Real = 4.0;
+const ACTIVITY_PROBABILITY: Real = 0.7;
+const ACTIVITY_ANGLE_DEG: Real = 90.0;
 const GOAL_PROBABILITY: Real = 0.3;
 const NOTICE_ANGLE_DEG: Real = 40.0;
 const LOOK_AHEAD_M: [Real; 2] = [3.0, 5.0];
@@ -56,6 +64,26 @@ pub struct GazeGoal {
     pub until_frame: usize,
 }
 
+/// What an activity of the wearer acts on, and the frames `from_frame..until_frame` over which
+/// it is looked at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GazeLook {
+    pub point: Vec3,
+    pub from_frame: usize,
+    pub until_frame: usize,
+}
+
+impl GazeLook {
+    /// What a take's activity record says the person looks at.
+    pub fn of(look: &crate::synth::activity::LookAt) -> Self {
+        Self {
+            point: Vec3::from_array(look.point),
+            from_frame: look.start_frame,
+            until_frame: look.end_frame,
+        }
+    }
+}
+
 /// What the wearer can look at.
 pub struct GazeWorld<'a> {
     /// The device's CPF through the take (the headset spline).
@@ -64,6 +92,8 @@ pub struct GazeWorld<'a> {
     pub others: Vec<&'a [Affine3]>,
     pub frame_rate_hz: Real,
     pub goals: &'a [GazeGoal],
+    /// What its activities act on, in frame order (none where people only walk).
+    pub looks: &'a [GazeLook],
     /// The scene, for depths and the floor; `None`: depths to the targets, the floor 1.6 m
     /// below the eyes at the start.
     pub rays: Option<&'a SceneRays>,
@@ -192,10 +222,20 @@ pub fn fixations(world: &GazeWorld, seed: u64) -> Vec<Fixation> {
                 (Vec3::new(g.x, g.y, eyes.z) - eyes).length() < GOAL_RANGE_M
                     && direction_in_cpf(&head, *g).1 < notice
             });
+        // Drawn only while an activity's target is in front: takes without one draw as before.
+        let on_task = world
+            .looks
+            .iter()
+            .find(|l| (l.from_frame..l.until_frame).contains(&frame))
+            .filter(|l| direction_in_cpf(&head, l.point).1 < ACTIVITY_ANGLE_DEG.to_radians())
+            .filter(|_| uniform_open01(&mut rng) < ACTIVITY_PROBABILITY);
         let roll = uniform_open01(&mut rng);
-        let target = match (person, goal) {
-            (Some((k, _)), _) if roll < PERSON_PROBABILITY => GazeTarget::Person(k),
-            (_, Some(g)) if uniform_open01(&mut rng) < GOAL_PROBABILITY => GazeTarget::Point(g),
+        let target = match (on_task, person, goal) {
+            (Some(look), _, _) => GazeTarget::Point(look.point),
+            (None, Some((k, _)), _) if roll < PERSON_PROBABILITY => GazeTarget::Person(k),
+            (None, _, Some(g)) if uniform_open01(&mut rng) < GOAL_PROBABILITY => {
+                GazeTarget::Point(g)
+            }
             _ => {
                 // The floor where the path will be 3–5 m on (within the next 6 s).
                 let reach = uniform_in(&mut rng, LOOK_AHEAD_M[0], LOOK_AHEAD_M[1]);
@@ -297,29 +337,117 @@ pub fn gaze_samples(world: &GazeWorld, fixations: &[Fixation], rate_hz: Real) ->
         .collect()
 }
 
-/// The legacy MPS eye-gaze header (projectaria-tools reads it by name; no other column).
+/// Half the distance between the eyes (m): the eye origins written in the CSV, left at +x
+/// (CPF's x points left), as in Meta's published sample (`tx_left_eye_cpf` 0.0315).
+pub(crate) const HALF_IPD_M: Real = 0.0315;
+
+/// The MPS eye-gaze header of the vergence layout (projectaria-tools reads it first, by name).
 pub(crate) const EYE_GAZE_HEADER: &str =
-    "tracking_timestamp_us,yaw_rads_cpf,pitch_rads_cpf,depth_m,\
-yaw_low_rads_cpf,pitch_low_rads_cpf,yaw_high_rads_cpf,pitch_high_rads_cpf,session_uid";
+    "tracking_timestamp_us,left_yaw_rads_cpf,right_yaw_rads_cpf,pitch_rads_cpf,depth_m,\
+left_yaw_low_rads_cpf,right_yaw_low_rads_cpf,pitch_low_rads_cpf,\
+left_yaw_high_rads_cpf,right_yaw_high_rads_cpf,pitch_high_rads_cpf,\
+tx_left_eye_cpf,ty_left_eye_cpf,tz_left_eye_cpf,tx_right_eye_cpf,ty_right_eye_cpf,tz_right_eye_cpf,\
+session_uid";
+
+/// Each eye's yaw towards the fixated point: the point at `depth_m` along (tan yaw, tan pitch,
+/// 1), seen from the eyes at x = ±[`HALF_IPD_M`]. The reader's combined yaw, atan of the rays'
+/// crossing x/z, is the sample's yaw for any eye distance; `depth_m` is written as it is.
+fn eye_yaws(s: &GazeSample) -> (Real, Real) {
+    let (tx, ty) = (s.yaw_rad.tan(), s.pitch_rad.tan());
+    let z = s.depth_m / (tx * tx + ty * ty + 1.0).sqrt();
+    let x = tx * z;
+    (((x - HALF_IPD_M) / z).atan(), ((x + HALF_IPD_M) / z).atan())
+}
 
 /// The samples as `general_eye_gaze.csv`.
 pub(crate) fn eye_gaze_csv(samples: &[GazeSample], session: &str) -> String {
-    let mut text = String::with_capacity(samples.len() * 120 + 200);
+    let mut text = String::with_capacity(samples.len() * 280 + 400);
     text.push_str(EYE_GAZE_HEADER);
     text.push('\n');
+    let h = HALF_IPD_M;
     for s in samples {
+        let (left, right) = eye_yaws(s);
+        let p = s.pitch_rad;
         let _ = writeln!(
             text,
-            "{},{},{},{},{},{},{},{},{session}",
-            s.timestamp_us,
-            s.yaw_rad,
-            s.pitch_rad,
-            s.depth_m,
-            s.yaw_rad,
-            s.pitch_rad,
-            s.yaw_rad,
-            s.pitch_rad
+            "{},{left},{right},{p},{},{left},{right},{p},{left},{right},{p},{h},0,0,{},0,0,{session}",
+            s.timestamp_us, s.depth_m, -h,
         );
     }
     text
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// projectaria-tools' `computeDepthAndCombinedGazeDirection` (EyeGazeFormat.h): the crossing
+    /// of the eyes' rays from x = ±half_ipd, its distance and combined yaw.
+    fn reader_combines(left: Real, right: Real, pitch: Real, half_ipd: Real) -> (Real, Real) {
+        let (tl, tr) = (left.tan(), right.tan());
+        let x = half_ipd * (tl + tr) / (tr - tl);
+        let z = 2.0 * half_ipd / (tr - tl);
+        let y = z * pitch.tan();
+        ((x * x + y * y + z * z).sqrt(), (x / z).atan())
+    }
+
+    #[test]
+    fn the_eyes_yaws_combine_back_into_the_gaze_at_its_depth() {
+        for (yaw_deg, pitch_deg, depth_m) in [
+            (0.0, 0.0, 1.0),
+            (29.9, -29.9, 0.12),
+            (-20.0, 10.0, 19.5),
+            (5.0, -25.0, 2.5),
+            (-29.9, 29.9, 60.0),
+        ] {
+            let s = GazeSample {
+                timestamp_us: 0,
+                yaw_rad: (yaw_deg as Real).to_radians(),
+                pitch_rad: (pitch_deg as Real).to_radians(),
+                depth_m,
+                eccentricity_rad: 0.0,
+            };
+            let (left, right) = eye_yaws(&s);
+            assert!(
+                left < right,
+                "the left eye (+x) turns further right: {left} {right}"
+            );
+            let (depth, yaw) = reader_combines(left, right, s.pitch_rad, HALF_IPD_M);
+            assert!(
+                (yaw - s.yaw_rad).abs() < 1e-9 * depth_m.max(1.0),
+                "{yaw} {}",
+                s.yaw_rad
+            );
+            assert!(
+                (depth - depth_m).abs() < 1e-9 * depth_m,
+                "{depth} {depth_m}"
+            );
+            // Another eye distance in the reader: the yaw is the same.
+            let (_, yaw) = reader_combines(left, right, s.pitch_rad, 0.032);
+            assert!((yaw - s.yaw_rad).abs() < 1e-9 * depth_m.max(1.0));
+        }
+        let row = eye_gaze_csv(
+            &[GazeSample {
+                timestamp_us: 33_333,
+                yaw_rad: 0.1,
+                pitch_rad: -0.2,
+                depth_m: 1.5,
+                eccentricity_rad: 0.2,
+            }],
+            "agent_0",
+        );
+        let lines: Vec<&str> = row.lines().collect();
+        assert_eq!(lines.len(), 2);
+        let header: Vec<&str> = lines[0].split(',').collect();
+        let values: Vec<&str> = lines[1].split(',').collect();
+        assert_eq!(header.len(), 18);
+        assert_eq!(values.len(), 18);
+        let at = |name: &str| values[header.iter().position(|h| *h == name).unwrap()];
+        assert_eq!(at("tracking_timestamp_us"), "33333");
+        assert_eq!(at("depth_m"), "1.5");
+        assert_eq!(at("pitch_rads_cpf"), "-0.2");
+        assert_eq!(at("tx_left_eye_cpf"), "0.0315");
+        assert_eq!(at("tx_right_eye_cpf"), "-0.0315");
+        assert_eq!(at("session_uid"), "agent_0");
+    }
 }

@@ -6,7 +6,9 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 
 use crate::exr_file::ExrContents;
-use crate::manifest::{dataset_files, sha256_file, Manifest, MANIFEST};
+use std::collections::HashSet;
+
+use crate::manifest::{dataset_files, sha256_file, Manifest, MANIFEST, MANIFEST_VERSION};
 use crate::render::frame_file::{check_frame_channels, FrameFileError};
 
 /// What `verify` checked.
@@ -29,13 +31,28 @@ pub fn verify(dir: &Path) -> Result<VerifyReport> {
     })?;
     let manifest: Manifest = serde_json::from_str(&text)
         .with_context(|| format!("{}: not an egogen manifest", path.display()))?;
+    if manifest.egogen_manifest != MANIFEST_VERSION {
+        bail!(
+            "{}: key egogen_manifest: format version {}, expected {MANIFEST_VERSION} (written by another egogen version?)",
+            path.display(),
+            manifest.egogen_manifest
+        );
+    }
     if manifest.files.is_empty() {
         bail!("{}: lists no files; not a finished dataset", path.display());
     }
     let mut problems = Vec::new();
     let mut frames = 0;
     let mut bytes = 0;
+    let mut seen = HashSet::new();
     for e in &manifest.files {
+        if !seen.insert(e.path.as_str()) {
+            problems.push(format!(
+                "{}: listed more than once in {MANIFEST} (each file once)",
+                e.path
+            ));
+            continue;
+        }
         let inside = Path::new(&e.path)
             .components()
             .all(|c| matches!(c, std::path::Component::Normal(_)));
@@ -133,7 +150,7 @@ mod tests {
         let dir = dataset_with(&[("a.json", b"{}")]);
         let write = |files: Vec<ManifestEntry>| {
             let m = Manifest {
-                egogen_manifest: 1,
+                egogen_manifest: MANIFEST_VERSION,
                 files,
             };
             std::fs::write(
@@ -163,5 +180,34 @@ mod tests {
                 "{path}: {err}"
             );
         }
+    }
+
+    #[test]
+    fn verify_refuses_a_file_listed_twice_and_another_format_version() {
+        let dir = dataset_with(&[("a.json", b"{}"), ("b.txt", b"b")]);
+        let good = build_manifest(dir.path()).unwrap();
+        let write = |m: &Manifest| {
+            std::fs::write(dir.path().join(MANIFEST), serde_json::to_string(m).unwrap()).unwrap()
+        };
+        write(&good);
+        assert_eq!(verify(dir.path()).unwrap().files, 2);
+        let mut twice = good.clone();
+        twice.files.push(good.files[1].clone());
+        write(&twice);
+        let err = format!("{:#}", verify(dir.path()).unwrap_err());
+        assert!(
+            err.contains("b.txt: listed more than once in manifest.json"),
+            "{err}"
+        );
+        let other = Manifest {
+            egogen_manifest: 2,
+            ..good
+        };
+        write(&other);
+        let err = format!("{:#}", verify(dir.path()).unwrap_err());
+        assert!(
+            err.contains("manifest.json: key egogen_manifest: format version 2, expected 1"),
+            "{err}"
+        );
     }
 }

@@ -51,6 +51,72 @@ impl Default for ActivityWeights {
     }
 }
 
+impl ActivityWeights {
+    /// The names a weight is given by.
+    pub const NAMES: [&'static str; 4] = ["walk", "stand", "sit", "pick_up"];
+
+    /// Weights given by name; those not named are 0 (unlike `[activities.weights]`, whose
+    /// `walk` defaults to 1): what a campaign's `activity_weights` entries and
+    /// `egogen-run --activity-weights` say. The message names the weight that is wrong.
+    pub fn from_named<'a>(named: impl IntoIterator<Item = (&'a str, f64)>) -> Result<Self, String> {
+        let mut w = Self {
+            walk: 0.0,
+            stand: 0.0,
+            sit: 0.0,
+            pick_up: 0.0,
+        };
+        for (name, v) in named {
+            let slot = match name {
+                "walk" => &mut w.walk,
+                "stand" => &mut w.stand,
+                "sit" => &mut w.sit,
+                "pick_up" => &mut w.pick_up,
+                other => {
+                    return Err(format!(
+                        "unknown activity `{other}` (expected {})",
+                        Self::NAMES.join(", ")
+                    ))
+                }
+            };
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("`{name}`: expected a weight ≥ 0, got {v}"));
+            }
+            *slot = v;
+        }
+        if w.walk + w.stand + w.sit + w.pick_up <= 0.0 {
+            return Err("expected at least one weight > 0, got all zero".into());
+        }
+        Ok(w)
+    }
+
+    /// `walk=2,sit=1`: the weights above 0 by name (unnamed are 0).
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let mut named = Vec::new();
+        for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (name, v) = part
+                .split_once('=')
+                .ok_or_else(|| format!("`{part}`: expected NAME=WEIGHT, e.g. walk=2,sit=1"))?;
+            let v: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("`{part}`: expected a number after `=`"))?;
+            named.push((name.trim(), v));
+        }
+        Self::from_named(named)
+    }
+
+    /// The weights above 0 as [`parse`](Self::parse) reads them.
+    pub fn flag(&self) -> String {
+        Self::NAMES
+            .iter()
+            .zip([self.walk, self.stand, self.sit, self.pick_up])
+            .filter(|(_, v)| *v > 0.0)
+            .map(|(n, v)| format!("{n}={v}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+}
+
 /// What people do besides walking (`[activities]` of synth and run configs; docs/ACTIVITIES.md).
 /// The default is walking only: takes as before.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -162,6 +228,18 @@ pub enum Activity {
     PickUp,
 }
 
+impl Activity {
+    /// Its name in configs and files (`walk`, `stand`, `sit`, `pick_up`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Activity::Walk => "walk",
+            Activity::Stand => "stand",
+            Activity::Sit => "sit",
+            Activity::PickUp => "pick_up",
+        }
+    }
+}
+
 /// Where in an activity a frame is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -172,6 +250,17 @@ pub enum Phase {
     Transition,
     /// The activity itself: standing and looking, seated, picking up.
     Hold,
+}
+
+impl Phase {
+    /// Its name in files (`approach`, `transition`, `hold`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Approach => "approach",
+            Phase::Transition => "transition",
+            Phase::Hold => "hold",
+        }
+    }
 }
 
 /// Frames `start..end` of an agent's track spent in `activity`'s `phase` (frames in none: walking).
@@ -230,6 +319,19 @@ pub struct ActivityRecord {
     pub join_joint_speed_rad_s: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clip_joint_speed_rad_s: Option<f64>,
+    /// What the person looks at while doing it (the Aria gaze model fixates it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub look_at: Option<LookAt>,
+}
+
+/// A point a person looks at over frames `start_frame..end_frame` of its track: the seat
+/// from the walk to it until seated, the spot on the floor picked from while bending.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LookAt {
+    /// World (m).
+    pub point: [f64; 3],
+    pub start_frame: usize,
+    pub end_frame: usize,
 }
 
 /// An activity drawn but not done, and why.
@@ -504,6 +606,7 @@ impl ActivityWorld {
     ) -> Result<Performance, String> {
         let (played, pelvis) = self.where_standing(body, last, "64_28", floor_z)?;
         let clip_speed = max_joint_speed(&played);
+        let spot = lowest_reach(body, &played, floor_z)?;
         let (into, turn) = self.transition(body, last, &played[0])?;
         let end = played[played.len() - 1].clone();
         let pad = rounded_hold(into.len() + played.len(), 0.0, 0);
@@ -520,6 +623,11 @@ impl ActivityWorld {
         let mut r = record(Activity::PickUp, pelvis, turn);
         r.clip = Some("64_28".into());
         r.clip_joint_speed_rad_s = Some(clip_speed);
+        r.look_at = Some(LookAt {
+            point: spot,
+            start_frame: 0,
+            end_frame: frames.len(),
+        });
         Ok(Performance {
             activity: Activity::PickUp,
             record: r,
@@ -672,6 +780,11 @@ impl ActivityWorld {
         r.seat_fit_m = Some(fit);
         r.foot_miss_m = Some(foot_miss);
         r.seat_penetration_m = Some(seat_penetration(body, &frames, &seat, map)?);
+        r.look_at = Some(LookAt {
+            point: [seated_at.x, seated_at.y, seat.surface_z_m],
+            start_frame: 0,
+            end_frame: down,
+        });
         Ok(Performance {
             activity: Activity::Sit,
             record: r,
@@ -720,6 +833,7 @@ fn record(activity: Activity, place: DVec2, turn_deg: f64) -> ActivityRecord {
         contact: f64::NAN,
         join_joint_speed_rad_s: f64::NAN,
         clip_joint_speed_rad_s: None,
+        look_at: None,
     }
 }
 
@@ -729,6 +843,26 @@ fn rounded_hold(before: usize, seconds: f64, after: usize) -> usize {
     let per = NEW_FRAMES;
     let want = before + ((seconds * PRIMITIVE_RATE_HZ).round() as usize).max(1) + after;
     want.div_ceil(per) * per - before - after
+}
+
+/// The spot on the floor below the hands where they reach lowest in `frames`.
+fn lowest_reach(
+    body: &BodyContext,
+    frames: &[BodyParams],
+    floor_z: f64,
+) -> Result<[f64; 3], String> {
+    let mut best = [0.0, 0.0, f64::INFINITY];
+    for f in frames {
+        let s = body
+            .shaped
+            .skeleton(&f.pose, f.transl)
+            .map_err(|e| e.to_string())?;
+        let mid = (s.joints[joint::LEFT_WRIST] + s.joints[joint::RIGHT_WRIST]) * 0.5;
+        if mid.z < best[2] {
+            best = [mid.x, mid.y, mid.z];
+        }
+    }
+    Ok([best[0], best[1], floor_z])
 }
 
 /// A pose's pelvis (horizontal) and facing.
@@ -889,6 +1023,28 @@ mod tests {
     }
 
     #[test]
+    fn weights_given_by_name_read_back_from_their_flag_and_bad_ones_are_named() {
+        let w = ActivityWeights::parse("walk=2, sit=0.5").unwrap();
+        assert_eq!((w.walk, w.stand, w.sit, w.pick_up), (2.0, 0.0, 0.5, 0.0));
+        assert_eq!(w.flag(), "walk=2,sit=0.5");
+        assert_eq!(ActivityWeights::parse(&w.flag()).unwrap(), w);
+        let tiny = ActivityWeights::from_named([("pick_up", 1e-300)]).unwrap();
+        assert_eq!(ActivityWeights::parse(&tiny.flag()).unwrap(), tiny);
+        for (text, says) in [
+            ("run=1", "unknown activity `run`"),
+            ("sit=-1", "`sit`: expected a weight ≥ 0, got -1"),
+            ("sit=NaN", "`sit`: expected a weight ≥ 0"),
+            ("sit", "expected NAME=WEIGHT"),
+            ("sit=x", "expected a number"),
+            ("walk=0", "all zero"),
+            ("", "all zero"),
+        ] {
+            let e = ActivityWeights::parse(text).unwrap_err();
+            assert!(e.contains(says), "{text}: {e}");
+        }
+    }
+
+    #[test]
     fn a_frame_is_labelled_by_the_segment_holding_it_or_walking() {
         let seg = |activity, phase, start_frame, end_frame| ActivitySegment {
             activity,
@@ -909,6 +1065,24 @@ mod tests {
         assert_eq!(at(40), (Activity::Stand, Some(Phase::Hold)));
         assert_eq!(at(41), (Activity::Walk, None));
         assert_eq!(ActivitySegment::at(&[], 5), (Activity::Walk, None));
+        // Names as files spell them.
+        for a in [
+            Activity::Walk,
+            Activity::Stand,
+            Activity::Sit,
+            Activity::PickUp,
+        ] {
+            assert_eq!(
+                serde_json::to_string(&a).unwrap(),
+                format!("\"{}\"", a.name())
+            );
+        }
+        for p in [Phase::Approach, Phase::Transition, Phase::Hold] {
+            assert_eq!(
+                serde_json::to_string(&p).unwrap(),
+                format!("\"{}\"", p.name())
+            );
+        }
     }
 
     #[test]

@@ -951,6 +951,16 @@ impl<'m> Agent<'m> {
     /// Begins playing `p` from the next frame.
     fn perform(&mut self, mut p: Performance) {
         let start = self.track.frames.len();
+        if let Some(look) = p.record.look_at.as_mut() {
+            look.start_frame += start;
+            look.end_frame += start;
+            // A seat is looked at from the walk to it on.
+            if let Some(walk) = self.track.activity_segments.last().filter(|s| {
+                p.activity == Activity::Sit && s.phase == Phase::Approach && s.end_frame == start
+            }) {
+                look.start_frame = walk.start_frame;
+            }
+        }
         let mut k = start;
         for &(phase, n) in &p.phases {
             self.track.activity_segments.push(ActivitySegment {
@@ -1040,6 +1050,9 @@ impl<'m> Agent<'m> {
             .retain(|seg| seg.start_frame < seg.end_frame);
         for r in &mut t.activities {
             r.end_frame = r.end_frame.min(frames);
+            if let Some(look) = r.look_at.as_mut() {
+                look.end_frame = look.end_frame.min(frames);
+            }
         }
         while t.frames.len() < frames {
             t.frames.push(t.frames[t.frames.len() - 1].clone());

@@ -4,7 +4,8 @@
 //! Layout: `agents/<name>/motion.npz` (AMASS-style SMPL-X at 40 fps: `poses` N×165, `trans`,
 //! `betas`, `gender`, `mocap_frame_rate`), `agents/<name>/cpf_trajectory.json`
 //! (`world_from_cpf` per frame), `agents/<name>/markers.npy` (float32 N×67×3, world, m);
-//! `paths.png` (top view: walkable map, obstacles, every agent's pelvis path, starts and goals);
+//! `paths.png` (top view: walkable map, obstacles, every agent's pelvis path, starts,
+//! goals and activities done);
 //! `summary.json` (what was asked, per agent goals and state, totals, wall time);
 //! `manifest.json` (files with sizes and SHA-256).
 
@@ -14,6 +15,7 @@ use anyhow::{bail, Context, Result};
 use glam::DVec2;
 use serde::Serialize;
 
+use super::activity::Activity;
 use super::crowd::{AgentState, AgentTrack, CrowdTake, CrowdWorld};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
@@ -264,8 +266,9 @@ fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
 
 /// A top view of the takes' paths over the walkable map: the region shaded, static
 /// obstacles dark red, moving ones at the first take's start (light) and end (dark), per
-/// agent its pelvis path, start (dot in a ring), goals (dots; a white centre: missed) and end
-/// (a disc; black: fell or failed). Several takes of one world draw over each other.
+/// agent its pelvis path, start (dot in a ring), goals (dots; a white centre: missed),
+/// activities done ([`activity_mark`]) and end (a disc; black: fell or failed). Several takes
+/// of one world draw over each other.
 pub(crate) fn paths_picture<'a>(
     world: &'a CrowdWorld,
     takes: &[&CrowdTake],
@@ -306,6 +309,9 @@ pub(crate) fn paths_picture<'a>(
                 pic.dot(p, 2, [255, 255, 255]);
             }
         }
+        for r in &a.activities {
+            activity_mark(&mut pic, r.activity, DVec2::from_array(r.place), c);
+        }
         if let Some(&s) = a.pelvis_xy.first() {
             pic.dot(s, 4, [0, 0, 0]);
             pic.dot(s, 2, c);
@@ -325,6 +331,39 @@ pub(crate) fn paths_picture<'a>(
         }
     }
     pic
+}
+
+/// Where an activity was done, in the agent's colour on black: a sit as a square on the seat,
+/// a stand as a ring, a pick-up as a cross.
+fn activity_mark(pic: &mut MapPicture, activity: Activity, p: DVec2, c: [u8; 3]) {
+    let square = |half: f64| Obstacle2::Box {
+        centre: p,
+        half_extents: DVec2::splat(half),
+        yaw_rad: 0.0,
+    };
+    match activity {
+        Activity::Sit => {
+            pic.obstacle(&square(0.16), [0, 0, 0]);
+            pic.obstacle(&square(0.1), c);
+        }
+        Activity::Stand => {
+            pic.dot(p, 8, [0, 0, 0]);
+            pic.dot(p, 6, c);
+            pic.dot(p, 3, [255, 255, 255]);
+        }
+        Activity::PickUp => {
+            let black: &[f64] = &[-0.045, -0.015, 0.015, 0.045];
+            for (d, rgb, offsets) in [(0.22, [0, 0, 0], black), (0.18, c, &[-0.015, 0.0, 0.015])] {
+                for &o in offsets {
+                    // Each diagonal drawn thick: moved across itself.
+                    let (n, m) = (DVec2::new(o, -o), DVec2::new(o, o));
+                    pic.line(p + DVec2::new(-d, -d) + n, p + DVec2::new(d, d) + n, rgb);
+                    pic.line(p + DVec2::new(-d, d) + m, p + DVec2::new(d, -d) + m, rgb);
+                }
+            }
+        }
+        Activity::Walk => {}
+    }
 }
 
 /// Writes a take folder (see the module docs); `dir` must pass [`check_out_dir`]. `wall_s`:

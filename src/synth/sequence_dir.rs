@@ -54,8 +54,12 @@ pub(crate) fn cpf_trajectory_json(
     Ok(serde_json::to_vec_pretty(&cpf)?)
 }
 
-/// Reads a `cpf_trajectory.json`: its frame rate (from the frames' times) and poses; errors
-/// name the file, the frame and the key.
+/// How far a pose's rotation may be from orthonormal (max |RᵀR − I|): rounding of a written
+/// pose is ~1e-15; a scaled or sheared one is far beyond.
+const RIGID_TOLERANCE: f64 = 1e-6;
+
+/// Reads a `cpf_trajectory.json`: its frame rate (from the frames' times, which must be
+/// regular) and poses (rigid); errors name the file, the frame and the key.
 pub fn read_cpf_trajectory(path: &Path) -> Result<(f64, Vec<crate::math::Affine3>)> {
     let text =
         std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
@@ -77,14 +81,25 @@ pub fn read_cpf_trajectory(path: &Path) -> Result<(f64, Vec<crate::math::Affine3
                 f.frame
             );
         }
-        poses.push(
-            crate::math::affine_from_row_major(&f.world_from_cpf).with_context(|| {
-                format!(
-                    "{}: frame {i}: key `world_from_cpf`: expected finite numbers",
-                    path.display()
-                )
-            })?,
-        );
+        let pose = crate::math::affine_from_row_major(&f.world_from_cpf).with_context(|| {
+            format!(
+                "{}: frame {i}: key `world_from_cpf`: expected finite numbers",
+                path.display()
+            )
+        })?;
+        let r = pose.matrix3;
+        let off_rigid = (r.transpose() * r - glam::DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0_f64, |m, x| m.max(x.abs()));
+        if off_rigid > RIGID_TOLERANCE || r.determinant() <= 0.0 {
+            bail!(
+                "{}: frame {i}: key `world_from_cpf`: its 3×3 part is not a rotation (RᵀR differs from I by {off_rigid:.3e}, det {:.6}); expected a rigid pose",
+                path.display(),
+                r.determinant()
+            );
+        }
+        poses.push(pose);
     }
     let mut rate = if frames.len() > 1 {
         1.0 / frames[1].time_s
@@ -101,6 +116,17 @@ pub fn read_cpf_trajectory(path: &Path) -> Result<(f64, Vec<crate::math::Affine3
             path.display(),
             frames[1].time_s
         );
+    }
+    // The exports sample frames as regular: every frame's time must be i / rate.
+    for (i, f) in frames.iter().enumerate() {
+        let expected = i as f64 / rate;
+        if !((f.time_s - expected).abs() <= 1e-6 + 1e-12 * expected) {
+            bail!(
+                "{}: frame {i}: key `time_s`: {} s, expected {expected} s (frames at a constant {rate} Hz, from frame 1's time)",
+                path.display(),
+                f.time_s
+            );
+        }
     }
     Ok((rate, poses))
 }
@@ -252,4 +278,71 @@ fn side_view(model: &BodyModel, meshes: &[(usize, PosedBody)]) -> RgbImage {
         })
         .collect();
     MeshView::looking_from(Vec3::new(0.0, -1.0, 0.0), Vec3::Z).render(&parts, 960, 360)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{axis_angle_to_matrix, Affine3, Vec3};
+
+    fn written(frames: usize) -> serde_json::Value {
+        let poses: Vec<Affine3> = (0..frames)
+            .map(|i| Affine3 {
+                matrix3: axis_angle_to_matrix(Vec3::new(0.1, 0.3 * i as f64, 3.0)),
+                translation: Vec3::new(i as f64 * 0.05, 1.6, -2.0),
+            })
+            .collect();
+        serde_json::from_slice(&cpf_trajectory_json(&poses, 30.0).unwrap()).unwrap()
+    }
+
+    fn read(doc: &serde_json::Value) -> Result<(f64, Vec<Affine3>)> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("cpf_trajectory.json");
+        std::fs::write(&path, serde_json::to_vec(doc).unwrap()).unwrap();
+        read_cpf_trajectory(&path)
+    }
+
+    #[test]
+    fn a_trajectory_with_a_scaled_rotation_or_irregular_times_is_refused() {
+        let good = written(6);
+        let (rate, poses) = read(&good).unwrap();
+        assert_eq!((rate, poses.len()), (30.0, 6));
+
+        let mut scaled = good.clone();
+        for row in scaled[3]["world_from_cpf"]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .take(3)
+        {
+            for x in row.as_array_mut().unwrap().iter_mut().take(3) {
+                *x = (x.as_f64().unwrap() * 2.0).into();
+            }
+        }
+        let err = format!("{:#}", read(&scaled).unwrap_err());
+        assert!(
+            err.contains("frame 3: key `world_from_cpf`: its 3×3 part is not a rotation"),
+            "{err}"
+        );
+
+        let mut mirrored = good.clone();
+        for x in mirrored[2]["world_from_cpf"][0]
+            .as_array_mut()
+            .unwrap()
+            .iter_mut()
+            .take(3)
+        {
+            *x = (-x.as_f64().unwrap()).into();
+        }
+        let err = format!("{:#}", read(&mirrored).unwrap_err());
+        assert!(err.contains("frame 2: key `world_from_cpf`"), "{err}");
+
+        let mut jump = good.clone();
+        for i in 4..6 {
+            jump[i]["time_s"] = (i as f64 / 30.0 + 100.0).into();
+        }
+        let err = format!("{:#}", read(&jump).unwrap_err());
+        assert!(err.contains("frame 4: key `time_s`: 100.13"), "{err}");
+        assert!(err.contains("expected 0.1333"), "{err}");
+    }
 }

@@ -140,9 +140,19 @@ def test_cpf_of_the_device_calibration_is_the_rigs(take):
         assert np.allclose(t[:3, :3], np.array(cam["cpf_from_cam"]["rotation"]), atol=1e-9)
 
 
-def test_eye_gaze_reads_and_points_where_the_depth_says(take):
+def test_eye_gaze_reads_and_points_where_the_depth_says(take, capfd):
     agent = agents(take / "take")[0]
     gaze = mps.read_eyegaze(str(take / "ideal" / agent / "eye_gaze" / "general_eye_gaze.csv"))
+    # Read by the vergence reader projectaria-tools tries first: no fallback to the legacy one.
+    printed = capfd.readouterr()
+    assert "Failed to parse" not in printed.err + printed.out, printed.err
+    g = gaze[10]
+    assert g.vergence.tx_left_eye == pytest.approx(0.0315) and g.vergence.tx_right_eye == pytest.approx(-0.0315)
+    assert g.vergence.left_yaw < g.yaw < g.vergence.right_yaw
+    # The reader's own vergence geometry: the eyes' rays cross at the written depth and yaw.
+    depth_from_eyes, yaw_from_eyes, _ = mps.compute_depth_and_combined_gaze_direction(
+        g.vergence.left_yaw, g.vergence.right_yaw, g.pitch)
+    assert depth_from_eyes == pytest.approx(g.depth, rel=1e-3) and yaw_from_eyes == pytest.approx(g.yaw, abs=1e-5)
     assert len(gaze) == int(np.floor(head_poses(take / "take", agent)[-1][0] * 30 + 1e-9)) + 1
     yaw = np.array([g.yaw for g in gaze])
     pitch = np.array([g.pitch for g in gaze])
