@@ -228,6 +228,69 @@ fn a_campaign_renders_indexes_resumes_and_reads_back() {
     common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
     assert_eq!(common::campaign_digest(&out), baseline);
 
+    // The campaign's own state is rebuilt from the take folders: campaign.json cut short
+    // (kept in work/), or deleted (a start without --resume says to give it); a finished take
+    // whose manifest was deleted is named, left as it is, and the others stay complete.
+    let state_file = out.join("campaign.json");
+    let text = std::fs::read(&state_file).unwrap();
+    std::fs::write(&state_file, &text[..text.len() / 2]).unwrap();
+    let rebuilt = common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+    let said = String::from_utf8_lossy(&rebuilt.stderr);
+    assert!(said.contains("rebuilt from the take folders"), "{said}");
+    assert_eq!(std::fs::read(&state_file).unwrap(), text, "{said}");
+    assert_eq!(
+        std::fs::read(out.join("work/campaign.json.unreadable")).unwrap(),
+        &text[..text.len() / 2]
+    );
+    std::fs::remove_file(&state_file).unwrap();
+    let refused = egogen_run().arg(&campaign).output().unwrap();
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success()
+            && said
+                .contains("holds this campaign's takes but no campaign.json; rerun with --resume"),
+        "{said}"
+    );
+    common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+    assert_eq!(std::fs::read(&state_file).unwrap(), text);
+    assert_eq!(common::campaign_digest(&out), baseline);
+    let manifest = out.join("takes").join(first).join("manifest.json");
+    let kept_manifest = std::fs::read(&manifest).unwrap();
+    std::fs::remove_file(&manifest).unwrap();
+    let resumed = egogen_run()
+        .arg(&campaign)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&resumed.stderr);
+    assert!(!resumed.status.success(), "{said}");
+    assert!(
+        said.contains(&format!(
+            "{first} is a finished take's folder without its manifest.json"
+        )) && !said.contains("output.dir"),
+        "{said}"
+    );
+    assert_eq!(state(&out).count(egogen::campaign::TakeStatus::Complete), 2);
+    std::fs::write(&manifest, kept_manifest).unwrap();
+    common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+    assert_eq!(common::campaign_digest(&out), baseline);
+    // A folder holding anything else is not rebuilt from: refused, untouched.
+    std::fs::remove_file(&state_file).unwrap();
+    std::fs::write(out.join("notes.txt"), "mine").unwrap();
+    let refused = egogen_run()
+        .arg(&campaign)
+        .arg("--resume")
+        .output()
+        .unwrap();
+    let said = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && said.contains("it holds `notes.txt`, not this campaign's"),
+        "{said}"
+    );
+    std::fs::remove_file(out.join("notes.txt")).unwrap();
+    common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+    assert_eq!(common::campaign_digest(&out), baseline);
+
     // The same campaign again in the same place (the uninterrupted one moved aside), its
     // supervisor killed with SIGKILL three times at random moments (a worker once), resumed.
     std::fs::rename(&out, a.path().join("uninterrupted")).unwrap();
@@ -611,4 +674,84 @@ min_free_disk_gb = 0.0
         "{err}"
     );
     assert!(!a.path().join("never").exists());
+}
+
+/// What would fail a take is found before any take is staged, even by `--dry-run`: a scene of
+/// random bytes, a rig without the run's camera and a crowd beyond the limit are refused
+/// naming the take or the campaign key, nothing written; a scene read on its side is warned
+/// of naming the take.
+#[test]
+fn a_campaign_s_takes_are_checked_before_any_is_staged() {
+    let a = tempfile::tempdir().unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    common::tiny_campaign_run(a.path(), false);
+    std::fs::write(
+        a.path().join("noise.glb"),
+        [0x5a_u8, 0x13, 0xc7, 0x01].repeat(500),
+    )
+    .unwrap();
+    std::fs::write(a.path().join("room_cm.obj"), common::room_y_up_cm_obj()).unwrap();
+    let apartment = root
+        .join("assets/scenes/apartment.glb")
+        .display()
+        .to_string();
+    let cases = [
+        (
+            format!("scenes = [\"{apartment}\", \"noise.glb\"]"),
+            vec!["take ", "noise.glb", "cannot read"],
+        ),
+        (
+            format!(
+                "scenes = [\"{apartment}\"]\nrigs = [\"{}\"]",
+                root.join("camera_rigs/hololens2.json").display()
+            ),
+            vec![
+                "take ",
+                "hololens2.json: no camera named `camera-slam-left`",
+            ],
+        ),
+        (
+            format!("scenes = [\"{apartment}\"]\ncrowd_count = [842, 842]"),
+            vec!["key `campaign.crowd_count`: [842, 842]: at most 32 people"],
+        ),
+    ];
+    // A scene read on its side is warned of, naming the take, before any is staged.
+    let campaign = a.path().join("sideways.toml");
+    std::fs::write(
+        &campaign,
+        format!("[campaign]\nrun = \"run.toml\"\nout = \"sideways\"\ntakes = 2\nscenes = [\"{apartment}\", \"room_cm.obj\"]\nmin_free_disk_gb = 0.0\n"),
+    )
+    .unwrap();
+    let dry = common::succeeds(egogen_run().arg(&campaign).arg("--dry-run"));
+    let said = String::from_utf8_lossy(&dry.stderr);
+    assert!(
+        said.contains("take room_cm-s1-") && said.contains("warning") && said.contains("up_axis"),
+        "{said}"
+    );
+    assert!(!a.path().join("sideways").exists());
+    for (k, (keys, says)) in cases.iter().enumerate() {
+        let campaign = a.path().join(format!("c{k}.toml"));
+        std::fs::write(
+            &campaign,
+            format!("[campaign]\nrun = \"run.toml\"\nout = \"out{k}\"\ntakes = 2\n{keys}\nmin_free_disk_gb = 0.0\n"),
+        )
+        .unwrap();
+        for dry in [true, false] {
+            let mut cmd = egogen_run();
+            cmd.arg(&campaign);
+            if dry {
+                cmd.arg("--dry-run");
+            }
+            let o = cmd.output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "case {k} accepted: {err}");
+            for s in says {
+                assert!(err.contains(s), "case {k}: expected `{s}` in: {err}");
+            }
+            assert!(
+                !a.path().join(format!("out{k}")).exists(),
+                "case {k} wrote its folder"
+            );
+        }
+    }
 }

@@ -251,6 +251,69 @@ fn an_obj_scene_renders_with_its_textures_materials_and_object_names() {
     assert!(green > 0.8, "wall green {green:.2}");
 }
 
+/// An OBJ without `o` or `g` lines is one object named after its file, in the id table and in
+/// Blender: its pixels carry that id (not 0, the id of nothing). Faces before the first `o`
+/// line are that object too, and the named object after them its own.
+#[test]
+fn an_obj_without_object_lines_is_one_object_named_after_its_file() {
+    let (v, floor, wall) = room();
+    let mut vertices = String::new();
+    for p in &v {
+        vertices += &format!("v {} {} {}\n", p[0], p[1], p[2]);
+    }
+    let faces = |quads: &[[usize; 4]]| -> String {
+        quads
+            .iter()
+            .map(|q| format!("f {} {} {} {}\n", q[0], q[1], q[2], q[3]))
+            .collect()
+    };
+    for (file, obj, wall_name) in [
+        (
+            "plain_room.obj",
+            format!("{vertices}{}{}", faces(&floor), faces(&wall)),
+            "plain_room",
+        ),
+        (
+            "leading.obj",
+            format!("{vertices}{}o wall\n{}", faces(&floor), faces(&wall)),
+            "wall",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join(file);
+        std::fs::write(&scene, obj).unwrap();
+        let config = dir.path().join("run.toml");
+        std::fs::write(&config, self::config(&scene)).unwrap();
+        common::egogen_run_ok(&config);
+        let (ids, pixels) = rendered(&dir.path().join("out"));
+        let stem = file.trim_end_matches(".obj");
+        let floor_id = id_of(&ids, stem);
+        assert!(floor_id > 0, "{file}: {ids:?}");
+        let wall_id = id_of(&ids, wall_name);
+        let on_floor = |p: &&Pixel| p.xyz[2].abs() < 0.01;
+        let on_wall = |p: &&Pixel| (2.99..=3.21).contains(&p.xyz[0]);
+        let floor = pixels
+            .iter()
+            .filter(|p| p.id == floor_id && on_floor(p))
+            .count();
+        let wall = pixels
+            .iter()
+            .filter(|p| p.id == wall_id && on_wall(p))
+            .count();
+        assert!(
+            floor > 50 && wall > 50,
+            "{file}: {floor} floor, {wall} wall pixels with their ids"
+        );
+        assert!(
+            pixels
+                .iter()
+                .filter(|p| p.id == floor_id || p.id == wall_id)
+                .all(|p| on_floor(&p) || on_wall(&p)),
+            "{file}: a pixel of the room's ids off the room"
+        );
+    }
+}
+
 /// An OBJ written y up in centimetres (as many modelling tools write one) renders as the same
 /// room in metres, z up, when the config says how to read it: the floor's pixels at z = 0 and
 /// the wall's at x 3.0–3.2 in the position pass, both textures in place.

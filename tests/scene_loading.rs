@@ -587,37 +587,56 @@ fn a_file_in_centimetres_or_y_up_is_read_in_metres_z_up_when_told() {
     }
 }
 
+/// `egogen scene inspect SCENE ARGS --out PNG`, run.
+fn scene_inspect(scene: &Path, args: &[&str], png: &Path) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(["scene", "inspect"])
+        .arg(scene)
+        .args(args)
+        .arg("--out")
+        .arg(png)
+        .output()
+        .unwrap()
+}
+
+/// What a successful `scene inspect` said on stderr.
+fn inspect_ok(scene: &Path, args: &[&str], png: &Path) -> String {
+    let out = scene_inspect(scene, args, png);
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{err}");
+    err
+}
+
 /// `egogen scene inspect` warns when the floor it found lies high above the scene's lowest
-/// point — a room on its side, read with the wrong up axis, walked on a wall's end — and not
-/// when the file is read the right way up.
+/// point or the scene is much taller than wide — a room on its side, read with the wrong up
+/// axis, walked on a wall's end — and not when the file is read the right way up.
 #[test]
 fn scene_inspect_warns_of_a_scene_on_its_side() {
     let dir = tempfile::tempdir().unwrap();
     let obj = common::room_y_up_cm_obj();
     let scene = write(dir.path(), "room_cm.obj", &obj);
-    let inspect = |up: Option<&str>, png: &str| {
-        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_egogen"));
-        cmd.args(["scene", "inspect"])
-            .arg(&scene)
-            .args(["--unit-m", "0.01", "--out"])
-            .arg(dir.path().join(png));
-        if let Some(up) = up {
-            cmd.args(["--up", up]);
-        }
-        let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8_lossy(&out.stderr).into_owned()
-    };
-    let sideways = inspect(None, "sideways.png");
+    let png = |name: &str| dir.path().join(name);
+    let sideways = inspect_ok(&scene, &["--unit-m", "0.01"], &png("sideways.png"));
     assert!(
         sideways.contains("warning") && sideways.contains("--up"),
         "{sideways}"
     );
-    let upright = inspect(Some("y"), "upright.png");
+    let upright = inspect_ok(
+        &scene,
+        &["--unit-m", "0.01", "--up", "y"],
+        &png("upright.png"),
+    );
+    assert!(!upright.contains("warning"), "{upright}");
+
+    // The shipped apartment (glTF, y up) read z up: its floor found lies only 0.57 m above its
+    // lowest point, but it stands 10.2 m tall and 2.5 m across; read as it is, no warning.
+    let apartment = common::repo_root().join("assets/scenes/apartment.glb");
+    let sideways = inspect_ok(&apartment, &["--up", "z"], &png("apartment_z.png"));
+    assert!(
+        sideways.contains("warning") && sideways.contains("m tall and 2.50 m across"),
+        "{sideways}"
+    );
+    let upright = inspect_ok(&apartment, &[], &png("apartment.png"));
     assert!(!upright.contains("warning"), "{upright}");
 }
 
@@ -659,4 +678,47 @@ fn scene_inspect_lists_the_apartments_seats() {
         "{text}"
     );
     assert!(png.is_file());
+}
+
+/// A scene read at the wrong size or walked at a floor it does not have is refused or warned of
+/// naming the key to check: the apartment (in metres) read in millimetres is refused naming
+/// `unit_m`, in centimetres (1 walkable cell) warned of naming `unit_m`; a floor asked for
+/// far above it, or at a height inside it where there is no floor, is refused naming
+/// `floor_z_m`.
+#[test]
+fn a_scene_at_the_wrong_size_or_floor_names_the_key_to_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let apartment = common::repo_root().join("assets/scenes/apartment.glb");
+    let inspect = |args: &[&str], png: &str| scene_inspect(&apartment, args, &dir.path().join(png));
+    let mm = inspect(&["--unit-m", "0.001"], "mm.png");
+    let err = String::from_utf8_lossy(&mm.stderr);
+    assert!(
+        !mm.status.success()
+            && err.contains("only 0.01 × 0.01 m across")
+            && err.contains("`[scene] unit_m`"),
+        "{err}"
+    );
+    let cm = inspect(&["--unit-m", "0.01"], "cm.png");
+    let err = String::from_utf8_lossy(&cm.stderr);
+    assert!(
+        cm.status.success() && err.contains("warning") && err.contains("`[scene] unit_m`"),
+        "{err}"
+    );
+    let high = inspect(&["--floor-z-m", "50"], "high.png");
+    let err = String::from_utf8_lossy(&high.stderr);
+    assert!(
+        !high.status.success()
+            && err
+                .contains("`[scene] floor_z_m` = 50 (--floor-z-m) is outside the scene's heights"),
+        "{err}"
+    );
+    let inside = inspect(&["--floor-z-m", "1.2"], "inside.png");
+    let err = String::from_utf8_lossy(&inside.stderr);
+    assert!(
+        !inside.status.success()
+            && err.contains("no walkable cell")
+            && err.contains("`[scene] floor_z_m`"),
+        "{err}"
+    );
+    assert!(!dir.path().join("mm.png").exists() && !dir.path().join("high.png").exists());
 }

@@ -69,6 +69,7 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
     let plan = plan_campaign(path)?;
     let out = plan.out.clone();
     let earlier = check_out(&plan, request)?;
+    check_takes(&plan)?;
     let run_request = RunRequest {
         resume: true,
         blender: request.blender.clone(),
@@ -215,7 +216,9 @@ pub fn run(path: &Path, request: &CampaignRequest) -> Result<()> {
 }
 
 /// Checks the campaign folder: absent or empty for a new campaign; with `--resume`, a campaign
-/// of the same takes (returned). Nothing is touched either way.
+/// of the same takes (returned), or one whose `campaign.json` is missing or unreadable but
+/// whose folder holds only this campaign's takes (`None`: its state is rebuilt from the take
+/// folders; an unreadable file is moved to `work/`). Nothing else is touched.
 fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<CampaignState>> {
     let out = &plan.out;
     if out.exists() && !out.is_dir() {
@@ -224,8 +227,32 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
             out.display()
         );
     }
+    let resuming = request.resume || request.dry_run;
     if out.join(STATE_FILE).is_file() {
-        let found = CampaignState::read(out)?;
+        let found = match CampaignState::read(out) {
+            Ok(found) => found,
+            Err(e) if resuming => {
+                check_rebuildable(plan)?;
+                // The unreadable file is kept, out of the way, for whoever wants to look.
+                if request.resume {
+                    let kept = out.join("work").join(format!("{STATE_FILE}.unreadable"));
+                    std::fs::create_dir_all(out.join("work"))
+                        .and_then(|_| std::fs::rename(out.join(STATE_FILE), &kept))
+                        .with_context(|| {
+                            format!("moving the unreadable {STATE_FILE} to {}", kept.display())
+                        })?;
+                }
+                eprintln!(
+                    "egogen-run: campaign: {e:#}; {} from the take folders in {} (the unreadable file kept as work/{STATE_FILE}.unreadable)",
+                    if request.resume { "rebuilt" } else { "--resume rebuilds it" },
+                    out.join("takes").display()
+                );
+                return Ok(None);
+            }
+            Err(e) => {
+                bail!("{e:#}: --resume rebuilds it from the take folders (nothing was written)")
+            }
+        };
         if !request.resume && !request.dry_run {
             bail!(
                 "{} holds a campaign; rerun with --resume to continue it, or choose another `campaign.out` (nothing was written)",
@@ -242,12 +269,116 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
         return Ok(Some(found));
     }
     if std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some()) {
+        let rebuildable = check_rebuildable(plan);
+        if let (Err(e), true) = (&rebuildable, request.resume) {
+            bail!("{e:#}");
+        }
+        if rebuildable.is_ok() {
+            if resuming {
+                eprintln!(
+                    "egogen-run: campaign: {} has no {STATE_FILE}; {} from the take folders in {}",
+                    out.display(),
+                    if request.resume {
+                        "rebuilt"
+                    } else {
+                        "--resume rebuilds it"
+                    },
+                    out.join("takes").display()
+                );
+                return Ok(None);
+            }
+            bail!(
+                "{} holds this campaign's takes but no {STATE_FILE}; rerun with --resume to rebuild it from the take folders (nothing was written)",
+                out.display()
+            );
+        }
         bail!(
             "campaign folder {} already exists and is not empty; choose another `campaign.out` (nothing was written)",
             out.display()
         );
     }
     Ok(None)
+}
+
+/// Checks every take as staging would, before any is staged, without synthesising: the run
+/// config with the take's flags resolves (its scene file, rig and the rig's cameras, crowd),
+/// and each scene loads in its frame with a walkable floor (each scene, frame and floor once;
+/// its warnings said). Errors name the take and its scene. Floor plans the campaign generates
+/// are checked once written.
+fn check_takes(plan: &CampaignPlan) -> Result<()> {
+    let base = crate::cli::RawRun::load(&plan.run)?;
+    let mut scenes_seen = std::collections::HashSet::new();
+    for t in &plan.takes {
+        if t.scene.starts_with(plan.out.join("scenes")) && !t.scene.is_file() {
+            continue;
+        }
+        let what = || {
+            format!(
+                "campaign {}: take {} (scene {})",
+                plan.config.display(),
+                t.id,
+                t.scene.display()
+            )
+        };
+        let mut raw = base.clone();
+        t.overrides(&plan.out.join("takes"))
+            .apply(&mut raw)
+            .with_context(what)?;
+        let run = crate::cli::resolve_run(raw, &plan.run).with_context(what)?;
+        if scenes_seen.insert(format!("{:?}", (&run.scene, run.scene_frame, run.walkable))) {
+            let mesh = crate::scene::load_scene(&run.scene, run.scene_frame).with_context(what)?;
+            let map =
+                crate::scene::walkable_map(&mesh, &run.scene, run.walkable).with_context(what)?;
+            if let Some(warning) = crate::scene::scene_frame_warning(&mesh, &map, &run.scene) {
+                eprintln!("egogen-run: campaign: take {}: {warning}", t.id);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// What a campaign folder may hold besides `takes/`: its scratch, logs, generated scenes,
+/// index, contact sheet and state (with their atomic writes' `.partial` files).
+const CAMPAIGN_ENTRIES: [&str; 6] = [
+    "work",
+    "logs",
+    "scenes",
+    INDEX_FILE,
+    "contact_sheet.png",
+    STATE_FILE,
+];
+
+/// Whether the campaign folder holds only what this campaign writes — `takes/` only this
+/// plan's takes, finished (`<id>`) or staged (`<id>.partial`) — so that its state can be
+/// rebuilt from the take folders; else an error saying what is foreign.
+fn check_rebuildable(plan: &CampaignPlan) -> Result<()> {
+    let out = &plan.out;
+    let foreign = |what: String| {
+        anyhow::anyhow!(
+            "{}: cannot rebuild its {STATE_FILE}: {what}, not this campaign's (nothing was touched)",
+            out.display()
+        )
+    };
+    for e in std::fs::read_dir(out).with_context(|| format!("reading {}", out.display()))? {
+        let name = e?.file_name().to_string_lossy().into_owned();
+        let known = name == "takes"
+            || CAMPAIGN_ENTRIES
+                .iter()
+                .any(|k| name == *k || name.strip_prefix(k) == Some(".partial"));
+        if !known {
+            return Err(foreign(format!("it holds `{name}`")));
+        }
+    }
+    let ids: std::collections::HashSet<&str> = plan.takes.iter().map(|t| t.id.as_str()).collect();
+    if let Ok(takes) = std::fs::read_dir(out.join("takes")) {
+        for e in takes {
+            let name = e?.file_name().to_string_lossy().into_owned();
+            if !ids.contains(name.strip_suffix(".partial").unwrap_or(&name)) {
+                return Err(foreign(format!("takes/{name} is a take")));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Checks every finished take against its manifest: a take that matches is complete (its
@@ -265,6 +396,15 @@ fn check_finished_takes(
     for t in state.takes.iter_mut() {
         let dir = plan.out.join("takes").join(&t.def.id);
         if !dir.join(crate::manifest::MANIFEST).is_file() {
+            // A take folder appears only by the rename that finishes it, manifest and all.
+            if dir.exists() {
+                t.status = TakeStatus::Failed;
+                t.reason = Some(format!(
+                    "{} is a finished take's folder without its {} (deleted?); left as it is: move it away and --resume renders the take again",
+                    dir.display(),
+                    crate::manifest::MANIFEST
+                ));
+            }
             continue;
         }
         let checked = if !rehash && stamp::stamp_matches(&plan.out, &t.def.id, &dir) {

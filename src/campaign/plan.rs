@@ -283,12 +283,24 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
                 format!("{} has no [crowd] section to vary", run.display()),
             ));
         }
+        let max = crate::cli::synth_config::MAX_AGENTS.saturating_sub(base.agents.len());
+        if hi > max {
+            return Err(bad(
+                "crowd_count",
+                format!(
+                    "[{lo}, {hi}]: at most {max} people per take (1–{} agents, {} of them the run config's [[agents]])",
+                    crate::cli::synth_config::MAX_AGENTS,
+                    base.agents.len()
+                ),
+            ));
+        }
     }
     if let Some([lo, hi]) = c.duration_s {
-        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi && hi <= 3600.0) {
+        let max = crate::cli::synth_config::MAX_DURATION_S;
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi && hi <= max) {
             return Err(bad(
                 "duration_s",
-                format!("expected [lo, hi] seconds with 0 < lo <= hi <= 3600, got [{lo}, {hi}]"),
+                format!("expected [lo, hi] seconds with 0 < lo <= hi <= {max}, got [{lo}, {hi}]"),
             ));
         }
     }

@@ -85,7 +85,7 @@ pub fn scene_inspect(
         ),
         _ => println!("floor:      z = {:.3} m", map.floor_z_m),
     }
-    if let Some(warning) = crate::scene::floor_height_warning(&mesh, &map, &path) {
+    if let Some(warning) = crate::scene::scene_frame_warning(&mesh, &map, &path) {
         eprintln!("{warning}");
     }
     println!(

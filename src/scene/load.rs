@@ -129,8 +129,17 @@ pub enum SceneError {
     },
     #[error("scene {path}: no floor found (no upward-facing horizontal surface); is the up axis right? (give the other one: `[scene] up_axis = \"y\"` or `\"z\"` in a config, `--up y|z` on the command line)")]
     NoFloor { path: PathBuf },
-    #[error("scene {path}: no walkable cell (floor at {floor_z_m:.2} m is covered everywhere between {lo:.2} and {hi:.2} m)")]
+    #[error("scene {path}: no walkable cell (floor at {floor_z_m:.2} m is covered everywhere between {lo:.2} and {hi:.2} m){hint}")]
     NoWalkable {
+        path: PathBuf,
+        floor_z_m: f64,
+        lo: f64,
+        hi: f64,
+        /// What to check, when the scene's size or the floor asked for suggests it.
+        hint: String,
+    },
+    #[error("scene {path}: `[scene] floor_z_m` = {floor_z_m} (--floor-z-m) is outside the scene's heights ({lo:.2} to {hi:.2} m); expected the height of one of its floors")]
+    FloorOutside {
         path: PathBuf,
         floor_z_m: f64,
         lo: f64,
@@ -359,9 +368,14 @@ fn read_gltf_parts(path: &Path) -> Result<Vec<Part>, String> {
     Ok(parts)
 }
 
+/// tobj's name for faces that come before any `o` or `g` line.
+const TOBJ_UNNAMED: &str = "unnamed_object";
+
 /// An OBJ's objects and groups (`o`, `g`), each one part; the pieces tobj splits off where
 /// the material changes (`usemtl`) join their object again, in order of first appearance, so
 /// that parts are named as Blender's importer names its objects (one per object or group).
+/// Faces before any `o` or `g` line (a file without them: all its faces) are one part named
+/// after the file, as Blender names that object.
 fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
     let opts = tobj::LoadOptions {
         triangulate: true,
@@ -369,12 +383,21 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
         ..Default::default()
     };
     let (models, _) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
+    let leading = obj_faces_before_any_object(path)?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "obj".into());
     let mut parts: Vec<Part> = Vec::new();
     let mut index = std::collections::HashMap::new();
     for m in models {
-        let k = *index.entry(m.name.clone()).or_insert_with(|| {
+        let name = match (&leading, m.name.as_str()) {
+            (Some(named_unnamed), TOBJ_UNNAMED) if !named_unnamed => stem.clone(),
+            _ => m.name,
+        };
+        let k = *index.entry(name.clone()).or_insert_with(|| {
             parts.push(Part {
-                name: m.name,
+                name,
                 positions: Vec::new(),
                 triangles: Vec::new(),
                 file_id: None,
@@ -397,6 +420,34 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
         );
     }
     Ok(parts)
+}
+
+/// Whether an OBJ has faces before its first `o` or `g` line (`Some`), and then whether one of
+/// its `o`/`g` lines is itself named tobj's [`TOBJ_UNNAMED`] (then both are one part, as tobj
+/// reads them).
+fn obj_faces_before_any_object(path: &Path) -> Result<Option<bool>, String> {
+    use std::io::BufRead;
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut leading = false;
+    let mut named_unnamed = false;
+    for line in std::io::BufReader::new(file).split(b'\n') {
+        let line = line.map_err(|e| e.to_string())?;
+        let line = line.trim_ascii_start();
+        match line.first() {
+            // (An `o`/`g` line before any face has returned already.)
+            Some(b'f') if line.get(1).is_some_and(u8::is_ascii_whitespace) => leading = true,
+            Some(b'o' | b'g') if line.get(1).is_none_or(u8::is_ascii_whitespace) => {
+                if !leading {
+                    return Ok(None);
+                }
+                if line[1..].trim_ascii() == TOBJ_UNNAMED.as_bytes() {
+                    named_unnamed = true;
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(leading.then_some(named_unnamed))
 }
 
 /// Longest object name Blender keeps (bytes of UTF-8); it cuts longer ones.
@@ -718,23 +769,60 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<(Vec<u32>, PlyIds)>), Stri
 /// scene on its side (m): more than a floor slab or a few steps down.
 pub const FLOOR_HIGH_ABOVE_LOWEST_M: f64 = 1.0;
 
-/// A warning for a map whose floor lies more than [`FLOOR_HIGH_ABOVE_LOWEST_M`] above the
-/// scene's lowest point when no storey was asked for — most often a scene read on its side,
-/// walked on a wall's end or a table's side — naming the file and what to give; none
-/// otherwise.
-pub fn floor_height_warning(
+/// How far below a scene's lowest point `floor_z_m` may be asked for (m): a floor is in the
+/// scene, give or take a slab.
+const FLOOR_BELOW_SCENE_M: f64 = 0.5;
+
+/// A scene less than this wide at its widest (m) is too small to walk in: most often a file
+/// not in metres read as if it were.
+pub const SMALL_SCENE_M: f64 = 1.5;
+
+/// What to say of a scene whose bounds are less than [`SMALL_SCENE_M`] wide at the widest.
+fn small_scene((lo, hi): (Vec3, Vec3)) -> Option<String> {
+    let (w, d) = (hi.x - lo.x, hi.y - lo.y);
+    (w.max(d) < SMALL_SCENE_M).then(|| {
+        format!(
+            "the scene is only {w:.2} × {d:.2} m across: if the file is not in metres, give its unit (`[scene] unit_m`, --unit-m; 0.01 for centimetres, 0.001 for millimetres)"
+        )
+    })
+}
+
+/// A scene taller than [`TALLER_THAN_WIDE`] times its narrowest horizontal extent, and than
+/// [`TALLER_THAN_WIDE_M`], is taken for one on its side (a dwelling is wider than it is tall:
+/// the shipped apartment read z up is 10.2 m tall and 2.5 m across).
+pub const TALLER_THAN_WIDE: f64 = 1.5;
+/// See [`TALLER_THAN_WIDE`] (m).
+pub const TALLER_THAN_WIDE_M: f64 = 4.0;
+
+/// A warning for a scene most likely read in the wrong frame, naming the file and what to
+/// give: too small to walk in ([`SMALL_SCENE_M`]: the unit), or on its side (walked on a
+/// wall's end or a table's side): its floor lies more than
+/// [`FLOOR_HIGH_ABOVE_LOWEST_M`] above the scene's lowest point when no storey was asked for,
+/// or the scene is much taller than wide ([`TALLER_THAN_WIDE`]); none otherwise.
+pub fn scene_frame_warning(
     mesh: &SceneMesh,
     map: &super::WalkableMap,
     path: &Path,
 ) -> Option<String> {
-    let (lo, _) = mesh.bounds()?;
+    let (lo, hi) = mesh.bounds()?;
     let above_m = map.floor_z_m - lo.z;
-    (map.settings.floor_z_m.is_none() && above_m > FLOOR_HIGH_ABOVE_LOWEST_M).then(|| {
-        format!(
-            "warning: scene {}: the floor found lies {above_m:.2} m above the scene's lowest point; if the scene lies on its side, give its up axis (`[scene] up_axis`, --up y|z) and unit (`[scene] unit_m`, --unit-m)",
-            path.display()
-        )
-    })
+    if let Some(small) = small_scene((lo, hi)) {
+        return Some(format!("warning: scene {}: {small}", path.display()));
+    }
+    let what = if map.settings.floor_z_m.is_none() && above_m > FLOOR_HIGH_ABOVE_LOWEST_M {
+        format!("the floor found lies {above_m:.2} m above the scene's lowest point")
+    } else {
+        let (tall, narrow) = (hi.z - lo.z, (hi.x - lo.x).min(hi.y - lo.y));
+        if tall > TALLER_THAN_WIDE_M.max(TALLER_THAN_WIDE * narrow) {
+            format!("the scene is {tall:.2} m tall and {narrow:.2} m across at its narrowest")
+        } else {
+            return None;
+        }
+    };
+    Some(format!(
+        "warning: scene {}: {what}; if the scene lies on its side, give its up axis (`[scene] up_axis`, --up y|z) and unit (`[scene] unit_m`, --unit-m)",
+        path.display()
+    ))
 }
 
 /// Builds the walkable map of a loaded scene, naming the file in errors.
@@ -744,6 +832,17 @@ pub fn walkable_map(
     settings: super::WalkableSettings,
 ) -> Result<super::WalkableMap, SceneError> {
     use super::walkable::WalkableError;
+    let bounds = mesh.bounds();
+    if let (Some(z), Some((lo, hi))) = (settings.floor_z_m, bounds) {
+        if !(lo.z - FLOOR_BELOW_SCENE_M..=hi.z).contains(&z) {
+            return Err(SceneError::FloorOutside {
+                path: path.to_owned(),
+                floor_z_m: z,
+                lo: lo.z,
+                hi: hi.z,
+            });
+        }
+    }
     super::WalkableMap::build(mesh, settings).map_err(|e| match e {
         WalkableError::NoFloor => SceneError::NoFloor {
             path: path.to_owned(),
@@ -753,6 +852,11 @@ pub fn walkable_map(
             floor_z_m,
             lo,
             hi,
+            hint: match (settings.floor_z_m, bounds) {
+                (Some(_), _) => "; it is the floor asked for with `[scene] floor_z_m` (--floor-z-m): is that one of the scene's floors?".into(),
+                (None, Some(b)) => small_scene(b).map(|s| format!("; {s}")).unwrap_or_default(),
+                (None, None) => String::new(),
+            },
         },
         WalkableError::TooManyCells { nx, ny, cell_m } => SceneError::MapTooLarge {
             path: path.to_owned(),

@@ -23,7 +23,7 @@ pub mod seen_map;
 pub mod walkable;
 
 pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};
-pub use load::{floor_height_warning, load_scene, walkable_map, SceneError, SceneFrame, UpAxis};
+pub use load::{load_scene, scene_frame_warning, walkable_map, SceneError, SceneFrame, UpAxis};
 pub use mesh::{ObjectId, SceneMesh, SceneObject};
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{

@@ -418,7 +418,7 @@ fn rendered_agents(
     match motion {
         RunMotion::Placed(m) => {
             let map = walkable_map(scene, &plan.scene, plan.walkable)?;
-            if let Some(warning) = crate::scene::floor_height_warning(scene, &map, &plan.scene) {
+            if let Some(warning) = crate::scene::scene_frame_warning(scene, &map, &plan.scene) {
                 eprintln!("{warning}");
             }
             let (placed, _) = place_motion(model, m, &map, plan.scene_seed)

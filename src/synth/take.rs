@@ -76,7 +76,7 @@ fn synth_scene(plan: &SynthPlan) -> Result<(WalkableMap, Option<crate::scene::Sc
         Some(path) => {
             let mesh = crate::scene::load_scene(path, plan.scene_frame)?;
             let map = crate::scene::walkable_map(&mesh, path, plan.walkable)?;
-            if let Some(warning) = crate::scene::floor_height_warning(&mesh, &map, path) {
+            if let Some(warning) = crate::scene::scene_frame_warning(&mesh, &map, path) {
                 eprintln!("{warning}");
             }
             Ok((map, Some(mesh)))
