@@ -13,6 +13,8 @@ the final name. Prints one `EGOGEN_DONE <path>` line per finished file, and
 `EGOGEN_TIMING <stage> <seconds>` lines saying where the time goes (`ready` once `bpy` is
 imported; then scene import, camera set-up, each frame's scene update and render; the
 supervisor adds them up per attempt, docs/RENDERING.md "Where a frame's time goes").
+`render_shard.py --check-device gpu` only says which GPU Blender would render on (exit 0) or
+why it cannot (exit 3, `EGOGEN_SETUP_FAILED`): egogen runs it before it stages a take.
 """
 import json
 import math
@@ -25,10 +27,15 @@ import numpy as np
 from mathutils import Matrix, Quaternion, Vector
 
 
+def script_args():
+    """The script's own arguments: after `--` under a Blender executable, else all of them."""
+    return sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+
+
 def load_spec():
-    args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
+    args = script_args()
     if len(args) != 1:
-        sys.exit("usage: render_shard.py SPEC.json")
+        sys.exit("usage: render_shard.py SPEC.json | --check-device gpu")
     with open(args[0]) as f:
         return json.load(f)
 
@@ -239,11 +246,9 @@ def add_world_hdri(world, hdri):
 GPU_BACKENDS = ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL")
 
 
-def set_device(scene, device):
-    """Cycles on the CPU, or on the first GPU backend that Blender finds a device for."""
-    if device == "cpu":
-        scene.cycles.device = "CPU"
-        return
+def find_gpu():
+    """The first GPU backend Blender finds a device for, with the devices' names, set up in the
+    preferences for rendering; RuntimeError naming what it looked for when there is none."""
     prefs = bpy.context.preferences.addons["cycles"].preferences
     for backend in GPU_BACKENDS:
         try:
@@ -255,15 +260,35 @@ def set_device(scene, device):
         if gpus:
             for d in prefs.devices:
                 d.use = d.type == backend
-            scene.cycles.device = "GPU"
-            names = ", ".join(d.name for d in gpus)
-            print(f"egogen: rendering on {backend}: {names}", file=sys.stderr, flush=True)
-            return
+            return backend, ", ".join(d.name for d in gpus)
     raise RuntimeError(
         'render.device = "gpu", but Blender found no GPU (looked for '
         + ", ".join(GPU_BACKENDS)
         + '); use device = "cpu" on this machine'
     )
+
+
+def set_device(scene, device):
+    """Cycles on the CPU, or on the first GPU backend that Blender finds a device for."""
+    if device == "cpu":
+        scene.cycles.device = "CPU"
+        return
+    backend, names = find_gpu()
+    scene.cycles.device = "GPU"
+    print(f"egogen: rendering on {backend}: {names}", file=sys.stderr, flush=True)
+
+
+def check_device(device):
+    """`render_shard.py --check-device gpu`: says which GPU Blender would render on and exits 0,
+    or why it cannot (exit EXIT_SETUP_FAILED); run by egogen before a take is staged."""
+    if device != "gpu":
+        sys.exit(f"--check-device {device}: expected gpu")
+    try:
+        backend, names = find_gpu()
+    except RuntimeError as e:
+        print(f"EGOGEN_SETUP_FAILED {e}", file=sys.stderr, flush=True)
+        sys.exit(EXIT_SETUP_FAILED)
+    print(f"egogen: Blender renders on {backend}: {names}", file=sys.stderr, flush=True)
 
 
 def import_scene_file(path, up_axis, unit_m=1.0):
@@ -642,6 +667,10 @@ EXIT_SETUP_FAILED = 3
 
 
 def main():
+    args = script_args()
+    if args[:1] == ["--check-device"] and len(args) == 2:
+        check_device(args[1])
+        return
     timing("ready", 0.0)
     spec = load_spec()
     t0 = time.perf_counter()

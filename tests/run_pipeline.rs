@@ -585,8 +585,9 @@ fn only_the_asked_passes_are_rendered_and_monochrome_cameras_store_grey() {
     verify(&seq);
 }
 
-/// `device = "gpu"` on a machine without one fails at the first shard, naming the setting, and
-/// leaves no dataset (when a GPU is there, the run succeeds instead).
+/// `device = "gpu"` on a machine without one fails before the take is staged, naming the
+/// setting and what Blender looked for, and leaves nothing: no dataset, no `.partial` (when a
+/// GPU is there, the run succeeds instead).
 #[test]
 fn gpu_device_without_a_gpu_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
@@ -606,7 +607,11 @@ fn gpu_device_without_a_gpu_is_a_clear_error() {
         err.contains("render.device = \"gpu\"") && err.contains("found no GPU"),
         "{err}"
     );
-    assert!(!dir.path().join("seq").exists());
+    assert!(!dir.path().join("seq").exists() && !dir.path().join("seq.partial").exists());
+    assert!(
+        !err.contains("shard"),
+        "failed in a shard, after staging: {err}"
+    );
 }
 
 /// Command-line values out of range are refused by the option's name before any work: negative

@@ -210,6 +210,12 @@ impl TakeFeed for CampaignFeed {
 
 /// Free bytes for an unprivileged user on the file system holding `path`.
 pub(crate) fn free_bytes(path: &Path) -> Option<u64> {
+    disk_space(path).map(|(free, _)| free)
+}
+
+/// Free bytes for an unprivileged user and the size in bytes of the file system holding
+/// `path`.
+pub(crate) fn disk_space(path: &Path) -> Option<(u64, u64)> {
     use std::os::unix::ffi::OsStrExt;
     let c = std::ffi::CString::new(path.as_os_str().as_bytes()).ok()?;
     let mut s: libc::statvfs = unsafe { std::mem::zeroed() };
@@ -217,5 +223,6 @@ pub(crate) fn free_bytes(path: &Path) -> Option<u64> {
     if unsafe { libc::statvfs(c.as_ptr(), &mut s) } != 0 {
         return None;
     }
-    Some(s.f_bavail as u64 * s.f_frsize as u64)
+    let unit = s.f_frsize as u64;
+    Some((s.f_bavail as u64 * unit, s.f_blocks as u64 * unit))
 }

@@ -69,6 +69,7 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
     let plan = plan_campaign(path)?;
     let out = plan.out.clone();
     let earlier = check_out(&plan, request)?;
+    check_disk_floor(&plan)?;
     check_takes(&plan)?;
     let run_request = RunRequest {
         resume: true,
@@ -96,6 +97,9 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
     let runtime = BlenderRuntime::resolve(request.blender.as_deref())?;
     if shared.plan.supervisor.backend == Backend::Slurm {
         crate::supervisor::slurm::check_slurm_tools()?;
+    } else if let Some(render) = &shared.plan.render {
+        // Once, before any take is staged (on Slurm the compute nodes' GPUs: the workers check).
+        crate::render::shard::check_device(&runtime, render.device).map_err(anyhow::Error::msg)?;
     }
     std::fs::create_dir_all(out.join("takes"))
         .with_context(|| format!("creating {}", out.display()))?;
@@ -298,6 +302,26 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
         );
     }
     Ok(None)
+}
+
+/// Refuses a free-disk floor larger than the whole file system the campaign is written to: the
+/// campaign would pause before its first take and wait for ever.
+fn check_disk_floor(plan: &CampaignPlan) -> Result<()> {
+    let Some(existing) = plan.out.ancestors().find(|p| p.exists()) else {
+        return Ok(());
+    };
+    if let Some((_, size)) = feed::disk_space(existing) {
+        if plan.min_free_disk_bytes > size {
+            bail!(
+                "campaign {}: key `campaign.min_free_disk_gb`: {:.2} GB is more than the whole file system under {} ({:.2} GB); the campaign would wait for ever (nothing was written)",
+                plan.config.display(),
+                plan.min_free_disk_bytes as f64 / 1e9,
+                existing.display(),
+                size as f64 / 1e9
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Checks every take as staging would, before any is staged, without synthesising: the run

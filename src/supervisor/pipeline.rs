@@ -113,10 +113,15 @@ pub fn run_pipeline(
     // A new run fails on a missing Blender or Slurm before anything is staged.
     let mut runtime = None;
     let before_staging = || -> Result<()> {
-        runtime = Some(BlenderRuntime::resolve(opts.blender.as_deref())?);
+        let found = BlenderRuntime::resolve(opts.blender.as_deref())?;
         if plan.supervisor.backend == Backend::Slurm {
             check_slurm_tools()?;
+        } else {
+            // On Slurm the GPU is the compute node's: the worker checks it there.
+            crate::render::shard::check_device(&found, render.device)
+                .map_err(anyhow::Error::msg)?;
         }
+        runtime = Some(found);
         Ok(())
     };
     let staged = match stage_take(
