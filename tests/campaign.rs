@@ -677,9 +677,10 @@ min_free_disk_gb = 0.0
 }
 
 /// What would fail a take is found before any take is staged, even by `--dry-run`: a scene of
-/// random bytes, a rig without the run's camera and a crowd beyond the limit are refused
-/// naming the take or the campaign key, nothing written; a scene read on its side is warned
-/// of naming the take.
+/// random bytes, a rig without the run's camera, a crowd beyond the limit and a free-disk floor
+/// beyond the disk are refused naming the take or the campaign key, nothing written; a scene
+/// read on its side is warned of naming the take; `--throughput-from` a missing folder or a
+/// file is an error.
 #[test]
 fn a_campaign_s_takes_are_checked_before_any_is_staged() {
     let a = tempfile::tempdir().unwrap();
@@ -733,6 +734,20 @@ fn a_campaign_s_takes_are_checked_before_any_is_staged() {
         "{said}"
     );
     assert!(!a.path().join("sideways").exists());
+    // Throughput read from a folder that is not there, or from a file, is an error.
+    for (from, says) in [("nowhere", "no such folder"), ("run.toml", "not a folder")] {
+        let o = egogen_run()
+            .arg(&campaign)
+            .args(["--dry-run", "--throughput-from"])
+            .arg(a.path().join(from))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("--throughput-from") && err.contains(says),
+            "{err}"
+        );
+    }
     for (k, (keys, says)) in cases.iter().enumerate() {
         let campaign = a.path().join(format!("c{k}.toml"));
         std::fs::write(
@@ -764,5 +779,98 @@ fn a_campaign_s_takes_are_checked_before_any_is_staged() {
                 "case {k} wrote its folder"
             );
         }
+    }
+}
+
+/// A tmpfs mounted on a folder for a test, unmounted when dropped.
+struct Tmpfs(PathBuf);
+
+impl Tmpfs {
+    /// Mounts a tmpfs of `size` (as `mount -o size=` takes it) on `dir`; why not, where this
+    /// machine does not let the test mount one.
+    fn mount(dir: &Path, size: &str) -> Result<Tmpfs, String> {
+        std::fs::create_dir_all(dir).unwrap();
+        let o = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(dir)
+            .output()
+            .map_err(|e| format!("mount: {e}"))?;
+        if !o.status.success() {
+            return Err(String::from_utf8_lossy(&o.stderr).trim().to_string());
+        }
+        Ok(Tmpfs(dir.to_path_buf()))
+    }
+
+    /// Makes it `size` (its files kept).
+    fn resize(&self, size: &str) {
+        common::succeeds(
+            Command::new("mount")
+                .args(["-o", &format!("remount,size={size}")])
+                .arg(&self.0),
+        );
+    }
+}
+
+impl Drop for Tmpfs {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+    }
+}
+
+/// A campaign on a disk that fills up — while its takes are staged (three takes on 10 MB) and
+/// while its one take renders (7.6 MB) — fails its takes naming the full disk; once space is
+/// freed, `--resume` finishes it, identical by SHA-256 (every manifest and the index) to the
+/// same campaign run uninterrupted in the same place. Needs a tmpfs (root, as on CI): skipped
+/// where none can be mounted.
+#[test]
+fn a_campaign_on_a_disk_that_fills_resumes_to_the_same_bytes() {
+    let a = tempfile::tempdir().unwrap();
+    let disk = match Tmpfs::mount(&a.path().join("disk"), "200m") {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("SKIPPED: no tmpfs to fill ({e})");
+            return;
+        }
+    };
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    std::fs::write(
+        a.path().join("run.toml"),
+        "[body]\n[motion]\nsource = \"agents\"\nduration_s = 1.0\n[crowd]\ncount = 2\nlayout = \"random\"\nwander = true\n\
+         [output]\ndir = \"single\"\nmesh_every_n_frames = 0\n[render]\ncameras = [\"camera-slam-left\"]\nresolution_scale = 0.1\n\
+         every_n_frames = 10\nsamples = 2\nframes_per_shard = 2\npasses = [\"colour\", \"depth\", \"segmentation\"]\n[supervisor]\nworkers = 2\n",
+    )
+    .unwrap();
+    let out = disk.0.join("out");
+    for (takes, full) in [(3, "10m"), (1, "7600k")] {
+        let campaign = a.path().join(format!("c{takes}.toml"));
+        std::fs::write(
+            &campaign,
+            format!(
+                "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = {takes}\nscenes = [\"{}\"]\ncrowd_count = [1, 2]\nmin_free_disk_gb = 0.0\n",
+                out.display(),
+                root.join("assets/scenes/apartment.glb").display()
+            ),
+        )
+        .unwrap();
+        disk.resize("200m");
+        run_to_completion(&campaign, &out);
+        let uninterrupted = common::campaign_digest(&out);
+        std::fs::remove_dir_all(&out).unwrap();
+
+        disk.resize(full);
+        let filled = egogen_run().arg(&campaign).output().unwrap();
+        let said = String::from_utf8_lossy(&filled.stderr);
+        assert!(
+            !filled.status.success() && said.contains("No space left on device"),
+            "{takes} take(s) on {full}: {said}"
+        );
+        disk.resize("200m");
+        common::succeeds(egogen_run().arg(&campaign).arg("--resume"));
+        assert_eq!(
+            common::campaign_digest(&out),
+            uninterrupted,
+            "{takes} take(s) on {full}"
+        );
+        std::fs::remove_dir_all(&out).unwrap();
     }
 }

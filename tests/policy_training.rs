@@ -631,9 +631,9 @@ fn action_spread_scales_the_sampled_actions_about_the_mean() {
 }
 
 /// Training never writes a non-finite policy and never replaces an earlier run's weights
-/// unasked: a learning rate of 1e10 stops the run with the update and the term that went
-/// non-finite (exit non-zero); the same run twice writes the same bytes; a second run into the
-/// same outputs is refused until `--force`.
+/// unasked: a learning rate of 1e10 is refused by key; a run that diverges stops with the
+/// update and the term that went non-finite (exit non-zero); the same run twice writes the
+/// same bytes; a second run into the same outputs is refused until `--force`.
 #[test]
 fn non_finite_training_stops_and_earlier_weights_are_not_replaced_unasked() {
     use std::process::Command;
@@ -646,7 +646,21 @@ fn non_finite_training_stops_and_earlier_weights_are_not_replaced_unasked() {
     };
     let dir = tempfile::tempdir().unwrap();
     let config = dir.path().join("c.toml");
+    // A learning rate from 1 up is refused before any training, naming the key.
     let text = tiny_config(dir.path()).replace("[ppo]\n", "[ppo]\nlearning_rate = 1e10\n");
+    std::fs::write(&config, text).unwrap();
+    let out = train(&config, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success()
+            && err.contains("ppo.learning_rate")
+            && err.contains("expected a learning rate in (0, 1), got 10000000000"),
+        "{err}"
+    );
+    assert!(!dir.path().join("w.safetensors").exists() && !dir.path().join("w.log.jsonl").exists());
+    // A run that diverges all the same (a value loss weighted by 1e38) stops at the update that
+    // did, naming the term, and writes nothing after it.
+    let text = tiny_config(dir.path()).replace("[ppo]\n", "[ppo]\nvalue_coef = 1e38\n");
     std::fs::write(&config, text).unwrap();
     let out = train(&config, &[]);
     let err = String::from_utf8_lossy(&out.stderr);

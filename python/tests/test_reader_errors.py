@@ -134,9 +134,9 @@ def test_an_exr_with_bytes_flipped_in_its_header_or_its_pixels(campaign):
     assert str(e.value).startswith(f"{frame.path}: channel dXpth.Z: not a frame-file channel")
 
     # In the pixel data (ZIP-compressed): OpenEXR fails to decompress it. Not every damage is
-    # found: of all 193 640 single-bit flips of one 24 205-byte frame file of this campaign, 21
-    # (in its compressed pixels) decode to other pixels without an error; 1 847 change nothing
-    # read. (The take's manifest has every file's SHA-256: `egogen-run CAMPAIGN --resume
+    # found: of all 193 640 single-bit flips of one 24 205-byte frame file, 22 (in its
+    # compressed pixels) decode to other pixels without an error; 1 847 change nothing read
+    # (`tools/exr_bitflips.py`, docs/CAMPAIGNS.md). (The take's manifest has every file's SHA-256: `egogen-run CAMPAIGN --resume
     # --rehash` checks them.) 16 inverted bytes are found.
     frame.path.write_bytes(flipped(data, len(data) * 3 // 4))
     with pytest.raises(egogen.FormatError) as e:

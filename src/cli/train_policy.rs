@@ -265,8 +265,18 @@ fn check_numbers(raw: &RawTrainPolicy, bad: Bad) -> Result<(), ConfigError> {
             return Err(bad(key, format!("expected a number in (0, 1], got {v}")));
         }
     }
+    // Adam's steps are about the learning rate whatever the gradient: from 1 up they throw the
+    // weights far off without a NaN to stop them (1e10 trained to weights of 1e10).
+    if !(p.learning_rate.is_finite() && p.learning_rate > 0.0 && p.learning_rate < 1.0) {
+        return Err(bad(
+            "ppo.learning_rate",
+            format!(
+                "expected a learning rate in (0, 1), got {}",
+                p.learning_rate
+            ),
+        ));
+    }
     let non_negative = [
-        ("ppo.learning_rate", p.learning_rate),
         ("ppo.weight_decay", p.weight_decay),
         ("ppo.value_coef", p.value_coef),
         ("ppo.entropy_coef", p.entropy_coef),

@@ -42,20 +42,16 @@ pub fn read_arch(path: &Path) -> Result<ArchConfig, WeightsError> {
     read_metadata(path, ARCH_KEY)
 }
 
-/// Reads the JSON value under metadata `key` of a safetensors file's header.
-pub(crate) fn read_metadata<A: serde::de::DeserializeOwned>(
-    path: &Path,
-    key: &'static str,
-) -> Result<A, WeightsError> {
-    let io = |source| WeightsError::Io {
-        path: path.into(),
-        source,
-    };
+/// A safetensors file's header: its length in bytes and its JSON.
+fn read_header(path: &Path) -> Result<(u64, serde_json::Value), WeightsError> {
     let format = |message: String| WeightsError::Format {
         path: path.into(),
         message,
     };
-    let mut file = std::fs::File::open(path).map_err(io)?;
+    let mut file = std::fs::File::open(path).map_err(|source| WeightsError::Io {
+        path: path.into(),
+        source,
+    })?;
     let mut len = [0u8; 8];
     file.read_exact(&mut len)
         .map_err(|e| format(format!("header length: {e}")))?;
@@ -66,8 +62,51 @@ pub(crate) fn read_metadata<A: serde::de::DeserializeOwned>(
     let mut header = vec![0u8; len as usize];
     file.read_exact(&mut header)
         .map_err(|e| format(format!("header: {e}")))?;
-    let header: serde_json::Value =
+    let header =
         serde_json::from_slice(&header).map_err(|e| format(format!("header JSON: {e}")))?;
+    Ok((len, header))
+}
+
+/// Checks that a safetensors file holds all the tensor data its header lists (a file cut short
+/// after its header would otherwise be reported by the reader as "incomplete metadata").
+fn check_complete(path: &Path) -> Result<(), WeightsError> {
+    let (len, header) = read_header(path)?;
+    let listed = header
+        .as_object()
+        .into_iter()
+        .flatten()
+        .filter(|(k, _)| *k != "__metadata__")
+        .filter_map(|(_, t)| t.get("data_offsets")?.get(1)?.as_u64())
+        .max()
+        .unwrap_or(0);
+    let size = std::fs::metadata(path)
+        .map_err(|source| WeightsError::Io {
+            path: path.into(),
+            source,
+        })?
+        .len();
+    let held = size.saturating_sub(8 + len);
+    if held < listed {
+        return Err(WeightsError::Format {
+            path: path.into(),
+            message: format!(
+                "its tensors' data is cut short: the header lists {listed} bytes, the file holds {held}"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Reads the JSON value under metadata `key` of a safetensors file's header.
+pub(crate) fn read_metadata<A: serde::de::DeserializeOwned>(
+    path: &Path,
+    key: &'static str,
+) -> Result<A, WeightsError> {
+    let format = |message: String| WeightsError::Format {
+        path: path.into(),
+        message,
+    };
+    let (_, header) = read_header(path)?;
     let arch = header
         .get("__metadata__")
         .and_then(|m| m.get(key))
@@ -97,6 +136,7 @@ pub(crate) fn load_into<B: Backend, M: burn::module::Module<B>>(
     net: &mut M,
     described: &str,
 ) -> Result<(), WeightsError> {
+    check_complete(path)?;
     let mut store = SafetensorsStore::from_file(path)
         .validate(false)
         .allow_partial(true);
@@ -204,4 +244,27 @@ fn canonical_header(path: &Path) -> Result<(), WeightsError> {
     out.extend_from_slice(&sorted);
     out.extend_from_slice(&bytes[8 + n..]);
     std::fs::write(path, out).map_err(io)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_cut_short_after_their_header_say_so() {
+        let shipped = crate::paths::crate_root().join("assets/motion/primitive_cvae.safetensors");
+        let bytes = std::fs::read(&shipped).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let cut = dir.path().join("cut.safetensors");
+        std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).unwrap();
+        let Err(err) = load::<burn::backend::Flex>(&cut, &Default::default()) else {
+            panic!("a cut file loaded");
+        };
+        let err = err.to_string();
+        assert!(
+            err.contains("cut.safetensors: not a safetensors file (its tensors' data is cut short: the header lists")
+                && err.contains("truncated"),
+            "{err}"
+        );
+    }
 }
