@@ -820,8 +820,9 @@ impl Drop for Tmpfs {
 /// A campaign on a disk that fills up — while its takes are staged (three takes on 10 MB) and
 /// while its one take renders (7.6 MB) — fails its takes naming the full disk; once space is
 /// freed, `--resume` finishes it, identical by SHA-256 (every manifest and the index) to the
-/// same campaign run uninterrupted in the same place. Needs a tmpfs (root, as on CI): skipped
-/// where none can be mounted.
+/// same campaign run uninterrupted in the same place; below its free-disk floor it pauses
+/// staging while staged takes finish. Needs a tmpfs (root, as on CI): skipped where none can be
+/// mounted.
 #[test]
 fn a_campaign_on_a_disk_that_fills_resumes_to_the_same_bytes() {
     let a = tempfile::tempdir().unwrap();
@@ -873,4 +874,42 @@ fn a_campaign_on_a_disk_that_fills_resumes_to_the_same_bytes() {
         );
         std::fs::remove_dir_all(&out).unwrap();
     }
+
+    // Below its free-disk floor, the campaign stops staging, not rendering: on 40 MB with a
+    // 35 MB floor, the first take staged leaves less free; it renders and finishes meanwhile,
+    // which frees the space, and the second is staged. (The wait once held the feed, so the
+    // first take could not finish: the campaign waited for ever.)
+    let campaign = a.path().join("floor.toml");
+    std::fs::write(
+        &campaign,
+        format!(
+            "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = 2\nscenes = [\"{}\"]\ncrowd_count = [1, 2]\nmin_free_disk_gb = 0.035\n",
+            out.display(),
+            root.join("assets/scenes/apartment.glb").display()
+        ),
+    )
+    .unwrap();
+    disk.resize("40m");
+    let mut child = egogen_run()
+        .arg(&campaign)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(300);
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > deadline {
+            child.kill().unwrap();
+            panic!("the campaign below its disk floor never finished");
+        }
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let o = child.wait_with_output().unwrap();
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{said}");
+    assert!(
+        said.contains("paused: ") && said.contains("free disk is back above the floor"),
+        "{said}"
+    );
+    assert_eq!(state(&out).count(egogen::campaign::TakeStatus::Complete), 2);
 }

@@ -31,6 +31,8 @@ pub(crate) struct CampaignFeed {
     done_before: usize,
     /// Seconds between free-disk checks while paused.
     pub disk_poll: Duration,
+    /// Whether staging is paused for want of free disk (said when it starts and ends).
+    paused: bool,
     /// Each take's position by id.
     positions: HashMap<String, usize>,
     /// When `campaign.json` was last rewritten (it is rewritten at most every
@@ -66,7 +68,8 @@ impl CampaignFeed {
             frames_total: frames.iter().sum(),
             frames,
             done_before,
-            disk_poll: Duration::from_secs(30),
+            disk_poll: Duration::from_secs(5),
+            paused: false,
             saved: None,
             positions,
         }
@@ -98,26 +101,29 @@ impl CampaignFeed {
         );
     }
 
-    /// Waits while the campaign folder's file system has less free space than the floor.
-    fn wait_for_disk(&self) {
-        let mut said = false;
-        while let Some(free) = free_bytes(&self.plan.out) {
-            if free >= self.plan.min_free_disk_bytes {
-                if said {
-                    eprintln!("egogen-run: campaign: free disk is back above the floor; going on");
+    /// Whether staging waits: while the campaign folder's file system has less free space than
+    /// the floor (said once when it starts and once when it ends).
+    fn disk_pause(&mut self) -> Option<Duration> {
+        match free_bytes(&self.plan.out) {
+            Some(free) if free < self.plan.min_free_disk_bytes => {
+                if !self.paused {
+                    eprintln!(
+                        "egogen-run: campaign: paused: {:.3} GB free under {} < the floor of {:.3} GB (`campaign.min_free_disk_gb`); takes already staged go on; free some space and staging goes on",
+                        free as f64 / 1e9,
+                        self.plan.out.display(),
+                        self.plan.min_free_disk_bytes as f64 / 1e9
+                    );
+                    self.paused = true;
                 }
-                return;
+                Some(self.disk_poll)
             }
-            if !said {
-                eprintln!(
-                    "egogen-run: campaign: paused: {:.2} GB free under {} < the floor of {:.2} GB (`campaign.min_free_disk_gb`); free some space and it goes on",
-                    free as f64 / 1e9,
-                    self.plan.out.display(),
-                    self.plan.min_free_disk_bytes as f64 / 1e9
-                );
-                said = true;
+            _ => {
+                if self.paused {
+                    eprintln!("egogen-run: campaign: free disk is back above the floor; going on");
+                    self.paused = false;
+                }
+                None
             }
-            std::thread::sleep(self.disk_poll);
         }
     }
 
@@ -163,6 +169,18 @@ impl TakeFeed for CampaignFeed {
         (self.frames_total, self.done_before)
     }
 
+    fn pause(&mut self) -> Option<Duration> {
+        // Nothing left to stage: no reason to wait.
+        let left = self.state.takes[self.next.min(self.state.takes.len())..]
+            .iter()
+            .any(|t| t.status == TakeStatus::Planned);
+        if left {
+            self.disk_pause()
+        } else {
+            None
+        }
+    }
+
     fn next_take(&mut self) -> Option<Result<PoolTake, TakeFailure>> {
         while self.next < self.state.takes.len() {
             let k = self.next;
@@ -171,7 +189,6 @@ impl TakeFeed for CampaignFeed {
             if self.state.takes[k].status != TakeStatus::Planned {
                 continue;
             }
-            self.wait_for_disk();
             match self.stage(k) {
                 Ok(None) => continue,
                 Ok(Some(take)) => return Some(Ok(take)),

@@ -265,6 +265,19 @@ fn prefetch(shared: &Arc<Shared>) {
 /// Stages the feed's next take and queues its shards (a take with none left is handed back
 /// at once); a take that cannot be staged is recorded (or stops the run).
 async fn stage_next(shared: &Arc<Shared>) {
+    // While the feed pauses, the feed is free: staged takes render and finish meanwhile.
+    loop {
+        let feed = shared.feed.clone();
+        let pause = tokio::task::spawn_blocking(move || feed.lock().unwrap().pause())
+            .await
+            .ok()
+            .flatten();
+        match pause {
+            _ if *shared.stop.borrow() => return,
+            Some(wait) => tokio::time::sleep(wait).await,
+            None => break,
+        }
+    }
     let feed = shared.feed.clone();
     let next = tokio::task::spawn_blocking(move || feed.lock().unwrap().next_take())
         .await

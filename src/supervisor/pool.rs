@@ -89,6 +89,12 @@ pub trait TakeFeed: Send {
     /// Stages the next take; `None` when none is left. An error is that take's failure: the
     /// pool records it and goes on (or stops, with [`PoolRun::stop_on_failure`]).
     fn next_take(&mut self) -> Option<Result<PoolTake, TakeFailure>>;
+    /// `Some(wait)` while no take should be staged yet (the feed says why): the pool asks again
+    /// after `wait`, without holding the feed, so that takes already staged render and finish
+    /// meanwhile (finishing one may be what ends the wait). `None`: stage now.
+    fn pause(&mut self) -> Option<std::time::Duration> {
+        None
+    }
     /// Every frame of `take` is rendered: finish it (annotations, exports, manifest).
     fn take_rendered(&mut self, take: &PoolTake) -> Result<()>;
     /// `take` failed; the pool renders no more of it.

@@ -163,6 +163,10 @@ fn stage_more(
         if pending >= want {
             return false;
         }
+        // Paused: asked again at the next poll, the jobs in flight going on meanwhile.
+        if feed.lock().unwrap().pause().is_some() {
+            return false;
+        }
         let next = feed.lock().unwrap().next_take();
         match next {
             None => return true,
