@@ -709,7 +709,7 @@ mod gaze {
 
     #[test]
     fn an_activity_s_target_draws_most_fixations_while_it_lasts_and_no_others() {
-        use egogen::export::gaze::GazeLook;
+        use egogen::synth::activity::LookAt;
         let still = walking_head(0.0, Vec3::ZERO, None)[0];
         let me = PoseSpline::interpolate(40.0, &vec![still; 40 * 60 + 1]).unwrap();
         // A seat 1.5 m ahead, 0.3 m to one side and 0.6 m down (within the eyes' 30°), looked at over 20–40 s;
@@ -717,15 +717,15 @@ mod gaze {
         let seat = still.transform_point3(Vec3::new(0.3, -0.6, 1.5));
         let behind = still.transform_point3(Vec3::new(0.0, -1.0, -1.5));
         let looks = [
-            GazeLook {
-                point: seat,
-                from_frame: 800,
-                until_frame: 1600,
+            LookAt {
+                point: seat.to_array(),
+                start_frame: 800,
+                end_frame: 1600,
             },
-            GazeLook {
-                point: behind,
-                from_frame: 1600,
-                until_frame: 2400,
+            LookAt {
+                point: behind.to_array(),
+                start_frame: 1600,
+                end_frame: 2400,
             },
         ];
         let plain = world(&me, Vec::new());

@@ -23,6 +23,26 @@ fn state(out: &Path) -> egogen::campaign::CampaignState {
     egogen::campaign::CampaignState::read(out).unwrap()
 }
 
+/// `dir/NAME.toml`: a campaign of `takes` takes from `dir/run.toml` into `out`, with `keys`
+/// (`scenes`, …) and, unless they give one, no free-disk floor.
+fn campaign_file(dir: &Path, name: &str, out: &Path, takes: usize, keys: &str) -> PathBuf {
+    let floor = if keys.contains("min_free_disk_gb") {
+        ""
+    } else {
+        "min_free_disk_gb = 0.0\n"
+    };
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &path,
+        format!(
+            "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = {takes}\n{keys}\n{floor}",
+            out.display()
+        ),
+    )
+    .unwrap();
+    path
+}
+
 /// Runs a campaign to its end: every take complete (else what it said), its state.
 fn run_to_completion(campaign: &Path, out: &Path) -> egogen::campaign::CampaignState {
     let run = common::succeeds(egogen_run().arg(campaign));
@@ -395,24 +415,17 @@ fn a_campaign_reads_each_scene_in_the_frame_its_entry_gives() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
     let run_config = common::tiny_campaign_run(a.path(), false);
     std::fs::write(a.path().join("room_cm.obj"), common::room_y_up_cm_obj()).unwrap();
-    let campaign = a.path().join("framed.toml");
-    std::fs::write(
-        &campaign,
-        format!(
-            r#"
-[campaign]
-run = "run.toml"
-out = "framed"
-takes = 2
-scenes = [{{ path = "room_cm.obj", up_axis = "y", unit_m = 0.01 }}, "{}"]
-crowd_count = [1, 1]
-min_free_disk_gb = 0.0
-"#,
+    let out = a.path().join("framed");
+    let campaign = campaign_file(
+        a.path(),
+        "framed",
+        &out,
+        2,
+        &format!(
+            "scenes = [{{ path = \"room_cm.obj\", up_axis = \"y\", unit_m = 0.01 }}, \"{}\"]\ncrowd_count = [1, 1]",
             root.join("assets/scenes/apartment.glb").display()
         ),
-    )
-    .unwrap();
-    let out = a.path().join("framed");
+    );
     let s = run_to_completion(&campaign, &out);
     let room = &s.takes[0];
     assert!(room.def.scene.ends_with("room_cm.obj"));
@@ -500,24 +513,17 @@ workers = 2
 "#,
     )
     .unwrap();
-    let campaign = a.path().join("acts.toml");
-    std::fs::write(
-        &campaign,
-        format!(
-            r#"
-[campaign]
-run = "run.toml"
-out = "acts"
-takes = 2
-scenes = ["{}"]
-activity_weights = [{{ walk = 1 }}, {{ stand = 1, pick_up = 1.5 }}]
-min_free_disk_gb = 0.0
-"#,
+    let out = a.path().join("acts");
+    let campaign = campaign_file(
+        a.path(),
+        "acts",
+        &out,
+        2,
+        &format!(
+            "scenes = [\"{}\"]\nactivity_weights = [{{ walk = 1 }}, {{ stand = 1, pick_up = 1.5 }}]",
             root.join("assets/scenes/apartment.glb").display()
         ),
-    )
-    .unwrap();
-    let out = a.path().join("acts");
+    );
     let s = run_to_completion(&campaign, &out);
     assert!(
         s.takes[0].command.ends_with("--activity-weights walk=1"),
@@ -721,12 +727,13 @@ fn a_campaign_s_takes_are_checked_before_any_is_staged() {
         ),
     ];
     // A scene read on its side is warned of, naming the take, before any is staged.
-    let campaign = a.path().join("sideways.toml");
-    std::fs::write(
-        &campaign,
-        format!("[campaign]\nrun = \"run.toml\"\nout = \"sideways\"\ntakes = 2\nscenes = [\"{apartment}\", \"room_cm.obj\"]\nmin_free_disk_gb = 0.0\n"),
-    )
-    .unwrap();
+    let campaign = campaign_file(
+        a.path(),
+        "sideways",
+        &a.path().join("sideways"),
+        2,
+        &format!("scenes = [\"{apartment}\", \"room_cm.obj\"]"),
+    );
     let dry = common::succeeds(egogen_run().arg(&campaign).arg("--dry-run"));
     let said = String::from_utf8_lossy(&dry.stderr);
     assert!(
@@ -749,19 +756,13 @@ fn a_campaign_s_takes_are_checked_before_any_is_staged() {
         );
     }
     for (k, (keys, says)) in cases.iter().enumerate() {
-        let campaign = a.path().join(format!("c{k}.toml"));
-        std::fs::write(
-            &campaign,
-            format!(
-                "[campaign]\nrun = \"run.toml\"\nout = \"out{k}\"\ntakes = 2\n{keys}\n{}",
-                if keys.contains("min_free_disk_gb") {
-                    ""
-                } else {
-                    "min_free_disk_gb = 0.0\n"
-                }
-            ),
-        )
-        .unwrap();
+        let campaign = campaign_file(
+            a.path(),
+            &format!("c{k}"),
+            &a.path().join(format!("out{k}")),
+            2,
+            keys,
+        );
         for dry in [true, false] {
             let mut cmd = egogen_run();
             cmd.arg(&campaign);
@@ -834,25 +835,17 @@ fn a_campaign_on_a_disk_that_fills_resumes_to_the_same_bytes() {
         }
     };
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    std::fs::write(
-        a.path().join("run.toml"),
-        "[body]\n[motion]\nsource = \"agents\"\nduration_s = 1.0\n[crowd]\ncount = 2\nlayout = \"random\"\nwander = true\n\
-         [output]\ndir = \"single\"\nmesh_every_n_frames = 0\n[render]\ncameras = [\"camera-slam-left\"]\nresolution_scale = 0.1\n\
-         every_n_frames = 10\nsamples = 2\nframes_per_shard = 2\npasses = [\"colour\", \"depth\", \"segmentation\"]\n[supervisor]\nworkers = 2\n",
-    )
-    .unwrap();
+    // The tiny campaign's takes, each frame tried once more at most: a full disk fails at once.
+    let run = common::tiny_campaign_run(a.path(), false);
+    let text = std::fs::read_to_string(&run).unwrap();
+    std::fs::write(&run, text.replace("retries = 40", "retries = 1")).unwrap();
+    let scenes = format!(
+        "scenes = [\"{}\"]\ncrowd_count = [1, 2]",
+        root.join("assets/scenes/apartment.glb").display()
+    );
     let out = disk.0.join("out");
     for (takes, full) in [(3, "10m"), (1, "7600k")] {
-        let campaign = a.path().join(format!("c{takes}.toml"));
-        std::fs::write(
-            &campaign,
-            format!(
-                "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = {takes}\nscenes = [\"{}\"]\ncrowd_count = [1, 2]\nmin_free_disk_gb = 0.0\n",
-                out.display(),
-                root.join("assets/scenes/apartment.glb").display()
-            ),
-        )
-        .unwrap();
+        let campaign = campaign_file(a.path(), &format!("c{takes}"), &out, takes, &scenes);
         disk.resize("200m");
         run_to_completion(&campaign, &out);
         let uninterrupted = common::campaign_digest(&out);
@@ -879,16 +872,13 @@ fn a_campaign_on_a_disk_that_fills_resumes_to_the_same_bytes() {
     // 35 MB floor, the first take staged leaves less free; it renders and finishes meanwhile,
     // which frees the space, and the second is staged. (The wait once held the feed, so the
     // first take could not finish: the campaign waited for ever.)
-    let campaign = a.path().join("floor.toml");
-    std::fs::write(
-        &campaign,
-        format!(
-            "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = 2\nscenes = [\"{}\"]\ncrowd_count = [1, 2]\nmin_free_disk_gb = 0.035\n",
-            out.display(),
-            root.join("assets/scenes/apartment.glb").display()
-        ),
-    )
-    .unwrap();
+    let campaign = campaign_file(
+        a.path(),
+        "floor",
+        &out,
+        2,
+        &format!("{scenes}\nmin_free_disk_gb = 0.035"),
+    );
     disk.resize("40m");
     let mut child = egogen_run()
         .arg(&campaign)

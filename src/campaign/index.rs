@@ -1,8 +1,9 @@
 //! The campaign's index: one Parquet table (`index.parquet`) listing every rendered frame of
 //! every finished take — take, scene, seed, camera, frame, time, file, agents in view,
-//! exposure, what the wearer and the people in view do — the form ML data loaders open directly (pandas, pyarrow, polars). Each finished
-//! take's rows are kept in `work/index/<id>.json` so the index is rewritten from small files,
-//! in take order, to the same bytes however the campaign was interrupted.
+//! exposure, what the wearer and the people in view do — the form ML data loaders open
+//! directly (pandas, pyarrow, polars). Each finished take's rows are kept in
+//! `work/index/<id>.json` so the index is rewritten from small files, in take order, to the
+//! same bytes however the campaign was interrupted.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -2,12 +2,14 @@
 //! A campaign file (`plan`) names the run config every take starts from and what varies per
 //! take; each take is a complete dataset of `egogen-run`'s form in `takes/<id>/`, the same
 //! bytes as that take rendered alone (its command is in `campaign.json`). All takes' shards go
-//! to one pool (local workers or Slurm), takes staged on demand (`feed`); `campaign.json`
-//! (`state`) is rewritten at every change and `--resume` continues a killed campaign (a
-//! finished take checked by its `stamp`, or in full when it changed or with `--rehash`); the
-//! frames of every finished take are listed in `index.parquet` (`index`) and shown on
-//! `contact_sheet.png` (`sheet`). The budget (takes,
-//! frames, disk, core-hours from measured throughput) is stated before any work (`budget`).
+//! to one pool (local workers or Slurm), takes staged on demand (`feed`, pausing below the
+//! free-disk floor); `campaign.json` (`state`) is rewritten at every change and `--resume`
+//! continues a killed campaign (a finished take checked by its `stamp`, or in full when it
+//! changed or with `--rehash`; the state rebuilt from the take folders when `campaign.json` is
+//! lost); the frames of every finished take are listed in `index.parquet` (`index`) and shown
+//! on `contact_sheet.png` (`sheet`). Before any work every take is checked as staging would
+//! check it (scene, rig, crowd) and the budget (takes, frames, disk, core-hours from measured
+//! throughput) is stated (`budget`).
 
 pub mod budget;
 pub mod feed;
@@ -232,32 +234,45 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
         );
     }
     let resuming = request.resume || request.dry_run;
+    // The state rebuilt from the take folders: said, and `None` (a new state from the plan).
+    let rebuilt = |why: String| {
+        let done = if request.resume {
+            "rebuilt"
+        } else {
+            "--resume rebuilds it"
+        };
+        eprintln!(
+            "egogen-run: campaign: {why}; {done} from the take folders in {}",
+            out.join("takes").display()
+        );
+        Ok(None)
+    };
     if out.join(STATE_FILE).is_file() {
         let found = match CampaignState::read(out) {
             Ok(found) => found,
             Err(e) if resuming => {
                 check_rebuildable(plan)?;
                 // The unreadable file is kept, out of the way, for whoever wants to look.
+                let kept = out.join("work").join(format!("{STATE_FILE}.unreadable"));
                 if request.resume {
-                    let kept = out.join("work").join(format!("{STATE_FILE}.unreadable"));
                     std::fs::create_dir_all(out.join("work"))
                         .and_then(|_| std::fs::rename(out.join(STATE_FILE), &kept))
                         .with_context(|| {
                             format!("moving the unreadable {STATE_FILE} to {}", kept.display())
                         })?;
                 }
-                eprintln!(
-                    "egogen-run: campaign: {e:#}; {} from the take folders in {} (the unreadable file kept as work/{STATE_FILE}.unreadable)",
-                    if request.resume { "rebuilt" } else { "--resume rebuilds it" },
-                    out.join("takes").display()
-                );
-                return Ok(None);
+                let keeps = if request.resume {
+                    "kept"
+                } else {
+                    "--resume keeps it"
+                };
+                return rebuilt(format!("{e:#} ({keeps} as {})", kept.display()));
             }
             Err(e) => {
                 bail!("{e:#}: --resume rebuilds it from the take folders (nothing was written)")
             }
         };
-        if !request.resume && !request.dry_run {
+        if !resuming {
             bail!(
                 "{} holds a campaign; rerun with --resume to continue it, or choose another `campaign.out` (nothing was written)",
                 out.display()
@@ -273,33 +288,18 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
         return Ok(Some(found));
     }
     if std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some()) {
-        let rebuildable = check_rebuildable(plan);
-        if let (Err(e), true) = (&rebuildable, request.resume) {
-            bail!("{e:#}");
-        }
-        if rebuildable.is_ok() {
-            if resuming {
-                eprintln!(
-                    "egogen-run: campaign: {} has no {STATE_FILE}; {} from the take folders in {}",
-                    out.display(),
-                    if request.resume {
-                        "rebuilt"
-                    } else {
-                        "--resume rebuilds it"
-                    },
-                    out.join("takes").display()
-                );
-                return Ok(None);
-            }
-            bail!(
+        return match (check_rebuildable(plan), resuming) {
+            (Ok(()), true) => rebuilt(format!("{} has no {STATE_FILE}", out.display())),
+            (Ok(()), false) => bail!(
                 "{} holds this campaign's takes but no {STATE_FILE}; rerun with --resume to rebuild it from the take folders (nothing was written)",
                 out.display()
-            );
-        }
-        bail!(
-            "campaign folder {} already exists and is not empty; choose another `campaign.out` (nothing was written)",
-            out.display()
-        );
+            ),
+            (Err(e), true) if request.resume => Err(e),
+            (Err(_), _) => bail!(
+                "campaign folder {} already exists and is not empty; choose another `campaign.out` (nothing was written)",
+                out.display()
+            ),
+        };
     }
     Ok(None)
 }

@@ -1,7 +1,7 @@
 //! A campaign config (`[campaign]`) and the takes it defines: the run config every take starts
 //! from, and what varies per take — scene (paths, globs, generated floor plans, each with the
-//! frame it is read in), seed, crowd size, duration, rig, activity mix. Each take is that run config with
-//! `egogen-run`'s command-line overrides, so a take rendered alone is the same command; its id
+//! frame it is read in), seed, crowd size, duration, rig, activity mix. Each take is that run
+//! config with `egogen-run`'s command-line overrides, so a take rendered alone is the same command; its id
 //! is derived from what defines it.
 
 use std::path::{Path, PathBuf};

@@ -6,9 +6,10 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 
 use crate::export::aria::{write_wearer_streams, AriaSettings, AriaStreams, Wearer};
-use crate::export::gaze::{GazeGoal, GazeLook};
+use crate::export::gaze::GazeGoal;
 use crate::math::{affine_from_row_major, Affine3};
 use crate::rig::Rig;
+use crate::synth::activity::LookAt;
 use crate::synth::sequence_dir::read_cpf_trajectory;
 
 /// What `egogen aria export` was asked.
@@ -56,7 +57,7 @@ struct TakeHead {
     world_from_cpf: Vec<Affine3>,
     cpf_from_headset: Affine3,
     goals: Vec<GazeGoal>,
-    looks: Vec<GazeLook>,
+    looks: Vec<LookAt>,
 }
 
 /// Runs `egogen aria export`.
@@ -247,7 +248,7 @@ fn take_scene(take: &Path) -> Result<Option<(PathBuf, crate::scene::SceneFrame)>
 
 /// Each agent's goals and what its activities act on, from `summary.json`
 /// (`agents[].goals[]`: `goal` [x, y], `end_frame`; `agents[].activities[].look_at`).
-fn take_targets(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>, Vec<GazeLook>)>> {
+fn take_targets(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>, Vec<LookAt>)>> {
     let path = motion_root(take).join("summary.json");
     let Ok(text) = std::fs::read_to_string(&path) else {
         return Ok(Vec::new());
@@ -273,14 +274,14 @@ fn take_targets(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>, Vec<GazeLook>
             if act.get("look_at").is_none() {
                 continue;
             }
-            let look: crate::synth::activity::LookAt =
+            let look: LookAt =
                 serde_json::from_value(act["look_at"].clone()).with_context(|| {
                     format!(
                         "{}: agent {name}: key activities[{k}].look_at: expected {{ point: [x, y, z], start_frame, end_frame }}",
                         path.display()
                     )
                 })?;
-            looks.push(GazeLook::of(&look));
+            looks.push(look);
         }
         out.push((name, goals, looks));
     }

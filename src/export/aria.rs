@@ -19,7 +19,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use serde_json::json;
 
-use super::gaze::{eye_gaze_csv, fixations, gaze_samples, Fixation, GazeGoal, GazeLook, GazeWorld};
+use super::gaze::{eye_gaze_csv, fixations, gaze_samples, Fixation, GazeGoal, GazeWorld};
 use super::imu::{sample_times_ns, simulate_imu, ImuErrors, ImuSample, GRAVITY_WORLD};
 use super::take::{FinishedTake, TakeExport};
 use crate::atomic_file::write_atomically;
@@ -188,7 +188,7 @@ pub(crate) struct Wearer<'a> {
     /// The wearer's goals in order, for the gaze.
     pub goals: Vec<GazeGoal>,
     /// What its activities act on, for the gaze.
-    pub looks: Vec<GazeLook>,
+    pub looks: Vec<crate::synth::activity::LookAt>,
     /// The scene, for gaze depths.
     pub rays: Option<&'a SceneRays>,
 }
@@ -212,7 +212,7 @@ pub struct AriaWearer {
     /// Where it walks, in order (the gaze looks ahead to it).
     pub goals: Vec<GazeGoal>,
     /// What its activities act on (the gaze looks at it while it acts).
-    pub looks: Vec<GazeLook>,
+    pub looks: Vec<crate::synth::activity::LookAt>,
     /// How the headset sits on its head.
     pub cpf_from_headset: Affine3,
 }

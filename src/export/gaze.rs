@@ -7,7 +7,8 @@
 //!   on (the seat from the walk to it until seated, the spot on the floor picked from while
 //!   bending; `synth::activity::LookAt`) with probability 0.7 when within 90° of the head's
 //!   forward direction (a choice after Land & Hayhoe, Vision Research 2001: in everyday
-//!   tasks the eyes fixate the object about to be acted on, ahead of the hands); else another person within 5 m and 40° of the head's
+//!   tasks the eyes fixate the object about to be acted on, ahead of the hands); else another
+//!   person within 5 m and 40° of the head's
 //!   forward direction (with probability 0.5; the nearest), the current goal when it is within
 //!   4 m and 40° (probability 0.3), else the floor where the wearer's path will be 3–5 m on
 //!   (walkers fixate the path ahead, the farther the flatter the ground: Matthis, Yates &
@@ -38,6 +39,7 @@ use crate::math::pose_spline::PoseSpline;
 use crate::math::random::{standard_normal, uniform_in, uniform_open01};
 use crate::math::{Affine3, Real, Vec3};
 use crate::scene::mesh_distance::SceneRays;
+use crate::synth::activity::LookAt;
 
 /// The model's figures (module docs).
 const PERSON_RANGE_M: Real = 5.0;
@@ -64,26 +66,6 @@ pub struct GazeGoal {
     pub until_frame: usize,
 }
 
-/// What an activity of the wearer acts on, and the frames `from_frame..until_frame` over which
-/// it is looked at.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GazeLook {
-    pub point: Vec3,
-    pub from_frame: usize,
-    pub until_frame: usize,
-}
-
-impl GazeLook {
-    /// What a take's activity record says the person looks at.
-    pub fn of(look: &crate::synth::activity::LookAt) -> Self {
-        Self {
-            point: Vec3::from_array(look.point),
-            from_frame: look.start_frame,
-            until_frame: look.end_frame,
-        }
-    }
-}
-
 /// What the wearer can look at.
 pub struct GazeWorld<'a> {
     /// The device's CPF through the take (the headset spline).
@@ -93,7 +75,7 @@ pub struct GazeWorld<'a> {
     pub frame_rate_hz: Real,
     pub goals: &'a [GazeGoal],
     /// What its activities act on, in frame order (none where people only walk).
-    pub looks: &'a [GazeLook],
+    pub looks: &'a [LookAt],
     /// The scene, for depths and the floor; `None`: depths to the targets, the floor 1.6 m
     /// below the eyes at the start.
     pub rays: Option<&'a SceneRays>,
@@ -226,12 +208,13 @@ pub fn fixations(world: &GazeWorld, seed: u64) -> Vec<Fixation> {
         let on_task = world
             .looks
             .iter()
-            .find(|l| (l.from_frame..l.until_frame).contains(&frame))
-            .filter(|l| direction_in_cpf(&head, l.point).1 < ACTIVITY_ANGLE_DEG.to_radians())
+            .find(|l| (l.start_frame..l.end_frame).contains(&frame))
+            .map(|l| Vec3::from_array(l.point))
+            .filter(|&p| direction_in_cpf(&head, p).1 < ACTIVITY_ANGLE_DEG.to_radians())
             .filter(|_| uniform_open01(&mut rng) < ACTIVITY_PROBABILITY);
         let roll = uniform_open01(&mut rng);
         let target = match (on_task, person, goal) {
-            (Some(look), _, _) => GazeTarget::Point(look.point),
+            (Some(point), _, _) => GazeTarget::Point(point),
             (None, Some((k, _)), _) if roll < PERSON_PROBABILITY => GazeTarget::Person(k),
             (None, _, Some(g)) if uniform_open01(&mut rng) < GOAL_PROBABILITY => {
                 GazeTarget::Point(g)

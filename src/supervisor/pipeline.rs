@@ -17,7 +17,7 @@ use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::export::annotations::SegmentationId;
 use crate::export::aria::{AriaExport, AriaWearer};
-use crate::export::gaze::{GazeGoal, GazeLook};
+use crate::export::gaze::GazeGoal;
 use crate::export::{take_exports, FinishedTake};
 use crate::manifest::{dataset_files, remove_temporaries, sha256_hex, MANIFEST};
 use crate::motion::MotionSequence;
@@ -519,7 +519,7 @@ fn aria_export(
                 RunMotion::Agents { take, .. } => take.agents[w]
                     .activities
                     .iter()
-                    .filter_map(|a| a.look_at.as_ref().map(GazeLook::of))
+                    .filter_map(|a| a.look_at)
                     .collect(),
                 RunMotion::Placed(_) => Vec::new(),
             },
