@@ -433,6 +433,193 @@ def split_scene(split):
         collection.objects.link(new)
 
 
+class Nodes:
+    """Builds a material's node tree: each method adds a node, links what it is given (a
+    socket, or a value set as the input's default) and returns its output socket."""
+
+    def __init__(self, mat):
+        self.nodes, self.links = mat.node_tree.nodes, mat.node_tree.links
+
+    def feed(self, target, value):
+        if hasattr(value, "is_output"):
+            self.links.new(value, target)
+        else:
+            target.default_value = value
+
+    def add(self, kind, inputs=(), **props):
+        node = self.nodes.new(kind)
+        for key, value in props.items():
+            setattr(node, key, value)
+        for key, value in inputs:
+            self.feed(node.inputs[key] if isinstance(key, int) else socket_named(node.inputs, key), value)
+        return node
+
+    def math(self, op, a, b=0.0, c=0.0):
+        return self.add("ShaderNodeMath", [(0, a), (1, b), (2, c)], operation=op).outputs[0]
+
+    def mix(self, data_type, factor, a, b):
+        """`a` where factor is 0, `b` where it is 1 (FLOAT, VECTOR or RGBA)."""
+        suffix = {"FLOAT": "Float", "VECTOR": "Vector", "RGBA": "Color"}[data_type]
+        node = self.add("ShaderNodeMix", data_type=data_type)
+        self.feed(socket(node.inputs, "Factor_Float"), factor)
+        self.feed(socket(node.inputs, "A_" + suffix), a)
+        self.feed(socket(node.inputs, "B_" + suffix), b)
+        return socket(node.outputs, "Result_" + suffix)
+
+    def ramp(self, value, lo, hi):
+        """`value` mapped from [lo, hi] to [0, 1], clamped."""
+        return self.add("ShaderNodeMapRange", [("Value", value), ("From Min", lo),
+                                               ("From Max", hi)]).outputs["Result"]
+
+    def grey(self, colour):
+        return self.add("ShaderNodeRGBToBW", [("Color", colour)]).outputs["Val"]
+
+
+def socket_named(sockets, name):
+    """The first enabled socket called `name` (some nodes have several, one per data type)."""
+    return next(s for s in sockets if s.name == name and s.enabled)
+
+
+def rgba(rgb, k=1.0):
+    return (*(min(1.0, c * k) for c in rgb), 1.0)
+
+
+def planar_coordinates(n):
+    """World position (m) on the plane a surface faces: (x, y) on floors and other surfaces
+    facing up or down, (y, z) on walls facing ±x, (x, z) on walls facing ±y; so planks lie
+    along floors and bricks stand upright on walls."""
+    geometry = n.add("ShaderNodeNewGeometry")
+    pos = n.add("ShaderNodeSeparateXYZ", [("Vector", geometry.outputs["Position"])]).outputs
+    nrm = n.add("ShaderNodeSeparateXYZ", [("Vector", geometry.outputs["Normal"])]).outputs
+    ax, ay, az = (n.math("ABSOLUTE", nrm[k]) for k in "XYZ")
+    faces_x = n.math("GREATER_THAN", ax, ay)
+    faces_up = n.math("GREATER_THAN", az, n.math("MAXIMUM", ax, ay))
+    side_u = n.mix("FLOAT", faces_x, pos["X"], pos["Y"])
+    u = n.mix("FLOAT", faces_up, side_u, pos["X"])
+    v = n.mix("FLOAT", faces_up, pos["Z"], pos["Y"])
+    return n.add("ShaderNodeCombineXYZ", [("X", u), ("Y", v)]).outputs["Vector"]
+
+
+def noise(n, vector, size_m, detail=4.0, roughness=0.5):
+    """Noise factor in [0, 1] with features about `size_m` across."""
+    return n.add("ShaderNodeTexNoise", [("Vector", vector), ("Scale", 1.0 / size_m),
+                                        ("Detail", detail), ("Roughness", roughness)]).outputs["Fac"]
+
+
+def pattern_colour(n, m):
+    """The base colour socket of one drawn material (`m`: a spec `materials` entry) and, for
+    metal, its metallic value."""
+    p, s = m["pattern"], m["scale_m"]
+    base, accent = rgba(m["base_rgb"]), rgba(m["accent_rgb"])
+    world = n.add("ShaderNodeNewGeometry").outputs["Position"]
+    if p in ("wood_planks", "tiles", "brick"):
+        plane = planar_coordinates(n)
+        # (brick length, row height, mortar, second colour's shade, offset)
+        shape = {"wood_planks": (6.0 * s, s, 0.0015, 0.8, 0.5),
+                 "tiles": (s, s, 0.005, 0.93, 0.0),
+                 "brick": (s, 0.3 * s, 0.01, 0.75, 0.5)}[p]
+        mortar = rgba(m["accent_rgb"], 0.5) if p == "wood_planks" else accent
+        bricks = n.add("ShaderNodeTexBrick", [
+            ("Vector", plane), ("Color1", base), ("Color2", rgba(m["base_rgb"], shape[3])),
+            ("Mortar", mortar), ("Scale", 1.0), ("Mortar Size", shape[2]),
+            ("Mortar Smooth", 0.1), ("Bias", 0.0), ("Brick Width", shape[0]),
+            ("Row Height", shape[1])], offset=shape[4], offset_frequency=2).outputs["Color"]
+        if p == "wood_planks":
+            # Grain along each plank: bands across a vector stretched along its length.
+            along = n.add("ShaderNodeVectorMath", [(0, plane), (1, (0.15, 1.0, 1.0))],
+                          operation="MULTIPLY").outputs["Vector"]
+            grain = n.add("ShaderNodeTexWave", [("Vector", along), ("Scale", 0.5 / s),
+                                                ("Distortion", 6.0), ("Detail", 3.0)],
+                          wave_type="BANDS", bands_direction="Y").outputs["Fac"]
+            return n.mix("RGBA", n.math("MULTIPLY", grain, 0.45), bricks, accent), 0.0
+        spots = n.ramp(noise(n, world, 0.5 * s if p == "tiles" else 0.08), 0.3, 0.7)
+        return n.mix("RGBA", n.math("MULTIPLY", spots, 0.25), bricks, rgba(m["base_rgb"], 0.8)), 0.0
+    if p == "stone":
+        plane = planar_coordinates(n)
+        cells = n.add("ShaderNodeTexVoronoi", [("Vector", plane), ("Scale", 1.0 / s)])
+        edges = n.add("ShaderNodeTexVoronoi", [("Vector", plane), ("Scale", 1.0 / s)],
+                      feature="DISTANCE_TO_EDGE").outputs["Distance"]
+        shade = n.mix("RGBA", n.math("MULTIPLY", n.grey(cells.outputs["Color"]), 0.8), base, accent)
+        veined = n.mix("RGBA", n.math("MULTIPLY", noise(n, world, 0.3 * s, 6.0, 0.6), 0.3), shade, accent)
+        return n.mix("RGBA", n.ramp(edges, 0.03, 0.0), veined, rgba(m["accent_rgb"], 0.55)), 0.0
+    if p == "wallpaper":
+        plane = planar_coordinates(n)
+        stripes = n.add("ShaderNodeTexWave", [("Vector", plane), ("Scale", 0.5 / s)],
+                        wave_type="BANDS", bands_direction="X").outputs["Fac"]
+        dots = n.add("ShaderNodeTexVoronoi", [("Vector", plane), ("Scale", 2.0 / s),
+                                              ("Randomness", 0.3)]).outputs["Distance"]
+        motif = n.math("MAXIMUM", n.ramp(stripes, 0.45, 0.5), n.ramp(dots, 0.18, 0.12))
+        return n.mix("RGBA", n.math("MULTIPLY", motif, 0.8), base, accent), 0.0
+    if p == "carpet":
+        fibres = noise(n, world, 0.004, 2.0)
+        blotches = n.ramp(noise(n, world, s, 5.0, 0.6), 0.35, 0.65)
+        both = n.math("MULTIPLY_ADD", blotches, 0.6, n.math("MULTIPLY", fibres, 0.4))
+        return n.mix("RGBA", both, base, accent), 0.0
+    if p in ("plaster", "paint", "plastic", "metal"):
+        amount = {"plaster": 1.0, "paint": 0.6, "plastic": 0.3, "metal": 0.4}[p]
+        detail = {"plaster": 8.0, "paint": 4.0, "plastic": 2.0, "metal": 4.0}[p]
+        vector = world
+        if p == "metal":  # brushed: the noise stretched along one axis
+            vector = n.add("ShaderNodeVectorMath", [(0, world), (1, (20.0, 1.0, 1.0))],
+                           operation="MULTIPLY").outputs["Vector"]
+        f = n.ramp(noise(n, vector, s, detail, 0.6), 0.3, 0.7)
+        return n.mix("RGBA", n.math("MULTIPLY", f, amount), base, accent), float(p == "metal")
+    if p == "wood":
+        rings = n.add("ShaderNodeTexWave", [("Vector", world), ("Scale", 1.0 / s),
+                                            ("Distortion", 8.0), ("Detail", 4.0)],
+                      wave_type="RINGS").outputs["Fac"]
+        return n.mix("RGBA", n.math("MULTIPLY", rings, 0.7), base, accent), 0.0
+    if p == "fabric":
+        plane = planar_coordinates(n)
+        warp = n.add("ShaderNodeTexWave", [("Vector", plane), ("Scale", 0.5 / s)],
+                     wave_type="BANDS", bands_direction="X").outputs["Fac"]
+        weft = n.add("ShaderNodeTexWave", [("Vector", plane), ("Scale", 0.5 / s)],
+                     wave_type="BANDS", bands_direction="Y").outputs["Fac"]
+        weave = n.math("MULTIPLY", warp, weft)
+        folds = n.ramp(noise(n, world, 0.12, 4.0), 0.3, 0.7)
+        woven = n.mix("RGBA", n.math("MULTIPLY", weave, 0.5), base, accent)
+        return n.mix("RGBA", n.math("MULTIPLY", folds, 0.3), woven, rgba(m["base_rgb"], 0.7)), 0.0
+    if p == "leather":
+        grain = n.add("ShaderNodeTexVoronoi", [("Vector", world), ("Scale", 1.0 / s)]).outputs["Distance"]
+        wear = n.ramp(noise(n, world, 0.1, 4.0), 0.3, 0.7)
+        both = n.math("MULTIPLY_ADD", grain, 0.5, n.math("MULTIPLY", wear, 0.4))
+        return n.mix("RGBA", both, accent, base), 0.0
+    raise RuntimeError(f"materials: unknown pattern {p!r} for {m['object']!r}")
+
+
+def drawn_material(m):
+    """A Principled BSDF whose colour is the drawn pattern; no bump: the shading normal (and so
+    the Normal pass) stays the geometry's."""
+    mat = bpy.data.materials.new(f"egogen_{m['pattern']}_{m['object']}")
+    mat.diffuse_color = rgba(m["base_rgb"])
+    mat.use_nodes = True
+    n = Nodes(mat)
+    colour, metallic = pattern_colour(n, m)
+    bsdf = n.nodes["Principled BSDF"]
+    n.feed(bsdf.inputs["Base Color"], colour)
+    bsdf.inputs["Roughness"].default_value = m["roughness"]
+    bsdf.inputs["Metallic"].default_value = metallic
+    return mat
+
+
+def apply_materials(scene, materials):
+    """Replaces the materials of each listed object with its drawn one (a mesh shared with an
+    object not listed is copied first)."""
+    by_name = {o.name: o for o in scene.objects if o.type == "MESH"}
+    for m in materials:
+        obj = by_name.get(blender_name(m["object"]))
+        if obj is None:
+            raise RuntimeError(f"materials: no mesh object {m['object']!r} in the scene")
+        if obj.data.users > 1:
+            obj.data = obj.data.copy()
+        mat = drawn_material(m)
+        obj.data.materials.clear()
+        obj.data.materials.append(mat)
+        obj.data.polygons.foreach_set("material_index", [0] * len(obj.data.polygons))
+        for slot in obj.material_slots:
+            slot.link = "DATA"
+
+
 def blender_name(name):
     """The name Blender keeps for an object called `name`: at most 63 bytes of UTF-8."""
     return name.encode("utf-8")[:63].decode("utf-8", "ignore")
@@ -451,6 +638,7 @@ def build_scene(spec):
     ids = {blender_name(name): i for name, i in spec["object_ids"]}
     for obj in scene.objects:
         obj.pass_index = ids.get(obj.name, 0)
+    apply_materials(scene, spec.get("materials", []))
     bodies = [add_body(scene, b) for b in spec["bodies"]]
     obstacles = [add_obstacle(scene, o) for o in spec.get("obstacles", [])]
     scene.render.fps = spec["fps"]

@@ -42,6 +42,8 @@ pub struct RenderPlan {
     pub headset_wear: Option<crate::rig::wear::HeadsetWear>,
     /// How the sequence's lighting is drawn.
     pub lighting: crate::render::lighting::LightingPlan,
+    /// Which scene objects get drawn materials, and their seed.
+    pub materials: crate::render::materials::MaterialsPlan,
     /// How each agent's skin is drawn.
     pub skin: crate::render::skin_tone::SkinPlan,
     /// What the dataset holds.

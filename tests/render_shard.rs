@@ -254,6 +254,7 @@ fn render_scene() -> Rendered {
                 watts: 200.0,
             }],
         },
+        materials: Vec::new(),
         rgb: Some(ShardRgb {
             samples: 4,
             adaptive_threshold: 0.0,

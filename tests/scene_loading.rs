@@ -50,6 +50,48 @@ fn obj_keeps_objects_and_builds_a_map() {
     );
 }
 
+/// What `[render.materials]` reads of an object's own look: an MTL's `map_Kd` makes it
+/// textured, `d` below 1 see-through; shipped scenes: the apartment has no texture, the small
+/// house mostly textures.
+#[test]
+fn objects_say_whether_they_are_textured_or_see_through() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "room.mtl",
+        "newmtl boards\nKd 0.5 0.4 0.3\nmap_Kd boards.png\nnewmtl glass\nKd 1 1 1\nd 0.3\n",
+    );
+    let obj = ROOM_OBJ
+        .replace("o floor\n", "mtllib room.mtl\no floor\nusemtl boards\n")
+        .replace("o table\n", "o table\nusemtl glass\n");
+    let path = write(dir.path(), "room.obj", &obj);
+    let mesh = load_scene(&path, Default::default()).unwrap();
+    let look: Vec<(&str, bool, bool)> = mesh
+        .objects
+        .iter()
+        .map(|o| (o.name.as_str(), o.textured, o.see_through))
+        .collect();
+    assert_eq!(look, [("floor", true, false), ("table", false, true)]);
+    let plain = load_scene(
+        &write(dir.path(), "plain.obj", ROOM_OBJ),
+        Default::default(),
+    )
+    .unwrap();
+    assert!(plain.objects.iter().all(|o| !o.textured && !o.see_through));
+    let shipped = |name: &str| {
+        let mesh = load_scene(
+            &common::repo_root().join("assets/scenes").join(name),
+            Default::default(),
+        )
+        .unwrap();
+        let textured = mesh.objects.iter().filter(|o| o.textured).count();
+        (textured, mesh.objects.len())
+    };
+    assert_eq!(shipped("apartment.glb").0, 0);
+    let (textured, all) = shipped("small_house.glb");
+    assert!(textured > all / 2 && textured < all, "{textured} of {all}");
+}
+
 #[test]
 fn ply_and_y_up() {
     let dir = tempfile::tempdir().unwrap();

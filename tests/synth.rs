@@ -818,16 +818,16 @@ fn drawn_shapes_are_cut_to_the_model_and_given_ones_beyond_it_refused() {
     assert!(refused(given).contains("12 betas given"));
 }
 
-#[test]
-fn lighting_skin_and_headset_wear_vary_with_their_seeds_and_the_same_seed_renders_the_same_bytes() {
-    let config = |seed: u64| {
-        format!(
-            r#"
+/// A scripted walk of `duration_s` in a shipped scene, its RGB camera rendered at 1/16 size
+/// every 10th frame (40 Hz) by one worker; `sections` adds `[render.…]` tables.
+fn tiny_walk(scene: &str, duration_s: f64, sections: &str) -> String {
+    format!(
+        r#"
 [body]
 betas = []
 [motion]
 source = "scripted_walk"
-duration_s = 0.25
+duration_s = {duration_s:?}
 frame_rate_hz = 40.0
 [output]
 dir = "out"
@@ -840,6 +840,24 @@ resolution_scale = 0.0625
 every_n_frames = 10
 samples = 2
 shutter_frames = 0.0
+[supervisor]
+workers = 1
+{sections}"#,
+        common::repo_root()
+            .join("assets/scenes")
+            .join(scene)
+            .display()
+    )
+}
+
+#[test]
+fn lighting_skin_and_headset_wear_vary_with_their_seeds_and_the_same_seed_renders_the_same_bytes() {
+    let config = |seed: u64| {
+        tiny_walk(
+            "apartment.glb",
+            0.25,
+            &format!(
+                r#"
 [render.headset_wear]
 seed = {seed}
 [render.lighting]
@@ -848,12 +866,8 @@ lamp_watts = [100.0, 500.0]
 seed = {seed}
 [render.skin]
 seed = {seed}
-[supervisor]
-workers = 1
-"#,
-            common::repo_root()
-                .join("assets/scenes/apartment.glb")
-                .display()
+"#
+            ),
         )
     };
     let run = |seed: u64| {
@@ -907,6 +921,97 @@ workers = 1
     let mb = common::read_manifest(&b.path().join("out"));
     assert_eq!(ma.files, mb.files);
     assert_eq!(doc_a, doc_b);
+}
+
+/// `[render.materials]`: `keep`, `fill` and `all` render the small house's ground truth bit for
+/// bit alike (depth, position, segmentation, flow, validity) and its colour differently; every drawn
+/// material is in the annotations, `fill` draws only objects without a texture of their own,
+/// and another seed draws other materials.
+#[test]
+fn drawn_materials_change_the_colour_and_not_the_ground_truth() {
+    let config = |mode: &str, seed: u64| {
+        tiny_walk(
+            "small_house.glb",
+            0.5,
+            &format!("[render.materials]\nmode = \"{mode}\"\nseed = {seed}\n"),
+        )
+    };
+    let run = |mode: &str, seed: u64| {
+        let (dir, path) = common::run_dir(&config(mode, seed));
+        common::egogen_run_ok(&path);
+        let cam = dir.path().join("out/cameras/camera-rgb");
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
+                .unwrap();
+        let frames: Vec<egogen::exr_file::ExrContents> = doc["frames"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| {
+                egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap()
+            })
+            .collect();
+        (dir, doc, frames)
+    };
+    let drawn = |doc: &serde_json::Value| -> Vec<String> {
+        doc["materials"]
+            .as_array()
+            .map(|m| {
+                m.iter()
+                    .map(|m| m["object"].as_str().unwrap().to_owned())
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let (_k, keep, keep_frames) = run("keep", 0);
+    let (_f, fill, fill_frames) = run("fill", 0);
+    let (_a, all, all_frames) = run("all", 0);
+    let (_o, other, _) = run("all", 1);
+    assert!(drawn(&keep).is_empty(), "{}", keep["materials"]);
+    let (fill_objects, all_objects) = (drawn(&fill), drawn(&all));
+    assert!(!fill_objects.is_empty() && fill_objects.len() < all_objects.len());
+    assert!(fill_objects.iter().all(|o| all_objects.contains(o)));
+    assert_ne!(
+        all["materials"], other["materials"],
+        "another seed, other materials"
+    );
+    let ground_truth = |name: &str| {
+        ["depth", "position", "segmentation", "flow", "valid"]
+            .iter()
+            .any(|p| name.starts_with(p))
+    };
+    assert_eq!(keep_frames.len(), 2);
+    let mut colour_differs = false;
+    for ((k, f), a) in keep_frames.iter().zip(&fill_frames).zip(&all_frames) {
+        let names: Vec<&str> = k.channels.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(
+            names.iter().filter(|n| ground_truth(n)).count(),
+            10,
+            "{names:?}"
+        );
+        for c in &k.channels {
+            let values = |e: &egogen::exr_file::ExrContents| {
+                e.channel(&c.name)
+                    .unwrap()
+                    .values
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect::<Vec<u32>>()
+            };
+            let (vk, vf, va) = (values(k), values(f), values(a));
+            if ground_truth(&c.name) {
+                assert!(
+                    vk == vf && vk == va,
+                    "{}: {} differs",
+                    k.path.display(),
+                    c.name
+                );
+            } else if c.name.starts_with("rgb") {
+                colour_differs |= vk != va;
+            }
+        }
+    }
+    assert!(colour_differs, "the drawn materials show in the colour");
 }
 
 /// An `[[obstacles]]` box crossing in front of a walking wearer is rendered: it has its own

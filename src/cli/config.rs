@@ -147,6 +147,8 @@ pub struct RawRender {
     pub headset_wear: Option<RawHeadsetWear>,
     /// `[render.lighting]`: the world light and the lamp (default: a grey world, 300 W).
     pub lighting: Option<RawLighting>,
+    /// `[render.materials]`: procedural materials drawn per object (default: the scene's own).
+    pub materials: Option<RawMaterials>,
     /// What the frame files hold: any of `colour`, `depth`, `normals`, `segmentation`,
     /// `position`, `flow`, `depth_noise` (default: all, `depth_noise` where
     /// `[render.depth_noise]` is given). Only these are rendered, assembled and listed.
@@ -207,6 +209,17 @@ pub struct RawLighting {
     pub world_rgb: Option<[f64; 3]>,
     /// `[MIN, MAX]` of the lamp's power (W; default [300, 300]).
     pub lamp_watts: Option<[f64; 2]>,
+    /// Default 0.
+    pub seed: Option<u64>,
+}
+
+/// `[render.materials]` (docs/RENDERING.md "Materials").
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RawMaterials {
+    /// `keep` (the scene's own materials; default), `fill` (objects without a texture of their
+    /// own get drawn ones) or `all`.
+    pub mode: Option<crate::render::materials::MaterialsMode>,
     /// Default 0.
     pub seed: Option<u64>,
 }

@@ -12,9 +12,9 @@ pub struct RunOverrides {
     /// `output.dir`.
     pub out: Option<PathBuf>,
     /// Every seed of the config: `motion.seed` (agents) or `scene.seed` (a placed motion),
-    /// `[render.skin]`'s, and those of `[render.lighting]`, `[render.headset_wear]` and
-    /// `[render.depth_noise]` where those sections are given — another variant of the same
-    /// config.
+    /// `[render.skin]`'s, and those of `[render.lighting]`, `[render.materials]`,
+    /// `[render.headset_wear]` and `[render.depth_noise]` where those sections are given —
+    /// another variant of the same config.
     pub seed: Option<u64>,
     /// `render.rig`.
     pub rig: Option<PathBuf>,
@@ -87,6 +87,9 @@ impl RunOverrides {
                 }
                 if let Some(w) = r.headset_wear.as_mut() {
                     w.seed = Some(seed);
+                }
+                if let Some(m) = r.materials.as_mut() {
+                    m.seed = Some(seed);
                 }
                 if let Some(d) = r.depth_noise.as_mut() {
                     d.seed = Some(seed);

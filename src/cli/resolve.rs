@@ -412,6 +412,14 @@ fn resolve_render(
         None => LightingPlan::default(),
         Some(l) => resolve_lighting(l, config_path)?,
     };
+    let materials = r
+        .materials
+        .as_ref()
+        .map(|m| crate::render::materials::MaterialsPlan {
+            mode: m.mode.unwrap_or_default(),
+            seed: m.seed.unwrap_or(0),
+        })
+        .unwrap_or_default();
     let skin = match &r.skin {
         None => SkinPlan::default(),
         Some(raw) => skin_plan(raw, &bad)?,
@@ -443,6 +451,7 @@ fn resolve_render(
         depth_noise,
         headset_wear,
         lighting,
+        materials,
         skin,
         passes,
         colmap,

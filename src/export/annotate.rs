@@ -70,6 +70,7 @@ fn write_annotations(take: &FinishedTake) -> Result<()> {
             wearer: agents[work.wearer].name.clone(),
             headset_wear: work.headset_wear,
             lighting: take.spec.lighting.clone(),
+            materials: take.spec.materials.clone(),
             skins: take
                 .spec
                 .bodies

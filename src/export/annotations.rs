@@ -29,6 +29,10 @@ pub struct CameraAnnotations {
     pub headset_wear: Option<crate::rig::wear::WearOffset>,
     /// The lights egogen added (world light, lamps), as rendered.
     pub lighting: crate::render::ShardLighting,
+    /// The scene objects whose materials egogen drew (`[render.materials]`), as rendered;
+    /// absent: every object has the scene's own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub materials: Vec<crate::render::ShardMaterial>,
     /// Each agent's skin material, as rendered (absent in files written before skins).
     #[serde(default)]
     pub skins: Vec<AgentSkin>,

@@ -248,21 +248,6 @@ pub fn palette(id: f32) -> [u8; 3] {
 }
 
 fn hsv(h_deg: f32, s: f32, v: f32) -> [u8; 3] {
-    let c = v.clamp(0.0, 1.0) * s;
-    let hp = h_deg / 60.0;
-    let x = c * (1.0 - (hp % 2.0 - 1.0).abs());
-    let (r, g, b) = match hp as u32 {
-        0 => (c, x, 0.0),
-        1 => (x, c, 0.0),
-        2 => (0.0, c, x),
-        3 => (0.0, x, c),
-        4 => (x, 0.0, c),
-        _ => (c, 0.0, x),
-    };
-    let m = v.clamp(0.0, 1.0) - c;
-    [
-        ((r + m) * 255.0).round() as u8,
-        ((g + m) * 255.0).round() as u8,
-        ((b + m) * 255.0).round() as u8,
-    ]
+    crate::math::colour::hsv_to_rgb(h_deg as f64, s as f64, v as f64)
+        .map(|c| (c * 255.0).round() as u8)
 }

@@ -1,5 +1,5 @@
 //! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps, seeded
-//! random draws.
+//! random draws, colour conversions.
 //!
 //! Conventions used across egogen:
 //! - Lengths are metres, angles radians, time seconds unless a name says otherwise.
@@ -10,6 +10,7 @@
 //!   camera frame (x right, y down, z forward).
 //! - Rotations are right-handed; axis-angle vectors have angle = norm, in radians.
 
+pub mod colour;
 pub mod pose_spline;
 pub mod random;
 pub mod rotation;

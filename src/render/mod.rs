@@ -1,7 +1,8 @@
 //! Rendering: the Blender runtime egogen drives (PyPI `bpy` 4.5 LTS in a managed virtual
 //! environment, or a user's own), the wire protocol of shard specs (`protocol`) and how they
 //! are planned (`shard_plan`, `camera_setup`), what Blender renders for each rig camera
-//! (`render_camera`, `lens_polynomial`), the drawn appearance it is given (`lighting`, `skin`),
+//! (`render_camera`, `lens_polynomial`), the drawn appearance it is given (`lighting`,
+//! `materials`, `skin`),
 //! and turning its raw renders into frame files (`frame_file`, `passes`, `depth_noise`).
 //! `render` knows nothing of bodies, motion or policies: bodies reach it as files
 //! (`crate::vertex_cache`) that `synth` writes.
@@ -12,6 +13,7 @@ pub mod depth_noise;
 pub mod frame_file;
 pub mod lens_polynomial;
 pub mod lighting;
+pub mod materials;
 pub mod passes;
 pub mod protocol;
 pub mod render_camera;
@@ -22,6 +24,6 @@ pub mod skin_tone;
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
 pub use protocol::{
     BodyProbe, CameraKey, DenoisePrefilter, ObstacleKey, PointLight, RenderDevice, ShardBody,
-    ShardCamera, ShardFrame, ShardLens, ShardLighting, ShardObstacle, ShardRgb, ShardSpec,
-    WorldHdri,
+    ShardCamera, ShardFrame, ShardLens, ShardLighting, ShardMaterial, ShardObstacle, ShardRgb,
+    ShardSpec, WorldHdri,
 };

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+pub use super::materials::ShardMaterial;
 pub use super::skin_tone::{RegionPaint, Skin};
 
 /// How Blender's camera images: either the rig camera itself (a pinhole) or the wider ideal
@@ -195,6 +196,10 @@ pub struct ShardSpec {
     pub fps_base: f64,
     pub bodies: Vec<ShardBody>,
     pub lighting: ShardLighting,
+    /// Scene objects whose materials egogen replaces with drawn procedural ones
+    /// (`[render.materials]`); the others keep the scene's own.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub materials: Vec<ShardMaterial>,
     /// The colour render's settings; none: no colour is rendered.
     pub rgb: Option<ShardRgb>,
     /// Blender view-layer passes of the ground-truth render (`use_pass_<name>`: `position`,

@@ -246,8 +246,11 @@ pub fn load_scene(path: &Path, frame: SceneFrame) -> Result<SceneMesh, SceneErro
             .collect();
         let id = mesh.add_object(part.name, &verts, &part.triangles);
         *part_object.last_mut().expect("pushed above") = id.0 - 1;
+        let object = &mut mesh.objects[id.0 as usize - 1];
+        object.textured = part.textured;
+        object.see_through = part.see_through;
         if let Some(file_id) = part.file_id {
-            mesh.objects[id.0 as usize - 1].label = labels.get(&file_id).cloned();
+            object.label = labels.get(&file_id).cloned();
         }
     }
     mesh.file_face_objects = face_parts.map(|(faces, _)| {
@@ -271,6 +274,10 @@ struct Part {
     triangles: Vec<[u32; 3]>,
     /// The object id the file gives it (a PLY's `object_id`), when it gives one.
     file_id: Option<i64>,
+    /// Its surface has an image texture or vertex colours ([`SceneObject::textured`]).
+    textured: bool,
+    /// A material lets light through ([`SceneObject::see_through`]).
+    see_through: bool,
 }
 
 /// Class names of a Replica scan's object ids, from the `info_semantic.json` beside it
@@ -337,11 +344,20 @@ fn read_gltf_parts(path: &Path) -> Result<Vec<Part>, String> {
             positions: Vec::new(),
             triangles: Vec::new(),
             file_id: None,
+            textured: false,
+            see_through: false,
         };
         for prim in mesh.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;
             }
+            part.textured |= prim
+                .material()
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .is_some()
+                || prim.get(&gltf::Semantic::Colors(0)).is_some();
+            part.see_through |= prim.material().alpha_mode() != gltf::material::AlphaMode::Opaque;
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(pos) = reader.read_positions() else {
                 continue;
@@ -382,7 +398,9 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
         single_index: true,
         ..Default::default()
     };
-    let (models, _) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
+    let (models, materials) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
+    // A missing or unreadable MTL leaves the faces untextured, as Blender's importer does.
+    let materials = materials.unwrap_or_default();
     let leading = obj_faces_before_any_object(path)?;
     let stem = path
         .file_stem()
@@ -401,10 +419,20 @@ fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
                 positions: Vec::new(),
                 triangles: Vec::new(),
                 file_id: None,
+                textured: false,
+                see_through: false,
             });
             parts.len() - 1
         });
         let part = &mut parts[k];
+        if let Some(mat) = m.mesh.material_id.and_then(|i| materials.get(i)) {
+            part.textured |= mat
+                .diffuse_texture
+                .as_deref()
+                .is_some_and(|t| !t.is_empty());
+            part.see_through |=
+                mat.dissolve.is_some_and(|d| d < 1.0) || mat.dissolve_texture.is_some();
+        }
         let base = part.positions.len() as u32;
         part.positions.extend(
             m.mesh
@@ -650,6 +678,11 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<(Vec<u32>, PlyIds)>), Stri
         }
     }
     let verts = verts.ok_or("no `vertex` element")?;
+    let coloured = header.elements.get("vertex").is_some_and(|v| {
+        ["red", "green", "blue"]
+            .iter()
+            .all(|c| v.properties.contains_key(*c))
+    });
     let positions = verts
         .iter()
         .enumerate()
@@ -718,6 +751,8 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<(Vec<u32>, PlyIds)>), Stri
                 positions,
                 triangles,
                 file_id: None,
+                textured: coloured,
+                see_through: false,
             }],
             None,
         ));
@@ -735,6 +770,8 @@ fn read_ply(path: &Path) -> Result<(Vec<Part>, Option<(Vec<u32>, PlyIds)>), Stri
             positions: Vec::new(),
             triangles: Vec::new(),
             file_id: Some(id),
+            textured: coloured,
+            see_through: false,
         })
         .collect();
     let mut local: Vec<(u32, u32)> = vec![(u32::MAX, 0); positions.len()];

@@ -14,6 +14,14 @@ pub struct SceneObject {
     pub name: String,
     /// Its class where the file says (a Replica scan's `info_semantic.json`); else none.
     pub label: Option<String>,
+    /// Its surface carries detail of its own: an image texture on a material of it (glTF
+    /// base colour, an OBJ material's `map_Kd`) or vertex colours (glTF `COLOR_0`, a PLY's
+    /// `red`/`green`/`blue`). `[render.materials] mode = "fill"` keeps these objects' materials.
+    pub textured: bool,
+    /// A material of it lets light through where it is hit (glTF `alphaMode` blend or mask,
+    /// an OBJ material's `d` below 1 or `map_d`): replacing it would change the depth, so
+    /// `[render.materials]` never does.
+    pub see_through: bool,
 }
 
 /// World-space triangles (metres, z up) with the object each belongs to.
@@ -44,6 +52,8 @@ impl SceneMesh {
             id,
             name: name.into(),
             label: None,
+            textured: false,
+            see_through: false,
         });
         let base = self.vertices.len() as u32;
         self.vertices.extend_from_slice(vertices);
@@ -141,4 +151,67 @@ impl SceneMesh {
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         crate::math::point_bounds(&self.vertices)
     }
+
+    /// How each object's surfaces face (in [`Self::objects`]' order): shares of its area whose
+    /// normal is within 30° of up, of down, and the rest, and its height range.
+    pub fn object_orientations(&self) -> Vec<ObjectOrientation> {
+        let mut out = vec![
+            ObjectOrientation {
+                area_up: 0.0,
+                area_down: 0.0,
+                area_side: 0.0,
+                z_min: f64::INFINITY,
+                z_max: f64::NEG_INFINITY,
+            };
+            self.objects.len()
+        ];
+        let cos30 = 30f64.to_radians().cos();
+        for t in 0..self.triangles.len() {
+            let Some(o) = (self.triangle_object[t].0 as usize)
+                .checked_sub(1)
+                .and_then(|k| out.get_mut(k))
+            else {
+                continue;
+            };
+            let [a, b, c] = self.triangle(t);
+            o.z_min = o.z_min.min(a.z.min(b.z).min(c.z));
+            o.z_max = o.z_max.max(a.z.max(b.z).max(c.z));
+            let n = (b - a).cross(c - a);
+            let area = n.length();
+            if !(area > 0.0) {
+                continue;
+            }
+            let nz = n.z / area;
+            if nz >= cos30 {
+                o.area_up += area;
+            } else if nz <= -cos30 {
+                o.area_down += area;
+            } else {
+                o.area_side += area;
+            }
+        }
+        for o in &mut out {
+            let total = o.area_up + o.area_down + o.area_side;
+            if total > 0.0 {
+                o.area_up /= total;
+                o.area_down /= total;
+                o.area_side /= total;
+            }
+        }
+        out
+    }
+}
+
+/// How an object's surfaces face ([`SceneMesh::object_orientations`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectOrientation {
+    /// Share of its area facing up (normal within 30° of +z).
+    pub area_up: f64,
+    /// Share facing down.
+    pub area_down: f64,
+    /// The rest: sideways.
+    pub area_side: f64,
+    /// Its lowest and highest points (m, z up); infinite for an object without triangles.
+    pub z_min: f64,
+    pub z_max: f64,
 }

@@ -24,7 +24,7 @@ pub mod walkable;
 
 pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};
 pub use load::{load_scene, scene_frame_warning, walkable_map, SceneError, SceneFrame, UpAxis};
-pub use mesh::{ObjectId, SceneMesh, SceneObject};
+pub use mesh::{ObjectId, ObjectOrientation, SceneMesh, SceneObject};
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{
     guide_aim, line_is_clear, plan_path, plan_path_centred, plan_path_weighted, Guide, PathField,

@@ -23,6 +23,7 @@ use crate::manifest::{dataset_files, remove_temporaries, sha256_hex, MANIFEST};
 use crate::motion::MotionSequence;
 use crate::plan::{Backend, RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
+use crate::render::materials::{MaterialsMode, SurfaceFacts};
 use crate::render::protocol::{
     ObstacleKey, ShardCeiling, ShardObstacle, ShardSceneSplit, ShardSkinRegion, CEILING_OBJECT,
 };
@@ -778,6 +779,7 @@ fn base_spec(
         lighting: render
             .lighting
             .draw([mid.x, mid.y, lo.z + 0.85 * (hi.z - lo.z)]),
+        materials: render.materials.draw(&surface_facts(plan, scene, objects)),
         rgb: render.passes.needs_colour_render().then_some(ShardRgb {
             samples: render.samples,
             adaptive_threshold: render.adaptive_threshold,
@@ -928,6 +930,57 @@ fn obstacle_boxes(
             }
         })
         .collect()
+}
+
+/// What `[render.materials]` classes each scene object by (the added ceiling among them): its
+/// name, label, own texture and how its surfaces face above the walked floor.
+fn surface_facts(
+    plan: &RunPlan,
+    scene: &crate::scene::SceneMesh,
+    objects: &SceneObjects,
+) -> Vec<SurfaceFacts> {
+    if plan
+        .render
+        .as_ref()
+        .is_none_or(|r| r.materials.mode == MaterialsMode::Keep)
+    {
+        return Vec::new();
+    }
+    let floor_z = plan
+        .walkable
+        .floor_z_m
+        .or_else(|| crate::scene::floor::detect_floor_z(scene))
+        .unwrap_or(0.0);
+    let mut facts: Vec<SurfaceFacts> = scene
+        .objects
+        .iter()
+        .zip(scene.object_orientations())
+        .map(|(o, f)| SurfaceFacts {
+            name: o.name.clone(),
+            label: o.label.clone(),
+            textured: o.textured,
+            see_through: o.see_through,
+            area_up: f.area_up,
+            area_down: f.area_down,
+            area_side: f.area_side,
+            z_min_m: f.z_min - floor_z,
+            z_max_m: f.z_max - floor_z,
+        })
+        .collect();
+    if let Some(c) = objects.ceiling {
+        facts.push(SurfaceFacts {
+            name: CEILING_OBJECT.into(),
+            label: None,
+            textured: false,
+            see_through: false,
+            area_up: 0.0,
+            area_down: 1.0,
+            area_side: 0.0,
+            z_min_m: c.z_m - floor_z,
+            z_max_m: c.z_m - floor_z,
+        });
+    }
+    facts
 }
 
 fn scene_bounds(scene: &crate::scene::SceneMesh) -> (crate::math::Vec3, crate::math::Vec3) {
