@@ -13,6 +13,7 @@ use clap::Parser;
 
 use egogen::cli::config::Backend;
 use egogen::cli::overrides::RunOverrides;
+use egogen::render::materials::MaterialsMode;
 use egogen::run_job::RunRequest;
 use egogen::synth::activity::ActivityWeights;
 
@@ -72,6 +73,10 @@ struct Args {
     /// (weights not named are 0; docs/ACTIVITIES.md).
     #[arg(long, value_parser = parse_activity_weights)]
     activity_weights: Option<ActivityWeights>,
+    /// Which scene objects get drawn materials, overriding `render.materials.mode`: `keep`
+    /// (the scene's own), `fill` (objects without a texture of their own) or `all`.
+    #[arg(long, value_enum)]
+    materials: Option<MaterialsArg>,
     /// Where shards run, overriding `supervisor.backend`: `local` (Blender processes here) or
     /// `slurm` (a job array; resources in `[supervisor.slurm]`).
     #[arg(long, value_enum)]
@@ -90,6 +95,13 @@ struct Args {
     /// campaign or dataset folder (default: the campaign's own earlier starts).
     #[arg(long)]
     throughput_from: Option<PathBuf>,
+}
+
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+enum MaterialsArg {
+    Keep,
+    Fill,
+    All,
 }
 
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
@@ -140,6 +152,11 @@ fn run(args: Args) -> Result<()> {
         crowd_count: args.crowd_count,
         duration_s: args.duration_s,
         activity_weights: args.activity_weights,
+        materials: args.materials.map(|m| match m {
+            MaterialsArg::Keep => MaterialsMode::Keep,
+            MaterialsArg::Fill => MaterialsMode::Fill,
+            MaterialsArg::All => MaterialsMode::All,
+        }),
         workers: args.workers,
         backend,
     };

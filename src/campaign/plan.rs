@@ -121,6 +121,7 @@ impl TakeDef {
             crowd_count: self.crowd_count,
             duration_s: self.duration_s,
             activity_weights: self.activity_weights,
+            materials: None,
             workers: None,
             backend: None,
         }

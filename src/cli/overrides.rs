@@ -30,6 +30,8 @@ pub struct RunOverrides {
     pub duration_s: Option<f64>,
     /// `activities.weights`: what people do when a walk ends.
     pub activity_weights: Option<crate::synth::activity::ActivityWeights>,
+    /// `render.materials.mode`.
+    pub materials: Option<crate::render::materials::MaterialsMode>,
     /// `supervisor.workers`.
     pub workers: Option<usize>,
     /// `supervisor.backend`.
@@ -73,6 +75,19 @@ impl RunOverrides {
         }
         if let Some(w) = self.activity_weights {
             raw.activities.weights = w;
+        }
+        if let Some(mode) = self.materials {
+            let Some(r) = raw.render.as_mut() else {
+                anyhow::bail!(
+                    "--materials: the config has no [render] section; nothing is rendered"
+                );
+            };
+            r.materials
+                .get_or_insert(super::config::RawMaterials {
+                    mode: None,
+                    seed: None,
+                })
+                .mode = Some(mode);
         }
         if let Some(seed) = self.seed {
             // Agents draw from the motion's seed; a single motion is placed by the scene's.
@@ -123,6 +138,7 @@ impl RunOverrides {
             ("--crowd-count", self.crowd_count.is_some()),
             ("--duration", self.duration_s.is_some()),
             ("--activity-weights", self.activity_weights.is_some()),
+            ("--materials", self.materials.is_some()),
         ]
         .into_iter()
         .filter_map(|(flag, on)| on.then_some(flag))
@@ -140,6 +156,7 @@ impl RunOverrides {
             && self.crowd_count.is_none()
             && self.duration_s.is_none()
             && self.activity_weights.is_none()
+            && self.materials.is_none()
             && self.workers.is_none()
             && self.backend.is_none()
     }
