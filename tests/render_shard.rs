@@ -719,7 +719,7 @@ fn fisheye_frames_follow_the_exact_model() {
                 .angle_between(at(Pixel::new(1.0, 0.0)))
                 .max(at(Pixel::ZERO).angle_between(at(Pixel::new(0.0, 1.0))))
         };
-        let (mut worst, mut count) = (0.0f64, 0);
+        let mut off = Vec::new();
         for y in 0..res.height_px as usize {
             for x in 0..res.width_px as usize {
                 let i = y * res.width_px as usize + x;
@@ -735,16 +735,23 @@ fn fisheye_frames_follow_the_exact_model() {
                 let ray = ray.unwrap();
                 let p = Vec3::new(pos[0][i] as f64, pos[1][i] as f64, pos[2][i] as f64);
                 let seen = cam_from_world.transform_point3(p).normalize();
-                worst = worst.max(seen.angle_between(ray) / raw_px_rad(ray));
-                count += 1;
+                off.push(seen.angle_between(ray) / raw_px_rad(ray));
             }
         }
+        off.sort_by(f64::total_cmp);
+        let (count, worst) = (off.len(), off.last().copied().unwrap_or(0.0));
+        let (median, p90) = (off[count / 2], off[count * 9 / 10]);
         eprintln!(
-            "{name} {}×{} from a {}×{} render: {count} px, worst {worst:.3} raw px",
+            "{name} {}×{} from a {}×{} render: {count} px, off their rays by median {median:.2e}, 90 % ≤ {p90:.2e}, worst {worst:.3} raw px",
             res.width_px, res.height_px, raw_res.width_px, raw_res.height_px
         );
         assert!(count > 1000, "{name}: {count}");
+        // On one surface the point is interpolated onto the pixel's ray; at edges it is the
+        // nearest rendered pixel's, within about half a raw pixel.
         assert!(worst < 0.75, "{name}: {worst} raw pixels");
+        // (Before, every point was the nearest pixel's: median 0.39 raw px; this tiny render has
+        // many edges, where it still is.)
+        assert!(median < 0.02, "{name}: median {median} raw pixels");
     }
 }
 
