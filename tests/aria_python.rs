@@ -3,7 +3,9 @@
 //! under pytest, against this build's `egogen`. Without network on a first run it says
 //! SKIPPED, unless `EGOGEN_REQUIRE_SYSTEM_TOOLS=1` (CI) makes that a failure.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use std::path::PathBuf;
 use std::process::Command;
 
 /// The PyPI packages the check runs with (the reader version is pinned: it is the oracle).
@@ -13,33 +15,9 @@ fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A Python with the packages, created at `<venv>.partial` and renamed when complete.
-fn provision(venv: &Path) -> Result<PathBuf, String> {
-    let python = venv.join("bin/python");
-    if python.is_file() {
-        return Ok(python);
-    }
-    let partial = PathBuf::from(format!("{}.partial", venv.display()));
-    let _ = std::fs::remove_dir_all(&partial);
-    std::fs::create_dir_all(partial.parent().unwrap()).map_err(|e| e.to_string())?;
-    let ok = |c: &mut Command| c.status().map(|s| s.success()).unwrap_or(false);
-    if !ok(Command::new("python3").args(["-m", "venv"]).arg(&partial)) {
-        return Err("python3 -m venv failed".into());
-    }
-    let mut pip = Command::new(partial.join("bin/python"));
-    pip.args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
-        .args(PACKAGES);
-    if !ok(&mut pip) {
-        return Err(format!("pip install {} failed", PACKAGES.join(" ")));
-    }
-    std::fs::rename(&partial, venv).map_err(|e| e.to_string())?;
-    Ok(python)
-}
-
 #[test]
 fn projectaria_tools_reads_the_aria_streams() {
-    let venv = egogen::render::blender_runtime::cache_dir().join("projectaria-tools-2.3.0");
-    let python = match provision(&venv) {
+    let python = match common::cached_python("projectaria-tools-2.3.0", &PACKAGES) {
         Ok(p) => p,
         Err(e) if std::env::var_os("EGOGEN_REQUIRE_SYSTEM_TOOLS").is_none() => {
             eprintln!("SKIPPED aria_python: could not install projectaria-tools: {e}");

@@ -65,6 +65,10 @@ enum Command {
     /// formats projectaria-tools reads (docs/ARIA.md).
     #[command(subcommand)]
     Aria(AriaCommand),
+    /// A rendered take's wearer in the EuRoC MAV layout VIO/SLAM tools read: the SLAM cameras'
+    /// grey images, the IMU, the ground truth and the sensors' YAML (docs/ARIA.md).
+    #[command(subcommand)]
+    Euroc(EurocCommand),
     /// Train learned models.
     #[command(subcommand)]
     Train(TrainCommand),
@@ -93,6 +97,12 @@ enum Command {
 enum AriaCommand {
     /// Write each wearer's Aria streams of a finished take into a new folder.
     Export(egogen::cli::aria_jobs::AriaExportArgs),
+}
+
+#[derive(Subcommand, Debug)]
+enum EurocCommand {
+    /// Write one wearer of a rendered take as a EuRoC MAV folder (`OUT/mav0/…`).
+    Export(egogen::cli::euroc_jobs::EurocExportArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -404,6 +414,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
         Command::Aria(AriaCommand::Export(args)) => egogen::cli::aria_jobs::aria_export(&args)?,
+        Command::Euroc(EurocCommand::Export(args)) => egogen::cli::euroc_jobs::euroc_export(&args)?,
         Command::Train(TrainCommand::Policy {
             config,
             quiet,

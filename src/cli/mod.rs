@@ -7,6 +7,7 @@ pub mod aria_jobs;
 pub mod body_jobs;
 pub mod config;
 pub mod config_file;
+pub mod euroc_jobs;
 pub mod eval_jobs;
 pub mod import_jobs;
 pub mod inspect_jobs;

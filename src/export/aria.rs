@@ -291,15 +291,21 @@ pub(crate) struct AriaWritten {
     pub fixations: Vec<Fixation>,
 }
 
-/// The headset's trajectory through the wearer's head poses.
-pub(crate) fn headset_spline(wearer: &Wearer) -> Result<PoseSpline> {
-    let poses: Vec<Affine3> = wearer
-        .world_from_cpf
+/// The headset's trajectory through a wearer's head poses (`world_from_cpf` at
+/// `frame_rate_hz`, the headset at `cpf_from_headset` on the head): the one spline every
+/// stream of a device on that head is sampled from.
+pub(crate) fn headset_spline(
+    name: &str,
+    frame_rate_hz: Real,
+    world_from_cpf: &[Affine3],
+    cpf_from_headset: Affine3,
+) -> Result<PoseSpline> {
+    let poses: Vec<Affine3> = world_from_cpf
         .iter()
-        .map(|p| *p * wearer.cpf_from_headset)
+        .map(|p| *p * cpf_from_headset)
         .collect();
-    PoseSpline::interpolate(wearer.frame_rate_hz, &poses)
-        .with_context(|| format!("splining the head poses of {}", wearer.name))
+    PoseSpline::interpolate(frame_rate_hz, &poses)
+        .with_context(|| format!("splining the head poses of {name}"))
 }
 
 /// Writes the asked streams of `wearer` into `dir` (created; each file written atomically).
@@ -312,7 +318,12 @@ pub(crate) fn write_wearer_streams(
     if let Some(p) = settings.problem(rig) {
         bail!("aria streams: {p}");
     }
-    let spline = headset_spline(wearer)?;
+    let spline = headset_spline(
+        wearer.name,
+        wearer.frame_rate_hz,
+        wearer.world_from_cpf,
+        wearer.cpf_from_headset,
+    )?;
     let cpf_from_device = rig.cpf_from_device();
     let mut out = AriaWritten {
         spline_residual_rad: spline.rotation_residual_rad(),
@@ -436,7 +447,7 @@ fn session_uid(name: &str) -> String {
 }
 
 /// The seed of one IMU's errors: the run's seed, the wearer, the IMU.
-fn imu_seed(seed: u64, wearer: usize, imu: usize) -> u64 {
+pub(crate) fn imu_seed(seed: u64, wearer: usize, imu: usize) -> u64 {
     seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
         .wrapping_add((wearer as u64) << 16)
         .wrapping_add(imu as u64)

@@ -38,8 +38,9 @@ use glam::DQuat;
 use super::annotate::colour_pass;
 use super::take::{CameraWork, FinishedFrame, FinishedTake, TakeExport};
 use crate::atomic_file::write_atomically;
-use crate::camera::{Camera, CameraModel, Fisheye624, Pixel};
+use crate::camera::{valid_pixel_rays, Camera, CameraModel, Fisheye624, FitError, Pixel};
 use crate::inspect::preview::pass_preview_exposed;
+use crate::math::least_squares::NormalEquations;
 use crate::math::{Affine3, Real, Vec3};
 
 /// A camera as COLMAP's `cameras.txt` spells it.
@@ -51,15 +52,6 @@ pub struct ColmapCamera {
     pub params: Vec<Real>,
     pub width_px: u32,
     pub height_px: u32,
-}
-
-/// How well a fitted COLMAP model reproduces egogen's, over the valid field of view.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct FitError {
-    pub max_px: Real,
-    pub mean_px: Real,
-    /// Pixels of the fitting grid inside the valid field of view.
-    pub samples: usize,
 }
 
 /// The COLMAP model that is exactly egogen's camera:
@@ -155,78 +147,26 @@ fn thin_prism_terms(u: Real, v: Real) -> [[Real; 8]; 2] {
 pub(crate) fn fit_thin_prism_fisheye(camera: &Fisheye624) -> ([Real; 12], FitError) {
     let q = camera.params();
     let (f, cx, cy) = (q[0], q[1] + 0.5, q[2] + 0.5);
-    let res = camera.resolution();
-    let mut samples: Vec<(Vec3, Pixel)> = Vec::new();
-    for row in 0..res.height_px {
-        for col in 0..res.width_px {
-            let px = Pixel::new(col as Real, row as Real);
-            if let Some(ray) = camera.unproject(px) {
-                samples.push((ray, px + Pixel::splat(0.5)));
-            }
-        }
-    }
-    // Normal equations of the 2·n residuals (u + d·k) − (pixel − c)/f.
-    let mut ata = [[0.0; 8]; 8];
-    let mut atb = [0.0; 8];
-    for (ray, px) in &samples {
+    let samples: Vec<(Pixel, Vec3)> = valid_pixel_rays(&Camera::Fisheye624(*camera))
+        .into_iter()
+        .map(|(px, ray)| (px + Pixel::splat(0.5), ray))
+        .collect();
+    // The 2·n residuals (u + d·k) − (pixel − c)/f.
+    let mut eq = NormalEquations::<8>::default();
+    for (px, ray) in &samples {
         let (u, v) = equidistant(*ray);
         let terms = thin_prism_terms(u, v);
         let targets = [(px.x - cx) / f - u, (px.y - cy) / f - v];
         for (row, b) in terms.iter().zip(targets) {
-            for i in 0..8 {
-                atb[i] += row[i] * b;
-                for j in 0..8 {
-                    ata[i][j] += row[i] * row[j];
-                }
-            }
+            eq.add(row, b);
         }
     }
-    let k = solve8(ata, atb);
+    let k = eq.solve();
     let mut params = [0.0; 12];
     params[..4].copy_from_slice(&[f, f, cx, cy]);
     params[4..].copy_from_slice(&k);
-    let errors: Vec<Real> = samples
-        .iter()
-        .map(|(ray, px)| thin_prism_fisheye_project(&params, *ray).distance(*px))
-        .collect();
-    let error = FitError {
-        max_px: errors.iter().copied().fold(0.0, Real::max),
-        mean_px: errors.iter().sum::<Real>() / errors.len().max(1) as Real,
-        samples: errors.len(),
-    };
+    let error = FitError::measure(&samples, |ray| thin_prism_fisheye_project(&params, ray));
     (params, error)
-}
-
-/// Solves the symmetric 8×8 system `a·x = b` by Gaussian elimination with partial pivoting; a
-/// singular direction (no pixel constrains it) gets 0.
-fn solve8(mut a: [[Real; 8]; 8], mut b: [Real; 8]) -> [Real; 8] {
-    let scale = (0..8).map(|i| a[i][i].abs()).fold(0.0, Real::max);
-    for col in 0..8 {
-        let pivot = (col..8)
-            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
-            .unwrap();
-        a.swap(col, pivot);
-        b.swap(col, pivot);
-        if a[col][col].abs() <= 1e-14 * scale {
-            a[col] = [0.0; 8];
-            a[col][col] = 1.0;
-            b[col] = 0.0;
-            continue;
-        }
-        for row in col + 1..8 {
-            let m = a[row][col] / a[col][col];
-            for k in col..8 {
-                a[row][k] -= m * a[col][k];
-            }
-            b[row] -= m * b[col];
-        }
-    }
-    let mut x = [0.0; 8];
-    for row in (0..8).rev() {
-        let s: Real = (row + 1..8).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - s) / a[row][row];
-    }
-    x
 }
 
 /// COLMAP's pose of an image: `cam_from_world` as `(QW, QX, QY, QZ)` with `QW ≥ 0` and the

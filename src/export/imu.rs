@@ -142,22 +142,49 @@ pub fn simulate_imu(
     rate_hz: Real,
     errors: Option<(&ImuErrors, &ImuCalibration, u64)>,
 ) -> Vec<ImuSample> {
+    simulate_imu_with_biases(spline, head_from_imu, rate_hz, errors)
+        .into_iter()
+        .map(|r| r.sample)
+        .collect()
+}
+
+/// One IMU sample and the sensor's biases when it was taken (`b_on + b_k` of the model, in the
+/// rectified units: m/s² and rad/s in the IMU frame; 0 without errors), what a ground truth
+/// of the IMU's state holds beside its pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuReading {
+    pub sample: ImuSample,
+    pub accel_bias: Vec3,
+    pub gyro_bias: Vec3,
+}
+
+/// [`simulate_imu`], each sample with the biases it was taken with.
+pub fn simulate_imu_with_biases(
+    spline: &PoseSpline,
+    head_from_imu: Affine3,
+    rate_hz: Real,
+    errors: Option<(&ImuErrors, &ImuCalibration, u64)>,
+) -> Vec<ImuReading> {
     let times = sample_times_ns(rate_hz, spline.duration_s());
     let dt = 1.0 / rate_hz;
-    let mut truth: Vec<ImuSample> = times
+    let mut readings: Vec<ImuReading> = times
         .iter()
         .map(|&ns| {
             let s = spline.sample(ns as Real * 1e-9).attached(head_from_imu);
             let (accel, gyro) = true_measurement(&s);
-            ImuSample {
-                timestamp_ns: ns,
-                accel,
-                gyro,
+            ImuReading {
+                sample: ImuSample {
+                    timestamp_ns: ns,
+                    accel,
+                    gyro,
+                },
+                accel_bias: Vec3::ZERO,
+                gyro_bias: Vec3::ZERO,
             }
         })
         .collect();
     let Some((e, cal, seed)) = errors else {
-        return truth;
+        return readings;
     };
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let normal3 = |rng: &mut ChaCha8Rng| {
@@ -172,7 +199,8 @@ pub fn simulate_imu(
     let white = |s: &SensorErrors| s.noise_density / dt.sqrt();
     let walk = |s: &SensorErrors| s.bias_random_walk * dt.sqrt();
     let clamp = |v: Vec3, limit: Real| v.clamp(Vec3::splat(-limit), Vec3::splat(limit));
-    for sample in &mut truth {
+    for reading in &mut readings {
+        let sample = &mut reading.sample;
         let accel = sample.accel + accel_bias + normal3(&mut rng) * white(&e.accelerometer);
         let gyro = sample.gyro + gyro_bias + normal3(&mut rng) * white(&e.gyroscope);
         sample.accel = clamp(
@@ -183,10 +211,12 @@ pub fn simulate_imu(
             cal.gyro_rectification * gyro + cal.gyro_bias,
             e.gyroscope.saturation,
         );
+        reading.accel_bias = accel_bias;
+        reading.gyro_bias = gyro_bias;
         accel_bias += normal3(&mut rng) * walk(&e.accelerometer);
         gyro_bias += normal3(&mut rng) * walk(&e.gyroscope);
     }
-    truth
+    readings
 }
 
 /// Allan deviation of `values` sampled every `dt` seconds at cluster size `m` samples

@@ -13,9 +13,11 @@ pub mod annotate;
 pub mod annotations;
 pub mod aria;
 pub mod colmap;
+pub mod euroc;
 pub mod gaze;
 pub mod imu;
 pub mod take;
+pub mod take_folder;
 pub mod take_manifest;
 
 pub use take::{FinishedTake, TakeExport, TakeExports};

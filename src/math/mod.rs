@@ -1,5 +1,5 @@
 //! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps, seeded
-//! random draws, colour conversions.
+//! random draws, colour conversions, small least-squares solves.
 //!
 //! Conventions used across egogen:
 //! - Lengths are metres, angles radians, time seconds unless a name says otherwise.
@@ -11,6 +11,7 @@
 //! - Rotations are right-handed; axis-angle vectors have angle = norm, in radians.
 
 pub mod colour;
+pub mod least_squares;
 pub mod pose_spline;
 pub mod random;
 pub mod rotation;

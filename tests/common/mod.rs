@@ -400,40 +400,49 @@ pub fn campaign_digest(out: &Path) -> Vec<(String, String)> {
     files
 }
 
-/// A Python with what the reader package (`python/`) and its tests need (numpy, OpenEXR,
-/// pyarrow, pytest): a virtual environment of the egogen cache made on first use (the reader
-/// itself goes in with [`install_reader`]); an error when PyPI cannot be reached.
-pub fn reader_python() -> Result<PathBuf, String> {
-    let venv = egogen::render::blender_runtime::cache_dir().join("python-reader-2");
+/// A Python with `packages` from PyPI: a virtual environment `name` of the egogen cache,
+/// made on first use at `<venv>.partial` and renamed when complete; an error when PyPI cannot
+/// be reached.
+pub fn cached_python(name: &str, packages: &[&str]) -> Result<PathBuf, String> {
+    let venv = egogen::render::blender_runtime::cache_dir().join(name);
     let python = venv.join("bin/python");
+    if python.is_file() {
+        return Ok(python);
+    }
     let ok = |c: &mut std::process::Command| c.status().map(|s| s.success()).unwrap_or(false);
-    if !python.is_file() {
-        let partial = PathBuf::from(format!("{}.partial", venv.display()));
-        let _ = std::fs::remove_dir_all(&partial);
-        std::fs::create_dir_all(partial.parent().unwrap()).map_err(|e| e.to_string())?;
-        if !ok(std::process::Command::new("python3")
-            .args(["-m", "venv"])
-            .arg(&partial))
-        {
-            return Err("python3 -m venv failed".into());
-        }
-        let packages = [
+    let partial = PathBuf::from(format!("{}.partial", venv.display()));
+    let _ = std::fs::remove_dir_all(&partial);
+    std::fs::create_dir_all(partial.parent().unwrap()).map_err(|e| e.to_string())?;
+    if !ok(std::process::Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&partial))
+    {
+        return Err("python3 -m venv failed".into());
+    }
+    if !ok(std::process::Command::new(partial.join("bin/python"))
+        .args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
+        .args(packages))
+    {
+        return Err(format!("pip install {} failed", packages.join(" ")));
+    }
+    std::fs::rename(&partial, &venv).map_err(|e| e.to_string())?;
+    Ok(python)
+}
+
+/// A Python with what the reader package (`python/`) and its tests need (numpy, OpenEXR,
+/// pyarrow, pytest): [`cached_python`] (the reader itself goes in with [`install_reader`]).
+pub fn reader_python() -> Result<PathBuf, String> {
+    cached_python(
+        "python-reader-2",
+        &[
             "numpy",
             "OpenEXR==3.5.3",
             "pyarrow",
             "pytest",
             "setuptools",
             "wheel",
-        ];
-        if !ok(std::process::Command::new(partial.join("bin/python"))
-            .args(["-m", "pip", "install", "-q", "--disable-pip-version-check"])
-            .args(packages))
-        {
-            return Err(format!("pip install {} failed", packages.join(" ")));
-        }
-        std::fs::rename(&partial, &venv).map_err(|e| e.to_string())?;
-    }
-    Ok(python)
+        ],
+    )
 }
 
 /// Installs the reader package as the checkout has it now into `python`'s environment (built
