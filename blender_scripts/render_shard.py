@@ -51,8 +51,8 @@ def add_body(scene, body):
         poly.use_smooth = True
     if body.get("uvs_npy"):
         add_uv_layer(mesh, np.load(body["uvs_npy"]), body["uvs_npy"])
-    mesh.materials.append(
-        skin_material(body["name"] + "_skin", body["skin"], body.get("skin_regions", [])))
+    mesh.materials.append(skin_material(body["name"] + "_skin", body["skin"],
+                                        body.get("skin_regions", []), body.get("skin_detail")))
     obj = bpy.data.objects.new(body["name"], mesh)
     obj.pass_index = body["pass_index"]
     scene.collection.objects.link(obj)
@@ -100,10 +100,11 @@ def socket(sockets, identifier):
     return next(s for s in sockets if s.identifier == identifier)
 
 
-def skin_material(name, skin, regions):
+def skin_material(name, skin, regions, detail=None):
     """Principled BSDF skin: the tone's base colour, each region's colour mixed in through its
     mask (in the body's UV layout), mottled by noise on the rest-pose (Generated) coordinates,
-    which stay on the skin as the vertex cache deforms the mesh."""
+    which stay on the skin as the vertex cache deforms the mesh, and multiplied by twice the
+    detail map (the relative lightness of a skin albedo in the same layout) when there is one."""
     mat = bpy.data.materials.new(name)
     mat.diffuse_color = (*skin["base_rgb"], 1.0)
     mat.use_nodes = True
@@ -129,6 +130,24 @@ def skin_material(name, skin, regions):
     colour.inputs[0].default_value = skin["base_rgb"]
     links.new(centred.outputs["Value"], colour.inputs[1])
     links.new(colour.outputs["Vector"], bsdf.inputs["Base Color"])
+    if detail:
+        uv = nodes.new("ShaderNodeUVMap")
+        uv.uv_map = "UVMap"
+        image = bpy.data.images.load(detail, check_existing=True)
+        image.colorspace_settings.name = "Non-Color"
+        texture = nodes.new("ShaderNodeTexImage")
+        texture.image = image
+        texture.interpolation = "Linear"
+        links.new(uv.outputs["UV"], texture.inputs["Vector"])
+        twice = nodes.new("ShaderNodeMath")
+        twice.operation = "MULTIPLY"
+        twice.inputs[1].default_value = 2.0
+        links.new(texture.outputs["Color"], twice.inputs[0])
+        detailed = nodes.new("ShaderNodeVectorMath")
+        detailed.operation = "MULTIPLY"
+        links.new(colour.outputs["Vector"], detailed.inputs[0])
+        links.new(twice.outputs["Value"], detailed.inputs[1])
+        links.new(detailed.outputs["Vector"], bsdf.inputs["Base Color"])
     if regions:
         uv = nodes.new("ShaderNodeUVMap")
         uv.uv_map = "UVMap"

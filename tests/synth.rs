@@ -912,6 +912,8 @@ seed = {seed}
         .map(|r| r.paint(&drawn))
         .collect();
     assert_eq!(regions, expected);
+    // The shipped model's skin detail map (MakeHuman's albedo's lightness) is used and recorded.
+    assert_eq!(doc_a["skins"][0]["detail"], "egogen_skin_detail.jpg");
     // Another seed: other lighting, another headset offset, another skin tone.
     assert_ne!(doc_a["lighting"], doc_c["lighting"]);
     assert_ne!(doc_a["headset_wear"], doc_c["headset_wear"]);

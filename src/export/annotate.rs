@@ -79,6 +79,9 @@ fn write_annotations(take: &FinishedTake) -> Result<()> {
                     name: b.name.clone(),
                     skin: b.skin,
                     regions: b.skin_regions.iter().map(|r| r.paint.clone()).collect(),
+                    detail: b.skin_detail.as_ref().and_then(|p| {
+                        p.file_name().map(|n| n.to_string_lossy().into_owned())
+                    }),
                 })
                 .collect(),
             frame_rate_hz: agents[0].motion.frame_rate_hz,

@@ -91,6 +91,9 @@ pub struct AgentSkin {
     /// written before regions).
     #[serde(default)]
     pub regions: Vec<crate::render::skin_tone::RegionPaint>,
+    /// The skin detail map's file name (in the body model's `textures/`), when one was used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub detail: Option<String>,
 }
 
 /// Where a joint is in the image.

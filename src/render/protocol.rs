@@ -106,6 +106,10 @@ pub struct ShardBody {
     /// Skin regions painted through masks in that UV layout ([`super::skin_tone::SKIN_REGIONS`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub skin_regions: Vec<ShardSkinRegion>,
+    /// The skin's detail map in that UV layout (grey; the skin's colour is multiplied by twice
+    /// it: [`super::skin_tone::SKIN_DETAIL_FILE`]), when the body model has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin_detail: Option<PathBuf>,
 }
 
 /// A skin region: its colour and the grey mask (in the body's UV layout) that places it.

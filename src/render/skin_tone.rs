@@ -73,15 +73,30 @@ pub struct SkinRegion {
 }
 
 /// The regions egogen tints: lips redder and darker, eyelids and ears a little flushed, areolae
-/// darker, nails paler, pinker and glossier than the skin they sit on.
-pub const SKIN_REGIONS: [SkinRegion; 6] = [
+/// darker, nails paler, pinker and glossier than the skin they sit on, the eyes dark.
+pub const SKIN_REGIONS: [SkinRegion; 7] = [
     SkinRegion::tinted("lips", "mpfb_lips.jpg", [0.80, 0.50, 0.50], 0.35),
     SkinRegion::tinted("eyelids", "mpfb_eyelids.jpg", [0.90, 0.78, 0.76], 0.45),
     SkinRegion::tinted("ears", "mpfb_ears.jpg", [1.0, 0.86, 0.84], 0.45),
     SkinRegion::tinted("areolae", "mpfb_aureolae.jpg", [0.62, 0.46, 0.42], 0.45),
     SkinRegion::nail("fingernails", "mpfb_fingernails.jpg"),
     SkinRegion::nail("toenails", "mpfb_toenails.jpg"),
+    // The eye sockets (MakeHuman's skins paint them plain red; the body has no eyeballs): a
+    // dark, wet eye, 92 % of the way to a dark brown whatever the skin.
+    SkinRegion {
+        name: "eyes",
+        mask_file: "egogen_eyes.jpg",
+        tint: [1.0; 3],
+        mix: 0.92,
+        toward: [0.05, 0.035, 0.03],
+        roughness: 0.1,
+    },
 ];
+
+/// The skin detail map's file name in the body model's `textures/`: the relative lightness of
+/// MakeHuman's skin albedo (face features, creases, freckles; 0.5 = the skin's mean), built by
+/// `tools/build_skin_detail.py`. The skin's colour, regions included, is multiplied by twice it.
+pub const SKIN_DETAIL_FILE: &str = "egogen_skin_detail.jpg";
 
 /// One region as painted on one body: what Blender receives (with its mask) and the
 /// annotations record.

@@ -29,7 +29,7 @@ use crate::render::protocol::{
 };
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::{blender_fps, AGENT_ID_BASE};
-use crate::render::skin_tone::{SkinRegion, SKIN_REGIONS};
+use crate::render::skin_tone::{SkinRegion, SKIN_DETAIL_FILE, SKIN_REGIONS};
 use crate::render::{BlenderRuntime, ShardBody, ShardRgb, ShardSpec};
 use crate::scene::ceiling::ceiling_to_add;
 use crate::scene::{load_scene, walkable_map};
@@ -555,6 +555,10 @@ fn write_body_inputs(
 ) -> Result<(Vec<ShardBody>, Vec<PathBuf>)> {
     std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
     let masks = skin_region_masks(model)?;
+    let skin_detail = match masks.is_empty() {
+        true => None,
+        false => skin_detail_map(model)?,
+    };
     let mut scratch = Vec::new();
     // One UV file for every agent: they share the model's layout.
     let uvs_npy = match (&model.uvs, masks.is_empty()) {
@@ -618,10 +622,33 @@ fn write_body_inputs(
             skin,
             uvs_npy: uvs_npy.clone(),
             skin_regions,
+            skin_detail: skin_detail.clone(),
         });
         scratch.extend([pc2, faces, vertices]);
     }
     Ok((bodies, scratch))
+}
+
+/// `textures/` beside a body model with UVs (what is painted there is in its UV layout).
+fn body_textures(model: &BodyModel) -> Option<PathBuf> {
+    match (&model.uvs, model.source.parent()) {
+        (Some(_), Some(parent)) => Some(parent.join("textures")),
+        _ => None,
+    }
+}
+
+/// The skin detail map beside a body model that has region masks, when it is there
+/// ([`SKIN_DETAIL_FILE`]).
+fn skin_detail_map(model: &BodyModel) -> Result<Option<PathBuf>> {
+    let Some(path) = body_textures(model).map(|d| d.join(SKIN_DETAIL_FILE)) else {
+        return Ok(None);
+    };
+    if !path.is_file() {
+        return Ok(None);
+    }
+    Ok(Some(std::fs::canonicalize(&path).with_context(|| {
+        format!("resolving {}", path.display())
+    })?))
 }
 
 /// The skin regions' masks for `model`: in `textures/` beside the model file, painted in the
@@ -629,9 +656,8 @@ fn write_body_inputs(
 /// lie beside it (the official SMPL-X files: another layout); all of them, or an error naming
 /// the first one missing.
 fn skin_region_masks(model: &BodyModel) -> Result<Vec<(SkinRegion, PathBuf)>> {
-    let dir = match (&model.uvs, model.source.parent()) {
-        (Some(_), Some(parent)) => parent.join("textures"),
-        _ => return Ok(Vec::new()),
+    let Some(dir) = body_textures(model) else {
+        return Ok(Vec::new());
     };
     let masks: Vec<(SkinRegion, PathBuf)> = SKIN_REGIONS
         .iter()
@@ -1042,12 +1068,16 @@ mod tests {
         let masks = skin_region_masks(&shipped).unwrap();
         assert_eq!(masks.len(), SKIN_REGIONS.len());
         assert!(masks.iter().all(|(_, p)| p.is_absolute() && p.is_file()));
+        // The detail map ships beside them.
+        let detail = skin_detail_map(&shipped).unwrap().unwrap();
+        assert!(detail.is_absolute() && detail.ends_with(SKIN_DETAIL_FILE));
 
         // The same model in a directory without masks: no regions.
         let dir = tempfile::tempdir().unwrap();
         let mut elsewhere = shipped.clone();
         elsewhere.source = dir.path().join("SMPLX_NEUTRAL.npz");
         assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
+        assert_eq!(skin_detail_map(&elsewhere).unwrap(), None);
         // Some of them: an error naming the first one missing.
         let textures = dir.path().join("textures");
         std::fs::create_dir(&textures).unwrap();
@@ -1058,7 +1088,7 @@ mod tests {
         .unwrap();
         let msg = format!("{:#}", skin_region_masks(&elsewhere).unwrap_err());
         assert!(
-            msg.contains("mpfb_eyelids.jpg") && msg.contains("`eyelids`") && msg.contains("1 of 6"),
+            msg.contains("mpfb_eyelids.jpg") && msg.contains("`eyelids`") && msg.contains("1 of 7"),
             "{msg}"
         );
         // A model without UVs never looks for them.
