@@ -100,6 +100,17 @@ def socket(sockets, identifier):
     return next(s for s in sockets if s.identifier == identifier)
 
 
+def uv_image(nodes, links, uv, path):
+    """A grey image (data, not colour) in the body's UV layout, read at `uv`'s coordinates."""
+    image = bpy.data.images.load(path, check_existing=True)
+    image.colorspace_settings.name = "Non-Color"
+    texture = nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Linear"
+    links.new(uv.outputs["UV"], texture.inputs["Vector"])
+    return texture
+
+
 def skin_material(name, skin, regions, detail=None):
     """Principled BSDF skin: the tone's base colour, each region's colour mixed in through its
     mask (in the body's UV layout), mottled by noise on the rest-pose (Generated) coordinates,
@@ -130,15 +141,12 @@ def skin_material(name, skin, regions, detail=None):
     colour.inputs[0].default_value = skin["base_rgb"]
     links.new(centred.outputs["Value"], colour.inputs[1])
     links.new(colour.outputs["Vector"], bsdf.inputs["Base Color"])
-    if detail:
+    uv = None
+    if detail or regions:
         uv = nodes.new("ShaderNodeUVMap")
         uv.uv_map = "UVMap"
-        image = bpy.data.images.load(detail, check_existing=True)
-        image.colorspace_settings.name = "Non-Color"
-        texture = nodes.new("ShaderNodeTexImage")
-        texture.image = image
-        texture.interpolation = "Linear"
-        links.new(uv.outputs["UV"], texture.inputs["Vector"])
+    if detail:
+        texture = uv_image(nodes, links, uv, detail)
         twice = nodes.new("ShaderNodeMath")
         twice.operation = "MULTIPLY"
         twice.inputs[1].default_value = 2.0
@@ -149,17 +157,10 @@ def skin_material(name, skin, regions, detail=None):
         links.new(twice.outputs["Value"], detailed.inputs[1])
         links.new(detailed.outputs["Vector"], bsdf.inputs["Base Color"])
     if regions:
-        uv = nodes.new("ShaderNodeUVMap")
-        uv.uv_map = "UVMap"
         base, rough = None, None  # the outputs carrying colour and roughness so far
         for region in regions:
             paint = region["paint"]
-            image = bpy.data.images.load(region["mask"], check_existing=True)
-            image.colorspace_settings.name = "Non-Color"
-            mask = nodes.new("ShaderNodeTexImage")
-            mask.image = image
-            mask.interpolation = "Linear"
-            links.new(uv.outputs["UV"], mask.inputs["Vector"])
+            mask = uv_image(nodes, links, uv, region["mask"])
             mix = nodes.new("ShaderNodeMix")
             mix.data_type = "RGBA"
             links.new(mask.outputs["Color"], socket(mix.inputs, "Factor_Float"))
