@@ -87,7 +87,7 @@ fn region_masks_select_the_anatomy_they_are_named_for() {
     let feet = [joint(&j, "left_foot"), joint(&j, "right_foot")];
     let near = |p: &Vec3, set: &[Vec3], r: f64| set.iter().any(|q| p.distance(*q) < r);
     let both_sides = |ps: &[Vec3]| ps.iter().any(|p| p.x > 0.0) && ps.iter().any(|p| p.x < 0.0);
-    assert_eq!(SKIN_REGIONS.len(), 6);
+    assert_eq!(SKIN_REGIONS.len(), 7);
     for r in SKIN_REGIONS {
         let ps = region(&model, r.mask_file);
         assert!(ps.len() >= 30, "{}: {} vertices", r.name, ps.len());
@@ -100,6 +100,8 @@ fn region_masks_select_the_anatomy_they_are_named_for() {
                     && p.z > eyes[0].z
             }
             "eyelids" => near(p, &eyes, 0.03),
+            // The sockets MakeHuman paints red: at the eye joints.
+            "eyes" => near(p, &eyes, 0.025),
             // At the sides of the head, behind the eyes.
             "ears" => p.x.abs() > 0.06 && near(p, &[joint(&j, "head")], 0.1) && p.z < eyes[0].z,
             // On the front of the chest.

@@ -1,7 +1,7 @@
 """Renders one take of a config with each `[render.materials]` mode (keep, fill, all; seed 0)
 and with fill at two more material seeds (the motion, lighting and skins stay those of the
 config: only `render.materials.seed` changes), and writes a contact sheet of the same RGB
-frame of each, left to right: keep, fill, all, fill seed 1, fill seed 2.
+frame of each, left to right: keep, fill, all, fill seed 1, fill seed 2 (`--variants`).
 
     python3 tools/materials_sheet.py [--config configs/default.toml] [--duration 2]
         [--frame 40] [--out out/materials_sheet] [--sheet docs/materials_apartment.png]
@@ -32,6 +32,8 @@ def main():
     ap.add_argument("--duration", type=float, default=2.0, help="seconds of motion")
     ap.add_argument("--frame", type=int, default=40, help="the motion frame shown")
     ap.add_argument("--camera", default="camera-rgb")
+    ap.add_argument("--variants", nargs="+", default=[f"{m}:{s}" for m, s in VARIANTS],
+                    help="MODE:SEED of each column (default: keep:0 fill:0 all:0 fill:1 fill:2)")
     ap.add_argument("--out", default=os.path.join(ROOT, "out/materials_sheet"))
     ap.add_argument("--sheet", default=os.path.join(ROOT, "docs/materials_apartment.png"))
     args = ap.parse_args()
@@ -42,7 +44,8 @@ def main():
     with open(args.config) as f:
         text = f.read()
     frames = []
-    for mode, seed in VARIANTS:
+    variants = [(v.split(":")[0], int(v.split(":")[1])) for v in args.variants]
+    for mode, seed in variants:
         out = os.path.join(args.out, f"{mode}_{seed}")
         if not os.path.isdir(out):
             variant = os.path.join(os.path.dirname(os.path.abspath(args.config)),
