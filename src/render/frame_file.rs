@@ -19,8 +19,8 @@
 //! every ground-truth channel; outside the valid field of view the colour is 0 too. Ground
 //! truth is sampled at the rendered pixel nearest to the exact ray (ids, normals and flow are
 //! never blended), except the surface point (depth, position): where the four rendered pixels
-//! around the ray lie on one surface it is interpolated between them, so that it lies on the
-//! pixel's own ray (on a plane to second order), else the nearest pixel's. Colour is
+//! around the ray lie on one plane it is interpolated between them, so that it lies on the
+//! pixel's own ray (to second order), else the nearest pixel's. Colour is
 //! interpolated bilinearly. A render that is the target image
 //! itself (a pinhole, or the native polynomial fisheye) is taken pixel for pixel, and its flow
 //! is in its own pixels.
@@ -102,6 +102,11 @@ pub fn luminance(rgb: [f32; 3]) -> f32 {
 /// 3 % across a pixel at 1/4 Aria size; a depth edge far more.
 const ONE_SURFACE_DEPTH_SPREAD: Real = 0.05;
 
+/// ... and lie on one plane: the fourth within this share of the pixels' spacing of the plane
+/// through the other three (the position pass is float32: about 1e-7 of the distance from
+/// the origin, hence also 10 µm absolute).
+const COPLANAR_TOLERANCE: Real = 1e-3;
+
 /// A raw render's planes, looked up by pass and component.
 struct Raw {
     contents: ExrContents,
@@ -162,9 +167,10 @@ impl Raw {
     }
 
     /// The surface point on the ray through `q` (world, m): the position pass interpolated
-    /// bilinearly between the four rendered pixels around `q` where they lie on one surface —
+    /// bilinearly between the four rendered pixels around `q` where they lie on one plane —
     /// all hit and rendered, one object id, depths within [`ONE_SURFACE_DEPTH_SPREAD`] of each
-    /// other — which on a plane is the ray's own point to second order in the pixel spacing;
+    /// other, coplanar ([`COPLANAR_TOLERANCE`]) — which is the ray's own point to second order
+    /// in the pixel spacing;
     /// `None` where they do not (edges, the image border): the nearest pixel's point is taken.
     fn surface_point(
         &self,
@@ -189,9 +195,10 @@ impl Raw {
             ax * ay,
         ];
         let mut point = Vec3::ZERO;
+        let mut corner_points = [Vec3::ZERO; 4];
         let (mut z_min, mut z_max) = (Real::INFINITY, Real::NEG_INFINITY);
         let first = (y0 as usize) * self.width + x0 as usize;
-        for ((dx, dy), w) in corners.into_iter().zip(weights) {
+        for (k, ((dx, dy), w)) in corners.into_iter().zip(weights).enumerate() {
             let n = (y0 + dy) as usize * self.width + (x0 + dx) as usize;
             if hit[n] < 0.5
                 || !renders(Pixel::new(x0 + dx, y0 + dy))
@@ -203,8 +210,17 @@ impl Raw {
             let z = cam_from_world.transform_point3(world).z;
             (z_min, z_max) = (z_min.min(z), z_max.max(z));
             point += w * world;
+            corner_points[k] = world;
         }
-        (z_min > 0.0 && z_max - z_min <= ONE_SURFACE_DEPTH_SPREAD * z_min).then_some(point)
+        // One plane: the fourth point on the plane of the other three (a crease between two
+        // faces of one object, a wall meeting the floor, is not; nor is a curved surface).
+        let [p00, p10, p01, p11] = corner_points;
+        let (u, v) = (p10 - p00, p01 - p00);
+        let n = u.cross(v);
+        let off_plane = n.dot(p11 - p00).abs() / n.length().max(Real::MIN_POSITIVE);
+        let coplanar = off_plane <= COPLANAR_TOLERANCE * u.length().max(v.length()) + 1e-5;
+        (coplanar && z_min > 0.0 && z_max - z_min <= ONE_SURFACE_DEPTH_SPREAD * z_min)
+            .then_some(point)
     }
 
     fn bilinear(&self, plane: &[f32], q: Pixel) -> f32 {
