@@ -416,14 +416,20 @@ def write_json(path, doc):
 # features
 
 
+def images_and_camera(args):
+    """The take, the camera's frames, its exported COLMAP camera (model, width, height,
+    parameters) and the folder of its images."""
+    take = open_take(args.take)
+    frames = camera_frames(take, args.camera, args.max_frames)
+    camera = read_colmap_camera_file(take, args.camera)
+    return take, frames, camera, check_images(take, args.camera, frames)
+
+
 def cmd_features(args) -> dict:
     import pycolmap
 
     t0 = time.time()
-    take = open_take(args.take)
-    frames = camera_frames(take, args.camera, args.max_frames)
-    model, w, h, params = read_colmap_camera_file(take, args.camera)
-    image_dir = check_images(take, args.camera, frames)
+    take, frames, (model, w, h, params), image_dir = images_and_camera(args)
     if len(frames) < 2:
         raise ToolError(f"{frames[0].annotations}: {len(frames)} frame; two-view geometry needs at least 2")
 
@@ -593,10 +599,7 @@ def cmd_sfm(args) -> dict:
     import pycolmap
 
     t0 = time.time()
-    take = open_take(args.take)
-    frames = camera_frames(take, args.camera, args.max_frames)
-    model, w, h, params = read_colmap_camera_file(take, args.camera)
-    image_dir = check_images(take, args.camera, frames)
+    take, frames, (model, w, h, params), image_dir = images_and_camera(args)
     names = [image_name(f) for f in frames]
     gt_centre = {image_name(f): f.T_world_cam[:3, 3] for f in frames}
     centres = np.array([gt_centre[n] for n in names])

@@ -1,5 +1,14 @@
 //! Colour conversions shared by previews and drawn materials.
 
+/// An sRGB component in [0, 1] as linear light (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// HSV to RGB in the same space (hue in degrees, any value wrapping; saturation and value
 /// clamped to [0, 1]), each component in [0, 1].
 pub fn hsv_to_rgb(h_deg: f64, s: f64, v: f64) -> [f64; 3] {

@@ -13,8 +13,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use super::skin_tone::srgb_to_linear;
-use crate::math::colour::hsv_to_rgb;
+use crate::math::colour::{hsv_to_rgb, srgb_to_linear};
 use crate::math::random::uniform_open01;
 
 /// Which objects get a drawn material (`[render.materials] mode`).
@@ -289,7 +288,7 @@ fn between(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
 
 /// HSV (hue in degrees, saturation and value in [0, 1], sRGB) as linear RGB.
 fn hsv_linear(h: f64, s: f64, v: f64) -> [f64; 3] {
-    hsv_to_rgb(h, s, v).map(|u| srgb_to_linear((u * 255.0).round() as u8))
+    hsv_to_rgb(h, s, v).map(srgb_to_linear)
 }
 
 /// A colour drawn from ranges of hue (degrees), saturation and value.

@@ -28,14 +28,9 @@ pub(crate) const MONK_SKIN_TONES_SRGB: [[u8; 3]; 10] = [
     [0x29, 0x24, 0x20],
 ];
 
-/// An 8-bit sRGB value as linear light (IEC 61966-2-1).
+/// An 8-bit sRGB value as linear light.
 pub(crate) fn srgb_to_linear(v: u8) -> f64 {
-    let c = v as f64 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
+    crate::math::colour::srgb_to_linear(v as f64 / 255.0)
 }
 
 /// One agent's skin material, as Blender receives it.
