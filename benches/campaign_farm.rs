@@ -83,6 +83,9 @@ impl RenderTake for StandInTake {
     fn camera_name(&self, _: usize) -> &str {
         CAMERA
     }
+    fn camera_pixels(&self, _: usize) -> u64 {
+        1
+    }
     fn total_frames(&self) -> usize {
         FRAMES_PER_TAKE as usize
     }

@@ -21,6 +21,11 @@
 //! many workers as cores each worker has one core), and what is "ours": everything but the
 //! limit's colour path tracing per frame.
 //!
+//! `cargo bench --bench render_cost -- --device gpu` renders the shipped settings on the CPU (2
+//! workers) and then on the GPU Blender finds (OptiX, CUDA, HIP, oneAPI or Metal; 1 worker),
+//! side by side: the "whole runs" table's wall seconds are the comparison. Without a GPU the
+//! second run stops before staging, naming what Blender looked for.
+//!
 //! `cargo bench --bench render_cost` (about 15 minutes on 2 cores).
 //! `EGOGEN_RENDER_COST_SCALE=1 cargo bench --bench render_cost` renders the cameras at that
 //! resolution scale instead of the default run's 0.25 (1 = full Aria size: RGB 1408×1408,
@@ -154,15 +159,41 @@ fn per_camera(report: &serde_json::Value) -> PerCamera {
     out
 }
 
+/// `-- --device gpu`: the shipped settings on the CPU (2 workers) and on the GPU Blender finds
+/// (1 worker), side by side.
+const ON_CPU_AND_GPU: [Variant; 2] = [
+    Variant {
+        name: "shipped, CPU (2 workers)",
+        render: SHIPPED,
+        envs: &[],
+        as_limit: false,
+        at_full_size: true,
+    },
+    Variant {
+        name: "shipped, GPU (1 worker)",
+        render: "samples = 4\ndenoise = true\ndenoise_prefilter = \"fast\"\ndevice = \"gpu\"",
+        envs: &[],
+        as_limit: false,
+        at_full_size: true,
+    },
+];
+
 fn main() {
     let scale = std::env::var("EGOGEN_RENDER_COST_SCALE").ok();
-    let variants: Vec<&Variant> = match scale {
-        Some(_) => VARIANTS.iter().filter(|v| v.at_full_size).collect(),
-        None => VARIANTS.iter().collect(),
+    let args: Vec<String> = std::env::args().collect();
+    let on_gpu = args.windows(2).any(|w| w[0] == "--device" && w[1] == "gpu");
+    let variants: Vec<&Variant> = match (on_gpu, &scale) {
+        (true, _) => ON_CPU_AND_GPU.iter().collect(),
+        (false, Some(_)) => VARIANTS.iter().filter(|v| v.at_full_size).collect(),
+        (false, None) => VARIANTS.iter().collect(),
     };
     let mut results: Vec<(&Variant, PerCamera, f64)> = Vec::new();
     for v in variants {
-        let mut config = default_run_config(v.render, "workers = 2");
+        let workers = match v.render.contains("device = \"gpu\"") {
+            true => "workers = 1",
+            false => "workers = 2",
+        };
+        let mut config = default_run_config(v.render, workers);
         if let Some(scale) = &scale {
             const SHIPPED_SCALE: &str = "resolution_scale = 0.25";
             assert!(config.contains(SHIPPED_SCALE), "{config}");

@@ -15,6 +15,8 @@ imported; then scene import, camera set-up, each frame's scene update and render
 supervisor adds them up per attempt, docs/RENDERING.md "Where a frame's time goes").
 `render_shard.py --check-device gpu` only says which GPU Blender would render on (exit 0) or
 why it cannot (exit 3, `EGOGEN_SETUP_FAILED`): egogen runs it before it stages a take.
+`render_shard.py --serve TAKE_DIR` is a long-lived worker: it builds the scene once and renders
+shard after shard of one take, each named on a line of its standard input (see `serve`).
 """
 import json
 import math
@@ -35,7 +37,7 @@ def script_args():
 def load_spec():
     args = script_args()
     if len(args) != 1:
-        sys.exit("usage: render_shard.py SPEC.json | --check-device gpu")
+        sys.exit("usage: render_shard.py SPEC.json | --serve TAKE_DIR | --check-device gpu")
     with open(args[0]) as f:
         return json.load(f)
 
@@ -295,6 +297,14 @@ def set_device(scene, device):
         return
     backend, names = find_gpu()
     scene.cycles.device = "GPU"
+    # What Cycles on a GPU wants: the denoiser on the GPU too (OIDN 2 runs on CUDA, HIP,
+    # oneAPI and Metal devices; Blender falls back to the CPU where it cannot), and tiles as
+    # large as the frame (Blender's default 2048 px covers every Aria camera at full size).
+    # Persistent data is on for every device (above).
+    if hasattr(scene.cycles, "denoising_use_gpu"):
+        scene.cycles.denoising_use_gpu = True
+    scene.cycles.use_auto_tile = True
+    scene.cycles.tile_size = max(scene.cycles.tile_size, 2048)
     print(f"egogen: rendering on {backend}: {names}", file=sys.stderr, flush=True)
 
 
@@ -874,22 +884,20 @@ def probe_bodies(scene, bodies, probe):
 EXIT_SETUP_FAILED = 3
 
 
-def main():
-    args = script_args()
-    if args[:1] == ["--check-device"] and len(args) == 2:
-        check_device(args[1])
-        return
-    timing("ready", 0.0)
-    spec = load_spec()
+def set_up(spec):
+    """Builds the spec's scene (exit EXIT_SETUP_FAILED, saying why, when it cannot)."""
     t0 = time.perf_counter()
     try:
-        scene, bodies, obstacles = build_scene(spec)
+        built = build_scene(spec)
     except Exception as e:  # noqa: BLE001 - any setup failure is reported the same way
         print(f"EGOGEN_SETUP_FAILED {type(e).__name__}: {e}", file=sys.stderr, flush=True)
         sys.exit(EXIT_SETUP_FAILED)
     timing("scene_import", time.perf_counter() - t0)
-    if spec.get("body_probe"):
-        probe_bodies(scene, bodies, spec["body_probe"])
+    return built
+
+
+def render_cameras(spec, scene, bodies, obstacles):
+    """Renders every frame of the spec's cameras in the scene built for it."""
     step = spec["ground_truth_frame_step"]
     for cam_spec in spec["cameras"]:
         t0 = time.perf_counter()
@@ -910,6 +918,72 @@ def main():
                     scene, frame["frame"] / step, frame["ground_truth_exr"], "ground_truth")
             if step != 1:
                 set_frame_step(cam, cam_spec, bodies, obstacles, spec, 1)
+        # The next shard's camera is a new object: this one goes, with its keys.
+        data = cam.data
+        bpy.data.objects.remove(cam, do_unlink=True)
+        bpy.data.cameras.remove(data)
+
+
+def take_key(spec):
+    """What a long-lived worker's scene is built from: the spec but its cameras (and probe)."""
+    rest = {k: v for k, v in spec.items() if k not in ("cameras", "body_probe")}
+    return json.dumps(rest, sort_keys=True)
+
+
+def resident_mb():
+    """This process's resident memory (MB), from /proc where there is one, else its peak."""
+    try:
+        with open("/proc/self/statm") as f:
+            return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+    except (OSError, ValueError, IndexError):
+        import resource
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+        return peak / 1e6 if sys.platform == "darwin" else peak / 1e3
+
+
+def serve(take_dir):
+    """`render_shard.py --serve TAKE_DIR`: a long-lived worker for the take in TAKE_DIR (named on
+    its command line so that a process list shows which take it renders). Reads one JSON
+    object a line from standard input, `{"spec": SPEC.json, "log": LOG}`; renders each spec's
+    shard in the scene built once, from the first spec (every later one must be of the same
+    take), its standard error appended to LOG; prints `EGOGEN_SHARD_END <resident MB>` after
+    each. Exits at the end of its input."""
+    timing("ready", 0.0)
+    built, key = None, None
+    for line in sys.stdin:
+        if not line.strip():
+            continue
+        request = json.loads(line)
+        errors = os.open(request["log"], os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+        sys.stderr.flush()
+        os.dup2(errors, 2)
+        os.close(errors)
+        with open(request["spec"]) as f:
+            spec = json.load(f)
+        if built is None:
+            built, key = set_up(spec), take_key(spec)
+        elif take_key(spec) != key:
+            print(f"EGOGEN_SETUP_FAILED render_shard.py --serve {take_dir}: a shard of another "
+                  "take; a long-lived worker renders one take", file=sys.stderr, flush=True)
+            sys.exit(EXIT_SETUP_FAILED)
+        render_cameras(spec, *built)
+        print("EGOGEN_SHARD_END", f"{resident_mb():.1f}", flush=True)
+
+
+def main():
+    args = script_args()
+    if args[:1] == ["--check-device"] and len(args) == 2:
+        check_device(args[1])
+        return
+    if args[:1] == ["--serve"] and len(args) == 2:
+        serve(args[1])
+        return
+    timing("ready", 0.0)
+    spec = load_spec()
+    scene, bodies, obstacles = set_up(spec)
+    if spec.get("body_probe"):
+        probe_bodies(scene, bodies, spec["body_probe"])
+    render_cameras(spec, scene, bodies, obstacles)
 
 
 if __name__ == "__main__":

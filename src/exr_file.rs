@@ -165,6 +165,19 @@ impl ExrContents {
         })
     }
 
+    /// A one-part file's contents made in memory from its channels (in file order), as
+    /// [`ExrContents::read`] would give them; no text attributes.
+    pub fn from_channels(path: &Path, channels: Vec<ExrChannel>) -> Self {
+        let passes = group_passes(&channels);
+        Self {
+            path: path.to_owned(),
+            parts: 1,
+            channels,
+            passes,
+            attributes: Default::default(),
+        }
+    }
+
     /// The channel called `name`.
     pub fn channel(&self, name: &str) -> Option<&ExrChannel> {
         self.channels.iter().find(|c| c.name == name)

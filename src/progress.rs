@@ -3,6 +3,7 @@
 //! (`EGOGEN_PROGRESS_EVERY_S` sets how often; default 10 s).
 
 use std::io::IsTerminal;
+use std::sync::Arc;
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressStyle};
@@ -23,18 +24,36 @@ pub fn average_eta(pos: u64, len: u64, start: u64, elapsed: Duration) -> Option<
     })
 }
 
+/// How a bar estimates the time left from its position, length and elapsed time.
+pub type Eta = Arc<dyn Fn(u64, u64, Duration) -> Option<Duration> + Send + Sync>;
+
 /// A bar over `total` items of `unit` (e.g. "frames"), `done` of them already done; `what`
 /// names the work (e.g. "rendering") and `program` the command the plain lines come from.
+/// The time left is [`average_eta`]'s.
 pub fn progress_bar(program: &str, what: &str, unit: &str, total: u64, done: u64) -> ProgressBar {
+    let eta: Eta = Arc::new(move |pos, len, elapsed| average_eta(pos, len, done, elapsed));
+    progress_bar_with_eta(program, what, unit, total, done, eta)
+}
+
+/// [`progress_bar`] with the time left estimated by `eta`.
+pub fn progress_bar_with_eta(
+    program: &str,
+    what: &str,
+    unit: &str,
+    total: u64,
+    done: u64,
+    eta: Eta,
+) -> ProgressBar {
     let template = format!(
         "{what} {{bar:30}} {{pos}}/{{len}} {unit} [{{elapsed_precise}} < {{eta_average}}] {{msg}}"
     );
+    let bar_eta = eta.clone();
     let style = ProgressStyle::with_template(&template)
         .unwrap_or_else(|_| ProgressStyle::default_bar())
         .with_key(
             "eta_average",
             move |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
-                let eta = average_eta(state.pos(), state.len().unwrap_or(0), done, state.elapsed());
+                let eta = bar_eta(state.pos(), state.len().unwrap_or(0), state.elapsed());
                 let _ = match eta {
                     Some(t) => {
                         let s = t.as_secs();
@@ -61,7 +80,7 @@ pub fn progress_bar(program: &str, what: &str, unit: &str, total: u64, done: u64
                 break;
             }
             let (pos, len) = (bar.position(), bar.length().unwrap_or(0));
-            let left = match average_eta(pos, len, done, bar.elapsed()) {
+            let left = match eta(pos, len, bar.elapsed()) {
                 Some(t) => format!("about {} s left", t.as_secs()),
                 None => "time left not known yet".into(),
             };

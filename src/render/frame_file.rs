@@ -33,7 +33,7 @@ use exr::prelude::{
 };
 
 use crate::camera::{Camera, CameraModel, Pixel};
-use crate::exr_file::{ExrContents, InspectError};
+use crate::exr_file::{ExrChannel, ExrContents, InspectError};
 use crate::math::{Affine3, Real, Vec3};
 use crate::render::passes::{Pass, Passes, CHANNEL_GROUPS};
 use crate::render::render_camera::RenderCamera;
@@ -452,12 +452,66 @@ impl FrameImage {
 
     /// The frame file's bytes, with the planes it holds; `path` is where they are meant to go
     /// (named in errors). Callers write them under a temporary name and rename, as
-    /// [`crate::supervisor::Dataset::finish_frame`] does.
+    /// [`crate::supervisor::Dataset::finish_frame`] does. The file's blocks are compressed on
+    /// every thread of rayon's pool.
     pub fn encode(&self, path: &Path) -> Result<Vec<u8>, FrameFileError> {
-        let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
-        let mut f32_channel = |name: &str, values: Vec<f32>| {
-            channels.push(AnyChannel::new(name, FlatSamples::F32(values)))
-        };
+        let channels: Vec<AnyChannel<FlatSamples>> = self
+            .channels()
+            .into_iter()
+            .map(|(name, samples)| AnyChannel::new(name.as_str(), samples))
+            .collect();
+        let layer = Layer::new(
+            (self.width, self.height),
+            LayerAttributes::default(),
+            Encoding::SMALL_LOSSLESS,
+            AnyChannels::sort(SmallVec::from_vec(channels)),
+        );
+        let mut bytes = std::io::Cursor::new(Vec::new());
+        Image::from_layer(layer)
+            .write()
+            .to_buffered(&mut bytes)
+            .map_err(|e| FrameFileError::Write {
+                path: path.into(),
+                message: e.to_string(),
+            })?;
+        Ok(bytes.into_inner())
+    }
+
+    /// What [`FrameImage::encode`]'s file holds, read back as [`ExrContents::read`] would
+    /// (`path` names it): channels in the file's order (sorted by name), the same samples. The
+    /// frame file's ZIP compression is lossless and its samples are stored as given (`f32`,
+    /// `u32`), so decoding the encoded bytes gives exactly these planes (tested); a finished
+    /// frame is checked on them and on the encoded file's header
+    /// (`check_encoded_header`) instead of decoding the whole file again.
+    pub fn contents(&self, path: &Path) -> ExrContents {
+        let mut named = self.channels();
+        named.sort_by(|a, b| a.0.cmp(&b.0));
+        let channels: Vec<ExrChannel> = named
+            .into_iter()
+            .map(|(name, samples)| {
+                let (sample_type, values) = match samples {
+                    FlatSamples::F32(v) => ("f32", v),
+                    FlatSamples::U32(v) => ("u32", v.into_iter().map(|x| x as f32).collect()),
+                    FlatSamples::F16(v) => ("f16", v.into_iter().map(f32::from).collect()),
+                };
+                ExrChannel {
+                    name,
+                    sample_type,
+                    width: self.width,
+                    height: self.height,
+                    values,
+                    compression: format!("{:?}", Encoding::SMALL_LOSSLESS.compression),
+                }
+            })
+            .collect();
+        ExrContents::from_channels(path, channels)
+    }
+
+    /// The frame file's channels by name, in the order they are made.
+    fn channels(&self) -> Vec<(String, FlatSamples)> {
+        let mut channels: Vec<(String, FlatSamples)> = Vec::new();
+        let mut f32_channel =
+            |name: &str, values: Vec<f32>| channels.push((name.into(), FlatSamples::F32(values)));
         fn component<const N: usize>(v: &[[f32; N]], c: usize) -> Vec<f32> {
             v.iter().map(|p| p[c]).collect()
         }
@@ -495,28 +549,94 @@ impl FrameImage {
             }
         }
         if let Some(ids) = &self.segmentation {
-            channels.push(AnyChannel::new(
-                "segmentation.id",
-                FlatSamples::U32(ids.clone()),
-            ));
+            channels.push(("segmentation.id".into(), FlatSamples::U32(ids.clone())));
         }
-        let layer = Layer::new(
-            (self.width, self.height),
-            LayerAttributes::default(),
-            Encoding::SMALL_LOSSLESS,
-            AnyChannels::sort(SmallVec::from_vec(channels)),
-        );
-        let mut bytes = std::io::Cursor::new(Vec::new());
-        Image::from_layer(layer)
-            .write()
-            .non_parallel()
-            .to_buffered(&mut bytes)
-            .map_err(|e| FrameFileError::Write {
-                path: path.into(),
-                message: e.to_string(),
-            })?;
-        Ok(bytes.into_inner())
+        channels
     }
+}
+
+/// Checks that `bytes`, the encoding of `contents` ([`FrameImage::encode`],
+/// [`FrameImage::contents`]), open as an EXR file whose header names exactly those channels,
+/// sample types, size and compression, and whose offset tables and compressed blocks are all
+/// there; nothing is decompressed.
+pub(crate) fn check_encoded_header(
+    contents: &ExrContents,
+    bytes: &[u8],
+) -> Result<(), FrameFileError> {
+    let path = &contents.path;
+    let unreadable = |message: String| {
+        FrameFileError::Read(InspectError::Read {
+            path: path.clone(),
+            message,
+        })
+    };
+    let reader = exr::block::reader::Reader::read_from_buffered(std::io::Cursor::new(bytes), true)
+        .map_err(|e| unreadable(e.to_string()))?;
+    let headers = reader.headers().to_vec();
+    let [header] = headers.as_slice() else {
+        return Err(unreadable(format!(
+            "{} parts in the encoded file, expected 1",
+            headers.len()
+        )));
+    };
+    use exr::block::reader::ChunksReader;
+    let chunks = reader
+        .all_chunks(true)
+        .map_err(|e| unreadable(e.to_string()))?;
+    let expected = chunks.expected_chunk_count();
+    let mut found = 0usize;
+    for chunk in chunks {
+        chunk.map_err(|e| unreadable(e.to_string()))?;
+        found += 1;
+    }
+    if found != expected {
+        return Err(unreadable(format!(
+            "{found} blocks in the encoded file, its header says {expected}"
+        )));
+    }
+    let size = header.layer_size;
+    let in_header: Vec<(String, &'static str)> = header
+        .channels
+        .list
+        .iter()
+        .map(|c| {
+            let kind = match c.sample_type {
+                exr::meta::attribute::SampleType::F16 => "f16",
+                exr::meta::attribute::SampleType::F32 => "f32",
+                exr::meta::attribute::SampleType::U32 => "u32",
+            };
+            (c.name.to_string(), kind)
+        })
+        .collect();
+    let made: Vec<(String, &'static str)> = contents
+        .channels
+        .iter()
+        .map(|c| (c.name.clone(), c.sample_type))
+        .collect();
+    if in_header != made {
+        return Err(unreadable(format!(
+            "the encoded header lists channels {in_header:?}, the frame holds {made:?}"
+        )));
+    }
+    for c in &contents.channels {
+        if (c.width, c.height) != (size.width(), size.height()) {
+            return Err(FrameFileError::Size {
+                path: path.clone(),
+                width: size.width(),
+                height: size.height(),
+                expected_w: c.width as u32,
+                expected_h: c.height as u32,
+            });
+        }
+    }
+    if header.compression != Encoding::SMALL_LOSSLESS.compression {
+        return Err(unreadable(format!(
+            "encoded with {:?}, expected {:?}",
+            header.compression,
+            Encoding::SMALL_LOSSLESS.compression
+        )));
+    }
+    Ok(())
 }
 
 /// Checks a frame file: it opens, holds exactly `channels` (e.g. from
@@ -630,5 +750,80 @@ mod tests {
         assert_eq!(blender_duration_seconds(" 00:13.25 "), Some(13.25));
         assert_eq!(blender_duration_seconds("00:xx"), None);
         assert_eq!(blender_duration_seconds(""), None);
+    }
+
+    /// A frame of every plane, `w × h`, values spread over many magnitudes (and ids past
+    /// 2²⁴, which an `f32` cannot hold exactly).
+    fn every_plane(w: usize, h: usize, monochrome: bool) -> FrameImage {
+        let n = w * h;
+        let v =
+            |k: usize, c: usize| ((k * 7 + c * 13) as f32).sin() * 10f32.powi((k % 9) as i32 - 4);
+        FrameImage {
+            width: w,
+            height: h,
+            valid: (0..n).map(|k| (k % 3 == 0) as u8 as f32).collect(),
+            rgba: Some((0..n).map(|k| [v(k, 0), v(k, 1), v(k, 2), 1.0]).collect()),
+            monochrome,
+            depth: Some((0..n).map(|k| v(k, 3).abs()).collect()),
+            normal: Some((0..n).map(|k| [v(k, 4), v(k, 5), v(k, 6)]).collect()),
+            position: Some((0..n).map(|k| [v(k, 7) + 1e5, v(k, 8), -v(k, 9)]).collect()),
+            segmentation: Some((0..n).map(|k| (k as u32) * 40_001 + 16_777_217).collect()),
+            flow_forward: Some((0..n).map(|k| [v(k, 10), v(k, 11)]).collect()),
+            flow_backward: Some((0..n).map(|k| [v(k, 12), v(k, 13)]).collect()),
+            depth_noisy: Some((0..n).map(|k| v(k, 14).abs()).collect()),
+            render_seconds: Vec::new(),
+        }
+    }
+
+    /// What a frame is checked on instead of decoding its file again is what decoding it
+    /// gives: every channel's name, type, size, compression and every value bit for bit
+    /// (a frame taller than one ZIP block of 16 rows, its width odd).
+    #[test]
+    fn a_frames_contents_are_its_decoded_file() {
+        let path = Path::new("frame_00000.exr");
+        for monochrome in [false, true] {
+            let image = every_plane(37, 53, monochrome);
+            let bytes = image.encode(path).unwrap();
+            let decoded = ExrContents::from_bytes(path, &bytes).unwrap();
+            let made = image.contents(path);
+            assert_eq!(made.parts, decoded.parts);
+            assert_eq!(made.channels.len(), decoded.channels.len());
+            for (a, b) in made.channels.iter().zip(&decoded.channels) {
+                assert_eq!(
+                    (&a.name, a.sample_type, a.width, a.height, &a.compression),
+                    (&b.name, b.sample_type, b.width, b.height, &b.compression)
+                );
+                let bits =
+                    |c: &ExrChannel| c.values.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(a), bits(b), "{}", a.name);
+            }
+            let passes = |c: &ExrContents| {
+                c.passes
+                    .iter()
+                    .map(|p| (p.name.clone(), p.components.clone()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(passes(&made), passes(&decoded));
+            check_encoded_header(&made, &bytes).unwrap();
+        }
+    }
+
+    /// The encoded file's check catches a file cut short, a block damaged in its framing, and
+    /// bytes that are not the frame's encoding.
+    #[test]
+    fn the_encoded_check_fails_on_other_bytes() {
+        let path = Path::new("frame_00000.exr");
+        let image = every_plane(19, 40, false);
+        let bytes = image.encode(path).unwrap();
+        let made = image.contents(path);
+        let cut = &bytes[..bytes.len() - 10];
+        assert!(check_encoded_header(&made, cut).is_err());
+        let mut other = image.clone();
+        other.depth_noisy = None;
+        let err = check_encoded_header(&other.contents(path), &bytes).unwrap_err();
+        assert!(err.to_string().contains("depth_noisy.Z"), "{err}");
+        let smaller = every_plane(19, 39, false);
+        assert!(check_encoded_header(&smaller.contents(path), &bytes).is_err());
+        assert!(check_encoded_header(&made, b"not an exr file").is_err());
     }
 }

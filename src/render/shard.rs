@@ -18,6 +18,13 @@ pub fn worker_command(runtime: &BlenderRuntime, spec_path: &Path) -> Command {
     script_command(runtime, &[spec_path.as_os_str()])
 }
 
+/// A long-lived worker for the take in `take_dir` (`render_shard.py --serve TAKE_DIR`): it
+/// reads `{"spec": …, "log": …}` lines on its standard input and renders each shard in the
+/// scene it built for the first.
+pub fn serve_command(runtime: &BlenderRuntime, take_dir: &Path) -> Command {
+    script_command(runtime, &["--serve".as_ref(), take_dir.as_os_str()])
+}
+
 /// The worker script with `args` under this Blender.
 fn script_command(runtime: &BlenderRuntime, args: &[&std::ffi::OsStr]) -> Command {
     let script = render_script();

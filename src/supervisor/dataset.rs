@@ -105,8 +105,11 @@ impl Dataset {
         std::fs::create_dir_all(out.parent().unwrap())
             .with_context(|| format!("creating {}", out.parent().unwrap().display()))?;
         let bytes = image.encode(&out)?;
-        let contents = self.validate_frame_bytes(camera, &out, &bytes)?;
+        let encoded = std::time::Instant::now();
+        let contents = self.validate_encoded_frame(camera, image.contents(&out), &bytes)?;
+        let checked = std::time::Instant::now();
         self.record_frame(camera, frame, &contents, FileFacts::of(&bytes))?;
+        let recorded = std::time::Instant::now();
         let tmp = out.with_extension("exr.tmp");
         if let Err(e) = std::fs::write(&tmp, &bytes) {
             let _ = std::fs::remove_file(&tmp);
@@ -117,8 +120,13 @@ impl Dataset {
             let _ = std::fs::remove_file(raw);
         }
         let mut seconds = image.render_seconds.clone();
-        seconds.push(("assemble", (assembled - started).as_secs_f64()));
+        let between = |a: std::time::Instant, b: std::time::Instant| (b - a).as_secs_f64();
+        seconds.push(("assemble", between(started, assembled)));
         seconds.push(("finish", assembled.elapsed().as_secs_f64()));
+        seconds.push(("finish_encode", between(assembled, encoded)));
+        seconds.push(("finish_check", between(encoded, checked)));
+        seconds.push(("finish_record", between(checked, recorded)));
+        seconds.push(("finish_write", recorded.elapsed().as_secs_f64()));
         Ok(WrittenFrame { path: out, seconds })
     }
 }
@@ -132,6 +140,9 @@ impl RenderTake for Dataset {
     }
     fn camera_name(&self, camera: usize) -> &str {
         &self.cameras[camera].camera.name
+    }
+    fn camera_pixels(&self, camera: usize) -> u64 {
+        Dataset::camera_pixels(self, camera)
     }
     fn total_frames(&self) -> usize {
         Dataset::total_frames(self)

@@ -1,10 +1,12 @@
 //! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard (of
 //! any take the feed has staged; the next take is staged in the background when fewer shards
-//! than workers are queued, or by a worker that finds none left), starts
-//! Blender on its spec, finishes frames as their raw files are reported, and retries a failed
-//! or timed-out attempt on the frames still missing until one frame has failed more than the
-//! configured count (retries count frames, not attempts: `run_shard`); each attempt's stderr
-//! goes to its take's `logs/`. A take whose shards are all done goes back to the feed to be
+//! than workers are queued, or by a worker that finds none left), hands its spec to the
+//! Blender it keeps for that take (`LiveBlender`: started on the take's first shard, the scene
+//! built once, replaced for another take, after `SHARDS_PER_BLENDER` shards, when its memory
+//! grows, or when it fails), finishes frames as their raw files are reported, and retries a
+//! failed or timed-out attempt on the frames still missing until one frame has failed more than
+//! the configured count (retries count frames, not attempts: `run_shard`); each attempt's
+//! stderr goes to its take's `logs/`. A take whose shards are all done goes back to the feed to be
 //! finished while the workers render the next. Ctrl-C kills the workers and leaves every
 //! finished frame in place, so `--resume` continues.
 
@@ -15,16 +17,17 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 use indicatif::ProgressBar;
-use tokio::io::{AsyncBufReadExt, BufReader};
+use tokio::io::{AsyncBufReadExt, AsyncWriteExt, BufReader};
 use tokio::sync::watch;
 
+use super::pace::FramePace;
 use super::pool::{
-    add_stage, frames_bar, setup_failure, shard_failure_message, worker_timing, Attempt,
-    FrameTries, Outcome, PoolReport, PoolRun, PoolTake, RenderTake, ShardPool, ShardReport,
-    StageSeconds, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
+    add_stage, frames_bar, plan_pace, setup_failure, shard_failure_message, worker_timing, Attempt,
+    BlenderUse, FrameTries, Outcome, PoolReport, PoolRun, PoolTake, RenderTake, ShardPool,
+    ShardReport, StageSeconds, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
 };
 use super::staged::Shard;
-use crate::render::shard::worker_command;
+use crate::render::shard::serve_command;
 use crate::render::BlenderRuntime;
 
 /// Pool settings.
@@ -70,6 +73,8 @@ struct Shared {
     busy_seconds: Mutex<Vec<f64>>,
     states: Mutex<Vec<String>>,
     bar: ProgressBar,
+    /// Each camera's pace, for the bar's ETA.
+    pace: Arc<FramePace>,
     stop: watch::Receiver<bool>,
 }
 
@@ -98,7 +103,8 @@ fn run_local(
     rt.block_on(async move {
         let started = Instant::now();
         let (total, done) = feed.lock().unwrap().frames();
-        let bar = frames_bar(total as u64, done as u64)?;
+        let pace = Arc::new(FramePace::default());
+        let bar = frames_bar(total as u64, done as u64, pace.clone());
         let (stop_tx, stop_rx) = watch::channel(false);
         let workers = settings.workers.max(1);
         let shared = Arc::new(Shared {
@@ -116,6 +122,7 @@ fn run_local(
             busy_seconds: Mutex::new(vec![0.0; workers]),
             states: Mutex::new(vec!["idle".into(); workers]),
             bar: bar.clone(),
+            pace,
             stop: stop_rx,
         });
         let interrupt = tokio::spawn(async move {
@@ -203,6 +210,8 @@ fn next_work(shared: &Shared) -> Next {
 }
 
 async fn worker(shared: Arc<Shared>, w: usize) {
+    // The Blender this worker keeps across a take's shards.
+    let mut live: Option<LiveBlender> = None;
     loop {
         let (t, dataset, shard) = match next_work(&shared) {
             Next::Stop => break,
@@ -218,7 +227,7 @@ async fn worker(shared: Arc<Shared>, w: usize) {
         };
         prefetch(&shared);
         let began = Instant::now();
-        let (mut report, failure) = run_shard(&shared, &dataset, w, &shard).await;
+        let (mut report, failure) = run_shard(&shared, &dataset, w, t, &shard, &mut live).await;
         shared.busy_seconds.lock().unwrap()[w] += began.elapsed().as_secs_f64();
         let name = shared.takes.lock().unwrap()[t].name.clone();
         report.take = name.clone();
@@ -241,6 +250,9 @@ async fn worker(shared: Arc<Shared>, w: usize) {
             }
         }
         shared.reports.lock().unwrap().push(report);
+    }
+    if let Some(live) = live.take() {
+        live.retire().await;
     }
     set_state(&shared, w, "done".into());
 }
@@ -299,6 +311,7 @@ async fn stage_next(shared: &Arc<Shared>) {
                 shared.bar.set_length(total as u64);
             }
             let shards = take.shards.clone();
+            plan_pace(&shared.pace, take.dataset.as_ref(), &shards);
             let t = {
                 let mut takes = shared.takes.lock().unwrap();
                 takes.push(TakeInPool {
@@ -364,7 +377,9 @@ async fn run_shard(
     shared: &Shared,
     dataset: &Arc<dyn RenderTake>,
     w: usize,
+    t: usize,
     shard: &Shard,
+    live: &mut Option<LiveBlender>,
 ) -> (ShardReport, Option<String>) {
     let camera = dataset.camera_name(shard.camera).to_owned();
     let mut report = ShardReport {
@@ -404,11 +419,21 @@ async fn run_shard(
             .logs_dir()
             .join(format!("shard_{:04}_attempt_{attempt}.log", shard.id));
         let mut stages = StageSeconds::new();
-        let (finished, outcome) =
-            match attempt_shard(shared, dataset, shard.camera, &missing, &log, &mut stages).await {
-                Ok(n) => (n, Outcome::Ok),
-                Err((n, outcome)) => (n, outcome),
-            };
+        let mut blender = BlenderUse {
+            shards_before: 0,
+            resident_mb: None,
+        };
+        let work = ShardWork {
+            t,
+            camera: shard.camera,
+            frames: &missing,
+            log: &log,
+        };
+        let result = attempt_shard(shared, dataset, &work, live, &mut stages, &mut blender).await;
+        let (finished, outcome) = match result {
+            Ok(n) => (n, Outcome::Ok),
+            Err((n, outcome)) => (n, outcome),
+        };
         let ok = outcome.is_ok();
         let setup_failed = outcome.repeats();
         report.attempts.push(Attempt {
@@ -419,6 +444,7 @@ async fn run_shard(
             seconds: started.elapsed().as_secs_f64(),
             log: dataset.relative(&log),
             stages,
+            blender: Some(blender),
         });
         let left = missing_now();
         let Some(&first_left) = left.first() else {
@@ -435,64 +461,172 @@ async fn run_shard(
             return (
                 report,
                 Some(format!(
-                    "Blender exited cleanly but left {} frame(s) unfinished, first {first_left}",
+                    "Blender ended the shard cleanly but left {} frame(s) unfinished, first {first_left}",
                     left.len()
                 )),
             );
         }
-        tries.charge(first_left);
+        // A Blender kept from earlier shards that fails may fail for what it kept (its memory,
+        // its state), not for this frame: the frame is tried again in a fresh Blender without
+        // a try charged. A fresh Blender's failure is the frame's.
+        if blender.shards_before == 0 {
+            tries.charge(first_left);
+        }
         if let Some((frame, n)) = tries.exhausted(shared.settings.retries) {
             return (report, Some(format!("frame {frame} failed {n} time(s)")));
         }
     }
 }
 
-/// One Blender run over `frames`; returns frames finished, or (finished, reason). Adds where
-/// its time went to `stages`.
+/// Shards a long-lived Blender renders before it is replaced by a fresh one.
+const SHARDS_PER_BLENDER: usize = 40;
+/// A long-lived Blender whose resident memory has grown past this many times what it held
+/// after its first shard is replaced by a fresh one (measured on the default take's SLAM
+/// camera over 500 frames: 440 MB after the first shard, 537 MB from the 10th on, flat;
+/// docs/SUPERVISOR.md).
+const RESIDENT_GROWTH_LIMIT: f64 = 1.5;
+
+/// A Blender started with `render_shard.py --serve` for one take and kept by one worker across
+/// that take's shards (the scene is built and synced once), until the worker moves to another
+/// take, it has rendered [`SHARDS_PER_BLENDER`] shards, its memory has grown past
+/// [`RESIDENT_GROWTH_LIMIT`], or it fails. Killed when dropped.
+struct LiveBlender {
+    /// The take it renders (index into the pool's takes).
+    take: usize,
+    child: tokio::process::Child,
+    stdin: tokio::process::ChildStdin,
+    lines: tokio::io::Lines<BufReader<tokio::process::ChildStdout>>,
+    /// Shards rendered to their end.
+    shards: usize,
+    /// Its resident memory after its first shard (MB).
+    first_mb: Option<f64>,
+    /// It has grown past [`RESIDENT_GROWTH_LIMIT`].
+    swollen: bool,
+}
+
+impl LiveBlender {
+    fn start(
+        shared: &Shared,
+        take: usize,
+        dataset: &dyn RenderTake,
+        log: &std::path::Path,
+    ) -> std::io::Result<Self> {
+        let stderr = std::fs::OpenOptions::new()
+            .append(true)
+            .create(true)
+            .open(log)?;
+        let mut cmd =
+            tokio::process::Command::from(serve_command(&shared.runtime, dataset.folder()));
+        cmd.stdout(Stdio::piped())
+            .stderr(Stdio::from(stderr))
+            .stdin(Stdio::piped())
+            .kill_on_drop(true);
+        let mut child = cmd.spawn()?;
+        let stdin = child.stdin.take().expect("piped");
+        let stdout = child.stdout.take().expect("piped");
+        Ok(Self {
+            take,
+            child,
+            stdin,
+            lines: BufReader::new(stdout).lines(),
+            shards: 0,
+            first_mb: None,
+            swollen: false,
+        })
+    }
+
+    /// Lets it exit at the end of its input (killed if it has not within a few seconds).
+    async fn retire(mut self) {
+        drop(self.stdin);
+        let _ = tokio::time::timeout(Duration::from_secs(5), self.child.wait()).await;
+    }
+}
+
+/// What an attempt renders: frames of a camera of take `t`, its log.
+struct ShardWork<'a> {
+    t: usize,
+    camera: usize,
+    frames: &'a [u32],
+    log: &'a std::path::Path,
+}
+
+/// Renders `work`'s frames in the worker's long-lived Blender (started, or replaced, as
+/// needed); returns frames finished, or (finished, reason). Adds where its time went to
+/// `stages` and which Blender ran it to `blender`; a Blender that failed, timed out or was
+/// stopped is let go.
 async fn attempt_shard(
     shared: &Shared,
     dataset: &Arc<dyn RenderTake>,
-    camera: usize,
-    frames: &[u32],
-    log: &std::path::Path,
+    work: &ShardWork<'_>,
+    live: &mut Option<LiveBlender>,
     stages: &mut StageSeconds,
+    blender: &mut BlenderUse,
 ) -> std::result::Result<usize, (usize, Outcome)> {
-    let spawned = Instant::now();
+    let (camera, frames, log) = (work.camera, work.frames, work.log);
+    let pace = shared.pace.attempt(dataset.camera_name(camera));
     let fail = |n: usize, reason: String| (n, Outcome::Failed { reason });
     let spec = dataset
         .shard_spec_json(camera, frames)
-        .map_err(|e| fail(0, format!("preparing the shard: {e:#}")))?;
+        .map_err(|e| fail(0, format!("preparing the shard: {e}")))?;
     let spec_path = log.with_extension("json");
     let io = |e: std::io::Error| fail(0, format!("preparing the shard: {e}"));
     std::fs::create_dir_all(dataset.logs_dir()).map_err(io)?;
     std::fs::write(&spec_path, spec).map_err(io)?;
-    let stderr = std::fs::File::create(log).map_err(io)?;
-    let mut cmd = tokio::process::Command::from(worker_command(&shared.runtime, &spec_path));
-    cmd.stdout(Stdio::piped())
-        .stderr(Stdio::from(stderr))
-        .stdin(Stdio::null())
-        .kill_on_drop(true);
-    let mut child = cmd.spawn().map_err(|e| {
-        fail(
-            0,
-            format!("starting {}: {e}", shared.runtime.path.display()),
-        )
-    })?;
-    let stdout = child.stdout.take().unwrap();
-    let mut lines = BufReader::new(stdout).lines();
+    std::fs::File::create(log).map_err(io)?;
+    let request = serde_json::json!({ "spec": spec_path, "log": log }).to_string() + "\n";
+    // A Blender of another take, one that has done its share, or one that has exited while
+    // idle is let go; a fresh one is started.
+    if let Some(l) = live.as_mut() {
+        let exited = !matches!(l.child.try_wait(), Ok(None));
+        if l.take != work.t || l.shards >= SHARDS_PER_BLENDER || l.swollen || exited {
+            if let Some(l) = live.take() {
+                l.retire().await;
+            }
+        }
+    }
+    let mut spawned = None;
+    loop {
+        if live.is_none() {
+            let started =
+                LiveBlender::start(shared, work.t, dataset.as_ref(), log).map_err(|e| {
+                    fail(
+                        0,
+                        format!("starting {}: {e}", shared.runtime.path.display()),
+                    )
+                })?;
+            *live = Some(started);
+            spawned = Some(Instant::now());
+        }
+        let l = live.as_mut().expect("started above");
+        match l.stdin.write_all(request.as_bytes()).await {
+            Ok(()) => break,
+            // It exited while idle: once more in a fresh one.
+            Err(_) if spawned.is_none() => *live = None,
+            Err(e) => {
+                *live = None;
+                return Err(fail(0, format!("sending the shard to Blender: {e}")));
+            }
+        }
+    }
+    let l = live.as_mut().expect("sent above");
+    blender.shards_before = l.shards;
     let mut reported: BTreeSet<std::path::PathBuf> = BTreeSet::new();
     let mut finished = 0usize;
     let mut stop = shared.stop.clone();
     let deadline = tokio::time::sleep(shared.settings.shard_timeout);
     tokio::pin!(deadline);
-    loop {
+    let ended = 'shard: loop {
         tokio::select! {
-            line = lines.next_line() => {
+            line = l.lines.next_line() => {
                 match line {
                     Ok(Some(line)) => {
+                        if let Some(mb) = line.strip_prefix("EGOGEN_SHARD_END ") {
+                            break Ok(Some(mb.trim().parse::<f64>().ok()));
+                        }
                         if let Some((stage, s)) = worker_timing(&line) {
-                            match stage {
-                                "ready" => add_stage(stages, "blender_start_up", spawned.elapsed().as_secs_f64()),
+                            match (stage, spawned) {
+                                ("ready", Some(t)) => add_stage(stages, "blender_start_up", t.elapsed().as_secs_f64()),
+                                ("ready", None) => {}
                                 _ => add_stage(stages, stage, s),
                             }
                             continue;
@@ -507,38 +641,47 @@ async fn attempt_shard(
                                 let ds = dataset.clone();
                                 let result = tokio::task::spawn_blocking(move || ds.finish_frame(camera, f))
                                     .await
-                                    .map_err(|e| fail(finished, format!("finishing frame {f}: {e}")))?;
-                                let done = result.map_err(|e| fail(finished, format!("frame {f}: {e:#}")))?;
+                                    .map_err(|e| fail(finished, format!("finishing frame {f}: {e}")));
+                                let done = result
+                                    .and_then(|r| r.map_err(|e| fail(finished, format!("frame {f}: {e:#}"))));
+                                let done = match done {
+                                    Ok(done) => done,
+                                    Err(e) => break 'shard Err(e),
+                                };
                                 for (stage, s) in done.seconds {
                                     add_stage(stages, stage, s);
                                 }
                                 finished += 1;
+                                pace.frame_done();
                                 shared.bar.inc(1);
                             }
                         }
                     }
-                    Ok(None) => break,
-                    Err(e) => return Err(fail(finished, format!("reading worker output: {e}"))),
+                    Ok(None) => break Ok(None),
+                    Err(e) => break Err(fail(finished, format!("reading worker output: {e}"))),
                 }
             }
             _ = &mut deadline => {
-                let _ = child.kill().await;
-                return Err(fail(finished, format!("timed out after {:?}", shared.settings.shard_timeout)));
+                break Err(fail(finished, format!("timed out after {:?}", shared.settings.shard_timeout)));
             }
-            _ = stop.changed() => {
-                let _ = child.kill().await;
-                return Err(fail(finished, "interrupted".into()));
-            }
+            _ = stop.changed() => break Err(fail(finished, "interrupted".into())),
         }
-    }
-    let status = child
-        .wait()
-        .await
-        .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
-    if status.code() == Some(EXIT_SETUP_FAILED) {
-        return Err((finished, setup_failure(log)));
-    }
-    if !status.success() {
+    };
+    // A Blender that failed, timed out or was stopped is let go (killed).
+    let ended = ended.inspect_err(|_| *live = None)?;
+    let Some(resident_mb) = ended else {
+        // Its output ended before the shard did: Blender exited.
+        let Some(mut gone) = live.take() else {
+            return Err(fail(finished, "Blender is gone".into()));
+        };
+        let status = gone
+            .child
+            .wait()
+            .await
+            .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
+        if status.code() == Some(EXIT_SETUP_FAILED) {
+            return Err((finished, setup_failure(log)));
+        }
         // The last thing the worker said is usually why.
         let said = std::fs::read_to_string(log).ok().and_then(|t| {
             t.lines()
@@ -553,15 +696,24 @@ async fn attempt_shard(
                 None => format!("Blender exited with {status}"),
             },
         ));
+    };
+    if let Some(l) = live.as_mut() {
+        l.shards += 1;
+        if let Some(mb) = resident_mb {
+            let first = *l.first_mb.get_or_insert(mb);
+            l.swollen = mb > RESIDENT_GROWTH_LIMIT * first;
+        }
     }
+    blender.resident_mb = resident_mb;
     let missing = frames
         .iter()
         .filter(|&&f| !dataset.frame_done(camera, f))
         .count();
     if missing > 0 {
+        *live = None;
         return Err(fail(
             finished,
-            format!("Blender exited cleanly but {missing} frames are missing"),
+            format!("Blender ended the shard but {missing} frames are missing"),
         ));
     }
     Ok(finished)

@@ -2,12 +2,13 @@
 //! `run_job`) to a finished dataset. Stages a take (`pipeline`: its sequence folder, the
 //! bodies' caches, the rendering work of `staged`), plans shards (camera × frame block), runs
 //! them on a pool (`local` or `slurm`; one take's shards or many takes' through one feed,
-//! `pool`), finishes and validates frames (`dataset`, `frame_record`), writes the take's outputs
+//! `pool`; the time left at each camera's pace, `pace`), finishes and validates frames (`dataset`, `frame_record`), writes the take's outputs
 //! (`export::take_exports`: annotations, the COLMAP export, the manifest), and resumes an interrupted run where it stopped.
 
 pub mod dataset;
 pub mod frame_record;
 pub mod local;
+pub mod pace;
 pub mod pipeline;
 pub mod pool;
 pub mod slurm;

@@ -1,7 +1,7 @@
 //! What every backend shares: the [`ShardPool`] interface the pipeline runs shards through
 //! (local processes or a Slurm array), the [`TakeFeed`] that hands a pool its takes (one for
 //! `egogen-run`, many staged on demand for a campaign) and takes them back when rendered, the
-//! report of what each shard attempt did, and the rendering progress bar.
+//! report of what each shard attempt did, and the rendering progress bar (its ETA: [`super::pace`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
@@ -10,6 +10,7 @@ use anyhow::{Context, Result};
 use indicatif::ProgressBar;
 use serde::Serialize;
 
+use super::pace::FramePace;
 use super::staged::Shard;
 use crate::render::BlenderRuntime;
 
@@ -36,6 +37,9 @@ pub trait RenderTake: Send + Sync + std::fmt::Debug {
     fn logs_dir(&self) -> PathBuf;
     /// The name of camera `camera`.
     fn camera_name(&self, camera: usize) -> &str;
+    /// Pixels Blender renders for a frame of camera `camera` (what prices a camera in the ETA
+    /// before its first frame is done).
+    fn camera_pixels(&self, camera: usize) -> u64;
     /// Planned frames over all cameras.
     fn total_frames(&self) -> usize;
     /// The spec file a worker renders `frames` of `camera` from (JSON bytes).
@@ -161,6 +165,19 @@ pub struct Attempt {
     /// goes"); on Slurm the worker's own stages from its log, without start-up and Rust's.
     #[serde(skip_serializing_if = "StageSeconds::is_empty")]
     pub stages: StageSeconds,
+    /// The long-lived Blender it ran in (local backend); none on Slurm.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub blender: Option<BlenderUse>,
+}
+
+/// Which long-lived Blender an attempt ran in, and its memory after it.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct BlenderUse {
+    /// Shards that Blender had rendered to their end before this one (0: started for it).
+    pub shards_before: usize,
+    /// Its resident memory when the shard ended (MB, as it measured itself); none when the
+    /// attempt did not end cleanly.
+    pub resident_mb: Option<f64>,
 }
 
 /// Seconds per stage of an attempt, summed over its frames: `blender_start_up` (process start
@@ -263,15 +280,29 @@ pub(crate) fn shard_failure_message(
     )
 }
 
-/// The rendering progress bar: frames done of all planned, ETA, and a status message.
-pub(crate) fn frames_bar(total: u64, done: u64) -> Result<ProgressBar> {
-    Ok(crate::progress::progress_bar(
-        "egogen-run",
-        "rendering",
-        "frames",
-        total,
-        done,
-    ))
+/// The rendering progress bar: frames done of all planned, the time left at each camera's
+/// pace ([`FramePace`]), and a status message.
+pub(crate) fn frames_bar(total: u64, done: u64, pace: Arc<FramePace>) -> ProgressBar {
+    let eta: crate::progress::Eta = Arc::new(move |pos: u64, len: u64, elapsed| {
+        pace.time_left(elapsed, len.saturating_sub(pos))
+    });
+    crate::progress::progress_bar_with_eta("egogen-run", "rendering", "frames", total, done, eta)
+}
+
+/// Plans `shards` of `take` on `pace`: each camera's frames still to render.
+pub(crate) fn plan_pace(pace: &FramePace, take: &dyn RenderTake, shards: &[Shard]) {
+    for shard in shards {
+        let left = shard
+            .frames
+            .iter()
+            .filter(|&&f| !take.frame_done(shard.camera, f))
+            .count();
+        pace.plan(
+            take.camera_name(shard.camera),
+            take.camera_pixels(shard.camera),
+            left as u64,
+        );
+    }
 }
 
 /// Exit status of `render_shard.py` when the spec or the scene cannot be loaded: a failure

@@ -23,10 +23,11 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 
+use super::pace::{FramePace, PaceAttempt};
 use super::pool::{
-    frames_bar, setup_failure, shard_failure_message, stages_from_worker_log, Attempt, FrameTries,
-    Outcome, PoolReport, PoolRun, PoolTake, RenderTake, ShardPool, ShardReport, TakeFailure,
-    TakeFeed, EXIT_SETUP_FAILED,
+    frames_bar, plan_pace, setup_failure, shard_failure_message, stages_from_worker_log, Attempt,
+    FrameTries, Outcome, PoolReport, PoolRun, PoolTake, RenderTake, ShardPool, ShardReport,
+    TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
 };
 use super::staged::Shard;
 use crate::atomic_file::write_atomically;
@@ -60,6 +61,8 @@ struct ShardState {
     report: ShardReport,
     /// Failed tries charged to each frame (retries count frames, not attempts).
     tries: FrameTries,
+    /// Its task's pace while Slurm runs it (for the ETA).
+    pace: Option<PaceAttempt>,
 }
 
 /// A staged take in the run, and whether it is done with (finished or given up). The take
@@ -150,6 +153,7 @@ fn stage_more(
     states: &mut Vec<ShardState>,
     failed: &mut Vec<TakeFailure>,
     want: usize,
+    pace: &FramePace,
 ) -> bool {
     // Counted once from disk; a newly staged take adds its shards (all pending).
     let mut pending = takes
@@ -172,6 +176,7 @@ fn stage_more(
             None => return true,
             Some(Err(f)) => failed.push(f),
             Some(Ok(take)) => {
+                plan_pace(pace, take.dataset.as_ref(), &take.shards);
                 pending += take.shards.len();
                 let t = takes.all.len();
                 let first = states.len();
@@ -186,6 +191,7 @@ fn stage_more(
                     },
                     shard: shard.clone(),
                     tries: FrameTries::default(),
+                    pace: None,
                 }));
                 takes.all.push(TakeInRun {
                     name: take.name.clone(),
@@ -218,7 +224,8 @@ fn run_slurm(
     let stop = ctrl_c_flag();
 
     let (total, done) = feed.lock().unwrap().frames();
-    let bar = frames_bar(total as u64, done as u64)?;
+    let pace = Arc::new(FramePace::default());
+    let bar = frames_bar(total as u64, done as u64, pace.clone());
     let mut failed_takes = Vec::new();
     let mut takes = Takes::default();
     let mut states: Vec<ShardState> = Vec::new();
@@ -241,7 +248,14 @@ fn run_slurm(
     let poll = Duration::from_secs_f64(settings.plan.poll_interval_s);
     loop {
         if !feed_done {
-            feed_done = stage_more(&feed, &mut takes, &mut states, &mut failed_takes, window);
+            feed_done = stage_more(
+                &feed,
+                &mut takes,
+                &mut states,
+                &mut failed_takes,
+                window,
+                &pace,
+            );
             if run.stop_on_failure {
                 if let Some(f) = failed_takes.first() {
                     cancel_all(&in_flight);
@@ -259,6 +273,18 @@ fn run_slurm(
         let mut still = Vec::new();
         for (mut array, queue) in in_flight.drain(..).zip(queues) {
             array.live = queue.len();
+            // The pace of each task from when it is first seen running until it leaves.
+            for (t, (i, _, _)) in array.tasks.iter().enumerate() {
+                let state = &mut states[*i];
+                match queue.get(&(t as u32)).map(String::as_str) {
+                    Some("RUNNING") if state.pace.is_none() => {
+                        let dataset = takes.all[state.take].dataset();
+                        state.pace = Some(pace.attempt(dataset.camera_name(state.shard.camera)));
+                    }
+                    None => state.pace = None,
+                    _ => {}
+                }
+            }
             if queue.is_empty() {
                 frames_finished += finish_ready_frames(&takes, &states, &array.shards(), &bar)?;
                 for i in array.shards() {
@@ -532,6 +558,7 @@ fn record_attempts(
             stages: std::fs::read_to_string(&log)
                 .map(|t| stages_from_worker_log(&t))
                 .unwrap_or_default(),
+            blender: None,
         });
     }
 }
@@ -567,6 +594,9 @@ fn finish_ready_frames(
             match dataset.finish_frame(shard.camera, f) {
                 Ok(_) => {
                     finished += 1;
+                    if let Some(pace) = &states[i].pace {
+                        pace.frame_done();
+                    }
                     bar.inc(1);
                 }
                 Err(e) => {

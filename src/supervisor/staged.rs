@@ -9,7 +9,7 @@ use crate::camera::CameraModel;
 use crate::export::take::{frame_file_path, TakeExports};
 pub use crate::export::take::{CameraWork, RenderedAgent};
 use crate::exr_file::ExrContents;
-use crate::render::frame_file::{validate_frame_contents, FrameFileError};
+use crate::render::frame_file::{check_encoded_header, validate_frame_contents, FrameFileError};
 use crate::render::passes::Passes;
 use crate::render::shard_plan::{raw_frame_paths, shard_camera, RawRenders};
 use crate::render::ShardSpec;
@@ -95,6 +95,26 @@ impl Dataset {
         )
     }
 
+    /// Checks a camera's frame about to be written: `contents` (from [`crate::render::frame_file::FrameImage::contents`])
+    /// hold exactly the camera's channels at its size, all finite, and `bytes` are their
+    /// encoding ([`check_encoded_header`]); nothing is decoded.
+    pub(crate) fn validate_encoded_frame(
+        &self,
+        camera: usize,
+        contents: ExrContents,
+        bytes: &[u8],
+    ) -> Result<ExrContents, FrameFileError> {
+        let res = self.cameras[camera].camera.model.resolution();
+        let contents = validate_frame_contents(
+            contents,
+            res.width_px,
+            res.height_px,
+            &self.frame_channels(camera),
+        )?;
+        check_encoded_header(&contents, bytes)?;
+        Ok(contents)
+    }
+
     /// This start's logs: `logs/start_<n>/`.
     pub(crate) fn logs_dir(&self) -> PathBuf {
         self.staging
@@ -110,26 +130,51 @@ impl Dataset {
     }
 
     /// Shards covering the frames not done yet, `frames_per_shard` consecutive planned frames
-    /// of one camera each.
+    /// of one camera each, taken from the cameras in turn (the camera of the most pixels
+    /// first): every camera's pace is measured early (the ETA, [`super::pace`]) and the
+    /// costliest shards do not all come last.
     pub(crate) fn pending_shards(&self) -> Vec<Shard> {
-        let mut shards = Vec::new();
-        for (c, work) in self.cameras.iter().enumerate() {
-            for block in work.frames.chunks(self.frames_per_shard) {
-                let frames: Vec<u32> = block
-                    .iter()
-                    .copied()
-                    .filter(|&f| !self.frame_done(c, f))
+        let mut cameras: Vec<(usize, Vec<Vec<u32>>)> = self
+            .cameras
+            .iter()
+            .enumerate()
+            .map(|(c, work)| {
+                let blocks = work
+                    .frames
+                    .chunks(self.frames_per_shard)
+                    .map(|block| {
+                        block
+                            .iter()
+                            .copied()
+                            .filter(|&f| !self.frame_done(c, f))
+                            .collect::<Vec<u32>>()
+                    })
+                    .filter(|frames| !frames.is_empty())
                     .collect();
-                if !frames.is_empty() {
+                (c, blocks)
+            })
+            .collect();
+        cameras.sort_by_key(|(c, _)| std::cmp::Reverse(self.camera_pixels(*c)));
+        let rounds = cameras.iter().map(|(_, b)| b.len()).max().unwrap_or(0);
+        let mut shards = Vec::new();
+        for round in 0..rounds {
+            for (c, blocks) in &cameras {
+                if let Some(frames) = blocks.get(round) {
                     shards.push(Shard {
                         id: shards.len(),
-                        camera: c,
-                        frames,
+                        camera: *c,
+                        frames: frames.clone(),
                     });
                 }
             }
         }
         shards
+    }
+
+    /// Pixels Blender renders for a frame of camera `camera`.
+    pub(crate) fn camera_pixels(&self, camera: usize) -> u64 {
+        let r = self.cameras[camera].render.resolution();
+        u64::from(r.width_px) * u64::from(r.height_px)
     }
 
     /// Total planned frames over all cameras.
