@@ -18,7 +18,8 @@ docs/ANNOTATIONS.md, docs/RENDERING.md). Three measures, each on one camera (def
   tsdf      the take's depth fused with the ground-truth poses (Open3D TSDF) against the scene
             mesh: Chamfer distance (mean of both directions), share of fused points within
             2 cm of the mesh; and per-pixel checks of the depth against the mesh and the
-            position pass.
+            position pass. `--depth noisy` fuses the sensor-noise channel (depth_noisy.Z)
+            instead of the exact depth.
 
 Install (Python >= 3.11; Open3D's Linux wheel needs the system's libusb-1.0, e.g. Debian's
 `apt-get install libusb-1.0-0`):
@@ -899,10 +900,12 @@ def cmd_tsdf(args) -> dict:
     take = open_take(args.take)
     frames = camera_frames(take, args.camera, args.max_frames)
     chans = frame_groups(frames[0])
-    if "depth" not in chans:
+    depth_group = {"exact": "depth", "noisy": "depth_noisy"}[getattr(args, "depth", "exact")]
+    if depth_group not in chans:
         raise ToolError(
-            f"{frames[0].path}: no depth.Z channel (its channel groups: {', '.join(sorted(chans))}); expected a take rendered "
-            "with the `depth` pass ([render] passes)"
+            f"{frames[0].path}: no {depth_group}.Z channel (its channel groups: {', '.join(sorted(chans))}); expected a take rendered "
+            + ("with the `depth` pass ([render] passes)" if depth_group == "depth"
+               else f"with depth noise for {args.camera} ([render.depth_noise] cameras, docs/RENDERING.md)")
         )
     if "segmentation" not in chans:
         raise ToolError(
@@ -962,8 +965,8 @@ def cmd_tsdf(args) -> dict:
     n_used = n_bodies = n_ceiling = n_missed = integrated = 0
     n_ray_bad = int((~ray_ok).sum())
     for fr in frames:
-        d = read_frame(fr, ["depth", "valid", "segmentation"] + (["position"] if has_position else []))
-        depth, seg = d["depth"].astype(np.float64), d["segmentation"]
+        d = read_frame(fr, [depth_group, "valid", "segmentation"] + (["position"] if has_position else []))
+        depth, seg = d[depth_group].astype(np.float64), d["segmentation"]
         valid = (d["valid"] > 0.5) & (depth > 0) & ray_ok
         scene_px = valid & np.isin(seg, list(keep_ids))
         n_bodies += int((valid & (seg >= 1000)).sum())
@@ -1025,6 +1028,7 @@ def cmd_tsdf(args) -> dict:
         "measure": "tsdf",
         "take": str(take.path),
         "camera": args.camera,
+        "depth": depth_group + ".Z",
         "frames": len(frames),
         "colmap_camera": {"model": model, "width": w, "height": h, "params": params, "from": cam_source},
         "scene": {"path": str(scene_path), "up_axis": up, "unit_m": unit, "triangles": int(len(F))},
@@ -1080,7 +1084,7 @@ def cmd_tsdf(args) -> dict:
     res["seconds"] = time.time() - t0
 
     rows = [
-        ("camera", f"{args.camera} ({model} {w}x{h}, {cam_source}), {len(frames)} frames"),
+        ("camera", f"{args.camera} ({model} {w}x{h}, {cam_source}), {len(frames)} frames, {depth_group}.Z"),
         ("scene mesh", f"{scene_path} ({len(F)} triangles, {up} up -> z up, x{unit:g} m)"),
         ("pixels fused", f"{n_used} (masked out: {n_bodies} people, {n_ceiling} ceiling/obstacles; {n_ray_bad} pixels without an invertible ray)"),
         ("depth vs mesh, per pixel", f"median |diff| {fmt(res['depth_vs_mesh_median_abs_m'], '.4f', ' m')}, within 2 cm {fmt(100 * res['depth_vs_mesh_within_2cm_share'] if res['depth_vs_mesh_within_2cm_share'] is not None else None, '.1f', ' %')}, rays missing the mesh {n_missed}"),
@@ -1139,6 +1143,10 @@ def main(argv=None) -> int:
     p.add_argument("--voxel-m", type=float, default=0.02, help="TSDF voxel size (m), default 0.02")
     p.add_argument("--max-depth-m", type=float, default=10.0, help="depth beyond this is not fused (m), default 10")
     p.add_argument("--scene", default=None, help="the scene file, when the take's summary names none or it moved")
+    p.add_argument(
+        "--depth", choices=("exact", "noisy"), default="exact",
+        help="fuse the exact depth (depth.Z, default) or the sensor-noise channel (depth_noisy.Z, [render.depth_noise])",
+    )
     args = ap.parse_args(argv)
     if args.debug:
         os.environ["VISION_CHECKS_DEBUG"] = "1"
