@@ -253,6 +253,7 @@ fn pool_of(slurm: bool, workers: usize) -> Box<dyn ShardPool> {
             workers,
             shard_timeout: timeout,
             retries: 2,
+            keep_blender: false,
         }))
     }
 }

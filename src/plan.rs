@@ -63,6 +63,8 @@ pub struct SupervisorPlan {
     pub workers: usize,
     pub shard_timeout_s: f64,
     pub retries: u32,
+    /// Each local worker keeps its Blender across a take's shards.
+    pub keep_blender: bool,
     pub slurm: SlurmPlan,
 }
 

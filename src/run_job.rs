@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 
 use crate::body::BodyModel;
-use crate::cli::overrides::{effective_config_toml, resume_fingerprint, RunOverrides};
+use crate::cli::overrides::{
+    effective_config_toml, resume_fingerprint, resume_fingerprint_anywhere, RunOverrides,
+};
 use crate::cli::{resolve_run, MotionPlan, RawRun, RunPlan};
 use crate::supervisor::{run_pipeline, RunMotion, RunOptions, RunSummary};
 use crate::synth::take::{make_motion, TakeMotion};
@@ -49,6 +51,8 @@ pub fn prepare(
     let config_toml = effective_config_toml(&raw, config, overrides)
         .context("writing out the effective config")?;
     let resume_fingerprint = resume_fingerprint(&raw).context("fingerprinting the config")?;
+    let moved_fingerprint =
+        resume_fingerprint_anywhere(&raw).context("fingerprinting the config")?;
     let plan = resolve_run(raw, config)?;
     if plan.output_dir.exists() && !plan.output_dir.is_dir() {
         anyhow::bail!(
@@ -61,6 +65,7 @@ pub fn prepare(
         blender: request.blender.clone(),
         config_toml,
         resume_fingerprint,
+        moved_fingerprint,
     };
     let model = BodyModel::load(&plan.body_model)?;
     if plan.betas.len() > model.num_betas() {

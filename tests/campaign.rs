@@ -903,3 +903,129 @@ fn a_campaign_on_a_disk_that_fills_resumes_to_the_same_bytes() {
     );
     assert_eq!(state(&out).count(egogen::campaign::TakeStatus::Complete), 2);
 }
+
+/// A campaign folder copied elsewhere with its campaign and run config (its scenes outside it)
+/// — one take interrupted, its supervisor killed with SIGKILL once the take has a frame —
+/// resumes there: the state is rebuilt for the new place and says so, the interrupted take is
+/// continued where it lies (its `config.toml` now names the new folder), and the frame files
+/// are those of an uninterrupted run of the same campaign elsewhere. Before, the copy was
+/// refused as "a campaign of other takes".
+#[test]
+fn a_campaign_copied_elsewhere_resumes_there() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let a = tempfile::tempdir().unwrap();
+    let write_campaign = |dir: &Path| -> PathBuf {
+        std::fs::create_dir_all(dir).unwrap();
+        common::tiny_campaign_run(dir, false);
+        let keys = format!(
+            "scenes = [\"{}\"]\nfirst_seed = 3",
+            root.join("assets/scenes/apartment.glb").display()
+        );
+        campaign_file(dir, "campaign", Path::new("out"), 2, &keys)
+    };
+    // The uninterrupted campaign, in a folder of its own.
+    let reference = a.path().join("reference");
+    run_to_completion(&write_campaign(&reference), &reference.join("out"));
+
+    // The same campaign elsewhere, stopped once its first take has a frame.
+    let here = a.path().join("here");
+    let campaign = write_campaign(&here);
+    let mut child = egogen_run()
+        .arg(&campaign)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let deadline = Instant::now() + Duration::from_secs(300);
+    let has_a_frame = |takes: &Path| -> bool {
+        std::fs::read_dir(takes).is_ok_and(|d| {
+            d.flatten().any(|t| {
+                t.file_name().to_string_lossy().ends_with(".partial")
+                    && std::fs::read_dir(t.path().join("cameras/camera-slam-left")).is_ok_and(|f| {
+                        f.flatten()
+                            .any(|f| f.path().extension().is_some_and(|e| e == "exr"))
+                    })
+            })
+        })
+    };
+    while !has_a_frame(&here.join("out/takes")) {
+        assert!(Instant::now() < deadline, "no frame appeared");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the campaign ended before it was stopped"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    // Its Blender workers stop at their next frame.
+    let needle = here.display().to_string();
+    while !common::pids_with(&["render_shard.py", &needle]).is_empty() {
+        assert!(
+            Instant::now() < deadline,
+            "workers outlived their supervisor"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    // Copied elsewhere, then resumed there.
+    let there = a.path().join("there");
+    let copied = Command::new("cp")
+        .arg("-a")
+        .arg(&here)
+        .arg(&there)
+        .status()
+        .unwrap();
+    assert!(copied.success());
+    assert!(
+        has_a_frame(&there.join("out/takes")),
+        "no interrupted take was copied"
+    );
+    let resumed = common::succeeds(
+        egogen_run()
+            .arg(there.join("campaign.toml"))
+            .arg("--resume"),
+    );
+    let said = String::from_utf8_lossy(&resumed.stderr);
+    assert!(said.contains("campaign was moved or copied here"), "{said}");
+    assert!(said.contains("was started in another folder"), "{said}");
+    let s = state(&there.join("out"));
+    assert!(
+        s.takes
+            .iter()
+            .all(|t| t.status == egogen::campaign::TakeStatus::Complete),
+        "{said}"
+    );
+    for t in &s.takes {
+        let take = there.join("out/takes").join(&t.def.id);
+        egogen::supervisor::verify(&take).unwrap();
+        assert!(
+            t.command.contains(&there.display().to_string()),
+            "{}",
+            t.command
+        );
+        let config = std::fs::read_to_string(take.join("config.toml")).unwrap();
+        assert!(config.contains(&take.display().to_string()), "{config}");
+    }
+    // The frame files are the uninterrupted campaign's, byte for byte.
+    let frames = |out: &Path| -> Vec<(String, String)> {
+        let mut listed = Vec::new();
+        for take in std::fs::read_dir(out.join("takes")).unwrap().flatten() {
+            let name = take.file_name().to_string_lossy().into_owned();
+            let manifest: serde_json::Value = serde_json::from_str(
+                &std::fs::read_to_string(take.path().join("manifest.json")).unwrap(),
+            )
+            .unwrap();
+            for f in manifest["files"].as_array().unwrap() {
+                let path = f["path"].as_str().unwrap();
+                if path.ends_with(".exr") {
+                    listed.push((format!("{name}/{path}"), f["sha256"].to_string()));
+                }
+            }
+        }
+        listed.sort();
+        listed
+    };
+    let expected = frames(&reference.join("out"));
+    assert!(!expected.is_empty());
+    assert_eq!(frames(&there.join("out")), expected);
+}

@@ -76,8 +76,7 @@ impl Lcg {
 
 /// Retries count frames, not attempts: with `retries = 0`, a worker killed after it has
 /// written its shard's one frame (its attempt fails, but no frame is lost) does not fail the
-/// run. Every worker is killed as soon as its frame is finished (a worker's Blender is kept
-/// across a take's shards: the kill finds it idle, or as it begins its next shard).
+/// run. Every worker is killed as soon as its frame is finished, before Blender exits.
 #[test]
 fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
     let config = CONFIG
@@ -120,9 +119,7 @@ fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
     assert_eq!(frames, 5);
     let report = verify(&dir.path().join("out")).unwrap();
     assert_eq!(report.frames, 5);
-    // The pool report shows the kills: attempts killed although their frame was finished, or
-    // (a worker's Blender is kept across a take's shards) killed in a kept Blender as it began
-    // its next shard, which a fresh Blender renders again without a try charged.
+    // The pool report shows attempts that were killed although their frame was finished.
     let pool: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(dir.path().join("out/logs/start_01/pool_report.json")).unwrap(),
     )
@@ -132,15 +129,10 @@ fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
         .unwrap()
         .iter()
         .flat_map(|s| s["attempts"].as_array().unwrap())
-        .filter(|a| {
-            a["outcome"] != "ok"
-                && (a["finished"] == a["frames"]
-                    || a["blender"]["shards_before"].as_u64() > Some(0))
-        })
+        .filter(|a| a["outcome"] != "ok" && a["finished"] == a["frames"])
         .count();
     assert!(killed_after_frame >= 1, "{pool}");
-    // An attempt that finished frames says where its time went, Blender's and Rust's (its
-    // Blender's start-up and scene import where it started that Blender).
+    // An attempt that finished frames says where its time went, Blender's and Rust's.
     for attempt in pool["shards"]
         .as_array()
         .unwrap()
@@ -148,12 +140,7 @@ fn a_worker_killed_after_writing_its_frames_does_not_use_up_a_retry() {
         .flat_map(|s| s["attempts"].as_array().unwrap())
         .filter(|a| a["finished"].as_u64().unwrap() > 0)
     {
-        let fresh = attempt["blender"]["shards_before"] == 0;
-        let stages: &[&str] = match fresh {
-            true => &["blender_start_up", "scene_import", "assemble", "finish"],
-            false => &["assemble", "finish"],
-        };
-        for &stage in stages {
+        for stage in ["blender_start_up", "scene_import", "assemble", "finish"] {
             assert!(
                 attempt["stages"][stage].as_f64().unwrap() > 0.0,
                 "{stage}: {attempt}"
@@ -629,4 +616,86 @@ fn out_and_seed_overrides_are_recorded_and_a_resume_must_repeat_them() {
         .unwrap();
     assert!((100.0..=500.0).contains(&watts), "{watts}");
     verify(&other).unwrap();
+}
+
+/// `keep_blender = true`: each worker keeps one Blender across the take's shards. Its frames are
+/// the same bytes as one Blender per shard's; the pool report says which attempts ran in a kept
+/// Blender and what it held; and a kept Blender killed with SIGKILL while it renders costs no
+/// try (`retries = 0`): the frame is rendered again in a fresh Blender and the run succeeds.
+#[test]
+fn a_kept_blender_renders_the_same_frames_and_its_kill_costs_no_try() {
+    let frames_of = |dir: &Path| -> Vec<(String, String)> {
+        let listed = common::read_manifest(dir);
+        let mut frames: Vec<(String, String)> = listed
+            .files
+            .iter()
+            .filter(|f| f.path.ends_with(".exr"))
+            .map(|f| (f.path.clone(), f.sha256.clone()))
+            .collect();
+        frames.sort();
+        frames
+    };
+    let (one_shot, config) = setup();
+    common::succeeds(egogen_run().arg(&config));
+    let expected = frames_of(&one_shot.path().join("out"));
+    assert_eq!(expected.len(), 20);
+
+    let kept_config = CONFIG.replace("retries = 40", "retries = 0\nkeep_blender = true");
+    let (dir, config) = common::run_dir(&kept_config);
+    let mut child = egogen_run()
+        .arg(&config)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let needle = dir.path().display().to_string();
+    let frames_dir = dir.path().join("out.partial/cameras/camera-slam-left");
+    let deadline = Instant::now() + Duration::from_secs(300);
+    // Once the kept Blender has finished a few shards, kill it (while it renders, mostly).
+    while std::fs::read_dir(&frames_dir).map_or(0, |d| d.count()) < 8 {
+        assert!(Instant::now() < deadline, "the run is stuck");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended too soon"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let killed: usize = common::pids_with(&["render_shard.py", "--serve", &needle])
+        .into_iter()
+        .filter(|&pid| kill9(pid))
+        .count();
+    assert_eq!(killed, 1, "one kept Blender");
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.path().join("out/logs/start_01/pool_report.json")).unwrap(),
+    )
+    .unwrap();
+    let attempts: Vec<&serde_json::Value> = report["shards"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|s| s["attempts"].as_array().unwrap())
+        .collect();
+    // Shards after the first ran in the kept Blender, which says what it held.
+    assert!(
+        attempts
+            .iter()
+            .any(|a| a["blender"]["shards_before"].as_u64() > Some(2)
+                && a["blender"]["resident_mb"]
+                    .as_f64()
+                    .is_some_and(|mb| mb > 50.0)),
+        "{report}"
+    );
+    // After the kill a fresh Blender took over (the killed one's attempt, if it was rendering,
+    // failed without a try charged: with retries = 0 the run would have failed otherwise).
+    let fresh = attempts
+        .iter()
+        .filter(|a| a["blender"]["shards_before"] == 0)
+        .count();
+    assert!(fresh >= 2, "{report}");
+    assert_eq!(frames_of(&dir.path().join("out")), expected);
 }

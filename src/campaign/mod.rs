@@ -253,19 +253,7 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
             Err(e) if resuming => {
                 check_rebuildable(plan)?;
                 // The unreadable file is kept, out of the way, for whoever wants to look.
-                let kept = out.join("work").join(format!("{STATE_FILE}.unreadable"));
-                if request.resume {
-                    std::fs::create_dir_all(out.join("work"))
-                        .and_then(|_| std::fs::rename(out.join(STATE_FILE), &kept))
-                        .with_context(|| {
-                            format!("moving the unreadable {STATE_FILE} to {}", kept.display())
-                        })?;
-                }
-                let keeps = if request.resume {
-                    "kept"
-                } else {
-                    "--resume keeps it"
-                };
+                let (kept, keeps) = set_state_aside(out, "unreadable", request.resume)?;
                 return rebuilt(format!("{e:#} ({keeps} as {})", kept.display()));
             }
             Err(e) => {
@@ -278,9 +266,27 @@ fn check_out(plan: &CampaignPlan, request: &CampaignRequest) -> Result<Option<Ca
                 out.display()
             );
         }
+        // The same takes (a take's id hashes its effective config) under another fingerprint:
+        // the campaign's files lie elsewhere now (the run config, the output folder), as when a
+        // campaign folder is moved or copied. Its state is rebuilt for where it lies.
+        let same_takes = found.takes.len() == plan.takes.len()
+            && found
+                .takes
+                .iter()
+                .zip(&plan.takes)
+                .all(|(f, p)| f.def.id == p.id);
+        if found.fingerprint != plan.fingerprint && same_takes {
+            check_rebuildable(plan)?;
+            let (kept, keeps) = set_state_aside(out, "before_move", request.resume)?;
+            return rebuilt(format!(
+                "{} holds this campaign's takes under a {STATE_FILE} written for other paths (the campaign was moved or copied here; the old one {keeps} as {})",
+                out.display(),
+                kept.display()
+            ));
+        }
         if found.fingerprint != plan.fingerprint {
             bail!(
-                "{} holds a campaign of other takes than {} defines (its run config, scenes, seeds, crowds, durations or rigs differ); resuming would mix two campaigns (nothing was touched)",
+                "{} holds a campaign of other takes than {} defines (its run config, scenes, seeds, crowds, durations or rigs differ; a take names its scene and rig files by path, so a campaign whose scenes lie inside the folder that moved, such as its generated floor plans, resumes only where it was made); resuming would mix two campaigns (nothing was touched)",
                 out.display(),
                 plan.config.display()
             );
@@ -371,6 +377,19 @@ const CAMPAIGN_ENTRIES: [&str; 6] = [
     "contact_sheet.png",
     STATE_FILE,
 ];
+
+/// Where the state file of a campaign folder `out` is kept when it is rebuilt
+/// (`work/campaign.json.<suffix>`), moved there when `resume`; and how to say so.
+fn set_state_aside(out: &Path, suffix: &str, resume: bool) -> Result<(PathBuf, &'static str)> {
+    let kept = out.join("work").join(format!("{STATE_FILE}.{suffix}"));
+    if !resume {
+        return Ok((kept, "--resume keeps it"));
+    }
+    std::fs::create_dir_all(out.join("work"))
+        .and_then(|_| std::fs::rename(out.join(STATE_FILE), &kept))
+        .with_context(|| format!("moving {STATE_FILE} to {}", kept.display()))?;
+    Ok((kept, "kept"))
+}
 
 /// Whether the campaign folder holds only what this campaign writes — `takes/` only this
 /// plan's takes, finished (`<id>`) or staged (`<id>.partial`) — so that its state can be

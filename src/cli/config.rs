@@ -294,6 +294,9 @@ pub struct RawSupervisor {
     pub shard_timeout_s: Option<f64>,
     /// Failed shard attempts retried before the run fails (default 2).
     pub retries: Option<u32>,
+    /// Each local worker keeps one Blender across its take's shards (default false: one
+    /// Blender per shard attempt).
+    pub keep_blender: Option<bool>,
     /// Used with `backend = "slurm"`.
     pub slurm: Option<RawSlurm>,
 }

@@ -205,3 +205,11 @@ pub(crate) fn resume_fingerprint(raw: &RawRun) -> Result<String, toml::ser::Erro
     }
     toml::to_string(&content_table(&r)?)
 }
+
+/// [`resume_fingerprint`] without the output folder: what a run moved to another folder (a
+/// campaign copied elsewhere, `<dir>.partial` renamed) must still find unchanged.
+pub(crate) fn resume_fingerprint_anywhere(raw: &RawRun) -> Result<String, toml::ser::Error> {
+    let mut r = raw.clone();
+    r.output.dir = std::path::PathBuf::new();
+    resume_fingerprint(&r)
+}

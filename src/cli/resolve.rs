@@ -790,6 +790,7 @@ fn resolve_supervisor(s: RawSupervisor, config_path: &Path) -> Result<Supervisor
         workers,
         shard_timeout_s,
         retries: s.retries.unwrap_or(2),
+        keep_blender: s.keep_blender.unwrap_or(false),
         slurm: resolve_slurm(s.slurm.unwrap_or_default(), &bad)?,
     })
 }

@@ -1,9 +1,10 @@
 //! The local backend: a tokio pool of Blender worker processes. Each worker takes a shard (of
 //! any take the feed has staged; the next take is staged in the background when fewer shards
-//! than workers are queued, or by a worker that finds none left), hands its spec to the
-//! Blender it keeps for that take (`LiveBlender`: started on the take's first shard, the scene
-//! built once, replaced for another take, after `SHARDS_PER_BLENDER` shards, when its memory
-//! grows, or when it fails), finishes frames as their raw files are reported, and retries a
+//! than workers are queued, or by a worker that finds none left), starts Blender on its spec —
+//! or, with `keep_blender`, hands the spec to the Blender it keeps for that take
+//! (`LiveBlender`: started on the take's first shard, the scene built once, replaced for
+//! another take, after `SHARDS_PER_BLENDER` shards, when its memory grows, or when it fails)
+//! — finishes frames as their raw files are reported, and retries a
 //! failed or timed-out attempt on the frames still missing until one frame has failed more than
 //! the configured count (retries count frames, not attempts: `run_shard`); each attempt's
 //! stderr goes to its take's `logs/`. A take whose shards are all done goes back to the feed to be
@@ -27,7 +28,7 @@ use super::pool::{
     ShardReport, StageSeconds, TakeFailure, TakeFeed, EXIT_SETUP_FAILED,
 };
 use super::staged::Shard;
-use crate::render::shard::serve_command;
+use crate::render::shard::{serve_command, worker_command};
 use crate::render::BlenderRuntime;
 
 /// Pool settings.
@@ -36,6 +37,9 @@ pub struct PoolSettings {
     pub workers: usize,
     pub shard_timeout: Duration,
     pub retries: u32,
+    /// Each worker keeps its Blender across a take's shards (`LiveBlender`); else one
+    /// Blender per attempt.
+    pub keep_blender: bool,
 }
 
 /// The local backend: renders shards with a pool of local Blender workers; returns when all
@@ -444,7 +448,7 @@ async fn run_shard(
             seconds: started.elapsed().as_secs_f64(),
             log: dataset.relative(&log),
             stages,
-            blender: Some(blender),
+            blender: shared.settings.keep_blender.then_some(blender),
         });
         let left = missing_now();
         let Some(&first_left) = left.first() else {
@@ -494,7 +498,8 @@ struct LiveBlender {
     /// The take it renders (index into the pool's takes).
     take: usize,
     child: tokio::process::Child,
-    stdin: tokio::process::ChildStdin,
+    /// Where shards are sent; none for a Blender started on one shard's spec.
+    stdin: Option<tokio::process::ChildStdin>,
     lines: tokio::io::Lines<BufReader<tokio::process::ChildStdout>>,
     /// Shards rendered to their end.
     shards: usize,
@@ -505,24 +510,33 @@ struct LiveBlender {
 }
 
 impl LiveBlender {
+    /// A Blender for take `take`: kept across its shards (`--serve`), or else started on the
+    /// one shard spec `spec` alone (it exits when that shard is done).
     fn start(
         shared: &Shared,
         take: usize,
         dataset: &dyn RenderTake,
         log: &std::path::Path,
+        spec: Option<&std::path::Path>,
     ) -> std::io::Result<Self> {
         let stderr = std::fs::OpenOptions::new()
             .append(true)
             .create(true)
             .open(log)?;
-        let mut cmd =
-            tokio::process::Command::from(serve_command(&shared.runtime, dataset.folder()));
+        let (command, stdin) = match spec {
+            None => (
+                serve_command(&shared.runtime, dataset.folder()),
+                Stdio::piped(),
+            ),
+            Some(spec) => (worker_command(&shared.runtime, spec), Stdio::null()),
+        };
+        let mut cmd = tokio::process::Command::from(command);
         cmd.stdout(Stdio::piped())
             .stderr(Stdio::from(stderr))
-            .stdin(Stdio::piped())
+            .stdin(stdin)
             .kill_on_drop(true);
         let mut child = cmd.spawn()?;
-        let stdin = child.stdin.take().expect("piped");
+        let stdin = child.stdin.take();
         let stdout = child.stdout.take().expect("piped");
         Ok(Self {
             take,
@@ -537,7 +551,7 @@ impl LiveBlender {
 
     /// Lets it exit at the end of its input (killed if it has not within a few seconds).
     async fn retire(mut self) {
-        drop(self.stdin);
+        drop(self.stdin.take());
         let _ = tokio::time::timeout(Duration::from_secs(5), self.child.wait()).await;
     }
 }
@@ -584,11 +598,17 @@ async fn attempt_shard(
             }
         }
     }
+    // Without a kept Blender, one is started on this shard's spec alone.
+    let keep = shared.settings.keep_blender;
+    if !keep {
+        *live = None;
+    }
     let mut spawned = None;
     loop {
         if live.is_none() {
+            let spec = (!keep).then_some(spec_path.as_path());
             let started =
-                LiveBlender::start(shared, work.t, dataset.as_ref(), log).map_err(|e| {
+                LiveBlender::start(shared, work.t, dataset.as_ref(), log, spec).map_err(|e| {
                     fail(
                         0,
                         format!("starting {}: {e}", shared.runtime.path.display()),
@@ -598,7 +618,10 @@ async fn attempt_shard(
             spawned = Some(Instant::now());
         }
         let l = live.as_mut().expect("started above");
-        match l.stdin.write_all(request.as_bytes()).await {
+        let Some(stdin) = l.stdin.as_mut() else {
+            break;
+        };
+        match stdin.write_all(request.as_bytes()).await {
             Ok(()) => break,
             // It exited while idle: once more in a fresh one.
             Err(_) if spawned.is_none() => *live = None,
@@ -669,33 +692,11 @@ async fn attempt_shard(
     };
     // A Blender that failed, timed out or was stopped is let go (killed).
     let ended = ended.inspect_err(|_| *live = None)?;
-    let Some(resident_mb) = ended else {
-        // Its output ended before the shard did: Blender exited.
-        let Some(mut gone) = live.take() else {
-            return Err(fail(finished, "Blender is gone".into()));
-        };
-        let status = gone
-            .child
-            .wait()
-            .await
-            .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
-        if status.code() == Some(EXIT_SETUP_FAILED) {
-            return Err((finished, setup_failure(log)));
-        }
-        // The last thing the worker said is usually why.
-        let said = std::fs::read_to_string(log).ok().and_then(|t| {
-            t.lines()
-                .rev()
-                .find(|l| !l.trim().is_empty())
-                .map(str::to_owned)
-        });
-        return Err(fail(
-            finished,
-            match said {
-                Some(line) => format!("Blender exited with {status}; its last words: {line}"),
-                None => format!("Blender exited with {status}"),
-            },
-        ));
+    let resident_mb = match ended {
+        Some(mb) => mb,
+        // Its output ended: Blender exited — the end of a one-shot Blender's shard when it
+        // exited cleanly, else a failure.
+        None => ended_blender(live, keep, finished, log).await?,
     };
     if let Some(l) = live.as_mut() {
         l.shards += 1;
@@ -717,6 +718,46 @@ async fn attempt_shard(
         ));
     }
     Ok(finished)
+}
+
+/// A Blender whose output ended: `Ok(None)` when it was a one-shot Blender (`keep` false)
+/// that exited cleanly, else why it failed (its setup failure, or its exit status and last
+/// words in `log`). It is let go either way.
+async fn ended_blender(
+    live: &mut Option<LiveBlender>,
+    keep: bool,
+    finished: usize,
+    log: &std::path::Path,
+) -> std::result::Result<Option<f64>, (usize, Outcome)> {
+    let fail = |n: usize, reason: String| (n, Outcome::Failed { reason });
+    let Some(mut gone) = live.take() else {
+        return Err(fail(finished, "Blender is gone".into()));
+    };
+    let status = gone
+        .child
+        .wait()
+        .await
+        .map_err(|e| fail(finished, format!("waiting for Blender: {e}")))?;
+    if status.success() && !keep {
+        return Ok(None);
+    }
+    if status.code() == Some(EXIT_SETUP_FAILED) {
+        return Err((finished, setup_failure(log)));
+    }
+    // The last thing the worker said is usually why.
+    let said = std::fs::read_to_string(log).ok().and_then(|t| {
+        t.lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .map(str::to_owned)
+    });
+    Err(fail(
+        finished,
+        match said {
+            Some(line) => format!("Blender exited with {status}; its last words: {line}"),
+            None => format!("Blender exited with {status}"),
+        },
+    ))
 }
 
 /// Lists a failed take in the report; it stops the run when the run says so.

@@ -52,6 +52,9 @@ pub struct RunOptions {
     pub config_toml: String,
     /// What a resume must find unchanged (`cli::overrides::resume_fingerprint`); hashed.
     pub resume_fingerprint: String,
+    /// The same without the output folder (`cli::overrides::resume_fingerprint_anywhere`): a
+    /// `.partial` moved to another folder is resumed where it lies; hashed.
+    pub moved_fingerprint: String,
 }
 
 /// What a run produced.
@@ -80,6 +83,11 @@ pub struct RunState {
     /// before it was recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rig_sha256: Option<String>,
+    /// SHA-256 of the effective values without the output folder: the same run moved to
+    /// another folder. Absent in runs started before it was recorded (those resume only where
+    /// they were started).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub moved_sha256: Option<String>,
 }
 
 /// What moves in a run's scene.
@@ -205,6 +213,7 @@ pub fn shard_pool(sup: &crate::plan::SupervisorPlan) -> Box<dyn ShardPool> {
             workers: sup.workers,
             shard_timeout,
             retries: sup.retries,
+            keep_blender: sup.keep_blender,
         })),
         Backend::Slurm => Box::new(SlurmPool(SlurmSettings {
             plan: sup.slurm.clone(),
@@ -258,11 +267,16 @@ pub fn stage_take(
         config_sha256: sha256_hex(opts.resume_fingerprint.as_bytes()),
         // The rig as resolved (a --rig override included): a resume must render with the same one.
         rig_sha256: Some(sha256_hex(render.rig.to_json().as_bytes())),
+        moved_sha256: Some(sha256_hex(opts.moved_fingerprint.as_bytes())),
     };
     let fresh = match check_output(dir, &staging, &state, opts)? {
         OutputState::Complete => return Ok(Staged::Complete(dir.clone())),
         OutputState::Fresh => true,
         OutputState::Resume => false,
+        OutputState::Moved => {
+            restamp_moved(&staging, &state, opts)?;
+            false
+        }
     };
 
     // Everything that can fail on bad input, before anything is staged: the scene, where the
@@ -332,6 +346,9 @@ enum OutputState {
     Resume,
     /// `<dir>` is this run's finished dataset, and `--resume` was asked.
     Complete,
+    /// `<dir>.partial` of this same run started in another folder (moved or copied here), and
+    /// `--resume` asked to continue it.
+    Moved,
 }
 
 /// Checks that the run may write where it is told: `<dir>` empty or absent (or finished, under
@@ -371,7 +388,10 @@ fn check_output(
                 state_path.display()
             )
         })?;
-    if found.config_sha256 != state.config_sha256 {
+    let moved = found.config_sha256 != state.config_sha256
+        && found.moved_sha256.is_some()
+        && found.moved_sha256 == state.moved_sha256;
+    if found.config_sha256 != state.config_sha256 && !moved {
         bail!(
             "{} was started from a different config than {} with these options (its values or the command line's --out, --seed, --rig); resuming would mix two runs (nothing was touched)",
             staging.display(),
@@ -384,7 +404,25 @@ fn check_output(
             staging.display()
         );
     }
-    Ok(OutputState::Resume)
+    Ok(match moved {
+        true => OutputState::Moved,
+        false => OutputState::Resume,
+    })
+}
+
+/// A `.partial` moved here from another folder: its effective config (which names the output
+/// folder) and `work/run.json` are written again for where it lies now, each atomically, and
+/// it says so.
+fn restamp_moved(staging: &Path, state: &RunState, opts: &RunOptions) -> Result<()> {
+    eprintln!(
+        "egogen-run: {} was started in another folder (moved or copied here); its config.toml and work/run.json now name this one",
+        staging.display()
+    );
+    write_atomically(&staging.join("config.toml"), opts.config_toml.as_bytes())
+        .with_context(|| format!("writing the effective config of {}", state.config))?;
+    let run_json = staging.join("work/run.json");
+    write_atomically(&run_json, serde_json::to_string_pretty(state)?.as_bytes())
+        .with_context(|| format!("writing {}", run_json.display()))
 }
 
 /// Creates `<dir>.partial` with the effective config and `work/run.json`, whole or not at all:
@@ -1038,12 +1076,14 @@ mod tests {
             config: "run.toml".into(),
             config_sha256: "abc".into(),
             rig_sha256: None,
+            moved_sha256: None,
         };
         let opts = RunOptions {
             resume: true,
             blender: None,
             config_toml: "[scene]\n".into(),
             resume_fingerprint: "abc".into(),
+            moved_fingerprint: "ab".into(),
         };
         assert!(matches!(
             check_output(&dir, &staging, &state, &opts).unwrap(),
