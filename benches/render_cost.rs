@@ -38,8 +38,13 @@ use common::{default_run_config, egogen_run_env};
 
 /// Seconds of motion rendered (every 4th frame at 40 Hz: 10 frames per second per camera).
 const DURATION_S: &str = "0.5";
-/// The shipped colour settings (configs/default.toml).
-const SHIPPED: &str = "samples = 4\ndenoise = true\ndenoise_prefilter = \"fast\"";
+/// The shipped colour settings (configs/default.toml), as a literal for `concat!`.
+macro_rules! shipped {
+    () => {
+        "samples = 4\ndenoise = true\ndenoise_prefilter = \"fast\""
+    };
+}
+const SHIPPED: &str = shipped!();
 /// The colour settings shipped until 2026-11-28.
 const ACCURATE: &str = "samples = 4\ndenoise = true\ndenoise_prefilter = \"accurate\"";
 
@@ -171,7 +176,7 @@ const ON_CPU_AND_GPU: [Variant; 2] = [
     },
     Variant {
         name: "shipped, GPU (1 worker)",
-        render: "samples = 4\ndenoise = true\ndenoise_prefilter = \"fast\"\ndevice = \"gpu\"",
+        render: concat!(shipped!(), "\ndevice = \"gpu\""),
         envs: &[],
         as_limit: false,
         at_full_size: true,

@@ -1,7 +1,8 @@
 //! Reading every channel of an EXR file (`exr` crate) into named `f32` planes, grouped into
 //! passes by name: Blender writes `ViewLayer.Depth.Z` as one channel of a single part (4.5) or
 //! channel `Z` of a part named `ViewLayer.Depth` (5.0); both become pass `ViewLayer.Depth`,
-//! component `Z`.
+//! component `Z`. A frame file's contents can also be made in memory from its planes
+//! (`ExrContents::from_channels`), as reading the file it encodes to would give them.
 
 use std::path::{Path, PathBuf};
 

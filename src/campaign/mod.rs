@@ -6,7 +6,7 @@
 //! free-disk floor); `campaign.json` (`state`) is rewritten at every change and `--resume`
 //! continues a killed campaign (a finished take checked by its `stamp`, or in full when it
 //! changed or with `--rehash`; the state rebuilt from the take folders when `campaign.json` is
-//! lost); the frames of every finished take are listed in `index.parquet` (`index`) and shown
+//! lost, or was written for another place: a campaign folder moved or copied); the frames of every finished take are listed in `index.parquet` (`index`) and shown
 //! on `contact_sheet.png` (`sheet`). Before any work every take is checked as staging would
 //! check it (scene, rig, crowd) and the budget (takes, frames, disk, core-hours from measured
 //! throughput) is stated (`budget`).

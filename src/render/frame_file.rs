@@ -15,6 +15,10 @@
 //! - `depth_noisy.Z` (only for cameras with a depth-noise model) — `depth.Z` through the
 //!   sensor noise model of [`crate::render::depth_noise`]; 0 = no measurement.
 //!
+//! A frame is encoded with its ZIP blocks compressed on every thread and checked without
+//! decoding it again: on the planes it was encoded from ([`FrameImage::contents`]) and the
+//! encoded bytes' header and blocks (`check_encoded_header`).
+//!
 //! Pixels with no surface (background) or outside the camera's valid field of view hold 0 in
 //! every ground-truth channel; outside the valid field of view the colour is 0 too. Ground
 //! truth is sampled at the rendered pixel nearest to the exact ray (ids, normals and flow are

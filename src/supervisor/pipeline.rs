@@ -418,9 +418,15 @@ fn restamp_moved(staging: &Path, state: &RunState, opts: &RunOptions) -> Result<
         "egogen-run: {} was started in another folder (moved or copied here); its config.toml and work/run.json now name this one",
         staging.display()
     );
-    write_atomically(&staging.join("config.toml"), opts.config_toml.as_bytes())
+    write_run_stamp(staging, state, opts)
+}
+
+/// Writes what says which run a folder holds: its effective config (`config.toml`) and
+/// `work/run.json`, each atomically.
+fn write_run_stamp(folder: &Path, state: &RunState, opts: &RunOptions) -> Result<()> {
+    write_atomically(&folder.join("config.toml"), opts.config_toml.as_bytes())
         .with_context(|| format!("writing the effective config of {}", state.config))?;
-    let run_json = staging.join("work/run.json");
+    let run_json = folder.join("work/run.json");
     write_atomically(&run_json, serde_json::to_string_pretty(state)?.as_bytes())
         .with_context(|| format!("writing {}", run_json.display()))
 }
@@ -441,12 +447,7 @@ fn stage_run(staging: &Path, state: &RunState, opts: &RunOptions) -> Result<()> 
     }
     std::fs::create_dir_all(fresh.join("work"))
         .with_context(|| format!("creating {}", fresh.display()))?;
-    write_atomically(&fresh.join("config.toml"), opts.config_toml.as_bytes())
-        .with_context(|| format!("writing the effective config of {}", state.config))?;
-    write_atomically(
-        &fresh.join("work/run.json"),
-        serde_json::to_string_pretty(state)?.as_bytes(),
-    )?;
+    write_run_stamp(&fresh, state, opts)?;
     std::fs::rename(&fresh, staging)
         .with_context(|| format!("renaming {} to {}", fresh.display(), staging.display()))?;
     Ok(())

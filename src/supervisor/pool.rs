@@ -289,18 +289,13 @@ pub(crate) fn frames_bar(total: u64, done: u64, pace: Arc<FramePace>) -> Progres
     crate::progress::progress_bar_with_eta("egogen-run", "rendering", "frames", total, done, eta)
 }
 
-/// Plans `shards` of `take` on `pace`: each camera's frames still to render.
+/// Plans `shards` of `take` (its pending shards: frames not done yet) on `pace`.
 pub(crate) fn plan_pace(pace: &FramePace, take: &dyn RenderTake, shards: &[Shard]) {
     for shard in shards {
-        let left = shard
-            .frames
-            .iter()
-            .filter(|&&f| !take.frame_done(shard.camera, f))
-            .count();
         pace.plan(
             take.camera_name(shard.camera),
             take.camera_pixels(shard.camera),
-            left as u64,
+            shard.frames.len() as u64,
         );
     }
 }
