@@ -30,8 +30,8 @@ Install (Python >= 3.11; Open3D's Linux wheel needs the system's libusb-1.0, e.g
 Run (TAKE: the take's folder, e.g. out/default; each prints its table in seconds for a
 take of ~40 frames):
 
-  VENV/bin/python tools/vision_checks.py features TAKE [--camera NAME] [--max-frames N] [--json OUT]
-  VENV/bin/python tools/vision_checks.py sfm TAKE [--camera NAME] [--max-frames N] [--colmap-defaults] [--json OUT]
+  VENV/bin/python tools/vision_checks.py features TAKE [--camera NAME] [--max-frames N] [--rectify] [--mask-people] [--threads N] [--json OUT]
+  VENV/bin/python tools/vision_checks.py sfm TAKE [--camera NAME] [--max-frames N] [--rectify | --colmap-defaults] [--mask-people] [--threads N] [--json OUT]
   VENV/bin/python tools/vision_checks.py tsdf TAKE [--camera NAME] [--voxel-m 0.02] [--max-frames N] [--scene FILE] [--json OUT]
 
 Conventions (as docs/RENDERING.md "COLMAP export" uses them with the colmap CLI):
@@ -74,8 +74,21 @@ Conventions (as docs/RENDERING.md "COLMAP export" uses them with the colmap CLI)
   nothing reconstructed); the Aria RGB Fisheye624 has |k| up to 1.77 by design, so with the
   camera held fixed the limit is raised just above the camera's own coefficients
   (`--colmap-defaults` keeps 1). Seeds are fixed (`pycolmap.set_random_seed(0)`, RANSAC and
-  mapper `random_seed = 0`), but COLMAP's threads still make runs differ a little (on one
-  take: SfM centre RMSE 0.39-0.64 m, feature rotation median 3.0-3.3 deg over repeats).
+  mapper `random_seed = 0`), but COLMAP's threads still make runs differ (on one take: SfM
+  centre RMSE 0.31-1.10 m over repeats, docs/VISION_CHECKS.md); `--threads 1` (features, sfm:
+  `num_threads` of extraction, matching and mapping) makes a run repeat exactly.
+- `--rectify` (features, sfm): the frames are first resampled onto a pinhole ("linear")
+  camera of the same size and focal length, principal point at the image centre, as
+  projectaria_tools' `distort_by_calibration` onto `get_linear_camera_calibration` does: each
+  pinhole pixel's ray projected into the fisheye image with the exported camera (exact), the
+  8-bit colour interpolated bilinearly there; the camera mask is the pinhole pixels whose four
+  source pixels lie inside `valid.V`, eroded by 2 px. The measure then runs on the `PINHOLE`
+  camera (no distortion parameters: COLMAP's `max_extra_param` is never raised). The ground
+  truth is unchanged: the pinhole has the fisheye's camera frame.
+- `--mask-people` (features, sfm): per-image masks (`ImageReaderOptions.mask_path`) instead of
+  the camera mask: each frame's `valid.V` without its people (`segmentation.id` >= 1000), grown
+  by 1/200 of the width (the segmentation is rendered without motion blur, the colour with it),
+  eroded by 2 px; resampled like the images with `--rectify`.
 - tsdf: the fisheye is resampled to pinholes, not integrated as a fisheye. Each pixel's ray
   comes from the exported COLMAP camera (`Camera.cam_from_img`, egogen pixel centre (u, v) =
   COLMAP (u + 0.5, v + 0.5); pixels whose ray does not project back within 0.01 px are
@@ -325,15 +338,134 @@ def write_camera_mask(frames, out: Path, size) -> Path | None:
     v = valid_mask(frames[0])
     if v.shape[::-1] != tuple(size):
         return None
-    for _ in range(2):
+    v = erode(v, 2)
+    Image.fromarray((v * 255).astype(np.uint8)).save(out)
+    return out
+
+
+def erode(v: np.ndarray, px: int) -> np.ndarray:
+    for _ in range(px):
         e = v.copy()
         e[1:, :] &= v[:-1, :]
         e[:-1, :] &= v[1:, :]
         e[:, 1:] &= v[:, :-1]
         e[:, :-1] &= v[:, 1:]
         v = e
-    Image.fromarray((v * 255).astype(np.uint8)).save(out)
+    return v
+
+
+def bilinear(img: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """img (h, w[, c]) at continuous pixels `at` (..., 2; centres at integers, all finite and
+    inside [-0.5, w-0.5] x [-0.5, h-0.5]), bilinear, edges clamped."""
+    h, w = img.shape[:2]
+    x = np.clip(at[..., 0], 0, w - 1)
+    y = np.clip(at[..., 1], 0, h - 1)
+    x0 = np.clip(np.floor(x).astype(np.int64), 0, max(w - 2, 0))
+    y0 = np.clip(np.floor(y).astype(np.int64), 0, max(h - 2, 0))
+    ax, ay = x - x0, y - y0
+    if img.ndim == 3:
+        ax, ay = ax[..., None], ay[..., None]
+    f = img.astype(np.float64)
+    x1, y1 = np.minimum(x0 + 1, w - 1), np.minimum(y0 + 1, h - 1)
+    return (1 - ay) * ((1 - ax) * f[y0, x0] + ax * f[y0, x1]) + ay * ((1 - ax) * f[y1, x0] + ax * f[y1, x1])
+
+
+def people_dilation_px(w: int) -> int:
+    """How far a person's mask is grown: their motion-blurred edge reaches past the
+    segmentation, which is rendered without blur (1/200 of the width, at least 2 px)."""
+    return max(2, round(w / 200))
+
+
+def frame_masks(frames, size, people: bool):
+    """Per frame (image name -> bool array, True = use), the frame's `valid.V`, and with
+    `people` its people (`segmentation.id` >= 1000, docs/ANNOTATIONS.md) taken out, grown by
+    `people_dilation_px`; None without `people` (the camera mask serves every frame)."""
+    if not people:
+        return None
+    w, h = size
+    groups = frame_groups(frames[0])
+    if "segmentation" not in groups:
+        raise ToolError(
+            f"{frames[0].path}: no segmentation.id channel (its channel groups: {', '.join(sorted(groups))}); "
+            "--mask-people needs a take rendered with the `segmentation` pass"
+        )
+    out = {}
+    for f in frames:
+        d = read_frame(f, ["valid", "segmentation"])
+        person = d["segmentation"] >= 1000
+        grown = ~erode(~person, people_dilation_px(w))
+        out[image_name(f)] = (d["valid"] > 0.5) & ~grown
     return out
+
+
+def write_masks(masks: dict, out: Path) -> Path:
+    """COLMAP's per-image masks: `<out>/<image name>.png`, white = use, eroded by 2 px."""
+    from PIL import Image
+
+    out.mkdir(parents=True, exist_ok=True)
+    for name, m in masks.items():
+        Image.fromarray((erode(m, 2) * 255).astype(np.uint8)).save(out / f"{name}.png")
+    return out
+
+
+def rectified_images(frames, image_dir: Path, names, fisheye, out: Path, masks=None):
+    """The frames resampled onto a pinhole ("linear") camera of the same size and focal length,
+    principal point at the image centre, as projectaria_tools' `distort_by_calibration` does onto
+    `get_linear_camera_calibration`: each pinhole pixel's ray projected into the fisheye image
+    (the exported camera, exact), its colour interpolated bilinearly there. Returns the pinhole's
+    COLMAP camera (model, width, height, params), the folder of its images and its camera mask
+    (pixels whose four source pixels are all inside the lens's valid field, eroded by 2 px);
+    with per-frame `masks` (`frame_masks`), those resampled the same way instead."""
+    from PIL import Image
+
+    model, w, h, params = fisheye
+    camera = pycolmap_camera(model, w, h, params)
+    f = float(camera.mean_focal_length())
+    cx, cy = w / 2.0, h / 2.0  # COLMAP's convention: the image centre
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    rays = np.stack([(u.ravel() + 0.5 - cx) / f, (v.ravel() + 0.5 - cy) / f, np.ones(w * h)], axis=1)
+    _, ray_ok = fisheye_rays(camera, w, h)
+    at = fisheye_pixels_of_rays(camera, rays, w, h, ray_ok).reshape(h, w, 2)
+    inside = np.isfinite(at).all(axis=2)
+    x0 = np.clip(np.floor(np.nan_to_num(at[..., 0])).astype(np.int64), 0, w - 2)
+    y0 = np.clip(np.floor(np.nan_to_num(at[..., 1])).astype(np.int64), 0, h - 2)
+
+    def resampled(src_ok: np.ndarray) -> np.ndarray:
+        """Pinhole pixels whose four source pixels are all `src_ok`."""
+        return inside & src_ok[y0, x0] & src_ok[y0, x0 + 1] & src_ok[y0 + 1, x0] & src_ok[y0 + 1, x0 + 1]
+
+    src_valid = ray_ok
+    if frames[0].path.is_file():
+        src_valid = src_valid & valid_mask(frames[0])
+    ok = resampled(src_valid)
+    out.mkdir(parents=True, exist_ok=True)
+    at_ok = at[ok]
+    for name in names:
+        img = np.asarray(Image.open(image_dir / name).convert("RGB"))
+        rect = np.zeros((h, w, 3), np.uint8)
+        rect[ok] = np.clip(np.rint(bilinear(img, at_ok)), 0, 255).astype(np.uint8)
+        Image.fromarray(rect).save(out / name)
+    camera_out = ("PINHOLE", w, h, [f, f, cx, cy])
+    if masks is not None:
+        rect_masks = {n: resampled(m & ray_ok) for n, m in masks.items()}
+        return camera_out, out, None, write_masks(rect_masks, out.parent / "rectified_masks")
+    mask = out.parent / "rectified_mask.png"
+    Image.fromarray((erode(ok, 2) * 255).astype(np.uint8)).save(mask)
+    return camera_out, out, mask, None
+
+
+def prepare_images(args, frames, fisheye, image_dir: Path, work: Path):
+    """(camera, image folder, camera mask, per-image mask folder) the measure runs on: the
+    export's own, or with `--rectify` the frames resampled onto a pinhole camera
+    (`rectified_images`); with `--mask-people`, per-image masks without the people."""
+    names = [image_name(f) for f in frames]
+    _, w, h, _ = fisheye
+    masks = frame_masks(frames, (w, h), getattr(args, "mask_people", False))
+    if getattr(args, "rectify", False):
+        return rectified_images(frames, image_dir, names, fisheye, work / "rectified", masks)
+    if masks is not None:
+        return fisheye, image_dir, None, write_masks(masks, work / "masks")
+    return fisheye, image_dir, write_camera_mask(frames, work / "mask.png", (w, h)), None
 
 
 def quiet_colmap():
@@ -368,18 +500,36 @@ def seeded_verification():
     return opts
 
 
-def extract(db: Path, image_dir: Path, names, model, params, mask):
+def threads(args) -> int:
+    """COLMAP's num_threads: -1 (every core, its default) unless `--threads N`."""
+    return getattr(args, "threads", None) or -1
+
+
+def matching_options(args):
     import pycolmap
 
+    opts = pycolmap.FeatureMatchingOptions()
+    opts.num_threads = threads(args)
+    return opts
+
+
+def extract(db: Path, image_dir: Path, names, model, params, mask, image_masks=None, num_threads=-1):
+    import pycolmap
+
+    extraction_options = pycolmap.FeatureExtractionOptions()
+    extraction_options.num_threads = num_threads
     reader_options = pycolmap.ImageReaderOptions(camera_model=model, camera_params=",".join(repr(float(p)) for p in params))
     if mask is not None:
         reader_options.camera_mask_path = str(mask)
+    if image_masks is not None:
+        reader_options.mask_path = str(image_masks)
     pycolmap.extract_features(
         db,
         image_dir,
         image_names=list(names),
         camera_mode=pycolmap.CameraMode.SINGLE,
         reader_options=reader_options,
+        extraction_options=extraction_options,
         device=pycolmap.Device.cpu,
     )
 
@@ -454,10 +604,11 @@ def cmd_features(args) -> dict:
     work = Path(tempfile.mkdtemp(prefix="vision_checks_"))
     try:
         db_path = work / "database.db"
-        mask = write_camera_mask(frames, work / "mask.png", (w, h))
-        extract(db_path, image_dir, names, model, params, mask)
+        (model, w, h, params), image_dir, mask, image_masks = prepare_images(args, frames, (model, w, h, params), image_dir, work)
+        extract(db_path, image_dir, names, model, params, mask, image_masks, threads(args))
         pycolmap.match_sequential(
             db_path,
+            matching_options=matching_options(args),
             pairing_options=pycolmap.SequentialPairingOptions(overlap=1, quadratic_overlap=False),
             verification_options=seeded_verification(),
             device=pycolmap.Device.cpu,
@@ -528,7 +679,9 @@ def cmd_features(args) -> dict:
         "take": str(take.path),
         "camera": args.camera,
         "colmap_camera": {"model": model, "width": w, "height": h, "params": params},
-        "camera_mask": mask is not None,
+        "camera_mask": mask is not None or image_masks is not None,
+        "rectified": bool(args.rectify),
+        "people_masked": bool(args.mask_people),
         "frames": len(frames),
         "pairs": len(pairs),
         "features_per_frame_median": median(n_features),
@@ -553,7 +706,7 @@ def cmd_features(args) -> dict:
         "seconds": time.time() - t0,
     }
     rows = [
-        ("camera", f"{args.camera} ({model} {w}x{h}), {len(frames)} frames, {len(pairs)} consecutive pairs"),
+        ("camera", f"{args.camera} ({model} {w}x{h}{', rectified' if args.rectify else ''}{', people masked' if args.mask_people else ''}), {len(frames)} frames, {len(pairs)} consecutive pairs"),
         ("SIFT features per frame", f"median {fmt(res['features_per_frame_median'], '.0f')} (min {res['features_per_frame_min']}, max {res['features_per_frame_max']})"),
         ("putative matches per pair", f"median {fmt(res['putative_matches_median'], '.0f')}"),
         ("inlier matches per pair", f"median {fmt(res['inlier_matches_median'], '.0f')}"),
@@ -611,9 +764,14 @@ def cmd_sfm(args) -> dict:
     work = Path(tempfile.mkdtemp(prefix="vision_checks_"))
     try:
         db_path = work / "database.db"
-        mask = write_camera_mask(frames, work / "mask.png", (w, h))
-        extract(db_path, image_dir, names, model, params, mask)
-        pycolmap.match_exhaustive(db_path, verification_options=seeded_verification(), device=pycolmap.Device.cpu)
+        (model, w, h, params), image_dir, mask, image_masks = prepare_images(args, frames, (model, w, h, params), image_dir, work)
+        extract(db_path, image_dir, names, model, params, mask, image_masks, threads(args))
+        pycolmap.match_exhaustive(
+            db_path,
+            matching_options=matching_options(args),
+            verification_options=seeded_verification(),
+            device=pycolmap.Device.cpu,
+        )
         db = pycolmap.Database.open(db_path)
         try:
             n_features = [int(db.num_keypoints_for_image(im.image_id)) for im in db.read_all_images()]
@@ -623,6 +781,7 @@ def cmd_sfm(args) -> dict:
         finally:
             db.close()
         opts = pycolmap.IncrementalPipelineOptions()
+        opts.num_threads = threads(args)
         opts.random_seed = opts.mapper.random_seed = opts.triangulation.random_seed = 0
         opts.ba_refine_focal_length = False
         opts.ba_refine_principal_point = False
@@ -669,7 +828,9 @@ def cmd_sfm(args) -> dict:
         "take": str(take.path),
         "camera": args.camera,
         "colmap_camera": {"model": model, "width": w, "height": h, "params": params},
-        "camera_mask": mask is not None,
+        "camera_mask": mask is not None or image_masks is not None,
+        "rectified": bool(args.rectify),
+        "people_masked": bool(args.mask_people),
         "frames": len(frames),
         "features_per_frame_median": median(n_features),
         "verified_image_pairs": verified_pairs,
@@ -693,12 +854,13 @@ def cmd_sfm(args) -> dict:
         res["alignment"] = {"scale": s, "rotation": R.tolist(), "translation": t.tolist()}
         res["centre_error_rmse_m"] = float(np.sqrt((err**2).mean()))
         res["centre_error_median_m"] = float(np.median(err))
+        res["centre_error_m_by_frame"] = {n: float(e) for n, e in sorted(zip(reg_names, err))}
         reg_sorted = [gt_centre[n] for n in names if n in set(reg_names)]
         res["gt_path_length_registered_m"] = float(np.linalg.norm(np.diff(np.array(reg_sorted), axis=0), axis=1).sum())
     res["seconds"] = time.time() - t0
 
     rows = [
-        ("camera", f"{args.camera} ({model} {w}x{h}, held fixed), {len(frames)} frames"),
+        ("camera", f"{args.camera} ({model} {w}x{h}{', rectified' if args.rectify else ''}{', people masked' if args.mask_people else ''}, held fixed), {len(frames)} frames"),
         ("SIFT features per frame", f"median {fmt(res['features_per_frame_median'], '.0f')}"),
         ("verified image pairs", f"{verified_pairs} of {len(frames) * (len(frames) - 1) // 2} (exhaustive matching; not degenerate)"),
         ("COLMAP max_extra_param", (f"{lifted:g} (default 1 would reject this camera: |k| up to {extra:.2f}; held fixed)" if lifted is not None else f"{res['max_extra_param']:g}")),
@@ -821,6 +983,33 @@ def fisheye_rays(camera, w, h):
     return xy.reshape(h, w, 2), ok.reshape(h, w)
 
 
+def fisheye_pixels_of_rays(camera, rays: np.ndarray, w: int, h: int, ray_ok: np.ndarray) -> np.ndarray:
+    """Where camera-frame rays (N x 3) land in the fisheye image: continuous pixels, egogen's
+    centres at integers; NaN for a ray behind the camera, outside the image or the lens's
+    valid field (`ray_ok`, from `fisheye_rays`), or one the lens folds back (a polynomial lens
+    can bring rays past its field of view back into the image: the ray must come back from the
+    pixel it lands on)."""
+    at = np.full((len(rays), 2), np.nan)
+    front = rays[:, 2] > 1e-6
+    if not front.any():
+        return at
+    p = np.asarray(camera.img_from_cam(rays[front]), dtype=np.float64)
+    good = np.isfinite(p).all(axis=1)
+    xy = np.full_like(p, np.nan)
+    xy[good] = np.asarray(camera.cam_from_img(p[good]), dtype=np.float64)
+    r = rays[front][:, :2] / rays[front][:, 2:3]
+    good &= np.isfinite(xy).all(axis=1)
+    good[good] &= np.linalg.norm(xy[good] - r[good], axis=1) < 1e-3 * (1 + np.linalg.norm(r[good], axis=1) ** 2)
+    q = p - 0.5  # egogen's pixel centres
+    good &= (q[:, 0] > -0.5) & (q[:, 0] < w - 0.5) & (q[:, 1] > -0.5) & (q[:, 1] < h - 0.5)
+    nearest = np.rint(np.nan_to_num(q)).astype(np.int64)
+    near_flat = np.clip(nearest[:, 1], 0, h - 1) * w + np.clip(nearest[:, 0], 0, w - 1)
+    good &= ray_ok.ravel()[near_flat]
+    q[~good] = np.nan
+    at[np.flatnonzero(front)] = q
+    return at
+
+
 def face_maps(camera, w, h, f_face: float, ray_ok: np.ndarray):
     """For each cube face: its size, and per face pixel where its ray lands in the fisheye
     image (continuous, egogen pixel centres at integers; NaN where it does not: outside the
@@ -833,26 +1022,7 @@ def face_maps(camera, w, h, f_face: float, ray_ok: np.ndarray):
     local_len = np.linalg.norm(local, axis=1).reshape(S, S)
     maps = {}
     for name, R_cam_face in _FACES.items():
-        rays = local @ R_cam_face.T
-        at = np.full((S * S, 2), np.nan)
-        front = rays[:, 2] > 1e-6
-        if front.any():
-            p = np.asarray(camera.img_from_cam(rays[front]), dtype=np.float64)
-            good = np.isfinite(p).all(axis=1)
-            # The ray must come back from the pixel it lands on (a polynomial lens can fold
-            # rays past its field of view back into the image).
-            xy = np.full_like(p, np.nan)
-            xy[good] = np.asarray(camera.cam_from_img(p[good]), dtype=np.float64)
-            r = rays[front][:, :2] / rays[front][:, 2:3]
-            good &= np.isfinite(xy).all(axis=1)
-            good[good] &= np.linalg.norm(xy[good] - r[good], axis=1) < 1e-3 * (1 + np.linalg.norm(r[good], axis=1) ** 2)
-            q = p - 0.5  # egogen's pixel centres
-            good &= (q[:, 0] > -0.5) & (q[:, 0] < w - 0.5) & (q[:, 1] > -0.5) & (q[:, 1] < h - 0.5)
-            nearest = np.rint(q).astype(np.int64)
-            near_flat = np.clip(nearest[:, 1], 0, h - 1) * w + np.clip(nearest[:, 0], 0, w - 1)
-            good &= ray_ok.ravel()[near_flat]
-            q[~good] = np.nan
-            at[np.flatnonzero(front)] = q
+        at = fisheye_pixels_of_rays(camera, local @ R_cam_face.T, w, h, ray_ok)
         if np.isfinite(at).any():
             maps[name] = (R_cam_face, at.reshape(S, S, 2))
     return S, fx, c, local_len, maps
@@ -1130,10 +1300,28 @@ def main(argv=None) -> int:
         p.add_argument("--max-frames", type=int, default=None, help="only the first N frames")
         p.add_argument("--json", metavar="OUT", default=None, help="write the numbers to this JSON file")
 
+    def colmap_options(p):
+        p.add_argument(
+            "--rectify", action="store_true",
+            help="resample the frames onto a pinhole camera of the same size and focal length first "
+            "(as projectaria_tools' distort_by_calibration); COLMAP's defaults then take the camera as it is",
+        )
+        p.add_argument(
+            "--threads", type=int, default=None,
+            help="COLMAP's threads (default: every core); 1 makes a run repeat exactly",
+        )
+        p.add_argument(
+            "--mask-people", action="store_true",
+            help="keep features off the people (segmentation ids >= 1000, grown by 1/200 of the width): "
+            "they move, SfM assumes a static scene; needs the segmentation pass",
+        )
+
     p = sub.add_parser("features", help="SIFT and two-view geometry between consecutive frames")
     common(p)
+    colmap_options(p)
     p = sub.add_parser("sfm", help="incremental SfM with the exported camera held fixed")
     common(p)
+    colmap_options(p)
     p.add_argument(
         "--colmap-defaults", action="store_true",
         help="keep COLMAP's max_extra_param = 1 even where it rejects the (fixed) camera",
