@@ -577,7 +577,9 @@ async fn attempt_shard(
     blender: &mut BlenderUse,
 ) -> std::result::Result<usize, (usize, Outcome)> {
     let (camera, frames, log) = (work.camera, work.frames, work.log);
-    let pace = shared.pace.attempt(dataset.camera_name(camera));
+    let pace = shared
+        .pace
+        .attempt(dataset.camera_name(camera), frames.len() as u64);
     let fail = |n: usize, reason: String| (n, Outcome::Failed { reason });
     let spec = dataset
         .shard_spec_json(camera, frames)

@@ -279,7 +279,9 @@ fn run_slurm(
                 match queue.get(&(t as u32)).map(String::as_str) {
                     Some("RUNNING") if state.pace.is_none() => {
                         let dataset = takes.all[state.take].dataset();
-                        state.pace = Some(pace.attempt(dataset.camera_name(state.shard.camera)));
+                        let frames = missing_frames(dataset, &state.shard).len() as u64;
+                        let camera = dataset.camera_name(state.shard.camera);
+                        state.pace = Some(pace.attempt(camera, frames));
                     }
                     None => state.pace = None,
                     _ => {}
