@@ -460,8 +460,8 @@ def prepare_images(args, frames, fisheye, image_dir: Path, work: Path):
     (`rectified_images`); with `--mask-people`, per-image masks without the people."""
     names = [image_name(f) for f in frames]
     _, w, h, _ = fisheye
-    masks = frame_masks(frames, (w, h), getattr(args, "mask_people", False))
-    if getattr(args, "rectify", False):
+    masks = frame_masks(frames, (w, h), args.mask_people)
+    if args.rectify:
         return rectified_images(frames, image_dir, names, fisheye, work / "rectified", masks)
     if masks is not None:
         return fisheye, image_dir, None, write_masks(masks, work / "masks")
@@ -502,7 +502,7 @@ def seeded_verification():
 
 def threads(args) -> int:
     """COLMAP's num_threads: -1 (every core, its default) unless `--threads N`."""
-    return getattr(args, "threads", None) or -1
+    return args.threads or -1
 
 
 def matching_options(args):

@@ -177,14 +177,6 @@ impl FramePace {
     }
 }
 
-/// Seconds per frame of each camera at `per_pixel` where it has no frames of its own.
-fn priced(c: &CameraPace, frames: u64, seconds: f64, per_pixel: f64) -> f64 {
-    match frames {
-        0 => per_pixel * c.pixels as f64,
-        n => seconds / n as f64,
-    }
-}
-
 /// (worker seconds done, worker seconds left, frames done) from the attempts that ended, the
 /// running ones counting their time so far and the rest of their expected time.
 fn by_attempts(s: &PaceState, now: Instant) -> (f64, f64, u64) {
@@ -236,7 +228,10 @@ fn by_frames(s: &PaceState, now: Instant) -> Option<(f64, f64, u64)> {
     let left: f64 = s
         .cameras
         .values()
-        .map(|c| c.left as f64 * priced(c, c.done, c.seconds, per_pixel))
+        .map(|c| match c.done {
+            0 => c.left as f64 * per_pixel * c.pixels as f64,
+            n => c.left as f64 * c.seconds / n as f64,
+        })
         .sum();
     // Work in progress counts as done, and as no longer left.
     let running: f64 = s
