@@ -728,6 +728,8 @@ def make_camera(scene, cam_spec):
             setattr(data, f"fisheye_polynomial_k{i}", k)
         data.shift_x = p["shift_x"]
         data.shift_y = p["shift_y"]
+        # Cycles skips pixels whose θ exceeds half of it: the corners beyond the valid view.
+        data.fisheye_fov = p["fov_rad"]
         scene.render.resolution_x = p["width_px"]
         scene.render.resolution_y = p["height_px"]
     scene.render.resolution_percentage = 100

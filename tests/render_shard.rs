@@ -434,6 +434,51 @@ fn every_ground_truth_pixel_lies_on_its_ray() {
     }
 }
 
+/// Cycles traces a polynomial fisheye's pixels up to its traced radius (the camera's valid
+/// field of view and a margin: `fisheye_fov`), not the image's corners beyond it. A pixel
+/// Cycles does not trace comes back opaque with a zero position; one traced into the open
+/// (the transparent film) transparent.
+#[test]
+fn polynomial_fisheyes_trace_only_the_valid_field_of_view() {
+    let r = rendered();
+    for (name, _, render) in &r.cameras {
+        let (RenderCamera::PolynomialSource(lens) | RenderCamera::PolynomialFisheye(lens)) = render
+        else {
+            continue;
+        };
+        let (_, gt) = raw(r, name, 2);
+        let exr = ExrContents::read(&gt).unwrap();
+        let res = render.resolution();
+        let alpha = plane(&exr, "ViewLayer.Combined.A");
+        let p = ["X", "Y", "Z"].map(|c| plane(&exr, &format!("ViewLayer.Position.{c}")));
+        let (mut beyond, mut beyond_traced, mut inside, mut inside_traced) = (0, 0, 0, 0);
+        for y in 0..res.height_px as usize {
+            for x in 0..res.width_px as usize {
+                let i = y * res.width_px as usize + x;
+                let px = Pixel::new(x as f64, y as f64);
+                let traced = alpha[i] < 0.5 || p.iter().any(|c| c[i] != 0.0);
+                if render.renders(px) {
+                    inside += 1;
+                    inside_traced += usize::from(traced);
+                } else if (px - lens.centre_px).length() > lens.traced_radius_px + 0.01 {
+                    beyond += 1;
+                    beyond_traced += usize::from(traced);
+                }
+            }
+        }
+        eprintln!(
+            "{name}: {inside_traced} of {inside} pixels inside the traced radius traced, \
+             {beyond_traced} of {beyond} beyond it"
+        );
+        assert!(
+            beyond > 0,
+            "{name}: the image has corners beyond the valid view"
+        );
+        assert_eq!(beyond_traced, 0, "{name}");
+        assert_eq!(inside_traced, inside, "{name}");
+    }
+}
+
 #[test]
 fn depth_normals_and_segmentation_match_the_geometry() {
     let r = rendered();

@@ -15,6 +15,7 @@
 //! - `depth_noisy.Z` (only for cameras with a depth-noise model) — `depth.Z` through the
 //!   sensor noise model of [`crate::render::depth_noise`]; 0 = no measurement.
 //!
+//! Where each pixel reads the render ([`RemapTable`]) is computed once per camera and take.
 //! A frame is encoded with its ZIP blocks compressed on every thread and checked without
 //! decoding it again: on the planes it was encoded from ([`FrameImage::contents`]) and the
 //! encoded bytes' header and blocks (`check_encoded_header`).
@@ -271,11 +272,94 @@ fn blender_duration_seconds(text: &str) -> Option<f64> {
 /// it was rendered), for the rig camera `target` whose pose at this frame is `world_from_cam`
 /// (OpenCV axes). The ground truth holds the planes of the passes its render had: `Position`
 /// gives depth and position, `Normal` normals, `IndexOB` segmentation, `Vector` flow.
+/// The remap is computed for this frame alone; [`RemapTable::assemble`] reuses one across a
+/// camera's frames.
 pub fn assemble_frame(
     rgb_exr: Option<&Path>,
     ground_truth_exr: Option<&Path>,
     render: &RenderCamera,
     target: &Camera,
+    world_from_cam: Affine3,
+) -> Result<FrameImage, FrameFileError> {
+    RemapTable::new(render, target).assemble(rgb_exr, ground_truth_exr, world_from_cam)
+}
+
+/// Where each pixel of a rig camera reads the render Blender made for it: the rendered pixel
+/// (continuous) on the exact model's ray, or none outside the valid field of view. It is the
+/// same for every frame of a camera, so a take computes it once per camera (16 bytes a pixel:
+/// 32 MB for a full-size Aria RGB camera) instead of unprojecting and reprojecting every
+/// pixel of every frame (0.5 s of a full-size RGB frame's assembly on one core).
+pub struct RemapTable {
+    render: RenderCamera,
+    target: Camera,
+    /// Per target pixel (row-major), NaN where it is not valid.
+    source_px: Vec<Pixel>,
+}
+
+impl std::fmt::Debug for RemapTable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let res = self.target.resolution();
+        write!(f, "RemapTable({}×{})", res.width_px, res.height_px)
+    }
+}
+
+impl RemapTable {
+    /// The table of `target` read from `render` (rows on rayon's pool).
+    pub fn new(render: &RenderCamera, target: &Camera) -> Self {
+        use rayon::prelude::*;
+        let res = target.resolution();
+        let (w, h) = (res.width_px as usize, res.height_px as usize);
+        let mut source_px = vec![Pixel::NAN; w * h];
+        source_px
+            .par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, q) in row.iter_mut().enumerate() {
+                    let p = Pixel::new(x as Real, y as Real);
+                    let Some(ray) = target.unproject(p) else {
+                        continue;
+                    };
+                    let source = match render.is_identity() {
+                        true => Some(p),
+                        false => render.ray_to_pixel(ray),
+                    };
+                    if let Some(source) = source {
+                        *q = source;
+                    }
+                }
+            });
+        Self {
+            render: *render,
+            target: target.clone(),
+            source_px,
+        }
+    }
+
+    /// [`assemble_frame`] with this table's render and camera.
+    pub fn assemble(
+        &self,
+        rgb_exr: Option<&Path>,
+        ground_truth_exr: Option<&Path>,
+        world_from_cam: Affine3,
+    ) -> Result<FrameImage, FrameFileError> {
+        let (render, target) = (&self.render, &self.target);
+        assemble_with(
+            self,
+            render,
+            target,
+            rgb_exr,
+            ground_truth_exr,
+            world_from_cam,
+        )
+    }
+}
+
+fn assemble_with(
+    remap: &RemapTable,
+    render: &RenderCamera,
+    target: &Camera,
+    rgb_exr: Option<&Path>,
+    ground_truth_exr: Option<&Path>,
     world_from_cam: Affine3,
 ) -> Result<FrameImage, FrameFileError> {
     let rgb = rgb_exr.map(|p| Raw::read(p, render)).transpose()?;
@@ -346,18 +430,10 @@ pub fn assemble_frame(
     for y in 0..h {
         for x in 0..w {
             let i = y * w + x;
-            let p = Pixel::new(x as Real, y as Real);
-            let Some(ray) = target.unproject(p) else {
+            let q = remap.source_px[i];
+            if q.x.is_nan() {
                 continue;
-            };
-            let q = if render.is_identity() {
-                p
-            } else {
-                match render.ray_to_pixel(ray) {
-                    Some(q) => q,
-                    None => continue,
-                }
-            };
+            }
             out.valid[i] = 1.0;
             if let (Some(planes), Some(rgb), Some(o)) = (&colour, &rgb, out.rgba.as_mut()) {
                 for c in 0..4 {

@@ -9,10 +9,12 @@
 //! `θ = −(k0 + k1·r + k2·r² + k3·r³ + k4·r⁴)` from the optical axis at sensor radius `r` (mm,
 //! `sensor_width / width_px` mm per pixel) from the centre
 //! `((w − 1)/2 − shift_x·w, (h − 1)/2 + shift_y·h)` (OpenCV pixels: the shift is in units of
-//! each image side, +y up), azimuth as in the image (x right, y down). Pixels past θ = 90°
-//! come back with alpha 1 and a zero position (no ray traced), so egogen uses the lens only up
-//! to 90°. egogen writes `k0 = 0` and `kᵢ = −cᵢ / (mm per pixel)ⁱ` for its fit
-//! `θ(ρ) = c₁ρ + c₂ρ² + c₃ρ³ + c₄ρ⁴` in pixels.
+//! each image side, +y up), azimuth as in the image (x right, y down). Pixels past θ = 90°,
+//! or past half of the camera's `fisheye_fov`, come back with alpha 1 and a zero position (no
+//! ray traced), so egogen uses the lens only up to 90° and sets `fisheye_fov` so that only the
+//! valid field of view and a margin are traced ([`LensPolynomial::traced_radius_px`]), not
+//! the image's corners beyond it. egogen writes `k0 = 0` and `kᵢ = −cᵢ / (mm per pixel)ⁱ` for
+//! its fit `θ(ρ) = c₁ρ + c₂ρ² + c₃ρ³ + c₄ρ⁴` in pixels.
 //!
 //! What cannot be represented: Fisheye624's tangential and thin-prism terms (the lens is
 //! radially symmetric), and a radial map that is not a quartic in ρ; [`native_error`] measures
@@ -26,6 +28,11 @@ use crate::camera::{
 };
 use crate::math::{Real, Vec3};
 
+/// Margin traced beyond a native lens's farthest valid pixel (the denoiser's rim context).
+const FOV_MARGIN_PX: Real = 2.0;
+/// How far inside the traced radius a pixel must lie to count as rendered: Cycles compares θ
+/// in single precision (about 1e-3 px at the Aria cameras' rim).
+const TRACED_RADIUS_TOLERANCE_PX: Real = 0.01;
 /// Sensor width Blender is given (mm); any value works, this is Blender's default.
 const SENSOR_WIDTH_MM: Real = 36.0;
 /// Grid (per image side) on which egogen reports a stand-in's error ([`native_error`]).
@@ -44,6 +51,9 @@ pub struct LensPolynomial {
     pub theta_coeffs: [Real; 4],
     /// Up to this radius θ(ρ) increases and stays below 90°; farther pixels are not used.
     pub max_radius_px: Real,
+    /// Cycles traces pixels up to this radius (its `fisheye_fov` is twice θ here), at most
+    /// `max_radius_px`: the valid field of view and its margin; farther pixels are skipped.
+    pub traced_radius_px: Real,
 }
 
 /// Why a camera has no polynomial stand-in.
@@ -124,8 +134,10 @@ impl LensPolynomial {
             centre_px: centre,
             theta_coeffs,
             max_radius_px: corner_px,
+            traced_radius_px: corner_px,
         };
         lens.max_radius_px = lens.increasing_limit(corner_px);
+        lens.traced_radius_px = lens.max_radius_px;
         if lens.max_radius_px < needed_px {
             return Err(LensFitError::NotMonotonic {
                 turn_px: lens.max_radius_px,
@@ -136,9 +148,17 @@ impl LensPolynomial {
     }
 
     /// The fit for a Fisheye624 over its valid field of view.
+    /// Cycles traces the valid field of view plus `FOV_MARGIN_PX`, not the image's corners
+    /// beyond it.
     pub fn for_fisheye624(model: &Fisheye624) -> Result<Self, LensFitError> {
         let cam = Camera::Fisheye624(*model);
-        Self::fit(&cam, max_theta_in_image(&cam))
+        let mut lens = Self::fit(&cam, max_theta_in_image(&cam))?;
+        let farthest = valid_boundary(&cam)
+            .iter()
+            .map(|(p, _)| (*p - lens.centre_px).length())
+            .fold(0.0, Real::max);
+        lens.traced_radius_px = lens.max_radius_px.min(farthest + FOV_MARGIN_PX);
+        Ok(lens)
     }
 
     /// The fit as the *source* of an exact remap to `target` (`[render] fisheye = "exact"`):
@@ -187,44 +207,17 @@ impl LensPolynomial {
             centre_px: Pixel::ZERO,
             theta_coeffs,
             max_radius_px: fit.max_radius_px * scale,
+            traced_radius_px: fit.max_radius_px * scale,
         };
         // Where the valid target pixels land (centre at the origin): the image of the valid
-        // region's boundary — pixel centres along the image border, and the valid circle
-        // where it cuts the image — bounds the image of the region.
+        // region's boundary bounds the image of the region.
         let (mut lo, mut hi) = (Pixel::splat(Real::INFINITY), Pixel::splat(-Real::INFINITY));
         let mut needed: Real = 0.0;
-        let mut include = |ray: Vec3| {
+        for (_, ray) in valid_boundary(target) {
             if let Some(q) = scaled.ray_to_pixel(ray) {
                 lo = lo.min(q);
                 hi = hi.max(q);
                 needed = needed.max(q.length());
-            }
-        };
-        let steps = 4 * (res.width_px + res.height_px) as usize;
-        for k in 0..=steps {
-            let t = k as Real / steps as Real;
-            for p in [
-                Pixel::new(t * (w - 1.0), 0.0),
-                Pixel::new(t * (w - 1.0), h - 1.0),
-                Pixel::new(0.0, t * (h - 1.0)),
-                Pixel::new(w - 1.0, t * (h - 1.0)),
-            ] {
-                if let Some(ray) = target.unproject(p) {
-                    include(ray);
-                }
-            }
-        }
-        let rim = CameraModel::max_theta_rad(model);
-        if rim <= max_theta + 1e-9 {
-            for k in 0..4 * steps {
-                let phi = k as Real / (4 * steps) as Real * std::f64::consts::TAU;
-                let ray = Vec3::new(rim.sin() * phi.cos(), rim.sin() * phi.sin(), rim.cos());
-                let inside = target.project_unbounded(ray).is_some_and(|p| {
-                    (0.0..=w - 1.0).contains(&p.x) && (0.0..=h - 1.0).contains(&p.y)
-                });
-                if inside {
-                    include(ray);
-                }
             }
         }
         let centre = Pixel::splat(margin_px) - lo;
@@ -254,6 +247,9 @@ impl LensPolynomial {
                 needed_px,
             });
         }
+        // The corners beyond the valid field of view (a fifth of an Aria RGB image) are not
+        // traced.
+        source.traced_radius_px = source.max_radius_px.min(needed_px);
         Ok(source)
     }
 
@@ -280,9 +276,15 @@ impl LensPolynomial {
         upper
     }
 
-    /// Whether Cycles renders this pixel within the fitted, increasing part of the lens.
+    /// Whether Cycles renders this pixel: within the traced radius (0.01 px inside it, for
+    /// Cycles' single-precision θ), on the fitted, increasing part of the lens.
     pub fn renders(&self, px: Pixel) -> bool {
-        (px - self.centre_px).length() <= self.max_radius_px
+        (px - self.centre_px).length() <= self.traced_radius_px - TRACED_RADIUS_TOLERANCE_PX
+    }
+
+    /// Cycles' `fisheye_fov`: twice θ at the traced radius (pixels beyond it are skipped).
+    pub fn fov_rad(&self) -> Real {
+        2.0 * self.theta_with_slope(self.traced_radius_px).0
     }
 
     /// Unit ray (OpenCV camera frame) of a pixel, as Cycles traces it; `None` past the radius
@@ -395,6 +397,43 @@ pub fn pixel_error_stats(mut errors: Vec<Real>) -> PixelError {
     }
 }
 
+/// Points on the boundary of a camera's valid region, each target pixel with its ray: pixel
+/// centres along the image border where valid, and the valid circle (the model's `max θ`)
+/// where it cuts the image. The region's image under any lens that keeps it connected is
+/// bounded by these points' images.
+fn valid_boundary(target: &Camera) -> Vec<(Pixel, Vec3)> {
+    let res = target.resolution();
+    let (w, h) = (res.width_px as Real, res.height_px as Real);
+    let mut points = Vec::new();
+    let steps = 4 * (res.width_px + res.height_px) as usize;
+    for k in 0..=steps {
+        let t = k as Real / steps as Real;
+        for p in [
+            Pixel::new(t * (w - 1.0), 0.0),
+            Pixel::new(t * (w - 1.0), h - 1.0),
+            Pixel::new(0.0, t * (h - 1.0)),
+            Pixel::new(w - 1.0, t * (h - 1.0)),
+        ] {
+            if let Some(ray) = target.unproject(p) {
+                points.push((p, ray));
+            }
+        }
+    }
+    let rim = target.max_theta_rad();
+    if rim <= max_theta_in_image(target) + 1e-9 {
+        for k in 0..4 * steps {
+            let phi = k as Real / (4 * steps) as Real * std::f64::consts::TAU;
+            let ray = Vec3::new(rim.sin() * phi.cos(), rim.sin() * phi.sin(), rim.cos());
+            if let Some(p) = target.project_unbounded(ray) {
+                if (0.0..=w - 1.0).contains(&p.x) && (0.0..=h - 1.0).contains(&p.y) {
+                    points.push((p, ray));
+                }
+            }
+        }
+    }
+    points
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -498,14 +537,62 @@ mod tests {
             }
             let ratio =
                 (src.width_px * src.height_px) as Real / (res.width_px * res.height_px) as Real;
+            // What Cycles traces: the source's pixels within the traced radius, against the
+            // target's valid pixels.
+            let count = |w: u32, h: u32, keep: &dyn Fn(Pixel) -> bool| {
+                (0..h)
+                    .flat_map(|y| (0..w).map(move |x| Pixel::new(x as Real, y as Real)))
+                    .filter(|&p| keep(p))
+                    .count() as Real
+            };
+            let traced = count(src.width_px, src.height_px, &|p| source.renders(p));
+            let target_valid = count(res.width_px, res.height_px, &|p| {
+                target.unproject(p).is_some()
+            });
+            let traced_ratio = traced / target_valid;
             eprintln!(
-                "{name} × {scale}: {}×{} from {}×{} ({ratio:.3}× the pixels); {valid} px, least room {least_room:.2} px, source px per target px ≥ {coarsest:.4}",
-                res.width_px, res.height_px, src.width_px, src.height_px
+                "{name} × {scale}: {}×{} from {}×{} ({ratio:.3}× the pixels; traced {traced_ratio:.3}× the valid pixels, {:.3}× all); {valid} px, least room {least_room:.2} px, source px per target px ≥ {coarsest:.4}",
+                res.width_px, res.height_px, src.width_px, src.height_px,
+                traced / (res.width_px * res.height_px) as Real
             );
             assert!(valid > 10_000);
             assert!(least_room >= 1.99, "{name}: {least_room}");
             assert!(coarsest >= 0.995, "{name}: {coarsest}");
             assert!(ratio < 1.2, "{name}: {ratio}");
+            assert!(traced_ratio < 1.15, "{name}: {traced_ratio}");
+            assert!(source.fov_rad() < std::f64::consts::PI);
+        }
+    }
+
+    /// A native lens traces every valid pixel of the image and not the corners beyond the
+    /// valid field of view.
+    #[test]
+    fn a_native_lens_traces_the_valid_field_of_view() {
+        for (name, scale) in [
+            ("camera-rgb", 1.0),
+            ("camera-slam-left", 1.0),
+            ("camera-rgb", 0.25),
+        ] {
+            let target = Camera::Fisheye624(aria(name)).scaled(scale).unwrap();
+            let Camera::Fisheye624(model) = target else {
+                unreachable!()
+            };
+            let lens = LensPolynomial::for_fisheye624(&model).unwrap();
+            let res = target.resolution();
+            let (mut valid, mut traced) = (0, 0);
+            for y in 0..res.height_px {
+                for x in 0..res.width_px {
+                    let p = Pixel::new(x as Real, y as Real);
+                    let is_valid = target.unproject(p).is_some();
+                    valid += usize::from(is_valid);
+                    traced += usize::from(lens.renders(p));
+                    assert!(!is_valid || lens.renders(p), "{name} ({x}, {y})");
+                }
+            }
+            let ratio = traced as Real / valid as Real;
+            eprintln!("{name} × {scale}: traces {ratio:.3}× its valid pixels");
+            assert!(ratio < 1.05, "{name}: {ratio}");
+            assert!(lens.traced_radius_px <= lens.max_radius_px);
         }
     }
 

@@ -36,6 +36,9 @@ pub enum ShardLens {
         k: [f64; 5],
         shift_x: f64,
         shift_y: f64,
+        /// Cycles' `fisheye_fov`: pixels seeing farther than half of it off the axis are not
+        /// traced (the image's corners beyond the camera's valid field of view).
+        fov_rad: f64,
     },
 }
 

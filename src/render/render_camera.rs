@@ -170,6 +170,7 @@ impl RenderCamera {
                     k,
                     shift_x,
                     shift_y,
+                    fov_rad: lens.fov_rad(),
                 }
             }
         }

@@ -23,7 +23,7 @@ use super::staged::Dataset;
 use crate::export::take::FileFacts;
 use crate::math::{Real, Vec3};
 use crate::render::depth_noise::NoiseSeed;
-use crate::render::frame_file::{assemble_frame, FrameImage};
+use crate::render::frame_file::FrameImage;
 use crate::render::shard_plan::raw_frame_paths;
 
 impl Dataset {
@@ -72,11 +72,9 @@ impl Dataset {
             frame,
             self.raw_renders(),
         );
-        let mut image: FrameImage = assemble_frame(
+        let mut image: FrameImage = self.remap(camera).assemble(
             rgb.as_deref(),
             gt.as_deref(),
-            &work.render,
-            &work.camera.model,
             work.world_from_cam[frame as usize],
         )?;
         let assembled = std::time::Instant::now();

@@ -313,6 +313,7 @@ pub fn stage_take(
         None => None,
     };
     let cameras = camera_work(render, &agents, &wearers, &frames);
+    let n_cameras = cameras.len();
     let objects = scene_objects(plan, &scene, &motion, &agents);
     let mut base_spec = base_spec(plan, render, &scene, &agents[wearers[0]], bodies, &objects)?;
     base_spec.scene_split = scene_split;
@@ -327,6 +328,7 @@ pub fn stage_take(
         agents,
         exports: take_exports(render.colmap, aria),
         start: next_start(&staging),
+        remaps: (0..n_cameras).map(|_| Default::default()).collect(),
     });
     repair(&dataset)?;
     Ok(Staged::Take(Box::new(StagedTake {

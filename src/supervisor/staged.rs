@@ -4,12 +4,15 @@
 //! Finishing frames into files and records (`dataset`, `frame_record`) builds on it.
 
 use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
 
 use crate::camera::CameraModel;
 use crate::export::take::{frame_file_path, TakeExports};
 pub use crate::export::take::{CameraWork, RenderedAgent};
 use crate::exr_file::ExrContents;
-use crate::render::frame_file::{check_encoded_header, validate_frame_contents, FrameFileError};
+use crate::render::frame_file::{
+    check_encoded_header, validate_frame_contents, FrameFileError, RemapTable,
+};
 use crate::render::passes::Passes;
 use crate::render::shard_plan::{raw_frame_paths, shard_camera, RawRenders};
 use crate::render::ShardSpec;
@@ -43,9 +46,20 @@ pub struct Dataset {
     /// start keeps its logs in its own folder, so a resume never overwrites what an earlier
     /// start wrote (an error message may name those logs).
     pub start: u32,
+    /// Each camera's remap from its render to its frames, made when its first frame is
+    /// finished ([`Dataset::remap`]).
+    pub(crate) remaps: Vec<OnceLock<Arc<RemapTable>>>,
 }
 
 impl Dataset {
+    /// A camera's remap table, made on first use and kept for the take.
+    pub(crate) fn remap(&self, camera: usize) -> Arc<RemapTable> {
+        let work = &self.cameras[camera];
+        self.remaps[camera]
+            .get_or_init(|| Arc::new(RemapTable::new(&work.render, &work.camera.model)))
+            .clone()
+    }
+
     /// The frame file of a camera's frame.
     pub(crate) fn frame_path(&self, camera: usize, frame: u32) -> PathBuf {
         self.staging
