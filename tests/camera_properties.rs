@@ -1,13 +1,16 @@
 //! Round trips of every camera model over its whole valid field of view, on the optical axis
-//! (θ → 0) and at the edge: `unproject(project(p))` and `project(unproject(px))` within 1e-6 px.
+//! (θ → 0) and at the edge: `unproject(project(p))` and `project(unproject(px))` within 1e-6 px;
+//! and the renders standing in for a fisheye trace every valid pixel up to the rim.
 //! The deterministic sweeps print the measured maxima with `--nocapture`.
 
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 use egogen::camera::{
     theta_of, Camera, CameraModel, Fisheye624, KannalaBrandt4, Pinhole, Pixel, Resolution,
 };
 use egogen::math::Vec3;
+use egogen::render::render_camera::{FisheyeRendering, RenderCamera};
 use egogen::rig::{AriaRgbResolution, Rig};
 use proptest::prelude::*;
 
@@ -316,5 +319,100 @@ fn edges_of_the_valid_fov() {
         }
         assert!(cam.project(Vec3::new(0.0, 0.0, -1.0)).is_none(), "{name}");
         assert!(theta_of(Vec3::new(0.0, 0.0, -1.0)) > std::f64::consts::PI - 2e-3);
+    }
+}
+
+/// The last valid pixel from the principal point in direction `phi` (image axes): on the
+/// image's border where that is valid, else on the valid circle (bisected to 1e-9 px).
+fn valid_boundary_pixel(cam: &Camera, phi: f64) -> Pixel {
+    let r = cam.resolution();
+    let c = cam.principal_point();
+    let d = Pixel::new(phi.cos(), phi.sin());
+    let reach = |from: f64, dir: f64, size: u32| match dir {
+        x if x > 0.0 => (size as f64 - 1.0 - from) / x,
+        x if x < 0.0 => -from / x,
+        _ => f64::INFINITY,
+    };
+    let far = reach(c.x, d.x, r.width_px).min(reach(c.y, d.y, r.height_px));
+    if cam.unproject(c + d * far).is_some() {
+        return c + d * far;
+    }
+    let (mut lo, mut hi) = (0.0, far);
+    while hi - lo > 1e-9 {
+        let mid = 0.5 * (lo + hi);
+        match cam.unproject(c + d * mid) {
+            Some(_) => lo = mid,
+            None => hi = mid,
+        }
+    }
+    c + d * lo
+}
+
+/// Each Fisheye624 camera of [`models`] at ⅛, ¼ and full size, with the two renders that stand
+/// in for it: the exact mode's source (remapped) and the native polynomial lens (built once).
+fn fisheye_renders() -> &'static [(String, Camera, RenderCamera, RenderCamera)] {
+    static RENDERS: OnceLock<Vec<(String, Camera, RenderCamera, RenderCamera)>> = OnceLock::new();
+    RENDERS.get_or_init(|| {
+        let mut out = Vec::new();
+        for (name, cam) in models() {
+            if !matches!(cam, Camera::Fisheye624(_)) {
+                continue;
+            }
+            for scale in [0.125, 0.25, 1.0] {
+                let cam = cam.scaled(scale).unwrap();
+                let exact = RenderCamera::for_camera(&cam, 1.0, FisheyeRendering::Exact).unwrap();
+                let native = RenderCamera::for_camera(&cam, 1.0, FisheyeRendering::Native).unwrap();
+                out.push((format!("{name} × {scale}"), cam, exact, native));
+            }
+        }
+        out
+    })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+
+    /// What Blender traces holds every valid pixel up to the rim of the field of view: the
+    /// exact mode reads the four source pixels around the pixel's ray (bilinear colour, nearest
+    /// ground truth), all traced; a native lens's valid pixels are traced themselves. Pixels
+    /// are drawn anywhere in the image or on the boundary of its valid region (the image's
+    /// border or the valid circle), in any direction from the principal point.
+    #[test]
+    fn the_renders_trace_every_valid_pixel_to_the_rim(
+        phi in 0.0f64..std::f64::consts::TAU,
+        fx in 0.0f64..1.0,
+        fy in 0.0f64..1.0,
+        on_rim in any::<bool>(),
+    ) {
+        for (name, cam, exact, native) in fisheye_renders() {
+            let r = cam.resolution();
+            let (w, h) = (r.width_px as f64, r.height_px as f64);
+            let px = if on_rim {
+                valid_boundary_pixel(cam, phi)
+            } else {
+                Pixel::new(fx * (w - 1.0), fy * (h - 1.0))
+            };
+            let Some(ray) = cam.unproject(px) else { continue };
+            let q = exact.ray_to_pixel(ray);
+            prop_assert!(q.is_some(), "{name}: {px:?} has no source pixel");
+            let q = q.unwrap();
+            let src = exact.resolution();
+            let (x0, y0) = (q.x.floor(), q.y.floor());
+            for (dx, dy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+                let corner = Pixel::new(x0 + dx, y0 + dy);
+                prop_assert!(
+                    corner.x >= 0.0 && corner.y >= 0.0
+                        && corner.x <= src.width_px as f64 - 1.0
+                        && corner.y <= src.height_px as f64 - 1.0,
+                    "{name}: {px:?} reads {corner:?}, outside the source"
+                );
+                prop_assert!(exact.renders(corner), "{name}: {px:?} reads untraced {corner:?}");
+            }
+            // The native image is the frame: its valid (whole) pixels are traced.
+            let whole = Pixel::new(px.x.round(), px.y.round());
+            if cam.unproject(whole).is_some() {
+                prop_assert!(native.renders(whole), "{name}: native {whole:?} untraced");
+            }
+        }
     }
 }
