@@ -342,26 +342,17 @@ impl RemapTable {
         ground_truth_exr: Option<&Path>,
         world_from_cam: Affine3,
     ) -> Result<FrameImage, FrameFileError> {
-        let (render, target) = (&self.render, &self.target);
-        assemble_with(
-            self,
-            render,
-            target,
-            rgb_exr,
-            ground_truth_exr,
-            world_from_cam,
-        )
+        assemble_with(self, rgb_exr, ground_truth_exr, world_from_cam)
     }
 }
 
 fn assemble_with(
     remap: &RemapTable,
-    render: &RenderCamera,
-    target: &Camera,
     rgb_exr: Option<&Path>,
     ground_truth_exr: Option<&Path>,
     world_from_cam: Affine3,
 ) -> Result<FrameImage, FrameFileError> {
+    let (render, target) = (&remap.render, &remap.target);
     let rgb = rgb_exr.map(|p| Raw::read(p, render)).transpose()?;
     let gt = ground_truth_exr.map(|p| Raw::read(p, render)).transpose()?;
     let mut render_seconds = Vec::new();
