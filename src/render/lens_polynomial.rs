@@ -28,8 +28,10 @@ use crate::camera::{
 };
 use crate::math::{Real, Vec3};
 
-/// Margin traced beyond a native lens's farthest valid pixel (the denoiser's rim context).
-const FOV_MARGIN_PX: Real = 2.0;
+/// Rendered beyond the camera's valid field of view, in render pixels: room for the remap's
+/// bilinear lookups and the denoiser's context at the rim (every lens Cycles renders for a
+/// distorted camera, `render_camera`).
+pub(crate) const FOV_MARGIN_PX: Real = 2.0;
 /// How far inside the traced radius a pixel must lie to count as rendered: Cycles compares θ
 /// in single precision (about 1e-3 px at the Aria cameras' rim).
 const TRACED_RADIUS_TOLERANCE_PX: Real = 0.01;

@@ -17,11 +17,8 @@
 use crate::camera::{max_theta_in_image, Camera, CameraModel, Pixel, Resolution};
 use crate::math::{Real, Vec3};
 use crate::render::camera_setup::blender_lens;
-use crate::render::lens_polynomial::{LensFitError, LensPolynomial};
+use crate::render::lens_polynomial::{LensFitError, LensPolynomial, FOV_MARGIN_PX};
 use crate::render::protocol::ShardLens;
-
-/// Extra angle rendered beyond the model's `max θ`, in raw pixels (room for bilinear lookups).
-const FOV_MARGIN_PX: Real = 2.0;
 
 /// How Fisheye624 cameras are rendered (`[render] fisheye`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Deserialize, serde::Serialize)]

@@ -1,6 +1,7 @@
 //! A staged take's rendering work, as data: which frames of which camera (the take's cameras
 //! and bodies as `export::take` describes them), grouped into shards, where each frame's files
-//! live, the shard specs Blender receives, and the outputs the take is finished into.
+//! live, the shard specs Blender receives, the outputs the take is finished into, and each
+//! camera's remap from its render to its frames (made once per take).
 //! Finishing frames into files and records (`dataset`, `frame_record`) builds on it.
 
 use std::path::PathBuf;
