@@ -1355,6 +1355,10 @@ fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
         walker: egogen::policy::WalkerSettings {
             success_m: 0.1,
             max_primitives_per_goal: PER_GOAL,
+            // The frames as decoded: the take's finishing (joins smoothed, head steadied)
+            // changes what is written, not which primitives are walked.
+            smooth_joins: false,
+            steady_head: false,
             ..Default::default()
         },
         primitives: PRIMITIVES,

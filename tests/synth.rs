@@ -2,7 +2,7 @@
 //! frames and markers of the take's length, the top view, the summary, the manifest), readable
 //! by numpy as an AMASS-style SMPL-X file, and agents that cross avoid each other; long
 //! wandering takes stay finite, upright, on the floor; bad configs are refused by key and
-//! nothing is overwritten.
+//! nothing is overwritten; a wanderer's head moves like a head (`egogen motion head-stats`).
 
 mod common;
 
@@ -1702,4 +1702,106 @@ fn rendered_annotations(config: &str) -> (tempfile::TempDir, serde_json::Value) 
     let file = dir.path().join("out/cameras/camera-rgb/annotations.json");
     let doc = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
     (dir, doc)
+}
+
+/// `egogen motion head-stats` of a take's people and the real Aria wearer (JSON records).
+fn head_stats(sources: &[&Path]) -> Vec<serde_json::Value> {
+    let json = tempfile::tempdir().unwrap();
+    let path = json.path().join("stats.json");
+    common::succeeds(
+        egogen()
+            .args(["motion", "head-stats"])
+            .args(sources)
+            .arg("--json")
+            .arg(&path),
+    );
+    serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap()
+}
+
+/// The head of a wanderer moves like a head (docs/MOTION.md, "Head motion"): no jolt where
+/// primitives join (head and pelvis acceleration on the join frames as inside primitives), a
+/// head that holds its heading while the torso sways, an IMU within reach of a real Aria
+/// wearer's; the primitives as decoded (`smooth_joins`, `steady_head` off) fail each.
+#[test]
+fn a_wanderers_head_moves_like_a_head() {
+    let aria =
+        common::repo_root().join("assets/reference/aria_mps_sample_closed_loop_trajectory.csv");
+    let take = |walker: &str| {
+        let config = format!(
+            "{}\n[walker]\n{walker}\n",
+            wandering_in_the_apartment(2, 15.0, 4, "")
+        );
+        let (dir, path) = common::run_dir(&config);
+        run_synth(&load_synth_plan(&path).unwrap(), false).unwrap();
+        let stats = head_stats(&[&dir.path().join("take"), &aria]);
+        (dir, stats)
+    };
+    let (_shipped, stats) = take("");
+    let real = &stats[2];
+    let real_force = real["imu"]["specific_force"]["p99"].as_f64().unwrap();
+    assert!((10.0..20.0).contains(&real_force), "{real}");
+    for s in &stats[..2] {
+        for part in ["head_acceleration", "pelvis_acceleration"] {
+            let a = &s[part];
+            assert!(a["seam_ratio_median"].as_f64().unwrap() < 1.3, "{part} {s}");
+            assert!(a["seam_ratio_p95"].as_f64().unwrap() < 1.5, "{part} {s}");
+        }
+        assert!(
+            s["head_acceleration"]["all"]["p95"].as_f64().unwrap() < 8.0,
+            "{s}"
+        );
+        assert!(s["yaw_sway_rms_deg"].as_f64().unwrap() < 3.0, "{s}");
+        let force = s["imu"]["specific_force"]["p99"].as_f64().unwrap();
+        assert!(force < 1.5 * real_force, "{s}");
+    }
+    let (_decoded, stats) = take("smooth_joins = false\nsteady_head = false");
+    for s in &stats[..2] {
+        assert!(
+            s["head_acceleration"]["seam_ratio_median"]
+                .as_f64()
+                .unwrap()
+                > 3.0,
+            "{s}"
+        );
+        assert!(s["yaw_sway_rms_deg"].as_f64().unwrap() > 4.0, "{s}");
+        let force = s["imu"]["specific_force"]["p99"].as_f64().unwrap();
+        assert!(force > 2.0 * real_force, "{s}");
+    }
+}
+
+/// A broken MPS trajectory is refused with the file, the line and the column.
+#[test]
+fn head_stats_refuses_a_broken_mps_trajectory() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("closed_loop_trajectory.csv");
+    let header = "graph_uid,tracking_timestamp_us,tx_world_device,ty_world_device,tz_world_device,qx_world_device,qy_world_device,qz_world_device,qw_world_device";
+    std::fs::write(
+        &csv,
+        format!("{header}\ng,1000,0,0,0,0,0,0,1\ng,2000,0,x,0,0,0,0,1\n"),
+    )
+    .unwrap();
+    let out = egogen()
+        .args(["motion", "head-stats"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("closed_loop_trajectory.csv")
+            && err.contains("line 3")
+            && err.contains("ty_world_device"),
+        "{err}"
+    );
+    std::fs::write(&csv, "a,b\n1,2\n").unwrap();
+    let out = egogen()
+        .args(["motion", "head-stats"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("tracking_timestamp_us"),
+        "{err}"
+    );
 }

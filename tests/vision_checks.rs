@@ -154,8 +154,12 @@ fn features_agree_with_the_ground_truth_on_the_fisheye_and_rectified() {
             epipolar < 0.5,
             "rectify {rectify}: epipolar error {epipolar} px"
         );
+        // A median over this 2 s take's 20 pairs moves with the motion: 1.1–1.4° with the
+        // head as decoded, 2.06° on the fisheye with the head fixed (docs/MOTION.md "Head
+        // motion"), where the whole 10 s take's median fell from 0.93° to 0.86°
+        // (docs/VISION_CHECKS.md); a broken camera or pose is off by far more.
         let rays = f64_of(&doc, "rays_E_rotation_error_deg_median");
-        assert!(rays < 2.0, "rectify {rectify}: E on rays {rays} deg");
+        assert!(rays < 2.5, "rectify {rectify}: E on rays {rays} deg");
     }
 }
 

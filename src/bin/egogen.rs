@@ -234,6 +234,29 @@ enum MotionCommand {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// How a head moves (docs/MOTION.md, "Head motion"): linear acceleration where motion
+    /// primitives join against inside them, angular speed, yaw sway, vertical bob, step
+    /// frequency and a true IMU's specific force and angular rate, for take folders, AMASS-style
+    /// clips (or folders of them: each clip's head by the body model) and projectaria-tools MPS
+    /// trajectories (the device poses moved to the CPF by the Aria rig); JSON lines, then a
+    /// table on standard error.
+    HeadStats {
+        /// Take folders, `.npz` clips, folders of `.npz` clips, MPS trajectory `.csv` files.
+        #[arg(required = true)]
+        sources: Vec<PathBuf>,
+        /// SMPL-X `.npz` model the clips are posed with (default: the shipped CC0 neutral model).
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// Rig whose device frame an MPS trajectory is in.
+        #[arg(long, default_value_os_t = egogen::paths::crate_root().join("camera_rigs/aria_gen1.json"))]
+        rig: PathBuf,
+        /// Rate of the IMU computed from each head (Hz; the Aria exports' is 1000 for EuRoC).
+        #[arg(long, default_value_t = 1000.0)]
+        imu_rate_hz: f64,
+        /// JSON file with every source's statistics (must not exist).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// What the latent space can reach: latents chosen per primitive by a cross-entropy-method
     /// optimiser for a target pelvis speed and heading; sustained straight walks at each
     /// `--speeds` value and turns by each `--turns` angle, with foot contact and plausibility
@@ -485,6 +508,24 @@ fn run(cli: Cli) -> Result<()> {
                 refuse_existing(j)?;
             }
             motion_stats(&config, json.as_deref())?;
+        }
+        Command::Motion(MotionCommand::HeadStats {
+            sources,
+            model,
+            rig,
+            imu_rate_hz,
+            json,
+        }) => {
+            if let Some(j) = &json {
+                refuse_existing(j)?;
+            }
+            egogen::cli::motion_jobs::motion_head_stats(
+                &sources,
+                &model_path(model),
+                &rig,
+                imu_rate_hz,
+                json.as_deref(),
+            )?;
         }
         Command::Motion(MotionCommand::Control(opts)) => motion_control(&opts)?,
         Command::Motion(MotionCommand::Import {

@@ -28,6 +28,15 @@ pub type Affine3 = glam::DAffine3;
 
 pub use rotation::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d, rot6d_to_matrix};
 
+/// The `p` quantile (0–1, nearest rank) of `sorted` (ascending, finite); NaN for none.
+pub fn quantile(sorted: &[Real], p: Real) -> Real {
+    if sorted.is_empty() {
+        Real::NAN
+    } else {
+        sorted[((sorted.len() - 1) as Real * p.clamp(0.0, 1.0)).round() as usize]
+    }
+}
+
 /// Axis-aligned bounds (min, max) of `points`; `None` for none.
 pub(crate) fn point_bounds<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Option<(Vec3, Vec3)> {
     let mut points = points.into_iter();

@@ -1,6 +1,8 @@
 //! Motion: SMPL-X pose sequences in time, the files they travel in, and real mocap turned
 //! into them (BVH reading, retargeting, resampling, mirroring); activity clips and the pose
-//! tools that play them (`activity_clip`).
+//! tools that play them (`activity_clip`); how a head moves, measured the same way for takes
+//! and real references (`head_motion`), the joins of primitives smoothed (`joins`) and the head
+//! held steady while the torso sways (`head_stabilise`).
 //!
 //! Owns frame rates and sequences of body parameters; the body itself (skinning) is `body`'s.
 
@@ -9,6 +11,9 @@ pub mod amass;
 pub mod bvh;
 pub mod cvae;
 pub mod deepmimic;
+pub mod head_motion;
+pub mod head_stabilise;
+pub mod joins;
 pub mod primitive;
 pub mod resample;
 pub mod retarget;

@@ -45,6 +45,14 @@ pub struct WalkerSettings {
     /// `true` (default): every primitive is tested against the scene at every frame it spans
     /// (no step passes through a wall); `false`: at its end alone (EgoGen's test).
     pub scene_every_frame: bool,
+    /// `true` (default): where one primitive hands over to the next (or to an activity, or to
+    /// a held pose), the velocity jump is spread over ±0.2 s (`motion::joins`); `false`: the
+    /// primitives as decoded, a jolt at every join (docs/MOTION.md "Head motion").
+    pub smooth_joins: bool,
+    /// `true` (default): the neck and head turn against the torso's sway so the heading of the
+    /// gaze follows its smoothed course (`motion::head_stabilise`); `false`: the head as
+    /// decoded, swaying with the body.
+    pub steady_head: bool,
 }
 
 impl Default for WalkerSettings {
@@ -59,6 +67,8 @@ impl Default for WalkerSettings {
             guide_unknown_cost: 0.0,
             anticipate_people: true,
             scene_every_frame: true,
+            smooth_joins: true,
+            steady_head: true,
         }
     }
 }
@@ -202,7 +212,7 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(s.changed_keys(), ["anticipate_people", "guide_lookahead_m"]);
-        assert_eq!(WalkerSettings::keys().len(), 9);
+        assert_eq!(WalkerSettings::keys().len(), 11);
         assert!(WalkerSettings::keys().contains(&"scene_every_frame".to_string()));
     }
 }

@@ -32,6 +32,12 @@
 //! person where it is, and the walker takes over from its last two frames; a walk comes
 //! between two activities. An activity that would enter the scene is skipped with its reason.
 //!
+//! When the take ends, each agent's motion is finished as written: the velocity jump where
+//! one primitive (or activity, or held pose) hands over to the next is spread over ±0.2 s
+//! (up to ±0.4 s for the largest changes; [`crate::motion::joins`]) and the neck and head turn against the torso's sway
+//! ([`crate::motion::head_stabilise`]), `[walker] smooth_joins` and `steady_head`; the
+//! walk itself (what was chosen, where it went) is as stepped.
+//!
 //! Deterministic per seed: agent `i` draws from a generator seeded by `(seed, i)` alone (and
 //! its activities from one of their own).
 
@@ -48,6 +54,8 @@ use crate::motion::cvae::contact::contact_score;
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::tensor_body::RigGeometry;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel, PrimitiveSeed};
+use crate::motion::head_stabilise::{stabilise_head, HeadStabiliser};
+use crate::motion::joins::{smooth_joins, JoinWindow};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 use crate::policy::env::SeedBank;
 use crate::policy::reward::{path_leaves_floor, Judged, Limits, RewardWeights};
@@ -266,6 +274,13 @@ pub struct AgentTrack {
     /// Horizontal pelvis position per frame.
     #[serde(skip)]
     pub pelvis_xy: Vec<DVec2>,
+    /// First frame of each primitive walked (its 18 new frames follow its two seed frames).
+    #[serde(skip)]
+    pub primitive_starts: Vec<usize>,
+    /// Frames where what the body does hands over to what comes next: each primitive's
+    /// first frame, an activity's, the held pose's after a stop ([`crate::motion::joins`]).
+    #[serde(skip)]
+    pub joins: Vec<usize>,
     pub goals: Vec<GoalRecord>,
     pub state: AgentState,
     /// First frame of the held pose, when the agent stopped before the take ended.
@@ -275,7 +290,8 @@ pub struct AgentTrack {
     /// Primitives in which the pelvis moved less than [`STUCK_STEP_M`] with the goal not
     /// reached: time spent stuck.
     pub stuck_primitives: usize,
-    /// Mean foot contact (3-D, Eq. 12) over the primitives.
+    /// Mean foot contact (3-D, Eq. 12) over the primitives walked, as written (joins
+    /// smoothed, head steadied).
     pub contact: f64,
     /// Share of new frames with a body marker inside a static obstacle, a moving obstacle or
     /// another agent's 2D box.
@@ -572,6 +588,8 @@ impl<'m> Agent<'m> {
             world_from_cpf: view.world_from_cpf.to_vec(),
             markers: view.markers.to_vec(),
             pelvis_xy: vec![view.pelvis; SEED_FRAMES],
+            primitive_starts: Vec::new(),
+            joins: Vec::new(),
             goals: Vec::new(),
             state: AgentState::Walking,
             stopped_at_frame: None,
@@ -797,6 +815,9 @@ impl<'m> Agent<'m> {
         {
             self.track.stuck_primitives += 1;
         }
+        let start = self.track.frames.len();
+        self.track.primitive_starts.push(start);
+        self.track.joins.push(start);
         for k in SEED_FRAMES..p.world.len() {
             let mut f = p.world[k].clone();
             f.betas = self.plan.betas.clone();
@@ -989,6 +1010,9 @@ impl<'m> Agent<'m> {
             return Ok(());
         };
         let end = (*taken + NEW_FRAMES).min(p.frames.len());
+        if *taken == 0 {
+            self.track.joins.push(self.track.frames.len());
+        }
         let frames = p.frames[*taken..end].to_vec();
         *taken = end;
         let over = end == p.frames.len();
@@ -1032,8 +1056,13 @@ impl<'m> Agent<'m> {
         self.track.stopped_at_frame = Some(self.track.frames.len());
     }
 
-    /// Holds the last pose until the take has `frames` frames; closes the summary.
-    fn finish(mut self, frames: usize) -> AgentTrack {
+    /// Holds the last pose until the take has `frames` frames, smooths the joins and steadies
+    /// the head ([`finish_motion`]); closes the summary.
+    fn finish(
+        mut self,
+        frames: usize,
+        settings: &WalkerSettings,
+    ) -> Result<AgentTrack, CrowdError> {
         let t = &mut self.track;
         for seg in &mut t.activity_segments {
             seg.end_frame = seg.end_frame.min(frames);
@@ -1054,6 +1083,9 @@ impl<'m> Agent<'m> {
                 look.end_frame = look.end_frame.min(frames);
             }
         }
+        if t.frames.len() < frames {
+            t.joins.push(t.frames.len());
+        }
         while t.frames.len() < frames {
             t.frames.push(t.frames[t.frames.len() - 1].clone());
             t.world_from_cpf
@@ -1061,19 +1093,13 @@ impl<'m> Agent<'m> {
             t.markers.push(t.markers[t.markers.len() - 1].clone());
             t.pelvis_xy.push(t.pelvis_xy[t.pelvis_xy.len() - 1]);
         }
+        finish_motion(t, &self.body, settings)?;
         // How each activity moved: foot contact over its frames, the fastest joint turn where
         // it joins the walk.
         let floor_z = self.walker.view.seed.floor_z;
         for r in &mut t.activities {
             let (a, b) = (r.start_frame, r.end_frame.min(t.frames.len()));
-            let feet: Vec<Vec<[f64; 3]>> = (a..b)
-                .map(|f| {
-                    self.foot_markers
-                        .iter()
-                        .map(|&k| t.markers[f][k].to_array())
-                        .collect()
-                })
-                .collect();
+            let feet = foot_points(&t.markers, &self.foot_markers, a..b);
             let scores: Vec<f64> = (0..feet.len().saturating_sub(PRIMITIVE_FRAMES - 1))
                 .step_by(NEW_FRAMES)
                 .map(|s| contact_score(&feet[s..s + PRIMITIVE_FRAMES], floor_z))
@@ -1086,13 +1112,83 @@ impl<'m> Agent<'m> {
         }
         let w = &self.walker;
         let n = w.steps.max(1) as f64;
-        t.contact = w.totals.contact / n;
+        let walked: Vec<f64> = t
+            .primitive_starts
+            .iter()
+            .filter(|&&s| s + NEW_FRAMES <= t.frames.len())
+            .map(|&s| {
+                let feet = foot_points(
+                    &t.markers,
+                    &self.foot_markers,
+                    s - SEED_FRAMES..s + NEW_FRAMES,
+                );
+                contact_score(&feet, floor_z)
+            })
+            .collect();
+        t.contact = walked.iter().sum::<f64>() / walked.len().max(1) as f64;
         t.penetration_share = w.totals.frames_in_obstacle as f64 / w.totals.frames.max(1) as f64;
         t.speed_m_s = w.speed_m_s();
         t.view_cos = w.totals.view_cos / n;
         t.pose_score = w.totals.pose_score / n;
-        self.track
+        Ok(self.track)
     }
+}
+
+/// The foot markers' positions over `frames`, as the foot-contact score reads them.
+fn foot_points(
+    markers: &[Vec<Vec3>],
+    foot_markers: &[usize],
+    frames: std::ops::Range<usize>,
+) -> Vec<Vec<[f64; 3]>> {
+    frames
+        .map(|f| {
+            foot_markers
+                .iter()
+                .map(|&k| markers[f][k].to_array())
+                .collect()
+        })
+        .collect()
+}
+
+/// The motion as written: each join's velocity jump spread ([`WalkerSettings::smooth_joins`]),
+/// the head steadied against the torso's sway ([`WalkerSettings::steady_head`]); the eye
+/// frame, markers and pelvis positions posed again from the frames where either changed them.
+fn finish_motion(
+    t: &mut AgentTrack,
+    body: &BodyContext,
+    settings: &WalkerSettings,
+) -> Result<(), CrowdError> {
+    if !settings.smooth_joins && !settings.steady_head {
+        return Ok(());
+    }
+    if settings.smooth_joins {
+        smooth_joins(
+            &mut t.frames,
+            &t.joins,
+            &JoinWindow::at_rate(PRIMITIVE_RATE_HZ),
+        );
+    }
+    if settings.steady_head {
+        stabilise_head(
+            &mut t.frames,
+            &body.shaped,
+            &body.cpf,
+            PRIMITIVE_RATE_HZ,
+            &HeadStabiliser::default(),
+        )
+        .map_err(DecodeError::from)?;
+    }
+    for (f, frame) in t.frames.iter().enumerate() {
+        let mf = body
+            .shaped
+            .marker_frame(&frame.pose, frame.transl, &body.marker_ids)
+            .map_err(DecodeError::from)?;
+        let q = mf.skeleton.joints[joint::PELVIS];
+        t.world_from_cpf[f] = body.cpf.world_from_cpf(&mf.skeleton);
+        t.markers[f] = mf.markers;
+        t.pelvis_xy[f] = DVec2::new(q.x, q.y);
+    }
+    Ok(())
 }
 
 /// Frames either side over which [`AgentTrack::follow_floor`] takes the largest lift a frame
@@ -1297,7 +1393,7 @@ pub fn run_crowd_with_activities(
         agents: agents
             .into_iter()
             .map(|a| {
-                let mut track = a.finish(frames);
+                let mut track = a.finish(frames, &settings.walker)?;
                 track.follow_floor(&world.map);
                 // Sitting down, seated and standing up, the pelvis is over its seat.
                 let seated = |f: usize| {
@@ -1313,8 +1409,8 @@ pub fn run_crowd_with_activities(
                         path_leaves_floor(&world.map, track.pelvis_xy[f - 1], track.pelvis_xy[f])
                     })
                     .count();
-                track
+                Ok(track)
             })
-            .collect(),
+            .collect::<Result<_, CrowdError>>()?,
     })
 }

@@ -175,6 +175,8 @@ mod tests {
             world_from_cpf: Vec::new(),
             markers: Vec::new(),
             pelvis_xy: Vec::new(),
+            primitive_starts: Vec::new(),
+            joins: Vec::new(),
             goals: Vec::new(),
             state: AgentState::Done,
             stopped_at_frame: None,

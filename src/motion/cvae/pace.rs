@@ -129,13 +129,7 @@ impl Quantiles {
     pub fn of(values: impl IntoIterator<Item = f64>) -> Quantiles {
         let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
         v.sort_by(f64::total_cmp);
-        let q = |p: f64| {
-            if v.is_empty() {
-                f64::NAN
-            } else {
-                v[((v.len() - 1) as f64 * p).round() as usize]
-            }
-        };
+        let q = |p: f64| crate::math::quantile(&v, p);
         Quantiles {
             count: v.len(),
             mean: if v.is_empty() {

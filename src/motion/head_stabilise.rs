@@ -1,0 +1,188 @@
+//! A stabilised head: walking people hold their heading steady while the torso sways from side
+//! to side with each stride (a real walker's head yaws 1.7° RMS about its path, the decoded
+//! body's 6°; docs/MOTION.md, "Head motion"). [`stabilise_head`] turns the neck and head about
+//! the vertical so the viewing direction's heading follows its own smoothed course (a
+//! zero-phase Gaussian over [`HeadStabiliser::smoothing_s`]: the stride's sway is filtered out,
+//! turns are kept and the head starts each turn a little before the body, as people do); the
+//! neck takes [`HeadStabiliser::neck_share`] of the turn, the head the rest. The rest of the
+//! body is unchanged. Where the viewing direction is near vertical (looking at the floor) the
+//! heading is ill-defined and the correction fades out.
+
+use crate::body::{joint, BodyParams, CpfCalibration, PoseError, ShapedBody, PARENTS};
+use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Affine3, Mat3, Real};
+
+use super::head_motion::unwrapped_yaw;
+
+/// How the head is held.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadStabiliser {
+    /// σ of the Gaussian the heading is smoothed with (s).
+    pub smoothing_s: Real,
+    /// Share of each correction the neck takes (the head the rest).
+    pub neck_share: Real,
+    /// Largest correction (rad).
+    pub max_correction_rad: Real,
+}
+
+impl Default for HeadStabiliser {
+    fn default() -> Self {
+        Self {
+            smoothing_s: 0.45,
+            neck_share: 0.4,
+            max_correction_rad: 0.5,
+        }
+    }
+}
+
+/// Zero-phase Gaussian smoothing with σ `sigma` samples; the kernel renormalised at the ends.
+fn gaussian_smooth(v: &[Real], sigma: Real) -> Vec<Real> {
+    if sigma <= 0.0 {
+        return v.to_vec();
+    }
+    let half = (3.0 * sigma).ceil() as usize;
+    let kernel: Vec<Real> = (0..=2 * half)
+        .map(|i| {
+            let d = i as Real - half as Real;
+            (-0.5 * d * d / (sigma * sigma)).exp()
+        })
+        .collect();
+    (0..v.len())
+        .map(|f| {
+            let (mut sum, mut w) = (0.0, 0.0);
+            for (i, k) in kernel.iter().enumerate() {
+                let Some(g) = (f + i).checked_sub(half) else {
+                    continue;
+                };
+                if let Some(x) = v.get(g) {
+                    sum += k * x;
+                    w += k;
+                }
+            }
+            sum / w
+        })
+        .collect()
+}
+
+fn rotation_about_z(angle: Real) -> Mat3 {
+    Mat3::from_rotation_z(angle)
+}
+
+/// Turns the neck and head of `frames` (a body of shape `shaped`, at `rate_hz`) so the CPF's
+/// heading follows its smoothed course; returns each frame's new `world_from_cpf`.
+pub fn stabilise_head(
+    frames: &mut [BodyParams],
+    shaped: &ShapedBody,
+    cpf: &CpfCalibration,
+    rate_hz: Real,
+    settings: &HeadStabiliser,
+) -> Result<Vec<Affine3>, PoseError> {
+    let neck = joint::NECK;
+    let head = joint::HEAD;
+    let spine3 = PARENTS[neck].expect("the neck has a parent");
+    let mut parents = Vec::with_capacity(frames.len());
+    let mut heads = Vec::with_capacity(frames.len());
+    for f in frames.iter() {
+        let sk = shaped.skeleton(&f.pose, f.transl)?;
+        parents.push((
+            sk.world_from_joint[spine3].matrix3,
+            sk.world_from_joint[neck].matrix3,
+        ));
+        heads.push(cpf.world_from_cpf(&sk));
+    }
+    let yaw = unwrapped_yaw(&heads);
+    let target = gaussian_smooth(&yaw, settings.smoothing_s * rate_hz);
+    for (f, frame) in frames.iter_mut().enumerate() {
+        let forward = heads[f].matrix3.z_axis;
+        let level = ((forward.truncate().length() - 0.3) / 0.4).clamp(0.0, 1.0);
+        let delta = (target[f] - yaw[f])
+            .clamp(-settings.max_correction_rad, settings.max_correction_rad)
+            * level;
+        if delta == 0.0 {
+            continue;
+        }
+        let (spine_world, neck_world) = parents[f];
+        for (j, parent_world, angle) in [
+            (neck, spine_world, settings.neck_share * delta),
+            (head, neck_world, (1.0 - settings.neck_share) * delta),
+        ] {
+            let local = axis_angle_to_matrix(frame.joint_axis_angle(j));
+            let turned = parent_world.transpose() * rotation_about_z(angle) * parent_world * local;
+            frame.set_joint_axis_angle(j, matrix_to_axis_angle(turned));
+        }
+    }
+    frames
+        .iter()
+        .map(|f| Ok(cpf.world_from_cpf(&shaped.skeleton(&f.pose, f.transl)?)))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::body::BodyModel;
+    use crate::math::Vec3;
+    use std::f64::consts::PI;
+
+    #[test]
+    fn gaussian_smoothing_keeps_a_line_and_damps_a_fast_sine() {
+        let line: Vec<Real> = (0..100).map(|i| 0.1 * i as Real).collect();
+        let s = gaussian_smooth(&line, 5.0);
+        for i in 20..80 {
+            assert!((s[i] - line[i]).abs() < 1e-9);
+        }
+        let sine: Vec<Real> = (0..400)
+            .map(|i| (2.0 * PI * i as Real / 44.0).sin())
+            .collect();
+        let s = gaussian_smooth(&sine, 18.0);
+        assert!(s[100..300].iter().all(|x| x.abs() < 0.1));
+    }
+
+    #[test]
+    fn a_swaying_torso_keeps_a_steady_head_and_the_rest_of_the_body() {
+        let model =
+            BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz"))
+                .unwrap();
+        let shaped = model.shape(&[], &[]).unwrap();
+        let cpf = CpfCalibration::from_rest_joints(&shaped.rest_joints);
+        // The body yaws ±8° at 0.9 Hz about the vertical (global orient about world z: the
+        // body frame's y is up in the SMPL-X rest; a z-up world turns it upright first).
+        let upright = Mat3::from_rotation_x(PI / 2.0);
+        let mut frames: Vec<BodyParams> = (0..200)
+            .map(|f| {
+                let t = f as Real / 40.0;
+                let yaw = 8f64.to_radians() * (2.0 * PI * 0.9 * t).sin();
+                let mut b = BodyParams::default();
+                b.set_joint_axis_angle(
+                    0,
+                    matrix_to_axis_angle(Mat3::from_rotation_z(yaw) * upright),
+                );
+                b.transl = Vec3::new(1.2 * t, 0.0, 0.0);
+                b
+            })
+            .collect();
+        let before = frames.clone();
+        let heads =
+            stabilise_head(&mut frames, &shaped, &cpf, 40.0, &HeadStabiliser::default()).unwrap();
+        let yaw = unwrapped_yaw(&heads);
+        // The body faces −y on average.
+        let mid = &yaw[50..150];
+        let mean = mid.iter().sum::<Real>() / mid.len() as Real;
+        let rms = (mid.iter().map(|y| (y - mean).powi(2)).sum::<Real>() / mid.len() as Real).sqrt();
+        // The body sways 5.7° RMS.
+        assert!(
+            rms.to_degrees() < 1.7,
+            "head yaw sway {}°",
+            rms.to_degrees()
+        );
+        for (a, b) in frames.iter().zip(&before) {
+            for j in (0..55).filter(|&j| j != joint::NECK && j != joint::HEAD) {
+                assert_eq!(a.joint_axis_angle(j), b.joint_axis_angle(j));
+            }
+            assert_eq!(a.transl, b.transl);
+        }
+        // The heads returned are the posed bodies'.
+        let again =
+            cpf.world_from_cpf(&shaped.skeleton(&frames[7].pose, frames[7].transl).unwrap());
+        assert!(again.abs_diff_eq(heads[7], 1e-12));
+    }
+}
