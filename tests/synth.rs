@@ -1743,8 +1743,8 @@ fn a_wanderers_head_moves_like_a_head() {
     for s in &stats[..2] {
         for part in ["head_acceleration", "pelvis_acceleration"] {
             let a = &s[part];
-            assert!(a["seam_ratio_median"].as_f64().unwrap() < 1.3, "{part} {s}");
-            assert!(a["seam_ratio_p95"].as_f64().unwrap() < 1.5, "{part} {s}");
+            assert!(a["join_ratio_median"].as_f64().unwrap() < 1.3, "{part} {s}");
+            assert!(a["join_ratio_p95"].as_f64().unwrap() < 1.5, "{part} {s}");
         }
         assert!(
             s["head_acceleration"]["all"]["p95"].as_f64().unwrap() < 8.0,
@@ -1757,7 +1757,7 @@ fn a_wanderers_head_moves_like_a_head() {
     let (_decoded, stats) = take("smooth_joins = false\nsteady_head = false");
     for s in &stats[..2] {
         assert!(
-            s["head_acceleration"]["seam_ratio_median"]
+            s["head_acceleration"]["join_ratio_median"]
                 .as_f64()
                 .unwrap()
                 > 3.0,

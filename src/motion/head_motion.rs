@@ -9,7 +9,7 @@
 //! Definitions, on a track of head poses at [`STATS_RATE_HZ`] in a z-up world, the head frame's
 //! z axis its viewing direction (egogen's CPF):
 //! - linear acceleration of frame `f`: `|x(f+1) − 2 x(f) + x(f−1)| · rate²`;
-//! - seam frames: the two frames whose central difference spans the join of two primitives
+//! - join frames: the two frames whose central difference spans the join of two primitives
 //!   (the last of one, the first of the next: frames `f` with `(f − 2) mod 18` = 17 or 0), the
 //!   same frames on a real track, where nothing joins;
 //! - angular speed of frame `f`: the angle of `R(f)ᵀ R(f+1)` · rate;
@@ -82,19 +82,19 @@ impl Spread {
 
 /// Linear acceleration on the frames where primitives join against the frames inside them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SeamAcceleration {
+pub struct JoinAcceleration {
     /// Every frame (m/s²).
     pub all: Spread,
     /// Walking frames (m/s²).
     pub walking: Spread,
-    /// Seam frames (m/s²).
-    pub seam: Spread,
+    /// Join frames (m/s²).
+    pub join: Spread,
     /// Frames inside primitives (m/s²).
     pub inside: Spread,
-    /// Seam median over inside median.
-    pub seam_ratio_median: Real,
-    /// Seam p95 over inside p95.
-    pub seam_ratio_p95: Real,
+    /// Join-frame median over inside median.
+    pub join_ratio_median: Real,
+    /// Join-frame p95 over inside p95.
+    pub join_ratio_p95: Real,
 }
 
 /// What an IMU on the head reads while walking.
@@ -113,10 +113,10 @@ pub struct HeadMotionStats {
     pub duration_s: Real,
     pub walking_s: Real,
     /// Head linear acceleration.
-    pub head_acceleration: SeamAcceleration,
+    pub head_acceleration: JoinAcceleration,
     /// Pelvis linear acceleration, where the source has a pelvis.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub pelvis_acceleration: Option<SeamAcceleration>,
+    pub pelvis_acceleration: Option<JoinAcceleration>,
     /// Head angular speed while walking (rad/s).
     pub angular_speed: Spread,
     pub yaw_sway_rms_deg: Real,
@@ -133,7 +133,7 @@ pub struct HeadMotionStats {
 }
 
 /// Whether frame `f`'s central difference spans the join of two primitives.
-pub fn is_seam_frame(f: usize) -> bool {
+pub fn is_join_frame(f: usize) -> bool {
     f + 1 >= SEED_FRAMES && {
         let k = (f + 1 - SEED_FRAMES) % NEW_FRAMES;
         k == 0 || k == 1
@@ -152,7 +152,7 @@ fn accelerations(points: &[Vec3], rate_hz: Real) -> Vec<Real> {
         .collect()
 }
 
-fn seam_acceleration(points: &[Vec3], rate_hz: Real, walking: &[bool]) -> SeamAcceleration {
+fn join_acceleration(points: &[Vec3], rate_hz: Real, walking: &[bool]) -> JoinAcceleration {
     let acc = accelerations(points, rate_hz);
     let pick = |keep: &dyn Fn(usize) -> bool| {
         Spread::of(
@@ -162,15 +162,15 @@ fn seam_acceleration(points: &[Vec3], rate_hz: Real, walking: &[bool]) -> SeamAc
                 .map(|(_, a)| *a),
         )
     };
-    let seam = pick(&|f| is_seam_frame(f));
-    let inside = pick(&|f| !is_seam_frame(f));
-    SeamAcceleration {
+    let join = pick(&|f| is_join_frame(f));
+    let inside = pick(&|f| !is_join_frame(f));
+    JoinAcceleration {
         all: pick(&|_| true),
         walking: pick(&|f| walking[f]),
-        seam,
+        join,
         inside,
-        seam_ratio_median: seam.median / inside.median,
-        seam_ratio_p95: seam.p95 / inside.p95,
+        join_ratio_median: join.median / inside.median,
+        join_ratio_p95: join.p95 / inside.p95,
     }
 }
 
@@ -387,8 +387,8 @@ impl HeadMotionStats {
             label: label.to_string(),
             duration_s: n.saturating_sub(1) as Real / rate,
             walking_s: walking.iter().filter(|w| **w).count() as Real / rate,
-            head_acceleration: seam_acceleration(&points, rate, &walking),
-            pelvis_acceleration: pelvis.map(|p| seam_acceleration(p, rate, &walking)),
+            head_acceleration: join_acceleration(&points, rate, &walking),
+            pelvis_acceleration: pelvis.map(|p| join_acceleration(p, rate, &walking)),
             angular_speed,
             yaw_sway_rms_deg: rms_over(&yaw_res, &kept).to_degrees(),
             path_ahead_deg,
@@ -573,13 +573,13 @@ mod tests {
         // Bob acceleration peaks at 0.015 (4π)² = 2.37 m/s².
         assert!((s.head_acceleration.all.max - 0.015 * (4.0 * PI).powi(2)).abs() < 0.05);
         assert!(
-            (s.head_acceleration.seam_ratio_median - 1.0).abs() < 0.3,
+            (s.head_acceleration.join_ratio_median - 1.0).abs() < 0.3,
             "{s:?}"
         );
     }
 
     #[test]
-    fn a_velocity_jump_at_every_join_shows_on_the_seam_frames() {
+    fn a_velocity_jump_at_every_join_shows_on_the_join_frames() {
         let mut t = walker(0.0, 0.0);
         // Shift everything after each join back by 1 cm: a velocity jump at the join.
         let mut shift = 0.0;
@@ -590,14 +590,14 @@ mod tests {
             t.world_from_head[f].translation.x -= shift;
         }
         let s = HeadMotionStats::measure("w", &t, None, None, None);
-        assert!((s.head_acceleration.seam.median - 0.01 * 1600.0).abs() < 1e-6);
+        assert!((s.head_acceleration.join.median - 0.01 * 1600.0).abs() < 1e-6);
         assert!(s.head_acceleration.inside.p95 < 1e-6);
     }
 
     #[test]
-    fn seam_frames_are_the_two_either_side_of_each_join() {
-        let seams: Vec<usize> = (0..60).filter(|&f| is_seam_frame(f)).collect();
-        assert_eq!(seams, vec![1, 2, 19, 20, 37, 38, 55, 56]);
+    fn join_frames_are_the_two_either_side_of_each_join() {
+        let joins: Vec<usize> = (0..60).filter(|&f| is_join_frame(f)).collect();
+        assert_eq!(joins, vec![1, 2, 19, 20, 37, 38, 55, 56]);
     }
 
     #[test]
