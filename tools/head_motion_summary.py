@@ -10,17 +10,17 @@ import math
 import sys
 
 STATS = [
-    ("head acc median", lambda r: r["head_acceleration"]["all"]["median"], "m/s²"),
+    ("head acc median", lambda r: r["head_acceleration"]["all"]["p50"], "m/s²"),
     ("head acc p95", lambda r: r["head_acceleration"]["all"]["p95"], "m/s²"),
     ("join frames / inside median", lambda r: r["head_acceleration"]["join_ratio_median"], "×"),
     ("join frames / inside p95", lambda r: r["head_acceleration"]["join_ratio_p95"], "×"),
     ("pelvis acc p95", lambda r: (r.get("pelvis_acceleration") or {}).get("all", {}).get("p95"), "m/s²"),
     ("pelvis join frames / inside median", lambda r: (r.get("pelvis_acceleration") or {}).get("join_ratio_median"), "×"),
     ("pelvis join frames / inside p95", lambda r: (r.get("pelvis_acceleration") or {}).get("join_ratio_p95"), "×"),
-    ("angular speed median", lambda r: r["angular_speed"]["median"], "rad/s"),
+    ("angular speed median", lambda r: r["angular_speed"]["p50"], "rad/s"),
     ("angular speed p95", lambda r: r["angular_speed"]["p95"], "rad/s"),
     ("yaw sway RMS", lambda r: r["yaw_sway_rms_deg"], "°"),
-    ("heading to the path 2 m ahead, median", lambda r: r["path_ahead_deg"]["median"], "°"),
+    ("heading to the path 2 m ahead, median", lambda r: r["path_ahead_deg"]["p50"], "°"),
     ("vertical bob RMS", lambda r: r["bob_rms_mm"], "mm"),
     ("step frequency", lambda r: r["step_hz"], "Hz"),
     ("IMU specific force p99", lambda r: r["imu"]["specific_force"]["p99"], "m/s²"),

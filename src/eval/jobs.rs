@@ -838,7 +838,7 @@ fn path_follow_row(
     fixed: &crate::policy::env::FixedScene,
 ) -> Result<PolicyRow> {
     use super::metrics::AgentResult;
-    use crate::motion::cvae::pace::Quantiles;
+    use crate::math::Quantiles;
     use crate::synth::crowd::{
         run_crowd, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld,
     };

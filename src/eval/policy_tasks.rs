@@ -7,10 +7,10 @@ use rand_core::{Rng, SeedableRng};
 use serde::Serialize;
 
 use crate::body::BodyParams;
+use crate::math::Quantiles;
 use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Vec3};
 use crate::motion::cvae::data::PrimitiveSet;
 use crate::motion::cvae::features::{frame_params, FRAME_DIM};
-use crate::motion::cvae::pace::Quantiles;
 use crate::motion::cvae::train::normal_samples;
 use crate::motion::cvae::MotionModel;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};

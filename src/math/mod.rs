@@ -1,5 +1,6 @@
 //! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps, seeded
-//! random draws, colour conversions, small least-squares solves.
+//! random draws, colour conversions, small least-squares solves, quantiles of a sample and
+//! angles wrapped to (−π, π].
 //!
 //! Conventions used across egogen:
 //! - Lengths are metres, angles radians, time seconds unless a name says otherwise.
@@ -37,6 +38,56 @@ pub fn quantile(sorted: &[Real], p: Real) -> Real {
     }
 }
 
+/// Quantiles of a sample, with its mean and size.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Quantiles {
+    pub count: usize,
+    pub mean: f64,
+    pub p05: f64,
+    pub p10: f64,
+    pub p25: f64,
+    pub p50: f64,
+    pub p75: f64,
+    pub p95: f64,
+    pub p99: f64,
+    pub max: f64,
+}
+
+impl Quantiles {
+    /// Quantiles (nearest rank) of the finite values of `values`; all NaN when there are none.
+    pub fn of(values: impl IntoIterator<Item = f64>) -> Quantiles {
+        let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        let q = |p: f64| quantile(&v, p);
+        Quantiles {
+            count: v.len(),
+            mean: if v.is_empty() {
+                f64::NAN
+            } else {
+                v.iter().sum::<f64>() / v.len() as f64
+            },
+            p05: q(0.05),
+            p10: q(0.1),
+            p25: q(0.25),
+            p50: q(0.5),
+            p75: q(0.75),
+            p95: q(0.95),
+            p99: q(0.99),
+            max: q(1.0),
+        }
+    }
+}
+
+/// Wraps an angle to (−π, π].
+pub fn wrap_rad(a: f64) -> f64 {
+    let w = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+    if w <= -std::f64::consts::PI {
+        w + std::f64::consts::TAU
+    } else {
+        w
+    }
+}
+
 /// Axis-aligned bounds (min, max) of `points`; `None` for none.
 pub(crate) fn point_bounds<'a>(points: impl IntoIterator<Item = &'a Vec3>) -> Option<(Vec3, Vec3)> {
     let mut points = points.into_iter();
@@ -64,4 +115,30 @@ pub(crate) fn row_major(m: Affine3) -> [[f64; 4]; 4] {
 pub(crate) fn affine_from_row_major(rows: &[[f64; 4]; 4]) -> Option<Affine3> {
     let a = Affine3::from_mat4(glam::DMat4::from_cols_array_2d(rows).transpose());
     a.is_finite().then_some(a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrap_stays_in_range_at_the_extremes() {
+        use std::f64::consts::PI;
+        for a in [PI, -PI, 3.0 * PI, -3.0 * PI, 1e-12, -1e-12, 1e6, -1e6] {
+            let w = wrap_rad(a);
+            assert!(w > -PI && w <= PI, "{a} -> {w}");
+            assert!(((w - a) / std::f64::consts::TAU).fract().abs() < 1e-6 || (w - a).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn quantiles_of_a_known_sample() {
+        let q = Quantiles::of((0..=100).map(f64::from).chain([f64::NAN]));
+        assert_eq!(
+            (q.count, q.p05, q.p10, q.p50, q.p95, q.p99, q.max),
+            (101, 5.0, 10.0, 50.0, 95.0, 99.0, 100.0)
+        );
+        assert!((q.mean - 50.0).abs() < 1e-12);
+        assert!(Quantiles::of(std::iter::empty()).p50.is_nan());
+    }
 }

@@ -28,7 +28,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::primitive::{NEW_FRAMES, SEED_FRAMES};
-use crate::math::{quantile, Affine3, Mat3, Real, Vec3};
+use crate::math::{wrap_rad, Affine3, Mat3, Quantiles, Real, Vec3};
 
 /// The rate every track is measured at (the motion model's).
 pub const STATS_RATE_HZ: Real = 40.0;
@@ -58,39 +58,17 @@ pub struct ImuTrace {
     pub gyro: Vec<Real>,
 }
 
-/// Percentiles of a quantity.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Spread {
-    pub median: Real,
-    pub p95: Real,
-    pub p99: Real,
-    pub max: Real,
-}
-
-impl Spread {
-    fn of(values: impl IntoIterator<Item = Real>) -> Spread {
-        let mut v: Vec<Real> = values.into_iter().filter(|x| x.is_finite()).collect();
-        v.sort_by(Real::total_cmp);
-        Spread {
-            median: quantile(&v, 0.5),
-            p95: quantile(&v, 0.95),
-            p99: quantile(&v, 0.99),
-            max: quantile(&v, 1.0),
-        }
-    }
-}
-
 /// Linear acceleration on the frames where primitives join against the frames inside them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct JoinAcceleration {
     /// Every frame (m/s²).
-    pub all: Spread,
+    pub all: Quantiles,
     /// Walking frames (m/s²).
-    pub walking: Spread,
+    pub walking: Quantiles,
     /// Join frames (m/s²).
-    pub join: Spread,
+    pub join: Quantiles,
     /// Frames inside primitives (m/s²).
-    pub inside: Spread,
+    pub inside: Quantiles,
     /// Join-frame median over inside median.
     pub join_ratio_median: Real,
     /// Join-frame p95 over inside p95.
@@ -101,9 +79,9 @@ pub struct JoinAcceleration {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ImuStats {
     /// |specific force| (m/s²).
-    pub specific_force: Spread,
+    pub specific_force: Quantiles,
     /// |angular rate| (rad/s).
-    pub gyro: Spread,
+    pub gyro: Quantiles,
 }
 
 /// The statistics of one head track (and, where the source has a body, its pelvis).
@@ -118,13 +96,13 @@ pub struct HeadMotionStats {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pelvis_acceleration: Option<JoinAcceleration>,
     /// Head angular speed while walking (rad/s).
-    pub angular_speed: Spread,
+    pub angular_speed: Quantiles,
     pub yaw_sway_rms_deg: Real,
     /// While walking, the angle between the viewing direction's heading and the direction to
     /// the point of the head's own path [`PATH_AHEAD_M`] on (reached within
     /// [`PATH_AHEAD_MAX_S`]), degrees: how far the eyes turn from the head to look where the
     /// walk goes.
-    pub path_ahead_deg: Spread,
+    pub path_ahead_deg: Quantiles,
     pub bob_rms_mm: Real,
     /// NaN where the track walks too little to tell.
     pub step_hz: Real,
@@ -155,7 +133,7 @@ fn accelerations(points: &[Vec3], rate_hz: Real) -> Vec<Real> {
 fn join_acceleration(points: &[Vec3], rate_hz: Real, walking: &[bool]) -> JoinAcceleration {
     let acc = accelerations(points, rate_hz);
     let pick = |keep: &dyn Fn(usize) -> bool| {
-        Spread::of(
+        Quantiles::of(
             acc.iter()
                 .enumerate()
                 .filter(|(f, _)| keep(*f))
@@ -169,7 +147,7 @@ fn join_acceleration(points: &[Vec3], rate_hz: Real, walking: &[bool]) -> JoinAc
         walking: pick(&|f| walking[f]),
         join,
         inside,
-        join_ratio_median: join.median / inside.median,
+        join_ratio_median: join.p50 / inside.p50,
         join_ratio_p95: join.p95 / inside.p95,
     }
 }
@@ -277,12 +255,6 @@ pub fn unwrapped_yaw(world_from_head: &[Affine3]) -> Vec<Real> {
     out
 }
 
-/// `a` wrapped into (−π, π].
-pub fn wrap(a: Real) -> Real {
-    let tau = std::f64::consts::TAU;
-    a - tau * ((a + std::f64::consts::PI) / tau).ceil() + tau
-}
-
 /// Per frame, the heading (rad) from the head to the point of its own path `ahead_m` on
 /// (horizontal path length), where the head gets there within `max_frames` frames.
 pub fn path_ahead_heading(points: &[Vec3], ahead_m: Real, max_frames: usize) -> Vec<Option<Real>> {
@@ -349,21 +321,22 @@ impl HeadMotionStats {
             .zip(moving_average(&z, half))
             .map(|(y, m)| y - m)
             .collect();
-        let angular_speed = Spread::of((0..n.saturating_sub(1)).filter(|&f| walking[f]).map(|f| {
-            angle_between(
-                head.world_from_head[f].matrix3,
-                head.world_from_head[f + 1].matrix3,
-            ) * rate
-        }));
+        let angular_speed =
+            Quantiles::of((0..n.saturating_sub(1)).filter(|&f| walking[f]).map(|f| {
+                angle_between(
+                    head.world_from_head[f].matrix3,
+                    head.world_from_head[f + 1].matrix3,
+                ) * rate
+            }));
         let ahead = path_ahead_heading(
             &points,
             PATH_AHEAD_M,
             (PATH_AHEAD_MAX_S * rate).round() as usize,
         );
-        let path_ahead_deg = Spread::of(
+        let path_ahead_deg = Quantiles::of(
             (0..n)
                 .filter(|&f| walking[f])
-                .filter_map(|f| ahead[f].map(|a| wrap(a - yaw[f]).abs().to_degrees())),
+                .filter_map(|f| ahead[f].map(|a| wrap_rad(a - yaw[f]).abs().to_degrees())),
         );
         let imu = imu.map(|t| {
             let walking_at = |k: usize| {
@@ -371,7 +344,7 @@ impl HeadMotionStats {
                 walking.get(f).copied().unwrap_or(false)
             };
             let pick = |v: &[Real]| {
-                Spread::of(
+                Quantiles::of(
                     v.iter()
                         .enumerate()
                         .filter(|(k, _)| walking_at(*k))
@@ -590,7 +563,7 @@ mod tests {
             t.world_from_head[f].translation.x -= shift;
         }
         let s = HeadMotionStats::measure("w", &t, None, None, None);
-        assert!((s.head_acceleration.join.median - 0.01 * 1600.0).abs() < 1e-6);
+        assert!((s.head_acceleration.join.p50 - 0.01 * 1600.0).abs() < 1e-6);
         assert!(s.head_acceleration.inside.p95 < 1e-6);
     }
 
@@ -619,7 +592,7 @@ mod tests {
         assert_eq!(ahead[7], None);
         assert_eq!(path_ahead_heading(&points, 3.0, 2)[0], None);
         for a in [-7.0, -PI, -1.0, 0.0, PI, 4.0, 100.0] {
-            let w = wrap(a);
+            let w = wrap_rad(a);
             assert!(w > -PI - 1e-12 && w <= PI + 1e-12, "{a} → {w}");
             assert!(
                 ((a - w) / std::f64::consts::TAU).fract().abs() < 1e-9

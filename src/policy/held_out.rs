@@ -11,7 +11,7 @@
 use serde::Serialize;
 
 use super::env::{Ending, EnvError, EpisodeSummary, PolicyEnv, StepOutput};
-use crate::motion::cvae::pace::Quantiles;
+use crate::math::Quantiles;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 
 /// Episode base of held-out evaluation episodes (training bases are small integers).

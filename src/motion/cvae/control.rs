@@ -19,11 +19,12 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use super::infer::{BodyContext, DecodeError, DecodedPrimitive, MotionModel, PrimitiveSeed};
-use super::pace::{heading_rad, wrap_rad, Pace, PACE_SPAN_S};
+use super::pace::{heading_rad, Pace, PACE_SPAN_S};
 use super::sampler::{plausibility, Plausibility, PlausibilityRules};
 use super::tensor_body::RigGeometry;
 use crate::body::joint;
 use crate::math::random::normal_samples;
+use crate::math::wrap_rad;
 use crate::motion::primitive::SEED_FRAMES;
 use crate::motion::MotionSequence;
 

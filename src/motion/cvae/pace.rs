@@ -10,6 +10,8 @@
 use burn::prelude::*;
 use serde::Serialize;
 
+use crate::math::{wrap_rad, Quantiles};
+
 use super::data::PrimitiveSet;
 use super::loss::pose_frames;
 use super::measure::set_batch;
@@ -26,16 +28,6 @@ pub fn heading_rad(joints: &[Vec3]) -> f64 {
     let right = joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP];
     // Forward = z × right, horizontal.
     (right.x).atan2(-right.y)
-}
-
-/// Wraps an angle to (−π, π].
-pub(crate) fn wrap_rad(a: f64) -> f64 {
-    let w = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
-    if w <= -std::f64::consts::PI {
-        w + std::f64::consts::TAU
-    } else {
-        w
-    }
 }
 
 /// How fast a primitive moves and how far it turns.
@@ -108,44 +100,6 @@ pub(crate) fn raw_paces<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Vec<
     (0..b)
         .map(|i| Pace::between(&as_joints(&first, i), &as_joints(&last, i)))
         .collect()
-}
-
-/// Quantiles of a sample, with its mean and size.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Quantiles {
-    pub count: usize,
-    pub mean: f64,
-    pub p05: f64,
-    pub p10: f64,
-    pub p25: f64,
-    pub p50: f64,
-    pub p75: f64,
-    pub p95: f64,
-    pub max: f64,
-}
-
-impl Quantiles {
-    /// Quantiles (nearest rank) of the finite values of `values`; all NaN when there are none.
-    pub fn of(values: impl IntoIterator<Item = f64>) -> Quantiles {
-        let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
-        v.sort_by(f64::total_cmp);
-        let q = |p: f64| crate::math::quantile(&v, p);
-        Quantiles {
-            count: v.len(),
-            mean: if v.is_empty() {
-                f64::NAN
-            } else {
-                v.iter().sum::<f64>() / v.len() as f64
-            },
-            p05: q(0.05),
-            p10: q(0.1),
-            p25: q(0.25),
-            p50: q(0.5),
-            p75: q(0.75),
-            p95: q(0.95),
-            max: q(1.0),
-        }
-    }
 }
 
 /// Speed and turn distributions of a set of paces (turns as absolute degrees).
@@ -255,16 +209,6 @@ mod tests {
     }
 
     #[test]
-    fn wrap_stays_in_range_at_the_extremes() {
-        use std::f64::consts::PI;
-        for a in [PI, -PI, 3.0 * PI, -3.0 * PI, 1e-12, -1e-12, 1e6, -1e6] {
-            let w = wrap_rad(a);
-            assert!(w > -PI && w <= PI, "{a} -> {w}");
-            assert!(((w - a) / std::f64::consts::TAU).fract().abs() < 1e-6 || (w - a).abs() < 1e-9);
-        }
-    }
-
-    #[test]
     fn speed_by_turn_bins_each_primitive_once_by_its_absolute_turn() {
         let p = |speed_m_s, turn_deg| Pace {
             speed_m_s,
@@ -295,16 +239,5 @@ mod tests {
         );
         assert_eq!(bins[0].speed_m_s.max, 1.4);
         assert!(speed_by_turn(&[]).is_empty());
-    }
-
-    #[test]
-    fn quantiles_of_a_known_sample() {
-        let q = Quantiles::of((0..=100).map(f64::from).chain([f64::NAN]));
-        assert_eq!(
-            (q.count, q.p05, q.p10, q.p50, q.p95, q.max),
-            (101, 5.0, 10.0, 50.0, 95.0, 100.0)
-        );
-        assert!((q.mean - 50.0).abs() < 1e-12);
-        assert!(Quantiles::of(std::iter::empty()).p50.is_nan());
     }
 }

@@ -7,7 +7,8 @@ use serde::Serialize;
 
 use super::control::{chain_speed_m_s, relative_norm, Controlled, LatentController, PaceTarget};
 use super::infer::{BodyContext, DecodeError, MotionModel, PrimitiveSeed};
-use super::pace::{wrap_rad, Pace, Quantiles, PACE_SPAN_S};
+use super::pace::{Pace, PACE_SPAN_S};
+use crate::math::{wrap_rad, Quantiles};
 
 /// A straight walk asked for one pace.
 #[derive(Debug, Clone, Serialize)]
