@@ -519,7 +519,7 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(j) = &json {
                 refuse_existing(j)?;
             }
-            egogen::cli::motion_jobs::motion_head_stats(
+            egogen::cli::head_stats_jobs::motion_head_stats(
                 &sources,
                 &model_path(model),
                 &rig,
