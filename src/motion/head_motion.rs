@@ -28,7 +28,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use super::primitive::{NEW_FRAMES, SEED_FRAMES};
-use crate::math::{wrap_rad, Affine3, Mat3, Quantiles, Real, Vec3};
+use crate::math::{matrix_to_axis_angle, wrap_rad, Affine3, Mat3, Quantiles, Real, Vec3};
 
 /// The rate every track is measured at (the motion model's).
 pub const STATS_RATE_HZ: Real = 40.0;
@@ -281,10 +281,9 @@ pub fn path_ahead_heading(points: &[Vec3], ahead_m: Real, max_frames: usize) -> 
         .collect()
 }
 
+/// The angle of the rotation from `a` to `b` (accurate near 0, where `acos` of the trace is not).
 fn angle_between(a: Mat3, b: Mat3) -> Real {
-    let r = a.transpose() * b;
-    let c = ((r.x_axis.x + r.y_axis.y + r.z_axis.z - 1.0) * 0.5).clamp(-1.0, 1.0);
-    c.acos()
+    matrix_to_axis_angle(a.transpose() * b).length()
 }
 
 impl HeadMotionStats {
