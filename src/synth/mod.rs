@@ -1,5 +1,7 @@
 //! Synth: motion + body → per-frame posed bodies and eye-anchor (CPF) trajectories, and the
-//! sequence folder they are written to: crowds of agents steered through a scene (`crowd`),
+//! sequence folder they are written to: crowds of agents steered through a scene, their motion
+//! finished as written (joins smoothed, head steadied: `motion::joins`, `motion::head_stabilise`)
+//! (`crowd`),
 //! what they do besides walking (`activity`: standing and looking around, sitting, picking up),
 //! placing a motion in it (`placement`), a take of agents from its plan (`take`), the penetration tests (`penetration`), and the body
 //! caches Blender plays (`body_cache`).
