@@ -18,17 +18,19 @@ use egogen::motion::cvae::infer::InferBackend;
 use egogen::motion::cvae::train::shipped_weights_path;
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::motion::MotionSequence;
-use egogen::policy::pose_prior::shipped_pose_prior_path;
-use egogen::policy::{PosePrior, SeedBank, WalkerSettings};
+use egogen::policy::SeedBank;
 use egogen::scene::WalkableMap;
 use egogen::synth::crowd::{
-    run_crowd, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld, NEW_FRAMES,
+    run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, NEW_FRAMES,
 };
+use egogen::walker::pose_prior::shipped_pose_prior_path;
+use egogen::walker::ControllerSpec;
+use egogen::walker::{PosePrior, WalkerSettings};
 use glam::DVec2;
 
 const PRIMITIVES: usize = 8;
 
-fn circle(n: usize, radius_m: f64, steering: Controller) -> Vec<AgentPlan> {
+fn circle(n: usize, radius_m: f64, steering: ControllerSpec) -> Vec<AgentPlan> {
     (0..n)
         .map(|i| {
             let p = DVec2::from_angle(std::f64::consts::TAU * i as f64 / n as f64) * radius_m;
@@ -91,12 +93,12 @@ fn bench(c: &mut Criterion) {
     };
     let mut g = c.benchmark_group("synth_crowd");
     g.sample_size(10);
-    let steer = Controller::POLICY;
+    let steer = ControllerSpec::POLICY;
     let cases = [
         ("policy", 1usize, steer),
         ("policy", 4, steer),
         ("policy", 16, steer),
-        ("sampling_k16", 1, Controller::Sampling { k: 16 }),
+        ("sampling_k16", 1, ControllerSpec::Sampling { k: 16 }),
     ];
     for (name, agents, steering) in cases {
         let plans = circle(agents, 4.0, steering);
@@ -165,7 +167,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("synth_step_parts");
     g.sample_size(20);
     let seed = bank.seeds[0].clone();
-    let view_seed = egogen::policy::walker::place_seed(
+    let view_seed = egogen::walker::state::place_seed(
         &seed.0,
         seed.1,
         DVec2::new(-2.0, 0.0),
@@ -173,15 +175,15 @@ fn bench(c: &mut Criterion) {
         0.0,
         ctx.shaped.rest_joints[0],
     );
-    let view = egogen::policy::walker::SeedView::new(&ctx, view_seed.clone()).unwrap();
-    let walker = egogen::policy::walker::Walker::new(view, DVec2::new(2.0, 0.0));
+    let view = egogen::walker::state::SeedView::new(&ctx, view_seed.clone()).unwrap();
+    let walker = egogen::walker::state::Walker::new(view, DVec2::new(2.0, 0.0));
     let sensor = egogen::sensing::Sensor::default();
-    let around = egogen::policy::walker::Surroundings {
+    let around = egogen::walker::state::Surroundings {
         map: &world.map,
         obstacle: None,
         moving: &[],
     };
-    let mut obs = vec![0f32; egogen::policy::ObsLayout::PAPER.dim()];
+    let mut obs = vec![0f32; egogen::walker::ObsLayout::PAPER.dim()];
     g.bench_function("observe", |b| {
         b.iter(|| {
             walker.observe_into(
@@ -221,14 +223,14 @@ fn bench(c: &mut Criterion) {
         .unwrap()
         .foot_markers;
     let situation = walker.situation(&around, DVec2::new(2.0, 0.0), 0.0);
-    let limits = egogen::policy::reward::Limits::eq7(0.3);
+    let limits = egogen::walker::reward::Limits::eq7(0.3);
     g.bench_function("judge", |b| {
-        b.iter(|| egogen::policy::reward::judge(&p, &situation, &feet, &prior, &limits))
+        b.iter(|| egogen::walker::reward::judge(&p, &situation, &feet, &prior, &limits))
     });
     // The same with the scene tested at every frame (what a take's agents pay per draw).
-    let swept = egogen::policy::reward::Limits::swept(0.3);
+    let swept = egogen::walker::reward::Limits::swept(0.3);
     g.bench_function("judge_swept", |b| {
-        b.iter(|| egogen::policy::reward::judge(&p, &situation, &feet, &prior, &swept))
+        b.iter(|| egogen::walker::reward::judge(&p, &situation, &feet, &prior, &swept))
     });
     g.bench_function("agent_setup", |b| {
         b.iter(|| BodyContext::new(&body, &[0.5, -0.5]).unwrap())

@@ -37,3 +37,4 @@ pub mod sensing;
 pub mod supervisor;
 pub mod synth;
 pub mod vertex_cache;
+pub mod walker;

@@ -9,12 +9,14 @@ mod common;
 use egogen::body::BodyModel;
 use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
-use egogen::policy::env::{Ending, STATE_FRAME_DIM};
-use egogen::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
-use egogen::policy::reward::Judged;
+use egogen::policy::env::Ending;
 use egogen::policy::sampling::sampling_step;
-use egogen::policy::{EnvSettings, ObsLayout, PolicyEnv, SeedBank};
+use egogen::policy::{EnvSettings, PolicyEnv, SeedBank};
 use egogen::scene::generated::box_scene::{BoxScene, BoxSceneSettings};
+use egogen::walker::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
+use egogen::walker::reward::Judged;
+use egogen::walker::ObsLayout;
+use egogen::walker::STATE_FRAME_DIM;
 
 /// The paper's observation layout (32 rays), which environments use unless told otherwise.
 const LAYOUT: ObsLayout = ObsLayout::PAPER;
@@ -351,8 +353,8 @@ fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
 #[test]
 fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
     use egogen::policy::env::FixedScene;
-    use egogen::policy::reward::EQ11_VERTICES;
     use egogen::scene::{SceneMesh, SceneSdf, StartGoal, WalkableMap};
+    use egogen::walker::reward::EQ11_VERTICES;
     env_parts!(body, ctx, model, bank, prior);
     // An open floor (the map sees nothing) with a closed 1.6 × 1.6 × 2 m pillar over the first
     // pair's start, which only the 3D SDF knows of; the second pair starts 4 m from it.
@@ -409,7 +411,7 @@ fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
 
     // Training's test (Eq. 11 on a vertex subset) decides instead of Eq. 7: the body in the
     // pillar penetrates and loses the penetration term, the free one does not.
-    let test = egogen::policy::reward::SceneTest::new(&body, 1024);
+    let test = egogen::walker::reward::SceneTest::new(&body, 1024);
     assert_eq!(test.vertices(), 1024);
     let expected = (40.0 * 1024.0 / body.num_vertices() as f64)
         .round()
@@ -520,7 +522,7 @@ fn a_fixed_share_mixes_scene_pairs_with_box_scenes_each_on_its_own_clock() {
     // doubled indoors and tripled in box scenes doubles and triples their rewards (the reward
     // is linear in the weights).
     let w = settings.weights;
-    let scaled = |f: f64| egogen::policy::reward::WeightChanges {
+    let scaled = |f: f64| egogen::walker::reward::WeightChanges {
         floor: Some(f * w.floor),
         skate: Some(f * w.skate),
         goal: Some(f * w.goal),
@@ -1274,15 +1276,14 @@ fn paid_along_the_way_round_walls_only_the_goal_terms_change_and_only_indoors() 
 /// policy eval`'s environment (the f32 actor's mean actions stepping a [`PolicyEnv`], as
 /// `eval::policy_tasks` does) and through a take's agent (`synth::crowd::run_crowd`, steered
 /// by the policy's mean action), frame for frame, bit for bit: both choose by the one step
-/// (`policy::step::choose_primitive`).
+/// (`walker::step::choose_primitive`).
 #[test]
 fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
     use egogen::policy::env::FixedScene;
     use egogen::scene::generated::crossing_scene::{CrossingScene, CrossingSettings};
     use egogen::scene::StartGoal;
-    use egogen::synth::crowd::{
-        run_crowd, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld,
-    };
+    use egogen::synth::crowd::{run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld};
+    use egogen::walker::ControllerSpec;
     use std::sync::Arc;
 
     env_parts!(body, ctx, model, bank, prior);
@@ -1346,13 +1347,13 @@ fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
         facing_rad: None,
         goals: vec![goal],
         wander: false,
-        steering: Controller::Policy {
+        steering: ControllerSpec::Policy {
             mean_action: true,
             spread: 1.0,
         },
     };
     let crowd = CrowdSettings {
-        walker: egogen::policy::WalkerSettings {
+        walker: egogen::walker::WalkerSettings {
             success_m: 0.1,
             max_primitives_per_goal: PER_GOAL,
             // The frames as decoded: the take's finishing (joins smoothed, head steadied)

@@ -13,7 +13,7 @@ use burn::prelude::*;
 use egogen::motion::cvae::train::TrainBackend;
 use egogen::policy::net::{kl_to_standard, PolicyArch};
 use egogen::policy::ppo::clip_global_norm;
-use egogen::policy::ObsLayout;
+use egogen::walker::ObsLayout;
 
 const OBS_DIM: usize = ObsLayout::PAPER.dim();
 

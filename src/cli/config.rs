@@ -4,9 +4,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::policy::WalkerSettings;
 use crate::render::render_camera::FisheyeRendering;
 use crate::synth::activity::ActivitySettings;
+use crate::walker::WalkerSettings;
 
 pub use super::config_file::{load_toml, Bad, ConfigError};
 

@@ -48,7 +48,7 @@ fn with_walker_hint(message: String) -> String {
         .and_then(|rest| rest.split('`').next());
     match refused {
         Some(key)
-            if crate::policy::WalkerSettings::keys()
+            if crate::walker::WalkerSettings::keys()
                 .iter()
                 .any(|k| k == key) =>
         {

@@ -101,7 +101,7 @@ fn load_common() -> Result<SuiteParts> {
     let model =
         crate::motion::cvae::MotionModel::load(crate::motion::cvae::train::shipped_weights_path())?;
     let prior =
-        crate::policy::PosePrior::load(&crate::policy::pose_prior::shipped_pose_prior_path())?;
+        crate::walker::PosePrior::load(&crate::walker::pose_prior::shipped_pose_prior_path())?;
     let train_plan =
         super::train_primitive::load_train_plan(&root.join("configs/train_primitive.toml"))?;
     // Held-out seeds: whole clips never trained on.

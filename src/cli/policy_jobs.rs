@@ -176,8 +176,9 @@ pub enum PolicyCommand {
 pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
     use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
     use crate::motion::cvae::{BodyContext, MotionModel};
-    use crate::policy::pose_prior::shipped_pose_prior_path;
-    use crate::policy::{EnvSettings, PosePrior, SeedBank};
+    use crate::policy::{EnvSettings, SeedBank};
+    use crate::walker::pose_prior::shipped_pose_prior_path;
+    use crate::walker::PosePrior;
     match cmd {
         PolicyCommand::PosePrior {
             config,
@@ -334,7 +335,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
                 }
             }
-            if let Some((field, what)) = crate::policy::walker_settings::guide_problem(
+            if let Some((field, what)) = crate::walker::settings::guide_problem(
                 &crate::scene::Guide {
                     lookahead_m: guide_lookahead_m,
                     centre_weight: guide_centre_weight,
@@ -519,7 +520,8 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Re
     use crate::motion::cvae::{BodyContext, MotionModel};
     use crate::policy::env::EnvParts;
     use crate::policy::ppo::train_policy;
-    use crate::policy::{PosePrior, SeedBank};
+    use crate::policy::SeedBank;
+    use crate::walker::PosePrior;
     let mut plan = crate::cli::train_policy::load_policy_plan(config)?;
     let body = BodyModel::load(&plan.body_model)?;
     let ctx = BodyContext::new(&body, &[])?;

@@ -17,10 +17,11 @@ use super::config_file::{crate_root, resolve_body_model};
 use super::config_file::{load_toml, Bad, ConfigError};
 use crate::math::random::normal_samples;
 use crate::plan::{AgentDraft, SynthPlan};
-use crate::policy::WalkerSettings;
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableSettings};
 use crate::synth::activity::ActivitySettings;
-use crate::synth::crowd::{Controller, CrowdSettings};
+use crate::synth::crowd::CrowdSettings;
+use crate::walker::ControllerSpec;
+use crate::walker::WalkerSettings;
 
 /// Most agents in one take.
 pub(crate) const MAX_AGENTS: usize = 32;
@@ -180,7 +181,7 @@ pub(crate) struct RawSynth {
     pub output: RawSynthOutput,
 }
 
-fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<Controller, String> {
+fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<ControllerSpec, String> {
     match (name, spread) {
         (_, Some(x)) if !(x.is_finite() && x >= 0.0) => {
             return Err(format!("`action_spread`: expected a scale ≥ 0, got {x}"))
@@ -189,15 +190,15 @@ fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<Control
         _ => return Err("`action_spread` is for steering = \"policy\" only".into()),
     }
     match (name, k) {
-        ("policy", None) => Ok(Controller::Policy {
+        ("policy", None) => Ok(ControllerSpec::Policy {
             mean_action: false,
             spread: spread.unwrap_or(1.0),
         }),
-        ("policy_mean", None) => Ok(Controller::POLICY_MEAN),
+        ("policy_mean", None) => Ok(ControllerSpec::POLICY_MEAN),
         ("sampling" | "path_follow", k) => match (name, k.unwrap_or(16)) {
             (_, 0) => Err("`k` must be at least 1".into()),
-            ("sampling", k) => Ok(Controller::Sampling { k }),
-            (_, k) => Ok(Controller::PathFollow { k }),
+            ("sampling", k) => Ok(ControllerSpec::Sampling { k }),
+            (_, k) => Ok(ControllerSpec::PathFollow { k }),
         },
         ("policy" | "policy_mean", Some(_)) => {
             Err("`k` is for steering = \"sampling\" or \"path_follow\" only".into())
@@ -297,7 +298,7 @@ pub(crate) fn resolve_synth(
     .map_err(|m| bad("motion.duration_s", m))?;
     let policy = if agents
         .iter()
-        .any(|a| matches!(a.steering, Controller::Policy { .. }))
+        .any(|a| matches!(a.steering, ControllerSpec::Policy { .. }))
     {
         Some(file(
             "motion.policy",

@@ -196,7 +196,7 @@ const MAX_VALIDATION_EPISODES: usize = 100_000;
 fn check_training_memory(arch: &PolicyArch, p: &PpoSettings, bad: Bad) -> Result<(), ConfigError> {
     let f32_bytes = std::mem::size_of::<f32>() as f64;
     let network = 4.0 * arch.parameter_count() * f32_bytes;
-    let obs = crate::policy::walker::ObsLayout::of(&arch.sensing).dim();
+    let obs = crate::walker::state::ObsLayout::of(&arch.sensing).dim();
     let per_step = (obs + arch.latent_dim + 4) as f64 * f32_bytes;
     let rollout = p.envs as f64 * p.steps_per_env as f64 * per_step;
     let (key, what) = match network > rollout {
@@ -357,8 +357,7 @@ fn resolve_stage(
             format!("expected a radius > 0 m, got {}", e.success_m),
         ));
     }
-    if let Some((field, what)) =
-        crate::policy::walker_settings::guide_problem(&e.guide(), e.guide_memory)
+    if let Some((field, what)) = crate::walker::settings::guide_problem(&e.guide(), e.guide_memory)
     {
         return Err(bad(&key(&format!("env.{field}")), what));
     }

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 use crate::body::BodyParams;
-use crate::policy::PosePrior;
+use crate::walker::PosePrior;
 
 /// One row of Table 2 or 3: a controller (a policy with sampled or mean actions, or the
 /// sampling controller) on a set of held-out episodes.

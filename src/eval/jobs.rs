@@ -47,7 +47,7 @@ pub struct EvalJob {
 pub struct SuiteParts {
     pub body: BodyModel,
     pub model: crate::motion::cvae::MotionModel,
-    pub prior: crate::policy::PosePrior,
+    pub prior: crate::walker::PosePrior,
     pub bank: crate::policy::SeedBank,
     /// The pose embedding norm on the paper's scale, calibrated on the held-out mocap.
     pub pose_norm: Option<crate::eval::files::PoseNormCalibration>,
@@ -839,9 +839,8 @@ fn path_follow_row(
 ) -> Result<PolicyRow> {
     use super::metrics::AgentResult;
     use crate::math::Quantiles;
-    use crate::synth::crowd::{
-        run_crowd, AgentPlan, Controller, CrowdParts, CrowdSettings, CrowdWorld,
-    };
+    use crate::synth::crowd::{run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld};
+    use crate::walker::ControllerSpec;
     use rayon::prelude::*;
     let t0 = std::time::Instant::now();
     let parts = CrowdParts {
@@ -869,13 +868,13 @@ fn path_follow_row(
                 facing_rad: None,
                 goals: vec![pair.goal],
                 wander: false,
-                steering: Controller::PathFollow { k: args.k },
+                steering: ControllerSpec::PathFollow { k: args.k },
             };
             let settings = CrowdSettings {
-                walker: crate::policy::WalkerSettings {
+                walker: crate::walker::WalkerSettings {
                     success_m: SUCCESS_M,
                     max_primitives_per_goal: TABLE2_MAX_PRIMITIVES,
-                    ..crate::policy::WalkerSettings::default().unguided()
+                    ..crate::walker::WalkerSettings::default().unguided()
                 },
                 arrival_m: Some(ARRIVAL_M),
                 primitives: TABLE2_MAX_PRIMITIVES,

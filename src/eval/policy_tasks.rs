@@ -16,8 +16,8 @@ use crate::motion::cvae::MotionModel;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 use crate::policy::env::{EnvParts, EnvSettings, PolicyEnv};
 use crate::policy::held_out::{run_episodes, EvalReport, HELD_OUT_BASE};
-use crate::policy::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 use crate::policy::sampling::sampling_step;
+use crate::walker::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 
 /// Frames of every primitive of a set, as poses.
 /// Every primitive of a set as its frames' body parameters (no shape).

@@ -14,7 +14,8 @@ use serde::Serialize;
 
 use crate::math::random::uniform_open01;
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
-use crate::synth::crowd::{AgentPlan, Controller, CrowdSettings, CrowdWorld};
+use crate::synth::crowd::{AgentPlan, CrowdSettings, CrowdWorld};
+use crate::walker::ControllerSpec;
 
 /// A person has reached the goal when the walk ends this close to it (m; paper S4.2's SR).
 pub(crate) const SUCCESS_M: f64 = 0.3;
@@ -138,7 +139,7 @@ fn unit(rng: &mut ChaCha8Rng) -> f64 {
 pub fn episode(
     scenario: Scenario,
     floor: &Arc<WalkableMap>,
-    steering: Controller,
+    steering: ControllerSpec,
     seed: u64,
     n: u64,
 ) -> Episode {
@@ -212,12 +213,12 @@ pub fn episode(
         },
         agents,
         settings: CrowdSettings {
-            walker: crate::policy::WalkerSettings {
+            walker: crate::walker::WalkerSettings {
                 success_m: SUCCESS_M,
                 max_primitives_per_goal: scenario.max_primitives(),
                 // The policy as trained and evaluated by the paper: no redraws, no guide.
                 penetration_redraws: 0,
-                ..crate::policy::WalkerSettings::default().unguided()
+                ..crate::walker::WalkerSettings::default().unguided()
             },
             arrival_m: Some(ARRIVAL_M),
             primitives: scenario.max_primitives(),

@@ -10,15 +10,16 @@ use super::metrics::{measure, row, EpisodeResult, Row};
 use super::scenarios::{episode, open_floor, Scenario, WALK_M};
 use crate::body::BodyModel;
 use crate::synth::crowd::{
-    run_crowd, Controller, CrowdError, CrowdParts, CrowdSettings, CrowdTake, CrowdWorld,
+    run_crowd, CrowdError, CrowdParts, CrowdSettings, CrowdTake, CrowdWorld,
 };
+use crate::walker::ControllerSpec;
 
 /// A named way of steering every person of a scenario.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub(crate) struct NamedController {
     pub name: String,
-    pub steering: Controller,
-    /// How each person sees the others ([`crate::policy::WalkerSettings::anticipate_people`]; `false`:
+    pub steering: ControllerSpec,
+    /// How each person sees the others ([`crate::walker::WalkerSettings::anticipate_people`]; `false`:
     /// EgoGen's crowd loop).
     pub anticipate_people: bool,
 }
@@ -31,7 +32,7 @@ impl NamedController {
         out.push(NamedController::sampling(k));
         out.push(NamedController::new(
             format!("path_follow_k{k}"),
-            Controller::PathFollow { k },
+            ControllerSpec::PathFollow { k },
         ));
         out
     }
@@ -47,14 +48,14 @@ impl NamedController {
     /// The policy with sampled actions and with the mean action.
     fn policies() -> Vec<NamedController> {
         vec![
-            NamedController::new("policy".into(), Controller::POLICY),
-            NamedController::new("policy_mean".into(), Controller::POLICY_MEAN),
+            NamedController::new("policy".into(), ControllerSpec::POLICY),
+            NamedController::new("policy_mean".into(), ControllerSpec::POLICY_MEAN),
         ]
     }
 
     /// The policy with sampled actions (`policy_as_placed`) and with the mean action
     /// (`policy_mean_as_placed`) in EgoGen's crowd loop: each person sees the others where they
-    /// were last put ([`crate::policy::WalkerSettings::anticipate_people`] off).
+    /// were last put ([`crate::walker::WalkerSettings::anticipate_people`] off).
     pub(crate) fn policies_as_placed() -> Vec<NamedController> {
         NamedController::policies()
             .into_iter()
@@ -67,7 +68,7 @@ impl NamedController {
     }
 
     /// A controller with the others anticipated (egogen's default).
-    fn new(name: String, steering: Controller) -> NamedController {
+    fn new(name: String, steering: ControllerSpec) -> NamedController {
         NamedController {
             name,
             steering,
@@ -79,7 +80,7 @@ impl NamedController {
     pub(crate) fn policy_spread(name: &str, spread: f32) -> NamedController {
         NamedController::new(
             name.into(),
-            Controller::Policy {
+            ControllerSpec::Policy {
                 mean_action: false,
                 spread,
             },
@@ -88,7 +89,7 @@ impl NamedController {
 
     /// The sampling controller with `k` latents per primitive.
     fn sampling(k: usize) -> NamedController {
-        NamedController::new(format!("sampling_k{k}"), Controller::Sampling { k })
+        NamedController::new(format!("sampling_k{k}"), ControllerSpec::Sampling { k })
     }
 }
 

@@ -18,12 +18,12 @@ use burn::nn::Linear;
 use burn::prelude::*;
 use rand_chacha::ChaCha8Rng;
 
-use super::env::{ObsLayout, STATE_FRAME_DIM};
 use super::net::{ActorCritic, Gru, DEPTH_CNN, LEAKY_SLOPE, LOGVAR_RANGE};
 use super::row_product::RowMatrix;
 use crate::math::random::normal_samples;
 use crate::motion::primitive::SEED_FRAMES;
 use crate::sensing::SensingSpec;
+use crate::walker::{ObsLayout, STATE_FRAME_DIM};
 
 /// burn Flex's threshold (`m · n · k`) above which a product runs on all cores.
 const PARALLEL_OPS: usize = 192 * 192 * 192;
@@ -434,6 +434,16 @@ impl Actor {
         let (mean, logvar) = self.forward(obs);
         let std = logvar.iter().map(|lv| (lv * 0.5).exp()).collect();
         (mean, std)
+    }
+}
+
+impl crate::walker::Policy for Actor {
+    fn obs_dim(&self) -> usize {
+        self.obs_layout().dim()
+    }
+
+    fn distribution(&self, obs: &[f32]) -> (Vec<f32>, Vec<f32>) {
+        Actor::distribution(self, obs)
     }
 }
 

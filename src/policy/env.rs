@@ -8,7 +8,7 @@
 //! that the rays see and the penetration test counts, on the episode's clock — a mocap seed
 //! (two frames of a training primitive) placed at the start facing the goal within ±`seed_yaw_jitter_rad`,
 //! the floor at z = 0. A step decodes the latent, judges the primitive and takes it by the
-//! walker's step every walker shares (`policy::step`: the reward of [`super::reward`]),
+//! walker's step every walker shares (`walker::step`: the reward of [`crate::walker::reward`]),
 //! and ends the episode on success, on penetration (when `terminate_on_penetration`), on a
 //! non-finite primitive, or after `max_primitives` (a timeout is terminal, as in EgoGen).
 //! Finished episodes are replaced by the next episode at once; episode `n` of an
@@ -25,13 +25,6 @@ use rand_core::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::pose_prior::PosePrior;
-use super::reward::{Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges};
-use super::step::{choose_primitive, finite_reward, Judge, Proposal, SceneCheck, StepContext};
-use super::walker::{
-    frame_time_s, memory_scan, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker,
-};
-pub use super::walker::{ObsLayout, STATE_FRAME_DIM};
 use crate::body::{joint, BodyParams, POSE_DIM};
 use crate::math::random::uniform_open01;
 use crate::math::Vec3;
@@ -51,6 +44,15 @@ use crate::scene::{
     SceneSdf, SeenMap, StartGoal, WalkableMap,
 };
 use crate::sensing::{EgoSensor, SensingSpec, Sensor};
+use crate::walker::pose_prior::PosePrior;
+use crate::walker::reward::{Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges};
+use crate::walker::state::{
+    frame_time_s, memory_scan, place_seed, seen_ahead, SeedView, Surroundings, Totals, Walker,
+};
+use crate::walker::step::{
+    choose_primitive, finite_reward, Judge, Proposal, SceneCheck, StepContext,
+};
+use crate::walker::ObsLayout;
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
 /// (a start too near a wall for every seed).
@@ -146,7 +148,7 @@ pub struct EnvSettings {
     /// `None`: `max_primitives`.
     pub fixed_max_primitives: Option<usize>,
     /// With N > 0, penetration in a fixed scene with a 3D SDF is paper Eq. 11 on N body
-    /// vertices ([`super::reward::SceneTest`]) instead of Eq. 7 (EgoGen's apartment): the
+    /// vertices ([`crate::walker::reward::SceneTest`]) instead of Eq. 7 (EgoGen's apartment): the
     /// termination and the penetration reward term. 0: Eq. 7 everywhere.
     pub scene_test_vertices: usize,
     /// With `scene_test_vertices`: Eq. 7's cells still count there too, a primitive penetrating
@@ -184,7 +186,7 @@ impl Default for EnvSettings {
             arrival_m: None,
             max_primitives: 11,
             terminate_on_penetration: false,
-            penetration_cells: crate::policy::reward::EQ7_PENETRATION_CELLS,
+            penetration_cells: crate::walker::reward::EQ7_PENETRATION_CELLS,
             people_every_frame: false,
             box_every_frame: false,
             scene_every_frame: false,
@@ -404,7 +406,7 @@ pub struct EpisodeSummary {
     /// the first primitive arrives.
     pub view_cos_walking: f64,
     /// Angle between the view and the direction of travel, each primitive that travelled
-    /// (degrees; [`super::reward::Judged::view_off_travel_rad`]).
+    /// (degrees; [`crate::walker::reward::Judged::view_off_travel_rad`]).
     pub view_off_travel_deg: Vec<f64>,
     /// Share of the new frames in which a body marker stood inside the obstacle.
     pub penetration_share: f64,
@@ -415,7 +417,7 @@ pub struct EpisodeSummary {
     pub scene_penetration_share: f64,
     pub scene_vertices_inside_max: usize,
     /// New frames whose pelvis path passed over a cell that is not walkable: through a wall,
-    /// furniture or a closed doorway ([`super::reward::path_leaves_floor`]).
+    /// furniture or a closed doorway ([`crate::walker::reward::path_leaves_floor`]).
     pub pelvis_off_floor_frames: usize,
     /// The pelvis's floor position at the end (m, world).
     pub end_xy: [f64; 2],
@@ -427,7 +429,7 @@ pub struct EpisodeSummary {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub way_round_m: Option<f64>,
     /// The mean over its primitives of each one's largest pose embedding norm (EgoGen's
-    /// ‖VP‖₂ role, [`super::PosePrior::embedding_norm`]; comparable with mocap primitives').
+    /// ‖VP‖₂ role, [`crate::walker::PosePrior::embedding_norm`]; comparable with mocap primitives').
     pub pose_norm_max: f64,
 }
 
@@ -1020,7 +1022,7 @@ impl<'m> PolicyEnv<'m> {
 
     /// The candidate each episode takes of `candidates` (`per` each, episode-major, as
     /// [`Self::propose`] made them), by the one rule every walker chooses by
-    /// (`policy::step::choose_primitive`, no redraws); an episode none of whose candidates
+    /// (`walker::step::choose_primitive`, no redraws); an episode none of whose candidates
     /// decoded takes its first (and fails).
     pub fn choose(&self, candidates: Vec<Candidate>) -> Result<Vec<Candidate>, EnvError> {
         let mut per_episode: Vec<Vec<Candidate>> =

@@ -17,9 +17,9 @@ use burn::prelude::*;
 use burn::tensor::activation::{leaky_relu, sigmoid};
 use serde::{Deserialize, Serialize};
 
-use super::env::{ObsLayout, STATE_FRAME_DIM};
 use crate::motion::primitive::SEED_FRAMES;
 use crate::sensing::SensingSpec;
+use crate::walker::{ObsLayout, STATE_FRAME_DIM};
 
 /// The depth image's CNN (paper Tab. 3, "Egocentric depth"): convolutions whose stride equals
 /// their kernel, `(kernel, channels)` in order, each followed by LeakyReLU: 4 × 4 patches of

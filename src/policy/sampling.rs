@@ -2,7 +2,7 @@
 //! `k` latents drawn from N(0, I) are decoded and judged by the environment's own reward
 //! (one primitive of lookahead) and the best is taken. `k` is the speed/accuracy knob: one
 //! step costs `k` decodes per episode; `k = 1` is the plain random walk. The best is taken by the
-//! one rule every walker chooses by (`policy::step::choose_primitive`).
+//! one rule every walker chooses by (`walker::step::choose_primitive`).
 
 use rand_chacha::ChaCha8Rng;
 

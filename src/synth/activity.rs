@@ -22,9 +22,9 @@ use crate::motion::activity_clip::{
 };
 use crate::motion::cvae::BodyContext;
 use crate::motion::primitive::{NEW_FRAMES, PRIMITIVE_RATE_HZ};
-use crate::policy::reward::path_leaves_floor;
 use crate::scene::mesh_distance::MeshDistance;
 use crate::scene::{find_seats, SceneMesh, Seat, SeatSettings, WalkableMap};
+use crate::walker::reward::path_leaves_floor;
 
 /// Relative weights of what a person does next when a walk ends (`[activities.weights]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

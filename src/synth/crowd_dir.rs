@@ -20,9 +20,9 @@ use super::crowd::{AgentState, AgentTrack, CrowdTake, CrowdWorld};
 use crate::atomic_file::write_atomically;
 use crate::body::BodyModel;
 use crate::manifest::{build_manifest, MANIFEST};
-use crate::policy::walker::footprint;
 use crate::preview::map::{MapPicture, AGENT_COLOURS};
 use crate::scene::Obstacle2;
+use crate::walker::state::footprint;
 
 /// What a finished take folder holds.
 #[derive(Debug, Clone, Serialize)]
@@ -81,7 +81,7 @@ pub struct TakeChecks {
     pub outside_region_max_m: f64,
     /// Frames, over all agents, whose pelvis path from the frame before passes over a cell
     /// that is not walkable: the pelvis in or through a wall or furniture (0 with the swept
-    /// scene test, [`crate::policy::WalkerSettings::scene_every_frame`]).
+    /// scene test, [`crate::walker::WalkerSettings::scene_every_frame`]).
     pub pelvis_off_floor_frames: usize,
     /// Walkable floor, and the part of it starts and goals are drawn on (m²).
     pub walkable_m2: f64,

@@ -159,7 +159,8 @@ mod tests {
     use super::*;
     use crate::body::BodyParams;
     use crate::math::Vec3;
-    use crate::synth::crowd::{AgentState, Controller};
+    use crate::synth::crowd::AgentState;
+    use crate::walker::ControllerSpec;
 
     fn standing(name: &str, x: f64, frames: usize) -> AgentTrack {
         let f = BodyParams {
@@ -170,7 +171,7 @@ mod tests {
         AgentTrack {
             name: name.into(),
             betas: Vec::new(),
-            steering: Controller::Sampling { k: 1 },
+            steering: ControllerSpec::Sampling { k: 1 },
             frames: vec![f; frames],
             world_from_cpf: Vec::new(),
             markers: Vec::new(),

@@ -17,9 +17,9 @@ use crate::motion::cvae::train::TrainPlan;
 use crate::motion::MotionSequence;
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableMap};
 use crate::synth::crowd::{
-    run_crowd_with_activities, sample_point, AgentPlan, Controller, CrowdParts, CrowdSettings,
-    CrowdWorld,
+    run_crowd_with_activities, sample_point, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld,
 };
+use crate::walker::ControllerSpec;
 
 /// Where agents come from before the map is known: given, or to be sampled.
 #[derive(Debug, Clone, PartialEq)]
@@ -32,7 +32,7 @@ pub struct AgentDraft {
     pub facing_rad: Option<f64>,
     pub goals: Vec<DVec2>,
     pub wander: bool,
-    pub steering: Controller,
+    pub steering: ControllerSpec,
 }
 
 /// A checked synth config.
@@ -302,7 +302,8 @@ pub(crate) fn synthesize(
     progress: bool,
 ) -> Result<Synthesized> {
     use crate::motion::cvae::MotionModel;
-    use crate::policy::{PosePrior, SeedBank};
+    use crate::policy::SeedBank;
+    use crate::walker::PosePrior;
     let (map, mesh) = synth_scene(plan)?;
     let (map, region) = crate::scene::indoor_map(map, plan.indoors);
     let agents = place_agents(plan, &map, region.as_deref())?;

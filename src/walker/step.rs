@@ -11,6 +11,7 @@
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
 
+use super::controller::{draw_action, Controller, Sight};
 use super::reward::{
     judge, scene_penetration, Judged, Limits, RewardWeights, SceneTest, Situation,
 };
@@ -283,6 +284,47 @@ pub(crate) fn choose_primitive(
     Ok(best)
 }
 
+/// One walker's step: its controller's proposals ([`Controller::propose`]) decoded at the
+/// walker's seed, judged, scored by the controller and chosen by [`choose_primitive`] with up
+/// to `redraws` more draws. `None` when nothing decoded.
+pub(crate) fn walk_step(
+    controller: &mut dyn Controller,
+    sight: &Sight,
+    ctx: &StepContext,
+    redraws: usize,
+    rng: &mut ChaCha8Rng,
+) -> Result<Option<Chosen>, DecodeError> {
+    let proposed = controller.propose(sight, rng);
+    let seeds = vec![ctx.seed.clone(); proposed.latents.len()];
+    let decoded = ctx.model.decode_each(ctx.body, &seeds, &proposed.latents)?;
+    let mut proposals = Vec::with_capacity(decoded.len());
+    for (d, latent) in decoded.into_iter().zip(proposed.latents) {
+        match d {
+            Ok(p) => {
+                let (j, r) = ctx.judge.judge(ctx.body, &p, ctx.situation)?;
+                let score = controller.score(&p, &j, r);
+                proposals.push(Proposal {
+                    latent,
+                    primitive: p,
+                    judged: j,
+                    reward: finite_reward(r),
+                    score,
+                });
+            }
+            Err(DecodeError::NonFinite { .. }) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    let redraws = Redraws {
+        count: redraws,
+        policy: proposed
+            .policy
+            .as_ref()
+            .map(|(mean, std)| (mean.as_slice(), std.as_slice())),
+    };
+    choose_primitive(ctx, proposals, Some((&redraws, rng)))
+}
+
 /// How [`choose_primitive`] ranks judged primitives: the one of highest score; a candidate that did not decode
 /// (`None`) never beats one that did, a non-finite score counts as −∞, and among equals the
 /// first is kept. `None` only when there is no candidate.
@@ -315,15 +357,6 @@ fn held(p: &DecodedPrimitive) -> DecodedPrimitive {
         h.world_from_cpf[k] = h.world_from_cpf[last];
     }
     h
-}
-
-/// An action `mean + std · ε`, ε ~ N(0, I) drawn from `rng`.
-pub(crate) fn draw_action(mean: &[f32], std: &[f32], rng: &mut ChaCha8Rng) -> Vec<f32> {
-    normal_samples(rng, mean.len())
-        .iter()
-        .zip(mean.iter().zip(std))
-        .map(|(e, (m, s))| m + s * e)
-        .collect()
 }
 
 #[cfg(test)]

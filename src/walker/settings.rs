@@ -19,7 +19,7 @@ pub struct WalkerSettings {
     /// body's 2D box at its end (paper Eq. 7: walls, obstacles, the others' boxes), a body
     /// marker inside another person's box or an obstacle in any frame, the pelvis ending off
     /// the walkable floor — up to this many more actions are drawn from the policy, then as
-    /// many from the motion model's prior (`policy::step`; default 4; 0: none, as trained).
+    /// many from the motion model's prior (`walker::step`; default 4; 0: none, as trained).
     pub penetration_redraws: usize,
     /// Where a wall hides the goal, the policy is shown the point this far (m) along the
     /// shortest path round what blocks the straight way (`scene::guide_aim`; rewards and

@@ -1,0 +1,192 @@
+//! A person's activities between walks: what comes after a walk (walk on, stand, pick up,
+//! or walk to a seat and sit), and an activity's frames taken a round at a time
+//! ([`crate::synth::activity`] makes them).
+
+use glam::DVec2;
+
+use super::{CrowdError, CrowdSettings, CrowdWorld, NEW_FRAMES};
+use crate::body::joint;
+use crate::motion::cvae::infer::DecodeError;
+use crate::motion::cvae::PrimitiveSeed;
+use crate::synth::activity::{
+    Activity, ActivitySegment, ActivityWorld, Performance, Phase, SkippedActivity,
+};
+use crate::walker::state::SeedView;
+
+use super::person::Agent;
+
+impl Agent<'_> {
+    /// After a walk: sits down if it was the walk to a seat, else draws what comes next
+    /// from `acts`; whether an activity (or the walk to one) began — `false`: walk on.
+    pub(super) fn after_walk(&mut self, acts: &mut ActivityWorld, world: &CrowdWorld) -> bool {
+        let frame = self.track.frames.len();
+        let floor_z = self.walker.view.seed.floor_z;
+        let last = self.track.frames[frame - 1].clone();
+        if let Some((s, began)) = self.approaching.take() {
+            self.track.activity_segments.push(ActivitySegment {
+                activity: Activity::Sit,
+                phase: Phase::Approach,
+                start_frame: began,
+                end_frame: frame,
+            });
+            let reached = self.track.goals.last().is_some_and(|g| g.reached);
+            let sat = if reached {
+                acts.sit(
+                    &self.body,
+                    &world.map,
+                    &last,
+                    s,
+                    floor_z,
+                    &mut self.activity_rng,
+                )
+            } else {
+                Err(format!(
+                    "the place in front of the seat of {} was not reached",
+                    acts.seats[s].object_name
+                ))
+            };
+            match sat {
+                Ok(p) => {
+                    self.perform(p);
+                    return true;
+                }
+                Err(reason) => {
+                    acts.taken[s] = false;
+                    self.skip(Activity::Sit, frame, reason);
+                }
+            }
+        }
+        let activity = acts.draw(&mut self.activity_rng);
+        let done = match activity {
+            Activity::Walk => return false,
+            Activity::Stand => acts.stand(
+                &self.body,
+                &world.map,
+                &last,
+                floor_z,
+                &mut self.activity_rng,
+            ),
+            Activity::PickUp => acts.pick_up(
+                &self.body,
+                &world.map,
+                &last,
+                floor_z,
+                &mut self.activity_rng,
+            ),
+            Activity::Sit => match acts.nearest_free_seat(&world.map, self.walker.view.pelvis) {
+                Some(s) => {
+                    acts.taken[s] = true;
+                    self.approaching = Some((s, frame));
+                    self.goal = acts.seats[s].stand();
+                    self.goal_steps = 0;
+                    self.walker.retarget(self.goal);
+                    return true;
+                }
+                None => Err(match acts.seats.is_empty() {
+                    true => "the scene has no seat (`egogen scene inspect` lists them)".into(),
+                    false => "every seat on this floor is taken".into(),
+                }),
+            },
+        };
+        match done {
+            Ok(p) => {
+                self.perform(p);
+                true
+            }
+            Err(reason) => {
+                self.skip(activity, frame, reason);
+                false
+            }
+        }
+    }
+
+    pub(super) fn skip(&mut self, activity: Activity, frame: usize, reason: String) {
+        self.track.skipped_activities.push(SkippedActivity {
+            activity,
+            frame,
+            reason,
+        });
+    }
+
+    /// Begins playing `p` from the next frame.
+    pub(super) fn perform(&mut self, mut p: Performance) {
+        let start = self.track.frames.len();
+        if let Some(look) = p.record.look_at.as_mut() {
+            look.start_frame += start;
+            look.end_frame += start;
+            // A seat is looked at from the walk to it on.
+            if let Some(walk) = self.track.activity_segments.last().filter(|s| {
+                p.activity == Activity::Sit && s.phase == Phase::Approach && s.end_frame == start
+            }) {
+                look.start_frame = walk.start_frame;
+            }
+        }
+        let mut k = start;
+        for &(phase, n) in &p.phases {
+            self.track.activity_segments.push(ActivitySegment {
+                activity: p.activity,
+                phase,
+                start_frame: k,
+                end_frame: k + n,
+            });
+            k += n;
+        }
+        p.record.start_frame = start;
+        p.record.end_frame = k;
+        self.track.activities.push(p.record.clone());
+        self.acting = Some((p, 0));
+    }
+
+    /// Takes the next [`NEW_FRAMES`] frames of the activity being played; when it ends,
+    /// gives its seat back and walks on to the next goal.
+    pub(super) fn act(
+        &mut self,
+        acts: &mut ActivityWorld,
+        world: &CrowdWorld,
+        settings: &CrowdSettings,
+    ) -> Result<(), CrowdError> {
+        let Some((p, taken)) = self.acting.as_mut() else {
+            return Ok(());
+        };
+        let end = (*taken + NEW_FRAMES).min(p.frames.len());
+        if *taken == 0 {
+            self.track.joins.push(self.track.frames.len());
+        }
+        let frames = p.frames[*taken..end].to_vec();
+        *taken = end;
+        let over = end == p.frames.len();
+        for f in frames {
+            let mf = self
+                .body
+                .shaped
+                .marker_frame(&f.pose, f.transl, &self.body.marker_ids)
+                .map_err(DecodeError::from)?;
+            let q = mf.skeleton.joints[joint::PELVIS];
+            self.track
+                .world_from_cpf
+                .push(self.body.cpf.world_from_cpf(&mf.skeleton));
+            self.track.markers.push(mf.markers);
+            self.track.pelvis_xy.push(DVec2::new(q.x, q.y));
+            self.track.frames.push(f);
+        }
+        let n = self.track.frames.len();
+        let seed = PrimitiveSeed {
+            frames: [
+                self.track.frames[n - 2].clone(),
+                self.track.frames[n - 1].clone(),
+            ],
+            floor_z: self.walker.view.seed.floor_z,
+        };
+        self.walker.view = SeedView::new(&self.body, seed)?;
+        if over {
+            if let Some((p, _)) = self.acting.take() {
+                if let Some(s) = p.seat {
+                    acts.taken[s] = false;
+                }
+            }
+            // A walk comes between two activities.
+            self.next_goal(world, settings);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,233 @@
+//! What a person of a crowd did: every frame of its body, its goals and how it ended
+//! ([`AgentTrack`]), and its motion finished as written (joins smoothed, head steadied).
+
+use glam::DVec2;
+use serde::Serialize;
+
+use super::CrowdError;
+use crate::body::{joint, BodyParams};
+use crate::math::{Affine3, Vec3};
+use crate::motion::cvae::infer::DecodeError;
+use crate::motion::cvae::BodyContext;
+use crate::motion::head_stabilise::{stabilise_head, HeadStabiliser};
+use crate::motion::joins::{smooth_joins, JoinWindow};
+use crate::motion::primitive::PRIMITIVE_RATE_HZ;
+use crate::scene::WalkableMap;
+use crate::synth::activity::{ActivityRecord, ActivitySegment, SkippedActivity};
+use crate::walker::{ControllerSpec, WalkerSettings};
+
+/// Why an agent stopped before the take ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AgentState {
+    /// Still walking when the take ended.
+    Walking,
+    /// No goals left (all reached or missed).
+    Done,
+    /// The head came below half the standing head height.
+    Fell,
+    /// The decoder produced a non-finite primitive.
+    DecoderFailure,
+}
+
+/// One goal an agent walked to.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct GoalRecord {
+    pub goal: [f64; 2],
+    pub reached: bool,
+    /// Primitives spent on it.
+    pub primitives: usize,
+    /// Frame at which it was reached or given up.
+    pub end_frame: usize,
+    pub final_distance_m: f64,
+}
+
+/// What an agent did: every frame of its body at 40 Hz, eye frames and markers, goals.
+#[derive(Debug, Clone, Serialize)]
+pub struct AgentTrack {
+    pub name: String,
+    pub betas: Vec<f64>,
+    pub steering: ControllerSpec,
+    #[serde(skip)]
+    pub frames: Vec<BodyParams>,
+    #[serde(skip)]
+    pub world_from_cpf: Vec<Affine3>,
+    #[serde(skip)]
+    pub markers: Vec<Vec<Vec3>>,
+    /// Horizontal pelvis position per frame.
+    #[serde(skip)]
+    pub pelvis_xy: Vec<DVec2>,
+    /// First frame of each primitive walked (its 18 new frames follow its two seed frames).
+    #[serde(skip)]
+    pub primitive_starts: Vec<usize>,
+    /// Frames where what the body does hands over to what comes next: each primitive's
+    /// first frame, an activity's, the held pose's after a stop ([`crate::motion::joins`]).
+    #[serde(skip)]
+    pub joins: Vec<usize>,
+    pub goals: Vec<GoalRecord>,
+    pub state: AgentState,
+    /// First frame of the held pose, when the agent stopped before the take ended.
+    pub stopped_at_frame: Option<usize>,
+    /// Primitives taken.
+    pub primitives: usize,
+    /// Primitives in which the pelvis moved less than [`STUCK_STEP_M`] with the goal not
+    /// reached: time spent stuck.
+    pub stuck_primitives: usize,
+    /// Mean foot contact (3-D, Eq. 12) over the primitives walked, as written (joins
+    /// smoothed, head steadied).
+    pub contact: f64,
+    /// Share of new frames with a body marker inside a static obstacle, a moving obstacle or
+    /// another agent's 2D box.
+    pub penetration_share: f64,
+    /// Frames of the take whose pelvis path from the frame before passes over a cell of the
+    /// walkable map that is not walkable (a wall, furniture, a closed doorway), measured on
+    /// the track as written ([`crate::walker::reward::path_leaves_floor`]); frames sitting
+    /// down, seated or standing up (over the seat) not counted.
+    pub pelvis_off_floor_frames: usize,
+    /// Primitives in which the body held its pose because every draw would have taken its
+    /// pelvis over a wall ([`WalkerSettings::scene_every_frame`]).
+    pub held_primitives: usize,
+    /// Horizontal walking speed over the primitives taken (m/s).
+    pub speed_m_s: f64,
+    /// Mean cos(angle) between the viewing direction and the direction to the goal at the
+    /// primitives' ends.
+    pub view_cos: f64,
+    /// Mean pose-prior score (−ln p / 63) over the primitives.
+    pub pose_score: f64,
+    /// Activities done besides walking ([`crate::synth::activity`]), in order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub activities: Vec<ActivityRecord>,
+    /// Which frames each activity's phases span (frames in none: walking).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub activity_segments: Vec<ActivitySegment>,
+    /// Activities drawn but not done, with why.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub skipped_activities: Vec<SkippedActivity>,
+}
+
+impl AgentTrack {
+    /// Lifts a track walked on the flat floor at the map's `floor_z_m` onto its stepped
+    /// floors ([`crate::scene::WalkableSettings::floor_steps_m`]), rigidly, frame by frame:
+    /// at least to the floor under the pelvis ([`WalkableMap::floor_under`]), and high
+    /// enough that no marker stands lower under the floor of its own cell than it stood under
+    /// the flat floor (a foot over a step up lifts the body onto it); that lift is the
+    /// largest within ±[`FLOOR_FOLLOW_FRAMES`] of each frame, averaged over as many, so the
+    /// body rises or sinks over 0.2 s and never puts a foot into a step. The motion model
+    /// walks a flat floor, so the body is lifted onto a step up to 0.1 s before its foot
+    /// lands there, and the other foot lifts off the floor below. Nothing changes on a flat
+    /// floor.
+    pub(crate) fn follow_floor(&mut self, map: &WalkableMap) {
+        if map.is_flat() || self.frames.is_empty() {
+            return;
+        }
+        let z0 = map.floor_z_m;
+        let need: Vec<f64> = (0..self.frames.len())
+            .map(|f| {
+                self.markers[f]
+                    .iter()
+                    .filter_map(|m| {
+                        let under = map.cell_floor_at(DVec2::new(m.x, m.y))?;
+                        Some(under - z0 - (m.z - z0).max(0.0))
+                    })
+                    .fold(map.floor_under(self.pelvis_xy[f]) - z0, f64::max)
+            })
+            .collect();
+        let last = need.len() - 1;
+        let window = |f: usize| {
+            (
+                f.saturating_sub(FLOOR_FOLLOW_FRAMES),
+                (f + FLOOR_FOLLOW_FRAMES).min(last),
+            )
+        };
+        let most: Vec<f64> = (0..need.len())
+            .map(|f| {
+                let (a, b) = window(f);
+                need[a..=b]
+                    .iter()
+                    .copied()
+                    .fold(f64::NEG_INFINITY, f64::max)
+            })
+            .collect();
+        for f in 0..self.frames.len() {
+            let (a, b) = window(f);
+            let dz = most[a..=b].iter().sum::<f64>() / (b - a + 1) as f64;
+            self.frames[f].transl.z += dz;
+            self.world_from_cpf[f].translation.z += dz;
+            for m in &mut self.markers[f] {
+                m.z += dz;
+            }
+        }
+    }
+
+    /// The agent's frames as a motion sequence (neutral gender; the body model's).
+    pub(crate) fn motion_sequence(&self, frame_rate_hz: f64) -> crate::motion::MotionSequence {
+        crate::motion::MotionSequence {
+            frame_rate_hz,
+            betas: self.betas.clone(),
+            gender: "neutral".into(),
+            poses: self.frames.iter().map(|f| f.pose).collect(),
+            trans: self.frames.iter().map(|f| f.transl).collect(),
+        }
+    }
+}
+
+/// The foot markers' positions over `frames`, as the foot-contact score reads them.
+pub(super) fn foot_points(
+    markers: &[Vec<Vec3>],
+    foot_markers: &[usize],
+    frames: std::ops::Range<usize>,
+) -> Vec<Vec<[f64; 3]>> {
+    frames
+        .map(|f| {
+            foot_markers
+                .iter()
+                .map(|&k| markers[f][k].to_array())
+                .collect()
+        })
+        .collect()
+}
+
+/// The motion as written: each join's velocity jump spread ([`WalkerSettings::smooth_joins`]),
+/// the head steadied against the torso's sway ([`WalkerSettings::steady_head`]); the eye
+/// frame, markers and pelvis positions posed again from the frames where either changed them.
+pub(super) fn finish_motion(
+    t: &mut AgentTrack,
+    body: &BodyContext,
+    settings: &WalkerSettings,
+) -> Result<(), CrowdError> {
+    if !settings.smooth_joins && !settings.steady_head {
+        return Ok(());
+    }
+    if settings.smooth_joins {
+        smooth_joins(
+            &mut t.frames,
+            &t.joins,
+            &JoinWindow::at_rate(PRIMITIVE_RATE_HZ),
+        );
+    }
+    if settings.steady_head {
+        stabilise_head(
+            &mut t.frames,
+            &body.shaped,
+            &body.cpf,
+            PRIMITIVE_RATE_HZ,
+            &HeadStabiliser::default(),
+        )
+        .map_err(DecodeError::from)?;
+    }
+    for (f, frame) in t.frames.iter().enumerate() {
+        let mf = body
+            .shaped
+            .marker_frame(&frame.pose, frame.transl, &body.marker_ids)
+            .map_err(DecodeError::from)?;
+        let q = mf.skeleton.joints[joint::PELVIS];
+        t.world_from_cpf[f] = body.cpf.world_from_cpf(&mf.skeleton);
+        t.markers[f] = mf.markers;
+        t.pelvis_xy[f] = DVec2::new(q.x, q.y);
+    }
+    Ok(())
+}
+
+/// Frames either side over which [`AgentTrack::follow_floor`] takes the largest lift a frame
+/// needs and averages it (0.1 s at 40 Hz).
+pub(crate) const FLOOR_FOLLOW_FRAMES: usize = 4;
