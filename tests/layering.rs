@@ -85,6 +85,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         "render",
         &[
             "math",
+            "scene",
             "camera",
             "rig",
             "exr_file",

@@ -1,5 +1,6 @@
 //! Materials drawn per take for the scene's surfaces (`[render.materials]`): what each object
-//! is (a floor, a wall, a ceiling or furniture — by its name or label where those say, by its
+//! is (a floor, a wall, a ceiling or furniture — by its [`crate::scene::ObjectClass`] where its
+//! name or label says, by its
 //! surfaces' orientation otherwise), which procedural pattern it gets (floors: wood planks,
 //! tiles, carpet, stone; walls: plaster, paint, wallpaper, brick; ceilings: plaster; furniture: wood,
 //! fabric, leather, metal, plastic) and that pattern's colours, scale and roughness, drawn per
@@ -15,6 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::math::colour::{hsv_to_rgb, srgb_to_linear};
 use crate::math::random::uniform_open01;
+use crate::scene::ObjectClass;
 
 /// Which objects get a drawn material (`[render.materials] mode`).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -115,60 +117,6 @@ pub struct SurfaceFacts {
     pub z_max_m: f64,
 }
 
-/// What a word in a name or label makes an object, `None` for things whose own material
-/// stays (plants, books, small objects): checked in order, first match wins.
-const NAME_WORDS: &[(&str, Option<Kind>)] = &[
-    ("plant", None),
-    ("tree", None),
-    ("flower", None),
-    ("leaf", None),
-    ("leaves", None),
-    ("book", None),
-    ("ball", None),
-    ("window", None),
-    ("glass", None),
-    ("mirror", None),
-    ("tv", None),
-    ("television", None),
-    ("monitor", None),
-    ("screen", None),
-    ("carpet", Some(Kind::Carpet)),
-    ("rug", Some(Kind::Carpet)),
-    ("ceiling", Some(Kind::Class(SurfaceClass::Ceiling))),
-    ("floor", Some(Kind::Class(SurfaceClass::Floor))),
-    ("ground", Some(Kind::Class(SurfaceClass::Floor))),
-    ("step", Some(Kind::Class(SurfaceClass::Floor))),
-    ("stair", Some(Kind::Class(SurfaceClass::Floor))),
-    ("wall", Some(Kind::Class(SurfaceClass::Wall))),
-    ("sofa", Some(Kind::Soft)),
-    ("couch", Some(Kind::Soft)),
-    ("armchair", Some(Kind::Soft)),
-    ("bed", Some(Kind::Soft)),
-    ("cushion", Some(Kind::Soft)),
-    ("pillow", Some(Kind::Soft)),
-    ("curtain", Some(Kind::Soft)),
-    ("lamp", Some(Kind::Light)),
-    ("chandelier", Some(Kind::Light)),
-    ("light", Some(Kind::Light)),
-    ("chair", Some(Kind::Seat)),
-    ("stool", Some(Kind::Seat)),
-    ("table", Some(Kind::Case)),
-    ("desk", Some(Kind::Case)),
-    ("shelf", Some(Kind::Case)),
-    ("shelves", Some(Kind::Case)),
-    ("cupboard", Some(Kind::Case)),
-    ("cabinet", Some(Kind::Case)),
-    ("chest", Some(Kind::Case)),
-    ("drawer", Some(Kind::Case)),
-    ("dresser", Some(Kind::Case)),
-    ("wardrobe", Some(Kind::Case)),
-    ("console", Some(Kind::Case)),
-    ("counter", Some(Kind::Case)),
-    ("bench", Some(Kind::Case)),
-    ("nightstand", Some(Kind::Case)),
-    ("door", Some(Kind::Case)),
-];
-
 /// What an object is, finer than [`SurfaceClass`] where a name says more.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Kind {
@@ -222,36 +170,27 @@ impl Kind {
     }
 }
 
-/// The first listed word found at a word's start in `text` (after a non-letter or where
-/// camel case starts one): `floor_living`, `IKEA_bed_FJELLSE`, `HouseWallB_01` and
-/// `IKEAShelf_mesh` say `floor`, `bed`, `wall` and `shelf`; `sofabed` says `sofa`.
+/// What an object's class ([`ObjectClass`], from a word of its name or label) makes it
+/// here: `Some(None)` for things whose own material stays (plants, small objects, windows,
+/// screens), `None` where its surfaces decide (appliances).
+fn kind_of(class: ObjectClass) -> Option<Option<Kind>> {
+    use ObjectClass as C;
+    Some(match class {
+        C::Plant | C::SmallObject | C::Window | C::Screen => None,
+        C::Carpet => Some(Kind::Carpet),
+        C::Floor => Some(Kind::Class(SurfaceClass::Floor)),
+        C::Wall => Some(Kind::Class(SurfaceClass::Wall)),
+        C::Ceiling => Some(Kind::Class(SurfaceClass::Ceiling)),
+        C::Sofa | C::Bed | C::Textile => Some(Kind::Soft),
+        C::Light => Some(Kind::Light),
+        C::Seat => Some(Kind::Seat),
+        C::Table | C::Storage | C::Door => Some(Kind::Case),
+        C::Appliance => return None,
+    })
+}
+
 fn kind_by_words(text: &str) -> Option<Option<Kind>> {
-    let chars: Vec<(usize, char)> = text.char_indices().collect();
-    let starts: Vec<usize> = (0..chars.len())
-        .filter(|&k| {
-            let c = chars[k].1;
-            let prev = k.checked_sub(1).map(|j| chars[j].1);
-            let next = chars.get(k + 1).map(|&(_, n)| n);
-            c.is_alphabetic()
-                && match prev {
-                    None => true,
-                    Some(p) if !p.is_alphabetic() => true,
-                    Some(p) => {
-                        c.is_uppercase()
-                            && (p.is_lowercase() || next.is_some_and(char::is_lowercase))
-                    }
-                }
-        })
-        .map(|k| chars[k].0)
-        .collect();
-    NAME_WORDS
-        .iter()
-        .find(|(word, _)| {
-            starts
-                .iter()
-                .any(|&i| text[i..].to_lowercase().starts_with(word))
-        })
-        .map(|&(_, kind)| kind)
+    ObjectClass::by_words(text).and_then(kind_of)
 }
 
 /// An object's class by its surfaces: mostly facing up and low — a floor; mostly facing down

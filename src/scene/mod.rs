@@ -1,5 +1,6 @@
 //! Scenes: triangle meshes in metres (z up) with named objects, the floor, the walkable map
-//! (occupancy + 2D signed distance), start/goal sampling, the places to sit (`seats`);
+//! (occupancy + 2D signed distance), start/goal sampling, what each object is (`object_class`:
+//! the one vocabulary seats, materials and generated scenes read), the places to sit (`seats`);
 //! procedural scenario scenes.
 //!
 //! Also owns body–scene collision terms (`penetration`: 3D SDF or the 2D box test). Hands
@@ -12,6 +13,7 @@ pub mod generated;
 pub mod load;
 pub mod mesh;
 pub mod mesh_distance;
+pub mod object_class;
 pub mod obstacle;
 pub mod path_plan;
 pub mod penetration;
@@ -25,6 +27,7 @@ pub mod walkable;
 pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};
 pub use load::{load_scene, scene_frame_warning, walkable_map, SceneError, SceneFrame, UpAxis};
 pub use mesh::{ObjectId, ObjectOrientation, SceneMesh, SceneObject};
+pub use object_class::ObjectClass;
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{
     guide_aim, line_is_clear, plan_path, plan_path_centred, plan_path_weighted, Guide, PathField,

@@ -5,6 +5,7 @@
 //! goes, which way the seated person faces, the walkable point in front where they stand
 //! before sitting down. A long sofa or a bed gives several places, spaced apart.
 
+use super::object_class::ObjectClass;
 use glam::DVec2;
 
 use super::floor::UP_FACING_MIN_NZ;
@@ -47,42 +48,6 @@ impl Default for SeatSettings {
     }
 }
 
-/// Words in an object's name or label that make it a seat.
-const SEAT_WORDS: [&str; 12] = [
-    "chair", "sofa", "couch", "bench", "stool", "bed", "seat", "ottoman", "pouf", "settee",
-    "futon", "armchair",
-];
-
-/// Words that make it something else one does not sit on, though its top may be at sitting
-/// height.
-const NOT_SEAT_WORDS: [&str; 25] = [
-    "table",
-    "desk",
-    "shelf",
-    "cabinet",
-    "counter",
-    "drawer",
-    "chest",
-    "console",
-    "cupboard",
-    "nightstand",
-    "dresser",
-    "wardrobe",
-    "bookcase",
-    "sink",
-    "stove",
-    "oven",
-    "fridge",
-    "refrigerator",
-    "tv",
-    "rack",
-    "plant",
-    "lamp",
-    "trash",
-    "bin",
-    "mailbox",
-];
-
 /// What the file says an object is, as far as sitting goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -93,17 +58,11 @@ pub enum SeatNaming {
     Shape,
 }
 
-/// Whether an object's name and label (lower-cased) make it a seat (`Some(true)`), something
-/// else (`Some(false)`), or neither.
+/// Whether an object's name (else its label) makes it a seat (`Some(true)`: a chair, a sofa,
+/// a bed …), something else one does not sit on (`Some(false)`: a table, a shelf, a floor …;
+/// [`ObjectClass`]), or says nothing either way.
 pub fn seat_by_name(name: &str, label: Option<&str>) -> Option<bool> {
-    let text = format!("{} {}", name, label.unwrap_or("")).to_lowercase();
-    if SEAT_WORDS.iter().any(|w| text.contains(w)) {
-        Some(true)
-    } else if NOT_SEAT_WORDS.iter().any(|w| text.contains(w)) {
-        Some(false)
-    } else {
-        None
-    }
+    ObjectClass::named(name, label).map(ObjectClass::is_seat)
 }
 
 /// One place to sit.
