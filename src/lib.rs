@@ -1,13 +1,16 @@
 //! egogen: egocentric synthetic data for head-mounted cameras.
 //!
-//! Modules follow the data flow: `scene` (meshes, walkable map) → `sensing` (ego rays);
-//! `body` (SMPL-X skeleton, skinning, eye anchor) →
-//! `motion` (pose sequences and their files, the motion-primitive model) → `policy` (the
-//! locomotion environment, rewards and controllers) → `synth` (posed sequences, CPF trajectories);
-//! `eval` runs the paper's evaluation scenarios through `synth` and measures them;
-//! `preview` draws PNG pictures for people;
-//! `cli` holds the command-line and config plumbing and no domain logic; `run_job` is
-//! `egogen-run`'s job, from a config through `supervisor` to a dataset.
+//! Modules follow the data flow (docs/ARCHITECTURE.md; `tests/layering.rs` keeps every module
+//! to the layers below it): `scene` (meshes, walkable map, what each object is) → `sensing`
+//! (ego rays); `body` (SMPL-X skeleton, skinning, eye anchor) → `motion` (pose sequences and
+//! their files, the motion-primitive model, joins and the steady head) → `walker` (one person
+//! walking: settings, observation, controllers, the judge and the step every walker takes) →
+//! `policy` (training: the batched environment, the network, PPO) → `synth` (takes: crowds of
+//! people walking and doing things, their tracks and sequence folders); `eval` runs the paper's
+//! evaluation through `synth` and `policy` and measures it; `render` draws frames in Blender,
+//! `export` turns a take into its outputs, `supervisor` turns a plan into a dataset,
+//! `campaign` runs many takes; `preview` draws PNG pictures for people; `cli` holds the
+//! command-line and config plumbing and no domain logic; `run_job` is `egogen-run`'s job.
 
 pub mod atomic_file;
 pub mod body;

@@ -148,7 +148,7 @@ fn episodes_are_deterministic_observed_as_egogen_and_time_out() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let mut b_env = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 7).unwrap();
     let mut ended = Vec::new();
-    for step in 0..settings.max_primitives {
+    for step in 0..settings.walker.max_primitives_per_goal {
         let z = normal_samples(&mut rng, b * l);
         let out = a.step(&z).unwrap();
         let twin_out = b_env.step(&z).unwrap();
@@ -775,7 +775,10 @@ fn people_seen_ahead_change_the_rays_only_and_not_for_people_standing_still() {
             speed_m_s,
             ..CrossingSettings::default()
         },
-        people_seen_ahead: ahead,
+        walker: egogen::walker::WalkerSettings {
+            anticipate_people: ahead,
+            ..egogen::walker::WalkerSettings::PAPER
+        },
         ..EnvSettings::default()
     };
     let b = 6;
@@ -839,7 +842,10 @@ fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
     use egogen::scene::{line_is_clear, GUIDE_CLEARANCE_M};
     env_parts!(body, ctx, model, bank, prior);
     let rooms = |guide_lookahead_m: f64| EnvSettings {
-        guide_lookahead_m,
+        walker: egogen::walker::WalkerSettings {
+            guide_lookahead_m,
+            ..floor_plans_only().walker
+        },
         ..floor_plans_only()
     };
     let b = 12;
@@ -882,12 +888,18 @@ fn a_guide_on_memory_plans_on_what_the_walker_saw_and_restores_from_snapshots() 
     use egogen::scene::{line_is_clear, GUIDE_CLEARANCE_M};
     env_parts!(body, ctx, model, bank, prior);
     let rooms = |guide_memory: bool| EnvSettings {
-        guide_lookahead_m: 2.0,
-        guide_memory,
+        walker: egogen::walker::WalkerSettings {
+            guide_lookahead_m: 2.0,
+            guide_memory,
+            ..floor_plans_only().walker
+        },
         ..floor_plans_only()
     };
     let plain_settings = EnvSettings {
-        guide_lookahead_m: 0.0,
+        walker: egogen::walker::WalkerSettings {
+            guide_lookahead_m: 0.0,
+            ..rooms(false).walker
+        },
         ..rooms(false)
     };
     let b = 12;
@@ -895,7 +907,10 @@ fn a_guide_on_memory_plans_on_what_the_walker_saw_and_restores_from_snapshots() 
     let mut memory = PolicyEnv::new(&model, &ctx, &bank, &prior, rooms(true), b, 8).unwrap();
     // The same memory, ground never seen costing its guide twice as much to cross.
     let wary_settings = EnvSettings {
-        guide_unknown_cost: 1.0,
+        walker: egogen::walker::WalkerSettings {
+            guide_unknown_cost: 1.0,
+            ..rooms(true).walker
+        },
         ..rooms(true)
     };
     let mut wary = PolicyEnv::new(&model, &ctx, &bank, &prior, wary_settings, b, 8).unwrap();
@@ -1079,7 +1094,10 @@ fn floor_plans_measure_the_way_round_walls_and_may_have_time_for_it() {
 #[test]
 fn the_scene_tested_in_every_frame_adds_exactly_the_primitives_that_pass_through_walls() {
     let settings = |scene_every_frame: bool| EnvSettings {
-        scene_every_frame,
+        walker: egogen::walker::WalkerSettings {
+            scene_every_frame,
+            ..floor_plans_only().walker
+        },
         ..floor_plans_only()
     };
     let (mut through, mut only_within) = (0, 0);
@@ -1103,7 +1121,10 @@ fn the_scene_tested_in_every_frame_adds_exactly_the_primitives_that_pass_through
 #[test]
 fn a_primitive_through_a_wall_earns_no_progress_when_asked() {
     let settings = |no_progress_through_walls: bool| EnvSettings {
-        scene_every_frame: true,
+        walker: egogen::walker::WalkerSettings {
+            scene_every_frame: true,
+            ..floor_plans_only().walker
+        },
         no_progress_through_walls,
         ..floor_plans_only()
     };
@@ -1184,7 +1205,10 @@ fn with_an_arrival_radius_walks_go_on_and_are_scored_where_they_end() {
     let b = 3;
     // Every start lies within 100 m of its goal.
     let scored_at_100m = |arrival_m| EnvSettings {
-        success_m: 100.0,
+        walker: egogen::walker::WalkerSettings {
+            success_m: 100.0,
+            ..egogen::walker::WalkerSettings::PAPER
+        },
         arrival_m,
         ..EnvSettings::default()
     };
@@ -1193,7 +1217,7 @@ fn with_an_arrival_radius_walks_go_on_and_are_scored_where_they_end() {
         let mut env = PolicyEnv::new(&model, &ctx, &bank, &prior, settings, b, 11).unwrap();
         let l = env.latent_dim();
         let mut ended = Vec::new();
-        for _ in 0..settings.max_primitives {
+        for _ in 0..settings.walker.max_primitives_per_goal {
             let z = normal_samples(&mut rng, b * l);
             ended.extend(env.step(&z).unwrap().finished);
         }
@@ -1213,10 +1237,14 @@ fn with_an_arrival_radius_walks_go_on_and_are_scored_where_they_end() {
     assert_eq!(walked_on.len(), b);
     assert!(walked_on
         .iter()
-        .all(|s| s.primitives == settings.max_primitives && matches!(s.ending, Ending::Success)));
+        .all(|s| s.primitives == settings.walker.max_primitives_per_goal
+            && matches!(s.ending, Ending::Success)));
     // Scored at 0 m instead, the same walks time out.
     let missed = run(EnvSettings {
-        success_m: 0.0,
+        walker: egogen::walker::WalkerSettings {
+            success_m: 0.0,
+            ..settings.walker
+        },
         ..settings
     });
     assert!(missed.iter().all(|s| matches!(s.ending, Ending::Timeout)));
@@ -1279,6 +1307,23 @@ fn paid_along_the_way_round_walls_only_the_goal_terms_change_and_only_indoors() 
 /// (`walker::step::choose_primitive`).
 #[test]
 fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
+    walk_both(egogen::walker::ControllerSpec::Policy {
+        mean_action: true,
+        spread: 1.0,
+    });
+}
+
+/// The sampling controller of `egogen policy eval` is the walker layer's, the one a take's
+/// person steps with (`walker::controller`): from the same generator state (a take's walker
+/// draws its seed pose first) both walk the same primitives, bit for bit.
+#[test]
+fn policy_eval_and_a_takes_agent_sample_the_same_primitives() {
+    walk_both(egogen::walker::ControllerSpec::Sampling { k: 4 });
+}
+
+/// Walks one walker steered by `steering` through `egogen policy eval`'s environment and
+/// through a take, and compares every primitive's seed frames.
+fn walk_both(steering: egogen::walker::ControllerSpec) {
     use egogen::policy::env::FixedScene;
     use egogen::scene::generated::crossing_scene::{CrossingScene, CrossingSettings};
     use egogen::scene::StartGoal;
@@ -1311,17 +1356,28 @@ fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
     };
     let settings = EnvSettings {
         seed_yaw_jitter_rad: 0.0,
-        max_primitives: PER_GOAL,
-        success_m: 0.1,
+        walker: egogen::walker::WalkerSettings {
+            max_primitives_per_goal: PER_GOAL,
+            success_m: 0.1,
+            ..egogen::walker::WalkerSettings::PAPER
+        },
         ..EnvSettings::default()
     };
     let mut env = PolicyEnv::with_scene(&model, &ctx, &bank, &prior, Some(&fixed), settings, 1, 7)
         .unwrap()
         .with_sensing(&actor.sensing());
     let mut eval_seeds = Vec::new();
+    // The take's walker 0 of seed 0 draws its seed pose (of a bank of one), then proposes.
+    let mut rng = egogen::walker::controller::walker_rng(0, 0);
+    rand_core::Rng::next_u64(&mut rng);
     for _ in 0..PRIMITIVES {
-        let a = actor.actions_with_spread(&env.observations(), None, 1.0);
-        let out = env.step(&a).unwrap();
+        let out = match steering {
+            ControllerSpec::Policy { .. } => {
+                let a = actor.actions_with_spread(&env.observations(), None, 1.0);
+                env.step(&a).unwrap()
+            }
+            spec => egogen::policy::sampling::controller_step(&mut env, spec, &mut rng).unwrap(),
+        };
         assert!(!out.done[0], "the walk ends before the comparison does");
         eval_seeds.push(env.snapshot().episodes[0].clone());
     }
@@ -1347,10 +1403,7 @@ fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
         facing_rad: None,
         goals: vec![goal],
         wander: false,
-        steering: ControllerSpec::Policy {
-            mean_action: true,
-            spread: 1.0,
-        },
+        steering,
     };
     let crowd = CrowdSettings {
         walker: egogen::walker::WalkerSettings {
@@ -1360,6 +1413,8 @@ fn policy_eval_and_a_takes_agent_walk_the_same_primitives() {
             // changes what is written, not which primitives are walked.
             smooth_joins: false,
             steady_head: false,
+            // The proposals as they are, as `policy eval` takes them.
+            penetration_redraws: 0,
             ..Default::default()
         },
         primitives: PRIMITIVES,

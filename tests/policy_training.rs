@@ -334,23 +334,33 @@ fn bad_policy_configs_name_the_file_and_the_key() {
         ),
         (
             "[stages.env]",
-            "[stages.env]\nguide_lookahead_m = -1.0",
-            "stages[1].env.guide_lookahead_m",
+            "[stages.env]\n[stages.env.walker]\nguide_lookahead_m = -1.0",
+            "stages[1].env.walker.guide_lookahead_m",
         ),
         (
             "[stages.env]",
-            "[stages.env]\nguide_memory = true",
-            "stages[1].env.guide_memory",
+            "[stages.env]\n[stages.env.walker]\nguide_memory = true",
+            "stages[1].env.walker.guide_memory",
         ),
         (
             "[stages.env]",
-            "[stages.env]\nguide_lookahead_m = 1.0\nguide_centre_weight = nan",
-            "stages[1].env.guide_centre_weight",
+            "[stages.env]\n[stages.env.walker]\nguide_lookahead_m = 1.0\nguide_centre_weight = nan",
+            "stages[1].env.walker.guide_centre_weight",
         ),
         (
             "[stages.env]",
-            "[stages.env]\nguide_lookahead_m = 1.0\nguide_unknown_cost = 1.0",
-            "stages[1].env.guide_unknown_cost",
+            "[stages.env]\n[stages.env.walker]\nguide_lookahead_m = 1.0\nguide_unknown_cost = 1.0",
+            "stages[1].env.walker.guide_unknown_cost",
+        ),
+        (
+            "[stages.env]",
+            "[stages.env]\n[stages.env.walker]\npenetration_redraws = 4",
+            "stages[1].env.walker.penetration_redraws",
+        ),
+        (
+            "[stages.env]",
+            "[stages.env]\n[stages.env.walker]\nsuccess_m = 0",
+            "stages[1].env.walker.success_m",
         ),
         (
             "[policy]",

@@ -74,7 +74,7 @@ enum Command {
     Train(TrainCommand),
     /// Locomotion control: the pose prior of the reward, controller evaluation.
     #[command(subcommand)]
-    Policy(PolicyCommand),
+    Policy(Box<PolicyCommand>),
     /// Make motion without rendering: agents steered by the policy (or by sampling) walk to
     /// their goals in a scene, in turn, each sensing the others (paper Alg. 1). Writes per
     /// agent an AMASS-style SMPL-X .npz, eye-frame trajectory and markers, a top view of all
@@ -416,7 +416,7 @@ fn run(cli: Cli) -> Result<()> {
             pass.as_deref(),
             &exposure,
         )?,
-        Command::Policy(cmd) => run_policy(cmd)?,
+        Command::Policy(cmd) => run_policy(*cmd)?,
         Command::Eval(args) => egogen::cli::eval_jobs::run_eval(&args)?,
         Command::Synth { config, quiet } => {
             let plan = egogen::cli::synth_config::load_synth_plan(&config)?;

@@ -77,6 +77,11 @@ pub enum PolicyCommand {
         /// each; default 1,16,64, none when --policy is given alone).
         #[arg(long, value_delimiter = ',')]
         k: Option<Vec<usize>>,
+        /// Also evaluate these controllers of the walker layer, the very ones a take's people
+        /// step with (comma-separated names: `sampling_kK`, `path_follow_kK`; `--k K` is
+        /// `sampling_kK`).
+        #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+        controller: Vec<String>,
         /// Also evaluate this trained policy (the shipped one:
         /// assets/policy/scene_weights/policy.safetensors).
         #[arg(long)]
@@ -278,6 +283,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             weights,
             prior,
             k,
+            controller,
             episodes,
             envs,
             success_m,
@@ -308,9 +314,26 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if let Some(f) = &episodes_jsonl {
                 refuse_existing(f)?;
             }
-            let k = k.unwrap_or_else(|| match policy {
-                Some(_) => vec![],
-                None => vec![1, 16, 64],
+            let controllers = controller
+                .iter()
+                .map(|name| {
+                    use crate::walker::ControllerSpec as C;
+                    match C::from_name(name) {
+                        Some(spec @ C::Sampling { k }) => Some(("sampling", k, spec)),
+                        Some(spec @ C::PathFollow { k }) => Some(("path_follow", k, spec)),
+                        _ => None,
+                    }
+                    .with_context(|| {
+                        format!(
+                            "--controller: \"{name}\": expected sampling_kK or path_follow_kK \
+                                 with K ≥ 1 (the policy: --policy FILE)"
+                        )
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let k = k.unwrap_or_else(|| match policy.is_some() || !controllers.is_empty() {
+                true => vec![],
+                false => vec![1, 16, 64],
             });
             if k.contains(&0) || episodes == 0 || envs == 0 {
                 bail!("--k, --episodes and --envs must be at least 1");
@@ -318,7 +341,12 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             const MAX_EPISODES: usize = 1_000_000;
             const MAX_ENVS: usize = 65_536;
             const MAX_K: usize = 65_536;
-            if episodes > MAX_EPISODES || envs > MAX_ENVS || k.iter().any(|&k| k > MAX_K) {
+            if episodes > MAX_EPISODES
+                || envs > MAX_ENVS
+                || k.iter()
+                    .chain(controllers.iter().map(|c| &c.1))
+                    .any(|&k| k > MAX_K)
+            {
                 bail!(
                     "--episodes {episodes}, --envs {envs}, --k {k:?}: at most {MAX_EPISODES} episodes, \
                      {MAX_ENVS} environments and K = {MAX_K} (every episode's record is kept in memory)"
@@ -327,23 +355,30 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             if !(action_spread.is_finite() && action_spread >= 0.0) {
                 bail!("--action-spread: expected a scale ≥ 0, got {action_spread}");
             }
-            if !(success_m.is_finite() && success_m > 0.0) {
-                bail!("--success-m: expected a radius > 0 m, got {success_m}");
-            }
             if let Some(m) = time_by_way_round_m {
                 if !(m.is_finite() && m > 0.0) {
                     bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
                 }
             }
-            if let Some((field, what)) = crate::walker::settings::guide_problem(
-                &crate::scene::Guide {
-                    lookahead_m: guide_lookahead_m,
-                    centre_weight: guide_centre_weight,
-                    unknown_cost: guide_unknown_cost,
-                },
+            // The flags fill the walker's one settings schema, over the paper's walker.
+            let paper = crate::walker::WalkerSettings::PAPER;
+            let walker = crate::walker::WalkerSettings {
+                success_m,
+                max_primitives_per_goal: max_primitives.unwrap_or(paper.max_primitives_per_goal),
+                guide_lookahead_m,
                 guide_memory,
-            ) {
-                bail!("--{}: {what}", field.replace('_', "-"));
+                guide_centre_weight,
+                guide_unknown_cost,
+                anticipate_people: people_seen_ahead,
+                ..paper
+            };
+            if let Some((field, what)) = walker.problem_over(&paper) {
+                let flag = match field {
+                    "max_primitives_per_goal" => "max_primitives",
+                    "anticipate_people" => "people_seen_ahead",
+                    f => f,
+                };
+                bail!("--{}: {what}", flag.replace('_', "-"));
             }
             let plan = crate::cli::train_primitive::load_train_plan(&config)?;
             let body = BodyModel::load(&plan.body_model)?;
@@ -376,8 +411,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 );
             }
             let settings = EnvSettings {
-                success_m,
-                max_primitives: max_primitives.unwrap_or(defaults.max_primitives),
+                walker,
                 crossing: crate::scene::generated::crossing_scene::CrossingSettings {
                     share: crossing_share,
                     people,
@@ -388,24 +422,18 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                     max_primitives: max_primitives.unwrap_or(defaults.rooms.max_primitives),
                     ..defaults.rooms
                 },
-                guide_lookahead_m,
-                guide_memory,
-                guide_centre_weight,
-                guide_unknown_cost,
-                people_seen_ahead,
                 time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
                 ..defaults
             };
-            if max_primitives == Some(0) {
-                bail!("--max-primitives must be at least 1");
-            }
-            if scene.is_some() && !k.is_empty() {
+            if scene.is_some() && !(k.is_empty() && controllers.is_empty()) {
                 match policy {
                     None => bail!(
                         "--scene evaluates a policy: give --policy FILE (the shipped one: {})",
                         crate::policy::weights::SHIPPED_POLICY
                     ),
-                    Some(_) => bail!("--scene evaluates --policy only (give no --k)"),
+                    Some(_) => {
+                        bail!("--scene evaluates --policy only (give no --k or --controller)")
+                    }
                 }
             }
             if scene.is_none() && (up.is_some() || unit_m.is_some() || pair_distance_on_foot) {
@@ -435,7 +463,7 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             };
             if let Some(png) = &paths_png {
                 refuse_existing(png)?;
-                if k.len() + usize::from(policy.is_some()) != 1 || paths == 0 {
+                if k.len() + controllers.len() + usize::from(policy.is_some()) != 1 || paths == 0 {
                     bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
                 }
             }
@@ -451,10 +479,18 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
                 .map(|&kk| {
                     (
                         serde_json::json!({"controller": "sampling", "k": kk}),
-                        HeldOutController::Sampling { k: kk },
+                        HeldOutController::Walker(crate::walker::ControllerSpec::Sampling {
+                            k: kk,
+                        }),
                     )
                 })
                 .collect();
+            runs.extend(controllers.iter().map(|&(kind, k, spec)| {
+                (
+                    serde_json::json!({"controller": kind, "k": k}),
+                    HeldOutController::Walker(spec),
+                )
+            }));
             if let Some(net) = &loaded {
                 let name = if mean_action { "policy_mean" } else { "policy" };
                 let mut about =

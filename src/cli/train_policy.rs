@@ -315,11 +315,33 @@ fn resolve_stage(
         ));
     }
     let e = &s.env;
-    if e.max_primitives == 0 {
-        return Err(bad(
-            &key("env.max_primitives"),
-            "expected a whole number ≥ 1, got 0".into(),
-        ));
+    if let Some((field, what)) = e.walker.problem_over(&crate::walker::WalkerSettings::PAPER) {
+        return Err(bad(&key(&format!("env.walker.{field}")), what));
+    }
+    let paper = crate::walker::WalkerSettings::PAPER;
+    for (field, given, as_trained) in [
+        (
+            "penetration_redraws",
+            e.walker.penetration_redraws != paper.penetration_redraws,
+            "an episode takes its controller's best proposal as it is",
+        ),
+        (
+            "smooth_joins",
+            e.walker.smooth_joins,
+            "an episode writes no motion: the joins are smoothed where a take writes it",
+        ),
+        (
+            "steady_head",
+            e.walker.steady_head,
+            "an episode writes no motion: the head is steadied where a take writes it",
+        ),
+    ] {
+        if given {
+            return Err(bad(
+                &key(&format!("env.walker.{field}")),
+                format!("a take's setting, not training's ({as_trained}): leave it out"),
+            ));
+        }
     }
     if e.fixed_max_primitives == Some(0) {
         return Err(bad(
@@ -350,16 +372,6 @@ fn resolve_stage(
             &key("env.fixed_share"),
             "a share of episodes in a fixed scene needs a [scene] section".into(),
         ));
-    }
-    if !(e.success_m.is_finite() && e.success_m > 0.0) {
-        return Err(bad(
-            &key("env.success_m"),
-            format!("expected a radius > 0 m, got {}", e.success_m),
-        ));
-    }
-    if let Some((field, what)) = crate::walker::settings::guide_problem(&e.guide(), e.guide_memory)
-    {
-        return Err(bad(&key(&format!("env.{field}")), what));
     }
     let (lo, hi) = e.scene.box_side_m;
     if !(lo > 0.0

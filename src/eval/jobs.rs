@@ -721,9 +721,12 @@ fn table2_scene(args: &EvalJob, voxel_m: f64) -> Result<crate::policy::env::Fixe
 /// 13 primitives in the apartment.
 fn table2_settings() -> EnvSettings {
     EnvSettings {
-        success_m: SUCCESS_M,
+        walker: crate::walker::WalkerSettings {
+            success_m: SUCCESS_M,
+            max_primitives_per_goal: TABLE2_MAX_PRIMITIVES,
+            ..crate::walker::WalkerSettings::PAPER
+        },
         arrival_m: Some(ARRIVAL_M),
-        max_primitives: TABLE2_MAX_PRIMITIVES,
         ..EnvSettings::default()
     }
 }
@@ -757,7 +760,10 @@ fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
     )?;
     // Beyond the paper: the shipped policy shown the way round walls by an A* path.
     let guided = EnvSettings {
-        guide_lookahead_m: TABLE2_GUIDE_LOOKAHEAD_M,
+        walker: crate::walker::WalkerSettings {
+            guide_lookahead_m: TABLE2_GUIDE_LOOKAHEAD_M,
+            ..settings.walker
+        },
         ..settings
     };
     rows.extend(policy_rows(
@@ -768,7 +774,8 @@ fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<()> {
         &[("apartment", guided)],
         &progress,
     )?);
-    let sampling: HeldOutController<InferBackend> = HeldOutController::Sampling { k: args.k };
+    let sampling: HeldOutController<InferBackend> =
+        HeldOutController::Walker(crate::walker::ControllerSpec::Sampling { k: args.k });
     let (report, _) = evaluate(
         &parts,
         settings,
@@ -815,7 +822,10 @@ fn box_and_crossing_sets() -> Vec<(&'static str, EnvSettings)> {
         .map(|(set, crossing_share)| {
             let defaults = EnvSettings::default();
             let settings = EnvSettings {
-                success_m: SUCCESS_M,
+                walker: crate::walker::WalkerSettings {
+                    success_m: SUCCESS_M,
+                    ..defaults.walker
+                },
                 arrival_m: Some(ARRIVAL_M),
                 crossing: crate::scene::generated::crossing_scene::CrossingSettings {
                     share: crossing_share,

@@ -16,7 +16,7 @@ use crate::motion::cvae::MotionModel;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 use crate::policy::env::{EnvParts, EnvSettings, PolicyEnv};
 use crate::policy::held_out::{run_episodes, EvalReport, HELD_OUT_BASE};
-use crate::policy::sampling::sampling_step;
+use crate::policy::sampling::controller_step;
 use crate::walker::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 
 /// Frames of every primitive of a set, as poses.
@@ -149,8 +149,9 @@ pub(crate) fn fit_pose_prior(
 
 /// What chooses the latents in an evaluation.
 pub(crate) enum HeldOutController<'a, B: burn::prelude::Backend> {
-    /// The best of `k` random latents by the reward.
-    Sampling { k: usize },
+    /// A controller of the walker layer that needs no policy, as a take's people step with it
+    /// (the best of `k` random latents by the reward, the path follower).
+    Walker(crate::walker::ControllerSpec),
     /// The trained policy: actions sampled from π (as EgoGen's test collector does) or its
     /// mean.
     Policy {
@@ -259,7 +260,7 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
     // per tensor operation).
     let actor = match controller {
         HeldOutController::Policy { net, .. } => Some(crate::policy::Actor::of(*net)),
-        HeldOutController::Sampling { .. } => None,
+        HeldOutController::Walker(_) => None,
     };
     let mut recorder = PathRecorder {
         count: paths as u64,
@@ -271,7 +272,7 @@ pub(crate) fn evaluate_with_paths<B: burn::prelude::Backend>(
         |e| {
             let ids = (paths > 0).then(|| recorder.before(e));
             let out = match controller {
-                HeldOutController::Sampling { k } => sampling_step(e, *k, &mut rng),
+                HeldOutController::Walker(spec) => controller_step(e, *spec, &mut rng),
                 HeldOutController::Policy {
                     mean_action,
                     spread,

@@ -30,10 +30,7 @@ impl NamedController {
     pub fn table1(k: usize) -> Vec<NamedController> {
         let mut out = NamedController::policies();
         out.push(NamedController::sampling(k));
-        out.push(NamedController::new(
-            format!("path_follow_k{k}"),
-            ControllerSpec::PathFollow { k },
-        ));
+        out.push(NamedController::of(ControllerSpec::PathFollow { k }));
         out
     }
 
@@ -48,8 +45,8 @@ impl NamedController {
     /// The policy with sampled actions and with the mean action.
     fn policies() -> Vec<NamedController> {
         vec![
-            NamedController::new("policy".into(), ControllerSpec::POLICY),
-            NamedController::new("policy_mean".into(), ControllerSpec::POLICY_MEAN),
+            NamedController::of(ControllerSpec::POLICY),
+            NamedController::of(ControllerSpec::POLICY_MEAN),
         ]
     }
 
@@ -65,6 +62,12 @@ impl NamedController {
                 ..c
             })
             .collect()
+    }
+
+    /// A controller by its own name ([`ControllerSpec::name`]), the others anticipated
+    /// (egogen's default).
+    fn of(steering: ControllerSpec) -> NamedController {
+        NamedController::new(steering.name(), steering)
     }
 
     /// A controller with the others anticipated (egogen's default).
@@ -89,7 +92,7 @@ impl NamedController {
 
     /// The sampling controller with `k` latents per primitive.
     fn sampling(k: usize) -> NamedController {
-        NamedController::new(format!("sampling_k{k}"), ControllerSpec::Sampling { k })
+        NamedController::of(ControllerSpec::Sampling { k })
     }
 }
 

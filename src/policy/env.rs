@@ -10,12 +10,12 @@
 //! the floor at z = 0. A step decodes the latent, judges the primitive and takes it by the
 //! walker's step every walker shares (`walker::step`: the reward of [`crate::walker::reward`]),
 //! and ends the episode on success, on penetration (when `terminate_on_penetration`), on a
-//! non-finite primitive, or after `max_primitives` (a timeout is terminal, as in EgoGen).
+//! non-finite primitive, or after `walker.max_primitives_per_goal` (a timeout is terminal, as in EgoGen).
 //! Finished episodes are replaced by the next episode at once; episode `n` of an
 //! environment with `episode_base` b is drawn from a generator seeded by `(b, n)` alone, so
 //! runs are deterministic and held-out bases never meet training ones.
 //!
-//! The observation is the walker's ([`super::walker`]), on the episode's clock.
+//! The observation is the walker's ([`crate::walker::state`]), on the episode's clock.
 
 use std::sync::Arc;
 
@@ -44,6 +44,7 @@ use crate::scene::{
     SceneSdf, SeenMap, StartGoal, WalkableMap,
 };
 use crate::sensing::{EgoSensor, SensingSpec, Sensor};
+use crate::walker::controller::{Controller, Sight};
 use crate::walker::pose_prior::PosePrior;
 use crate::walker::reward::{Judged, Limits, RewardWeights, SceneTest, Situation, WeightChanges};
 use crate::walker::state::{
@@ -52,7 +53,7 @@ use crate::walker::state::{
 use crate::walker::step::{
     choose_primitive, finite_reward, Judge, Proposal, SceneCheck, StepContext,
 };
-use crate::walker::ObsLayout;
+use crate::walker::{ObsLayout, WalkerSettings};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
 /// (a start too near a wall for every seed).
@@ -74,15 +75,22 @@ pub struct EnvSettings {
     /// Changes to `weights` in the indoor episodes, floor plans and the fixed scene's pairs
     /// (e.g. a pace bonus where paths bend round walls). Nothing given: `weights`.
     pub indoor_weights: WeightChanges,
-    /// Success radius around the goal (m, horizontal; EgoGen's 0.1).
-    pub success_m: f64,
+    /// How the walker of every episode steps (`[stages.env.walker]`, the one schema of
+    /// [`WalkerSettings`]; keys left out are the paper's, [`WalkerSettings::PAPER`]): the goal
+    /// reached within `success_m`, an episode timing out after `max_primitives_per_goal`
+    /// primitives (EgoGen's box scenes: 11), the scene tested at every frame or at a
+    /// primitive's end, the others seen ahead (`anticipate_people`), the guide round what hides
+    /// the goal (`guide_*`; with [`Self::guide_indoors_only`], indoor episodes alone). An
+    /// episode takes its controller's best proposal as it is and writes no motion:
+    /// `penetration_redraws`, `smooth_joins` and `steady_head` stay off (training configs are
+    /// refused otherwise).
+    #[serde(deserialize_with = "paper_walker")]
+    pub walker: WalkerSettings,
     /// Evaluation as the paper's tables: `Some(r)` ends an episode (and pays the success
     /// term) only when the pelvis comes within `r` m, and an episode that times out within
     /// `success_m` still succeeds — walks go on to EgoGen's goal threshold and are scored at
     /// the tables' radius. `None` (default): both at `success_m`.
     pub arrival_m: Option<f64>,
-    /// Primitives before the episode times out (EgoGen's box scenes: 11).
-    pub max_primitives: usize,
     /// End the episode when the body penetrates (fine-tuning).
     pub terminate_on_penetration: bool,
     /// Blocked cells in the body's 2D box beyond which it penetrates (paper Eq. 7: 3).
@@ -95,36 +103,6 @@ pub struct EnvSettings {
     /// too (the eval's penetration measure; Eq. 7 looks at the primitive's last frame only);
     /// false: Eq. 7 alone, as EgoGen.
     pub box_every_frame: bool,
-    /// Whether the scene is tested at every frame of a primitive, as `egogen synth` judges its
-    /// agents ([`Limits::scene_every_frame`]: the body's box on blocked cells in any frame, or
-    /// the pelvis's path over a cell that is not walkable, penetrates); false: Eq. 7 at the
-    /// primitive's end alone, as EgoGen — which lets a 0.6 m step pass through a 0.15 m wall
-    /// unseen.
-    pub scene_every_frame: bool,
-    /// Whether the walker's rays see each other person (a crossing's moving box) standing
-    /// where that person will be when the walker's primitive ends, as `egogen synth`'s crowd
-    /// stepping shows them (`WalkerSettings::anticipate_people`); the primitive is still judged
-    /// against them moving. false: where they are at each seed frame's time, as EgoGen.
-    pub people_seen_ahead: bool,
-    /// With L > 0, the walker observes a guide's aim instead of its goal where a wall hides
-    /// the goal: the point L m along the shortest path around what blocks the straight way
-    /// (`scene::guide_aim`; rewards, success and distance stay the goal's). 0: the goal, as
-    /// EgoGen.
-    pub guide_lookahead_m: f64,
-    /// With the guide on: it plans on what the walker's own rays have shown it so far in the
-    /// episode (`scene::SeenMap`, the unknown taken as open) instead of on the whole map — the
-    /// walker's memory of a dwelling it has never walked, not a map it was given. false: the
-    /// whole map.
-    pub guide_memory: bool,
-    /// With the guide on: how strongly its path keeps to the middle of doorways and corridors
-    /// (`scene::plan_path_centred`: a step nearer than 0.45 m to what blocks walking costs up to
-    /// this many times more). 0: the shortest path at the guide's 0.3 m clearance.
-    pub guide_centre_weight: f64,
-    /// With the guide on memory: a step onto ground the walker never saw costs this many
-    /// times its length more than one onto ground seen open: the way round prefers the
-    /// doorways its rays looked through (`scene::Guide::unknown_cost`). 0: the unknown taken
-    /// as open.
-    pub guide_unknown_cost: f64,
     /// With the guide on: only indoor episodes (floor plans and the fixed scene's pairs) are
     /// guided; box scenes and crossings walk to their goals unguided, as the paper's tables
     /// evaluate them. false: every episode.
@@ -145,7 +123,7 @@ pub struct EnvSettings {
     /// the others box scenes and crossings as without one; 1 walks only its pairs, in turn.
     pub fixed_share: f64,
     /// Primitives before an episode in the fixed scene times out (EgoGen's apartment: 13);
-    /// `None`: `max_primitives`.
+    /// `None`: `walker.max_primitives_per_goal`.
     pub fixed_max_primitives: Option<usize>,
     /// With N > 0, penetration in a fixed scene with a 3D SDF is paper Eq. 11 on N body
     /// vertices ([`crate::walker::reward::SceneTest`]) instead of Eq. 7 (EgoGen's apartment): the
@@ -161,18 +139,6 @@ pub struct EnvSettings {
     pub time_by_way_round_m: f64,
 }
 
-impl EnvSettings {
-    /// The guide these settings give every guided episode (`guide_*`; [`Self::guide_indoors_only`]
-    /// is the environment's to apply per course).
-    pub fn guide(&self) -> Guide {
-        Guide {
-            lookahead_m: self.guide_lookahead_m,
-            centre_weight: self.guide_centre_weight,
-            unknown_cost: self.guide_unknown_cost,
-        }
-    }
-}
-
 impl Default for EnvSettings {
     fn default() -> Self {
         Self {
@@ -182,19 +148,12 @@ impl Default for EnvSettings {
             weights: RewardWeights::default(),
             box_weights: WeightChanges::default(),
             indoor_weights: WeightChanges::default(),
-            success_m: 0.1,
+            walker: WalkerSettings::PAPER,
             arrival_m: None,
-            max_primitives: 11,
             terminate_on_penetration: false,
             penetration_cells: crate::walker::reward::EQ7_PENETRATION_CELLS,
             people_every_frame: false,
             box_every_frame: false,
-            scene_every_frame: false,
-            people_seen_ahead: false,
-            guide_lookahead_m: 0.0,
-            guide_memory: false,
-            guide_centre_weight: 0.0,
-            guide_unknown_cost: 0.0,
             guide_indoors_only: false,
             seed_yaw_jitter_rad: 0.2 * std::f64::consts::PI,
             goal_by_path: false,
@@ -206,6 +165,11 @@ impl Default for EnvSettings {
             time_by_way_round_m: 0.0,
         }
     }
+}
+
+/// `[stages.env.walker]` over the paper's preset.
+fn paper_walker<'de, D: serde::Deserializer<'de>>(d: D) -> Result<WalkerSettings, D::Error> {
+    WalkerSettings::over(WalkerSettings::PAPER, d)
 }
 
 /// Mocap seeds episodes start from: the first two frames of training primitives, canonical,
@@ -303,7 +267,7 @@ struct Episode {
     id: u64,
     course: Course,
     walker: Walker,
-    /// What the walker has seen, where its guide plans on that ([`EnvSettings::guide_memory`]).
+    /// What the walker has seen, where its guide plans on that ([`WalkerSettings::guide_memory`]).
     seen: Option<SeenMap>,
 }
 
@@ -521,6 +485,8 @@ pub enum EnvError {
     },
     #[error("environment snapshot: {0}")]
     Snapshot(String),
+    #[error("this controller acts through a policy: the environment steps a policy through its batched actor")]
+    NeedsPolicy,
     #[error(transparent)]
     Decode(#[from] DecodeError),
 }
@@ -704,7 +670,7 @@ impl<'m> PolicyEnv<'m> {
             crossing: None,
             rooms: None,
             pair: None,
-            max_primitives: self.settings.max_primitives,
+            max_primitives: self.settings.walker.max_primitives_per_goal,
             sdf: None,
             goal_field: None,
             way_round: Default::default(),
@@ -740,7 +706,7 @@ impl<'m> PolicyEnv<'m> {
             crossing: Some(scene.params),
             rooms: None,
             pair: None,
-            max_primitives: self.settings.max_primitives,
+            max_primitives: self.settings.walker.max_primitives_per_goal,
             sdf: None,
             goal_field: None,
             way_round: Default::default(),
@@ -761,7 +727,7 @@ impl<'m> PolicyEnv<'m> {
             max_primitives: self
                 .settings
                 .fixed_max_primitives
-                .unwrap_or(self.settings.max_primitives),
+                .unwrap_or(self.settings.walker.max_primitives_per_goal),
             sdf: f.sdf.clone(),
             goal_field: self.goal_field(&f.map, f.pairs[pair].goal),
             way_round: Default::default(),
@@ -879,13 +845,13 @@ impl<'m> PolicyEnv<'m> {
         if self.settings.guide_indoors_only && !course.indoors() {
             0.0
         } else {
-            self.settings.guide_lookahead_m
+            self.settings.walker.guide_lookahead_m
         }
     }
 
     /// Whether the walker of a course remembers what it sees: its guide plans on it.
     fn remembers(&self, course: &Course) -> bool {
-        self.settings.guide_memory && self.guide_lookahead_m(course) > 0.0
+        self.settings.walker.guide_memory && self.guide_lookahead_m(course) > 0.0
     }
 
     fn observe_into(&self, e: &Episode, out: &mut [f32]) {
@@ -898,20 +864,14 @@ impl<'m> PolicyEnv<'m> {
             e.course.goal,
             &Guide {
                 lookahead_m: self.guide_lookahead_m(&e.course),
-                ..self.settings.guide()
+                ..self.settings.walker.guide()
             },
         );
         let t0_s = frame_time_s(w.steps, 0);
-        let around = e.course.surroundings();
-        let ahead: Vec<MovingObstacle>;
-        let around = if self.settings.people_seen_ahead && !around.moving.is_empty() {
-            ahead = seen_ahead(around.moving, t0_s).collect();
-            Surroundings {
-                moving: &ahead,
-                ..around
-            }
-        } else {
-            around
+        let (around, ahead) = self.seen_around(e, t0_s);
+        let around = Surroundings {
+            moving: ahead.as_deref().unwrap_or(around.moving),
+            ..around
         };
         w.observe_into(
             self.body,
@@ -993,11 +953,14 @@ impl<'m> PolicyEnv<'m> {
         };
         Judge {
             limits: Limits {
-                success_m: self.settings.arrival_m.unwrap_or(self.settings.success_m),
+                success_m: self
+                    .settings
+                    .arrival_m
+                    .unwrap_or(self.settings.walker.success_m),
                 penetration_cells: self.settings.penetration_cells,
                 people_every_frame: self.settings.people_every_frame,
                 box_every_frame: self.settings.box_every_frame,
-                scene_every_frame: self.settings.scene_every_frame,
+                scene_every_frame: self.settings.walker.scene_every_frame,
             },
             weights: self.weights(&e.course),
             primitives_left: e.course.max_primitives.saturating_sub(e.walker.steps + 1),
@@ -1107,7 +1070,7 @@ impl<'m> PolicyEnv<'m> {
                         Some(Ending::Penetration)
                     } else if w.steps >= max_primitives {
                         let within = self.settings.arrival_m.is_some()
-                            && w.distance_m < self.settings.success_m;
+                            && w.distance_m < self.settings.walker.success_m;
                         Some(if within {
                             Ending::Success
                         } else {
@@ -1135,6 +1098,74 @@ impl<'m> PolicyEnv<'m> {
             }
         }
         Ok(out)
+    }
+
+    /// One step of every episode by a controller of the walker layer (`controllers[i]` for
+    /// the walker of episode slot `i`, each proposing as a take's person does, drawing from
+    /// `rng` in episode order), its proposals decoded in one batch, scored by the controller
+    /// and chosen as [`Self::choose`] does. Every controller proposes as many latents.
+    pub(crate) fn step_with(
+        &mut self,
+        controllers: &mut [Box<dyn Controller + '_>],
+        rng: &mut ChaCha8Rng,
+    ) -> Result<StepOutput, EnvError> {
+        let l = self.latent_dim();
+        let mut latents = Vec::new();
+        let mut per = None;
+        for (e, controller) in self.episodes.iter().zip(controllers.iter_mut()) {
+            let w = &e.walker;
+            let t0_s = frame_time_s(w.steps, 0);
+            let (around, ahead) = self.seen_around(e, t0_s);
+            let around = Surroundings {
+                moving: ahead.as_deref().unwrap_or(around.moving),
+                ..around
+            };
+            let sight = Sight {
+                walker: w,
+                body: self.body,
+                sensor: &self.sensor,
+                around: &around,
+                standing: e.course.obstacle.as_slice(),
+                goal: e.course.goal,
+                t0_s,
+                time_left: 1.0 - w.steps as f64 / e.course.max_primitives as f64,
+                settings: &self.settings.walker,
+                latent_dim: l,
+            };
+            let proposed = controller.propose(&sight, rng);
+            let n = proposed.latents.len();
+            if *per.get_or_insert(n) != n {
+                return Err(EnvError::LatentShape {
+                    found: n * l,
+                    envs: self.episodes.len(),
+                    per: per.unwrap_or(0),
+                    dim: l,
+                });
+            }
+            latents.extend(proposed.latents.into_iter().flatten());
+        }
+        let mut candidates = self.propose(&latents, per.unwrap_or(1))?;
+        for c in &mut candidates {
+            if let (Some(p), Some(j)) = (&c.primitive, &c.judged) {
+                c.score = controllers[c.env].score(p, j, c.score);
+            }
+        }
+        let chosen = self.choose(candidates)?;
+        self.commit(chosen)
+    }
+
+    /// The others as an episode's walker sees them at `t0_s`: the course's surroundings, and
+    /// where [`WalkerSettings::anticipate_people`] says, the moving people where they will
+    /// stand when the primitive ends.
+    fn seen_around<'a>(
+        &self,
+        e: &'a Episode,
+        t0_s: f64,
+    ) -> (Surroundings<'a>, Option<Vec<MovingObstacle>>) {
+        let around = e.course.surroundings();
+        let ahead = (self.settings.walker.anticipate_people && !around.moving.is_empty())
+            .then(|| seen_ahead(around.moving, t0_s).collect());
+        (around, ahead)
     }
 
     /// One primitive per episode from `latents` (`[B × L]`).

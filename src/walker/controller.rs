@@ -1,7 +1,7 @@
-//! What proposes a walker's next primitive: the [`Controller`] trait, its three kinds (the
+//! What proposes a walker's next primitive: the `Controller` trait, its three kinds (the
 //! trained policy, the best of K random latents, the path-planning baseline) and the one serde
 //! spec they are built from ([`ControllerSpec`], a take's `steering`, `egogen eval`'s
-//! controller names). A controller proposes latents; [`super::step::walk_step`] decodes,
+//! controller names). A controller proposes latents; `walker::step::walk_step` decodes,
 //! judges and chooses among them the same way for every kind. A new controller is one type
 //! here with its `Controller` impl and its arm in [`ControllerSpec`].
 
@@ -67,6 +67,47 @@ impl ControllerSpec {
         mean_action: true,
         spread: 1.0,
     };
+
+    /// The controller's name in reports and on command lines: `policy`, `policy_mean`,
+    /// `policy_spread_S`, `sampling_kK`, `path_follow_kK`.
+    pub fn name(&self) -> String {
+        match *self {
+            ControllerSpec::Policy {
+                mean_action: true, ..
+            } => "policy_mean".into(),
+            ControllerSpec::Policy { spread: 1.0, .. } => "policy".into(),
+            ControllerSpec::Policy { spread, .. } => format!("policy_spread_{spread}"),
+            ControllerSpec::Sampling { k } => format!("sampling_k{k}"),
+            ControllerSpec::PathFollow { k } => format!("path_follow_k{k}"),
+        }
+    }
+
+    /// The controller a name ([`Self::name`]'s) says, if any.
+    pub fn from_name(name: &str) -> Option<ControllerSpec> {
+        let k = |s: &str| s.parse::<usize>().ok().filter(|&k| k >= 1);
+        match name {
+            "policy" => Some(ControllerSpec::POLICY),
+            "policy_mean" => Some(ControllerSpec::POLICY_MEAN),
+            _ => {
+                if let Some(s) = name.strip_prefix("policy_spread_") {
+                    let spread: f32 = s
+                        .parse()
+                        .ok()
+                        .filter(|x: &f32| x.is_finite() && *x >= 0.0)?;
+                    Some(ControllerSpec::Policy {
+                        mean_action: false,
+                        spread,
+                    })
+                } else if let Some(s) = name.strip_prefix("sampling_k") {
+                    Some(ControllerSpec::Sampling { k: k(s)? })
+                } else {
+                    Some(ControllerSpec::PathFollow {
+                        k: k(name.strip_prefix("path_follow_k")?)?,
+                    })
+                }
+            }
+        }
+    }
 
     /// Whether this controller acts through a trained policy.
     pub fn needs_policy(&self) -> bool {
@@ -205,6 +246,15 @@ pub(crate) fn draw_action(mean: &[f32], std: &[f32], rng: &mut ChaCha8Rng) -> Ve
         .collect()
 }
 
+/// The generator walker `i` of a take seeded `seed` draws from (its seed pose first, then
+/// its controller's proposals and redraws).
+pub fn walker_rng(seed: u64, i: usize) -> ChaCha8Rng {
+    use rand_core::SeedableRng;
+    ChaCha8Rng::seed_from_u64(
+        seed.rotate_left(17) ^ (i as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03),
+    )
+}
+
 /// `k` latents from N(0, I).
 fn random_latents(k: usize, l: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f32>> {
     normal_samples(rng, k.max(1) * l)
@@ -271,5 +321,39 @@ impl Controller for PathFollowController {
             } else {
                 0.0
             })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::ControllerSpec;
+
+    #[test]
+    fn a_controllers_name_says_it_back() {
+        for spec in [
+            ControllerSpec::POLICY,
+            ControllerSpec::POLICY_MEAN,
+            ControllerSpec::Policy {
+                mean_action: false,
+                spread: 0.5,
+            },
+            ControllerSpec::Sampling { k: 16 },
+            ControllerSpec::PathFollow { k: 1 },
+        ] {
+            assert_eq!(
+                ControllerSpec::from_name(&spec.name()),
+                Some(spec),
+                "{spec:?}"
+            );
+        }
+        for bad in [
+            "sampling_k0",
+            "sampling_k",
+            "path_follow_kx",
+            "policy_spread_-1",
+            "walk",
+        ] {
+            assert_eq!(ControllerSpec::from_name(bad), None, "{bad}");
+        }
     }
 }

@@ -1,7 +1,9 @@
-//! The one schema of a walker's settings: how every person of a take steps, the `[walker]`
-//! table of synth and run configs (and so of every campaign take), with its defaults and its
-//! checks. A new walker setting is a field here (its doc comment, its default, its check in
-//! [`WalkerSettings::problem`]) and the code that reads it.
+//! The one schema of a walker's settings: how every walker steps — the `[walker]` table of
+//! synth and run configs (and so of every campaign take), a training stage's
+//! `[stages.env.walker]` (over the paper's preset, [`WalkerSettings::PAPER`]) and the flags of
+//! `egogen policy eval` — with its defaults and its checks. A new walker setting is a field
+//! here (its doc comment, its default, its check in [`WalkerSettings::problem`]) and the code
+//! that reads it.
 
 use serde::{Deserialize, Serialize};
 
@@ -74,6 +76,48 @@ impl Default for WalkerSettings {
 }
 
 impl WalkerSettings {
+    /// EgoGen's walker, as the paper trains and evaluates it: the goal reached within 0.1 m,
+    /// 11 primitives to reach it (its box scenes), no redraws, no guide, the others where they
+    /// were last put, the scene tested at a primitive's end, the motion as decoded. What a
+    /// training stage's `[stages.env.walker]` starts from.
+    pub const PAPER: WalkerSettings = WalkerSettings {
+        success_m: 0.1,
+        max_primitives_per_goal: 11,
+        penetration_redraws: 0,
+        guide_lookahead_m: 0.0,
+        guide_memory: false,
+        guide_centre_weight: 0.0,
+        guide_unknown_cost: 0.0,
+        anticipate_people: false,
+        scene_every_frame: false,
+        smooth_joins: false,
+        steady_head: false,
+    };
+
+    /// The keys given in a table (`given`, e.g. a config's `[stages.env.walker]`) over
+    /// `preset`: what a key left out is. Unknown keys are refused, naming them.
+    pub fn over<'de, D: serde::Deserializer<'de>>(
+        preset: WalkerSettings,
+        given: D,
+    ) -> Result<WalkerSettings, D::Error> {
+        use serde::de::Error;
+        let given = serde_json::Map::<String, serde_json::Value>::deserialize(given)?;
+        let Ok(serde_json::Value::Object(mut table)) = serde_json::to_value(preset) else {
+            return Err(D::Error::custom("the walker's settings are a table"));
+        };
+        let keys = Self::keys();
+        for (k, v) in given {
+            if !table.contains_key(&k) {
+                return Err(D::Error::custom(format!(
+                    "unknown walker setting `{k}`, expected one of {}",
+                    keys.join(", ")
+                )));
+            }
+            table.insert(k, v);
+        }
+        serde_json::from_value(serde_json::Value::Object(table)).map_err(D::Error::custom)
+    }
+
     /// The guide these settings give a policy-steered walker (`guide_*`).
     pub fn guide(&self) -> Guide {
         Guide {
@@ -99,11 +143,22 @@ impl WalkerSettings {
         }
     }
 
-    /// What is wrong with these settings, if anything: the key and what was expected. Memory
-    /// without a guide is no mistake here (it is on by default, and `guide_lookahead_m = 0`
-    /// turns the guide off).
+    /// What is wrong with these settings, if anything: the key (a config key's last part; a
+    /// flag is it with dashes) and what was expected. One check for `[walker]`, training
+    /// configs and `egogen policy eval`. Memory without a guide is no mistake here (it is on by
+    /// default, and `guide_lookahead_m = 0` turns the guide off); see [`Self::problem_over`].
     pub fn problem(&self) -> Option<(&'static str, String)> {
-        if let Some(p) = guide_problem(&self.guide(), self.remembers()) {
+        self.problem_over(&WalkerSettings::default())
+    }
+
+    /// [`Self::problem`] for settings given over `preset`: memory turned on against the preset
+    /// without a guide to plan on it is a mistake too.
+    pub fn problem_over(&self, preset: &WalkerSettings) -> Option<(&'static str, String)> {
+        let memory = match self.guide_memory != preset.guide_memory {
+            true => self.guide_memory,
+            false => self.remembers(),
+        };
+        if let Some(p) = guide_problem(&self.guide(), memory) {
             return Some(p);
         }
         if !(self.success_m.is_finite() && self.success_m > 0.0) {
@@ -149,10 +204,9 @@ impl WalkerSettings {
     }
 }
 
-/// What is wrong with a guide's settings, if anything: the setting's name (a config key's last
-/// part; a flag is it with dashes) and what was expected. One check for `[walker]`, training
-/// configs and `egogen policy eval`.
-pub fn guide_problem(guide: &Guide, memory: bool) -> Option<(&'static str, String)> {
+/// What is wrong with a guide's settings, if anything: the setting's name and what was
+/// expected.
+fn guide_problem(guide: &Guide, memory: bool) -> Option<(&'static str, String)> {
     let Guide {
         lookahead_m,
         centre_weight,
@@ -213,6 +267,7 @@ mod tests {
         };
         assert_eq!(s.changed_keys(), ["anticipate_people", "guide_lookahead_m"]);
         assert_eq!(WalkerSettings::keys().len(), 11);
+        assert!(WalkerSettings::PAPER.problem().is_none());
         assert!(WalkerSettings::keys().contains(&"scene_every_frame".to_string()));
     }
 }

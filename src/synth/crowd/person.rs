@@ -4,7 +4,7 @@
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
-use rand_core::{Rng, SeedableRng};
+use rand_core::Rng;
 
 use super::goals::sample_goal;
 use super::track::{finish_motion, foot_points, AgentState, AgentTrack, GoalRecord};
@@ -21,7 +21,7 @@ use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 use crate::scene::Obstacle2;
 use crate::sensing::Sensor;
 use crate::synth::activity::{Activity, ActivitySegment, ActivityWorld, Performance, Phase};
-use crate::walker::controller::{Controller, Sight};
+use crate::walker::controller::{walker_rng, Controller, Sight};
 use crate::walker::reward::{Judged, Limits, RewardWeights};
 use crate::walker::state::{place_seed, SeedView, Surroundings, Walker};
 use crate::walker::step::{walk_step, Judge, SceneCheck, StepContext};
@@ -47,12 +47,6 @@ pub(super) struct Agent<'m> {
     /// Draws what comes after each walk: a stream of its own, so walking draws as without
     /// activities.
     pub(super) activity_rng: ChaCha8Rng,
-}
-
-pub(super) fn agent_rng(seed: u64, i: usize) -> ChaCha8Rng {
-    ChaCha8Rng::seed_from_u64(
-        seed.rotate_left(17) ^ (i as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03),
-    )
 }
 
 impl<'m> Agent<'m> {
@@ -81,7 +75,7 @@ impl<'m> Agent<'m> {
         let foot_markers = RigGeometry::new(body.model, &body.betas)
             .map_err(|e| err(format!("body: {e}")))?
             .foot_markers;
-        let mut rng = agent_rng(settings.seed, index);
+        let mut rng = walker_rng(settings.seed, index);
         let mut goals = plan.goals.iter().copied();
         let goal = match goals.next() {
             Some(g) => g,
@@ -199,7 +193,7 @@ impl<'m> Agent<'m> {
             track,
             acting: None,
             approaching: None,
-            activity_rng: agent_rng(settings.seed ^ 0xAC71_7117, index),
+            activity_rng: walker_rng(settings.seed ^ 0xAC71_7117, index),
         })
     }
 

@@ -70,7 +70,7 @@ pub struct AgentTrack {
     pub stopped_at_frame: Option<usize>,
     /// Primitives taken.
     pub primitives: usize,
-    /// Primitives in which the pelvis moved less than [`STUCK_STEP_M`] with the goal not
+    /// Primitives in which the pelvis moved less than [`super::STUCK_STEP_M`] with the goal not
     /// reached: time spent stuck.
     pub stuck_primitives: usize,
     /// Mean foot contact (3-D, Eq. 12) over the primitives walked, as written (joins
