@@ -655,6 +655,31 @@ def blender_name(name):
     return name.encode("utf-8")[:63].decode("utf-8", "ignore")
 
 
+def check_object_names(scene, spec):
+    """The segmentation contract: every scene object Rust gave an id is an object of the
+    imported scene by the same name (as Blender keeps it), and no two names become one. An
+    object Blender renamed would otherwise draw with id 0 or another's id: an error instead,
+    naming the objects."""
+    obstacles = {o["name"] for o in spec.get("obstacles", [])}
+    kept = {}
+    for name, _ in spec["object_ids"]:
+        if name not in obstacles:
+            kept.setdefault(blender_name(name), []).append(name)
+    merged = [names for names in kept.values() if len(names) > 1]
+    if merged:
+        raise RuntimeError(
+            f"segmentation: object names that Blender keeps as one (cut at 63 bytes): {merged[:5]}"
+        )
+    present = {o.name for o in scene.objects}
+    missing = [names[0] for b, names in kept.items() if b not in present]
+    if missing:
+        others = sorted(present - set(kept))[:5]
+        raise RuntimeError(
+            f"segmentation: {len(missing)} object(s) of the scene are not in Blender's import by "
+            f"their name (first: {missing[:5]}); Blender's objects not in the ids: {others}"
+        )
+
+
 def build_scene(spec):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
@@ -666,6 +691,7 @@ def build_scene(spec):
         add_ceiling(scene, spec["ceiling"])
     # Blender cuts object names at 63 bytes of UTF-8: match the names as it keeps them.
     ids = {blender_name(name): i for name, i in spec["object_ids"]}
+    check_object_names(scene, spec)
     for obj in scene.objects:
         obj.pass_index = ids.get(obj.name, 0)
     apply_materials(scene, spec.get("materials", []))
