@@ -27,15 +27,48 @@ pub enum ClipKind {
     PickUp,
 }
 
-/// The shipped clips a take plays (`assets/motion/activities/<name>.npz`): CMU 75_20 (low
-/// seat), 75_17 (medium), 75_18 (high), 64_28 (picking up a ball). The lifts 74_07 and 74_08
-/// start crouched, with no way down: not played.
-pub const ACTIVITY_CLIPS: [(&str, ClipKind); 4] = [
-    ("75_20", ClipKind::Sit),
-    ("75_17", ClipKind::Sit),
-    ("75_18", ClipKind::Sit),
-    ("64_28", ClipKind::PickUp),
-];
+/// The shipped clips a take plays (`assets/motion/activities/<name>.npz`), by their CMU
+/// take: 75_20 (low seat), 75_17 (medium), 75_18 (high), 64_28 (picking up a ball). The lifts
+/// 74_07 and 74_08 start crouched, with no way down: not played.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ClipId {
+    /// CMU 75_20: sitting down on a low seat and standing up.
+    Sit75_20,
+    /// CMU 75_17: a medium seat.
+    Sit75_17,
+    /// CMU 75_18: a high seat (its first frame also stands a person looking around).
+    Sit75_18,
+    /// CMU 64_28: bending to pick a ball up from the floor.
+    PickUp64_28,
+}
+
+impl ClipId {
+    /// Every shipped clip, in the order they are loaded.
+    pub const ALL: [ClipId; 4] = [
+        ClipId::Sit75_20,
+        ClipId::Sit75_17,
+        ClipId::Sit75_18,
+        ClipId::PickUp64_28,
+    ];
+
+    /// Its file's name (the CMU take, subject_trial), as records name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ClipId::Sit75_20 => "75_20",
+            ClipId::Sit75_17 => "75_17",
+            ClipId::Sit75_18 => "75_18",
+            ClipId::PickUp64_28 => "64_28",
+        }
+    }
+
+    /// What it shows.
+    pub fn kind(self) -> ClipKind {
+        match self {
+            ClipId::PickUp64_28 => ClipKind::PickUp,
+            _ => ClipKind::Sit,
+        }
+    }
+}
 
 /// The folder the shipped clips are in.
 pub fn activity_clip_dir() -> PathBuf {
@@ -48,6 +81,7 @@ const SPINE3: usize = 9;
 /// An activity clip as read: its frames at 40 Hz on the neutral body, feet on z = 0.
 #[derive(Debug, Clone)]
 pub struct ActivityClip {
+    pub id: ClipId,
     pub name: String,
     pub kind: ClipKind,
     pub frames: Vec<BodyParams>,
@@ -71,7 +105,8 @@ pub enum ActivityClipError {
 
 impl ActivityClip {
     /// Reads the clip `name` of `kind` from `dir`.
-    pub fn load(dir: &Path, name: &str, kind: ClipKind) -> Result<Self, ActivityClipError> {
+    pub fn load(dir: &Path, id: ClipId) -> Result<Self, ActivityClipError> {
+        let (name, kind) = (id.name(), id.kind());
         let path = dir.join(format!("{name}.npz"));
         let seq = MotionSequence::read(&path).map_err(|source| ActivityClipError::Read {
             path: path.clone(),
@@ -92,18 +127,16 @@ impl ActivityClip {
             })
             .collect();
         Ok(Self {
+            id,
             name: name.to_string(),
             kind,
             frames,
         })
     }
 
-    /// Every shipped clip ([`ACTIVITY_CLIPS`]) from `dir`.
+    /// Every shipped clip ([`ClipId::ALL`]) from `dir`.
     pub fn load_shipped(dir: &Path) -> Result<Vec<Self>, ActivityClipError> {
-        ACTIVITY_CLIPS
-            .iter()
-            .map(|&(name, kind)| Self::load(dir, name, kind))
-            .collect()
+        ClipId::ALL.iter().map(|&id| Self::load(dir, id)).collect()
     }
 
     /// The clip on `body`: its shape's betas in every frame, lifted or lowered so that the
@@ -453,7 +486,7 @@ mod tests {
     fn placing_moves_the_chosen_pose_to_the_place_and_facing() {
         let model = model();
         let body = BodyContext::new(&model, &[0.5]).unwrap();
-        let clip = ActivityClip::load(&activity_clip_dir(), "75_18", ClipKind::Sit)
+        let clip = ActivityClip::load(&activity_clip_dir(), ClipId::Sit75_18)
             .unwrap()
             .on_body(&body)
             .unwrap();
@@ -488,7 +521,7 @@ mod tests {
         let model = model();
         for betas in [vec![], vec![-2.0, 2.0]] {
             let body = BodyContext::new(&model, &betas).unwrap();
-            let clip = ActivityClip::load(&activity_clip_dir(), "75_18", ClipKind::Sit)
+            let clip = ActivityClip::load(&activity_clip_dir(), ClipId::Sit75_18)
                 .unwrap()
                 .on_body(&body)
                 .unwrap();
@@ -524,7 +557,7 @@ mod tests {
     fn a_blend_and_an_idle_hold_join_their_ends_without_a_jump() {
         let model = model();
         let body = BodyContext::new(&model, &[]).unwrap();
-        let clip = ActivityClip::load(&activity_clip_dir(), "75_17", ClipKind::Sit)
+        let clip = ActivityClip::load(&activity_clip_dir(), ClipId::Sit75_17)
             .unwrap()
             .on_body(&body)
             .unwrap();

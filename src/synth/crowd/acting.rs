@@ -9,7 +9,7 @@ use crate::body::joint;
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::PrimitiveSeed;
 use crate::synth::activity::{
-    Activity, ActivitySegment, ActivityWorld, Performance, Phase, SkippedActivity,
+    Activity, ActivitySegment, ActivityWorld, Performance, Phase, Refusal, SkippedActivity,
 };
 use crate::walker::state::SeedView;
 
@@ -40,10 +40,9 @@ impl Agent<'_> {
                     &mut self.activity_rng,
                 )
             } else {
-                Err(format!(
-                    "the place in front of the seat of {} was not reached",
-                    acts.seats[s].object_name
-                ))
+                Err(Refusal::SeatNotReached {
+                    seat: acts.seats[s].object_name.clone(),
+                })
             };
             match sat {
                 Ok(p) => {
@@ -83,8 +82,8 @@ impl Agent<'_> {
                     return true;
                 }
                 None => Err(match acts.seats.is_empty() {
-                    true => "the scene has no seat (`egogen scene inspect` lists them)".into(),
-                    false => "every seat on this floor is taken".into(),
+                    true => Refusal::NoSeat,
+                    false => Refusal::SeatsTaken,
                 }),
             },
         };
@@ -100,11 +99,11 @@ impl Agent<'_> {
         }
     }
 
-    pub(super) fn skip(&mut self, activity: Activity, frame: usize, reason: String) {
+    pub(super) fn skip(&mut self, activity: Activity, frame: usize, reason: Refusal) {
         self.track.skipped_activities.push(SkippedActivity {
             activity,
             frame,
-            reason,
+            reason: reason.to_string(),
         });
     }
 

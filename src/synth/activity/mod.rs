@@ -1,0 +1,421 @@
+//! Activities beyond walking in a take (docs/ACTIVITIES.md): what a person does when a walk
+//! ends — walk on, stand and look around, sit down on a seat and stand up again, pick
+//! something up from the floor — drawn from the take's seed and the `[activities]` weights;
+//! the one schema of those settings; and the frames each activity is made of, on the body
+//! that does it, at its place, checked against the scene: a transition from the walker's last
+//! pose (a blend, turning at a bounded rate), the clip (`motion::activity_clip`) placed and
+//! fitted to the seat, a hold with procedural idle motion, padded to whole primitives so that
+//! the walker takes over where it ends. The crowd (`synth::crowd`) schedules them.
+//!
+//! Here: the schema and the records; `world` (the activity world every activity shares:
+//! seats, clips, the scene check, the transition), one file per activity (`stand`,
+//! `pick_up`, `sit`), `refusal` (why one is skipped, typed).
+
+use serde::{Deserialize, Serialize};
+
+use crate::body::BodyParams;
+
+mod pick_up;
+mod refusal;
+mod sit;
+mod stand;
+mod world;
+
+pub use refusal::{Doing, Refusal};
+pub use world::{ActivityWorld, ENTER_TOLERANCE_M};
+
+/// Relative weights of what a person does next when a walk ends (`[activities.weights]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ActivityWeights {
+    /// Walk on to a new goal (default 1).
+    pub walk: f64,
+    /// Stand where the walk ended and look around (default 0).
+    pub stand: f64,
+    /// Walk to the nearest free seat, sit down, stay seated, stand up (default 0).
+    pub sit: f64,
+    /// Bend to pick something up from the floor where the walk ended (default 0).
+    pub pick_up: f64,
+}
+
+impl Default for ActivityWeights {
+    fn default() -> Self {
+        Self {
+            walk: 1.0,
+            stand: 0.0,
+            sit: 0.0,
+            pick_up: 0.0,
+        }
+    }
+}
+
+impl ActivityWeights {
+    /// The names a weight is given by.
+    pub const NAMES: [&'static str; 4] = ["walk", "stand", "sit", "pick_up"];
+
+    /// Weights given by name; those not named are 0 (unlike `[activities.weights]`, whose
+    /// `walk` defaults to 1): what a campaign's `activity_weights` entries and
+    /// `egogen-run --activity-weights` say. The message names the weight that is wrong.
+    pub fn from_named<'a>(named: impl IntoIterator<Item = (&'a str, f64)>) -> Result<Self, String> {
+        let mut w = Self {
+            walk: 0.0,
+            stand: 0.0,
+            sit: 0.0,
+            pick_up: 0.0,
+        };
+        for (name, v) in named {
+            let slot = match name {
+                "walk" => &mut w.walk,
+                "stand" => &mut w.stand,
+                "sit" => &mut w.sit,
+                "pick_up" => &mut w.pick_up,
+                other => {
+                    return Err(format!(
+                        "unknown activity `{other}` (expected {})",
+                        Self::NAMES.join(", ")
+                    ))
+                }
+            };
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("`{name}`: expected a weight ≥ 0, got {v}"));
+            }
+            *slot = v;
+        }
+        if w.walk + w.stand + w.sit + w.pick_up <= 0.0 {
+            return Err("expected at least one weight > 0, got all zero".into());
+        }
+        Ok(w)
+    }
+
+    /// `walk=2,sit=1`: the weights above 0 by name (unnamed are 0).
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let mut named = Vec::new();
+        for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (name, v) = part
+                .split_once('=')
+                .ok_or_else(|| format!("`{part}`: expected NAME=WEIGHT, e.g. walk=2,sit=1"))?;
+            let v: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| format!("`{part}`: expected a number after `=`"))?;
+            named.push((name.trim(), v));
+        }
+        Self::from_named(named)
+    }
+
+    /// The weights above 0 as [`parse`](Self::parse) reads them.
+    pub fn flag(&self) -> String {
+        Self::NAMES
+            .iter()
+            .zip([self.walk, self.stand, self.sit, self.pick_up])
+            .filter(|(_, v)| *v > 0.0)
+            .map(|(n, v)| format!("{n}={v}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+}
+
+/// What people do besides walking (`[activities]` of synth and run configs; docs/ACTIVITIES.md).
+/// The default is walking only: takes as before.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ActivitySettings {
+    pub weights: ActivityWeights,
+    /// How long a person stands and looks around (s, drawn uniformly; default [3, 8]).
+    pub stand_s: [f64; 2],
+    /// How long a person stays seated (s, drawn uniformly; default [4, 12]).
+    pub sit_s: [f64; 2],
+    /// Shortest transition from the walk into an activity (s; default 0.4): every joint
+    /// blended from the last walking pose to the activity's first.
+    pub blend_s: f64,
+    /// Fastest turn in a transition (degrees per second; default 180): a person who arrives
+    /// facing a seat turns round at this rate before sitting.
+    pub turn_deg_per_s: f64,
+    /// Farthest a sit clip's seated height is moved up or down to meet a seat (m; default
+    /// 0.2): a seat no clip comes this close to is not sat on.
+    pub seat_fit_m: f64,
+}
+
+impl Default for ActivitySettings {
+    fn default() -> Self {
+        Self {
+            weights: ActivityWeights::default(),
+            stand_s: [3.0, 8.0],
+            sit_s: [4.0, 12.0],
+            blend_s: 0.4,
+            turn_deg_per_s: 180.0,
+            seat_fit_m: 0.2,
+        }
+    }
+}
+
+impl ActivitySettings {
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Whether people only walk (every weight but `walk` zero): takes exactly as without
+    /// activities.
+    pub fn walk_only(&self) -> bool {
+        let w = self.weights;
+        w.stand == 0.0 && w.sit == 0.0 && w.pick_up == 0.0
+    }
+
+    /// What is wrong with these settings, if anything: the key (under `activities.`) and
+    /// what was expected.
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        let w = self.weights;
+        for (key, v) in [
+            ("weights.walk", w.walk),
+            ("weights.stand", w.stand),
+            ("weights.sit", w.sit),
+            ("weights.pick_up", w.pick_up),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Some((key, format!("expected a weight ≥ 0, got {v}")));
+            }
+        }
+        if w.walk + w.stand + w.sit + w.pick_up <= 0.0 {
+            return Some((
+                "weights",
+                "expected at least one weight > 0 (walk = 1 walks only), got all zero".into(),
+            ));
+        }
+        for (key, [lo, hi]) in [("stand_s", self.stand_s), ("sit_s", self.sit_s)] {
+            if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi && hi <= 3600.0) {
+                return Some((
+                    key,
+                    format!(
+                        "expected [MIN, MAX] seconds with 0 < MIN ≤ MAX ≤ 3600, got [{lo}, {hi}]"
+                    ),
+                ));
+            }
+        }
+        if !(self.blend_s.is_finite() && (0.05..=5.0).contains(&self.blend_s)) {
+            return Some((
+                "blend_s",
+                format!("expected 0.05–5 s, got {}", self.blend_s),
+            ));
+        }
+        if !(self.turn_deg_per_s.is_finite() && self.turn_deg_per_s >= 10.0) {
+            return Some((
+                "turn_deg_per_s",
+                format!(
+                    "expected at least 10 degrees per second, got {}",
+                    self.turn_deg_per_s
+                ),
+            ));
+        }
+        if !(self.seat_fit_m.is_finite() && (0.0..=0.5).contains(&self.seat_fit_m)) {
+            return Some((
+                "seat_fit_m",
+                format!("expected 0–0.5 m, got {}", self.seat_fit_m),
+            ));
+        }
+        None
+    }
+}
+
+/// What a person does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Activity {
+    Walk,
+    Stand,
+    Sit,
+    PickUp,
+}
+
+impl Activity {
+    /// Its name in configs and files (`walk`, `stand`, `sit`, `pick_up`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Activity::Walk => "walk",
+            Activity::Stand => "stand",
+            Activity::Sit => "sit",
+            Activity::PickUp => "pick_up",
+        }
+    }
+}
+
+/// Where in an activity a frame is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// Walking to the activity's place (a seat).
+    Approach,
+    /// Turning and blending into the activity, sitting down, standing up.
+    Transition,
+    /// The activity itself: standing and looking, seated, picking up.
+    Hold,
+}
+
+impl Phase {
+    /// Its name in files (`approach`, `transition`, `hold`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Approach => "approach",
+            Phase::Transition => "transition",
+            Phase::Hold => "hold",
+        }
+    }
+}
+
+/// Frames `start..end` of an agent's track spent in `activity`'s `phase` (frames in none: walking).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ActivitySegment {
+    pub activity: Activity,
+    pub phase: Phase,
+    pub start_frame: usize,
+    pub end_frame: usize,
+}
+
+impl ActivitySegment {
+    /// What frame `f` of an agent with these segments does: the segment's activity and phase,
+    /// or walking (no phase).
+    pub fn at(segments: &[ActivitySegment], f: usize) -> (Activity, Option<Phase>) {
+        segments
+            .iter()
+            .find(|s| (s.start_frame..s.end_frame).contains(&f))
+            .map_or((Activity::Walk, None), |s| (s.activity, Some(s.phase)))
+    }
+}
+
+/// One activity done, and how well it fitted its place.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ActivityRecord {
+    pub activity: Activity,
+    pub start_frame: usize,
+    pub end_frame: usize,
+    /// Where (the seated pelvis for a sit, else where the person stood).
+    pub place: [f64; 2],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clip: Option<String>,
+    /// The seat's object and surface height (m over the floor).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seat: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seat_height_m: Option<f64>,
+    /// How far the clip's seated height was moved to meet the seat (m, + up).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seat_fit_m: Option<f64>,
+    /// Farthest an ankle stayed from where the clip put it once the clip was fitted to the
+    /// seat (m: legs too short to reach a lower seat's floor).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub foot_miss_m: Option<f64>,
+    /// Deepest the buttocks and thighs went below the seat's surface where over it, sitting
+    /// down, seated or standing up (m).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seat_penetration_m: Option<f64>,
+    /// The turn in the transition into it (degrees).
+    pub turn_deg: f64,
+    /// Foot contact over its frames (paper Eq. 12 over 20-frame windows, as a walking
+    /// primitive's).
+    pub contact: f64,
+    /// The fastest joint turn (rad/s) within 0.1 s of where it joins the walk before and
+    /// after it, beside the same in the clip itself (`clip_joint_speed_rad_s`).
+    pub join_joint_speed_rad_s: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clip_joint_speed_rad_s: Option<f64>,
+    /// What the person looks at while doing it (the Aria gaze model fixates it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub look_at: Option<LookAt>,
+}
+
+/// A point a person looks at over frames `start_frame..end_frame` of its track: the seat
+/// from the walk to it until seated, the spot on the floor picked from while bending.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LookAt {
+    /// World (m).
+    pub point: [f64; 3],
+    pub start_frame: usize,
+    pub end_frame: usize,
+}
+
+/// An activity drawn but not done, and why.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SkippedActivity {
+    pub activity: Activity,
+    pub frame: usize,
+    pub reason: String,
+}
+
+/// An activity's frames, ready to be taken [`crate::motion::primitive::NEW_FRAMES`] at a time.
+#[derive(Debug, Clone)]
+pub struct Performance {
+    pub activity: Activity,
+    pub frames: Vec<BodyParams>,
+    /// Phases in order with their frame counts (summing to `frames.len()`).
+    pub phases: Vec<(Phase, usize)>,
+    pub record: ActivityRecord,
+    /// The seat booked for it, given back when it ends.
+    pub seat: Option<usize>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_given_by_name_read_back_from_their_flag_and_bad_ones_are_named() {
+        let w = ActivityWeights::parse("walk=2, sit=0.5").unwrap();
+        assert_eq!((w.walk, w.stand, w.sit, w.pick_up), (2.0, 0.0, 0.5, 0.0));
+        assert_eq!(w.flag(), "walk=2,sit=0.5");
+        assert_eq!(ActivityWeights::parse(&w.flag()).unwrap(), w);
+        let tiny = ActivityWeights::from_named([("pick_up", 1e-300)]).unwrap();
+        assert_eq!(ActivityWeights::parse(&tiny.flag()).unwrap(), tiny);
+        for (text, says) in [
+            ("run=1", "unknown activity `run`"),
+            ("sit=-1", "`sit`: expected a weight ≥ 0, got -1"),
+            ("sit=NaN", "`sit`: expected a weight ≥ 0"),
+            ("sit", "expected NAME=WEIGHT"),
+            ("sit=x", "expected a number"),
+            ("walk=0", "all zero"),
+            ("", "all zero"),
+        ] {
+            let e = ActivityWeights::parse(text).unwrap_err();
+            assert!(e.contains(says), "{text}: {e}");
+        }
+    }
+
+    #[test]
+    fn a_frame_is_labelled_by_the_segment_holding_it_or_walking() {
+        let seg = |activity, phase, start_frame, end_frame| ActivitySegment {
+            activity,
+            phase,
+            start_frame,
+            end_frame,
+        };
+        let segments = [
+            seg(Activity::Sit, Phase::Approach, 10, 20),
+            seg(Activity::Sit, Phase::Transition, 20, 30),
+            seg(Activity::Stand, Phase::Hold, 40, 41),
+        ];
+        let at = |f| ActivitySegment::at(&segments, f);
+        assert_eq!(at(9), (Activity::Walk, None));
+        assert_eq!(at(10), (Activity::Sit, Some(Phase::Approach)));
+        assert_eq!(at(20), (Activity::Sit, Some(Phase::Transition)));
+        assert_eq!(at(30), (Activity::Walk, None));
+        assert_eq!(at(40), (Activity::Stand, Some(Phase::Hold)));
+        assert_eq!(at(41), (Activity::Walk, None));
+        assert_eq!(ActivitySegment::at(&[], 5), (Activity::Walk, None));
+        // Names as files spell them.
+        for a in [
+            Activity::Walk,
+            Activity::Stand,
+            Activity::Sit,
+            Activity::PickUp,
+        ] {
+            assert_eq!(
+                serde_json::to_string(&a).unwrap(),
+                format!("\"{}\"", a.name())
+            );
+        }
+        for p in [Phase::Approach, Phase::Transition, Phase::Hold] {
+            assert_eq!(
+                serde_json::to_string(&p).unwrap(),
+                format!("\"{}\"", p.name())
+            );
+        }
+    }
+}

@@ -1,0 +1,313 @@
+//! The activity world of a take: its seats and who sits on them, the clips, the scene each
+//! activity's frames are checked against; what every activity shares (placing a clip where
+//! the walk ended, the transition into it, the checks).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::DVec2;
+use rand_chacha::ChaCha8Rng;
+
+use super::refusal::{Doing, Refusal};
+use super::{Activity, ActivityRecord, ActivitySettings, Phase};
+use crate::body::{joint, BodyParams, PoseError};
+use crate::math::random::uniform_open01;
+use crate::motion::activity_clip::{
+    blend, heading, placed, ActivityClip, ActivityClipError, ClipId,
+};
+use crate::motion::cvae::BodyContext;
+use crate::motion::primitive::{NEW_FRAMES, PRIMITIVE_RATE_HZ};
+use crate::scene::mesh_distance::MeshDistance;
+use crate::scene::{find_seats, SceneMesh, Seat, SeatSettings, WalkableMap};
+use crate::walker::reward::path_leaves_floor;
+
+/// Markers this close above the floor (m) are not tested against the scene: feet on a floor
+/// modelled as a slab (walking is not tested there either).
+pub(super) const FLOOR_BAND_M: f64 = 0.05;
+
+/// Every how many frames an idle hold (only the head and chest moving) is tested against the
+/// scene; transitions and clips every second frame.
+pub(super) const IDLE_STRIDE: usize = 20;
+
+/// Markers more than this far inside scene geometry (m) count as entering it (markers lie
+/// on the skin; cushions and mesh noise give a little).
+pub const ENTER_TOLERANCE_M: f64 = 0.03;
+
+/// What activities need of a take's world: its seats and who sits on them, the clips, the
+/// scene for the 3D check of every frame an activity plays. Built once per take, and only
+/// when the take asks for more than walking.
+pub struct ActivityWorld {
+    pub settings: ActivitySettings,
+    pub seats: Vec<Seat>,
+    /// Booked by someone walking to it or sitting on it.
+    pub taken: Vec<bool>,
+    pub(super) clips: Vec<ActivityClip>,
+    mesh: Option<Arc<SceneMesh>>,
+    /// The scene without the objects of one name (the seat sat on: its parts, a chair's
+    /// backrest among them; `None`: the whole scene), for distances.
+    distances: HashMap<Option<String>, Option<MeshDistance>>,
+}
+
+impl ActivityWorld {
+    /// The activity world of a scene (`None`: open floor, no seats) and its map.
+    pub fn new(
+        settings: ActivitySettings,
+        mesh: Option<Arc<SceneMesh>>,
+        map: &WalkableMap,
+        clip_dir: &std::path::Path,
+    ) -> Result<Self, ActivityClipError> {
+        let seats = match (&mesh, settings.weights.sit > 0.0) {
+            (Some(m), true) => find_seats(m, map, &SeatSettings::default())
+                .into_iter()
+                .filter(|s| map.is_walkable_at(s.stand()))
+                .collect(),
+            _ => Vec::new(),
+        };
+        Ok(Self {
+            settings,
+            taken: vec![false; seats.len()],
+            seats,
+            clips: ActivityClip::load_shipped(clip_dir)?,
+            mesh,
+            distances: HashMap::new(),
+        })
+    }
+
+    /// Draws what comes after a walk.
+    pub fn draw(&self, rng: &mut ChaCha8Rng) -> Activity {
+        let w = self.settings.weights;
+        let total = w.walk + w.stand + w.sit + w.pick_up;
+        let mut x = uniform_open01(rng) * total;
+        for (a, v) in [
+            (Activity::Stand, w.stand),
+            (Activity::Sit, w.sit),
+            (Activity::PickUp, w.pick_up),
+        ] {
+            if x < v {
+                return a;
+            }
+            x -= v;
+        }
+        Activity::Walk
+    }
+
+    /// The nearest free seat whose standing point lies on `from`'s floor region, if any.
+    pub fn nearest_free_seat(&self, map: &WalkableMap, from: DVec2) -> Option<usize> {
+        let region = |p: DVec2| map.cell_of(p).map(|(i, j)| map.component[j * map.nx + i]);
+        let here = region(from);
+        (0..self.seats.len())
+            .filter(|&s| !self.taken[s] && region(self.seats[s].stand()) == here)
+            .min_by(|&a, &b| {
+                let d = |s: usize| self.seats[s].stand().distance(from);
+                d(a).total_cmp(&d(b)).then(a.cmp(&b))
+            })
+    }
+
+    pub(super) fn clip(&self, id: ClipId) -> Result<&ActivityClip, Refusal> {
+        self.clips
+            .iter()
+            .find(|c| c.id == id)
+            .ok_or(Refusal::NoClip(id.name()))
+    }
+
+    /// The scene's distance field without the objects named `without` (cached).
+    pub(super) fn distance(&mut self, without: Option<&str>) -> Option<&MeshDistance> {
+        let mesh = self.mesh.clone()?;
+        self.distances
+            .entry(without.map(str::to_string))
+            .or_insert_with(|| match without {
+                None => MeshDistance::new(&mesh),
+                Some(name) => {
+                    // The same vertices, the triangles of every other object.
+                    let kept: Vec<usize> = (0..mesh.triangles.len())
+                        .filter(|&t| {
+                            let o = mesh.triangle_object[t].0 as usize;
+                            mesh.objects
+                                .get(o.wrapping_sub(1))
+                                .is_none_or(|o| o.name != name)
+                        })
+                        .collect();
+                    let rest = SceneMesh {
+                        vertices: mesh.vertices.clone(),
+                        triangles: kept.iter().map(|&t| mesh.triangles[t]).collect(),
+                        triangle_object: kept.iter().map(|&t| mesh.triangle_object[t]).collect(),
+                        objects: mesh.objects.clone(),
+                        file_face_objects: None,
+                    };
+                    MeshDistance::new(&rest)
+                }
+            })
+            .as_ref()
+    }
+
+    /// The first frame of `frames` (in `phases`: every second frame of a transition, every
+    /// `hold_stride`-th of a hold, and the last) whose body markers above the floor's band
+    /// ([`FLOOR_BAND_M`] over `floor_z`) enter the scene (but the objects named `without`)
+    /// deeper than [`ENTER_TOLERANCE_M`], and how
+    /// deep.
+    pub(super) fn first_entry(
+        &mut self,
+        body: &BodyContext,
+        frames: &[BodyParams],
+        phases: &[(Phase, usize)],
+        hold_stride: usize,
+        without: Option<&str>,
+        floor_z: f64,
+    ) -> Option<(usize, f64)> {
+        let distance = self.distance(without)?;
+        let mut checked = Vec::new();
+        let mut start = 0;
+        for &(phase, n) in phases {
+            let stride = if phase == Phase::Hold { hold_stride } else { 2 };
+            checked.extend((start..start + n).step_by(stride));
+            start += n;
+        }
+        checked.push(frames.len().saturating_sub(1));
+        checked
+            .into_iter()
+            .filter(|&k| k < frames.len())
+            .find_map(|k| {
+                let f = &frames[k];
+                let mf = body
+                    .shaped
+                    .marker_frame(&f.pose, f.transl, &body.marker_ids)
+                    .ok()?;
+                let deepest = mf
+                    .markers
+                    .iter()
+                    .filter(|m| m.z > floor_z + FLOOR_BAND_M)
+                    .map(|m| distance.signed_distance(*m))
+                    .fold(f64::INFINITY, f64::min);
+                (deepest < -ENTER_TOLERANCE_M).then_some((k, -deepest))
+            })
+    }
+
+    /// Whether an activity played where the walk ended fits there: no frame enters the
+    /// scene ([`Self::first_entry`]) and the pelvis stays on the walkable floor (the walker
+    /// takes over where it ends); else why not, the body `doing` what it did.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn fits_here(
+        &mut self,
+        body: &BodyContext,
+        map: &WalkableMap,
+        frames: &[BodyParams],
+        phases: &[(Phase, usize)],
+        hold_stride: usize,
+        floor_z: f64,
+        doing: Doing,
+    ) -> Result<(), Refusal> {
+        if let Some((frame, depth_m)) =
+            self.first_entry(body, frames, phases, hold_stride, None, floor_z)
+        {
+            return Err(Refusal::EntersScene {
+                doing,
+                depth_m,
+                frame,
+            });
+        }
+        match off_floor(body, map, frames)? {
+            Some(frame) => Err(Refusal::LeavesFloor { doing, frame }),
+            None => Ok(()),
+        }
+    }
+
+    /// The clip `name` on `body`, its first frame standing where `last` stands and facing its
+    /// way, on the floor at `floor_z`; and where that is.
+    pub(super) fn where_standing(
+        &self,
+        body: &BodyContext,
+        last: &BodyParams,
+        id: ClipId,
+        floor_z: f64,
+    ) -> Result<(Vec<BodyParams>, DVec2), Refusal> {
+        let clip = self.clip(id)?.on_body(body)?;
+        let (pelvis, facing) = pelvis_and_heading(body, last)?;
+        let frames = placed(
+            &clip.frames,
+            body.shaped.rest_joints[joint::PELVIS],
+            (clip.pelvis[0], clip.headings[0]),
+            (pelvis, facing),
+            |_| floor_z,
+        );
+        Ok((frames, pelvis))
+    }
+
+    /// The frames from `last` into `first` (neither included): a blend of at least
+    /// `blend_s`, longer where the body must turn faster than `turn_deg_per_s` or move its
+    /// pelvis faster than 0.6 m/s; and the turn (degrees).
+    pub(super) fn transition(
+        &self,
+        body: &BodyContext,
+        last: &BodyParams,
+        first: &BodyParams,
+    ) -> Result<(Vec<BodyParams>, f64), Refusal> {
+        let (pa, ha) = pelvis_and_heading(body, last)?;
+        let (pb, hb) = pelvis_and_heading(body, first)?;
+        let turn = (hb - ha + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        let s = self.settings;
+        let seconds = s
+            .blend_s
+            .max(turn.abs().to_degrees() / s.turn_deg_per_s)
+            .max(pa.distance(pb) / 0.6);
+        let n = (seconds * PRIMITIVE_RATE_HZ).round().max(1.0) as usize;
+        Ok((blend(last, first, n), turn.to_degrees()))
+    }
+}
+
+pub(super) fn record(activity: Activity, place: DVec2, turn_deg: f64) -> ActivityRecord {
+    ActivityRecord {
+        activity,
+        start_frame: 0,
+        end_frame: 0,
+        place: place.to_array(),
+        clip: None,
+        seat: None,
+        seat_height_m: None,
+        seat_fit_m: None,
+        foot_miss_m: None,
+        seat_penetration_m: None,
+        turn_deg,
+        contact: f64::NAN,
+        join_joint_speed_rad_s: f64::NAN,
+        clip_joint_speed_rad_s: None,
+        look_at: None,
+    }
+}
+
+/// Frames of a hold of about `seconds` after `before` frames and before `after`, such that
+/// the whole is a whole number of primitives' new frames (at least one frame more).
+pub(super) fn rounded_hold(before: usize, seconds: f64, after: usize) -> usize {
+    let per = NEW_FRAMES;
+    let want = before + ((seconds * PRIMITIVE_RATE_HZ).round() as usize).max(1) + after;
+    want.div_ceil(per) * per - before - after
+}
+
+/// A pose's pelvis (horizontal) and facing.
+pub(super) fn pelvis_and_heading(
+    body: &BodyContext,
+    p: &BodyParams,
+) -> Result<(DVec2, f64), PoseError> {
+    let s = body.shaped.skeleton(&p.pose, p.transl)?;
+    let q = s.joints[joint::PELVIS];
+    Ok((DVec2::new(q.x, q.y), heading(&s.joints)))
+}
+
+/// The first frame of `frames` whose pelvis path from the frame before passes over a cell of
+/// the walkable map that is not walkable (the walk's own test: the walker takes over where an
+/// activity ends).
+pub(super) fn off_floor(
+    body: &BodyContext,
+    map: &WalkableMap,
+    frames: &[BodyParams],
+) -> Result<Option<usize>, PoseError> {
+    let mut before: Option<DVec2> = None;
+    for (k, f) in frames.iter().enumerate() {
+        let (p, _) = pelvis_and_heading(body, f)?;
+        if path_leaves_floor(map, before.unwrap_or(p), p) {
+            return Ok(Some(k));
+        }
+        before = Some(p);
+    }
+    Ok(None)
+}
