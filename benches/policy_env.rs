@@ -16,8 +16,9 @@ use egogen::motion::cvae::train::{normal_samples, shipped_weights_path, TrainBac
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::motion::MotionSequence;
 use egogen::policy::net::{log_prob, PolicyArch};
-use egogen::policy::{EnvSettings, PolicyEnv, SeedBank};
+use egogen::policy::{EnvSettings, PolicyEnv};
 use egogen::walker::pose_prior::shipped_pose_prior_path;
+use egogen::walker::SeedBank;
 use egogen::walker::{ObsLayout, PosePrior};
 
 const OBS_DIM: usize = ObsLayout::PAPER.dim();

@@ -18,13 +18,13 @@ use egogen::motion::cvae::infer::InferBackend;
 use egogen::motion::cvae::train::shipped_weights_path;
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::motion::MotionSequence;
-use egogen::policy::SeedBank;
 use egogen::scene::WalkableMap;
 use egogen::synth::crowd::{
     run_crowd, AgentPlan, CrowdParts, CrowdSettings, CrowdWorld, NEW_FRAMES,
 };
 use egogen::walker::pose_prior::shipped_pose_prior_path;
 use egogen::walker::ControllerSpec;
+use egogen::walker::SeedBank;
 use egogen::walker::{PosePrior, WalkerSettings};
 use glam::DVec2;
 

@@ -11,11 +11,12 @@ use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
 use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use egogen::policy::env::Ending;
 use egogen::policy::sampling::sampling_step;
-use egogen::policy::{EnvSettings, PolicyEnv, SeedBank};
+use egogen::policy::{EnvSettings, PolicyEnv};
 use egogen::scene::generated::box_scene::{BoxScene, BoxSceneSettings};
 use egogen::walker::pose_prior::{prior_values, PosePrior, PRIOR_DIM};
 use egogen::walker::reward::Judged;
 use egogen::walker::ObsLayout;
+use egogen::walker::SeedBank;
 use egogen::walker::STATE_FRAME_DIM;
 
 /// The paper's observation layout (32 rays), which environments use unless told otherwise.

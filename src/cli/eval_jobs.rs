@@ -106,7 +106,7 @@ fn load_common() -> Result<SuiteParts> {
         super::train_primitive::load_train_plan(&root.join("configs/train_primitive.toml"))?;
     // Held-out seeds: whole clips never trained on.
     let (_, held_out) = evaluation_sets(&train_plan, &body, true)?;
-    let bank = crate::policy::SeedBank::from_set(&held_out);
+    let bank = crate::walker::SeedBank::from_set(&held_out);
     let pose_norm = crate::eval::files::PoseNormCalibration::new(
         &prior,
         &crate::eval::policy_tasks::set_frames(&held_out),

@@ -181,9 +181,10 @@ pub enum PolicyCommand {
 pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
     use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
     use crate::motion::cvae::{BodyContext, MotionModel};
-    use crate::policy::{EnvSettings, SeedBank};
+    use crate::policy::EnvSettings;
     use crate::walker::pose_prior::shipped_pose_prior_path;
     use crate::walker::PosePrior;
+    use crate::walker::SeedBank;
     match cmd {
         PolicyCommand::PosePrior {
             config,
@@ -556,8 +557,8 @@ pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Re
     use crate::motion::cvae::{BodyContext, MotionModel};
     use crate::policy::env::EnvParts;
     use crate::policy::ppo::train_policy;
-    use crate::policy::SeedBank;
     use crate::walker::PosePrior;
+    use crate::walker::SeedBank;
     let mut plan = crate::cli::train_policy::load_policy_plan(config)?;
     let body = BodyModel::load(&plan.body_model)?;
     let ctx = BodyContext::new(&body, &[])?;

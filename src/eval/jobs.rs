@@ -48,7 +48,7 @@ pub struct SuiteParts {
     pub body: BodyModel,
     pub model: crate::motion::cvae::MotionModel,
     pub prior: crate::walker::PosePrior,
-    pub bank: crate::policy::SeedBank,
+    pub bank: crate::walker::SeedBank,
     /// The pose embedding norm on the paper's scale, calibrated on the held-out mocap.
     pub pose_norm: Option<crate::eval::files::PoseNormCalibration>,
 }

@@ -28,13 +28,9 @@ use serde::{Deserialize, Serialize};
 use crate::body::{joint, BodyParams, POSE_DIM};
 use crate::math::random::uniform_open01;
 use crate::math::Vec3;
-use crate::motion::cvae::data::PrimitiveSet;
-use crate::motion::cvae::features::{frame_params, FRAME_DIM};
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::tensor_body::RigGeometry;
-use crate::motion::cvae::{
-    BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed,
-};
+use crate::motion::cvae::{BodyContext, DecodedPrimitive, MotionModel, PrimitiveSeed};
 use crate::motion::primitive::SEED_FRAMES;
 use crate::scene::generated::box_scene::{BoxParams, BoxScene, BoxSceneSettings};
 use crate::scene::generated::crossing_scene::{CrossingParams, CrossingScene, CrossingSettings};
@@ -53,7 +49,7 @@ use crate::walker::state::{
 use crate::walker::step::{
     choose_primitive, finite_reward, Judge, Proposal, SceneCheck, StepContext,
 };
-use crate::walker::{ObsLayout, WalkerSettings};
+use crate::walker::{ObsLayout, SeedBank, WalkerSettings};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
 /// (a start too near a wall for every seed).
@@ -170,48 +166,6 @@ impl Default for EnvSettings {
 /// `[stages.env.walker]` over the paper's preset.
 fn paper_walker<'de, D: serde::Deserializer<'de>>(d: D) -> Result<WalkerSettings, D::Error> {
     WalkerSettings::over(WalkerSettings::PAPER, d)
-}
-
-/// Mocap seeds episodes start from: the first two frames of training primitives, canonical,
-/// with the floor height in that frame.
-#[derive(Debug, Clone)]
-pub struct SeedBank {
-    pub seeds: Vec<([BodyParams; SEED_FRAMES], f64)>,
-}
-
-impl SeedBank {
-    /// The seeds of every primitive of a set.
-    pub(crate) fn from_set(set: &PrimitiveSet) -> Self {
-        let seeds = (0..set.len())
-            .map(|i| {
-                let v = set.item(i);
-                (
-                    std::array::from_fn(|k| {
-                        frame_params(&v[k * FRAME_DIM..(k + 1) * FRAME_DIM], &[])
-                    }),
-                    set.floors(i)[0] as f64,
-                )
-            })
-            .collect();
-        Self { seeds }
-    }
-
-    /// Seeds given in the world (any floor height), canonicalised.
-    pub fn from_world_seeds(
-        body: &BodyContext,
-        seeds: &[PrimitiveSeed],
-    ) -> Result<Self, DecodeError> {
-        let seeds = seeds
-            .iter()
-            .map(|s| {
-                let c = CanonicalSeed::new(body, s)?;
-                let frames: [BodyParams; SEED_FRAMES] =
-                    std::array::from_fn(|k| c.frames[k].clone());
-                Ok((frames, c.floor as f64))
-            })
-            .collect::<Result<_, DecodeError>>()?;
-        Ok(Self { seeds })
-    }
 }
 
 /// Where an episode walks: its walkable map, the obstacle of a box scene, start and goal.

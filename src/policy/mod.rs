@@ -29,4 +29,4 @@ pub mod sampling;
 pub mod weights;
 
 pub use actor::Actor;
-pub use env::{EnvSettings, PolicyEnv, SeedBank};
+pub use env::{EnvSettings, PolicyEnv};

@@ -302,8 +302,8 @@ pub(crate) fn synthesize(
     progress: bool,
 ) -> Result<Synthesized> {
     use crate::motion::cvae::MotionModel;
-    use crate::policy::SeedBank;
     use crate::walker::PosePrior;
+    use crate::walker::SeedBank;
     let (map, mesh) = synth_scene(plan)?;
     let (map, region) = crate::scene::indoor_map(map, plan.indoors);
     let agents = place_agents(plan, &map, region.as_deref())?;

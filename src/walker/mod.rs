@@ -9,16 +9,19 @@
 //!   sampling controller, the path follower) and the serde spec they are built from;
 //! - `step`: the judge of a primitive and the one function by which every walker chooses
 //!   the primitive it takes;
-//! - `reward` and `pose_prior`: what the judge weighs (Tab. S2's terms, our pose prior).
+//! - `reward` and `pose_prior`: what the judge weighs (Tab. S2's terms, our pose prior);
+//! - `seed_bank`: the mocap seeds every walker starts from.
 
 pub mod controller;
 pub mod pose_prior;
 pub mod reward;
+pub mod seed_bank;
 pub mod settings;
 pub mod state;
 pub(crate) mod step;
 
 pub use controller::{ControllerSpec, Policy};
 pub use pose_prior::PosePrior;
+pub use seed_bank::SeedBank;
 pub use settings::WalkerSettings;
 pub use state::{ObsLayout, STATE_FRAME_DIM};

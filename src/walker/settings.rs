@@ -101,21 +101,19 @@ impl WalkerSettings {
         given: D,
     ) -> Result<WalkerSettings, D::Error> {
         use serde::de::Error;
-        let given = serde_json::Map::<String, serde_json::Value>::deserialize(given)?;
-        let Ok(serde_json::Value::Object(mut table)) = serde_json::to_value(preset) else {
-            return Err(D::Error::custom("the walker's settings are a table"));
-        };
-        let keys = Self::keys();
+        // TOML values (not JSON): a NaN given stays one, for `problem` to name.
+        let given = toml::Table::deserialize(given)?;
+        let mut table = toml::Table::try_from(preset).map_err(D::Error::custom)?;
         for (k, v) in given {
             if !table.contains_key(&k) {
                 return Err(D::Error::custom(format!(
                     "unknown walker setting `{k}`, expected one of {}",
-                    keys.join(", ")
+                    Self::keys().join(", ")
                 )));
             }
             table.insert(k, v);
         }
-        serde_json::from_value(serde_json::Value::Object(table)).map_err(D::Error::custom)
+        WalkerSettings::deserialize(toml::Value::Table(table)).map_err(D::Error::custom)
     }
 
     /// The guide these settings give a policy-steered walker (`guide_*`).

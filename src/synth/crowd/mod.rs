@@ -49,13 +49,13 @@ use crate::math::{Affine3, Vec3};
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::{BodyContext, MotionModel};
 use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
-use crate::policy::env::SeedBank;
 use crate::policy::Actor;
 use crate::scene::{MovingObstacle, Obstacle2, WalkableMap};
 use crate::sensing::Sensor;
 use crate::synth::activity::{Activity, ActivityWorld, Phase};
 use crate::walker::reward::path_leaves_floor;
 use crate::walker::state::{frame_time_s, seen_ahead, Surroundings, PRIMITIVE_S};
+use crate::walker::SeedBank;
 use crate::walker::{ControllerSpec, PosePrior, WalkerSettings};
 
 mod acting;
