@@ -65,126 +65,126 @@ pub enum PolicyCommand {
     },
     /// Evaluate the sampling controller (best of K random latents by the reward) on held-out
     /// box-scene episodes; one JSON line per K.
-    Eval {
-        #[arg(long, default_value_os_t = crate::paths::crate_root().join("configs/train_primitive.toml"))]
-        config: PathBuf,
-        #[arg(long)]
-        weights: Option<PathBuf>,
-        /// Pose prior (default: the shipped one).
-        #[arg(long)]
-        prior: Option<PathBuf>,
-        /// Candidates per step of the sampling controller (comma-separated: one evaluation
-        /// each; default 1,16,64, none when --policy is given alone).
-        #[arg(long, value_delimiter = ',')]
-        k: Option<Vec<usize>>,
-        /// Also evaluate these controllers of the walker layer, the very ones a take's people
-        /// step with (comma-separated names: `sampling_kK`, `path_follow_kK`; `--k K` is
-        /// `sampling_kK`).
-        #[arg(long, value_delimiter = ',', value_name = "NAMES")]
-        controller: Vec<String>,
-        /// Also evaluate this trained policy (the shipped one:
-        /// assets/policy/scene_weights/policy.safetensors).
-        #[arg(long)]
-        policy: Option<PathBuf>,
-        /// The policy's mean action instead of a sample from it.
-        #[arg(long)]
-        mean_action: bool,
-        /// Scale of the sampled actions' standard deviation: 1 draws as trained, smaller
-        /// values draw nearer the mean (0 is the mean action).
-        #[arg(long, default_value_t = 1.0)]
-        action_spread: f32,
-        /// Evaluate in this scene (e.g. assets/scenes/apartment.glb) on start/goal pairs
-        /// instead of in box scenes.
-        #[arg(long)]
-        scene: Option<PathBuf>,
-        /// With --scene: up axis of the file (default: y for glTF, z otherwise).
-        #[arg(long, value_parser = ["y", "z"])]
-        up: Option<String>,
-        /// With --scene: metres per unit of the file (default 1; 0.01 for centimetres).
-        #[arg(long)]
-        unit_m: Option<f64>,
-        /// Distance range of the scene's start/goal pairs (m).
-        #[arg(long, value_delimiter = ',', default_value = "2,7")]
-        pair_distance_m: Vec<f64>,
-        /// Measure --pair-distance-m on foot, as the walking distance round walls (the way round
-        /// the report bins by), instead of straight: every pair within the walk a horizon allows.
-        #[arg(long)]
-        pair_distance_on_foot: bool,
-        /// Draw the scene's starts and goals anywhere walkable, not only inside the walls.
-        #[arg(long)]
-        anywhere: bool,
-        /// Primitives before an episode times out (default 11 in box scenes and crossings, 13
-        /// in floor plans and scenes, EgoGen's apartment; given, it applies to all).
-        #[arg(long)]
-        max_primitives: Option<usize>,
-        /// Share of procedural floor plans (rooms, doorways, furniture; drawn anew every
-        /// episode) instead of box scenes and crossings: 0 (default) to 1.
-        #[arg(long, default_value_t = 0.0)]
-        rooms_share: f64,
-        /// Share of crossing scenes (another person walking across the path) instead of box
-        /// scenes: 0 (default) to 1.
-        #[arg(long, default_value_t = 0.0)]
-        crossing_share: f64,
-        /// How many other people cross in a crossing scene: N, or MIN,MAX drawn per episode.
-        #[arg(long, value_delimiter = ',', default_value = "1")]
-        crossing_people: Vec<usize>,
-        /// Show the policy a guide's aim where a wall hides its goal: the point this many
-        /// metres along the shortest path (0, the default: the goal itself, as EgoGen).
-        #[arg(long, default_value_t = 0.0)]
-        guide_lookahead_m: f64,
-        /// With --guide-lookahead-m: the guide plans only on what the walker's own rays have
-        /// shown it so far (the unknown taken as open), not on the whole map.
-        #[arg(long)]
-        guide_memory: bool,
-        /// With --guide-lookahead-m: how strongly the guide's path keeps to the middle of
-        /// doorways and corridors (0, the default: the shortest path at 0.3 m from walls).
-        #[arg(long, default_value_t = 0.0)]
-        guide_centre_weight: f64,
-        /// With --guide-memory: a step onto ground the walker never saw costs this many times
-        /// its length more than one onto ground seen open: the way round prefers the doorways
-        /// its rays looked through (0, the default: the unknown taken as open).
-        #[arg(long, default_value_t = 0.0)]
-        guide_unknown_cost: f64,
-        /// Give each indoor episode time for its way round walls: at least (walking distance
-        /// round walls) / M primitives, never fewer than --max-primitives (7/13 ≈ 0.54: the
-        /// time 13 primitives give a 7 m straight walk). Not given: --max-primitives alone.
-        #[arg(long, value_name = "M")]
-        time_by_way_round_m: Option<f64>,
-        /// Show the walker the crossing people where they will stand when its primitive ends,
-        /// as `egogen synth`'s crowds do (a policy trained with `people_seen_ahead`).
-        #[arg(long)]
-        people_seen_ahead: bool,
-        #[arg(long, default_value_t = 200)]
-        episodes: usize,
-        /// Episodes run in parallel (one decode batch).
-        #[arg(long, default_value_t = 50)]
-        envs: usize,
-        /// Success radius (m; the table's 0.3).
-        #[arg(long, default_value_t = 0.3)]
-        success_m: f64,
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Write every episode's summary (JSON lines).
-        #[arg(long)]
-        episodes_jsonl: Option<PathBuf>,
-        /// Draw the walks of the first `--paths` episodes from above as a PNG (one controller
-        /// only): the pelvis at every primitive boundary, green where the goal was reached,
-        /// orange on a timeout, red where the walk ended in an obstacle.
-        #[arg(long)]
-        paths_png: Option<PathBuf>,
-        /// How many walks `--paths-png` draws.
-        #[arg(long, default_value_t = 6)]
-        paths: usize,
-    },
+    Eval(PolicyEvalArgs),
+}
+
+/// `egogen policy eval`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct PolicyEvalArgs {
+    #[arg(long, default_value_os_t = crate::paths::crate_root().join("configs/train_primitive.toml"))]
+    pub config: PathBuf,
+    #[arg(long)]
+    pub weights: Option<PathBuf>,
+    /// Pose prior (default: the shipped one).
+    #[arg(long)]
+    pub prior: Option<PathBuf>,
+    /// Candidates per step of the sampling controller (comma-separated: one evaluation
+    /// each; default 1,16,64, none when --policy is given alone).
+    #[arg(long, value_delimiter = ',')]
+    pub k: Option<Vec<usize>>,
+    /// Also evaluate these controllers of the walker layer, the very ones a take's people
+    /// step with (comma-separated names: `sampling_kK`, `path_follow_kK`; `--k K` is
+    /// `sampling_kK`).
+    #[arg(long, value_delimiter = ',', value_name = "NAMES")]
+    pub controller: Vec<String>,
+    /// Also evaluate this trained policy (the shipped one:
+    /// assets/policy/scene_weights/policy.safetensors).
+    #[arg(long)]
+    pub policy: Option<PathBuf>,
+    /// The policy's mean action instead of a sample from it.
+    #[arg(long)]
+    pub mean_action: bool,
+    /// Scale of the sampled actions' standard deviation: 1 draws as trained, smaller
+    /// values draw nearer the mean (0 is the mean action).
+    #[arg(long, default_value_t = 1.0)]
+    pub action_spread: f32,
+    /// Evaluate in this scene (e.g. assets/scenes/apartment.glb) on start/goal pairs
+    /// instead of in box scenes.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// With --scene: up axis of the file (default: y for glTF, z otherwise).
+    #[arg(long, value_parser = ["y", "z"])]
+    pub up: Option<String>,
+    /// With --scene: metres per unit of the file (default 1; 0.01 for centimetres).
+    #[arg(long)]
+    pub unit_m: Option<f64>,
+    /// Distance range of the scene's start/goal pairs (m).
+    #[arg(long, value_delimiter = ',', default_value = "2,7")]
+    pub pair_distance_m: Vec<f64>,
+    /// Measure --pair-distance-m on foot, as the walking distance round walls (the way round
+    /// the report bins by), instead of straight: every pair within the walk a horizon allows.
+    #[arg(long)]
+    pub pair_distance_on_foot: bool,
+    /// Draw the scene's starts and goals anywhere walkable, not only inside the walls.
+    #[arg(long)]
+    pub anywhere: bool,
+    /// Primitives before an episode times out (default 11 in box scenes and crossings, 13
+    /// in floor plans and scenes, EgoGen's apartment; given, it applies to all).
+    #[arg(long)]
+    pub max_primitives: Option<usize>,
+    /// Share of procedural floor plans (rooms, doorways, furniture; drawn anew every
+    /// episode) instead of box scenes and crossings: 0 (default) to 1.
+    #[arg(long, default_value_t = 0.0)]
+    pub rooms_share: f64,
+    /// Share of crossing scenes (another person walking across the path) instead of box
+    /// scenes: 0 (default) to 1.
+    #[arg(long, default_value_t = 0.0)]
+    pub crossing_share: f64,
+    /// How many other people cross in a crossing scene: N, or MIN,MAX drawn per episode.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub crossing_people: Vec<usize>,
+    /// Show the policy a guide's aim where a wall hides its goal: the point this many
+    /// metres along the shortest path (0, the default: the goal itself, as EgoGen).
+    #[arg(long, default_value_t = 0.0)]
+    pub guide_lookahead_m: f64,
+    /// With --guide-lookahead-m: the guide plans only on what the walker's own rays have
+    /// shown it so far (the unknown taken as open), not on the whole map.
+    #[arg(long)]
+    pub guide_memory: bool,
+    /// With --guide-lookahead-m: how strongly the guide's path keeps to the middle of
+    /// doorways and corridors (0, the default: the shortest path at 0.3 m from walls).
+    #[arg(long, default_value_t = 0.0)]
+    pub guide_centre_weight: f64,
+    /// With --guide-memory: a step onto ground the walker never saw costs this many times
+    /// its length more than one onto ground seen open: the way round prefers the doorways
+    /// its rays looked through (0, the default: the unknown taken as open).
+    #[arg(long, default_value_t = 0.0)]
+    pub guide_unknown_cost: f64,
+    /// Give each indoor episode time for its way round walls: at least (walking distance
+    /// round walls) / M primitives, never fewer than --max-primitives (7/13 ≈ 0.54: the
+    /// time 13 primitives give a 7 m straight walk). Not given: --max-primitives alone.
+    #[arg(long, value_name = "M")]
+    pub time_by_way_round_m: Option<f64>,
+    /// Show the walker the crossing people where they will stand when its primitive ends,
+    /// as `egogen synth`'s crowds do (a policy trained with `people_seen_ahead`).
+    #[arg(long)]
+    pub people_seen_ahead: bool,
+    #[arg(long, default_value_t = 200)]
+    pub episodes: usize,
+    /// Episodes run in parallel (one decode batch).
+    #[arg(long, default_value_t = 50)]
+    pub envs: usize,
+    /// Success radius (m; the table's 0.3).
+    #[arg(long, default_value_t = 0.3)]
+    pub success_m: f64,
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write every episode's summary (JSON lines).
+    #[arg(long)]
+    pub episodes_jsonl: Option<PathBuf>,
+    /// Draw the walks of the first `--paths` episodes from above as a PNG (one controller
+    /// only): the pelvis at every primitive boundary, green where the goal was reached,
+    /// orange on a timeout, red where the walk ended in an obstacle.
+    #[arg(long)]
+    pub paths_png: Option<PathBuf>,
+    /// How many walks `--paths-png` draws.
+    #[arg(long, default_value_t = 6)]
+    pub paths: usize,
 }
 
 pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
     use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
-    use crate::motion::cvae::{BodyContext, MotionModel};
-    use crate::policy::EnvSettings;
-    use crate::walker::pose_prior::shipped_pose_prior_path;
-    use crate::walker::PosePrior;
-    use crate::walker::SeedBank;
+    use crate::motion::cvae::MotionModel;
     match cmd {
         PolicyCommand::PosePrior {
             config,
@@ -279,275 +279,332 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             rooms_sheet(&plans).write_png(&out)?;
             println!("wrote {}", out.display());
         }
-        PolicyCommand::Eval {
-            config,
-            weights,
-            prior,
-            k,
-            controller,
-            episodes,
-            envs,
-            success_m,
-            seed,
-            episodes_jsonl,
-            paths_png,
-            paths,
-            policy,
-            mean_action,
-            action_spread,
-            scene,
-            up,
-            unit_m,
-            pair_distance_m,
-            pair_distance_on_foot,
-            anywhere,
-            max_primitives,
-            crossing_share,
-            rooms_share,
-            crossing_people,
-            guide_lookahead_m,
-            guide_memory,
-            guide_centre_weight,
-            guide_unknown_cost,
-            time_by_way_round_m,
-            people_seen_ahead,
-        } => {
-            if let Some(f) = &episodes_jsonl {
-                refuse_existing(f)?;
+        PolicyCommand::Eval(args) => policy_eval(args)?,
+    }
+    Ok(())
+}
+
+/// The walker-layer controllers `--controller` names: (kind, K, spec) each.
+fn eval_controllers(
+    names: &[String],
+) -> Result<Vec<(&'static str, usize, crate::walker::ControllerSpec)>> {
+    names
+        .iter()
+        .map(|name| {
+            use crate::walker::ControllerSpec as C;
+            match C::from_name(name) {
+                Some(spec @ C::Sampling { k }) => Some(("sampling", k, spec)),
+                Some(spec @ C::PathFollow { k }) => Some(("path_follow", k, spec)),
+                _ => None,
             }
-            let controllers = controller
-                .iter()
-                .map(|name| {
-                    use crate::walker::ControllerSpec as C;
-                    match C::from_name(name) {
-                        Some(spec @ C::Sampling { k }) => Some(("sampling", k, spec)),
-                        Some(spec @ C::PathFollow { k }) => Some(("path_follow", k, spec)),
-                        _ => None,
-                    }
-                    .with_context(|| {
-                        format!(
-                            "--controller: \"{name}\": expected sampling_kK or path_follow_kK \
-                                 with K ≥ 1 (the policy: --policy FILE)"
-                        )
-                    })
-                })
-                .collect::<Result<Vec<_>>>()?;
-            let k = k.unwrap_or_else(|| match policy.is_some() || !controllers.is_empty() {
-                true => vec![],
-                false => vec![1, 16, 64],
-            });
-            if k.contains(&0) || episodes == 0 || envs == 0 {
-                bail!("--k, --episodes and --envs must be at least 1");
-            }
-            const MAX_EPISODES: usize = 1_000_000;
-            const MAX_ENVS: usize = 65_536;
-            const MAX_K: usize = 65_536;
-            if episodes > MAX_EPISODES
-                || envs > MAX_ENVS
-                || k.iter()
-                    .chain(controllers.iter().map(|c| &c.1))
-                    .any(|&k| k > MAX_K)
-            {
-                bail!(
-                    "--episodes {episodes}, --envs {envs}, --k {k:?}: at most {MAX_EPISODES} episodes, \
-                     {MAX_ENVS} environments and K = {MAX_K} (every episode's record is kept in memory)"
-                );
-            }
-            if !(action_spread.is_finite() && action_spread >= 0.0) {
-                bail!("--action-spread: expected a scale ≥ 0, got {action_spread}");
-            }
-            if let Some(m) = time_by_way_round_m {
-                if !(m.is_finite() && m > 0.0) {
-                    bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
-                }
-            }
-            // The flags fill the walker's one settings schema, over the paper's walker.
-            let paper = crate::walker::WalkerSettings::PAPER;
-            let walker = crate::walker::WalkerSettings {
-                success_m,
-                max_primitives_per_goal: max_primitives.unwrap_or(paper.max_primitives_per_goal),
-                guide_lookahead_m,
-                guide_memory,
-                guide_centre_weight,
-                guide_unknown_cost,
-                anticipate_people: people_seen_ahead,
-                ..paper
-            };
-            if let Some((field, what)) = walker.problem_over(&paper) {
-                let flag = match field {
-                    "max_primitives_per_goal" => "max_primitives",
-                    "anticipate_people" => "people_seen_ahead",
-                    f => f,
-                };
-                bail!("--{}: {what}", flag.replace('_', "-"));
-            }
-            let plan = crate::cli::train_primitive::load_train_plan(&config)?;
-            let body = BodyModel::load(&plan.body_model)?;
-            let ctx = BodyContext::new(&body, &[])?;
-            let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
-            let prior = PosePrior::load(&prior.unwrap_or_else(shipped_pose_prior_path))?;
-            let (_, held) = evaluation_sets(&plan, &body, true)?;
-            let bank = SeedBank::from_set(&held);
-            let defaults = EnvSettings::default();
-            if scene.is_some() && (rooms_share > 0.0 || crossing_share > 0.0) {
-                bail!("--scene walks the scene's pairs only: give no --rooms-share or --crossing-share with it");
-            }
-            if !(0.0..=1.0).contains(&rooms_share) {
-                bail!("--rooms-share: expected a share in [0, 1], got {rooms_share}");
-            }
-            if !(0.0..=1.0).contains(&crossing_share) {
-                bail!("--crossing-share: expected a share in [0, 1], got {crossing_share}");
-            }
-            let people = match *crossing_people.as_slice() {
-                [n] => (n, n),
-                [lo, hi] => (lo, hi),
-                _ => bail!("--crossing-people: expected N or MIN,MAX"),
-            };
-            if !crate::scene::generated::crossing_scene::people_in_range(people) {
-                bail!(
-                    "--crossing-people: expected 1 ≤ MIN ≤ MAX ≤ {}, got {},{}",
-                    crate::scene::generated::crossing_scene::MAX_PEOPLE,
-                    people.0,
-                    people.1
-                );
-            }
-            let settings = EnvSettings {
-                walker,
-                crossing: crate::scene::generated::crossing_scene::CrossingSettings {
-                    share: crossing_share,
-                    people,
-                    ..defaults.crossing
-                },
-                rooms: crate::scene::generated::room_scene::RoomSettings {
-                    share: rooms_share,
-                    max_primitives: max_primitives.unwrap_or(defaults.rooms.max_primitives),
-                    ..defaults.rooms
-                },
-                time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
-                ..defaults
-            };
-            if scene.is_some() && !(k.is_empty() && controllers.is_empty()) {
-                match policy {
-                    None => bail!(
-                        "--scene evaluates a policy: give --policy FILE (the shipped one: {})",
-                        crate::policy::weights::SHIPPED_POLICY
-                    ),
-                    Some(_) => {
-                        bail!("--scene evaluates --policy only (give no --k or --controller)")
-                    }
-                }
-            }
-            if scene.is_none() && (up.is_some() || unit_m.is_some() || pair_distance_on_foot) {
-                bail!("--up, --unit-m and --pair-distance-on-foot are about a --scene file's pairs; give --scene FILE");
-            }
-            let frame = super::scene_jobs::scene_frame_flags(up.as_deref(), unit_m)?;
-            let fixed = match &scene {
-                None => None,
-                Some(path) => {
-                    let &[lo, hi] = pair_distance_m.as_slice() else {
-                        bail!("--pair-distance-m: expected MIN,MAX in metres");
-                    };
-                    if !(lo >= 0.0 && hi >= lo) {
-                        bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
-                    }
-                    Some(crate::policy::fixed_scene::held_out_scene(
-                        path,
-                        frame,
-                        episodes,
-                        (lo, hi),
-                        pair_distance_on_foot,
-                        !anywhere,
-                        seed,
-                        crate::scene::sdf3d::DEFAULT_VOXEL_M,
-                    )?)
-                }
-            };
-            if let Some(png) = &paths_png {
-                refuse_existing(png)?;
-                if k.len() + controllers.len() + usize::from(policy.is_some()) != 1 || paths == 0 {
-                    bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
-                }
-            }
-            use crate::eval::policy_tasks::{evaluate_with_paths, HeldOutController};
-            use crate::motion::cvae::infer::InferBackend;
-            use crate::policy::env::EnvParts;
-            let loaded = match &policy {
-                None => None,
-                Some(path) => Some(crate::policy::weights::load_policy_for(path, &model)?),
-            };
-            let mut runs: Vec<(serde_json::Value, HeldOutController<InferBackend>)> = k
-                .iter()
-                .map(|&kk| {
-                    (
-                        serde_json::json!({"controller": "sampling", "k": kk}),
-                        HeldOutController::Walker(crate::walker::ControllerSpec::Sampling {
-                            k: kk,
-                        }),
-                    )
-                })
-                .collect();
-            runs.extend(controllers.iter().map(|&(kind, k, spec)| {
-                (
-                    serde_json::json!({"controller": kind, "k": k}),
-                    HeldOutController::Walker(spec),
+            .with_context(|| {
+                format!(
+                    "--controller: \"{name}\": expected sampling_kK or path_follow_kK with K ≥ 1 \
+                     (the policy: --policy FILE)"
                 )
-            }));
-            if let Some(net) = &loaded {
-                let name = if mean_action { "policy_mean" } else { "policy" };
-                let mut about =
-                    serde_json::json!({"controller": name, "weights": policy, "scene": scene});
-                if action_spread != 1.0 && !mean_action {
-                    about["action_spread"] = action_spread.into();
-                }
-                runs.push((
-                    about,
-                    HeldOutController::Policy {
-                        net,
-                        mean_action,
-                        spread: action_spread,
-                    },
-                ));
-            }
-            let parts = EnvParts {
-                model: &model,
-                body: &ctx,
-                bank: &bank,
-                prior: &prior,
-                fixed: fixed.as_ref(),
+            })
+        })
+        .collect()
+}
+
+/// The environment `egogen policy eval`'s flags ask for, checked: the walker's one settings
+/// schema over the paper's walker, the shares of floor plans and crossings.
+fn eval_settings(a: &PolicyEvalArgs) -> Result<crate::policy::EnvSettings> {
+    use crate::policy::EnvSettings;
+    let PolicyEvalArgs {
+        success_m,
+        scene,
+        max_primitives,
+        crossing_share,
+        rooms_share,
+        crossing_people,
+        guide_lookahead_m,
+        guide_memory,
+        guide_centre_weight,
+        guide_unknown_cost,
+        time_by_way_round_m,
+        people_seen_ahead,
+        ..
+    } = a;
+    let (success_m, max_primitives, crossing_share, rooms_share) =
+        (*success_m, *max_primitives, *crossing_share, *rooms_share);
+    let (guide_lookahead_m, guide_memory, guide_centre_weight, guide_unknown_cost) = (
+        *guide_lookahead_m,
+        *guide_memory,
+        *guide_centre_weight,
+        *guide_unknown_cost,
+    );
+    let (time_by_way_round_m, people_seen_ahead) = (*time_by_way_round_m, *people_seen_ahead);
+    if let Some(m) = time_by_way_round_m {
+        if !(m.is_finite() && m > 0.0) {
+            bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
+        }
+    }
+    // The flags fill the walker's one settings schema, over the paper's walker.
+    let paper = crate::walker::WalkerSettings::PAPER;
+    let walker = crate::walker::WalkerSettings {
+        success_m,
+        max_primitives_per_goal: max_primitives.unwrap_or(paper.max_primitives_per_goal),
+        guide_lookahead_m,
+        guide_memory,
+        guide_centre_weight,
+        guide_unknown_cost,
+        anticipate_people: people_seen_ahead,
+        ..paper
+    };
+    if let Some((field, what)) = walker.problem_over(&paper) {
+        let flag = match field {
+            "max_primitives_per_goal" => "max_primitives",
+            "anticipate_people" => "people_seen_ahead",
+            f => f,
+        };
+        bail!("--{}: {what}", flag.replace('_', "-"));
+    }
+    let defaults = EnvSettings::default();
+    if scene.is_some() && (rooms_share > 0.0 || crossing_share > 0.0) {
+        bail!("--scene walks the scene's pairs only: give no --rooms-share or --crossing-share with it");
+    }
+    if !(0.0..=1.0).contains(&rooms_share) {
+        bail!("--rooms-share: expected a share in [0, 1], got {rooms_share}");
+    }
+    if !(0.0..=1.0).contains(&crossing_share) {
+        bail!("--crossing-share: expected a share in [0, 1], got {crossing_share}");
+    }
+    let people = match *crossing_people.as_slice() {
+        [n] => (n, n),
+        [lo, hi] => (lo, hi),
+        _ => bail!("--crossing-people: expected N or MIN,MAX"),
+    };
+    if !crate::scene::generated::crossing_scene::people_in_range(people) {
+        bail!(
+            "--crossing-people: expected 1 ≤ MIN ≤ MAX ≤ {}, got {},{}",
+            crate::scene::generated::crossing_scene::MAX_PEOPLE,
+            people.0,
+            people.1
+        );
+    }
+    let settings = EnvSettings {
+        walker,
+        crossing: crate::scene::generated::crossing_scene::CrossingSettings {
+            share: crossing_share,
+            people,
+            ..defaults.crossing
+        },
+        rooms: crate::scene::generated::room_scene::RoomSettings {
+            share: rooms_share,
+            max_primitives: max_primitives.unwrap_or(defaults.rooms.max_primitives),
+            ..defaults.rooms
+        },
+        time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
+        ..defaults
+    };
+    Ok(settings)
+}
+
+/// `--scene`'s held-out start/goal pairs, if a scene is given.
+fn eval_scene(a: &PolicyEvalArgs) -> Result<Option<crate::policy::env::FixedScene>> {
+    let PolicyEvalArgs {
+        scene,
+        up,
+        unit_m,
+        pair_distance_m,
+        pair_distance_on_foot,
+        anywhere,
+        episodes,
+        seed,
+        ..
+    } = a;
+    let (pair_distance_on_foot, anywhere, episodes, seed) =
+        (*pair_distance_on_foot, *anywhere, *episodes, *seed);
+    if scene.is_none() && (up.is_some() || unit_m.is_some() || pair_distance_on_foot) {
+        bail!("--up, --unit-m and --pair-distance-on-foot are about a --scene file's pairs; give --scene FILE");
+    }
+    let frame = super::scene_jobs::scene_frame_flags(up.as_deref(), *unit_m)?;
+    let fixed = match scene {
+        None => None,
+        Some(path) => {
+            let &[lo, hi] = pair_distance_m.as_slice() else {
+                bail!("--pair-distance-m: expected MIN,MAX in metres");
             };
-            let mut lines = String::new();
-            for (label, controller) in &runs {
-                let bar =
-                    indicatif::ProgressBar::new(episodes as u64).with_message(label.to_string());
-                let drawn = if paths_png.is_some() { paths } else { 0 };
-                let (report, summaries, walks) = evaluate_with_paths(
-                    &parts,
-                    settings,
-                    controller,
-                    (episodes, envs, seed),
-                    drawn,
-                    |_| bar.inc(1),
-                )?;
-                bar.finish_and_clear();
-                if let Some(png) = &paths_png {
-                    paths_sheet(&walks).write_png(png)?;
-                    println!("wrote {}", png.display());
-                }
-                let mut line = label.clone();
-                line["report"] = serde_json::to_value(&report)?;
-                println!("{line}");
-                for s in summaries {
-                    let mut e = label.clone();
-                    e["episode"] = serde_json::to_value(&s)?;
-                    lines.push_str(&e.to_string());
-                    lines.push('\n');
-                }
+            if !(lo >= 0.0 && hi >= lo) {
+                bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
             }
-            if let Some(f) = episodes_jsonl {
-                crate::atomic_file::write_atomically(&f, lines.as_bytes())?;
-                println!("wrote {}", f.display());
+            Some(crate::policy::fixed_scene::held_out_scene(
+                path,
+                frame,
+                episodes,
+                (lo, hi),
+                pair_distance_on_foot,
+                !anywhere,
+                seed,
+                crate::scene::sdf3d::DEFAULT_VOXEL_M,
+            )?)
+        }
+    };
+    Ok(fixed)
+}
+
+/// `egogen policy eval`: controllers on held-out episodes, one JSON line each.
+fn policy_eval(a: PolicyEvalArgs) -> Result<()> {
+    use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
+    use crate::motion::cvae::{BodyContext, MotionModel};
+    use crate::walker::pose_prior::shipped_pose_prior_path;
+    use crate::walker::{PosePrior, SeedBank};
+    if let Some(f) = &a.episodes_jsonl {
+        refuse_existing(f)?;
+    }
+    let controllers = eval_controllers(&a.controller)?;
+    let settings = eval_settings(&a)?;
+    let PolicyEvalArgs {
+        config,
+        weights,
+        prior,
+        k,
+        episodes,
+        envs,
+        seed,
+        episodes_jsonl,
+        paths_png,
+        paths,
+        policy,
+        mean_action,
+        action_spread,
+        scene,
+        ..
+    } = &a;
+    let (episodes, envs, seed, paths, mean_action, action_spread) = (
+        *episodes,
+        *envs,
+        *seed,
+        *paths,
+        *mean_action,
+        *action_spread,
+    );
+    let k = k
+        .clone()
+        .unwrap_or_else(|| match policy.is_some() || !controllers.is_empty() {
+            true => vec![],
+            false => vec![1, 16, 64],
+        });
+    if k.contains(&0) || episodes == 0 || envs == 0 {
+        bail!("--k, --episodes and --envs must be at least 1");
+    }
+    const MAX_EPISODES: usize = 1_000_000;
+    const MAX_ENVS: usize = 65_536;
+    const MAX_K: usize = 65_536;
+    if episodes > MAX_EPISODES
+        || envs > MAX_ENVS
+        || k.iter()
+            .chain(controllers.iter().map(|c| &c.1))
+            .any(|&k| k > MAX_K)
+    {
+        bail!(
+            "--episodes {episodes}, --envs {envs}, --k {k:?}: at most {MAX_EPISODES} episodes, \
+             {MAX_ENVS} environments and K = {MAX_K} (every episode's record is kept in memory)"
+        );
+    }
+    if !(action_spread.is_finite() && action_spread >= 0.0) {
+        bail!("--action-spread: expected a scale ≥ 0, got {action_spread}");
+    }
+    if scene.is_some() && !(k.is_empty() && controllers.is_empty()) {
+        match policy {
+            None => bail!(
+                "--scene evaluates a policy: give --policy FILE (the shipped one: {})",
+                crate::policy::weights::SHIPPED_POLICY
+            ),
+            Some(_) => {
+                bail!("--scene evaluates --policy only (give no --k or --controller)")
             }
         }
+    }
+    let fixed = eval_scene(&a)?;
+    let plan = crate::cli::train_primitive::load_train_plan(config)?;
+    let body = BodyModel::load(&plan.body_model)?;
+    let ctx = BodyContext::new(&body, &[])?;
+    let model = MotionModel::load(weights.clone().unwrap_or_else(shipped_weights_path))?;
+    let prior = PosePrior::load(&prior.clone().unwrap_or_else(shipped_pose_prior_path))?;
+    let (_, held) = evaluation_sets(&plan, &body, true)?;
+    let bank = SeedBank::from_set(&held);
+    if let Some(png) = &paths_png {
+        refuse_existing(png)?;
+        if k.len() + controllers.len() + usize::from(policy.is_some()) != 1 || paths == 0 {
+            bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
+        }
+    }
+    use crate::eval::policy_tasks::{evaluate_with_paths, HeldOutController};
+    use crate::motion::cvae::infer::InferBackend;
+    use crate::policy::env::EnvParts;
+    let loaded = match &policy {
+        None => None,
+        Some(path) => Some(crate::policy::weights::load_policy_for(path, &model)?),
+    };
+    let mut runs: Vec<(serde_json::Value, HeldOutController<InferBackend>)> = k
+        .iter()
+        .map(|&kk| {
+            (
+                serde_json::json!({"controller": "sampling", "k": kk}),
+                HeldOutController::Walker(crate::walker::ControllerSpec::Sampling { k: kk }),
+            )
+        })
+        .collect();
+    runs.extend(controllers.iter().map(|&(kind, k, spec)| {
+        (
+            serde_json::json!({"controller": kind, "k": k}),
+            HeldOutController::Walker(spec),
+        )
+    }));
+    if let Some(net) = &loaded {
+        let name = if mean_action { "policy_mean" } else { "policy" };
+        let mut about = serde_json::json!({"controller": name, "weights": policy, "scene": scene});
+        if action_spread != 1.0 && !mean_action {
+            about["action_spread"] = action_spread.into();
+        }
+        runs.push((
+            about,
+            HeldOutController::Policy {
+                net,
+                mean_action,
+                spread: action_spread,
+            },
+        ));
+    }
+    let parts = EnvParts {
+        model: &model,
+        body: &ctx,
+        bank: &bank,
+        prior: &prior,
+        fixed: fixed.as_ref(),
+    };
+    let mut lines = String::new();
+    for (label, controller) in &runs {
+        let bar = indicatif::ProgressBar::new(episodes as u64).with_message(label.to_string());
+        let drawn = if paths_png.is_some() { paths } else { 0 };
+        let (report, summaries, walks) = evaluate_with_paths(
+            &parts,
+            settings,
+            controller,
+            (episodes, envs, seed),
+            drawn,
+            |_| bar.inc(1),
+        )?;
+        bar.finish_and_clear();
+        if let Some(png) = &paths_png {
+            paths_sheet(&walks).write_png(png)?;
+            println!("wrote {}", png.display());
+        }
+        let mut line = label.clone();
+        line["report"] = serde_json::to_value(&report)?;
+        println!("{line}");
+        for s in summaries {
+            let mut e = label.clone();
+            e["episode"] = serde_json::to_value(&s)?;
+            lines.push_str(&e.to_string());
+            lines.push('\n');
+        }
+    }
+    if let Some(f) = episodes_jsonl {
+        crate::atomic_file::write_atomically(f, lines.as_bytes())?;
+        println!("wrote {}", f.display());
     }
     Ok(())
 }

@@ -228,7 +228,7 @@ pub(crate) fn run_episodes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::policy::env::mean_before_arrival;
+    use crate::policy::env::summary::mean_before_arrival;
 
     fn summary(id: u64, ending: Ending, view_cos_each: Vec<f64>) -> EpisodeSummary {
         let n = view_cos_each.len();
