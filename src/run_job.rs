@@ -37,6 +37,33 @@ pub struct PreparedRun {
     pub config: PathBuf,
 }
 
+/// The first key of `raw` (dotted, as in the file) holding an integer TOML cannot write (above
+/// 2^63 − 1: a seed of 2^63, say), and its value.
+fn integer_beyond_toml(raw: &RawRun) -> Option<(String, u64)> {
+    fn find(v: &serde_json::Value, at: &str) -> Option<(String, u64)> {
+        match v {
+            serde_json::Value::Number(n) => n
+                .as_u64()
+                .filter(|&u| u > i64::MAX as u64)
+                .map(|u| (at.to_string(), u)),
+            serde_json::Value::Object(m) => m.iter().find_map(|(k, v)| {
+                let key = if at.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{at}.{k}")
+                };
+                find(v, &key)
+            }),
+            serde_json::Value::Array(a) => a
+                .iter()
+                .enumerate()
+                .find_map(|(i, v)| find(v, &format!("{at}[{i}]"))),
+            _ => None,
+        }
+    }
+    find(&serde_json::to_value(raw).ok()?, "")
+}
+
 /// Reads `config`, applies `overrides` to it as written (so its checks apply to them too),
 /// resolves it and loads its body model.
 pub fn prepare(
@@ -48,6 +75,17 @@ pub fn prepare(
     overrides
         .apply(&mut raw)
         .with_context(|| format!("applying the command line to {}", config.display()))?;
+    if let Some((key, v)) = integer_beyond_toml(&raw) {
+        let from = match overrides.seed.is_some() && key.ends_with("seed") {
+            true => " (set by --seed)",
+            false => "",
+        };
+        anyhow::bail!(
+            "{}: {key} = {v}{from}: expected at most 9223372036854775807 (2^63 − 1: a TOML \
+             integer is 64-bit signed, and the effective config is written as TOML)",
+            config.display()
+        );
+    }
     let config_toml = effective_config_toml(&raw, config, overrides)
         .context("writing out the effective config")?;
     let resume_fingerprint = resume_fingerprint(&raw).context("fingerprinting the config")?;

@@ -597,7 +597,7 @@ fn bad_requests_are_refused_and_nothing_is_written() {
     );
     // The right camera rendered, but its images gone.
     let partial_copy = dir.path().join("copy");
-    copy_dir(two, &partial_copy);
+    common::copy_tree(two, &partial_copy);
     std::fs::remove_file(partial_copy.join("images/wearer_camera-slam-right/frame_00010.png"))
         .unwrap();
     refused(
@@ -605,6 +605,32 @@ fn bad_requests_are_refused_and_nothing_is_written() {
         &out,
         &["--wearer", "wearer"],
         &["frame_00010.png", "is missing", "colmap"],
+    );
+    // An image of another size than its camera's calibration (which sensor.yaml states).
+    let resized = dir.path().join("resized");
+    common::copy_tree(two, &resized);
+    let image = resized.join("images/wearer_camera-slam-right/frame_00000.png");
+    let mut tiny = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut tiny, 4, 4);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().unwrap();
+        w.write_image_data(&[128; 16]).unwrap();
+    }
+    std::fs::write(&image, tiny).unwrap();
+    refused(
+        &resized,
+        &out,
+        &["--wearer", "wearer"],
+        &["frame_00000.png", "4×4 pixels", "calibration"],
+    );
+    // An export into its own take: refused, the take left as egogen-run made it.
+    refused(
+        two,
+        &two.join("euroc"),
+        &["--wearer", "wearer"],
+        &["inside the take"],
     );
     // A rig without IMUs; a rig that is not the take's.
     let root = common::repo_root();
@@ -636,18 +662,6 @@ fn bad_requests_are_refused_and_nothing_is_written() {
         std::fs::read_to_string(out.join("keep.txt")).unwrap(),
         "mine"
     );
-}
-
-fn copy_dir(from: &Path, to: &Path) {
-    std::fs::create_dir_all(to).unwrap();
-    for e in std::fs::read_dir(from).unwrap().flatten() {
-        let target = to.join(e.file_name());
-        if e.file_type().unwrap().is_dir() {
-            copy_dir(&e.path(), &target);
-        } else {
-            std::fs::copy(e.path(), target).unwrap();
-        }
-    }
 }
 
 /// The Python with `evo` (its EuRoC reader is the client checked), PyYAML, numpy and pytest.

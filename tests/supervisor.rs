@@ -556,6 +556,40 @@ fn a_resume_with_another_rig_is_refused() {
     assert!(err.contains("different camera rig"), "{err}");
 }
 
+/// A seed TOML cannot write (2^63) is refused by its key before anything is made, in the
+/// file and as `--seed`.
+#[test]
+fn a_seed_beyond_toml_is_refused_by_its_key() {
+    let (dir, config) = setup();
+    let text = std::fs::read_to_string(&config).unwrap().replace(
+        "[supervisor]",
+        "[render.lighting]\nlamp_watts = [100.0, 500.0]\nseed = 9223372036854775808\n[supervisor]",
+    );
+    std::fs::write(&config, text).unwrap();
+    let out = egogen_run().arg(&config).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("render.lighting.seed = 9223372036854775808") && err.contains("2^63"),
+        "{err}"
+    );
+    let out = egogen_run()
+        .arg(&config)
+        .args(["--seed", "18446744073709551615"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("seed = 18446744073709551615 (set by --seed)"),
+        "{err}"
+    );
+    assert!(std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .all(|e| !e.file_name().to_string_lossy().ends_with(".partial")));
+}
+
 #[test]
 fn out_and_seed_overrides_are_recorded_and_a_resume_must_repeat_them() {
     let (dir, config) = setup();
@@ -588,6 +622,15 @@ fn out_and_seed_overrides_are_recorded_and_a_resume_must_repeat_them() {
     assert!(!refused.status.success());
     let err = String::from_utf8_lossy(&refused.stderr);
     assert!(err.contains("different config"), "{err}");
+    // Every override that changes the config is named, the activity weights and materials too.
+    for flag in [
+        "--seed",
+        "--activity-weights",
+        "--materials",
+        "--duration-s",
+    ] {
+        assert!(err.contains(flag), "{flag}: {err}");
+    }
     // The same overrides with more workers: the same run, resumed to the end.
     let resumed = egogen_run()
         .arg(&config)

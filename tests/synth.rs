@@ -1592,6 +1592,30 @@ fn a_sit_without_a_seat_is_skipped_with_a_reason() {
         .all(|s| s["activity"] == "sit" && s["reason"].as_str().unwrap().contains("no seat")));
 }
 
+/// An activity drawn as the take ends is never played: the one primitive of a 0.5 s take
+/// reaches its goal (within 3 m), the stand drawn after it would begin on the frame after the
+/// last. It is skipped with that reason, not recorded as done with no frames.
+#[test]
+fn an_activity_drawn_as_the_take_ends_is_skipped_not_done() {
+    let config = "[scene]\nfloor_m = 8.0\n[motion]\nduration_s = 0.5\nstop_when_done = false\n\
+        [walker]\nsuccess_m = 3.0\n\
+        [activities]\nweights = { walk = 0.0, stand = 1.0 }\n\
+        [[agents]]\nstart = [0.0, 0.0]\ngoals = [[0.5, 0.0]]\nsteering = 'policy'\n\
+        [output]\ndir = 'take'\n";
+    let (dir, path) = common::run_dir(config);
+    let plan = load_synth_plan(&path).unwrap();
+    run_synth(&plan, false).unwrap();
+    let summary = summary(&dir.path().join("take"));
+    let agent = &summary["agents"][0];
+    assert_eq!(agent["goals"][0]["reached"], true, "{agent}");
+    let done = agent["activities"].as_array().cloned().unwrap_or_default();
+    assert!(done.is_empty(), "recorded as done: {done:?}");
+    let skipped = agent["skipped_activities"].as_array().unwrap();
+    assert_eq!(skipped.len(), 1, "{skipped:?}");
+    assert_eq!(skipped[0]["activity"], "stand");
+    assert_eq!(skipped[0]["reason"], "the take ended before it began");
+}
+
 /// One primitive between two activities: goals 0.35–0.4 m away are reached in one step, so the
 /// walk between a pick-up and a look around is a single primitive; both joins stay smooth.
 #[test]

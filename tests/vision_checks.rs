@@ -216,3 +216,41 @@ fn a_folder_that_is_not_a_take_is_refused_by_name() {
         "{err}"
     );
 }
+
+/// A damaged image is refused by name, not counted as a frame with no features; an existing
+/// `--json` is refused before any work and left as it was.
+#[test]
+fn a_truncated_image_and_an_existing_json_are_refused() {
+    let Some(python) = vision_python() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("take");
+    common::copy_tree(&take().path, &copy);
+    let image = copy.join("images/camera-rgb/frame_00000.png");
+    let bytes = std::fs::read(&image).unwrap();
+    std::fs::write(&image, &bytes[..bytes.len() / 2]).unwrap();
+    let run = |take: &Path, more: &[&str]| {
+        Command::new(&python)
+            .arg(common::repo_root().join("tools/vision_checks.py"))
+            .arg("features")
+            .arg(take)
+            .args(more)
+            .output()
+            .unwrap()
+    };
+    let out = run(&copy, &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("frame_00000.png") && err.contains("not a whole image"),
+        "{err}"
+    );
+    let json = dir.path().join("mine.json");
+    std::fs::write(&json, "mine").unwrap();
+    let out = run(&take().path, &["--json", json.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("exists") && err.contains("mine.json"), "{err}");
+    assert_eq!(std::fs::read_to_string(&json).unwrap(), "mine");
+}

@@ -485,9 +485,17 @@ def check_images(take, camera: str, frames) -> Path:
             f"{d}: no such folder (expected the COLMAP export's images of {camera}: a take rendered "
             "with colour and `[render] colmap` on, the default)"
         )
+    from PIL import Image
+
     for f in frames:
-        if not (d / image_name(f)).is_file():
-            raise ToolError(f"{d / image_name(f)}: no such file (expected the image of frame {f.index}, named in {f.annotations})")
+        path = d / image_name(f)
+        if not path.is_file():
+            raise ToolError(f"{path}: no such file (expected the image of frame {f.index}, named in {f.annotations})")
+        try:
+            with Image.open(path) as im:
+                im.load()  # every byte decoded: a truncated file is refused, not counted as a frame
+        except (OSError, SyntaxError, ValueError) as e:
+            raise ToolError(f"{path}: not a whole image ({e}); the take's image of frame {f.index} is damaged")
     return d
 
 
@@ -559,7 +567,11 @@ def write_json(path, doc):
     p = Path(path)
     if p.parent and not p.parent.is_dir():
         raise ToolError(f"{p.parent}: no such folder (for --json {path})")
-    p.write_text(json.dumps(doc, indent=2) + "\n")
+    if p.exists():
+        raise ToolError(f"--json {path} exists; give a new path (nothing is overwritten)")
+    partial = p.with_name(p.name + ".partial")
+    partial.write_text(json.dumps(doc, indent=2) + "\n")
+    os.replace(partial, p)
     print(f"wrote {p}")
 
 
@@ -1342,6 +1354,8 @@ def main(argv=None) -> int:
     try:
         if args.json is not None and not Path(args.json).resolve().parent.is_dir():
             raise ToolError(f"{Path(args.json).resolve().parent}: no such folder (for --json {args.json})")
+        if args.json is not None and Path(args.json).exists():
+            raise ToolError(f"--json {args.json} exists; give a new path (nothing is overwritten)")
         res = {"features": cmd_features, "sfm": cmd_sfm, "tsdf": cmd_tsdf}[args.cmd](args)
         write_json(args.json, res)
     except ToolError as e:

@@ -118,6 +118,16 @@ pub fn export_euroc(request: &EurocRequest) -> Result<EurocWritten> {
             );
         }
     }
+    if let (Ok(take), Some(out_abs)) = (request.take.canonicalize(), absolute_of(out)) {
+        if out_abs.starts_with(&take) {
+            bail!(
+                "--out {} is inside the take {}: an export beside its take, not in it, keeps the \
+                 take as egogen-run made it (nothing was written)",
+                out.display(),
+                request.take.display()
+            );
+        }
+    }
     let plan = plan_export(request)?;
     let staging = PathBuf::from(format!("{}.partial", out.display()));
     if staging.exists() {
@@ -280,6 +290,21 @@ fn plan_export<'a>(request: &EurocRequest<'a>) -> Result<Plan<'a>> {
                      writes (render with the `colour` pass and `[render] colmap`, the default \
                      with colour)",
                     path.display()
+                );
+            }
+            let size = png_size(&path)?;
+            let res = CameraModel::resolution(&cam.camera.model);
+            let calibrated = (res.width_px, res.height_px);
+            if size != calibrated {
+                bail!(
+                    "{} is {}×{} pixels, but camera `{}`'s calibration (and so sensor.yaml) is \
+                     {}×{}: the take's images are not this camera's (nothing was written)",
+                    path.display(),
+                    size.0,
+                    size.1,
+                    cam.camera.name,
+                    calibrated.0,
+                    calibrated.1
                 );
             }
             images.push(path);
@@ -454,6 +479,31 @@ fn check_camera_poses(
 
 /// A PNG as 8-bit grey: grey as it is; colour by OpenCV's `RGB2GRAY` weights (0.299, 0.587,
 /// 0.114), which leave a grey image stored as RGB (a monochrome camera's) unchanged.
+/// A PNG's width and height, from its header.
+fn png_size(path: &Path) -> Result<(u32, u32)> {
+    let file = std::fs::File::open(path).with_context(|| format!("reading {}", path.display()))?;
+    let reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .with_context(|| format!("{}: not a PNG", path.display()))?;
+    let info = reader.info();
+    Ok((info.width, info.height))
+}
+
+/// `path` made absolute through its nearest existing ancestor (symbolic links resolved), if
+/// it has one.
+fn absolute_of(path: &Path) -> Option<PathBuf> {
+    let path = std::path::absolute(path).ok()?;
+    let mut rest = Vec::new();
+    let mut base = path.as_path();
+    loop {
+        if let Ok(real) = base.canonicalize() {
+            return Some(rest.iter().rev().fold(real, |p, c| p.join(c)));
+        }
+        rest.push(base.file_name()?.to_owned());
+        base = base.parent()?;
+    }
+}
+
 fn grey_png(bytes: &[u8]) -> Result<Vec<u8>> {
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::EXPAND);

@@ -395,7 +395,7 @@ fn check_output(
         && found.moved_sha256 == state.moved_sha256;
     if found.config_sha256 != state.config_sha256 && !moved {
         bail!(
-            "{} was started from a different config than {} with these options (its values or the command line's --out, --seed, --rig); resuming would mix two runs (nothing was touched)",
+            "{} was started from a different config than {} with these options (its values, or those the first run's command line set: --out, --seed, --scene, --up, --unit-m, --crowd-count, --duration-s, --activity-weights, --materials — give the same again); resuming would mix two runs (nothing was touched)",
             staging.display(),
             state.config
         );

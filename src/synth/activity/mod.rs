@@ -24,9 +24,9 @@ mod world;
 pub use refusal::{Doing, Refusal};
 pub use world::{ActivityWorld, ENTER_TOLERANCE_M};
 
-/// Relative weights of what a person does next when a walk ends (`[activities.weights]`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+/// Relative weights of what a person does next when a walk ends (`[activities.weights]`: a
+/// table by name; an array is refused, not read by position).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ActivityWeights {
     /// Walk on to a new goal (default 1).
     pub walk: f64,
@@ -49,9 +49,70 @@ impl Default for ActivityWeights {
     }
 }
 
+/// `[activities.weights]`: a table of weights by name over the defaults (`walk` 1, the others
+/// 0); unknown names and arrays are refused.
+impl<'de> Deserialize<'de> for ActivityWeights {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let named = std::collections::BTreeMap::<String, f64>::deserialize(d)?;
+        let mut w = ActivityWeights::default();
+        for (name, v) in named {
+            *w.slot(&name).ok_or_else(|| {
+                D::Error::custom(format!(
+                    "unknown activity `{name}` (expected {})",
+                    Self::NAMES.join(", ")
+                ))
+            })? = v;
+        }
+        Ok(w)
+    }
+}
+
 impl ActivityWeights {
     /// The names a weight is given by.
     pub const NAMES: [&'static str; 4] = ["walk", "stand", "sit", "pick_up"];
+
+    /// The weight of the activity named `name`, if it is one.
+    fn slot(&mut self, name: &str) -> Option<&mut f64> {
+        match name {
+            "walk" => Some(&mut self.walk),
+            "stand" => Some(&mut self.stand),
+            "sit" => Some(&mut self.sit),
+            "pick_up" => Some(&mut self.pick_up),
+            _ => None,
+        }
+    }
+
+    /// What is wrong with these weights, if anything: the weight's name (`None`: all of them)
+    /// and what was expected. Each is finite and ≥ 0, and so is their sum, which is > 0.
+    pub fn problem(&self) -> Option<(Option<&'static str>, String)> {
+        for (name, v) in
+            Self::NAMES
+                .into_iter()
+                .zip([self.walk, self.stand, self.sit, self.pick_up])
+        {
+            if !(v.is_finite() && v >= 0.0) {
+                return Some((Some(name), format!("expected a weight ≥ 0, got {v}")));
+            }
+        }
+        let total = self.walk + self.stand + self.sit + self.pick_up;
+        if !total.is_finite() {
+            return Some((
+                None,
+                format!(
+                    "expected weights whose sum is finite, got a sum of {total} (relative \
+                     weights: 1, 2, 0.5 … say as much as 1e300 does)"
+                ),
+            ));
+        }
+        if total <= 0.0 {
+            return Some((
+                None,
+                "expected at least one weight > 0 (walk = 1 walks only), got all zero".into(),
+            ));
+        }
+        None
+    }
 
     /// Weights given by name; those not named are 0 (unlike `[activities.weights]`, whose
     /// `walk` defaults to 1): what a campaign's `activity_weights` entries and
@@ -63,26 +124,25 @@ impl ActivityWeights {
             sit: 0.0,
             pick_up: 0.0,
         };
+        let mut given: Vec<&str> = Vec::new();
         for (name, v) in named {
-            let slot = match name {
-                "walk" => &mut w.walk,
-                "stand" => &mut w.stand,
-                "sit" => &mut w.sit,
-                "pick_up" => &mut w.pick_up,
-                other => {
-                    return Err(format!(
-                        "unknown activity `{other}` (expected {})",
-                        Self::NAMES.join(", ")
-                    ))
-                }
-            };
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("`{name}`: expected a weight ≥ 0, got {v}"));
+            if given.contains(&name) {
+                return Err(format!("`{name}` is given twice: give each weight once"));
             }
+            given.push(name);
+            let slot = w.slot(name).ok_or_else(|| {
+                format!(
+                    "unknown activity `{name}` (expected {})",
+                    Self::NAMES.join(", ")
+                )
+            })?;
             *slot = v;
         }
-        if w.walk + w.stand + w.sit + w.pick_up <= 0.0 {
-            return Err("expected at least one weight > 0, got all zero".into());
+        if let Some((name, what)) = w.problem() {
+            return Err(match name {
+                Some(name) => format!("`{name}`: {what}"),
+                None => what,
+            });
         }
         Ok(w)
     }
@@ -122,8 +182,10 @@ impl ActivityWeights {
 pub struct ActivitySettings {
     pub weights: ActivityWeights,
     /// How long a person stands and looks around (s, drawn uniformly; default [3, 8]).
+    #[serde(deserialize_with = "min_max")]
     pub stand_s: [f64; 2],
     /// How long a person stays seated (s, drawn uniformly; default [4, 12]).
+    #[serde(deserialize_with = "min_max")]
     pub sit_s: [f64; 2],
     /// Shortest transition from the walk into an activity (s; default 0.4): every joint
     /// blended from the last walking pose to the activity's first.
@@ -134,6 +196,18 @@ pub struct ActivitySettings {
     /// Farthest a sit clip's seated height is moved up or down to meet a seat (m; default
     /// 0.2): a seat no clip comes this close to is not sat on.
     pub seat_fit_m: f64,
+}
+
+/// `[MIN, MAX]`: exactly two numbers (a third is refused, not dropped).
+fn min_max<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    use serde::de::Error;
+    let v = Vec::<f64>::deserialize(d)?;
+    <[f64; 2]>::try_from(v.as_slice()).map_err(|_| {
+        D::Error::custom(format!(
+            "expected [MIN, MAX]: two numbers, got {} ({v:?})",
+            v.len()
+        ))
+    })
 }
 
 impl Default for ActivitySettings {
@@ -164,22 +238,15 @@ impl ActivitySettings {
     /// What is wrong with these settings, if anything: the key (under `activities.`) and
     /// what was expected.
     pub fn problem(&self) -> Option<(&'static str, String)> {
-        let w = self.weights;
-        for (key, v) in [
-            ("weights.walk", w.walk),
-            ("weights.stand", w.stand),
-            ("weights.sit", w.sit),
-            ("weights.pick_up", w.pick_up),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Some((key, format!("expected a weight ≥ 0, got {v}")));
-            }
-        }
-        if w.walk + w.stand + w.sit + w.pick_up <= 0.0 {
-            return Some((
-                "weights",
-                "expected at least one weight > 0 (walk = 1 walks only), got all zero".into(),
-            ));
+        if let Some((name, what)) = self.weights.problem() {
+            let key = match name {
+                Some("walk") => "weights.walk",
+                Some("stand") => "weights.stand",
+                Some("sit") => "weights.sit",
+                Some(_) => "weights.pick_up",
+                None => "weights",
+            };
+            return Some((key, what));
         }
         for (key, [lo, hi]) in [("stand_s", self.stand_s), ("sit_s", self.sit_s)] {
             if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi && hi <= 3600.0) {
@@ -372,10 +439,38 @@ mod tests {
             ("sit=x", "expected a number"),
             ("walk=0", "all zero"),
             ("", "all zero"),
+            ("walk=1,walk=0,sit=1", "`walk` is given twice"),
+            ("walk=1e308,sit=1e308", "sum is finite"),
         ] {
             let e = ActivityWeights::parse(text).unwrap_err();
             assert!(e.contains(says), "{text}: {e}");
         }
+    }
+
+    #[test]
+    fn activity_settings_refuse_arrays_for_tables_extra_numbers_and_weights_that_overflow() {
+        let read = |text: &str| toml::from_str::<ActivitySettings>(text);
+        let ok = read("weights = { walk = 1.0, sit = 2.0 }\nsit_s = [1.0, 2.0]").unwrap();
+        assert_eq!((ok.weights.walk, ok.weights.sit), (1.0, 2.0));
+        assert_eq!(ok.sit_s, [1.0, 2.0]);
+        // Not read by position.
+        let e = read("weights = [1.0, 2.0]").unwrap_err().to_string();
+        assert!(e.contains("expected a map"), "{e}");
+        // Not the first two of three.
+        let e = read("sit_s = [1.0, 2.0, 3.0]").unwrap_err().to_string();
+        assert!(e.contains("two numbers, got 3"), "{e}");
+        let e = read("weights = { run = 1.0 }").unwrap_err().to_string();
+        assert!(e.contains("unknown activity `run`"), "{e}");
+        // Each weight finite, their sum infinite: refused by key, not walked as the first.
+        let huge = read("weights = { walk = 1e308, sit = 1e308 }").unwrap();
+        let (key, what) = huge.problem().unwrap();
+        assert_eq!(key, "weights");
+        assert!(what.contains("sum is finite"), "{what}");
+        // As before: a JSON record of the weights reads back.
+        let w = ActivityWeights::parse("walk=2,sit=1").unwrap();
+        let back: ActivityWeights =
+            serde_json::from_str(&serde_json::to_string(&w).unwrap()).unwrap();
+        assert_eq!(back, w);
     }
 
     #[test]

@@ -57,6 +57,8 @@ pub enum Refusal {
     NoSeat,
     #[error("every seat on this floor is taken")]
     SeatsTaken,
+    #[error("the take ended before it began")]
+    TakeEnded,
     #[error("no sit clip")]
     NoSitClip,
     #[error("the activity clip {0} is not loaded")]

@@ -20,7 +20,9 @@ use crate::motion::cvae::{BodyContext, DecodedPrimitive};
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 use crate::scene::Obstacle2;
 use crate::sensing::Sensor;
-use crate::synth::activity::{Activity, ActivitySegment, ActivityWorld, Performance, Phase};
+use crate::synth::activity::{
+    Activity, ActivitySegment, ActivityWorld, Performance, Phase, Refusal, SkippedActivity,
+};
 use crate::walker::controller::{walker_rng, Controller, Sight};
 use crate::walker::reward::{Judged, Limits, RewardWeights};
 use crate::walker::state::{place_seed, SeedView, Surroundings, Walker};
@@ -382,6 +384,17 @@ impl Agent<'_> {
         }
         t.activity_segments
             .retain(|seg| seg.start_frame < seg.end_frame);
+        // An activity drawn as the take ended was never played: skipped, not done.
+        let (played, unplayed): (Vec<_>, Vec<_>) = std::mem::take(&mut t.activities)
+            .into_iter()
+            .partition(|r| r.start_frame < frames);
+        t.activities = played;
+        t.skipped_activities
+            .extend(unplayed.into_iter().map(|r| SkippedActivity {
+                activity: r.activity,
+                frame: r.start_frame.min(frames),
+                reason: Refusal::TakeEnded.to_string(),
+            }));
         for r in &mut t.activities {
             r.end_frame = r.end_frame.min(frames);
             if let Some(look) = r.look_at.as_mut() {
