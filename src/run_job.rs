@@ -76,12 +76,8 @@ pub fn prepare(
         .apply(&mut raw)
         .with_context(|| format!("applying the command line to {}", config.display()))?;
     if let Some((key, v)) = integer_beyond_toml(&raw) {
-        let from = match overrides.seed.is_some() && key.ends_with("seed") {
-            true => " (set by --seed)",
-            false => "",
-        };
         anyhow::bail!(
-            "{}: {key} = {v}{from}: expected at most 9223372036854775807 (2^63 − 1: a TOML \
+            "{}: {key} = {v}: expected at most 9223372036854775807 (2^63 − 1: a TOML \
              integer is 64-bit signed, and the effective config is written as TOML)",
             config.display()
         );

@@ -726,6 +726,41 @@ fn a_campaign_s_takes_are_checked_before_any_is_staged() {
             vec!["key `campaign.min_free_disk_gb`: 1000000000.00 GB is more than the whole file system"],
         ),
     ];
+    // A campaign whose `run` is itself, and one that is no TOML: each says so, --dry-run or not.
+    let own = a.path().join("own.toml");
+    std::fs::write(
+        &own,
+        format!(
+            "[campaign]\nrun = \"own.toml\"\nout = \"{}\"\ntakes = 1\n",
+            a.path().join("own_out").display()
+        ),
+    )
+    .unwrap();
+    let broken = a.path().join("broken.toml");
+    std::fs::write(&broken, "[campaign]\nrun = \"run.toml\"\ntakes = = 2\n").unwrap();
+    for (file, says) in [
+        (&own, ["campaign.run", "the campaign file itself"]),
+        (&broken, ["broken.toml", "TOML parse error"]),
+    ] {
+        for dry in [true, false] {
+            let mut cmd = egogen_run();
+            cmd.arg(file);
+            if dry {
+                cmd.arg("--dry-run");
+            }
+            let o = cmd.output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "{} accepted: {err}", file.display());
+            for s in says {
+                assert!(
+                    err.contains(s),
+                    "{}: expected `{s}` in: {err}",
+                    file.display()
+                );
+            }
+        }
+    }
+    assert!(!a.path().join("own_out").exists());
     // A scene read on its side is warned of, naming the take, before any is staged.
     let campaign = campaign_file(
         a.path(),

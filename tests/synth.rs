@@ -1616,6 +1616,26 @@ fn an_activity_drawn_as_the_take_ends_is_skipped_not_done() {
     assert_eq!(skipped[0]["reason"], "the take ended before it began");
 }
 
+/// A storey asked for where the scene has no floor names `floor_z_m` (and the clearance), not
+/// only that no start was found.
+#[test]
+fn a_storey_without_floor_names_floor_z_m() {
+    let config = format!(
+        "[scene]\npath = \"{}\"\nfloor_z_m = 1.0\n[motion]\nduration_s = 1.0\n\
+         [crowd]\ncount = 1\nlayout = \"random\"\nsteering = \"policy\"\n[output]\ndir = \"take\"\n",
+        common::repo_root()
+            .join("assets/scenes/apartment.glb")
+            .display()
+    );
+    let (dir, path) = common::run_dir(&config);
+    let err = match load_synth_plan(&path) {
+        Err(e) => format!("{e:#}"),
+        Ok(plan) => format!("{:#}", run_synth(&plan, false).unwrap_err()),
+    };
+    assert!(err.contains("floor_z_m"), "{err}");
+    assert!(!dir.path().join("take").exists());
+}
+
 /// One primitive between two activities: goals 0.35–0.4 m away are reached in one step, so the
 /// walk between a pick-up and a look around is a single primitive; both joins stay smooth.
 #[test]

@@ -218,9 +218,9 @@ fn a_folder_that_is_not_a_take_is_refused_by_name() {
 }
 
 /// A damaged image is refused by name, not counted as a frame with no features; an existing
-/// `--json` is refused before any work and left as it was.
+/// `--json` is refused before any work and left as it was; a bad TSDF depth by its flag.
 #[test]
-fn a_truncated_image_and_an_existing_json_are_refused() {
+fn a_truncated_image_an_existing_json_and_a_bad_depth_are_refused() {
     let Some(python) = vision_python() else {
         return;
     };
@@ -253,4 +253,15 @@ fn a_truncated_image_and_an_existing_json_are_refused() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("exists") && err.contains("mine.json"), "{err}");
     assert_eq!(std::fs::read_to_string(&json).unwrap(), "mine");
+    // A depth range that is none is refused by its flag, not by Open3D.
+    let out = Command::new(&python)
+        .arg(common::repo_root().join("tools/vision_checks.py"))
+        .args(["tsdf"])
+        .arg(&take().path)
+        .args(["--max-depth-m", "-1"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--max-depth-m -1"), "{err}");
 }

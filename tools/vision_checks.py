@@ -1067,6 +1067,10 @@ def sample_range(rng: np.ndarray, seg: np.ndarray, at: np.ndarray, spread: float
 
 
 def cmd_tsdf(args) -> dict:
+    if not (math.isfinite(args.voxel_m) and args.voxel_m > 0):
+        raise ToolError(f"--voxel-m {args.voxel_m}: expected a positive size in metres")
+    if not (math.isfinite(args.max_depth_m) and args.max_depth_m > 0):
+        raise ToolError(f"--max-depth-m {args.max_depth_m}: expected a positive depth in metres")
     try:
         import open3d as o3d
     except ImportError as e:
@@ -1077,8 +1081,6 @@ def cmd_tsdf(args) -> dict:
     from scipy.spatial import cKDTree
 
     t0 = time.time()
-    if not args.voxel_m > 0:
-        raise ToolError(f"--voxel-m {args.voxel_m}: expected a positive size in metres")
     take = open_take(args.take)
     frames = camera_frames(take, args.camera, args.max_frames)
     chans = frame_groups(frames[0])

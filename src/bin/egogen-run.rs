@@ -179,6 +179,8 @@ fn run(args: Args) -> Result<()> {
         return egogen::campaign::run(&config, &request);
     }
     if args.dry_run || args.throughput_from.is_some() || args.rehash {
+        // A file that does not parse says so, not that it is no campaign.
+        egogen::cli::config_file::load_toml::<toml::Table>(&config)?;
         anyhow::bail!(
             "--dry-run, --throughput-from and --rehash are for campaigns; {} has no [campaign] section",
             config.display()

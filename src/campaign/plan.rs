@@ -187,6 +187,16 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
     let dir = path.parent().unwrap_or(Path::new("."));
     let at = |p: &Path| lexical(&std::path::absolute(dir.join(p)).unwrap_or_else(|_| dir.join(p)));
     let run = at(&c.run);
+    if run.canonicalize().ok() == path.canonicalize().ok() {
+        return Err(bad(
+            "run",
+            format!(
+                "\"{}\" is the campaign file itself; expected the run config (egogen-run's) \
+                 every take varies",
+                c.run.display()
+            ),
+        ));
+    }
     if !run.is_file() {
         return Err(bad("run", format!("{} is not a file", run.display())));
     }

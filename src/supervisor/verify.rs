@@ -23,12 +23,30 @@ pub struct VerifyReport {
 /// file is missing from the manifest, every frame file has every channel and only finite values.
 pub fn verify(dir: &Path) -> Result<VerifyReport> {
     let path = dir.join(MANIFEST);
-    let text = std::fs::read_to_string(&path).with_context(|| {
-        format!(
-            "{}: no manifest (is this an egogen dataset?)",
-            path.display()
-        )
-    })?;
+    let text = match std::fs::read(&path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if dir.join("campaign.json").is_file() {
+                bail!(
+                    "{}: a campaign's folder, not one dataset: each take is one, verify them one \
+                     by one (egogen-run verify {})",
+                    dir.display(),
+                    dir.join("takes/<take>").display()
+                );
+            }
+            bail!(
+                "{}: no manifest (is this an egogen dataset?)",
+                path.display()
+            );
+        }
+        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
+        Ok(bytes) => String::from_utf8(bytes).map_err(|_| {
+            anyhow::anyhow!(
+                "{}: not text (expected the JSON manifest egogen-run writes; a damaged or \
+                 foreign file)",
+                path.display()
+            )
+        })?,
+    };
     let manifest: Manifest = serde_json::from_str(&text)
         .with_context(|| format!("{}: not an egogen manifest", path.display()))?;
     if manifest.egogen_manifest != MANIFEST_VERSION {

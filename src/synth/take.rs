@@ -161,8 +161,15 @@ pub(crate) fn place_agents(
                     }
                 }
                 found.with_context(|| {
+                    let storey = match plan.walkable.floor_z_m {
+                        Some(z) => format!(
+                            "; `[scene] floor_z_m = {z}` walks the floor at that height: check \
+                             the scene has a floor there (`egogen scene inspect --floor-z-m {z}`)"
+                        ),
+                        None => String::new(),
+                    };
                     format!(
-                        "{}: agent {}: no free start on the walkable floor ({} m clearance, 1 m from the other agents)",
+                        "{}: agent {}: no free start on the walkable floor ({} m clearance, `[motion] clearance_m`; 1 m from the other agents){storey}",
                         plan.config.display(),
                         a.name,
                         s.clearance_m
