@@ -72,6 +72,24 @@ impl ActivityWeights {
     /// The names a weight is given by.
     pub const NAMES: [&'static str; 4] = ["walk", "stand", "sit", "pick_up"];
 
+    /// Draws what comes after a walk: each activity in proportion to its weight.
+    pub fn draw(&self, rng: &mut rand_chacha::ChaCha8Rng) -> Activity {
+        let w = self;
+        let total = w.walk + w.stand + w.sit + w.pick_up;
+        let mut x = crate::math::random::uniform_open01(rng) * total;
+        for (a, v) in [
+            (Activity::Stand, w.stand),
+            (Activity::Sit, w.sit),
+            (Activity::PickUp, w.pick_up),
+        ] {
+            if x < v {
+                return a;
+            }
+            x -= v;
+        }
+        Activity::Walk
+    }
+
     /// The weight of the activity named `name`, if it is one.
     fn slot(&mut self, name: &str) -> Option<&mut f64> {
         match name {
@@ -280,6 +298,27 @@ impl ActivitySettings {
             ));
         }
         None
+    }
+}
+
+impl ActivityWorld {
+    /// Plays `activity` where the walk that `last` ends has ended, in its own file's way
+    /// (`stand.rs`, `pick_up.rs`): its frames, or why not. Walking on and sitting (which walks
+    /// to a seat first, `sit.rs`) are the crowd's to start.
+    pub fn play_here(
+        &mut self,
+        activity: Activity,
+        body: &crate::motion::cvae::BodyContext,
+        map: &crate::scene::WalkableMap,
+        last: &BodyParams,
+        floor_z: f64,
+        rng: &mut rand_chacha::ChaCha8Rng,
+    ) -> Result<Performance, Refusal> {
+        match activity {
+            Activity::Stand => self.stand(body, map, last, floor_z, rng),
+            Activity::PickUp => self.pick_up(body, map, last, floor_z, rng),
+            Activity::Walk | Activity::Sit => Err(Refusal::NotHere(activity.name())),
+        }
     }
 }
 

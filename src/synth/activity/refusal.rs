@@ -59,6 +59,8 @@ pub enum Refusal {
     SeatsTaken,
     #[error("the take ended before it began")]
     TakeEnded,
+    #[error("`{0}` is not played where a walk ended")]
+    NotHere(&'static str),
     #[error("no sit clip")]
     NoSitClip,
     #[error("the activity clip {0} is not loaded")]

@@ -11,7 +11,6 @@ use rand_chacha::ChaCha8Rng;
 use super::refusal::{Doing, Refusal};
 use super::{Activity, ActivityRecord, ActivitySettings, Phase};
 use crate::body::{joint, BodyParams, PoseError};
-use crate::math::random::uniform_open01;
 use crate::motion::activity_clip::{
     blend, heading, placed, ActivityClip, ActivityClipError, ClipId,
 };
@@ -73,22 +72,9 @@ impl ActivityWorld {
         })
     }
 
-    /// Draws what comes after a walk.
+    /// Draws what comes after a walk ([`super::ActivityWeights::draw`]).
     pub fn draw(&self, rng: &mut ChaCha8Rng) -> Activity {
-        let w = self.settings.weights;
-        let total = w.walk + w.stand + w.sit + w.pick_up;
-        let mut x = uniform_open01(rng) * total;
-        for (a, v) in [
-            (Activity::Stand, w.stand),
-            (Activity::Sit, w.sit),
-            (Activity::PickUp, w.pick_up),
-        ] {
-            if x < v {
-                return a;
-            }
-            x -= v;
-        }
-        Activity::Walk
+        self.settings.weights.draw(rng)
     }
 
     /// The nearest free seat whose standing point lies on `from`'s floor region, if any.

@@ -58,20 +58,6 @@ impl Agent<'_> {
         let activity = acts.draw(&mut self.activity_rng);
         let done = match activity {
             Activity::Walk => return false,
-            Activity::Stand => acts.stand(
-                &self.body,
-                &world.map,
-                &last,
-                floor_z,
-                &mut self.activity_rng,
-            ),
-            Activity::PickUp => acts.pick_up(
-                &self.body,
-                &world.map,
-                &last,
-                floor_z,
-                &mut self.activity_rng,
-            ),
             Activity::Sit => match acts.nearest_free_seat(&world.map, self.walker.view.pelvis) {
                 Some(s) => {
                     acts.taken[s] = true;
@@ -86,6 +72,14 @@ impl Agent<'_> {
                     false => Refusal::SeatsTaken,
                 }),
             },
+            here => acts.play_here(
+                here,
+                &self.body,
+                &world.map,
+                &last,
+                floor_z,
+                &mut self.activity_rng,
+            ),
         };
         match done {
             Ok(p) => {
