@@ -722,6 +722,10 @@ fn a_campaign_s_takes_are_checked_before_any_is_staged() {
             vec!["key `campaign.crowd_count`: [842, 842]: at most 32 people"],
         ),
         (
+            format!("scenes = [\"{apartment}\"]\nduration_s = [0.01, 0.04]"),
+            vec!["key `campaign.duration_s`", "0.1 s steps"],
+        ),
+        (
             format!("scenes = [\"{apartment}\"]\nmin_free_disk_gb = 1e9"),
             vec!["key `campaign.min_free_disk_gb`: 1000000000.00 GB is more than the whole file system"],
         ),

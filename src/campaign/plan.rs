@@ -308,10 +308,19 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
     }
     if let Some([lo, hi]) = c.duration_s {
         let max = crate::cli::synth_config::MAX_DURATION_S;
-        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= hi && hi <= max) {
+        // Drawn in 0.1 s steps from lo rounded to one: a take is at least 0.1 s.
+        if !(lo.is_finite()
+            && hi.is_finite()
+            && (lo * 10.0).round() >= 1.0
+            && lo <= hi
+            && hi <= max)
+        {
             return Err(bad(
                 "duration_s",
-                format!("expected [lo, hi] seconds with 0 < lo <= hi <= {max}, got [{lo}, {hi}]"),
+                format!(
+                    "expected [lo, hi] seconds with 0.1 <= lo <= hi <= {max} (drawn in 0.1 s \
+                     steps, so a take is at least 0.1 s), got [{lo}, {hi}]"
+                ),
             ));
         }
     }
