@@ -311,31 +311,8 @@ fn eval_controllers(
 /// schema over the paper's walker, the shares of floor plans and crossings.
 fn eval_settings(a: &PolicyEvalArgs) -> Result<crate::policy::EnvSettings> {
     use crate::policy::EnvSettings;
-    let PolicyEvalArgs {
-        success_m,
-        scene,
-        max_primitives,
-        crossing_share,
-        rooms_share,
-        crossing_people,
-        guide_lookahead_m,
-        guide_memory,
-        guide_centre_weight,
-        guide_unknown_cost,
-        time_by_way_round_m,
-        people_seen_ahead,
-        ..
-    } = a;
-    let (success_m, max_primitives, crossing_share, rooms_share) =
-        (*success_m, *max_primitives, *crossing_share, *rooms_share);
-    let (guide_lookahead_m, guide_memory, guide_centre_weight, guide_unknown_cost) = (
-        *guide_lookahead_m,
-        *guide_memory,
-        *guide_centre_weight,
-        *guide_unknown_cost,
-    );
-    let (time_by_way_round_m, people_seen_ahead) = (*time_by_way_round_m, *people_seen_ahead);
-    if let Some(m) = time_by_way_round_m {
+    let (rooms_share, crossing_share) = (a.rooms_share, a.crossing_share);
+    if let Some(m) = a.time_by_way_round_m {
         if !(m.is_finite() && m > 0.0) {
             bail!("--time-by-way-round-m: expected metres per primitive > 0, got {m}");
         }
@@ -343,13 +320,13 @@ fn eval_settings(a: &PolicyEvalArgs) -> Result<crate::policy::EnvSettings> {
     // The flags fill the walker's one settings schema, over the paper's walker.
     let paper = crate::walker::WalkerSettings::PAPER;
     let walker = crate::walker::WalkerSettings {
-        success_m,
-        max_primitives_per_goal: max_primitives.unwrap_or(paper.max_primitives_per_goal),
-        guide_lookahead_m,
-        guide_memory,
-        guide_centre_weight,
-        guide_unknown_cost,
-        anticipate_people: people_seen_ahead,
+        success_m: a.success_m,
+        max_primitives_per_goal: a.max_primitives.unwrap_or(paper.max_primitives_per_goal),
+        guide_lookahead_m: a.guide_lookahead_m,
+        guide_memory: a.guide_memory,
+        guide_centre_weight: a.guide_centre_weight,
+        guide_unknown_cost: a.guide_unknown_cost,
+        anticipate_people: a.people_seen_ahead,
         ..paper
     };
     if let Some((field, what)) = walker.problem_over(&paper) {
@@ -361,7 +338,7 @@ fn eval_settings(a: &PolicyEvalArgs) -> Result<crate::policy::EnvSettings> {
         bail!("--{}: {what}", flag.replace('_', "-"));
     }
     let defaults = EnvSettings::default();
-    if scene.is_some() && (rooms_share > 0.0 || crossing_share > 0.0) {
+    if a.scene.is_some() && (rooms_share > 0.0 || crossing_share > 0.0) {
         bail!("--scene walks the scene's pairs only: give no --rooms-share or --crossing-share with it");
     }
     if !(0.0..=1.0).contains(&rooms_share) {
@@ -370,7 +347,7 @@ fn eval_settings(a: &PolicyEvalArgs) -> Result<crate::policy::EnvSettings> {
     if !(0.0..=1.0).contains(&crossing_share) {
         bail!("--crossing-share: expected a share in [0, 1], got {crossing_share}");
     }
-    let people = match *crossing_people.as_slice() {
+    let people = match *a.crossing_people.as_slice() {
         [n] => (n, n),
         [lo, hi] => (lo, hi),
         _ => bail!("--crossing-people: expected N or MIN,MAX"),
@@ -392,10 +369,10 @@ fn eval_settings(a: &PolicyEvalArgs) -> Result<crate::policy::EnvSettings> {
         },
         rooms: crate::scene::generated::room_scene::RoomSettings {
             share: rooms_share,
-            max_primitives: max_primitives.unwrap_or(defaults.rooms.max_primitives),
+            max_primitives: a.max_primitives.unwrap_or(defaults.rooms.max_primitives),
             ..defaults.rooms
         },
-        time_by_way_round_m: time_by_way_round_m.unwrap_or(0.0),
+        time_by_way_round_m: a.time_by_way_round_m.unwrap_or(0.0),
         ..defaults
     };
     Ok(settings)
@@ -403,27 +380,14 @@ fn eval_settings(a: &PolicyEvalArgs) -> Result<crate::policy::EnvSettings> {
 
 /// `--scene`'s held-out start/goal pairs, if a scene is given.
 fn eval_scene(a: &PolicyEvalArgs) -> Result<Option<crate::policy::env::FixedScene>> {
-    let PolicyEvalArgs {
-        scene,
-        up,
-        unit_m,
-        pair_distance_m,
-        pair_distance_on_foot,
-        anywhere,
-        episodes,
-        seed,
-        ..
-    } = a;
-    let (pair_distance_on_foot, anywhere, episodes, seed) =
-        (*pair_distance_on_foot, *anywhere, *episodes, *seed);
-    if scene.is_none() && (up.is_some() || unit_m.is_some() || pair_distance_on_foot) {
+    if a.scene.is_none() && (a.up.is_some() || a.unit_m.is_some() || a.pair_distance_on_foot) {
         bail!("--up, --unit-m and --pair-distance-on-foot are about a --scene file's pairs; give --scene FILE");
     }
-    let frame = super::scene_jobs::scene_frame_flags(up.as_deref(), *unit_m)?;
-    let fixed = match scene {
+    let frame = super::scene_jobs::scene_frame_flags(a.up.as_deref(), a.unit_m)?;
+    let fixed = match &a.scene {
         None => None,
         Some(path) => {
-            let &[lo, hi] = pair_distance_m.as_slice() else {
+            let &[lo, hi] = a.pair_distance_m.as_slice() else {
                 bail!("--pair-distance-m: expected MIN,MAX in metres");
             };
             if !(lo >= 0.0 && hi >= lo) {
@@ -432,11 +396,11 @@ fn eval_scene(a: &PolicyEvalArgs) -> Result<Option<crate::policy::env::FixedScen
             Some(crate::policy::fixed_scene::held_out_scene(
                 path,
                 frame,
-                episodes,
+                a.episodes,
                 (lo, hi),
-                pair_distance_on_foot,
-                !anywhere,
-                seed,
+                a.pair_distance_on_foot,
+                !a.anywhere,
+                a.seed,
                 crate::scene::sdf3d::DEFAULT_VOXEL_M,
             )?)
         }

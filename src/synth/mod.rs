@@ -2,7 +2,8 @@
 //! sequence folder they are written to: crowds of agents steered through a scene, their motion
 //! finished as written (joins smoothed, head steadied: `motion::joins`, `motion::head_stabilise`)
 //! (`crowd`),
-//! what they do besides walking (`activity`: standing and looking around, sitting, picking up),
+//! what they do besides walking (`activity`: the schema, one file per activity — standing and
+//! looking around, sitting, picking up — and why one is skipped),
 //! placing a motion in it (`placement`), a take of agents from its plan (`take`), the penetration tests (`penetration`), and the body
 //! caches Blender plays (`body_cache`).
 

@@ -38,8 +38,13 @@
 //! ([`crate::motion::head_stabilise`]), `[walker] smooth_joins` and `steady_head`; the
 //! walk itself (what was chosen, where it went) is as stepped.
 //!
-//! Deterministic per seed: agent `i` draws from a generator seeded by `(seed, i)` alone (and
-//! its activities from one of their own).
+//! Deterministic per seed: agent `i` draws from a generator seeded by `(seed, i)` alone
+//! (`walker::controller::walker_rng`; its activities from one of their own).
+//!
+//! Here: the rounds and the take (`mod.rs`); one person, its controller and walker, goal to
+//! goal (`person`); what it does between walks (`acting`); where starts and goals are drawn
+//! (`goals`); what it did, finished as written (`track`). How a person steps is the walker
+//! layer's (`crate::walker`).
 
 use glam::DVec2;
 use serde::Serialize;
