@@ -25,7 +25,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
     // Things in the world.
     ("camera", &["math"]),
     ("body", &["math", "npz", "atomic_file"]),
-    ("scene", &["math", "parser_guard", "atomic_file", "memory"]),
+    (
+        "scene",
+        &["math", "parser_guard", "atomic_file", "memory", "paths"],
+    ),
     ("rig", &["math", "camera", "atomic_file"]),
     ("sensing", &["math", "scene"]),
     ("preview", &["math", "scene", "atomic_file"]),

@@ -269,7 +269,8 @@ enum SceneCommand {
     /// Load a scene, build its walkable map, print a summary and draw the map with sample
     /// sensing rays as PNG.
     Inspect {
-        /// Scene file (.glb, .gltf, .obj, .ply) or `scenario:empty_floor|single_box|moving_box`.
+        /// Scene file (.glb, .gltf, .obj, .ply), `dwelling:SEED` (a generated dwelling) or
+        /// `scenario:empty_floor|single_box|moving_box`.
         scene: String,
         /// Up axis of the file (default: y for glTF, z otherwise), as `[scene] up_axis`.
         #[arg(long, value_parser = ["y", "z"])]
@@ -300,6 +301,10 @@ enum SceneCommand {
         #[arg(long)]
         depth_images: bool,
     },
+    /// Generate furnished dwellings from the shipped CC0 furniture catalogue: `dwelling.glb`
+    /// (one named node per object) and `dwelling.json` (each object's class, room, model,
+    /// creator and licence; the rooms) in --out (--count 1) or in --out/seed_<N>/ per seed.
+    Generate(egogen::cli::scene_jobs::GenerateArgs),
 }
 
 #[derive(Subcommand, Debug)]
@@ -576,6 +581,9 @@ fn run(cli: Cli) -> Result<()> {
                 seed,
                 depth_images,
             )?;
+        }
+        Command::Scene(SceneCommand::Generate(args)) => {
+            egogen::cli::scene_jobs::scene_generate(&args)?
         }
         Command::Body(BodyCommand::Info { model }) => body_jobs::body_info(&model_path(model))?,
         Command::Body(BodyCommand::Shapes {

@@ -79,6 +79,11 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
     };
     // The first take's plan carries what every take shares: render settings and supervisor.
     let mut first = plan.takes[0].overrides(&out.join("takes"));
+    if !plan.takes[0].scene.is_file() {
+        // A scene the campaign generates and has not written yet (a dwelling, a floor plan):
+        // what is shared does not depend on the scene, so the run config's own serves.
+        (first.scene, first.up_axis, first.unit_m) = (None, None, None);
+    }
     first.workers = request.workers;
     first.backend = request.backend;
     let shared = prepare(&plan.run, &first, &run_request)
@@ -113,7 +118,7 @@ pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSu
         }
     }
     state.write(&out)?;
-    plan::write_floor_plans(&plan)?;
+    plan::write_generated_scenes(&plan)?;
     let done_before = check_finished_takes(&plan, &mut state, request.rehash)?;
     state.write(&out)?;
     let mut maker = takes::StagedTakes::new(out.clone(), plan.run.clone(), run_request);

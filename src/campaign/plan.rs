@@ -47,6 +47,12 @@ pub(crate) struct RawCampaign {
     /// --obj-dir`), written to `scenes/plan_<seed>.obj` in the campaign folder.
     #[serde(default)]
     pub floor_plans: Vec<u64>,
+    /// Generated furnished dwellings, by seed (as `egogen scene generate --seed S`: default
+    /// settings, the shipped catalogue), written to `scenes/dwelling_<seed>.glb` with its
+    /// sidecar `scenes/dwelling_<seed>.json` in the campaign folder; after `floor_plans` in
+    /// the scenes' order.
+    #[serde(default)]
+    pub dwellings: Vec<u64>,
     /// People per take, drawn uniformly in `[lo, hi]` from the take's seed (default: the run
     /// config's `crowd.count`).
     pub crowd_count: Option<[usize; 2]>,
@@ -78,6 +84,8 @@ pub struct CampaignPlan {
     pub min_free_disk_bytes: u64,
     /// Floor plans to write before the first take (seed, file).
     pub floor_plans: Vec<(u64, PathBuf)>,
+    /// Dwellings to generate before the first take (seed, GLB file).
+    pub dwellings: Vec<(u64, PathBuf)>,
     /// SHA-256 of what defines the campaign (its takes' definitions): a resume must match.
     pub fingerprint: String,
 }
@@ -262,6 +270,19 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         (None, None)
     };
     scenes.extend(floor_plans.iter().map(|(_, p)| (p.clone(), plan_frame)));
+    let dwellings: Vec<(u64, PathBuf)> = c
+        .dwellings
+        .iter()
+        .map(|&s| (s, out.join("scenes").join(format!("dwelling_{s}.glb"))))
+        .collect();
+    // Dwellings are glTF (y up, metres): said so per take where the run config reads its
+    // scenes in another frame.
+    let dwelling_frame = if base.scene.up_axis.is_some() || base.scene.unit_m.is_some() {
+        (Some(UpAxis::Y), Some(1.0))
+    } else {
+        (None, None)
+    };
+    scenes.extend(dwellings.iter().map(|(_, p)| (p.clone(), dwelling_frame)));
     if base.render.is_none() {
         return Err(bad(
             "run",
@@ -418,6 +439,7 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         takes,
         min_free_disk_bytes: (min_free_disk_gb * 1e9) as u64,
         floor_plans,
+        dwellings,
         fingerprint,
     })
 }
@@ -529,8 +551,9 @@ fn take_id(take: &TakeDef, base: &RawRun) -> Result<String> {
     ))
 }
 
-/// Writes the campaign's floor plans that are not there yet (a resumed campaign keeps them).
-pub(crate) fn write_floor_plans(plan: &CampaignPlan) -> Result<()> {
+/// Writes the campaign's floor plans and dwellings that are not there yet (a resumed campaign
+/// keeps them).
+pub(crate) fn write_generated_scenes(plan: &CampaignPlan) -> Result<()> {
     use crate::scene::generated::room_scene::{RoomScene, RoomSettings};
     let settings = RoomSettings::default();
     for (seed, file) in &plan.floor_plans {
@@ -548,6 +571,20 @@ pub(crate) fn write_floor_plans(plan: &CampaignPlan) -> Result<()> {
             .write_obj(&tmp)
             .with_context(|| format!("writing {}", tmp.display()))?;
         std::fs::rename(&tmp, file).with_context(|| format!("writing {}", file.display()))?;
+    }
+    if !plan.dwellings.is_empty() {
+        use crate::scene::dwelling::{
+            generate, shipped_catalogue_dir, Catalogue, DwellingSettings,
+        };
+        let catalogue = Catalogue::load(&shipped_catalogue_dir())?;
+        let settings = DwellingSettings::default();
+        for (seed, file) in &plan.dwellings {
+            // The GLB is written last: a dwelling whose GLB is there is whole.
+            if file.is_file() {
+                continue;
+            }
+            generate(&settings, &catalogue, *seed)?.write_glb(&catalogue, file)?;
+        }
     }
     Ok(())
 }

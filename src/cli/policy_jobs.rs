@@ -393,8 +393,10 @@ fn eval_scene(a: &PolicyEvalArgs) -> Result<Option<crate::policy::env::FixedScen
             if !(lo >= 0.0 && hi >= lo) {
                 bail!("--pair-distance-m: expected 0 ≤ MIN ≤ MAX, got {lo},{hi}");
             }
+            let path = crate::scene::dwelling::scene_source(&path.to_string_lossy(), Path::new(""))
+                .map_err(|m| anyhow::anyhow!("--scene: {m}"))?;
             Some(crate::policy::fixed_scene::held_out_scene(
-                path,
+                &path,
                 frame,
                 a.episodes,
                 (lo, hi),

@@ -39,7 +39,8 @@ pub fn resolve_run(raw: RawRun, config_path: &Path) -> Result<RunPlan, ConfigErr
         resolve_body_model(raw.body.model.clone(), base).map_err(|m| bad("body.model", m))?;
     check_betas(&raw.body.betas, &bad)?;
     let scene = match &raw.scene.path {
-        Some(p) => base.join(p),
+        Some(p) => crate::scene::dwelling::scene_source(&p.to_string_lossy(), base)
+            .map_err(|m| bad("scene.path", m))?,
         None => crate_root().join(DEFAULT_SCENE),
     };
     check_unused_for_source(&raw, &bad)?;

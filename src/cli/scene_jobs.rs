@@ -59,7 +59,8 @@ pub fn scene_inspect(
             (sc.mesh, sc.moving, PathBuf::from(scene))
         }
         None => {
-            let path = PathBuf::from(scene);
+            let path = crate::scene::dwelling::scene_source(scene, Path::new(""))
+                .map_err(|m| anyhow::anyhow!("{m}"))?;
             (load_scene(&path, frame)?, Vec::new(), path)
         }
     };
@@ -202,4 +203,207 @@ fn depth_picture(depth: &DepthImage, ranges: &[f64], frame: [u8; 3]) -> RgbImage
         }
     }
     image
+}
+
+/// `egogen scene generate`'s flags.
+#[derive(clap::Args, Debug)]
+pub struct GenerateArgs {
+    /// Seed of the (first) dwelling.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Dwellings to make, from seeds --seed, --seed + 1, …
+    #[arg(long, default_value_t = 1)]
+    pub count: u64,
+    /// Folder to write into (its dwelling files must not exist).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Generate and check only, write nothing (to measure generation).
+    #[arg(long, conflicts_with = "out")]
+    pub check_only: bool,
+    /// TOML file of generator settings (keys of docs/SCENES.md "Generated dwellings"; every
+    /// key optional).
+    #[arg(long)]
+    pub settings: Option<PathBuf>,
+    /// Furniture catalogue folder (default: the shipped CC0 one, assets/furniture).
+    #[arg(long)]
+    pub catalogue: Option<PathBuf>,
+    /// Also write one JSON line per dwelling here (seed, seconds, tries, rooms, area, pieces,
+    /// models, seats, seating pieces with and without a seat found): `tools/dwelling_survey.py`
+    /// reads it.
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+}
+
+/// Generates `args.count` dwellings, writes them (unless checking only) and prints a line per
+/// dwelling and a summary (time, rooms, area, objects, models, seats).
+pub fn scene_generate(args: &GenerateArgs) -> Result<()> {
+    use crate::scene::dwelling::{
+        dwelling_files, generate, shipped_catalogue_dir, Catalogue, DwellingSettings,
+    };
+    let out = match (&args.out, args.check_only) {
+        (Some(out), _) => Some(out.clone()),
+        (None, true) => None,
+        (None, false) => bail!("--out DIR is required (or --check-only to write nothing)"),
+    };
+    if args.count == 0 {
+        bail!("--count must be at least 1");
+    }
+    let settings: DwellingSettings = match &args.settings {
+        Some(path) => crate::cli::config_file::load_toml(path)?,
+        None => DwellingSettings::default(),
+    };
+    if let Some((key, message)) = settings.problem() {
+        let file = args
+            .settings
+            .as_ref()
+            .map_or("dwelling settings".into(), |p| p.display().to_string());
+        bail!("{file}: `{key}`: {message}");
+    }
+    let catalogue_dir = args.catalogue.clone().unwrap_or_else(shipped_catalogue_dir);
+    let catalogue = Catalogue::load(&catalogue_dir)?;
+    let dir_of = |seed: u64| {
+        out.as_ref().map(|o| {
+            if args.count == 1 {
+                o.clone()
+            } else {
+                o.join(format!("seed_{seed}"))
+            }
+        })
+    };
+    let last = args
+        .seed
+        .checked_add(args.count - 1)
+        .ok_or_else(|| anyhow::anyhow!("--seed + --count overflows"))?;
+    for seed in args.seed..=last {
+        if let Some(dir) = dir_of(seed) {
+            let (glb, json) = dwelling_files(&dir);
+            for f in [glb, json] {
+                if f.exists() {
+                    bail!("{} already exists; not overwriting it", f.display());
+                }
+            }
+        }
+    }
+    if let Some(summary) = &args.summary {
+        crate::cli::motion_jobs::refuse_existing(summary)?;
+    }
+    let bar = crate::progress::progress_bar(
+        "egogen scene generate",
+        "dwellings",
+        "dwellings",
+        args.count,
+        0,
+    );
+    let mut times = Vec::new();
+    let mut models = std::collections::BTreeSet::new();
+    let mut lines = String::new();
+    let mut failed = Vec::new();
+    for seed in args.seed..=last {
+        let t = std::time::Instant::now();
+        let d = match generate(&settings, &catalogue, seed) {
+            Ok(d) => d,
+            Err(e @ crate::scene::dwelling::DwellingError::NoDwelling { .. }) if args.count > 1 => {
+                bar.println(format!("seed {seed}: {e}"));
+                failed.push(seed);
+                bar.inc(1);
+                continue;
+            }
+            Err(e) => return Err(e.into()),
+        };
+        if let Some(dir) = dir_of(seed) {
+            d.write(&catalogue, &dir)?;
+        }
+        let seconds = t.elapsed().as_secs_f64();
+        if args.summary.is_some() {
+            lines.push_str(&dwelling_summary_line(&d, seconds).to_string());
+            lines.push('\n');
+        }
+        times.push(seconds);
+        models.extend(d.placed.iter().map(|p| p.model.clone()));
+        let area: f64 = d.plan.rooms.iter().map(|r| r.area_m2()).sum();
+        let line = format!(
+            "seed {seed}: {} rooms, {area:.1} m², {} pieces ({} models), {} seats, {} tries, {seconds:.2} s",
+            d.plan.rooms.len(),
+            d.placed.len(),
+            d.placed.iter().map(|p| &p.model).collect::<std::collections::BTreeSet<_>>().len(),
+            d.seats_per_room.iter().sum::<usize>(),
+            d.tries
+        );
+        if args.count == 1 {
+            println!("{line}");
+        } else {
+            bar.inc(1);
+            bar.println(line);
+        }
+    }
+    bar.finish_and_clear();
+    if let Some(summary) = &args.summary {
+        crate::atomic_file::write_atomically(summary, lines.as_bytes())
+            .map_err(|e| anyhow::anyhow!("writing {}: {e}", summary.display()))?;
+    }
+    if times.is_empty() {
+        bail!("no dwelling could be made (seeds {failed:?})");
+    }
+    times.sort_by(f64::total_cmp);
+    let q = |p: f64| times[((times.len() - 1) as f64 * p).round() as usize];
+    println!(
+        "{} dwellings: {:.2} s median, {:.2} s p95 each; {} catalogue models used",
+        times.len(),
+        q(0.5),
+        q(0.95),
+        models.len()
+    );
+    if let Some(o) = out {
+        println!("written to {}", o.display());
+    }
+    if !failed.is_empty() {
+        bail!(
+            "{} of {} seeds made no dwelling: {failed:?}",
+            failed.len(),
+            args.count
+        );
+    }
+    Ok(())
+}
+
+/// One dwelling's line of `--summary`.
+fn dwelling_summary_line(d: &crate::scene::dwelling::Dwelling, seconds: f64) -> serde_json::Value {
+    use crate::scene::dwelling::Role;
+    let seating = [
+        Role::Sofa,
+        Role::Armchair,
+        Role::DiningChair,
+        Role::DeskChair,
+        Role::Stool,
+        Role::Bed,
+    ];
+    let (mut seating_with, mut seating_without, mut other_with, mut built_with) = (0, 0, 0, 0);
+    for o in &d.objects {
+        let seating = o.piece.map(|k| seating.contains(&d.placed[k].role));
+        match (seating, o.seats > 0) {
+            (Some(true), true) => seating_with += 1,
+            (Some(true), false) => seating_without += 1,
+            (Some(false), true) => other_with += 1,
+            (None, true) => built_with += 1,
+            _ => {}
+        }
+    }
+    serde_json::json!({
+        "seed": d.seed,
+        "seconds": seconds,
+        "tries": d.tries,
+        "redrawn": d.redrawn,
+        "rooms": d.plan.rooms.iter().map(|r| r.kind.name()).collect::<Vec<_>>(),
+        "area_m2": d.plan.rooms.iter().map(|r| r.area_m2()).sum::<f64>(),
+        "pieces": d.placed.len(),
+        "models": d.placed.iter().map(|p| p.model.as_str()).collect::<Vec<_>>(),
+        "roles": d.placed.iter().map(|p| format!("{:?}", p.role)).collect::<Vec<_>>(),
+        "piece_rooms": d.placed.iter().map(|p| d.plan.rooms[p.room].kind.name()).collect::<Vec<_>>(),
+        "seats": d.seats_per_room.iter().sum::<usize>(),
+        "seating_with_seat": seating_with,
+        "seating_without_seat": seating_without,
+        "other_with_seat": other_with,
+        "built_with_seat": built_with,
+        "triangles": d.mesh.triangles.len(),
+    })
 }

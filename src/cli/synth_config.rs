@@ -343,7 +343,8 @@ fn synth_scene(
 ) -> Result<(Option<PathBuf>, f64), ConfigError> {
     let scene = match &raw.path {
         Some(p) => {
-            let f = base.join(p);
+            let f = crate::scene::dwelling::scene_source(&p.to_string_lossy(), base)
+                .map_err(|m| bad("scene.path", m))?;
             if !f.is_file() {
                 return Err(bad("scene.path", format!("file {} not found", f.display())));
             }

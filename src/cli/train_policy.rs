@@ -131,7 +131,12 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
     let scene = raw
         .scene
         .map(|sc| {
-            let path = existing("scene.path", &sc.path);
+            let named = sc.path.to_string_lossy();
+            let path = if named.starts_with(crate::scene::dwelling::DWELLING_SOURCE) {
+                crate::scene::dwelling::scene_source(&named, base).map_err(|m| bad("scene.path", m))
+            } else {
+                existing("scene.path", &sc.path)
+            };
             resolve_train_scene(sc, path, &bad)
         })
         .transpose()?;

@@ -154,19 +154,7 @@ impl BlenderRuntime {
     }
 }
 
-/// `$EGOGEN_CACHE`, else `$XDG_CACHE_HOME/egogen`, else `~/.cache/egogen`.
-pub fn cache_dir() -> PathBuf {
-    if let Some(p) = std::env::var_os("EGOGEN_CACHE").filter(|p| !p.is_empty()) {
-        return PathBuf::from(p);
-    }
-    if let Some(p) = std::env::var_os("XDG_CACHE_HOME").filter(|p| !p.is_empty()) {
-        return PathBuf::from(p).join("egogen");
-    }
-    let home = std::env::var_os("HOME")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from("."));
-    home.join(".cache/egogen")
-}
+pub use crate::paths::cache_dir;
 
 /// Creates the managed environment: venv in `<dir>.partial`, install, rename. The caller holds
 /// `<dir>.lock`, so a `<dir>.partial` found here is a killed install's, not a running one's.

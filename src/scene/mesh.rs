@@ -66,26 +66,7 @@ impl SceneMesh {
 
     /// Adds an axis-aligned box (closed, outward normals) as an object.
     pub fn add_box(&mut self, name: impl Into<String>, min: Vec3, max: Vec3) -> ObjectId {
-        let c = |i: usize| {
-            Vec3::new(
-                if i & 1 == 0 { min.x } else { max.x },
-                if i & 2 == 0 { min.y } else { max.y },
-                if i & 4 == 0 { min.z } else { max.z },
-            )
-        };
-        let v: Vec<Vec3> = (0..8).map(c).collect();
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        let tris: Vec<[u32; 3]> = quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect();
+        let (v, tris) = box_triangles(min, max);
         self.add_object(name, &v, &tris)
     }
 
@@ -214,4 +195,30 @@ pub struct ObjectOrientation {
     /// Its lowest and highest points (m, z up); infinite for an object without triangles.
     pub z_min: f64,
     pub z_max: f64,
+}
+
+/// An axis-aligned box's 8 corners (corner `i` takes `max` on x, y, z where bit 0, 1, 2 of `i`
+/// is set) and its 12 triangles, wound counter-clockwise seen from outside.
+pub fn box_triangles(min: Vec3, max: Vec3) -> ([Vec3; 8], [[u32; 3]; 12]) {
+    let corners = std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { min.x } else { max.x },
+            if i & 2 == 0 { min.y } else { max.y },
+            if i & 4 == 0 { min.z } else { max.z },
+        )
+    });
+    let quads: [[u32; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut tris = [[0; 3]; 12];
+    for (k, q) in quads.iter().enumerate() {
+        tris[2 * k] = [q[0], q[1], q[2]];
+        tris[2 * k + 1] = [q[0], q[2], q[3]];
+    }
+    (corners, tris)
 }

@@ -8,6 +8,7 @@
 //! Nothing here knows about bodies or policies.
 
 pub mod ceiling;
+pub mod dwelling;
 pub mod floor;
 pub mod generated;
 pub mod load;

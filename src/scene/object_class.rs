@@ -115,6 +115,12 @@ const CLASS_WORDS: &[(&str, ObjectClass)] = &[
     ("oven", ObjectClass::Appliance),
     ("fridge", ObjectClass::Appliance),
     ("refrigerator", ObjectClass::Appliance),
+    ("toilet", ObjectClass::Appliance),
+    ("washbasin", ObjectClass::Appliance),
+    ("shower", ObjectClass::Appliance),
+    ("radiator", ObjectClass::Appliance),
+    // A generated dwelling's small things (`scene::dwelling`).
+    ("thing", ObjectClass::SmallObject),
 ];
 
 impl ObjectClass {

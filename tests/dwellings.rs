@@ -1,0 +1,311 @@
+//! Generated dwellings (`egogen scene generate`): the same seed gives the same bytes; the GLB
+//! reads back as the scene the generator checked (same objects, names and triangles), every
+//! room is reached from the living room over the walkable map, no two pieces' boxes overlap,
+//! each living room has a seat; bad settings and a missing catalogue are refused by name with
+//! nothing written.
+
+mod common;
+
+use std::process::Command;
+
+use egogen::scene::dwelling::{
+    dwelling_files, dwelling_map, generate, shipped_catalogue_dir, Catalogue, DwellingSettings,
+    Role, RoomKind,
+};
+use egogen::scene::{load_scene, SceneFrame};
+
+fn catalogue() -> Catalogue {
+    Catalogue::load(&shipped_catalogue_dir()).expect("the shipped catalogue loads")
+}
+
+#[test]
+fn the_same_seed_writes_the_same_bytes_and_the_glb_reads_back_as_checked() {
+    let catalogue = catalogue();
+    let settings = DwellingSettings::default();
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    let d = generate(&settings, &catalogue, 7).unwrap();
+    d.write(&catalogue, &a).unwrap();
+    generate(&settings, &catalogue, 7)
+        .unwrap()
+        .write(&catalogue, &b)
+        .unwrap();
+    let (glb_a, json_a) = dwelling_files(&a);
+    let (glb_b, json_b) = dwelling_files(&b);
+    assert_eq!(
+        std::fs::read(&glb_a).unwrap(),
+        std::fs::read(&glb_b).unwrap()
+    );
+    assert_eq!(
+        std::fs::read(&json_a).unwrap(),
+        std::fs::read(&json_b).unwrap()
+    );
+    let other = generate(&settings, &catalogue, 8).unwrap();
+    assert_ne!(other.plan, d.plan, "another seed, another plan");
+
+    let loaded = load_scene(&glb_a, SceneFrame::default()).unwrap();
+    let names = |m: &egogen::scene::SceneMesh| -> Vec<String> {
+        m.objects.iter().map(|o| o.name.clone()).collect()
+    };
+    assert_eq!(names(&loaded), names(&d.mesh));
+    assert_eq!(loaded.triangles.len(), d.mesh.triangles.len());
+    let (lo1, hi1) = loaded.bounds().unwrap();
+    let (lo2, hi2) = d.mesh.bounds().unwrap();
+    assert!((lo1 - lo2).abs().max_element() < 1e-4 && (hi1 - hi2).abs().max_element() < 1e-4);
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json_a).unwrap()).unwrap();
+    let nodes: Vec<&str> = sidecar["objects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["node"].as_str().unwrap())
+        .collect();
+    assert_eq!(nodes, names(&loaded));
+    assert_eq!(sidecar["generator"]["seed"], 7);
+    // Every catalogue piece names its model, creator and licence.
+    for o in sidecar["objects"].as_array().unwrap() {
+        if o["model"].is_string() {
+            assert!(o["creator"].is_string() && o["licence"] == "CC0-1.0", "{o}");
+        }
+    }
+}
+
+#[test]
+fn rooms_are_reached_pieces_do_not_overlap_and_living_rooms_have_seats() {
+    let catalogue = catalogue();
+    let settings = DwellingSettings::default();
+    for seed in 100..104 {
+        let d = generate(&settings, &catalogue, seed).unwrap();
+        let p = &d.placed;
+        for i in 0..p.len() {
+            for j in i + 1..p.len() {
+                let (a, b) = (p[i].rect(), p[j].rect());
+                let apart_z = p[i].top_m() <= p[j].z_m + 1e-9 || p[j].top_m() <= p[i].z_m + 1e-9;
+                // A thing stands on its support's surface (a basin's, a seat's), inside its box.
+                let on = |x: &egogen::scene::dwelling::Placed,
+                          y: &egogen::scene::dwelling::Placed| {
+                    let (rx, ry) = (x.rect(), y.rect());
+                    x.z_m > y.z_m + 1e-9
+                        && rx.min.cmpge(ry.min - 1e-9).all()
+                        && rx.max.cmple(ry.max + 1e-9).all()
+                };
+                assert!(
+                    !a.overlaps(&b) || apart_z || on(&p[i], &p[j]) || on(&p[j], &p[i]),
+                    "seed {seed}: {} and {} overlap",
+                    p[i].model,
+                    p[j].model
+                );
+            }
+            let (lo, hi) = d.plan.interior(p[i].room);
+            let r = p[i].rect();
+            assert!(r.min.cmpge(lo - 1e-6).all() && r.max.cmple(hi + 1e-6).all());
+        }
+        let map = dwelling_map(&d.mesh).unwrap();
+        let living = d
+            .plan
+            .rooms
+            .iter()
+            .position(|r| r.kind == RoomKind::Living)
+            .unwrap();
+        assert!(d.seats_per_room[living] >= 1, "seed {seed}");
+        // One walkable component holds floor of every room.
+        let centre_component = |room: usize| {
+            let (lo, hi) = d.plan.interior(room);
+            let mut found = std::collections::BTreeSet::new();
+            for j in 0..map.ny {
+                for i in 0..map.nx {
+                    let c = map.centre(i, j);
+                    let k = j * map.nx + i;
+                    if c.cmpgt(lo).all() && c.cmplt(hi).all() && map.component[k] > 0 {
+                        found.insert(map.component[k]);
+                    }
+                }
+            }
+            found
+        };
+        let shared = (0..d.plan.rooms.len())
+            .map(centre_component)
+            .reduce(|a, b| a.intersection(&b).copied().collect())
+            .unwrap();
+        assert!(
+            !shared.is_empty(),
+            "seed {seed}: no component reaches every room"
+        );
+        assert!(
+            d.placed.iter().any(|p| p.role == Role::Bed),
+            "seed {seed}: no bed"
+        );
+    }
+}
+
+fn egogen(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_egogen"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// `egogen scene generate --out OUT FLAG VALUE` fails; its standard error.
+fn refused(out: &std::path::Path, flag: &str, value: &std::path::Path) -> String {
+    let o = egogen(&[
+        "scene",
+        "generate",
+        "--out",
+        out.to_str().unwrap(),
+        flag,
+        value.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn bad_settings_or_a_missing_catalogue_are_refused_by_name_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let settings = dir.path().join("bad.toml");
+    let out = dir.path().join("out");
+    std::fs::write(&settings, "bathroom_m2 = [-3.0, 5.0]\n").unwrap();
+    let err = refused(&out, "--settings", &settings);
+    assert!(
+        err.contains("bathroom_m2") && err.contains("bad.toml"),
+        "{err}"
+    );
+    std::fs::write(&settings, "rooms = 3\n").unwrap();
+    let err = refused(&out, "--settings", &settings);
+    assert!(err.contains("rooms"), "{err}");
+
+    let empty = dir.path().join("empty_catalogue");
+    std::fs::create_dir(&empty).unwrap();
+    let err = refused(&out, "--catalogue", &empty);
+    assert!(err.contains("catalogue.json"), "{err}");
+    std::fs::write(
+        empty.join("catalogue.json"),
+        r#"{"library":"x","licence":"CC0-1.0","source":"x","source_sha256":"0","models":[]}"#,
+    )
+    .unwrap();
+    let err = refused(&out, "--catalogue", &empty);
+    assert!(err.contains("no models"), "{err}");
+    assert!(!out.exists());
+
+    // A dwelling that is there is not overwritten.
+    let o = egogen(&[
+        "scene",
+        "generate",
+        "--seed",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let before = std::fs::read(dwelling_files(&out).0).unwrap();
+    let o = egogen(&[
+        "scene",
+        "generate",
+        "--seed",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("already exists"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(dwelling_files(&out).0).unwrap(), before);
+}
+
+/// A campaign's `dwellings` are generated once into its `scenes/` (the same bytes as `egogen
+/// scene generate`), rendered like any scene, and a run config names one as `dwelling:SEED`
+/// (generated into the cache, the same file again).
+#[test]
+fn a_campaign_and_a_run_config_walk_generated_dwellings() {
+    let a = tempfile::tempdir().unwrap();
+    common::tiny_campaign_run(a.path(), false);
+    let out = a.path().join("campaign");
+    let campaign = a.path().join("dwellings.toml");
+    std::fs::write(
+        &campaign,
+        format!(
+            "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = 1\ndwellings = [5]\ncrowd_count = [1, 1]\nmin_free_disk_gb = 0.0\n",
+            out.display()
+        ),
+    )
+    .unwrap();
+    common::succeeds(Command::new(env!("CARGO_BIN_EXE_egogen-run")).arg(&campaign));
+    let state = egogen::campaign::CampaignState::read(&out).unwrap();
+    assert!(state.takes[0].def.scene.ends_with("scenes/dwelling_5.glb"));
+    assert_eq!(
+        state.takes[0].status,
+        egogen::campaign::TakeStatus::Complete
+    );
+    let alone = a.path().join("alone");
+    let o = egogen(&[
+        "scene",
+        "generate",
+        "--seed",
+        "5",
+        "--out",
+        alone.to_str().unwrap(),
+    ]);
+    assert!(o.status.success());
+    let (glb, json) = dwelling_files(&alone);
+    assert_eq!(
+        std::fs::read(glb).unwrap(),
+        std::fs::read(out.join("scenes/dwelling_5.glb")).unwrap()
+    );
+    assert_eq!(
+        std::fs::read(json).unwrap(),
+        std::fs::read(out.join("scenes/dwelling_5.json")).unwrap()
+    );
+
+    // `dwelling:SEED` in a run config: generated into the cache (EGOGEN_CACHE) on first use.
+    let cache = a.path().join("cache");
+    let run = a.path().join("motion_only.toml");
+    std::fs::write(
+        &run,
+        format!("[body]\n[motion]\nsource = \"agents\"\nduration_s = 0.5\n[crowd]\ncount = 1\nlayout = \"random\"\n[output]\ndir = \"{}\"\n[scene]\npath = \"dwelling:5\"\n", a.path().join("take").display()),
+    )
+    .unwrap();
+    common::succeeds(
+        Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+            .arg(&run)
+            .env("EGOGEN_CACHE", &cache),
+    );
+    let cached: Vec<_> = walk(&cache)
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    assert_eq!(cached.len(), 1, "{cached:?}");
+    assert_eq!(
+        std::fs::read(&cached[0]).unwrap(),
+        std::fs::read(out.join("scenes/dwelling_5.glb")).unwrap()
+    );
+    let bad = std::fs::write(
+        &run,
+        "[body]\n[motion]\nsource = \"agents\"\n[output]\ndir = \"x\"\n[scene]\npath = \"dwelling:five\"\n",
+    );
+    bad.unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+        .arg(&run)
+        .env("EGOGEN_CACHE", &cache)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("scene.path") && err.contains("dwelling:SEED"),
+        "{err}"
+    );
+}
+
+fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
