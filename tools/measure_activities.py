@@ -10,6 +10,7 @@ join the walk beside the clips' own, frames with the pelvis over a wall, activit
     python3 tools/measure_activities.py --bin target/release/egogen \
         --scenes apartment small_house --seeds 0 1 2 3 4 5 --out out/measure_activities
     python3 tools/measure_activities.py ... --set 'blend_s = 0.8' --out out/measure_blend08
+    python3 tools/measure_activities.py ... --scenes dwelling:5000 dwelling:5001 --seeds 0  # generated dwellings
 """
 
 import argparse
@@ -52,7 +53,7 @@ def take(bin_, scene, seed, duration, weights, out, extra=""):
         config = out.with_suffix(".toml")
         config.write_text(
             CONFIG.format(
-                scene=ROOT / "assets/scenes" / f"{scene}.glb",
+                scene=scene if scene.startswith("dwelling:") else ROOT / "assets/scenes" / f"{scene}.glb",
                 duration=duration,
                 seed=seed,
                 weights=weights,
@@ -83,15 +84,20 @@ def main():
     ap.add_argument("--set", action="append", default=[],
                     help="another [activities] key, e.g. --set 'blend_s = 0.8' (the knobs' trades)")
     ap.add_argument("--out", default=str(ROOT / "out/measure_activities"))
+    ap.add_argument("--pool", metavar="NAME",
+                    help="report the scenes' takes together under NAME (e.g. 50 generated dwellings)")
     args = ap.parse_args()
     out = Path(args.out)
-    for scene in args.scenes:
+    groups = [(args.pool, args.scenes)] if args.pool else [(s, [s]) for s in args.scenes]
+    for scene, scenes in groups:
         counts, records, skipped = Counter(), [], Counter()
         contact_walk, off_floor, agents = [], 0, 0
         walk_only_contact = []
-        for seed in args.seeds:
-            s = take(args.bin, scene, seed, args.duration, WEIGHTS, out / scene / f"seed{seed}",
-                     "\n".join(args.set))
+        goals = 0
+        for scene_file, seed in ((f, seed) for f in scenes for seed in args.seeds):
+            s = take(args.bin, scene_file, seed, args.duration, WEIGHTS,
+                     out / scene_file.replace(":", "_") / f"seed{seed}", "\n".join(args.set))
+            goals += s.get("totals", {}).get("goals_reached", 0)
             for a in s["agents"]:
                 agents += 1
                 counts += frames_of(a.get("activity_segments", []), s["frames"])
@@ -100,12 +106,14 @@ def main():
                 contact_walk.append(a["contact"])
                 off_floor += a["pelvis_off_floor_frames"]
             if args.walk_only:
-                w = take(args.bin, scene, seed, args.duration, "{ walk = 1.0 }",
-                         out / scene / f"seed{seed}_walk")
+                w = take(args.bin, scene_file, seed, args.duration, "{ walk = 1.0 }",
+                         out / scene_file.replace(":", "_") / f"seed{seed}_walk")
                 walk_only_contact += [a["contact"] for a in w["agents"]]
         total = sum(counts.values())
-        print(f"## {scene}: {len(args.seeds)} seeds x {agents // len(args.seeds)} people x {args.duration:g} s"
+        takes = len(args.seeds) * len(scenes)
+        print(f"## {scene}: {takes} takes x {agents // takes} people x {args.duration:g} s"
               + (f" ({'; '.join(args.set)})" if args.set else ""))
+        print(f"goals reached: {goals} ({goals / agents:.1f} per person)")
         by_activity = defaultdict(int)
         for (a, _), n in counts.items():
             by_activity[a] += n

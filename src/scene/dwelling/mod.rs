@@ -424,11 +424,12 @@ fn build(plan: &FloorPlan) -> Vec<Built> {
                 into.y - w.at
             }
             .signum();
-            let leaf = d.to - d.from - 0.08;
+            // 5 mm clear of the jamb (a hinge's gap: no face shared with the frame).
+            let leaf = d.to - d.from - 0.09;
             let (a, b) = if at_from {
-                (d.from + 0.04, d.from + 0.08)
+                (d.from + 0.045, d.from + 0.085)
             } else {
-                (d.to - 0.08, d.to - 0.04)
+                (d.to - 0.085, d.to - 0.045)
             };
             let (c0, c1) = (w.at + across * t / 2.0, w.at + across * (t / 2.0 + leaf));
             out.push(Built {
