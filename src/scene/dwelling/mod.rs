@@ -33,6 +33,9 @@ use crate::scene::{ObjectClass, SceneMesh, SeatSettings, WalkableMap, WalkableSe
 /// is the same file.
 pub const DWELLING_VERSION: u32 = 1;
 
+/// How far short of the far face of the wall it meets a wall's end stops (m).
+const WALL_END_INSET_M: f64 = 0.005;
+
 /// Plans and furnishings drawn before a seed is given up.
 const MAX_TRIES: usize = 40;
 
@@ -383,7 +386,11 @@ fn build(plan: &FloorPlan) -> Vec<Built> {
         openings.sort_by(|a, b| a.0.total_cmp(&b.0));
         let piece = |a: f64, b: f64, z0: f64, z1: f64| span_block(w, t, a, b, z0, z1);
         let mut blocks = Vec::new();
-        let mut cursor = w.from - t / 2.0;
+        // Each end runs into the wall it meets, 5 mm short of that wall's far face: an end
+        // flush with it would share its face, and coplanar faces render black (each one's
+        // shadow rays hit the other).
+        let reach = t / 2.0 - WALL_END_INSET_M;
+        let mut cursor = w.from - reach;
         for &(a, b, bottom, top) in &openings {
             blocks.push(piece(cursor, a, 0.0, h));
             if bottom > 0.0 {
@@ -392,7 +399,7 @@ fn build(plan: &FloorPlan) -> Vec<Built> {
             blocks.push(piece(a, b, top, h));
             cursor = b;
         }
-        blocks.push(piece(cursor, w.to + t / 2.0, 0.0, h));
+        blocks.push(piece(cursor, w.to + reach, 0.0, h));
         out.push(Built {
             name: format!("wall_{}", k + 1),
             look: glb::Look::Wall,
@@ -409,8 +416,9 @@ fn build(plan: &FloorPlan) -> Vec<Built> {
             look: glb::Look::Frame,
             room: None,
             blocks: vec![
-                span_block(w, t, d.from, d.from + 0.04, 0.0, top),
-                span_block(w, t, d.to - 0.04, d.to, 0.0, top),
+                // Jambs up to the head, the head across them: no two boxes share a face.
+                span_block(w, t, d.from, d.from + 0.04, 0.0, top - 0.04),
+                span_block(w, t, d.to - 0.04, d.to, 0.0, top - 0.04),
                 span_block(w, t, d.from, d.to, top - 0.04, top),
             ],
         });
@@ -457,11 +465,19 @@ fn build(plan: &FloorPlan) -> Vec<Built> {
             look: glb::Look::Frame,
             room: Some(win.room),
             blocks: vec![
-                span_block(w, t, a, a + 0.05, s, top),
-                span_block(w, t, b - 0.05, b, s, top),
+                // Posts and the mullion between the sill and head bars (no shared faces).
+                span_block(w, t, a, a + 0.05, s + 0.05, top - 0.05),
+                span_block(w, t, b - 0.05, b, s + 0.05, top - 0.05),
                 span_block(w, t, a, b, s, s + 0.05),
                 span_block(w, t, a, b, top - 0.05, top),
-                span_block(w, 0.05, (a + b) / 2.0 - 0.02, (a + b) / 2.0 + 0.02, s, top),
+                span_block(
+                    w,
+                    0.05,
+                    (a + b) / 2.0 - 0.02,
+                    (a + b) / 2.0 + 0.02,
+                    s + 0.05,
+                    top - 0.05,
+                ),
             ],
         });
     }
