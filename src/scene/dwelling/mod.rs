@@ -680,9 +680,16 @@ pub fn scene_source(source: &str, base: &Path) -> Result<PathBuf, String> {
     ));
     let glb = dir.join(format!("dwelling_{seed}.glb"));
     if !glb.is_file() {
+        // Written under a name of this process's own and renamed into place (the sidecar
+        // first): takes resolving the same dwelling at once each write whole files, the same
+        // bytes, and the last rename wins.
+        let own = dir.join(format!(".dwelling_{seed}.{}.glb", std::process::id()));
         generate(&DwellingSettings::default(), &catalogue, seed)
-            .and_then(|d| d.write_glb(&catalogue, &glb))
+            .and_then(|d| d.write_glb(&catalogue, &own))
             .map_err(|e| format!("`{source}`: {e}"))?;
+        std::fs::rename(own.with_extension("json"), glb.with_extension("json"))
+            .and_then(|()| std::fs::rename(&own, &glb))
+            .map_err(|e| format!("`{source}`: moving it into {}: {e}", dir.display()))?;
     }
     Ok(glb)
 }
