@@ -289,7 +289,7 @@ pub fn estimate(
         // furnished dwelling in about 0.03 s and 2.5 MB (median 2.4, p95 3.0 MB) (docs/SCENES.md "Generated dwellings").
         text.push(format!(
             "scenes: {plans} floor plan(s) and {dwellings} dwelling(s) to generate first, about {:.0} s and {:.2} GB",
-            0.05 * dwellings as f64 + 0.01 * plans as f64,
+            0.03 * dwellings as f64 + 0.01 * plans as f64,
             (2.5e6 * dwellings as f64 + 0.2e6 * plans as f64) / 1e9
         ));
     }
