@@ -205,8 +205,7 @@ pub(super) fn write(d: &Dwelling, catalogue: &Catalogue) -> Result<Vec<u8>, Dwel
     for look in Look::ALL {
         out.materials.push(look.material());
     }
-    let built = super::build(&d.plan);
-    for b in &built {
+    for b in &d.built {
         let (mut pos, mut nrm, mut idx) = (Vec::new(), Vec::new(), Vec::<u32>::new());
         for (lo, hi) in &b.blocks {
             box_faces(*lo, *hi, &mut pos, &mut nrm, &mut idx);

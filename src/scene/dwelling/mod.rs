@@ -218,6 +218,8 @@ pub struct Dwelling {
     pub tries: usize,
     /// Why each earlier draw was drawn again.
     pub redrawn: Vec<String>,
+    /// The architecture the plan was built into (what the GLB writes beside the pieces).
+    built: Vec<Built>,
 }
 
 /// One object of a dwelling, as the sidecar lists it.
@@ -296,6 +298,7 @@ pub fn generate(
                     seats_per_room,
                     tries,
                     redrawn,
+                    built,
                 });
             }
             Err(why) => redrawn.push(why),
