@@ -9,7 +9,8 @@
 //! lost, or was written for another place: a campaign folder moved or copied); the frames of every finished take are listed in `index.parquet` (`index`) and shown
 //! on `contact_sheet.png` (`sheet`). Before any work every take is checked as staging would
 //! check it (scene, rig, crowd) and the budget (takes, frames, disk, core-hours from measured
-//! throughput) is stated (`budget`).
+//! throughput) is stated (`budget`). The scenes a campaign generates (`floor_plans`,
+//! `dwellings`) are written once into its `scenes/` before the first take.
 
 pub mod budget;
 pub mod feed;

@@ -1,6 +1,7 @@
 //! `egogen scene inspect`: a scene loaded, its walkable map built and summarised, and a PNG of
 //! the map with sampled starts, goals and their sensing rays (and, when asked, each start's
-//! egocentric depth image beside it).
+//! egocentric depth image beside it). `egogen scene generate`: dwellings generated, written and
+//! summarised (`--summary`, read by `tools/dwelling_survey.py`).
 
 use std::path::{Path, PathBuf};
 

@@ -1,7 +1,8 @@
 //! Scenes: triangle meshes in metres (z up) with named objects, the floor, the walkable map
 //! (occupancy + 2D signed distance), start/goal sampling, what each object is (`object_class`:
 //! the one vocabulary seats, materials and generated scenes read), the places to sit (`seats`);
-//! procedural scenario scenes.
+//! procedural scenario scenes (`generated`) and furnished dwellings generated from a seed and
+//! the furniture catalogue (`dwelling`, the `dwelling:SEED` scene source).
 //!
 //! Also owns body–scene collision terms (`penetration`: 3D SDF or the 2D box test). Hands
 //! off to `sensing` (rays over the walkable map).
