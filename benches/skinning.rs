@@ -1,7 +1,7 @@
 //! Skinning throughput on the shipped model: full single-frame skinning (shape + pose + LBS),
 //! a batch of 64 bodies, a sequence frame with the shape cached, and the joints-only fast path;
 //! on a model with official SMPL-X sizes, single frames and 64-frame sequences with and without
-//! pose correctives.
+//! pose correctives; the finger motion of a take per frame (`motion::hands`).
 //! `tools/bench_skinning.py` runs this and `smplx` in one go and writes the ratio table.
 
 #[path = "../tests/common/mod.rs"]
@@ -50,6 +50,22 @@ fn bench(c: &mut Criterion) {
             (cal.world_from_cpf(&f.skeleton), f)
         })
     });
+    // The fingers of 400 frames (10 s) moved with what the hands do (`motion::hands`), per
+    // frame beside the joints, markers and eye frame a take poses again after it.
+    {
+        use egogen::motion::hands::{move_fingers, HandAxes, HandDoing, HandStyle};
+        use rand_core::SeedableRng;
+        let axes = HandAxes::from_rest(&shaped.rest_joints);
+        let style = HandStyle::draw(&mut rand_chacha::ChaCha8Rng::seed_from_u64(0));
+        let doing: Vec<[HandDoing; 2]> = (0..400)
+            .map(|f| [[HandDoing::Walking, HandDoing::Holding][f / 200]; 2])
+            .collect();
+        let mut frames = vec![one.clone(); 400];
+        g.throughput(Throughput::Elements(400));
+        g.bench_function("finger_motion_per_frame", |b| {
+            b.iter(|| move_fingers(&mut frames, &doing, &axes, &style, 40.0))
+        });
+    }
     g.throughput(Throughput::Elements(64));
     g.bench_with_input(BenchmarkId::new("full_batch", 64), &batch, |b, batch| {
         b.iter(|| model.pose_batch(batch).unwrap())

@@ -1414,6 +1414,7 @@ fn walk_both(steering: egogen::walker::ControllerSpec) {
             // changes what is written, not which primitives are walked.
             smooth_joins: false,
             steady_head: false,
+            finger_motion: false,
             // The proposals as they are, as `policy eval` takes them.
             penetration_redraws: 0,
             ..Default::default()

@@ -156,6 +156,31 @@ fn the_crowd_loop_is_chosen_by_anticipate_people() {
     assert_ne!(bytes(&a), bytes(&b));
 }
 
+/// `[walker] finger_motion = false` leaves the hands at the body model's rest (hand pose all
+/// zeros) and changes nothing else: the fingers are a pass over the motion as walked.
+#[test]
+fn finger_motion_changes_the_hands_alone() {
+    let still = crossing("still", 2) + "[walker]\nfinger_motion = false\n";
+    let (dir, path) = common::run_dir(&crossing("moving", 2));
+    std::fs::write(dir.path().join("still.toml"), still).unwrap();
+    run_synth(&load_synth_plan(&path).unwrap(), false).unwrap();
+    run_synth(
+        &load_synth_plan(&dir.path().join("still.toml")).unwrap(),
+        false,
+    )
+    .unwrap();
+    for agent in ["left", "right"] {
+        let moving = read(&dir.path().join("moving"), agent);
+        let still = read(&dir.path().join("still"), agent);
+        assert_eq!(moving.trans, still.trans);
+        for (m, s) in moving.poses.iter().zip(&still.poses) {
+            assert_eq!(m[..75], s[..75]);
+            assert!(s[75..].iter().all(|&x| x == 0.0));
+            assert!(m[75..].iter().any(|&x| x != 0.0));
+        }
+    }
+}
+
 /// numpy reads the npz as an AMASS SMPL-X file: the keys, shapes and dtypes the `smplx`
 /// package's AMASS loaders read. The Python is the managed Blender environment's (bpy depends
 /// on numpy), provisioned on first use as a first render would.
@@ -1435,10 +1460,12 @@ fn a_y_up_scene_in_centimetres_is_walked_in_metres() {
 /// People do more than walk in the apartment: they stand and look around, sit down on its
 /// seats and stand up again, pick things up — each transition joining the walk without a jump
 /// (joints turning no faster than in the clips themselves), seated on the seat's surface with
-/// the feet where the clip has them, nobody stepping through a wall, the same seed making the
-/// same take.
+/// the feet where the clip has them, each person's fingers moving with what its hands do,
+/// nobody stepping through a wall, the same seed making the same take.
 #[test]
 fn people_sit_stand_and_pick_up_in_the_apartment() {
+    use egogen::motion::hands::stats::HandStats;
+    use egogen::motion::hands::{joint_flexion, HandAxes};
     let config = wandering_in_the_apartment(3, 40.0, 0, "")
         + "[activities]\nweights = { walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 1.0 }\n";
     let (dir, path) = common::run_dir(&config);
@@ -1446,6 +1473,7 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
     let out = run_synth(&plan, false).unwrap();
     let summary = summary(&dir.path().join("take"));
     let mut done = std::collections::BTreeMap::<String, usize>::new();
+    let mut hands = Vec::new();
     for a in summary["agents"].as_array().unwrap() {
         let name = a["name"].as_str().unwrap();
         assert_eq!(a["pelvis_off_floor_frames"], 0, "{name}");
@@ -1544,7 +1572,51 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
             let feet = j[7].z.min(j[8].z).min(j[10].z).min(j[11].z);
             assert!(feet < 0.15, "{name} seated at frame {f}: feet at {feet}");
         }
+        // The fingers move with what the hands do, inside their ranges, without a jump: a
+        // pick-up closes one hand round what it takes, a seated hand lies nearly flat.
+        let axes = HandAxes::from_rest(&shaped.rest_joints);
+        let frames: Vec<_> = (0..m.len()).map(|i| m.frame(i)).collect();
+        let stats = HandStats::of(&frames, &axes, 40.0);
+        assert_eq!(stats.frames_with_hand_pose, m.len(), "{name}");
+        assert_eq!(stats.frames_outside_range, 0, "{name}: {stats:?}");
+        assert!(
+            stats.flexion_acceleration_rad_s2.max < 100.0,
+            "{name}: {stats:?}"
+        );
+        let closed = |f: usize| -> [f64; 2] {
+            let flex = joint_flexion(&frames[f], &axes);
+            [0, 1].map(|h| flex[h].iter().flatten().sum::<f64>().to_degrees())
+        };
+        let walking = closed(0);
+        for s in &segments {
+            let (a, b) = (
+                s["start_frame"].as_u64().unwrap() as usize,
+                s["end_frame"].as_u64().unwrap() as usize,
+            );
+            match (
+                s["activity"].as_str().unwrap(),
+                s["phase"].as_str().unwrap(),
+            ) {
+                ("pick_up", "hold") => {
+                    let [l, r] = closed(b - 5);
+                    assert!((l - r).abs() > 150.0, "{name} holding at {b}: {l}° / {r}°");
+                }
+                ("sit", "hold") if b - a > 40 => {
+                    let seated = closed((a + b) / 2);
+                    assert!(
+                        seated[0] < walking[0] - 60.0,
+                        "{name}: {seated:?} {walking:?}"
+                    );
+                }
+                _ => {}
+            }
+        }
+        hands.push(frames[0].pose[75..].to_vec());
     }
+    assert!(
+        hands.windows(2).all(|w| w[0] != w[1]),
+        "each person's own hands"
+    );
     for kind in ["stand", "sit", "pick_up"] {
         assert!(done.get(kind).is_some_and(|&n| n >= 1), "{kind}: {done:?}");
     }

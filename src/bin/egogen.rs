@@ -257,6 +257,21 @@ enum MotionCommand {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// How the fingers move in AMASS-style SMPL-X files and takes (each joint's flexion against
+    /// its range, speed, acceleration, how closed the hands are; docs/HANDS.md): JSON lines,
+    /// then a table on standard error.
+    HandStats {
+        /// `.npz` motion files and take folders (their agents/*/motion.npz).
+        #[arg(required = true)]
+        sources: Vec<PathBuf>,
+        /// SMPL-X `.npz` model whose rest hand the flexion is measured from (default: the
+        /// shipped CC0 neutral model).
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// JSON file with every file's statistics (must not exist).
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// What the latent space can reach: latents chosen per primitive by a cross-entropy-method
     /// optimiser for a target pelvis speed and heading; sustained straight walks at each
     /// `--speeds` value and turns by each `--turns` angle, with foot contact and plausibility
@@ -342,6 +357,21 @@ enum BodyCommand {
         /// Image height in pixels.
         #[arg(long, default_value_t = 480)]
         height_px: usize,
+    },
+    /// Render a PNG sheet of the right hand doing each thing a hand does (walking, standing,
+    /// seated, reaching, holding) for a few people, beside the body model's rest hand.
+    Hands {
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// How many people's hands (each drawn from its own seed).
+        #[arg(long, default_value_t = 3)]
+        people: usize,
+        /// Output PNG path (must not exist).
+        #[arg(long)]
+        out: PathBuf,
+        /// Size of each picture in pixels.
+        #[arg(long, default_value_t = 200)]
+        cell_px: usize,
     },
     /// Render a PNG row of rest-pose bodies, one per value of one beta (front views).
     Shapes {
@@ -514,6 +544,20 @@ fn run(cli: Cli) -> Result<()> {
             }
             motion_stats(&config, json.as_deref())?;
         }
+        Command::Motion(MotionCommand::HandStats {
+            sources,
+            model,
+            json,
+        }) => {
+            if let Some(j) = &json {
+                refuse_existing(j)?;
+            }
+            egogen::cli::hand_stats_jobs::motion_hand_stats(
+                &sources,
+                &model_path(model),
+                json.as_deref(),
+            )?;
+        }
         Command::Motion(MotionCommand::HeadStats {
             sources,
             model,
@@ -604,6 +648,12 @@ fn run(cli: Cli) -> Result<()> {
             out,
             height_px,
         }) => body_jobs::body_preview(&model_path(model), &betas, &out, height_px)?,
+        Command::Body(BodyCommand::Hands {
+            model,
+            people,
+            out,
+            cell_px,
+        }) => body_jobs::body_hands(&model_path(model), people, &out, cell_px)?,
     }
     Ok(())
 }

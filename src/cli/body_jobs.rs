@@ -1,5 +1,6 @@
-//! `egogen body info|shapes|pose|preview`: a body model summarised, drawn along one beta,
-//! posed to OBJ (from a motion file or the scripted walk) and previewed at rest and walking.
+//! `egogen body info|shapes|pose|preview|hands`: a body model summarised, drawn along one beta,
+//! posed to OBJ (from a motion file or the scripted walk), previewed at rest and walking, and
+//! its hands drawn doing each thing a hand does (`motion::hands`).
 
 use std::path::Path;
 
@@ -9,6 +10,7 @@ use super::motion_jobs::refuse_existing;
 use crate::body::export::write_obj;
 use crate::body::{BodyModel, BodyParams, CpfCalibration};
 use crate::math::Vec3;
+use crate::motion::hands::{HandAxes, HandDoing, HandStyle};
 use crate::motion::scripted::WalkCycle;
 use crate::motion::MotionSequence;
 use crate::preview::MeshView;
@@ -151,4 +153,85 @@ pub fn body_preview(model: &Path, betas: &[f64], out: &Path, height_px: usize) -
 fn walk_params(m: &BodyModel, betas: &[f64], t_s: f64) -> Result<BodyParams> {
     let shaped = m.shape(betas, &[])?;
     Ok(WalkCycle::default().params_at(t_s, betas, shaped.rest_joints[0], shaped.rest_sole_y()))
+}
+
+/// What `egogen body hands` draws, row by row.
+const HAND_ROWS: [HandDoing; 5] = [
+    HandDoing::Walking,
+    HandDoing::Standing,
+    HandDoing::Seated,
+    HandDoing::Reaching,
+    HandDoing::Holding,
+];
+
+/// The right hand of `people` people (their hands drawn from seeds 0, 1, …) doing each thing a
+/// hand does (rows: walking, standing, seated, reaching, holding; the drift at its first
+/// frame), seen from the thumb's side and from the palm, to `out` (PNG); the rest hand of the
+/// body model in the first column.
+pub fn body_hands(model: &Path, people: usize, out: &Path, cell_px: usize) -> Result<()> {
+    use rand_core::SeedableRng;
+    refuse_existing(out)?;
+    let m = BodyModel::load(model)?;
+    let shaped = m.shape(&[], &[])?;
+    let axes = HandAxes::from_rest(&shaped.rest_joints);
+    let (wrist, hand_joints) = (21, 40..55);
+    // The right hand's vertices: those beyond the wrist along −x.
+    let cut = shaped.rest_joints[wrist].x + 0.01;
+    let keep: Vec<Option<u32>> = {
+        let mut next = 0u32;
+        shaped
+            .v_shaped
+            .iter()
+            .map(|v| {
+                (v.x < cut).then(|| {
+                    next += 1;
+                    next - 1
+                })
+            })
+            .collect()
+    };
+    let faces: Vec<[u32; 3]> = m
+        .faces
+        .iter()
+        .filter_map(|f| {
+            let [a, b, c] = f.map(|i| keep[i as usize]);
+            Some([a?, b?, c?])
+        })
+        .collect();
+    let views = [
+        MeshView::looking_from(Vec3::new(-0.3, 0.35, 1.0), Vec3::Y),
+        MeshView::looking_from(Vec3::new(-0.2, -1.0, 0.25), Vec3::Z),
+    ];
+    let draw = |frame: &BodyParams| -> Result<Vec<crate::preview::RgbImage>> {
+        let body = shaped.pose(&frame.pose, Vec3::ZERO)?;
+        let verts: Vec<Vec3> = body
+            .vertices
+            .iter()
+            .zip(&keep)
+            .filter_map(|(v, k)| k.map(|_| *v))
+            .collect();
+        Ok(views
+            .iter()
+            .map(|view| view.render(&[(&verts, &faces, SKIN)], cell_px, cell_px))
+            .collect())
+    };
+    let _ = hand_joints;
+    let mut cells = Vec::new();
+    let columns = 2 * (people + 1);
+    for doing in HAND_ROWS {
+        cells.extend(draw(&BodyParams::default())?);
+        for person in 0..people {
+            let style = HandStyle::draw(&mut rand_chacha::ChaCha8Rng::seed_from_u64(person as u64));
+            let mut frame = [BodyParams::default()];
+            crate::motion::hands::move_fingers(&mut frame, &[[doing; 2]], &axes, &style, 40.0);
+            cells.extend(draw(&frame[0])?);
+        }
+    }
+    let sheet = crate::preview::RgbImage::contact_sheet(&cells, cell_px, columns, PANEL_GAP);
+    sheet.write_png(out)?;
+    println!(
+        "wrote {} (rows: walking, standing, seated, reaching, holding; columns: the rest hand, then {people} people; each from the thumb's side and the palm)",
+        out.display()
+    );
+    Ok(())
 }

@@ -9,6 +9,7 @@ pub mod config;
 pub mod config_file;
 pub mod euroc_jobs;
 pub mod eval_jobs;
+pub mod hand_stats_jobs;
 pub mod head_stats_jobs;
 pub mod import_jobs;
 pub mod inspect_jobs;

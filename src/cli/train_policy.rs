@@ -323,30 +323,11 @@ fn resolve_stage(
     if let Some((field, what)) = e.walker.problem_over(&crate::walker::WalkerSettings::PAPER) {
         return Err(bad(&key(&format!("env.walker.{field}")), what));
     }
-    let paper = crate::walker::WalkerSettings::PAPER;
-    for (field, given, as_trained) in [
-        (
-            "penetration_redraws",
-            e.walker.penetration_redraws != paper.penetration_redraws,
-            "an episode takes its controller's best proposal as it is",
-        ),
-        (
-            "smooth_joins",
-            e.walker.smooth_joins,
-            "an episode writes no motion: the joins are smoothed where a take writes it",
-        ),
-        (
-            "steady_head",
-            e.walker.steady_head,
-            "an episode writes no motion: the head is steadied where a take writes it",
-        ),
-    ] {
-        if given {
-            return Err(bad(
-                &key(&format!("env.walker.{field}")),
-                format!("a take's setting, not training's ({as_trained}): leave it out"),
-            ));
-        }
+    if let Some((field, as_trained)) = e.walker.take_only_given() {
+        return Err(bad(
+            &key(&format!("env.walker.{field}")),
+            format!("a take's setting, not training's ({as_trained}): leave it out"),
+        ));
     }
     if e.fixed_max_primitives == Some(0) {
         return Err(bad(

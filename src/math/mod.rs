@@ -1,6 +1,6 @@
 //! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps, seeded
-//! random draws, colour conversions, small least-squares solves, quantiles of a sample and
-//! angles wrapped to (−π, π].
+//! random draws, colour conversions, small least-squares solves, quantiles of a sample,
+//! zero-phase Gaussian smoothing of a series and angles wrapped to (−π, π].
 //!
 //! Conventions used across egogen:
 //! - Lengths are metres, angles radians, time seconds unless a name says otherwise.
@@ -36,6 +36,35 @@ pub fn quantile(sorted: &[Real], p: Real) -> Real {
     } else {
         sorted[((sorted.len() - 1) as Real * p.clamp(0.0, 1.0)).round() as usize]
     }
+}
+
+/// Zero-phase Gaussian smoothing with σ `sigma` samples; the kernel renormalised at the ends.
+pub(crate) fn gaussian_smooth(v: &[Real], sigma: Real) -> Vec<Real> {
+    if sigma <= 0.0 {
+        return v.to_vec();
+    }
+    let half = (3.0 * sigma).ceil() as usize;
+    let kernel: Vec<Real> = (0..=2 * half)
+        .map(|i| {
+            let d = i as Real - half as Real;
+            (-0.5 * d * d / (sigma * sigma)).exp()
+        })
+        .collect();
+    (0..v.len())
+        .map(|f| {
+            let (mut sum, mut w) = (0.0, 0.0);
+            for (i, k) in kernel.iter().enumerate() {
+                let Some(g) = (f + i).checked_sub(half) else {
+                    continue;
+                };
+                if let Some(x) = v.get(g) {
+                    sum += k * x;
+                    w += k;
+                }
+            }
+            sum / w
+        })
+        .collect()
 }
 
 /// Quantiles of a sample, with its mean and size.
@@ -140,5 +169,20 @@ mod tests {
         );
         assert!((q.mean - 50.0).abs() < 1e-12);
         assert!(Quantiles::of(std::iter::empty()).p50.is_nan());
+    }
+
+    #[test]
+    fn gaussian_smoothing_keeps_a_line_and_damps_a_fast_sine() {
+        use std::f64::consts::PI;
+        let line: Vec<Real> = (0..100).map(|i| 0.1 * i as Real).collect();
+        let s = gaussian_smooth(&line, 5.0);
+        for i in 20..80 {
+            assert!((s[i] - line[i]).abs() < 1e-9);
+        }
+        let sine: Vec<Real> = (0..400)
+            .map(|i| (2.0 * PI * i as Real / 44.0).sin())
+            .collect();
+        let s = gaussian_smooth(&sine, 18.0);
+        assert!(s[100..300].iter().all(|x| x.abs() < 0.1));
     }
 }

@@ -12,6 +12,7 @@ use crate::body::{joint, BodyParams, CpfCalibration, PoseError, ShapedBody, PARE
 use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Mat3, Real};
 
 use super::head_motion::unwrapped_yaw;
+use crate::math::gaussian_smooth;
 
 /// How the head is held.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,35 +33,6 @@ impl Default for HeadStabiliser {
             max_correction_rad: 0.5,
         }
     }
-}
-
-/// Zero-phase Gaussian smoothing with σ `sigma` samples; the kernel renormalised at the ends.
-fn gaussian_smooth(v: &[Real], sigma: Real) -> Vec<Real> {
-    if sigma <= 0.0 {
-        return v.to_vec();
-    }
-    let half = (3.0 * sigma).ceil() as usize;
-    let kernel: Vec<Real> = (0..=2 * half)
-        .map(|i| {
-            let d = i as Real - half as Real;
-            (-0.5 * d * d / (sigma * sigma)).exp()
-        })
-        .collect();
-    (0..v.len())
-        .map(|f| {
-            let (mut sum, mut w) = (0.0, 0.0);
-            for (i, k) in kernel.iter().enumerate() {
-                let Some(g) = (f + i).checked_sub(half) else {
-                    continue;
-                };
-                if let Some(x) = v.get(g) {
-                    sum += k * x;
-                    w += k;
-                }
-            }
-            sum / w
-        })
-        .collect()
 }
 
 fn rotation_about_z(angle: Real) -> Mat3 {
@@ -120,20 +92,6 @@ mod tests {
     use crate::body::BodyModel;
     use crate::math::{Affine3, Vec3};
     use std::f64::consts::PI;
-
-    #[test]
-    fn gaussian_smoothing_keeps_a_line_and_damps_a_fast_sine() {
-        let line: Vec<Real> = (0..100).map(|i| 0.1 * i as Real).collect();
-        let s = gaussian_smooth(&line, 5.0);
-        for i in 20..80 {
-            assert!((s[i] - line[i]).abs() < 1e-9);
-        }
-        let sine: Vec<Real> = (0..400)
-            .map(|i| (2.0 * PI * i as Real / 44.0).sin())
-            .collect();
-        let s = gaussian_smooth(&sine, 18.0);
-        assert!(s[100..300].iter().all(|x| x.abs() < 0.1));
-    }
 
     #[test]
     fn a_swaying_torso_keeps_a_steady_head_and_the_rest_of_the_body() {

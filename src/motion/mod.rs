@@ -1,8 +1,9 @@
 //! Motion: SMPL-X pose sequences in time, the files they travel in, and real mocap turned
 //! into them (BVH reading, retargeting, resampling, mirroring); activity clips and the pose
 //! tools that play them (`activity_clip`); how a head moves, measured the same way for takes
-//! and real references (`head_motion`), the joins of primitives smoothed (`joins`) and the head
-//! held steady while the torso sways (`head_stabilise`).
+//! and real references (`head_motion`), the joins of primitives smoothed (`joins`), the head
+//! held steady while the torso sways (`head_stabilise`) and the fingers moved with what the
+//! hands do (`hands`).
 //!
 //! Owns frame rates and sequences of body parameters; the body itself (skinning) is `body`'s.
 
@@ -11,6 +12,7 @@ pub mod amass;
 pub mod bvh;
 pub mod cvae;
 pub mod deepmimic;
+pub mod hands;
 pub mod head_motion;
 pub mod head_stabilise;
 pub mod joins;

@@ -55,6 +55,11 @@ pub struct WalkerSettings {
     /// gaze follows its smoothed course (`motion::head_stabilise`); `false`: the head as
     /// decoded, swaying with the body.
     pub steady_head: bool,
+    /// `true` (default): the fingers move with what the hands do — relaxed while walking and
+    /// standing, resting when seated, opening and closing round what is picked up — each
+    /// person's hands its own (`motion::hands`; docs/HANDS.md); `false`: the body model's
+    /// rest hand on every frame (hand pose all zeros).
+    pub finger_motion: bool,
 }
 
 impl Default for WalkerSettings {
@@ -71,6 +76,7 @@ impl Default for WalkerSettings {
             scene_every_frame: true,
             smooth_joins: true,
             steady_head: true,
+            finger_motion: true,
         }
     }
 }
@@ -92,7 +98,40 @@ impl WalkerSettings {
         scene_every_frame: false,
         smooth_joins: false,
         steady_head: false,
+        finger_motion: false,
     };
+
+    /// A key a training stage's `[stages.env.walker]` set that only a take reads, if any, and
+    /// why training has no use for it: an episode takes its controller's best proposal as it
+    /// is and writes no motion.
+    pub fn take_only_given(&self) -> Option<(&'static str, &'static str)> {
+        let paper = WalkerSettings::PAPER;
+        [
+            (
+                "penetration_redraws",
+                self.penetration_redraws != paper.penetration_redraws,
+                "an episode takes its controller's best proposal as it is",
+            ),
+            (
+                "smooth_joins",
+                self.smooth_joins,
+                "an episode writes no motion: the joins are smoothed where a take writes it",
+            ),
+            (
+                "steady_head",
+                self.steady_head,
+                "an episode writes no motion: the head is steadied where a take writes it",
+            ),
+            (
+                "finger_motion",
+                self.finger_motion,
+                "an episode writes no motion: the fingers move where a take writes it",
+            ),
+        ]
+        .into_iter()
+        .find(|(_, given, _)| *given)
+        .map(|(key, _, why)| (key, why))
+    }
 
     /// The keys given in a table (`given`, e.g. a config's `[stages.env.walker]`) over
     /// `preset`: what a key left out is. Unknown keys are refused, naming them.

@@ -17,6 +17,7 @@ use crate::motion::cvae::contact::contact_score;
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::tensor_body::RigGeometry;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive};
+use crate::motion::hands::HandStyle;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 use crate::scene::Obstacle2;
 use crate::sensing::Sensor;
@@ -49,6 +50,8 @@ pub(super) struct Agent<'m> {
     /// Draws what comes after each walk: a stream of its own, so walking draws as without
     /// activities.
     pub(super) activity_rng: ChaCha8Rng,
+    /// This person's hands (`motion::hands`), drawn from a stream of their own.
+    pub(super) hands: HandStyle,
 }
 
 impl<'m> Agent<'m> {
@@ -196,6 +199,7 @@ impl<'m> Agent<'m> {
             acting: None,
             approaching: None,
             activity_rng: walker_rng(settings.seed ^ 0xAC71_7117, index),
+            hands: HandStyle::draw(&mut walker_rng(settings.seed ^ 0x4A4D_5EED, index)),
         })
     }
 
@@ -411,7 +415,7 @@ impl Agent<'_> {
             t.markers.push(t.markers[t.markers.len() - 1].clone());
             t.pelvis_xy.push(t.pelvis_xy[t.pelvis_xy.len() - 1]);
         }
-        finish_motion(t, &self.body, settings)?;
+        finish_motion(t, &self.body, settings, &self.hands)?;
         // How each activity moved: foot contact over its frames, the fastest joint turn where
         // it joins the walk.
         let floor_z = self.walker.view.seed.floor_z;

@@ -1,5 +1,6 @@
 //! What a person of a crowd did: every frame of its body, its goals and how it ended
-//! ([`AgentTrack`]), and its motion finished as written (joins smoothed, head steadied).
+//! ([`AgentTrack`]), and its motion finished as written (joins smoothed, head steadied, the
+//! fingers moved with what the hands do).
 
 use glam::DVec2;
 use serde::Serialize;
@@ -9,11 +10,12 @@ use crate::body::{joint, BodyParams};
 use crate::math::{Affine3, Vec3};
 use crate::motion::cvae::infer::DecodeError;
 use crate::motion::cvae::BodyContext;
+use crate::motion::hands::{move_fingers, HandAxes, HandDoing, HandStyle};
 use crate::motion::head_stabilise::{stabilise_head, HeadStabiliser};
 use crate::motion::joins::{smooth_joins, JoinWindow};
 use crate::motion::primitive::PRIMITIVE_RATE_HZ;
 use crate::scene::WalkableMap;
-use crate::synth::activity::{ActivityRecord, ActivitySegment, SkippedActivity};
+use crate::synth::activity::{Activity, ActivityRecord, ActivitySegment, Phase, SkippedActivity};
 use crate::walker::{ControllerSpec, WalkerSettings};
 
 /// Why an agent stopped before the take ended.
@@ -188,14 +190,17 @@ pub(super) fn foot_points(
 }
 
 /// The motion as written: each join's velocity jump spread ([`WalkerSettings::smooth_joins`]),
-/// the head steadied against the torso's sway ([`WalkerSettings::steady_head`]); the eye
-/// frame, markers and pelvis positions posed again from the frames where either changed them.
+/// the head steadied against the torso's sway ([`WalkerSettings::steady_head`]), the fingers
+/// moved with what the hands do ([`WalkerSettings::finger_motion`], `hands`: the person's);
+/// the eye frame, markers and pelvis positions posed again from the frames where any changed
+/// them.
 pub(super) fn finish_motion(
     t: &mut AgentTrack,
     body: &BodyContext,
     settings: &WalkerSettings,
+    hands: &HandStyle,
 ) -> Result<(), CrowdError> {
-    if !settings.smooth_joins && !settings.steady_head {
+    if !settings.smooth_joins && !settings.steady_head && !settings.finger_motion {
         return Ok(());
     }
     if settings.smooth_joins {
@@ -215,6 +220,11 @@ pub(super) fn finish_motion(
         )
         .map_err(DecodeError::from)?;
     }
+    if settings.finger_motion {
+        let doing = hands_doing(t, body).map_err(DecodeError::from)?;
+        let axes = HandAxes::from_rest(&body.shaped.rest_joints);
+        move_fingers(&mut t.frames, &doing, &axes, hands, PRIMITIVE_RATE_HZ);
+    }
     for (f, frame) in t.frames.iter().enumerate() {
         let mf = body
             .shaped
@@ -226,6 +236,64 @@ pub(super) fn finish_motion(
         t.pelvis_xy[f] = DVec2::new(q.x, q.y);
     }
     Ok(())
+}
+
+/// How long before the lowest reach of a pick-up the reaching hand opens (s).
+const REACH_OPENS_S: f64 = 0.8;
+
+/// What each hand does on each frame of `t` (`[left, right]`): walking outside activities,
+/// standing in a stand and after the walk ends, seated from sitting down to standing up, and
+/// in a pick-up the hand that reaches lower opening before its lowest reach and holding from
+/// there to the end of the pick-up (the other standing).
+fn hands_doing(
+    t: &AgentTrack,
+    body: &BodyContext,
+) -> Result<Vec<[HandDoing; 2]>, crate::body::PoseError> {
+    let n = t.frames.len();
+    let still_from = t.stopped_at_frame.unwrap_or(n);
+    let mut doing: Vec<[HandDoing; 2]> = (0..n)
+        .map(|f| {
+            let one = match ActivitySegment::at(&t.activity_segments, f) {
+                (Activity::Sit, Some(Phase::Transition | Phase::Hold)) => HandDoing::Seated,
+                (Activity::Stand | Activity::PickUp, Some(_)) => HandDoing::Standing,
+                _ if f >= still_from => HandDoing::Standing,
+                _ => HandDoing::Walking,
+            };
+            [one; 2]
+        })
+        .collect();
+    for seg in &t.activity_segments {
+        if seg.activity != Activity::PickUp || seg.phase != Phase::Hold {
+            continue;
+        }
+        // The lowest wrist over the pick-up: its hand reaches and takes hold.
+        let mut lowest = (f64::INFINITY, seg.start_frame, 0);
+        for f in seg.start_frame..seg.end_frame.min(n) {
+            let s = body
+                .shaped
+                .skeleton(&t.frames[f].pose, t.frames[f].transl)?;
+            for (hand, wrist) in [joint::LEFT_WRIST, joint::RIGHT_WRIST]
+                .into_iter()
+                .enumerate()
+            {
+                if s.joints[wrist].z < lowest.0 {
+                    lowest = (s.joints[wrist].z, f, hand);
+                }
+            }
+        }
+        let (_, at, hand) = lowest;
+        let opens = at.saturating_sub((REACH_OPENS_S * PRIMITIVE_RATE_HZ) as usize);
+        for (f, d) in doing.iter_mut().enumerate().take(seg.end_frame.min(n)) {
+            if f >= opens.max(seg.start_frame) {
+                d[hand] = if f < at {
+                    HandDoing::Reaching
+                } else {
+                    HandDoing::Holding
+                };
+            }
+        }
+    }
+    Ok(doing)
 }
 
 /// Frames either side over which [`AgentTrack::follow_floor`] takes the largest lift a frame
