@@ -7,7 +7,7 @@
 mod common;
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// What each module may use (its own submodules aside). Lower layers first.
 const ALLOWED: &[(&str, &[&str])] = &[
@@ -392,9 +392,25 @@ fn modules_use_only_the_layers_below_them() {
 /// and the test fails when one is gone (so the list only shrinks). None today.
 const KNOWN_CYCLES: &[(&str, &str)] = &[];
 
-/// An import cycle among the files of one folder, if any: through `super::x` and through
-/// `crate::<folder>::x` (the folder named from the crate's root, `folder` as
-/// `render` or `motion::cvae`), in every form.
+/// The `.rs` files under `dir`, at any depth.
+fn rust_files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            files.extend(rust_files_under(&p));
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            files.push(p);
+        }
+    }
+    files
+}
+
+/// An import cycle among the modules of one folder, if any: its files and its subfolders
+/// with a `mod.rs` (a module split into files is one node: what its `mod.rs` reaches through
+/// `super::x`, and what any of its files reaches through `crate::<folder>::x`); through
+/// `super::x` and through `crate::<folder>::x` (the folder named from the crate's root,
+/// `folder` as `render` or `motion::cvae`), in every form.
 fn import_cycle(dir: &Path, folder: &str) -> Option<Vec<String>> {
     let own = format!("crate::{folder}");
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
@@ -403,17 +419,30 @@ fn import_cycle(dir: &Path, folder: &str) -> Option<Vec<String>> {
         let Some(name) = p.file_stem().map(|s| s.to_string_lossy().into_owned()) else {
             continue;
         };
-        if p.extension().is_none_or(|x| x != "rs") || name == "mod" {
+        // (file, what `super::` means in it is this folder's sibling)
+        let texts: Vec<(String, bool)> = if p.is_dir() && p.join("mod.rs").is_file() {
+            rust_files_under(&p)
+                .into_iter()
+                .map(|f| {
+                    let at_top = f == p.join("mod.rs");
+                    (std::fs::read_to_string(f).unwrap(), at_top)
+                })
+                .collect()
+        } else if p.extension().is_some_and(|x| x == "rs") && name != "mod" {
+            vec![(std::fs::read_to_string(&p).unwrap(), true)]
+        } else {
             continue;
-        }
-        let text = std::fs::read_to_string(&p).unwrap();
+        };
         let uses = graph.entry(name.clone()).or_default();
-        for (_, used) in references(&text, "super")
-            .into_iter()
-            .chain(references(&text, &own))
-        {
-            if used != name {
-                uses.insert(used);
+        for (text, supers_are_siblings) in &texts {
+            let supers = match supers_are_siblings {
+                true => references(text, "super"),
+                false => Vec::new(),
+            };
+            for (_, used) in supers.into_iter().chain(references(text, &own)) {
+                if used != name {
+                    uses.insert(used);
+                }
             }
         }
     }
@@ -506,6 +535,23 @@ fn a_planted_cycle_is_found() {
     );
     std::fs::write(dir.path().join("c.rs"), "// super::a::g();\n").unwrap();
     assert_eq!(import_cycle(dir.path(), "x"), None);
+}
+
+/// A module split into a folder is one node of its parent folder's graph: a cycle through a
+/// file of it is found, and its own files' `super::` (the module itself) is no edge.
+#[test]
+fn a_planted_cycle_through_a_module_folder_is_found() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("b")).unwrap();
+    std::fs::write(dir.path().join("a.rs"), "use super::b::run;\n").unwrap();
+    std::fs::write(dir.path().join("b/mod.rs"), "mod part;\n").unwrap();
+    std::fs::write(dir.path().join("b/part.rs"), "use super::helper;\n").unwrap();
+    assert_eq!(import_cycle(dir.path(), "x"), None);
+    std::fs::write(dir.path().join("b/part.rs"), "use crate::x::a::f;\n").unwrap();
+    assert_eq!(
+        import_cycle(dir.path(), "x").unwrap(),
+        ["a", "b", "a"].map(String::from)
+    );
 }
 
 /// A planted cycle through the folder's own name from the crate's root
