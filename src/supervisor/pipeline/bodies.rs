@@ -1,0 +1,336 @@
+//! The take's people staged (steps 2 and 3 of the main job): the bodies rendered with their
+//! tracks and who wears the rig, the take's `sequence/` folder, the Aria streams' output, and
+//! Blender's body inputs (vertex caches, textures, skin maps).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+
+use super::RunMotion;
+use crate::body::BodyModel;
+use crate::export::aria::{AriaExport, AriaWearer};
+use crate::export::gaze::GazeGoal;
+use crate::plan::{RenderPlan, RunPlan};
+use crate::render::protocol::ShardSkinRegion;
+use crate::render::shard_plan::AGENT_ID_BASE;
+use crate::render::skin_tone::{SkinRegion, SKIN_DETAIL_FILE, SKIN_REGIONS};
+use crate::render::ShardBody;
+use crate::scene::walkable_map;
+use crate::supervisor::staged::RenderedAgent;
+use crate::synth::body_cache::{body_cache_at, playback_keys, rendered_sample_indices};
+use crate::synth::crowd_dir::write_crowd_dir;
+use crate::synth::placement::place_motion;
+use crate::synth::{pose_meshes, track_body, write_sequence_dir};
+use crate::vertex_cache::{write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy};
+
+/// The bodies the run renders, each with its track, and which of them wear the rig.
+pub(super) fn rendered_agents(
+    plan: &RunPlan,
+    scene: &crate::scene::SceneMesh,
+    motion: &RunMotion,
+    model: &BodyModel,
+) -> Result<(Vec<RenderedAgent>, Vec<usize>)> {
+    match motion {
+        RunMotion::Placed(m) => {
+            let map = walkable_map(scene, &plan.scene, plan.walkable)?;
+            if let Some(warning) = crate::scene::scene_frame_warning(scene, &map, &plan.scene) {
+                eprintln!("{warning}");
+            }
+            let (placed, _) = place_motion(model, m, &map, plan.scene_seed)
+                .with_context(|| format!("placing the motion in {}", plan.scene.display()))?;
+            let track = track_body(model, &placed)?;
+            let agent = RenderedAgent {
+                name: "agent_0".into(),
+                id: AGENT_ID_BASE,
+                motion: placed,
+                track,
+                activities: None,
+            };
+            Ok((vec![agent], vec![0]))
+        }
+        RunMotion::Agents { take, wearers, .. } => {
+            // A take with activities labels every frame of every agent.
+            let with_activities = take
+                .agents
+                .iter()
+                .any(|a| !a.activity_segments.is_empty() || !a.skipped_activities.is_empty());
+            let agents = take
+                .agents
+                .iter()
+                .enumerate()
+                .map(|(k, a)| {
+                    let motion = a.motion_sequence(take.frame_rate_hz);
+                    let track = track_body(model, &motion)?;
+                    Ok(RenderedAgent {
+                        name: a.name.clone(),
+                        id: AGENT_ID_BASE + k as u32,
+                        motion,
+                        track,
+                        activities: with_activities.then(|| a.activity_segments.clone()),
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Ok((agents, wearers.to_vec()))
+        }
+    }
+}
+
+/// Writes the dataset's `sequence/` folder: the take's folder, or a placed motion's.
+pub(super) fn write_sequence(
+    sequence: &Path,
+    motion: &RunMotion,
+    agents: &[RenderedAgent],
+    model: &BodyModel,
+    plan: &RunPlan,
+) -> Result<()> {
+    match motion {
+        RunMotion::Placed(_) => {
+            let a = &agents[0];
+            let meshes = pose_meshes(model, &a.motion, plan.mesh_every_n_frames)?;
+            write_sequence_dir(sequence, model, &a.motion, &a.track, &meshes).map(drop)
+        }
+        RunMotion::Agents {
+            world, take, about, ..
+        } => write_crowd_dir(sequence, world, model, take, None, about.clone()).map(drop),
+    }
+}
+
+/// The Aria streams' output of the take (`[render.aria]`), written when it is finished: each
+/// wearer with its goals and headset offset, and the scene's rays when the gaze is asked.
+/// Settings the rig cannot serve fail here, before anything renders.
+pub(super) fn aria_export(
+    render: &RenderPlan,
+    wearers: &[usize],
+    motion: &RunMotion,
+    scene: &crate::scene::SceneMesh,
+) -> Result<Option<AriaExport>> {
+    let Some(settings) = &render.aria else {
+        return Ok(None);
+    };
+    if let Some(p) = settings.problem(&render.rig) {
+        bail!("aria streams: {p}");
+    }
+    let wearers = wearers
+        .iter()
+        .map(|&w| AriaWearer {
+            agent: w,
+            goals: match motion {
+                RunMotion::Agents { take, .. } => take.agents[w]
+                    .goals
+                    .iter()
+                    .map(|g| GazeGoal {
+                        xy: g.goal,
+                        until_frame: g.end_frame,
+                    })
+                    .collect(),
+                RunMotion::Placed(_) => Vec::new(),
+            },
+            looks: match motion {
+                RunMotion::Agents { take, .. } => take.agents[w]
+                    .activities
+                    .iter()
+                    .filter_map(|a| a.look_at)
+                    .collect(),
+                RunMotion::Placed(_) => Vec::new(),
+            },
+            cpf_from_headset: render
+                .headset_wear
+                .map_or(crate::math::Affine3::IDENTITY, |h| {
+                    h.draw(w).cpf_from_headset()
+                }),
+        })
+        .collect();
+    Ok(Some(AriaExport {
+        settings: settings.clone(),
+        wearers,
+        rays: settings
+            .streams
+            .gaze
+            .then(|| crate::scene::mesh_distance::SceneRays::new(scene))
+            .flatten(),
+    }))
+}
+
+/// Writes what Blender reads of each body into `work` (a PC2 cache of the times the renders
+/// of `frames` read, faces, rest vertices), rewritten identically on every (re)start; returns
+/// the bodies as shard specs name them and the files written (scratch, removed when the
+/// dataset is finished).
+pub(super) fn write_body_inputs(
+    work: &Path,
+    agents: &[RenderedAgent],
+    model: &BodyModel,
+    render: &RenderPlan,
+    frames: &[u32],
+) -> Result<(Vec<ShardBody>, Vec<PathBuf>)> {
+    std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
+    let masks = skin_region_masks(model)?;
+    let skin_detail = match masks.is_empty() {
+        true => None,
+        false => skin_detail_map(model)?,
+    };
+    let mut scratch = Vec::new();
+    // One UV file for every agent: they share the model's layout.
+    let uvs_npy = match (&model.uvs, masks.is_empty()) {
+        (Some(uvs), false) => {
+            let path = work.join("body_uvs.npy");
+            write_corner_uvs_npy(&path, &uvs.per_corner())?;
+            scratch.push(path.clone());
+            Some(std::fs::canonicalize(&path)?)
+        }
+        _ => None,
+    };
+    let mut bodies = Vec::with_capacity(agents.len());
+    for (k, a) in agents.iter().enumerate() {
+        let pc2 = work.join(format!("agent_{k}.pc2"));
+        let faces = work.join(format!("agent_{k}_faces.npy"));
+        let vertices = work.join(format!("agent_{k}_vertices.npy"));
+        // Only what is rendered: the shutter around each rendered frame, the neighbours the
+        // flow reads (with the colour pass off, no shutter).
+        let shutter = if render.passes.needs_colour_render() {
+            render.shutter_frames
+        } else {
+            0.0
+        };
+        let indices = rendered_sample_indices(
+            frames,
+            render.every_n_frames as u32,
+            shutter,
+            render.cache_samples_per_frame,
+            a.motion.len(),
+        );
+        let cache = body_cache_at(
+            model,
+            &a.motion,
+            render.cache_samples_per_frame,
+            Some(&indices),
+        )?;
+        cache.write(&pc2)?;
+        write_faces_npy(&faces, &model.faces)?;
+        write_rest_vertices_npy(&vertices, &cache)?;
+        drop(cache);
+        let skin = render.skin.draw(k);
+        let skin_regions: Vec<ShardSkinRegion> = masks
+            .iter()
+            .map(|(region, mask)| ShardSkinRegion {
+                paint: region.paint(&skin),
+                mask: mask.clone(),
+            })
+            .collect();
+        bodies.push(ShardBody {
+            name: a.name.clone(),
+            pass_index: a.id,
+            faces_npy: std::fs::canonicalize(&faces)?,
+            vertices_npy: std::fs::canonicalize(&vertices)?,
+            pc2: std::fs::canonicalize(&pc2)?,
+            samples_per_frame: render.cache_samples_per_frame,
+            cache_keys: playback_keys(&indices, render.cache_samples_per_frame),
+            motion_steps: crate::render::shard_plan::deform_motion_steps(
+                render.shutter_frames,
+                render.cache_samples_per_frame,
+            ),
+            skin,
+            uvs_npy: uvs_npy.clone(),
+            skin_regions,
+            skin_detail: skin_detail.clone(),
+        });
+        scratch.extend([pc2, faces, vertices]);
+    }
+    Ok((bodies, scratch))
+}
+
+/// `textures/` beside a body model with UVs (what is painted there is in its UV layout).
+fn body_textures(model: &BodyModel) -> Option<PathBuf> {
+    match (&model.uvs, model.source.parent()) {
+        (Some(_), Some(parent)) => Some(parent.join("textures")),
+        _ => None,
+    }
+}
+
+/// The skin detail map beside a body model that has region masks, when it is there
+/// ([`SKIN_DETAIL_FILE`]).
+pub(super) fn skin_detail_map(model: &BodyModel) -> Result<Option<PathBuf>> {
+    let Some(path) = body_textures(model).map(|d| d.join(SKIN_DETAIL_FILE)) else {
+        return Ok(None);
+    };
+    if !path.is_file() {
+        return Ok(None);
+    }
+    Ok(Some(std::fs::canonicalize(&path).with_context(|| {
+        format!("resolving {}", path.display())
+    })?))
+}
+
+/// The skin regions' masks for `model`: in `textures/` beside the model file, painted in the
+/// UV layout the model carries (ours: MakeHuman's). None when the model has no UVs or no masks
+/// lie beside it (the official SMPL-X files: another layout); all of them, or an error naming
+/// the first one missing.
+pub(super) fn skin_region_masks(model: &BodyModel) -> Result<Vec<(SkinRegion, PathBuf)>> {
+    let Some(dir) = body_textures(model) else {
+        return Ok(Vec::new());
+    };
+    let masks: Vec<(SkinRegion, PathBuf)> = SKIN_REGIONS
+        .iter()
+        .map(|r| (*r, dir.join(r.mask_file)))
+        .collect();
+    let present = masks.iter().filter(|(_, p)| p.is_file()).count();
+    if present == 0 {
+        return Ok(Vec::new());
+    }
+    if let Some((region, path)) = masks.iter().find(|(_, p)| !p.is_file()) {
+        bail!(
+            "{}: the skin region mask for `{}` is missing ({present} of {} masks are there); \
+             masks beside a body model are used all together",
+            path.display(),
+            region.name,
+            masks.len()
+        );
+    }
+    masks
+        .into_iter()
+        .map(|(r, p)| {
+            let p =
+                std::fs::canonicalize(&p).with_context(|| format!("resolving {}", p.display()))?;
+            Ok((r, p))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn skin_masks_are_used_all_together_beside_a_model_with_uvs() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let shipped = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+        let masks = skin_region_masks(&shipped).unwrap();
+        assert_eq!(masks.len(), SKIN_REGIONS.len());
+        assert!(masks.iter().all(|(_, p)| p.is_absolute() && p.is_file()));
+        // The detail map ships beside them.
+        let detail = skin_detail_map(&shipped).unwrap().unwrap();
+        assert!(detail.is_absolute() && detail.ends_with(SKIN_DETAIL_FILE));
+
+        // The same model in a directory without masks: no regions.
+        let dir = tempfile::tempdir().unwrap();
+        let mut elsewhere = shipped.clone();
+        elsewhere.source = dir.path().join("SMPLX_NEUTRAL.npz");
+        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
+        assert_eq!(skin_detail_map(&elsewhere).unwrap(), None);
+        // Some of them: an error naming the first one missing.
+        let textures = dir.path().join("textures");
+        std::fs::create_dir(&textures).unwrap();
+        std::fs::copy(
+            root.join("assets/body/textures/mpfb_lips.jpg"),
+            textures.join("mpfb_lips.jpg"),
+        )
+        .unwrap();
+        let msg = format!("{:#}", skin_region_masks(&elsewhere).unwrap_err());
+        assert!(
+            msg.contains("mpfb_eyelids.jpg") && msg.contains("`eyelids`") && msg.contains("1 of 7"),
+            "{msg}"
+        );
+        // A model without UVs never looks for them.
+        elsewhere.uvs = None;
+        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
+    }
+}
