@@ -1,10 +1,12 @@
 //! The body: SMPL-X skeleton, model files, skinning and the eye anchor (CPF).
 //!
 //! Owns the 55-joint skeleton, the rest mesh with its blend shapes and skin weights, LBS
-//! exactly as `smplx` computes it, and `world_from_cpf`. Timing and sequences belong to `motion`.
+//! exactly as `smplx` computes it, `world_from_cpf` and the hands' landmarks in MPS order
+//! (`hand_landmarks`). Timing and sequences belong to `motion`.
 
 pub mod cpf;
 pub mod export;
+pub mod hand_landmarks;
 pub mod lbs;
 pub mod markers;
 pub mod model;

@@ -22,7 +22,8 @@ pub struct AriaExportArgs {
     /// The new folder to write (must not exist): `OUT/<wearer>/…` and `OUT/manifest.json`.
     #[arg(long)]
     pub out: PathBuf,
-    /// Streams to write (comma-separated): trajectory, calibration, imu, gaze.
+    /// Streams to write (comma-separated): trajectory, calibration, imu, gaze, hands (the
+    /// hands: each wearer's 21 landmarks per hand from its body, docs/HANDS.md).
     #[arg(
         long,
         value_delimiter = ',',
@@ -45,6 +46,10 @@ pub struct AriaExportArgs {
     /// Eye gaze samples per second.
     #[arg(long, default_value_t = 30.0)]
     pub gaze_rate_hz: f64,
+    /// SMPL-X `.npz` model the take's bodies are posed with for the hands (default: the
+    /// shipped CC0 neutral model).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
 }
 
 /// Runs `egogen aria export`.
@@ -114,13 +119,26 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
     } else {
         None
     };
+    let hands = if settings.streams.hands {
+        let model_path = args
+            .model
+            .clone()
+            .unwrap_or_else(|| crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz"));
+        let model = crate::body::BodyModel::load(&model_path)?;
+        wearers
+            .iter()
+            .map(|&w| wearer_hands(&model, &everyone[w], &args.take).map(Some))
+            .collect::<Result<Vec<_>>>()?
+    } else {
+        vec![None; wearers.len()]
+    };
     std::fs::create_dir_all(&staging).with_context(|| format!("creating {}", staging.display()))?;
     let exported = export_into(
         &staging,
         &args.out,
         &rig,
         &settings,
-        &wearers,
+        (&wearers, &hands),
         &everyone,
         rays.as_ref(),
     );
@@ -129,6 +147,24 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
         let _ = std::fs::remove_dir_all(&staging);
     }
     exported
+}
+
+/// Both hands' landmarks on every frame of `head`'s body (its `motion.npz`), in the world.
+fn wearer_hands(
+    model: &crate::body::BodyModel,
+    head: &TakeHead,
+    take: &Path,
+) -> Result<Vec<[crate::body::hand_landmarks::HandLandmarks; 2]>> {
+    let Some(path) = &head.motion else {
+        bail!(
+            "--streams hands: take {} has no motion.npz beside {}'s head trajectory; the hands need its body",
+            take.display(),
+            head.name
+        );
+    };
+    let motion = crate::motion::MotionSequence::read(path)?;
+    crate::body::hand_landmarks::hand_track(model, &motion.betas, &motion.poses, &motion.trans)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
 /// Whether `dir` holds only what an export of wearers `names` writes.
@@ -149,7 +185,10 @@ fn export_into(
     out: &Path,
     rig: &crate::rig::Rig,
     settings: &AriaSettings,
-    wearers: &[usize],
+    (wearers, hands): (
+        &[usize],
+        &[Option<Vec<[crate::body::hand_landmarks::HandLandmarks; 2]>>],
+    ),
     everyone: &[TakeHead],
     rays: Option<&crate::scene::mesh_distance::SceneRays>,
 ) -> Result<()> {
@@ -169,6 +208,7 @@ fn export_into(
             goals: head.goals.clone(),
             looks: head.looks.clone(),
             rays,
+            hands: hands[index].as_deref(),
         };
         let written = write_wearer_streams(&staging.join(&head.name), rig, settings, &wearer)?;
         let bytes: u64 = written.files.iter().map(|f| f.1).sum();

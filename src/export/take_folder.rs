@@ -26,6 +26,8 @@ pub struct TakeHead {
     pub cpf_from_headset: Affine3,
     pub goals: Vec<GazeGoal>,
     pub looks: Vec<LookAt>,
+    /// Its body's motion file (`motion.npz` beside its head trajectory), when there is one.
+    pub motion: Option<PathBuf>,
 }
 
 /// One camera a dataset rendered, from its `cameras/<camera>/annotations.json`.
@@ -186,6 +188,10 @@ pub fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<usize>, Ve
                 .find(|w| &w.0 == name)
                 .map_or(Affine3::IDENTITY, |w| w.1);
             let target = targets.iter().find(|g| &g.0 == name);
+            let motion = path
+                .parent()
+                .map(|d| d.join("motion.npz"))
+                .filter(|m| m.is_file());
             Ok(TakeHead {
                 name: name.clone(),
                 frame_rate_hz,
@@ -193,6 +199,7 @@ pub fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<usize>, Ve
                 cpf_from_headset,
                 goals: target.map(|g| g.1.clone()).unwrap_or_default(),
                 looks: target.map(|g| g.2.clone()).unwrap_or_default(),
+                motion,
             })
         })
         .collect::<Result<Vec<TakeHead>>>()?;

@@ -35,6 +35,7 @@ def take(tmp_path_factory):
     run("synth", tmp / "take.toml", "--quiet")
     run("aria", "export", tmp / "take", "--out", tmp / "ideal", "--ideal-imu")
     run("aria", "export", tmp / "take", "--out", tmp / "device", "--seed", "7")
+    run("aria", "export", tmp / "take", "--out", tmp / "hands", "--streams", "trajectory,hands")
     return tmp
 
 
@@ -165,3 +166,40 @@ def test_eye_gaze_reads_and_points_where_the_depth_says(take, capfd):
     assert 0.1 < depth.min() and depth.max() < 20.0
     point = np.array(mps.get_eyegaze_point_at_depth(gaze[10].yaw, gaze[10].pitch, gaze[10].depth))
     assert abs(np.linalg.norm(point) - gaze[10].depth) < 1e-4
+
+
+def test_hand_tracking_reads_back_where_the_bodies_hands_are(take):
+    """MPS hand tracking by projectaria-tools' reader: a row per motion frame, 21 landmarks a
+    hand in the device frame at the trajectory's pose of the same microsecond; the wrist
+    landmark is the wrist pose's origin, the bones between finger joints keep their length
+    (a rigid skeleton seen from a moving head), the normals are unit vectors, and the hands
+    hang below the head and move with the fingers."""
+    from projectaria_tools.core.mps import hand_tracking as ht
+    for agent in agents(take / "take"):
+        out = take / "hands" / agent
+        rows = ht.read_hand_tracking_results(str(out / "hand_tracking" / "hand_tracking_results.csv"))
+        heads = head_poses(take / "take", agent)
+        assert len(rows) == len(heads)
+        traj = mps.read_closed_loop_trajectory(str(out / "slam" / "closed_loop_trajectory.csv"))
+        by_us = {int(p.tracking_timestamp.total_seconds() * 1e6 + 0.5): p for p in traj}
+        bones = {}
+        for row, (time_s, world_from_cpf) in zip(rows, heads):
+            us = int(row.tracking_timestamp.total_seconds() * 1e6 + 0.5)
+            assert us == round(time_s * 1e6)
+            world_from_device = by_us[us].transform_world_device.to_matrix()
+            for side, hand in [("left", row.left_hand), ("right", row.right_hand)]:
+                assert hand.confidence == 1.0
+                pts = np.array(hand.landmark_positions_device)
+                assert pts.shape == (21, 3)
+                wrist = hand.transform_device_wrist.to_matrix()
+                assert np.linalg.norm(pts[int(ht.HandLandmark.WRIST)] - wrist[:3, 3]) < 1e-9
+                normals = hand.wrist_and_palm_normal_device
+                assert abs(np.linalg.norm(normals.palm_normal_device) - 1.0) < 1e-9
+                assert abs(np.linalg.norm(normals.wrist_normal_device) - 1.0) < 1e-9
+                world = (world_from_device[:3, :3] @ pts.T).T + world_from_device[:3, 3]
+                below = world_from_cpf[2, 3] - world[:, 2]
+                assert below.min() > 0.2, f"{agent} {side}: a hand above the eyes"
+                for a, b in [(8, 9), (9, 10), (11, 12), (14, 15), (17, 18), (6, 7)]:
+                    bones.setdefault((side, a, b), []).append(np.linalg.norm(world[a] - world[b]))
+        for key, lengths in bones.items():
+            assert np.ptp(lengths) < 1e-9, f"{agent} {key}: bone length varies by {np.ptp(lengths)}"

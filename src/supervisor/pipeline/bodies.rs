@@ -96,12 +96,15 @@ pub(super) fn write_sequence(
 }
 
 /// The Aria streams' output of the take (`[render.aria]`), written when it is finished: each
-/// wearer with its goals and headset offset, and the scene's rays when the gaze is asked.
-/// Settings the rig cannot serve fail here, before anything renders.
+/// wearer with its goals and headset offset (and its hands' landmarks when the hands are
+/// asked), and the scene's rays when the gaze is asked. Settings the rig cannot serve fail
+/// here, before anything renders.
 pub(super) fn aria_export(
     render: &RenderPlan,
     wearers: &[usize],
     motion: &RunMotion,
+    agents: &[RenderedAgent],
+    model: &BodyModel,
     scene: &crate::scene::SceneMesh,
 ) -> Result<Option<AriaExport>> {
     let Some(settings) = &render.aria else {
@@ -110,36 +113,48 @@ pub(super) fn aria_export(
     if let Some(p) = settings.problem(&render.rig) {
         bail!("aria streams: {p}");
     }
+    let hands = |w: usize| -> Result<Option<Vec<_>>> {
+        if !settings.streams.hands {
+            return Ok(None);
+        }
+        let m = &agents[w].motion;
+        crate::body::hand_landmarks::hand_track(model, &m.betas, &m.poses, &m.trans)
+            .map(Some)
+            .map_err(|e| anyhow::anyhow!("the hands of {}: {e}", agents[w].name))
+    };
     let wearers = wearers
         .iter()
-        .map(|&w| AriaWearer {
-            agent: w,
-            goals: match motion {
-                RunMotion::Agents { take, .. } => take.agents[w]
-                    .goals
-                    .iter()
-                    .map(|g| GazeGoal {
-                        xy: g.goal,
-                        until_frame: g.end_frame,
-                    })
-                    .collect(),
-                RunMotion::Placed(_) => Vec::new(),
-            },
-            looks: match motion {
-                RunMotion::Agents { take, .. } => take.agents[w]
-                    .activities
-                    .iter()
-                    .filter_map(|a| a.look_at)
-                    .collect(),
-                RunMotion::Placed(_) => Vec::new(),
-            },
-            cpf_from_headset: render
-                .headset_wear
-                .map_or(crate::math::Affine3::IDENTITY, |h| {
-                    h.draw(w).cpf_from_headset()
-                }),
+        .map(|&w| -> Result<AriaWearer> {
+            Ok(AriaWearer {
+                agent: w,
+                goals: match motion {
+                    RunMotion::Agents { take, .. } => take.agents[w]
+                        .goals
+                        .iter()
+                        .map(|g| GazeGoal {
+                            xy: g.goal,
+                            until_frame: g.end_frame,
+                        })
+                        .collect(),
+                    RunMotion::Placed(_) => Vec::new(),
+                },
+                looks: match motion {
+                    RunMotion::Agents { take, .. } => take.agents[w]
+                        .activities
+                        .iter()
+                        .filter_map(|a| a.look_at)
+                        .collect(),
+                    RunMotion::Placed(_) => Vec::new(),
+                },
+                cpf_from_headset: render
+                    .headset_wear
+                    .map_or(crate::math::Affine3::IDENTITY, |h| {
+                        h.draw(w).cpf_from_headset()
+                    }),
+                hands: hands(w)?,
+            })
         })
-        .collect();
+        .collect::<Result<Vec<_>>>()?;
     Ok(Some(AriaExport {
         settings: settings.clone(),
         wearers,

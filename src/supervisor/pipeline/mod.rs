@@ -278,7 +278,7 @@ pub fn stage_take(
     if !sequence.exists() {
         write_sequence(&sequence, &motion, &agents, model, plan)?;
     }
-    let aria = aria_export(render, &wearers, &motion, &scene)?;
+    let aria = aria_export(render, &wearers, &motion, &agents, model, &scene)?;
     let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
         .step_by(render.every_n_frames)
         .collect();
