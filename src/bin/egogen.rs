@@ -473,36 +473,18 @@ fn run(cli: Cli) -> Result<()> {
         Command::Rig(cmd) => egogen::rig::run_command(&cmd, &mut std::io::stdout().lock())?,
         Command::Aria(AriaCommand::Export(args)) => egogen::cli::aria_jobs::aria_export(&args)?,
         Command::Euroc(EurocCommand::Export(args)) => egogen::cli::euroc_jobs::euroc_export(&args)?,
-        Command::Train(TrainCommand::Policy {
-            config,
-            quiet,
-            resume,
-            force,
-        }) => train_policy(&config, quiet, resume, force)?,
-        Command::Train(TrainCommand::Primitive {
-            config,
-            quiet,
-            resume,
-        }) => {
-            let plan = egogen::cli::train_primitive::load_train_plan(&config)?;
-            let report = egogen::motion::cvae::train(&plan, !quiet, resume)?;
-            println!(
-                "trained on {} primitives ({} chains) in {:.0} s; final loss {:.4}; held-out marker error {}",
-                report.train_primitives,
-                report.train_chains,
-                report.seconds,
-                report.final_loss,
-                report
-                    .held_out_mpjpe_mm
-                    .map_or("n/a (nothing held out)".into(), |e| format!("{e:.1} mm ({} primitives)", report.held_out_primitives)),
-            );
-            println!(
-                "wrote {} and {}",
-                plan.weights_out.display(),
-                plan.log_out.display()
-            );
-        }
-        Command::Motion(MotionCommand::Eval {
+        Command::Motion(cmd) => run_motion(cmd)?,
+        Command::Scene(cmd) => run_scene(cmd)?,
+        Command::Body(cmd) => run_body(cmd)?,
+        Command::Train(cmd) => run_train(cmd)?,
+    }
+    Ok(())
+}
+
+/// Runs `egogen motion …`.
+fn run_motion(cmd: MotionCommand) -> Result<()> {
+    match cmd {
+        MotionCommand::Eval {
             weights,
             config,
             random_primitives,
@@ -517,7 +499,7 @@ fn run(cli: Cli) -> Result<()> {
             lookahead,
             export_npz,
             pace_json,
-        }) => {
+        } => {
             let weights = weights.unwrap_or_else(egogen::motion::cvae::train::shipped_weights_path);
             motion_eval(
                 &weights,
@@ -538,17 +520,17 @@ fn run(cli: Cli) -> Result<()> {
                 },
             )?;
         }
-        Command::Motion(MotionCommand::Stats { config, json }) => {
+        MotionCommand::Stats { config, json } => {
             if let Some(j) = &json {
                 refuse_existing(j)?;
             }
             motion_stats(&config, json.as_deref())?;
         }
-        Command::Motion(MotionCommand::HandStats {
+        MotionCommand::HandStats {
             sources,
             model,
             json,
-        }) => {
+        } => {
             if let Some(j) = &json {
                 refuse_existing(j)?;
             }
@@ -558,13 +540,13 @@ fn run(cli: Cli) -> Result<()> {
                 json.as_deref(),
             )?;
         }
-        Command::Motion(MotionCommand::HeadStats {
+        MotionCommand::HeadStats {
             sources,
             model,
             rig,
             imu_rate_hz,
             json,
-        }) => {
+        } => {
             if let Some(j) = &json {
                 refuse_existing(j)?;
             }
@@ -576,8 +558,8 @@ fn run(cli: Cli) -> Result<()> {
                 json.as_deref(),
             )?;
         }
-        Command::Motion(MotionCommand::Control(opts)) => motion_control(&opts)?,
-        Command::Motion(MotionCommand::Import {
+        MotionCommand::Control(opts) => motion_control(&opts)?,
+        MotionCommand::Import {
             bvh,
             out,
             model,
@@ -586,7 +568,7 @@ fn run(cli: Cli) -> Result<()> {
             strip,
             strip_frames,
             skip_frames,
-        }) => {
+        } => {
             egogen::cli::import_jobs::import_bvh(
                 &bvh,
                 &out,
@@ -598,7 +580,14 @@ fn run(cli: Cli) -> Result<()> {
                 skip_frames,
             )?;
         }
-        Command::Scene(SceneCommand::Inspect {
+    }
+    Ok(())
+}
+
+/// Runs `egogen scene …`.
+fn run_scene(cmd: SceneCommand) -> Result<()> {
+    match cmd {
+        SceneCommand::Inspect {
             scene,
             up,
             unit_m,
@@ -609,7 +598,7 @@ fn run(cli: Cli) -> Result<()> {
             agents,
             seed,
             depth_images,
-        }) => {
+        } => {
             refuse_existing(&out)?;
             egogen::cli::scene_jobs::scene_inspect(
                 &scene,
@@ -626,34 +615,75 @@ fn run(cli: Cli) -> Result<()> {
                 depth_images,
             )?;
         }
-        Command::Scene(SceneCommand::Generate(args)) => {
-            egogen::cli::scene_jobs::scene_generate(&args)?
-        }
-        Command::Body(BodyCommand::Info { model }) => body_jobs::body_info(&model_path(model))?,
-        Command::Body(BodyCommand::Shapes {
+        SceneCommand::Generate(args) => egogen::cli::scene_jobs::scene_generate(&args)?,
+    }
+    Ok(())
+}
+
+/// Runs `egogen body …`.
+fn run_body(cmd: BodyCommand) -> Result<()> {
+    match cmd {
+        BodyCommand::Info { model } => body_jobs::body_info(&model_path(model))?,
+        BodyCommand::Shapes {
             model,
             beta,
             values,
             out,
-        }) => body_jobs::body_shapes(&model_path(model), beta, &values, &out)?,
-        Command::Body(BodyCommand::Pose {
+        } => body_jobs::body_shapes(&model_path(model), beta, &values, &out)?,
+        BodyCommand::Pose {
             model,
             motion,
             frame,
             out,
-        }) => body_jobs::body_pose(&model_path(model), motion.as_deref(), frame, &out)?,
-        Command::Body(BodyCommand::Preview {
+        } => body_jobs::body_pose(&model_path(model), motion.as_deref(), frame, &out)?,
+        BodyCommand::Preview {
             model,
             betas,
             out,
             height_px,
-        }) => body_jobs::body_preview(&model_path(model), &betas, &out, height_px)?,
-        Command::Body(BodyCommand::Hands {
+        } => body_jobs::body_preview(&model_path(model), &betas, &out, height_px)?,
+        BodyCommand::Hands {
             model,
             people,
             out,
             cell_px,
-        }) => body_jobs::body_hands(&model_path(model), people, &out, cell_px)?,
+        } => body_jobs::body_hands(&model_path(model), people, &out, cell_px)?,
+    }
+    Ok(())
+}
+
+/// Runs `egogen train …`.
+fn run_train(cmd: TrainCommand) -> Result<()> {
+    match cmd {
+        TrainCommand::Policy {
+            config,
+            quiet,
+            resume,
+            force,
+        } => train_policy(&config, quiet, resume, force)?,
+        TrainCommand::Primitive {
+            config,
+            quiet,
+            resume,
+        } => {
+            let plan = egogen::cli::train_primitive::load_train_plan(&config)?;
+            let report = egogen::motion::cvae::train(&plan, !quiet, resume)?;
+            println!(
+                "trained on {} primitives ({} chains) in {:.0} s; final loss {:.4}; held-out marker error {}",
+                report.train_primitives,
+                report.train_chains,
+                report.seconds,
+                report.final_loss,
+                report
+                    .held_out_mpjpe_mm
+                    .map_or("n/a (nothing held out)".into(), |e| format!("{e:.1} mm ({} primitives)", report.held_out_primitives)),
+            );
+            println!(
+                "wrote {} and {}",
+                plan.weights_out.display(),
+                plan.log_out.display()
+            );
+        }
     }
     Ok(())
 }
