@@ -583,6 +583,24 @@ workers = 1
         let other = &agents[1];
         assert_eq!(other["name"], "other");
         assert!(other["interaction_distance_m"].as_f64().unwrap() > 0.0);
+        // Both people's hands (their fingers move): 21 landmarks each, the wrist landmark the
+        // wrist joint, projected and seen alike.
+        for agent in agents {
+            let hands = agent["hands"]
+                .as_array()
+                .expect("the hands of a moving hand");
+            assert_eq!(hands.len(), 2);
+            for (h, (side, wrist)) in hands.iter().zip([("left", 20), ("right", 21)]) {
+                assert_eq!(h["side"], side);
+                assert_eq!(h["landmarks_3d"].as_array().unwrap().len(), 21);
+                assert_eq!(h["landmarks_3d"][5], agent["joints_3d"][wrist]);
+                assert_eq!(h["landmarks_2d"][5], agent["joints_2d"][wrist]);
+                assert_eq!(
+                    h["landmark_visibility"][5],
+                    agent["joint_visibility"][wrist]
+                );
+            }
+        }
         let exr =
             egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
         let seg = &exr.channel("segmentation.id").unwrap().values;

@@ -7,7 +7,7 @@
 //! finger's knuckle; the normals are the rest hand's (palm −y, fingers along ±x) turned by
 //! the wrist.
 
-use super::{joint, BodyModel, PosedSkeleton, ShapedBody, POSE_DIM};
+use super::{joint, BodyModel, PoseError, PosedSkeleton, ShapedBody, POSE_DIM};
 use crate::math::{Affine3, Real, Vec3};
 
 /// The landmarks' names, in MPS order.
@@ -57,8 +57,8 @@ pub struct HandTips {
 impl HandTips {
     /// Each finger's tip: of the vertices its last joint moves most, the one farthest along
     /// its last bone (the model's rest shape).
-    pub fn of(model: &BodyModel) -> Result<HandTips, String> {
-        let rest = model.rest_joints(&[], &[]).map_err(|e| e.to_string())?;
+    pub fn of(model: &BodyModel) -> Result<HandTips, PoseError> {
+        let rest = model.rest_joints(&[], &[])?;
         let mut vertices = [[0u32; 5]; 2];
         for (hand, tips) in vertices.iter_mut().enumerate() {
             for (finger, tip) in tips.iter_mut().enumerate() {
@@ -76,11 +76,9 @@ impl HandTips {
                     .map(|(v, _)| (v as u32, (model.v_template[v] - rest[j3]).dot(along)))
                     .max_by(|a, b| a.1.total_cmp(&b.1))
                     .map(|(v, _)| v)
-                    .ok_or_else(|| {
-                        format!(
-                            "{}: no vertex follows joint {j3} most (a fingertip)",
-                            model.source.display()
-                        )
+                    .ok_or_else(|| PoseError::NoFingertip {
+                        joint: j3,
+                        model: model.source.display().to_string(),
                     })?;
             }
         }
@@ -160,15 +158,15 @@ pub fn hand_track(
     betas: &[Real],
     poses: &[[Real; POSE_DIM]],
     trans: &[Vec3],
-) -> Result<Vec<[HandLandmarks; 2]>, String> {
+) -> Result<Vec<[HandLandmarks; 2]>, PoseError> {
     use rayon::prelude::*;
     let tips = HandTips::of(model)?;
-    let shaped = model.shape(betas, &[]).map_err(|e| e.to_string())?;
+    let shaped = model.shape(betas, &[])?;
     poses
         .par_iter()
         .zip(trans)
         .map(|(pose, &t)| {
-            let skeleton = shaped.skeleton(pose, t).map_err(|e| e.to_string())?;
+            let skeleton = shaped.skeleton(pose, t)?;
             Ok(hand_landmarks(&shaped, &skeleton, pose, &tips))
         })
         .collect()

@@ -82,6 +82,8 @@ pub enum PoseError {
     },
     #[error("non-finite {what} value at index {index}")]
     NonFinite { what: &'static str, index: usize },
+    #[error("the model {model} has no vertex that follows joint {joint} most (a fingertip)")]
+    NoFingertip { joint: usize, model: String },
 }
 
 /// A body with its shape applied: shaped rest vertices and rest joints.

@@ -9,7 +9,7 @@ use serde_json::json;
 
 use super::annotations::{
     ActivityLabel, AgentAnnotation, AgentSkin, CameraAnnotations, Conventions, FrameAnnotation,
-    JointVisibility, SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
+    HandAnnotation, JointVisibility, SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
 use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
 use crate::camera::CameraModel;
@@ -175,38 +175,26 @@ fn frame_annotation(
         .enumerate()
         .map(|(k, a)| {
             let joints = &a.track.frames[i].joints;
-            let mut joints_2d = Vec::with_capacity(joints.len());
-            let mut visibility = Vec::with_capacity(joints.len());
-            for j in joints {
-                let p = cam_from_world.transform_point3(*j);
-                match work.camera.model.project(p) {
-                    Some(px) => {
-                        let (x, y) = (px.x.round() as usize, px.y.round() as usize);
-                        let at = y.min(res.height_px as usize - 1) * w + x.min(w - 1);
-                        joints_2d.push(Some([px.x, px.y]));
-                        visibility.push(match (depth, ids) {
-                            (Some(depth), Some(ids)) => {
-                                let d = depth[at] as f64;
-                                // Hidden when the pixel shows something else, nearer than the
-                                // joint; the agent's own surface over its joint is the joint seen.
-                                if ids[at] as u32 != a.id
-                                    && d > 0.0
-                                    && d < p.z - JOINT_OCCLUSION_TOLERANCE_M
-                                {
-                                    JointVisibility::Occluded
-                                } else {
-                                    JointVisibility::Visible
-                                }
-                            }
-                            _ => JointVisibility::InView,
-                        });
-                    }
-                    None => {
-                        joints_2d.push(None);
-                        visibility.push(JointVisibility::Outside);
-                    }
-                }
-            }
+            let seen = |points: &[crate::math::Vec3]| {
+                project_points(work, cam_from_world, depth, ids, a.id, points)
+            };
+            let (joints_2d, visibility) = seen(joints);
+            let hands = a.track.hands.as_ref().map(|hands| {
+                hands[i]
+                    .iter()
+                    .zip(["left", "right"])
+                    .map(|(hand, side)| {
+                        let (landmarks_2d, landmark_visibility) = seen(&hand.points);
+                        HandAnnotation {
+                            side: side.into(),
+                            landmarks_3d: hand.points.iter().map(|p| p.to_array()).collect(),
+                            bbox_xyxy: box_of(&landmarks_2d),
+                            landmarks_2d,
+                            landmark_visibility,
+                        }
+                    })
+                    .collect()
+            });
             let bbox = ids.and_then(|ids| bbox_of(ids, w, a.id));
             // With segmentation: its pixels are in the image; without: a joint is.
             let in_view = match ids {
@@ -239,6 +227,7 @@ fn frame_annotation(
                     let (activity, phase) = ActivitySegment::at(segments, f as usize);
                     ActivityLabel { activity, phase }
                 }),
+                hands,
             }
         })
         .collect();
@@ -250,6 +239,62 @@ fn frame_annotation(
         colour_exposure: None,
         agents: listed,
     }
+}
+
+/// Each of `points` (world) in the camera's image: its pixel (`None` outside the valid field of
+/// view) and its visibility — occluded where the pixel shows something else than the agent
+/// `id`, nearer than the point by more than [`JOINT_OCCLUSION_TOLERANCE_M`] (the agent's own
+/// surface over a point is the point seen), `InView` without depth or segmentation.
+fn project_points(
+    work: &CameraWork,
+    cam_from_world: crate::math::Affine3,
+    depth: Option<&[f32]>,
+    ids: Option<&[f32]>,
+    id: u32,
+    points: &[crate::math::Vec3],
+) -> (Vec<Option<[f64; 2]>>, Vec<JointVisibility>) {
+    let res = work.camera.model.resolution();
+    let w = res.width_px as usize;
+    let mut pixels = Vec::with_capacity(points.len());
+    let mut visibility = Vec::with_capacity(points.len());
+    for j in points {
+        let p = cam_from_world.transform_point3(*j);
+        match work.camera.model.project(p) {
+            Some(px) => {
+                let (x, y) = (px.x.round() as usize, px.y.round() as usize);
+                let at = y.min(res.height_px as usize - 1) * w + x.min(w - 1);
+                pixels.push(Some([px.x, px.y]));
+                visibility.push(match (depth, ids) {
+                    (Some(depth), Some(ids)) => {
+                        let d = depth[at] as f64;
+                        if ids[at] as u32 != id && d > 0.0 && d < p.z - JOINT_OCCLUSION_TOLERANCE_M
+                        {
+                            JointVisibility::Occluded
+                        } else {
+                            JointVisibility::Visible
+                        }
+                    }
+                    _ => JointVisibility::InView,
+                });
+            }
+            None => {
+                pixels.push(None);
+                visibility.push(JointVisibility::Outside);
+            }
+        }
+    }
+    (pixels, visibility)
+}
+
+/// The box (x0, y0, x1, y1) of the pixels given, `None` when there are none.
+fn box_of(pixels: &[Option<[f64; 2]>]) -> Option<[f64; 4]> {
+    pixels.iter().flatten().fold(None, |b, p| {
+        Some(
+            b.map_or([p[0], p[1], p[0], p[1]], |[x0, y0, x1, y1]: [f64; 4]| {
+                [x0.min(p[0]), y0.min(p[1]), x1.max(p[0]), y1.max(p[1])]
+            }),
+        )
+    })
 }
 
 /// Inclusive pixel box of the pixels labelled `id`, if any.

@@ -134,6 +134,25 @@ pub struct AgentAnnotation {
     /// in a take where people only walk.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub activity: Option<ActivityLabel>,
+    /// Its hands, left then right: each one's 21 landmarks in MPS order (docs/HANDS.md);
+    /// absent for a body whose hand pose is all zeros (the rest hand throughout).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hands: Option<Vec<HandAnnotation>>,
+}
+
+/// One hand in one frame: its landmarks as the joints are annotated.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HandAnnotation {
+    /// `left` or `right`.
+    pub side: String,
+    /// The 21 landmarks in the world (m), in MPS order (`body::hand_landmarks::HAND_LANDMARKS`).
+    pub landmarks_3d: Vec<[f64; 3]>,
+    /// Their pixels; `None` outside the valid field of view.
+    pub landmarks_2d: Vec<Option<[f64; 2]>>,
+    /// Each one's visibility, as the joints' (`joint_visibility`).
+    pub landmark_visibility: Vec<JointVisibility>,
+    /// The box of its landmarks in view (x0, y0, x1, y1 in pixels); `None` when none is.
+    pub bbox_xyxy: Option<[f64; 4]>,
 }
 
 /// What an agent does in a frame: `walk` (no phase), or an activity and its phase

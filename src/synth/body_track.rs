@@ -1,7 +1,9 @@
-//! Poses a body over a motion sequence: joints and `world_from_cpf` per frame.
+//! Poses a body over a motion sequence: joints and `world_from_cpf` per frame, and the hands'
+//! landmarks (`body::hand_landmarks`) where its hands move.
 
 use rayon::prelude::*;
 
+use crate::body::hand_landmarks::{hand_track, HandLandmarks};
 use crate::body::{BodyModel, CpfCalibration, PoseError, NUM_JOINTS};
 use crate::math::{Affine3, Vec3};
 use crate::motion::MotionSequence;
@@ -18,6 +20,10 @@ pub struct TrackFrame {
 pub struct BodyTrack {
     pub frame_rate_hz: f64,
     pub frames: Vec<TrackFrame>,
+    /// Both hands' landmarks on every frame, in the world (left, right); `None` when the
+    /// motion's hand pose is all zeros (the body model's rest hand throughout: a take with
+    /// `[walker] finger_motion = false`, or mocap without fingers).
+    pub hands: Option<Vec<[HandLandmarks; 2]>>,
 }
 
 /// Joints and CPF for every frame (joints-only fast path; no vertices).
@@ -34,8 +40,22 @@ pub fn track_body(model: &BodyModel, motion: &MotionSequence) -> Result<BodyTrac
             })
         })
         .collect::<Result<Vec<_>, PoseError>>()?;
+    let moves = motion
+        .poses
+        .iter()
+        .any(|p| p[75..].iter().any(|&x| x != 0.0));
+    let hands = match moves {
+        true => Some(hand_track(
+            model,
+            &motion.betas,
+            &motion.poses,
+            &motion.trans,
+        )?),
+        false => None,
+    };
     Ok(BodyTrack {
         frame_rate_hz: motion.frame_rate_hz,
         frames,
+        hands,
     })
 }

@@ -117,6 +117,9 @@ pub(super) fn aria_export(
         if !settings.streams.hands {
             return Ok(None);
         }
+        if let Some(hands) = &agents[w].track.hands {
+            return Ok(Some(hands.clone()));
+        }
         let m = &agents[w].motion;
         crate::body::hand_landmarks::hand_track(model, &m.betas, &m.poses, &m.trans)
             .map(Some)

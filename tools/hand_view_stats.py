@@ -1,0 +1,88 @@
+#!/usr/bin/env python3
+"""How a rendered take's wearers see their own hands (docs/HANDS.md): per camera, the share of
+frames in which a wearer's hand landmark projects into the valid field of view, the share in
+which one is visible, and of the visible landmarks the share that lands on the wearer's own
+segmentation (within `--tolerance-px`, default 1 px: landmarks lie on the hand's surface or
+inside it, so a visible one should fall on its body's pixels).
+
+    python3 tools/hand_view_stats.py TAKE [--camera camera-rgb] [--json OUT]
+
+Needs numpy and OpenEXR, and egogen's reader (`pip install ./python`, or run from the checkout).
+"""
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "python"))
+from egogen import reader  # noqa: E402
+
+
+def stats(take: Path, camera: str, tolerance: int) -> dict:
+    t = reader.Take(take)
+    doc = t.annotations(camera)
+    wearer = doc["wearer"]
+    frames = doc["frames"]
+    in_view = visible_frames = visible = on_mask = 0
+    per_landmark_visible = np.zeros(21, int)
+    for frame in t.frames(camera):
+        f = {"frame": frame.index}
+        me = next(a for a in frame.agents if a["name"] == wearer)
+        hands = me.get("hands")
+        if not hands:
+            raise SystemExit(f"{take}: {wearer} has no hands in {camera}'s annotations (frame {f['frame']})")
+        seen = [(k, h["landmarks_2d"][k]) for h in hands for k in range(21)
+                if h["landmark_visibility"][k] == "visible"]
+        if any(p is not None for h in hands for p in h["landmarks_2d"]):
+            in_view += 1
+        if not seen:
+            continue
+        visible_frames += 1
+        seg = np.squeeze(np.asarray(frame.read(["segmentation"])["segmentation"]))
+        h_px, w_px = seg.shape
+        for k, (x, y) in seen:
+            visible += 1
+            per_landmark_visible[k] += 1
+            xi, yi = int(round(x)), int(round(y))
+            y0, y1 = max(0, yi - tolerance), min(h_px, yi + tolerance + 1)
+            x0, x1 = max(0, xi - tolerance), min(w_px, xi + tolerance + 1)
+            on_mask += int((seg[y0:y1, x0:x1].astype(np.int64) == me["id"]).any())
+    n = len(frames)
+    return {
+        "take": str(take),
+        "camera": camera,
+        "wearer": wearer,
+        "frames": n,
+        "frames_with_a_hand_landmark_in_view": in_view,
+        "frames_with_a_hand_landmark_visible": visible_frames,
+        "visible_landmarks": visible,
+        "visible_landmarks_on_the_wearers_mask": on_mask,
+        "share_on_mask": on_mask / visible if visible else None,
+        "visible_per_landmark": per_landmark_visible.tolist(),
+    }
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("take", type=Path)
+    ap.add_argument("--camera", default="camera-rgb")
+    ap.add_argument("--tolerance-px", type=int, default=1)
+    ap.add_argument("--json", type=Path)
+    a = ap.parse_args()
+    s = stats(a.take, a.camera, a.tolerance_px)
+    print(
+        f"{s['take']} {s['camera']} ({s['wearer']}): {s['frames']} frames; a hand landmark in view in "
+        f"{s['frames_with_a_hand_landmark_in_view']}, visible in {s['frames_with_a_hand_landmark_visible']}; "
+        f"{s['visible_landmarks_on_the_wearers_mask']} of {s['visible_landmarks']} visible landmarks on the wearer's mask"
+    )
+    if a.json:
+        if a.json.exists():
+            raise SystemExit(f"{a.json} exists; not overwriting it")
+        a.json.write_text(json.dumps(s, indent=2))
+
+
+if __name__ == "__main__":
+    main()
