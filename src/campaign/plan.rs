@@ -230,32 +230,7 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             ),
         ));
     }
-    // Each scene file with the frame its entry gives (none: the run config's).
-    let mut scenes: Vec<(PathBuf, Framed)> = Vec::new();
-    for (i, entry) in c.scenes.iter().enumerate() {
-        let field = format!("scenes[{i}]");
-        let (s, frame) = scene_entry(entry).map_err(|m| bad(&field, m))?;
-        let s = s.as_str();
-        let pattern = dir.join(s);
-        if s.contains(['*', '?', '[']) {
-            let mut found: Vec<PathBuf> = glob::glob(&pattern.to_string_lossy())
-                .map_err(|e| bad(&field, format!("{s:?} is not a valid glob: {e}")))?
-                .filter_map(|p| p.ok())
-                .filter(|p| p.is_file())
-                .collect();
-            if found.is_empty() {
-                return Err(bad(&field, format!("{s:?} matches no file")));
-            }
-            found.sort();
-            scenes.extend(found.into_iter().map(|p| (at(&p), frame)));
-        } else {
-            let p = at(Path::new(s));
-            if !p.is_file() {
-                return Err(bad(&field, format!("{} is not a file", p.display())));
-            }
-            scenes.push((p, frame));
-        }
-    }
+    let mut scenes = scene_files(&c, dir, &at, &bad)?;
     let floor_plans: Vec<(u64, PathBuf)> = c
         .floor_plans
         .iter()
@@ -302,6 +277,101 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             (None, None),
         ));
     }
+    check_crowd_count(&c, &base, &run, &bad)?;
+    check_duration(&c, &bad)?;
+    let rigs: Vec<PathBuf> = c.rigs.iter().map(|r| at(r)).collect();
+    for r in &rigs {
+        if !r.is_file() {
+            return Err(bad("rigs", format!("{} is not a file", r.display())));
+        }
+    }
+    let mixes = activity_mixes(&c, &bad)?;
+    if !mixes.is_empty() && base.motion.source != crate::cli::config::MotionSource::Agents {
+        return Err(bad(
+            "activity_weights",
+            format!(
+                "{} does not make agents (`motion.source = \"agents\"`): nobody to do activities",
+                run.display()
+            ),
+        ));
+    }
+    let min_free_disk_gb = c.min_free_disk_gb.unwrap_or(1.0);
+    if !(min_free_disk_gb.is_finite() && min_free_disk_gb >= 0.0) {
+        return Err(bad(
+            "min_free_disk_gb",
+            format!("expected a size >= 0, got {min_free_disk_gb}"),
+        ));
+    }
+    let takes = draw_takes(&c, &scenes, &rigs, &mixes, &base)?;
+    let mut ids: Vec<&str> = takes.iter().map(|t| t.id.as_str()).collect();
+    ids.sort_unstable();
+    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
+        bail!(
+            "campaign {}: two takes are the same take ({}): vary the seed, scene or crowd",
+            path.display(),
+            w[0]
+        );
+    }
+    let fingerprint = sha256_hex(
+        serde_json::to_string(&(&run, &takes))
+            .context("fingerprinting the campaign")?
+            .as_bytes(),
+    );
+    Ok(CampaignPlan {
+        config: path.to_path_buf(),
+        run,
+        out,
+        takes,
+        min_free_disk_bytes: (min_free_disk_gb * 1e9) as u64,
+        floor_plans,
+        dwellings,
+        fingerprint,
+    })
+}
+
+/// The campaign's scene files, globs expanded (sorted), each with the frame its entry gives
+/// (none: the run config's).
+fn scene_files(
+    c: &RawCampaign,
+    dir: &Path,
+    at: &impl Fn(&Path) -> PathBuf,
+    bad: &impl Fn(&str, String) -> anyhow::Error,
+) -> Result<Vec<(PathBuf, Framed)>> {
+    let mut scenes: Vec<(PathBuf, Framed)> = Vec::new();
+    for (i, entry) in c.scenes.iter().enumerate() {
+        let field = format!("scenes[{i}]");
+        let (s, frame) = scene_entry(entry).map_err(|m| bad(&field, m))?;
+        let s = s.as_str();
+        let pattern = dir.join(s);
+        if s.contains(['*', '?', '[']) {
+            let mut found: Vec<PathBuf> = glob::glob(&pattern.to_string_lossy())
+                .map_err(|e| bad(&field, format!("{s:?} is not a valid glob: {e}")))?
+                .filter_map(|p| p.ok())
+                .filter(|p| p.is_file())
+                .collect();
+            if found.is_empty() {
+                return Err(bad(&field, format!("{s:?} matches no file")));
+            }
+            found.sort();
+            scenes.extend(found.into_iter().map(|p| (at(&p), frame)));
+        } else {
+            let p = at(Path::new(s));
+            if !p.is_file() {
+                return Err(bad(&field, format!("{} is not a file", p.display())));
+            }
+            scenes.push((p, frame));
+        }
+    }
+    Ok(scenes)
+}
+
+/// Checks `crowd_count` against the run config's crowd and agents.
+fn check_crowd_count(
+    c: &RawCampaign,
+    base: &RawRun,
+    run: &Path,
+    bad: &impl Fn(&str, String) -> anyhow::Error,
+) -> Result<()> {
     if let Some([lo, hi]) = c.crowd_count {
         if lo == 0 || lo > hi {
             return Err(bad(
@@ -327,6 +397,11 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             ));
         }
     }
+    Ok(())
+}
+
+/// Checks `duration_s`: drawn in 0.1 s steps, at most the synth's longest take.
+fn check_duration(c: &RawCampaign, bad: &impl Fn(&str, String) -> anyhow::Error) -> Result<()> {
     if let Some([lo, hi]) = c.duration_s {
         let max = crate::cli::synth_config::MAX_DURATION_S;
         // Drawn in 0.1 s steps from lo rounded to one: a take is at least 0.1 s.
@@ -345,12 +420,14 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             ));
         }
     }
-    let rigs: Vec<PathBuf> = c.rigs.iter().map(|r| at(r)).collect();
-    for r in &rigs {
-        if !r.is_file() {
-            return Err(bad("rigs", format!("{} is not a file", r.display())));
-        }
-    }
+    Ok(())
+}
+
+/// The `activity_weights` mixes, each checked.
+fn activity_mixes(
+    c: &RawCampaign,
+    bad: &impl Fn(&str, String) -> anyhow::Error,
+) -> Result<Vec<ActivityWeights>> {
     let mut mixes = Vec::with_capacity(c.activity_weights.len());
     for (i, entry) in c.activity_weights.iter().enumerate() {
         let field = format!("activity_weights[{i}]");
@@ -370,22 +447,18 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         }
         mixes.push(ActivityWeights::from_named(named).map_err(|m| bad(&field, m))?);
     }
-    if !mixes.is_empty() && base.motion.source != crate::cli::config::MotionSource::Agents {
-        return Err(bad(
-            "activity_weights",
-            format!(
-                "{} does not make agents (`motion.source = \"agents\"`): nobody to do activities",
-                run.display()
-            ),
-        ));
-    }
-    let min_free_disk_gb = c.min_free_disk_gb.unwrap_or(1.0);
-    if !(min_free_disk_gb.is_finite() && min_free_disk_gb >= 0.0) {
-        return Err(bad(
-            "min_free_disk_gb",
-            format!("expected a size >= 0, got {min_free_disk_gb}"),
-        ));
-    }
+    Ok(mixes)
+}
+
+/// The takes: each one's seed, its draws of crowd and duration, and its scene, rig and mix in
+/// turn.
+fn draw_takes(
+    c: &RawCampaign,
+    scenes: &[(PathBuf, Framed)],
+    rigs: &[PathBuf],
+    mixes: &[ActivityWeights],
+    base: &RawRun,
+) -> Result<Vec<TakeDef>> {
     let mut takes = Vec::with_capacity(c.takes);
     for k in 0..c.takes {
         let seed = c.first_seed + k as u64;
@@ -415,33 +488,10 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             rig: (!rigs.is_empty()).then(|| rigs[k % rigs.len()].clone()),
             activity_weights: (!mixes.is_empty()).then(|| mixes[k % mixes.len()]),
         };
-        take.id = take_id(&take, &base)?;
+        take.id = take_id(&take, base)?;
         takes.push(take);
     }
-    let mut ids: Vec<&str> = takes.iter().map(|t| t.id.as_str()).collect();
-    ids.sort_unstable();
-    if let Some(w) = ids.windows(2).find(|w| w[0] == w[1]) {
-        bail!(
-            "campaign {}: two takes are the same take ({}): vary the seed, scene or crowd",
-            path.display(),
-            w[0]
-        );
-    }
-    let fingerprint = sha256_hex(
-        serde_json::to_string(&(&run, &takes))
-            .context("fingerprinting the campaign")?
-            .as_bytes(),
-    );
-    Ok(CampaignPlan {
-        config: path.to_path_buf(),
-        run,
-        out,
-        takes,
-        min_free_disk_bytes: (min_free_disk_gb * 1e9) as u64,
-        floor_plans,
-        dwellings,
-        fingerprint,
-    })
+    Ok(takes)
 }
 
 /// The up axis and metres per unit a campaign's scene entry gives (none: the run config's).

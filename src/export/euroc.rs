@@ -280,35 +280,7 @@ fn plan_export<'a>(request: &EurocRequest<'a>) -> Result<Plan<'a>> {
         if cam.frames.is_empty() {
             bail!("{}: no frames", cam.source.display());
         }
-        let images_dir = take.join("images").join(&cam.camera.name);
-        let mut images = Vec::new();
-        for &(frame, _) in &cam.frames {
-            let path = images_dir.join(image_name(frame));
-            if !path.is_file() {
-                bail!(
-                    "{} is missing: an EuRoC export copies the colour images the COLMAP export \
-                     writes (render with the `colour` pass and `[render] colmap`, the default \
-                     with colour)",
-                    path.display()
-                );
-            }
-            let size = png_size(&path)?;
-            let res = CameraModel::resolution(&cam.camera.model);
-            let calibrated = (res.width_px, res.height_px);
-            if size != calibrated {
-                bail!(
-                    "{} is {}×{} pixels, but camera `{}`'s calibration (and so sensor.yaml) is \
-                     {}×{}: the take's images are not this camera's (nothing was written)",
-                    path.display(),
-                    size.0,
-                    size.1,
-                    cam.camera.name,
-                    calibrated.0,
-                    calibrated.1
-                );
-            }
-            images.push(path);
-        }
+        let images = camera_images(take, cam)?;
         cameras.push(((*cam).clone(), images));
     }
     let (wanted, heads) = read_take_heads(take, std::slice::from_ref(&wearer))?;
@@ -325,6 +297,40 @@ fn plan_export<'a>(request: &EurocRequest<'a>) -> Result<Plan<'a>> {
         world_from_cpf: head.world_from_cpf,
         cpf_from_headset: head.cpf_from_headset,
     })
+}
+
+/// The colour images of a rendered camera, each checked to be there at the calibrated size.
+fn camera_images(take: &Path, cam: &RenderedCamera) -> Result<Vec<PathBuf>> {
+    let images_dir = take.join("images").join(&cam.camera.name);
+    let mut images = Vec::new();
+    for &(frame, _) in &cam.frames {
+        let path = images_dir.join(image_name(frame));
+        if !path.is_file() {
+            bail!(
+                "{} is missing: an EuRoC export copies the colour images the COLMAP export \
+                 writes (render with the `colour` pass and `[render] colmap`, the default \
+                 with colour)",
+                path.display()
+            );
+        }
+        let size = png_size(&path)?;
+        let res = CameraModel::resolution(&cam.camera.model);
+        let calibrated = (res.width_px, res.height_px);
+        if size != calibrated {
+            bail!(
+                "{} is {}×{} pixels, but camera `{}`'s calibration (and so sensor.yaml) is \
+                 {}×{}: the take's images are not this camera's (nothing was written)",
+                path.display(),
+                size.0,
+                size.1,
+                cam.camera.name,
+                calibrated.0,
+                calibrated.1
+            );
+        }
+        images.push(path);
+    }
+    Ok(images)
 }
 
 /// The larger of the translation (m) and rotation (rad) between two poses.

@@ -296,55 +296,7 @@ pub(super) fn rig_from_aria_value(
             .unwrap_or_else(|| format!("CameraCalibrations[{i}]"));
         let cam: AriaCamera = serde_json::from_value(value)
             .map_err(|e| RigError::field(path, &label_hint, e.to_string()))?;
-        let (resolution, radius, max_theta) = label_limits(&cam.label).ok_or_else(|| {
-            RigError::field(
-                path,
-                format!("{label_hint}.Label"),
-                "unknown Aria camera label, expected camera-rgb, camera-slam-left, \
-                     camera-slam-right, camera-et-left or camera-et-right",
-            )
-        })?;
-        let mut params = cam.projection.params.clone();
-        let proj_at = format!("{label_hint}.Projection");
-        match (cam.projection.name.as_str(), params.len()) {
-            ("FisheyeRadTanThinPrism", 15) => {}
-            ("Fisheye62", 11) => params.extend([0.0; 4]),
-            ("FisheyeRadTanThinPrism" | "Fisheye62", n) => {
-                return Err(RigError::field(
-                    path,
-                    format!("{proj_at}.Params"),
-                    format!(
-                        "{n} numbers for {}, expected {}",
-                        cam.projection.name,
-                        if cam.projection.name == "Fisheye62" {
-                            11
-                        } else {
-                            15
-                        }
-                    ),
-                ))
-            }
-            (other, _) => {
-                return Err(RigError::field(
-                    path,
-                    format!("{proj_at}.Name"),
-                    format!(
-                        "`{other}` is not supported, expected FisheyeRadTanThinPrism or Fisheye62"
-                    ),
-                ))
-            }
-        }
-        let mut model = Fisheye624::new(&params, resolution, Some(max_theta), radius)
-            .map_err(|e| RigError::field(path, &proj_at, e.to_string()))?;
-        if cam.label == "camera-rgb" && rgb == AriaRgbResolution::Rescaled1408 {
-            let binned = Resolution {
-                width_px: 1408,
-                height_px: 1408,
-            };
-            model = model
-                .rescaled(binned, 0.5, DVec2::splat(32.0))
-                .map_err(|e| RigError::field(path, &proj_at, e.to_string()))?;
-        }
+        let model = camera_model(path, &cam, &label_hint, rgb)?;
         let device_from_cam = se3(&cam.t_device_camera)
             .map_err(|m| RigError::field(path, format!("{label_hint}.T_Device_Camera"), m))?;
         if cameras.iter().any(|c| c.name == cam.label) {
@@ -375,8 +327,88 @@ pub(super) fn rig_from_aria_value(
             "expected at least one camera",
         ));
     }
+    let imus = aria_imus(path, cal.imu_calibrations, &cameras, cpf_from_device)?;
+    let notes = rig_notes(path, &build, &origin.child_label, rgb);
+    Ok(Rig {
+        name: path
+            .file_stem()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "aria".into()),
+        notes,
+        source: path.into(),
+        cameras,
+        imus,
+        device_frame: Some(origin.child_label.clone()),
+    })
+}
+
+/// A camera's projection: the calibration's Fisheye624 parameters (a Fisheye62's padded) with
+/// its label's sensor size, valid radius and maximum angle; camera-rgb rescaled as `rgb` asks.
+fn camera_model(
+    path: &Path,
+    cam: &AriaCamera,
+    label_hint: &str,
+    rgb: AriaRgbResolution,
+) -> Result<Fisheye624, RigError> {
+    let (resolution, radius, max_theta) = label_limits(&cam.label).ok_or_else(|| {
+        RigError::field(
+            path,
+            format!("{label_hint}.Label"),
+            "unknown Aria camera label, expected camera-rgb, camera-slam-left, \
+                 camera-slam-right, camera-et-left or camera-et-right",
+        )
+    })?;
+    let mut params = cam.projection.params.clone();
+    let proj_at = format!("{label_hint}.Projection");
+    match (cam.projection.name.as_str(), params.len()) {
+        ("FisheyeRadTanThinPrism", 15) => {}
+        ("Fisheye62", 11) => params.extend([0.0; 4]),
+        ("FisheyeRadTanThinPrism" | "Fisheye62", n) => {
+            return Err(RigError::field(
+                path,
+                format!("{proj_at}.Params"),
+                format!(
+                    "{n} numbers for {}, expected {}",
+                    cam.projection.name,
+                    if cam.projection.name == "Fisheye62" {
+                        11
+                    } else {
+                        15
+                    }
+                ),
+            ))
+        }
+        (other, _) => {
+            return Err(RigError::field(
+                path,
+                format!("{proj_at}.Name"),
+                format!("`{other}` is not supported, expected FisheyeRadTanThinPrism or Fisheye62"),
+            ))
+        }
+    }
+    let mut model = Fisheye624::new(&params, resolution, Some(max_theta), radius)
+        .map_err(|e| RigError::field(path, &proj_at, e.to_string()))?;
+    if cam.label == "camera-rgb" && rgb == AriaRgbResolution::Rescaled1408 {
+        let binned = Resolution {
+            width_px: 1408,
+            height_px: 1408,
+        };
+        model = model
+            .rescaled(binned, 0.5, DVec2::splat(32.0))
+            .map_err(|e| RigError::field(path, &proj_at, e.to_string()))?;
+    }
+    Ok(model)
+}
+
+/// The rig's IMUs, from the calibration's `ImuCalibrations`; labels unique among all sensors.
+fn aria_imus(
+    path: &Path,
+    imu_calibrations: Vec<serde_json::Value>,
+    cameras: &[RigCamera],
+    cpf_from_device: Affine3,
+) -> Result<Vec<RigImu>, RigError> {
     let mut imus: Vec<RigImu> = Vec::new();
-    for (i, value) in cal.imu_calibrations.into_iter().enumerate() {
+    for (i, value) in imu_calibrations.into_iter().enumerate() {
         let hint = value
             .get("Label")
             .and_then(|l| l.as_str())
@@ -406,11 +438,16 @@ pub(super) fn rig_from_aria_value(
             calibration,
         });
     }
+    Ok(imus)
+}
+
+/// The rig's notes: where its intrinsics and poses come from.
+fn rig_notes(path: &Path, build: &str, origin_label: &str, rgb: AriaRgbResolution) -> String {
     let file_name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let notes = format!(
+    format!(
         "From the Project Aria device calibration {file_name} (BuildVersion {build}, device \
          frame = {origin}). Intrinsics: the calibration's FisheyeRadTanThinPrism (Fisheye624) \
          parameters; sensor sizes, valid radii and maximum angles as projectaria-tools assigns \
@@ -418,25 +455,14 @@ pub(super) fn rig_from_aria_value(
          {build} CAD extrinsics, nominal, not calibrated) * T_Device_Camera (calibrated). Camera \
          frames are the sensors' native OpenCV frames (Aria images are stored rotated; rotate \
          90 degrees clockwise to view upright).",
-        origin = origin.child_label,
+        origin = origin_label,
         rgb_note = match rgb {
             AriaRgbResolution::Full2880 => "",
             AriaRgbResolution::Rescaled1408 =>
                 "; camera-rgb rescaled to 1408x1408 (crop 32 px per side, scale 0.5) as \
                  projectaria-tools does for 1408x1408 recordings",
         },
-    );
-    Ok(Rig {
-        name: path
-            .file_stem()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "aria".into()),
-        notes,
-        source: path.into(),
-        cameras,
-        imus,
-        device_frame: Some(origin.child_label.clone()),
-    })
+    )
 }
 
 /// A projectaria-tools SE(3): the quaternion is normalised (as Sophus does) after checking

@@ -590,16 +590,7 @@ async fn attempt_shard(
     std::fs::write(&spec_path, spec).map_err(io)?;
     std::fs::File::create(log).map_err(io)?;
     let request = serde_json::json!({ "spec": spec_path, "log": log }).to_string() + "\n";
-    // A Blender of another take, one that has done its share, or one that has exited while
-    // idle is let go; a fresh one is started.
-    if let Some(l) = live.as_mut() {
-        let exited = !matches!(l.child.try_wait(), Ok(None));
-        if l.take != work.t || l.shards >= SHARDS_PER_BLENDER || l.swollen || exited {
-            if let Some(l) = live.take() {
-                l.retire().await;
-            }
-        }
-    }
+    let_go_unfit_blender(live, work).await;
     // Without a kept Blender, one is started on this shard's spec alone.
     let keep = shared.settings.keep_blender;
     if !keep {
@@ -720,6 +711,19 @@ async fn attempt_shard(
         ));
     }
     Ok(finished)
+}
+
+/// Lets the live Blender go when it is of another take, has done its share, or has exited
+/// while idle (the shard then starts a fresh one).
+async fn let_go_unfit_blender(live: &mut Option<LiveBlender>, work: &ShardWork<'_>) {
+    if let Some(l) = live.as_mut() {
+        let exited = !matches!(l.child.try_wait(), Ok(None));
+        if l.take != work.t || l.shards >= SHARDS_PER_BLENDER || l.swollen || exited {
+            if let Some(l) = live.take() {
+                l.retire().await;
+            }
+        }
+    }
 }
 
 /// A Blender whose output ended: `Ok(None)` when it was a one-shot Blender (`keep` false)
