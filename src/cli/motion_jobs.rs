@@ -156,20 +156,111 @@ pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> R
     // long they stay upright.
     use crate::motion::cvae::pace::{set_paces, Pace, PaceSummary};
     let mut chain_paces: Vec<Pace> = prims.iter().map(|p| Pace::of_frames(&p.joints)).collect();
+    short_chains(
+        (&model, &ctx, &sampler),
+        &train_set,
+        short_chain_primitives,
+        &mut rng,
+        &mut chain_paces,
+    )?;
+    let train_paces = set_paces(&rig, &train_set, 256);
+    println!(
+        "{}",
+        serde_json::json!({
+            "measure": "pace",
+            "about": "horizontal pelvis speed (m/s) and |heading change| (deg) per primitive: training primitives (contact-filtered, not mirrored) against every primitive of the random-latent chains above",
+            "train_primitives": PaceSummary::of(&train_paces),
+            "random_chains": PaceSummary::of(&chain_paces),
+        })
+    );
+    write_eval_files(
+        opts,
+        (weights, config),
+        (&train_paces, &chain_paces),
+        &prims,
+    )?;
+    let walk = match opts.steer_goal_m {
+        Some(ahead) => {
+            let (report, prims) =
+                steered_walk(&model, &ctx, &seed_frames, ahead, lookahead, &mut rng)?;
+            println!("{}", report);
+            let probes = steer_probes(&model, &ctx, &train_set, ahead, lookahead, &mut rng)?;
+            println!("{}", probes);
+            prims
+        }
+        None => prims,
+    };
+    if let Some(png) = &opts.walk_png {
+        draw_walk(&walk, png)?;
+        println!("wrote {}", png.display());
+    }
+    Ok(())
+}
+
+/// The files `egogen motion eval` was asked for: the paces (`--pace-json`), the long chain as
+/// an AMASS-style npz (`--export-npz`) and its trace (`--chain-trace`).
+fn write_eval_files(
+    opts: &MotionEvalOptions,
+    (weights, config): (&Path, &Path),
+    (train_paces, chain_paces): (
+        &[crate::motion::cvae::pace::Pace],
+        &[crate::motion::cvae::pace::Pace],
+    ),
+    prims: &[crate::motion::cvae::DecodedPrimitive],
+) -> Result<()> {
+    use crate::motion::cvae::pace::Pace;
+    if let Some(file) = &opts.pace_json {
+        let values = |p: &[Pace]| {
+            serde_json::json!({
+                "speed_m_s": p.iter().map(|x| x.speed_m_s).collect::<Vec<_>>(),
+                "turn_deg": p.iter().map(|x| x.turn_deg).collect::<Vec<_>>(),
+            })
+        };
+        let doc = serde_json::json!({
+            "weights": weights,
+            "config": config,
+            "train_primitives": values(train_paces),
+            "random_chains": values(chain_paces),
+        });
+        crate::atomic_file::write_atomically(file, doc.to_string().as_bytes())?;
+        println!("wrote {}", file.display());
+    }
+    if let Some(file) = &opts.export_npz {
+        let refs: Vec<_> = prims.iter().collect();
+        crate::motion::cvae::control::chain_sequence(&refs, &[]).write_amass(file)?;
+        println!("wrote {}", file.display());
+    }
+    if let Some(file) = &opts.chain_trace {
+        write_chain_trace(prims, file)?;
+        println!("wrote {}", file.display());
+    }
+    Ok(())
+}
+
+/// Shorter chains from [`SHORT_CHAINS`] training seeds of `train_set`, each in its canonical
+/// frame, `primitives` long: how long they stay upright (a JSON line); their paces added to
+/// `chain_paces`.
+fn short_chains(
+    (model, ctx, sampler): (
+        &crate::motion::cvae::MotionModel,
+        &crate::motion::cvae::BodyContext,
+        &crate::motion::cvae::BestOfK,
+    ),
+    train_set: &crate::motion::cvae::data::PrimitiveSet,
+    primitives: usize,
+    rng: &mut rand_chacha::ChaCha8Rng,
+    chain_paces: &mut Vec<crate::motion::cvae::pace::Pace>,
+) -> Result<()> {
+    use crate::motion::cvae::measure::long_rollout;
+    use crate::motion::cvae::pace::Pace;
+    let short_chain_primitives = primitives;
     let mut upright = Vec::new();
     let mut on_floor = Vec::new();
     let mut moving = Vec::new();
     let mut pelvis_range = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..SHORT_CHAINS {
-        let seed = set_seed(&train_set, i * train_set.len() / SHORT_CHAINS);
-        let (report, prims) = long_rollout(
-            &model,
-            &ctx,
-            seed,
-            short_chain_primitives,
-            &sampler,
-            &mut rng,
-        )?;
+        let seed = set_seed(train_set, i * train_set.len() / SHORT_CHAINS);
+        let (report, prims) = long_rollout(model, ctx, seed, short_chain_primitives, sampler, rng)?;
         chain_paces.extend(prims.iter().map(|p| Pace::of_frames(&p.joints)));
         upright.push(report.upright_primitives);
         on_floor.push(report.feet_on_floor_share);
@@ -198,56 +289,6 @@ pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> R
             "upright_primitives_sorted": upright,
         })
     );
-    let train_paces = set_paces(&rig, &train_set, 256);
-    println!(
-        "{}",
-        serde_json::json!({
-            "measure": "pace",
-            "about": "horizontal pelvis speed (m/s) and |heading change| (deg) per primitive: training primitives (contact-filtered, not mirrored) against every primitive of the random-latent chains above",
-            "train_primitives": PaceSummary::of(&train_paces),
-            "random_chains": PaceSummary::of(&chain_paces),
-        })
-    );
-    if let Some(file) = &opts.pace_json {
-        let values = |p: &[Pace]| {
-            serde_json::json!({
-                "speed_m_s": p.iter().map(|x| x.speed_m_s).collect::<Vec<_>>(),
-                "turn_deg": p.iter().map(|x| x.turn_deg).collect::<Vec<_>>(),
-            })
-        };
-        let doc = serde_json::json!({
-            "weights": weights,
-            "config": config,
-            "train_primitives": values(&train_paces),
-            "random_chains": values(&chain_paces),
-        });
-        crate::atomic_file::write_atomically(file, doc.to_string().as_bytes())?;
-        println!("wrote {}", file.display());
-    }
-    if let Some(file) = &opts.export_npz {
-        let refs: Vec<_> = prims.iter().collect();
-        crate::motion::cvae::control::chain_sequence(&refs, &[]).write_amass(file)?;
-        println!("wrote {}", file.display());
-    }
-    if let Some(file) = &opts.chain_trace {
-        write_chain_trace(&prims, file)?;
-        println!("wrote {}", file.display());
-    }
-    let walk = match opts.steer_goal_m {
-        Some(ahead) => {
-            let (report, prims) =
-                steered_walk(&model, &ctx, &seed_frames, ahead, lookahead, &mut rng)?;
-            println!("{}", report);
-            let probes = steer_probes(&model, &ctx, &train_set, ahead, lookahead, &mut rng)?;
-            println!("{}", probes);
-            prims
-        }
-        None => prims,
-    };
-    if let Some(png) = &opts.walk_png {
-        draw_walk(&walk, png)?;
-        println!("wrote {}", png.display());
-    }
     Ok(())
 }
 

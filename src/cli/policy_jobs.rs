@@ -410,42 +410,22 @@ fn eval_scene(a: &PolicyEvalArgs) -> Result<Option<crate::policy::env::FixedScen
     Ok(fixed)
 }
 
-/// `egogen policy eval`: controllers on held-out episodes, one JSON line each.
-fn policy_eval(a: PolicyEvalArgs) -> Result<()> {
-    use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
-    use crate::motion::cvae::{BodyContext, MotionModel};
-    use crate::walker::pose_prior::shipped_pose_prior_path;
-    use crate::walker::{PosePrior, SeedBank};
-    if let Some(f) = &a.episodes_jsonl {
-        refuse_existing(f)?;
-    }
-    let controllers = eval_controllers(&a.controller)?;
-    let settings = eval_settings(&a)?;
+/// The sampling controllers' K of `policy eval` (default 1, 16 and 64 when neither a policy
+/// nor a controller is given), with every count and scale of `a` checked.
+fn eval_ks(
+    a: &PolicyEvalArgs,
+    controllers: &[(&'static str, usize, crate::walker::ControllerSpec)],
+) -> Result<Vec<usize>> {
     let PolicyEvalArgs {
-        config,
-        weights,
-        prior,
         k,
         episodes,
         envs,
-        seed,
-        episodes_jsonl,
-        paths_png,
-        paths,
         policy,
-        mean_action,
         action_spread,
         scene,
         ..
-    } = &a;
-    let (episodes, envs, seed, paths, mean_action, action_spread) = (
-        *episodes,
-        *envs,
-        *seed,
-        *paths,
-        *mean_action,
-        *action_spread,
-    );
+    } = a;
+    let (episodes, envs, action_spread) = (*episodes, *envs, *action_spread);
     let k = k
         .clone()
         .unwrap_or_else(|| match policy.is_some() || !controllers.is_empty() {
@@ -483,6 +463,45 @@ fn policy_eval(a: PolicyEvalArgs) -> Result<()> {
             }
         }
     }
+    Ok(k)
+}
+
+/// `egogen policy eval`: controllers on held-out episodes, one JSON line each.
+fn policy_eval(a: PolicyEvalArgs) -> Result<()> {
+    use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
+    use crate::motion::cvae::{BodyContext, MotionModel};
+    use crate::walker::pose_prior::shipped_pose_prior_path;
+    use crate::walker::{PosePrior, SeedBank};
+    if let Some(f) = &a.episodes_jsonl {
+        refuse_existing(f)?;
+    }
+    let controllers = eval_controllers(&a.controller)?;
+    let settings = eval_settings(&a)?;
+    let PolicyEvalArgs {
+        config,
+        weights,
+        prior,
+        episodes,
+        envs,
+        seed,
+        episodes_jsonl,
+        paths_png,
+        paths,
+        policy,
+        mean_action,
+        action_spread,
+        scene,
+        ..
+    } = &a;
+    let (episodes, envs, seed, paths, mean_action, action_spread) = (
+        *episodes,
+        *envs,
+        *seed,
+        *paths,
+        *mean_action,
+        *action_spread,
+    );
+    let k = eval_ks(&a, &controllers)?;
     let fixed = eval_scene(&a)?;
     let plan = crate::cli::train_primitive::load_train_plan(config)?;
     let body = BodyModel::load(&plan.body_model)?;

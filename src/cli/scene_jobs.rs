@@ -42,7 +42,7 @@ pub fn scene_inspect(
     depth_images: bool,
 ) -> Result<()> {
     use crate::preview::map::MapPicture;
-    use crate::scene::{load_scene, sample_start_goals, scenario, walkable_map, ScenarioKind};
+    use crate::scene::{sample_start_goals, walkable_map};
     use crate::sensing::{EgoPose2, RayScan, SensingWorld};
 
     let cell_m = settings.cell_m;
@@ -52,19 +52,7 @@ pub fn scene_inspect(
     if let Some((field, what)) = settings.floor_problem() {
         bail!("--{}: {what}", field.replace('_', "-"));
     }
-    let (mesh, moving, path) = match scene.strip_prefix("scenario:") {
-        Some(name) => {
-            let kind: ScenarioKind = serde_json::from_value(serde_json::Value::String(name.into()))
-                .map_err(|_| anyhow::anyhow!("unknown scenario `{name}` (expected empty_floor, single_box or moving_box)"))?;
-            let sc = scenario(kind);
-            (sc.mesh, sc.moving, PathBuf::from(scene))
-        }
-        None => {
-            let path = crate::scene::dwelling::scene_source(scene, Path::new(""))
-                .map_err(|m| anyhow::anyhow!("{m}"))?;
-            (load_scene(&path, frame)?, Vec::new(), path)
-        }
-    };
+    let (mesh, moving, path) = inspected_scene(scene, frame)?;
     let t = std::time::Instant::now();
     let map = walkable_map(&mesh, &path, settings)?;
     let build_s = t.elapsed().as_secs_f64();
@@ -101,30 +89,7 @@ pub fn scene_inspect(
         components
     );
     let seats = crate::scene::find_seats(&mesh, &map, &crate::scene::SeatSettings::default());
-    println!(
-        "seats:      {} place(s) to sit on {} object(s) ({} named as seats)",
-        seats.len(),
-        seats
-            .iter()
-            .map(|s| s.object)
-            .collect::<std::collections::BTreeSet<_>>()
-            .len(),
-        seats
-            .iter()
-            .filter(|s| s.naming == crate::scene::seats::SeatNaming::Named)
-            .count()
-    );
-    for s in &seats {
-        println!(
-            "            {:<28} seat {:.2} m at ({:.2}, {:.2}), facing {:>4.0}°, {}",
-            s.object_name,
-            s.height_m,
-            s.pelvis_xy[0],
-            s.pelvis_xy[1],
-            s.facing_rad.to_degrees(),
-            if s.backed { "backed" } else { "no back" }
-        );
-    }
+    print_seats(&seats);
     let obstacles: Vec<_> = moving.iter().map(|m| m.at(0.0)).collect();
     let world = SensingWorld {
         map: &map,
@@ -184,6 +149,60 @@ pub fn scene_inspect(
     image.write_png(out)?;
     println!("wrote {}", out.display());
     Ok(())
+}
+
+/// The scene `scene` names (a file, `dwelling:SEED` or `scenario:NAME`, read as `frame` says):
+/// its mesh, its moving obstacles and its path.
+fn inspected_scene(
+    scene: &str,
+    frame: crate::scene::SceneFrame,
+) -> Result<(
+    crate::scene::SceneMesh,
+    Vec<crate::scene::MovingObstacle>,
+    PathBuf,
+)> {
+    use crate::scene::{load_scene, scenario, ScenarioKind};
+    Ok(match scene.strip_prefix("scenario:") {
+        Some(name) => {
+            let kind: ScenarioKind = serde_json::from_value(serde_json::Value::String(name.into()))
+                .map_err(|_| anyhow::anyhow!("unknown scenario `{name}` (expected empty_floor, single_box or moving_box)"))?;
+            let sc = scenario(kind);
+            (sc.mesh, sc.moving, PathBuf::from(scene))
+        }
+        None => {
+            let path = crate::scene::dwelling::scene_source(scene, Path::new(""))
+                .map_err(|m| anyhow::anyhow!("{m}"))?;
+            (load_scene(&path, frame)?, Vec::new(), path)
+        }
+    })
+}
+
+/// Prints the places to sit found, one line each.
+fn print_seats(seats: &[crate::scene::Seat]) {
+    println!(
+        "seats:      {} place(s) to sit on {} object(s) ({} named as seats)",
+        seats.len(),
+        seats
+            .iter()
+            .map(|s| s.object)
+            .collect::<std::collections::BTreeSet<_>>()
+            .len(),
+        seats
+            .iter()
+            .filter(|s| s.naming == crate::scene::seats::SeatNaming::Named)
+            .count()
+    );
+    for s in seats {
+        println!(
+            "            {:<28} seat {:.2} m at ({:.2}, {:.2}), facing {:>4.0}°, {}",
+            s.object_name,
+            s.height_m,
+            s.pelvis_xy[0],
+            s.pelvis_xy[1],
+            s.facing_rad.to_degrees(),
+            if s.backed { "backed" } else { "no back" }
+        );
+    }
 }
 
 /// A depth image as grey levels (near bright, nothing within range black), each pixel 8 × 8,
