@@ -179,9 +179,10 @@ mod tests {
 
     #[test]
     fn landmarks_sit_where_a_hand_is() {
-        let model =
-            BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz"))
-                .unwrap();
+        let model = BodyModel::load(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
+        )
+        .unwrap();
         let tips = HandTips::of(&model).unwrap();
         let frame = BodyParams::default();
         let hands = hand_track(&model, &[], &[frame.pose], &[Vec3::ZERO]).unwrap();

@@ -745,9 +745,10 @@ mod tests {
     /// that turns.
     #[test]
     fn hand_tracking_rows_are_the_bodies_hands_in_the_device_frame() {
-        let model =
-            BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz"))
-                .unwrap();
+        let model = BodyModel::load(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
+        )
+        .unwrap();
         let n = 12;
         let poses: Vec<[Real; POSE_DIM]> = (0..n)
             .map(|i| {

@@ -303,7 +303,7 @@ mod tests {
             ..Default::default()
         };
         assert_eq!(s.changed_keys(), ["anticipate_people", "guide_lookahead_m"]);
-        assert_eq!(WalkerSettings::keys().len(), 11);
+        assert_eq!(WalkerSettings::keys().len(), 12);
         assert!(WalkerSettings::PAPER.problem().is_none());
         assert!(WalkerSettings::keys().contains(&"scene_every_frame".to_string()));
     }
