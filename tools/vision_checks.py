@@ -109,7 +109,7 @@ Conventions (as docs/RENDERING.md "COLMAP export" uses them with the colmap CLI)
   are left out.
   The scene mesh is the file the take names (`sequence/summary.json`, `about.scene`,
   `scene_up_axis`, `scene_unit_m`; `--scene` overrides the path), read with trimesh (node
-  transforms applied) and turned into egogen's world as `src/scene/load.rs` does: a y-up
+  transforms applied) and turned into egogen's world as `src/scene/load/` does: a y-up
   file's (x, y, z) becomes (x, -z, y) (glTF is y up unless the take says otherwise; OBJ and
   PLY z up), times `unit_m`.
   What the camera saw: the same pixels' rays (ground-truth pose, exported camera) cast
@@ -939,7 +939,7 @@ def take_scene(take, override: str | None):
 
 
 def load_scene_mesh(path: Path, up: str, unit: float):
-    """Vertices (world: metres, z up) and triangles of the scene file, as src/scene/load.rs."""
+    """Vertices (world: metres, z up) and triangles of the scene file, as src/scene/load/."""
     import trimesh
 
     try:
