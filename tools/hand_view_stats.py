@@ -25,15 +25,13 @@ def stats(take: Path, camera: str, tolerance: int) -> dict:
     t = reader.Take(take)
     doc = t.annotations(camera)
     wearer = doc["wearer"]
-    frames = doc["frames"]
     in_view = visible_frames = visible = on_mask = 0
     per_landmark_visible = np.zeros(21, int)
     for frame in t.frames(camera):
-        f = {"frame": frame.index}
         me = next(a for a in frame.agents if a["name"] == wearer)
         hands = me.get("hands")
         if not hands:
-            raise SystemExit(f"{take}: {wearer} has no hands in {camera}'s annotations (frame {f['frame']})")
+            raise SystemExit(f"{take}: {wearer} has no hands in {camera}'s annotations (frame {frame.index})")
         seen = [(k, h["landmarks_2d"][k]) for h in hands for k in range(21)
                 if h["landmark_visibility"][k] == "visible"]
         if any(p is not None for h in hands for p in h["landmarks_2d"]):
@@ -50,7 +48,7 @@ def stats(take: Path, camera: str, tolerance: int) -> dict:
             y0, y1 = max(0, yi - tolerance), min(h_px, yi + tolerance + 1)
             x0, x1 = max(0, xi - tolerance), min(w_px, xi + tolerance + 1)
             on_mask += int((seg[y0:y1, x0:x1].astype(np.int64) == me["id"]).any())
-    n = len(frames)
+    n = len(doc["frames"])
     return {
         "take": str(take),
         "camera": camera,

@@ -3,7 +3,7 @@
 
 use rayon::prelude::*;
 
-use crate::body::hand_landmarks::{hand_track, HandLandmarks};
+use crate::body::hand_landmarks::{hand_landmarks, HandLandmarks, HandTips};
 use crate::body::{BodyModel, CpfCalibration, PoseError, NUM_JOINTS};
 use crate::math::{Affine3, Vec3};
 use crate::motion::MotionSequence;
@@ -26,36 +26,39 @@ pub struct BodyTrack {
     pub hands: Option<Vec<[HandLandmarks; 2]>>,
 }
 
-/// Joints and CPF for every frame (joints-only fast path; no vertices).
+/// Joints and CPF for every frame (joints-only fast path; no vertices), and the hands'
+/// landmarks from the same skeletons where the hand pose is not all zeros.
 pub fn track_body(model: &BodyModel, motion: &MotionSequence) -> Result<BodyTrack, PoseError> {
     let shaped = model.shape(&motion.betas, &[])?;
     let calibration = CpfCalibration::from_rest_joints(&shaped.rest_joints);
-    let frames = (0..motion.len())
-        .into_par_iter()
-        .map(|i| {
-            let skeleton = shaped.skeleton(&motion.poses[i], motion.trans[i])?;
-            Ok(TrackFrame {
-                joints: skeleton.joints,
-                world_from_cpf: calibration.world_from_cpf(&skeleton),
-            })
-        })
-        .collect::<Result<Vec<_>, PoseError>>()?;
     let moves = motion
         .poses
         .iter()
         .any(|p| p[75..].iter().any(|&x| x != 0.0));
-    let hands = match moves {
-        true => Some(hand_track(
-            model,
-            &motion.betas,
-            &motion.poses,
-            &motion.trans,
-        )?),
-        false => None,
-    };
+    let tips = moves.then(|| HandTips::of(model)).transpose()?;
+    let tracked = (0..motion.len())
+        .into_par_iter()
+        .map(|i| {
+            let pose = &motion.poses[i];
+            let skeleton = shaped.skeleton(pose, motion.trans[i])?;
+            let hands = tips
+                .as_ref()
+                .map(|tips| hand_landmarks(&shaped, &skeleton, pose, tips));
+            let frame = TrackFrame {
+                joints: skeleton.joints,
+                world_from_cpf: calibration.world_from_cpf(&skeleton),
+            };
+            Ok((frame, hands))
+        })
+        .collect::<Result<Vec<_>, PoseError>>()?;
+    let (frames, hands): (Vec<_>, Vec<_>) = tracked.into_iter().unzip();
     Ok(BodyTrack {
         frame_rate_hz: motion.frame_rate_hz,
         frames,
-        hands,
+        hands: if moves {
+            hands.into_iter().collect()
+        } else {
+            None
+        },
     })
 }

@@ -32,14 +32,7 @@ fn read_gltf_parts(path: &Path) -> Result<Vec<Part>, String> {
             .or(mesh.name())
             .map(str::to_owned)
             .unwrap_or_else(|| format!("node_{}", node.index()));
-        let mut part = Part {
-            name,
-            positions: Vec::new(),
-            triangles: Vec::new(),
-            file_id: None,
-            textured: false,
-            see_through: false,
-        };
+        let mut part = Part::empty(name);
         for prim in mesh.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
                 continue;

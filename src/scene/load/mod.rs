@@ -291,6 +291,20 @@ struct Part {
     see_through: bool,
 }
 
+impl Part {
+    /// A part named `name` with no geometry yet, untextured, opaque, without a file id.
+    fn empty(name: String) -> Part {
+        Part {
+            name,
+            positions: Vec::new(),
+            triangles: Vec::new(),
+            file_id: None,
+            textured: false,
+            see_through: false,
+        }
+    }
+}
+
 /// How far above a scene's lowest point the floor found may lie before it is taken for a
 /// scene on its side (m): more than a floor slab or a few steps down.
 pub const FLOOR_HIGH_ABOVE_LOWEST_M: f64 = 1.0;

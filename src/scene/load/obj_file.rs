@@ -35,14 +35,7 @@ pub(super) fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
             _ => m.name,
         };
         let k = *index.entry(name.clone()).or_insert_with(|| {
-            parts.push(Part {
-                name,
-                positions: Vec::new(),
-                triangles: Vec::new(),
-                file_id: None,
-                textured: false,
-                see_through: false,
-            });
+            parts.push(Part::empty(name));
             parts.len() - 1
         });
         let part = &mut parts[k];

@@ -355,12 +355,9 @@ fn ply_parts_by_id(
     let mut parts: Vec<Part> = ids
         .iter()
         .map(|&id| Part {
-            name: split_name(&name, id),
-            positions: Vec::new(),
-            triangles: Vec::new(),
             file_id: Some(id),
             textured: coloured,
-            see_through: false,
+            ..Part::empty(split_name(&name, id))
         })
         .collect();
     let mut local: Vec<(u32, u32)> = vec![(u32::MAX, 0); positions.len()];
