@@ -451,6 +451,21 @@ fn aria_export_writes_every_stream_of_a_take_and_refuses_bad_requests() {
     ]);
     assert!(!again.status.success());
     assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
+    // An export inside its take: refused, nothing written there.
+    let inside = take.join("aria_export");
+    let refused = run(&[
+        "aria",
+        "export",
+        take.to_str().unwrap(),
+        "--out",
+        inside.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        !refused.status.success() && err.contains("is inside the take"),
+        "{err}"
+    );
+    assert!(!inside.exists() && !take.join("aria_export.partial").exists());
     let cases: [(&[&str], &str); 4] = [
         (
             &["--streams", "trajectory,odometry"],
@@ -505,7 +520,7 @@ fn aria_export_writes_every_stream_of_a_take_and_refuses_bad_requests() {
     let err = String::from_utf8_lossy(&again.stderr);
     assert!(again.status.success(), "{err}");
     assert!(
-        err.contains("left by an interrupted export; exporting again"),
+        err.contains("left by an interrupted run; starting it again"),
         "{err}"
     );
     assert!(killed.join("manifest.json").is_file() && !tmp.path().join("killed.partial").exists());

@@ -1297,6 +1297,72 @@ def cmd_tsdf(args) -> dict:
     return res
 
 
+def cmd_rays(args) -> dict:
+    """Ground truth on its own pixel: each pixel's surface point (`position`) reprojected with
+    the exported camera lands how far from the pixel's centre, and how far the depth, unprojected
+    along the pixel's exact ray, lies from that point."""
+    t0 = time.time()
+    take = open_take(args.take)
+    frames = camera_frames(take, args.camera, args.max_frames)
+    chans = frame_groups(frames[0])
+    for group in ("depth", "position"):
+        if group not in chans:
+            raise ToolError(
+                f"{frames[0].path}: no {group} channel (its channel groups: {', '.join(sorted(chans))}); "
+                "expected a take rendered with the `depth` and `position` passes ([render] passes)"
+            )
+    if (take.path / "colmap" / args.camera / "cameras.txt").is_file():
+        model, w, h, params = read_colmap_camera_file(take, args.camera)
+    else:
+        model, w, h, params = colmap_camera_from_annotations(take, args.camera)
+    camera = pycolmap_camera(model, w, h, params)
+    xy, ray_ok = fisheye_rays(camera, w, h)
+    dirs_cam = np.concatenate([xy, np.ones((h, w, 1))], axis=2)
+    u, v = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(h, dtype=np.float64))
+    centre = np.stack([u + 0.5, v + 0.5], axis=2)
+    off_px, gap_m = [], []
+    for fr in frames:
+        d = read_frame(fr, ["depth", "position", "valid"])
+        depth = d["depth"].astype(np.float64)
+        px = (d["valid"] > 0.5) & (depth > 0) & ray_ok
+        T = fr.T_world_cam
+        R, t = T[:3, :3], T[:3, 3]
+        P_cam = (d["position"][px].astype(np.float64) - t) @ R  # R^T (p - t), row-wise
+        back = np.asarray(camera.img_from_cam(P_cam), dtype=np.float64)
+        off_px.append(np.linalg.norm(back - centre[px], axis=1))
+        gap_m.append(np.linalg.norm(dirs_cam[px] * depth[px][:, None] - P_cam, axis=1))
+    off = np.concatenate(off_px) if off_px else np.zeros(0)
+    gap = np.concatenate(gap_m) if gap_m else np.zeros(0)
+    ok = np.isfinite(off)
+    q = lambda a, p: float(np.percentile(a, p)) if len(a) else None
+    res = {
+        "measure": "rays",
+        "take": str(take.path),
+        "camera": args.camera,
+        "frames": len(frames),
+        "size_px": [w, h],
+        "surface_pixels": int(len(off)),
+        "on_own_ray_share": float((off[ok] < 0.01).mean()) if ok.any() else None,
+        "within_0_1px_share": float((off[ok] < 0.1).mean()) if ok.any() else None,
+        "reprojection_px_median": q(off[ok], 50),
+        "reprojection_px_p90": q(off[ok], 90),
+        "reprojection_px_p99": q(off[ok], 99),
+        "depth_vs_position_m_median": q(gap, 50),
+        "depth_vs_position_m_p99": q(gap, 99),
+        "seconds": time.time() - t0,
+    }
+    pct = lambda x: "-" if x is None else f"{100 * x:.1f} %"
+    print_table(f"rays: {take.path} ({args.camera}, {w}x{h}, {len(frames)} frames)", [
+        ("surface pixels", f"{res['surface_pixels']}"),
+        ("position on its pixel's ray (< 0.01 px)", pct(res["on_own_ray_share"])),
+        ("within 0.1 px", pct(res["within_0_1px_share"])),
+        ("position reprojected vs pixel centre", f"median {fmt(res['reprojection_px_median'], '.4f', ' px')}, p90 {fmt(res['reprojection_px_p90'], '.4f', ' px')}, p99 {fmt(res['reprojection_px_p99'], '.4f', ' px')}"),
+        ("depth along the ray vs position", f"median {fmt(res['depth_vs_position_m_median'] and 1000 * res['depth_vs_position_m_median'], '.3f', ' mm')}, p99 {fmt(res['depth_vs_position_m_p99'] and 1000 * res['depth_vs_position_m_p99'], '.3f', ' mm')}"),
+        ("time", f"{res['seconds']:.1f} s"),
+    ])
+    return res
+
+
 # ---------------------------------------------------------------------------------------------
 
 
@@ -1349,6 +1415,8 @@ def main(argv=None) -> int:
         "--depth", choices=("exact", "noisy"), default="exact",
         help="fuse the exact depth (depth.Z, default) or the sensor-noise channel (depth_noisy.Z, [render.depth_noise])",
     )
+    p = sub.add_parser("rays", help="ground truth on its own pixel: position reprojected, depth against position")
+    common(p)
     args = ap.parse_args(argv)
     if args.debug:
         os.environ["VISION_CHECKS_DEBUG"] = "1"
@@ -1358,7 +1426,7 @@ def main(argv=None) -> int:
             raise ToolError(f"{Path(args.json).resolve().parent}: no such folder (for --json {args.json})")
         if args.json is not None and Path(args.json).exists():
             raise ToolError(f"--json {args.json} exists; give a new path (nothing is overwritten)")
-        res = {"features": cmd_features, "sfm": cmd_sfm, "tsdf": cmd_tsdf}[args.cmd](args)
+        res = {"features": cmd_features, "sfm": cmd_sfm, "tsdf": cmd_tsdf, "rays": cmd_rays}[args.cmd](args)
         write_json(args.json, res)
     except ToolError as e:
         print(f"vision_checks {args.cmd}: error: {e}", file=sys.stderr)

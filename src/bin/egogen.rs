@@ -6,10 +6,10 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+use egogen::atomic_file::refuse_existing;
 use egogen::cli::body_jobs;
 use egogen::cli::motion_jobs::{
-    motion_control, motion_eval, motion_stats, refuse_existing, MotionControlOptions,
-    MotionEvalOptions, Precision,
+    motion_control, motion_eval, motion_stats, MotionControlOptions, MotionEvalOptions, Precision,
 };
 use egogen::cli::policy_jobs::{run_policy, train_policy, PolicyCommand};
 use egogen::cli::resolve::{crate_root, DEFAULT_BODY_MODEL};

@@ -3,8 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 
+use crate::atomic_file::{refuse_existing_folder, refuse_inside, StagedFolder};
 use crate::export::aria::{write_wearer_streams, AriaSettings, AriaStreams, Wearer};
 use crate::export::take_folder::{read_take_heads, take_scene, TakeHead};
 use crate::rig::Rig;
@@ -78,31 +79,20 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
     if let Some(p) = settings.problem(&rig) {
         bail!("{p}");
     }
-    if args.out.exists() {
-        bail!(
-            "--out {} already exists; choose a new folder (nothing was written)",
-            args.out.display()
-        );
-    }
-    let staging = PathBuf::from(format!("{}.partial", args.out.display()));
+    refuse_existing_folder(&args.out, "--out")?;
+    refuse_inside(&args.out, "--out", &args.take, "the take")?;
     let (wearers, everyone) = read_take_heads(&args.take, &args.wearer)?;
-    if staging.exists() {
-        // Left by an export that was killed: started again when it holds only what an export
-        // of this take writes (a folder per wearer, the manifest); anything else is not ours.
-        let names: Vec<&str> = wearers.iter().map(|&w| everyone[w].name.as_str()).collect();
-        if !holds_only_export_entries(&staging, &names) {
-            bail!(
-                "{} exists and holds files an export of this take does not write; move it away first (nothing was written)",
-                staging.display()
-            );
-        }
-        eprintln!(
-            "egogen aria export: {} is left by an interrupted export; exporting again",
-            staging.display()
-        );
-        std::fs::remove_dir_all(&staging)
-            .with_context(|| format!("removing {}", staging.display()))?;
-    }
+    // A `.partial` left by a killed export holds only what an export of this take writes (a
+    // folder per wearer, the manifest).
+    let names: Vec<&str> = wearers.iter().map(|&w| everyone[w].name.as_str()).collect();
+    let staged = StagedFolder::begin(
+        &args.out,
+        "--out",
+        "an export of this take",
+        |name, is_dir| {
+            (is_dir && names.contains(&name)) || (!is_dir && name.starts_with("manifest.json"))
+        },
+    )?;
     let rays = if settings.streams.gaze {
         match take_scene(&args.take)? {
             Some((path, frame)) => {
@@ -132,21 +122,14 @@ pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
     } else {
         vec![None; wearers.len()]
     };
-    std::fs::create_dir_all(&staging).with_context(|| format!("creating {}", staging.display()))?;
-    let exported = export_into(
-        &staging,
-        &args.out,
+    export_into(
+        staged,
         &rig,
         &settings,
         (&wearers, &hands),
         &everyone,
         rays.as_ref(),
-    );
-    if exported.is_err() {
-        // Nothing half-written is left: the staging folder is this run's own.
-        let _ = std::fs::remove_dir_all(&staging);
-    }
-    exported
+    )
 }
 
 /// Both hands' landmarks on every frame of `head`'s body (its `motion.npz`), in the world.
@@ -167,22 +150,10 @@ fn wearer_hands(
         .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
-/// Whether `dir` holds only what an export of wearers `names` writes.
-fn holds_only_export_entries(dir: &Path, names: &[&str]) -> bool {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return false;
-    };
-    entries.flatten().all(|e| {
-        let name = e.file_name().to_string_lossy().into_owned();
-        let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
-        (is_dir && names.contains(&name.as_str())) || (!is_dir && name.starts_with("manifest.json"))
-    })
-}
-
-/// Writes every wearer's streams and the manifest into `staging`, then renames it to `out`.
+/// Writes every wearer's streams and the manifest into `staged`, then renames it to its
+/// output.
 fn export_into(
-    staging: &Path,
-    out: &Path,
+    staged: StagedFolder,
     rig: &crate::rig::Rig,
     settings: &AriaSettings,
     (wearers, hands): (
@@ -193,6 +164,7 @@ fn export_into(
     rays: Option<&crate::scene::mesh_distance::SceneRays>,
 ) -> Result<()> {
     let started = std::time::Instant::now();
+    let staging = staged.path();
     for (index, head) in wearers.iter().map(|&w| &everyone[w]).enumerate() {
         let wearer = Wearer {
             name: &head.name,
@@ -226,8 +198,7 @@ fn export_into(
         }
     }
     crate::manifest::write_manifest(staging)?;
-    std::fs::rename(staging, out)
-        .with_context(|| format!("renaming {} to {}", staging.display(), out.display()))?;
+    let out = staged.finish()?;
     println!(
         "wrote {} ({} wearers in {:.2} s)",
         out.display(),

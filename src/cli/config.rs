@@ -354,4 +354,31 @@ mod tests {
         let err = toml::from_str::<RawRun>(text).unwrap_err().to_string();
         assert!(err.contains("betas") && err.contains("sequence"), "{err}");
     }
+
+    /// serde reads a struct from an array by position; a config refuses it by key.
+    #[test]
+    fn an_array_where_a_table_is_meant_is_refused_by_key() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("run.toml");
+        let base = "[body]\n[motion]\nsource='file'\npath='x.npz'\n[output]\ndir='o'\n";
+        std::fs::write(
+            &path,
+            format!("{base}[render]\nheadset_wear = [0.02, 5.0, 7]\n"),
+        )
+        .unwrap();
+        // serde alone takes it, by position.
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(toml::from_str::<RawRun>(&text).is_ok());
+        let err = RawRun::load(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("key `render.headset_wear`") && err.contains("expected a table"),
+            "{err}"
+        );
+        std::fs::write(
+            &path,
+            format!("{base}[render.headset_wear]\ntranslation_m = 0.02\n"),
+        )
+        .unwrap();
+        RawRun::load(&path).unwrap();
+    }
 }

@@ -27,16 +27,70 @@ pub enum ConfigError {
 }
 
 /// Reads and strictly parses a TOML config file; errors name the file, key and what was
-/// expected.
-pub fn load_toml<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, ConfigError> {
+/// expected. A table given as an array (`lighting = [0.5, 1.5]` where `[render.lighting]` is
+/// meant) is refused by its key, not read by position as serde would.
+pub fn load_toml<T: serde::de::DeserializeOwned + serde::Serialize>(
+    path: &Path,
+) -> Result<T, ConfigError> {
     let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
         path: path.into(),
         source,
     })?;
-    toml::from_str(&text).map_err(|e| ConfigError::Parse {
+    let parsed: T = toml::from_str(&text).map_err(|e| ConfigError::Parse {
         path: path.into(),
         message: with_walker_hint(e.to_string()),
-    })
+    })?;
+    if let (Ok(written), Ok(read)) = (
+        toml::from_str::<toml::Table>(&text),
+        toml::Table::try_from(&parsed),
+    ) {
+        if let Some(key) = array_for_table(&written, &read, "") {
+            return Err(ConfigError::Value {
+                path: path.into(),
+                key,
+                message: "expected a table (a `[section]` or `{ key = value, … }`), got an \
+                          array: a table's values are named, not read by position"
+                    .into(),
+            });
+        }
+    }
+    Ok(parsed)
+}
+
+/// The first key (dotted, under `prefix`) that the file `written` gives as an array where
+/// what it was `read` into holds a table.
+fn array_for_table(written: &toml::Table, read: &toml::Table, prefix: &str) -> Option<String> {
+    use toml::Value;
+    for (key, w) in written {
+        let path = match prefix {
+            "" => key.clone(),
+            p => format!("{p}.{key}"),
+        };
+        match (w, read.get(key)) {
+            (Value::Array(_), Some(Value::Table(_))) => return Some(path),
+            (Value::Table(w), Some(Value::Table(r))) => {
+                if let Some(found) = array_for_table(w, r, &path) {
+                    return Some(found);
+                }
+            }
+            (Value::Array(ws), Some(Value::Array(rs))) => {
+                for (i, (w, r)) in ws.iter().zip(rs).enumerate() {
+                    let at = format!("{path}[{i}]");
+                    match (w, r) {
+                        (Value::Array(_), Value::Table(_)) => return Some(at),
+                        (Value::Table(w), Value::Table(r)) => {
+                            if let Some(found) = array_for_table(w, r, &at) {
+                                return Some(found);
+                            }
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// A parse error's message, with where a walker setting goes when the error is that key

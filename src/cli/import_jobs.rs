@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::{bail, Result};
 
-use super::motion_jobs::refuse_existing;
+use crate::atomic_file::refuse_existing;
 use crate::body::BodyModel;
 use crate::math::Vec3;
 use crate::preview::MeshView;

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _, Result};
 
-use super::motion_jobs::refuse_existing;
+use crate::atomic_file::refuse_existing;
 
 /// Prints every file's parts, passes and channel statistics (only the pass `only`, when
 /// given) and, with `preview`, writes one sheet of their tiles; `exposure` is `none`, `auto`

@@ -12,13 +12,7 @@ use crate::body::BodyModel;
 use crate::math::Vec3;
 use crate::preview::MeshView;
 
-/// Refuses to write over an existing file.
-pub fn refuse_existing(path: &Path) -> Result<()> {
-    if path.exists() {
-        bail!("{} already exists; not overwriting it", path.display());
-    }
-    Ok(())
-}
+use crate::atomic_file::refuse_existing;
 
 /// Float precision of the motion network.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]

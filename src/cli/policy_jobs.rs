@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::Subcommand;
 
-use super::motion_jobs::refuse_existing;
+use crate::atomic_file::refuse_existing;
 use crate::body::BodyModel;
 use crate::preview::RgbImage;
 

@@ -298,14 +298,12 @@ pub fn scene_generate(args: &GenerateArgs) -> Result<()> {
         if let Some(dir) = dir_of(seed) {
             let (glb, json) = dwelling_files(&dir);
             for f in [glb, json] {
-                if f.exists() {
-                    bail!("{} already exists; not overwriting it", f.display());
-                }
+                crate::atomic_file::refuse_existing(&f)?;
             }
         }
     }
     if let Some(summary) = &args.summary {
-        crate::cli::motion_jobs::refuse_existing(summary)?;
+        crate::atomic_file::refuse_existing(summary)?;
     }
     let bar = crate::progress::progress_bar(
         "egogen scene generate",

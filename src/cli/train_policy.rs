@@ -13,7 +13,7 @@ use crate::policy::ppo::{PolicyTrainPlan, PpoSettings, StagePlan, TrainScene};
 use crate::sensing::SensingSpec;
 
 /// `[[stages]]`: one training stage.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawStage {
     pub name: String,
@@ -23,7 +23,7 @@ pub(crate) struct RawStage {
 }
 
 /// `[validation]`.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawValidation {
     pub every_updates: usize,
@@ -34,7 +34,7 @@ pub(crate) struct RawValidation {
 }
 
 /// `[output]`.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawPolicyOutput {
     pub weights: PathBuf,
@@ -43,7 +43,7 @@ pub(crate) struct RawPolicyOutput {
 }
 
 /// `[policy]`: the network's sizes.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawPolicyArch {
     pub hidden: usize,
@@ -54,7 +54,7 @@ pub(crate) struct RawPolicyArch {
 }
 
 /// `[scene]`: a fixed scene some episodes walk (each stage's `env.fixed_share`).
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawTrainScene {
     pub path: PathBuf,
@@ -73,7 +73,7 @@ pub(crate) struct RawTrainScene {
 }
 
 /// The whole config, as written.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawTrainPolicy {
     pub seed: u64,

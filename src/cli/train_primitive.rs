@@ -12,7 +12,7 @@ use crate::motion::cvae::train::{ClipSpec, PhasePlan, PriorPlan, TrainPlan};
 use crate::motion::cvae::ArchConfig;
 
 /// `[[clips]]`: one training clip (AMASS-style `.npz` at 40 Hz).
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawClip {
     /// Relative to the config's folder.
@@ -25,7 +25,7 @@ pub(crate) struct RawClip {
 }
 
 /// `[primitive]` and `[rollout]`: one training phase.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawPhase {
     pub steps: usize,
@@ -34,7 +34,7 @@ pub(crate) struct RawPhase {
 }
 
 /// `[rollout]`: a phase over chains of primitives.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawRollout {
     pub steps: usize,
@@ -45,7 +45,7 @@ pub(crate) struct RawRollout {
 }
 
 /// `[prior]`: fine-tuning on chains decoded from random latents.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawPrior {
     pub steps: usize,
@@ -74,7 +74,7 @@ pub(crate) struct RawPrior {
 }
 
 /// `[data]`.
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Copy, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawData {
     /// Frames between the starts of consecutive training primitives.
@@ -89,7 +89,7 @@ pub(crate) struct RawData {
 }
 
 /// `[output]`.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawTrainOutput {
     /// Weights file (safetensors), written atomically; relative to the config's folder.
@@ -101,7 +101,7 @@ pub(crate) struct RawTrainOutput {
 }
 
 /// The whole training config, as written.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawTrainPrimitive {
     /// Seed of weights, batches and noise.

@@ -37,6 +37,7 @@ use super::aria::{headset_spline, imu_seed};
 use super::colmap::image_name;
 use super::imu::{simulate_imu_with_biases, ImuErrors, ImuReading};
 use super::take_folder::{read_rendered_cameras, read_take_heads, RenderedCamera};
+use crate::atomic_file::{refuse_existing_folder, refuse_inside, StagedFolder};
 use crate::camera::kannala_brandt::fit_kb4;
 use crate::camera::{Camera, CameraModel, FitError};
 use crate::math::{Affine3, Real};
@@ -109,57 +110,16 @@ pub struct EurocCamera {
 /// left under either name when it fails.
 pub fn export_euroc(request: &EurocRequest) -> Result<EurocWritten> {
     let out = request.out;
-    if out.exists() {
-        let empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_none());
-        if !empty {
-            bail!(
-                "--out {} exists and is not an empty folder; choose a new folder (nothing was written)",
-                out.display()
-            );
-        }
-    }
-    if let (Ok(take), Some(out_abs)) = (request.take.canonicalize(), absolute_of(out)) {
-        if out_abs.starts_with(&take) {
-            bail!(
-                "--out {} is inside the take {}: an export beside its take, not in it, keeps the \
-                 take as egogen-run made it (nothing was written)",
-                out.display(),
-                request.take.display()
-            );
-        }
-    }
+    refuse_existing_folder(out, "--out")?;
+    refuse_inside(out, "--out", request.take, "the take")?;
     let plan = plan_export(request)?;
-    let staging = PathBuf::from(format!("{}.partial", out.display()));
-    if staging.exists() {
-        // Left by an export that was killed: started again when it holds only what an export
-        // writes (`mav0/`); anything else is not ours.
-        let ours = std::fs::read_dir(&staging).is_ok_and(|d| {
-            d.flatten()
-                .all(|e| e.file_name() == "mav0" && e.file_type().is_ok_and(|t| t.is_dir()))
-        });
-        if !ours {
-            bail!(
-                "{} exists and holds files an EuRoC export does not write; move it away first (nothing was written)",
-                staging.display()
-            );
-        }
-        std::fs::remove_dir_all(&staging)
-            .with_context(|| format!("removing {}", staging.display()))?;
-    }
-    std::fs::create_dir_all(&staging).with_context(|| format!("creating {}", staging.display()))?;
-    let written = write_export(&staging.join("mav0"), request, &plan).and_then(|w| {
-        if out.exists() {
-            std::fs::remove_dir(out).with_context(|| format!("replacing {}", out.display()))?;
-        }
-        std::fs::rename(&staging, out)
-            .with_context(|| format!("renaming {} to {}", staging.display(), out.display()))?;
-        Ok(w)
-    });
-    if written.is_err() {
-        // Nothing half-written is left: the staging folder is this run's own.
-        let _ = std::fs::remove_dir_all(&staging);
-    }
-    written
+    // A `.partial` left by a killed export holds only what an export writes (`mav0/`).
+    let staged = StagedFolder::begin(out, "--out", "an EuRoC export", |name, is_dir| {
+        is_dir && name == "mav0"
+    })?;
+    let written = write_export(&staged.path().join("mav0"), request, &plan)?;
+    staged.finish()?;
+    Ok(written)
 }
 
 /// What an export will write, every input found and checked before anything is.
@@ -493,21 +453,6 @@ fn png_size(path: &Path) -> Result<(u32, u32)> {
         .with_context(|| format!("{}: not a PNG", path.display()))?;
     let info = reader.info();
     Ok((info.width, info.height))
-}
-
-/// `path` made absolute through its nearest existing ancestor (symbolic links resolved), if
-/// it has one.
-fn absolute_of(path: &Path) -> Option<PathBuf> {
-    let path = std::path::absolute(path).ok()?;
-    let mut rest = Vec::new();
-    let mut base = path.as_path();
-    loop {
-        if let Ok(real) = base.canonicalize() {
-            return Some(rest.iter().rev().fold(real, |p, c| p.join(c)));
-        }
-        rest.push(base.file_name()?.to_owned());
-        base = base.parent()?;
-    }
 }
 
 fn grey_png(bytes: &[u8]) -> Result<Vec<u8>> {

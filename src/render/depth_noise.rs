@@ -106,6 +106,23 @@ impl DepthNoise {
                 ),
             ));
         }
+        // Each parameter finite is not enough: σ itself must be, wherever depth is measured.
+        let far = self.max_range_m.min(1e4);
+        let steepest = self.max_incidence_deg.to_radians();
+        for (z, theta) in [(far, steepest), (self.min_range_m.max(1e-3), steepest)] {
+            let sigma = self.sigma_m(z, theta);
+            if !(sigma.is_finite() && sigma * 8.0 < f32::MAX as Real) {
+                return Err((
+                    "sigma_base_m",
+                    format!(
+                        "expected parameters whose σ is finite at every measured depth: σ at \
+                         {z} m, {:.1}° is {sigma} (sigma_base_m, sigma_quadratic_per_m, \
+                         sigma_offset_m, sigma_grazing together)",
+                        theta.to_degrees()
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 
@@ -290,6 +307,16 @@ mod tests {
             ..DepthNoise::default()
         };
         assert_eq!(bad.check().unwrap_err().0, "sigma_base_m");
+        // Each finite, σ not: refused, not written as infinite depths.
+        let bad = DepthNoise {
+            sigma_base_m: 1e308,
+            sigma_quadratic_per_m: 1e308,
+            max_range_m: 1e3,
+            ..DepthNoise::default()
+        };
+        let (key, what) = bad.check().unwrap_err();
+        assert_eq!(key, "sigma_base_m");
+        assert!(what.contains("σ is finite"), "{what}");
         assert!(DepthNoise::default().check().is_ok());
         assert!(DepthNoise::none().check().is_ok());
     }

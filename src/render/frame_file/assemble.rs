@@ -10,15 +10,16 @@ use crate::exr_file::ExrContents;
 use crate::math::{Affine3, Real, Vec3};
 use crate::render::render_camera::RenderCamera;
 
-/// Four rendered pixels whose depths differ by at most this share of the nearest are taken as
-/// one surface ([`Raw::surface_point`]): a floor seen at 80° from its normal spreads about
-/// 3 % across a pixel at 1/4 Aria size; a depth edge far more.
-const ONE_SURFACE_DEPTH_SPREAD: Real = 0.05;
+/// Two neighbouring rendered pixels are one surface ([`Raw::surface_point`]) where the step
+/// between their points lies within this sine (20°) of both their tangent planes (the normal
+/// pass): a floor seen edge-on is, a step in depth is not; bump and normal detail of the
+/// drawn materials tilt a normal by a few degrees.
+const ONE_SURFACE_TANGENT_SIN: Real = 0.342;
 
-/// ... and lie on one plane: the fourth within this share of the pixels' spacing of the plane
-/// through the other three (the position pass is float32: about 1e-7 of the distance from
-/// the origin, hence also 10 µm absolute).
-const COPLANAR_TOLERANCE: Real = 1e-3;
+/// Without normals, rendered pixels whose depths differ from the nearest one's by more than
+/// this share of it are not taken as its surface: a floor seen at 80° from its normal spreads
+/// about 3 % across a pixel at 1/4 Aria RGB size (11 % at SLAM size); a depth edge far more.
+const ONE_SURFACE_DEPTH_SPREAD: Real = 0.05;
 
 /// A raw render's planes, looked up by pass and component.
 struct Raw {
@@ -79,61 +80,129 @@ impl Raw {
             .then(|| y as usize * self.width + x as usize)
     }
 
-    /// The surface point on the ray through `q` (world, m): the position pass interpolated
-    /// bilinearly between the four rendered pixels around `q` where they lie on one plane —
-    /// all hit and rendered, one object id, depths within [`ONE_SURFACE_DEPTH_SPREAD`] of each
-    /// other, coplanar ([`COPLANAR_TOLERANCE`]) — which is the ray's own point to second order
-    /// in the pixel spacing;
-    /// `None` where they do not (edges, the image border): the nearest pixel's point is taken.
+    /// The surface point on the frame pixel's exact ray `ray` (unit, camera frame), which
+    /// meets the render at `q`, in the camera frame: where the ray meets the plane of three
+    /// rendered pixels of the nearest one's surface (all hit and rendered, its object id, depths
+    /// within [`ONE_SURFACE_DEPTH_SPREAD`] of its depth) around `q`: the triangle holding `q`
+    /// when all four pixels around `q` are on it (of the two ways to split them, the flatter),
+    /// the three that are when one is not, else the nearest pixel with its neighbours on that
+    /// surface, towards `q` first. Exactly on the ray; off the surface by its curvature over a
+    /// rendered pixel, or at a crease by the chord across it. `None` (the nearest pixel's
+    /// point is taken) where no three are, e.g. a surface one pixel wide.
     fn surface_point(
         &self,
         pos: &[&[f32]; 3],
+        nrm: Option<&[&[f32]; 3]>,
         hit: &[f32],
         ids: Option<&[f32]>,
         q: Pixel,
         renders: impl Fn(Pixel) -> bool,
         cam_from_world: &Affine3,
+        ray: Vec3,
     ) -> Option<Vec3> {
-        let (x0, y0) = (q.x.floor(), q.y.floor());
-        if x0 < 0.0 || y0 < 0.0 || x0 + 1.0 >= self.width as Real || y0 + 1.0 >= self.height as Real
-        {
+        let n = self.nearest(q)?;
+        let (xn, yn) = ((n % self.width) as i64, (n / self.width) as i64);
+        let point = |i: usize| {
+            cam_from_world.transform_point3(Vec3::new(
+                pos[0][i] as Real,
+                pos[1][i] as Real,
+                pos[2][i] as Real,
+            ))
+        };
+        let z_n = point(n).z;
+        if z_n <= 0.0 {
             return None;
         }
-        let (ax, ay) = (q.x - x0, q.y - y0);
-        let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
-        let weights = [
-            (1.0 - ax) * (1.0 - ay),
-            ax * (1.0 - ay),
-            (1.0 - ax) * ay,
-            ax * ay,
-        ];
-        let mut point = Vec3::ZERO;
-        let mut corner_points = [Vec3::ZERO; 4];
-        let (mut z_min, mut z_max) = (Real::INFINITY, Real::NEG_INFINITY);
-        let first = (y0 as usize) * self.width + x0 as usize;
-        for (k, ((dx, dy), w)) in corners.into_iter().zip(weights).enumerate() {
-            let n = (y0 + dy) as usize * self.width + (x0 + dx) as usize;
-            if hit[n] < 0.5
-                || !renders(Pixel::new(x0 + dx, y0 + dy))
-                || ids.is_some_and(|ids| ids[n] != ids[first])
+        let normal = |i: usize| {
+            nrm.map(|nrm| {
+                cam_from_world
+                    .transform_vector3(Vec3::new(
+                        nrm[0][i] as Real,
+                        nrm[1][i] as Real,
+                        nrm[2][i] as Real,
+                    ))
+                    .normalize_or_zero()
+            })
+        };
+        let (p_n, normal_n) = (point(n), normal(n));
+        // A rendered pixel on the nearest one's surface: its point (camera frame).
+        let on_surface = |x: i64, y: i64| -> Option<Vec3> {
+            if x < 0 || y < 0 || x >= self.width as i64 || y >= self.height as i64 {
+                return None;
+            }
+            let i = y as usize * self.width + x as usize;
+            if hit[i] < 0.5
+                || !renders(Pixel::new(x as Real, y as Real))
+                || ids.is_some_and(|ids| ids[i] != ids[n])
             {
                 return None;
             }
-            let world = Vec3::new(pos[0][n] as Real, pos[1][n] as Real, pos[2][n] as Real);
-            let z = cam_from_world.transform_point3(world).z;
-            (z_min, z_max) = (z_min.min(z), z_max.max(z));
-            point += w * world;
-            corner_points[k] = world;
+            let p = point(i);
+            let one_surface = match (normal_n, normal(i)) {
+                // Both normals see the step between the two points in their tangent planes:
+                // a floor seen edge-on is one surface, a step in depth is not.
+                (Some(a), Some(b)) => {
+                    let step = p - p_n;
+                    let slack = ONE_SURFACE_TANGENT_SIN * step.length();
+                    a.dot(step).abs() <= slack && b.dot(step).abs() <= slack
+                }
+                _ => (p.z - z_n).abs() <= ONE_SURFACE_DEPTH_SPREAD * z_n,
+            };
+            one_surface.then_some(p)
+        };
+        let (x0, y0) = (q.x.floor() as i64, q.y.floor() as i64);
+        let (ax, ay) = (q.x - x0 as Real, q.y - y0 as Real);
+        let quad = [
+            on_surface(x0, y0),
+            on_surface(x0 + 1, y0),
+            on_surface(x0, y0 + 1),
+            on_surface(x0 + 1, y0 + 1),
+        ];
+        let mut triangles: Vec<[Vec3; 3]> = Vec::with_capacity(4);
+        match quad {
+            [Some(p00), Some(p10), Some(p01), Some(p11)] => {
+                // Split along 00–11 or 10–01, whichever folds less; the half holding q.
+                let fold = |a: [Vec3; 3], b: [Vec3; 3]| {
+                    let (na, nb) = (normal_of(a), normal_of(b));
+                    -na.dot(nb).abs()
+                };
+                let main = (
+                    [p00, p10, p11],
+                    [p00, p11, p01],
+                    if ax >= ay { 0 } else { 1 },
+                );
+                let anti = (
+                    [p00, p10, p01],
+                    [p10, p11, p01],
+                    if ax + ay <= 1.0 { 0 } else { 1 },
+                );
+                let (first, second) = match fold(main.0, main.1) <= fold(anti.0, anti.1) {
+                    true => (main, anti),
+                    false => (anti, main),
+                };
+                for (a, b, k) in [first, second] {
+                    triangles.push(if k == 0 { a } else { b });
+                }
+            }
+            _ => {
+                let known: Vec<Vec3> = quad.iter().flatten().copied().collect();
+                if let [a, b, c] = known[..] {
+                    triangles.push([a, b, c]);
+                }
+            }
         }
-        // One plane: the fourth point on the plane of the other three (a crease between two
-        // faces of one object, a wall meeting the floor, is not; nor is a curved surface).
-        let [p00, p10, p01, p11] = corner_points;
-        let (u, v) = (p10 - p00, p01 - p00);
-        let n = u.cross(v);
-        let off_plane = n.dot(p11 - p00).abs() / n.length().max(Real::MIN_POSITIVE);
-        let coplanar = off_plane <= COPLANAR_TOLERANCE * u.length().max(v.length()) + 1e-5;
-        (coplanar && z_min > 0.0 && z_max - z_min <= ONE_SURFACE_DEPTH_SPREAD * z_min)
-            .then_some(point)
+        // The nearest pixel and two of its neighbours on its surface, towards q first.
+        let toward = |d: Real| if d >= 0.0 { [1, -1] } else { [-1, 1] };
+        for sx in toward(q.x - xn as Real) {
+            for sy in toward(q.y - yn as Real) {
+                if let (Some(a), Some(b)) = (on_surface(xn + sx, yn), on_surface(xn, yn + sy)) {
+                    triangles.push([p_n, a, b]);
+                }
+            }
+        }
+        triangles
+            .into_iter()
+            .find_map(|t| ray_meets_triangle_plane(t, ray))
     }
 
     fn bilinear(&self, plane: &[f32], q: Pixel) -> f32 {
@@ -146,6 +215,27 @@ impl Raw {
         (1.0 - ay) * ((1.0 - ax) * at(x0, y0) + ax * at(x1, y0))
             + ay * ((1.0 - ax) * at(x0, y1) + ax * at(x1, y1))
     }
+}
+
+/// Unit normal of a triangle (zero if degenerate).
+fn normal_of([a, b, c]: [Vec3; 3]) -> Vec3 {
+    (b - a).cross(c - a).normalize_or_zero()
+}
+
+/// Where the ray from the origin along `ray` meets the plane of `triangle`, if it does within
+/// the triangle's neighbourhood (no farther from its corners than twice its longest edge: a
+/// plane seen edge-on sends the ray far away).
+fn ray_meets_triangle_plane(triangle: [Vec3; 3], ray: Vec3) -> Option<Vec3> {
+    let [a, b, c] = triangle;
+    let normal = (b - a).cross(c - a);
+    let denom = normal.dot(ray);
+    if denom.abs() <= 1e-12 * normal.length() * ray.length() || normal == Vec3::ZERO {
+        return None;
+    }
+    let t = normal.dot(a) / denom;
+    let x = t * ray;
+    let edge = (b - a).length().max((c - b).length()).max((a - c).length());
+    (t > 0.0 && (x - a).length() <= 2.0 * edge + 1e-6).then_some(x)
 }
 
 /// Cycles' own times of a raw render, from the header Blender writes
@@ -194,14 +284,17 @@ pub fn assemble_frame(
 
 /// Where each pixel of a rig camera reads the render Blender made for it: the rendered pixel
 /// (continuous) on the exact model's ray, or none outside the valid field of view. It is the
-/// same for every frame of a camera, so a take computes it once per camera (16 bytes a pixel:
-/// 32 MB for a full-size Aria RGB camera) instead of unprojecting and reprojecting every
+/// same for every frame of a camera, so a take computes it once per camera (28 bytes a pixel:
+/// 56 MB for a full-size Aria RGB camera) instead of unprojecting and reprojecting every
 /// pixel of every frame (0.5 s of a full-size RGB frame's assembly on one core).
 pub struct RemapTable {
     render: RenderCamera,
     target: Camera,
     /// Per target pixel (row-major), NaN where it is not valid.
     source_px: Vec<Pixel>,
+    /// Per target pixel, its exact model's unit ray (camera frame; zero where not valid): where
+    /// its surface point is sought.
+    rays: Vec<[f32; 3]>,
 }
 
 impl std::fmt::Debug for RemapTable {
@@ -218,11 +311,13 @@ impl RemapTable {
         let res = target.resolution();
         let (w, h) = (res.width_px as usize, res.height_px as usize);
         let mut source_px = vec![Pixel::NAN; w * h];
+        let mut rays = vec![[0.0f32; 3]; w * h];
         source_px
             .par_chunks_mut(w.max(1))
+            .zip(rays.par_chunks_mut(w.max(1)))
             .enumerate()
-            .for_each(|(y, row)| {
-                for (x, q) in row.iter_mut().enumerate() {
+            .for_each(|(y, (row, row_rays))| {
+                for (x, (q, r)) in row.iter_mut().zip(row_rays).enumerate() {
                     let p = Pixel::new(x as Real, y as Real);
                     let Some(ray) = target.unproject(p) else {
                         continue;
@@ -233,6 +328,7 @@ impl RemapTable {
                     };
                     if let Some(source) = source {
                         *q = source;
+                        *r = ray.normalize().as_vec3().to_array();
                     }
                 }
             });
@@ -240,6 +336,7 @@ impl RemapTable {
             render: *render,
             target: target.clone(),
             source_px,
+            rays,
         }
     }
 
@@ -250,19 +347,21 @@ impl RemapTable {
         ground_truth_exr: Option<&Path>,
         world_from_cam: Affine3,
     ) -> Result<FrameImage, FrameFileError> {
-        assemble_with(self, rgb_exr, ground_truth_exr, world_from_cam)
+        let rgb = rgb_exr.map(|p| Raw::read(p, &self.render)).transpose()?;
+        let gt = ground_truth_exr
+            .map(|p| Raw::read(p, &self.render))
+            .transpose()?;
+        assemble_with(self, rgb, gt, world_from_cam)
     }
 }
 
 fn assemble_with(
     remap: &RemapTable,
-    rgb_exr: Option<&Path>,
-    ground_truth_exr: Option<&Path>,
+    rgb: Option<Raw>,
+    gt: Option<Raw>,
     world_from_cam: Affine3,
 ) -> Result<FrameImage, FrameFileError> {
     let (render, target) = (&remap.render, &remap.target);
-    let rgb = rgb_exr.map(|p| Raw::read(p, render)).transpose()?;
-    let gt = ground_truth_exr.map(|p| Raw::read(p, render)).transpose()?;
     let mut render_seconds = Vec::new();
     for (raw, stages) in [
         (&rgb, ["colour_sync", "colour_path_tracing"]),
@@ -348,15 +447,31 @@ fn assemble_with(
                 continue;
             }
             if let Some(pos) = &pos {
-                let nearest = || Vec3::new(pos[0][n] as Real, pos[1][n] as Real, pos[2][n] as Real);
-                let world = match render.is_identity() {
+                let nearest = || {
+                    cam_from_world.transform_point3(Vec3::new(
+                        pos[0][n] as Real,
+                        pos[1][n] as Real,
+                        pos[2][n] as Real,
+                    ))
+                };
+                let ray = Vec3::from(remap.rays[i].map(Real::from));
+                let in_cam = match render.is_identity() {
                     // The render's pixel is the frame's: its point is on the pixel's ray.
                     true => nearest(),
                     false => gt
-                        .surface_point(pos, hit, ids, q, |px| render.renders(px), &cam_from_world)
+                        .surface_point(
+                            pos,
+                            nrm.as_ref(),
+                            hit,
+                            ids,
+                            q,
+                            |px| render.renders(px),
+                            &cam_from_world,
+                            ray,
+                        )
                         .unwrap_or_else(nearest),
                 };
-                let in_cam = cam_from_world.transform_point3(world);
+                let world = world_from_cam.transform_point3(in_cam);
                 out.depth.as_mut().unwrap()[i] = in_cam.z as f32;
                 out.position.as_mut().unwrap()[i] = world.as_vec3().to_array();
             }
@@ -395,6 +510,148 @@ fn assemble_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A ground-truth raw of `render` looking (camera = world frame) at a floor (`y = 1`,
+    /// OpenCV axes: below the camera) meeting a back wall (`z = 3`) in one object, and a
+    /// ball of another in front of them; and the true surface point of every ray.
+    fn room_raw(render: &RenderCamera) -> (Raw, impl Fn(Vec3) -> Option<Vec3>) {
+        let (centre, radius) = (Vec3::new(0.3, -0.2, 1.5), 0.3);
+        let hit = move |d: Vec3| -> Option<(Vec3, Vec3, f32)> {
+            let mut best: Option<(Real, Vec3, f32)> = None;
+            let mut take = |t: Real, normal: Vec3, id: f32| {
+                if t > 0.0 && best.is_none_or(|b| t < b.0) {
+                    best = Some((t, normal, id));
+                }
+            };
+            if d.y > 0.0 {
+                take(1.0 / d.y, Vec3::new(0.0, -1.0, 0.0), 1.0);
+            }
+            if d.z > 0.0 {
+                take(3.0 / d.z, Vec3::new(0.0, 0.0, -1.0), 1.0);
+            }
+            let (b, c) = (d.dot(centre), centre.length_squared() - radius * radius);
+            if b * b - c >= 0.0 {
+                let t = b - (b * b - c).sqrt();
+                take(t, (t * d - centre) / radius, 2.0);
+            }
+            best.map(|(t, normal, id)| (t * d, normal, id))
+        };
+        let res = render.resolution();
+        let (w, h) = (res.width_px as usize, res.height_px as usize);
+        let mut planes = vec![vec![0.0f32; w * h]; 8];
+        for i in 0..w * h {
+            let px = Pixel::new((i % w) as Real, (i / w) as Real);
+            let Some((p, normal, id)) = render.pixel_to_ray(px).and_then(hit) else {
+                continue;
+            };
+            let v = [1.0, p.x, p.y, p.z, normal.x, normal.y, normal.z, id as Real];
+            for (plane, v) in planes.iter_mut().zip(v) {
+                plane[i] = v as f32;
+            }
+        }
+        let names = [
+            "Combined.A",
+            "Position.X",
+            "Position.Y",
+            "Position.Z",
+            "Normal.X",
+            "Normal.Y",
+            "Normal.Z",
+            "IndexOB.X",
+        ];
+        let channels = names
+            .iter()
+            .zip(planes)
+            .map(|(name, values)| crate::exr_file::ExrChannel {
+                name: format!("ViewLayer.{name}"),
+                sample_type: "f32",
+                width: w,
+                height: h,
+                values,
+                compression: "ZIP".into(),
+            })
+            .collect();
+        let contents = ExrContents {
+            path: "room.exr".into(),
+            parts: 1,
+            channels,
+            passes: Vec::new(),
+            attributes: Default::default(),
+        };
+        let raw = Raw {
+            contents,
+            width: w,
+            height: h,
+        };
+        (raw, move |d: Vec3| hit(d).map(|(p, _, _)| p))
+    }
+
+    /// Every Aria camera at SLAM and RGB size: the surface point of (nearly) every pixel lies
+    /// on the pixel's own ray, on the surface the ray meets (planes: to float precision), and
+    /// no farther from it than the nearest rendered pixel's point is.
+    #[test]
+    fn surface_points_lie_on_their_pixels_rays() {
+        use crate::rig::Rig;
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let rig = Rig::load(&root.join("camera_rigs/aria_gen1.json")).unwrap();
+        for (name, scale) in [
+            ("camera-slam-left", 0.25),
+            ("camera-slam-right", 0.5),
+            ("camera-rgb", 0.125),
+        ] {
+            let target = rig.camera(name).unwrap().model.scaled(scale).unwrap();
+            let render = RenderCamera::exact(&target, 1.0);
+            assert!(!render.is_identity(), "{name}: remapped");
+            let (raw, truth) = room_raw(&render);
+            let remap = RemapTable::new(&render, &target);
+            let frame = assemble_with(&remap, None, Some(raw), Affine3::IDENTITY).unwrap();
+            let (mut surface, mut on_ray, mut on_plane, mut planar) = (0, 0, 0, 0);
+            let mut errors = Vec::new();
+            for (i, p) in frame.position.as_ref().unwrap().iter().enumerate() {
+                if frame.depth.as_ref().unwrap()[i] <= 0.0 {
+                    continue;
+                }
+                surface += 1;
+                let px = Pixel::new((i % frame.width) as Real, (i / frame.width) as Real);
+                let p = Vec3::new(p[0] as Real, p[1] as Real, p[2] as Real);
+                if let Some(back) = target.project(p) {
+                    on_ray += usize::from((back - px).length() < 1e-3);
+                }
+                let ray = target.unproject(px).unwrap();
+                let Some(truth) = truth(ray) else { continue };
+                let err = (p - truth).length();
+                errors.push(err);
+                // Floor or wall pixels 2–3 rendered pixels away from the crease and the ball's
+                // outline.
+                let ball = Vec3::new(0.3, -0.2, 1.5);
+                let off_ball = ray.angle_between(ball) - (0.3 / ball.length()).asin();
+                let planar_here = ((truth.y - 1.0).abs() < 1e-9 && truth.z < 2.85)
+                    || ((truth.z - 3.0).abs() < 1e-9 && truth.y < 0.85);
+                if planar_here && off_ball > 0.05 {
+                    planar += 1;
+                    let exact = err < 2e-5 * truth.length();
+                    on_plane += usize::from(exact);
+                    if !exact {
+                        eprintln!("  {px:?} {truth:?} {p:?} err {err:.2e}");
+                    }
+                }
+            }
+            errors.sort_by(Real::total_cmp);
+            let on_ray_share = on_ray as Real / surface as Real;
+            eprintln!(
+                "{name} ×{scale}: {surface} surface pixels, {:.2} % on their own ray, plane \
+                 pixels exact {on_plane}/{planar}, error median {:.2e} m, p99 {:.2e} m",
+                100.0 * on_ray_share,
+                errors[errors.len() / 2],
+                errors[errors.len() * 99 / 100]
+            );
+            assert!(on_ray_share > 0.98, "{name}: {on_ray_share}");
+            assert!(
+                planar > 100 && on_plane == planar,
+                "{name}: {on_plane}/{planar}"
+            );
+        }
+    }
 
     #[test]
     fn blender_durations_read_as_seconds() {

@@ -23,9 +23,10 @@
 //! Pixels with no surface (background) or outside the camera's valid field of view hold 0 in
 //! every ground-truth channel; outside the valid field of view the colour is 0 too. Ground
 //! truth is sampled at the rendered pixel nearest to the exact ray (ids, normals and flow are
-//! never blended), except the surface point (depth, position): where the four rendered pixels
-//! around the ray lie on one plane it is interpolated between them, so that it lies on the
-//! pixel's own ray (to second order), else the nearest pixel's. Colour is
+//! never blended), except the surface point (depth, position): where the ray meets the plane
+//! of three rendered pixels around it on the nearest one's surface (one object, the steps
+//! between them within the surface's tangent planes), so that it lies on the pixel's own ray,
+//! else (a surface one rendered pixel wide) the nearest pixel's. Colour is
 //! interpolated bilinearly. A render that is the target image
 //! itself (a pinhole, or the native polynomial fisheye) is taken pixel for pixel, and its flow
 //! is in its own pixels.
