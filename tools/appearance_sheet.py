@@ -4,15 +4,17 @@ frames where that box is clear of the image border), with the
 seed's skin tones, HDRI, lamp and headset offset printed beside it.
 
     python3 tools/appearance_sheet.py [--seeds 0 1 2 3 4 5] [--out out/appearance_seeds]
-        [--sheet docs/appearance_seeds.png]
+        [--sheet docs/appearance_seeds.png] [--replace]
 
-Uses the release binaries (cargo build --release first); standard library only.
+Uses the release binaries (cargo build --release first); standard library only. A seed's take
+already in --out is used as it is; the sheet is not overwritten without --replace.
 """
 import argparse
 import json
 import os
 import subprocess
-import sys
+
+import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -23,7 +25,9 @@ def main():
     ap.add_argument("--config", default=os.path.join(ROOT, "configs/appearance.toml"))
     ap.add_argument("--out", default=os.path.join(ROOT, "out/appearance_seeds"))
     ap.add_argument("--sheet", default=os.path.join(ROOT, "docs/appearance_seeds.png"))
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --sheet")
     args = ap.parse_args()
+    outputs.check_new(args.sheet, "--sheet", args.replace)
     run = os.path.join(ROOT, "target/release/egogen-run")
     egogen = os.path.join(ROOT, "target/release/egogen")
     frames = []
@@ -60,11 +64,10 @@ def main():
             f"wear {[round(1000 * t, 1) for t in wear.get('translation_m', [])]} mm"
         )
         frames.append(os.path.join(out, "cameras/camera-rgb", best["file"]))
-    if os.path.exists(args.sheet):
-        sys.exit(f"{args.sheet} exists; not overwriting it")
-    subprocess.run([egogen, "inspect", *frames, "--pass", "rgb", "--exposure", "auto",
-                    "--preview", args.sheet],
-                   check=True, stdout=subprocess.DEVNULL)
+    with outputs.writing(args.sheet, args.replace) as tmp:
+        subprocess.run([egogen, "inspect", *frames, "--pass", "rgb", "--exposure", "auto",
+                        "--preview", tmp],
+                       check=True, stdout=subprocess.DEVNULL)
     print("wrote", args.sheet)
 
 

@@ -9,7 +9,8 @@ all takes' shards in one pool), once as a shell-style loop of `egogen-run RUN.to
 --scene … --crowd-count …` (each take's own pool, started and drained in turn). Then a second
 campaign of as many other takes, budgeted with `--throughput-from` the first, to compare the
 budget's estimate with its wall time. Prints one table (wall seconds, worker utilisation from
-the pool reports, frames) and writes it as JSON beside the runs.
+the pool reports, frames) and writes it as JSON beside the runs (in --out, which must not
+exist; a new temporary folder without it).
 
 With `--against BIN`, only the campaign is made, by this checkout's `egogen-run` and by BIN
 (another build), alternating, to compare two versions of the pool (e.g. `--backend slurm` on
@@ -24,6 +25,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+import outputs
 
 ROOT = Path(__file__).resolve().parent.parent
 BIN = ROOT / "target/release/egogen-run"
@@ -92,10 +95,12 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--takes", type=int, default=6)
     ap.add_argument("--workers", type=int, default=2)
-    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--out", type=Path, default=None, help="folder for the runs (must not exist)")
     ap.add_argument("--backend", choices=["local", "slurm"], default="local")
     ap.add_argument("--against", type=Path, default=None)
     a = ap.parse_args()
+    if a.out:
+        outputs.check_new(a.out, "--out", None, folder=True, parents=True)
     backend = ["--backend", a.backend]
     work = a.out or Path(tempfile.mkdtemp(prefix="egogen-bench-campaign-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -148,7 +153,7 @@ def main():
         "budgeted_utilisation": round(budgeted_util, 3),
         "budget_error": round(estimate_s / budgeted_s - 1, 3),
     }
-    (work / "bench_campaign.json").write_text(json.dumps(result, indent=2))
+    outputs.write_json(work / "bench_campaign.json", result)
     print(f"{'':28}{'wall s':>9}{'utilisation':>13}")
     print(f"{'campaign':28}{campaign_s:9.1f}{camp_util:13.0%}")
     print(f"{'loop of single runs':28}{loop_s:9.1f}{loop_util:13.0%}")
@@ -172,9 +177,9 @@ def compare(a, work, backend):
             util = utilisation((work / out / "logs").glob("start_*/pool_report.json"))
             rows.append((name, rnd, wall, util))
             print(f"{name:8} round {rnd}: {wall:7.1f} s, utilisation {util:.0%}", flush=True)
-    (work / "bench_campaign_compare.json").write_text(json.dumps(
-        [{"binary": n, "round": r, "wall_s": round(w, 1), "utilisation": round(u, 3)}
-         for n, r, w, u in rows], indent=2))
+    outputs.write_json(work / "bench_campaign_compare.json", [
+        {"binary": n, "round": r, "wall_s": round(w, 1), "utilisation": round(u, 3)}
+        for n, r, w, u in rows])
     for name in ["this", "against"]:
         w = [r[2] for r in rows if r[0] == name]
         u = [r[3] for r in rows if r[0] == name]

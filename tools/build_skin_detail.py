@@ -9,7 +9,7 @@ albedo in MakeHuman's UV layout (the body model's own, docs/BODY_MODEL.md):
   islands of equal size; the largest red island, the inside of the mouth, is left out), a mask
   for the `eyes` skin region; the detail map holds 0.5 there.
 
-    python3 tools/build_skin_detail.py ALBEDO [--out assets/body/textures]
+    python3 tools/build_skin_detail.py ALBEDO [--out assets/body/textures] [--replace]
 
 The shipped files come from `young_lightskinned_female_diffuse_fix_nosehole-albedo.jpg` of
 akjava/makehuman-godot3-simple-pbr (MIT; MakeHuman's CC0 skin retouched), assets/NOTICE.
@@ -23,7 +23,10 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage
 
+import outputs
+
 SIZE = 1024
+NAMES = ["egogen_skin_detail.jpg", "egogen_eyes.jpg"]
 
 
 def srgb_to_linear(c):
@@ -35,7 +38,13 @@ def main():
     ap.add_argument("albedo")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.dirname(
         os.path.abspath(__file__))), "assets/body/textures"))
+    ap.add_argument("--replace", action="store_true",
+                    help="overwrite the maps in --out (the shipped ones, rebuilt on purpose)")
     args = ap.parse_args()
+    outputs.check_new_all([os.path.join(args.out, n) for n in NAMES], "--out", args.replace,
+                          parents=True)
+    for name in NAMES:
+        outputs.check_outside(os.path.join(args.out, name), "--out", args.albedo, "the albedo")
     srgb = np.asarray(Image.open(args.albedo).convert("RGB"), dtype=np.float64) / 255.0
     red = srgb[..., 0] - srgb[..., 1] > 0.35
     labels, n = ndimage.label(red)
@@ -52,9 +61,10 @@ def main():
     detail[ndimage.binary_dilation(red, iterations=2)] = 0.5
     eyes = ndimage.binary_dilation(eyes, iterations=2).astype(np.float64)
     os.makedirs(args.out, exist_ok=True)
-    for name, plane in [("egogen_skin_detail.jpg", detail), ("egogen_eyes.jpg", eyes)]:
+    for name, plane in zip(NAMES, [detail, eyes]):
         img = Image.fromarray(np.round(plane * 255).astype(np.uint8), "L")
-        img.resize((SIZE, SIZE), Image.LANCZOS).save(os.path.join(args.out, name), quality=92)
+        with outputs.writing(os.path.join(args.out, name), args.replace) as tmp:
+            img.resize((SIZE, SIZE), Image.LANCZOS).save(tmp, format="JPEG", quality=92)
         print("wrote", os.path.join(args.out, name))
     print(f"skin mean linear luminance {lum[skin].mean():.3f}; eye sockets {int(eyes.sum())} px")
 

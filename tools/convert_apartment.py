@@ -24,7 +24,10 @@ Usage (from the repository root)::
 
     .venv-bpy/bin/python tools/convert_apartment.py \
         [--blend /usr/share/morse/data/environments/apartment.blend] \
-        [--out assets/scenes/apartment.glb]
+        [--out assets/scenes/apartment.glb] [--replace]
+
+``--replace`` overwrites an existing ``--out`` (the shipped file, converted again on
+purpose); without it an existing file is refused before anything is read.
 
 Runs in ~1-2 s.  Re-running with the same inputs and bpy version gives byte-identical
 output (checked with bpy 4.5.15).
@@ -62,9 +65,12 @@ import json
 import os
 import struct
 import sys
+import tempfile
 import time
 
 import numpy as np
+
+import outputs
 
 DEFAULT_BLEND = "/usr/share/morse/data/environments/apartment.blend"
 BLEND_SHA256 = "b11a03abfb96aea78c8534fcc24f5dc409be66bdc78951bc7f01f9b08aefef9a"
@@ -307,7 +313,10 @@ def main() -> None:
         os.path.dirname(os.path.abspath(__file__)), "..", "assets", "scenes", "apartment.glb"))
     ap.add_argument("--skip-sha256", action="store_true",
                     help="accept an apartment.blend whose hash differs from morse-simulator-data 1.4-8")
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     args = ap.parse_args()
+    outputs.check_new(args.out, "--out", args.replace, parents=True)
+    outputs.check_outside(args.out, "--out", args.blend, "the .blend")
 
     t0 = time.time()
     digest = sha256(args.blend)
@@ -315,8 +324,14 @@ def main() -> None:
         sys.exit(f"{args.blend}: sha256 {digest} != expected {BLEND_SHA256} "
                  "(morse-simulator-data 1.4-8); use --skip-sha256 to override")
     out = os.path.normpath(args.out)
-    build_and_export(args.blend, out)
-    summary = check(out)
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    with outputs.writing(out, args.replace) as partial:
+        # Exported under its own name (the exporter goes by the extension), then checked.
+        with tempfile.TemporaryDirectory(dir=os.path.dirname(os.path.abspath(out))) as tmp:
+            glb = os.path.join(tmp, os.path.basename(out))
+            build_and_export(args.blend, glb)
+            summary = check(glb)
+            os.replace(glb, partial)
     summary["bytes"] = os.path.getsize(out)
     summary["sha256"] = sha256(out)
     summary["seconds"] = round(time.time() - t0, 2)

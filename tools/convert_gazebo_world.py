@@ -11,7 +11,7 @@ whose models are links with COLLADA visuals. Used for the held-out evaluation dw
     python3 -m venv /tmp/convert
     /tmp/convert/bin/pip install trimesh==5.2.0 pycollada==0.9.3 pillow==13.0.0 numpy==2.4.6
     /tmp/convert/bin/python tools/convert_gazebo_world.py SRC/worlds/small_house.world \
-        --models SRC/models --out assets/scenes/small_house.glb --copyright "Derived from \
+        --models SRC/models --out assets/scenes/small_house.glb --replace --copyright "Derived from \
     aws-robotics/aws-robomaker-small-house-world (c) 2019 Amazon.com, Inc. or its affiliates; \
     MIT-0, see assets/NOTICE"
 
@@ -63,6 +63,8 @@ import tempfile
 import xml.etree.ElementTree as ET
 
 import numpy as np
+
+import outputs
 
 
 def fail(msg: str):
@@ -367,7 +369,7 @@ class Glb:
         self.json["nodes"].append({"name": name, "mesh": len(self.json["meshes"]) - 1})
         self.json["scenes"][0]["nodes"].append(len(self.json["nodes"]) - 1)
 
-    def write(self, path: str, copyright: str) -> None:
+    def write(self, path: str, copyright: str, replace: bool) -> None:
         if copyright:
             self.json["asset"]["copyright"] = copyright
         self.json["buffers"] = [{"byteLength": len(self.bin)}]
@@ -379,12 +381,11 @@ class Glb:
         while len(self.bin) % 4:
             self.bin.append(0)
         total = 12 + 8 + len(doc) + 8 + len(self.bin)
-        tmp = path + ".partial"
-        with open(tmp, "wb") as f:
-            f.write(struct.pack("<III", 0x46546C67, 2, total))
-            f.write(struct.pack("<II", len(doc), 0x4E4F534A) + doc)
-            f.write(struct.pack("<II", len(self.bin), 0x004E4942) + bytes(self.bin))
-        os.replace(tmp, path)
+        with outputs.writing(path, replace) as tmp:
+            with open(tmp, "wb") as f:
+                f.write(struct.pack("<III", 0x46546C67, 2, total))
+                f.write(struct.pack("<II", len(doc), 0x4E4F534A) + doc)
+                f.write(struct.pack("<II", len(self.bin), 0x004E4942) + bytes(self.bin))
 
 
 class _AbsolutePaths:
@@ -466,7 +467,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("world", help="the Gazebo .world file")
     ap.add_argument("--models", required=True, help="folder holding the model://NAME folders")
-    ap.add_argument("--out", required=True, help="GLB to write (not overwritten unless --force)")
+    ap.add_argument("--out", required=True, help="GLB to write (not overwritten unless --replace)")
     ap.add_argument("--skip-model", action="append", default=[], metavar="NAME",
                     help="leave out a model by its world name (repeatable)")
     ap.add_argument("--skip-missing-models", action="store_true",
@@ -479,10 +480,15 @@ def main() -> None:
     ap.add_argument("--max-texture-px", type=int, default=512)
     ap.add_argument("--jpeg-quality", type=int, default=85)
     ap.add_argument("--copyright", default="")
-    ap.add_argument("--force", action="store_true", help="overwrite --out")
+    ap.add_argument("--replace", action="store_true",
+                    help="overwrite an existing --out (e.g. the shipped GLB, converted again on purpose)")
     args = ap.parse_args()
-    if os.path.exists(args.out) and not args.force:
-        fail(f"{args.out} exists; pass --force to overwrite it")
+    try:
+        outputs.check_new(args.out, "--out", args.replace, parents=True)
+        outputs.check_outside(args.out, "--out", args.models, "--models")
+        outputs.check_outside(args.out, "--out", args.world, "the world file")
+    except outputs.OutputError as e:
+        fail(str(e))
     if args.max_texture_px < 1:
         fail("--max-texture-px must be at least 1")
     if not 1 <= args.jpeg_quality <= 100:
@@ -529,7 +535,7 @@ def main() -> None:
         glb.node("floor", [(corners, up, None, np.array([[0, 1, 2], [0, 2, 3]]), grey)])
         print(f"  floor: x [{x0:.2f}, {x1:.2f}] y [{y0:.2f}, {y1:.2f}] at z {z:.3f}")
     os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
-    glb.write(args.out, args.copyright)
+    glb.write(args.out, args.copyright, args.replace)
     check(args.out)
 
 

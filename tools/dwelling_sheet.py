@@ -4,7 +4,8 @@ map with the seats found, `egogen scene inspect`) beside what its first person's
 sees on the take's first frame (`egogen-run`, two people, 1/2 size, upright).
 
     python3 tools/dwelling_sheet.py --seeds 0 1 2 3 4 5 6 7 --work /tmp/dwelling_sheet \\
-        --out docs/dwellings_sheet.png [--egogen target/release/egogen] [--egogen-run target/release/egogen-run]
+        --out docs/dwellings_sheet.png [--replace] [--egogen target/release/egogen]
+        [--egogen-run target/release/egogen-run]
 
 Needs Pillow. Each take renders in about a minute on two cores.
 """
@@ -12,6 +13,8 @@ import argparse
 import os
 import subprocess
 import sys
+
+import outputs
 
 RUN = """[body]
 
@@ -49,14 +52,15 @@ def main():
     ap.add_argument("--seeds", type=int, nargs="+", required=True)
     ap.add_argument("--work", required=True, help="folder for the dwellings and takes (must not exist)")
     ap.add_argument("--out", required=True, help="sheet PNG (must not exist)")
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     ap.add_argument("--egogen", default="target/release/egogen")
     ap.add_argument("--egogen-run", default="target/release/egogen-run")
     ap.add_argument("--columns", type=int, default=2)
     a = ap.parse_args()
+    outputs.check_new(a.work, "--work", None, folder=True, parents=True)
+    outputs.check_new(a.out, "--out", a.replace)
+    outputs.check_outside(a.out, "--out", a.work, "--work")
     from PIL import Image, ImageDraw
-    for p in (a.work, a.out):
-        if os.path.exists(p):
-            sys.exit(f"{p} already exists; not overwriting it")
     os.makedirs(a.work)
     tiles = []
     size = 360
@@ -85,7 +89,8 @@ def main():
     sheet = Image.new("RGB", (cols * w, rows * h), "white")
     for k, t in enumerate(tiles):
         sheet.paste(t, ((k % cols) * w, (k // cols) * h))
-    sheet.save(a.out)
+    with outputs.writing(a.out, a.replace) as tmp:
+        sheet.save(tmp, format="PNG")
     print(f"wrote {a.out}")
 
 

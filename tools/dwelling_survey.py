@@ -5,13 +5,15 @@ does against the catalogue (a seating piece is a sofa, armchair, chair, stool or
 Markdown table; with --png, histograms of area, pieces, models and rooms per dwelling.
 
     egogen scene generate --seed 0 --count 1000 --check-only --summary dwellings.jsonl
-    python3 tools/dwelling_survey.py dwellings.jsonl [--png dwellings_histograms.png]
+    python3 tools/dwelling_survey.py dwellings.jsonl [--png dwellings_histograms.png [--replace]]
 """
 import argparse
 import collections
 import json
 import statistics
 import sys
+
+import outputs
 
 
 def quantile(values, q):
@@ -41,7 +43,11 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("summary")
     ap.add_argument("--png")
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --png")
     a = ap.parse_args()
+    if a.png:
+        outputs.check_new(a.png, "--png", a.replace)
+        outputs.check_outside(a.png, "--png", a.summary, "the summary")
     try:
         rows = [json.loads(line) for line in open(a.summary) if line.strip()]
     except (OSError, json.JSONDecodeError) as e:
@@ -78,7 +84,8 @@ def main():
         histogram(d, (310, 10, 590, 290), pieces, "pieces per dwelling")
         histogram(d, (610, 10, 890, 290), per_models, "catalogue models per dwelling")
         histogram(d, (910, 10, 1190, 290), rooms, "rooms", bins=max(rooms) - min(rooms) + 1)
-        img.save(a.png)
+        with outputs.writing(a.png, a.replace) as tmp:
+            img.save(tmp, format="PNG")
         print(f"\nwrote {a.png}")
 
 

@@ -32,9 +32,12 @@ fast_simplification is deterministic).
 
 Usage:
   python3 tools/furniture_catalogue.py /path/to/sweethome3d-furniture_1.8-1_all.deb \
-      --out assets/furniture
-  python3 tools/furniture_catalogue.py /path/to/BlendSwap-CC-0.sh3f --out assets/furniture
+      --out assets/furniture --replace
+  python3 tools/furniture_catalogue.py /path/to/BlendSwap-CC-0.sh3f --out NEW_FOLDER
   python3 tools/furniture_catalogue.py --check assets/furniture   (verify only)
+
+An existing --out is refused unless --replace (the shipped catalogue, made again on purpose:
+its files are overwritten, GLBs of ids no longer made removed).
 
 Requirements: tools/furniture_catalogue_requirements.txt (numpy, scipy, pillow,
 fast_simplification, trimesh for the check).
@@ -57,6 +60,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from PIL import Image
+
+import outputs
 
 LIBRARY = "BlendSwap-CC-0"
 SH3F_MEMBER = "usr/share/sweethome3d/furniture/BlendSwap-CC-0.sh3f"
@@ -1372,7 +1377,7 @@ def check_folder(out: str) -> list[str]:
 # --------------------------------------------------------------------------- main
 
 
-def write_readme(out: str, cat: dict, base_bytes: int, stats: dict) -> int:
+def write_readme(out: str, cat: dict, base_bytes: int, stats: dict, replace: bool) -> int:
     """Write README.md; returns the folder's total size (GLBs, catalogue.json, README)."""
     import textwrap
 
@@ -1436,7 +1441,7 @@ def write_readme(out: str, cat: dict, base_bytes: int, stats: dict) -> int:
             "# Furniture catalogue (Sweet Home 3D, Blend Swap CC0)\n\n"
             + body
             + "\n\nRemake (byte-identical; Python packages in `tools/furniture_catalogue_requirements.txt`):\n\n"
-            "    python3 tools/furniture_catalogue.py sweethome3d-furniture_1.8-1_all.deb --out assets/furniture\n\n"
+            "    python3 tools/furniture_catalogue.py sweethome3d-furniture_1.8-1_all.deb --out assets/furniture --replace\n\n"
             "(or the extracted `BlendSwap-CC-0.sh3f` as the argument). Check only:\n\n"
             "    python3 tools/furniture_catalogue.py --check assets/furniture\n"
         )
@@ -1447,8 +1452,7 @@ def write_readme(out: str, cat: dict, base_bytes: int, stats: dict) -> int:
         if base_bytes + len(body) == total:
             break
         total = base_bytes + len(body)
-    with open(os.path.join(out, "README.md"), "wb") as f:
-        f.write(body)
+    outputs.write_bytes(os.path.join(out, "README.md"), body, replace)
     return total
 
 
@@ -1458,6 +1462,8 @@ def main() -> int:
     ap.add_argument("--out", default="assets/furniture", help="output folder")
     ap.add_argument("--check", metavar="DIR", help="only check an existing output folder")
     ap.add_argument("--only", nargs="*", help="convert only these ids (for testing; writes no catalogue)")
+    ap.add_argument("--replace", action="store_true",
+                    help="write into an existing --out (the shipped catalogue, made again on purpose)")
     args = ap.parse_args()
 
     if args.check:
@@ -1468,6 +1474,7 @@ def main() -> int:
         return 1 if fails else 0
     if not args.source:
         ap.error("source is required")
+    outputs.check_new(args.out, "--out", args.replace, folder=True, parents=True)
 
     sh3f = load_sh3f(args.source)
     sha = hashlib.sha256(sh3f).hexdigest()
@@ -1486,8 +1493,7 @@ def main() -> int:
     for e in entries:
         r = convert_model(zf, e)
         fname = f"{e.id}.glb"
-        with open(os.path.join(args.out, fname), "wb") as f:
-            f.write(r.glb)
+        outputs.write_bytes(os.path.join(args.out, fname), r.glb, args.replace)
         models.append(
             {
                 "id": e.id,
@@ -1527,10 +1533,10 @@ def main() -> int:
         "tool": TOOL,
         "models": models,
     }
-    with open(os.path.join(args.out, "catalogue.json"), "w", encoding="utf-8", newline="\n") as f:
-        f.write(json.dumps(cat, sort_keys=True, indent=1, ensure_ascii=False) + "\n")
+    outputs.write_text(os.path.join(args.out, "catalogue.json"),
+                       json.dumps(cat, sort_keys=True, indent=1, ensure_ascii=False) + "\n", args.replace)
     base = sum(m["bytes"] for m in models) + os.path.getsize(os.path.join(args.out, "catalogue.json"))
-    total = write_readme(args.out, cat, base, stats)
+    total = write_readme(args.out, cat, base, stats, args.replace)
 
     print("\nfront check (vertices above 60 % of the height; front = +z, so the back rest at z < 0):")
     for mid, fr in fronts:

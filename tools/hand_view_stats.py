@@ -5,23 +5,24 @@ which one is visible, and of the visible landmarks the share that lands on the w
 segmentation (within `--tolerance-px`, default 1 px: landmarks lie on the hand's surface or
 inside it, so a visible one should fall on its body's pixels).
 
-    python3 tools/hand_view_stats.py TAKE [--camera camera-rgb] [--json OUT]
+    python3 tools/hand_view_stats.py TAKE [--camera camera-rgb] [--json OUT [--replace]]
 
 Needs numpy and OpenEXR, and egogen's reader (`pip install ./python`, or run from the checkout).
 """
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "python"))
-from egogen import reader  # noqa: E402
+import outputs
 
 
 def stats(take: Path, camera: str, tolerance: int) -> dict:
+    import numpy as np
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "python"))
+    from egogen import reader
+
     t = reader.Take(take)
     doc = t.annotations(camera)
     wearer = doc["wearer"]
@@ -69,7 +70,11 @@ def main() -> None:
     ap.add_argument("--camera", default="camera-rgb")
     ap.add_argument("--tolerance-px", type=int, default=1)
     ap.add_argument("--json", type=Path)
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --json")
     a = ap.parse_args()
+    if a.json:
+        outputs.check_new(a.json, "--json", a.replace)
+        outputs.check_outside(a.json, "--json", a.take, "the take")
     s = stats(a.take, a.camera, a.tolerance_px)
     print(
         f"{s['take']} {s['camera']} ({s['wearer']}): {s['frames']} frames; a hand landmark in view in "
@@ -77,9 +82,7 @@ def main() -> None:
         f"{s['visible_landmarks_on_the_wearers_mask']} of {s['visible_landmarks']} visible landmarks on the wearer's mask"
     )
     if a.json:
-        if a.json.exists():
-            raise SystemExit(f"{a.json} exists; not overwriting it")
-        a.json.write_text(json.dumps(s, indent=2))
+        outputs.write_json(a.json, s, a.replace)
 
 
 if __name__ == "__main__":

@@ -2,11 +2,19 @@
 a 30 x 30 m floor grid with 3 mm of height noise (0.9 M triangles) inside four 2.5 m walls,
 vertex colours and Replica-style per-face object ids (floor 1, walls 2-5).
 
-    python tools/make_big_scan.py OUT.ply     (numpy)
+    python tools/make_big_scan.py OUT.ply [--replace]    (numpy)
 """
 import sys
 
 import numpy as np
+
+import outputs
+
+args = [a for a in sys.argv[1:] if a != "--replace"]
+replace = len(args) < len(sys.argv) - 1
+if len(args) != 1:
+    sys.exit("usage: make_big_scan.py OUT.ply [--replace]")
+out = outputs.check_new(args[0], "OUT.ply", replace)
 
 n = 670                      # grid vertices per side -> 2*(n-1)^2 triangles
 xs = np.linspace(-15, 15, n)
@@ -34,8 +42,7 @@ for k, (x0, y0, x1, y1) in enumerate([(-15, -15, 15, -15), (15, -15, 15, 15), (1
     ids = np.concatenate([ids, np.full(2 * len(a), k + 2, np.int32)])
 v = np.concatenate([v] + walls)
 col = np.tile(np.array([[180, 160, 140]], np.uint8), (len(v), 1))
-out = sys.argv[1]
-with open(out, "wb") as f:
+with outputs.writing(out, replace) as tmp, open(tmp, "wb") as f:
     f.write((f"ply\nformat binary_little_endian 1.0\nelement vertex {len(v)}\nproperty float x\nproperty float y\nproperty float z\n"
              f"property uchar red\nproperty uchar green\nproperty uchar blue\nelement face {len(tris)}\n"
              "property list uchar int vertex_indices\nproperty int object_id\nend_header\n").encode())

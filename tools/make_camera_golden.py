@@ -17,16 +17,18 @@ either way.
 
 Run (PyPI projectaria-tools 2.3.0, numpy):
     python3 -m venv .venv-aria && .venv-aria/bin/pip install projectaria-tools==2.3.0
-    .venv-aria/bin/python tools/make_camera_golden.py
+    .venv-aria/bin/python tools/make_camera_golden.py --replace   # [--out PATH] (a new file)
 """
+import argparse
 import hashlib
-import json
 import math
 import os
 from importlib.metadata import version
 
 import numpy as np
 from projectaria_tools.core import calibration
+
+import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 FIXTURE = os.path.join(ROOT, "tests", "fixtures", "aria_gen1_device_calibration.json")
@@ -144,6 +146,12 @@ def camera_entry(dc, label, rgb_1408, rng):
 
 
 def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", default=OUT, help="the golden file (default: the shipped one)")
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
+    args = ap.parse_args()
+    outputs.check_new(args.out, "--out", args.replace)
+    outputs.check_outside(args.out, "--out", FIXTURE, "the calibration")
     with open(FIXTURE, "rb") as f:
         raw = f.read()
     dc = calibration.device_calibration_from_json_string(raw.decode())
@@ -161,14 +169,12 @@ def main():
         "fixture_sha256": hashlib.sha256(raw).hexdigest(),
         "cameras": cams,
     }
-    with open(OUT, "w") as f:
-        json.dump(out, f, separators=(",", ":"))
-        f.write("\n")
+    outputs.write_json(args.out, out, args.replace, indent=None, separators=(",", ":"))
     n_pts = sum(len(c["points"]) for c in cams)
     n_pix = sum(len(c["query_pixels"]) for c in cams)
     n_valid = sum(p is not None for c in cams for p in c["pixels"])
-    print(f"wrote {OUT}: {n_pts} points ({n_valid} inside the valid FOV), {n_pix} pixels, "
-          f"{os.path.getsize(OUT)} bytes")
+    print(f"wrote {args.out}: {n_pts} points ({n_valid} inside the valid FOV), {n_pix} pixels, "
+          f"{os.path.getsize(args.out)} bytes")
 
 
 if __name__ == "__main__":

@@ -10,14 +10,16 @@ OpenCV's and are not tested here.
 
 Run (numpy, PyPI opencv-python-headless):
     .venv-aria/bin/pip install opencv-python-headless
-    .venv-aria/bin/python tools/make_kb4_golden.py
+    .venv-aria/bin/python tools/make_kb4_golden.py --replace   # [--out PATH] (a new file)
 """
-import json
+import argparse
 import math
 import os
 
 import cv2
 import numpy as np
+
+import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "tests", "fixtures", "kb4_golden.json")
@@ -33,6 +35,11 @@ CAMERAS = [
 
 
 def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", default=OUT, help="the golden file (default: the shipped one)")
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
+    args = ap.parse_args()
+    outputs.check_new(args.out, "--out", args.replace)
     rng = np.random.default_rng(SEED)
     out = {"generator": "tools/make_kb4_golden.py", "oracle": f"OpenCV {cv2.__version__} cv2.fisheye",
            "cameras": []}
@@ -67,10 +74,8 @@ def main():
             rays.append([float(c) for c in v / np.linalg.norm(v)])
         out["cameras"].append({**cam, "points": pts, "pixels": proj[0].tolist(),
                                "query_pixels": pix, "rays": rays})
-    with open(OUT, "w") as f:
-        json.dump(out, f, separators=(",", ":"))
-        f.write("\n")
-    print(f"wrote {OUT}: {os.path.getsize(OUT)} bytes")
+    outputs.write_json(args.out, out, args.replace, indent=None, separators=(",", ":"))
+    print(f"wrote {args.out}: {os.path.getsize(args.out)} bytes")
 
 
 if __name__ == "__main__":

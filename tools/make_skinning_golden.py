@@ -7,7 +7,8 @@ and smplx's outputs in float64: all 55 joints, all vertices for the first FULL_P
 and a fixed vertex subset for every body (float64; the full-mesh bodies, all near the origin,
 are stored as float32, rounding < 1e-7 m).
 
-Run (needs torch + smplx 0.1.28):  python tools/make_skinning_golden.py [default] [random]
+Run (needs torch + smplx 0.1.28):  python tools/make_skinning_golden.py [default] [random] --replace
+(the shipped files are not overwritten without --replace).
 """
 import os
 import sys
@@ -18,6 +19,7 @@ import smplx
 import torch
 
 sys.path.insert(0, os.path.dirname(__file__))
+import outputs  # noqa: E402
 import random_smplx_model  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -72,27 +74,35 @@ def run_smplx(model_dir, n_betas, n_expr, bodies):
     return pose.numpy(), betas.numpy(), expr.numpy(), transl.numpy(), out.vertices.numpy(), out.joints[:, :55].numpy()
 
 
-def write(name, model_dir, n_betas, n_expr, seed):
+def write(name, model_dir, n_betas, n_expr, seed, replace):
     rng = np.random.default_rng(seed)
     bodies = poses_and_shapes(rng, n_betas, n_expr)
     pose, betas, expr, transl, verts, joints = run_smplx(model_dir, n_betas, n_expr, bodies)
     subset = np.sort(rng.choice(verts.shape[1], SUBSET, replace=False)).astype(np.int64)
     path = os.path.join(FIX, name)
-    np.savez_compressed(path, poses=pose, betas=betas, expression=expr, transl=transl, joints=joints,
-                        subset=subset, vertices_subset=verts[:, subset],
-                        vertices_full=verts[:FULL_POSES].astype(np.float32))
+    with outputs.writing(path, replace) as tmp, open(tmp, "wb") as f:
+        np.savez_compressed(f, poses=pose, betas=betas, expression=expr, transl=transl, joints=joints,
+                            subset=subset, vertices_subset=verts[:, subset],
+                            vertices_full=verts[:FULL_POSES].astype(np.float32))
     print(f"wrote {path}: {len(bodies)} bodies, {verts.shape[1]} vertices, {os.path.getsize(path)} bytes")
 
 
 def main():
-    which = sys.argv[1:] or ["default", "random"]
+    replace = "--replace" in sys.argv[1:]
+    which = [a for a in sys.argv[1:] if a != "--replace"] or ["default", "random"]
+    unknown = [a for a in which if a not in ("default", "random")]
+    if unknown:
+        sys.exit(f"usage: make_skinning_golden.py [default] [random] [--replace] (not {' '.join(unknown)})")
+    outputs.check_new_all([os.path.join(FIX, f"skinning_golden_{w}.npz") for w in which],
+                          "golden", replace, parents=True)
     os.makedirs(FIX, exist_ok=True)
     if "default" in which:
-        write("skinning_golden_default.npz", os.path.join(ROOT, "assets", "body"), 10, 10, seed=1)
+        write("skinning_golden_default.npz", os.path.join(ROOT, "assets", "body"), 10, 10, seed=1,
+              replace=replace)
     if "random" in which:
         with tempfile.TemporaryDirectory() as tmp:
             np.savez(os.path.join(tmp, "SMPLX_NEUTRAL.npz"), **random_smplx_model.build())
-            write("skinning_golden_random.npz", tmp, 300, 100, seed=2)
+            write("skinning_golden_random.npz", tmp, 300, 100, seed=2, replace=replace)
 
 
 if __name__ == "__main__":

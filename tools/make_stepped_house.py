@@ -7,13 +7,15 @@ between the den and the kitchen a doorway with a middle step (z = 0.02): steps o
 0.14-0.17 m everywhere. Walls 0.15 m thick and 2.6 m high; a sofa, a table, a kitchen
 counter and a bed. Every part is a named object (`o`), boxes closed with outward normals.
 
-    python3 tools/make_stepped_house.py assets/scenes/stepped_house.obj
+    python3 tools/make_stepped_house.py OUT.obj [--replace]
 
-The same arguments give the same bytes. Refuses to overwrite an existing file.
+The same arguments give the same bytes. Refuses to overwrite an existing file unless
+--replace (e.g. assets/scenes/stepped_house.obj, made again on purpose).
 """
 
 import sys
-from pathlib import Path
+
+import outputs
 
 WALL_T = 0.15
 WALL_H = 2.6
@@ -87,14 +89,12 @@ def obj_text():
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: make_stepped_house.py OUT.obj")
-    out = Path(sys.argv[1])
-    if out.exists():
-        sys.exit(f"{out} exists; not overwritten")
-    tmp = out.with_name(out.name + ".partial")
-    tmp.write_text(obj_text())
-    tmp.rename(out)
+    args = [a for a in sys.argv[1:] if a != "--replace"]
+    replace = len(args) < len(sys.argv) - 1
+    if len(args) != 1:
+        sys.exit("usage: make_stepped_house.py OUT.obj [--replace]")
+    out = outputs.check_new(args[0], "OUT.obj", replace)
+    outputs.write_text(out, obj_text(), replace)
     print(f"wrote {out}")
 
 

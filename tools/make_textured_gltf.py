@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """A small textured glTF room: the one tests/scene_formats.rs renders and docs/RENDERING.md shows.
 
-    python3 tools/make_textured_gltf.py DIR
+    python3 tools/make_textured_gltf.py DIR [--replace]
 
-Writes DIR/room.gltf, DIR/room.bin and DIR/checker.png: an 8 x 8 m floor carrying a 4 x 4
+Writes DIR/room.gltf, DIR/room.bin and DIR/checker.png (none of them may exist, unless
+--replace; DIR is made if missing): an 8 x 8 m floor carrying a 4 x 4
 texel red-and-blue checker (repeated four times across it) and a 0.2 m wall at x = 3 m, 2.5 m
 tall, one mesh of two primitives with two materials (green on the face towards -x, grey on the
 rest). glTF is y up. Standard library only. docs/RENDERING.md renders it with
@@ -16,26 +17,38 @@ import sys
 import zlib
 from pathlib import Path
 
+import outputs
 
-def png(path, w, h, rows):
+FILES = ["checker.png", "room.bin", "room.gltf"]
+
+
+def png(path, w, h, rows, replace):
     def chunk(kind, data):
         c = kind + data
         return struct.pack(">I", len(data)) + c + struct.pack(">I", zlib.crc32(c) & 0xFFFFFFFF)
 
     raw = b"".join(b"\0" + bytes(v for px in row for v in px) for row in rows)
-    path.write_bytes(
+    outputs.write_bytes(
+        path,
         b"\x89PNG\r\n\x1a\n"
         + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
         + chunk(b"IDAT", zlib.compress(raw))
-        + chunk(b"IEND", b"")
+        + chunk(b"IEND", b""),
+        replace,
     )
 
 
 def main():
-    out = Path(sys.argv[1])
+    args = [a for a in sys.argv[1:] if a != "--replace"]
+    replace = len(args) < len(sys.argv) - 1
+    if len(args) != 1:
+        sys.exit("usage: make_textured_gltf.py DIR [--replace]")
+    out = Path(args[0])
+    outputs.check_new_all([out / f for f in FILES], "DIR", replace, parents=True)
     out.mkdir(parents=True, exist_ok=True)
     png(out / "checker.png", 4, 4,
-        [[(230, 20, 20) if (x + y) % 2 == 0 else (20, 20, 230) for x in range(4)] for y in range(4)])
+        [[(230, 20, 20) if (x + y) % 2 == 0 else (20, 20, 230) for x in range(4)] for y in range(4)],
+        replace)
     v = [(-4, -4, 0), (4, -4, 0), (4, 4, 0), (-4, 4, 0)]
     for z in (0.0, 2.5):
         v += [(3.0, -4, z), (3.2, -4, z), (3.2, 4, z), (3.0, 4, z)]
@@ -61,7 +74,7 @@ def main():
     for a in arrays:
         views.append({"buffer": 0, "byteOffset": len(binary), "byteLength": len(a)})
         binary += a + b"\0" * (-len(a) % 4)
-    (out / "room.bin").write_bytes(binary)
+    outputs.write_bytes(out / "room.bin", binary, replace)
     bounds = lambda ps: ([min(p[k] for p in ps) for k in range(3)], [max(p[k] for p in ps) for k in range(3)])
     (flo, fhi), (wlo, whi) = bounds(floor_pos), bounds(wall_pos)
     doc = {
@@ -95,7 +108,7 @@ def main():
         "bufferViews": views,
         "buffers": [{"uri": "room.bin", "byteLength": len(binary)}],
     }
-    (out / "room.gltf").write_text(json.dumps(doc, indent=2))
+    outputs.write_text(out / "room.gltf", json.dumps(doc, indent=2), replace)
     print(f"wrote {out / 'room.gltf'}")
 
 

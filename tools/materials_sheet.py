@@ -4,10 +4,11 @@ config: only `render.materials.seed` changes), and writes a contact sheet of the
 frame of each, left to right: keep, fill, all, fill seed 1, fill seed 2 (`--variants`).
 
     python3 tools/materials_sheet.py [--config configs/default.toml] [--duration 2]
-        [--frame 40] [--out out/materials_sheet] [--sheet docs/materials_apartment.png]
+        [--frame 40] [--out out/materials_sheet] [--sheet docs/materials_apartment.png] [--replace]
 
 Uses the release binaries (cargo build --release first); standard library only. The variant
-configs are written beside the config (paths in it are relative to its folder) and removed.
+configs are written beside the config (paths in it are relative to its folder) and removed. A
+variant's take already in --out is used as it is; the sheet is not overwritten without --replace.
 """
 import argparse
 import json
@@ -15,6 +16,8 @@ import os
 import re
 import subprocess
 import sys
+
+import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 VARIANTS = [("keep", 0), ("fill", 0), ("all", 0), ("fill", 1), ("fill", 2)]
@@ -36,9 +39,9 @@ def main():
                     help="MODE:SEED of each column (default: keep:0 fill:0 all:0 fill:1 fill:2)")
     ap.add_argument("--out", default=os.path.join(ROOT, "out/materials_sheet"))
     ap.add_argument("--sheet", default=os.path.join(ROOT, "docs/materials_apartment.png"))
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --sheet")
     args = ap.parse_args()
-    if os.path.exists(args.sheet):
-        sys.exit(f"{args.sheet} exists; not overwriting it")
+    outputs.check_new(args.sheet, "--sheet", args.replace)
     run = os.path.join(ROOT, "target/release/egogen-run")
     egogen = os.path.join(ROOT, "target/release/egogen")
     with open(args.config) as f:
@@ -67,8 +70,9 @@ def main():
         patterns = sorted({m["pattern"] for m in drawn})
         print(f"{mode} seed {seed}: {len(drawn)} objects drawn ({', '.join(patterns) or 'none'})")
         frames.append(os.path.join(cam, frame["file"]))
-    subprocess.run([egogen, "inspect", *frames, "--pass", "rgb", "--exposure", "auto",
-                    "--preview", args.sheet], check=True, stdout=subprocess.DEVNULL)
+    with outputs.writing(args.sheet, args.replace) as tmp:
+        subprocess.run([egogen, "inspect", *frames, "--pass", "rgb", "--exposure", "auto",
+                        "--preview", tmp], check=True, stdout=subprocess.DEVNULL)
     print("wrote", args.sheet)
 
 

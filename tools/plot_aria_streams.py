@@ -2,7 +2,7 @@
 
     egogen synth configs/apartment3.toml
     egogen aria export out/apartment3 --out out/apartment3_aria --gaze-rate-hz 200
-    python tools/plot_aria_streams.py out/apartment3 out/apartment3_aria crowd_00 docs/aria_streams.png
+    python tools/plot_aria_streams.py out/apartment3 out/apartment3_aria crowd_00 docs/aria_streams.png [--replace]
 
 Needs projectaria-tools, numpy, matplotlib. Left: the device trajectory from above with a gaze
 ray every 0.5 s (to its depth), the other agents' paths in grey. Middle: imu-right's
@@ -23,8 +23,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 from projectaria_tools.core import calibration, mps
 
+import outputs
 
-def main(take, aria, wearer, out):
+
+def main(take, aria, wearer, out, replace=False):
+    outputs.check_new(out, "OUT", replace)
+    outputs.check_outside(out, "OUT", take, "the take")
+    outputs.check_outside(out, "OUT", aria, "the Aria export")
     take, aria = Path(take), Path(aria) / wearer
     traj = mps.read_closed_loop_trajectory(str(aria / "slam" / "closed_loop_trajectory.csv"))
     device = calibration.device_calibration_from_json(str(aria / "device_calibration.json"))
@@ -100,11 +105,15 @@ def main(take, aria, wearer, out):
     ax[4].set_xlabel("seconds")
     ax[4].legend(loc="upper right", fontsize=8)
     fig.tight_layout()
-    fig.savefig(out, dpi=80)
+    with outputs.writing(out, replace) as tmp:
+        fig.savefig(tmp, dpi=80, format=outputs.format_of(out))
     print(f"wrote {out}: {len(durations)} fixations by I-VT, median {np.median(durations):.3f} s, "
           f"mean {durations.mean():.3f} s; gaze angle median {np.median(ecc):.1f} deg, "
           f"90th percentile {np.percentile(ecc, 90):.1f} deg")
 
 
 if __name__ == "__main__":
-    main(*sys.argv[1:])
+    args = [a for a in sys.argv[1:] if a != "--replace"]
+    if len(args) != 4:
+        sys.exit("usage: plot_aria_streams.py TAKE ARIA WEARER OUT [--replace]")
+    main(*args, replace="--replace" in sys.argv[1:])

@@ -2,7 +2,7 @@
 primitive), side by side for several sets, from the JSON files that
 `egogen motion stats --json` and `egogen motion eval --pace-json` write.
 
-    python tools/plot_motion_paces.py --out docs/motion_paces.png \
+    python tools/plot_motion_paces.py --out docs/motion_paces.png [--replace] \
         "old training set=old_stats.json:train" "new training set=new_stats.json:train" \
         "random-latent chains=eval_paces.json:random_chains"
 
@@ -11,7 +11,6 @@ Each argument is `LABEL=FILE:KEY`, KEY a set in that file (`train`, `held_out`,
 """
 import argparse
 import json
-import os
 import sys
 
 import matplotlib
@@ -19,6 +18,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+import outputs  # noqa: E402
 
 
 def load(spec):
@@ -40,9 +41,9 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("sets", nargs="+", help="LABEL=FILE:KEY")
     ap.add_argument("--out", required=True, help="output PNG (must not exist)")
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     args = ap.parse_args()
-    if os.path.exists(args.out):
-        sys.exit(f"error: {args.out} already exists; not overwriting it")
+    outputs.check_new(args.out, "--out", args.replace)
     sets = [load(s) for s in args.sets]
     fig, (ax_v, ax_t) = plt.subplots(1, 2, figsize=(12, 4.2))
     v_bins = np.arange(0.0, 2.51, 0.1)
@@ -61,9 +62,8 @@ def main():
     ax_t.set_yscale("log")
     ax_t.legend(fontsize=8)
     fig.tight_layout()
-    tmp = args.out + ".partial.png"
-    fig.savefig(tmp, dpi=110)
-    os.replace(tmp, args.out)
+    with outputs.writing(args.out, args.replace) as tmp:
+        fig.savefig(tmp, dpi=110, format=outputs.format_of(args.out))
     print(f"wrote {args.out}")
 
 

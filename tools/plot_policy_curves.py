@@ -3,13 +3,12 @@ writes: mean episode return, success share, episode length (primitives) and KL(Ï
 per update (thin) and for the validation episodes (dots), against environment steps, with
 the stage boundary marked.
 
-    python tools/plot_policy_curves.py assets/policy/train_log.jsonl --out docs/policy_curves.png
+    python tools/plot_policy_curves.py assets/policy/train_log.jsonl --out docs/policy_curves.png [--replace]
 
 Needs numpy and matplotlib (pip install matplotlib).
 """
 import argparse
 import json
-import os
 import sys
 
 import matplotlib
@@ -17,6 +16,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+import outputs  # noqa: E402
 
 PANELS = [
     ("episode_return", "episode_return", "episode return"),
@@ -30,9 +31,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("log")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     args = ap.parse_args()
-    if os.path.exists(args.out):
-        sys.exit(f"error: {args.out} already exists; not overwriting it")
+    outputs.check_new(args.out, "--out", args.replace)
+    outputs.check_outside(args.out, "--out", args.log, "the log")
     rows = []
     try:
         with open(args.log) as f:
@@ -68,7 +70,8 @@ def main():
     wall = rows[-1]["wall_s"]
     fig.suptitle(f"{len(rows)} updates, {int(steps[-1]):,} steps, {wall / 60:.0f} min", fontsize=10)
     fig.tight_layout()
-    fig.savefig(args.out, dpi=110)
+    with outputs.writing(args.out, args.replace) as tmp:
+        fig.savefig(tmp, dpi=110, format=outputs.format_of(args.out))
     print(f"wrote {args.out}")
 
 

@@ -4,13 +4,12 @@ mocap with one joint bent by 90°, with the prior's plausibility limit, from the
 `egogen policy pose-prior --out PRIOR --scores-json SCORES` writes.
 
     python tools/plot_pose_prior.py --prior assets/policy/pose_prior.json \
-        --scores scores.json --out docs/pose_prior_scores.png
+        --scores scores.json --out docs/pose_prior_scores.png [--replace]
 
 Scores above 6 are drawn in the last bin. Needs numpy and matplotlib (pip install matplotlib).
 """
 import argparse
 import json
-import os
 import sys
 
 import matplotlib
@@ -18,6 +17,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+
+import outputs  # noqa: E402
 
 GROUPS = [
     ("held_out_mocap", "held-out mocap"),
@@ -40,9 +41,9 @@ def main():
     ap.add_argument("--prior", required=True)
     ap.add_argument("--scores", required=True)
     ap.add_argument("--out", required=True)
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     args = ap.parse_args()
-    if os.path.exists(args.out):
-        sys.exit(f"error: {args.out} already exists; not overwriting it")
+    outputs.check_new(args.out, "--out", args.replace)
     prior = read_json(args.prior, "a pose prior")
     scores = read_json(args.scores, "pose-prior scores")
     limit = prior.get("plausible_max_nll")
@@ -64,7 +65,8 @@ def main():
         f"{prior.get('plausible_quantile', '?')}; ≥ {CLIP:g} in the last bin)"
     )
     fig.tight_layout()
-    fig.savefig(args.out, dpi=110)
+    with outputs.writing(args.out, args.replace) as tmp:
+        fig.savefig(tmp, dpi=110, format=outputs.format_of(args.out))
     print(f"wrote {args.out}")
 
 

@@ -4,7 +4,7 @@ one panel pair per camera; plain path tracing and OpenImageDenoise (with its acc
 fast prefilter) as lines labelled with their sample counts, adaptive sampling as separate
 points, the shipped setting circled.
 
-    python tools/plot_render_quality.py target/render_quality_0.25.json --out docs/render_quality.png
+    python tools/plot_render_quality.py target/render_quality_0.25.json --out docs/render_quality.png [--replace]
 
 Needs numpy and matplotlib (pip install matplotlib).
 """
@@ -17,14 +17,19 @@ import matplotlib.ticker
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+import outputs  # noqa: E402
+
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("json", help="render_quality_<scale>.json written by the bench")
     ap.add_argument("--out", required=True, help="PNG to write")
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     ap.add_argument("--shipped", default="4,fast",
                     help="samples[,accurate|fast] to circle (no prefilter: plain path tracing)")
     args = ap.parse_args()
+    outputs.check_new(args.out, "--out", args.replace)
+    outputs.check_outside(args.out, "--out", args.json, "the bench's JSON")
     rows = json.load(open(args.json))
     for r in rows:  # JSON of earlier runs: no prefilter recorded, Cycles' default (accurate)
         r.setdefault("denoise_prefilter", "accurate" if r["denoise"] else None)
@@ -72,7 +77,8 @@ def main():
             if row == 0:
                 ax.legend(loc="lower right", fontsize=8)
     fig.tight_layout()
-    fig.savefig(args.out, dpi=110)
+    with outputs.writing(args.out, args.replace) as tmp:
+        fig.savefig(tmp, dpi=110, format=outputs.format_of(args.out))
     print(f"wrote {args.out}")
 
 

@@ -4,23 +4,26 @@ SAMP (licence-gated; not shipped) stores a pickle with `pose_est_fullposes` (N, 
 `pose_est_trans` (N, 3), `shape_est_betas` and `mocap_framerate`. egogen reads `.npz` only
 (no pickle parsing in Rust), so this copies those arrays, unchanged, into an `.npz`.
 
-    python tools/samp_pkl_to_npz.py IN.pkl OUT.npz
+    python tools/samp_pkl_to_npz.py IN.pkl OUT.npz [--replace]
 """
-import os
 import pickle
 import sys
 
 import numpy as np
 
+import outputs
+
 KEYS = ["pose_est_fullposes", "pose_est_trans", "shape_est_betas", "mocap_framerate"]
 
 
 def main(argv):
+    replace = "--replace" in argv[1:]
+    argv = [a for a in argv if a != "--replace"]
     if len(argv) != 3:
         sys.exit(__doc__)
     src, dst = argv[1], argv[2]
-    if os.path.exists(dst):
-        sys.exit(f"{dst} exists; not overwriting it")
+    outputs.check_new(dst, "OUT.npz", replace)
+    outputs.check_outside(dst, "OUT.npz", src, "IN.pkl")
     with open(src, "rb") as f:
         data = pickle.load(f, encoding="latin1")
     missing = [k for k in KEYS if k not in data]
@@ -29,10 +32,11 @@ def main(argv):
     poses = np.asarray(data["pose_est_fullposes"], dtype=np.float64)
     if poses.ndim != 2 or poses.shape[1] != 165:
         sys.exit(f"{src}: `pose_est_fullposes` has shape {poses.shape}, expected (N, 165)")
-    np.savez(dst, pose_est_fullposes=poses,
-             pose_est_trans=np.asarray(data["pose_est_trans"], dtype=np.float64),
-             shape_est_betas=np.asarray(data["shape_est_betas"], dtype=np.float64),
-             mocap_framerate=np.float64(data["mocap_framerate"]))
+    with outputs.writing(dst, replace) as tmp, open(tmp, "wb") as f:
+        np.savez(f, pose_est_fullposes=poses,
+                 pose_est_trans=np.asarray(data["pose_est_trans"], dtype=np.float64),
+                 shape_est_betas=np.asarray(data["shape_est_betas"], dtype=np.float64),
+                 mocap_framerate=np.float64(data["mocap_framerate"]))
     print(f"wrote {dst}: {poses.shape[0]} frames")
 
 

@@ -4,8 +4,8 @@ record (base tone, the regions tinted through the body model's masks, the detail
 side.
 
     ~/.cache/egogen/bpy-4.5/bin/python tools/skin_regions_sheet.py ANNOTATIONS.json [...]
-        [--model assets/body/SMPLX_NEUTRAL.npz] [--out docs/skin_regions.png] [--size 256]
-        [--views face,hand] [--samples 64] [--detail recorded|off|both]
+        [--model assets/body/SMPLX_NEUTRAL.npz] [--out docs/skin_regions.png] [--replace]
+        [--size 256] [--views face,hand] [--samples 64] [--detail recorded|off|both]
 
 Views: `face` (three-quarter, head and ears), `hand` (the left hand's back), `closeup` (the
 eyes, brows and nose, frontal: what the detail map adds is seen best here).
@@ -22,6 +22,9 @@ import sys
 import bpy
 import numpy as np
 from mathutils import Vector
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # also under `blender --python`
+import outputs  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -56,12 +59,14 @@ def main():
     ap.add_argument("annotations", nargs="+")
     ap.add_argument("--model", default=os.path.join(ROOT, "assets/body/SMPLX_NEUTRAL.npz"))
     ap.add_argument("--out", default=os.path.join(ROOT, "docs/skin_regions.png"))
+    ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     ap.add_argument("--size", type=int, default=256)
     ap.add_argument("--views", default="face,hand", help="comma-separated: face, hand, closeup")
     ap.add_argument("--samples", type=int, default=64)
     ap.add_argument("--detail", choices=("recorded", "off", "both"), default="recorded",
                     help="the detail map as recorded, none, or each skin without and with it side by side")
     args = ap.parse_args(sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else None)
+    outputs.check_new(args.out, "--out", args.replace)
 
     rs = shard_script()
     skins = skins_of(args.annotations)
@@ -149,9 +154,10 @@ def main():
     sheet = np.concatenate(tiles, 1)
     out = bpy.data.images.new("sheet", sheet.shape[1], sheet.shape[0], alpha=True)
     out.pixels = sheet.ravel()
-    out.filepath_raw = os.path.abspath(args.out)
     out.file_format = "PNG"
-    out.save()
+    with outputs.writing(args.out, args.replace) as tmp:
+        out.filepath_raw = os.path.abspath(tmp)
+        out.save()
     print(f"wrote {args.out} ({len(skins)} skins)")
 
 

@@ -30,9 +30,9 @@ Install (Python >= 3.11; Open3D's Linux wheel needs the system's libusb-1.0, e.g
 Run (TAKE: the take's folder, e.g. out/default; each prints its table in seconds for a
 take of ~40 frames):
 
-  VENV/bin/python tools/vision_checks.py features TAKE [--camera NAME] [--max-frames N] [--rectify] [--mask-people] [--threads N] [--json OUT]
-  VENV/bin/python tools/vision_checks.py sfm TAKE [--camera NAME] [--max-frames N] [--rectify | --colmap-defaults] [--mask-people] [--threads N] [--json OUT]
-  VENV/bin/python tools/vision_checks.py tsdf TAKE [--camera NAME] [--voxel-m 0.02] [--max-frames N] [--scene FILE] [--json OUT]
+  VENV/bin/python tools/vision_checks.py features TAKE [--camera NAME] [--max-frames N] [--rectify] [--mask-people] [--threads N] [--json OUT [--replace]]
+  VENV/bin/python tools/vision_checks.py sfm TAKE [--camera NAME] [--max-frames N] [--rectify | --colmap-defaults] [--mask-people] [--threads N] [--json OUT [--replace]]
+  VENV/bin/python tools/vision_checks.py tsdf TAKE [--camera NAME] [--voxel-m 0.02] [--max-frames N] [--scene FILE] [--json OUT [--replace]]
 
 Conventions (as docs/RENDERING.md "COLMAP export" uses them with the colmap CLI):
 
@@ -140,6 +140,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+import outputs
 
 
 class ToolError(Exception):
@@ -561,18 +563,11 @@ def print_table(title: str, rows):
         print(f"  {k:<{width}}  {v}")
 
 
-def write_json(path, doc):
+def write_json(path, doc, replace=False):
     if path is None:
         return
-    p = Path(path)
-    if p.parent and not p.parent.is_dir():
-        raise ToolError(f"{p.parent}: no such folder (for --json {path})")
-    if p.exists():
-        raise ToolError(f"--json {path} exists; give a new path (nothing is overwritten)")
-    partial = p.with_name(p.name + ".partial")
-    partial.write_text(json.dumps(doc, indent=2) + "\n")
-    os.replace(partial, p)
-    print(f"wrote {p}")
+    outputs.write_json(path, doc, replace)
+    print(f"wrote {path}")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1379,6 +1374,7 @@ def main(argv=None) -> int:
         p.add_argument("--camera", default="camera-rgb", help="camera name (default camera-rgb)")
         p.add_argument("--max-frames", type=int, default=None, help="only the first N frames")
         p.add_argument("--json", metavar="OUT", default=None, help="write the numbers to this JSON file")
+        p.add_argument("--replace", action="store_true", help="overwrite an existing --json")
 
     def colmap_options(p):
         p.add_argument(
@@ -1422,13 +1418,12 @@ def main(argv=None) -> int:
         os.environ["VISION_CHECKS_DEBUG"] = "1"
 
     try:
-        if args.json is not None and not Path(args.json).resolve().parent.is_dir():
-            raise ToolError(f"{Path(args.json).resolve().parent}: no such folder (for --json {args.json})")
-        if args.json is not None and Path(args.json).exists():
-            raise ToolError(f"--json {args.json} exists; give a new path (nothing is overwritten)")
+        if args.json is not None:
+            outputs.check_new(args.json, "--json", args.replace)
+            outputs.check_outside(args.json, "--json", args.take, "the take")
         res = {"features": cmd_features, "sfm": cmd_sfm, "tsdf": cmd_tsdf, "rays": cmd_rays}[args.cmd](args)
-        write_json(args.json, res)
-    except ToolError as e:
+        write_json(args.json, res, args.replace)
+    except (ToolError, outputs.OutputError) as e:
         print(f"vision_checks {args.cmd}: error: {e}", file=sys.stderr)
         return 2
     except ImportError as e:
