@@ -3,6 +3,8 @@
 //! tool's input is refused; `--replace` overwrites; no `<path>.partial` is left behind. Runs
 //! the system `python3` (standard library only): the helpers' own unit tests
 //! (`tests/tools/test_outputs.py`) and tools whose argument checks need no other package.
+//! Their command lines (`tools/arguments.py`): an option that takes one value is refused when
+//! given twice, as egogen's own commands refuse it (`tests/tools/test_arguments.py`).
 
 mod common;
 
@@ -50,6 +52,57 @@ fn the_output_helpers_pass_their_unit_tests() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("\nOK"), "{err}");
+}
+
+#[test]
+fn the_argument_parser_passes_its_unit_tests() {
+    let out = python(
+        &common::repo_root().join("tests/tools/test_arguments.py"),
+        &[],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("\nOK"), "{err}");
+}
+
+/// A tool given one of its single-value options twice (either form) exits with status 2
+/// naming the option, before any work: neither `--png` is written; the same for a switch
+/// of a tool that reads its command line by hand.
+#[test]
+fn a_repeated_option_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let summary = dir.path().join("summary.jsonl");
+    std::fs::write(&summary, b"").unwrap();
+    let (a, b) = (dir.path().join("a.png"), dir.path().join("b.png"));
+    let png_b = format!("--png={}", b.display());
+    let out = python(
+        &tool("dwelling_survey.py"),
+        &[&summary, &"--png", &a, &png_b],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "argument --png: given twice (--png {}, --png {}); give it once",
+            a.display(),
+            b.display()
+        )),
+        "{err}"
+    );
+    assert!(!a.exists() && !b.exists(), "written:\n{err}");
+
+    let obj = dir.path().join("house.obj");
+    let out = python(
+        &tool("make_stepped_house.py"),
+        &[&obj, &"--replace", &"--replace"],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("argument --replace: given twice (--replace, --replace)"),
+        "{err}"
+    );
+    assert!(!obj.exists(), "written:\n{err}");
 }
 
 /// `make_textured_gltf.py DIR` with one of its files already in DIR writes none of them.

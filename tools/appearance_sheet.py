@@ -9,18 +9,18 @@ seed's skin tones, HDRI, lamp and headset offset printed beside it.
 Uses the release binaries (cargo build --release first); standard library only. A seed's take
 already in --out is used as it is; the sheet is not overwritten without --replace.
 """
-import argparse
 import json
 import os
 import subprocess
 
+import arguments
 import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = arguments.StrictParser()
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4, 5])
     ap.add_argument("--config", default=os.path.join(ROOT, "configs/appearance.toml"))
     ap.add_argument("--out", default=os.path.join(ROOT, "out/appearance_seeds"))

@@ -17,7 +17,6 @@ With `--against BIN`, only the campaign is made, by this checkout's `egogen-run`
 the single-node cluster of `tools/slurm_single_node.sh`).
 """
 
-import argparse
 import json
 import re
 import subprocess
@@ -26,6 +25,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import arguments
 import outputs
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -92,7 +92,7 @@ def utilisation(reports):
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = arguments.StrictParser()
     ap.add_argument("--takes", type=int, default=6)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--out", type=Path, default=None, help="folder for the runs (must not exist)")

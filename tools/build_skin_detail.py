@@ -15,7 +15,6 @@ The shipped files come from `young_lightskinned_female_diffuse_fix_nosehole-albe
 akjava/makehuman-godot3-simple-pbr (MIT; MakeHuman's CC0 skin retouched), assets/NOTICE.
 Needs numpy, scipy and Pillow (tools/vision_checks_requirements.txt installs them).
 """
-import argparse
 import os
 import sys
 
@@ -23,6 +22,7 @@ import numpy as np
 from PIL import Image
 from scipy import ndimage
 
+import arguments
 import outputs
 
 SIZE = 1024
@@ -34,7 +34,7 @@ def srgb_to_linear(c):
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = arguments.StrictParser()
     ap.add_argument("albedo")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.dirname(
         os.path.abspath(__file__))), "assets/body/textures"))

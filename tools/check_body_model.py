@@ -10,14 +10,15 @@ left-knee bend moves only the left lower leg and foot backwards/up; the eye join
 inside the head in front of the head joint; plausible stature (neutral 1.6-1.8 m); betas +-3 change
 stature / volume; array dtypes and shapes.
 """
-import argparse
 import sys
 
 import numpy as np
 
+import arguments
+
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = arguments.StrictParser()
     ap.add_argument("--dir", default="assets/body")
     ap.add_argument("--gender", default="neutral", choices=["neutral", "male", "female"])
     args = ap.parse_args()

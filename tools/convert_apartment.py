@@ -59,7 +59,6 @@ What it does
 """
 from __future__ import annotations
 
-import argparse
 import hashlib
 import json
 import os
@@ -70,6 +69,7 @@ import time
 
 import numpy as np
 
+import arguments
 import outputs
 
 DEFAULT_BLEND = "/usr/share/morse/data/environments/apartment.blend"
@@ -307,7 +307,7 @@ def check(path: str) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n")[0])
     ap.add_argument("--blend", default=DEFAULT_BLEND)
     ap.add_argument("--out", default=os.path.join(
         os.path.dirname(os.path.abspath(__file__)), "..", "assets", "scenes", "apartment.glb"))

@@ -51,7 +51,6 @@ The output is a derivative of the source world: keep its licence and attribution
 """
 from __future__ import annotations
 
-import argparse
 import hashlib
 import io
 import json
@@ -64,6 +63,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+import arguments
 import outputs
 
 
@@ -464,7 +464,7 @@ def check(path: str) -> None:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n")[0])
     ap.add_argument("world", help="the Gazebo .world file")
     ap.add_argument("--models", required=True, help="folder holding the model://NAME folders")
     ap.add_argument("--out", required=True, help="GLB to write (not overwritten unless --replace)")

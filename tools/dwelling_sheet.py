@@ -14,6 +14,7 @@ import os
 import subprocess
 import sys
 
+import arguments
 import outputs
 
 RUN = """[body]
@@ -48,7 +49,7 @@ def run(cmd):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = arguments.StrictParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seeds", type=int, nargs="+", required=True)
     ap.add_argument("--work", required=True, help="folder for the dwellings and takes (must not exist)")
     ap.add_argument("--out", required=True, help="sheet PNG (must not exist)")

@@ -13,6 +13,7 @@ import json
 import statistics
 import sys
 
+import arguments
 import outputs
 
 
@@ -40,7 +41,7 @@ def histogram(draw, box, values, title, bins=12):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = arguments.StrictParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("summary")
     ap.add_argument("--png")
     ap.add_argument("--replace", action="store_true", help="overwrite an existing --png")

@@ -7,13 +7,13 @@ read as other pixels without an error (not found), and that change nothing read.
 Prints one line of counts. Every flip is written to a scratch copy; FRAME.exr is only read.
 """
 
-import argparse
 import os
 import sys
 import tempfile
 
 import numpy as np
 
+import arguments
 import egogen
 
 
@@ -30,7 +30,7 @@ def same(a, b):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = arguments.StrictParser(description=__doc__.splitlines()[0])
     ap.add_argument("frame", help="an egogen frame file (EXR)")
     args = ap.parse_args()
     data = open(args.frame, "rb").read()

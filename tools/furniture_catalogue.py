@@ -61,6 +61,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from PIL import Image
 
+import arguments
 import outputs
 
 LIBRARY = "BlendSwap-CC-0"
@@ -1457,7 +1458,7 @@ def write_readme(out: str, cat: dict, base_bytes: int, stats: dict, replace: boo
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = arguments.StrictParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("source", nargs="?", help="sweethome3d-furniture_*.deb or BlendSwap-CC-0.sh3f")
     ap.add_argument("--out", default="assets/furniture", help="output folder")
     ap.add_argument("--check", metavar="DIR", help="only check an existing output folder")

@@ -10,10 +10,10 @@ inside it, so a visible one should fall on its body's pixels).
 Needs numpy and OpenEXR, and egogen's reader (`pip install ./python`, or run from the checkout).
 """
 
-import argparse
 import sys
 from pathlib import Path
 
+import arguments
 import outputs
 
 
@@ -65,7 +65,7 @@ def stats(take: Path, camera: str, tolerance: int) -> dict:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("take", type=Path)
     ap.add_argument("--camera", default="camera-rgb")
     ap.add_argument("--tolerance-px", type=int, default=1)

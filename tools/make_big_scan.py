@@ -8,10 +8,10 @@ import sys
 
 import numpy as np
 
+import arguments
 import outputs
 
-args = [a for a in sys.argv[1:] if a != "--replace"]
-replace = len(args) < len(sys.argv) - 1
+args, replace = arguments.switch(sys.argv[1:], "--replace")
 if len(args) != 1:
     sys.exit("usage: make_big_scan.py OUT.ply [--replace]")
 out = outputs.check_new(args[0], "OUT.ply", replace)

@@ -19,7 +19,6 @@ Run (PyPI projectaria-tools 2.3.0, numpy):
     python3 -m venv .venv-aria && .venv-aria/bin/pip install projectaria-tools==2.3.0
     .venv-aria/bin/python tools/make_camera_golden.py --replace   # [--out PATH] (a new file)
 """
-import argparse
 import hashlib
 import math
 import os
@@ -28,6 +27,7 @@ from importlib.metadata import version
 import numpy as np
 from projectaria_tools.core import calibration
 
+import arguments
 import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -146,7 +146,7 @@ def camera_entry(dc, label, rgb_1408, rng):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=OUT, help="the golden file (default: the shipped one)")
     ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     args = ap.parse_args()

@@ -12,13 +12,13 @@ Run (numpy, PyPI opencv-python-headless):
     .venv-aria/bin/pip install opencv-python-headless
     .venv-aria/bin/python tools/make_kb4_golden.py --replace   # [--out PATH] (a new file)
 """
-import argparse
 import math
 import os
 
 import cv2
 import numpy as np
 
+import arguments
 import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -35,7 +35,7 @@ CAMERAS = [
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=OUT, help="the golden file (default: the shipped one)")
     ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     args = ap.parse_args()

@@ -19,6 +19,7 @@ import smplx
 import torch
 
 sys.path.insert(0, os.path.dirname(__file__))
+import arguments  # noqa: E402
 import outputs  # noqa: E402
 import random_smplx_model  # noqa: E402
 
@@ -88,8 +89,8 @@ def write(name, model_dir, n_betas, n_expr, seed, replace):
 
 
 def main():
-    replace = "--replace" in sys.argv[1:]
-    which = [a for a in sys.argv[1:] if a != "--replace"] or ["default", "random"]
+    which, replace = arguments.switch(sys.argv[1:], "--replace")
+    which = which or ["default", "random"]
     unknown = [a for a in which if a not in ("default", "random")]
     if unknown:
         sys.exit(f"usage: make_skinning_golden.py [default] [random] [--replace] (not {' '.join(unknown)})")

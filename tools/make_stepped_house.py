@@ -15,6 +15,7 @@ The same arguments give the same bytes. Refuses to overwrite an existing file un
 
 import sys
 
+import arguments
 import outputs
 
 WALL_T = 0.15
@@ -89,8 +90,7 @@ def obj_text():
 
 
 def main():
-    args = [a for a in sys.argv[1:] if a != "--replace"]
-    replace = len(args) < len(sys.argv) - 1
+    args, replace = arguments.switch(sys.argv[1:], "--replace")
     if len(args) != 1:
         sys.exit("usage: make_stepped_house.py OUT.obj [--replace]")
     out = outputs.check_new(args[0], "OUT.obj", replace)

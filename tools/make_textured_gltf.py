@@ -17,6 +17,7 @@ import sys
 import zlib
 from pathlib import Path
 
+import arguments
 import outputs
 
 FILES = ["checker.png", "room.bin", "room.gltf"]
@@ -39,8 +40,7 @@ def png(path, w, h, rows, replace):
 
 
 def main():
-    args = [a for a in sys.argv[1:] if a != "--replace"]
-    replace = len(args) < len(sys.argv) - 1
+    args, replace = arguments.switch(sys.argv[1:], "--replace")
     if len(args) != 1:
         sys.exit("usage: make_textured_gltf.py DIR [--replace]")
     out = Path(args[0])

@@ -10,13 +10,13 @@ Uses the release binaries (cargo build --release first); standard library only. 
 configs are written beside the config (paths in it are relative to its folder) and removed. A
 variant's take already in --out is used as it is; the sheet is not overwritten without --replace.
 """
-import argparse
 import json
 import os
 import re
 import subprocess
 import sys
 
+import arguments
 import outputs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -30,7 +30,7 @@ def with_materials(text, mode, seed):
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = arguments.StrictParser()
     ap.add_argument("--config", default=os.path.join(ROOT, "configs/default.toml"))
     ap.add_argument("--duration", type=float, default=2.0, help="seconds of motion")
     ap.add_argument("--frame", type=int, default=40, help="the motion frame shown")

@@ -13,13 +13,14 @@ join the walk beside the clips' own, frames with the pelvis over a wall, activit
     python3 tools/measure_activities.py ... --scenes dwelling:5000 dwelling:5001 --seeds 0  # generated dwellings
 """
 
-import argparse
 import json
 import statistics
 import subprocess
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
+
+import arguments
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -75,7 +76,7 @@ def frames_of(segments, frames):
 
 
 def main():
-    ap = argparse.ArgumentParser()
+    ap = arguments.StrictParser()
     ap.add_argument("--bin", default=str(ROOT / "target/release/egogen"))
     ap.add_argument("--scenes", nargs="+", default=["apartment", "small_house"])
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2, 3, 4, 5])

@@ -23,6 +23,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from projectaria_tools.core import calibration, mps
 
+import arguments
 import outputs
 
 
@@ -113,7 +114,7 @@ def main(take, aria, wearer, out, replace=False):
 
 
 if __name__ == "__main__":
-    args = [a for a in sys.argv[1:] if a != "--replace"]
+    args, replace = arguments.switch(sys.argv[1:], "--replace")
     if len(args) != 4:
         sys.exit("usage: plot_aria_streams.py TAKE ARIA WEARER OUT [--replace]")
-    main(*args, replace="--replace" in sys.argv[1:])
+    main(*args, replace=replace)

@@ -9,7 +9,6 @@ primitive), side by side for several sets, from the JSON files that
 Each argument is `LABEL=FILE:KEY`, KEY a set in that file (`train`, `held_out`,
 `train_primitives`, `random_chains`). Needs numpy and matplotlib (pip install matplotlib).
 """
-import argparse
 import json
 import sys
 
@@ -19,6 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+import arguments  # noqa: E402
 import outputs  # noqa: E402
 
 
@@ -38,7 +38,7 @@ def load(spec):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("sets", nargs="+", help="LABEL=FILE:KEY")
     ap.add_argument("--out", required=True, help="output PNG (must not exist)")
     ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")

@@ -7,7 +7,6 @@ the stage boundary marked.
 
 Needs numpy and matplotlib (pip install matplotlib).
 """
-import argparse
 import json
 import sys
 
@@ -17,6 +16,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+import arguments  # noqa: E402
 import outputs  # noqa: E402
 
 PANELS = [
@@ -28,7 +28,7 @@ PANELS = [
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("log")
     ap.add_argument("--out", required=True)
     ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")

@@ -8,7 +8,6 @@ mocap with one joint bent by 90°, with the prior's plausibility limit, from the
 
 Scores above 6 are drawn in the last bin. Needs numpy and matplotlib (pip install matplotlib).
 """
-import argparse
 import json
 import sys
 
@@ -18,6 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+import arguments  # noqa: E402
 import outputs  # noqa: E402
 
 GROUPS = [
@@ -37,7 +37,7 @@ def read_json(path, what):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--prior", required=True)
     ap.add_argument("--scores", required=True)
     ap.add_argument("--out", required=True)

@@ -8,7 +8,6 @@ points, the shipped setting circled.
 
 Needs numpy and matplotlib (pip install matplotlib).
 """
-import argparse
 import json
 
 import matplotlib
@@ -17,11 +16,12 @@ import matplotlib.ticker
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+import arguments  # noqa: E402
 import outputs  # noqa: E402
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("json", help="render_quality_<scale>.json written by the bench")
     ap.add_argument("--out", required=True, help="PNG to write")
     ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")

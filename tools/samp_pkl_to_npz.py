@@ -11,17 +11,17 @@ import sys
 
 import numpy as np
 
+import arguments
 import outputs
 
 KEYS = ["pose_est_fullposes", "pose_est_trans", "shape_est_betas", "mocap_framerate"]
 
 
 def main(argv):
-    replace = "--replace" in argv[1:]
-    argv = [a for a in argv if a != "--replace"]
-    if len(argv) != 3:
+    args, replace = arguments.switch(argv[1:], "--replace")
+    if len(args) != 2:
         sys.exit(__doc__)
-    src, dst = argv[1], argv[2]
+    src, dst = args
     outputs.check_new(dst, "OUT.npz", replace)
     outputs.check_outside(dst, "OUT.npz", src, "IN.pkl")
     with open(src, "rb") as f:

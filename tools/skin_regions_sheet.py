@@ -13,7 +13,6 @@ eyes, brows and nose, frontal: what the detail map adds is seen best here).
 Runs in the Python that has Blender's `bpy` (egogen installs it there on first render).
 Skins are taken in order from every file given, duplicates (same tone) once.
 """
-import argparse
 import importlib.util
 import json
 import os
@@ -24,6 +23,7 @@ import numpy as np
 from mathutils import Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # also under `blender --python`
+import arguments  # noqa: E402
 import outputs  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -55,7 +55,7 @@ def look_at(obj, target):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("annotations", nargs="+")
     ap.add_argument("--model", default=os.path.join(ROOT, "assets/body/SMPLX_NEUTRAL.npz"))
     ap.add_argument("--out", default=os.path.join(ROOT, "docs/skin_regions.png"))

@@ -128,7 +128,6 @@ naming the file and what was expected, and exit 2.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
@@ -141,6 +140,7 @@ from pathlib import Path
 
 import numpy as np
 
+import arguments
 import outputs
 
 
@@ -1362,7 +1362,7 @@ def cmd_rays(args) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(
+    ap = arguments.StrictParser(
         prog="vision_checks.py",
         description="Standard vision (SIFT, two-view geometry, SfM, TSDF) on a finished egogen take.",
     )
