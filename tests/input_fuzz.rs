@@ -363,6 +363,10 @@ struct Fuzz {
     entry: Option<String>,
     /// Every damaged version may be read (a file the reader does without when it is unusable).
     all_may_read: bool,
+    /// The deadline per case and the folder failing cases are kept in, when not the
+    /// environment's.
+    deadline: Option<Duration>,
+    keep: Option<PathBuf>,
 }
 
 impl Fuzz {
@@ -376,6 +380,8 @@ impl Fuzz {
             beside: Vec::new(),
             entry: None,
             all_may_read: false,
+            deadline: None,
+            keep: None,
         }
     }
 
@@ -406,6 +412,13 @@ impl Fuzz {
         self
     }
 
+    /// Cases past `deadline` hang; failing cases are kept in `keep`.
+    fn checked_with(mut self, deadline: Duration, keep: &Path) -> Fuzz {
+        self.deadline = Some(deadline);
+        self.keep = Some(keep.to_owned());
+        self
+    }
+
     /// Feeds every damaged version to `read`; fails naming each case that panicked, hung or
     /// was refused without naming the file handed to the reader, its files kept.
     fn run<T, E: Display>(self, read: impl Fn(&Path) -> Result<T, E> + Send + Sync + 'static) {
@@ -416,7 +429,8 @@ impl Fuzz {
             None => self.name.clone(),
         };
         let dir = tempfile::tempdir().unwrap();
-        let deadline = deadline();
+        let deadline = self.deadline.unwrap_or_else(deadline);
+        let keep = self.keep.clone().unwrap_or_else(keep_dir);
         let start = Instant::now();
         let (mut readable, mut refused, mut hangs, mut count) = (0, 0, 0, 0);
         let mut failures = Vec::new();
@@ -447,7 +461,7 @@ impl Fuzz {
                 }
             };
             if let Some(failure) = failure {
-                let kept = keep_dir().join(slug(&label)).join(slug(&what));
+                let kept = keep.join(slug(&label)).join(slug(&what));
                 let _ = std::fs::remove_dir_all(&kept);
                 std::fs::create_dir_all(&kept).unwrap();
                 for (name, b) in self.beside.iter().chain([&(self.name.clone(), bytes)]) {
@@ -479,6 +493,57 @@ impl Fuzz {
             "{label}: no damaged version was refused"
         );
     }
+}
+
+/// A reader that hangs, panics or answers without naming the file fails the run, naming the
+/// reader and the case, with the case's files kept; a hanging reader is given up after
+/// [`MAX_HANGS`] hangs.
+#[test]
+fn readers_that_hang_panic_or_do_not_name_the_file_fail_the_run() {
+    let keep = tempfile::tempdir().unwrap();
+    let failure = |read: fn(&Path) -> Result<(), String>| {
+        let run = std::panic::catch_unwind(|| {
+            Fuzz::text("stuck.toml", "a = 1\nb = \"x\"\n", 31)
+                .checked_with(Duration::from_millis(200), keep.path())
+                .run(read)
+        });
+        let payload = run.expect_err("the run passed");
+        payload.downcast_ref::<String>().cloned().unwrap()
+    };
+    let msg = failure(|p| match std::fs::read(p).unwrap().len() {
+        0 => loop {
+            std::thread::park();
+        },
+        _ => Ok(()),
+    });
+    assert!(
+        msg.contains("stuck.toml, first 0 bytes: no answer within 200ms"),
+        "{msg}"
+    );
+    let kept = keep.path().join("stuck_toml").join("first_0_bytes");
+    assert_eq!(std::fs::read(kept.join("stuck.toml")).unwrap(), b"");
+    assert!(std::fs::read_to_string(kept.join("what.txt"))
+        .unwrap()
+        .contains("no answer"));
+
+    let msg = failure(|_| loop {
+        std::thread::park();
+    });
+    assert!(msg.contains("stuck.toml: stopped after 3 hangs"), "{msg}");
+
+    let msg = failure(|p| match std::fs::read(p).unwrap().len() {
+        1 => panic!("index out of range"),
+        _ => Err(format!("{}: bad", p.display())),
+    });
+    assert!(
+        msg.contains("stuck.toml, first 1 bytes: the reader panicked: index out of range"),
+        "{msg}"
+    );
+    let msg = failure(|_| Err("bad value".into()));
+    assert!(
+        msg.contains("the error does not name the file: bad value"),
+        "{msg}"
+    );
 }
 
 /// `what` as a folder name.
