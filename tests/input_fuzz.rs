@@ -280,7 +280,12 @@ fn token_damage(good: &str, rng: &mut Rng, kind: usize) -> (String, String) {
 /// Damaged versions of `good`, made one at a time (a long run of a large file would not fit in
 /// memory at once): truncations, then byte-level changes, and for text half of them
 /// token-level changes.
-fn damaged(good: &[u8], seed: u64, text: bool) -> impl Iterator<Item = (String, Vec<u8>)> + '_ {
+fn damaged(
+    good: &[u8],
+    seed: u64,
+    text: bool,
+    cases: usize,
+) -> impl Iterator<Item = (String, Vec<u8>)> + '_ {
     let n = good.len();
     let cuts = [
         0,
@@ -299,7 +304,7 @@ fn damaged(good: &[u8], seed: u64, text: bool) -> impl Iterator<Item = (String, 
         .map(move |cut| (format!("first {cut} bytes"), good[..cut.min(n)].to_vec()));
     let text = text.then(|| std::str::from_utf8(good).expect("a text seed is UTF-8"));
     let mut rng = Rng(seed);
-    let changed = (0..cases()).map(move |case| match text {
+    let changed = (0..cases).map(move |case| match text {
         Some(t) if case % 2 == 1 => {
             let (what, b) = token_damage(t, &mut rng, case / 2);
             (format!("case {case}: {what}"), b.into_bytes())
@@ -363,8 +368,9 @@ struct Fuzz {
     entry: Option<String>,
     /// Every damaged version may be read (a file the reader does without when it is unusable).
     all_may_read: bool,
-    /// The deadline per case and the folder failing cases are kept in, when not the
+    /// The cases, the deadline per case and the folder failing cases are kept in, when not the
     /// environment's.
+    cases: Option<usize>,
     deadline: Option<Duration>,
     keep: Option<PathBuf>,
 }
@@ -380,6 +386,7 @@ impl Fuzz {
             beside: Vec::new(),
             entry: None,
             all_may_read: false,
+            cases: None,
             deadline: None,
             keep: None,
         }
@@ -412,8 +419,9 @@ impl Fuzz {
         self
     }
 
-    /// Cases past `deadline` hang; failing cases are kept in `keep`.
-    fn checked_with(mut self, deadline: Duration, keep: &Path) -> Fuzz {
+    /// `cases` cases; those past `deadline` hang; failing cases are kept in `keep`.
+    fn checked_with(mut self, cases: usize, deadline: Duration, keep: &Path) -> Fuzz {
+        self.cases = Some(cases);
         self.deadline = Some(deadline);
         self.keep = Some(keep.to_owned());
         self
@@ -434,7 +442,14 @@ impl Fuzz {
         let start = Instant::now();
         let (mut readable, mut refused, mut hangs, mut count) = (0, 0, 0, 0);
         let mut failures = Vec::new();
-        for (k, (what, bytes)) in damaged(&self.good, self.seed, self.text).enumerate() {
+        for (k, (what, bytes)) in damaged(
+            &self.good,
+            self.seed,
+            self.text,
+            self.cases.unwrap_or_else(cases),
+        )
+        .enumerate()
+        {
             // Each case in a folder of its own: a reader left hanging may still read its files.
             let case_dir = dir.path().join(format!("case_{k}"));
             std::fs::create_dir(&case_dir).unwrap();
@@ -504,7 +519,7 @@ fn readers_that_hang_panic_or_do_not_name_the_file_fail_the_run() {
     let failure = |read: fn(&Path) -> Result<(), String>| {
         let run = std::panic::catch_unwind(|| {
             Fuzz::text("stuck.toml", "a = 1\nb = \"x\"\n", 31)
-                .checked_with(Duration::from_millis(200), keep.path())
+                .checked_with(8, Duration::from_millis(200), keep.path())
                 .run(read)
         });
         let payload = run.expect_err("the run passed");
@@ -645,6 +660,37 @@ fn furniture_catalogue() {
 fn pose_prior() {
     Fuzz::text("pose_prior.json", read("assets/policy/pose_prior.json"), 30)
         .run(egogen::walker::PosePrior::load);
+}
+
+/// Dwelling settings at the largest values taken make a dwelling or say why not, never panic
+/// (`aspect = [1.0, 1e308]` laid walls out at infinite coordinates); past them they are refused
+/// naming the file and the key.
+#[test]
+fn dwelling_settings_at_their_limits_make_a_dwelling_or_say_why_not() {
+    use egogen::cli::scene_jobs::load_dwelling_settings;
+    use egogen::scene::dwelling::{generate, shipped_catalogue_dir, Catalogue};
+    let catalogue = Catalogue::load(&shipped_catalogue_dir()).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    for (key, at_limit, past) in [
+        ("aspect", "[1.0, 10.0]", "[1.0, 1e308]"),
+        ("bedroom_m2", "[9.0, 500.0]", "[9.0, 1e308]"),
+        ("living_m2", "[18.0, 500.0]", "[18.0, 501.0]"),
+        ("ceiling_m", "[2.5, 10.0]", "[2.5, 10.5]"),
+        ("window_sill_m", "[0.9, 1.0]", "[0.9, inf]"),
+    ] {
+        let path = dir.path().join(format!("{key}.toml"));
+        std::fs::write(&path, format!("{key} = {past}\n")).unwrap();
+        let err = load_dwelling_settings(&path).unwrap_err().to_string();
+        assert!(
+            err.contains(&format!("{key}.toml")) && err.contains(&format!("`{key}`")),
+            "{err}"
+        );
+        std::fs::write(&path, format!("{key} = {at_limit}\n")).unwrap();
+        let settings = load_dwelling_settings(&path).unwrap();
+        for seed in 0..3 {
+            let _ = generate(&settings, &catalogue, seed);
+        }
+    }
 }
 
 #[test]
