@@ -1,6 +1,7 @@
 //! Third-party parsers that panic on some malformed files instead of returning an error
-//! (`gltf` on an out-of-range index, `bvh_anim` on a misplaced keyword): their panics are caught
-//! here and become errors, without the panic message on standard error.
+//! (`gltf` on an out-of-range index, `bvh_anim` on a misplaced keyword, `tobj` on a material
+//! colour of fewer than three numbers): their panics are caught here and become errors, without
+//! the panic message on standard error.
 
 use std::cell::Cell;
 use std::sync::Once;

@@ -254,6 +254,17 @@ pub struct GenerateArgs {
     pub summary: Option<PathBuf>,
 }
 
+/// Reads and checks a dwelling settings file (`scene generate --settings`); errors name the
+/// file and the key.
+pub fn load_dwelling_settings(path: &Path) -> Result<crate::scene::dwelling::DwellingSettings> {
+    let settings: crate::scene::dwelling::DwellingSettings =
+        crate::cli::config_file::load_toml(path)?;
+    if let Some((key, message)) = settings.problem() {
+        bail!("{}: `{key}`: {message}", path.display());
+    }
+    Ok(settings)
+}
+
 /// Generates `args.count` dwellings, writes them (unless checking only) and prints a line per
 /// dwelling and a summary (time, rooms, area, objects, models, seats).
 pub fn scene_generate(args: &GenerateArgs) -> Result<()> {
@@ -268,17 +279,10 @@ pub fn scene_generate(args: &GenerateArgs) -> Result<()> {
     if args.count == 0 {
         bail!("--count must be at least 1");
     }
-    let settings: DwellingSettings = match &args.settings {
-        Some(path) => crate::cli::config_file::load_toml(path)?,
+    let settings = match &args.settings {
+        Some(path) => load_dwelling_settings(path)?,
         None => DwellingSettings::default(),
     };
-    if let Some((key, message)) = settings.problem() {
-        let file = args
-            .settings
-            .as_ref()
-            .map_or("dwelling settings".into(), |p| p.display().to_string());
-        bail!("{file}: `{key}`: {message}");
-    }
     let catalogue_dir = args.catalogue.clone().unwrap_or_else(shipped_catalogue_dir);
     let catalogue = Catalogue::load(&catalogue_dir)?;
     let dir_of = |seed: u64| {

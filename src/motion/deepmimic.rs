@@ -14,7 +14,7 @@ use std::path::Path;
 
 use glam::DQuat;
 
-use super::retarget::{rotation_between, sequence_from_body_rotations, RetargetError};
+use super::retarget::{rotation_between, sequence_from_body_rotations};
 use super::MotionSequence;
 use crate::body::skeleton::NUM_BODY_JOINTS;
 use crate::body::{joint, BodyModel};
@@ -37,13 +37,27 @@ fn v(a: [f64; 3]) -> Vec3 {
     Vec3::from_array(a) * SCALE
 }
 
+/// Where each quaternion (`w x y z`) starts in a frame, and whose rotation it is.
+const QUATERNIONS: [(usize, &str); 9] = [
+    (4, "root"),
+    (8, "chest"),
+    (12, "neck"),
+    (16, "right hip"),
+    (21, "right ankle"),
+    (25, "right shoulder"),
+    (30, "left hip"),
+    (35, "left ankle"),
+    (39, "left shoulder"),
+];
+
+/// A quaternion shorter than this has no direction to normalise to.
+const MIN_QUATERNION_LENGTH: f64 = 1e-6;
+
 /// What went wrong reading a DeepMimic clip.
 #[derive(Debug, thiserror::Error)]
 pub enum DeepMimicError {
     #[error("DeepMimic clip {path}: {message}")]
     Invalid { path: String, message: String },
-    #[error(transparent)]
-    Retarget(#[from] RetargetError),
 }
 
 #[derive(serde::Deserialize)]
@@ -78,8 +92,21 @@ pub fn import_deepmimic(path: &Path, model: &BodyModel) -> Result<MotionSequence
         return Err(bad(format!("frame {i} holds a non-finite value")));
     }
     let dt = clip.frames[0][0];
-    if !(dt > 0.0) {
-        return Err(bad(format!("frame duration must be positive, found {dt}")));
+    if !(dt > 0.0 && (1.0 / dt).is_finite()) {
+        return Err(bad(format!(
+            "frame duration must be positive and give a finite frame rate, found {dt}"
+        )));
+    }
+    for (i, f) in clip.frames.iter().enumerate() {
+        if let Some((at, joint)) = QUATERNIONS.iter().find(|(at, _)| {
+            let len = DQuat::from_xyzw(f[at + 1], f[at + 2], f[at + 3], f[*at]).length();
+            !(len.is_finite() && len > MIN_QUATERNION_LENGTH)
+        }) {
+            return Err(bad(format!(
+                "frame {i}: the {joint} rotation (numbers {at}–{}) is not a rotation: expected a quaternion w x y z of length near 1",
+                at + 3
+            )));
+        }
     }
     let c = to_body();
     let conv = |r: Mat3| c * r * c.transpose();
@@ -91,7 +118,9 @@ pub fn import_deepmimic(path: &Path, model: &BodyModel) -> Result<MotionSequence
     let hinge = |a: f64| conv(axis_angle_to_matrix(Vec3::Z * a));
 
     // Rest bones of both skeletons (body axes), and per-bone corrections.
-    let rest = model.rest_joints(&[], &[]).map_err(RetargetError::from)?;
+    let rest = model
+        .rest_joints(&[], &[])
+        .map_err(|e| bad(format!("retargeting: {e}")))?;
     let dm_bone = |j: usize| -> Option<Vec3> {
         let d = match j {
             joint::RIGHT_HIP | joint::LEFT_HIP => KNEE,
@@ -178,7 +207,6 @@ pub fn import_deepmimic(path: &Path, model: &BodyModel) -> Result<MotionSequence
     } else {
         rate
     };
-    Ok(sequence_from_body_rotations(
-        &world, &path_body, rate, model,
-    )?)
+    sequence_from_body_rotations(&world, &path_body, rate, model)
+        .map_err(|e| bad(format!("retargeting: {e}")))
 }

@@ -39,6 +39,9 @@ const WALL_END_INSET_M: f64 = 0.005;
 /// Plans and furnishings drawn before a seed is given up.
 const MAX_TRIES: usize = 40;
 
+/// Largest floor area of one room a settings file may ask for (m²): a hall of 22 m by 22 m.
+pub const MAX_ROOM_M2: f64 = 500.0;
+
 /// How dwellings are drawn (`[dwelling]` in a settings file; every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -99,13 +102,17 @@ impl Default for DwellingSettings {
 impl DwellingSettings {
     /// The first key that cannot make a dwelling, with what was expected.
     pub fn problem(&self) -> Option<(&'static str, String)> {
-        let range = |key: &'static str, (lo, hi): (f64, f64), least: f64| {
-            (!(lo.is_finite() && hi.is_finite() && least <= lo && lo <= hi)).then(|| {
-                (
-                    key,
-                    format!("expected [min, max] with {least} ≤ min ≤ max, got [{lo}, {hi}]"),
-                )
-            })
+        let range = |key: &'static str, (lo, hi): (f64, f64), least: f64, most: f64| {
+            (!(lo.is_finite() && hi.is_finite() && least <= lo && lo <= hi && hi <= most)).then(
+                || {
+                    (
+                        key,
+                        format!(
+                            "expected [min, max] with {least} ≤ min ≤ max ≤ {most}, got [{lo}, {hi}]"
+                        ),
+                    )
+                },
+            )
         };
         let side = self.min_room_side_m;
         let fits = |key: &'static str, (_, hi): (f64, f64)| {
@@ -151,16 +158,17 @@ impl DwellingSettings {
                 format!("expected 0–1, got {}", self.door_leaf_share),
             ));
         }
-        range("living_m2", self.living_m2, 1.0)
-            .or_else(|| range("kitchen_m2", self.kitchen_m2, 1.0))
-            .or_else(|| range("bedroom_m2", self.bedroom_m2, 1.0))
-            .or_else(|| range("bathroom_m2", self.bathroom_m2, 1.0))
-            .or_else(|| range("hall_m2", self.hall_m2, 1.0))
-            .or_else(|| range("aspect", self.aspect, 1.0))
-            .or_else(|| range("ceiling_m", self.ceiling_m, 2.2))
-            .or_else(|| range("door_m", self.door_m, 0.6))
-            .or_else(|| range("window_m", self.window_m, 0.5))
-            .or_else(|| range("window_sill_m", self.window_sill_m, 0.0))
+        let room = MAX_ROOM_M2;
+        range("living_m2", self.living_m2, 1.0, room)
+            .or_else(|| range("kitchen_m2", self.kitchen_m2, 1.0, room))
+            .or_else(|| range("bedroom_m2", self.bedroom_m2, 1.0, room))
+            .or_else(|| range("bathroom_m2", self.bathroom_m2, 1.0, room))
+            .or_else(|| range("hall_m2", self.hall_m2, 1.0, room))
+            .or_else(|| range("aspect", self.aspect, 1.0, 10.0))
+            .or_else(|| range("ceiling_m", self.ceiling_m, 2.2, 10.0))
+            .or_else(|| range("door_m", self.door_m, 0.6, 10.0))
+            .or_else(|| range("window_m", self.window_m, 0.5, 10.0))
+            .or_else(|| range("window_sill_m", self.window_sill_m, 0.0, 10.0))
             .or_else(|| {
                 (self.door_m.1 > side - 0.4).then(|| {
                     ("door_m", format!("a doorway {} m wide does not fit a wall of min_room_side_m = {side} m less 0.2 m at each end", self.door_m.1))
@@ -765,6 +773,10 @@ mod tests {
             (|s| s.door_m = (0.8, 1.9), "door_m"),
             (|s| s.wall_m = f64::NAN, "wall_m"),
             (|s| s.window_top_m = 3.5, "window_top_m"),
+            (|s| s.aspect = (1.0, 1e308), "aspect"),
+            (|s| s.bedroom_m2 = (9.0, 1e308), "bedroom_m2"),
+            (|s| s.living_m2 = (18.0, 501.0), "living_m2"),
+            (|s| s.ceiling_m = (2.5, 11.0), "ceiling_m"),
         ];
         for (edit, key) in cases {
             let mut s = DwellingSettings::default();

@@ -19,7 +19,13 @@ pub(super) fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
         single_index: true,
         ..Default::default()
     };
-    let (models, materials) = tobj::load_obj(path, &opts).map_err(|e| e.to_string())?;
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let (models, materials) = crate::parser_guard::catch_parser_panic(|| {
+        tobj::load_obj_buf(&mut std::io::BufReader::new(file), &opts, |mtl| {
+            load_mtl(&path.parent().unwrap_or(Path::new("")).join(mtl))
+        })
+    })?
+    .map_err(|e| e.to_string())?;
     // A missing or unreadable MTL leaves the faces untextured, as Blender's importer does.
     let materials = materials.unwrap_or_default();
     let leading = obj_faces_before_any_object(path)?;
@@ -62,6 +68,13 @@ pub(super) fn read_obj(path: &Path) -> Result<Vec<Part>, String> {
         );
     }
     Ok(parts)
+}
+
+/// A material library as tobj reads it; one tobj cannot read (it panics on a colour of fewer
+/// than three numbers) is an error, as a missing one is.
+fn load_mtl(path: &Path) -> tobj::MTLLoadResult {
+    crate::parser_guard::catch_parser_panic(|| tobj::load_mtl(path))
+        .unwrap_or(Err(tobj::LoadError::MaterialParseError))
 }
 
 /// Whether an OBJ has faces before its first `o` or `g` line (`Some`), and then whether one of
