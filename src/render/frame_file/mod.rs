@@ -24,9 +24,10 @@
 //! every ground-truth channel; outside the valid field of view the colour is 0 too. Ground
 //! truth is sampled at the rendered pixel nearest to the exact ray (ids, normals and flow are
 //! never blended), except the surface point (depth, position): where the ray meets the plane
-//! of three rendered pixels around it on the nearest one's surface (one object, the steps
-//! between them within the surface's tangent planes), so that it lies on the pixel's own ray,
-//! else (a surface one rendered pixel wide) the nearest pixel's. Colour is
+//! of three of the four rendered pixels around it whose triangle holds the ray, all on the
+//! nearest one's surface (one object; steps within the tangent planes and normals agreeing,
+//! or without normals all four on one plane), so that it lies on the pixel's own ray and never
+//! past the object's edge; else (an edge, a crease) the nearest pixel's. Colour is
 //! interpolated bilinearly. A render that is the target image
 //! itself (a pinhole, or the native polynomial fisheye) is taken pixel for pixel, and its flow
 //! is in its own pixels.
