@@ -115,9 +115,7 @@ pub fn run_command(cmd: &RigCommand, out: &mut dyn Write) -> Result<()> {
             name,
             aria_rgb_1408,
         } => {
-            if out_path.exists() {
-                bail!("{} already exists; not overwriting it", out_path.display());
-            }
+            crate::atomic_file::refuse_existing(out_path)?;
             let mut rig = Rig::load_with(rig, rgb(*aria_rgb_1408))?;
             if let Some(name) = name {
                 rig.name = name.clone();

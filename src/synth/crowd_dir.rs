@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use super::activity::Activity;
 use super::crowd::{AgentState, AgentTrack, CrowdTake, CrowdWorld};
-use crate::atomic_file::write_atomically;
+use crate::atomic_file::{partial_of, refuse_existing_folder, write_atomically};
 use crate::body::BodyModel;
 use crate::manifest::{build_manifest, MANIFEST};
 use crate::preview::map::{MapPicture, AGENT_COLOURS};
@@ -166,17 +166,8 @@ pub struct TakeSummary {
 /// Refuses an output folder that exists and is not empty (nothing is overwritten), or a
 /// `.partial` folder beside it that is not a take's leftover.
 pub(crate) fn check_out_dir(dir: &Path) -> Result<()> {
-    if dir.exists()
-        && std::fs::read_dir(dir)
-            .map(|mut d| d.next().is_some())
-            .unwrap_or(true)
-    {
-        bail!(
-            "output folder {} already exists and is not empty; choose another `output.dir` (nothing was written)",
-            dir.display()
-        );
-    }
-    let staging = staging_dir(dir);
+    refuse_existing_folder(dir, "output.dir")?;
+    let staging = partial_of(dir);
     if staging.exists() && !is_take_leftover(&staging) {
         bail!(
             "{} exists and is not an interrupted synth take; move it away or delete it (nothing was touched)",
@@ -184,10 +175,6 @@ pub(crate) fn check_out_dir(dir: &Path) -> Result<()> {
         );
     }
     Ok(())
-}
-
-fn staging_dir(dir: &Path) -> PathBuf {
-    PathBuf::from(format!("{}.partial", dir.display()))
 }
 
 const TAKE_ENTRIES: [&str; 4] = ["agents", "paths.png", "summary.json", "manifest.json"];
@@ -377,7 +364,7 @@ pub(crate) fn write_crowd_dir(
     about: serde_json::Value,
 ) -> Result<CrowdOutputs> {
     check_out_dir(dir)?;
-    let staging = staging_dir(dir);
+    let staging = partial_of(dir);
     if staging.exists() {
         std::fs::remove_dir_all(&staging)
             .with_context(|| format!("removing stale {}", staging.display()))?;

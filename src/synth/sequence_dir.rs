@@ -12,7 +12,7 @@ use anyhow::{bail, Context, Result};
 use serde::Serialize;
 
 use super::BodyTrack;
-use crate::atomic_file::write_atomically;
+use crate::atomic_file::{partial_of, refuse_existing_folder, write_atomically};
 use crate::body::export::write_obj;
 use crate::body::{BodyModel, PosedBody};
 use crate::manifest::{build_manifest, MANIFEST};
@@ -193,14 +193,8 @@ pub fn write_sequence_dir(
     track: &BodyTrack,
     meshes: &[(usize, PosedBody)],
 ) -> Result<SequenceOutputs> {
-    if dir.exists()
-        && std::fs::read_dir(dir)
-            .map(|mut d| d.next().is_some())
-            .unwrap_or(true)
-    {
-        bail!("output folder {} already exists and is not empty; choose another `output.dir` (nothing was written)", dir.display());
-    }
-    let staging = PathBuf::from(format!("{}.partial", dir.display()));
+    refuse_existing_folder(dir, "output.dir")?;
+    let staging = partial_of(dir);
     if staging.exists() {
         // A sequence folder is written in one go: its own leftover is worthless and replaced.
         // Anything else there (an interrupted render run's frames) is not ours to delete.

@@ -165,55 +165,44 @@ impl Raw {
             on_surface(x0, y0 + 1),
             on_surface(x0 + 1, y0 + 1),
         ];
-        let mut triangles: Vec<[Vec3; 3]> = Vec::with_capacity(2);
-        match quad {
+        // The triangles to try, in order (no allocation: this runs for every pixel).
+        let triangles: [Option<[Vec3; 3]>; 2] = match quad {
             // Without normals a crease is told only by four pixels off one plane: only four
             // coplanar ones are taken.
             [Some(p00), Some(p10), Some(p01), Some(p11)]
-                if nrm.is_none() && !coplanar([p00, p10, p01, p11]) => {}
+                if nrm.is_none() && !coplanar([p00, p10, p01, p11]) =>
+            {
+                [None, None]
+            }
             [Some(p00), Some(p10), Some(p01), Some(p11)] => {
-                // Split along 00–11 or 10–01, whichever folds less; the half holding q.
-                let fold = |a: [Vec3; 3], b: [Vec3; 3]| {
-                    let (na, nb) = (normal_of(a), normal_of(b));
-                    -na.dot(nb).abs()
-                };
-                let main = (
-                    [p00, p10, p11],
-                    [p00, p11, p01],
-                    if ax >= ay { 0 } else { 1 },
-                );
-                let anti = (
-                    [p00, p10, p01],
-                    [p10, p11, p01],
-                    if ax + ay <= 1.0 { 0 } else { 1 },
-                );
-                let (first, second) = match fold(main.0, main.1) <= fold(anti.0, anti.1) {
-                    true => (main, anti),
-                    false => (anti, main),
-                };
-                for (a, b, k) in [first, second] {
-                    triangles.push(if k == 0 { a } else { b });
+                // Of each split (along 00–11, along 10–01) the half holding q; the split that
+                // folds less first.
+                let main = [[p00, p10, p11], [p00, p11, p01]];
+                let anti = [[p00, p10, p01], [p10, p11, p01]];
+                let fold = |[a, b]: [[Vec3; 3]; 2]| -normal_of(a).dot(normal_of(b)).abs();
+                let main_half = main[usize::from(ax < ay)];
+                let anti_half = anti[usize::from(ax + ay > 1.0)];
+                match fold(main) <= fold(anti) {
+                    true => [Some(main_half), Some(anti_half)],
+                    false => [Some(anti_half), Some(main_half)],
                 }
             }
-            _ if nrm.is_none() => {}
+            _ if nrm.is_none() => [None, None],
             // Three on the surface: their triangle, where it holds q (the half of the quad
             // towards the fourth is past the surface's edge: never extrapolated).
-            [a, b, c, d] => {
-                let holds_q = match [a.is_some(), b.is_some(), c.is_some(), d.is_some()] {
-                    [false, true, true, true] => ax + ay >= 1.0,
-                    [true, false, true, true] => ax <= ay,
-                    [true, true, false, true] => ax >= ay,
-                    [true, true, true, false] => ax + ay <= 1.0,
-                    _ => false,
-                };
-                let known: Vec<Vec3> = [a, b, c, d].into_iter().flatten().collect();
-                if let (&[a, b, c], true) = (known.as_slice(), holds_q) {
-                    triangles.push([a, b, c]);
-                }
+            [None, Some(p10), Some(p01), Some(p11)] if ax + ay >= 1.0 => {
+                [Some([p10, p01, p11]), None]
             }
-        }
+            [Some(p00), None, Some(p01), Some(p11)] if ax <= ay => [Some([p00, p01, p11]), None],
+            [Some(p00), Some(p10), None, Some(p11)] if ax >= ay => [Some([p00, p10, p11]), None],
+            [Some(p00), Some(p10), Some(p01), None] if ax + ay <= 1.0 => {
+                [Some([p00, p10, p01]), None]
+            }
+            _ => [None, None],
+        };
         triangles
             .into_iter()
+            .flatten()
             .find_map(|t| ray_meets_triangle_plane(t, ray))
     }
 

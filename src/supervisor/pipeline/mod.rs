@@ -246,7 +246,7 @@ pub fn stage_take(
     before_staging: impl FnOnce() -> Result<()>,
 ) -> Result<Staged> {
     let dir = &plan.output_dir;
-    let staging = PathBuf::from(format!("{}.partial", dir.display()));
+    let staging = crate::atomic_file::partial_of(dir);
     let state = RunState {
         config: config_path.display().to_string(),
         config_sha256: sha256_hex(opts.resume_fingerprint.as_bytes()),
