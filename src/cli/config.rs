@@ -26,7 +26,7 @@ pub struct RawBody {
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum MotionSource {
-    /// The scripted walk cycle (`duration_s`, `frame_rate_hz`, `speed_m_per_s`).
+    /// The scripted walk cycle (`duration_s`, `frame_rate_hz`, `speed_m_s`).
     ScriptedWalk,
     /// An AMASS- or SAMP-style `.npz` motion file (`path`).
     File,
@@ -45,8 +45,10 @@ pub struct RawMotion {
     pub duration_s: Option<f64>,
     /// Frame rate of the scripted walk (Hz).
     pub frame_rate_hz: Option<f64>,
-    /// Walking speed of the scripted walk (m/s, default 1.2).
-    pub speed_m_per_s: Option<f64>,
+    /// Walking speed of the scripted walk (m/s, default 1.2; `speed_m_per_s`, its older name,
+    /// is read too).
+    #[serde(alias = "speed_m_per_s")]
+    pub speed_m_s: Option<f64>,
     /// Motion file, relative to the config's folder.
     pub path: Option<PathBuf>,
     /// With `source = "agents"`: `egogen synth`'s `[motion]` keys (docs/SYNTH.md).
@@ -353,6 +355,21 @@ mod tests {
             "[body]\nbetas='tall'\n[motion]\nsource='file'\npath='x.npz'\n[output]\ndir='o'\n";
         let err = toml::from_str::<RawRun>(text).unwrap_err().to_string();
         assert!(err.contains("betas") && err.contains("sequence"), "{err}");
+    }
+
+    /// The walking speed has one name, `speed_m_s`, as everywhere in egogen; configs written
+    /// with its older name read the same.
+    #[test]
+    fn the_scripted_speed_reads_by_its_name_and_its_older_one() {
+        let read = |key: &str| {
+            let text = format!(
+                "[body]\nbetas=[]\n[motion]\nsource='scripted_walk'\n{key} = 0.9\n[output]\ndir='o'\n"
+            );
+            toml::from_str::<RawRun>(&text).map(|r| r.motion.speed_m_s)
+        };
+        assert_eq!(read("speed_m_s").unwrap(), Some(0.9));
+        assert_eq!(read("speed_m_per_s").unwrap(), Some(0.9));
+        assert!(read("speed_m_per_sec").is_err());
     }
 
     /// serde reads a struct from an array by position; a config refuses it by key.

@@ -36,9 +36,19 @@ pub fn load_toml<T: serde::de::DeserializeOwned + serde::Serialize>(
         path: path.into(),
         source,
     })?;
-    let parsed: T = toml::from_str(&text).map_err(|e| ConfigError::Parse {
+    let parse_error = |message: String| ConfigError::Parse {
         path: path.into(),
-        message: with_walker_hint(e.to_string()),
+        message: with_walker_hint(message),
+    };
+    let document = toml::Deserializer::parse(&text).map_err(|e| parse_error(e.to_string()))?;
+    // The key a bad value was given by (`crowd.layout`, `agents[0].k`), beside TOML's line.
+    let parsed: T = serde_path_to_error::deserialize(document).map_err(|e| {
+        let key = e.path().to_string();
+        let message = e.into_inner().to_string();
+        parse_error(match key.as_str() {
+            "" | "." => message,
+            _ => format!("key `{key}`: {message}"),
+        })
     })?;
     if let (Ok(written), Ok(read)) = (
         toml::from_str::<toml::Table>(&text),

@@ -6,17 +6,14 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use crate::body::BodyModel;
-use crate::eval::jobs::{EvalJob, SuiteParts};
+use crate::eval::jobs::{EvalJob, Suite, SuiteParts};
 
 /// What `egogen eval` is asked.
 #[derive(Debug, Clone, clap::Args)]
 pub struct EvalArgs {
-    /// Which table: table1 (scenarios with moving obstacles and people), table2 (the apartment:
-    /// egocentric sensing against a local map), table3 (ablations) or speed (the policy
-    /// against sampling with K = 4, 8, 16, 32 latents, accuracy and time); report rewrites
-    /// OUT/RESULTS.md from the results already in OUT/results and runs nothing.
-    #[arg(long, default_value = "table1")]
-    pub suite: String,
+    /// Which table (Table 1 by default).
+    #[arg(long, value_enum, default_value_t = Suite::Table1)]
+    pub suite: Suite,
     /// Episodes per row (table1: per scenario and controller; table2 and table3: per policy,
     /// set and actions).
     #[arg(long, default_value_t = 100)]
@@ -62,7 +59,7 @@ impl EvalArgs {
     /// The job these arguments ask for.
     pub fn job(&self) -> EvalJob {
         EvalJob {
-            suite: self.suite.clone(),
+            suite: self.suite,
             episodes: self.episodes,
             seed: self.seed,
             out: self.out.clone(),

@@ -20,8 +20,8 @@ use crate::plan::{AgentDraft, SynthPlan};
 use crate::scene::{MovingObstacle, Obstacle2, ObstacleSolid, WalkableSettings};
 use crate::synth::activity::ActivitySettings;
 use crate::synth::crowd::CrowdSettings;
-use crate::walker::ControllerSpec;
 use crate::walker::WalkerSettings;
+use crate::walker::{ControllerSpec, Steering};
 
 /// Most agents in one take.
 pub(crate) const MAX_AGENTS: usize = 32;
@@ -83,14 +83,12 @@ pub(crate) struct RawSynthMotion {
 #[serde(deny_unknown_fields)]
 pub struct RawCrowd {
     pub count: usize,
-    /// `"circle"`: evenly on a circle, each walking to the opposite point (paper Fig. S7);
-    /// `"random"`: sampled starts and goals on the walkable map.
-    #[serde(default = "default_layout")]
-    pub layout: String,
+    #[serde(default)]
+    pub layout: CrowdLayout,
     pub radius_m: Option<f64>,
     pub centre: Option<[f64; 2]>,
-    #[serde(default = "default_steering")]
-    pub steering: String,
+    #[serde(default)]
+    pub steering: Steering,
     pub k: Option<usize>,
     /// Scale of the policy's sampled actions' standard deviation (default 1, as trained;
     /// smaller walks nearer the mean action: docs/POLICY.md, "Action spread").
@@ -103,12 +101,15 @@ pub struct RawCrowd {
     pub betas_count: Option<usize>,
 }
 
-fn default_layout() -> String {
-    "circle".into()
-}
-
-fn default_steering() -> String {
-    "policy".into()
+/// `[crowd] layout`: where the crowd's people start and go.
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CrowdLayout {
+    /// Evenly on a circle, each walking to the opposite point (paper Fig. S7).
+    #[default]
+    Circle,
+    /// Sampled starts and goals on the walkable map.
+    Random,
 }
 
 /// `[[agents]]`: one agent.
@@ -126,9 +127,9 @@ pub struct RawAgent {
     pub goals: Vec<[f64; 2]>,
     #[serde(default)]
     pub wander: bool,
-    /// `"policy"` (actions sampled from π), `"policy_mean"` or `"sampling"`.
-    pub steering: Option<String>,
-    /// Candidates of `"sampling"` (default 16).
+    /// Which controller steers (default `"policy"`).
+    pub steering: Option<Steering>,
+    /// Candidates of `"sampling"` and `"path_follow"` (default 16).
     pub k: Option<usize>,
     /// Scale of `"policy"`'s sampled actions' standard deviation (default 1, as trained).
     pub action_spread: Option<f32>,
@@ -179,34 +180,6 @@ pub(crate) struct RawSynth {
     #[serde(default)]
     pub obstacles: Vec<RawObstacle>,
     pub output: RawSynthOutput,
-}
-
-fn steering(name: &str, k: Option<usize>, spread: Option<f32>) -> Result<ControllerSpec, String> {
-    match (name, spread) {
-        (_, Some(x)) if !(x.is_finite() && x >= 0.0) => {
-            return Err(format!("`action_spread`: expected a scale ≥ 0, got {x}"))
-        }
-        ("policy", _) | (_, None) => {}
-        _ => return Err("`action_spread` is for steering = \"policy\" only".into()),
-    }
-    match (name, k) {
-        ("policy", None) => Ok(ControllerSpec::Policy {
-            mean_action: false,
-            spread: spread.unwrap_or(1.0),
-        }),
-        ("policy_mean", None) => Ok(ControllerSpec::POLICY_MEAN),
-        ("sampling" | "path_follow", k) => match (name, k.unwrap_or(16)) {
-            (_, 0) => Err("`k` must be at least 1".into()),
-            ("sampling", k) => Ok(ControllerSpec::Sampling { k }),
-            (_, k) => Ok(ControllerSpec::PathFollow { k }),
-        },
-        ("policy" | "policy_mean", Some(_)) => {
-            Err("`k` is for steering = \"sampling\" or \"path_follow\" only".into())
-        }
-        (other, _) => Err(format!(
-            "expected \"policy\", \"policy_mean\", \"sampling\" or \"path_follow\", got \"{other}\""
-        )),
-    }
 }
 
 fn finite2(v: [f64; 2]) -> bool {
@@ -449,12 +422,11 @@ fn listed_agents(raw: &[RawAgent], bad: Bad) -> Result<Vec<AgentDraft>, ConfigEr
     let mut agents = Vec::new();
     for (i, a) in raw.iter().enumerate() {
         let key = |k: &str| format!("agents[{i}].{k}");
-        let steer = steering(
-            a.steering.as_deref().unwrap_or("policy"),
-            a.k,
-            a.action_spread,
-        )
-        .map_err(|e| bad(&key("steering"), e))?;
+        let steer = a
+            .steering
+            .unwrap_or_default()
+            .spec(a.k, a.action_spread)
+            .map_err(|e| bad(&key("steering"), e))?;
         if let Some((b, v)) = a
             .betas
             .iter()
@@ -499,8 +471,10 @@ fn listed_agents(raw: &[RawAgent], bad: Bad) -> Result<Vec<AgentDraft>, ConfigEr
 /// at sampled places.
 fn crowd_agents(c: &RawCrowd, seed: u64, bad: Bad) -> Result<Vec<AgentDraft>, ConfigError> {
     let mut agents = Vec::new();
-    let steer =
-        steering(&c.steering, c.k, c.action_spread).map_err(|e| bad("crowd.steering", e))?;
+    let steer = c
+        .steering
+        .spec(c.k, c.action_spread)
+        .map_err(|e| bad("crowd.steering", e))?;
     let sigma = c.betas_sigma.unwrap_or(2.0);
     if !(sigma.is_finite() && (0.0..=10.0).contains(&sigma)) {
         return Err(bad(
@@ -540,8 +514,8 @@ fn crowd_agents(c: &RawCrowd, seed: u64, bad: Bad) -> Result<Vec<AgentDraft>, Co
             .into_iter()
             .map(|b| (b as f64).clamp(-sigma, sigma))
             .collect();
-        let (start, goals) = match c.layout.as_str() {
-            "circle" => {
+        let (start, goals) = match c.layout {
+            CrowdLayout::Circle => {
                 let r = c.radius_m.unwrap_or(2.0);
                 if !(r.is_finite() && r > 0.0) {
                     return Err(bad(
@@ -553,17 +527,11 @@ fn crowd_agents(c: &RawCrowd, seed: u64, bad: Bad) -> Result<Vec<AgentDraft>, Co
                 let p = DVec2::from_angle(a) * r;
                 (Some(centre + p), vec![centre - p])
             }
-            "random" => {
+            CrowdLayout::Random => {
                 if c.radius_m.is_some() || c.centre.is_some() {
                     return Err(bad("crowd.radius_m", "for layout = \"circle\" only".into()));
                 }
                 (None, Vec::new())
-            }
-            other => {
-                return Err(bad(
-                    "crowd.layout",
-                    format!("expected \"circle\" or \"random\", got \"{other}\""),
-                ))
             }
         };
         agents.push(AgentDraft {

@@ -11,7 +11,7 @@ use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Mat3, Vec3};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WalkCycle {
     /// Walking speed (m/s).
-    pub speed_m_per_s: f64,
+    pub speed_m_s: f64,
     /// Steps per second (two steps per gait cycle).
     pub cadence_steps_per_s: f64,
     /// Peak hip flexion (radians).
@@ -21,7 +21,7 @@ pub struct WalkCycle {
 impl Default for WalkCycle {
     fn default() -> Self {
         Self {
-            speed_m_per_s: 1.2,
+            speed_m_s: 1.2,
             cadence_steps_per_s: 1.8,
             hip_swing_rad: 0.45,
         }
@@ -81,7 +81,7 @@ impl WalkCycle {
         set(&mut p, joint::RIGHT_ELBOW, rot(Vec3::Y, 0.35));
         // Feet on z = 0: the pelvis height above the soles, with a small bob.
         let height = rest_pelvis.y - rest_sole_y - 0.02 * (1.0 - (2.0 * phase).cos());
-        let pelvis_world = Vec3::new(self.speed_m_per_s * t_s, 0.0, height);
+        let pelvis_world = Vec3::new(self.speed_m_s * t_s, 0.0, height);
         // LBS rotates about the rest pelvis: transl = pelvis_world − rest_pelvis.
         p.transl = pelvis_world - rest_pelvis;
         p

@@ -321,7 +321,7 @@ pub(crate) fn paths_picture<'a>(
 }
 
 /// Where an activity was done, in the agent's colour on black: a sit as a square on the seat,
-/// a stand as a ring, a pick-up as a cross.
+/// a pick-up as a cross, a stand (and any other) as a ring.
 fn activity_mark(pic: &mut MapPicture, activity: Activity, p: DVec2, c: [u8; 3]) {
     let square = |half: f64| Obstacle2::Box {
         centre: p,
@@ -333,11 +333,7 @@ fn activity_mark(pic: &mut MapPicture, activity: Activity, p: DVec2, c: [u8; 3])
             pic.obstacle(&square(0.16), [0, 0, 0]);
             pic.obstacle(&square(0.1), c);
         }
-        Activity::Stand => {
-            pic.dot(p, 8, [0, 0, 0]);
-            pic.dot(p, 6, c);
-            pic.dot(p, 3, [255, 255, 255]);
-        }
+
         Activity::PickUp => {
             let black: &[f64] = &[-0.045, -0.015, 0.015, 0.045];
             for (d, rgb, offsets) in [(0.22, [0, 0, 0], black), (0.18, c, &[-0.015, 0.0, 0.015])] {
@@ -350,6 +346,12 @@ fn activity_mark(pic: &mut MapPicture, activity: Activity, p: DVec2, c: [u8; 3])
             }
         }
         Activity::Walk => {}
+        // Standing, and any other activity done where the walk ended.
+        _ => {
+            pic.dot(p, 8, [0, 0, 0]);
+            pic.dot(p, 6, c);
+            pic.dot(p, 3, [255, 255, 255]);
+        }
     }
 }
 

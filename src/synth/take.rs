@@ -217,7 +217,7 @@ pub enum MotionPlan {
     ScriptedWalk {
         duration_s: f64,
         frame_rate_hz: f64,
-        speed_m_per_s: f64,
+        speed_m_s: f64,
     },
     File {
         path: PathBuf,
@@ -255,11 +255,11 @@ pub fn make_motion(
         MotionPlan::ScriptedWalk {
             duration_s,
             frame_rate_hz,
-            speed_m_per_s,
+            speed_m_s,
         } => {
             let shaped = body.shape(betas, &[])?;
             let walk = crate::motion::scripted::WalkCycle {
-                speed_m_per_s: *speed_m_per_s,
+                speed_m_s: *speed_m_s,
                 ..Default::default()
             };
             TakeMotion::One(walk.sequence(
@@ -361,10 +361,13 @@ pub(crate) fn synthesize(
             &crate::motion::activity_clip::activity_clip_dir(),
         )?),
     };
-    if acts
-        .as_ref()
-        .is_some_and(|a| a.settings.weights.sit > 0.0 && a.seats.is_empty())
-    {
+    if acts.as_ref().is_some_and(|a| {
+        a.settings
+            .weights
+            .weight(crate::synth::activity::Activity::Sit)
+            > 0.0
+            && a.seats.is_empty()
+    }) {
         eprintln!(
             "warning: {}: activities.weights.sit > 0 but the scene has no seat people can reach \
              (`egogen scene inspect` lists what it finds); every sit drawn is skipped",

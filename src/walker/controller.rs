@@ -7,7 +7,7 @@
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::reward::Judged;
 use super::settings::WalkerSettings;
@@ -131,6 +131,54 @@ impl ControllerSpec {
             }),
             ControllerSpec::Sampling { k } => Box::new(SamplingController { k }),
             ControllerSpec::PathFollow { k } => Box::new(PathFollowController { k, aim: None }),
+        })
+    }
+}
+
+/// Which controller steers, as configs name it (`steering = "sampling"`); with the knobs given
+/// beside it (`k`, `action_spread`) it makes a [`ControllerSpec`] ([`Self::spec`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Steering {
+    /// The trained policy, actions sampled from π.
+    #[default]
+    Policy,
+    /// The trained policy's mean action.
+    PolicyMean,
+    /// The best of `k` random latents by the reward.
+    Sampling,
+    /// The path-planning baseline.
+    PathFollow,
+}
+
+impl Steering {
+    /// The controller this steering makes with the knobs given beside it: `k` candidates for
+    /// `sampling` and `path_follow` (default 16), `spread` of `policy`'s sampled actions
+    /// (default 1); a knob given to a steering that has none is refused, by name.
+    pub fn spec(self, k: Option<usize>, spread: Option<f32>) -> Result<ControllerSpec, String> {
+        if let Some(x) = spread {
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(format!("`action_spread`: expected a scale ≥ 0, got {x}"));
+            }
+            if self != Steering::Policy {
+                return Err("`action_spread` is for steering = \"policy\" only".into());
+            }
+        }
+        let k = match (self, k) {
+            (Steering::Policy | Steering::PolicyMean, Some(_)) => {
+                return Err("`k` is for steering = \"sampling\" or \"path_follow\" only".into())
+            }
+            (_, Some(0)) => return Err("`k` must be at least 1".into()),
+            (_, k) => k.unwrap_or(16),
+        };
+        Ok(match self {
+            Steering::Policy => ControllerSpec::Policy {
+                mean_action: false,
+                spread: spread.unwrap_or(1.0),
+            },
+            Steering::PolicyMean => ControllerSpec::POLICY_MEAN,
+            Steering::Sampling => ControllerSpec::Sampling { k },
+            Steering::PathFollow => ControllerSpec::PathFollow { k },
         })
     }
 }

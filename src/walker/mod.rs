@@ -20,7 +20,7 @@ pub mod settings;
 pub mod state;
 pub(crate) mod step;
 
-pub use controller::{ControllerSpec, Policy};
+pub use controller::{ControllerSpec, Policy, Steering};
 pub use pose_prior::PosePrior;
 pub use seed_bank::SeedBank;
 pub use settings::WalkerSettings;

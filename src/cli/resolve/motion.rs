@@ -19,7 +19,7 @@ pub(super) fn agents_motion(
     for (key, present) in [
         ("motion.path", m.path.is_some()),
         ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
-        ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
+        ("motion.speed_m_s", m.speed_m_s.is_some()),
         ("scene.seed", raw.scene.seed.is_some()),
     ] {
         unused(key, present, "agents", bad)?;
@@ -139,17 +139,17 @@ pub(super) fn scripted_motion(m: &RawMotion, bad: Bad) -> Result<MotionPlan, Con
         frames * per_frame as f64,
     )
     .map_err(|m| bad("motion.duration_s", m))?;
-    let speed_m_per_s = m.speed_m_per_s.unwrap_or(1.2);
-    if !(speed_m_per_s.is_finite() && (0.0..=10.0).contains(&speed_m_per_s)) {
+    let speed_m_s = m.speed_m_s.unwrap_or(1.2);
+    if !(speed_m_s.is_finite() && (0.0..=10.0).contains(&speed_m_s)) {
         return Err(bad(
-            "motion.speed_m_per_s",
-            format!("expected 0..=10 m/s, found {speed_m_per_s}"),
+            "motion.speed_m_s",
+            format!("expected 0..=10 m/s, found {speed_m_s}"),
         ));
     }
     Ok(MotionPlan::ScriptedWalk {
         duration_s,
         frame_rate_hz,
-        speed_m_per_s,
+        speed_m_s,
     })
 }
 
@@ -158,7 +158,7 @@ pub(super) fn file_motion(m: &RawMotion, base: &Path, bad: Bad) -> Result<Motion
     for (key, present) in [
         ("motion.duration_s", m.duration_s.is_some()),
         ("motion.frame_rate_hz", m.frame_rate_hz.is_some()),
-        ("motion.speed_m_per_s", m.speed_m_per_s.is_some()),
+        ("motion.speed_m_s", m.speed_m_s.is_some()),
     ] {
         unused(key, present, "file", bad)?;
     }

@@ -28,11 +28,25 @@ use speed::{speed, SPEED_SCENARIOS};
 use table1::table1;
 use table2::table2;
 
+/// Which of `egogen eval`'s suites a run makes (`--suite`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Suite {
+    /// Table 1: scenarios with moving obstacles and people, walked by each controller.
+    Table1,
+    /// Table 2: the apartment, egocentric sensing against a local map.
+    Table2,
+    /// Table 3: the ablated policies.
+    Table3,
+    /// The policy against sampling with K = 4, 8, 16, 32 latents, accuracy and time.
+    Speed,
+    /// Rewrites OUT/RESULTS.md from the results already in OUT/results; runs nothing.
+    Report,
+}
+
 /// What an evaluation run is asked (`egogen eval`'s arguments, `cli::eval_jobs::EvalArgs`).
 #[derive(Debug, Clone)]
 pub struct EvalJob {
-    /// table1, table2, table3, speed or report.
-    pub suite: String,
+    pub suite: Suite,
     pub episodes: usize,
     pub seed: u64,
     /// Folder of RESULTS.md and results/.
@@ -61,22 +75,23 @@ pub struct SuiteParts {
 }
 
 /// The files a suite writes under `OUT/results/`.
-fn suite_files(out: &Path, suite: &str) -> Vec<PathBuf> {
+fn suite_files(out: &Path, suite: Suite) -> Vec<PathBuf> {
     let results = out.join("results");
     match suite {
-        "table1" => vec![
+        Suite::Table1 => vec![
             results.join("table1.json"),
             results.join("table1_episodes.jsonl"),
         ],
-        "speed" => vec![
+        Suite::Speed => vec![
             results.join("speed.json"),
             results.join("speed_episodes.jsonl"),
             results.join("rays.json"),
             results.join("width.json"),
             results.join("sdf.json"),
         ],
-        "table2" => vec![results.join("table2.json")],
-        _ => vec![results.join("table3.json")],
+        Suite::Table2 => vec![results.join("table2.json")],
+        Suite::Table3 => vec![results.join("table3.json")],
+        Suite::Report => Vec::new(),
     }
 }
 
@@ -90,16 +105,7 @@ fn bar(args: &EvalJob, total: usize, unit: &str) -> indicatif::ProgressBar {
 /// Runs the suite, writes its files and renders `OUT/RESULTS.md` from every suite's results
 /// there (see the module docs).
 pub fn run_eval(args: &EvalJob, load_parts: impl FnOnce() -> Result<SuiteParts>) -> Result<()> {
-    if !matches!(
-        args.suite.as_str(),
-        "table1" | "table2" | "table3" | "speed" | "report"
-    ) {
-        bail!(
-            "--suite {}: expected \"table1\", \"table2\", \"table3\", \"speed\" or \"report\"",
-            args.suite
-        );
-    }
-    if args.suite == "report" {
+    if args.suite == Suite::Report {
         if !args.out.join("results").is_dir() {
             bail!(
                 "--suite report: {} has no results/ folder to report (run a suite first)",
@@ -111,11 +117,11 @@ pub fn run_eval(args: &EvalJob, load_parts: impl FnOnce() -> Result<SuiteParts>)
     if args.episodes == 0 || args.k == 0 {
         bail!("--episodes and --k must be at least 1");
     }
-    if args.keep_other_rows && args.suite != "table1" {
+    if args.keep_other_rows && args.suite != Suite::Table1 {
         bail!("--keep-other-rows: only Table 1 keeps rows (--suite table1)");
     }
     if !args.force && !args.keep_other_rows {
-        if let Some(f) = suite_files(&args.out, &args.suite)
+        if let Some(f) = suite_files(&args.out, args.suite)
             .iter()
             .find(|f| f.exists())
         {
@@ -127,17 +133,18 @@ pub fn run_eval(args: &EvalJob, load_parts: impl FnOnce() -> Result<SuiteParts>)
         }
     }
     let mut scenarios = chosen_scenarios(&args.scenarios)?;
-    if args.suite == "speed" && args.scenarios.is_empty() {
+    if args.suite == Suite::Speed && args.scenarios.is_empty() {
         scenarios.retain(|s| SPEED_SCENARIOS.contains(&s.name().as_str()));
     }
     let common = load_parts()?;
     let results = args.out.join("results");
     std::fs::create_dir_all(&results).with_context(|| format!("creating {}", results.display()))?;
-    match args.suite.as_str() {
-        "table1" => table1(args, &common, &scenarios, &results)?,
-        "speed" => speed(args, &common, &scenarios, &results)?,
-        "table2" => table2(args, &common, &results)?,
-        _ => table3(args, &common, &results)?,
+    match args.suite {
+        Suite::Table1 => table1(args, &common, &scenarios, &results)?,
+        Suite::Speed => speed(args, &common, &scenarios, &results)?,
+        Suite::Table2 => table2(args, &common, &results)?,
+        Suite::Table3 => table3(args, &common, &results)?,
+        Suite::Report => {} // Answered above: it runs nothing.
     }
     write_results_markdown(&args.out)
 }

@@ -373,15 +373,14 @@ fn assemble_with(
     world_from_cam: Affine3,
 ) -> Result<FrameImage, FrameFileError> {
     let (render, target) = (&remap.render, &remap.target);
-    let mut render_seconds = Vec::new();
-    for (raw, stages) in [
+    let render_seconds = [
         (&rgb, ["colour_sync", "colour_path_tracing"]),
         (&gt, ["ground_truth_sync", "ground_truth_path_tracing"]),
-    ] {
-        if let Some(raw) = raw {
-            render_seconds.extend(cycles_seconds(&raw.contents, stages));
-        }
-    }
+    ]
+    .into_iter()
+    .filter_map(|(raw, stages)| Some(cycles_seconds(&raw.as_ref()?.contents, stages)))
+    .flatten()
+    .collect();
     let colour = rgb
         .as_ref()
         .map(|r| r.planes("Combined", ["R", "G", "B", "A"]))

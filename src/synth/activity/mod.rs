@@ -25,27 +25,26 @@ pub use refusal::{Doing, Refusal};
 pub use world::{ActivityWorld, ENTER_TOLERANCE_M};
 
 /// Relative weights of what a person does next when a walk ends (`[activities.weights]`: a
-/// table by name; an array is refused, not read by position).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ActivityWeights {
-    /// Walk on to a new goal (default 1).
-    pub walk: f64,
-    /// Stand where the walk ended and look around (default 0).
-    pub stand: f64,
-    /// Walk to the nearest free seat, sit down, stay seated, stand up (default 0).
-    pub sit: f64,
-    /// Bend to pick something up from the floor where the walk ended (default 0).
-    pub pick_up: f64,
-}
+/// table by name; an array is refused, not read by position), one per [`Activity`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActivityWeights([f64; Activity::ALL.len()]);
 
 impl Default for ActivityWeights {
+    /// Walking only: `walk` 1, the others 0.
     fn default() -> Self {
-        Self {
-            walk: 1.0,
-            stand: 0.0,
-            sit: 0.0,
-            pick_up: 0.0,
+        Self::named_only([(Activity::Walk, 1.0)])
+    }
+}
+
+/// Written as a table by name, in [`Activity::ALL`]'s order.
+impl Serialize for ActivityWeights {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for a in Activity::ALL {
+            map.serialize_entry(a.name(), &self.weight(a))?;
         }
+        map.end()
     }
 }
 
@@ -57,31 +56,37 @@ impl<'de> Deserialize<'de> for ActivityWeights {
         let named = std::collections::BTreeMap::<String, f64>::deserialize(d)?;
         let mut w = ActivityWeights::default();
         for (name, v) in named {
-            *w.slot(&name).ok_or_else(|| {
-                D::Error::custom(format!(
-                    "unknown activity `{name}` (expected {})",
-                    Self::NAMES.join(", ")
-                ))
-            })? = v;
+            w.0[Activity::named(&name).map_err(D::Error::custom)? as usize] = v;
         }
         Ok(w)
     }
 }
 
 impl ActivityWeights {
-    /// The names a weight is given by.
-    pub const NAMES: [&'static str; 4] = ["walk", "stand", "sit", "pick_up"];
+    /// These weights, the others 0.
+    fn named_only(named: impl IntoIterator<Item = (Activity, f64)>) -> Self {
+        let mut w = Self([0.0; Activity::ALL.len()]);
+        for (a, v) in named {
+            w.0[a as usize] = v;
+        }
+        w
+    }
+
+    /// The weight of `activity`.
+    pub fn weight(&self, activity: Activity) -> f64 {
+        self.0[activity as usize]
+    }
+
+    /// The sum of the weights, added in [`Activity::ALL`]'s order.
+    fn total(&self) -> f64 {
+        self.0.iter().sum()
+    }
 
     /// Draws what comes after a walk: each activity in proportion to its weight.
     pub fn draw(&self, rng: &mut rand_chacha::ChaCha8Rng) -> Activity {
-        let w = self;
-        let total = w.walk + w.stand + w.sit + w.pick_up;
-        let mut x = crate::math::random::uniform_open01(rng) * total;
-        for (a, v) in [
-            (Activity::Stand, w.stand),
-            (Activity::Sit, w.sit),
-            (Activity::PickUp, w.pick_up),
-        ] {
+        let mut x = crate::math::random::uniform_open01(rng) * self.total();
+        for a in Activity::ALL.into_iter().filter(|&a| a != Activity::Walk) {
+            let v = self.weight(a);
             if x < v {
                 return a;
             }
@@ -90,30 +95,17 @@ impl ActivityWeights {
         Activity::Walk
     }
 
-    /// The weight of the activity named `name`, if it is one.
-    fn slot(&mut self, name: &str) -> Option<&mut f64> {
-        match name {
-            "walk" => Some(&mut self.walk),
-            "stand" => Some(&mut self.stand),
-            "sit" => Some(&mut self.sit),
-            "pick_up" => Some(&mut self.pick_up),
-            _ => None,
-        }
-    }
-
-    /// What is wrong with these weights, if anything: the weight's name (`None`: all of them)
-    /// and what was expected. Each is finite and ≥ 0, and so is their sum, which is > 0.
-    pub fn problem(&self) -> Option<(Option<&'static str>, String)> {
-        for (name, v) in
-            Self::NAMES
-                .into_iter()
-                .zip([self.walk, self.stand, self.sit, self.pick_up])
-        {
+    /// What is wrong with these weights, if anything: the activity whose weight it is
+    /// (`None`: all of them) and what was expected. Each is finite and ≥ 0, and so is their
+    /// sum, which is > 0.
+    pub fn problem(&self) -> Option<(Option<Activity>, String)> {
+        for a in Activity::ALL {
+            let v = self.weight(a);
             if !(v.is_finite() && v >= 0.0) {
-                return Some((Some(name), format!("expected a weight ≥ 0, got {v}")));
+                return Some((Some(a), format!("expected a weight ≥ 0, got {v}")));
             }
         }
-        let total = self.walk + self.stand + self.sit + self.pick_up;
+        let total = self.total();
         if !total.is_finite() {
             return Some((
                 None,
@@ -136,29 +128,19 @@ impl ActivityWeights {
     /// `walk` defaults to 1): what a campaign's `activity_weights` entries and
     /// `egogen-run --activity-weights` say. The message names the weight that is wrong.
     pub fn from_named<'a>(named: impl IntoIterator<Item = (&'a str, f64)>) -> Result<Self, String> {
-        let mut w = Self {
-            walk: 0.0,
-            stand: 0.0,
-            sit: 0.0,
-            pick_up: 0.0,
-        };
-        let mut given: Vec<&str> = Vec::new();
+        let mut w = Self::named_only([]);
+        let mut given: Vec<Activity> = Vec::new();
         for (name, v) in named {
-            if given.contains(&name) {
+            let a = Activity::named(name)?;
+            if given.contains(&a) {
                 return Err(format!("`{name}` is given twice: give each weight once"));
             }
-            given.push(name);
-            let slot = w.slot(name).ok_or_else(|| {
-                format!(
-                    "unknown activity `{name}` (expected {})",
-                    Self::NAMES.join(", ")
-                )
-            })?;
-            *slot = v;
+            given.push(a);
+            w.0[a as usize] = v;
         }
-        if let Some((name, what)) = w.problem() {
-            return Err(match name {
-                Some(name) => format!("`{name}`: {what}"),
+        if let Some((a, what)) = w.problem() {
+            return Err(match a {
+                Some(a) => format!("`{}`: {what}", a.name()),
                 None => what,
             });
         }
@@ -183,11 +165,10 @@ impl ActivityWeights {
 
     /// The weights above 0 as [`parse`](Self::parse) reads them.
     pub fn flag(&self) -> String {
-        Self::NAMES
-            .iter()
-            .zip([self.walk, self.stand, self.sit, self.pick_up])
-            .filter(|(_, v)| *v > 0.0)
-            .map(|(n, v)| format!("{n}={v}"))
+        Activity::ALL
+            .into_iter()
+            .filter(|&a| self.weight(a) > 0.0)
+            .map(|a| format!("{}={}", a.name(), self.weight(a)))
             .collect::<Vec<_>>()
             .join(",")
     }
@@ -249,27 +230,25 @@ impl ActivitySettings {
     /// Whether people only walk (every weight but `walk` zero): takes exactly as without
     /// activities.
     pub fn walk_only(&self) -> bool {
-        let w = self.weights;
-        w.stand == 0.0 && w.sit == 0.0 && w.pick_up == 0.0
+        Activity::ALL
+            .into_iter()
+            .all(|a| a == Activity::Walk || self.weights.weight(a) == 0.0)
     }
 
     /// What is wrong with these settings, if anything: the key (under `activities.`) and
     /// what was expected.
-    pub fn problem(&self) -> Option<(&'static str, String)> {
-        if let Some((name, what)) = self.weights.problem() {
-            let key = match name {
-                Some("walk") => "weights.walk",
-                Some("stand") => "weights.stand",
-                Some("sit") => "weights.sit",
-                Some(_) => "weights.pick_up",
-                None => "weights",
+    pub fn problem(&self) -> Option<(String, String)> {
+        if let Some((a, what)) = self.weights.problem() {
+            let key = match a {
+                Some(a) => format!("weights.{}", a.name()),
+                None => "weights".into(),
             };
             return Some((key, what));
         }
         for (key, [lo, hi]) in [("stand_s", self.stand_s), ("sit_s", self.sit_s)] {
             if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo <= hi && hi <= 3600.0) {
                 return Some((
-                    key,
+                    key.into(),
                     format!(
                         "expected [MIN, MAX] seconds with 0 < MIN ≤ MAX ≤ 3600, got [{lo}, {hi}]"
                     ),
@@ -278,13 +257,13 @@ impl ActivitySettings {
         }
         if !(self.blend_s.is_finite() && (0.05..=5.0).contains(&self.blend_s)) {
             return Some((
-                "blend_s",
+                "blend_s".into(),
                 format!("expected 0.05–5 s, got {}", self.blend_s),
             ));
         }
         if !(self.turn_deg_per_s.is_finite() && self.turn_deg_per_s >= 10.0) {
             return Some((
-                "turn_deg_per_s",
+                "turn_deg_per_s".into(),
                 format!(
                     "expected at least 10 degrees per second, got {}",
                     self.turn_deg_per_s
@@ -293,7 +272,7 @@ impl ActivitySettings {
         }
         if !(self.seat_fit_m.is_finite() && (0.0..=0.5).contains(&self.seat_fit_m)) {
             return Some((
-                "seat_fit_m",
+                "seat_fit_m".into(),
                 format!("expected 0–0.5 m, got {}", self.seat_fit_m),
             ));
         }
@@ -322,7 +301,8 @@ impl ActivityWorld {
     }
 }
 
-/// What a person does.
+/// What a person does. A new activity is a variant here (with its name, and its arm in
+/// [`ActivityWorld::play_here`]) and a file of its own beside `stand.rs`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Activity {
@@ -333,6 +313,14 @@ pub enum Activity {
 }
 
 impl Activity {
+    /// Every activity, in the order weights are drawn and written.
+    pub const ALL: [Activity; 4] = [
+        Activity::Walk,
+        Activity::Stand,
+        Activity::Sit,
+        Activity::PickUp,
+    ];
+
     /// Its name in configs and files (`walk`, `stand`, `sit`, `pick_up`).
     pub fn name(self) -> &'static str {
         match self {
@@ -341,6 +329,17 @@ impl Activity {
             Activity::Sit => "sit",
             Activity::PickUp => "pick_up",
         }
+    }
+
+    /// The activity of a name, or an error listing the names.
+    pub fn named(name: &str) -> Result<Activity, String> {
+        Activity::ALL
+            .into_iter()
+            .find(|a| a.name() == name)
+            .ok_or_else(|| {
+                let names: Vec<_> = Activity::ALL.into_iter().map(Activity::name).collect();
+                format!("unknown activity `{name}` (expected {})", names.join(", "))
+            })
     }
 }
 
@@ -465,7 +464,8 @@ mod tests {
     #[test]
     fn weights_given_by_name_read_back_from_their_flag_and_bad_ones_are_named() {
         let w = ActivityWeights::parse("walk=2, sit=0.5").unwrap();
-        assert_eq!((w.walk, w.stand, w.sit, w.pick_up), (2.0, 0.0, 0.5, 0.0));
+        let by_name = Activity::ALL.map(|a| w.weight(a));
+        assert_eq!(by_name, [2.0, 0.0, 0.5, 0.0]);
         assert_eq!(w.flag(), "walk=2,sit=0.5");
         assert_eq!(ActivityWeights::parse(&w.flag()).unwrap(), w);
         let tiny = ActivityWeights::from_named([("pick_up", 1e-300)]).unwrap();
@@ -490,7 +490,11 @@ mod tests {
     fn activity_settings_refuse_arrays_for_tables_extra_numbers_and_weights_that_overflow() {
         let read = |text: &str| toml::from_str::<ActivitySettings>(text);
         let ok = read("weights = { walk = 1.0, sit = 2.0 }\nsit_s = [1.0, 2.0]").unwrap();
-        assert_eq!((ok.weights.walk, ok.weights.sit), (1.0, 2.0));
+        let w = ok.weights;
+        assert_eq!(
+            (w.weight(Activity::Walk), w.weight(Activity::Sit)),
+            (1.0, 2.0)
+        );
         assert_eq!(ok.sit_s, [1.0, 2.0]);
         // Not read by position.
         let e = read("weights = [1.0, 2.0]").unwrap_err().to_string();

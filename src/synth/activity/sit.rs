@@ -221,12 +221,7 @@ mod tests {
 
     fn sitting() -> ActivitySettings {
         ActivitySettings {
-            weights: ActivityWeights {
-                walk: 1.0,
-                stand: 0.0,
-                sit: 1.0,
-                pick_up: 0.0,
-            },
+            weights: ActivityWeights::parse("walk=1,sit=1").unwrap(),
             ..Default::default()
         }
     }

@@ -55,7 +55,7 @@ impl ActivityWorld {
         map: &WalkableMap,
         clip_dir: &std::path::Path,
     ) -> Result<Self, ActivityClipError> {
-        let seats = match (&mesh, settings.weights.sit > 0.0) {
+        let seats = match (&mesh, settings.weights.weight(Activity::Sit) > 0.0) {
             (Some(m), true) => find_seats(m, map, &SeatSettings::default())
                 .into_iter()
                 .filter(|s| map.is_walkable_at(s.stand()))
