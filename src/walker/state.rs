@@ -80,9 +80,9 @@ pub(crate) const PRIMITIVE_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PR
 
 /// Obstacles as a walker sees them ahead: each standing where it will be when the primitive
 /// taken at `t0_s` ends (how the crowd stepping shows the other people, and the training
-/// environment with [`EnvSettings::people_seen_ahead`]).
+/// environment with the walker setting [`anticipate_people`]).
 ///
-/// [`EnvSettings::people_seen_ahead`]: super::env::EnvSettings::people_seen_ahead
+/// [`anticipate_people`]: super::WalkerSettings::anticipate_people
 pub(crate) fn seen_ahead<'a, I: IntoIterator<Item = &'a MovingObstacle>>(
     moving: I,
     t0_s: f64,

@@ -1,6 +1,6 @@
 //! A walker's step: how every walker judges the primitives its controller proposes and
 //! chooses the one it takes — an episode of the training environment and of `egogen policy
-//! eval` ([`super::env`]), an agent of a take's crowd (`synth::crowd`: `egogen synth`,
+//! eval` (`policy::env`), an agent of a take's crowd (`synth::crowd`: `egogen synth`,
 //! `egogen-run`, the paper's Table 1). One [`Judge`] (limits, reward weights, the scene's 3-D
 //! test) judges every decoded primitive; [`choose_primitive`] is the one function that
 //! chooses: the best proposal by [`best_of`], then, with [`Redraws`], more

@@ -9,8 +9,8 @@ use super::FrameFileError;
 use crate::exr_file::{ExrContents, InspectError};
 use crate::render::passes::CHANNEL_GROUPS;
 
-/// Checks that `bytes`, the encoding of `contents` ([`FrameImage::encode`],
-/// [`FrameImage::contents`]), open as an EXR file whose header names exactly those channels,
+/// Checks that `bytes`, the encoding of `contents` ([`super::FrameImage::encode`],
+/// [`super::FrameImage::contents`]), open as an EXR file whose header names exactly those channels,
 /// sample types, size and compression, and whose offset tables and compressed blocks are all
 /// there; nothing is decompressed.
 pub(crate) fn check_encoded_header(

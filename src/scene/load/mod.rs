@@ -285,9 +285,9 @@ struct Part {
     triangles: Vec<[u32; 3]>,
     /// The object id the file gives it (a PLY's `object_id`), when it gives one.
     file_id: Option<i64>,
-    /// Its surface has an image texture or vertex colours ([`SceneObject::textured`]).
+    /// Its surface has an image texture or vertex colours ([`crate::scene::SceneObject::textured`]).
     textured: bool,
-    /// A material lets light through ([`SceneObject::see_through`]).
+    /// A material lets light through ([`crate::scene::SceneObject::see_through`]).
     see_through: bool,
 }
 
