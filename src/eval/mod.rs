@@ -3,12 +3,14 @@
 //! policy, the sampling controller and a path-planning baseline on the same motion model
 //! (`jobs`), their result files (`files`), `RESULTS.md` (`report`) and the paper's own figures
 //! beside ours (`paper`); the `egogen policy` commands' jobs (`policy_tasks`: the pose prior
-//! fitted and checked, a controller over held-out episodes with its walks drawn). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
+//! fitted and checked, a controller over held-out episodes with its walks drawn); the motion
+//! model measured (`motion_model`: `egogen motion eval` and `control`). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
 //! `egogen eval`'s arguments and loads the shipped parts.
 
 pub mod files;
 pub mod jobs;
 pub mod metrics;
+pub(crate) mod motion_model;
 pub mod paper;
 pub mod policy_tasks;
 pub mod report;

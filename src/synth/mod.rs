@@ -5,10 +5,13 @@
 //! what they do besides walking (`activity`: the schema, one file per activity — standing and
 //! looking around, sitting, picking up — and why one is skipped),
 //! placing a motion in it (`placement`), a take of agents from its plan (`take`), the penetration tests (`penetration`), and the body
-//! caches Blender plays (`body_cache`).
+//! caches Blender plays (`body_cache`). Pictures of bodies and their motion drawn with
+//! `preview`, which `body` and `motion` may not use, are here too: `body_pictures` (`egogen body
+//! shapes|preview|hands`, `egogen motion import --strip`).
 
 pub mod activity;
 pub mod body_cache;
+pub(crate) mod body_pictures;
 pub mod body_track;
 pub mod crowd;
 pub mod crowd_dir;
