@@ -10,7 +10,8 @@
 //! evaluation through `synth` and `policy` and measures it; `render` draws frames in Blender,
 //! `export` turns a take into its outputs, `supervisor` turns a plan into a dataset,
 //! `campaign` runs many takes; `preview` draws PNG pictures for people; `cli` holds the
-//! command-line and config plumbing and no domain logic; `run_job` is `egogen-run`'s job.
+//! command-line and config plumbing and no domain logic (each command's job lives in the module
+//! whose data it is); `run_job` is `egogen-run`'s job.
 
 pub mod atomic_file;
 pub mod body;

@@ -2,11 +2,13 @@
 //!
 //! Owns the 55-joint skeleton, the rest mesh with its blend shapes and skin weights, LBS
 //! exactly as `smplx` computes it, `world_from_cpf` and the hands' landmarks in MPS order
-//! (`hand_landmarks`). Timing and sequences belong to `motion`.
+//! (`hand_landmarks`); `egogen body info`'s summary of a model (`info`). Timing and sequences belong
+//! to `motion`.
 
 pub mod cpf;
 pub mod export;
 pub mod hand_landmarks;
+pub(crate) mod info;
 pub mod lbs;
 pub mod markers;
 pub mod model;

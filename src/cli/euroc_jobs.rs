@@ -1,12 +1,11 @@
-//! `egogen euroc export`: a rendered take and one of its wearers in, a EuRoC MAV folder out
-//! (`export::euroc` writes it).
+//! `egogen euroc export`: its flags, and the default rig resolved; the job (a rendered take and
+//! one of its wearers in, a EuRoC MAV folder out) is `export::euroc::job`.
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 
-use crate::export::euroc::{export_euroc, EurocRequest};
-use crate::rig::Rig;
+use crate::export::euroc::job::EurocExportJob;
 
 /// What `egogen euroc export` was asked.
 #[derive(Debug, Clone, clap::Args)]
@@ -34,45 +33,14 @@ pub struct EurocExportArgs {
 
 /// Runs `egogen euroc export`.
 pub fn euroc_export(args: &EurocExportArgs) -> Result<()> {
-    let started = std::time::Instant::now();
-    let rig_path = args
-        .rig
-        .clone()
+    let rig = (args.rig.clone())
         .unwrap_or_else(|| crate::paths::crate_root().join(super::resolve::DEFAULT_RIG));
-    let rig = Rig::load(&rig_path)?;
-    let written = export_euroc(&EurocRequest {
-        take: &args.take,
-        rig: &rig,
-        wearer: args.wearer.as_deref(),
-        out: &args.out,
-        imu_errors: !args.ideal_imu,
+    crate::export::euroc::job::euroc_export(&EurocExportJob {
+        take: args.take.clone(),
+        out: args.out.clone(),
+        wearer: args.wearer.clone(),
+        rig,
+        ideal_imu: args.ideal_imu,
         seed: args.seed,
-    })?;
-    for (k, cam) in written.cameras.iter().enumerate() {
-        let lens = match cam.fit {
-            Some(e) => format!(
-                "KB4 fitted to its Fisheye624: max {:.4} px, mean {:.4} px over {} valid pixel centres",
-                e.max_px, e.mean_px, e.samples
-            ),
-            None => "lens written exactly".into(),
-        };
-        eprintln!(
-            "egogen euroc export: cam{k} = {} ({} images at {} Hz; {lens})",
-            cam.name, cam.images, cam.rate_hz
-        );
-    }
-    if let Some(note) = &written.note {
-        eprintln!("egogen euroc export: {note}");
-    }
-    eprintln!(
-        "egogen euroc export: imu0 = {} ({} samples at {} Hz), the body frame; ground truth at every sample",
-        written.imu, written.imu_samples, written.imu_rate_hz
-    );
-    println!(
-        "wrote {} ({} in {:.2} s)",
-        args.out.display(),
-        written.wearer,
-        started.elapsed().as_secs_f64()
-    );
-    Ok(())
+    })
 }

@@ -1,7 +1,13 @@
 //! Command-line and configuration plumbing: clap arguments, TOML configs, resolved plans.
 //!
 //! No domain logic lives here: `config` only parses and checks values, `resolve` turns them
-//! into typed plans the stages consume.
+//! into typed plans the stages consume, and each `*_jobs` file holds a command's clap
+//! arguments and thin functions that turn them into a typed job (defaults resolved, configs
+//! loaded, flags checked) and call the module whose data the job is: `eval::jobs`,
+//! `eval::motion_model`, `eval::policy_commands`, `motion::jobs`, `motion::clip_import`,
+//! `policy::train_job`, `scene::dwelling::batch`, `synth::scene_inspect`, `synth::body_pictures`,
+//! `body::info`, `export::head_stats`, `export::aria::job`, `export::euroc::job`,
+//! `inspect::report`.
 
 pub mod aria_jobs;
 pub mod body_jobs;

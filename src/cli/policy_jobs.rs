@@ -1,15 +1,16 @@
-//! Jobs of the `egogen policy` and `egogen train policy` commands: fitting and checking the
-//! pose prior, evaluating controllers on held-out episodes (box scenes, crossings, a scene's
-//! start/goal pairs), and training the policy. The binary parses the flags and calls them.
+//! `egogen policy` and `egogen train policy`: their flags, `policy eval`'s checked into its
+//! settings, controllers and scene, and thin calls into the jobs: fitting and checking the pose
+//! prior, drawing floor plans and evaluating controllers on held-out episodes
+//! (`eval::policy_commands`), and training the policy (`policy::train_job`).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::Subcommand;
 
+use super::train_primitive::train_plan_for_job;
 use crate::atomic_file::refuse_existing;
-use crate::body::BodyModel;
-use crate::preview::RgbImage;
+use crate::eval::policy_commands::{PolicyEvalJob, PosePriorJob};
 
 // Parsed once per command; the evaluation's many options make its variant the largest.
 #[allow(clippy::large_enum_variant)]
@@ -182,9 +183,9 @@ pub struct PolicyEvalArgs {
     pub paths: usize,
 }
 
+/// Runs an `egogen policy` command.
 pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
-    use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
-    use crate::motion::cvae::MotionModel;
+    use crate::eval::policy_commands::{draw_room_plans, pose_prior};
     match cmd {
         PolicyCommand::PosePrior {
             config,
@@ -195,90 +196,26 @@ pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
             quantile,
             scores_json,
             seed,
-        } => {
-            refuse_existing(&out)?;
-            if let Some(f) = &scores_json {
-                refuse_existing(f)?;
-            }
-            if !(0.0..=1.0).contains(&quantile) || components == 0 {
-                bail!("--quantile must lie in [0, 1] and --components be at least 1");
-            }
-            let plan = crate::cli::train_primitive::load_train_plan(&config)?;
-            let body = BodyModel::load(&plan.body_model)?;
-            let model = MotionModel::load(weights.unwrap_or_else(shipped_weights_path))?;
-            let (train, held) = evaluation_sets(&plan, &body, true)?;
-            let (prior, sep) = crate::eval::policy_tasks::fit_pose_prior(
-                &train,
-                &held,
-                &model,
+        } => pose_prior(
+            PosePriorJob {
+                config,
+                weights,
+                out,
                 components,
                 iterations,
                 quantile,
+                scores_json,
                 seed,
-                &config.display().to_string(),
-            );
-            if let Some(parent) = out.parent() {
-                std::fs::create_dir_all(parent)?;
-            }
-            prior.save(&out)?;
-            let mut summary = serde_json::to_value(&sep)?;
-            summary.as_object_mut().map(|o| o.remove("scores"));
-            println!(
-                "{}",
-                serde_json::json!({"frames": prior.frames, "components": components, "separation": summary})
-            );
-            if let Some(f) = scores_json {
-                crate::atomic_file::write_atomically(
-                    &f,
-                    serde_json::to_string(&sep.scores)?.as_bytes(),
-                )?;
-                println!("wrote {}", f.display());
-            }
-            println!("wrote {}", out.display());
-        }
+            },
+            train_plan_for_job,
+        )?,
         PolicyCommand::Rooms {
             out,
             count,
             seed,
             obj_dir,
             wall_m,
-        } => {
-            use crate::scene::generated::room_scene::RoomSettings;
-            refuse_existing(&out)?;
-            if count == 0 {
-                bail!("--count must be at least 1");
-            }
-            if count > MAX_ROOM_PLANS {
-                bail!("--count {count}: at most {MAX_ROOM_PLANS} plans are drawn at once");
-            }
-            let settings = RoomSettings {
-                wall_m,
-                ..RoomSettings::default()
-            };
-            if !settings.is_valid() {
-                bail!("--wall-m: expected a thickness > 0 m, got {wall_m}");
-            }
-            let plans = room_plans(&settings, count, seed);
-            if let Some(dir) = &obj_dir {
-                let files: Vec<PathBuf> = (0..count as u64)
-                    .map(|k| dir.join(format!("plan_{}.obj", seed.wrapping_add(k))))
-                    .collect();
-                for f in &files {
-                    refuse_existing(f)?;
-                }
-                std::fs::create_dir_all(dir)
-                    .with_context(|| format!("creating {}", dir.display()))?;
-                for (plan, f) in plans.iter().zip(&files) {
-                    plan.params
-                        .scene_mesh(&settings)
-                        .write_obj(f)
-                        .with_context(|| format!("writing {}", f.display()))?;
-                    println!("wrote {}", f.display());
-                }
-            }
-            rooms_sheet(&plans).write_png(&out)?;
-            println!("wrote {}", out.display());
-        }
+        } => draw_room_plans(&out, count, seed, obj_dir.as_deref(), wall_m)?,
         PolicyCommand::Eval(args) => policy_eval(args)?,
     }
     Ok(())
@@ -466,258 +403,40 @@ fn eval_ks(
     Ok(k)
 }
 
-/// `egogen policy eval`: controllers on held-out episodes, one JSON line each.
+/// `egogen policy eval`: its flags checked into the job, in the order they were checked
+/// before (the episodes file, the controllers, the settings, the K, the scene).
 fn policy_eval(a: PolicyEvalArgs) -> Result<()> {
-    use crate::motion::cvae::train::{evaluation_sets, shipped_weights_path};
-    use crate::motion::cvae::{BodyContext, MotionModel};
-    use crate::walker::pose_prior::shipped_pose_prior_path;
-    use crate::walker::{PosePrior, SeedBank};
     if let Some(f) = &a.episodes_jsonl {
         refuse_existing(f)?;
     }
     let controllers = eval_controllers(&a.controller)?;
     let settings = eval_settings(&a)?;
-    let PolicyEvalArgs {
-        config,
-        weights,
-        prior,
-        episodes,
-        envs,
-        seed,
-        episodes_jsonl,
-        paths_png,
-        paths,
-        policy,
-        mean_action,
-        action_spread,
-        scene,
-        ..
-    } = &a;
-    let (episodes, envs, seed, paths, mean_action, action_spread) = (
-        *episodes,
-        *envs,
-        *seed,
-        *paths,
-        *mean_action,
-        *action_spread,
-    );
     let k = eval_ks(&a, &controllers)?;
     let fixed = eval_scene(&a)?;
-    let plan = crate::cli::train_primitive::load_train_plan(config)?;
-    let body = BodyModel::load(&plan.body_model)?;
-    let ctx = BodyContext::new(&body, &[])?;
-    let model = MotionModel::load(weights.clone().unwrap_or_else(shipped_weights_path))?;
-    let prior = PosePrior::load(&prior.clone().unwrap_or_else(shipped_pose_prior_path))?;
-    let (_, held) = evaluation_sets(&plan, &body, true)?;
-    let bank = SeedBank::from_set(&held);
-    if let Some(png) = &paths_png {
-        refuse_existing(png)?;
-        if k.len() + controllers.len() + usize::from(policy.is_some()) != 1 || paths == 0 {
-            bail!("--paths-png draws one controller's walks: give one --k or --policy alone, and --paths ≥ 1");
-        }
-    }
-    use crate::eval::policy_tasks::{evaluate_with_paths, HeldOutController};
-    use crate::motion::cvae::infer::InferBackend;
-    use crate::policy::env::EnvParts;
-    let loaded = match &policy {
-        None => None,
-        Some(path) => Some(crate::policy::weights::load_policy_for(path, &model)?),
+    let job = PolicyEvalJob {
+        config: a.config,
+        weights: a.weights,
+        prior: a.prior,
+        episodes: a.episodes,
+        envs: a.envs,
+        seed: a.seed,
+        episodes_jsonl: a.episodes_jsonl,
+        paths_png: a.paths_png,
+        paths: a.paths,
+        policy: a.policy,
+        mean_action: a.mean_action,
+        action_spread: a.action_spread,
+        scene: a.scene,
+        settings,
+        controllers,
+        k,
+        fixed,
     };
-    let mut runs: Vec<(serde_json::Value, HeldOutController<InferBackend>)> = k
-        .iter()
-        .map(|&kk| {
-            (
-                serde_json::json!({"controller": "sampling", "k": kk}),
-                HeldOutController::Walker(crate::walker::ControllerSpec::Sampling { k: kk }),
-            )
-        })
-        .collect();
-    runs.extend(controllers.iter().map(|&(kind, k, spec)| {
-        (
-            serde_json::json!({"controller": kind, "k": k}),
-            HeldOutController::Walker(spec),
-        )
-    }));
-    if let Some(net) = &loaded {
-        let name = if mean_action { "policy_mean" } else { "policy" };
-        let mut about = serde_json::json!({"controller": name, "weights": policy, "scene": scene});
-        if action_spread != 1.0 && !mean_action {
-            about["action_spread"] = action_spread.into();
-        }
-        runs.push((
-            about,
-            HeldOutController::Policy {
-                net,
-                mean_action,
-                spread: action_spread,
-            },
-        ));
-    }
-    let parts = EnvParts {
-        model: &model,
-        body: &ctx,
-        bank: &bank,
-        prior: &prior,
-        fixed: fixed.as_ref(),
-    };
-    let mut lines = String::new();
-    for (label, controller) in &runs {
-        let bar = indicatif::ProgressBar::new(episodes as u64).with_message(label.to_string());
-        let drawn = if paths_png.is_some() { paths } else { 0 };
-        let (report, summaries, walks) = evaluate_with_paths(
-            &parts,
-            settings,
-            controller,
-            (episodes, envs, seed),
-            drawn,
-            |_| bar.inc(1),
-        )?;
-        bar.finish_and_clear();
-        if let Some(png) = &paths_png {
-            paths_sheet(&walks).write_png(png)?;
-            println!("wrote {}", png.display());
-        }
-        let mut line = label.clone();
-        line["report"] = serde_json::to_value(&report)?;
-        println!("{line}");
-        for s in summaries {
-            let mut e = label.clone();
-            e["episode"] = serde_json::to_value(&s)?;
-            lines.push_str(&e.to_string());
-            lines.push('\n');
-        }
-    }
-    if let Some(f) = episodes_jsonl {
-        crate::atomic_file::write_atomically(f, lines.as_bytes())?;
-        println!("wrote {}", f.display());
-    }
-    Ok(())
+    crate::eval::policy_commands::policy_eval(job, train_plan_for_job)
 }
 
+/// `egogen train policy`: the training config at `config` loaded, the policy trained.
 pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Result<()> {
-    use crate::motion::cvae::train::evaluation_sets;
-    use crate::motion::cvae::{BodyContext, MotionModel};
-    use crate::policy::env::EnvParts;
-    use crate::policy::ppo::train_policy;
-    use crate::walker::PosePrior;
-    use crate::walker::SeedBank;
-    let mut plan = crate::cli::train_policy::load_policy_plan(config)?;
-    let body = BodyModel::load(&plan.body_model)?;
-    let ctx = BodyContext::new(&body, &[])?;
-    let model = MotionModel::load(&plan.motion_weights)?;
-    plan.arch.latent_dim = model.latent_dim();
-    let prior = PosePrior::load(&plan.pose_prior)?;
-    let motion_plan = crate::cli::train_primitive::load_train_plan(&plan.motion_config)?;
-    let (train_set, _) = evaluation_sets(&motion_plan, &body, true)?;
-    let bank = SeedBank::from_set(&train_set);
-    // The scene's 3D SDF only where a stage tests penetration by Eq. 11.
-    let sdf_voxel_m = plan
-        .stages
-        .iter()
-        .any(|s| s.env.scene_test_vertices > 0)
-        .then_some(crate::scene::sdf3d::DEFAULT_VOXEL_M);
-    let fixed = plan
-        .scene
-        .as_ref()
-        .map(|s| crate::policy::fixed_scene::fixed_scene(s, sdf_voxel_m))
-        .transpose()?;
-    let parts = EnvParts {
-        model: &model,
-        body: &ctx,
-        bank: &bank,
-        prior: &prior,
-        fixed: fixed.as_ref(),
-    };
-    let report = train_policy(&plan, &parts, !quiet, resume, force)?;
-    println!(
-        "trained {} parameters for {} updates ({} env steps) in {:.0} s; best validation return {}",
-        report.parameters,
-        report.updates,
-        report.env_steps,
-        report.seconds,
-        report
-            .best_validation_return
-            .map_or("n/a".into(), |r| format!("{r:.3}"))
-    );
-    println!(
-        "wrote {} and {}",
-        plan.weights_out.display(),
-        plan.log_out.display()
-    );
-    Ok(())
-}
-
-/// Side of a picture's tile (px).
-const TILE_PX: usize = 320;
-const WHITE: [u8; 3] = [255, 255, 255];
-const START_RGB: [u8; 3] = [40, 160, 60];
-const GOAL_RGB: [u8; 3] = [200, 50, 50];
-
-/// `count` floor plans with their start (green), goal (red) and the line between, three to a
-/// row.
-/// Most plans `egogen policy rooms` draws at once (a sheet of 1 000 tiles is 54 MB).
-const MAX_ROOM_PLANS: usize = 1000;
-
-/// Plans `seed`, `seed + 1`, … drawn with `settings`.
-fn room_plans(
-    settings: &crate::scene::generated::room_scene::RoomSettings,
-    count: usize,
-    seed: u64,
-) -> Vec<crate::scene::generated::room_scene::RoomScene> {
-    use rand_core::SeedableRng;
-    (0..count as u64)
-        .map(|k| {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed.wrapping_add(k));
-            crate::scene::generated::room_scene::RoomScene::sample(settings, &mut rng)
-        })
-        .collect()
-}
-
-fn rooms_sheet(plans: &[crate::scene::generated::room_scene::RoomScene]) -> RgbImage {
-    use crate::preview::map::MapPicture;
-    let tiles: Vec<RgbImage> = plans
-        .iter()
-        .map(|scene| {
-            let mut pic = MapPicture::new(&scene.map, TILE_PX - 16);
-            pic.line(scene.start, scene.goal, [120, 120, 220]);
-            pic.dot(scene.start, 5, START_RGB);
-            pic.dot(scene.goal, 5, GOAL_RGB);
-            pic.image
-        })
-        .collect();
-    RgbImage::contact_sheet(&tiles, TILE_PX, 3, WHITE)
-}
-
-/// Evaluated walks over their courses (see `--paths-png`), three to a row.
-fn paths_sheet(walks: &[crate::eval::policy_tasks::EpisodePath]) -> RgbImage {
-    use crate::policy::env::Ending;
-    use crate::preview::map::MapPicture;
-    let tiles: Vec<RgbImage> = walks
-        .iter()
-        .map(|w| {
-            let c = &w.course;
-            let mut pic = MapPicture::new(&c.map, TILE_PX - 16);
-            if let Some(o) = &c.obstacle {
-                pic.obstacle(o, [90, 90, 200]);
-            }
-            for m in &c.moving {
-                pic.obstacle(&m.at_start, [150, 150, 230]);
-            }
-            let rgb = match w.ending {
-                Some(Ending::Success) => [30, 150, 60],
-                Some(Ending::Timeout) | None => [230, 140, 20],
-                Some(Ending::Penetration | Ending::Failure) => [210, 40, 40],
-            };
-            for seg in w.pelvis_xy.windows(2) {
-                pic.line(seg[0], seg[1], rgb);
-            }
-            for &p in &w.pelvis_xy {
-                pic.dot(p, 2, rgb);
-            }
-            pic.dot(c.start, 5, START_RGB);
-            pic.dot(c.goal, 5, GOAL_RGB);
-            pic.image
-        })
-        .collect();
-    RgbImage::contact_sheet(&tiles, TILE_PX, 3, WHITE)
+    let plan = super::train_policy::load_policy_plan(config)?;
+    crate::policy::train_job::train_policy(plan, quiet, resume, force, train_plan_for_job)
 }

@@ -459,3 +459,8 @@ fn resolve_prior(p: RawPrior, has_init_weights: bool, bad: Bad) -> Result<PriorP
 pub fn load_train_plan(path: &Path) -> Result<TrainPlan, ConfigError> {
     RawTrainPrimitive::load(path)?.resolve(path)
 }
+
+/// [`load_train_plan`] as the jobs that take a loader call it (the error as `anyhow`'s).
+pub(crate) fn train_plan_for_job(path: &Path) -> anyhow::Result<TrainPlan> {
+    Ok(load_train_plan(path)?)
+}

@@ -2,14 +2,18 @@
 //! measures (paper S4.2), the suites that run Tables 1–3 and the speed table for the trained
 //! policy, the sampling controller and a path-planning baseline on the same motion model
 //! (`jobs`), their result files (`files`), `RESULTS.md` (`report`) and the paper's own figures
-//! beside ours (`paper`); the `egogen policy` commands' jobs (`policy_tasks`: the pose prior
-//! fitted and checked, a controller over held-out episodes with its walks drawn). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
+//! beside ours (`paper`); the `egogen policy` commands' jobs (`policy_commands`: the pose prior
+//! fitted and checked, floor plans drawn, controllers over held-out episodes with their walks
+//! drawn, on `policy_tasks`); the motion model measured (`motion_model`: `egogen motion eval`
+//! and `control`). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
 //! `egogen eval`'s arguments and loads the shipped parts.
 
 pub mod files;
 pub mod jobs;
 pub mod metrics;
+pub(crate) mod motion_model;
 pub mod paper;
+pub(crate) mod policy_commands;
 pub mod policy_tasks;
 pub mod report;
 pub mod scenarios;

@@ -11,6 +11,9 @@
 //! - exports of a finished take's folder, read back by `take_folder`: the Aria streams
 //!   (`egogen aria export`) and a wearer in the EuRoC MAV layout for VIO/SLAM tools (`euroc`:
 //!   SLAM camera images, the IMU, the device's ground truth).
+//!
+//! Also `egogen motion head-stats`' job (`head_stats`): how a head moves in takes, clips and
+//! MPS trajectories, with the IMU computed as the exports compute theirs.
 
 pub mod annotate;
 pub mod annotations;
@@ -18,6 +21,7 @@ pub mod aria;
 pub mod colmap;
 pub mod euroc;
 pub mod gaze;
+pub(crate) mod head_stats;
 pub mod imu;
 pub mod take;
 pub mod take_folder;

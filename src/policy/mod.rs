@@ -13,10 +13,11 @@
 //!   episode at once);
 //! - training: `net` (the actor-critic in burn), `ppo` (its stages and checkpoints) over the
 //!   environment's scenes — generated ones (`crate::scene::generated`: box scenes, crossings,
-//!   floor plans) and `fixed_scene` (a scene file with start/goal pairs);
+//!   floor plans) and `fixed_scene` (a scene file with start/goal pairs); `train_job`
+//!   (`egogen train policy`: the parts a plan names loaded, the policy trained);
 //! - evaluation: `held_out` (a controller over held-out episodes, training's validation
-//!   among them); the `egogen policy` commands' jobs are `crate::eval::policy_tasks`, the
-//!   paper's tables `crate::eval`'s.
+//!   among them); the `egogen policy` commands' jobs are `crate::eval::policy_commands` (on
+//!   `crate::eval::policy_tasks`), the paper's tables `crate::eval`'s.
 
 pub mod actor;
 pub mod env;
@@ -26,6 +27,7 @@ pub mod net;
 pub mod ppo;
 pub mod row_product;
 pub mod sampling;
+pub(crate) mod train_job;
 pub mod weights;
 
 pub use actor::Actor;

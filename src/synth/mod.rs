@@ -5,15 +5,20 @@
 //! what they do besides walking (`activity`: the schema, one file per activity — standing and
 //! looking around, sitting, picking up — and why one is skipped),
 //! placing a motion in it (`placement`), a take of agents from its plan (`take`), the penetration tests (`penetration`), and the body
-//! caches Blender plays (`body_cache`).
+//! caches Blender plays (`body_cache`). Two commands' jobs that draw bodies, motion and what a
+//! walker senses with `preview`, which `body`, `motion` and `scene` may not use, are here too:
+//! `body_pictures` (`egogen body shapes|preview|hands`, `egogen motion import --strip`) and
+//! `scene_inspect` (`egogen scene inspect`).
 
 pub mod activity;
 pub mod body_cache;
+pub(crate) mod body_pictures;
 pub mod body_track;
 pub mod crowd;
 pub mod crowd_dir;
 pub mod penetration;
 pub mod placement;
+pub(crate) mod scene_inspect;
 pub mod sequence_dir;
 pub mod take;
 

@@ -14,6 +14,9 @@
 //! Time: the device clock starts at the take's frame 0 (`tracking_timestamp_us = 0`); frame
 //! `i` is at `i / frame_rate_hz`. There is no wall clock (`utc_timestamp_ns = -1`, as MPS
 //! writes when it has none).
+//!
+//! `egogen aria export`'s job, a finished take's folder in and its wearers' streams out, is
+//! `job`.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -23,6 +26,7 @@ use anyhow::{bail, Context, Result};
 use serde_json::json;
 
 mod hands;
+pub(crate) mod job;
 
 use super::gaze::{eye_gaze_csv, fixations, gaze_samples, Fixation, GazeGoal, GazeWorld};
 use super::imu::{sample_times_ns, simulate_imu, ImuErrors, ImuSample, GRAVITY_WORLD};

@@ -7,8 +7,10 @@
 //! ceilings, door frames and leaves, window frames and ceiling lamps built here, the
 //! furniture's meshes and textures copied from the catalogue's GLBs: `glb`) with a JSON
 //! sidecar (each object's class, room, catalogue model, creator and licence; the rooms).
-//! The same seed, settings and catalogue give the same bytes.
+//! The same seed, settings and catalogue give the same bytes. `batch` is `egogen scene
+//! generate`'s job: dwellings from consecutive seeds, written and summarised.
 
+pub(crate) mod batch;
 pub mod catalogue;
 pub mod furnish;
 mod glb;

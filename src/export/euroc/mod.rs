@@ -27,6 +27,10 @@
 //! the bias random walk, saturated): EuRoC has no place for a device's own scale and
 //! misalignment, so the rig's IMU calibration is not applied; the ground truth's biases are the
 //! model's bias state at each sample (0 with ideal IMUs).
+//!
+//! `egogen euroc export`'s job, which says on standard error what was written, is `job`.
+
+pub(crate) mod job;
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
