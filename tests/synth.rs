@@ -22,7 +22,8 @@ fn egogen() -> Command {
 ///
 /// The policy is the box-and-crossing one (`configs/train_policy.toml`), on which the overlap
 /// bound below was measured; the shipped policy, fine-tuned in the apartment, brushes the
-/// sampling walker more in this head-on case (docs/POLICY.md).
+/// sampling walker more in this head-on case
+/// (docs/records/2026-12-06-policy-training-history.md, "Fine-tuning with the apartment").
 fn crossing(out: &str, seed: u64) -> String {
     format!(
         r#"
