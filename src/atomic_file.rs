@@ -33,7 +33,7 @@ pub enum OutputError {
 }
 
 /// Writes `bytes` to `<path>.partial` and renames it into place.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+pub(crate) fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let tmp = partial_of(path);
     let result = std::fs::File::create(&tmp).and_then(|mut f| {
         f.write_all(bytes)?;
@@ -49,7 +49,7 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
 }
 
 /// `<path>.partial`: where `path` is made before it is renamed into place.
-pub fn partial_of(path: &Path) -> PathBuf {
+pub(crate) fn partial_of(path: &Path) -> PathBuf {
     PathBuf::from(format!("{}.partial", path.display()))
 }
 
@@ -62,7 +62,7 @@ pub fn refuse_existing(path: &Path) -> Result<(), OutputError> {
 }
 
 /// Refuses a folder output (`flag`, e.g. `--out`) that exists and is not an empty folder.
-pub fn refuse_existing_folder(path: &Path, flag: &str) -> Result<(), OutputError> {
+pub(crate) fn refuse_existing_folder(path: &Path, flag: &str) -> Result<(), OutputError> {
     if !(path.exists() || path.is_symlink()) {
         return Ok(());
     }
@@ -79,7 +79,12 @@ pub fn refuse_existing_folder(path: &Path, flag: &str) -> Result<(), OutputError
 /// Refuses an output `path` (given as `flag`) inside the input folder `input` (`what`, e.g.
 /// "the take"), or the input itself; links are followed, a path not made yet is taken where
 /// it would be.
-pub fn refuse_inside(path: &Path, flag: &str, input: &Path, what: &str) -> Result<(), OutputError> {
+pub(crate) fn refuse_inside(
+    path: &Path,
+    flag: &str,
+    input: &Path,
+    what: &str,
+) -> Result<(), OutputError> {
     if let (Ok(input_abs), Some(out_abs)) = (input.canonicalize(), absolute_of(path)) {
         if out_abs.starts_with(&input_abs) {
             return Err(OutputError::Inside {
@@ -110,7 +115,7 @@ fn absolute_of(path: &Path) -> Option<PathBuf> {
 /// A folder output built in `<out>.partial` and renamed to `out` when it is whole; dropped
 /// unfinished, the `.partial` is removed (it is this run's own).
 #[derive(Debug)]
-pub struct StagedFolder {
+pub(crate) struct StagedFolder {
     out: PathBuf,
     staging: PathBuf,
     finished: bool,
@@ -120,7 +125,7 @@ impl StagedFolder {
     /// Starts `out` (given as `flag`): refused where it exists and is not an empty folder; a
     /// `.partial` left by a killed run is removed when every entry in it is one `ours` accepts
     /// (name, is a folder), else refused naming `what` (e.g. "an EuRoC export").
-    pub fn begin(
+    pub(crate) fn begin(
         out: &Path,
         flag: &str,
         what: &str,
@@ -162,12 +167,12 @@ impl StagedFolder {
     }
 
     /// The folder being built.
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.staging
     }
 
     /// Renames the built folder to its output (replacing the empty folder there, if any).
-    pub fn finish(mut self) -> Result<PathBuf, OutputError> {
+    pub(crate) fn finish(mut self) -> Result<PathBuf, OutputError> {
         let io = |path: &Path| {
             let path = path.to_path_buf();
             move |source| OutputError::Io { path, source }

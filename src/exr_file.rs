@@ -98,7 +98,7 @@ impl ExrContents {
 
     /// Reads all parts and channels of a file's bytes held in memory (`path` names them in
     /// messages and in [`ExrContents::path`]).
-    pub fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, InspectError> {
+    pub(crate) fn from_bytes(path: &Path, bytes: &[u8]) -> Result<Self, InspectError> {
         Self::read_from(path, std::io::Cursor::new(bytes))
     }
 
@@ -168,7 +168,7 @@ impl ExrContents {
 
     /// A one-part file's contents made in memory from its channels (in file order), as
     /// [`ExrContents::read`] would give them; no text attributes.
-    pub fn from_channels(path: &Path, channels: Vec<ExrChannel>) -> Self {
+    pub(crate) fn from_channels(path: &Path, channels: Vec<ExrChannel>) -> Self {
         let passes = group_passes(&channels);
         Self {
             path: path.to_owned(),

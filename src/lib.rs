@@ -13,6 +13,11 @@
 //! command-line and config plumbing and no domain logic (each command's job lives in the module
 //! whose data it is); `run_job` is `egogen-run`'s job.
 
+// Items are pub(crate) unless a binary, test or bench uses them (tests/code_shape.rs); the docs
+// are built with them (`cargo doc --document-private-items`), where a public item's link to a
+// crate-private one resolves.
+#![allow(rustdoc::private_intra_doc_links)]
+
 pub mod atomic_file;
 pub mod body;
 pub mod camera;

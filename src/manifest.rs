@@ -10,10 +10,10 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 /// Folders of a dataset that are scratch, not data.
-pub const SCRATCH_DIRS: [&str; 2] = ["work", "logs"];
-pub const MANIFEST: &str = "manifest.json";
+pub(crate) const SCRATCH_DIRS: [&str; 2] = ["work", "logs"];
+pub(crate) const MANIFEST: &str = "manifest.json";
 /// The manifest format this egogen writes and reads (`egogen_manifest`).
-pub const MANIFEST_VERSION: u32 = 1;
+pub(crate) const MANIFEST_VERSION: u32 = 1;
 
 /// One file.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -32,7 +32,7 @@ pub struct Manifest {
 }
 
 /// SHA-256 of bytes, lower-case hex.
-pub fn sha256_hex(bytes: &[u8]) -> String {
+pub(crate) fn sha256_hex(bytes: &[u8]) -> String {
     format!("{:x}", Sha256::digest(bytes))
 }
 
@@ -74,13 +74,13 @@ fn collect(dir: &Path, rel: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
 
 /// Whether a file name is one of egogen's temporaries (`<name>.partial` of an atomic write,
 /// `<frame>.exr.tmp` of a frame being finished): never data, only ever left by a killed run.
-pub fn is_temporary(name: &str) -> bool {
+pub(crate) fn is_temporary(name: &str) -> bool {
     name.ends_with(".partial") || name.ends_with(".tmp")
 }
 
 /// Removes the temporaries a killed run left among the dataset files of `dir` (scratch folders
 /// excluded), so that the manifest lists only data; returns what was removed.
-pub fn remove_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
+pub(crate) fn remove_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut removed = Vec::new();
     for rel in dataset_files(dir)? {
         if is_temporary(&rel) {
@@ -100,7 +100,7 @@ pub fn build_manifest(dir: &Path) -> Result<Manifest> {
 
 /// [`build_manifest`], taking the checksum of a file from `known` (entries computed when the
 /// file was written) instead of reading it, where the file has the size `known` says.
-pub fn build_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manifest> {
+pub(crate) fn build_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manifest> {
     let known: std::collections::HashMap<&str, &ManifestEntry> =
         known.iter().map(|e| (e.path.as_str(), e)).collect();
     let files = dataset_files(dir)?
@@ -133,7 +133,7 @@ pub fn write_manifest(dir: &Path) -> Result<Manifest> {
 }
 
 /// [`write_manifest`] with checksums `known` ([`build_manifest_with`]).
-pub fn write_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manifest> {
+pub(crate) fn write_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manifest> {
     let manifest = build_manifest_with(dir, known)?;
     let path = dir.join(MANIFEST);
     crate::atomic_file::write_atomically(
@@ -146,7 +146,7 @@ pub fn write_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result<Manife
 
 /// Dataset files under `dir` (scratch folders and the manifest excluded), `/`-separated,
 /// sorted.
-pub fn dataset_files(dir: &Path) -> Result<Vec<String>> {
+pub(crate) fn dataset_files(dir: &Path) -> Result<Vec<String>> {
     let mut files = Vec::new();
     collect(dir, Path::new(""), &mut files)?;
     Ok(files

@@ -7,11 +7,11 @@
 use std::path::Path;
 
 /// Environment variable that sets the budget, in GB (10⁹ bytes).
-pub const MEMORY_ENV: &str = "EGOGEN_MEMORY_GB";
+pub(crate) const MEMORY_ENV: &str = "EGOGEN_MEMORY_GB";
 
 /// How much memory a run may plan for, and where that figure comes from.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MemoryBudget {
+pub(crate) struct MemoryBudget {
     pub bytes: f64,
     /// `"EGOGEN_MEMORY_GB"`, `"the control group's limit"` or `"physical memory"`.
     pub source: &'static str,
@@ -21,7 +21,7 @@ impl MemoryBudget {
     /// This process's budget: `EGOGEN_MEMORY_GB` when set (an error names it when it is not a
     /// positive number), else the smaller of physical memory and the control group's limit.
     /// `None` when the system says neither.
-    pub fn of_this_process() -> Result<Option<Self>, String> {
+    pub(crate) fn of_this_process() -> Result<Option<Self>, String> {
         if let Ok(text) = std::env::var(MEMORY_ENV) {
             return match text.trim().parse::<f64>() {
                 Ok(gb) if gb.is_finite() && gb > 0.0 => Ok(Some(Self {
@@ -48,7 +48,7 @@ impl MemoryBudget {
     }
 
     /// `Err` with what `what` needs against the budget when `bytes` exceed it.
-    pub fn check(&self, what: &str, bytes: f64) -> Result<(), String> {
+    pub(crate) fn check(&self, what: &str, bytes: f64) -> Result<(), String> {
         match bytes <= self.bytes {
             true => Ok(()),
             false => Err(format!(
@@ -67,7 +67,7 @@ impl MemoryBudget {
 
 /// Checks `bytes` against this process's budget (see [`MemoryBudget::of_this_process`]); no
 /// budget known is no refusal.
-pub fn check_fits(what: &str, bytes: f64) -> Result<(), String> {
+pub(crate) fn check_fits(what: &str, bytes: f64) -> Result<(), String> {
     match MemoryBudget::of_this_process()? {
         Some(budget) => budget.check(what, bytes),
         None => Ok(()),

@@ -8,7 +8,7 @@ use npyz::npz::NpzArchive;
 use npyz::NpyFile;
 
 /// Why an array could not be read.
-pub enum ReadError {
+pub(crate) enum ReadError {
     /// The archive or array could not be read.
     Io(std::io::Error),
     /// The dtype is not a plain number type (the descriptor found).
@@ -18,7 +18,7 @@ pub enum ReadError {
 /// The array `name` of an `.npz`, its bytes inflated at once into memory, or `None` when the
 /// archive has no such array. (Read through the archive, an array is inflated a value at a
 /// time: loading a body model took several times longer.)
-pub fn array_in_memory<R: Read + Seek>(
+pub(crate) fn array_in_memory<R: Read + Seek>(
     npz: &mut NpzArchive<R>,
     name: &str,
 ) -> std::io::Result<Option<NpyFile<Cursor<Vec<u8>>>>> {
@@ -41,7 +41,7 @@ pub fn array_in_memory<R: Read + Seek>(
 }
 
 /// Reads any plain numeric npy array as `f64` in file order; returns whether it was floating point.
-pub fn read_as_f64<R: Read>(file: NpyFile<R>) -> Result<(Vec<f64>, bool), ReadError> {
+pub(crate) fn read_as_f64<R: Read>(file: NpyFile<R>) -> Result<(Vec<f64>, bool), ReadError> {
     let descr = match file.dtype() {
         npyz::DType::Plain(ts) => ts.to_string(),
         other => return Err(ReadError::Dtype(other.descr())),
@@ -79,7 +79,7 @@ pub fn read_as_f64<R: Read>(file: NpyFile<R>) -> Result<(Vec<f64>, bool), ReadEr
 }
 
 /// Reorders a Fortran-order (column-major) array of `shape` into C (row-major) order.
-pub fn fortran_to_c(data: &[f64], shape: &[u64]) -> Vec<f64> {
+pub(crate) fn fortran_to_c(data: &[f64], shape: &[u64]) -> Vec<f64> {
     let dims: Vec<usize> = shape.iter().map(|&d| d as usize).collect();
     let n = data.len();
     let mut out = vec![0.0; n];

@@ -14,7 +14,7 @@ static QUIET_HOOK: Once = Once::new();
 
 /// Runs `parse`; a panic inside it becomes `Err(its message)`. Panics elsewhere, and on other
 /// threads, are reported as before.
-pub fn catch_parser_panic<T>(parse: impl FnOnce() -> T) -> Result<T, String> {
+pub(crate) fn catch_parser_panic<T>(parse: impl FnOnce() -> T) -> Result<T, String> {
     QUIET_HOOK.call_once(|| {
         let previous = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {

@@ -15,7 +15,7 @@ const PLAIN_PROGRESS_EVERY: Duration = Duration::from_secs(10);
 /// done since then, `len − pos` to go. `None` before the first item. Work that finishes in
 /// bursts (a shard's frames come at its end) keeps a steady estimate this way, where a recent
 /// rate would swing from seconds to days between bursts.
-pub fn average_eta(pos: u64, len: u64, start: u64, elapsed: Duration) -> Option<Duration> {
+pub(crate) fn average_eta(pos: u64, len: u64, start: u64, elapsed: Duration) -> Option<Duration> {
     let done = pos.saturating_sub(start);
     (done > 0).then(|| {
         Duration::from_secs_f64(
@@ -25,18 +25,24 @@ pub fn average_eta(pos: u64, len: u64, start: u64, elapsed: Duration) -> Option<
 }
 
 /// How a bar estimates the time left from its position, length and elapsed time.
-pub type Eta = Arc<dyn Fn(u64, u64, Duration) -> Option<Duration> + Send + Sync>;
+pub(crate) type Eta = Arc<dyn Fn(u64, u64, Duration) -> Option<Duration> + Send + Sync>;
 
 /// A bar over `total` items of `unit` (e.g. "frames"), `done` of them already done; `what`
 /// names the work (e.g. "rendering") and `program` the command the plain lines come from.
 /// The time left is [`average_eta`]'s.
-pub fn progress_bar(program: &str, what: &str, unit: &str, total: u64, done: u64) -> ProgressBar {
+pub(crate) fn progress_bar(
+    program: &str,
+    what: &str,
+    unit: &str,
+    total: u64,
+    done: u64,
+) -> ProgressBar {
     let eta: Eta = Arc::new(move |pos, len, elapsed| average_eta(pos, len, done, elapsed));
     progress_bar_with_eta(program, what, unit, total, done, eta)
 }
 
 /// [`progress_bar`] with the time left estimated by `eta`.
-pub fn progress_bar_with_eta(
+pub(crate) fn progress_bar_with_eta(
     program: &str,
     what: &str,
     unit: &str,

@@ -66,7 +66,7 @@ fn integer_beyond_toml(raw: &RawRun) -> Option<(String, u64)> {
 
 /// Reads `config`, applies `overrides` to it as written (so its checks apply to them too),
 /// resolves it and loads its body model.
-pub fn prepare(
+pub(crate) fn prepare(
     config: &Path,
     overrides: &RunOverrides,
     request: &RunRequest,
@@ -122,7 +122,7 @@ pub fn prepare(
 impl PreparedRun {
     /// Makes the take's motion ([`crate::synth::take::make_motion`]) and says what the agents
     /// did.
-    pub fn make_motion(&self) -> Result<TakeMotion> {
+    pub(crate) fn make_motion(&self) -> Result<TakeMotion> {
         let motion = make_motion(&self.plan.motion, &self.plan.betas, &self.model)?;
         if let TakeMotion::Agents { walked, .. } = &motion {
             let reached: usize = walked
@@ -143,7 +143,7 @@ impl PreparedRun {
     }
 
     /// The motion as the supervisor renders it.
-    pub fn run_motion<'a>(&'a self, motion: &'a TakeMotion) -> RunMotion<'a> {
+    pub(crate) fn run_motion<'a>(&'a self, motion: &'a TakeMotion) -> RunMotion<'a> {
         match (motion, &self.plan.motion) {
             (TakeMotion::Agents { walked, wearers }, MotionPlan::Agents { synth, .. }) => {
                 RunMotion::Agents {

@@ -140,7 +140,7 @@ pub fn write_corner_uvs_npy(path: &Path, uvs: &[[f32; 2]]) -> Result<(), CacheEr
 /// Writes an object index per face of a scene file as an int32 `.npy` of shape F×1
 /// (atomically; `u32::MAX`, a face that made no triangle, as −1): how Blender splits a scan it
 /// imports as one mesh into the scene's objects.
-pub fn write_face_objects_npy(path: &Path, objects: &[u32]) -> Result<(), CacheError> {
+pub(crate) fn write_face_objects_npy(path: &Path, objects: &[u32]) -> Result<(), CacheError> {
     write_npy_rows(
         path,
         objects.iter().map(|&o| [i32::try_from(o).unwrap_or(-1)]),

@@ -10,7 +10,9 @@
 use super::{joint, BodyModel, PoseError, PosedSkeleton, ShapedBody, POSE_DIM};
 use crate::math::{Affine3, Real, Vec3};
 
-/// The landmarks' names, in MPS order.
+/// The landmarks' names, in MPS order (named for readers: the order every landmark array
+/// follows).
+#[allow(dead_code)]
 pub const HAND_LANDMARKS: [&str; 21] = [
     "thumb_fingertip",
     "index_fingertip",
@@ -50,14 +52,14 @@ const FINGER_JOINTS: [[usize; 3]; 5] = [
 
 /// A model's fingertip vertices, `[hand][finger]` (thumb to little finger).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct HandTips {
+pub(crate) struct HandTips {
     pub vertices: [[u32; 5]; 2],
 }
 
 impl HandTips {
     /// Each finger's tip: of the vertices its last joint moves most, the one farthest along
     /// its last bone (the model's rest shape).
-    pub fn of(model: &BodyModel) -> Result<HandTips, PoseError> {
+    pub(crate) fn of(model: &BodyModel) -> Result<HandTips, PoseError> {
         let rest = model.rest_joints(&[], &[])?;
         let mut vertices = [[0u32; 5]; 2];
         for (hand, tips) in vertices.iter_mut().enumerate() {
@@ -102,7 +104,7 @@ pub struct HandLandmarks {
 
 impl HandLandmarks {
     /// The same hand in another frame: `to_from_this` applied to every point, pose and normal.
-    pub fn moved(&self, to_from_this: Affine3) -> HandLandmarks {
+    pub(crate) fn moved(&self, to_from_this: Affine3) -> HandLandmarks {
         HandLandmarks {
             points: self.points.map(|p| to_from_this.transform_point3(p)),
             wrist: to_from_this * self.wrist,
@@ -114,7 +116,7 @@ impl HandLandmarks {
 
 /// Both hands (left, right) of a body posed as `skeleton` with `pose`, in the skeleton's
 /// frame.
-pub fn hand_landmarks(
+pub(crate) fn hand_landmarks(
     shaped: &ShapedBody,
     skeleton: &PosedSkeleton,
     pose: &[Real; POSE_DIM],
@@ -153,7 +155,7 @@ pub fn hand_landmarks(
 
 /// Both hands' landmarks on every frame of a motion (`betas`, per-frame `poses` and
 /// translations `trans`) in its world frame, frames in parallel.
-pub fn hand_track(
+pub(crate) fn hand_track(
     model: &BodyModel,
     betas: &[Real],
     poses: &[[Real; POSE_DIM]],

@@ -262,7 +262,7 @@ impl ShapedBody<'_> {
     }
 
     /// [`Self::skeleton`] written into `out` ([`posed_skeleton_into`]).
-    pub fn skeleton_into(
+    pub(crate) fn skeleton_into(
         &self,
         pose: &[Real; POSE_DIM],
         transl: Vec3,
@@ -459,7 +459,7 @@ impl SkinTransforms {
 }
 
 /// Rigid kinematic chain from rest joints and a pose (smplx `batch_rigid_transform`).
-pub fn posed_skeleton(
+pub(crate) fn posed_skeleton(
     rest_joints: &[Vec3; NUM_JOINTS],
     pose: &[Real; POSE_DIM],
     transl: Vec3,
@@ -471,7 +471,7 @@ pub fn posed_skeleton(
 
 /// [`posed_skeleton`] written into `out` (a sequence's frames posed one after another into one
 /// buffer, without moving 6 KB of transforms per frame). `out` is left as it was on an error.
-pub fn posed_skeleton_into(
+pub(crate) fn posed_skeleton_into(
     rest_joints: &[Vec3; NUM_JOINTS],
     pose: &[Real; POSE_DIM],
     transl: Vec3,

@@ -5,23 +5,23 @@
 //! (`hand_landmarks`); `egogen body info`'s summary of a model (`info`). Timing and sequences belong
 //! to `motion`.
 
-pub mod cpf;
-pub mod export;
-pub mod hand_landmarks;
+pub(crate) mod cpf;
+pub(crate) mod export;
+pub(crate) mod hand_landmarks;
 pub(crate) mod info;
-pub mod lbs;
-pub mod markers;
-pub mod model;
-pub mod model_file;
-pub mod occupancy;
-pub mod skeleton;
-pub mod volume;
+pub(crate) mod lbs;
+pub(crate) mod markers;
+pub(crate) mod model;
+pub(crate) mod model_file;
+pub(crate) mod occupancy;
+pub(crate) mod skeleton;
+pub(crate) mod volume;
 
 pub use cpf::CpfCalibration;
 pub use lbs::{BodyParams, PoseError, PosedBody, PosedSkeleton, ShapedBody, CORRECTIVE_BATCH};
 pub use markers::{farthest_point_markers, MarkerFrame, NUM_MARKERS};
 pub use model::{BodyModel, BodyUvs};
 pub use model_file::ModelFileError;
-pub use occupancy::BodyOccupancy;
+pub(crate) use occupancy::BodyOccupancy;
 pub use skeleton::{joint, JOINT_NAMES, NUM_JOINTS, PARENTS, POSE_DIM};
-pub use volume::CapsuleVolume;
+pub(crate) use volume::CapsuleVolume;

@@ -75,7 +75,7 @@ pub(crate) struct ModelArchive<R: Read + Seek> {
 }
 
 impl ModelArchive<std::io::BufReader<std::fs::File>> {
-    pub fn open(path: &Path) -> Result<Self, ModelFileError> {
+    pub(crate) fn open(path: &Path) -> Result<Self, ModelFileError> {
         let archive = NpzArchive::open(path).map_err(|source| ModelFileError::Open {
             path: path.to_owned(),
             source,
@@ -88,13 +88,17 @@ impl ModelArchive<std::io::BufReader<std::fs::File>> {
 }
 
 impl<R: Read + Seek> ModelArchive<R> {
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 
     /// Reads `key` as `f64`, checks its shape against `expected` (`None` = any extent) and,
     /// for float arrays, that every value is finite.
-    pub fn read(&mut self, key: &str, expected: &[Option<u64>]) -> Result<Array, ModelFileError> {
+    pub(crate) fn read(
+        &mut self,
+        key: &str,
+        expected: &[Option<u64>],
+    ) -> Result<Array, ModelFileError> {
         let path = self.path.clone();
         let describe = || describe_shape(expected);
         let file = array_in_memory(&mut self.archive, key)
@@ -172,7 +176,7 @@ impl<R: Read + Seek> ModelArchive<R> {
         }
     }
 
-    pub fn invalid(&self, key: &str, message: impl Into<String>) -> ModelFileError {
+    pub(crate) fn invalid(&self, key: &str, message: impl Into<String>) -> ModelFileError {
         ModelFileError::Invalid {
             path: self.path.clone(),
             key: key.into(),

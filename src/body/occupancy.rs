@@ -26,7 +26,7 @@ const DIRECTIONS: [[f64; 3]; 4] = [
 const GRAZE: f64 = 1e-9;
 
 /// A posed body's surface, ready for inside tests.
-pub struct BodyOccupancy {
+pub(crate) struct BodyOccupancy {
     triangles: Vec<[Vec3; 3]>,
     bvh: Bvh,
     bounds: (Vec3, Vec3),
@@ -35,7 +35,7 @@ pub struct BodyOccupancy {
 impl BodyOccupancy {
     /// The surface of `vertices` joined by `faces` (outward winding, as SMPL-X's). Faces with an
     /// index past `vertices` are skipped; an empty surface contains nothing.
-    pub fn new(vertices: &[Vec3], faces: &[[u32; 3]]) -> Self {
+    pub(crate) fn new(vertices: &[Vec3], faces: &[[u32; 3]]) -> Self {
         let triangles: Vec<[Vec3; 3]> = faces
             .iter()
             .filter(|f| f.iter().all(|&i| (i as usize) < vertices.len()))
@@ -63,12 +63,13 @@ impl BodyOccupancy {
     }
 
     /// The surface's axis-aligned bounds (min, max); no point outside them is inside.
+    #[cfg(test)]
     pub fn bounds(&self) -> (Vec3, Vec3) {
         self.bounds
     }
 
     /// Whether `p` lies inside the surface (winding number not zero).
-    pub fn contains(&self, p: Vec3) -> bool {
+    pub(crate) fn contains(&self, p: Vec3) -> bool {
         let (lo, hi) = self.bounds;
         p.cmpge(lo).all() && p.cmple(hi).all() && self.winding_number(p) != 0
     }

@@ -109,8 +109,9 @@ pub const PARENTS: [Option<usize>; NUM_JOINTS] = {
 /// Where each part of the 165-value pose vector starts (in values, not joints).
 ///
 /// Layout: global_orient 3 | body 21×3 | jaw 3 | left eye 3 | right eye 3 | left hand 15×3 |
-/// right hand 15×3 — joint `j` occupies values `3j..3j+3`.
-pub mod pose_layout {
+/// right hand 15×3 — joint `j` occupies values `3j..3j+3`. The whole layout is named, read or not.
+#[allow(dead_code)]
+pub(crate) mod pose_layout {
     pub const GLOBAL_ORIENT: usize = 0;
     pub const BODY: usize = 3;
     pub const JAW: usize = 66;

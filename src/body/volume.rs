@@ -17,7 +17,7 @@ const LEAVES: [usize; 5] = [10, 11, 15, 20, 21];
 
 /// Capsules of one body shape.
 #[derive(Debug, Clone, PartialEq)]
-pub struct CapsuleVolume {
+pub(crate) struct CapsuleVolume {
     /// (parent joint, joint, radius m) per bone.
     pub bones: Vec<(usize, usize, f64)>,
 }
@@ -37,7 +37,7 @@ fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> (f64, f64) {
 
 impl CapsuleVolume {
     /// The capsules of a shaped body (see the module docs).
-    pub fn new(model: &BodyModel, shaped: &ShapedBody) -> Self {
+    pub(crate) fn new(model: &BodyModel, shaped: &ShapedBody) -> Self {
         let owner: Vec<usize> = model
             .skin_weights
             .iter()
@@ -76,14 +76,14 @@ impl CapsuleVolume {
     }
 
     /// Whether `p` lies inside a capsule of the body posed with `joints`.
-    pub fn contains(&self, joints: &[Vec3], p: Vec3) -> bool {
+    pub(crate) fn contains(&self, joints: &[Vec3], p: Vec3) -> bool {
         self.bones
             .iter()
             .any(|&(a, b, r)| segment_distance(p, joints[a], joints[b]).0 < r)
     }
 
     /// Axis-aligned bounds of the posed capsules.
-    pub fn bounds(&self, joints: &[Vec3]) -> (Vec3, Vec3) {
+    pub(crate) fn bounds(&self, joints: &[Vec3]) -> (Vec3, Vec3) {
         let r = Vec3::splat(self.max_radius_m());
         let (lo, hi) = joints[..BODY_JOINTS].iter().fold(
             (Vec3::splat(f64::INFINITY), Vec3::splat(f64::NEG_INFINITY)),

@@ -127,7 +127,7 @@ impl CameraModel for KannalaBrandt4 {
 /// `f` and the principal point move absorbs part of them (on the shipped Aria cameras the
 /// largest error is 12–28 % below that of keeping the Fisheye624's; `fx ≠ fy` gains nothing
 /// more). `max θ` is the widest ray of the image.
-pub fn fit_kb4(camera: &Camera) -> Result<(KannalaBrandt4, FitError), CameraError> {
+pub(crate) fn fit_kb4(camera: &Camera) -> Result<(KannalaBrandt4, FitError), CameraError> {
     let samples = valid_pixel_rays(camera);
     if let Camera::KannalaBrandt4(m) = camera {
         return Ok((*m, FitError::measure(&samples, |r| m.project_unchecked(r))));

@@ -15,10 +15,10 @@
 //! Adding a model: a file with a struct that checks its parameters in `new` (returning
 //! [`CameraError`]), implements [`CameraModel`], and a variant of [`Camera`].
 
-pub mod fisheye624;
+pub(crate) mod fisheye624;
 mod fov;
 pub mod kannala_brandt;
-pub mod pinhole;
+pub(crate) mod pinhole;
 pub(crate) mod theta_poly;
 
 use glam::DVec2;
@@ -117,7 +117,7 @@ pub trait CameraModel {
 /// How well a fitted lens model reproduces a camera over its valid field of view: the
 /// distance between each sampled pixel centre and the fitted model's pixel of its exact ray.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FitError {
+pub(crate) struct FitError {
     pub max_px: Real,
     pub mean_px: Real,
     /// Pixel centres sampled (every one in the valid field of view).
@@ -303,7 +303,7 @@ pub fn theta_of(point_in_cam: Vec3) -> Real {
 
 /// Largest angle from the optical axis that a valid pixel of the image sees (the image border
 /// and the valid circle bound it), at most the model's `max θ`.
-pub fn max_theta_in_image(cam: &Camera) -> Real {
+pub(crate) fn max_theta_in_image(cam: &Camera) -> Real {
     let res = CameraModel::resolution(cam);
     let (w, h) = (res.width_px as Real, res.height_px as Real);
     let limit = CameraModel::max_theta_rad(cam).min(3.1);

@@ -16,7 +16,7 @@ pub(crate) struct ThetaPolynomial<const N: usize> {
 
 impl<const N: usize> ThetaPolynomial<N> {
     /// `θ_d(θ)`.
-    pub fn eval(&self, theta: Real) -> Real {
+    pub(crate) fn eval(&self, theta: Real) -> Real {
         self.eval_with_slope(theta).0
     }
 

@@ -22,14 +22,12 @@ pub struct Budget {
     pub seconds_per_frame: Option<(BTreeMap<String, f64>, PathBuf, usize)>,
     /// Bytes written per frame (finished datasets), and where.
     pub bytes_per_frame: Option<(f64, PathBuf)>,
-    pub workers: usize,
-    pub cores_per_worker: f64,
     text: Vec<String>,
 }
 
 impl Budget {
     /// The budget as lines for the log.
-    pub fn lines(&self) -> impl Iterator<Item = &str> {
+    pub(crate) fn lines(&self) -> impl Iterator<Item = &str> {
         self.text.iter().map(String::as_str)
     }
 
@@ -187,7 +185,7 @@ fn disk_per_frame(dir: &Path) -> Option<f64> {
 }
 
 /// The campaign's budget; `first` is its first take's plan (render settings, supervisor).
-pub fn estimate(
+pub(crate) fn estimate(
     plan: &CampaignPlan,
     first: &RunPlan,
     throughput_from: Option<&Path>,
@@ -228,8 +226,6 @@ pub fn estimate(
         cameras,
         seconds_per_frame: (!spf.is_empty()).then(|| (spf, source.clone(), measured)),
         bytes_per_frame: disk_per_frame(&source).map(|b| (b, source.clone())),
-        workers,
-        cores_per_worker,
         text: Vec::new(),
     };
     let total: usize = budget.frames_per_take.iter().sum();

@@ -47,7 +47,7 @@ pub(crate) const STATE_EVERY: Duration = Duration::from_secs(2);
 impl CampaignFeed {
     /// A feed over `plan`'s takes not complete in `state`; `frames` estimates each take's
     /// frames (exact once staged), `done_before` of them finished in earlier starts.
-    pub fn new(
+    pub(crate) fn new(
         plan: CampaignPlan,
         state: CampaignState,
         maker: Box<dyn TakeMaker>,

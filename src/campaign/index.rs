@@ -206,7 +206,7 @@ where
 
 /// Rows per row group at least (whole takes are added until a group has this many): groups
 /// large enough for Parquet's per-group overhead to vanish, small enough to bound memory.
-pub const GROUP_ROWS: usize = 65_536;
+pub(crate) const GROUP_ROWS: usize = 65_536;
 
 /// Writes `rows` as one row group.
 fn write_group<W: std::io::Write + Send>(

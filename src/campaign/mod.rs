@@ -12,11 +12,11 @@
 //! throughput) is stated (`budget`). The scenes a campaign generates (`floor_plans`,
 //! `dwellings`) are written once into its `scenes/` before the first take.
 
-pub mod budget;
-pub mod feed;
+pub(crate) mod budget;
+pub(crate) mod feed;
 pub mod index;
 pub mod plan;
-pub mod sheet;
+pub(crate) mod sheet;
 pub mod stamp;
 pub mod state;
 pub mod takes;
@@ -68,7 +68,7 @@ pub struct CampaignSummary {
 pub(crate) const INDEX_FILE: &str = "index.parquet";
 
 /// Runs (or, with `dry_run`, plans) the campaign at `path`.
-pub fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSummary> {
+pub(crate) fn run_campaign(path: &Path, request: &CampaignRequest) -> Result<CampaignSummary> {
     let plan = plan_campaign(path)?;
     let out = plan.out.clone();
     let earlier = check_out(&plan, request)?;

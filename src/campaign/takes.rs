@@ -40,7 +40,7 @@ pub(crate) struct StagedTakes {
 }
 
 impl StagedTakes {
-    pub fn new(out: PathBuf, run: PathBuf, request: RunRequest) -> Self {
+    pub(crate) fn new(out: PathBuf, run: PathBuf, request: RunRequest) -> Self {
         StagedTakes {
             out,
             run,

@@ -57,7 +57,7 @@ pub struct EvalArgs {
 
 impl EvalArgs {
     /// The job these arguments ask for.
-    pub fn job(&self) -> EvalJob {
+    pub(crate) fn job(&self) -> EvalJob {
         EvalJob {
             suite: self.suite,
             episodes: self.episodes,

@@ -41,7 +41,7 @@ pub struct RunOverrides {
 impl RunOverrides {
     /// Applies the overrides to a config as written; paths given on the command line are made
     /// absolute (the config's own stay relative to its folder).
-    pub fn apply(&self, raw: &mut RawRun) -> anyhow::Result<()> {
+    pub(crate) fn apply(&self, raw: &mut RawRun) -> anyhow::Result<()> {
         use anyhow::Context;
         let absolute = |p: &Path| {
             std::path::absolute(p)

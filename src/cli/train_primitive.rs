@@ -132,7 +132,7 @@ pub(crate) struct RawTrainPrimitive {
 
 impl RawTrainPrimitive {
     /// Reads and parses a config file; errors name the file, key and what was expected.
-    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+    pub(crate) fn load(path: &Path) -> Result<Self, ConfigError> {
         load_toml(path)
     }
 

@@ -52,7 +52,7 @@ fn null_as_nan<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f6
 }
 
 impl PolicyRow {
-    pub fn new(
+    pub(crate) fn new(
         (policy, weights, config): (&str, &str, &str),
         set: &str,
         actions: &str,
@@ -136,18 +136,18 @@ pub(crate) fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<O
 }
 
 /// The paper's pose embedding norm above which poses are abnormal (Table 3's note).
-pub const PAPER_ABNORMAL_VP: f64 = 15.0;
+pub(crate) const PAPER_ABNORMAL_VP: f64 = 15.0;
 
 /// The share of real (held-out mocap) frames whose pose embedding norm maps to
 /// [`PAPER_ABNORMAL_VP`] on the paper's scale: 1 in 1 000 real frames counts as abnormal.
-pub const ABNORMAL_QUANTILE: f64 = 0.999;
+pub(crate) const ABNORMAL_QUANTILE: f64 = 0.999;
 
 /// Our pose embedding norm ([`PosePrior::embedding_norm`]: a Mahalanobis distance over 63
 /// values) set on the paper's ‖VP‖₂ scale: held-out mocap's [`ABNORMAL_QUANTILE`] of frames
 /// maps to the paper's 15 ("> 15 is abnormal"), so a figure above 15 is a pose rarer than
 /// 1 in 1 000 frames of real walking.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct PoseNormCalibration {
+pub(crate) struct PoseNormCalibration {
     /// Held-out mocap frames measured.
     pub frames: usize,
     /// Their norm at [`ABNORMAL_QUANTILE`] (raw, before scaling).
@@ -161,7 +161,7 @@ pub struct PoseNormCalibration {
 
 impl PoseNormCalibration {
     /// Calibrates on held-out mocap primitives (each a list of frames).
-    pub fn new(prior: &PosePrior, primitives: &[Vec<BodyParams>]) -> Option<Self> {
+    pub(crate) fn new(prior: &PosePrior, primitives: &[Vec<BodyParams>]) -> Option<Self> {
         let each: Vec<Vec<f64>> = primitives
             .iter()
             .map(|p| prior.embedding_norms(p))

@@ -15,7 +15,7 @@ use crate::synth::crowd_dir::human_overlap_share;
 use crate::synth::penetration::human_penetration;
 
 /// Frames between Pene-H checks (as `egogen synth`).
-pub const PENE_H_EVERY_N_FRAMES: usize = 4;
+pub(crate) const PENE_H_EVERY_N_FRAMES: usize = 4;
 
 /// What one person did in one episode.
 #[derive(Debug, Clone, Serialize)]
@@ -186,7 +186,7 @@ pub fn path_diversity(paths: &[&[[f64; 2]]], start: DVec2, goal: DVec2) -> Optio
 /// sampling, a walk that has stopped staying where it stopped), the standard deviation of the
 /// walks' horizontal pelvis locations (root of the summed per-axis variances), averaged over
 /// the times; `None` with fewer than two walks.
-pub fn location_spread(paths: &[&[[f64; 2]]]) -> Option<f64> {
+pub(crate) fn location_spread(paths: &[&[[f64; 2]]]) -> Option<f64> {
     let paths: Vec<&[[f64; 2]]> = paths.iter().copied().filter(|p| !p.is_empty()).collect();
     let n = paths.len();
     let times = paths.iter().map(|p| p.len()).max()?;
@@ -212,7 +212,7 @@ pub fn location_spread(paths: &[&[[f64; 2]]]) -> Option<f64> {
 /// location of every walk pooled (root of the summed per-axis variances), which grows with the
 /// walk's length as much as with how the walks differ (one straight 5 m walk at an even pace
 /// alone gives 5 / √12 = 1.44 m); `None` with fewer than two locations.
-pub fn pooled_location_std(paths: &[&[[f64; 2]]]) -> Option<f64> {
+pub(crate) fn pooled_location_std(paths: &[&[[f64; 2]]]) -> Option<f64> {
     let all: Vec<DVec2> = paths
         .iter()
         .flat_map(|p| p.iter().map(|&q| DVec2::from_array(q)))
@@ -227,7 +227,7 @@ pub fn pooled_location_std(paths: &[&[[f64; 2]]]) -> Option<f64> {
 
 /// A table row: the means over every person of every episode of one scenario and controller.
 #[derive(Debug, Clone, Serialize, serde::Deserialize)]
-pub struct Row {
+pub(crate) struct Row {
     pub scenario: String,
     pub controller: String,
     pub episodes: usize,
@@ -273,7 +273,7 @@ fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
 
 /// The row of a set of episodes of one scenario and controller; `line` is the start and goal
 /// of a scenario whose episodes all walk the same line (path diversity).
-pub fn row(episodes: &[EpisodeResult], line: Option<(DVec2, DVec2)>) -> Row {
+pub(crate) fn row(episodes: &[EpisodeResult], line: Option<(DVec2, DVec2)>) -> Row {
     let people = || episodes.iter().flat_map(|e| e.agents.iter());
     let paths: Vec<&[[f64; 2]]> = episodes.iter().map(|e| e.pelvis_path.as_slice()).collect();
     let diversity = line.and_then(|(s, g)| path_diversity(&paths, s, g));

@@ -8,13 +8,13 @@
 //! and `control`). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
 //! `egogen eval`'s arguments and loads the shipped parts.
 
-pub mod files;
-pub mod jobs;
+pub(crate) mod files;
+pub(crate) mod jobs;
 pub mod metrics;
 pub(crate) mod motion_model;
-pub mod paper;
+pub(crate) mod paper;
 pub(crate) mod policy_commands;
-pub mod policy_tasks;
-pub mod report;
-pub mod scenarios;
-pub mod suite;
+pub(crate) mod policy_tasks;
+pub(crate) mod report;
+pub(crate) mod scenarios;
+pub(crate) mod suite;

@@ -179,7 +179,6 @@ pub(crate) fn evaluate<B: burn::prelude::Backend>(
 /// its start and after every primitive, and how it ended.
 #[derive(Debug, Clone)]
 pub struct EpisodePath {
-    pub id: u64,
     pub course: crate::policy::env::CourseView,
     pub pelvis_xy: Vec<glam::DVec2>,
     pub ending: Option<crate::policy::env::Ending>,
@@ -202,7 +201,6 @@ impl PathRecorder {
                 self.paths.insert(
                     id,
                     EpisodePath {
-                        id,
                         course,
                         pelvis_xy: vec![xy],
                         ending: None,

@@ -29,12 +29,12 @@ pub(crate) const ARRIVAL_M: f64 = 0.1;
 pub(crate) const FLOOR_M: f64 = 14.0;
 
 /// Start–goal distance of the one-person scenarios (m).
-pub const WALK_M: f64 = 5.0;
+pub(crate) const WALK_M: f64 = 5.0;
 
 /// A scenario of Table 1.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "snake_case", tag = "kind")]
-pub enum Scenario {
+pub(crate) enum Scenario {
     /// One person walks [`WALK_M`]; a box of side U(0.5, 1) m crosses the line between start
     /// and goal at right angles (± 30°), at U(0.5, 1.0) m/s, through a point 35–65 % of the
     /// way, timed to be there when a walker at 0.7 m/s would (± 1 s).
@@ -49,7 +49,7 @@ pub enum Scenario {
 
 impl Scenario {
     /// Table 1's rows, beyond the paper's 2 and 4 people also 8 and 16.
-    pub fn table1() -> Vec<Scenario> {
+    pub(crate) fn table1() -> Vec<Scenario> {
         vec![
             Scenario::MovingObstacle,
             Scenario::Circle {
@@ -73,7 +73,7 @@ impl Scenario {
     }
 
     /// A short name for files and tables.
-    pub fn name(&self) -> String {
+    pub(crate) fn name(&self) -> String {
         match self {
             Scenario::MovingObstacle => "moving_obstacle".into(),
             Scenario::Circle { people, .. } => format!("circle_{people}"),
@@ -82,7 +82,7 @@ impl Scenario {
     }
 
     /// What a reader sees in a table.
-    pub fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         match self {
             Scenario::MovingObstacle => "moving obstacle".into(),
             Scenario::Circle { people, radius_m } => {
@@ -93,7 +93,7 @@ impl Scenario {
     }
 
     /// Primitives each person may take: time for the longest walk at 0.5 m/s, plus 2 s.
-    pub fn max_primitives(&self) -> usize {
+    pub(crate) fn max_primitives(&self) -> usize {
         let longest = match self {
             Scenario::Circle { radius_m, .. } => 2.0 * radius_m,
             _ => WALK_M,
@@ -112,7 +112,7 @@ impl Scenario {
 
 /// One episode: the world, the people and how they walk.
 #[derive(Debug, Clone)]
-pub struct Episode {
+pub(crate) struct Episode {
     pub world: CrowdWorld,
     pub agents: Vec<AgentPlan>,
     pub settings: CrowdSettings,
@@ -136,7 +136,7 @@ fn unit(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Episode `n` of `scenario` under `seed`, every person steered by `steering`.
-pub fn episode(
+pub(crate) fn episode(
     scenario: Scenario,
     floor: &Arc<WalkableMap>,
     steering: ControllerSpec,

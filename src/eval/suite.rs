@@ -27,7 +27,7 @@ pub(crate) struct NamedController {
 impl NamedController {
     /// Table 1's controllers: the policy (sampled actions and mean action), the sampling
     /// controller and the path-following baseline, both with `k` latents per primitive.
-    pub fn table1(k: usize) -> Vec<NamedController> {
+    pub(crate) fn table1(k: usize) -> Vec<NamedController> {
         let mut out = NamedController::policies();
         out.push(NamedController::sampling(k));
         out.push(NamedController::of(ControllerSpec::PathFollow { k }));
@@ -36,7 +36,7 @@ impl NamedController {
 
     /// The speed/accuracy trade of steering: the policy (sampled and mean action) against the
     /// sampling controller with each of `ks` latents per primitive.
-    pub fn speed(ks: &[usize]) -> Vec<NamedController> {
+    pub(crate) fn speed(ks: &[usize]) -> Vec<NamedController> {
         let mut out = NamedController::policies();
         out.extend(ks.iter().map(|&k| NamedController::sampling(k)));
         out

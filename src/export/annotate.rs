@@ -25,7 +25,7 @@ pub(crate) const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
 
 /// `cameras/<camera>/annotations.json` for every camera (OpenCV conventions), from the
 /// frames' records.
-pub struct Annotations;
+pub(crate) struct Annotations;
 
 impl TakeExport for Annotations {
     fn name(&self) -> &'static str {
@@ -135,7 +135,7 @@ pub(crate) fn colour_pass(contents: &ExrContents) -> Option<&crate::exr_file::Ex
 /// A finished frame's annotation, from its validated `contents` (the frame file's channels):
 /// the camera's pose, the agents' bodies and, where the frame holds them, its depth and
 /// segmentation planes (joint visibility, boxes) and its colour (the exposure).
-pub fn annotate_frame(
+pub(crate) fn annotate_frame(
     work: &CameraWork,
     frame: u32,
     agents: &[RenderedAgent],

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use crate::synth::activity::{Activity, Phase};
 
 /// Version of the annotation schema (`egogen_annotations` in the file).
-pub const ANNOTATIONS_VERSION: u32 = 1;
+pub(crate) const ANNOTATIONS_VERSION: u32 = 1;
 
 /// One camera's annotations.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -180,7 +180,11 @@ pub struct SmplxParams {
 
 impl SmplxParams {
     /// Splits a full SMPL-X pose (55 × axis-angle) into the `smplx` package's groups.
-    pub fn new(betas: &[f64], pose: &[f64; crate::body::POSE_DIM], transl: [f64; 3]) -> Self {
+    pub(crate) fn new(
+        betas: &[f64],
+        pose: &[f64; crate::body::POSE_DIM],
+        transl: [f64; 3],
+    ) -> Self {
         let three = |k: usize| [pose[k], pose[k + 1], pose[k + 2]];
         Self {
             betas: betas.to_vec(),

@@ -45,7 +45,7 @@ use crate::math::{Affine3, Real, Vec3};
 
 /// A camera as COLMAP's `cameras.txt` spells it.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ColmapCamera {
+pub(crate) struct ColmapCamera {
     /// COLMAP model name (`PINHOLE`, `OPENCV_FISHEYE`, `RAD_TAN_THIN_PRISM_FISHEYE`, …).
     pub model: &'static str,
     /// Parameters in COLMAP's order, principal point in COLMAP's pixel convention.
@@ -61,7 +61,7 @@ pub struct ColmapCamera {
 ///   (COLMAP ≥ 3.10; the same equations as projectaria-tools, see `src/colmap/sensor/models.h`).
 ///
 /// Principal points move by +0.5 px into COLMAP's convention.
-pub fn colmap_camera(camera: &Camera) -> ColmapCamera {
+pub(crate) fn colmap_camera(camera: &Camera) -> ColmapCamera {
     let res = camera.resolution();
     let (model, params) = match camera {
         Camera::Pinhole(m) => {

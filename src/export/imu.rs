@@ -79,7 +79,7 @@ impl ImuErrors {
     }
 
     /// Why these errors cannot be simulated, naming the field, or `None`.
-    pub fn problem(&self) -> Option<String> {
+    pub(crate) fn problem(&self) -> Option<String> {
         for (sensor, e) in [
             ("accelerometer", &self.accelerometer),
             ("gyroscope", &self.gyroscope),
@@ -152,14 +152,14 @@ pub fn simulate_imu(
 /// rectified units: m/s² and rad/s in the IMU frame; 0 without errors), what a ground truth
 /// of the IMU's state holds beside its pose.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImuReading {
+pub(crate) struct ImuReading {
     pub sample: ImuSample,
     pub accel_bias: Vec3,
     pub gyro_bias: Vec3,
 }
 
 /// [`simulate_imu`], each sample with the biases it was taken with.
-pub fn simulate_imu_with_biases(
+pub(crate) fn simulate_imu_with_biases(
     spline: &PoseSpline,
     head_from_imu: Affine3,
     rate_hz: Real,

@@ -15,7 +15,7 @@
 //! Also `egogen motion head-stats`' job (`head_stats`): how a head moves in takes, clips and
 //! MPS trajectories, with the IMU computed as the exports compute theirs.
 
-pub mod annotate;
+pub(crate) mod annotate;
 pub mod annotations;
 pub mod aria;
 pub mod colmap;
@@ -24,15 +24,15 @@ pub mod gaze;
 pub(crate) mod head_stats;
 pub mod imu;
 pub mod take;
-pub mod take_folder;
-pub mod take_manifest;
+pub(crate) mod take_folder;
+pub(crate) mod take_manifest;
 
 pub use take::{FinishedTake, TakeExport, TakeExports};
 
 /// A take's outputs in the order they are written: its annotations, its COLMAP export when
 /// `colmap` (`[render] colmap`), the Aria streams when asked (`[render.aria]`), and last its
 /// manifest (which lists what the others wrote).
-pub fn take_exports(colmap: bool, aria: Option<aria::AriaExport>) -> TakeExports {
+pub(crate) fn take_exports(colmap: bool, aria: Option<aria::AriaExport>) -> TakeExports {
     let mut list: Vec<Box<dyn TakeExport>> = vec![Box::new(annotate::Annotations)];
     if colmap {
         list.push(Box::new(colmap::Colmap));

@@ -70,7 +70,7 @@ pub struct FileFacts {
 }
 
 impl FileFacts {
-    pub fn of(bytes: &[u8]) -> Self {
+    pub(crate) fn of(bytes: &[u8]) -> Self {
         Self {
             bytes: bytes.len() as u64,
             sha256: sha256_hex(bytes),
@@ -187,11 +187,11 @@ impl std::fmt::Debug for TakeExports {
 }
 
 impl TakeExports {
-    pub fn new(list: Vec<Box<dyn TakeExport>>) -> Self {
+    pub(crate) fn new(list: Vec<Box<dyn TakeExport>>) -> Self {
         TakeExports(list.into())
     }
 
-    pub fn iter(&self) -> impl Iterator<Item = &dyn TakeExport> {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = &dyn TakeExport> {
         self.0.iter().map(|e| e.as_ref())
     }
 }

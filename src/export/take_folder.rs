@@ -17,7 +17,7 @@ use crate::synth::activity::LookAt;
 use crate::synth::sequence_dir::read_cpf_trajectory;
 
 /// One agent's head through a take, as read from its folder.
-pub struct TakeHead {
+pub(crate) struct TakeHead {
     pub name: String,
     pub frame_rate_hz: f64,
     /// `world_from_cpf` of every motion frame.
@@ -32,7 +32,7 @@ pub struct TakeHead {
 
 /// One camera a dataset rendered, from its `cameras/<camera>/annotations.json`.
 #[derive(Debug, Clone)]
-pub struct RenderedCamera {
+pub(crate) struct RenderedCamera {
     /// The camera as rendered (its name in the dataset, the model at the rendered size, its
     /// pose on the CPF).
     pub camera: RigCamera,
@@ -58,7 +58,7 @@ fn motion_root(take: &Path) -> PathBuf {
 }
 
 /// The scene a take was made in (`summary.json`'s `about.scene`), if it names one.
-pub fn take_scene(take: &Path) -> Result<Option<(PathBuf, crate::scene::SceneFrame)>> {
+pub(crate) fn take_scene(take: &Path) -> Result<Option<(PathBuf, crate::scene::SceneFrame)>> {
     let path = motion_root(take).join("summary.json");
     let Ok(text) = std::fs::read_to_string(&path) else {
         return Ok(None);
@@ -128,7 +128,10 @@ fn take_targets(take: &Path) -> Result<Vec<(String, Vec<GazeGoal>, Vec<LookAt>)>
 
 /// The agents' heads of a take folder: the `wanted` ones (all, or a dataset's wearers, when
 /// empty) as indices into everyone's.
-pub fn read_take_heads(take: &Path, wanted: &[String]) -> Result<(Vec<usize>, Vec<TakeHead>)> {
+pub(crate) fn read_take_heads(
+    take: &Path,
+    wanted: &[String],
+) -> Result<(Vec<usize>, Vec<TakeHead>)> {
     if !take.is_dir() {
         bail!("take {}: not a folder", take.display());
     }
@@ -224,7 +227,7 @@ fn read_dataset_wear(take: &Path) -> Result<Vec<(String, Affine3)>> {
 
 /// Every camera a dataset rendered (`cameras/*/annotations.json`), in name order; empty for
 /// a take that is not a dataset.
-pub fn read_rendered_cameras(take: &Path) -> Result<Vec<RenderedCamera>> {
+pub(crate) fn read_rendered_cameras(take: &Path) -> Result<Vec<RenderedCamera>> {
     let Ok(dir) = std::fs::read_dir(take.join("cameras")) else {
         return Ok(Vec::new());
     };

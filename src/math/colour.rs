@@ -1,7 +1,7 @@
 //! Colour conversions shared by previews and drawn materials.
 
 /// An sRGB component in [0, 1] as linear light (IEC 61966-2-1).
-pub fn srgb_to_linear(c: f64) -> f64 {
+pub(crate) fn srgb_to_linear(c: f64) -> f64 {
     if c <= 0.04045 {
         c / 12.92
     } else {
@@ -11,7 +11,7 @@ pub fn srgb_to_linear(c: f64) -> f64 {
 
 /// HSV to RGB in the same space (hue in degrees, any value wrapping; saturation and value
 /// clamped to [0, 1]), each component in [0, 1].
-pub fn hsv_to_rgb(h_deg: f64, s: f64, v: f64) -> [f64; 3] {
+pub(crate) fn hsv_to_rgb(h_deg: f64, s: f64, v: f64) -> [f64; 3] {
     let (s, v) = (s.clamp(0.0, 1.0), v.clamp(0.0, 1.0));
     let h = h_deg.rem_euclid(360.0) / 60.0;
     let c = v * s;

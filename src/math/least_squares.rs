@@ -7,7 +7,7 @@ use super::Real;
 /// The normal equations `AᵀA x = Aᵀb` of an overdetermined system with `N` unknowns, built one
 /// row of `A` (and its entry of `b`) at a time.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct NormalEquations<const N: usize> {
+pub(crate) struct NormalEquations<const N: usize> {
     ata: [[Real; N]; N],
     atb: [Real; N],
     rows: usize,
@@ -25,7 +25,7 @@ impl<const N: usize> Default for NormalEquations<N> {
 
 impl<const N: usize> NormalEquations<N> {
     /// Adds the equation `row · x = target`.
-    pub fn add(&mut self, row: &[Real; N], target: Real) {
+    pub(crate) fn add(&mut self, row: &[Real; N], target: Real) {
         for i in 0..N {
             self.atb[i] += row[i] * target;
             for j in 0..N {
@@ -36,13 +36,14 @@ impl<const N: usize> NormalEquations<N> {
     }
 
     /// Equations added so far.
+    #[cfg(test)]
     pub fn rows(&self) -> usize {
         self.rows
     }
 
     /// The least-squares `x`, by Gaussian elimination with partial pivoting; a direction no
     /// equation constrains (a pivot below 1e-14 of the largest diagonal entry) gets 0.
-    pub fn solve(&self) -> [Real; N] {
+    pub(crate) fn solve(&self) -> [Real; N] {
         let (mut a, mut b) = (self.ata, self.atb);
         let scale = (0..N).map(|i| a[i][i].abs()).fold(0.0, Real::max);
         for col in 0..N {

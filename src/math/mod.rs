@@ -11,10 +11,10 @@
 //!   camera frame (x right, y down, z forward).
 //! - Rotations are right-handed; axis-angle vectors have angle = norm, in radians.
 
-pub mod colour;
-pub mod least_squares;
+pub(crate) mod colour;
+pub(crate) mod least_squares;
 pub mod pose_spline;
-pub mod random;
+pub(crate) mod random;
 pub mod rotation;
 
 /// Scalar used for geometry. Body maths runs in `f64` so that long kinematic chains and
@@ -30,7 +30,7 @@ pub type Affine3 = glam::DAffine3;
 pub use rotation::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d, rot6d_to_matrix};
 
 /// The `p` quantile (0–1, nearest rank) of `sorted` (ascending, finite); NaN for none.
-pub fn quantile(sorted: &[Real], p: Real) -> Real {
+pub(crate) fn quantile(sorted: &[Real], p: Real) -> Real {
     if sorted.is_empty() {
         Real::NAN
     } else {
@@ -84,7 +84,7 @@ pub struct Quantiles {
 
 impl Quantiles {
     /// Quantiles (nearest rank) of the finite values of `values`; all NaN when there are none.
-    pub fn of(values: impl IntoIterator<Item = f64>) -> Quantiles {
+    pub(crate) fn of(values: impl IntoIterator<Item = f64>) -> Quantiles {
         let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
         v.sort_by(f64::total_cmp);
         let q = |p: f64| quantile(&v, p);
@@ -108,7 +108,7 @@ impl Quantiles {
 }
 
 /// Wraps an angle to (−π, π].
-pub fn wrap_rad(a: f64) -> f64 {
+pub(crate) fn wrap_rad(a: f64) -> f64 {
     let w = (a + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
     if w <= -std::f64::consts::PI {
         w + std::f64::consts::TAU

@@ -132,7 +132,7 @@ pub fn rot6d_to_matrices(d6: &[[Real; 6]], out: &mut [Mat3]) {
 
 /// Rotations converted side by side in [`rot6d_to_matrices`], [`axis_angles_to_matrices`] and
 /// [`matrices_to_axis_angles`].
-pub const INTERLEAVED: usize = 8;
+pub(crate) const INTERLEAVED: usize = 8;
 
 /// [`axis_angle_to_matrix`] of many axis-angle vectors into `out`, bit for bit: each step over
 /// [`INTERLEAVED`] of them before the next, so that their square roots, sines and divisions

@@ -20,7 +20,7 @@ use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Affine3, Mat3, Vec
 /// What a clip shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum ClipKind {
+pub(crate) enum ClipKind {
     /// Stands, sits down, stands up again (split at its lowest pelvis).
     Sit,
     /// Stands, bends to pick something up from the floor, stands again.
@@ -31,7 +31,7 @@ pub enum ClipKind {
 /// take: 75_20 (low seat), 75_17 (medium), 75_18 (high), 64_28 (picking up a ball). The lifts
 /// 74_07 and 74_08 start crouched, with no way down: not played.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum ClipId {
+pub(crate) enum ClipId {
     /// CMU 75_20: sitting down on a low seat and standing up.
     Sit75_20,
     /// CMU 75_17: a medium seat.
@@ -44,7 +44,7 @@ pub enum ClipId {
 
 impl ClipId {
     /// Every shipped clip, in the order they are loaded.
-    pub const ALL: [ClipId; 4] = [
+    pub(crate) const ALL: [ClipId; 4] = [
         ClipId::Sit75_20,
         ClipId::Sit75_17,
         ClipId::Sit75_18,
@@ -52,7 +52,7 @@ impl ClipId {
     ];
 
     /// Its file's name (the CMU take, subject_trial), as records name it.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             ClipId::Sit75_20 => "75_20",
             ClipId::Sit75_17 => "75_17",
@@ -62,7 +62,7 @@ impl ClipId {
     }
 
     /// What it shows.
-    pub fn kind(self) -> ClipKind {
+    pub(crate) fn kind(self) -> ClipKind {
         match self {
             ClipId::PickUp64_28 => ClipKind::PickUp,
             _ => ClipKind::Sit,
@@ -71,7 +71,7 @@ impl ClipId {
 }
 
 /// The folder the shipped clips are in.
-pub fn activity_clip_dir() -> PathBuf {
+pub(crate) fn activity_clip_dir() -> PathBuf {
     crate::paths::crate_root().join("assets/motion/activities")
 }
 
@@ -80,7 +80,7 @@ const SPINE3: usize = 9;
 
 /// An activity clip as read: its frames at 40 Hz on the neutral body, feet on z = 0.
 #[derive(Debug, Clone)]
-pub struct ActivityClip {
+pub(crate) struct ActivityClip {
     pub id: ClipId,
     pub name: String,
     pub kind: ClipKind,
@@ -89,7 +89,7 @@ pub struct ActivityClip {
 
 /// What went wrong reading an activity clip.
 #[derive(Debug, thiserror::Error)]
-pub enum ActivityClipError {
+pub(crate) enum ActivityClipError {
     #[error("activity clip {}: {source} (the shipped clips are rebuilt by `bash tools/build_training_clips.sh activities`)", path.display())]
     Read {
         path: PathBuf,
@@ -105,7 +105,7 @@ pub enum ActivityClipError {
 
 impl ActivityClip {
     /// Reads the clip `name` of `kind` from `dir`.
-    pub fn load(dir: &Path, id: ClipId) -> Result<Self, ActivityClipError> {
+    pub(crate) fn load(dir: &Path, id: ClipId) -> Result<Self, ActivityClipError> {
         let (name, kind) = (id.name(), id.kind());
         let path = dir.join(format!("{name}.npz"));
         let seq = MotionSequence::read(&path).map_err(|source| ActivityClipError::Read {
@@ -135,13 +135,13 @@ impl ActivityClip {
     }
 
     /// Every shipped clip ([`ClipId::ALL`]) from `dir`.
-    pub fn load_shipped(dir: &Path) -> Result<Vec<Self>, ActivityClipError> {
+    pub(crate) fn load_shipped(dir: &Path) -> Result<Vec<Self>, ActivityClipError> {
         ClipId::ALL.iter().map(|&id| Self::load(dir, id)).collect()
     }
 
     /// The clip on `body`: its shape's betas in every frame, lifted or lowered so that the
     /// body's lowest point in the first frame stands on z = 0.
-    pub fn on_body(&self, body: &BodyContext) -> Result<ClipOnBody, PoseError> {
+    pub(crate) fn on_body(&self, body: &BodyContext) -> Result<ClipOnBody, PoseError> {
         let mut frames = self.frames.clone();
         for f in &mut frames {
             f.betas = body.betas.clone();
@@ -191,7 +191,6 @@ impl ActivityClip {
             .collect::<Result<_, _>>()?;
         Ok(ClipOnBody {
             name: self.name.clone(),
-            kind: self.kind,
             frames,
             pelvis,
             headings,
@@ -203,7 +202,7 @@ impl ActivityClip {
 
 /// The vertices a body sits on: the buttocks and thighs, those moved most by the pelvis or a
 /// hip.
-pub fn sitting_vertices(body: &BodyContext) -> Vec<u32> {
+pub(crate) fn sitting_vertices(body: &BodyContext) -> Vec<u32> {
     body.model
         .skin_weights
         .iter()
@@ -223,7 +222,6 @@ pub fn sitting_vertices(body: &BodyContext) -> Vec<u32> {
 #[derive(Debug, Clone)]
 pub struct ClipOnBody {
     pub name: String,
-    pub kind: ClipKind,
     pub frames: Vec<BodyParams>,
     /// Pelvis joint per frame.
     pub pelvis: Vec<Vec3>,
@@ -238,14 +236,14 @@ pub struct ClipOnBody {
 
 /// Facing of a posed skeleton (rad from +x): the horizontal normal of its hip line, as a
 /// motion primitive's canonical frame has it (forward = up × (right hip − left hip)).
-pub fn heading(joints: &[Vec3]) -> f64 {
+pub(crate) fn heading(joints: &[Vec3]) -> f64 {
     let across = joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP];
     (across.x).atan2(-across.y)
 }
 
 /// `frames` moved rigidly so that the pose at `from` (pelvis position, facing) stands at `to`
 /// (horizontal position, facing), heights unchanged but for `dz` (per frame: m added).
-pub fn placed(
+pub(crate) fn placed(
     frames: &[BodyParams],
     rest_pelvis: Vec3,
     from: (Vec3, f64),
@@ -271,7 +269,7 @@ pub fn placed(
 
 /// `n` frames from pose `a` to pose `b`, neither included: every joint's rotation slerped and
 /// the translation moved on a smooth step (zero velocity at both ends).
-pub fn blend(a: &BodyParams, b: &BodyParams, n: usize) -> Vec<BodyParams> {
+pub(crate) fn blend(a: &BodyParams, b: &BodyParams, n: usize) -> Vec<BodyParams> {
     (1..=n)
         .map(|k| {
             let t = k as f64 / (n + 1) as f64;
@@ -295,7 +293,7 @@ pub fn blend(a: &BodyParams, b: &BodyParams, n: usize) -> Vec<BodyParams> {
 /// right; world) — how a clip lifted or lowered to fit a seat keeps its feet where they
 /// were. Returns the frame and the farthest an ankle stays from its target (m: a leg too
 /// short to reach stays straight towards it).
-pub fn keep_ankles(
+pub(crate) fn keep_ankles(
     body: &BodyContext,
     frame: &BodyParams,
     ankles: [Vec3; 2],
@@ -352,7 +350,7 @@ pub fn keep_ankles(
 
 /// The fastest any of the 22 body joints (the root's orientation among them) turns from one
 /// frame to the next in `frames` at 40 Hz (rad/s).
-pub fn max_joint_speed(frames: &[BodyParams]) -> f64 {
+pub(crate) fn max_joint_speed(frames: &[BodyParams]) -> f64 {
     frames
         .windows(2)
         .flat_map(|w| {
@@ -370,7 +368,7 @@ fn quat(aa: Vec3) -> glam::DQuat {
 
 /// How idle motion moves a held pose.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Idle {
+pub(crate) struct Idle {
     /// Largest turn of the head to either side (rad), shared by neck (40 %) and head (60 %).
     pub look_rad: f64,
     /// Largest nod up or down (rad).
@@ -381,13 +379,13 @@ pub struct Idle {
 
 impl Idle {
     /// Standing and looking around.
-    pub const LOOK_AROUND: Idle = Idle {
+    pub(crate) const LOOK_AROUND: Idle = Idle {
         look_rad: 1.0,
         nod_rad: 0.25,
         look_every_s: 1.5,
     };
     /// Seated: glancing about.
-    pub const SEATED: Idle = Idle {
+    pub(crate) const SEATED: Idle = Idle {
         look_rad: 0.6,
         nod_rad: 0.2,
         look_every_s: 2.5,
@@ -398,7 +396,7 @@ impl Idle {
 /// towards directions drawn every [`Idle::look_every_s`] (eased from one to the next), the
 /// chest breathes (0.25 Hz, 1.5°). The first and last frames are `base`'s own head and
 /// chest, so the hold joins what comes before and after it without a jump.
-pub fn idle_frames(
+pub(crate) fn idle_frames(
     base: &BodyParams,
     n: usize,
     idle: Idle,

@@ -23,7 +23,7 @@ use crate::math::{axis_angle_to_matrix, gaussian_smooth, matrix_to_axis_angle, R
 pub const FINGERS: [&str; 5] = ["thumb", "index", "middle", "ring", "pinky"];
 
 /// First SMPL-X joint of each hand's 15 finger joints (left, right).
-pub const HAND_FIRST_JOINT: [usize; 2] = [25, 40];
+pub(crate) const HAND_FIRST_JOINT: [usize; 2] = [25, 40];
 
 /// Offset of each finger's first joint among its hand's 15 (SMPL-X order: index, middle,
 /// pinky, ring, thumb), indexed like [`FINGERS`].
@@ -36,7 +36,7 @@ const WRIST: [usize; 2] = [20, 21];
 /// extension), indexed `[finger][joint]` like [`FINGERS`], joints from the palm out (for the
 /// thumb: CMC, MCP, IP). Active ranges of motion of the hand (American Academy of Orthopaedic
 /// Surgeons' norms, rounded).
-pub const JOINT_RANGES_DEG: [[(Real, Real); 3]; 5] = [
+pub(crate) const JOINT_RANGES_DEG: [[(Real, Real); 3]; 5] = [
     [(-15.0, 50.0), (-10.0, 60.0), (-15.0, 80.0)],
     [(-20.0, 90.0), (0.0, 110.0), (-5.0, 85.0)],
     [(-20.0, 90.0), (0.0, 110.0), (-5.0, 85.0)],
@@ -95,7 +95,7 @@ const DRIFT_AMPLITUDE: Real = 0.05;
 const DRIFT_WAVES: usize = 3;
 /// σ of the Gaussian the targets are smoothed with (s): a change of what a hand does takes
 /// about 4σ.
-pub const SMOOTHING_S: Real = 0.09;
+pub(crate) const SMOOTHING_S: Real = 0.09;
 
 /// One person's hands: its relaxed curls, spread, the split of a curl over the joints and the
 /// drift of each finger, both hands alike but for the drift's phases.
@@ -218,7 +218,12 @@ impl HandAxes {
 
     /// Each joint's flexion (rad, rest flexion included) for each finger's `curl` split over
     /// its joints, clamped into [`JOINT_RANGES_DEG`].
-    pub fn flexion(&self, hand: usize, curl: &[Real; 5], split: &[[Real; 3]; 5]) -> [[Real; 3]; 5] {
+    pub(crate) fn flexion(
+        &self,
+        hand: usize,
+        curl: &[Real; 5],
+        split: &[[Real; 3]; 5],
+    ) -> [[Real; 3]; 5] {
         std::array::from_fn(|finger| {
             std::array::from_fn(|k| {
                 let added = curl[finger] * CURL_DEG[finger][k] * split[finger][k];
@@ -233,7 +238,7 @@ impl HandAxes {
 
     /// The 45 hand-pose values of `hand` with each joint's `flex`ion (rad, rest flexion
     /// included) and the hand's `spread`.
-    pub fn hand_pose(&self, hand: usize, flex: &[[Real; 3]; 5], spread: Real) -> [Real; 45] {
+    pub(crate) fn hand_pose(&self, hand: usize, flex: &[[Real; 3]; 5], spread: Real) -> [Real; 45] {
         let mut out = [0.0; 45];
         for finger in 0..5 {
             for k in 0..3 {

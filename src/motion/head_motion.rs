@@ -31,26 +31,26 @@ use super::primitive::{NEW_FRAMES, SEED_FRAMES};
 use crate::math::{matrix_to_axis_angle, wrap_rad, Affine3, Mat3, Quantiles, Real, Vec3};
 
 /// The rate every track is measured at (the motion model's).
-pub const STATS_RATE_HZ: Real = 40.0;
+pub(crate) const STATS_RATE_HZ: Real = 40.0;
 /// Horizontal head speed from which a frame counts as walking (m/s).
-pub const WALKING_SPEED_M_S: Real = 0.5;
+pub(crate) const WALKING_SPEED_M_S: Real = 0.5;
 /// Window of the moving averages sway and bob are measured against (s).
 const DETREND_S: Real = 1.0;
 /// How far along its path the head's heading is compared with where the walk goes (m).
-pub const PATH_AHEAD_M: Real = 2.0;
+pub(crate) const PATH_AHEAD_M: Real = 2.0;
 /// The path ahead counts only when the head gets there within this time (s).
-pub const PATH_AHEAD_MAX_S: Real = 4.0;
+pub(crate) const PATH_AHEAD_MAX_S: Real = 4.0;
 
 /// A head's poses at a fixed rate (`world_from_head`, world z up, head z forward).
 #[derive(Debug, Clone)]
-pub struct HeadTrack {
+pub(crate) struct HeadTrack {
     pub rate_hz: Real,
     pub world_from_head: Vec<Affine3>,
 }
 
 /// Specific force and angular rate magnitudes of an IMU on the head, in time order.
 #[derive(Debug, Clone, Default)]
-pub struct ImuTrace {
+pub(crate) struct ImuTrace {
     pub rate_hz: Real,
     /// |specific force| (m/s²) per sample.
     pub specific_force: Vec<Real>,
@@ -60,7 +60,7 @@ pub struct ImuTrace {
 
 /// Linear acceleration on the frames where primitives join against the frames inside them.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct JoinAcceleration {
+pub(crate) struct JoinAcceleration {
     /// Every frame (m/s²).
     pub all: Quantiles,
     /// Walking frames (m/s²).
@@ -77,7 +77,7 @@ pub struct JoinAcceleration {
 
 /// What an IMU on the head reads while walking.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ImuStats {
+pub(crate) struct ImuStats {
     /// |specific force| (m/s²).
     pub specific_force: Quantiles,
     /// |angular rate| (rad/s).
@@ -86,7 +86,7 @@ pub struct ImuStats {
 
 /// The statistics of one head track (and, where the source has a body, its pelvis).
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct HeadMotionStats {
+pub(crate) struct HeadMotionStats {
     pub label: String,
     pub duration_s: Real,
     pub walking_s: Real,
@@ -111,7 +111,7 @@ pub struct HeadMotionStats {
 }
 
 /// Whether frame `f`'s central difference spans the join of two primitives.
-pub fn is_join_frame(f: usize) -> bool {
+pub(crate) fn is_join_frame(f: usize) -> bool {
     f + 1 >= SEED_FRAMES && {
         let k = (f + 1 - SEED_FRAMES) % NEW_FRAMES;
         k == 0 || k == 1
@@ -169,7 +169,7 @@ fn moving_average(v: &[Real], half: usize) -> Vec<Real> {
 }
 
 /// Which frames walk: horizontal speed averaged over ±0.25 s at least [`WALKING_SPEED_M_S`].
-pub fn walking_frames(points: &[Vec3], rate_hz: Real) -> Vec<bool> {
+pub(crate) fn walking_frames(points: &[Vec3], rate_hz: Real) -> Vec<bool> {
     let n = points.len();
     if n < 2 {
         return vec![false; n];
@@ -241,7 +241,7 @@ fn step_frequency(residual: &[Real], keep: &[bool], rate_hz: Real) -> Real {
 }
 
 /// The heading (radians, unwrapped along the track) of the viewing direction's horizontal part.
-pub fn unwrapped_yaw(world_from_head: &[Affine3]) -> Vec<Real> {
+pub(crate) fn unwrapped_yaw(world_from_head: &[Affine3]) -> Vec<Real> {
     let mut out: Vec<Real> = Vec::with_capacity(world_from_head.len());
     for p in world_from_head {
         let z = p.matrix3.z_axis;
@@ -257,7 +257,11 @@ pub fn unwrapped_yaw(world_from_head: &[Affine3]) -> Vec<Real> {
 
 /// Per frame, the heading (rad) from the head to the point of its own path `ahead_m` on
 /// (horizontal path length), where the head gets there within `max_frames` frames.
-pub fn path_ahead_heading(points: &[Vec3], ahead_m: Real, max_frames: usize) -> Vec<Option<Real>> {
+pub(crate) fn path_ahead_heading(
+    points: &[Vec3],
+    ahead_m: Real,
+    max_frames: usize,
+) -> Vec<Option<Real>> {
     let mut along = Vec::with_capacity(points.len());
     let mut s = 0.0;
     for (f, p) in points.iter().enumerate() {
@@ -373,7 +377,7 @@ impl HeadMotionStats {
 
 /// Poses at `rate_hz` over the span of timed poses (`times_s` increasing): positions linearly
 /// interpolated, rotations by slerp.
-pub fn resample_poses(times_s: &[Real], poses: &[Affine3], rate_hz: Real) -> Vec<Affine3> {
+pub(crate) fn resample_poses(times_s: &[Real], poses: &[Affine3], rate_hz: Real) -> Vec<Affine3> {
     if times_s.is_empty() {
         return Vec::new();
     }

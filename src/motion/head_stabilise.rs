@@ -16,7 +16,7 @@ use crate::math::gaussian_smooth;
 
 /// How the head is held.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HeadStabiliser {
+pub(crate) struct HeadStabiliser {
     /// σ of the Gaussian the heading is smoothed with (s).
     pub smoothing_s: Real,
     /// Share of each correction the neck takes (the head the rest).
@@ -42,7 +42,7 @@ fn rotation_about_z(angle: Real) -> Mat3 {
 /// Turns the neck and head of `frames` (a body of shape `shaped`, at `rate_hz`) so the CPF's
 /// heading follows its smoothed course (the caller poses the frames again for their eye
 /// frames and markers).
-pub fn stabilise_head(
+pub(crate) fn stabilise_head(
     frames: &mut [BodyParams],
     shaped: &ShapedBody,
     cpf: &CpfCalibration,

@@ -26,11 +26,11 @@ use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Mat3, Real, Vec3};
 
 /// Half the window over which a join's velocity change is spread (frames; 0.2 s at 40 Hz), at
 /// least.
-pub const JOIN_HALF_WINDOW_FRAMES: usize = 8;
+pub(crate) const JOIN_HALF_WINDOW_FRAMES: usize = 8;
 
 /// How wide each join's window is.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct JoinWindow {
+pub(crate) struct JoinWindow {
     /// Half the window, at least (frames).
     pub min_half_frames: usize,
     /// Half the window, at most (frames).
@@ -43,7 +43,7 @@ pub struct JoinWindow {
 impl JoinWindow {
     /// ±0.2 s, widened up to ±0.4 s so that the pelvis turns its velocity at no more than
     /// 2.5 m/s² (a reversal at a goal: 2 m/s within the window), at `rate_hz`.
-    pub fn at_rate(rate_hz: Real) -> JoinWindow {
+    pub(crate) fn at_rate(rate_hz: Real) -> JoinWindow {
         JoinWindow {
             min_half_frames: JOIN_HALF_WINDOW_FRAMES,
             max_half_frames: 2 * JOIN_HALF_WINDOW_FRAMES,
@@ -53,7 +53,7 @@ impl JoinWindow {
 
     /// Half the window (frames) for a join whose pelvis velocity changes by `dv` m per frame:
     /// a smoothstep turn over ±h peaks at `0.75 |dv| / h`.
-    pub fn half_frames(&self, dv: Real) -> usize {
+    pub(crate) fn half_frames(&self, dv: Real) -> usize {
         let needed = (0.75 * dv.abs() / self.max_acceleration_m_per_frame2).ceil();
         let needed = if needed.is_finite() {
             needed as usize
@@ -73,7 +73,7 @@ impl JoinWindow {
 /// frame-to-frame change stands above the motion inside primitives (the default take's head,
 /// median acceleration by frame from the join: 25, 15, 4.9, 3.3 m/s², then 1.9 against 1.2
 /// inside; docs/MOTION.md "Head motion").
-pub const JOIN_TRANSIENT_STEPS: usize = 4;
+pub(crate) const JOIN_TRANSIENT_STEPS: usize = 4;
 
 /// Smoothstep rising from 0 at `τ = −h` to 1 at `τ = h`.
 fn smooth_step(tau: Real, h: Real) -> Real {
@@ -154,7 +154,7 @@ impl Kink {
 /// without two frames before them and the transient after are left alone. The corrections
 /// are measured on the frames as given (before any is applied), so the result does not
 /// depend on the order of `joins`.
-pub fn smooth_joins(frames: &mut [BodyParams], joins: &[usize], window: &JoinWindow) {
+pub(crate) fn smooth_joins(frames: &mut [BodyParams], joins: &[usize], window: &JoinWindow) {
     let n = frames.len();
     let t = JOIN_TRANSIENT_STEPS;
     let rot: Vec<[Mat3; NUM_JOINTS]> = frames

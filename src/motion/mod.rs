@@ -8,7 +8,7 @@
 //!
 //! Owns frame rates and sequences of body parameters; the body itself (skinning) is `body`'s.
 
-pub mod activity_clip;
+pub(crate) mod activity_clip;
 pub mod amass;
 pub mod bvh;
 pub(crate) mod clip_import;
@@ -16,9 +16,9 @@ pub mod cvae;
 pub mod deepmimic;
 pub mod hands;
 pub mod head_motion;
-pub mod head_stabilise;
+pub(crate) mod head_stabilise;
 pub(crate) mod jobs;
-pub mod joins;
+pub(crate) mod joins;
 pub mod primitive;
 pub mod resample;
 pub mod retarget;

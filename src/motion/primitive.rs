@@ -51,7 +51,7 @@ pub(crate) fn canonical_frame(joints: &[Vec3]) -> Result<Affine3, PrimitiveError
 }
 
 /// Expresses `PRIMITIVE_FRAMES` frames of `seq` starting at `start` in their canonical frame.
-pub fn canonicalize(
+pub(crate) fn canonicalize(
     seq: &MotionSequence,
     start: usize,
     model: &BodyModel,

@@ -325,7 +325,7 @@ impl Actor {
     ///
     /// # Panics
     /// When `obs.len()` is not a multiple of the observation size (a caller's bug).
-    pub fn forward(&self, obs: &[f32]) -> (Vec<f32>, Vec<f32>) {
+    pub(crate) fn forward(&self, obs: &[f32]) -> (Vec<f32>, Vec<f32>) {
         let layout = self.obs_layout();
         let d = layout.dim();
         assert_eq!(obs.len() % d, 0, "observations of {d} values");

@@ -120,7 +120,7 @@ pub(crate) struct EvalReport {
 }
 
 impl EvalReport {
-    pub fn of(summaries: &[EpisodeSummary], env_steps: usize, wall_s: f64) -> Self {
+    pub(crate) fn of(summaries: &[EpisodeSummary], env_steps: usize, wall_s: f64) -> Self {
         let n = summaries.len().max(1) as f64;
         let rate = |e: Ending| summaries.iter().filter(|s| s.ending == e).count() as f64 / n;
         let mean = |f: fn(&EpisodeSummary) -> f64| summaries.iter().map(f).sum::<f64>() / n;

@@ -19,13 +19,13 @@
 //!   among them); the `egogen policy` commands' jobs are `crate::eval::policy_commands` (on
 //!   `crate::eval::policy_tasks`), the paper's tables `crate::eval`'s.
 
-pub mod actor;
+pub(crate) mod actor;
 pub mod env;
-pub mod fixed_scene;
-pub mod held_out;
+pub(crate) mod fixed_scene;
+pub(crate) mod held_out;
 pub mod net;
 pub mod ppo;
-pub mod row_product;
+pub(crate) mod row_product;
 pub mod sampling;
 pub(crate) mod train_job;
 pub mod weights;

@@ -31,7 +31,7 @@ pub(crate) const DEPTH_CNN: [(usize, usize); 2] = [(4, 16), (2, 32)];
 const DEPTH_CNN_STRIDE: usize = DEPTH_CNN[0].0 * DEPTH_CNN[1].0;
 
 /// Bounds of the actor's log-variance.
-pub const LOGVAR_RANGE: (f32, f32) = (-2.5, 2.5);
+pub(crate) const LOGVAR_RANGE: (f32, f32) = (-2.5, 2.5);
 /// LeakyReLU slope (PyTorch's default).
 pub(super) const LEAKY_SLOPE: f64 = 0.01;
 
@@ -76,7 +76,7 @@ pub(crate) const MAX_SENSING_DIM: usize = 65_536;
 
 impl PolicyArch {
     /// What is wrong with the sizes, naming the field and its limit (`None`: usable).
-    pub fn problem(&self) -> Option<String> {
+    pub(crate) fn problem(&self) -> Option<String> {
         let sizes = [
             ("hidden", self.hidden, 1, MAX_HIDDEN),
             ("pe_frequencies", self.pe_frequencies, 0, MAX_PE_FREQUENCIES),
@@ -144,7 +144,7 @@ impl PolicyArch {
 
     /// Weights and biases of the network [`Self::init`] builds (two GRUs, the actor's and the
     /// critic's residual MLPs, a depth image's CNN).
-    pub fn parameter_count(&self) -> f64 {
+    pub(crate) fn parameter_count(&self) -> f64 {
         let (h, w) = (self.hidden as f64, self.mlp_width() as f64);
         let gru = |inputs: f64| inputs * 3.0 * h + 3.0 * h + h * 3.0 * h + 3.0 * h;
         let mlp = |out: f64| self.residual_blocks as f64 * 2.0 * (w * w + w) + w * out + out;
@@ -381,7 +381,7 @@ impl<B: Backend> ActorCritic<B> {
 
     /// The actor alone, `(mean, logvar)` `[B, L]` each: what acting needs, without the
     /// critic's value (as [`Self::forward`] computes them).
-    pub fn actor_forward(&self, obs: Tensor<B, 2>) -> (Tensor<B, 2>, Tensor<B, 2>) {
+    pub(crate) fn actor_forward(&self, obs: Tensor<B, 2>) -> (Tensor<B, 2>, Tensor<B, 2>) {
         self.actor_head(self.features(obs))
     }
 
@@ -423,7 +423,7 @@ pub fn log_prob<B: Backend>(
 }
 
 /// Entropy of the diagonal Gaussian per row `[B]`.
-pub fn entropy<B: Backend>(logvar: Tensor<B, 2>) -> Tensor<B, 1> {
+pub(crate) fn entropy<B: Backend>(logvar: Tensor<B, 2>) -> Tensor<B, 1> {
     let l = logvar.dims()[1] as f64;
     logvar.sum_dim(1).squeeze_dim(1).mul_scalar(0.5) + 0.5 * l * (1.0 + std::f64::consts::TAU.ln())
 }

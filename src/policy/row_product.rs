@@ -20,7 +20,7 @@ const TILE: usize = 64;
 /// output columns, the inputs' rows of that tile one after another. Columns past `outputs` are
 /// zero.
 #[derive(Debug, Clone, PartialEq)]
-pub struct RowMatrix {
+pub(crate) struct RowMatrix {
     inputs: usize,
     outputs: usize,
     /// `[tiles × inputs × TILE]`.
@@ -29,7 +29,7 @@ pub struct RowMatrix {
 
 impl RowMatrix {
     /// Whether this processor runs the packed products (x86-64 with AVX2 and FMA).
-    pub fn supported() -> bool {
+    pub(crate) fn supported() -> bool {
         #[cfg(target_arch = "x86_64")]
         {
             std::arch::is_x86_feature_detected!("avx2")
@@ -45,7 +45,7 @@ impl RowMatrix {
     ///
     /// # Panics
     /// When `weight` does not hold `inputs × outputs` values, or `inputs` is 0 (a caller's bug).
-    pub fn new(inputs: usize, outputs: usize, weight: &[f32]) -> Self {
+    pub(crate) fn new(inputs: usize, outputs: usize, weight: &[f32]) -> Self {
         assert_eq!(weight.len(), inputs * outputs, "weights of the matrix");
         assert!(inputs > 0, "a product over no inputs");
         let tiles = outputs.div_ceil(TILE);
@@ -70,7 +70,7 @@ impl RowMatrix {
     /// # Panics
     /// When a row's length disagrees with the matrix, or on a processor without the
     /// instructions ([`Self::supported`] says; a caller's bug).
-    pub fn products<const R: usize>(&self, xs: [&[f32]; R], ys: [&mut [f32]; R]) {
+    pub(crate) fn products<const R: usize>(&self, xs: [&[f32]; R], ys: [&mut [f32]; R]) {
         assert!((1..=2).contains(&R), "one or two rows");
         for (x, y) in xs.iter().zip(&ys) {
             assert!(

@@ -20,7 +20,7 @@ pub(crate) struct MapPicture<'a> {
 }
 
 impl<'a> MapPicture<'a> {
-    pub fn new(map: &'a WalkableMap, max_side_px: usize) -> Self {
+    pub(crate) fn new(map: &'a WalkableMap, max_side_px: usize) -> Self {
         let px_per_cell = (max_side_px / map.nx.max(map.ny)).max(1);
         let mut image = RgbImage::new(map.nx * px_per_cell, map.ny * px_per_cell, NO_FLOOR);
         let (lowest, highest) = map
@@ -83,7 +83,7 @@ impl<'a> MapPicture<'a> {
     }
 
     /// Draws a world-space segment.
-    pub fn line(&mut self, a: DVec2, b: DVec2, rgb: [u8; 3]) {
+    pub(crate) fn line(&mut self, a: DVec2, b: DVec2, rgb: [u8; 3]) {
         let (pa, pb) = (self.to_px(a), self.to_px(b));
         let n = (pb - pa).abs().max_element().ceil().max(1.0) as usize;
         for s in 0..=n {
@@ -93,7 +93,7 @@ impl<'a> MapPicture<'a> {
     }
 
     /// Draws a filled disc of `radius_px` at a world point.
-    pub fn dot(&mut self, p: DVec2, radius_px: i64, rgb: [u8; 3]) {
+    pub(crate) fn dot(&mut self, p: DVec2, radius_px: i64, rgb: [u8; 3]) {
         let q = self.to_px(p);
         self.dot_px(q, radius_px, rgb);
     }
@@ -117,7 +117,7 @@ impl<'a> MapPicture<'a> {
     }
 
     /// Outlines an obstacle footprint.
-    pub fn obstacle(&mut self, o: &Obstacle2, rgb: [u8; 3]) {
+    pub(crate) fn obstacle(&mut self, o: &Obstacle2, rgb: [u8; 3]) {
         let pts: Vec<DVec2> = match *o {
             Obstacle2::Box {
                 centre,
@@ -143,7 +143,7 @@ impl<'a> MapPicture<'a> {
 }
 
 /// Colours of agents (their paths, starts and pictures), in turn.
-pub const AGENT_COLOURS: [[u8; 3]; 8] = [
+pub(crate) const AGENT_COLOURS: [[u8; 3]; 8] = [
     [31, 119, 180],
     [214, 39, 40],
     [44, 160, 44],

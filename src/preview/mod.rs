@@ -1,7 +1,7 @@
 //! Pictures for people: a small software rasteriser for mesh previews, and PNG writing.
 
-pub mod map;
-pub mod raster;
-pub mod sticks;
+pub(crate) mod map;
+pub(crate) mod raster;
+pub(crate) mod sticks;
 
 pub use raster::{MeshView, RgbImage};

@@ -65,7 +65,7 @@ impl RgbImage {
 
     /// `images` centred in square cells of `cell_px` (a larger one cropped to its cell),
     /// `per_row` (≥ 1) to a row, on `fill`; one blank cell when there are none.
-    pub fn contact_sheet(
+    pub(crate) fn contact_sheet(
         images: &[RgbImage],
         cell_px: usize,
         per_row: usize,
@@ -127,7 +127,7 @@ impl MeshView {
 
     /// Rasterises `meshes` (vertices, triangles, base colour) into a `width`×`height` image,
     /// framing them all with a margin. Triangles are shaded by their normal (two-sided).
-    pub fn render(
+    pub(crate) fn render(
         &self,
         meshes: &[(&[Vec3], &[[u32; 3]], [f64; 3])],
         width: usize,

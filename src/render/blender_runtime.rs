@@ -85,7 +85,7 @@ impl BlenderRuntime {
     }
 
     /// Runs `path` to learn what it is and which version it has.
-    pub fn check(path: &Path) -> Result<Self, RuntimeError> {
+    pub(crate) fn check(path: &Path) -> Result<Self, RuntimeError> {
         if !path.exists() {
             return Err(RuntimeError::NotFound {
                 path: path.to_owned(),

@@ -74,7 +74,7 @@ impl DepthNoise {
     }
 
     /// The parameter that cannot work, named as the config spells it, with what is expected.
-    pub fn check(&self) -> Result<(), (&'static str, String)> {
+    pub(crate) fn check(&self) -> Result<(), (&'static str, String)> {
         let non_negative = [
             ("sigma_base_m", self.sigma_base_m),
             ("sigma_quadratic_per_m", self.sigma_quadratic_per_m),
@@ -140,7 +140,7 @@ impl DepthNoise {
 
     /// The noisy depth of a frame: `depth` planar (m, 0 = no surface), `normal` unit normals
     /// and `ray` unit viewing directions (both camera frame) per pixel.
-    pub fn apply(
+    pub(crate) fn apply(
         &self,
         depth: &[f32],
         normal: &[[f32; 3]],
@@ -186,7 +186,7 @@ impl DepthNoise {
 
 /// What a frame's noise is drawn from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct NoiseSeed<'a> {
+pub(crate) struct NoiseSeed<'a> {
     pub seed: u64,
     pub camera: &'a str,
     pub frame: u32,

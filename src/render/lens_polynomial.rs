@@ -82,7 +82,7 @@ impl LensPolynomial {
     /// to `max_theta_rad`, the largest angle a valid pixel sees): samples `ρ(θ)` of the exact
     /// projection on 64 azimuths × 256 angles and minimises Σ (ρ′(θ)·(θ − θ_fit(ρ)))², a
     /// first-order pixel error; tangential and thin-prism terms average out over azimuth.
-    pub fn fit(target: &Camera, max_theta_rad: Real) -> Result<Self, LensFitError> {
+    pub(crate) fn fit(target: &Camera, max_theta_rad: Real) -> Result<Self, LensFitError> {
         let Camera::Fisheye624(model) = target else {
             return Err(LensFitError::Model(target.model_name()));
         };
@@ -168,7 +168,7 @@ impl LensPolynomial {
     /// an image just large enough to hold every valid target pixel's ray plus `margin_px` (room
     /// for bilinear lookups). The remap (`frame_file::assemble_frame`) is then exact, as from the
     /// wide equidistant render, while Cycles path-traces about the target's own pixel count.
-    pub fn remap_source(
+    pub(crate) fn remap_source(
         target: &Camera,
         oversample: Real,
         margin_px: Real,
@@ -280,12 +280,12 @@ impl LensPolynomial {
 
     /// Whether Cycles renders this pixel: within the traced radius (0.01 px inside it, for
     /// Cycles' single-precision θ), on the fitted, increasing part of the lens.
-    pub fn renders(&self, px: Pixel) -> bool {
+    pub(crate) fn renders(&self, px: Pixel) -> bool {
         (px - self.centre_px).length() <= self.traced_radius_px - TRACED_RADIUS_TOLERANCE_PX
     }
 
     /// Cycles' `fisheye_fov`: twice θ at the traced radius (pixels beyond it are skipped).
-    pub fn fov_rad(&self) -> Real {
+    pub(crate) fn fov_rad(&self) -> Real {
         2.0 * self.theta_with_slope(self.traced_radius_px).0
     }
 
@@ -328,7 +328,7 @@ impl LensPolynomial {
 
     /// Blender's camera numbers: `(sensor_width_mm, [k0..k4], shift_x, shift_y)` for
     /// `sensor_fit = HORIZONTAL` (see the module docs for the measured convention).
-    pub fn blender(&self) -> (Real, [Real; 5], Real, Real) {
+    pub(crate) fn blender(&self) -> (Real, [Real; 5], Real, Real) {
         let (w, h) = (
             self.resolution.width_px as Real,
             self.resolution.height_px as Real,

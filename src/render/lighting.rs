@@ -69,7 +69,7 @@ fn between(rng: &mut ChaCha8Rng, (lo, hi): (f64, f64)) -> f64 {
 
 impl LightingPlan {
     /// The lighting of one sequence, its lamp at `lamp_position` (m, z up).
-    pub fn draw(&self, lamp_position: [f64; 3]) -> ShardLighting {
+    pub(crate) fn draw(&self, lamp_position: [f64; 3]) -> ShardLighting {
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed ^ 0x11_6E7);
         let name = match &self.world {
             WorldChoice::Colour(_) => None,

@@ -100,7 +100,7 @@ pub struct ShardMaterial {
 
 /// What egogen knows of a scene object when it draws its material.
 #[derive(Debug, Clone, PartialEq)]
-pub struct SurfaceFacts {
+pub(crate) struct SurfaceFacts {
     pub name: String,
     /// The class label a scan gives it.
     pub label: Option<String>,
@@ -375,7 +375,7 @@ impl MaterialsPlan {
     /// The drawn material of each object the mode replaces, in the order given. Each object
     /// draws from its own stream (the seed and its name), so adding an object to a scene
     /// leaves the others' materials as they were.
-    pub fn draw(&self, objects: &[SurfaceFacts]) -> Vec<ShardMaterial> {
+    pub(crate) fn draw(&self, objects: &[SurfaceFacts]) -> Vec<ShardMaterial> {
         if self.mode == MaterialsMode::Keep {
             return Vec::new();
         }

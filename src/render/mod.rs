@@ -8,7 +8,7 @@
 //! (`crate::vertex_cache`) that `synth` writes.
 
 pub mod blender_runtime;
-pub mod camera_setup;
+pub(crate) mod camera_setup;
 pub mod depth_noise;
 pub mod frame_file;
 pub mod lens_polynomial;

@@ -38,7 +38,7 @@ impl Pass {
     ];
 
     /// Its name in a config.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Pass::Colour => "colour",
             Pass::Depth => "depth",
@@ -74,11 +74,11 @@ impl Passes {
         Passes(passes.into_iter().fold(0, |m, p| m | 1 << p as u16))
     }
 
-    pub fn has(self, pass: Pass) -> bool {
+    pub(crate) fn has(self, pass: Pass) -> bool {
         self.0 & (1 << pass as u16) != 0
     }
 
-    pub fn with(self, pass: Pass) -> Self {
+    pub(crate) fn with(self, pass: Pass) -> Self {
         Passes(self.0 | 1 << pass as u16)
     }
 

@@ -276,7 +276,7 @@ pub struct ShardCeiling {
 }
 
 /// The name of the ceiling object in the rendered scene and its annotations.
-pub const CEILING_OBJECT: &str = "egogen_ceiling";
+pub(crate) const CEILING_OBJECT: &str = "egogen_ceiling";
 
 /// How OpenImageDenoise is guided (`[render] denoise_prefilter`): Cycles' denoiser reads the
 /// colour with the first hit's albedo and normal, which at a few samples with motion blur are

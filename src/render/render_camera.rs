@@ -86,7 +86,7 @@ impl RenderCamera {
     /// The wide equidistant render remapped exactly to `target` (a pinhole with square pixels
     /// renders as itself); `oversample` scales the fisheye's pixels per radian over the
     /// target's largest (1 = same angular resolution).
-    pub fn equidistant(target: &Camera, oversample: Real) -> Self {
+    pub(crate) fn equidistant(target: &Camera, oversample: Real) -> Self {
         if let Camera::Pinhole(p) = target {
             let [fx, fy, cx, cy] = p.params();
             if (fx - fy).abs() <= 1e-9 * fx {
@@ -130,7 +130,7 @@ impl RenderCamera {
     }
 
     /// Blender's lens for this camera.
-    pub fn lens(&self) -> ShardLens {
+    pub(crate) fn lens(&self) -> ShardLens {
         match *self {
             RenderCamera::Perspective {
                 resolution,

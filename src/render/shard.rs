@@ -21,7 +21,7 @@ pub fn worker_command(runtime: &BlenderRuntime, spec_path: &Path) -> Command {
 /// A long-lived worker for the take in `take_dir` (`render_shard.py --serve TAKE_DIR`): it
 /// reads `{"spec": …, "log": …}` lines on its standard input and renders each shard in the
 /// scene it built for the first.
-pub fn serve_command(runtime: &BlenderRuntime, take_dir: &Path) -> Command {
+pub(crate) fn serve_command(runtime: &BlenderRuntime, take_dir: &Path) -> Command {
     script_command(runtime, &["--serve".as_ref(), take_dir.as_os_str()])
 }
 
@@ -53,7 +53,7 @@ fn script_command(runtime: &BlenderRuntime, args: &[&std::ffi::OsStr]) -> Comman
 /// Checks, before anything is staged, that this Blender can render on `device` (a GPU: one
 /// that Blender finds, as the worker would look for it), saying which one; the worker's own
 /// message when it cannot. Nothing to check for the CPU.
-pub fn check_device(runtime: &BlenderRuntime, device: RenderDevice) -> Result<(), String> {
+pub(crate) fn check_device(runtime: &BlenderRuntime, device: RenderDevice) -> Result<(), String> {
     if device == RenderDevice::Cpu {
         return Ok(());
     }

@@ -91,7 +91,7 @@ pub const SKIN_REGIONS: [SkinRegion; 7] = [
 /// The skin detail map's file name in the body model's `textures/`: the relative lightness of
 /// MakeHuman's skin albedo (face features, creases, freckles; 0.5 = the skin's mean), built by
 /// `tools/build_skin_detail.py`. The skin's colour, regions included, is multiplied by twice it.
-pub const SKIN_DETAIL_FILE: &str = "egogen_skin_detail.jpg";
+pub(crate) const SKIN_DETAIL_FILE: &str = "egogen_skin_detail.jpg";
 
 /// One region as painted on one body: what Blender receives (with its mask) and the
 /// annotations record.

@@ -13,7 +13,7 @@ use crate::camera::{Camera, Fisheye624, KannalaBrandt4, Pinhole, Resolution};
 use crate::math::{mat3_from_rows, mat3_rows, Affine3, Mat3, Real, Vec3};
 
 /// Value of the `egogen_rig` key this version reads and writes.
-pub const FORMAT_VERSION: u32 = 1;
+pub(crate) const FORMAT_VERSION: u32 = 1;
 
 /// The top level of a rig file, as written.
 #[derive(Debug, Clone, Deserialize, Serialize)]

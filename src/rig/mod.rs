@@ -7,10 +7,10 @@
 //! z forward). The file schema is documented in `docs/RIGS.md`.
 
 pub mod aria;
-pub mod command;
+pub(crate) mod command;
 mod error;
 mod file;
-pub mod pose;
+pub(crate) mod pose;
 pub mod wear;
 
 use std::path::{Path, PathBuf};
@@ -21,8 +21,7 @@ use crate::math::{Affine3, Mat3, Real, Vec3};
 pub use aria::{aria_build_of_device, AriaRgbResolution};
 pub use command::{run_command, RigCommand};
 pub use error::RigError;
-pub use file::FORMAT_VERSION;
-pub use pose::YawPitchRoll;
+pub(crate) use file::FORMAT_VERSION;
 
 /// One camera of a rig.
 #[derive(Debug, Clone, PartialEq)]

@@ -8,7 +8,7 @@ pub(crate) const ORTHONORMAL_TOLERANCE: Real = 1e-6;
 
 /// Why a matrix is not a rotation.
 #[derive(Debug, Clone, PartialEq)]
-pub enum NotRotation {
+pub(crate) enum NotRotation {
     /// `max |RᵀR − I|` over the entries.
     NotOrthonormal(Real),
     /// Orthonormal but a reflection.
@@ -48,15 +48,24 @@ pub use crate::math::rotation::nearest_rotation;
 /// - pitch: optical axis raised (+) or lowered (−);
 /// - roll: camera turned about its optical axis, + = clockwise as the wearer sees it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct YawPitchRoll {
+pub(crate) struct YawPitchRoll {
     pub yaw_rad: Real,
     pub pitch_rad: Real,
     pub roll_rad: Real,
 }
 
 impl YawPitchRoll {
+    /// The `cpf_from_cam` rotation these angles describe (the tests' oracle).
+    #[cfg(test)]
+    pub fn to_matrix(self) -> Mat3 {
+        Mat3::from_rotation_y(self.yaw_rad)
+            * Mat3::from_rotation_x(-self.pitch_rad)
+            * Mat3::from_rotation_z(self.roll_rad)
+            * Mat3::from_diagonal(Vec3::new(-1.0, -1.0, 1.0))
+    }
+
     /// Decomposes a `cpf_from_cam` rotation.
-    pub fn of(cpf_from_cam: Mat3) -> Self {
+    pub(crate) fn of(cpf_from_cam: Mat3) -> Self {
         let m = cpf_from_cam * Mat3::from_diagonal(Vec3::new(-1.0, -1.0, 1.0));
         let z = m.z_axis;
         Self {
@@ -64,14 +73,6 @@ impl YawPitchRoll {
             pitch_rad: z.y.clamp(-1.0, 1.0).asin(),
             roll_rad: m.x_axis.y.atan2(m.y_axis.y),
         }
-    }
-
-    /// The `cpf_from_cam` rotation these angles describe.
-    pub fn to_matrix(self) -> Mat3 {
-        Mat3::from_rotation_y(self.yaw_rad)
-            * Mat3::from_rotation_x(-self.pitch_rad)
-            * Mat3::from_rotation_z(self.roll_rad)
-            * Mat3::from_diagonal(Vec3::new(-1.0, -1.0, 1.0))
     }
 }
 

@@ -124,7 +124,7 @@ impl SceneMesh {
     }
 
     /// Corner points of triangle `t`.
-    pub fn triangle(&self, t: usize) -> [Vec3; 3] {
+    pub(crate) fn triangle(&self, t: usize) -> [Vec3; 3] {
         self.triangles[t].map(|i| self.vertices[i as usize])
     }
 
@@ -135,7 +135,7 @@ impl SceneMesh {
 
     /// How each object's surfaces face (in [`Self::objects`]' order): shares of its area whose
     /// normal is within 30° of up, of down, and the rest, and its height range.
-    pub fn object_orientations(&self) -> Vec<ObjectOrientation> {
+    pub(crate) fn object_orientations(&self) -> Vec<ObjectOrientation> {
         let mut out = vec![
             ObjectOrientation {
                 area_up: 0.0,
@@ -199,7 +199,7 @@ pub struct ObjectOrientation {
 
 /// An axis-aligned box's 8 corners (corner `i` takes `max` on x, y, z where bit 0, 1, 2 of `i`
 /// is set) and its 12 triangles, wound counter-clockwise seen from outside.
-pub fn box_triangles(min: Vec3, max: Vec3) -> ([Vec3; 8], [[u32; 3]; 12]) {
+pub(crate) fn box_triangles(min: Vec3, max: Vec3) -> ([Vec3; 8], [[u32; 3]; 12]) {
     let corners = std::array::from_fn(|i| {
         Vec3::new(
             if i & 1 == 0 { min.x } else { max.x },

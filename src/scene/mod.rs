@@ -8,28 +8,28 @@
 //! off to `sensing` (rays over the walkable map).
 //! Nothing here knows about bodies or policies.
 
-pub mod ceiling;
+pub(crate) mod ceiling;
 pub mod dwelling;
-pub mod floor;
+pub(crate) mod floor;
 pub mod generated;
-pub mod load;
-pub mod mesh;
+pub(crate) mod load;
+pub(crate) mod mesh;
 pub mod mesh_distance;
-pub mod object_class;
-pub mod obstacle;
-pub mod path_plan;
-pub mod penetration;
+pub(crate) mod object_class;
+pub(crate) mod obstacle;
+pub(crate) mod path_plan;
+pub(crate) mod penetration;
 pub mod sampler;
-pub mod sdf2d;
-pub mod sdf3d;
-pub mod seats;
-pub mod seen_map;
-pub mod walkable;
+pub(crate) mod sdf2d;
+pub(crate) mod sdf3d;
+pub(crate) mod seats;
+pub(crate) mod seen_map;
+pub(crate) mod walkable;
 
 pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};
 pub use load::{load_scene, scene_frame_warning, walkable_map, SceneError, SceneFrame, UpAxis};
 pub use mesh::{ObjectId, ObjectOrientation, SceneMesh, SceneObject};
-pub use object_class::ObjectClass;
+pub(crate) use object_class::ObjectClass;
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{
     guide_aim, line_is_clear, plan_path, plan_path_centred, plan_path_weighted, Guide, PathField,
@@ -38,6 +38,6 @@ pub use path_plan::{
 pub use penetration::{blocked_cells_in_box, sdf_penetration, Penetration};
 pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
 pub use sdf3d::SceneSdf;
-pub use seats::{find_seats, Seat, SeatSettings};
-pub use seen_map::{guide_aim_remembered, SeenMap};
+pub(crate) use seats::{find_seats, Seat, SeatSettings};
+pub(crate) use seen_map::{guide_aim_remembered, SeenMap};
 pub use walkable::{indoor_map, WalkableMap, WalkableSettings, MIN_ENCLOSED};

@@ -125,7 +125,7 @@ const CLASS_WORDS: &[(&str, ObjectClass)] = &[
 
 impl ObjectClass {
     /// The class the first listed word found at a word's start in `text` names, if any.
-    pub fn by_words(text: &str) -> Option<ObjectClass> {
+    pub(crate) fn by_words(text: &str) -> Option<ObjectClass> {
         let chars: Vec<(usize, char)> = text.char_indices().collect();
         let starts: Vec<usize> = (0..chars.len())
             .filter(|&k| {
@@ -152,12 +152,12 @@ impl ObjectClass {
     }
 
     /// What an object's name says it is, else what its label says (a scan's class label).
-    pub fn named(name: &str, label: Option<&str>) -> Option<ObjectClass> {
+    pub(crate) fn named(name: &str, label: Option<&str>) -> Option<ObjectClass> {
         Self::by_words(name).or_else(|| label.and_then(Self::by_words))
     }
 
     /// Something people sit on: a seat, a sofa or a bed.
-    pub fn is_seat(self) -> bool {
+    pub(crate) fn is_seat(self) -> bool {
         matches!(
             self,
             ObjectClass::Seat | ObjectClass::Sofa | ObjectClass::Bed

@@ -57,7 +57,7 @@ impl Obstacle2 {
     }
 
     /// The centre of the footprint.
-    pub fn centre(&self) -> DVec2 {
+    pub(crate) fn centre(&self) -> DVec2 {
         match *self {
             Obstacle2::Box { centre, .. } | Obstacle2::Circle { centre, .. } => centre,
         }

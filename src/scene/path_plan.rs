@@ -320,7 +320,7 @@ pub struct PathField {
 impl PathField {
     /// The field of `goal` on `map`; `None` when the goal lies off the grid or not on a
     /// walkable cell.
-    pub fn to_goal(map: &WalkableMap, goal: DVec2) -> Option<PathField> {
+    pub(crate) fn to_goal(map: &WalkableMap, goal: DVec2) -> Option<PathField> {
         use std::cmp::Reverse;
         use std::collections::BinaryHeap;
 
@@ -373,7 +373,7 @@ impl PathField {
 
     /// Walking distance (m) from a point to the goal, bilinear between the four nearest cell
     /// centres that reach the goal; `None` where none of them does.
-    pub fn at(&self, p: DVec2) -> Option<f64> {
+    pub(crate) fn at(&self, p: DVec2) -> Option<f64> {
         if !p.is_finite() {
             return None;
         }
@@ -402,7 +402,7 @@ impl PathField {
 
     /// The way to the goal from a point: the unit direction in which the walking distance
     /// falls fastest (central differences over one cell); `None` where it cannot be told.
-    pub fn way_at(&self, p: DVec2) -> Option<DVec2> {
+    pub(crate) fn way_at(&self, p: DVec2) -> Option<DVec2> {
         let h = self.cell_m;
         let dx = self.at(p + DVec2::X * h)? - self.at(p - DVec2::X * h)?;
         let dy = self.at(p + DVec2::Y * h)? - self.at(p - DVec2::Y * h)?;

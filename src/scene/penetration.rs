@@ -56,6 +56,3 @@ pub fn blocked_cells_in_box(
     }
     count
 }
-
-/// The paper's 2D collision rule: at least this many blocked cells in the body box.
-pub const BOX_COLLISION_MIN_CELLS: usize = 3;

@@ -83,7 +83,7 @@ fn edt_1d(f: &[f64], out: &mut [f64]) {
 /// Signed distance (m) per cell: positive inside `inside` cells (distance from the cell centre
 /// to the nearest outside cell centre minus half a cell, i.e. to the shared cell boundary along
 /// the axes), negative outside, by the same rule.
-pub fn signed_distance(inside: &[bool], nx: usize, ny: usize, cell_m: f64) -> Vec<f64> {
+pub(crate) fn signed_distance(inside: &[bool], nx: usize, ny: usize, cell_m: f64) -> Vec<f64> {
     let outside: Vec<bool> = inside.iter().map(|&b| !b).collect();
     let to_outside = squared_edt(&outside, nx, ny);
     let to_inside = squared_edt(inside, nx, ny);

@@ -14,7 +14,7 @@ use super::walkable::{clip_z, convex_overlaps_rect, WalkableMap};
 
 /// Knobs of the seat finder (docs/ACTIVITIES.md "Seats").
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SeatSettings {
+pub(crate) struct SeatSettings {
     /// Lowest and highest seat surface over the floor (m).
     pub height_m: (f64, f64),
     /// Free space a seat needs above its surface (m): shelves and the inside of cabinets have
@@ -51,7 +51,7 @@ impl Default for SeatSettings {
 /// What the file says an object is, as far as sitting goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum SeatNaming {
+pub(crate) enum SeatNaming {
     /// Its name or label names a seat (`chair`, `sofa`, `bed` …).
     Named,
     /// Its name says nothing either way: a seat by its shape alone.
@@ -61,13 +61,13 @@ pub enum SeatNaming {
 /// Whether an object's name (else its label) makes it a seat (`Some(true)`: a chair, a sofa,
 /// a bed …), something else one does not sit on (`Some(false)`: a table, a shelf, a floor …;
 /// [`ObjectClass`]), or says nothing either way.
-pub fn seat_by_name(name: &str, label: Option<&str>) -> Option<bool> {
+pub(crate) fn seat_by_name(name: &str, label: Option<&str>) -> Option<bool> {
     ObjectClass::named(name, label).map(ObjectClass::is_seat)
 }
 
 /// One place to sit.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct Seat {
+pub(crate) struct Seat {
     /// Where the seated pelvis goes (horizontal, m).
     pub pelvis_xy: [f64; 2],
     /// Which way a seated person faces (rad from +x): towards the free floor in front.
@@ -93,11 +93,11 @@ pub struct Seat {
 }
 
 impl Seat {
-    pub fn pelvis(&self) -> DVec2 {
+    pub(crate) fn pelvis(&self) -> DVec2 {
         DVec2::from_array(self.pelvis_xy)
     }
 
-    pub fn stand(&self) -> DVec2 {
+    pub(crate) fn stand(&self) -> DVec2 {
         DVec2::from_array(self.stand_xy)
     }
 }
@@ -107,7 +107,11 @@ const DIRECTIONS: usize = 16;
 
 /// The places to sit in `mesh` over its walkable `map` (see the module docs), in a
 /// deterministic order (by object, then position).
-pub fn find_seats(mesh: &SceneMesh, map: &WalkableMap, settings: &SeatSettings) -> Vec<Seat> {
+pub(crate) fn find_seats(
+    mesh: &SceneMesh,
+    map: &WalkableMap,
+    settings: &SeatSettings,
+) -> Vec<Seat> {
     let (mut top, top_object) = sitting_height_tops(mesh, map, settings);
     let high = clear_room_above(mesh, map, settings, &mut top);
     let refused: Vec<bool> = mesh

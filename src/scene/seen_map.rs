@@ -17,7 +17,7 @@ use super::walkable::WalkableMap;
 /// its memory when it keeps one — what stands is there where its rays met it, so `obstacles`
 /// are not added; ground never seen costs [`Guide::unknown_cost`] more — otherwise on the
 /// whole `map` round `obstacles`.
-pub fn guide_aim_remembered(
+pub(crate) fn guide_aim_remembered(
     seen: Option<&SeenMap>,
     map: &WalkableMap,
     obstacles: &[Obstacle2],
@@ -46,7 +46,7 @@ enum Seen {
 
 /// A walker's memory of a map's grid (same origin, cell size and extent as the map it walks).
 #[derive(Debug, Clone, PartialEq)]
-pub struct SeenMap {
+pub(crate) struct SeenMap {
     origin: DVec2,
     cell_m: f64,
     nx: usize,
@@ -56,7 +56,7 @@ pub struct SeenMap {
 
 impl SeenMap {
     /// Nothing seen yet of `map`'s grid.
-    pub fn unseen(map: &WalkableMap) -> Self {
+    pub(crate) fn unseen(map: &WalkableMap) -> Self {
         Self {
             origin: map.origin,
             cell_m: map.cell_m,
@@ -76,7 +76,7 @@ impl SeenMap {
     /// `hit_m` are open, the cell it enters at `hit_m` blocked; with no hit, open up to
     /// `max_m`. The latest ray decides a cell (a person who stood there and left is forgotten
     /// once a ray crosses the cell again). Points off the grid are not kept.
-    pub fn record_ray(&mut self, origin: DVec2, dir: DVec2, hit_m: Option<f64>, max_m: f64) {
+    pub(crate) fn record_ray(&mut self, origin: DVec2, dir: DVec2, hit_m: Option<f64>, max_m: f64) {
         if !(origin.is_finite() && dir.is_finite()) {
             return;
         }
@@ -98,7 +98,7 @@ impl SeenMap {
 
     /// The map as the walker believes it: every cell walkable but those seen blocked (cells
     /// off the grid block, as on every map).
-    pub fn believed(&self) -> WalkableMap {
+    pub(crate) fn believed(&self) -> WalkableMap {
         let mut map = WalkableMap::from_walkable(
             self.origin,
             self.cell_m,
@@ -132,6 +132,7 @@ impl SeenMap {
     }
 
     /// Cells seen open and seen blocked.
+    #[cfg(test)]
     pub fn seen_cells(&self) -> (usize, usize) {
         let count = |s: Seen| self.cells.iter().filter(|&&c| c == s).count();
         (count(Seen::Open), count(Seen::Blocked))
@@ -139,13 +140,13 @@ impl SeenMap {
 
     /// The memory as bytes, one a cell (0 unknown, 1 open, 2 blocked), row-major: what a
     /// checkpoint keeps.
-    pub fn to_bytes(&self) -> Vec<u8> {
+    pub(crate) fn to_bytes(&self) -> Vec<u8> {
         self.cells.iter().map(|&c| c as u8).collect()
     }
 
     /// A memory of `map`'s grid from [`Self::to_bytes`]; `None` when the bytes do not fit
     /// the grid.
-    pub fn from_bytes(map: &WalkableMap, bytes: &[u8]) -> Option<Self> {
+    pub(crate) fn from_bytes(map: &WalkableMap, bytes: &[u8]) -> Option<Self> {
         let mut seen = Self::unseen(map);
         if bytes.len() != seen.cells.len() {
             return None;

@@ -114,7 +114,7 @@ impl Default for DepthImage {
 }
 
 impl DepthImage {
-    pub fn new(settings: DepthImageSettings) -> Self {
+    pub(crate) fn new(settings: DepthImageSettings) -> Self {
         Self {
             settings,
             rows: (0..settings.rows)
@@ -127,12 +127,12 @@ impl DepthImage {
     }
 
     /// Its settings (fixed at [`Self::new`]: the angles are computed from them once).
-    pub fn settings(&self) -> DepthImageSettings {
+    pub(crate) fn settings(&self) -> DepthImageSettings {
         self.settings
     }
 
     /// Ray length (m) per pixel, row-major, `max_range_m` where nothing is hit within range.
-    pub fn ranges(&self, world: &SensingWorld, pose: EgoPose2) -> Vec<f64> {
+    pub(crate) fn ranges(&self, world: &SensingWorld, pose: EgoPose2) -> Vec<f64> {
         let mut out = vec![0.0; self.settings.rows * self.settings.cols];
         self.each_range(world, pose, |k, range| out[k] = range);
         out

@@ -105,7 +105,7 @@ pub struct RayScan {
 }
 
 impl RayScan {
-    pub fn new(settings: RayScanSettings) -> Self {
+    pub(crate) fn new(settings: RayScanSettings) -> Self {
         let n = settings.num_rays.max(1);
         let offsets = (0..n)
             .map(|k| {

@@ -9,11 +9,11 @@
 //! counter-clockwise about +z). Value per beam: `−1 + 2·hit/7` with `hit` the free distance
 //! (m); no hit within range gives `+1`; a ray starting inside an obstacle gives `−1`.
 
-pub mod depth_image;
-pub mod ego;
-pub mod local_map;
+pub(crate) mod depth_image;
+pub(crate) mod ego;
+pub(crate) mod local_map;
 pub mod ray;
-pub mod spec;
+pub(crate) mod spec;
 
 pub use depth_image::{DepthImage, DepthImageSettings};
 pub use ego::{EgoPose2, EgoSensor, RayScan, RayScanSettings, SensingWorld};

@@ -39,7 +39,7 @@ impl SensingSpec {
     }
 
     /// Values per observed pose.
-    pub fn dim(&self) -> usize {
+    pub(crate) fn dim(&self) -> usize {
         match self {
             Self::Rays(s) => s.num_rays,
             Self::LocalMap(s) => s.rows * s.cols,

@@ -63,7 +63,7 @@ impl Dataset {
     /// recorded (annotation, the outputs' files of it such as COLMAP's image, checksum:
     /// [`super::frame_record`]) from the bytes
     /// in memory, written under a temporary name and renamed; then the raw files are removed.
-    pub fn finish_frame(&self, camera: usize, frame: u32) -> Result<WrittenFrame> {
+    pub(crate) fn finish_frame(&self, camera: usize, frame: u32) -> Result<WrittenFrame> {
         let started = std::time::Instant::now();
         let work = &self.cameras[camera];
         let (rgb, gt) = raw_frame_paths(

@@ -105,7 +105,7 @@ impl Dataset {
     }
 
     /// Every planned frame's record, camera by camera: all frames must be finished.
-    pub fn records(&self) -> Result<Vec<Vec<FrameRecord>>> {
+    pub(crate) fn records(&self) -> Result<Vec<Vec<FrameRecord>>> {
         self.cameras
             .iter()
             .enumerate()

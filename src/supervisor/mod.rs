@@ -5,19 +5,19 @@
 //! `pool`; the time left at each camera's pace, `pace`), finishes and validates frames (`dataset`, `frame_record`), writes the take's outputs
 //! (`export::take_exports`: annotations, the COLMAP export, the manifest), and resumes an interrupted run where it stopped.
 
-pub mod dataset;
-pub mod frame_record;
-pub mod local;
+pub(crate) mod dataset;
+pub(crate) mod frame_record;
+pub(crate) mod local;
 pub mod pace;
-pub mod pipeline;
+pub(crate) mod pipeline;
 pub mod pool;
-pub mod slurm;
-pub mod staged;
+pub(crate) mod slurm;
+pub(crate) mod staged;
 pub mod verify;
 
 pub use crate::manifest::{build_manifest, write_manifest, Manifest};
 pub use local::{LocalPool, PoolSettings};
-pub use pipeline::{
+pub(crate) use pipeline::{
     run_pipeline, shard_pool, stage_take, RunMotion, RunOptions, RunSummary, Staged, StagedTake,
 };
 pub use pool::{PoolReport, PoolRun, PoolTake, ShardPool, TakeFailure, TakeFeed};

@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 
 /// Per-camera pace of one start's rendering; shared by a pool's workers (interior locking).
 #[derive(Debug, Default)]
-pub struct FramePace {
+pub(crate) struct FramePace {
     state: Mutex<PaceState>,
 }
 
@@ -48,14 +48,14 @@ struct RunningAttempt {
 
 /// A running attempt's handle on its pool's [`FramePace`]; dropping it ends the attempt.
 #[derive(Debug)]
-pub struct PaceAttempt {
+pub(crate) struct PaceAttempt {
     pace: Arc<FramePace>,
     key: u64,
 }
 
 impl PaceAttempt {
     /// The attempt finished a frame now.
-    pub fn frame_done(&self) {
+    pub(crate) fn frame_done(&self) {
         self.pace.frame_done_at(self.key, Instant::now());
     }
 }
@@ -91,7 +91,7 @@ impl FramePace {
 
     /// An attempt at `frames` frames of `camera` starts now; it ends when the returned handle
     /// is dropped.
-    pub fn attempt(self: &Arc<Self>, camera: &str, frames: u64) -> PaceAttempt {
+    pub(crate) fn attempt(self: &Arc<Self>, camera: &str, frames: u64) -> PaceAttempt {
         let key = {
             let mut s = self.state.lock().unwrap();
             s.next_key += 1;
@@ -122,7 +122,7 @@ impl FramePace {
 
     /// Time left after `elapsed` of wall time with `to_go` frames still to render (those not
     /// planned yet among them); `None` until a frame is done.
-    pub fn time_left(&self, elapsed: Duration, to_go: u64) -> Option<Duration> {
+    pub(crate) fn time_left(&self, elapsed: Duration, to_go: u64) -> Option<Duration> {
         self.time_left_at(elapsed, to_go, Instant::now())
     }
 

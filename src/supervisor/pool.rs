@@ -114,7 +114,7 @@ pub(crate) struct OneTake {
 
 impl OneTake {
     /// `take`, with `done` of its dataset's frames finished before this start.
-    pub fn new(take: PoolTake, done: usize) -> Self {
+    pub(crate) fn new(take: PoolTake, done: usize) -> Self {
         let total = take.dataset.total_frames();
         OneTake {
             take: Some(take),
@@ -185,7 +185,7 @@ pub struct BlenderUse {
 /// `ground_truth`) `_frame_update` (Blender's scene update), `_render` (the whole render call)
 /// and within it Cycles' own `_sync` and `_path_tracing` (from the raw file's header), and
 /// Rust's `assemble` (read, remap) and `finish` (encode, check, record, write).
-pub type StageSeconds = std::collections::BTreeMap<String, f64>;
+pub(crate) type StageSeconds = std::collections::BTreeMap<String, f64>;
 
 /// Adds `seconds` to `stage`.
 pub(crate) fn add_stage(stages: &mut StageSeconds, stage: &str, seconds: f64) {
@@ -244,7 +244,7 @@ pub struct PoolReport {
 
 impl PoolReport {
     /// Writes `pool_report.json` into the run's logs folder.
-    pub fn write(&self, run: &PoolRun) -> Result<()> {
+    pub(crate) fn write(&self, run: &PoolRun) -> Result<()> {
         let path = run.logs_dir.join("pool_report.json");
         std::fs::create_dir_all(&run.logs_dir)
             .with_context(|| format!("creating {}", run.logs_dir.display()))?;
@@ -327,7 +327,7 @@ impl FrameTries {
 }
 
 /// How such an attempt's outcome starts; backends do not retry it.
-pub const SETUP_FAILED: &str = "Blender could not set up the scene (not retried)";
+pub(crate) const SETUP_FAILED: &str = "Blender could not set up the scene (not retried)";
 
 /// How an attempt at a shard ended. Written to the pool report as text: `ok`, the setup
 /// failure ([`SETUP_FAILED`] and the worker's reason), or why it failed.
@@ -345,12 +345,12 @@ pub enum Outcome {
 }
 
 impl Outcome {
-    pub fn is_ok(&self) -> bool {
+    pub(crate) fn is_ok(&self) -> bool {
         matches!(self, Outcome::Ok)
     }
 
     /// Whether it fails the same way on every try (backends do not retry it).
-    pub fn repeats(&self) -> bool {
+    pub(crate) fn repeats(&self) -> bool {
         matches!(self, Outcome::SetupFailed { .. })
     }
 }

@@ -67,7 +67,7 @@ impl Dataset {
             .join(frame_file_path(&self.cameras[camera].camera.name, frame))
     }
 
-    pub fn raw_dir(&self) -> PathBuf {
+    pub(crate) fn raw_dir(&self) -> PathBuf {
         self.staging.join("work/raw")
     }
 
@@ -87,7 +87,7 @@ impl Dataset {
     }
 
     /// The channels a camera's frame files hold.
-    pub fn frame_channels(&self, camera: usize) -> Vec<&'static str> {
+    pub(crate) fn frame_channels(&self, camera: usize) -> Vec<&'static str> {
         let work = &self.cameras[camera];
         self.passes
             .frame_channels(work.camera.monochrome, work.depth_noise.is_some())

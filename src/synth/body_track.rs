@@ -28,7 +28,10 @@ pub struct BodyTrack {
 
 /// Joints and CPF for every frame (joints-only fast path; no vertices), and the hands'
 /// landmarks from the same skeletons where the hand pose is not all zeros.
-pub fn track_body(model: &BodyModel, motion: &MotionSequence) -> Result<BodyTrack, PoseError> {
+pub(crate) fn track_body(
+    model: &BodyModel,
+    motion: &MotionSequence,
+) -> Result<BodyTrack, PoseError> {
     let shaped = model.shape(&motion.betas, &[])?;
     let calibration = CpfCalibration::from_rest_joints(&shaped.rest_joints);
     let moves = motion

@@ -198,7 +198,7 @@ pub(crate) fn progress_bar(show: bool, rounds: usize) -> indicatif::ProgressBar 
 }
 
 /// Share of (agent, frame) pairs with a marker inside another agent's 2D box.
-pub fn human_overlap_share(agents: &[AgentTrack]) -> f64 {
+pub(crate) fn human_overlap_share(agents: &[AgentTrack]) -> f64 {
     let frames = agents.iter().map(|a| a.frames.len()).min().unwrap_or(0);
     if agents.len() < 2 || frames == 0 {
         return 0.0;

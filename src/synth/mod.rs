@@ -13,15 +13,15 @@
 pub mod activity;
 pub mod body_cache;
 pub(crate) mod body_pictures;
-pub mod body_track;
+pub(crate) mod body_track;
 pub mod crowd;
-pub mod crowd_dir;
-pub mod penetration;
-pub mod placement;
+pub(crate) mod crowd_dir;
+pub(crate) mod penetration;
+pub(crate) mod placement;
 pub(crate) mod scene_inspect;
 pub mod sequence_dir;
 pub mod take;
 
 pub use body_cache::body_cache;
-pub use body_track::{track_body, BodyTrack, TrackFrame};
+pub(crate) use body_track::{track_body, BodyTrack, TrackFrame};
 pub use sequence_dir::{pose_meshes, write_sequence_dir, SequenceOutputs};

@@ -232,7 +232,7 @@ pub enum MotionPlan {
 
 /// A take's motion, made: agents walked through the scene, or one motion (a scripted walk or a
 /// motion file).
-pub enum TakeMotion {
+pub(crate) enum TakeMotion {
     Agents {
         walked: Synthesized,
         wearers: Vec<usize>,
@@ -242,7 +242,7 @@ pub enum TakeMotion {
 
 /// Makes a take's motion: agents walk the scene (as `egogen synth`), a scripted walk of a body
 /// of shape `betas`, or a motion file read.
-pub fn make_motion(
+pub(crate) fn make_motion(
     motion: &MotionPlan,
     betas: &[f64],
     body: &crate::body::BodyModel,
@@ -275,7 +275,7 @@ pub fn make_motion(
 }
 
 /// A synthesized take and the world it was walked in.
-pub struct Synthesized {
+pub(crate) struct Synthesized {
     pub world: CrowdWorld,
     pub take: crate::synth::crowd::CrowdTake,
     pub wall_s: f64,

@@ -20,14 +20,14 @@ use crate::sensing::Sensor;
 
 /// How far along the planned path the path follower aims a primitive (m; a walking
 /// primitive covers 0.2–0.7 m).
-pub const PATH_LOOKAHEAD_M: f64 = 0.8;
+pub(crate) const PATH_LOOKAHEAD_M: f64 = 0.8;
 
 /// Free space the planned path keeps from walls and other people (m, about half a body's
 /// width).
 pub(crate) const PATH_CLEARANCE_M: f64 = 0.3;
 
 /// What a penetrating primitive costs the path follower, as extra distance (m).
-pub const PATH_PENETRATION_COST_M: f64 = 1.0;
+pub(crate) const PATH_PENETRATION_COST_M: f64 = 1.0;
 
 /// Which controller steers a walker and with what knobs: what configs name (`steering`, `k`,
 /// `action_spread`) and reports record (`{"kind": "sampling", "k": 16}`).
@@ -70,7 +70,7 @@ impl ControllerSpec {
 
     /// The controller's name in reports and on command lines: `policy`, `policy_mean`,
     /// `policy_spread_S`, `sampling_kK`, `path_follow_kK`.
-    pub fn name(&self) -> String {
+    pub(crate) fn name(&self) -> String {
         match *self {
             ControllerSpec::Policy {
                 mean_action: true, ..
@@ -83,7 +83,7 @@ impl ControllerSpec {
     }
 
     /// The controller a name ([`Self::name`]'s) says, if any.
-    pub fn from_name(name: &str) -> Option<ControllerSpec> {
+    pub(crate) fn from_name(name: &str) -> Option<ControllerSpec> {
         let k = |s: &str| s.parse::<usize>().ok().filter(|&k| k >= 1);
         match name {
             "policy" => Some(ControllerSpec::POLICY),
@@ -155,7 +155,11 @@ impl Steering {
     /// The controller this steering makes with the knobs given beside it: `k` candidates for
     /// `sampling` and `path_follow` (default 16), `spread` of `policy`'s sampled actions
     /// (default 1); a knob given to a steering that has none is refused, by name.
-    pub fn spec(self, k: Option<usize>, spread: Option<f32>) -> Result<ControllerSpec, String> {
+    pub(crate) fn spec(
+        self,
+        k: Option<usize>,
+        spread: Option<f32>,
+    ) -> Result<ControllerSpec, String> {
         if let Some(x) = spread {
             if !(x.is_finite() && x >= 0.0) {
                 return Err(format!("`action_spread`: expected a scale ≥ 0, got {x}"));

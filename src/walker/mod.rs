@@ -15,8 +15,8 @@
 pub mod controller;
 pub mod pose_prior;
 pub mod reward;
-pub mod seed_bank;
-pub mod settings;
+pub(crate) mod seed_bank;
+pub(crate) mod settings;
 pub mod state;
 pub(crate) mod step;
 

@@ -141,7 +141,7 @@ pub struct RewardTerms {
 
 impl RewardTerms {
     /// The weighted sum.
-    pub fn total(&self, w: &RewardWeights) -> f64 {
+    pub(crate) fn total(&self, w: &RewardWeights) -> f64 {
         w.floor * self.floor
             + w.skate * self.skate
             + w.goal * self.goal
@@ -268,14 +268,14 @@ pub struct Judged {
 
 /// Shortest pelvis travel over a primitive that gives [`Judged::view_off_travel_rad`] a
 /// direction (m).
-pub const TRAVEL_MIN_M: f64 = 0.1;
+pub(crate) const TRAVEL_MIN_M: f64 = 0.1;
 
 /// Body vertices with negative scene SDF that make a frame penetrate (paper Eq. 11: 40).
 pub const EQ11_VERTICES: usize = 40;
 
 /// Paper Eq. 11 on a primitive: every vertex of the posed body in each new frame looked up in
 /// the scene's SDF; `(frames with ≥ EQ11_VERTICES inside, most inside in a frame)`.
-pub fn scene_penetration(
+pub(crate) fn scene_penetration(
     body: &crate::motion::cvae::BodyContext,
     p: &DecodedPrimitive,
     sdf: &crate::scene::SceneSdf,
@@ -411,7 +411,7 @@ fn body_box<'a>(
 
 /// Whether the straight path from `from` to `to` passes over a cell of `map` that is not
 /// walkable (touching its edge or corner counts; cells outside the grid are not walkable).
-pub fn path_leaves_floor(map: &WalkableMap, from: DVec2, to: DVec2) -> bool {
+pub(crate) fn path_leaves_floor(map: &WalkableMap, from: DVec2, to: DVec2) -> bool {
     let d = to - from;
     let length = d.length();
     if !(from.is_finite() && length.is_finite()) {

@@ -19,7 +19,7 @@ pub struct SeedBank {
 
 impl SeedBank {
     /// The seeds of every primitive of a set.
-    pub fn from_set(set: &PrimitiveSet) -> Self {
+    pub(crate) fn from_set(set: &PrimitiveSet) -> Self {
         let seeds = (0..set.len())
             .map(|i| {
                 let v = set.item(i);

@@ -104,7 +104,7 @@ impl WalkerSettings {
     /// A key a training stage's `[stages.env.walker]` set that only a take reads, if any, and
     /// why training has no use for it: an episode takes its controller's best proposal as it
     /// is and writes no motion.
-    pub fn take_only_given(&self) -> Option<(&'static str, &'static str)> {
+    pub(crate) fn take_only_given(&self) -> Option<(&'static str, &'static str)> {
         let paper = WalkerSettings::PAPER;
         [
             (
@@ -135,7 +135,7 @@ impl WalkerSettings {
 
     /// The keys given in a table (`given`, e.g. a config's `[stages.env.walker]`) over
     /// `preset`: what a key left out is. Unknown keys are refused, naming them.
-    pub fn over<'de, D: serde::Deserializer<'de>>(
+    pub(crate) fn over<'de, D: serde::Deserializer<'de>>(
         preset: WalkerSettings,
         given: D,
     ) -> Result<WalkerSettings, D::Error> {
@@ -156,7 +156,7 @@ impl WalkerSettings {
     }
 
     /// The guide these settings give a policy-steered walker (`guide_*`).
-    pub fn guide(&self) -> Guide {
+    pub(crate) fn guide(&self) -> Guide {
         Guide {
             lookahead_m: self.guide_lookahead_m,
             centre_weight: self.guide_centre_weight,
@@ -165,12 +165,12 @@ impl WalkerSettings {
     }
 
     /// Whether the walker remembers what its rays saw: its guide plans on that.
-    pub fn remembers(&self) -> bool {
+    pub(crate) fn remembers(&self) -> bool {
         self.guide_memory && self.guide_lookahead_m > 0.0
     }
 
     /// EgoGen's walker: no guide (the goal itself, whatever hides it), the rest as these.
-    pub fn unguided(self) -> Self {
+    pub(crate) fn unguided(self) -> Self {
         Self {
             guide_lookahead_m: 0.0,
             guide_memory: false,
@@ -184,13 +184,13 @@ impl WalkerSettings {
     /// flag is it with dashes) and what was expected. One check for `[walker]`, training
     /// configs and `egogen policy eval`. Memory without a guide is no mistake here (it is on by
     /// default, and `guide_lookahead_m = 0` turns the guide off); see [`Self::problem_over`].
-    pub fn problem(&self) -> Option<(&'static str, String)> {
+    pub(crate) fn problem(&self) -> Option<(&'static str, String)> {
         self.problem_over(&WalkerSettings::default())
     }
 
     /// [`Self::problem`] for settings given over `preset`: memory turned on against the preset
     /// without a guide to plan on it is a mistake too.
-    pub fn problem_over(&self, preset: &WalkerSettings) -> Option<(&'static str, String)> {
+    pub(crate) fn problem_over(&self, preset: &WalkerSettings) -> Option<(&'static str, String)> {
         let memory = match self.guide_memory != preset.guide_memory {
             true => self.guide_memory,
             false => self.remembers(),
@@ -214,7 +214,7 @@ impl WalkerSettings {
     }
 
     /// The keys whose values differ from the defaults (what a config set), in alphabetical order.
-    pub fn changed_keys(&self) -> Vec<String> {
+    pub(crate) fn changed_keys(&self) -> Vec<String> {
         let table = |s: &WalkerSettings| match serde_json::to_value(s) {
             Ok(serde_json::Value::Object(m)) => m,
             _ => serde_json::Map::new(),
@@ -228,12 +228,12 @@ impl WalkerSettings {
     }
 
     /// Whether every setting is its default (a config that sets none).
-    pub fn is_default(&self) -> bool {
+    pub(crate) fn is_default(&self) -> bool {
         *self == WalkerSettings::default()
     }
 
     /// Every key of the schema.
-    pub fn keys() -> Vec<String> {
+    pub(crate) fn keys() -> Vec<String> {
         match serde_json::to_value(WalkerSettings::default()) {
             Ok(serde_json::Value::Object(m)) => m.into_iter().map(|(k, _)| k).collect(),
             _ => Vec::new(),

@@ -24,7 +24,7 @@ use crate::sensing::{EgoPose2, EgoSensor, RayScan, SensingWorld, Sensor};
 
 /// The rays a walker remembers what it saw with ([`Walker::look`]): the policy's own ray fan,
 /// or the paper's 32 rays where it senses otherwise.
-pub fn memory_scan(sensor: &Sensor) -> RayScan {
+pub(crate) fn memory_scan(sensor: &Sensor) -> RayScan {
     match sensor {
         Sensor::Rays(scan) => scan.clone(),
         _ => RayScan::default(),
@@ -47,7 +47,7 @@ impl ObsLayout {
     };
 
     /// The layout for a policy's sensing.
-    pub fn of(sensing: &crate::sensing::SensingSpec) -> Self {
+    pub(crate) fn of(sensing: &crate::sensing::SensingSpec) -> Self {
         Self {
             sensing_per_frame: sensing.dim(),
         }
@@ -159,7 +159,7 @@ impl SeedView {
     }
 
     /// The seed of the primitive after `p`, from its last frames.
-    pub fn after(p: &DecodedPrimitive) -> Self {
+    pub(crate) fn after(p: &DecodedPrimitive) -> Self {
         let n = p.joints.len();
         let p0 = p.joints[n - SEED_FRAMES][joint::PELVIS];
         Self {
@@ -173,7 +173,7 @@ impl SeedView {
     }
 
     /// The body's 2D box as others see it: [`footprint`] of both seed frames' markers.
-    pub fn footprint(&self) -> Obstacle2 {
+    pub(crate) fn footprint(&self) -> Obstacle2 {
         footprint(
             self.markers.iter().flatten(),
             &self.world_from_cpf[SEED_FRAMES - 1],
@@ -185,7 +185,7 @@ impl SeedView {
 /// A body's 2D box: the bounding box of its markers in its own horizontal frame (x along the
 /// hip line, y the facing of the eye frame `world_from_cpf` on the floor) — the box the
 /// penetration test of Eq. 7 lays over a body. Without finite markers, a point at `pelvis`.
-pub fn footprint<'a>(
+pub(crate) fn footprint<'a>(
     markers: impl Iterator<Item = &'a Vec3>,
     world_from_cpf: &Affine3,
     pelvis: DVec2,
@@ -339,7 +339,13 @@ impl Walker {
     /// Adds to `seen` what `scan` shows from the eyes of both seed frames of the still scene:
     /// the map and the obstacles that stand (`still`; people who move are left out: the policy
     /// sees them itself).
-    pub fn look(&self, scan: &RayScan, map: &WalkableMap, still: &[Obstacle2], seen: &mut SeenMap) {
+    pub(crate) fn look(
+        &self,
+        scan: &RayScan,
+        map: &WalkableMap,
+        still: &[Obstacle2],
+        seen: &mut SeenMap,
+    ) {
         let world = SensingWorld {
             map,
             obstacles: still,
@@ -404,7 +410,7 @@ impl Walker {
     }
 
     /// Counts a step that produced no primitive (the decoder's output was not finite).
-    pub fn fail(&mut self, reward: f64) {
+    pub(crate) fn fail(&mut self, reward: f64) {
         self.steps += 1;
         self.totals.reward += reward;
     }
@@ -416,7 +422,7 @@ impl Walker {
     }
 
     /// Horizontal walking speed over the primitives taken (m/s).
-    pub fn speed_m_s(&self) -> f64 {
+    pub(crate) fn speed_m_s(&self) -> f64 {
         self.totals.path_m / (self.totals.frames.max(1) as f64 / PRIMITIVE_RATE_HZ)
     }
 }

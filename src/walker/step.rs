@@ -328,7 +328,7 @@ pub(crate) fn walk_step(
 /// How [`choose_primitive`] ranks judged primitives: the one of highest score; a candidate that did not decode
 /// (`None`) never beats one that did, a non-finite score counts as −∞, and among equals the
 /// first is kept. `None` only when there is no candidate.
-pub fn best_of<T>(candidates: impl IntoIterator<Item = (T, Option<f64>)>) -> Option<T> {
+pub(crate) fn best_of<T>(candidates: impl IntoIterator<Item = (T, Option<f64>)>) -> Option<T> {
     let mut best: Option<(T, Option<f64>)> = None;
     for (candidate, score) in candidates {
         let score = score.map(|s| if s.is_finite() { s } else { f64::NEG_INFINITY });

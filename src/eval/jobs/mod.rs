@@ -45,7 +45,7 @@ pub enum Suite {
 
 /// What an evaluation run is asked (`egogen eval`'s arguments, `cli::eval_jobs::EvalArgs`).
 #[derive(Debug, Clone)]
-pub struct EvalJob {
+pub(crate) struct EvalJob {
     pub suite: Suite,
     pub episodes: usize,
     pub seed: u64,
@@ -65,7 +65,7 @@ pub struct EvalJob {
 
 /// The motion model, body, pose prior and the held-out seed poses every suite uses (loaded by
 /// the caller from the shipped files).
-pub struct SuiteParts {
+pub(crate) struct SuiteParts {
     pub body: BodyModel,
     pub model: crate::motion::cvae::MotionModel,
     pub prior: crate::walker::PosePrior,

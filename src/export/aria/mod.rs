@@ -56,7 +56,7 @@ impl AriaStreams {
         ["trajectory", "calibration", "imu", "gaze", "hands"];
 
     /// The streams named in `names`, or an error naming the unknown one.
-    pub fn parse<S: AsRef<str>>(names: &[S]) -> Result<Self, String> {
+    pub(crate) fn parse<S: AsRef<str>>(names: &[S]) -> Result<Self, String> {
         let mut s = AriaStreams::default();
         for n in names {
             match n.as_ref() {
@@ -76,7 +76,7 @@ impl AriaStreams {
         Ok(s)
     }
 
-    pub fn any(&self) -> bool {
+    pub(crate) fn any(&self) -> bool {
         self.trajectory || self.calibration || self.imu || self.gaze || self.hands
     }
 }
@@ -119,7 +119,7 @@ pub(crate) const MAX_TRAJECTORY_RATE_HZ: Real = 1e6;
 
 impl AriaSettings {
     /// Why these settings cannot be used with `rig`, naming the key, or `None`.
-    pub fn problem(&self, rig: &Rig) -> Option<String> {
+    pub(crate) fn problem(&self, rig: &Rig) -> Option<String> {
         let r = self.trajectory_rate_hz;
         if !(r.is_finite() && r > 0.0 && r <= MAX_TRAJECTORY_RATE_HZ) {
             return Some(format!(
@@ -212,7 +212,7 @@ pub(crate) struct Wearer<'a> {
 /// The Aria streams as a take's output (`[render.aria]`): each wearer's streams into
 /// `aria/<wearer>/` when the take is finished, from the bodies' head poses; built in
 /// `aria.partial/` and renamed, and kept as they are when a resumed run finds them.
-pub struct AriaExport {
+pub(crate) struct AriaExport {
     pub settings: AriaSettings,
     /// The agents wearing the rig, in order.
     pub wearers: Vec<AriaWearer>,
@@ -222,7 +222,7 @@ pub struct AriaExport {
 
 /// An agent wearing the rig, as its streams need it beside its head poses.
 #[derive(Debug, Clone)]
-pub struct AriaWearer {
+pub(crate) struct AriaWearer {
     /// Index into the take's agents.
     pub agent: usize,
     /// Where it walks, in order (the gaze looks ahead to it).

@@ -48,9 +48,9 @@ use crate::math::{Affine3, Real};
 use crate::rig::{ImuCalibration, Rig, RigImu};
 
 /// The rig cameras EuRoC's `cam0` and `cam1` are, when a rig has them (Aria).
-pub const SLAM_CAMERAS: [&str; 2] = ["camera-slam-left", "camera-slam-right"];
+pub(crate) const SLAM_CAMERAS: [&str; 2] = ["camera-slam-left", "camera-slam-right"];
 /// The rig IMU that is EuRoC's `imu0` when a rig has it (Aria's 1 kHz IMU).
-pub const BODY_IMU: &str = "imu-right";
+pub(crate) const BODY_IMU: &str = "imu-right";
 
 /// `cam0/data.csv`'s header.
 pub const CAMERA_HEADER: &str = "#timestamp [ns],filename";
@@ -70,7 +70,7 @@ const POSE_AGREEMENT: Real = 1e-6;
 
 /// What `egogen euroc export` was asked.
 #[derive(Debug, Clone)]
-pub struct EurocRequest<'a> {
+pub(crate) struct EurocRequest<'a> {
     /// A dataset rendered by `egogen-run` (its `sequence/`, `cameras/`, `images/`).
     pub take: &'a Path,
     /// The rig the take was rendered with: its IMU, and its cameras to check the take's by.
@@ -87,7 +87,7 @@ pub struct EurocRequest<'a> {
 
 /// What was written.
 #[derive(Debug, Clone)]
-pub struct EurocWritten {
+pub(crate) struct EurocWritten {
     pub wearer: String,
     /// The rig's IMU that is `imu0`.
     pub imu: String,
@@ -101,7 +101,7 @@ pub struct EurocWritten {
 
 /// One camera as written.
 #[derive(Debug, Clone)]
-pub struct EurocCamera {
+pub(crate) struct EurocCamera {
     /// Its name in the take.
     pub name: String,
     pub images: usize,
@@ -112,7 +112,7 @@ pub struct EurocCamera {
 
 /// Writes the EuRoC export of `request` into `out.partial` and renames it to `out`; nothing is
 /// left under either name when it fails.
-pub fn export_euroc(request: &EurocRequest) -> Result<EurocWritten> {
+pub(crate) fn export_euroc(request: &EurocRequest) -> Result<EurocWritten> {
     let out = request.out;
     refuse_existing_folder(out, "--out")?;
     refuse_inside(out, "--out", request.take, "the take")?;

@@ -25,7 +25,7 @@ use super::train_error::TrainError;
 
 /// Where the run stood when the checkpoint was written.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CheckpointState {
+pub(crate) struct CheckpointState {
     /// SHA-256 of the plan (its debug form: every setting and path).
     pub plan_sha256: String,
     /// Index of the phase to continue (0 primitive, 1 rollout, 2 prior).
@@ -79,7 +79,7 @@ pub(crate) fn checkpoint_dir(weights_out: &Path) -> PathBuf {
 }
 
 /// Whether `dir` holds a checkpoint to resume.
-pub fn exists(dir: &Path) -> bool {
+pub(crate) fn exists(dir: &Path) -> bool {
     dir.join(STATE).is_file()
 }
 
@@ -130,7 +130,7 @@ pub(crate) fn rng_position(rng: &ChaCha8Rng) -> (String, u64, String) {
 }
 
 /// What a checkpoint holds besides its state.
-pub struct Restored<M, O, X> {
+pub(crate) struct Restored<M, O, X> {
     pub state: CheckpointState,
     pub net: M,
     pub optim: Option<O>,
@@ -218,7 +218,7 @@ const PREVIOUS_STATE: &str = "state.prev.json";
 /// Reads the checkpoint in `dir` into `net` (the freshly built network of the same plan) and an
 /// optimiser from `fresh_optim` (used when the checkpoint has optimiser state). When a file of
 /// the newest checkpoint cannot be read, warns on stderr and reads the one before it.
-pub fn load<B, M, O, X>(
+pub(crate) fn load<B, M, O, X>(
     dir: &Path,
     plan_sha256: &str,
     net: M,

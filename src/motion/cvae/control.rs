@@ -202,7 +202,7 @@ impl LatentController {
 
     /// A chain of `primitives` from `seed`, the target of each primitive given by
     /// `target(i, heading_at_start)`.
-    pub fn chain(
+    pub(crate) fn chain(
         &self,
         model: &MotionModel,
         body: &BodyContext,

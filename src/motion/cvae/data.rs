@@ -105,13 +105,13 @@ impl PrimitiveSet {
     }
 
     /// Features of item `i`.
-    pub fn item(&self, i: usize) -> &[f32] {
+    pub(crate) fn item(&self, i: usize) -> &[f32] {
         let n = self.chain_len * PRIMITIVE_VALUES;
         &self.features[i * n..(i + 1) * n]
     }
 
     /// Floor heights of item `i`.
-    pub fn floors(&self, i: usize) -> &[f32] {
+    pub(crate) fn floors(&self, i: usize) -> &[f32] {
         &self.floor_z[i * self.chain_len..(i + 1) * self.chain_len]
     }
 
@@ -194,7 +194,7 @@ impl<'m> ContactFilter<'m> {
     }
 
     /// Foot-contact score of a canonical primitive over the world floor z = 0.
-    pub fn score(&self, p: &crate::motion::primitive::Primitive) -> Result<f64, PoseError> {
+    pub(crate) fn score(&self, p: &crate::motion::primitive::Primitive) -> Result<f64, PoseError> {
         let feet = p
             .frames
             .iter()

@@ -25,12 +25,12 @@ use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 const DECODED_FRAMES: usize = PRIMITIVE_FRAMES - SEED_FRAMES;
 
 /// Primitives decoded together by one thread.
-pub const BLOCK: usize = 32;
+pub(crate) const BLOCK: usize = 32;
 
 /// A dense layer `y = x · weight + bias`, `weight` `[inputs × outputs]` row-major (burn's
 /// `Linear` layout).
 #[derive(Debug, Clone, PartialEq)]
-pub struct DenseLayer {
+pub(crate) struct DenseLayer {
     pub inputs: usize,
     pub outputs: usize,
     pub weight: Vec<f32>,
@@ -64,7 +64,7 @@ impl DenseLayer {
 
 /// The decoder's parameters, as [`PrimitiveVae`](super::net::PrimitiveVae) holds them.
 #[derive(Debug, Clone, PartialEq)]
-pub struct DecoderF32 {
+pub(crate) struct DecoderF32 {
     latent: usize,
     hidden: usize,
     feature_mean: Vec<f32>,
@@ -98,7 +98,7 @@ struct HalfLayers {
 impl DecoderF32 {
     /// Builds the decoder from the network's arrays; the error names the first layer whose
     /// shape does not fit the others.
-    pub fn new(
+    pub(crate) fn new(
         feature_mean: Vec<f32>,
         feature_std: Vec<f32>,
         floor_mean_std: [f32; 2],
@@ -143,19 +143,14 @@ impl DecoderF32 {
 
     /// The decoder without its f16 path: every batch size decodes in f32 (the reference the
     /// f16 path is measured against).
-    pub fn without_half_precision(mut self) -> Self {
+    pub(crate) fn without_half_precision(mut self) -> Self {
         self.half = None;
         self
     }
 
     /// Whether a primitive decoded alone reads its weights in f16.
-    pub fn half_precision_weights(&self) -> bool {
+    pub(crate) fn half_precision_weights(&self) -> bool {
         self.half.is_some()
-    }
-
-    /// Latent size.
-    pub fn latent_dim(&self) -> usize {
-        self.latent
     }
 
     /// Raw canonical seed features `[B × 2 × F]`, canonical floor heights `[B]` (m) and latents
@@ -164,7 +159,7 @@ impl DecoderF32 {
     ///
     /// # Panics
     /// When the slices' lengths disagree with `B = floors.len()` (a caller's bug).
-    pub fn decode(&self, seeds: &[f32], floors: &[f32], latents: &[f32]) -> Vec<f32> {
+    pub(crate) fn decode(&self, seeds: &[f32], floors: &[f32], latents: &[f32]) -> Vec<f32> {
         let b = floors.len();
         let (l, f) = (self.latent, FRAME_DIM);
         assert_eq!(

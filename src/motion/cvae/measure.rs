@@ -224,7 +224,7 @@ pub(crate) const FOOT_ON_FLOOR_M: f64 = 0.1;
 
 /// Mean horizontal pelvis speed over a primitive (m/s) from which [`ChainReport`] counts it as
 /// moving.
-pub const MOVING_M_PER_S: f64 = 0.2;
+pub(crate) const MOVING_M_PER_S: f64 = 0.2;
 
 /// Statistics of one long chain of primitives decoded from random latents.
 #[derive(Debug, Clone, Copy, serde::Serialize)]

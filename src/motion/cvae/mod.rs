@@ -13,11 +13,11 @@
 //! are `measure`; the paper's evaluation of controllers is `crate::eval`, a controller over
 //! held-out episodes `policy::held_out`.
 
-pub mod checkpoint;
-pub mod contact;
+pub(crate) mod checkpoint;
+pub(crate) mod contact;
 pub mod control;
 pub mod data;
-pub mod decoder_f32;
+pub(crate) mod decoder_f32;
 pub mod features;
 pub mod half_matvec;
 pub mod infer;
@@ -26,12 +26,12 @@ pub mod measure;
 pub mod net;
 pub mod pace;
 pub mod pool;
-pub mod reach;
+pub(crate) mod reach;
 pub mod rollout;
 pub mod sampler;
 pub mod tensor_body;
 pub mod train;
-pub mod train_error;
+pub(crate) mod train_error;
 pub mod weights;
 
 pub use control::{CemSettings, LatentController, PaceTarget};

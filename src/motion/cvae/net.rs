@@ -130,17 +130,17 @@ impl<B: Backend> ModuleMapper<B> for CastParams {
 impl<B: Backend> PrimitiveVae<B> {
     /// The network with its weights in another float precision (e.g. `F16` or `BF16` for
     /// faster, less exact inference); [`decode_raw`] follows it.
-    pub fn with_precision(self, dtype: FloatDType) -> Self {
+    pub(crate) fn with_precision(self, dtype: FloatDType) -> Self {
         self.map(&mut CastParams(dtype))
     }
 
     /// Float type of the weights.
-    pub fn dtype(&self) -> burn::tensor::DType {
+    pub(crate) fn dtype(&self) -> burn::tensor::DType {
         self.feature_mean.val().dtype()
     }
 
     /// Latent size.
-    pub fn latent_dim(&self) -> usize {
+    pub(crate) fn latent_dim(&self) -> usize {
         self.enc_mu.weight.dims()[1]
     }
 
@@ -178,7 +178,7 @@ impl<B: Backend> PrimitiveVae<B> {
     }
 
     /// Raw features `[.., F]` → normalised.
-    pub fn normalize<const D: usize>(&self, x: Tensor<B, D>) -> Tensor<B, D> {
+    pub(crate) fn normalize<const D: usize>(&self, x: Tensor<B, D>) -> Tensor<B, D> {
         let (mean, std) = self.stats::<D>();
         (x - mean) / std
     }
@@ -199,7 +199,7 @@ impl<B: Backend> PrimitiveVae<B> {
     }
 
     /// Posterior `(mu, logvar)`, each `[B, L]`, of normalised primitives `[B, T, F]`.
-    pub fn encode(&self, x: Tensor<B, 3>) -> (Tensor<B, 2>, Tensor<B, 2>) {
+    pub(crate) fn encode(&self, x: Tensor<B, 3>) -> (Tensor<B, 2>, Tensor<B, 2>) {
         let h = relu(self.enc_in.forward(x.flatten(1, 2)));
         let h = relu(self.enc_hidden.forward(h));
         (self.enc_mu.forward(h.clone()), self.enc_logvar.forward(h))
@@ -215,7 +215,12 @@ impl<B: Backend> PrimitiveVae<B> {
 
     /// Decodes normalised seeds `[B, S, F]`, normalised floors `[B, 1]` and latents `[B, L]`
     /// into the normalised frames after the seed, `[B, T − S, F]`.
-    pub fn decode(&self, seed: Tensor<B, 3>, floor: Tensor<B, 2>, z: Tensor<B, 2>) -> Tensor<B, 3> {
+    pub(crate) fn decode(
+        &self,
+        seed: Tensor<B, 3>,
+        floor: Tensor<B, 2>,
+        z: Tensor<B, 2>,
+    ) -> Tensor<B, 3> {
         let [b, s, f] = seed.dims();
         let hidden = self.gru_hidden.weight.dims()[0];
         let mut h = self

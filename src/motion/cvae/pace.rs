@@ -41,7 +41,7 @@ pub struct Pace {
 
 impl Pace {
     /// The pace between the joints of the last seed frame and those of the last frame.
-    pub fn between(first: &[Vec3], last: &[Vec3]) -> Pace {
+    pub(crate) fn between(first: &[Vec3], last: &[Vec3]) -> Pace {
         let d = last[joint::PELVIS].truncate() - first[joint::PELVIS].truncate();
         Pace {
             speed_m_s: d.length() / PACE_SPAN_S,
@@ -138,14 +138,14 @@ impl PaceSummary {
 
 /// Upper edges (degrees of |turn| per primitive) of [`speed_by_turn`]'s bins; the last bin is
 /// open above.
-pub const TURN_BIN_EDGES_DEG: [f64; 4] = [10.0, 20.0, 30.0, 45.0];
+pub(crate) const TURN_BIN_EDGES_DEG: [f64; 4] = [10.0, 20.0, 30.0, 45.0];
 
 /// A brisk walk (m/s): what [`SpeedAtTurn::share_at_1_2_m_s`] counts.
-pub const BRISK_WALK_M_S: f64 = 1.2;
+pub(crate) const BRISK_WALK_M_S: f64 = 1.2;
 
 /// Speeds of the primitives that turn within one range of angles.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SpeedAtTurn {
+pub(crate) struct SpeedAtTurn {
     /// |turn| per primitive from this many degrees (inclusive) …
     pub from_deg: f64,
     /// … to this many (exclusive; `None`: no upper edge).
@@ -157,7 +157,7 @@ pub struct SpeedAtTurn {
 
 /// How fast the primitives move by how far they turn: whether a set turns at pace (bins of
 /// [`TURN_BIN_EDGES_DEG`]; bins with no primitive are left out).
-pub fn speed_by_turn(paces: &[Pace]) -> Vec<SpeedAtTurn> {
+pub(crate) fn speed_by_turn(paces: &[Pace]) -> Vec<SpeedAtTurn> {
     let mut edges = vec![0.0];
     edges.extend(TURN_BIN_EDGES_DEG);
     edges

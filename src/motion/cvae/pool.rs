@@ -42,7 +42,7 @@ pub(crate) enum SeedPool {
 
 /// The seeds of one batch of random chains, and where their ends go back.
 #[derive(Debug, Clone)]
-pub struct Draw {
+pub(crate) struct Draw {
     /// `[B × S × F]`.
     pub seeds: Vec<f32>,
     /// `[B]`.
@@ -59,7 +59,7 @@ fn unit(rng: &mut ChaCha8Rng) -> f64 {
 
 impl SeedPool {
     /// A `Recent` pool (`slots` = None) or `slots` persistent chains.
-    pub fn new(slots: Option<usize>) -> Self {
+    pub(crate) fn new(slots: Option<usize>) -> Self {
         match slots {
             None => Self::Recent(VecDeque::new()),
             Some(n) => Self::Slots(vec![None; n]),
@@ -68,7 +68,7 @@ impl SeedPool {
 
     /// Seeds of `size` random chains: each continues a pooled chain with probability
     /// `continue_share`, else starts from the first seed of a random item of `set`.
-    pub fn draw(
+    pub(crate) fn draw(
         &self,
         set: &PrimitiveSet,
         continue_share: f64,
@@ -156,7 +156,7 @@ impl SeedPool {
     }
 
     /// A uniformly drawn pooled seed, if any.
-    pub fn sample(&self, rng: &mut ChaCha8Rng) -> Option<&PoolSeed> {
+    pub(crate) fn sample(&self, rng: &mut ChaCha8Rng) -> Option<&PoolSeed> {
         match self {
             Self::Recent(ends) => match ends.len() {
                 0 => None,
@@ -181,12 +181,8 @@ impl Draw {
     }
 
     /// Chains in the batch.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.floors.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.floors.is_empty()
     }
 }
 

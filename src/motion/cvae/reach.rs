@@ -41,7 +41,7 @@ pub(crate) struct WalkReport {
 
 /// A turn asked for one angle.
 #[derive(Debug, Clone, Serialize)]
-pub struct TurnReport {
+pub(crate) struct TurnReport {
     pub target_turn_deg: f64,
     pub target_speed_m_s: f64,
     /// Primitives until the heading was within `TURN_TOLERANCE_DEG` of the target heading
@@ -128,7 +128,7 @@ pub(crate) fn sustained_walk(
 
 /// A turn by `turn_deg` (positive: to the left) from `seed`, walking at `speed_m_s`, for at
 /// most `max_primitives`.
-pub fn turn(
+pub(crate) fn turn(
     controller: &LatentController,
     model: &MotionModel,
     body: &BodyContext,

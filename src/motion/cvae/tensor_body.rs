@@ -150,14 +150,14 @@ impl<B: Backend> TensorRig<B> {
     }
 
     /// Rest pelvis `[3]`.
-    pub fn rest_pelvis(&self) -> Tensor<B, 1> {
+    pub(crate) fn rest_pelvis(&self) -> Tensor<B, 1> {
         self.pelvis_rest.clone()
     }
 
     /// Posed joints `[N, 22, 3]`, world rotations `[N, 22, 3, 3]` and markers `[N, M, 3]` of
     /// `N` frames given local rotations `[N, 22, 3, 3]` and translations `[N, 3]` (smplx
     /// `transl`: the pelvis sits at rest pelvis + transl).
-    pub fn pose(
+    pub(crate) fn pose(
         &self,
         local: Tensor<B, 4>,
         transl: Tensor<B, 2>,

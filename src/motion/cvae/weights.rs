@@ -119,7 +119,7 @@ pub(crate) fn read_metadata<A: serde::de::DeserializeOwned>(
 }
 
 /// Loads a network from a weights file written by [`save`].
-pub fn load<B: Backend>(
+pub(crate) fn load<B: Backend>(
     path: &Path,
     device: &B::Device,
 ) -> Result<(ArchConfig, PrimitiveVae<B>), WeightsError> {

@@ -63,7 +63,7 @@ pub(crate) mod summary;
 use course::{Course, Episode};
 pub use course::{CourseView, FixedScene};
 pub use settings::EnvSettings;
-pub use snapshot::{EnvSnapshot, EpisodeSnapshot};
+pub(crate) use snapshot::EnvSnapshot;
 pub use summary::{Ending, EpisodeSummary};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
@@ -260,7 +260,7 @@ impl<'m> PolicyEnv<'m> {
     }
 
     /// Number of parallel episodes.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.episodes.len()
     }
 
@@ -478,7 +478,7 @@ impl<'m> PolicyEnv<'m> {
     /// [`Self::propose`] made them), by the one rule every walker chooses by
     /// (`walker::step::choose_primitive`, no redraws); an episode none of whose candidates
     /// decoded takes its first (and fails).
-    pub fn choose(&self, candidates: Vec<Candidate>) -> Result<Vec<Candidate>, EnvError> {
+    pub(crate) fn choose(&self, candidates: Vec<Candidate>) -> Result<Vec<Candidate>, EnvError> {
         let mut per_episode: Vec<Vec<Candidate>> =
             (0..self.episodes.len()).map(|_| Vec::new()).collect();
         for c in candidates {
@@ -536,7 +536,7 @@ impl<'m> PolicyEnv<'m> {
 
     /// Takes one candidate per episode (in episode order), ends and restarts the episodes that
     /// are over.
-    pub fn commit(&mut self, chosen: Vec<Candidate>) -> Result<StepOutput, EnvError> {
+    pub(crate) fn commit(&mut self, chosen: Vec<Candidate>) -> Result<StepOutput, EnvError> {
         let mut out = StepOutput {
             reward: Vec::with_capacity(chosen.len()),
             done: Vec::with_capacity(chosen.len()),

@@ -63,7 +63,7 @@ pub struct EpisodeSummary {
 
 impl EpisodeSummary {
     /// The summary of a walk that ended.
-    pub fn of(id: u64, ending: Ending, w: &Walker) -> Self {
+    pub(crate) fn of(id: u64, ending: Ending, w: &Walker) -> Self {
         let n = w.steps.max(1) as f64;
         Self {
             id,

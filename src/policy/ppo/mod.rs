@@ -154,7 +154,7 @@ pub struct PolicyTrainPlan {
 
 impl PolicyTrainPlan {
     /// Updates of a stage.
-    pub fn updates(&self, stage: usize) -> usize {
+    pub(crate) fn updates(&self, stage: usize) -> usize {
         let per = (self.ppo.envs * self.ppo.steps_per_env).max(1);
         self.stages[stage].env_steps.div_ceil(per)
     }

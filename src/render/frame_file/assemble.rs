@@ -317,7 +317,7 @@ impl std::fmt::Debug for RemapTable {
 
 impl RemapTable {
     /// The table of `target` read from `render` (rows on rayon's pool).
-    pub fn new(render: &RenderCamera, target: &Camera) -> Self {
+    pub(crate) fn new(render: &RenderCamera, target: &Camera) -> Self {
         use rayon::prelude::*;
         let res = target.resolution();
         let (w, h) = (res.width_px as usize, res.height_px as usize);
@@ -352,7 +352,7 @@ impl RemapTable {
     }
 
     /// [`assemble_frame`] with this table's render and camera.
-    pub fn assemble(
+    pub(crate) fn assemble(
         &self,
         rgb_exr: Option<&Path>,
         ground_truth_exr: Option<&Path>,

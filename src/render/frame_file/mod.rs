@@ -106,7 +106,7 @@ pub struct FrameImage {
 }
 
 /// Rec. 709 luminance of linear RGB: how a monochrome camera's colour is stored.
-pub fn luminance(rgb: [f32; 3]) -> f32 {
+pub(crate) fn luminance(rgb: [f32; 3]) -> f32 {
     0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
 }
 
@@ -151,7 +151,7 @@ impl FrameImage {
     /// (named in errors). Callers write them under a temporary name and rename, as
     /// [`crate::supervisor::Dataset::finish_frame`] does. The file's blocks are compressed on
     /// every thread of rayon's pool.
-    pub fn encode(&self, path: &Path) -> Result<Vec<u8>, FrameFileError> {
+    pub(crate) fn encode(&self, path: &Path) -> Result<Vec<u8>, FrameFileError> {
         let channels: Vec<AnyChannel<FlatSamples>> = self
             .channels()
             .into_iter()
@@ -180,7 +180,7 @@ impl FrameImage {
     /// `u32`), so decoding the encoded bytes gives exactly these planes (tested); a finished
     /// frame is checked on them and on the encoded file's header
     /// (`check_encoded_header`) instead of decoding the whole file again.
-    pub fn contents(&self, path: &Path) -> ExrContents {
+    pub(crate) fn contents(&self, path: &Path) -> ExrContents {
         let mut named = self.channels();
         named.sort_by(|a, b| a.0.cmp(&b.0));
         let channels: Vec<ExrChannel> = named

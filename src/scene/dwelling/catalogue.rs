@@ -31,7 +31,7 @@ pub struct CatalogueModel {
 
 impl CatalogueModel {
     /// Height of the surface small things stand on (m over the model's base).
-    pub fn surface_m(&self) -> f64 {
+    pub(crate) fn surface_m(&self) -> f64 {
         match self.drop_on_top_m {
             Some(h) if h > 0.0 && h <= self.size_m[2] => h,
             _ => self.size_m[2],
@@ -128,12 +128,12 @@ impl Catalogue {
         Ok(catalogue)
     }
 
-    pub fn model_path(&self, m: &CatalogueModel) -> PathBuf {
+    pub(crate) fn model_path(&self, m: &CatalogueModel) -> PathBuf {
         self.dir.join(&m.file)
     }
 
     /// The catalogue's models that can play `role`, in the role table's order.
-    pub fn models_for(&self, role: Role) -> Vec<&CatalogueModel> {
+    pub(crate) fn models_for(&self, role: Role) -> Vec<&CatalogueModel> {
         role.model_ids()
             .iter()
             .filter_map(|id| self.models.get(*id))
@@ -179,7 +179,7 @@ pub enum Role {
 }
 
 impl Role {
-    pub const ALL: [Role; 29] = [
+    pub(crate) const ALL: [Role; 29] = [
         Role::Sofa,
         Role::Armchair,
         Role::DiningTable,
@@ -212,7 +212,7 @@ impl Role {
     ];
 
     /// The catalogue models (ids of the shipped CC0 library) that play it.
-    pub fn model_ids(self) -> &'static [&'static str] {
+    pub(crate) fn model_ids(self) -> &'static [&'static str] {
         match self {
             Role::Sofa => &["couch", "couch2", "sofa2", "winchester_sofa"],
             Role::Armchair => &[
@@ -300,7 +300,7 @@ impl Role {
     }
 
     /// The word the object is named by: one [`crate::scene::ObjectClass`] reads.
-    pub fn word(self) -> &'static str {
+    pub(crate) fn word(self) -> &'static str {
         match self {
             Role::Sofa => "sofa",
             Role::Armchair => "armchair",

@@ -11,8 +11,8 @@
 //! generate`'s job: dwellings from consecutive seeds, written and summarised.
 
 pub(crate) mod batch;
-pub mod catalogue;
-pub mod furnish;
+pub(crate) mod catalogue;
+pub(crate) mod furnish;
 mod glb;
 pub mod plan;
 
@@ -33,7 +33,7 @@ use crate::scene::{ObjectClass, SceneMesh, SeatSettings, WalkableMap, WalkableSe
 
 /// Version of the generator: a dwelling made again with the same seed, settings and version
 /// is the same file.
-pub const DWELLING_VERSION: u32 = 1;
+pub(crate) const DWELLING_VERSION: u32 = 1;
 
 /// How far short of the far face of the wall it meets a wall's end stops (m).
 const WALL_END_INSET_M: f64 = 0.005;
@@ -42,7 +42,7 @@ const WALL_END_INSET_M: f64 = 0.005;
 const MAX_TRIES: usize = 40;
 
 /// Largest floor area of one room a settings file may ask for (m²): a hall of 22 m by 22 m.
-pub const MAX_ROOM_M2: f64 = 500.0;
+pub(crate) const MAX_ROOM_M2: f64 = 500.0;
 
 /// How dwellings are drawn (`[dwelling]` in a settings file; every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -103,7 +103,7 @@ impl Default for DwellingSettings {
 
 impl DwellingSettings {
     /// The first key that cannot make a dwelling, with what was expected.
-    pub fn problem(&self) -> Option<(&'static str, String)> {
+    pub(crate) fn problem(&self) -> Option<(&'static str, String)> {
         let range = |key: &'static str, (lo, hi): (f64, f64), least: f64, most: f64| {
             (!(lo.is_finite() && hi.is_finite() && least <= lo && lo <= hi && hi <= most)).then(
                 || {
@@ -673,13 +673,13 @@ struct CatalogueRecord<'a> {
 
 /// The scene-source prefix that names a generated dwelling where a scene file is asked for:
 /// `dwelling:SEED`.
-pub const DWELLING_SOURCE: &str = "dwelling:";
+pub(crate) const DWELLING_SOURCE: &str = "dwelling:";
 
 /// The file a scene source names: a path as it is (joined to `base`), or for `dwelling:SEED`
 /// the dwelling of that seed (default settings, the shipped catalogue), generated into the
 /// cache on first use (`<cache>/dwellings/v<version>-<catalogue sha256, 12 hex>/dwelling_<seed>.glb`,
 /// its sidecar beside it) and the same file after.
-pub fn scene_source(source: &str, base: &Path) -> Result<PathBuf, String> {
+pub(crate) fn scene_source(source: &str, base: &Path) -> Result<PathBuf, String> {
     let Some(seed) = source.strip_prefix(DWELLING_SOURCE) else {
         return Ok(base.join(source));
     };
@@ -720,7 +720,11 @@ impl Dwelling {
 
     /// Writes the GLB to `glb_path` and its sidecar beside it (`.json`), the sidecar first:
     /// where the GLB is, both are whole.
-    pub fn write_glb(&self, catalogue: &Catalogue, glb_path: &Path) -> Result<(), DwellingError> {
+    pub(crate) fn write_glb(
+        &self,
+        catalogue: &Catalogue,
+        glb_path: &Path,
+    ) -> Result<(), DwellingError> {
         let json_path = glb_path.with_extension("json");
         let io = |path: &Path| {
             let path = path.to_owned();

@@ -20,7 +20,7 @@ const DOOR_END_MARGIN_M: f64 = 0.12;
 /// Least distance of a window from a corner or another window (m).
 const WINDOW_MARGIN_M: f64 = 0.4;
 /// Height of a doorway (m).
-pub const DOOR_HEIGHT_M: f64 = 2.05;
+pub(crate) const DOOR_HEIGHT_M: f64 = 2.05;
 /// Sill of a bathroom's window (m).
 const BATHROOM_SILL_M: f64 = 1.3;
 
@@ -36,7 +36,7 @@ pub enum RoomKind {
 }
 
 impl RoomKind {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             RoomKind::Living => "living",
             RoomKind::Kitchen => "kitchen",
@@ -63,13 +63,13 @@ pub struct Room {
 }
 
 impl Room {
-    pub fn min(&self) -> DVec2 {
+    pub(crate) fn min(&self) -> DVec2 {
         DVec2::from_array(self.min)
     }
-    pub fn max(&self) -> DVec2 {
+    pub(crate) fn max(&self) -> DVec2 {
         DVec2::from_array(self.max)
     }
-    pub fn area_m2(&self) -> f64 {
+    pub(crate) fn area_m2(&self) -> f64 {
         let s = self.max() - self.min();
         s.x * s.y
     }
@@ -88,7 +88,7 @@ pub struct WallLine {
 
 impl WallLine {
     /// The point `s` along the line.
-    pub fn point(&self, s: f64) -> DVec2 {
+    pub(crate) fn point(&self, s: f64) -> DVec2 {
         if self.vertical {
             DVec2::new(self.at, s)
         } else {
@@ -160,14 +160,14 @@ impl FloorPlan {
     }
 
     /// The room holding `p`, if any.
-    pub fn room_at(&self, p: DVec2) -> Option<usize> {
+    pub(crate) fn room_at(&self, p: DVec2) -> Option<usize> {
         self.rooms
             .iter()
             .position(|r| p.cmpge(r.min()).all() && p.cmple(r.max()).all())
     }
 
     /// Thickness of a wall.
-    pub fn thickness(&self, wall: &WallLine) -> f64 {
+    pub(crate) fn thickness(&self, wall: &WallLine) -> f64 {
         if wall.outer {
             self.outer_wall_m
         } else {
@@ -179,7 +179,7 @@ impl FloorPlan {
 /// Draws a floor plan; `None` when this draw's rooms do not fit the rules (a room narrower
 /// than `min_room_side_m`, two rooms that must be joined with too short a wall between them):
 /// the caller draws again.
-pub fn draw_plan(settings: &DwellingSettings, rng: &mut ChaCha8Rng) -> Option<FloorPlan> {
+pub(crate) fn draw_plan(settings: &DwellingSettings, rng: &mut ChaCha8Rng) -> Option<FloorPlan> {
     let mut program = vec![
         (RoomKind::Living, draw(rng, settings.living_m2)),
         (RoomKind::Kitchen, draw(rng, settings.kitchen_m2)),

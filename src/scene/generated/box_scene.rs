@@ -102,7 +102,7 @@ impl BoxScene {
     }
 
     /// The scene of drawn parameters: the box, the start, the goal mirrored through the box.
-    pub fn build(settings: &BoxSceneSettings, p: BoxParams) -> Self {
+    pub(crate) fn build(settings: &BoxSceneSettings, p: BoxParams) -> Self {
         let centre = DVec2::from_array(p.centre);
         let start = DVec2::from_array(p.start);
         let obstacle = Obstacle2::Box {

@@ -90,7 +90,7 @@ pub struct CrossingScene {
 
 impl CrossingScene {
     /// Draws a scene with `rng`.
-    pub fn sample(settings: &CrossingSettings, rng: &mut ChaCha8Rng) -> Self {
+    pub(crate) fn sample(settings: &CrossingSettings, rng: &mut ChaCha8Rng) -> Self {
         let mut u = |a: f64, b: f64| a + (b - a) * uniform_open01(rng);
         let d = u(settings.distance_m.0, settings.distance_m.1);
         let dir = DVec2::from_angle(u(0.0, std::f64::consts::TAU));
@@ -142,7 +142,7 @@ impl CrossingScene {
     }
 
     /// The scene of drawn parameters.
-    pub fn build(settings: &CrossingSettings, p: CrossingParams) -> Self {
+    pub(crate) fn build(settings: &CrossingSettings, p: CrossingParams) -> Self {
         let mover = |(at_start, velocity): ([f64; 2], [f64; 2])| {
             let velocity = DVec2::from_array(velocity);
             MovingObstacle {

@@ -145,7 +145,7 @@ pub struct Furniture {
 }
 
 impl Furniture {
-    pub fn obstacle(&self) -> Obstacle2 {
+    pub(crate) fn obstacle(&self) -> Obstacle2 {
         Obstacle2::Box {
             centre: DVec2::from_array(self.centre),
             half_extents: DVec2::from_array(self.half_extents),
@@ -294,7 +294,7 @@ impl RoomScene {
     }
 
     /// The scene of drawn parameters.
-    pub fn build(settings: &RoomSettings, params: RoomParams) -> Self {
+    pub(crate) fn build(settings: &RoomSettings, params: RoomParams) -> Self {
         Self {
             map: plan_map(settings, &params),
             start: DVec2::from_array(params.start),

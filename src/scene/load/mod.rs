@@ -40,7 +40,7 @@ impl UpAxis {
     }
 
     /// The axis named `"y"` or `"z"`, as configs and flags name it; none for any other name.
-    pub fn from_name(name: &str) -> Option<UpAxis> {
+    pub(crate) fn from_name(name: &str) -> Option<UpAxis> {
         match name {
             "y" => Some(UpAxis::Y),
             "z" => Some(UpAxis::Z),
@@ -84,7 +84,7 @@ impl Default for SceneFrame {
 
 impl SceneFrame {
     /// Smallest and largest `unit_m` taken: a micrometre to a kilometre per unit.
-    pub const UNIT_M_RANGE: (f64, f64) = (1e-6, 1e3);
+    pub(crate) const UNIT_M_RANGE: (f64, f64) = (1e-6, 1e3);
 
     /// The frame of a file whose up axis and unit are given where given (a config's keys, a
     /// command's flags); a unit outside [`Self::UNIT_M_RANGE`] (or not finite) is the message
@@ -101,13 +101,13 @@ impl SceneFrame {
     }
 
     /// The file's up axis: the one given, else the format's default.
-    pub fn up_for(&self, path: &Path) -> UpAxis {
+    pub(crate) fn up_for(&self, path: &Path) -> UpAxis {
         self.up.unwrap_or_else(|| UpAxis::default_for(path))
     }
 
     /// Whether the file is read as its format says (default up axis, metres): what plans
     /// leave out of their serialised form, so that earlier plans read the same.
-    pub fn is_default(&self) -> bool {
+    pub(crate) fn is_default(&self) -> bool {
         *self == Self::default()
     }
 
@@ -307,7 +307,7 @@ impl Part {
 
 /// How far above a scene's lowest point the floor found may lie before it is taken for a
 /// scene on its side (m): more than a floor slab or a few steps down.
-pub const FLOOR_HIGH_ABOVE_LOWEST_M: f64 = 1.0;
+pub(crate) const FLOOR_HIGH_ABOVE_LOWEST_M: f64 = 1.0;
 
 /// How far below a scene's lowest point `floor_z_m` may be asked for (m): a floor is in the
 /// scene, give or take a slab.
@@ -315,7 +315,7 @@ const FLOOR_BELOW_SCENE_M: f64 = 0.5;
 
 /// A scene less than this wide at its widest (m) is too small to walk in: most often a file
 /// not in metres read as if it were.
-pub const SMALL_SCENE_M: f64 = 1.5;
+pub(crate) const SMALL_SCENE_M: f64 = 1.5;
 
 /// What to say of a scene whose bounds are less than [`SMALL_SCENE_M`] wide at the widest.
 fn small_scene((lo, hi): (Vec3, Vec3)) -> Option<String> {
@@ -330,9 +330,9 @@ fn small_scene((lo, hi): (Vec3, Vec3)) -> Option<String> {
 /// A scene taller than [`TALLER_THAN_WIDE`] times its narrowest horizontal extent, and than
 /// [`TALLER_THAN_WIDE_M`], is taken for one on its side (a dwelling is wider than it is tall:
 /// the shipped apartment read z up is 10.2 m tall and 2.5 m across).
-pub const TALLER_THAN_WIDE: f64 = 1.5;
+pub(crate) const TALLER_THAN_WIDE: f64 = 1.5;
 /// See [`TALLER_THAN_WIDE`] (m).
-pub const TALLER_THAN_WIDE_M: f64 = 4.0;
+pub(crate) const TALLER_THAN_WIDE_M: f64 = 4.0;
 
 /// A warning for a scene most likely read in the wrong frame, naming the file and what to
 /// give: too small to walk in ([`SMALL_SCENE_M`]: the unit), or on its side (walked on a

@@ -11,7 +11,7 @@ use crate::scene::mesh::SceneMesh;
 
 impl WalkableMap {
     /// Whether the map has one flat floor at `floor_z_m` (not stepped floors).
-    pub fn is_flat(&self) -> bool {
+    pub(crate) fn is_flat(&self) -> bool {
         self.floor_m.is_empty()
     }
 
@@ -26,7 +26,7 @@ impl WalkableMap {
 
     /// Lowest and highest floor (m, [`Self::cell_floor_m`]) of the cells `counted` keeps;
     /// `None` when it keeps none.
-    pub fn floor_range(&self, counted: impl Fn(usize) -> bool) -> Option<(f64, f64)> {
+    pub(crate) fn floor_range(&self, counted: impl Fn(usize) -> bool) -> Option<(f64, f64)> {
         (0..self.nx * self.ny)
             .filter(|&k| counted(k))
             .map(|k| self.cell_floor_m(k))

@@ -13,7 +13,7 @@ impl WalkableMap {
     /// before they leave the grid. The ground around a building sees open space on one side
     /// (about half its rays escape); a room sees walls all round but through its doors and
     /// openings. `None` when no cell is enclosed (an open floor).
-    pub fn indoor_cells(&self, min_enclosed: f64) -> Option<Vec<bool>> {
+    pub(crate) fn indoor_cells(&self, min_enclosed: f64) -> Option<Vec<bool>> {
         const RAYS: usize = 32;
         let dirs: Vec<DVec2> = (0..RAYS)
             .map(|k| DVec2::from_angle(std::f64::consts::TAU * k as f64 / RAYS as f64))
@@ -47,7 +47,7 @@ impl WalkableMap {
     /// The map with every walkable cell outside `region` blocked, as a wall would block it:
     /// signed distances and components are those of the smaller floor. Agents that sense this
     /// map see the ground around a building as blocked and stay inside its walls.
-    pub fn restricted_to(&self, region: &[bool]) -> WalkableMap {
+    pub(crate) fn restricted_to(&self, region: &[bool]) -> WalkableMap {
         assert_eq!(
             region.len(),
             self.nx * self.ny,

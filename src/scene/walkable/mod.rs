@@ -52,14 +52,14 @@ impl Default for WalkableSettings {
 
 impl WalkableSettings {
     /// Geometry lower than a cell's floor + this (m) is stepped over.
-    pub fn stepped_over_m(&self) -> f64 {
+    pub(crate) fn stepped_over_m(&self) -> f64 {
         self.step_height_m.max(self.floor_steps_m.unwrap_or(0.0))
     }
 
     /// What is wrong with the floor a run asks for, if anything: the setting's name
     /// (`floor_z_m`, `floor_steps_m`; a config key's last part, a flag with dashes) and what
     /// was expected. One check for run and synth configs and `egogen scene inspect`.
-    pub fn floor_problem(&self) -> Option<(&'static str, String)> {
+    pub(crate) fn floor_problem(&self) -> Option<(&'static str, String)> {
         if let Some(z) = self.floor_z_m.filter(|z| !z.is_finite()) {
             return Some((
                 "floor_z_m",
@@ -81,16 +81,16 @@ impl WalkableSettings {
 
 /// Highest [`WalkableSettings::floor_steps_m`] a run accepts (m): a step a person takes, not
 /// a storey.
-pub const MAX_FLOOR_STEPS_M: f64 = 0.5;
+pub(crate) const MAX_FLOOR_STEPS_M: f64 = 0.5;
 
 /// With [`WalkableSettings::floor_steps_m`], upward-facing surfaces within this (m) of the
 /// floor height are candidates for a cell's floor.
-pub const FLOOR_LEVELS_RANGE_M: f64 = 1.5;
+pub(crate) const FLOOR_LEVELS_RANGE_M: f64 = 1.5;
 
 /// A body standing on stepped floors follows the cells' floors averaged within this (m)
 /// round its pelvis ([`WalkableMap::floor_under`]): it rises or sinks over about twice this
 /// across a step instead of at a cell's edge.
-pub const FLOOR_SMOOTHING_M: f64 = 0.3;
+pub(crate) const FLOOR_SMOOTHING_M: f64 = 0.3;
 
 /// Grid cells: index `j * nx + i`, cell `(i, j)` covers
 /// `[origin.x + i·cell, origin.x + (i+1)·cell) × [origin.y + j·cell, …)`.
@@ -143,7 +143,7 @@ pub enum WalkableError {
 }
 
 /// Most cells a walkable map may have (about 1.5 GB with the distance transform's scratch).
-pub const MAX_MAP_CELLS: f64 = 5e7;
+pub(crate) const MAX_MAP_CELLS: f64 = 5e7;
 
 /// Bytes a map needs per cell, scratch included (flags, signed distance, component, EDT).
 pub(crate) const MAP_BYTES_PER_CELL: f64 = 31.0;
@@ -366,7 +366,7 @@ impl WalkableMap {
 
     /// Whether cell `(i, j)` blocks walking (cells outside the grid do).
     #[inline]
-    pub fn blocked(&self, i: i64, j: i64) -> bool {
+    pub(crate) fn blocked(&self, i: i64, j: i64) -> bool {
         if i < 0 || j < 0 || i >= self.nx as i64 || j >= self.ny as i64 {
             return true;
         }

@@ -6,7 +6,7 @@ use super::{Ray2, RayTarget};
 
 /// A disc (closed).
 #[derive(Debug, Clone, Copy)]
-pub struct Circle {
+pub(crate) struct Circle {
     pub centre: DVec2,
     pub radius_m: f64,
 }

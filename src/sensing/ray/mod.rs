@@ -1,7 +1,7 @@
 //! 2D ray casting: a ray type, the obstacle trait (local-space hit, world hit derived), the
 //! grid DDA for static geometry.
 
-pub mod circle;
+pub(crate) mod circle;
 pub mod grid;
 pub mod oriented_box;
 

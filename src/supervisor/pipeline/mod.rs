@@ -50,7 +50,7 @@ pub struct RunOptions {
 
 /// What a run produced.
 #[derive(Debug, Clone)]
-pub struct RunSummary {
+pub(crate) struct RunSummary {
     pub dir: PathBuf,
     pub frames: usize,
     pub rendered_now: usize,
@@ -59,7 +59,7 @@ pub struct RunSummary {
 
 /// What `work/run.json` records of a run, so that a resume continues only the same run.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct RunState {
+pub(crate) struct RunState {
     /// The config file the run was started from, and the SHA-256 of its effective values
     /// (command-line overrides applied; `[supervisor]` left out).
     pub config: String,
@@ -76,7 +76,7 @@ pub struct RunState {
 }
 
 /// What moves in a run's scene.
-pub enum RunMotion<'a> {
+pub(crate) enum RunMotion<'a> {
     /// One motion (a scripted walk or a motion file) placed rigidly in the scene by
     /// `scene.seed`, worn by the rig.
     Placed(&'a MotionSequence),
@@ -96,7 +96,7 @@ pub enum RunMotion<'a> {
 /// Runs the pipeline for a plan with a render section; `config_path` is hashed so that a
 /// resumed run is known to be the same run: [`stage_take`], the missing frames rendered on the
 /// plan's backend, [`StagedTake::finish`].
-pub fn run_pipeline(
+pub(crate) fn run_pipeline(
     plan: &RunPlan,
     render: &RenderPlan,
     motion: RunMotion,
@@ -191,7 +191,7 @@ pub fn run_pipeline(
 }
 
 /// The backend the supervisor settings name, as a pool.
-pub fn shard_pool(sup: &crate::plan::SupervisorPlan) -> Box<dyn ShardPool> {
+pub(crate) fn shard_pool(sup: &crate::plan::SupervisorPlan) -> Box<dyn ShardPool> {
     let shard_timeout = Duration::from_secs_f64(sup.shard_timeout_s);
     match sup.backend {
         Backend::Local => Box::new(LocalPool(PoolSettings {
@@ -210,7 +210,7 @@ pub fn shard_pool(sup: &crate::plan::SupervisorPlan) -> Box<dyn ShardPool> {
 }
 
 /// What staging a take found.
-pub enum Staged {
+pub(crate) enum Staged {
     /// Its output folder is this run's finished dataset (under `--resume`).
     Complete(PathBuf),
     /// Staged in `<dir>.partial`, with its frames left to render.
@@ -218,7 +218,7 @@ pub enum Staged {
 }
 
 /// A take staged in `<dir>.partial`: what its shards render and what finishing it needs.
-pub struct StagedTake {
+pub(crate) struct StagedTake {
     pub dataset: Arc<Dataset>,
     /// The finished dataset's folder.
     pub dir: PathBuf,
@@ -236,7 +236,7 @@ pub struct StagedTake {
 /// interrupted run left (damaged frames, missing records).
 ///
 /// `work/run.json`, [`RunState`], says which run a `.partial` folder holds.
-pub fn stage_take(
+pub(crate) fn stage_take(
     plan: &RunPlan,
     render: &RenderPlan,
     motion: RunMotion,
@@ -330,7 +330,7 @@ impl StagedTake {
     /// killed writes, writes the take's outputs from the frames' records (annotations, the
     /// COLMAP model, the manifest last: `export::take_exports`) and renames `<dir>.partial` to
     /// `<dir>`; returns how many files the manifest lists.
-    pub fn finish(&self) -> Result<usize> {
+    pub(crate) fn finish(&self) -> Result<usize> {
         let dataset = &self.dataset;
         let staging = &dataset.staging;
         let records = dataset.records()?;

@@ -21,8 +21,8 @@ mod sit;
 mod stand;
 mod world;
 
-pub use refusal::{Doing, Refusal};
-pub use world::{ActivityWorld, ENTER_TOLERANCE_M};
+pub(crate) use refusal::Refusal;
+pub(crate) use world::ActivityWorld;
 
 /// Relative weights of what a person does next when a walk ends (`[activities.weights]`: a
 /// table by name; an array is refused, not read by position), one per [`Activity`].
@@ -73,7 +73,7 @@ impl ActivityWeights {
     }
 
     /// The weight of `activity`.
-    pub fn weight(&self, activity: Activity) -> f64 {
+    pub(crate) fn weight(&self, activity: Activity) -> f64 {
         self.0[activity as usize]
     }
 
@@ -83,7 +83,7 @@ impl ActivityWeights {
     }
 
     /// Draws what comes after a walk: each activity in proportion to its weight.
-    pub fn draw(&self, rng: &mut rand_chacha::ChaCha8Rng) -> Activity {
+    pub(crate) fn draw(&self, rng: &mut rand_chacha::ChaCha8Rng) -> Activity {
         let mut x = crate::math::random::uniform_open01(rng) * self.total();
         for a in Activity::ALL.into_iter().filter(|&a| a != Activity::Walk) {
             let v = self.weight(a);
@@ -98,7 +98,7 @@ impl ActivityWeights {
     /// What is wrong with these weights, if anything: the activity whose weight it is
     /// (`None`: all of them) and what was expected. Each is finite and ≥ 0, and so is their
     /// sum, which is > 0.
-    pub fn problem(&self) -> Option<(Option<Activity>, String)> {
+    pub(crate) fn problem(&self) -> Option<(Option<Activity>, String)> {
         for a in Activity::ALL {
             let v = self.weight(a);
             if !(v.is_finite() && v >= 0.0) {
@@ -127,7 +127,9 @@ impl ActivityWeights {
     /// Weights given by name; those not named are 0 (unlike `[activities.weights]`, whose
     /// `walk` defaults to 1): what a campaign's `activity_weights` entries and
     /// `egogen-run --activity-weights` say. The message names the weight that is wrong.
-    pub fn from_named<'a>(named: impl IntoIterator<Item = (&'a str, f64)>) -> Result<Self, String> {
+    pub(crate) fn from_named<'a>(
+        named: impl IntoIterator<Item = (&'a str, f64)>,
+    ) -> Result<Self, String> {
         let mut w = Self::named_only([]);
         let mut given: Vec<Activity> = Vec::new();
         for (name, v) in named {
@@ -164,7 +166,7 @@ impl ActivityWeights {
     }
 
     /// The weights above 0 as [`parse`](Self::parse) reads them.
-    pub fn flag(&self) -> String {
+    pub(crate) fn flag(&self) -> String {
         Activity::ALL
             .into_iter()
             .filter(|&a| self.weight(a) > 0.0)
@@ -223,13 +225,13 @@ impl Default for ActivitySettings {
 }
 
 impl ActivitySettings {
-    pub fn is_default(&self) -> bool {
+    pub(crate) fn is_default(&self) -> bool {
         *self == Self::default()
     }
 
     /// Whether people only walk (every weight but `walk` zero): takes exactly as without
     /// activities.
-    pub fn walk_only(&self) -> bool {
+    pub(crate) fn walk_only(&self) -> bool {
         Activity::ALL
             .into_iter()
             .all(|a| a == Activity::Walk || self.weights.weight(a) == 0.0)
@@ -237,7 +239,7 @@ impl ActivitySettings {
 
     /// What is wrong with these settings, if anything: the key (under `activities.`) and
     /// what was expected.
-    pub fn problem(&self) -> Option<(String, String)> {
+    pub(crate) fn problem(&self) -> Option<(String, String)> {
         if let Some((a, what)) = self.weights.problem() {
             let key = match a {
                 Some(a) => format!("weights.{}", a.name()),
@@ -284,7 +286,7 @@ impl ActivityWorld {
     /// Plays `activity` where the walk that `last` ends has ended, in its own file's way
     /// (`stand.rs`, `pick_up.rs`): its frames, or why not. Walking on and sitting (which walks
     /// to a seat first, `sit.rs`) are the crowd's to start.
-    pub fn play_here(
+    pub(crate) fn play_here(
         &mut self,
         activity: Activity,
         body: &crate::motion::cvae::BodyContext,
@@ -314,7 +316,7 @@ pub enum Activity {
 
 impl Activity {
     /// Every activity, in the order weights are drawn and written.
-    pub const ALL: [Activity; 4] = [
+    pub(crate) const ALL: [Activity; 4] = [
         Activity::Walk,
         Activity::Stand,
         Activity::Sit,
@@ -322,7 +324,7 @@ impl Activity {
     ];
 
     /// Its name in configs and files (`walk`, `stand`, `sit`, `pick_up`).
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Activity::Walk => "walk",
             Activity::Stand => "stand",
@@ -332,7 +334,7 @@ impl Activity {
     }
 
     /// The activity of a name, or an error listing the names.
-    pub fn named(name: &str) -> Result<Activity, String> {
+    pub(crate) fn named(name: &str) -> Result<Activity, String> {
         Activity::ALL
             .into_iter()
             .find(|a| a.name() == name)
@@ -357,7 +359,7 @@ pub enum Phase {
 
 impl Phase {
     /// Its name in files (`approach`, `transition`, `hold`).
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Phase::Approach => "approach",
             Phase::Transition => "transition",
@@ -378,7 +380,7 @@ pub struct ActivitySegment {
 impl ActivitySegment {
     /// What frame `f` of an agent with these segments does: the segment's activity and phase,
     /// or walking (no phase).
-    pub fn at(segments: &[ActivitySegment], f: usize) -> (Activity, Option<Phase>) {
+    pub(crate) fn at(segments: &[ActivitySegment], f: usize) -> (Activity, Option<Phase>) {
         segments
             .iter()
             .find(|s| (s.start_frame..s.end_frame).contains(&f))
@@ -447,7 +449,7 @@ pub struct SkippedActivity {
 
 /// An activity's frames, ready to be taken [`crate::motion::primitive::NEW_FRAMES`] at a time.
 #[derive(Debug, Clone)]
-pub struct Performance {
+pub(crate) struct Performance {
     pub activity: Activity,
     pub frames: Vec<BodyParams>,
     /// Phases in order with their frame counts (summing to `frames.len()`).

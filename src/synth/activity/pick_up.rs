@@ -12,7 +12,7 @@ use crate::scene::WalkableMap;
 
 impl ActivityWorld {
     /// Bending to pick something up from the floor in front of where `last` stands.
-    pub fn pick_up(
+    pub(crate) fn pick_up(
         &mut self,
         body: &BodyContext,
         map: &WalkableMap,

@@ -5,7 +5,7 @@ use crate::body::PoseError;
 
 /// What the body was doing when it would have entered the scene or left the floor.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Doing {
+pub(crate) enum Doing {
     /// Standing where the walk ended.
     StandingThere,
     /// Bending to the floor where the walk ended.
@@ -26,7 +26,7 @@ impl std::fmt::Display for Doing {
 
 /// Why an activity cannot be played where it was drawn.
 #[derive(Debug, thiserror::Error)]
-pub enum Refusal {
+pub(crate) enum Refusal {
     #[error("{doing}, the body would enter the scene {depth_m:.2} m at its frame {frame}")]
     EntersScene {
         doing: Doing,

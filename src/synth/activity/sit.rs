@@ -20,7 +20,7 @@ impl ActivityWorld {
     /// standing up: the sit clip nearest the seat's height, moved to the seat (its seated
     /// pelvis on the seat's place, facing the seat's way) and fitted to its height.
     #[allow(clippy::too_many_arguments)]
-    pub fn sit(
+    pub(crate) fn sit(
         &mut self,
         body: &BodyContext,
         map: &WalkableMap,

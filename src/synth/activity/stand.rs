@@ -13,7 +13,7 @@ use crate::scene::WalkableMap;
 
 impl ActivityWorld {
     /// Standing where `last` stands, looking around for a drawn time.
-    pub fn stand(
+    pub(crate) fn stand(
         &mut self,
         body: &BodyContext,
         map: &WalkableMap,

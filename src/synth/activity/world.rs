@@ -30,12 +30,12 @@ pub(super) const IDLE_STRIDE: usize = 20;
 
 /// Markers more than this far inside scene geometry (m) count as entering it (markers lie
 /// on the skin; cushions and mesh noise give a little).
-pub const ENTER_TOLERANCE_M: f64 = 0.03;
+pub(crate) const ENTER_TOLERANCE_M: f64 = 0.03;
 
 /// What activities need of a take's world: its seats and who sits on them, the clips, the
 /// scene for the 3D check of every frame an activity plays. Built once per take, and only
 /// when the take asks for more than walking.
-pub struct ActivityWorld {
+pub(crate) struct ActivityWorld {
     pub settings: ActivitySettings,
     pub seats: Vec<Seat>,
     /// Booked by someone walking to it or sitting on it.
@@ -49,7 +49,7 @@ pub struct ActivityWorld {
 
 impl ActivityWorld {
     /// The activity world of a scene (`None`: open floor, no seats) and its map.
-    pub fn new(
+    pub(crate) fn new(
         settings: ActivitySettings,
         mesh: Option<Arc<SceneMesh>>,
         map: &WalkableMap,
@@ -73,12 +73,12 @@ impl ActivityWorld {
     }
 
     /// Draws what comes after a walk ([`super::ActivityWeights::draw`]).
-    pub fn draw(&self, rng: &mut ChaCha8Rng) -> Activity {
+    pub(crate) fn draw(&self, rng: &mut ChaCha8Rng) -> Activity {
         self.settings.weights.draw(rng)
     }
 
     /// The nearest free seat whose standing point lies on `from`'s floor region, if any.
-    pub fn nearest_free_seat(&self, map: &WalkableMap, from: DVec2) -> Option<usize> {
+    pub(crate) fn nearest_free_seat(&self, map: &WalkableMap, from: DVec2) -> Option<usize> {
         let region = |p: DVec2| map.cell_of(p).map(|(i, j)| map.component[j * map.nx + i]);
         let here = region(from);
         (0..self.seats.len())

@@ -74,7 +74,7 @@ pub use track::{AgentState, AgentTrack, GoalRecord};
 
 /// A primitive moving the pelvis less than this (m, horizontal) with the goal still ahead
 /// counts as stuck (a walking primitive covers 0.2–0.7 m).
-pub const STUCK_STEP_M: f64 = 0.05;
+pub(crate) const STUCK_STEP_M: f64 = 0.05;
 
 pub use crate::motion::primitive::NEW_FRAMES;
 
@@ -269,7 +269,7 @@ pub fn run_crowd(
 
 /// [`run_crowd`] where people do more than walk: what comes after each walk is drawn from
 /// `acts` ([`crate::synth::activity`]).
-pub fn run_crowd_with_activities(
+pub(crate) fn run_crowd_with_activities(
     parts: &CrowdParts,
     world: &CrowdWorld,
     plans: &[AgentPlan],

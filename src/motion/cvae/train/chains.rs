@@ -49,7 +49,7 @@ pub(super) fn batch<B: Backend>(
 /// is offset by Gaussian noise (the same for both seed frames) of that many feature standard
 /// deviations while the targets stay the mocap's: the decoder cannot recognise a clip by its
 /// seed alone, and learns to bring a body that is off the data back onto it.
-pub fn chain_loss<B: Backend>(
+pub(crate) fn chain_loss<B: Backend>(
     net: &PrimitiveVae<B>,
     rig: &TensorRig<B>,
     weights: &LossWeights,

@@ -28,13 +28,13 @@ use super::loss::{LossWeights, PlausibleRange, PriorWeights};
 use super::net::{ArchConfig, PrimitiveVae};
 use super::pool::SeedPool;
 use super::tensor_body::{RigGeometry, TensorRig};
-pub use super::train_error::TrainError;
+pub(crate) use super::train_error::TrainError;
 use crate::body::BodyModel;
 use crate::motion::primitive::PRIMITIVE_RATE_HZ;
 use crate::motion::MotionSequence;
 
 use chains::batch;
-pub use chains::chain_loss;
+pub(crate) use chains::chain_loss;
 use prior::{PriorStep, SeedIndex};
 use setup::{
     create_output_dirs, finish_training, initial_net, prior_range, restore, training_sets,

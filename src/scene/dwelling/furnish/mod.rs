@@ -81,12 +81,12 @@ pub struct Placed {
 }
 
 impl Placed {
-    pub fn centre(&self) -> DVec2 {
+    pub(crate) fn centre(&self) -> DVec2 {
         DVec2::from_array(self.centre)
     }
 
     /// Half the footprint's extent along x and y.
-    pub fn half(&self) -> DVec2 {
+    pub(crate) fn half(&self) -> DVec2 {
         let [w, d, _] = self.size_m;
         if self.quarter.is_multiple_of(2) {
             DVec2::new(w, d) / 2.0
@@ -104,12 +104,12 @@ impl Placed {
     }
 
     /// The way its front faces.
-    pub fn front(&self) -> DVec2 {
+    pub(crate) fn front(&self) -> DVec2 {
         quarter_front(self.quarter)
     }
 
     /// The yaw about +z (rad).
-    pub fn yaw(&self) -> f64 {
+    pub(crate) fn yaw(&self) -> f64 {
         f64::from(self.quarter) * std::f64::consts::FRAC_PI_2
     }
 
@@ -204,7 +204,7 @@ impl<'a> Room<'a> {
 }
 
 /// What a dwelling's rooms hold.
-pub struct Furnishing<'a> {
+pub(crate) struct Furnishing<'a> {
     plan: &'a FloorPlan,
     pub placed: Vec<Placed>,
     zones: Vec<Zone>,
@@ -216,7 +216,7 @@ pub struct Furnishing<'a> {
 
 impl<'a> Furnishing<'a> {
     /// Furnishes every room of `plan`.
-    pub fn furnish(
+    pub(crate) fn furnish(
         plan: &'a FloorPlan,
         catalogue: &'a Catalogue,
         things: (usize, usize),
