@@ -368,6 +368,11 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "scene.path",
         ),
         (
+            "[policy]",
+            "[scene]\npath = \"dwelling:1000000\"\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
+            "the dwelling of seed 1000000 is held out",
+        ),
+        (
             "residual_blocks = 1",
             "residual_blocks = 1\n[policy.sensing]\nkind = \"rays\"\nnum_rays = 0",
             "policy.sensing",

@@ -132,6 +132,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         .scene
         .map(|sc| {
             let named = sc.path.to_string_lossy();
+            refuse_held_out_dwelling(&named, &base.join(&sc.path), &bad)?;
             let path = if named.starts_with(crate::scene::dwelling::DWELLING_SOURCE) {
                 crate::scene::dwelling::scene_source(&named, base).map_err(|m| bad("scene.path", m))
             } else {
@@ -398,6 +399,23 @@ fn resolve_stage(
         env_steps: s.env_steps,
         env: s.env,
     })
+}
+
+/// A generated dwelling whose seed is held out for measuring policies
+/// ([`crate::scene::dwelling::HELD_OUT_SEEDS_FROM`] and up) is refused as a training scene.
+fn refuse_held_out_dwelling(source: &str, path: &Path, bad: Bad) -> Result<(), ConfigError> {
+    use crate::scene::dwelling::{dwelling_seed, HELD_OUT_SEEDS_FROM};
+    match dwelling_seed(source, path) {
+        Some(seed) if seed >= HELD_OUT_SEEDS_FROM => Err(bad(
+            "scene.path",
+            format!(
+                "the dwelling of seed {seed} is held out: policies are measured on seeds \
+                 {HELD_OUT_SEEDS_FROM} and up and never trained on them; train on a seed below \
+                 {HELD_OUT_SEEDS_FROM}"
+            ),
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// `[scene]`: the fixed scene and its start/goal pairs (`path`: its file, checked).

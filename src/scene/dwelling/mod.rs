@@ -8,13 +8,15 @@
 //! furniture's meshes and textures copied from the catalogue's GLBs: `glb`) with a JSON
 //! sidecar (each object's class, room, catalogue model, creator and licence; the rooms).
 //! The same seed, settings and catalogue give the same bytes. `batch` is `egogen scene
-//! generate`'s job: dwellings from consecutive seeds, written and summarised.
+//! generate`'s job: dwellings from consecutive seeds, written and summarised; `source` is
+//! `dwelling:SEED` wherever a scene file is asked for, and the held-out seeds.
 
 pub(crate) mod batch;
 pub(crate) mod catalogue;
 pub(crate) mod furnish;
 mod glb;
 pub mod plan;
+mod source;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -27,6 +29,8 @@ use serde::{Deserialize, Serialize};
 pub use catalogue::{shipped_catalogue_dir, Catalogue, CatalogueModel, Role};
 pub use furnish::Placed;
 pub use plan::{FloorPlan, RoomKind};
+pub use source::HELD_OUT_SEEDS_FROM;
+pub(crate) use source::{dwelling_seed, scene_source, DWELLING_SOURCE};
 
 use crate::math::Vec3;
 use crate::scene::{ObjectClass, SceneMesh, SeatSettings, WalkableMap, WalkableSettings};
@@ -669,42 +673,6 @@ struct CatalogueRecord<'a> {
     licence: &'a str,
     source: &'a str,
     source_sha256: &'a str,
-}
-
-/// The scene-source prefix that names a generated dwelling where a scene file is asked for:
-/// `dwelling:SEED`.
-pub(crate) const DWELLING_SOURCE: &str = "dwelling:";
-
-/// The file a scene source names: a path as it is (joined to `base`), or for `dwelling:SEED`
-/// the dwelling of that seed (default settings, the shipped catalogue), generated into the
-/// cache on first use (`<cache>/dwellings/v<version>-<catalogue sha256, 12 hex>/dwelling_<seed>.glb`,
-/// its sidecar beside it) and the same file after.
-pub(crate) fn scene_source(source: &str, base: &Path) -> Result<PathBuf, String> {
-    let Some(seed) = source.strip_prefix(DWELLING_SOURCE) else {
-        return Ok(base.join(source));
-    };
-    let seed: u64 = seed.trim().parse().map_err(|_| {
-        format!("`{source}`: expected dwelling:SEED with SEED a whole number from 0 to 2^64 − 1")
-    })?;
-    let catalogue = Catalogue::load(&shipped_catalogue_dir()).map_err(|e| e.to_string())?;
-    let dir = crate::paths::cache_dir().join("dwellings").join(format!(
-        "v{DWELLING_VERSION}-{}",
-        catalogue.source_sha256.get(..12).unwrap_or("unknown")
-    ));
-    let glb = dir.join(format!("dwelling_{seed}.glb"));
-    if !glb.is_file() {
-        // Written under a name of this process's own and renamed into place (the sidecar
-        // first): takes resolving the same dwelling at once each write whole files, the same
-        // bytes, and the last rename wins.
-        let own = dir.join(format!(".dwelling_{seed}.{}.glb", std::process::id()));
-        generate(&DwellingSettings::default(), &catalogue, seed)
-            .and_then(|d| d.write_glb(&catalogue, &own))
-            .map_err(|e| format!("`{source}`: {e}"))?;
-        std::fs::rename(own.with_extension("json"), glb.with_extension("json"))
-            .and_then(|()| std::fs::rename(&own, &glb))
-            .map_err(|e| format!("`{source}`: moving it into {}: {e}", dir.display()))?;
-    }
-    Ok(glb)
 }
 
 /// The files a dwelling is written to in `dir`.
