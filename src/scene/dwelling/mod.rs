@@ -29,8 +29,7 @@ use serde::{Deserialize, Serialize};
 pub use catalogue::{shipped_catalogue_dir, Catalogue, CatalogueModel, Role};
 pub use furnish::Placed;
 pub use plan::{FloorPlan, RoomKind};
-pub use source::HELD_OUT_SEEDS_FROM;
-pub(crate) use source::{dwelling_seed, scene_source, DWELLING_SOURCE};
+pub(crate) use source::{dwelling_seed, scene_source, DWELLING_SOURCE, HELD_OUT_SEEDS_FROM};
 
 use crate::math::Vec3;
 use crate::scene::{ObjectClass, SceneMesh, SeatSettings, WalkableMap, WalkableSettings};

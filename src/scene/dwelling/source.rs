@@ -11,7 +11,7 @@ pub(crate) const DWELLING_SOURCE: &str = "dwelling:";
 
 /// Dwelling seeds from this one up are held out: a policy is measured on them and never
 /// trained on them (training refuses them), and the generator was not developed on them.
-pub const HELD_OUT_SEEDS_FROM: u64 = 1_000_000;
+pub(crate) const HELD_OUT_SEEDS_FROM: u64 = 1_000_000;
 
 /// The seed of the generated dwelling a scene is, if it is one: `dwelling:SEED` as written, or
 /// a scene file whose sidecar (`<stem>.json` beside it) records the generator's seed.
