@@ -228,18 +228,19 @@ fn eval_controllers(
     names
         .iter()
         .map(|name| {
-            use crate::walker::ControllerSpec as C;
-            match C::from_name(name) {
-                Some(spec @ C::Sampling { k }) => Some(("sampling", k, spec)),
-                Some(spec @ C::PathFollow { k }) => Some(("path_follow", k, spec)),
-                _ => None,
-            }
-            .with_context(|| {
-                format!(
-                    "--controller: \"{name}\": expected sampling_kK or path_follow_kK with K ≥ 1 \
-                     (the policy: --policy FILE)"
-                )
-            })
+            // Every controller but the policy's, which --policy FILE evaluates.
+            crate::walker::ControllerSpec::from_name(name)
+                .filter(|spec| !spec.needs_policy())
+                .map(|spec| {
+                    let (kind, k) = spec.kind_and_k();
+                    (kind, k, spec)
+                })
+                .with_context(|| {
+                    format!(
+                        "--controller: \"{name}\": expected sampling_kK or path_follow_kK with K \
+                         ≥ 1 (the policy: --policy FILE)"
+                    )
+                })
         })
         .collect()
 }

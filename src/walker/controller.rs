@@ -114,6 +114,16 @@ impl ControllerSpec {
         matches!(self, ControllerSpec::Policy { .. })
     }
 
+    /// Its kind as reports name it (`"policy"`, `"sampling"`, `"path_follow"`) and the
+    /// latents it proposes per primitive (`k`; a policy's one action).
+    pub(crate) fn kind_and_k(&self) -> (&'static str, usize) {
+        match *self {
+            ControllerSpec::Policy { .. } => ("policy", 1),
+            ControllerSpec::Sampling { k } => ("sampling", k),
+            ControllerSpec::PathFollow { k } => ("path_follow", k),
+        }
+    }
+
     /// The controller one walker steps with: `None` when it needs a policy and none is given.
     pub(crate) fn build<'a>(
         &self,
