@@ -1,9 +1,15 @@
 //! The body: SMPL-X skeleton, model files, skinning and the eye anchor (CPF).
 //!
 //! Owns the 55-joint skeleton, the rest mesh with its blend shapes and skin weights, LBS
-//! exactly as `smplx` computes it, `world_from_cpf` and the hands' landmarks in MPS order
-//! (`hand_landmarks`); `egogen body info`'s summary of a model (`info`). Timing and sequences belong
-//! to `motion`.
+//! exactly as `smplx` computes it, `world_from_cpf` and the hands' landmarks in MPS order.
+//! Timing and sequences belong to `motion`.
+//!
+//! Here: `skeleton` (joint names, parent table, pose-vector layout), `model` (the model in
+//! memory), `model_file` (reading a model's SMPL-X `.npz`), `lbs` (shape blend shapes, pose
+//! correctives and linear blend skinning), `cpf` (the eye anchor of a posed skeleton), `markers`
+//! (the surface vertices the motion loop tracks), `hand_landmarks` (the hands' landmarks in MPS
+//! order), `volume` (capsules around the bones), `occupancy` (whether a point lies inside a posed
+//! body), `export` (posed meshes as OBJ), `info` (`egogen body info`'s summary of a model).
 
 pub(crate) mod cpf;
 pub(crate) mod export;

@@ -1,6 +1,10 @@
 //! Camera models: the map between camera-frame points and pixels, one model per file behind
 //! the [`CameraModel`] trait. Where a camera sits on the head belongs to `rig`.
 //!
+//! Here: `pinhole` (the ideal pinhole), `kannala_brandt` (the KB4 fisheye of OpenCV's
+//! `cv::fisheye`), `fisheye624` (Aria's Fisheye624), `theta_poly` (the fisheyes' odd radial
+//! polynomial and its inverse), `fov` (a model's field of view measured from its valid region).
+//!
 //! Conventions shared by every model:
 //! - Camera frame: OpenCV (x right, y down, z forward along the optical axis), metres.
 //! - Pixels: continuous coordinates with the centre of the top-left pixel at (0, 0); the image

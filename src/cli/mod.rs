@@ -1,13 +1,26 @@
 //! Command-line and configuration plumbing: clap arguments, TOML configs, resolved plans.
 //!
-//! No domain logic lives here: `config` only parses and checks values, `resolve` turns them
-//! into typed plans the stages consume, and each `*_jobs` file holds a command's clap
-//! arguments and thin functions that turn them into a typed job (defaults resolved, configs
-//! loaded, flags checked) and call the module whose data the job is: `eval::jobs`,
-//! `eval::motion_model`, `eval::policy_commands`, `motion::jobs`, `motion::clip_import`,
-//! `policy::train_job`, `scene::dwelling::batch`, `synth::scene_inspect`, `synth::body_pictures`,
-//! `body::info`, `export::head_stats`, `export::aria::job`, `export::euroc::job`,
-//! `inspect::report`.
+//! No domain logic lives here: configs are only parsed and checked, then resolved into the typed
+//! plans the stages consume, and each `*_jobs` file holds a command's clap arguments and thin
+//! functions that turn them into a typed job (defaults resolved, configs loaded, flags checked)
+//! and call the module whose data the job is.
+//!
+//! Configs: `config_file` (what every config file shares: the error naming file and key, strict
+//! TOML loading, shipped defaults), `config` (the run config as written), `overrides`
+//! (`egogen-run`'s command-line overrides applied to it), `resolve` (a run config into a checked
+//! `RunPlan`), `synth_config` (`egogen synth`'s config into a `SynthPlan`), `train_primitive`
+//! and `train_policy` (the two training configs into their plans).
+//!
+//! Commands, each with the jobs it calls: `aria_jobs` (`egogen aria export`:
+//! `export::aria::job`), `body_jobs` (`egogen body …`: `body::info`, `motion::jobs`,
+//! `synth::body_pictures`), `euroc_jobs` (`egogen euroc export`: `export::euroc::job`),
+//! `eval_jobs` (`egogen eval`: `eval::jobs`), `hand_stats_jobs` (`egogen motion hand-stats`:
+//! `motion::jobs`), `head_stats_jobs` (`egogen motion head-stats`: `export::head_stats`),
+//! `import_jobs` (`egogen motion import`: `motion::clip_import`, `synth::body_pictures`),
+//! `inspect_jobs` (`egogen inspect`: `inspect::report`), `motion_jobs` (`egogen motion
+//! eval|stats|control`: `eval::motion_model`, `motion::jobs`), `policy_jobs` (`egogen policy`
+//! and `egogen train policy`: `eval::policy_commands`, `policy::train_job`), `scene_jobs`
+//! (`egogen scene inspect|generate`: `synth::scene_inspect`, `scene::dwelling::batch`).
 
 pub mod aria_jobs;
 pub mod body_jobs;

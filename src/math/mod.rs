@@ -1,6 +1,9 @@
-//! Shared math vocabulary: scalar and vector aliases, frame conventions, rotation maps, seeded
-//! random draws, colour conversions, small least-squares solves, quantiles of a sample,
-//! zero-phase Gaussian smoothing of a series and angles wrapped to (−π, π].
+//! Shared math vocabulary: scalar and vector aliases, frame conventions, quantiles of a sample,
+//! zero-phase Gaussian smoothing of a series and angles wrapped to (−π, π] here; `rotation`
+//! (maps between axis-angle, 6D and matrix forms), `random` (seeded draws on ChaCha8), `colour`
+//! (colour conversions), `least_squares` (small least-squares solves by normal equations, for
+//! the lens fits) and `pose_spline` (a C²-continuous rigid-body trajectory through poses
+//! sampled at a fixed rate: cubic B-splines on R³ × SO(3)).
 //!
 //! Conventions used across egogen:
 //! - Lengths are metres, angles radians, time seconds unless a name says otherwise.

@@ -1,12 +1,20 @@
-//! Motion: SMPL-X pose sequences in time, the files they travel in, and real mocap turned
-//! into them (BVH reading, retargeting, resampling, mirroring); activity clips and the pose
-//! tools that play them (`activity_clip`); how a head moves, measured the same way for takes
-//! and real references (`head_motion`), the joins of primitives smoothed (`joins`), the head
-//! held steady while the torso sways (`head_stabilise`) and the fingers moved with what the
-//! hands do (`hands`); the jobs of the commands that read and write motion data (`jobs`: `egogen
-//! motion stats` and `hand-stats`, `egogen body pose`; `clip_import`: `egogen motion import`).
+//! Motion: SMPL-X pose sequences in time, the files they travel in, real mocap turned into
+//! them, the motion-primitive model that makes new ones, and what is done to a sequence once
+//! made. Owns frame rates and sequences of body parameters; the body itself (skinning) is
+//! `body`'s.
 //!
-//! Owns frame rates and sequences of body parameters; the body itself (skinning) is `body`'s.
+//! Files and mocap: `amass` (AMASS-style SMPL-X `.npz` written and read, SAMP-style read),
+//! `bvh` (BVH reading and the source skeleton's forward kinematics), `retarget` (a CMU BVH clip
+//! onto the SMPL-X body joints), `deepmimic` (DeepMimic clips retargeted onto the body),
+//! `resample` (frame-rate changes and left ↔ right mirroring), `scripted` (a hand-written walk
+//! cycle for demos and tests). Primitives: `primitive` (20-frame primitives in their canonical
+//! frames), `cvae` (the conditional VAE that decodes them). A sequence finished: `joins` (the
+//! joins of primitives smoothed), `head_stabilise` (the head held steady while the torso
+//! sways), `hands` (the fingers moved with what the hands do); `activity_clip` (activity clips
+//! and the pose tools that play them); `head_motion` (how a head moves, measured the same way
+//! for takes and real references). Jobs of the commands that read and write motion data: `jobs`
+//! (`egogen motion stats` and `hand-stats`, `egogen body pose`), `clip_import` (`egogen motion
+//! import`).
 
 pub(crate) mod activity_clip;
 pub mod amass;

@@ -1,11 +1,11 @@
-//! Rendering: the Blender runtime egogen drives (PyPI `bpy` 4.5 LTS in a managed virtual
-//! environment, or a user's own), the wire protocol of shard specs (`protocol`) and how they
-//! are planned (`shard_plan`, `camera_setup`), what Blender renders for each rig camera
-//! (`render_camera`, `lens_polynomial`), the drawn appearance it is given (`lighting`,
-//! `materials`, `skin`),
-//! and turning its raw renders into frame files (`frame_file`, `passes`, `depth_noise`).
-//! `render` knows nothing of bodies, motion or policies: bodies reach it as files
-//! (`crate::vertex_cache`) that `synth` writes.
+//! Rendering: the Blender runtime egogen drives (`blender_runtime`: PyPI `bpy` 4.5 LTS in a
+//! managed virtual environment, or a user's own) and how a worker is started on a shard
+//! (`shard`), the wire protocol of shard specs (`protocol`) and how they are planned
+//! (`shard_plan`, `camera_setup`), what Blender renders for each rig camera (`render_camera`,
+//! `lens_polynomial`), the drawn appearance it is given (`lighting`, `materials`, `skin_tone`:
+//! each agent's skin), and turning its raw renders into frame files (`frame_file`, `passes`,
+//! `depth_noise`). `render` knows nothing of bodies, motion or policies: bodies reach it as
+//! files (`crate::vertex_cache`) that `synth` writes.
 
 pub mod blender_runtime;
 pub(crate) mod camera_setup;

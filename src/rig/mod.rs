@@ -3,6 +3,11 @@
 //! device calibration; `world_from_cam = world_from_cpf · cpf_from_cam`. Projection
 //! itself belongs to `camera`; the CPF of a posed body to `body::cpf`.
 //!
+//! Here: `file` (egogen's own rig file: parsed, validated, written back), `aria` (Project Aria
+//! device calibrations read as rigs), `error` (what can go wrong reading a rig), `pose` (camera
+//! poses relative to the CPF: rotation checks and the yaw/pitch/roll read-out), `wear` (each
+//! wearer's small rigid offset of the headset), `command` (`egogen rig check|project|convert`).
+//!
 //! Frames: CPF x = wearer's left, y = up, z = forward; cameras are OpenCV (x right, y down,
 //! z forward). The file schema is documented in `docs/RIGS.md`.
 

@@ -1,12 +1,20 @@
-//! Scenes: triangle meshes in metres (z up) with named objects, the floor, the walkable map
-//! (occupancy + 2D signed distance), start/goal sampling, what each object is (`object_class`:
-//! the one vocabulary seats, materials and generated scenes read), the places to sit (`seats`);
-//! procedural scenario scenes (`generated`) and furnished dwellings generated from a seed and
-//! the furniture catalogue (`dwelling`, the `dwelling:SEED` scene source).
+//! Scenes: triangle meshes in metres (z up) with named objects, the floor, the walkable map,
+//! start/goal sampling, what each object is and where one may sit, body–scene collision terms,
+//! and scenes drawn from a seed. Hands off to `sensing` (rays over the walkable map). Nothing
+//! here knows about bodies or policies.
 //!
-//! Also owns body–scene collision terms (`penetration`: 3D SDF or the 2D box test). Hands
-//! off to `sensing` (rays over the walkable map).
-//! Nothing here knows about bodies or policies.
+//! Here: `mesh` (a triangle soup with per-triangle object ids), `load` (glTF/GLB, OBJ and PLY
+//! files into a mesh in metres, z up), `ceiling` (whether a scene has one, and the one added
+//! when not), `floor` (the floor height), `walkable` (the walkable map: occupancy and 2D signed
+//! distance), `sdf2d` (the exact distance transform behind it), `mesh_distance` (exact signed
+//! distance to the triangles), `sdf3d` (the 3D signed distance field on voxels), `penetration`
+//! (body–scene collision terms: 3D SDF or the 2D box test), `obstacle` (2D boxes and circles
+//! that move or are not in the mesh), `sampler` (seeded start/goal sampling), `path_plan` (A*
+//! walking paths on the walkable map and the guide), `seen_map` (what a walker has seen of the
+//! map), `object_class` (the one vocabulary of what an object is, which seats, materials and
+//! generated scenes read), `seats` (the places to sit), `generated` (procedural scenario
+//! scenes), `dwelling` (furnished dwellings generated from a seed and the furniture catalogue,
+//! the `dwelling:SEED` scene source).
 
 pub(crate) mod ceiling;
 pub mod dwelling;

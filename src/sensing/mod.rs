@@ -3,11 +3,10 @@
 //! ego-centred occupancy patch, or an egocentric depth image cast from the same world, behind
 //! one [`EgoSensor`] interface.
 //!
-//! Ray scan (paper): `N = 32` rays spread evenly over [−90°, 90°] around the floor projection of
-//! the viewing direction, from the CPF, `7 m` long. Beam `k` points at
-//! `heading − 90° + 180°·k/(N−1)` (so beam 0 is on the right, beam N−1 on the left, angles
-//! counter-clockwise about +z). Value per beam: `−1 + 2·hit/7` with `hit` the free distance
-//! (m); no hit within range gives `+1`; a ray starting inside an obstacle gives `−1`.
+//! Here: `ego` (the ego pose on the floor plane, the sensing world, the ray-scan sensor), `ray`
+//! (2D ray casting against the grid and obstacles), `local_map` (the occupancy patch of the
+//! paper's Tab. 2), `depth_image` (the depth image of its Tab. 3), `spec` (which of them a
+//! policy observes, as its config and weights say).
 
 pub(crate) mod depth_image;
 pub(crate) mod ego;

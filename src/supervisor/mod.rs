@@ -2,8 +2,10 @@
 //! `run_job`) to a finished dataset. Stages a take (`pipeline`: its sequence folder, the
 //! bodies' caches, the rendering work of `staged`), plans shards (camera × frame block), runs
 //! them on a pool (`local` or `slurm`; one take's shards or many takes' through one feed,
-//! `pool`; the time left at each camera's pace, `pace`), finishes and validates frames (`dataset`, `frame_record`), writes the take's outputs
-//! (`export::take_exports`: annotations, the COLMAP export, the manifest), and resumes an interrupted run where it stopped.
+//! `pool`; the time left at each camera's pace, `pace`), finishes and validates frames
+//! (`dataset`, `frame_record`), writes the take's outputs (`export::take_exports`:
+//! annotations, the COLMAP export, the manifest), resumes an interrupted run where it stopped,
+//! and re-checks a finished dataset against its manifest (`verify`).
 
 pub(crate) mod dataset;
 pub(crate) mod frame_record;

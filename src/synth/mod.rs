@@ -1,14 +1,15 @@
 //! Synth: motion + body → per-frame posed bodies and eye-anchor (CPF) trajectories, and the
-//! sequence folder they are written to: crowds of agents steered through a scene, their motion
+//! folders they are written to: crowds of agents steered through a scene, their motion
 //! finished as written (joins smoothed, head steadied: `motion::joins`, `motion::head_stabilise`)
-//! (`crowd`),
-//! what they do besides walking (`activity`: the schema, one file per activity — standing and
-//! looking around, sitting, picking up — and why one is skipped),
-//! placing a motion in it (`placement`), a take of agents from its plan (`take`), the penetration tests (`penetration`), and the body
-//! caches Blender plays (`body_cache`). Two commands' jobs that draw bodies, motion and what a
-//! walker senses with `preview`, which `body`, `motion` and `scene` may not use, are here too:
-//! `body_pictures` (`egogen body shapes|preview|hands`, `egogen motion import --strip`) and
-//! `scene_inspect` (`egogen scene inspect`).
+//! (`crowd`), what they do besides walking (`activity`: the schema, one file per activity —
+//! standing and looking around, sitting, picking up — and why one is skipped), placing a motion
+//! in a scene (`placement`), a take of agents from its plan (`take`), a body posed over a
+//! sequence with its CPF and hand landmarks per frame (`body_track`), the penetration tests
+//! (`penetration`), the folder of one sequence (`sequence_dir`) and of a crowd take
+//! (`crowd_dir`), and the body caches Blender plays (`body_cache`). Two commands' jobs that draw
+//! bodies, motion and what a walker senses with `preview`, which `body`, `motion` and `scene`
+//! may not use, are here too: `body_pictures` (`egogen body shapes|preview|hands`, `egogen
+//! motion import --strip`) and `scene_inspect` (`egogen scene inspect`).
 
 pub mod activity;
 pub mod body_cache;

@@ -1,17 +1,27 @@
 //! The motion-primitive model: a conditional VAE (burn) over canonical primitives of 20
 //! frames at 40 fps. Given the 2 seed frames and a 128-D latent, an autoregressive GRU-cell
 //! decoder writes the other 18 frames (6D rotations of global orient and the 21 body joints,
-//! pelvis translation) in the primitive's canonical frame.
+//! pelvis translation) in the primitive's canonical frame. Skinning in f64 stays `body`'s,
+//! primitives and canonical frames `primitive`'s; the paper's evaluation of controllers is
+//! `crate::eval`, a controller over held-out episodes `policy::held_out`.
 //!
-//! Owns the network, its losses (pose, FK markers through a tensor rig, velocity, foot skate and
-//! floor, robust KL), training (single primitives, then rollout over chains, then prior
-//! fine-tuning), weights files, the inference API (burn's decoder beside a plain f32 one for
-//! few primitives at a time, reading f16 weights for one alone), best-of-K random-latent sampling, the pace
-//! and turn of primitives, and latents chosen for a target velocity and heading (`control`);
-//! skinning in f64 stays `body`'s, primitives and canonical frames `primitive`'s. A trained
-//! model's measurements (held-out marker error, contact of batches and chains, long rollouts)
-//! are `measure`; the paper's evaluation of controllers is `crate::eval`, a controller over
-//! held-out episodes `policy::held_out`.
+//! The network and its training: `net` (MLP encoder, residual GRU-cell decoder conditioned on
+//! seed, latent and floor height), `features` (what it reads and writes per frame, and the way
+//! back to SMPL-X parameters), `data` (clips cut into primitives and chains as `f32` features),
+//! `tensor_body` (the body as tensors: FK and the 67 markers, differentiable), `loss` (pose, FK
+//! markers, velocity, foot skate and floor, robust KL), `rollout` (chaining primitives on
+//! tensors), `pool` (the seeds prior fine-tuning starts chains from), `train` (single
+//! primitives, then rollout over chains, then prior fine-tuning), `train_error` (why a training
+//! run stopped), `checkpoint` (what `--resume` continues from), `weights` (safetensors files
+//! that carry their architecture).
+//!
+//! Using it: `infer` (the inference API: seeds and latents to primitives in the world, with
+//! markers and CPF), `decoder_f32` (the decoder in plain f32 for few primitives at a time),
+//! `half_matvec` (one primitive's products with f16 weights), `sampler` (best-of-K
+//! random-latent sampling), `pace` (pace and turn of primitives), `control` (latents chosen for
+//! a target velocity and heading by CEM), `reach` (what the latent space reaches, as `egogen
+//! motion control` prints it), `contact` (the foot-contact score), `measure` (a trained model's
+//! measurements: held-out marker error, contact of batches and chains, long rollouts).
 
 pub(crate) mod checkpoint;
 pub(crate) mod contact;

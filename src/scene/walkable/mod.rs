@@ -1,6 +1,9 @@
 //! The walkable map: a 2D grid over the scene (0.1 m cells by default) that marks where a
 //! person can stand — floor underneath, nothing between step height and head height — with
 //! the 2D signed distance to the nearest non-walkable cell and connected components.
+//! `floors` holds stepped floors (each cell's floor height, ledges too high to step, the
+//! smoothed floor a body follows), `indoor` the cells inside the walls and the map restricted
+//! to them.
 
 mod floors;
 mod indoor;

@@ -1,5 +1,6 @@
-//! 2D ray casting: a ray type, the obstacle trait (local-space hit, world hit derived), the
-//! grid DDA for static geometry.
+//! 2D ray casting: a ray type, the obstacle trait (local-space hit, world hit derived), and one
+//! file per target: `grid` (the DDA through the walkable map's cells, for static geometry),
+//! `circle` (a disc), `oriented_box` (an oriented box, by the slab method).
 
 pub(crate) mod circle;
 pub mod grid;

@@ -2,6 +2,12 @@
 //! `<dir>.partial/` and renamed when complete. A `.partial` folder left by an interrupted run is
 //! continued by `--resume` (finished frames are kept, partial ones redone) as long as the config
 //! is byte-identical; otherwise nothing is touched.
+//!
+//! The job's steps live here and in: `output` (whether `<dir>` and `<dir>.partial` may be
+//! written or resumed, and the partial folder staged with its stamp), `bodies` (the take's
+//! people staged: bodies, tracks, the wearer, the `sequence/` folder and Blender's body inputs),
+//! `spec` (the take's rendering work: cameras, segmentation ids, ceiling, obstacles, surfaces,
+//! the shard spec, and the repair of what an interrupted run left).
 
 mod bodies;
 mod output;

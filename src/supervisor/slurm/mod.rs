@@ -4,14 +4,19 @@
 //! an array with tasks waiting (its throttle raised with `scontrol update`), else a round
 //! writes one spec per pending shard of any staged take and an `sbatch` array script (one task
 //! per shard, resources from `[supervisor.slurm]`) throttled to the free places and submits it
-//! with `sbatch --parsable`, so no round waits for its slowest task. One `squeue` call per poll follows every array in flight; frames are finished
-//! here as the tasks' raw renders appear (the dataset folder is on a filesystem shared with the
-//! nodes). When an array has left the queue, each task's outcome comes from `scontrol` (or
-//! `sacct` once the controller has forgotten the job); shards that still miss frames — failed,
-//! timed out, cancelled, killed node — go out again, up to the retry count. Ctrl-C cancels the
-//! arrays in flight and leaves a resumable state; a resumed run first cancels the arrays its
-//! predecessor left behind. A take whose frames are all finished goes back to the feed at the
-//! next poll.
+//! with `sbatch --parsable`, so no round waits for its slowest task. One `squeue` call per
+//! poll follows every array in flight; frames are finished here as the tasks' raw renders
+//! appear (the dataset folder is on a filesystem shared with the nodes). When an array has
+//! left the queue, each task's outcome comes from `scontrol` (or `sacct` once the controller
+//! has forgotten the job); shards that still miss frames — failed, timed out, cancelled,
+//! killed node — go out again, up to the retry count. Ctrl-C cancels the arrays in flight
+//! and leaves a resumable state; a resumed run first cancels the arrays its predecessor left
+//! behind. A take whose frames are all finished goes back to the feed at the next poll.
+//!
+//! Here: the rounds and the polling; `client` (Slurm's client commands run and their answers
+//! parsed, the arrays a run submitted recorded), `submit` (a round's shard specs, its `sbatch`
+//! array script and its submission), `outcomes` (what an array's tasks did once it left the
+//! queue: each task's outcome, the frames it finished, the pool's report).
 
 mod client;
 mod outcomes;

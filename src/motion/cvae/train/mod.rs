@@ -4,6 +4,11 @@
 //! on the floor and upright by losses that need no mocap target and anchored to the root motion
 //! the starting weights decode for the same latents, next to the reconstruction of mocap
 //! chains. Deterministic for a seed: batches, noise and initial weights all come from it.
+//!
+//! Here: the loop; `setup` (what training starts from and ends with: the checkpoint resumed,
+//! the training and held-out sets, the starting weights, the output folders, and the weights,
+//! report and loss log written at the end), `chains` (the losses of a batch of chains),
+//! `prior` (the prior phase's terms of a step).
 
 mod chains;
 mod prior;
