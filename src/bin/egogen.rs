@@ -7,12 +7,12 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 use egogen::atomic_file::refuse_existing;
-use egogen::cli::body_jobs;
 use egogen::cli::motion_jobs::{
     motion_control, motion_eval, motion_stats, MotionControlOptions, MotionEvalOptions, Precision,
 };
 use egogen::cli::policy_jobs::{run_policy, train_policy, PolicyCommand};
 use egogen::cli::resolve::{crate_root, DEFAULT_BODY_MODEL};
+use egogen::synth::body_pictures;
 
 #[derive(Parser, Debug)]
 #[command(version, about = "egogen tools: body models, motion files, previews")]
@@ -445,7 +445,7 @@ fn run(cli: Cli) -> Result<()> {
             preview,
             pass,
             exposure,
-        } => egogen::cli::inspect_jobs::inspect_exr(
+        } => egogen::inspect::report::inspect_exr(
             &files,
             preview.as_deref(),
             pass.as_deref(),
@@ -534,11 +534,7 @@ fn run_motion(cmd: MotionCommand) -> Result<()> {
             if let Some(j) = &json {
                 refuse_existing(j)?;
             }
-            egogen::cli::hand_stats_jobs::motion_hand_stats(
-                &sources,
-                &model_path(model),
-                json.as_deref(),
-            )?;
+            egogen::motion::jobs::motion_hand_stats(&sources, &model_path(model), json.as_deref())?;
         }
         MotionCommand::HeadStats {
             sources,
@@ -550,7 +546,7 @@ fn run_motion(cmd: MotionCommand) -> Result<()> {
             if let Some(j) = &json {
                 refuse_existing(j)?;
             }
-            egogen::cli::head_stats_jobs::motion_head_stats(
+            egogen::export::head_stats::motion_head_stats(
                 &sources,
                 &model_path(model),
                 &rig,
@@ -600,7 +596,7 @@ fn run_scene(cmd: SceneCommand) -> Result<()> {
             depth_images,
         } => {
             refuse_existing(&out)?;
-            egogen::cli::scene_jobs::scene_inspect(
+            egogen::synth::scene_inspect::scene_inspect(
                 &scene,
                 egogen::cli::scene_jobs::scene_frame_flags(up.as_deref(), unit_m)?,
                 egogen::scene::WalkableSettings {
@@ -623,31 +619,31 @@ fn run_scene(cmd: SceneCommand) -> Result<()> {
 /// Runs `egogen body …`.
 fn run_body(cmd: BodyCommand) -> Result<()> {
     match cmd {
-        BodyCommand::Info { model } => body_jobs::body_info(&model_path(model))?,
+        BodyCommand::Info { model } => egogen::body::info::body_info(&model_path(model))?,
         BodyCommand::Shapes {
             model,
             beta,
             values,
             out,
-        } => body_jobs::body_shapes(&model_path(model), beta, &values, &out)?,
+        } => body_pictures::body_shapes(&model_path(model), beta, &values, &out)?,
         BodyCommand::Pose {
             model,
             motion,
             frame,
             out,
-        } => body_jobs::body_pose(&model_path(model), motion.as_deref(), frame, &out)?,
+        } => egogen::motion::jobs::body_pose(&model_path(model), motion.as_deref(), frame, &out)?,
         BodyCommand::Preview {
             model,
             betas,
             out,
             height_px,
-        } => body_jobs::body_preview(&model_path(model), &betas, &out, height_px)?,
+        } => body_pictures::body_preview(&model_path(model), &betas, &out, height_px)?,
         BodyCommand::Hands {
             model,
             people,
             out,
             cell_px,
-        } => body_jobs::body_hands(&model_path(model), people, &out, cell_px)?,
+        } => body_pictures::body_hands(&model_path(model), people, &out, cell_px)?,
     }
     Ok(())
 }

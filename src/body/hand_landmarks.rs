@@ -13,7 +13,7 @@ use crate::math::{Affine3, Real, Vec3};
 /// The landmarks' names, in MPS order (named for readers: the order every landmark array
 /// follows).
 #[allow(dead_code)]
-pub const HAND_LANDMARKS: [&str; 21] = [
+pub(crate) const HAND_LANDMARKS: [&str; 21] = [
     "thumb_fingertip",
     "index_fingertip",
     "middle_fingertip",

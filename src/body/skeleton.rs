@@ -112,13 +112,13 @@ pub const PARENTS: [Option<usize>; NUM_JOINTS] = {
 /// right hand 15×3 — joint `j` occupies values `3j..3j+3`. The whole layout is named, read or not.
 #[allow(dead_code)]
 pub(crate) mod pose_layout {
-    pub const GLOBAL_ORIENT: usize = 0;
-    pub const BODY: usize = 3;
-    pub const JAW: usize = 66;
-    pub const LEFT_EYE: usize = 69;
-    pub const RIGHT_EYE: usize = 72;
-    pub const LEFT_HAND: usize = 75;
-    pub const RIGHT_HAND: usize = 120;
+    pub(crate) const GLOBAL_ORIENT: usize = 0;
+    pub(crate) const BODY: usize = 3;
+    pub(crate) const JAW: usize = 66;
+    pub(crate) const LEFT_EYE: usize = 69;
+    pub(crate) const RIGHT_EYE: usize = 72;
+    pub(crate) const LEFT_HAND: usize = 75;
+    pub(crate) const RIGHT_HAND: usize = 120;
 }
 
 #[cfg(test)]

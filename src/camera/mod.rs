@@ -131,7 +131,7 @@ pub(crate) struct FitError {
 impl FitError {
     /// The error of `fitted` (a pixel of a ray, in the same convention) over `samples`, each
     /// a pixel centre with its exact ray.
-    pub fn measure(samples: &[(Pixel, Vec3)], fitted: impl Fn(Vec3) -> Pixel) -> Self {
+    pub(crate) fn measure(samples: &[(Pixel, Vec3)], fitted: impl Fn(Vec3) -> Pixel) -> Self {
         let mut max_px: Real = 0.0;
         let mut sum = 0.0;
         for &(px, ray) in samples {

@@ -14,7 +14,7 @@ use crate::synth::crowd::{frames_of, primitives_for};
 
 /// What a campaign will cost.
 #[derive(Debug, Clone)]
-pub struct Budget {
+pub(crate) struct Budget {
     /// Planned frames of each take, all cameras.
     pub frames_per_take: Vec<usize>,
     pub cameras: Vec<String>,

@@ -3,7 +3,10 @@
 //! No domain logic lives here: configs are only parsed and checked, then resolved into the typed
 //! plans the stages consume, and each `*_jobs` file holds a command's clap arguments and thin
 //! functions that turn them into a typed job (defaults resolved, configs loaded, flags checked)
-//! and call the module whose data the job is.
+//! and call the module whose data the job is. A command whose flags need nothing but parsing
+//! (`egogen body …`, `inspect`, `motion hand-stats|head-stats`, `scene inspect`) is called by
+//! the binary straight into its module's job: `body::info`, `synth::body_pictures`,
+//! `motion::jobs`, `inspect::report`, `export::head_stats`, `synth::scene_inspect`.
 //!
 //! Configs: `config_file` (what every config file shares: the error naming file and key, strict
 //! TOML loading, shipped defaults), `config` (the run config as written), `overrides`
@@ -12,26 +15,19 @@
 //! and `train_policy` (the two training configs into their plans).
 //!
 //! Commands, each with the jobs it calls: `aria_jobs` (`egogen aria export`:
-//! `export::aria::job`), `body_jobs` (`egogen body …`: `body::info`, `motion::jobs`,
-//! `synth::body_pictures`), `euroc_jobs` (`egogen euroc export`: `export::euroc::job`),
-//! `eval_jobs` (`egogen eval`: `eval::jobs`), `hand_stats_jobs` (`egogen motion hand-stats`:
-//! `motion::jobs`), `head_stats_jobs` (`egogen motion head-stats`: `export::head_stats`),
-//! `import_jobs` (`egogen motion import`: `motion::clip_import`, `synth::body_pictures`),
-//! `inspect_jobs` (`egogen inspect`: `inspect::report`), `motion_jobs` (`egogen motion
+//! `export::aria::job`), `euroc_jobs` (`egogen euroc export`: `export::euroc::job`),
+//! `eval_jobs` (`egogen eval`: `eval::jobs`), `import_jobs` (`egogen motion import`:
+//! `motion::clip_import`, `synth::body_pictures`), `motion_jobs` (`egogen motion
 //! eval|stats|control`: `eval::motion_model`, `motion::jobs`), `policy_jobs` (`egogen policy`
 //! and `egogen train policy`: `eval::policy_commands`, `policy::train_job`), `scene_jobs`
-//! (`egogen scene inspect|generate`: `synth::scene_inspect`, `scene::dwelling::batch`).
+//! (`egogen scene generate`: `scene::dwelling::batch`; the scene frame flags).
 
 pub mod aria_jobs;
-pub mod body_jobs;
 pub mod config;
 pub mod config_file;
 pub mod euroc_jobs;
 pub mod eval_jobs;
-pub mod hand_stats_jobs;
-pub mod head_stats_jobs;
 pub mod import_jobs;
-pub mod inspect_jobs;
 pub mod motion_jobs;
 pub mod overrides;
 pub mod policy_jobs;

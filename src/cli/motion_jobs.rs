@@ -2,7 +2,7 @@
 //! measure the motion model (`eval::motion_model`: held-out error, foot contact, long
 //! random-latent chains, steering probes; CEM-chosen latents for a target pace and heading)
 //! and its training data (`motion::jobs::motion_stats`: pace and turn distributions), with the
-//! training config loaded here. `head-stats` is `head_stats_jobs`'.
+//! training config loaded here. `head-stats` is `export::head_stats`'.
 
 use std::path::{Path, PathBuf};
 

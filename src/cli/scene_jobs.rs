@@ -1,7 +1,6 @@
-//! `egogen scene inspect|generate`: the scene flags read (`--up`, `--unit-m`), generate's flags
-//! checked and its settings file loaded, and thin calls into the jobs: a scene inspected
-//! (`synth::scene_inspect`: summary, walkable map, seats, rays, depth images) and dwellings
-//! generated (`scene::dwelling::batch`).
+//! `egogen scene inspect|generate`: the scene flags read (`--up`, `--unit-m`; the binary calls
+//! `synth::scene_inspect` with them), generate's flags checked and its settings file loaded,
+//! and the thin call that generates dwellings (`scene::dwelling::batch`).
 
 use std::path::{Path, PathBuf};
 
@@ -23,31 +22,6 @@ pub fn scene_frame_flags(
         ),
     };
     crate::scene::SceneFrame::new(up, unit_m).map_err(|m| anyhow::anyhow!("--unit-m: {m}"))
-}
-
-/// Prints the summary of `scene` (a file, or `scenario:NAME`, read as `frame` says) and draws its map with `agents`
-/// sampled start/goal pairs (from `seed`) and their rays to `out`; with `depth_images`, each
-/// start's egocentric depth image (Table 3's ablation, looking at its goal) to the right of
-/// the map, framed in the colour of its start.
-#[allow(clippy::too_many_arguments)]
-pub fn scene_inspect(
-    scene: &str,
-    frame: crate::scene::SceneFrame,
-    settings: crate::scene::WalkableSettings,
-    out: &Path,
-    agents: usize,
-    seed: u64,
-    depth_images: bool,
-) -> Result<()> {
-    crate::synth::scene_inspect::scene_inspect(
-        scene,
-        frame,
-        settings,
-        out,
-        agents,
-        seed,
-        depth_images,
-    )
 }
 
 /// `egogen scene generate`'s flags.

@@ -137,7 +137,7 @@ impl RawTrainPrimitive {
     }
 
     /// Resolves paths against the config's folder and checks values.
-    pub fn resolve(self, config_path: &Path) -> Result<TrainPlan, ConfigError> {
+    pub(crate) fn resolve(self, config_path: &Path) -> Result<TrainPlan, ConfigError> {
         let base = config_path.parent().unwrap_or(Path::new("."));
         let bad = |key: &str, message: String| ConfigError::Value {
             path: config_path.into(),

@@ -178,7 +178,7 @@ pub(crate) fn evaluate<B: burn::prelude::Backend>(
 /// One evaluated episode's walk, for pictures: its course and the pelvis's floor position at
 /// its start and after every primitive, and how it ended.
 #[derive(Debug, Clone)]
-pub struct EpisodePath {
+pub(crate) struct EpisodePath {
     pub course: crate::policy::env::CourseView,
     pub pelvis_xy: Vec<glam::DVec2>,
     pub ending: Option<crate::policy::env::Ending>,

@@ -21,7 +21,7 @@ pub mod aria;
 pub mod colmap;
 pub mod euroc;
 pub mod gaze;
-pub(crate) mod head_stats;
+pub mod head_stats;
 pub mod imu;
 pub mod take;
 pub(crate) mod take_folder;

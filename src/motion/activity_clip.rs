@@ -220,7 +220,7 @@ pub(crate) fn sitting_vertices(body: &BodyContext) -> Vec<u32> {
 
 /// An activity clip on one body, its feet on z = 0 in the first frame.
 #[derive(Debug, Clone)]
-pub struct ClipOnBody {
+pub(crate) struct ClipOnBody {
     pub name: String,
     pub frames: Vec<BodyParams>,
     /// Pelvis joint per frame.

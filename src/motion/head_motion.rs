@@ -294,7 +294,7 @@ impl HeadMotionStats {
     /// Measures `head` (and `pelvis` positions at the same frames, where given; an `imu` trace
     /// of the same head, where given); frames `busy` marks (an activity: sitting down, picking
     /// up) never count as walking.
-    pub fn measure(
+    pub(crate) fn measure(
         label: &str,
         head: &HeadTrack,
         pelvis: Option<&[Vec3]>,

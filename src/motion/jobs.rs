@@ -93,11 +93,7 @@ fn motion_files(path: &Path) -> Result<Vec<PathBuf>> {
 
 /// Prints each motion's finger statistics as a JSON line, then a table on standard error;
 /// writes them all to `json` when given.
-pub(crate) fn motion_hand_stats(
-    sources: &[PathBuf],
-    model: &Path,
-    json: Option<&Path>,
-) -> Result<()> {
+pub fn motion_hand_stats(sources: &[PathBuf], model: &Path, json: Option<&Path>) -> Result<()> {
     let m = BodyModel::load(model)?;
     let mut all = Vec::new();
     for source in sources {
@@ -162,12 +158,7 @@ pub(crate) fn motion_hand_stats(
 }
 
 /// Poses frame `frame` of `motion` (or of the scripted walk at 40 fps) and writes it as OBJ.
-pub(crate) fn body_pose(
-    model: &Path,
-    motion: Option<&Path>,
-    frame: usize,
-    out: &Path,
-) -> Result<()> {
+pub fn body_pose(model: &Path, motion: Option<&Path>, frame: usize, out: &Path) -> Result<()> {
     refuse_existing(out)?;
     let m = BodyModel::load(model)?;
     let params = match motion {

@@ -37,7 +37,7 @@ pub(crate) fn checked_rotation(m: Mat3) -> Result<Mat3, NotRotation> {
     Ok(nearest_rotation(m))
 }
 
-pub use crate::math::rotation::nearest_rotation;
+pub(crate) use crate::math::rotation::nearest_rotation;
 
 /// Orientation of a camera relative to the CPF as yaw, pitch and roll (radians), measured
 /// from an upright camera looking along the CPF's forward axis (camera x = wearer's right,

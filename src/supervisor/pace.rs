@@ -82,7 +82,7 @@ struct CameraPace {
 
 impl FramePace {
     /// `frames` more frames of `camera` (`pixels` a frame) to render.
-    pub fn plan(&self, camera: &str, pixels: u64, frames: u64) {
+    pub(crate) fn plan(&self, camera: &str, pixels: u64, frames: u64) {
         let mut s = self.state.lock().unwrap();
         let c = s.cameras.entry(camera.to_owned()).or_default();
         c.pixels = pixels.max(1);

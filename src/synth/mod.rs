@@ -13,13 +13,13 @@
 
 pub mod activity;
 pub mod body_cache;
-pub(crate) mod body_pictures;
+pub mod body_pictures;
 pub(crate) mod body_track;
 pub mod crowd;
 pub(crate) mod crowd_dir;
 pub(crate) mod penetration;
 pub(crate) mod placement;
-pub(crate) mod scene_inspect;
+pub mod scene_inspect;
 pub mod sequence_dir;
 pub mod take;
 

@@ -60,7 +60,7 @@ impl Judge<'_> {
     /// `p` judged where the walker stands (`s`), and its reward as weighed (not finite where a
     /// term is not: [`finite_reward`] is what a walker adds up, while a controller's scores
     /// rank it last).
-    pub fn judge(
+    pub(crate) fn judge(
         &self,
         body: &BodyContext,
         p: &DecodedPrimitive,

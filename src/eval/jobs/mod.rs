@@ -104,7 +104,10 @@ fn bar(args: &EvalJob, total: usize, unit: &str) -> indicatif::ProgressBar {
 
 /// Runs the suite, writes its files and renders `OUT/RESULTS.md` from every suite's results
 /// there (see the module docs).
-pub fn run_eval(args: &EvalJob, load_parts: impl FnOnce() -> Result<SuiteParts>) -> Result<()> {
+pub(crate) fn run_eval(
+    args: &EvalJob,
+    load_parts: impl FnOnce() -> Result<SuiteParts>,
+) -> Result<()> {
     if args.suite == Suite::Report {
         if !args.out.join("results").is_dir() {
             bail!(

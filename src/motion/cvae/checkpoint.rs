@@ -140,7 +140,7 @@ pub(crate) struct Restored<M, O, X> {
 
 /// Writes a checkpoint of `net`, `optim` and `extra` with `state` (whose file names it fills
 /// in) into `dir`, then removes the files of the previous one.
-pub fn save<B, M, O, X>(
+pub(crate) fn save<B, M, O, X>(
     dir: &Path,
     mut state: CheckpointState,
     net: &M,
