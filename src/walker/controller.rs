@@ -1,9 +1,11 @@
 //! What proposes a walker's next primitive: the `Controller` trait, its three kinds (the
 //! trained policy, the best of K random latents, the path-planning baseline) and the one serde
-//! spec they are built from ([`ControllerSpec`], a take's `steering`, `egogen eval`'s
-//! controller names). A controller proposes latents; `walker::step::walk_step` decodes,
+//! spec they are built from ([`ControllerSpec`]: reports' and `egogen eval`'s controller
+//! names; a config's `steering` name is a [`Steering`], made into a spec with its `k` and
+//! `action_spread`). A controller proposes latents; `walker::step::walk_step` decodes,
 //! judges and chooses among them the same way for every kind. A new controller is one type
-//! here with its `Controller` impl and its arm in [`ControllerSpec`].
+//! here with its `Controller` impl, its arm in [`ControllerSpec`] and its [`Steering`] variant;
+//! takes and `egogen policy eval --controller` then use it.
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
