@@ -26,6 +26,9 @@
 //! side by side: the "whole runs" table's wall seconds are the comparison. Without a GPU the
 //! second run stops before staging, naming what Blender looked for.
 //!
+//! `cargo bench --bench render_cost -- --outfits` renders the shipped settings with outfits off
+//! and on (`[render.outfits]`), in turn, twice each: what dressing people costs per frame.
+//!
 //! `cargo bench --bench render_cost` (about 15 minutes on 2 cores).
 //! `EGOGEN_RENDER_COST_SCALE=1 cargo bench --bench render_cost` renders the cameras at that
 //! resolution scale instead of the default run's 0.25 (1 = full Aria size: RGB 1408×1408,
@@ -183,11 +186,35 @@ const ON_CPU_AND_GPU: [Variant; 2] = [
     },
 ];
 
+/// `--outfits`: the shipped settings with every person bare and dressed (`[render.outfits]`),
+/// in turn, twice.
+const OUTFITS: [Variant; 4] = [
+    outfits_variant("outfits off (1)", "off"),
+    outfits_variant("outfits on (1)", "on"),
+    outfits_variant("outfits off (2)", "off"),
+    outfits_variant("outfits on (2)", "on"),
+];
+
+const fn outfits_variant(name: &'static str, mode: &'static str) -> Variant {
+    Variant {
+        name,
+        render: match mode.as_bytes()[1] {
+            b'f' => concat!(shipped!(), "\noutfits = { mode = \"off\" }"),
+            _ => concat!(shipped!(), "\noutfits = { mode = \"on\" }"),
+        },
+        envs: &[],
+        as_limit: false,
+        at_full_size: true,
+    }
+}
+
 fn main() {
     let scale = std::env::var("EGOGEN_RENDER_COST_SCALE").ok();
     let args: Vec<String> = std::env::args().collect();
     let on_gpu = args.windows(2).any(|w| w[0] == "--device" && w[1] == "gpu");
+    let outfits = args.iter().any(|a| a == "--outfits");
     let variants: Vec<&Variant> = match (on_gpu, &scale) {
+        _ if outfits => OUTFITS.iter().collect(),
         (true, _) => ON_CPU_AND_GPU.iter().collect(),
         (false, Some(_)) => VARIANTS.iter().filter(|v| v.at_full_size).collect(),
         (false, None) => VARIANTS.iter().collect(),

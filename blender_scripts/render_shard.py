@@ -44,18 +44,7 @@ def load_spec():
 
 def add_body(scene, body):
     """A body mesh with the PC2 vertex cache attached; vertex order is the cache's."""
-    faces = np.load(body["faces_npy"])
-    rest = np.load(body["vertices_npy"])
-    mesh = bpy.data.meshes.new(body["name"])
-    mesh.from_pydata(rest.tolist(), [], faces.tolist())
-    mesh.update()
-    for poly in mesh.polygons:
-        poly.use_smooth = True
-    if body.get("uvs_npy"):
-        add_uv_layer(mesh, np.load(body["uvs_npy"]), body["uvs_npy"])
-    mesh.materials.append(skin_material(body["name"] + "_skin", body["skin"],
-                                        body.get("skin_regions", []), body.get("skin_detail")))
-    obj = bpy.data.objects.new(body["name"], mesh)
+    obj = body_object(body, np.load(body["vertices_npy"]))
     obj.pass_index = body["pass_index"]
     scene.collection.objects.link(obj)
     cache = obj.modifiers.new("egogen_cache", "MESH_CACHE")
@@ -73,6 +62,26 @@ def add_body(scene, body):
     # EGOGEN_BLENDER_MOTION_STEPS overrides the spec's (for `cargo bench --bench render_cost`).
     obj.cycles.motion_steps = int(os.environ.get("EGOGEN_BLENDER_MOTION_STEPS", body["motion_steps"]))
     return obj
+
+
+def body_object(body, vertices):
+    """A smooth-shaded body mesh of `vertices` and the spec's faces, with its UVs, skin and
+    outfit (not linked to a scene)."""
+    faces = np.load(body["faces_npy"])
+    mesh = bpy.data.meshes.new(body["name"])
+    mesh.from_pydata(vertices.tolist(), [], faces.tolist())
+    mesh.update()
+    for poly in mesh.polygons:
+        poly.use_smooth = True
+    if body.get("uvs_npy"):
+        add_uv_layer(mesh, np.load(body["uvs_npy"]), body["uvs_npy"])
+    material = skin_material(body["name"] + "_skin", body["skin"],
+                             body.get("skin_regions", []), body.get("skin_detail"))
+    if body.get("outfit"):
+        add_outfit_attributes(mesh, body["outfit"])
+        dress(material, body["outfit"]["outfit"])
+    mesh.materials.append(material)
+    return bpy.data.objects.new(body["name"], mesh)
 
 
 def key_cache(obj, keys, frame_step):
@@ -184,6 +193,112 @@ def skin_material(name, skin, regions, detail=None):
         links.new(base, colour.inputs[0])
         links.new(rough, bsdf.inputs["Roughness"])
     return mat
+
+
+def add_outfit_attributes(mesh, outfit):
+    """Each garment slot's signed distance (m, positive on the garment) and the rest position
+    as point attributes (`egogen_<slot>`, `egogen_rest`): they stay on the skin as the vertex
+    cache moves the body."""
+    path = outfit["fields_npy"]
+    fields = np.load(path)
+    slots = outfit["slots"]
+    if fields.shape != (len(mesh.vertices), len(slots) + 3):
+        sys.exit(f"{path}: expected float32 ({len(mesh.vertices)}, {len(slots) + 3}) garment "
+                 f"fields, found {fields.dtype} {fields.shape}")
+    fields = np.ascontiguousarray(fields, dtype=np.float32)
+    for k, slot in enumerate(slots):
+        attribute = mesh.attributes.new("egogen_" + slot, "FLOAT", "POINT")
+        attribute.data.foreach_set("value", np.ascontiguousarray(fields[:, k]))
+    rest = mesh.attributes.new("egogen_rest", "FLOAT_VECTOR", "POINT")
+    rest.data.foreach_set("vector", np.ascontiguousarray(fields[:, len(slots):]).ravel())
+
+
+def linked_or_value(target):
+    """What feeds a node input: the linked socket, or its value."""
+    if target.is_linked:
+        return target.links[0].from_socket
+    value = target.default_value
+    return tuple(value) if hasattr(value, "__len__") else value
+
+
+def fabric_colour(n, g, rest):
+    """A garment's colour socket: its pattern (plain, stripes, checks, print) in the body's rest
+    coordinates (m), and its fabric's weave drawn in colour alone (no bump: the Normal pass is
+    ground truth)."""
+    base, accent = rgba(g["base_rgb"]), rgba(g["accent_rgb"])
+    s, p, fabric = g["scale_m"], g["pattern"], g["fabric"]
+
+    def bands(direction, size):
+        wave = n.add("ShaderNodeTexWave", [("Vector", rest), ("Scale", 1.0 / size)],
+                     wave_type="BANDS", bands_direction=direction).outputs["Fac"]
+        return n.ramp(wave, 0.45, 0.55)
+
+    if g["slot"] == "hair":
+        # Strands: noise stretched along the body's height.
+        along = n.add("ShaderNodeVectorMath", [(0, rest), (1, (400.0, 25.0, 400.0))],
+                      operation="MULTIPLY").outputs["Vector"]
+        strands = n.add("ShaderNodeTexNoise", [("Vector", along), ("Scale", 1.0),
+                                               ("Detail", 6.0)]).outputs["Fac"]
+        return n.mix("RGBA", n.ramp(strands, 0.3, 0.7), accent, base)
+    if p == "stripes":
+        colour = n.mix("RGBA", bands("Y", s), base, accent)
+    elif p == "checks":
+        across = n.math("MAXIMUM", bands("X", s), bands("Z", s))
+        colour = n.mix("RGBA", n.math("MULTIPLY", n.math("ADD", across, bands("Y", s)), 0.5),
+                       base, accent)
+    elif p == "print":
+        dots = n.add("ShaderNodeTexVoronoi", [("Vector", rest), ("Scale", 1.0 / s),
+                                              ("Randomness", 0.8)]).outputs["Distance"]
+        colour = n.mix("RGBA", n.ramp(dots, 0.3, 0.25), base, accent)
+    else:
+        colour = n.mix("RGBA", n.math("MULTIPLY", noise(n, rest, 0.05), 0.35), base, accent)
+    if fabric == "denim":
+        twill = n.add("ShaderNodeTexWave", [("Vector", rest), ("Scale", 1.0 / 0.0025)],
+                      wave_type="BANDS", bands_direction="DIAGONAL").outputs["Fac"]
+        weave = n.math("MULTIPLY", twill, 0.25)
+        light = rgba([min(1.0, 1.6 * c + 0.08) for c in g["base_rgb"]])
+    elif fabric == "knit":
+        weave = n.math("MULTIPLY", bands("X", 0.005), 0.2)
+        light = rgba(g["base_rgb"], 0.7)
+    elif fabric == "leather":
+        grain = n.add("ShaderNodeTexVoronoi", [("Vector", rest), ("Scale", 1.0 / 0.003)]).outputs["Distance"]
+        weave = n.math("MULTIPLY", grain, 0.2)
+        light = rgba(g["base_rgb"], 1.25)
+    else:
+        size = {"wool": 0.003, "cotton": 0.0015}.get(fabric, 0.001)
+        weave = n.math("MULTIPLY", noise(n, rest, size, 2.0), {"wool": 0.3}.get(fabric, 0.15))
+        light = rgba(g["base_rgb"], 0.75)
+    return n.mix("RGBA", weave, colour, light)
+
+
+def dress(mat, outfit):
+    """Paints the outfit over the skin material `mat`: each garment, lowest first, where its
+    signed distance is positive (an edge 3 mm wide across triangles), hems darkened within
+    6 mm of the edge, with the fabric's roughness and sheen; the skin's subsurface scattering
+    only where the skin shows."""
+    n = Nodes(mat)
+    bsdf = n.nodes["Principled BSDF"]
+    colour = linked_or_value(bsdf.inputs["Base Color"])
+    rough = linked_or_value(bsdf.inputs["Roughness"])
+    sheen, covered = 0.0, 0.0
+    rest = n.add("ShaderNodeAttribute", attribute_name="egogen_rest").outputs["Vector"]
+    for g in outfit["garments"]:
+        f = n.add("ShaderNodeAttribute", attribute_name="egogen_" + g["slot"]).outputs["Fac"]
+        cover = n.math("MULTIPLY", n.ramp(f, -0.0015, 0.0015), g["cover"])
+        fabric = fabric_colour(n, g, rest)
+        if g["slot"] != "hair":
+            hem = n.math("MULTIPLY_ADD", n.ramp(f, 0.0, 0.006), 0.25, 0.75)
+            fabric = n.add("ShaderNodeVectorMath", [(0, fabric), (1, hem)],
+                           operation="SCALE").outputs["Vector"]
+        colour = n.mix("RGBA", cover, colour, fabric)
+        rough = n.mix("FLOAT", cover, rough, g["roughness"])
+        sheen = n.mix("FLOAT", cover, sheen, g["sheen"])
+        covered = n.math("MAXIMUM", covered, cover)
+    n.feed(bsdf.inputs["Base Color"], colour)
+    n.feed(bsdf.inputs["Roughness"], rough)
+    n.feed(bsdf.inputs["Sheen Weight"], sheen)
+    skin_sss = bsdf.inputs["Subsurface Weight"].default_value
+    n.feed(bsdf.inputs["Subsurface Weight"], n.mix("FLOAT", covered, skin_sss, 0.0))
 
 
 def add_ceiling(scene, ceiling):
@@ -1037,10 +1152,73 @@ def serve(take_dir):
         print("EGOGEN_SHARD_END", f"{resident_mb():.1f}", flush=True)
 
 
+def outfit_sheet(path):
+    """`egogen body outfits`: each person of the spec, dressed as a take dresses them, front and
+    back under one area light and a grey world, side by side in one PNG (two rows)."""
+    with open(path) as f:
+        spec = json.load(f)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = spec["samples"]
+    scene.cycles.use_denoising = True
+    h = spec["cell_px"]
+    scene.render.resolution_x, scene.render.resolution_y = h // 2, h
+    scene.render.image_settings.file_format = "PNG"
+    scene.view_settings.view_transform = "Standard"
+    world = bpy.data.worlds.new("sheet")
+    world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.35, 0.35, 0.35, 1.0)
+    scene.world = world
+    cam = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+    cam.data.lens = 85
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    light = bpy.data.objects.new("light", bpy.data.lights.new("light", "AREA"))
+    light.data.energy = 400
+    light.data.size = 2.0
+    scene.collection.objects.link(light)
+    cells = []
+    out_dir = os.path.dirname(spec["out"])
+    for k, person in enumerate(spec["people"]):
+        # The body frame is y up (z forward); Blender's z up (-y forward).
+        verts = np.load(person["vertices_npy"])[:, [0, 2, 1]] * np.array([1.0, -1.0, 1.0])
+        obj = body_object(person, verts)
+        scene.collection.objects.link(obj)
+        zmin, zmax = verts[:, 2].min(), verts[:, 2].max()
+        middle = 0.5 * (zmin + zmax)
+        for side, (name, sign) in enumerate((("front", -1.0), ("back", 1.0))):
+            cam.location = (0.0, sign * 5.2, middle)
+            cam.rotation_euler = (Vector((0.0, 0.0, middle)) - cam.location).to_track_quat("-Z", "Y").to_euler()
+            light.location = (1.5, sign * 3.0, zmax + 1.0)
+            light.rotation_euler = (Vector((0.0, 0.0, middle)) - light.location).to_track_quat("-Z", "Y").to_euler()
+            scene.render.filepath = os.path.join(out_dir, f"cell_{k}_{name}.png")
+            bpy.ops.render.render(write_still=True)
+            cells.append((k, side, scene.render.filepath))
+        bpy.data.objects.remove(obj)
+    n = len(spec["people"])
+    w = h // 2
+    sheet = np.ones((2 * h, n * w, 4), dtype=np.float32)
+    for k, side, cell in cells:
+        image = bpy.data.images.load(cell)
+        pixels = np.array(image.pixels[:], dtype=np.float32).reshape(h, w, 4)[::-1]
+        sheet[side * h:(side + 1) * h, k * w:(k + 1) * w] = pixels
+        bpy.data.images.remove(image)
+    out = bpy.data.images.new("sheet", n * w, 2 * h, alpha=True)
+    out.pixels.foreach_set(sheet[::-1].ravel())
+    out.filepath_raw = spec["out"]
+    out.file_format = "PNG"
+    out.save()
+
+
 def main():
     args = script_args()
     if args[:1] == ["--check-device"] and len(args) == 2:
         check_device(args[1])
+        return
+    if args[:1] == ["--outfit-sheet"] and len(args) == 2:
+        outfit_sheet(args[1])
         return
     if args[:1] == ["--serve"] and len(args) == 2:
         serve(args[1])

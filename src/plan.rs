@@ -46,6 +46,8 @@ pub struct RenderPlan {
     pub materials: crate::render::materials::MaterialsPlan,
     /// How each agent's skin is drawn.
     pub skin: crate::render::skin_tone::SkinPlan,
+    /// How each person's outfit is drawn.
+    pub(crate) outfits: crate::render::outfit::OutfitPlan,
     /// What the dataset holds.
     pub passes: crate::render::passes::Passes,
     /// Whether the take gets the COLMAP export (`images/`, `colmap/`).

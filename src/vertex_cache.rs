@@ -137,6 +137,15 @@ pub fn write_corner_uvs_npy(path: &Path, uvs: &[[f32; 2]]) -> Result<(), CacheEr
     write_npy_rows(path, uvs.iter().copied())
 }
 
+/// Writes per-vertex rows of `C` values as a float32 `.npy` of shape N×C (atomically): a
+/// person's garment regions and rest positions (`render::outfit::regions`).
+pub(crate) fn write_vertex_rows_npy<const C: usize>(
+    path: &Path,
+    rows: &[[f32; C]],
+) -> Result<(), CacheError> {
+    write_npy_rows(path, rows.iter().copied())
+}
+
 /// Writes an object index per face of a scene file as an int32 `.npy` of shape F×1
 /// (atomically; `u32::MAX`, a face that made no triangle, as −1): how Blender splits a scan it
 /// imports as one mesh into the scene's objects.

@@ -88,6 +88,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         "render",
         &[
             "math",
+            "body",
             "scene",
             "camera",
             "rig",

@@ -248,6 +248,7 @@ fn render_scene() -> Rendered {
             // The shipped detail map scales every colour alike: the region and the skin keep
             // their hues (`skin_regions_follow_the_body_uvs`).
             skin_detail: Some(repo().join("assets/body/textures/egogen_skin_detail.jpg")),
+            outfit: None,
         }],
         lighting: ShardLighting {
             world_rgb: [0.3, 0.3, 0.3],

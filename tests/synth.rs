@@ -969,6 +969,130 @@ seed = {seed}
     assert_eq!(doc_a, doc_b);
 }
 
+/// Runs `config`; its folder, the RGB camera's annotations and frame files.
+fn rgb_take(
+    config: &str,
+) -> (
+    tempfile::TempDir,
+    serde_json::Value,
+    Vec<egogen::exr_file::ExrContents>,
+) {
+    let (dir, path) = common::run_dir(config);
+    common::egogen_run_ok(&path);
+    let cam = dir.path().join("out/cameras/camera-rgb");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
+            .unwrap();
+    let frames = doc["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap()
+        })
+        .collect();
+    (dir, doc, frames)
+}
+
+/// `[render.outfits]`: dressed people (the default) render the ground truth bit for bit as bare
+/// ones (`mode = "off"`) and their colour differently; each person's outfit is in the
+/// annotations (none with outfits off), another seed draws another; bad values are refused by
+/// key.
+#[test]
+fn outfits_change_the_colour_and_not_the_ground_truth() {
+    let run = |section: &str| rgb_take(&tiny_walk("apartment.glb", 0.25, section));
+    let (_d, dressed, dressed_frames) = run("");
+    let (_b, bare, bare_frames) = run("[render.outfits]\nmode = \"off\"\n");
+    let (_o, other, _) = run("[render.outfits]\nseed = 7\n");
+    assert!(bare.get("outfits").is_none(), "{}", bare["outfits"]);
+    let outfit = &dressed["outfits"][0];
+    assert_eq!(outfit["name"], "agent_0");
+    let slots: Vec<&str> = outfit["outfit"]["garments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| g["slot"].as_str().unwrap())
+        .collect();
+    assert!(
+        slots.contains(&"top") && slots.contains(&"bottom"),
+        "{slots:?}"
+    );
+    assert_ne!(
+        dressed["outfits"], other["outfits"],
+        "another seed, another outfit"
+    );
+    let ground_truth = |name: &str| {
+        [
+            "depth",
+            "position",
+            "segmentation",
+            "flow",
+            "valid",
+            "normal",
+        ]
+        .iter()
+        .any(|p| name.starts_with(p))
+    };
+    let mut colour_differs = false;
+    for (d, b) in dressed_frames.iter().zip(&bare_frames) {
+        for c in &d.channels {
+            let bits = |e: &egogen::exr_file::ExrContents| {
+                e.channel(&c.name)
+                    .unwrap()
+                    .values
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect::<Vec<u32>>()
+            };
+            if ground_truth(&c.name) {
+                assert!(
+                    bits(d) == bits(b),
+                    "{}: {} differs",
+                    d.path.display(),
+                    c.name
+                );
+            } else if c.name.starts_with("rgb") {
+                colour_differs |= bits(d) != bits(b);
+            }
+        }
+    }
+    assert!(colour_differs, "the outfit shows in the colour");
+    for (section, key, message) in [
+        (
+            "tops = { tunic = 1.0 }",
+            "render.outfits.tops",
+            "unknown style `tunic`",
+        ),
+        (
+            "hair = { bob = 0.0 }",
+            "render.outfits.hair",
+            "at least one style",
+        ),
+        ("shoes = 1.5", "render.outfits.shoes", "1.5"),
+        ("value = [0.8, 0.2]", "render.outfits.value", "MIN ≤ MAX"),
+        ("mode = \"some\"", "render.outfits", "some"),
+    ] {
+        let (dir, path) = common::run_dir(&tiny_walk(
+            "apartment.glb",
+            0.25,
+            &format!("[render.outfits]\n{section}\n"),
+        ));
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+            .arg(&path)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(key) && err.contains(message),
+            "{section}: {err}"
+        );
+        assert!(
+            !dir.path().join("out").exists(),
+            "{section}: something was staged"
+        );
+    }
+}
+
 /// `[render.materials]`: `keep`, `fill` and `all` render the small house's ground truth bit for
 /// bit alike (depth, position, segmentation, flow, validity) and its colour differently; every drawn
 /// material is in the annotations, `fill` draws only objects without a texture of their own,
@@ -982,23 +1106,7 @@ fn drawn_materials_change_the_colour_and_not_the_ground_truth() {
             &format!("[render.materials]\nmode = \"{mode}\"\nseed = {seed}\n"),
         )
     };
-    let run = |mode: &str, seed: u64| {
-        let (dir, path) = common::run_dir(&config(mode, seed));
-        common::egogen_run_ok(&path);
-        let cam = dir.path().join("out/cameras/camera-rgb");
-        let doc: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(cam.join("annotations.json")).unwrap())
-                .unwrap();
-        let frames: Vec<egogen::exr_file::ExrContents> = doc["frames"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|f| {
-                egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap()
-            })
-            .collect();
-        (dir, doc, frames)
-    };
+    let run = |mode: &str, seed: u64| rgb_take(&config(mode, seed));
     let drawn = |doc: &serde_json::Value| -> Vec<String> {
         doc["materials"]
             .as_array()

@@ -373,6 +373,30 @@ enum BodyCommand {
         #[arg(long, default_value_t = 200)]
         cell_px: usize,
     },
+    /// Render a PNG sheet of people dressed as takes dress them (`[render.outfits]`'s
+    /// defaults: a shape, skin and outfit each from the seed), front and back, with Blender.
+    Outfits {
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// How many people.
+        #[arg(long, default_value_t = 12)]
+        people: usize,
+        /// Draws the people's shapes, skins and outfits.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Each picture's height in pixels (its width is half of it).
+        #[arg(long, default_value_t = 320)]
+        cell_px: u32,
+        /// Cycles samples per pixel.
+        #[arg(long, default_value_t = 32)]
+        samples: u32,
+        /// A Python with bpy or a blender executable (default: the managed one).
+        #[arg(long)]
+        blender: Option<PathBuf>,
+        /// Output PNG path (must not exist).
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Render a PNG row of rest-pose bodies, one per value of one beta (front views).
     Shapes {
         #[arg(long)]
@@ -644,6 +668,23 @@ fn run_body(cmd: BodyCommand) -> Result<()> {
             out,
             cell_px,
         } => body_pictures::body_hands(&model_path(model), people, &out, cell_px)?,
+        BodyCommand::Outfits {
+            model,
+            people,
+            seed,
+            cell_px,
+            samples,
+            blender,
+            out,
+        } => egogen::render::outfit_sheet(
+            &model_path(model),
+            people,
+            seed,
+            cell_px,
+            samples,
+            blender.as_deref(),
+            &out,
+        )?,
     }
     Ok(())
 }

@@ -163,6 +163,9 @@ pub struct RawRender {
     /// `[render.skin]`: how each agent's skin tone is drawn (default: any of the ten Monk
     /// tones, seed 0).
     pub skin: Option<RawSkin>,
+    /// `[render.outfits]`: each person's clothes, shoes and hair (default: dressed, seed 0;
+    /// `mode = "off"` for bare bodies).
+    pub(crate) outfits: Option<RawOutfits>,
     /// `[render.aria]`: each wearer's Project Aria streams (docs/ARIA.md); none by default.
     pub aria: Option<RawAria>,
 }
@@ -196,6 +199,28 @@ pub struct RawSkin {
     pub tones: Option<Vec<u8>>,
     /// Default 0.
     pub seed: Option<u64>,
+}
+
+/// `[render.outfits]` (docs/RENDERING.md, "Outfits").
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawOutfits {
+    /// `on` (default) or `off` (bare bodies, the files as before outfits).
+    pub(crate) mode: Option<crate::render::outfit::OutfitsMode>,
+    /// Default 0.
+    pub(crate) seed: Option<u64>,
+    /// Shares of `sleeveless`, `short_sleeves`, `long_sleeves` (styles left out: none).
+    pub(crate) tops: Option<std::collections::BTreeMap<String, f64>>,
+    /// Shares of `shorts`, `knee`, `trousers`, `skirt`, `dress`.
+    pub(crate) bottoms: Option<std::collections::BTreeMap<String, f64>>,
+    /// Shares of `none`, `buzz`, `short`, `bob`, `long`.
+    pub(crate) hair: Option<std::collections::BTreeMap<String, f64>>,
+    /// The share of people in shoes, in [0, 1] (default 0.9).
+    pub(crate) shoes: Option<f64>,
+    /// `[MIN, MAX]` saturation of garment colours, in [0, 1] (default [0, 0.75]).
+    pub(crate) saturation: Option<[f64; 2]>,
+    /// `[MIN, MAX]` value (brightness) of garment colours, in [0, 1] (default [0.12, 0.92]).
+    pub(crate) value: Option<[f64; 2]>,
 }
 
 /// `[render.lighting]` (docs/RENDERING.md).

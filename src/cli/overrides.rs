@@ -12,7 +12,7 @@ pub struct RunOverrides {
     /// `output.dir`.
     pub out: Option<PathBuf>,
     /// Every seed of the config: `motion.seed` (agents) or `scene.seed` (a placed motion),
-    /// `[render.skin]`'s, and those of `[render.lighting]`, `[render.materials]`,
+    /// `[render.skin]`'s and `[render.outfits]`', and those of `[render.lighting]`, `[render.materials]`,
     /// `[render.headset_wear]` and `[render.depth_noise]` where those sections are given —
     /// another variant of the same config.
     pub seed: Option<u64>,
@@ -109,8 +109,9 @@ impl RunOverrides {
                 if let Some(d) = r.depth_noise.as_mut() {
                     d.seed = Some(seed);
                 }
-                // Skin is always drawn: a new seed gives new skins.
+                // Skin and outfits are always drawn: a new seed gives new ones.
                 r.skin.get_or_insert_with(Default::default).seed = Some(seed);
+                r.outfits.get_or_insert_with(Default::default).seed = Some(seed);
             }
         }
         if let Some(w) = self.workers {

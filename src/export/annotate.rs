@@ -8,8 +8,9 @@ use anyhow::{Context, Result};
 use serde_json::json;
 
 use super::annotations::{
-    ActivityLabel, AgentAnnotation, AgentSkin, CameraAnnotations, Conventions, FrameAnnotation,
-    HandAnnotation, JointVisibility, SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
+    ActivityLabel, AgentAnnotation, AgentOutfit, AgentSkin, CameraAnnotations, Conventions,
+    FrameAnnotation, HandAnnotation, JointVisibility, SegmentationId, SmplxParams,
+    ANNOTATIONS_VERSION,
 };
 use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
 use crate::camera::CameraModel;
@@ -82,6 +83,17 @@ fn write_annotations(take: &FinishedTake) -> Result<()> {
                     detail: b.skin_detail.as_ref().and_then(|p| {
                         p.file_name().map(|n| n.to_string_lossy().into_owned())
                     }),
+                })
+                .collect(),
+            outfits: take
+                .spec
+                .bodies
+                .iter()
+                .filter_map(|b| {
+                    b.outfit.as_ref().map(|o| AgentOutfit {
+                        name: b.name.clone(),
+                        outfit: o.outfit.clone(),
+                    })
                 })
                 .collect(),
             frame_rate_hz: agents[0].motion.frame_rate_hz,

@@ -36,6 +36,9 @@ pub struct CameraAnnotations {
     /// Each agent's skin material, as rendered (absent in files written before skins).
     #[serde(default)]
     pub skins: Vec<AgentSkin>,
+    /// Each person's outfit, as rendered (`[render.outfits]`); absent with outfits off.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) outfits: Vec<AgentOutfit>,
     pub frame_rate_hz: f64,
     pub segmentation_ids: Vec<SegmentationId>,
     pub frames: Vec<FrameAnnotation>,
@@ -94,6 +97,15 @@ pub struct AgentSkin {
     /// The skin detail map's file name (in the body model's `textures/`), when one was used.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub detail: Option<String>,
+}
+
+/// A person's outfit ([`crate::render::outfit`]): its garments (lowest layer first), whether
+/// the top is tucked in, and the cut (where each garment ends, in shares of the person's own
+/// lengths).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub(crate) struct AgentOutfit {
+    pub(crate) name: String,
+    pub(crate) outfit: crate::render::outfit::Outfit,
 }
 
 /// Where a joint is in the image.

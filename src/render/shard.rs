@@ -26,7 +26,7 @@ pub(crate) fn serve_command(runtime: &BlenderRuntime, take_dir: &Path) -> Comman
 }
 
 /// The worker script with `args` under this Blender.
-fn script_command(runtime: &BlenderRuntime, args: &[&std::ffi::OsStr]) -> Command {
+pub(crate) fn script_command(runtime: &BlenderRuntime, args: &[&std::ffi::OsStr]) -> Command {
     let script = render_script();
     let mut cmd = Command::new(&runtime.path);
     match runtime.kind {

@@ -8,10 +8,14 @@
 //! masks ([`SKIN_REGIONS`]); bodies are clothing-free. Every choice is in the shard spec and the
 //! annotations.
 
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
+use crate::body::BodyModel;
 use crate::math::random::uniform_open01;
 
 /// The Monk Skin Tone scale's swatches, sRGB (8-bit), tone 1 (lightest) to 10 (darkest).
@@ -187,9 +191,67 @@ impl SkinPlan {
     }
 }
 
+/// `textures/` beside a body model with UVs (what is painted there is in its UV layout).
+fn body_textures(model: &BodyModel) -> Option<PathBuf> {
+    match (&model.uvs, model.source.parent()) {
+        (Some(_), Some(parent)) => Some(parent.join("textures")),
+        _ => None,
+    }
+}
+
+/// The skin detail map beside a body model that has region masks, when it is there
+/// ([`SKIN_DETAIL_FILE`]).
+pub(crate) fn skin_detail_map(model: &BodyModel) -> Result<Option<PathBuf>> {
+    let Some(path) = body_textures(model).map(|d| d.join(SKIN_DETAIL_FILE)) else {
+        return Ok(None);
+    };
+    if !path.is_file() {
+        return Ok(None);
+    }
+    Ok(Some(std::fs::canonicalize(&path).with_context(|| {
+        format!("resolving {}", path.display())
+    })?))
+}
+
+/// The skin regions' masks for `model`: in `textures/` beside the model file, painted in the
+/// UV layout the model carries (ours: MakeHuman's). None when the model has no UVs or no masks
+/// lie beside it (the official SMPL-X files: another layout); all of them, or an error naming
+/// the first one missing.
+pub(crate) fn skin_region_masks(model: &BodyModel) -> Result<Vec<(SkinRegion, PathBuf)>> {
+    let Some(dir) = body_textures(model) else {
+        return Ok(Vec::new());
+    };
+    let masks: Vec<(SkinRegion, PathBuf)> = SKIN_REGIONS
+        .iter()
+        .map(|r| (*r, dir.join(r.mask_file)))
+        .collect();
+    let present = masks.iter().filter(|(_, p)| p.is_file()).count();
+    if present == 0 {
+        return Ok(Vec::new());
+    }
+    if let Some((region, path)) = masks.iter().find(|(_, p)| !p.is_file()) {
+        bail!(
+            "{}: the skin region mask for `{}` is missing ({present} of {} masks are there); \
+             masks beside a body model are used all together",
+            path.display(),
+            region.name,
+            masks.len()
+        );
+    }
+    masks
+        .into_iter()
+        .map(|(r, p)| {
+            let p =
+                std::fs::canonicalize(&p).with_context(|| format!("resolving {}", p.display()))?;
+            Ok((r, p))
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::body::BodyModel;
 
     #[test]
     fn tones_run_light_to_dark_and_draws_cover_them() {
@@ -249,5 +311,40 @@ mod tests {
             .unwrap();
         let darkest = &skins[9];
         assert!(lum(nails.paint(darkest).rgb) > 2.0 * lum(darkest.base_rgb));
+    }
+
+    #[test]
+    fn skin_masks_are_used_all_together_beside_a_model_with_uvs() {
+        let root = crate::paths::crate_root();
+        let shipped = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
+        let masks = skin_region_masks(&shipped).unwrap();
+        assert_eq!(masks.len(), SKIN_REGIONS.len());
+        assert!(masks.iter().all(|(_, p)| p.is_absolute() && p.is_file()));
+        // The detail map ships beside them.
+        let detail = skin_detail_map(&shipped).unwrap().unwrap();
+        assert!(detail.is_absolute() && detail.ends_with(SKIN_DETAIL_FILE));
+
+        // The same model in a directory without masks: no regions.
+        let dir = tempfile::tempdir().unwrap();
+        let mut elsewhere = shipped.clone();
+        elsewhere.source = dir.path().join("SMPLX_NEUTRAL.npz");
+        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
+        assert_eq!(skin_detail_map(&elsewhere).unwrap(), None);
+        // Some of them: an error naming the first one missing.
+        let textures = dir.path().join("textures");
+        std::fs::create_dir(&textures).unwrap();
+        std::fs::copy(
+            root.join("assets/body/textures/mpfb_lips.jpg"),
+            textures.join("mpfb_lips.jpg"),
+        )
+        .unwrap();
+        let msg = format!("{:#}", skin_region_masks(&elsewhere).unwrap_err());
+        assert!(
+            msg.contains("mpfb_eyelids.jpg") && msg.contains("`eyelids`") && msg.contains("1 of 7"),
+            "{msg}"
+        );
+        // A model without UVs never looks for them.
+        elsewhere.uvs = None;
+        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
     }
 }

@@ -40,11 +40,12 @@ pub use mesh::{ObjectId, ObjectOrientation, SceneMesh, SceneObject};
 pub(crate) use object_class::ObjectClass;
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{
-    guide_aim, line_is_clear, plan_path, plan_path_centred, plan_path_weighted, Guide, PathField,
-    PlannedPath, GUIDE_CENTRE_M, GUIDE_CLEARANCE_M,
+    guide_aim, line_is_clear, plan_path, Guide, PathField, PlannedPath, GUIDE_CENTRE_M,
+    GUIDE_CLEARANCE_M,
 };
 pub use penetration::{blocked_cells_in_box, sdf_penetration, Penetration};
-pub use sampler::{sample_start_goals, sample_start_goals_in, StartGoal};
+pub(crate) use sampler::sample_start_goals_in;
+pub use sampler::{sample_start_goals, StartGoal};
 pub use sdf3d::SceneSdf;
 pub(crate) use seats::{find_seats, Seat, SeatSettings};
 pub(crate) use seen_map::{guide_aim_remembered, SeenMap};

@@ -103,7 +103,7 @@ pub fn plan_path(
 /// doorway or a corridor instead of grazing its side at the clearance, where a body's swinging
 /// hands brush the frame. 0: [`plan_path`]. The octile heuristic stays admissible (steps only
 /// cost more).
-pub fn plan_path_centred(
+pub(crate) fn plan_path_centred(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
     clearance_m: f64,
@@ -118,7 +118,7 @@ pub fn plan_path_centred(
 /// `extra[k]` times its length more besides: a planner's dislike of some ground (a guide on
 /// memory, of cells the walker never saw: [`Guide::unknown_cost`]). `None` or all zeros:
 /// [`plan_path_centred`]. The heuristic stays admissible (steps only cost more).
-pub fn plan_path_weighted(
+pub(crate) fn plan_path_weighted(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
     clearance_m: f64,

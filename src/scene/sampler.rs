@@ -27,7 +27,7 @@ pub fn sample_start_goals(
 
 /// The same with starts and goals only on the cells of `region` (one flag per cell, e.g.
 /// [`WalkableMap::indoor_cells`]) when given.
-pub fn sample_start_goals_in(
+pub(crate) fn sample_start_goals_in(
     map: &WalkableMap,
     region: Option<&[bool]>,
     seed: u64,

@@ -133,7 +133,7 @@ impl SeenMap {
 
     /// Cells seen open and seen blocked.
     #[cfg(test)]
-    pub fn seen_cells(&self) -> (usize, usize) {
+    pub(crate) fn seen_cells(&self) -> (usize, usize) {
         let count = |s: Seen| self.cells.iter().filter(|&&c| c == s).count();
         (count(Seen::Open), count(Seen::Blocked))
     }

@@ -1,4 +1,4 @@
-//! The `[render]` section resolved: the rig and its cameras, the headset's wear, skin, passes,
+//! The `[render]` section resolved: the rig and its cameras, the headset's wear, skin, outfits, passes,
 //! COLMAP export, lighting and depth noise.
 
 use std::path::Path;
@@ -9,6 +9,7 @@ use crate::cli::config_file::crate_root;
 use crate::plan::RenderPlan;
 use crate::render::depth_noise::DepthNoise;
 use crate::render::lighting::{LightingPlan, WorldChoice, SHIPPED_HDRIS};
+use crate::render::outfit::{OutfitPlan, Shares};
 use crate::render::passes::{Pass, Passes};
 use crate::render::render_camera::RenderCamera;
 use crate::render::skin_tone::SkinPlan;
@@ -101,6 +102,10 @@ pub(super) fn resolve_render(
         None => SkinPlan::default(),
         Some(raw) => skin_plan(raw, &bad)?,
     };
+    let outfits = match &r.outfits {
+        None => OutfitPlan::default(),
+        Some(raw) => outfit_plan(raw, &bad)?,
+    };
     let passes = resolve_passes(
         r.passes.as_deref(),
         depth_noise.iter().any(Option::is_some),
@@ -130,6 +135,7 @@ pub(super) fn resolve_render(
         lighting,
         materials,
         skin,
+        outfits,
         passes,
         colmap,
         device: r.device.unwrap_or_default(),
@@ -265,6 +271,47 @@ fn skin_plan(raw: &crate::cli::config::RawSkin, bad: Bad) -> Result<SkinPlan, Co
     Ok(SkinPlan {
         tones,
         seed: raw.seed.unwrap_or(0),
+    })
+}
+
+/// `[render.outfits]`: the shares of each style, the colours' ranges and the seed; an error
+/// names the key.
+fn outfit_plan(raw: &crate::cli::config::RawOutfits, bad: Bad) -> Result<OutfitPlan, ConfigError> {
+    let d = OutfitPlan::default();
+    fn shares<S: crate::render::outfit::Style>(
+        table: &Option<std::collections::BTreeMap<String, f64>>,
+        default: Shares<S>,
+        key: &str,
+        bad: Bad,
+    ) -> Result<Shares<S>, ConfigError> {
+        match table {
+            None => Ok(default),
+            Some(t) => Shares::from_table(t).map_err(|m| bad(key, m)),
+        }
+    }
+    let range = |v: Option<[f64; 2]>, default: [f64; 2], key: &str| match v.unwrap_or(default) {
+        [lo, hi] if (0.0..=1.0).contains(&lo) && (lo..=1.0).contains(&hi) => Ok([lo, hi]),
+        r => Err(bad(
+            key,
+            format!("expected [MIN, MAX] with 0 ≤ MIN ≤ MAX ≤ 1, found {r:?}"),
+        )),
+    };
+    let shoes = raw.shoes.unwrap_or(d.shoes);
+    if !(0.0..=1.0).contains(&shoes) {
+        return Err(bad(
+            "render.outfits.shoes",
+            format!("expected a share in [0, 1], found {shoes}"),
+        ));
+    }
+    Ok(OutfitPlan {
+        mode: raw.mode.unwrap_or(d.mode),
+        seed: raw.seed.unwrap_or(d.seed),
+        tops: shares(&raw.tops, d.tops, "render.outfits.tops", bad)?,
+        bottoms: shares(&raw.bottoms, d.bottoms, "render.outfits.bottoms", bad)?,
+        hair: shares(&raw.hair, d.hair, "render.outfits.hair", bad)?,
+        shoes,
+        saturation: range(raw.saturation, d.saturation, "render.outfits.saturation")?,
+        value: range(raw.value, d.value, "render.outfits.value")?,
     })
 }
 

@@ -1,6 +1,6 @@
 //! The take's people staged (steps 2 and 3 of the main job): the bodies rendered with their
 //! tracks and who wears the rig, the take's `sequence/` folder, the Aria streams' output, and
-//! Blender's body inputs (vertex caches, textures, skin maps).
+//! Blender's body inputs (vertex caches, textures, skin maps, outfit regions).
 
 use std::path::{Path, PathBuf};
 
@@ -11,9 +11,11 @@ use crate::body::BodyModel;
 use crate::export::aria::{AriaExport, AriaWearer};
 use crate::export::gaze::GazeGoal;
 use crate::plan::{RenderPlan, RunPlan};
-use crate::render::protocol::ShardSkinRegion;
+use crate::render::outfit::regions::garment_fields;
+use crate::render::outfit::SLOTS;
+use crate::render::protocol::{ShardOutfit, ShardSkinRegion};
 use crate::render::shard_plan::AGENT_ID_BASE;
-use crate::render::skin_tone::{SkinRegion, SKIN_DETAIL_FILE, SKIN_REGIONS};
+use crate::render::skin_tone::{skin_detail_map, skin_region_masks};
 use crate::render::ShardBody;
 use crate::scene::walkable_map;
 use crate::supervisor::staged::RenderedAgent;
@@ -21,7 +23,9 @@ use crate::synth::body_cache::{body_cache_at, playback_keys, rendered_sample_ind
 use crate::synth::crowd_dir::write_crowd_dir;
 use crate::synth::placement::place_motion;
 use crate::synth::{pose_meshes, track_body, write_sequence_dir};
-use crate::vertex_cache::{write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy};
+use crate::vertex_cache::{
+    write_corner_uvs_npy, write_faces_npy, write_rest_vertices_npy, write_vertex_rows_npy,
+};
 
 /// The bodies the run renders, each with its track, and which of them wear the rig.
 pub(super) fn rendered_agents(
@@ -234,6 +238,21 @@ pub(super) fn write_body_inputs(
                 mask: mask.clone(),
             })
             .collect();
+        let outfit = match render.outfits.draw(k) {
+            None => None,
+            Some(outfit) => {
+                let path = work.join(format!("agent_{k}_outfit.npy"));
+                let fields = garment_fields(model, &a.motion.betas, &outfit)
+                    .with_context(|| format!("measuring {}'s outfit on its body", a.name))?;
+                write_vertex_rows_npy(&path, &fields)?;
+                scratch.push(path.clone());
+                Some(ShardOutfit {
+                    fields_npy: std::fs::canonicalize(&path)?,
+                    slots: SLOTS.iter().map(|s| s.to_string()).collect(),
+                    outfit,
+                })
+            }
+        };
         bodies.push(ShardBody {
             name: a.name.clone(),
             pass_index: a.id,
@@ -250,105 +269,9 @@ pub(super) fn write_body_inputs(
             uvs_npy: uvs_npy.clone(),
             skin_regions,
             skin_detail: skin_detail.clone(),
+            outfit,
         });
         scratch.extend([pc2, faces, vertices]);
     }
     Ok((bodies, scratch))
-}
-
-/// `textures/` beside a body model with UVs (what is painted there is in its UV layout).
-fn body_textures(model: &BodyModel) -> Option<PathBuf> {
-    match (&model.uvs, model.source.parent()) {
-        (Some(_), Some(parent)) => Some(parent.join("textures")),
-        _ => None,
-    }
-}
-
-/// The skin detail map beside a body model that has region masks, when it is there
-/// ([`SKIN_DETAIL_FILE`]).
-pub(super) fn skin_detail_map(model: &BodyModel) -> Result<Option<PathBuf>> {
-    let Some(path) = body_textures(model).map(|d| d.join(SKIN_DETAIL_FILE)) else {
-        return Ok(None);
-    };
-    if !path.is_file() {
-        return Ok(None);
-    }
-    Ok(Some(std::fs::canonicalize(&path).with_context(|| {
-        format!("resolving {}", path.display())
-    })?))
-}
-
-/// The skin regions' masks for `model`: in `textures/` beside the model file, painted in the
-/// UV layout the model carries (ours: MakeHuman's). None when the model has no UVs or no masks
-/// lie beside it (the official SMPL-X files: another layout); all of them, or an error naming
-/// the first one missing.
-pub(super) fn skin_region_masks(model: &BodyModel) -> Result<Vec<(SkinRegion, PathBuf)>> {
-    let Some(dir) = body_textures(model) else {
-        return Ok(Vec::new());
-    };
-    let masks: Vec<(SkinRegion, PathBuf)> = SKIN_REGIONS
-        .iter()
-        .map(|r| (*r, dir.join(r.mask_file)))
-        .collect();
-    let present = masks.iter().filter(|(_, p)| p.is_file()).count();
-    if present == 0 {
-        return Ok(Vec::new());
-    }
-    if let Some((region, path)) = masks.iter().find(|(_, p)| !p.is_file()) {
-        bail!(
-            "{}: the skin region mask for `{}` is missing ({present} of {} masks are there); \
-             masks beside a body model are used all together",
-            path.display(),
-            region.name,
-            masks.len()
-        );
-    }
-    masks
-        .into_iter()
-        .map(|(r, p)| {
-            let p =
-                std::fs::canonicalize(&p).with_context(|| format!("resolving {}", p.display()))?;
-            Ok((r, p))
-        })
-        .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn skin_masks_are_used_all_together_beside_a_model_with_uvs() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-        let shipped = BodyModel::load(root.join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
-        let masks = skin_region_masks(&shipped).unwrap();
-        assert_eq!(masks.len(), SKIN_REGIONS.len());
-        assert!(masks.iter().all(|(_, p)| p.is_absolute() && p.is_file()));
-        // The detail map ships beside them.
-        let detail = skin_detail_map(&shipped).unwrap().unwrap();
-        assert!(detail.is_absolute() && detail.ends_with(SKIN_DETAIL_FILE));
-
-        // The same model in a directory without masks: no regions.
-        let dir = tempfile::tempdir().unwrap();
-        let mut elsewhere = shipped.clone();
-        elsewhere.source = dir.path().join("SMPLX_NEUTRAL.npz");
-        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
-        assert_eq!(skin_detail_map(&elsewhere).unwrap(), None);
-        // Some of them: an error naming the first one missing.
-        let textures = dir.path().join("textures");
-        std::fs::create_dir(&textures).unwrap();
-        std::fs::copy(
-            root.join("assets/body/textures/mpfb_lips.jpg"),
-            textures.join("mpfb_lips.jpg"),
-        )
-        .unwrap();
-        let msg = format!("{:#}", skin_region_masks(&elsewhere).unwrap_err());
-        assert!(
-            msg.contains("mpfb_eyelids.jpg") && msg.contains("`eyelids`") && msg.contains("1 of 7"),
-            "{msg}"
-        );
-        // A model without UVs never looks for them.
-        elsewhere.uvs = None;
-        assert!(skin_region_masks(&elsewhere).unwrap().is_empty());
-    }
 }
