@@ -89,6 +89,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
         &[
             "math",
             "body",
+            "vertex_cache",
             "scene",
             "camera",
             "rig",

@@ -34,7 +34,7 @@ pub(crate) struct RawCampaign {
     pub out: PathBuf,
     /// How many takes.
     pub takes: usize,
-    /// Take k has seed `first_seed + k` (every seed of the run: motion, lighting, wear, skin).
+    /// Take k has seed `first_seed + k` (every seed of the run: motion, lighting, wear, skin, outfits).
     #[serde(default)]
     pub first_seed: u64,
     /// Scene files or globs (`rooms/*.obj`); take k walks scene k mod (number of scenes),

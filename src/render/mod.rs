@@ -4,8 +4,8 @@
 //! (`shard_plan`, `camera_setup`), what Blender renders for each rig camera (`render_camera`,
 //! `lens_polynomial`), the drawn appearance it is given (`lighting`, `materials`, `skin_tone`:
 //! each agent's skin, `outfit`: each person's clothes and hair, their regions measured on the
-//! body model's rest shape), and turning its raw renders into frame files (`frame_file`,
-//! `passes`, `depth_noise`). `render` knows nothing of motion or policies: posed bodies reach
+//! body model's rest shape; `outfit_sheet`: `egogen body outfits`), and turning its raw
+//! renders into frame files (`frame_file`, `passes`, `depth_noise`). `render` knows nothing of motion or policies: posed bodies reach
 //! it as files (`crate::vertex_cache`) that `synth` writes.
 
 pub mod blender_runtime;
@@ -16,6 +16,7 @@ pub mod lens_polynomial;
 pub mod lighting;
 pub mod materials;
 pub(crate) mod outfit;
+pub(crate) mod outfit_sheet;
 pub mod passes;
 pub mod protocol;
 pub mod render_camera;
@@ -24,7 +25,8 @@ pub mod shard_plan;
 pub mod skin_tone;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
-pub use outfit::sheet::outfit_sheet;
+pub use outfit::ShardOutfit;
+pub use outfit_sheet::outfit_sheet;
 pub use protocol::{
     BodyProbe, CameraKey, DenoisePrefilter, ObstacleKey, PointLight, RenderDevice, ShardBody,
     ShardCamera, ShardFrame, ShardLens, ShardLighting, ShardMaterial, ShardObstacle, ShardRgb,

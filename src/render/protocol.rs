@@ -115,19 +115,7 @@ pub struct ShardBody {
     pub skin_detail: Option<PathBuf>,
     /// Its outfit, when outfits are on ([`super::outfit`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub outfit: Option<ShardOutfit>,
-}
-
-/// A person's outfit as Blender paints it: the garments, lowest layer first, and per vertex
-/// each slot's signed distance and the rest position (float32 N×8,
-/// [`super::outfit::regions::garment_fields`]).
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ShardOutfit {
-    pub(crate) fields_npy: PathBuf,
-    /// The slots in the fields' column order.
-    pub(crate) slots: Vec<String>,
-    pub(crate) outfit: super::outfit::Outfit,
+    pub outfit: Option<super::outfit::ShardOutfit>,
 }
 
 /// A skin region: its colour and the grey mask (in the body's UV layout) that places it.

@@ -9,9 +9,9 @@
 //! files as they were before outfits.
 
 pub(crate) mod regions;
-pub(crate) mod sheet;
 
 use std::collections::BTreeMap;
+use std::path::PathBuf;
 
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
@@ -231,6 +231,18 @@ pub(crate) struct Outfit {
     /// The top tucked into the bottom (bottom drawn over it) or worn over it.
     pub(crate) tucked: bool,
     pub(crate) cut: Cut,
+}
+
+/// A person's outfit as Blender paints it: the garments, lowest layer first, and per vertex
+/// each slot's signed distance and the rest position (float32 N×8,
+/// [`regions::garment_fields`]).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardOutfit {
+    pub(crate) fields_npy: PathBuf,
+    /// The slots in the fields' column order.
+    pub(crate) slots: Vec<String>,
+    pub(crate) outfit: Outfit,
 }
 
 /// The regions' columns in the per-vertex fields ([`regions::garment_fields`]).

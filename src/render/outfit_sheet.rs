@@ -8,12 +8,11 @@ use anyhow::{bail, Context, Result};
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 
-use super::regions::garment_fields;
-use super::{OutfitPlan, SLOTS};
+use super::outfit::regions::garment_fields;
+use super::outfit::{OutfitPlan, ShardOutfit, SLOTS};
 use crate::body::{joint, BodyModel, BodyParams};
 use crate::math::random::standard_normal;
 use crate::math::Vec3;
-use crate::render::protocol::{ShardOutfit, ShardSkinRegion};
 use crate::render::skin_tone::{skin_detail_map, skin_region_masks, SkinPlan};
 use crate::render::BlenderRuntime;
 use crate::vertex_cache::{write_corner_uvs_npy, write_faces_npy, write_vertex_rows_npy};
@@ -97,12 +96,10 @@ pub fn outfit_sheet(
         let outfit = outfits.draw(k).expect("outfits are on");
         let fields = work.join(format!("person_{k}_outfit.npy"));
         write_vertex_rows_npy(&fields, &garment_fields(&model, &betas, &outfit)?)?;
-        let regions: Vec<ShardSkinRegion> = masks
+        // As a shard spec's `skin_regions`.
+        let regions: Vec<serde_json::Value> = masks
             .iter()
-            .map(|(region, mask)| ShardSkinRegion {
-                paint: region.paint(&skin),
-                mask: mask.clone(),
-            })
+            .map(|(region, mask)| serde_json::json!({"paint": region.paint(&skin), "mask": mask}))
             .collect();
         people.push(serde_json::json!({
             "name": format!("person_{k}"),
