@@ -28,9 +28,20 @@ pub(crate) fn hsv_to_rgb(h_deg: f64, s: f64, v: f64) -> [f64; 3] {
     [r + m, g + m, b + m].map(|u| u.clamp(0.0, 1.0))
 }
 
+/// HSV (hue in degrees, saturation and value in [0, 1], sRGB) as linear RGB.
+pub(crate) fn hsv_linear(h_deg: f64, s: f64, v: f64) -> [f64; 3] {
+    hsv_to_rgb(h_deg, s, v).map(srgb_to_linear)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::hsv_to_rgb;
+    use super::{hsv_linear, hsv_to_rgb};
+
+    #[test]
+    fn hsv_reads_back_as_linear_light() {
+        assert_eq!(hsv_linear(0.0, 1.0, 1.0), [1.0, 0.0, 0.0]);
+        assert_eq!(hsv_linear(360.0, 0.0, 0.0), [0.0; 3]);
+    }
 
     #[test]
     fn primaries_greys_and_wrapped_hues() {

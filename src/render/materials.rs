@@ -14,8 +14,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use crate::math::colour::{hsv_to_rgb, srgb_to_linear};
-use crate::math::random::uniform_open01;
+use crate::math::colour::hsv_linear;
+use crate::math::random::{uniform_in, weighted_index};
 use crate::scene::ObjectClass;
 
 /// Which objects get a drawn material (`[render.materials] mode`).
@@ -221,21 +221,12 @@ fn classify(f: &SurfaceFacts) -> (Option<Kind>, ClassedBy) {
     )
 }
 
-fn between(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
-    lo + (hi - lo) * uniform_open01(rng)
-}
-
-/// HSV (hue in degrees, saturation and value in [0, 1], sRGB) as linear RGB.
-fn hsv_linear(h: f64, s: f64, v: f64) -> [f64; 3] {
-    hsv_to_rgb(h, s, v).map(srgb_to_linear)
-}
-
 /// A colour drawn from ranges of hue (degrees), saturation and value.
 fn colour(rng: &mut ChaCha8Rng, h: (f64, f64), s: (f64, f64), v: (f64, f64)) -> [f64; 3] {
     let (h, s, v) = (
-        between(rng, h.0, h.1),
-        between(rng, s.0, s.1),
-        between(rng, v.0, v.1),
+        uniform_in(rng, h.0, h.1),
+        uniform_in(rng, s.0, s.1),
+        uniform_in(rng, v.0, v.1),
     );
     hsv_linear(h, s, v)
 }
@@ -251,63 +242,68 @@ fn draw_look(rng: &mut ChaCha8Rng, pattern: Pattern) -> ([f64; 3], [f64; 3], f64
     match pattern {
         WoodPlanks | Wood => {
             let base = colour(rng, (18.0, 40.0), (0.35, 0.7), (0.25, 0.7));
-            let grain = between(rng, 0.55, 0.75);
+            let grain = uniform_in(rng, 0.55, 0.75);
             let (scale, rough) = match pattern {
-                WoodPlanks => (between(rng, 0.10, 0.22), between(rng, 0.3, 0.6)),
-                _ => (between(rng, 0.02, 0.08), between(rng, 0.25, 0.55)),
+                WoodPlanks => (uniform_in(rng, 0.10, 0.22), uniform_in(rng, 0.3, 0.6)),
+                _ => (uniform_in(rng, 0.02, 0.08), uniform_in(rng, 0.25, 0.55)),
             };
             (base, scaled(base, grain), scale, rough)
         }
         Tiles => {
             let base = colour(rng, ANY, (0.0, 0.25), (0.45, 0.92));
             let grout = colour(rng, (30.0, 50.0), (0.0, 0.1), (0.25, 0.7));
-            (base, grout, between(rng, 0.2, 0.6), between(rng, 0.1, 0.35))
+            (
+                base,
+                grout,
+                uniform_in(rng, 0.2, 0.6),
+                uniform_in(rng, 0.1, 0.35),
+            )
         }
         Carpet => {
             let base = colour(rng, ANY, (0.1, 0.55), (0.15, 0.65));
             (
                 base,
-                scaled(base, between(rng, 0.55, 0.8)),
-                between(rng, 0.15, 0.5),
-                between(rng, 0.85, 1.0),
+                scaled(base, uniform_in(rng, 0.55, 0.8)),
+                uniform_in(rng, 0.15, 0.5),
+                uniform_in(rng, 0.85, 1.0),
             )
         }
         Stone => {
             let base = colour(rng, (20.0, 50.0), (0.0, 0.2), (0.35, 0.75));
             (
                 base,
-                scaled(base, between(rng, 0.5, 0.75)),
-                between(rng, 0.15, 0.5),
-                between(rng, 0.4, 0.8),
+                scaled(base, uniform_in(rng, 0.5, 0.75)),
+                uniform_in(rng, 0.15, 0.5),
+                uniform_in(rng, 0.4, 0.8),
             )
         }
         Plaster => {
             let base = colour(rng, (25.0, 60.0), (0.0, 0.12), (0.6, 0.92));
             (
                 base,
-                scaled(base, between(rng, 0.8, 0.9)),
-                between(rng, 0.05, 0.3),
-                between(rng, 0.7, 0.95),
+                scaled(base, uniform_in(rng, 0.8, 0.9)),
+                uniform_in(rng, 0.05, 0.3),
+                uniform_in(rng, 0.7, 0.95),
             )
         }
         Paint => {
             let base = colour(rng, ANY, (0.05, 0.4), (0.4, 0.88));
             (
                 base,
-                scaled(base, between(rng, 0.85, 0.93)),
-                between(rng, 0.2, 0.8),
-                between(rng, 0.5, 0.8),
+                scaled(base, uniform_in(rng, 0.85, 0.93)),
+                uniform_in(rng, 0.2, 0.8),
+                uniform_in(rng, 0.5, 0.8),
             )
         }
         Wallpaper => {
-            let hue = between(rng, 0.0, 360.0);
+            let hue = uniform_in(rng, 0.0, 360.0);
             let base = colour(rng, (hue, hue), (0.05, 0.35), (0.5, 0.88));
             let print = colour(rng, (hue + 60.0, hue + 300.0), (0.2, 0.55), (0.25, 0.7));
             (
                 base,
                 print,
-                between(rng, 0.05, 0.2),
-                between(rng, 0.5, 0.85),
+                uniform_in(rng, 0.05, 0.2),
+                uniform_in(rng, 0.5, 0.85),
             )
         }
         Brick => {
@@ -316,26 +312,26 @@ fn draw_look(rng: &mut ChaCha8Rng, pattern: Pattern) -> ([f64; 3], [f64; 3], f64
             (
                 base,
                 mortar,
-                between(rng, 0.2, 0.26),
-                between(rng, 0.75, 0.95),
+                uniform_in(rng, 0.2, 0.26),
+                uniform_in(rng, 0.75, 0.95),
             )
         }
         Fabric => {
             let base = colour(rng, ANY, (0.1, 0.7), (0.12, 0.7));
             (
                 base,
-                scaled(base, between(rng, 0.6, 0.8)),
-                between(rng, 0.002, 0.006),
-                between(rng, 0.8, 1.0),
+                scaled(base, uniform_in(rng, 0.6, 0.8)),
+                uniform_in(rng, 0.002, 0.006),
+                uniform_in(rng, 0.8, 1.0),
             )
         }
         Leather => {
             let base = colour(rng, (0.0, 40.0), (0.3, 0.75), (0.06, 0.4));
             (
                 base,
-                scaled(base, between(rng, 0.6, 0.8)),
-                between(rng, 0.005, 0.02),
-                between(rng, 0.35, 0.6),
+                scaled(base, uniform_in(rng, 0.6, 0.8)),
+                uniform_in(rng, 0.005, 0.02),
+                uniform_in(rng, 0.35, 0.6),
             )
         }
         Metal => {
@@ -343,8 +339,8 @@ fn draw_look(rng: &mut ChaCha8Rng, pattern: Pattern) -> ([f64; 3], [f64; 3], f64
             (
                 base,
                 scaled(base, 0.85),
-                between(rng, 0.3, 1.0),
-                between(rng, 0.15, 0.45),
+                uniform_in(rng, 0.3, 1.0),
+                uniform_in(rng, 0.15, 0.45),
             )
         }
         Plastic => {
@@ -352,23 +348,15 @@ fn draw_look(rng: &mut ChaCha8Rng, pattern: Pattern) -> ([f64; 3], [f64; 3], f64
             (
                 base,
                 scaled(base, 0.9),
-                between(rng, 0.3, 1.0),
-                between(rng, 0.3, 0.6),
+                uniform_in(rng, 0.3, 1.0),
+                uniform_in(rng, 0.3, 0.6),
             )
         }
     }
 }
 
 fn pick(rng: &mut ChaCha8Rng, weighted: &[(Pattern, f64)]) -> Pattern {
-    let total: f64 = weighted.iter().map(|(_, w)| w).sum();
-    let mut u = uniform_open01(rng) * total;
-    for &(p, w) in weighted {
-        if u < w {
-            return p;
-        }
-        u -= w;
-    }
-    weighted[weighted.len() - 1].0
+    weighted[weighted_index(rng, weighted.iter().map(|p| p.1))].0
 }
 
 impl MaterialsPlan {
@@ -529,7 +517,5 @@ mod tests {
                 }
             }
         }
-        assert_eq!(hsv_linear(0.0, 1.0, 1.0), [1.0, 0.0, 0.0]);
-        assert_eq!(hsv_linear(360.0, 0.0, 0.0), [0.0; 3]);
     }
 }

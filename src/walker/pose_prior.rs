@@ -147,16 +147,7 @@ impl PosePrior {
         let sq = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
         let mut nearest: Vec<f64> = poses.iter().map(|p| sq(p, &means[0])).collect();
         while means.len() < k {
-            let total: f64 = nearest.iter().sum();
-            let mut r = crate::math::random::uniform_open01(&mut rng) * total;
-            let mut pick = n - 1;
-            for (i, d) in nearest.iter().enumerate() {
-                if r < *d {
-                    pick = i;
-                    break;
-                }
-                r -= d;
-            }
+            let pick = crate::math::random::weighted_index(&mut rng, nearest.iter().copied());
             means.push(poses[pick].to_vec());
             for (d, p) in nearest.iter_mut().zip(poses) {
                 *d = d.min(sq(p, means.last().expect("just pushed")));

@@ -17,8 +17,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
 
-use crate::math::colour::{hsv_to_rgb, srgb_to_linear};
-use crate::math::random::{uniform_in, uniform_open01};
+use crate::math::colour::hsv_linear;
+use crate::math::random::{uniform_in, uniform_open01, weighted_index};
 
 /// `[render.outfits] mode`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -116,17 +116,7 @@ impl<S: Style> Shares<S> {
     }
 
     fn draw(&self, rng: &mut ChaCha8Rng) -> S {
-        let total: f64 = self.weights.iter().sum();
-        let mut u = uniform_open01(rng) * total;
-        for (k, w) in self.weights.iter().enumerate() {
-            if u < *w {
-                return S::ALL[k];
-            }
-            u -= w;
-        }
-        // Rounding at the top end: the last style with a share.
-        let last = self.weights.iter().rposition(|w| *w > 0.0).unwrap_or(0);
-        S::ALL[last]
+        S::ALL[weighted_index(rng, self.weights.iter().copied())]
     }
 }
 
@@ -380,16 +370,7 @@ impl OutfitPlan {
         style: &'static str,
         fabrics: &[(Fabric, f64)],
     ) -> Garment {
-        let total: f64 = fabrics.iter().map(|f| f.1).sum();
-        let mut u = uniform_open01(rng) * total;
-        let mut fabric = fabrics[0].0;
-        for &(f, w) in fabrics {
-            fabric = f;
-            if u < w {
-                break;
-            }
-            u -= w;
-        }
+        let fabric = fabrics[weighted_index(rng, fabrics.iter().map(|f| f.1))].0;
         let pattern = match (fabric, uniform_open01(rng)) {
             (Fabric::Denim | Fabric::Leather, _) => Pattern::Plain,
             (_, u) if u < 0.6 => Pattern::Plain,
@@ -493,11 +474,6 @@ const SKIRT_FABRICS: [(Fabric, f64); 4] = [
     (Fabric::Synthetic, 1.0),
 ];
 
-/// HSV (hue in degrees, saturation and value in [0, 1], sRGB) as linear RGB.
-fn hsv_linear(h: f64, s: f64, v: f64) -> [f64; 3] {
-    hsv_to_rgb(h, s, v).map(srgb_to_linear)
-}
-
 /// Hair of a natural colour (black, browns, auburn, blond, grey), drawn along its strands.
 fn hair_garment(rng: &mut ChaCha8Rng, style: HairStyle) -> Garment {
     // (hue, saturation, value) ranges of natural hair, sRGB.
@@ -509,16 +485,7 @@ fn hair_garment(rng: &mut ChaCha8Rng, style: HairStyle) -> Garment {
         ([35.0, 45.0], [0.35, 0.6], [0.55, 0.85], 1.2), // blond
         ([30.0, 40.0], [0.0, 0.1], [0.45, 0.8], 0.8),   // grey
     ];
-    let total: f64 = COLOURS.iter().map(|c| c.3).sum();
-    let mut u = uniform_open01(rng) * total;
-    let mut pick = COLOURS[0];
-    for c in COLOURS {
-        pick = c;
-        if u < c.3 {
-            break;
-        }
-        u -= c.3;
-    }
+    let pick = COLOURS[weighted_index(rng, COLOURS.iter().map(|c| c.3))];
     let base_rgb = hsv_linear(
         uniform_in(rng, pick.0[0], pick.0[1]),
         uniform_in(rng, pick.1[0], pick.1[1]),
