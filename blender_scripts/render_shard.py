@@ -17,6 +17,8 @@ supervisor adds them up per attempt, docs/RENDERING.md "Where a frame's time goe
 why it cannot (exit 3, `EGOGEN_SETUP_FAILED`): egogen runs it before it stages a take.
 `render_shard.py --serve TAKE_DIR` is a long-lived worker: it builds the scene once and renders
 shard after shard of one take, each named on a line of its standard input (see `serve`).
+`render_shard.py --outfit-sheet SHEET.json` renders `egogen body outfits`' people with the
+bodies' own materials (see `outfit_sheet`).
 """
 import json
 import math

@@ -13,7 +13,8 @@ use super::outfit::{OutfitPlan, ShardOutfit, SLOTS};
 use crate::body::{joint, BodyModel, BodyParams};
 use crate::math::random::standard_normal;
 use crate::math::Vec3;
-use crate::render::skin_tone::{skin_detail_map, skin_region_masks, SkinPlan};
+use crate::render::protocol::ShardSkinRegion;
+use crate::render::skin_tone::{SkinPlan, SkinTextures};
 use crate::render::BlenderRuntime;
 use crate::vertex_cache::{write_corner_uvs_npy, write_faces_npy, write_vertex_rows_npy};
 
@@ -48,22 +49,21 @@ pub fn outfit_sheet(
     }
     let model = BodyModel::load(model_path)?;
     let runtime = BlenderRuntime::resolve(blender)?;
-    let scratch = Scratch::new()?;
-    let work = scratch.0.as_path();
+    let scratch = tempfile::Builder::new()
+        .prefix("egogen-outfits-")
+        .tempdir()
+        .context("making a scratch folder")?;
+    let work = scratch.path();
     let faces = work.join("faces.npy");
     write_faces_npy(&faces, &model.faces)?;
-    let masks = skin_region_masks(&model)?;
-    let uvs = match (&model.uvs, masks.is_empty()) {
-        (Some(uvs), false) => {
+    let textures = SkinTextures::of(&model)?;
+    let uvs = match (&model.uvs, textures.need_uvs()) {
+        (Some(uvs), true) => {
             let path = work.join("uvs.npy");
             write_corner_uvs_npy(&path, &uvs.per_corner())?;
             Some(path)
         }
         _ => None,
-    };
-    let detail = match masks.is_empty() {
-        true => None,
-        false => skin_detail_map(&model)?,
     };
     let skins = SkinPlan {
         seed: sheet.seed,
@@ -96,11 +96,7 @@ pub fn outfit_sheet(
         let outfit = outfits.draw(k).expect("outfits are on");
         let fields = work.join(format!("person_{k}_outfit.npy"));
         write_vertex_rows_npy(&fields, &garment_fields(&model, &betas, &outfit)?)?;
-        // As a shard spec's `skin_regions`.
-        let regions: Vec<serde_json::Value> = masks
-            .iter()
-            .map(|(region, mask)| serde_json::json!({"paint": region.paint(&skin), "mask": mask}))
-            .collect();
+        let regions = ShardSkinRegion::painted(&textures, &skin);
         people.push(serde_json::json!({
             "name": format!("person_{k}"),
             "vertices_npy": vertices,
@@ -108,7 +104,7 @@ pub fn outfit_sheet(
             "uvs_npy": uvs,
             "skin": skin,
             "skin_regions": regions,
-            "skin_detail": detail,
+            "skin_detail": textures.detail,
             "outfit": ShardOutfit {
                 fields_npy: fields,
                 slots: SLOTS.iter().map(|s| s.to_string()).collect(),
@@ -143,21 +139,4 @@ pub fn outfit_sheet(
         .with_context(|| format!("writing {}", out.display()))?;
     println!("wrote {}", out.display());
     Ok(())
-}
-
-/// A scratch folder in the system's temporary directory, removed when dropped.
-struct Scratch(std::path::PathBuf);
-
-impl Scratch {
-    fn new() -> Result<Self> {
-        let dir = std::env::temp_dir().join(format!("egogen-outfits-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-        Ok(Self(dir))
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }

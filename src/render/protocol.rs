@@ -126,6 +126,20 @@ pub struct ShardSkinRegion {
     pub mask: PathBuf,
 }
 
+impl ShardSkinRegion {
+    /// Each region of `textures` painted on `skin`, with its mask.
+    pub(crate) fn painted(textures: &super::skin_tone::SkinTextures, skin: &Skin) -> Vec<Self> {
+        textures
+            .masks
+            .iter()
+            .map(|(region, mask)| Self {
+                paint: region.paint(skin),
+                mask: mask.clone(),
+            })
+            .collect()
+    }
+}
+
 /// Colour render settings.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -191,6 +191,32 @@ impl SkinPlan {
     }
 }
 
+/// What is painted on a body model's skin from the `textures/` beside it: the regions' masks
+/// (all or none) and, with them, the detail map. Both are in the model's UV layout, so Blender
+/// needs its UVs only when there are masks.
+#[derive(Debug, Clone)]
+pub(crate) struct SkinTextures {
+    pub(crate) masks: Vec<(SkinRegion, PathBuf)>,
+    pub(crate) detail: Option<PathBuf>,
+}
+
+impl SkinTextures {
+    /// The textures beside `model` (none for a model without UVs or masks).
+    pub(crate) fn of(model: &BodyModel) -> Result<Self> {
+        let masks = skin_region_masks(model)?;
+        let detail = match masks.is_empty() {
+            true => None,
+            false => skin_detail_map(model)?,
+        };
+        Ok(Self { masks, detail })
+    }
+
+    /// Whether Blender needs the body's UVs to paint them.
+    pub(crate) fn need_uvs(&self) -> bool {
+        !self.masks.is_empty()
+    }
+}
+
 /// `textures/` beside a body model with UVs (what is painted there is in its UV layout).
 fn body_textures(model: &BodyModel) -> Option<PathBuf> {
     match (&model.uvs, model.source.parent()) {
@@ -201,7 +227,7 @@ fn body_textures(model: &BodyModel) -> Option<PathBuf> {
 
 /// The skin detail map beside a body model that has region masks, when it is there
 /// ([`SKIN_DETAIL_FILE`]).
-pub(crate) fn skin_detail_map(model: &BodyModel) -> Result<Option<PathBuf>> {
+fn skin_detail_map(model: &BodyModel) -> Result<Option<PathBuf>> {
     let Some(path) = body_textures(model).map(|d| d.join(SKIN_DETAIL_FILE)) else {
         return Ok(None);
     };
@@ -217,7 +243,7 @@ pub(crate) fn skin_detail_map(model: &BodyModel) -> Result<Option<PathBuf>> {
 /// UV layout the model carries (ours: MakeHuman's). None when the model has no UVs or no masks
 /// lie beside it (the official SMPL-X files: another layout); all of them, or an error naming
 /// the first one missing.
-pub(crate) fn skin_region_masks(model: &BodyModel) -> Result<Vec<(SkinRegion, PathBuf)>> {
+fn skin_region_masks(model: &BodyModel) -> Result<Vec<(SkinRegion, PathBuf)>> {
     let Some(dir) = body_textures(model) else {
         return Ok(Vec::new());
     };

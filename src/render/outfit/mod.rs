@@ -4,8 +4,9 @@
 //! each with its cut (where a sleeve or hem ends, as a share of the person's own bone lengths),
 //! its fabric, pattern and colours. [`regions`] turns a cut into one signed distance per vertex
 //! and garment on the person's shaped rest body (positive on the garment), which Blender
-//! thresholds per pixel and fills with a procedural fabric (`render_shard.py`). Everything
-//! drawn is in the shard spec and the annotations; `mode = "off"` draws nothing and leaves the
+//! thresholds per pixel and fills with a procedural fabric (`render_shard.py`); a body's
+//! [`ShardOutfit`] carries both to Blender. Everything drawn is in the shard spec and the
+//! annotations; `mode = "off"` draws nothing and leaves the
 //! files as they were before outfits.
 
 pub(crate) mod regions;

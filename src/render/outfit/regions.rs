@@ -71,6 +71,10 @@ pub(crate) fn garment_fields(
     };
     let arms = [side_chain(&j, ARM_LEFT), side_chain(&j, ARM_RIGHT)];
     let legs = [side_chain(&j, LEG_LEFT), side_chain(&j, LEG_RIGHT)];
+    // Shoulder to wrist, hip to ankle.
+    let arm_lengths = arms.each_ref().map(|c| c.length_to(2));
+    let leg_lengths = legs.each_ref().map(|c| c.length_to(2));
+    let worn = SLOTS.map(|slot| outfit.garments.iter().any(|g| g.slot == slot));
     let mut out = Vec::with_capacity(v.len());
     for (k, &p) in v.iter().enumerate() {
         let side = usize::from(p.x < j[joint::PELVIS].x);
@@ -93,12 +97,17 @@ pub(crate) fn garment_fields(
             p,
             along_arm,
             along_leg,
-            arms[side].length_to(2),
-            legs[side].length_to(2),
+            arm_lengths[side],
+            leg_lengths[side],
         );
         let mut row = [0f32; FIELD_COLUMNS];
         for (c, dist) in d.iter().enumerate() {
-            row[c] = dist.clamp(-1.0, 1.0) as f32;
+            // A slot the outfit leaves empty: −1 everywhere.
+            row[c] = if worn[c] {
+                dist.clamp(-1.0, 1.0) as f32
+            } else {
+                -1.0
+            };
         }
         row[SLOTS.len()..].copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32]);
         out.push(row);
@@ -198,8 +207,8 @@ fn smoothstep(lo: Real, hi: Real, x: Real) -> Real {
 }
 
 impl Frame {
-    /// The distances of rest point `p` to each slot's garment (positive on it), in `SLOTS`
-    /// order; a slot the outfit leaves empty gets −1.
+    /// The distances of rest point `p` to each slot's garment as the outfit cuts it (positive on
+    /// it), in `SLOTS` order.
     fn distances(
         &self,
         outfit: &Outfit,
@@ -251,20 +260,6 @@ impl Frame {
         let hair = (p.y - (self.eye_y + level * self.head))
             .min(-along_arm - 0.02)
             .min(behind);
-        let mut out = [-1.0; SLOTS.len()];
-        for g in &outfit.garments {
-            let k = SLOTS
-                .iter()
-                .position(|s| *s == g.slot)
-                .expect("a garment's slot is one of SLOTS");
-            out[k] = match g.slot.as_str() {
-                "top" => top,
-                "bottom" => bottom,
-                "socks" => socks,
-                "shoes" => shoes,
-                _ => hair,
-            };
-        }
-        out
+        [top, bottom, socks, shoes, hair]
     }
 }

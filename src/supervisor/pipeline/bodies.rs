@@ -15,7 +15,7 @@ use crate::render::outfit::regions::garment_fields;
 use crate::render::outfit::{ShardOutfit, SLOTS};
 use crate::render::protocol::ShardSkinRegion;
 use crate::render::shard_plan::AGENT_ID_BASE;
-use crate::render::skin_tone::{skin_detail_map, skin_region_masks};
+use crate::render::skin_tone::SkinTextures;
 use crate::render::ShardBody;
 use crate::scene::walkable_map;
 use crate::supervisor::staged::RenderedAgent;
@@ -185,15 +185,11 @@ pub(super) fn write_body_inputs(
     frames: &[u32],
 ) -> Result<(Vec<ShardBody>, Vec<PathBuf>)> {
     std::fs::create_dir_all(work).with_context(|| format!("creating {}", work.display()))?;
-    let masks = skin_region_masks(model)?;
-    let skin_detail = match masks.is_empty() {
-        true => None,
-        false => skin_detail_map(model)?,
-    };
+    let textures = SkinTextures::of(model)?;
     let mut scratch = Vec::new();
     // One UV file for every agent: they share the model's layout.
-    let uvs_npy = match (&model.uvs, masks.is_empty()) {
-        (Some(uvs), false) => {
+    let uvs_npy = match (&model.uvs, textures.need_uvs()) {
+        (Some(uvs), true) => {
             let path = work.join("body_uvs.npy");
             write_corner_uvs_npy(&path, &uvs.per_corner())?;
             scratch.push(path.clone());
@@ -231,13 +227,7 @@ pub(super) fn write_body_inputs(
         write_rest_vertices_npy(&vertices, &cache)?;
         drop(cache);
         let skin = render.skin.draw(k);
-        let skin_regions: Vec<ShardSkinRegion> = masks
-            .iter()
-            .map(|(region, mask)| ShardSkinRegion {
-                paint: region.paint(&skin),
-                mask: mask.clone(),
-            })
-            .collect();
+        let skin_regions = ShardSkinRegion::painted(&textures, &skin);
         let outfit = match render.outfits.draw(k) {
             None => None,
             Some(outfit) => {
@@ -268,7 +258,7 @@ pub(super) fn write_body_inputs(
             skin,
             uvs_npy: uvs_npy.clone(),
             skin_regions,
-            skin_detail: skin_detail.clone(),
+            skin_detail: textures.detail.clone(),
             outfit,
         });
         scratch.extend([pc2, faces, vertices]);
