@@ -290,7 +290,7 @@ def dress(mat, outfit):
         fabric = fabric_colour(n, g, rest)
         if g["slot"] != "hair":
             hem = n.math("MULTIPLY_ADD", n.ramp(f, 0.0, 0.006), 0.25, 0.75)
-            fabric = n.add("ShaderNodeVectorMath", [(0, fabric), (1, hem)],
+            fabric = n.add("ShaderNodeVectorMath", [(0, fabric), ("Scale", hem)],
                            operation="SCALE").outputs["Vector"]
         colour = n.mix("RGBA", cover, colour, fabric)
         rough = n.mix("FLOAT", cover, rough, g["roughness"])
