@@ -58,7 +58,7 @@ fn bench(c: &mut Criterion) {
         let axes = HandAxes::from_rest(&shaped.rest_joints);
         let style = HandStyle::draw(&mut rand_chacha::ChaCha8Rng::seed_from_u64(0));
         let doing: Vec<[HandDoing; 2]> = (0..400)
-            .map(|f| [[HandDoing::Walking, HandDoing::Holding][f / 200]; 2])
+            .map(|f| [[HandDoing::Walking, HandDoing::HOLDING_A_CUP][f / 200]; 2])
             .collect();
         let mut frames = vec![one.clone(); 400];
         g.throughput(Throughput::Elements(400));

@@ -2,7 +2,8 @@
 
 Run by egogen (`python render_shard.py SPEC.json` with PyPI bpy, or
 `blender --background --python-exit-code 1 --python render_shard.py -- SPEC.json`).
-Thin on purpose: every number comes from the spec (see src/render/protocol.rs). Per camera it
+Thin on purpose: every number comes from the spec (see src/render/protocol.rs): the scene, the
+bodies, the obstacles and the objects people carry, each with its keys. Per camera it
 renders the RGB image of every frame (Cycles, camera + deformation motion blur) when the spec
 asks for colour, and then the ground truth of every frame (motion blur off, 1 sample at the
 pixel centre) with the spec's passes (position, normal, object index, motion vectors) when it
@@ -27,6 +28,7 @@ import sys
 import time
 
 import bpy
+import bmesh  # after bpy: the bpy wheel's bmesh is there once bpy is loaded
 import numpy as np
 from mathutils import Matrix, Quaternion, Vector
 
@@ -337,6 +339,53 @@ def add_obstacle(scene, ob):
     scene.collection.objects.link(obj)
     key_obstacle(obj, ob["keys"])
     return obj
+
+
+def add_held_object(scene, ob):
+    """A small object a person picks up (a `held_objects` entry): an upright cylinder or a box
+    of its size, centred on its origin, in one colour, posed by its keys."""
+    sx, sy, sz = ob["size_m"]
+    mesh = bpy.data.meshes.new(ob["name"])
+    bm = bmesh.new()
+    if ob["shape"] == "cylinder":
+        bmesh.ops.create_cone(bm, cap_ends=True, segments=32, radius1=0.5 * sx,
+                              radius2=0.5 * sx, depth=sz)
+    else:
+        bmesh.ops.create_cube(bm, size=1.0)
+        bmesh.ops.scale(bm, vec=(sx, sy, sz), verts=bm.verts)
+    bm.to_mesh(mesh)
+    bm.free()
+    for poly in mesh.polygons:
+        poly.use_smooth = ob["shape"] == "cylinder" and abs(poly.normal.z) < 0.5
+    mat = bpy.data.materials.new(ob["name"] + "_material")
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*ob["colour_rgb"], 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.35
+    mesh.materials.append(mat)
+    obj = bpy.data.objects.new(ob["name"], mesh)
+    obj.pass_index = ob["pass_index"]
+    obj.rotation_mode = "QUATERNION"
+    obj.cycles.use_motion_blur = True
+    scene.collection.objects.link(obj)
+    key_pose(obj, ob["keys"])
+    return obj
+
+
+def key_pose(obj, keys, frame_step=1):
+    """Location and rotation keys at `key.frame / frame_step`, linear in between (a held
+    object's; the camera's are keyed the same way)."""
+    obj.animation_data_clear()
+    for key in keys:
+        obj.location = Vector(key["location"])
+        obj.rotation_quaternion = Quaternion(key["rotation_wxyz"])
+        if len(keys) > 1:
+            obj.keyframe_insert("location", frame=key["frame"] / frame_step)
+            obj.keyframe_insert("rotation_quaternion", frame=key["frame"] / frame_step)
+    if len(keys) > 1:
+        for fcurve in action_fcurves(obj.animation_data.action):
+            for point in fcurve.keyframe_points:
+                point.interpolation = "LINEAR"
 
 
 def key_obstacle(obj, keys, frame_step=1):
@@ -773,14 +822,14 @@ def blender_name(name):
 
 
 def check_object_names(scene, spec):
-    """The segmentation contract: every scene object Rust gave an id is an object of the
-    imported scene by the same name (as Blender keeps it), and no two names become one. An
+    """The segmentation contract: every scene object Rust gave an id (but those egogen adds:
+    obstacles, held objects) is an object of the imported scene by the same name (as Blender keeps it), and no two names become one. An
     object Blender renamed would otherwise draw with id 0 or another's id: an error instead,
     naming the objects."""
-    obstacles = {o["name"] for o in spec.get("obstacles", [])}
+    added = {o["name"] for key in ("obstacles", "held_objects") for o in spec.get(key, [])}
     kept = {}
     for name, _ in spec["object_ids"]:
-        if name not in obstacles:
+        if name not in added:
             kept.setdefault(blender_name(name), []).append(name)
     merged = [names for names in kept.values() if len(names) > 1]
     if merged:
@@ -813,7 +862,15 @@ def build_scene(spec):
         obj.pass_index = ids.get(obj.name, 0)
     apply_materials(scene, spec.get("materials", []))
     bodies = [add_body(scene, b) for b in spec["bodies"]]
-    obstacles = [add_obstacle(scene, o) for o in spec.get("obstacles", [])]
+    # What moves besides the bodies and the camera, each with how it is keyed on a timeline
+    # of a given frame step.
+    movers = []
+    for o in spec.get("obstacles", []):
+        obj = add_obstacle(scene, o)
+        movers.append(lambda step, obj=obj, o=o: key_obstacle(obj, o["keys"], step))
+    for o in spec.get("held_objects", []):
+        obj = add_held_object(scene, o)
+        movers.append(lambda step, obj=obj, o=o: key_pose(obj, o["keys"], step))
     scene.render.fps = spec["fps"]
     scene.render.fps_base = spec["fps_base"]
     scene.render.engine = "CYCLES"
@@ -838,7 +895,7 @@ def build_scene(spec):
     settings.file_format = "OPEN_EXR_MULTILAYER"
     settings.color_depth = "32"
     settings.exr_codec = "ZIP"  # set per render kind: set_rgb_mode, set_ground_truth_mode
-    return scene, bodies, obstacles
+    return scene, bodies, movers
 
 
 def make_camera(scene, cam_spec):
@@ -881,34 +938,20 @@ def make_camera(scene, cam_spec):
     cam = bpy.data.objects.new(cam_spec["name"], data)
     scene.collection.objects.link(cam)
     cam.rotation_mode = "QUATERNION"
-    key_camera(cam, cam_spec["keys"])
+    key_pose(cam, cam_spec["keys"])
     scene.camera = cam
     return cam
 
 
-def key_camera(cam, keys, frame_step=1):
-    """Pose keys at `key.frame / frame_step` (the ground truth's scaled timeline)."""
-    cam.animation_data_clear()
-    for key in keys:
-        cam.location = Vector(key["location"])
-        cam.rotation_quaternion = Quaternion(key["rotation_wxyz"])
-        cam.keyframe_insert("location", frame=key["frame"] / frame_step)
-        cam.keyframe_insert("rotation_quaternion", frame=key["frame"] / frame_step)
-    # Between keys the pose is interpolated linearly, as the spec says (Bezier is the default).
-    for fcurve in action_fcurves(cam.animation_data.action):
-        for point in fcurve.keyframe_points:
-            point.interpolation = "LINEAR"
-
-
-def set_frame_step(cam, cam_spec, bodies, obstacles, spec, frame_step):
-    """Puts the camera, the bodies and the obstacles on a timeline where one frame is
-    `frame_step` frames of the motion: Cycles' motion vectors (to the frames before and after)
-    then reach the previous and next saved frame."""
-    key_camera(cam, cam_spec["keys"], frame_step)
+def set_frame_step(cam, cam_spec, bodies, movers, spec, frame_step):
+    """Puts the camera, the bodies, the obstacles and the held objects on a timeline where one
+    frame is `frame_step` frames of the motion: Cycles' motion vectors (to the frames before and
+    after) then reach the previous and next saved frame."""
+    key_pose(cam, cam_spec["keys"], frame_step)
     for obj, body in zip(bodies, spec["bodies"]):
         key_cache(obj, body["cache_keys"], frame_step)
-    for obj, ob in zip(obstacles, spec.get("obstacles", [])):
-        key_obstacle(obj, ob["keys"], frame_step)
+    for rekey in movers:
+        rekey(frame_step)
 
 
 # What lights the colour render, put out while the shard renders ground truth.
@@ -1080,7 +1123,7 @@ def set_up(spec):
     return built
 
 
-def render_cameras(spec, scene, bodies, obstacles):
+def render_cameras(spec, scene, bodies, movers):
     """Renders every frame of the spec's cameras in the scene built for it."""
     step = spec["ground_truth_frame_step"]
     for cam_spec in spec["cameras"]:
@@ -1095,13 +1138,13 @@ def render_cameras(spec, scene, bodies, obstacles):
             t0 = time.perf_counter()
             set_ground_truth_mode(scene, spec["ground_truth_passes"])
             if step != 1:
-                set_frame_step(cam, cam_spec, bodies, obstacles, spec, step)
+                set_frame_step(cam, cam_spec, bodies, movers, spec, step)
             timing("camera_setup", time.perf_counter() - t0)
             for frame in cam_spec["frames"]:
                 write_frame(
                     scene, frame["frame"] / step, frame["ground_truth_exr"], "ground_truth")
             if step != 1:
-                set_frame_step(cam, cam_spec, bodies, obstacles, spec, 1)
+                set_frame_step(cam, cam_spec, bodies, movers, spec, 1)
         # The next shard's camera is a new object: this one goes, with its keys.
         data = cam.data
         bpy.data.objects.remove(cam, do_unlink=True)
@@ -1227,10 +1270,10 @@ def main():
         return
     timing("ready", 0.0)
     spec = load_spec()
-    scene, bodies, obstacles = set_up(spec)
+    scene, bodies, movers = set_up(spec)
     if spec.get("body_probe"):
         probe_bodies(scene, bodies, spec["body_probe"])
-    render_cameras(spec, scene, bodies, obstacles)
+    render_cameras(spec, scene, bodies, movers)
 
 
 if __name__ == "__main__":

@@ -1209,30 +1209,19 @@ workers = 1
     );
     let (dir, doc) = rendered_annotations(&config);
     let cam = dir.path().join("out/cameras/camera-rgb");
-    let id = doc["segmentation_ids"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|i| i["name"] == "obstacle_00")
-        .expect("the obstacle is listed")["id"]
-        .as_u64()
-        .unwrap() as u32;
+    let id = segmentation_id(&doc, "obstacle_00");
     let rate = doc["frame_rate_hz"].as_f64().unwrap();
     let mut seen = Vec::new();
     for f in doc["frames"].as_array().unwrap() {
-        let exr =
-            egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
-        let seg = &exr.channel("segmentation.id").unwrap().values;
-        let pos = ["X", "Y", "Z"].map(|c| &exr.channel(&format!("position.{c}")).unwrap().values);
-        let px: Vec<usize> = (0..seg.len()).filter(|&k| seg[k] as u32 == id).collect();
+        let px = pixels_of(&cam, f, id);
         if px.len() < 20 {
             continue;
         }
         // Where the take had the box at this frame.
         let t = f["time_s"].as_f64().unwrap();
         let (cx, cy) = (0.6, -1.2 + 0.8 * t);
-        for &k in &px {
-            let (x, y, z) = (pos[0][k] as f64, pos[1][k] as f64, pos[2][k] as f64);
+        for p in &px {
+            let (x, y, z) = (p.x, p.y, p.z);
             assert!(
                 (x - cx).abs() <= 0.26 && (y - cy).abs() <= 0.26 && z <= 1.61,
                 "frame {}: obstacle pixel at ({x:.3}, {y:.3}, {z:.3}), box centre ({cx:.3}, {cy:.3})",
@@ -1738,6 +1727,73 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
                 _ => {}
             }
         }
+        // What each pick-up took: standing on the floor until its grasp, then carried
+        // rigidly with the wrist that took it, the hand closed round it to the take's end and
+        // no fingertip sinking into it.
+        let objects = a["held_objects"].as_array().cloned().unwrap_or_default();
+        let picked = records
+            .iter()
+            .filter(|r| r["activity"] == "pick_up")
+            .count();
+        assert!(objects.len() <= picked.min(2), "{name}: {objects:?}");
+        if picked > 0 {
+            assert!(!objects.is_empty(), "{name}: a pick-up took nothing");
+        }
+        if !objects.is_empty() {
+            let npy = std::fs::read(
+                dir.path()
+                    .join("take/agents")
+                    .join(name)
+                    .join("held_objects.npy"),
+            )
+            .unwrap();
+            let array = npyz::NpyFile::new(&npy[..]).unwrap();
+            assert_eq!(array.shape(), &[objects.len() as u64, m.len() as u64, 4, 4]);
+            let values: Vec<f64> = array.into_vec().unwrap();
+            let pose = |k: usize, f: usize| {
+                let at = (k * m.len() + f) * 16;
+                let r = &values[at..at + 16];
+                glam::DAffine3::from_mat4(
+                    glam::DMat4::from_cols_array(r.try_into().unwrap()).transpose(),
+                )
+            };
+            for (k, o) in objects.iter().enumerate() {
+                let grasp = o["grasp_frame"].as_u64().unwrap() as usize;
+                let hand = if o["hand"] == "left" { 0 } else { 1 };
+                let height = o["size_m"][2].as_f64().unwrap();
+                assert!(
+                    (pose(k, 0).translation.z - 0.5 * height).abs() < 0.02,
+                    "{name}: {o} stands on the floor"
+                );
+                assert_eq!(pose(k, 0), pose(k, grasp.saturating_sub(1)), "{name}: {o}");
+                let wrist = |f: usize| {
+                    shaped
+                        .skeleton(&m.poses[f], m.trans[f])
+                        .unwrap()
+                        .world_from_joint[20 + hand]
+                };
+                let held = wrist(grasp).inverse() * pose(k, grasp);
+                for f in (grasp..m.len()).step_by(37) {
+                    let d = (wrist(f).inverse() * pose(k, f)).to_cols_array();
+                    let e = held.to_cols_array();
+                    let off = d
+                        .iter()
+                        .zip(&e)
+                        .map(|(a, b)| (a - b).abs())
+                        .fold(0.0, f64::max);
+                    assert!(off < 1e-6, "{name}: {o} moves in the hand by {off} at {f}");
+                }
+                let gap = o["palm_gap_m"].as_f64().unwrap();
+                assert!((-0.02..0.12).contains(&gap), "{name}: {o}");
+                let depth = o["fingertip_depth_m"].as_f64().unwrap();
+                assert!(depth < 0.01, "{name}: {o}");
+                let holding = closed(m.len() - 1)[hand];
+                assert!(
+                    holding > walking[hand] + 100.0,
+                    "{name}: {o} {holding}° at the end"
+                );
+            }
+        }
         hands.push(frames[0].pose[75..].to_vec());
     }
     assert!(
@@ -1935,6 +1991,142 @@ workers = 1
     assert!(seen.contains("stand") && seen.contains("walk"), "{seen:?}");
     let _typed: egogen::export::annotations::CameraAnnotations =
         serde_json::from_value(doc).unwrap();
+}
+
+/// A wearer who picks something up: the object stands on the floor until the hand takes it,
+/// then is carried; the render draws it with its own segmentation id where the annotations
+/// pose it (its pixels' positions inside its box), and the holding hand's contact names it.
+#[test]
+fn a_picked_up_object_is_rendered_where_the_hand_carries_it() {
+    let config = format!(
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 8.0
+seed = 0
+[activities]
+weights = {{ walk = 0.0, pick_up = 1.0 }}
+[[agents]]
+name = "wearer"
+start = [-1.0, 0.0]
+goals = [[0.0, 0.0]]
+wander = true
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[scene]
+path = "{}"
+[render]
+cameras = ["camera-rgb"]
+resolution_scale = 0.125
+every_n_frames = 8
+samples = 1
+passes = ["segmentation", "position"]
+[supervisor]
+workers = 1
+"#,
+        common::repo_root()
+            .join("assets/scenes/apartment.glb")
+            .display()
+    );
+    let (dir, doc) = rendered_annotations(&config);
+    let out = dir.path().join("out");
+    let summary = summary(&out.join("sequence"));
+    let held = summary["agents"][0]["held_objects"][0].clone();
+    assert!(held.is_object(), "the pick-up took something: {summary}");
+    let name = held["name"].as_str().unwrap();
+    let grasp = held["grasp_frame"].as_u64().unwrap();
+    let id = segmentation_id(&doc, name);
+    let cam = out.join("cameras/camera-rgb");
+    let (mut seen_standing, mut seen_held) = (0, 0);
+    for f in doc["frames"].as_array().unwrap() {
+        let frame = f["frame"].as_u64().unwrap();
+        let o = &f["objects"][0];
+        assert_eq!(o["name"], name, "frame {frame}");
+        assert_eq!(o["id"], id, "frame {frame}");
+        let holding = frame >= grasp;
+        assert_eq!(o.get("held_by").is_some(), holding, "frame {frame}: {o}");
+        let hand = held["hand"].as_str().unwrap();
+        for h in f["agents"][0]["hands"].as_array().unwrap() {
+            let contact = h.get("contact").and_then(|c| c.as_u64());
+            let expected = (holding && h["side"] == hand).then_some(id as u64);
+            assert_eq!(contact, expected, "frame {frame}: {h}");
+        }
+        // Every pixel of the object lies inside its box as the annotation poses it.
+        let rows: Vec<Vec<f64>> = o["T_world_object"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|r| {
+                r.as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|v| v.as_f64().unwrap())
+                    .collect()
+            })
+            .collect();
+        let world_from_object = glam::DAffine3::from_mat4(
+            glam::DMat4::from_cols_array(&std::array::from_fn(|k| rows[k / 4][k % 4])).transpose(),
+        );
+        let object_from_world = world_from_object.inverse();
+        let px = pixels_of(&cam, f, id);
+        assert_eq!(
+            o["bbox_xyxy"].is_null(),
+            px.is_empty(),
+            "frame {frame}: {o}"
+        );
+        let half: Vec<f64> = o["size_m"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| 0.5 * v.as_f64().unwrap() + 0.01)
+            .collect();
+        for &world in &px {
+            let p = object_from_world.transform_point3(world);
+            assert!(
+                p.x.abs() <= half[0] && p.y.abs() <= half[1] && p.z.abs() <= half[2],
+                "frame {frame}: an object pixel at {p} in the object's frame"
+            );
+        }
+        if px.len() >= 3 {
+            *(if holding {
+                &mut seen_held
+            } else {
+                &mut seen_standing
+            }) += 1;
+        }
+    }
+    assert!(
+        seen_standing >= 1 && seen_held >= 1,
+        "in view standing in {seen_standing} frames, held in {seen_held}"
+    );
+    let _typed: egogen::export::annotations::CameraAnnotations =
+        serde_json::from_value(doc).unwrap();
+}
+
+/// The segmentation id the annotations give the object `name`.
+fn segmentation_id(doc: &serde_json::Value, name: &str) -> u32 {
+    doc["segmentation_ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|i| i["name"] == name)
+        .unwrap_or_else(|| panic!("{name} is listed"))["id"]
+        .as_u64()
+        .unwrap() as u32
+}
+
+/// Where the pixels of segmentation id `id` in the frame `f` of the annotations (in folder
+/// `cam`) see the world (its `position` pass).
+fn pixels_of(cam: &Path, f: &serde_json::Value, id: u32) -> Vec<glam::DVec3> {
+    let exr = egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
+    let seg = &exr.channel("segmentation.id").unwrap().values;
+    let pos = ["X", "Y", "Z"].map(|c| &exr.channel(&format!("position.{c}")).unwrap().values);
+    (0..seg.len())
+        .filter(|&k| seg[k] as u32 == id)
+        .map(|k| glam::DVec3::new(pos[0][k] as f64, pos[1][k] as f64, pos[2][k] as f64))
+        .collect()
 }
 
 /// Runs a rendered run config (`dir = "out"`, camera `camera-rgb`) and reads its camera's

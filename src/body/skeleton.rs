@@ -26,7 +26,6 @@ pub mod joint {
     pub(crate) const RIGHT_ELBOW: usize = 19;
     pub const LEFT_WRIST: usize = 20;
     pub const RIGHT_WRIST: usize = 21;
-    pub const JAW: usize = 22;
     pub const LEFT_EYE: usize = 23;
     pub const RIGHT_EYE: usize = 24;
 }

@@ -34,7 +34,8 @@ impl Pinhole {
     }
 
     /// A centred camera with square pixels and the given horizontal field of view.
-    pub fn from_horizontal_fov(
+    #[cfg(test)]
+    fn from_horizontal_fov(
         horizontal_fov_rad: Real,
         resolution: Resolution,
     ) -> Result<Self, CameraError> {

@@ -31,7 +31,8 @@ use crate::render::BlenderRuntime;
 use crate::run_job::{prepare, RunRequest};
 use crate::supervisor::{shard_pool, PoolRun};
 pub use plan::{is_campaign, plan_campaign, CampaignPlan, TakeDef};
-pub use state::{CampaignState, TakeStatus, STATE_FILE};
+pub(crate) use state::STATE_FILE;
+pub use state::{CampaignState, TakeStatus};
 
 /// How a campaign runs, beside its file.
 #[derive(Debug, Clone, Default)]

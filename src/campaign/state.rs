@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use super::plan::{CampaignPlan, TakeDef};
 
 /// The state file's name in the campaign folder.
-pub const STATE_FILE: &str = "campaign.json";
+pub(crate) const STATE_FILE: &str = "campaign.json";
 
 /// Where a take stands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]

@@ -130,7 +130,7 @@ pub const DEFAULT_BODY_MODEL: &str = "assets/body/SMPLX_NEUTRAL.npz";
 
 /// A body model path from a config (relative to its folder `base`), else the shipped default;
 /// the error says which file is missing.
-pub fn resolve_body_model(path: Option<PathBuf>, base: &Path) -> Result<PathBuf, String> {
+pub(crate) fn resolve_body_model(path: Option<PathBuf>, base: &Path) -> Result<PathBuf, String> {
     let body_model = match path {
         Some(p) => base.join(p),
         None => crate_root().join(DEFAULT_BODY_MODEL),

@@ -142,7 +142,7 @@ pub(crate) const PAPER_ABNORMAL_VP: f64 = 15.0;
 /// [`PAPER_ABNORMAL_VP`] on the paper's scale: 1 in 1 000 real frames counts as abnormal.
 pub(crate) const ABNORMAL_QUANTILE: f64 = 0.999;
 
-/// Our pose embedding norm ([`PosePrior::embedding_norm`]: a Mahalanobis distance over 63
+/// Our pose embedding norm ([`PosePrior::embedding_norms`]: a Mahalanobis distance over 63
 /// values) set on the paper's ‖VP‖₂ scale: held-out mocap's [`ABNORMAL_QUANTILE`] of frames
 /// maps to the paper's 15 ("> 15 is abnormal"), so a figure above 15 is a pose rarer than
 /// 1 in 1 000 frames of real walking.

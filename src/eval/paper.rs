@@ -399,7 +399,7 @@ paper's cos(v, a) with the goal as the attention direction (the paper's attentio
 not stated), at primitive ends. The pose norm stands in for ‖VP‖₂ (VPoser's embedding norm;
 VPoser is licence-gated), ours: the Mahalanobis distance of a pose's 21 body-joint rotations
 from the component of egogen's pose prior most responsible for them
-(`PosePrior::embedding_norm`), set on the paper's scale so that the held-out mocap's 99.9 %
+(`PosePrior::embedding_norms`), set on the paper's scale so that the held-out mocap's 99.9 %
 quantile of frames is the paper's 15 (\"> 15 indicates abnormal human poses\"); the largest
 of each primitive's 20 frames (the paper: \"the maximum pose embedding norm\", over what it
 does not say; EgoGen's environment judges poses per primitive), the mean over primitives and

@@ -1,6 +1,7 @@
 //! Computing and writing the annotations: each finished frame's annotation from its pixels
 //! while they are in memory ([`annotate_frame`]: agents in view, 2D joints and their
-//! visibility, boxes, the colour's exposure), and the output writing
+//! visibility, boxes, the objects people pick up and the hands holding them, the colour's
+//! exposure), and the output writing
 //! `cameras/<camera>/annotations.json` of a finished take ([`Annotations`]). The file's types
 //! are `annotations`.
 
@@ -9,8 +10,8 @@ use serde_json::json;
 
 use super::annotations::{
     ActivityLabel, AgentAnnotation, AgentOutfit, AgentSkin, CameraAnnotations, Conventions,
-    FrameAnnotation, HandAnnotation, JointVisibility, SegmentationId, SmplxParams,
-    ANNOTATIONS_VERSION,
+    FrameAnnotation, HandAnnotation, JointVisibility, ObjectAnnotation, ObjectHolder,
+    SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
 use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
 use crate::camera::CameraModel;
@@ -195,7 +196,8 @@ fn frame_annotation(
                 hands[i]
                     .iter()
                     .zip(["left", "right"])
-                    .map(|(hand, side)| {
+                    .enumerate()
+                    .map(|(h, (hand, side))| {
                         let (landmarks_2d, landmark_visibility) = seen(&hand.points);
                         HandAnnotation {
                             side: side.into(),
@@ -203,6 +205,11 @@ fn frame_annotation(
                             bbox_xyxy: box_of(&landmarks_2d),
                             landmarks_2d,
                             landmark_visibility,
+                            contact: a
+                                .held_objects
+                                .iter()
+                                .find(|o| o.object.hand.index() == h && o.object.held_at(i))
+                                .map(|o| o.id),
                         }
                     })
                     .collect()
@@ -243,6 +250,30 @@ fn frame_annotation(
             }
         })
         .collect();
+    let objects = agents
+        .iter()
+        .flat_map(|a| a.held_objects.iter().map(move |o| (a, o)))
+        .map(|(a, o)| {
+            let h = &o.object;
+            let pose = h.world_from_object[i.min(h.world_from_object.len() - 1)];
+            let (centre, seen) =
+                project_points(work, cam_from_world, depth, ids, o.id, &[pose.translation]);
+            ObjectAnnotation {
+                name: h.name.clone(),
+                id: o.id,
+                kind: h.kind,
+                t_world_object: crate::math::row_major(pose),
+                size_m: h.size_m,
+                held_by: h.held_at(i).then(|| ObjectHolder {
+                    agent: a.name.clone(),
+                    hand: h.hand,
+                }),
+                centre_2d: centre[0],
+                centre_visibility: seen[0],
+                bbox_xyxy: ids.and_then(|ids| bbox_of(ids, w, o.id)),
+            }
+        })
+        .collect();
     FrameAnnotation {
         frame: f,
         time_s: f as f64 / agents[0].motion.frame_rate_hz,
@@ -250,6 +281,7 @@ fn frame_annotation(
         t_world_cam: crate::math::row_major(world_from_cam),
         colour_exposure: None,
         agents: listed,
+        objects,
     }
 }
 

@@ -83,6 +83,41 @@ pub struct FrameAnnotation {
     pub colour_exposure: Option<f32>,
     /// Every agent of the run, in view or not.
     pub agents: Vec<AgentAnnotation>,
+    /// The objects people pick up, in view or not: standing where they are found until a
+    /// hand takes them, then carried (absent in a take where nobody picks anything up).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub objects: Vec<ObjectAnnotation>,
+}
+
+/// An object people pick up ([`crate::synth::held_object`]), in one frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectAnnotation {
+    pub name: String,
+    /// Its segmentation id.
+    pub id: u32,
+    pub kind: crate::scene::small_object::ObjectKind,
+    /// Row-major 4×4 mapping the object's frame (centred, z up; its `size_m` along x, y,
+    /// z) to the world (m).
+    #[serde(rename = "T_world_object")]
+    pub t_world_object: [[f64; 4]; 4],
+    pub size_m: [f64; 3],
+    /// The person holding it in this frame; absent while it stands where it was found.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_by: Option<ObjectHolder>,
+    /// Its centre's pixel; `None` outside the valid field of view.
+    pub centre_2d: Option<[f64; 2]>,
+    /// Its centre's visibility, as a joint's.
+    pub centre_visibility: JointVisibility,
+    /// Tight box of its segmentation pixels, inclusive pixel indices; `None` when not in view
+    /// (or the run rendered no segmentation).
+    pub bbox_xyxy: Option<[usize; 4]>,
+}
+
+/// Who holds an object, with which hand.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObjectHolder {
+    pub agent: String,
+    pub hand: crate::synth::held_object::Hand,
 }
 
 /// An agent's skin ([`crate::render::skin_tone`]).
@@ -165,6 +200,10 @@ pub struct HandAnnotation {
     pub landmark_visibility: Vec<JointVisibility>,
     /// The box of its landmarks in view (x0, y0, x1, y1 in pixels); `None` when none is.
     pub bbox_xyxy: Option<[f64; 4]>,
+    /// The segmentation id of the object it holds in this frame (`objects`); absent: it
+    /// holds nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<u32>,
 }
 
 /// What an agent does in a frame: `walk` (no phase), or an activity and its phase

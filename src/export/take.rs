@@ -53,6 +53,15 @@ pub struct RenderedAgent {
     pub track: BodyTrack,
     /// Its activities' segments, in a take with activities; `None` where people only walk.
     pub activities: Option<Vec<crate::synth::activity::ActivitySegment>>,
+    /// What it picks up and carries.
+    pub held_objects: Vec<RenderedObject>,
+}
+
+/// An object a body picks up and carries, with its segmentation id.
+#[derive(Debug, Clone)]
+pub struct RenderedObject {
+    pub id: u32,
+    pub object: crate::synth::held_object::HeldObject,
 }
 
 /// A camera's frame file, relative to the take's folder: `cameras/<camera>/frame_NNNNN.exr`.

@@ -19,21 +19,18 @@ use crate::body::{BodyParams, NUM_JOINTS};
 use crate::math::random::{standard_normal, uniform_in};
 use crate::math::{axis_angle_to_matrix, gaussian_smooth, matrix_to_axis_angle, Real, Vec3};
 
-/// The fingers, thumb first.
-pub const FINGERS: [&str; 5] = ["thumb", "index", "middle", "ring", "pinky"];
-
 /// First SMPL-X joint of each hand's 15 finger joints (left, right).
 pub(crate) const HAND_FIRST_JOINT: [usize; 2] = [25, 40];
 
 /// Offset of each finger's first joint among its hand's 15 (SMPL-X order: index, middle,
-/// pinky, ring, thumb), indexed like [`FINGERS`].
+/// pinky, ring, thumb), indexed thumb to little finger.
 const FINGER_OFFSET: [usize; 5] = [12, 0, 3, 9, 6];
 
 /// The wrists (left, right).
 const WRIST: [usize; 2] = [20, 21];
 
 /// Anatomical flexion range of each finger joint (degrees, rest flexion included; negative:
-/// extension), indexed `[finger][joint]` like [`FINGERS`], joints from the palm out (for the
+/// extension), indexed `[finger][joint]` thumb to little finger, joints from the palm out (for the
 /// thumb: CMC, MCP, IP). Active ranges of motion of the hand (American Academy of Orthopaedic
 /// Surgeons' norms, rounded).
 pub(crate) const JOINT_RANGES_DEG: [[(Real, Real); 3]; 5] = [
@@ -69,8 +66,13 @@ pub enum HandDoing {
     Seated,
     /// Opening to take hold of something.
     Reaching,
-    /// Closed round something held.
-    Holding,
+    /// Closed round something held, `grip_mm` wide where the fingers wrap it.
+    Holding { grip_mm: u16 },
+}
+
+impl HandDoing {
+    /// Holding something as wide as a cup.
+    pub const HOLDING_A_CUP: HandDoing = HandDoing::Holding { grip_mm: 80 };
 }
 
 /// Each finger's curl and the hand's spread for one [`HandDoing`], before a person's own
@@ -81,8 +83,17 @@ fn target(doing: HandDoing) -> ([Real; 5], Real) {
         HandDoing::Standing => ([0.12, 0.16, 0.22, 0.28, 0.34], -0.3),
         HandDoing::Seated => ([0.05, 0.06, 0.08, 0.10, 0.12], -0.5),
         HandDoing::Reaching => ([-0.10, -0.08, -0.08, -0.05, -0.02], 0.6),
-        HandDoing::Holding => ([0.55, 0.60, 0.64, 0.68, 0.72], -0.6),
+        HandDoing::Holding { grip_mm } => {
+            let k = grip_curl(grip_mm);
+            ([0.55 * k, 0.60 * k, 0.64 * k, 0.68 * k, 0.72 * k], -0.6)
+        }
     }
+}
+
+/// How much a grip closes the hand, against one round a 60 mm object (the targets' curls are
+/// scaled by it): wider things open it, narrower ones close it further.
+fn grip_curl(grip_mm: u16) -> Real {
+    ((160.0 - grip_mm as Real) / 100.0).clamp(0.35, 1.25)
 }
 
 /// How much a person's relaxed hand may differ from the targets, and its drift.

@@ -436,11 +436,6 @@ pub fn kl_to_standard<B: Backend>(mean: Tensor<B, 2>, logvar: Tensor<B, 2>) -> T
         .mul_scalar(0.5)
 }
 
-/// Parameters of a network.
-pub fn parameter_count<B: Backend>(net: &ActorCritic<B>) -> usize {
-    net.num_params()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 /// The Blender series egogen is tested with.
-pub const SUPPORTED_SERIES: &str = "4.5";
+pub(crate) const SUPPORTED_SERIES: &str = "4.5";
 /// The PyPI requirement the managed environment installs.
 pub(crate) const BPY_REQUIREMENT: &str = "bpy==4.5.*";
 

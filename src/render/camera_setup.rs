@@ -4,7 +4,7 @@
 use glam::DQuat;
 
 use crate::math::{Affine3, Mat3, Vec3};
-use crate::render::protocol::CameraKey;
+use crate::render::protocol::PoseKey;
 
 /// Blender's camera axes expressed in the OpenCV camera frame: x right, y up, z backwards
 /// (`opencv_from_blender = diag(1, −1, −1)`).
@@ -38,8 +38,8 @@ pub(crate) fn blender_lens(
 
 /// Pose keys for Blender from OpenCV `world_from_cam` poses at (sub)frames, quaternion signs
 /// kept continuous so Blender's linear interpolation takes the short way.
-pub(crate) fn camera_keys(poses: &[(f64, Affine3)]) -> Vec<CameraKey> {
-    let mut keys: Vec<CameraKey> = Vec::with_capacity(poses.len());
+pub(crate) fn camera_keys(poses: &[(f64, Affine3)]) -> Vec<PoseKey> {
+    let mut keys: Vec<PoseKey> = Vec::with_capacity(poses.len());
     let mut last: Option<DQuat> = None;
     for &(frame, world_from_cam) in poses {
         let blender = world_from_blender_cam(world_from_cam);
@@ -48,7 +48,7 @@ pub(crate) fn camera_keys(poses: &[(f64, Affine3)]) -> Vec<CameraKey> {
             q = -q;
         }
         last = Some(q);
-        keys.push(CameraKey {
+        keys.push(PoseKey {
             frame,
             location: blender.translation.to_array(),
             rotation_wxyz: [q.w, q.x, q.y, q.z],

@@ -24,11 +24,11 @@ pub mod shard;
 pub mod shard_plan;
 pub mod skin_tone;
 
-pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError, SUPPORTED_SERIES};
+pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError};
 pub use outfit::ShardOutfit;
 pub use outfit_sheet::outfit_sheet;
 pub use protocol::{
-    BodyProbe, CameraKey, DenoisePrefilter, ObstacleKey, PointLight, RenderDevice, ShardBody,
+    BodyProbe, DenoisePrefilter, ObstacleKey, PointLight, PoseKey, RenderDevice, ShardBody,
     ShardCamera, ShardFrame, ShardLens, ShardLighting, ShardMaterial, ShardObstacle, ShardRgb,
     ShardSpec, WorldHdri,
 };

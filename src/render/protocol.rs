@@ -6,6 +6,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use crate::scene::small_object::ObjectShape;
+
 pub use super::materials::ShardMaterial;
 pub use super::skin_tone::{RegionPaint, Skin};
 
@@ -42,12 +44,12 @@ pub enum ShardLens {
     },
 }
 
-/// A camera pose key at a (sub)frame: Blender `location` and `rotation_quaternion` (w, x, y, z)
-/// of the camera object (Blender camera axes: x right, y up, looking along −z). Keys are
-/// interpolated linearly.
+/// A pose key at a (sub)frame of a camera or a held object: Blender `location` and
+/// `rotation_quaternion` (w, x, y, z) of the object (a camera's axes in Blender: x right, y up,
+/// looking along −z). Keys are interpolated linearly.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
-pub struct CameraKey {
+pub struct PoseKey {
     pub frame: f64,
     pub location: [f64; 3],
     pub rotation_wxyz: [f64; 4],
@@ -74,7 +76,7 @@ pub struct ShardCamera {
     pub clip_start_m: f64,
     /// Pose keys covering every rendered frame, its neighbours (motion vectors) and the
     /// shutter interval.
-    pub keys: Vec<CameraKey>,
+    pub keys: Vec<PoseKey>,
     pub frames: Vec<ShardFrame>,
 }
 
@@ -244,6 +246,9 @@ pub struct ShardSpec {
     /// Boxes egogen adds for the run's `[[obstacles]]`.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub obstacles: Vec<ShardObstacle>,
+    /// Objects people pick up and carry, each with its pose keys.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_objects: Vec<ShardHeldObject>,
     /// A PLY scan whose faces or vertices carry object ids, imported as one mesh, split into
     /// the scene loader's objects.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -272,6 +277,21 @@ pub struct ShardObstacle {
     pub yaw_rad: f64,
     /// Its centre at (sub)frames; linear in between, held outside.
     pub keys: Vec<ObstacleKey>,
+}
+
+/// A small object a person picks up and carries (`synth::held_object`): a solid of its
+/// shape and size (centred, z up), one colour, its own segmentation id, posed by its keys.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardHeldObject {
+    pub name: String,
+    pub pass_index: u32,
+    pub shape: ObjectShape,
+    /// Full extents along its own x, y and up (m); a cylinder's x is its diameter.
+    pub size_m: [f64; 3],
+    /// Linear RGB.
+    pub colour_rgb: [f64; 3],
+    pub keys: Vec<PoseKey>,
 }
 
 /// Where an obstacle's centre is at a frame.

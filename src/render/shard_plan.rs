@@ -16,6 +16,10 @@ use crate::render::render_camera::RenderCamera;
 /// `AGENT_ID_BASE + k`.
 pub const AGENT_ID_BASE: u32 = 1000;
 
+/// Segmentation ids of the objects people pick up: `HELD_OBJECT_ID_BASE + k`, in the take's
+/// order (by person, then pick-up).
+pub(crate) const HELD_OBJECT_ID_BASE: u32 = 2000;
+
 /// Blender stores a frame rate as `fps / fps_base` with an integer `fps`.
 pub fn blender_fps(rate_hz: f64) -> (u32, f64) {
     let fps = rate_hz.round().max(1.0) as u32;

@@ -92,7 +92,7 @@ fn imu_rate_hz(label: &str) -> Real {
 /// The Aria build whose nominal CAD pose of `camera-slam-left` (the device frame) is
 /// `cpf_from_device` to 1e-9, if any: the rigs read from an Aria calibration, and the shipped
 /// `aria_gen1` rig, have one.
-pub fn aria_build_of_device(cpf_from_device: Affine3) -> Option<&'static str> {
+pub(crate) fn aria_build_of_device(cpf_from_device: Affine3) -> Option<&'static str> {
     [("DVT-S", &CAD_DVT_S), ("DVT-L", &CAD_DVT_L)]
         .into_iter()
         .find(|(_, table)| {

@@ -23,7 +23,8 @@ use std::path::{Path, PathBuf};
 use crate::camera::Camera;
 use crate::math::{Affine3, Mat3, Real, Vec3};
 
-pub use aria::{aria_build_of_device, AriaRgbResolution};
+pub(crate) use aria::aria_build_of_device;
+pub use aria::AriaRgbResolution;
 pub use command::{run_command, RigCommand};
 pub use error::RigError;
 pub(crate) use file::FORMAT_VERSION;

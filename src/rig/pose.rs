@@ -57,7 +57,7 @@ pub(crate) struct YawPitchRoll {
 impl YawPitchRoll {
     /// The `cpf_from_cam` rotation these angles describe (the tests' oracle).
     #[cfg(test)]
-    pub fn to_matrix(self) -> Mat3 {
+    pub(crate) fn to_matrix(self) -> Mat3 {
         Mat3::from_rotation_y(self.yaw_rad)
             * Mat3::from_rotation_x(-self.pitch_rad)
             * Mat3::from_rotation_z(self.roll_rad)

@@ -12,7 +12,8 @@
 //! that move or are not in the mesh), `sampler` (seeded start/goal sampling), `path_plan` (A*
 //! walking paths on the walkable map and the guide), `seen_map` (what a walker has seen of the
 //! map), `object_class` (the one vocabulary of what an object is, which seats, materials and
-//! generated scenes read), `seats` (the places to sit), `generated` (procedural scenario
+//! generated scenes read), `seats` (the places to sit), `small_object` (what people pick up:
+//! kinds, solids, sizes), `generated` (procedural scenario
 //! scenes), `dwelling` (furnished dwellings generated from a seed and the furniture catalogue,
 //! the `dwelling:SEED` scene source).
 
@@ -32,6 +33,7 @@ pub(crate) mod sdf2d;
 pub(crate) mod sdf3d;
 pub(crate) mod seats;
 pub(crate) mod seen_map;
+pub mod small_object;
 pub(crate) mod walkable;
 
 pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};
@@ -40,8 +42,7 @@ pub use mesh::{ObjectId, ObjectOrientation, SceneMesh, SceneObject};
 pub(crate) use object_class::ObjectClass;
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
 pub use path_plan::{
-    guide_aim, line_is_clear, plan_path, Guide, PathField, PlannedPath, GUIDE_CENTRE_M,
-    GUIDE_CLEARANCE_M,
+    guide_aim, line_is_clear, plan_path, Guide, PathField, PlannedPath, GUIDE_CLEARANCE_M,
 };
 pub use penetration::{blocked_cells_in_box, sdf_penetration, Penetration};
 pub(crate) use sampler::sample_start_goals_in;

@@ -165,7 +165,8 @@ impl ObjectClass {
     }
 
     /// Every class, in the order of the enum.
-    pub const ALL: [ObjectClass; 17] = [
+    #[cfg(test)]
+    const ALL: [ObjectClass; 17] = [
         ObjectClass::Floor,
         ObjectClass::Wall,
         ObjectClass::Ceiling,

@@ -19,7 +19,7 @@ pub const GUIDE_CLEARANCE_M: f64 = 0.3;
 
 /// Distance from what blocks walking at which a centred guide's path stops paying for being
 /// near it ([`plan_path_centred`]): the middle of a 0.9 m doorway.
-pub const GUIDE_CENTRE_M: f64 = 0.45;
+pub(crate) const GUIDE_CENTRE_M: f64 = 0.45;
 
 /// Integer costs: one cell straight, √2 diagonal, in thousandths of a cell.
 const STRAIGHT: u32 = 1000;

@@ -9,7 +9,7 @@ use std::sync::{Arc, OnceLock};
 
 use crate::camera::CameraModel;
 use crate::export::take::{frame_file_path, TakeExports};
-pub use crate::export::take::{CameraWork, RenderedAgent};
+pub use crate::export::take::{CameraWork, RenderedAgent, RenderedObject};
 use crate::exr_file::ExrContents;
 use crate::render::frame_file::{
     check_encoded_header, validate_frame_contents, FrameFileError, RemapTable,

@@ -98,7 +98,7 @@ const HAND_ROWS: [HandDoing; 5] = [
     HandDoing::Standing,
     HandDoing::Seated,
     HandDoing::Reaching,
-    HandDoing::Holding,
+    HandDoing::HOLDING_A_CUP,
 ];
 
 /// The right hand of `people` people (their hands drawn from seeds 0, 1, …) doing each thing a

@@ -3,7 +3,9 @@
 //!
 //! Layout: `agents/<name>/motion.npz` (AMASS-style SMPL-X at 40 fps: `poses` N×165, `trans`,
 //! `betas`, `gender`, `mocap_frame_rate`), `agents/<name>/cpf_trajectory.json`
-//! (`world_from_cpf` per frame), `agents/<name>/markers.npy` (float32 N×67×3, world, m);
+//! (`world_from_cpf` per frame), `agents/<name>/markers.npy` (float32 N×67×3, world, m),
+//! `agents/<name>/held_objects.npy` where it picked something up (float64 K×N×4×4: each
+//! object's `world_from_object` per frame, row-major, in the summary's `held_objects` order);
 //! `paths.png` (top view: walkable map, obstacles, every agent's pelvis path, starts,
 //! goals and activities done);
 //! `summary.json` (what was asked, per agent goals and state, totals, wall time);
@@ -246,6 +248,31 @@ fn markers_npy(track: &AgentTrack) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// Each held object's pose per frame: float64 K×N×4×4 (`world_from_object`, row-major), in
+/// the order of the summary's `held_objects`.
+fn held_objects_npy(track: &AgentTrack) -> Result<Vec<u8>> {
+    let k = track.held_objects.len() as u64;
+    let n = track.frames.len() as u64;
+    let mut bytes = Vec::new();
+    {
+        use npyz::WriterBuilder;
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(&[k, n, 4, 4])
+            .writer(&mut bytes)
+            .begin_nd()?;
+        for o in &track.held_objects {
+            for pose in &o.world_from_object {
+                for v in crate::math::row_major(*pose).as_flattened() {
+                    w.push(v)?;
+                }
+            }
+        }
+        w.finish()?;
+    }
+    Ok(bytes)
+}
+
 fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
     paths_picture(world, &[take], 900).image.write_png(path)?;
     Ok(())
@@ -382,6 +409,9 @@ pub(crate) fn write_crowd_dir(
             &super::sequence_dir::cpf_trajectory_json(&a.world_from_cpf, take.frame_rate_hz)?,
         )?;
         write_atomically(&folder.join("markers.npy"), &markers_npy(a)?)?;
+        if !a.held_objects.is_empty() {
+            write_atomically(&folder.join("held_objects.npy"), &held_objects_npy(a)?)?;
+        }
     }
     paths_png(world, take, &staging.join("paths.png"))?;
     let n = take.agents.len().max(1) as f64;

@@ -2,7 +2,8 @@
 //! folders they are written to: crowds of agents steered through a scene, their motion
 //! finished as written (joins smoothed, head steadied: `motion::joins`, `motion::head_stabilise`)
 //! (`crowd`), what they do besides walking (`activity`: the schema, one file per activity —
-//! standing and looking around, sitting, picking up — and why one is skipped), placing a motion
+//! standing and looking around, sitting, picking up — and why one is skipped), the objects
+//! picked up and carried (`held_object`), placing a motion
 //! in a scene (`placement`), a take of agents from its plan (`take`), a body posed over a
 //! sequence with its CPF and hand landmarks per frame (`body_track`), the penetration tests
 //! (`penetration`), the folder of one sequence (`sequence_dir`) and of a crowd take
@@ -17,6 +18,7 @@ pub mod body_pictures;
 pub(crate) mod body_track;
 pub mod crowd;
 pub(crate) mod crowd_dir;
+pub mod held_object;
 pub(crate) mod penetration;
 pub(crate) mod placement;
 pub mod scene_inspect;

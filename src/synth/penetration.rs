@@ -193,6 +193,7 @@ mod tests {
             activities: Vec::new(),
             activity_segments: Vec::new(),
             skipped_activities: Vec::new(),
+            held_objects: Vec::new(),
         }
     }
 

@@ -112,7 +112,7 @@ impl ControllerSpec {
     }
 
     /// Whether this controller acts through a trained policy.
-    pub fn needs_policy(&self) -> bool {
+    pub(crate) fn needs_policy(&self) -> bool {
         matches!(self, ControllerSpec::Policy { .. })
     }
 

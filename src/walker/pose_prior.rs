@@ -225,7 +225,7 @@ impl PosePrior {
         self.scores_with(values, &PriorLogs::of(self)).0
     }
 
-    /// The score and the embedding norm ([`Self::embedding_norm`]) together: the norm is read
+    /// The score and the embedding norm ([`Self::embedding_norms`]) together: the norm is read
     /// off the terms of the score (a component's log-density holds its Mahalanobis distance).
     fn scores_with(&self, values: &[f64; PRIOR_DIM], logs: &PriorLogs) -> (f64, f64) {
         let terms: Vec<f64> = self
@@ -251,15 +251,10 @@ impl PosePrior {
         (-log_sum_exp(&terms) / PRIOR_DIM as f64, norm)
     }
 
-    /// A pose's embedding norm, in VPoser's role (EgoGen's ‖VP‖₂: the norm of the pose's
-    /// latent code, near 0 for likely poses): the Mahalanobis distance of the body-joint
+    /// Each of `frames`' pose embedding norm, in VPoser's role (EgoGen's ‖VP‖₂: the norm of the
+    /// pose's latent code, near 0 for likely poses): the Mahalanobis distance of the body-joint
     /// rotations from the mixture component most responsible for them, i.e. the norm of the
-    /// pose whitened by that component (63 values).
-    pub fn embedding_norm(&self, params: &BodyParams) -> f64 {
-        self.embedding_norms(std::slice::from_ref(params))[0]
-    }
-
-    /// [`Self::embedding_norm`] of each of `frames`, the prior's logarithms taken once.
+    /// pose whitened by that component (63 values); the prior's logarithms taken once.
     pub(crate) fn embedding_norms(&self, frames: &[BodyParams]) -> Vec<f64> {
         let logs = PriorLogs::of(self);
         frames
@@ -269,7 +264,7 @@ impl PosePrior {
     }
 
     /// The mean score of `frames` ([`Self::mean_pose_nll`], the same bits) and the largest
-    /// embedding norm among them ([`Self::embedding_norm`]); (0, 0) for none.
+    /// embedding norm among them ([`Self::embedding_norms`]); (0, 0) for none.
     pub(crate) fn mean_nll_and_max_norm(&self, frames: &[BodyParams]) -> (f64, f64) {
         let logs = PriorLogs::of(self);
         let (sum, max) = frames.iter().fold((0.0, 0.0f64), |(sum, max), f| {
@@ -375,7 +370,7 @@ mod tests {
         // Score and norm together: the same score bits, the largest frame's norm.
         let (mean, max) = prior.mean_nll_and_max_norm(&frames);
         assert_eq!(mean.to_bits(), frame_by_frame.to_bits());
-        let norms: Vec<f64> = frames.iter().map(|f| prior.embedding_norm(f)).collect();
+        let norms: Vec<f64> = prior.embedding_norms(&frames);
         assert_eq!(max, norms.iter().copied().fold(0.0, f64::max));
     }
 
@@ -401,8 +396,8 @@ mod tests {
         let d = PRIOR_DIM as f64;
         // At a component's mean the norm is 0; 0.1 rad off every value of the first (σ = 0.1)
         // it is √63; near the second (σ = 0.2), 0.1 off is √63 / 2.
-        assert!(prior.embedding_norm(&at(0.0)) < 1e-6);
-        assert!((prior.embedding_norm(&at(0.1)) - d.sqrt()).abs() < 1e-6);
-        assert!((prior.embedding_norm(&at(0.9)) - 0.5 * d.sqrt()).abs() < 1e-6);
+        assert!(prior.embedding_norms(&[at(0.0)])[0] < 1e-6);
+        assert!((prior.embedding_norms(&[at(0.1)])[0] - d.sqrt()).abs() < 1e-6);
+        assert!((prior.embedding_norms(&[at(0.9)])[0] - 0.5 * d.sqrt()).abs() < 1e-6);
     }
 }

@@ -248,7 +248,7 @@ pub struct Judged {
     pub contact: f64,
     /// Mean pose-prior score of the frames.
     pub pose_nll: f64,
-    /// The largest pose embedding norm among them ([`PosePrior::embedding_norm`]).
+    /// The largest pose embedding norm among them ([`PosePrior::embedding_norms`]).
     pub pose_norm_max: f64,
     /// New frames (after the seed) in which a body marker stands inside the obstacle's
     /// footprint.

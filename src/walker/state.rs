@@ -233,7 +233,7 @@ pub struct Totals {
     #[serde(default)]
     pub pose_score: f64,
     /// Sum of the primitives' largest pose embedding norms
-    /// ([`super::PosePrior::embedding_norm`]).
+    /// ([`super::PosePrior::embedding_norms`]).
     #[serde(default)]
     pub pose_norm_max_sum: f64,
     /// Frames penetrating the scene by paper Eq. 11, and the most body vertices inside it in

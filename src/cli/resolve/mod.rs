@@ -10,7 +10,8 @@ mod supervisor;
 use std::path::Path;
 
 use super::config::{Bad, ConfigError, MotionSource, RawRun};
-pub use super::config_file::{crate_root, resolve_body_model, DEFAULT_BODY_MODEL};
+pub(crate) use super::config_file::resolve_body_model;
+pub use super::config_file::{crate_root, DEFAULT_BODY_MODEL};
 use motion::{agents_motion, file_motion, scripted_motion};
 use render::resolve_render;
 use supervisor::resolve_supervisor;

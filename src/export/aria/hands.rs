@@ -40,7 +40,7 @@ fn hand_tracking_header() -> String {
 /// Both hands of every frame (`hands`, in the world, at `frame_rate_hz`) as MPS hand tracking
 /// writes them: one row per frame at its whole microsecond, every point in the device's frame
 /// there (the device trajectory's pose at the same microsecond), confidence 1.
-pub fn hand_tracking_csv(
+pub(crate) fn hand_tracking_csv(
     spline: &PoseSpline,
     head_from_device: Affine3,
     frame_rate_hz: Real,

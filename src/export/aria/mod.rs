@@ -38,7 +38,7 @@ use crate::math::pose_spline::PoseSpline;
 use crate::math::{mat3_rows, Affine3, Real};
 use crate::rig::{aria_build_of_device, ImuCalibration, Rig};
 use crate::scene::mesh_distance::SceneRays;
-pub use hands::hand_tracking_csv;
+pub(crate) use hands::hand_tracking_csv;
 
 /// Which streams to write; each is off unless asked.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

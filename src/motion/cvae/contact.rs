@@ -37,7 +37,7 @@ fn contact_score_with(
 /// The two factors of the 3-D foot-contact score (paper Eq. 12), as EgoGen's reward uses
 /// them: `exp(−mean |lowest foot − floor − 0.02|)` (floor term) and
 /// `exp(−mean max(0, slowest foot speed − 0.075))` (skate term); NaN for fewer than 3 frames.
-pub fn contact_terms(feet: &[Vec<[f64; 3]>], floor_z: f64) -> (f64, f64) {
+pub(crate) fn contact_terms(feet: &[Vec<[f64; 3]>], floor_z: f64) -> (f64, f64) {
     contact_terms_with(feet, floor_z, |a, b| {
         glam::DVec3::from_array(b).distance(glam::DVec3::from_array(a))
     })

@@ -4,11 +4,12 @@
 use burn::prelude::*;
 use burn::tensor::FloatDType;
 
-pub use super::contact::{contact_score, contact_score_horizontal, contact_terms};
+pub(crate) use super::contact::contact_terms;
+pub use super::contact::{contact_score, contact_score_horizontal};
 use super::data::{PrimitiveSet, PRIMITIVE_VALUES};
 use super::features::FRAME_DIM;
 use super::loss::pose_frames;
-pub use super::net::decode_raw;
+pub(crate) use super::net::decode_raw;
 use super::net::PrimitiveVae;
 use super::tensor_body::TensorRig;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};

@@ -257,7 +257,7 @@ impl<B: Backend> PrimitiveVae<B> {
 /// Decodes raw seeds `[B, S, F]` over canonical floors `[B]` (m) with latents `[B, L]` into
 /// whole raw primitives `[B, T, F]` (the seed frames first). The network runs in its weights'
 /// precision; inputs and output are in the seed's.
-pub fn decode_raw<B: Backend>(
+pub(crate) fn decode_raw<B: Backend>(
     net: &PrimitiveVae<B>,
     seed: Tensor<B, 3>,
     floor: Tensor<B, 1>,

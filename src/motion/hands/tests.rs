@@ -1,6 +1,9 @@
 use rand_core::SeedableRng;
 
 use super::*;
+
+/// The fingers, thumb first.
+const FINGERS: [&str; 5] = ["thumb", "index", "middle", "ring", "pinky"];
 use crate::body::{BodyModel, ShapedBody};
 
 fn model() -> BodyModel {
@@ -119,7 +122,7 @@ fn fingers_move_smoothly_between_what_the_hands_do() {
     let order = [
         HandDoing::Walking,
         HandDoing::Reaching,
-        HandDoing::Holding,
+        HandDoing::HOLDING_A_CUP,
         HandDoing::Standing,
         HandDoing::Seated,
         HandDoing::Walking,

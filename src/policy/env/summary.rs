@@ -57,7 +57,7 @@ pub struct EpisodeSummary {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub way_round_m: Option<f64>,
     /// The mean over its primitives of each one's largest pose embedding norm (EgoGen's
-    /// ‖VP‖₂ role, [`crate::walker::PosePrior::embedding_norm`]; comparable with mocap primitives').
+    /// ‖VP‖₂ role, [`crate::walker::PosePrior::embedding_norms`]; comparable with mocap primitives').
     pub pose_norm_max: f64,
 }
 

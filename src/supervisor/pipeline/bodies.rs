@@ -14,11 +14,11 @@ use crate::plan::{RenderPlan, RunPlan};
 use crate::render::outfit::regions::garment_fields;
 use crate::render::outfit::{ShardOutfit, SLOTS};
 use crate::render::protocol::ShardSkinRegion;
-use crate::render::shard_plan::AGENT_ID_BASE;
+use crate::render::shard_plan::{AGENT_ID_BASE, HELD_OBJECT_ID_BASE};
 use crate::render::skin_tone::SkinTextures;
 use crate::render::ShardBody;
 use crate::scene::walkable_map;
-use crate::supervisor::staged::RenderedAgent;
+use crate::supervisor::staged::{RenderedAgent, RenderedObject};
 use crate::synth::body_cache::{body_cache_at, playback_keys, rendered_sample_indices};
 use crate::synth::crowd_dir::write_crowd_dir;
 use crate::synth::placement::place_motion;
@@ -49,6 +49,7 @@ pub(super) fn rendered_agents(
                 motion: placed,
                 track,
                 activities: None,
+                held_objects: Vec::new(),
             };
             Ok((vec![agent], vec![0]))
         }
@@ -71,9 +72,22 @@ pub(super) fn rendered_agents(
                         motion,
                         track,
                         activities: with_activities.then(|| a.activity_segments.clone()),
+                        held_objects: Vec::new(),
                     })
                 })
-                .collect::<Result<Vec<_>>>()?;
+                .collect::<Result<Vec<RenderedAgent>>>()?;
+            // What they pick up, with segmentation ids in the take's order.
+            let mut agents = agents;
+            let mut id = HELD_OBJECT_ID_BASE;
+            for (agent, a) in agents.iter_mut().zip(&take.agents) {
+                for object in &a.held_objects {
+                    agent.held_objects.push(RenderedObject {
+                        id,
+                        object: object.clone(),
+                    });
+                    id += 1;
+                }
+            }
             Ok((agents, wearers.to_vec()))
         }
     }
@@ -173,6 +187,29 @@ pub(super) fn aria_export(
     }))
 }
 
+/// What the renders of `frames` read of a motion of `len` frames, on a grid of
+/// `samples_per_frame`: the shutter around each rendered frame and the neighbours the flow
+/// reads (with the colour pass off, no shutter) ([`rendered_sample_indices`]).
+pub(super) fn rendered_samples(
+    render: &RenderPlan,
+    frames: &[u32],
+    samples_per_frame: u32,
+    len: usize,
+) -> Vec<usize> {
+    let shutter = if render.passes.needs_colour_render() {
+        render.shutter_frames
+    } else {
+        0.0
+    };
+    rendered_sample_indices(
+        frames,
+        render.every_n_frames as u32,
+        shutter,
+        samples_per_frame,
+        len,
+    )
+}
+
 /// Writes what Blender reads of each body into `work` (a PC2 cache of the times the renders
 /// of `frames` read, faces, rest vertices), rewritten identically on every (re)start; returns
 /// the bodies as shard specs name them and the files written (scratch, removed when the
@@ -202,17 +239,9 @@ pub(super) fn write_body_inputs(
         let pc2 = work.join(format!("agent_{k}.pc2"));
         let faces = work.join(format!("agent_{k}_faces.npy"));
         let vertices = work.join(format!("agent_{k}_vertices.npy"));
-        // Only what is rendered: the shutter around each rendered frame, the neighbours the
-        // flow reads (with the colour pass off, no shutter).
-        let shutter = if render.passes.needs_colour_render() {
-            render.shutter_frames
-        } else {
-            0.0
-        };
-        let indices = rendered_sample_indices(
+        let indices = rendered_samples(
+            render,
             frames,
-            render.every_n_frames as u32,
-            shutter,
             render.cache_samples_per_frame,
             a.motion.len(),
         );

@@ -305,7 +305,7 @@ pub(crate) fn stage_take(
     };
     let cameras = camera_work(render, &agents, &wearers, &frames);
     let n_cameras = cameras.len();
-    let objects = scene_objects(plan, &scene, &motion, &agents);
+    let objects = scene_objects(plan, render, &scene, &motion, &agents, &frames);
     let mut base_spec = base_spec(plan, render, &scene, &agents[wearers[0]], bodies, &objects)?;
     base_spec.scene_split = scene_split;
     let dataset = Arc::new(Dataset {

@@ -1,15 +1,19 @@
 //! The rendering work of a take (step 4 of the main job): each camera on its wearer, the scene's
-//! segmentation ids, ceiling and obstacles, their surfaces, the shard spec Blender reads, and
+//! segmentation ids, ceiling, obstacles and held objects, their surfaces, the shard spec
+//! Blender reads, and
 //! the repair of what an interrupted run left.
 
 use anyhow::Result;
 
+use super::bodies::rendered_samples;
 use super::RunMotion;
 use crate::export::annotations::SegmentationId;
 use crate::plan::{RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::materials::{MaterialsMode, SurfaceFacts};
-use crate::render::protocol::{ObstacleKey, ShardCeiling, ShardObstacle, CEILING_OBJECT};
+use crate::render::protocol::{
+    ObstacleKey, PoseKey, ShardCeiling, ShardHeldObject, ShardObstacle, CEILING_OBJECT,
+};
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::blender_fps;
 use crate::render::{ShardBody, ShardRgb, ShardSpec};
@@ -60,19 +64,23 @@ pub(super) fn camera_work(
 }
 
 /// What the renders hold besides the bodies: the scene's objects, a ceiling where the scene
-/// has none and the plan asks for one, the `[[obstacles]]` boxes; with their segmentation ids.
+/// has none and the plan asks for one, the `[[obstacles]]` boxes, the objects people pick up
+/// (posed at the frames the renders of `frames` read); with their segmentation ids.
 pub(super) struct SceneObjects {
     /// Every segmentation id but the agents': scene objects, ceiling, obstacles.
     pub(super) ids: Vec<(String, u32)>,
     ceiling: Option<ShardCeiling>,
     obstacles: Vec<ShardObstacle>,
+    held_objects: Vec<ShardHeldObject>,
 }
 
 pub(super) fn scene_objects(
     plan: &RunPlan,
+    render: &RenderPlan,
     scene: &crate::scene::SceneMesh,
     motion: &RunMotion,
     agents: &[RenderedAgent],
+    frames: &[u32],
 ) -> SceneObjects {
     let mut ids: Vec<(String, u32)> = scene
         .objects
@@ -100,6 +108,8 @@ pub(super) fn scene_objects(
         RunMotion::Placed(_) => Vec::new(),
     };
     ids.extend(obstacles.iter().map(|o| (o.name.clone(), o.pass_index)));
+    let held_objects = held_objects(render, agents, frames);
+    ids.extend(held_objects.iter().map(|o| (o.name.clone(), o.pass_index)));
     SceneObjects {
         ids,
         ceiling: ceiling.map(|c| ShardCeiling {
@@ -108,6 +118,7 @@ pub(super) fn scene_objects(
             max_xy: c.max_xy,
         }),
         obstacles,
+        held_objects,
     }
 }
 
@@ -156,6 +167,7 @@ pub(super) fn base_spec(
         body_probe: None,
         ceiling: objects.ceiling,
         obstacles: objects.obstacles.clone(),
+        held_objects: objects.held_objects.clone(),
         scene_split: None,
     })
 }
@@ -243,6 +255,43 @@ fn obstacle_boxes(
                     vec![key(-1.0), key(frames)]
                 },
             }
+        })
+        .collect()
+}
+
+/// The objects the agents pick up, keyed at every motion frame the renders of `frames` read
+/// (linear in between: a shutter's blur and the flow's neighbours).
+fn held_objects(
+    render: &RenderPlan,
+    agents: &[RenderedAgent],
+    frames: &[u32],
+) -> Vec<ShardHeldObject> {
+    agents
+        .iter()
+        .flat_map(|a| {
+            let keyed = rendered_samples(render, frames, 1, a.motion.len());
+            a.held_objects.iter().map(move |o| {
+                let h = &o.object;
+                ShardHeldObject {
+                    name: h.name.clone(),
+                    pass_index: o.id,
+                    shape: h.shape,
+                    size_m: h.size_m,
+                    colour_rgb: h.colour_rgb,
+                    keys: keyed
+                        .iter()
+                        .map(|&f| {
+                            let pose = h.world_from_object[f];
+                            let q = glam::DQuat::from_mat3(&pose.matrix3);
+                            PoseKey {
+                                frame: f as f64,
+                                location: pose.translation.to_array(),
+                                rotation_wxyz: [q.w, q.x, q.y, q.z],
+                            }
+                        })
+                        .collect(),
+                }
+            })
         })
         .collect()
 }

@@ -52,6 +52,8 @@ pub(super) struct Agent<'m> {
     pub(super) activity_rng: ChaCha8Rng,
     /// This person's hands (`motion::hands`), drawn from a stream of their own.
     pub(super) hands: HandStyle,
+    /// Draws what its pick-ups take (`synth::held_object`): a stream of its own.
+    pub(super) objects_rng: ChaCha8Rng,
 }
 
 impl<'m> Agent<'m> {
@@ -179,6 +181,7 @@ impl<'m> Agent<'m> {
             activities: Vec::new(),
             activity_segments: Vec::new(),
             skipped_activities: Vec::new(),
+            held_objects: Vec::new(),
         };
         track
             .frames
@@ -200,6 +203,7 @@ impl<'m> Agent<'m> {
             approaching: None,
             activity_rng: walker_rng(settings.seed ^ 0xAC71_7117, index),
             hands: HandStyle::draw(&mut walker_rng(settings.seed ^ 0x4A4D_5EED, index)),
+            objects_rng: walker_rng(settings.seed ^ 0x0B1E_C75E, index),
         })
     }
 
@@ -415,10 +419,17 @@ impl Agent<'_> {
             t.markers.push(t.markers[t.markers.len() - 1].clone());
             t.pelvis_xy.push(t.pelvis_xy[t.pelvis_xy.len() - 1]);
         }
-        finish_motion(t, &self.body, settings, &self.hands)?;
+        let floor_z = self.walker.view.seed.floor_z;
+        finish_motion(
+            t,
+            &self.body,
+            settings,
+            &self.hands,
+            floor_z,
+            &mut self.objects_rng,
+        )?;
         // How each activity moved: foot contact over its frames, the fastest joint turn where
         // it joins the walk.
-        let floor_z = self.walker.view.seed.floor_z;
         for r in &mut t.activities {
             let (a, b) = (r.start_frame, r.end_frame.min(t.frames.len()));
             let feet = foot_points(&t.markers, &self.foot_markers, a..b);

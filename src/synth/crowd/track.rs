@@ -1,11 +1,13 @@
 //! What a person of a crowd did: every frame of its body, its goals and how it ended
-//! ([`AgentTrack`]), and its motion finished as written (joins smoothed, head steadied, the
-//! fingers moved with what the hands do).
+//! ([`AgentTrack`]), and its motion finished as written (joins smoothed, head steadied, what its
+//! pick-ups take carried in its hands, the fingers moved with what the hands do).
 
 use glam::DVec2;
+use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use super::CrowdError;
+use crate::body::hand_landmarks::{hand_landmarks, HandTips};
 use crate::body::{joint, BodyParams};
 use crate::math::{Affine3, Vec3};
 use crate::motion::cvae::infer::DecodeError;
@@ -16,6 +18,7 @@ use crate::motion::joins::{smooth_joins, JoinWindow};
 use crate::motion::primitive::PRIMITIVE_RATE_HZ;
 use crate::scene::WalkableMap;
 use crate::synth::activity::{Activity, ActivityRecord, ActivitySegment, Phase, SkippedActivity};
+use crate::synth::held_object::{carry, depth_inside, grasp_in, placed_object, Grasp, HeldObject};
 use crate::walker::{ControllerSpec, WalkerSettings};
 
 /// Why an agent stopped before the take ended.
@@ -105,6 +108,9 @@ pub struct AgentTrack {
     /// Activities drawn but not done, with why.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub skipped_activities: Vec<SkippedActivity>,
+    /// What its pick-ups took and carry to the take's end, with a pose per frame.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub held_objects: Vec<HeldObject>,
 }
 
 impl AgentTrack {
@@ -150,13 +156,24 @@ impl AgentTrack {
                     .fold(f64::NEG_INFINITY, f64::max)
             })
             .collect();
-        for f in 0..self.frames.len() {
-            let (a, b) = window(f);
-            let dz = most[a..=b].iter().sum::<f64>() / (b - a + 1) as f64;
+        let lift: Vec<f64> = (0..self.frames.len())
+            .map(|f| {
+                let (a, b) = window(f);
+                most[a..=b].iter().sum::<f64>() / (b - a + 1) as f64
+            })
+            .collect();
+        for (f, &dz) in lift.iter().enumerate() {
             self.frames[f].transl.z += dz;
             self.world_from_cpf[f].translation.z += dz;
             for m in &mut self.markers[f] {
                 m.z += dz;
+            }
+        }
+        // A held object rises with the hand; before its grasp it stands where the hand finds
+        // it, lifted as the body is there.
+        for o in &mut self.held_objects {
+            for (f, pose) in o.world_from_object.iter_mut().enumerate() {
+                pose.translation.z += lift[f.max(o.grasp_frame).min(lift.len() - 1)];
             }
         }
     }
@@ -190,17 +207,25 @@ pub(super) fn foot_points(
 }
 
 /// The motion as written: each join's velocity jump spread ([`WalkerSettings::smooth_joins`]),
-/// the head steadied against the torso's sway ([`WalkerSettings::steady_head`]), the fingers
-/// moved with what the hands do ([`WalkerSettings::finger_motion`], `hands`: the person's);
+/// the head steadied against the torso's sway ([`WalkerSettings::steady_head`]), the objects
+/// its pick-ups take placed (standing on the floor at `floor_z`, kinds and colours drawn from
+/// `objects_rng`: [`crate::synth::held_object`]), the fingers moved with what the hands do
+/// ([`WalkerSettings::finger_motion`], `hands`: the person's, closing round what they hold);
 /// the eye frame, markers and pelvis positions posed again from the frames where any changed
-/// them.
+/// them, and the held objects carried with their wrists.
 pub(super) fn finish_motion(
     t: &mut AgentTrack,
     body: &BodyContext,
     settings: &WalkerSettings,
     hands: &HandStyle,
+    floor_z: f64,
+    objects_rng: &mut ChaCha8Rng,
 ) -> Result<(), CrowdError> {
-    if !settings.smooth_joins && !settings.steady_head && !settings.finger_motion {
+    let picks_up = t
+        .activity_segments
+        .iter()
+        .any(|s| s.activity == Activity::PickUp);
+    if !settings.smooth_joins && !settings.steady_head && !settings.finger_motion && !picks_up {
         return Ok(());
     }
     if settings.smooth_joins {
@@ -220,11 +245,33 @@ pub(super) fn finish_motion(
         )
         .map_err(DecodeError::from)?;
     }
+    // Each pick-up takes something with a free hand that reaches low enough; it holds it to
+    // the take's end.
+    let mut holds: Vec<Grasp> = Vec::new();
+    for seg in &t.activity_segments {
+        if seg.activity != Activity::PickUp || seg.phase != Phase::Hold {
+            continue;
+        }
+        let free = [0, 1].map(|h| holds.iter().all(|g| g.hand.index() != h));
+        let Some(g) = grasp_in(seg, &t.frames, body, free).map_err(DecodeError::from)? else {
+            continue;
+        };
+        if let Some(o) = placed_object(&t.name, holds.len(), &g, floor_z, objects_rng) {
+            holds.push(g);
+            t.held_objects.push(o);
+        }
+    }
     if settings.finger_motion {
-        let doing = hands_doing(t, body).map_err(DecodeError::from)?;
+        let doing = hands_doing(t, &holds);
         let axes = HandAxes::from_rest(&body.shaped.rest_joints);
         move_fingers(&mut t.frames, &doing, &axes, hands, PRIMITIVE_RATE_HZ);
     }
+    let tips = match t.held_objects.is_empty() {
+        true => None,
+        false => Some(HandTips::of(body.model).map_err(DecodeError::from)?),
+    };
+    let mut wrists = Vec::with_capacity(t.frames.len());
+    let mut fingertips = Vec::new();
     for (f, frame) in t.frames.iter().enumerate() {
         let mf = body
             .shaped
@@ -232,8 +279,21 @@ pub(super) fn finish_motion(
             .map_err(DecodeError::from)?;
         let q = mf.skeleton.joints[joint::PELVIS];
         t.world_from_cpf[f] = body.cpf.world_from_cpf(&mf.skeleton);
-        t.markers[f] = mf.markers;
         t.pelvis_xy[f] = DVec2::new(q.x, q.y);
+        wrists
+            .push([joint::LEFT_WRIST, joint::RIGHT_WRIST].map(|j| mf.skeleton.world_from_joint[j]));
+        if let Some(tips) = &tips {
+            let hands = hand_landmarks(&body.shaped, &mf.skeleton, &frame.pose, tips);
+            fingertips.push(hands.map(|h| [0, 1, 2, 3, 4].map(|k| h.points[k])));
+        }
+        t.markers[f] = mf.markers;
+    }
+    for object in &mut t.held_objects {
+        carry(object, &wrists);
+        let h = object.hand.index();
+        object.fingertip_depth_m = (object.grasp_frame..fingertips.len())
+            .flat_map(|f| fingertips[f][h].map(|p| depth_inside(object, f, p)))
+            .fold(0.0, f64::max);
     }
     Ok(())
 }
@@ -242,13 +302,10 @@ pub(super) fn finish_motion(
 const REACH_OPENS_S: f64 = 0.8;
 
 /// What each hand does on each frame of `t` (`[left, right]`): walking outside activities,
-/// standing in a stand and after the walk ends, seated from sitting down to standing up, and
-/// in a pick-up the hand that reaches lower opening before its lowest reach and holding from
-/// there to the end of the pick-up (the other standing).
-fn hands_doing(
-    t: &AgentTrack,
-    body: &BodyContext,
-) -> Result<Vec<[HandDoing; 2]>, crate::body::PoseError> {
+/// standing in a stand and after the walk ends, seated from sitting down to standing up; in a
+/// pick-up that takes an object (`holds[k]` took `t.held_objects[k]`) the hand that takes it
+/// opens before its lowest reach and holds it, shaped to its width, to the take's end.
+fn hands_doing(t: &AgentTrack, holds: &[Grasp]) -> Vec<[HandDoing; 2]> {
     let n = t.frames.len();
     let still_from = t.stopped_at_frame.unwrap_or(n);
     let mut doing: Vec<[HandDoing; 2]> = (0..n)
@@ -262,38 +319,23 @@ fn hands_doing(
             [one; 2]
         })
         .collect();
-    for seg in &t.activity_segments {
-        if seg.activity != Activity::PickUp || seg.phase != Phase::Hold {
-            continue;
-        }
-        // The lowest wrist over the pick-up: its hand reaches and takes hold.
-        let mut lowest = (f64::INFINITY, seg.start_frame, 0);
-        for f in seg.start_frame..seg.end_frame.min(n) {
-            let s = body
-                .shaped
-                .skeleton(&t.frames[f].pose, t.frames[f].transl)?;
-            for (hand, wrist) in [joint::LEFT_WRIST, joint::RIGHT_WRIST]
-                .into_iter()
-                .enumerate()
-            {
-                if s.joints[wrist].z < lowest.0 {
-                    lowest = (s.joints[wrist].z, f, hand);
-                }
-            }
-        }
-        let (_, at, hand) = lowest;
-        let opens = at.saturating_sub((REACH_OPENS_S * PRIMITIVE_RATE_HZ) as usize);
-        for (f, d) in doing.iter_mut().enumerate().take(seg.end_frame.min(n)) {
-            if f >= opens.max(seg.start_frame) {
-                d[hand] = if f < at {
-                    HandDoing::Reaching
-                } else {
-                    HandDoing::Holding
-                };
-            }
+    for (g, held) in holds.iter().zip(&t.held_objects) {
+        let holding = HandDoing::Holding {
+            grip_mm: (held.kind.grip_m() * 1000.0).round() as u16,
+        };
+        let opens = g
+            .frame
+            .saturating_sub((REACH_OPENS_S * PRIMITIVE_RATE_HZ) as usize)
+            .max(g.from_frame);
+        for (f, d) in doing.iter_mut().enumerate().skip(opens) {
+            d[g.hand.index()] = if f < g.frame {
+                HandDoing::Reaching
+            } else {
+                holding
+            };
         }
     }
-    Ok(doing)
+    doing
 }
 
 /// Frames either side over which [`AgentTrack::follow_floor`] takes the largest lift a frame
