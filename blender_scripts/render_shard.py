@@ -84,6 +84,8 @@ def body_object(body, vertices):
     if body.get("outfit"):
         add_outfit_attributes(mesh, body["outfit"])
         dress(material, body["outfit"]["outfit"])
+    if body.get("parts_npy"):
+        add_part_output(mesh, material, body["parts_npy"])
     mesh.materials.append(material)
     return bpy.data.objects.new(body["name"], mesh)
 
@@ -215,6 +217,29 @@ def add_outfit_attributes(mesh, outfit):
         attribute.data.foreach_set("value", np.ascontiguousarray(fields[:, k]))
     rest = mesh.attributes.new("egogen_rest", "FLOAT_VECTOR", "POINT")
     rest.data.foreach_set("vector", np.ascontiguousarray(fields[:, len(slots):]).ravel())
+
+
+def add_part_output(mesh, material, path):
+    """Each face's body part (a hand, a forearm, the rest) as a face attribute (constant over
+    the face: never a blend of two parts), written by the material to the `part` AOV: the
+    ground truth's `segmentation.part` channel."""
+    parts = np.load(path)
+    if parts.shape != (len(mesh.polygons), 1):
+        sys.exit(f"{path}: expected float32 ({len(mesh.polygons)}, 1) body parts, found "
+                 f"{parts.dtype} {parts.shape}")
+    attribute = mesh.attributes.new("egogen_part", "FLOAT", "FACE")
+    attribute.data.foreach_set("value", np.ascontiguousarray(parts[:, 0], dtype=np.float32))
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    read = nodes.new("ShaderNodeAttribute")
+    read.attribute_type = "GEOMETRY"
+    read.attribute_name = "egogen_part"
+    out = nodes.new("ShaderNodeOutputAOV")
+    out.aov_name = PART_AOV
+    links.new(read.outputs["Fac"], out.inputs["Value"])
+
+
+# The ground truth's AOV holding each pixel's body part.
+PART_AOV = "part"
 
 
 def linked_or_value(target):
@@ -1019,6 +1044,8 @@ def set_rgb_mode(scene, rgb):
     layer = scene.view_layers[0]
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, False)
+    for aov in list(layer.aovs):
+        layer.aovs.remove(aov)
     scene.cycles.samples = rgb["samples"]
     scene.cycles.max_bounces = 12  # Blender's default (the ground truth sets 0)
     scene.cycles.use_adaptive_sampling = rgb["adaptive_threshold"] > 0
@@ -1048,6 +1075,11 @@ def set_ground_truth_mode(scene, passes):
     layer = scene.view_layers[0]
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, p in passes)
+    # The bodies' parts beside their ids (the AOV is 0 wherever no body material writes it).
+    if "object_index" in passes and PART_AOV not in layer.aovs:
+        aov = layer.aovs.add()
+        aov.name = PART_AOV
+        aov.type = "VALUE"
     scene.cycles.samples = 1
     # Every pass it keeps is of the first hit: no light paths beyond it.
     scene.cycles.max_bounces = 0

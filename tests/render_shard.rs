@@ -249,6 +249,7 @@ fn render_scene() -> Rendered {
             // their hues (`skin_regions_follow_the_body_uvs`).
             skin_detail: Some(repo().join("assets/body/textures/egogen_skin_detail.jpg")),
             outfit: None,
+            parts_npy: None,
         }],
         lighting: ShardLighting {
             world_rgb: [0.3, 0.3, 0.3],

@@ -2040,6 +2040,7 @@ workers = 1
     let id = segmentation_id(&doc, name);
     let cam = out.join("cameras/camera-rgb");
     let (mut seen_standing, mut seen_held) = (0, 0);
+    let mut seen_hand_pixels = 0;
     for f in doc["frames"].as_array().unwrap() {
         let frame = f["frame"].as_u64().unwrap();
         let o = &f["objects"][0];
@@ -2096,11 +2097,71 @@ workers = 1
                 &mut seen_standing
             }) += 1;
         }
+        // Each hand's own pixels (`segmentation.part`) lie on that hand: within 6 cm of one
+        // of its landmarks; a part is only ever a person's.
+        let exr =
+            egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
+        let seg = &exr.channel("segmentation.id").unwrap().values;
+        let part = &exr.channel("segmentation.part").unwrap().values;
+        let pos = ["X", "Y", "Z"].map(|c| &exr.channel(&format!("position.{c}")).unwrap().values);
+        let wearer = f["agents"][0]["id"].as_u64().unwrap() as f32;
+        for k in 0..seg.len() {
+            assert!(
+                part[k] == 0.0 || seg[k] == wearer,
+                "frame {frame}: part {} on {}",
+                part[k],
+                seg[k]
+            );
+        }
+        let hands = f["agents"][0]["hands"].as_array().unwrap();
+        let landmarks: Vec<Vec<glam::DVec3>> = hands
+            .iter()
+            .map(|h| {
+                h["landmarks_3d"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|p| {
+                        glam::DVec3::new(
+                            p[0].as_f64().unwrap(),
+                            p[1].as_f64().unwrap(),
+                            p[2].as_f64().unwrap(),
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        let nearest = |side: usize, p: glam::DVec3| {
+            landmarks[side]
+                .iter()
+                .map(|l| l.distance(p))
+                .fold(f64::INFINITY, f64::min)
+        };
+        for (side, h) in hands.iter().enumerate() {
+            let own: Vec<usize> = (0..seg.len())
+                .filter(|&k| part[k] == (side + 1) as f32)
+                .collect();
+            assert_eq!(
+                h.get("mask_bbox_xyxy").is_some(),
+                !own.is_empty(),
+                "frame {frame}: {h}"
+            );
+            for &k in &own {
+                let p = glam::DVec3::new(pos[0][k] as f64, pos[1][k] as f64, pos[2][k] as f64);
+                let d = nearest(side, p);
+                assert!(
+                    d < 0.06,
+                    "frame {frame}: a pixel of hand {side} {d} m from it"
+                );
+            }
+            seen_hand_pixels += own.len();
+        }
     }
     assert!(
         seen_standing >= 1 && seen_held >= 1,
         "in view standing in {seen_standing} frames, held in {seen_held}"
     );
+    assert!(seen_hand_pixels > 0, "the wearer's hands are seen");
     let _typed: egogen::export::annotations::CameraAnnotations =
         serde_json::from_value(doc).unwrap();
 }

@@ -9,7 +9,8 @@
 //! correctives and linear blend skinning), `cpf` (the eye anchor of a posed skeleton), `markers`
 //! (the surface vertices the motion loop tracks), `hand_landmarks` (the hands' landmarks in MPS
 //! order), `volume` (capsules around the bones), `occupancy` (whether a point lies inside a posed
-//! body), `export` (posed meshes as OBJ), `info` (`egogen body info`'s summary of a model).
+//! body), `parts` (the hands and forearms a frame's segmentation tells apart), `export` (posed
+//! meshes as OBJ), `info` (`egogen body info`'s summary of a model).
 
 pub(crate) mod cpf;
 pub(crate) mod export;
@@ -20,6 +21,7 @@ pub(crate) mod markers;
 pub(crate) mod model;
 pub(crate) mod model_file;
 pub(crate) mod occupancy;
+pub(crate) mod parts;
 pub(crate) mod skeleton;
 pub(crate) mod volume;
 

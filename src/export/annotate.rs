@@ -14,6 +14,7 @@ use super::annotations::{
     SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
 use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
+use crate::body::parts::BodyPart;
 use crate::camera::CameraModel;
 use crate::exr_file::ExrContents;
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
@@ -60,6 +61,7 @@ fn write_annotations(take: &FinishedTake) -> Result<()> {
                 depth: "planar: z of the surface point in the camera frame (m); 0 = no surface".into(),
                 joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view) | in_view (inside it; occlusion not known: the run rendered no depth or no segmentation)"),
                 bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices; null without the segmentation pass".into(),
+                segmentation_part: "a person's body part at the pixel, beside its segmentation.id: 1 left hand, 2 right hand, 3 left forearm, 4 right forearm, 0 the rest of a person and every other pixel (a vertex belongs to the joint that carries most of its skin weight: the wrist's and fingers' make the hand, the elbow's the forearm)".into(),
             },
             camera: model_json,
             image_model: image_model(work),
@@ -161,6 +163,7 @@ pub(crate) fn annotate_frame(
         agents,
         plane("depth.Z"),
         plane("segmentation.id"),
+        plane("segmentation.part"),
     );
     annotation.colour_exposure =
         colour_pass(contents).map(|p| crate::inspect::preview::auto_exposure(contents, p));
@@ -176,6 +179,7 @@ fn frame_annotation(
     agents: &[RenderedAgent],
     depth: Option<&[f32]>,
     ids: Option<&[f32]>,
+    parts: Option<&[f32]>,
 ) -> FrameAnnotation {
     let i = f as usize;
     let res = work.camera.model.resolution();
@@ -205,6 +209,12 @@ fn frame_annotation(
                             bbox_xyxy: box_of(&landmarks_2d),
                             landmarks_2d,
                             landmark_visibility,
+                            mask_bbox_xyxy: ids.zip(parts).and_then(|(ids, parts)| {
+                                let part = BodyPart::hand(h) as u8 as f32;
+                                box_where(ids.len(), w, |i| {
+                                    parts[i] == part && ids[i] as u32 == a.id
+                                })
+                            }),
                             contact: a
                                 .held_objects
                                 .iter()
@@ -343,15 +353,19 @@ fn box_of(pixels: &[Option<[f64; 2]>]) -> Option<[f64; 4]> {
 
 /// Inclusive pixel box of the pixels labelled `id`, if any.
 fn bbox_of(ids: &[f32], width: usize, id: u32) -> Option<[usize; 4]> {
+    box_where(ids.len(), width, |i| ids[i] as u32 == id)
+}
+
+/// Tight box (inclusive pixel indices) of the pixels `i` of a `width`-wide image of `n`
+/// pixels where `inside(i)`.
+fn box_where(n: usize, width: usize, inside: impl Fn(usize) -> bool) -> Option<[usize; 4]> {
     let mut b: Option<[usize; 4]> = None;
-    for (i, &v) in ids.iter().enumerate() {
-        if v as u32 == id {
-            let (x, y) = (i % width, i / width);
-            b = Some(match b {
-                None => [x, y, x, y],
-                Some([x0, y0, x1, y1]) => [x0.min(x), y0.min(y), x1.max(x), y1.max(y)],
-            });
-        }
+    for i in (0..n).filter(|&i| inside(i)) {
+        let (x, y) = (i % width, i / width);
+        b = Some(match b {
+            None => [x, y, x, y],
+            Some([x0, y0, x1, y1]) => [x0.min(x), y0.min(y), x1.max(x), y1.max(y)],
+        });
     }
     b
 }

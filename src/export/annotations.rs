@@ -55,6 +55,9 @@ pub struct Conventions {
     pub depth: String,
     pub joint_visibility: String,
     pub bbox_xyxy: String,
+    /// What the frame file's `segmentation.part` values are (absent in files written before).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub segmentation_part: String,
 }
 
 /// A segmentation id and what carries it (a scene object, the added ceiling, an agent).
@@ -200,6 +203,10 @@ pub struct HandAnnotation {
     pub landmark_visibility: Vec<JointVisibility>,
     /// The box of its landmarks in view (x0, y0, x1, y1 in pixels); `None` when none is.
     pub bbox_xyxy: Option<[f64; 4]>,
+    /// Tight box of its own pixels (the segmentation's `part` of this person), inclusive pixel
+    /// indices; absent when none is in view or the run rendered no segmentation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mask_bbox_xyxy: Option<[usize; 4]>,
     /// The segmentation id of the object it holds in this frame (`objects`); absent: it
     /// holds nothing.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -15,7 +15,7 @@ pub enum Pass {
     Depth,
     /// Surface normals in the camera frame (`normal.*`).
     Normals,
-    /// Object and agent ids (`segmentation.id`).
+    /// Object and agent ids (`segmentation.id`), and a person's body part (`segmentation.part`).
     Segmentation,
     /// Surface points in the world frame (`position.*`).
     Position,
@@ -142,7 +142,7 @@ impl Passes {
             out.extend(["position.X", "position.Y", "position.Z"]);
         }
         if self.has(Pass::Segmentation) {
-            out.push("segmentation.id");
+            out.extend(["segmentation.id", "segmentation.part"]);
         }
         if self.has(Pass::Flow) {
             out.extend([
@@ -158,8 +158,9 @@ impl Passes {
 }
 
 /// Groups of channels a frame file may hold: a file holds each group whole or not at all, and
-/// `valid.V` always (how `verify` checks a file without the run's config).
-pub(crate) const CHANNEL_GROUPS: [&[&str]; 9] = [
+/// `valid.V` always (how `verify` checks a file without the run's config). The body parts are
+/// a group of their own: files written before them have the ids alone.
+pub(crate) const CHANNEL_GROUPS: [&[&str]; 10] = [
     &["valid.V"],
     &["rgb.A", "rgb.B", "rgb.G", "rgb.R"],
     &["gray.Y"],
@@ -168,6 +169,7 @@ pub(crate) const CHANNEL_GROUPS: [&[&str]; 9] = [
     &["normal.X", "normal.Y", "normal.Z"],
     &["position.X", "position.Y", "position.Z"],
     &["segmentation.id"],
+    &["segmentation.part"],
     &[
         "flow_backward.X",
         "flow_backward.Y",

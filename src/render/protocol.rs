@@ -118,6 +118,10 @@ pub struct ShardBody {
     /// Its outfit, when outfits are on ([`super::outfit`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub outfit: Option<super::outfit::ShardOutfit>,
+    /// Each face's body part (float32 F×1, `body::parts::BodyPart` as a number), written to
+    /// the ground truth's `part` AOV, when the segmentation is rendered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parts_npy: Option<PathBuf>,
 }
 
 /// A skin region: its colour and the grey mask (in the body's UV layout) that places it.

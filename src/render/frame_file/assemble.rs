@@ -86,8 +86,9 @@ impl Raw {
     /// The surface point on the frame pixel's exact ray `ray` (unit, camera frame), which
     /// meets the render at `q`, in the camera frame: where the ray meets the plane of three of
     /// the four rendered pixels around `q` that are on the nearest one's surface (hit and
-    /// rendered, its object id, one surface by [`ONE_SURFACE_TANGENT_SIN`] and
-    /// [`ONE_SURFACE_NORMAL_COS`]; without normals, all four on one plane) and whose triangle
+    /// rendered, its `ids`: the object, and on a person the body part; one surface by
+    /// [`ONE_SURFACE_TANGENT_SIN`] and [`ONE_SURFACE_NORMAL_COS`]; without normals, all four on
+    /// one plane) and whose triangle
     /// holds `q`: of all four, the half of the flatter split; of three, their triangle. Exactly
     /// on the ray; off the surface by its curvature over a rendered pixel, or at a crease by the
     /// chord across it; never past the surface's edge. Without the Normal pass only four
@@ -385,8 +386,8 @@ fn assemble_with(
         .as_ref()
         .map(|r| r.planes("Combined", ["R", "G", "B", "A"]))
         .transpose()?;
-    let (hit, pos, nrm, ids, vec) = match &gt {
-        None => (None, None, None, None, None),
+    let (hit, pos, nrm, ids, vec, parts) = match &gt {
+        None => (None, None, None, None, None, None),
         Some(gt) => {
             let has = |pass: &str| gt.contents.channel(&format!("ViewLayer.{pass}")).is_some();
             (
@@ -403,10 +404,18 @@ fn assemble_with(
                 has("Vector.X")
                     .then(|| gt.planes("Vector", ["X", "Y", "Z", "W"]))
                     .transpose()?,
+                // The bodies' parts (an AOV beside the object index; 0 where a raw has none).
+                has("part.X").then(|| gt.plane("part.X")).transpose()?,
             )
         }
     };
 
+    // A surface point is taken from pixels of one object, and on a person of one body part: a
+    // hand held before the torso is not one surface with it.
+    let surfaces: Option<Vec<f32>> = ids.map(|ids| match parts {
+        Some(parts) => ids.iter().zip(parts).map(|(&i, &p)| i * 8.0 + p).collect(),
+        None => ids.to_vec(),
+    });
     let res = target.resolution();
     let (w, h) = (res.width_px as usize, res.height_px as usize);
     let n_px = w * h;
@@ -421,6 +430,7 @@ fn assemble_with(
         normal: nrm.map(|_| vec![[0.0; 3]; n_px]),
         position: pos.map(|_| vec![[0.0; 3]; n_px]),
         segmentation: ids.map(|_| vec![0; n_px]),
+        body_parts: ids.map(|_| vec![0; n_px]),
         flow_forward: vec.map(|_| vec![[0.0; 2]; n_px]),
         flow_backward: vec.map(|_| vec![[0.0; 2]; n_px]),
         depth_noisy: None,
@@ -473,7 +483,7 @@ fn assemble_with(
                             pos,
                             nrm.as_ref(),
                             hit,
-                            ids,
+                            surfaces.as_deref(),
                             q,
                             |px| render.renders(px),
                             &cam_from_world,
@@ -497,6 +507,9 @@ fn assemble_with(
             }
             if let Some(ids) = ids {
                 out.segmentation.as_mut().unwrap()[i] = ids[n].round() as u32;
+                if let Some(parts) = parts {
+                    out.body_parts.as_mut().unwrap()[i] = parts[n].round() as u32;
+                }
             }
             if let Some(vec) = &vec {
                 // Blender's vector pass, pixels in Blender's raster (y up), measured

@@ -10,6 +10,8 @@
 //! - `normal.X/Y/Z` — unit surface normal in the OpenCV camera frame.
 //! - `position.X/Y/Z` — surface point in the world frame (m).
 //! - `segmentation.id` — u32: scene object or agent id (0 = nothing).
+//! - `segmentation.part` — u32: a person's body part at the pixel (1 and 2 the left and right
+//!   hand, 3 and 4 the left and right forearm, 0 the rest of a person and everything else).
 //! - `flow_forward.X/Y`, `flow_backward.X/Y` — pixel displacement of the surface point to the
 //!   next / previous saved frame (OpenCV pixels, x right, y down).
 //! - `depth_noisy.Z` (only for cameras with a depth-noise model) — `depth.Z` through the
@@ -96,6 +98,9 @@ pub struct FrameImage {
     pub normal: Option<Vec<[f32; 3]>>,
     pub position: Option<Vec<[f32; 3]>>,
     pub segmentation: Option<Vec<u32>>,
+    /// Each person's pixel's body part (`body::parts::BodyPart`: 0 the rest, 1 and 2 the left
+    /// and right hand, 3 and 4 the forearms), beside `segmentation`.
+    pub body_parts: Option<Vec<u32>>,
     pub flow_forward: Option<Vec<[f32; 2]>>,
     pub flow_backward: Option<Vec<[f32; 2]>>,
     /// `depth` through a sensor noise model, where the camera has one.
@@ -128,6 +133,7 @@ impl FrameImage {
         }
         if !passes.has(Pass::Segmentation) {
             self.segmentation = None;
+            self.body_parts = None;
         }
         if !passes.has(Pass::Flow) {
             self.flow_forward = None;
@@ -248,6 +254,9 @@ impl FrameImage {
         if let Some(ids) = &self.segmentation {
             channels.push(("segmentation.id".into(), FlatSamples::U32(ids.clone())));
         }
+        if let Some(parts) = &self.body_parts {
+            channels.push(("segmentation.part".into(), FlatSamples::U32(parts.clone())));
+        }
         channels
     }
 }
@@ -272,6 +281,7 @@ mod tests {
             normal: Some((0..n).map(|k| [v(k, 4), v(k, 5), v(k, 6)]).collect()),
             position: Some((0..n).map(|k| [v(k, 7) + 1e5, v(k, 8), -v(k, 9)]).collect()),
             segmentation: Some((0..n).map(|k| (k as u32) * 40_001 + 16_777_217).collect()),
+            body_parts: Some((0..n).map(|k| (k % 5) as u32).collect()),
             flow_forward: Some((0..n).map(|k| [v(k, 10), v(k, 11)]).collect()),
             flow_backward: Some((0..n).map(|k| [v(k, 12), v(k, 13)]).collect()),
             depth_noisy: Some((0..n).map(|k| v(k, 14).abs()).collect()),

@@ -1,18 +1,20 @@
 //! The take's people staged (steps 2 and 3 of the main job): the bodies rendered with their
 //! tracks and who wears the rig, the take's `sequence/` folder, the Aria streams' output, and
-//! Blender's body inputs (vertex caches, textures, skin maps, outfit regions).
+//! Blender's body inputs (vertex caches, textures, skin maps, outfit regions, body parts).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 
 use super::RunMotion;
+use crate::body::parts::face_parts;
 use crate::body::BodyModel;
 use crate::export::aria::{AriaExport, AriaWearer};
 use crate::export::gaze::GazeGoal;
 use crate::plan::{RenderPlan, RunPlan};
 use crate::render::outfit::regions::garment_fields;
 use crate::render::outfit::{ShardOutfit, SLOTS};
+use crate::render::passes::Pass;
 use crate::render::protocol::ShardSkinRegion;
 use crate::render::shard_plan::{AGENT_ID_BASE, HELD_OBJECT_ID_BASE};
 use crate::render::skin_tone::SkinTextures;
@@ -234,6 +236,20 @@ pub(super) fn write_body_inputs(
         }
         _ => None,
     };
+    // One part per face for every agent (they share the model's skinning), where the
+    // segmentation tells the hands and forearms apart.
+    let parts_npy = if render.passes.has(Pass::Segmentation) {
+        let path = work.join("body_parts.npy");
+        let parts: Vec<[f32; 1]> = face_parts(model)
+            .into_iter()
+            .map(|p| [p as u8 as f32])
+            .collect();
+        write_vertex_rows_npy(&path, &parts)?;
+        scratch.push(path.clone());
+        Some(std::fs::canonicalize(&path)?)
+    } else {
+        None
+    };
     let mut bodies = Vec::with_capacity(agents.len());
     for (k, a) in agents.iter().enumerate() {
         let pc2 = work.join(format!("agent_{k}.pc2"));
@@ -289,6 +305,7 @@ pub(super) fn write_body_inputs(
             skin_regions,
             skin_detail: textures.detail.clone(),
             outfit,
+            parts_npy: parts_npy.clone(),
         });
         scratch.extend([pc2, faces, vertices]);
     }
