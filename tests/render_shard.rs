@@ -935,7 +935,7 @@ print(json.dumps(out))
             "{}",
             ch.name
         );
-        let expected_type = if ch.name == "segmentation.id" {
+        let expected_type = if ch.name.starts_with("segmentation.") {
             "uint32"
         } else {
             "float32"

@@ -26,6 +26,11 @@ use crate::synth::activity::ActivitySegment;
 /// lie inside the body, up to about this deep under its surface.
 pub(crate) const JOINT_OCCLUSION_TOLERANCE_M: f64 = 0.10;
 
+/// How much nearer than a hand landmark another part of its own person must be at its pixel
+/// for the landmark to count as hidden by the body (m): the landmarks lie up to about 1.5 cm
+/// under the hand's skin.
+pub(crate) const SELF_OCCLUSION_TOLERANCE_M: f64 = 0.03;
+
 /// `cameras/<camera>/annotations.json` for every camera (OpenCV conventions), from the
 /// frames' records.
 pub(crate) struct Annotations;
@@ -59,7 +64,7 @@ fn write_annotations(take: &FinishedTake) -> Result<()> {
                 pixels: "centre of the top-left pixel at (0, 0)".into(),
                 t_world_cam: "row-major 4x4 mapping camera-frame points to the world".into(),
                 depth: "planar: z of the surface point in the camera frame (m); 0 = no surface".into(),
-                joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | outside (not in the valid field of view) | in_view (inside it; occlusion not known: the run rendered no depth or no segmentation)"),
+                joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | occluded_by_body (hand landmarks: the pixel shows another part of the same person, > {SELF_OCCLUSION_TOLERANCE_M} m nearer) | outside (not in the valid field of view) | in_view (inside it; occlusion not known: the run rendered no depth or no segmentation)"),
                 bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices; null without the segmentation pass".into(),
                 segmentation_part: "a person's body part at the pixel, beside its segmentation.id: 1 left hand, 2 right hand, 3 left forearm, 4 right forearm, 0 the rest of a person and every other pixel (a vertex belongs to the joint that carries most of its skin weight: the wrist's and fingers' make the hand, the elbow's the forearm)".into(),
             },
@@ -202,7 +207,15 @@ fn frame_annotation(
                     .zip(["left", "right"])
                     .enumerate()
                     .map(|(h, (hand, side))| {
-                        let (landmarks_2d, landmark_visibility) = seen(&hand.points);
+                        let (landmarks_2d, landmark_visibility) = project_part_points(
+                            work,
+                            cam_from_world,
+                            depth,
+                            ids,
+                            parts.map(|p| (p, BodyPart::hand(h))),
+                            a.id,
+                            &hand.points,
+                        );
                         HandAnnotation {
                             side: side.into(),
                             landmarks_3d: hand.points.iter().map(|p| p.to_array()).collect(),
@@ -307,6 +320,22 @@ fn project_points(
     id: u32,
     points: &[crate::math::Vec3],
 ) -> (Vec<Option<[f64; 2]>>, Vec<JointVisibility>) {
+    project_part_points(work, cam_from_world, depth, ids, None, id, points)
+}
+
+/// [`project_points`] of points of one body part (`part`: the frame's `segmentation.part`
+/// plane and the part's value): a point whose pixel shows another part of the same person,
+/// nearer than the point by more than [`SELF_OCCLUSION_TOLERANCE_M`], is
+/// [`JointVisibility::OccludedByBody`] (a hand behind its own body or the other hand).
+fn project_part_points(
+    work: &CameraWork,
+    cam_from_world: crate::math::Affine3,
+    depth: Option<&[f32]>,
+    ids: Option<&[f32]>,
+    part: Option<(&[f32], BodyPart)>,
+    id: u32,
+    points: &[crate::math::Vec3],
+) -> (Vec<Option<[f64; 2]>>, Vec<JointVisibility>) {
     let res = work.camera.model.resolution();
     let w = res.width_px as usize;
     let mut pixels = Vec::with_capacity(points.len());
@@ -321,9 +350,16 @@ fn project_points(
                 visibility.push(match (depth, ids) {
                     (Some(depth), Some(ids)) => {
                         let d = depth[at] as f64;
+                        let own_other_part = part.is_some_and(|(parts, part)| {
+                            parts[at] as u32 != part as u32
+                                && d > 0.0
+                                && d < p.z - SELF_OCCLUSION_TOLERANCE_M
+                        });
                         if ids[at] as u32 != id && d > 0.0 && d < p.z - JOINT_OCCLUSION_TOLERANCE_M
                         {
                             JointVisibility::Occluded
+                        } else if ids[at] as u32 == id && own_other_part {
+                            JointVisibility::OccludedByBody
                         } else {
                             JointVisibility::Visible
                         }

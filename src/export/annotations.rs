@@ -153,6 +153,9 @@ pub enum JointVisibility {
     Visible,
     /// The joint's pixel shows another object or agent nearer than the joint.
     Occluded,
+    /// A hand landmark's pixel shows another part of its own person nearer than it (the body
+    /// or the other hand before it); only where the frame has the body parts.
+    OccludedByBody,
     /// Not in the camera's valid field of view.
     Outside,
     /// In the valid field of view; whether it is occluded is not known (the run rendered no

@@ -367,6 +367,41 @@ impl RemapTable {
     }
 }
 
+/// The planes of a ground-truth raw, each where it was rendered.
+#[derive(Default)]
+struct GroundTruthPlanes<'a> {
+    /// Alpha: 1 where a surface was hit.
+    hit: Option<&'a [f32]>,
+    pos: Option<[&'a [f32]; 3]>,
+    nrm: Option<[&'a [f32]; 3]>,
+    ids: Option<&'a [f32]>,
+    vec: Option<[&'a [f32]; 4]>,
+    /// The bodies' parts (an AOV beside the object index; absent where a raw has none).
+    parts: Option<&'a [f32]>,
+}
+
+impl<'a> GroundTruthPlanes<'a> {
+    fn of(gt: &'a Raw) -> Result<Self, FrameFileError> {
+        let has = |pass: &str| gt.contents.channel(&format!("ViewLayer.{pass}")).is_some();
+        Ok(Self {
+            hit: Some(gt.plane("Combined.A")?),
+            pos: has("Position.X")
+                .then(|| gt.planes("Position", ["X", "Y", "Z"]))
+                .transpose()?,
+            nrm: has("Normal.X")
+                .then(|| gt.planes("Normal", ["X", "Y", "Z"]))
+                .transpose()?,
+            ids: has("IndexOB.X")
+                .then(|| gt.plane("IndexOB.X"))
+                .transpose()?,
+            vec: has("Vector.X")
+                .then(|| gt.planes("Vector", ["X", "Y", "Z", "W"]))
+                .transpose()?,
+            parts: has("part.X").then(|| gt.plane("part.X")).transpose()?,
+        })
+    }
+}
+
 fn assemble_with(
     remap: &RemapTable,
     rgb: Option<Raw>,
@@ -386,30 +421,17 @@ fn assemble_with(
         .as_ref()
         .map(|r| r.planes("Combined", ["R", "G", "B", "A"]))
         .transpose()?;
-    let (hit, pos, nrm, ids, vec, parts) = match &gt {
-        None => (None, None, None, None, None, None),
-        Some(gt) => {
-            let has = |pass: &str| gt.contents.channel(&format!("ViewLayer.{pass}")).is_some();
-            (
-                Some(gt.plane("Combined.A")?),
-                has("Position.X")
-                    .then(|| gt.planes("Position", ["X", "Y", "Z"]))
-                    .transpose()?,
-                has("Normal.X")
-                    .then(|| gt.planes("Normal", ["X", "Y", "Z"]))
-                    .transpose()?,
-                has("IndexOB.X")
-                    .then(|| gt.plane("IndexOB.X"))
-                    .transpose()?,
-                has("Vector.X")
-                    .then(|| gt.planes("Vector", ["X", "Y", "Z", "W"]))
-                    .transpose()?,
-                // The bodies' parts (an AOV beside the object index; 0 where a raw has none).
-                has("part.X").then(|| gt.plane("part.X")).transpose()?,
-            )
-        }
+    let GroundTruthPlanes {
+        hit,
+        pos,
+        nrm,
+        ids,
+        vec,
+        parts,
+    } = match &gt {
+        None => GroundTruthPlanes::default(),
+        Some(gt) => GroundTruthPlanes::of(gt)?,
     };
-
     // A surface point is taken from pixels of one object, and on a person of one body part: a
     // hand held before the torso is not one surface with it.
     let surfaces: Option<Vec<f32>> = ids.map(|ids| match parts {
