@@ -1142,7 +1142,7 @@ fn drawn_materials_change_the_colour_and_not_the_ground_truth() {
         let names: Vec<&str> = k.channels.iter().map(|c| c.name.as_str()).collect();
         assert_eq!(
             names.iter().filter(|n| ground_truth(n)).count(),
-            10,
+            11,
             "{names:?}"
         );
         for c in &k.channels {

@@ -206,3 +206,130 @@ pub(crate) fn depth_inside(object: &HeldObject, f: usize, point: Vec3) -> f64 {
     };
     across.min(z - p.z.abs()).max(0.0)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+    use rand_core::SeedableRng;
+
+    fn grasp_at(palm: Vec3, frame: usize) -> Grasp {
+        Grasp {
+            frame,
+            hand: Hand::Right,
+            from_frame: 0,
+            palm,
+            along: DVec2::new(0.6, 0.8),
+        }
+    }
+
+    /// A wrist pose from an axis-angle (any angle, π included) and a position.
+    fn wrist(axis: [f64; 3], angle: f64, at: [f64; 3]) -> Affine3 {
+        let axis = Vec3::from_array(axis).try_normalize().unwrap_or(Vec3::Z);
+        Affine3::from_rotation_translation(glam::DQuat::from_axis_angle(axis, angle), at.into())
+    }
+
+    proptest! {
+        /// Whatever the palm's height, the object taken never reaches into the palm and its
+        /// top lies within [`MAX_PALM_GAP_M`] below it; a palm too low for the smallest object
+        /// or too high over the tallest takes nothing. Far from the origin too.
+        #[test]
+        fn the_object_taken_fits_under_the_palm(
+            height in 0.0f64..0.6,
+            floor in -50.0f64..50.0,
+            xy in prop::array::uniform2(-1.0e4f64..1.0e4),
+            seed in 0u64..1000,
+        ) {
+            let palm = Vec3::new(xy[0], xy[1], floor + height);
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let taken = placed_object("p", 0, &grasp_at(palm, 7), floor, &mut rng);
+            let room = palm.z - floor - PALM_CLEARANCE_M;
+            let tops: Vec<f64> = ObjectKind::ALL.iter().map(|k| k.size_m()[2]).collect();
+            let fits = tops.iter().any(|&h| (room - MAX_PALM_GAP_M..=room).contains(&h));
+            prop_assert_eq!(taken.is_some(), fits);
+            if let Some(o) = taken {
+                let top = floor + o.size_m[2];
+                prop_assert!(top <= palm.z - PALM_CLEARANCE_M + 1e-9);
+                prop_assert!(o.palm_gap_m <= MAX_PALM_GAP_M + PALM_CLEARANCE_M + 1e-9);
+                let bottom = o.world_from_object[0].transform_point3(Vec3::new(0.0, 0.0, -0.5 * o.size_m[2]));
+                prop_assert!((bottom.z - floor).abs() < 1e-6 * (1.0 + floor.abs()));
+                prop_assert!((bottom.x - palm.x).abs() < 1e-6 && (bottom.y - palm.y).abs() < 1e-6);
+            }
+        }
+
+        /// Carried, the object keeps its pose in the wrist's frame on every frame (rotations
+        /// near 0 and π, far from the origin), and stands still before the grasp.
+        #[test]
+        fn a_carried_object_stays_put_in_the_hand(
+            axes in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 6),
+            angles in prop::collection::vec(prop_oneof![0.0f64..1e-6, (std::f64::consts::PI - 1e-6)..std::f64::consts::PI, 0.0f64..std::f64::consts::PI], 6),
+            at in prop::collection::vec(prop::array::uniform3(-1.0e3f64..1.0e3), 6),
+            grasp in 0usize..6,
+        ) {
+            let wrists: Vec<[Affine3; 2]> = (0..6)
+                .map(|f| { let w = wrist(axes[f], angles[f], at[f]); [w, w] })
+                .collect();
+            let palm = wrists[grasp][1].translation + Vec3::new(0.0, 0.0, -0.02);
+            let mut rng = ChaCha8Rng::seed_from_u64(1);
+            // A palm 0.15 m over the floor takes something.
+            let floor = palm.z - 0.15;
+            let mut o = placed_object("p", 0, &grasp_at(palm, grasp), floor, &mut rng).unwrap();
+            let resting = o.world_from_object[0];
+            carry(&mut o, &wrists);
+            prop_assert_eq!(o.world_from_object.len(), 6);
+            let held = wrists[grasp][1].inverse() * o.world_from_object[grasp];
+            for f in 0..6 {
+                if f < grasp {
+                    prop_assert_eq!(o.world_from_object[f], resting);
+                } else {
+                    let d = wrists[f][1].inverse() * o.world_from_object[f];
+                    let off = d.to_cols_array().iter().zip(held.to_cols_array()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                    prop_assert!(off < 1e-9 * 1.0e3, "frame {}: {}", f, off);
+                }
+                prop_assert_eq!(o.held_at(f), f >= grasp);
+            }
+            prop_assert!((o.world_from_object[grasp].translation - resting.translation).length() < 1e-9 * 1.0e3);
+        }
+    }
+
+    /// A point's depth inside each solid: at its centre half its smallest extent, 0 on and
+    /// outside its faces; the cylinder's corners are outside it.
+    #[test]
+    fn depth_inside_measures_to_the_nearest_face() {
+        for kind in ObjectKind::ALL {
+            let size_m = kind.size_m();
+            let o = HeldObject {
+                name: "o".into(),
+                kind,
+                shape: kind.shape(),
+                size_m,
+                colour_rgb: [0.5; 3],
+                hand: Hand::Left,
+                grasp_frame: 0,
+                palm_gap_m: 0.0,
+                fingertip_depth_m: 0.0,
+                world_from_object: vec![wrist([0.3, 0.2, 1.0], 2.0, [100.0, -40.0, 3.0])],
+            };
+            let world = |p: Vec3| o.world_from_object[0].transform_point3(p);
+            let half = size_m.map(|v| 0.5 * v);
+            let centre = depth_inside(&o, 0, world(Vec3::ZERO));
+            assert!(
+                (centre - half.iter().cloned().fold(f64::INFINITY, f64::min)).abs() < 1e-9,
+                "{kind:?}"
+            );
+            for p in [
+                Vec3::new(half[0] + 1e-6, 0.0, 0.0),
+                Vec3::new(0.0, 0.0, -half[2] - 1e-6),
+                Vec3::new(0.0, half[1], 0.0),
+            ] {
+                assert!(depth_inside(&o, 0, world(p)) < 1e-6, "{kind:?} {p}");
+            }
+            let corner = Vec3::new(0.95 * half[0], 0.95 * half[1], 0.0);
+            let d = depth_inside(&o, 0, world(corner));
+            match kind.shape() {
+                ObjectShape::Cylinder => assert_eq!(d, 0.0, "{kind:?}"),
+                ObjectShape::Box => assert!(d > 0.0, "{kind:?}"),
+            }
+        }
+    }
+}
