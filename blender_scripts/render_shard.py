@@ -887,6 +887,13 @@ def build_scene(spec):
         obj.pass_index = ids.get(obj.name, 0)
     apply_materials(scene, spec.get("materials", []))
     bodies = [add_body(scene, b) for b in spec["bodies"]]
+    # The bodies' parts beside their ids (0 wherever no body material writes it), registered
+    # before the first render: with persistent data, a pass added later is not rendered. The
+    # colour raws carry it too, unread.
+    if any(b.get("parts_npy") for b in spec["bodies"]):
+        aov = scene.view_layers[0].aovs.add()
+        aov.name = PART_AOV
+        aov.type = "VALUE"
     # What moves besides the bodies and the camera, each with how it is keyed on a timeline
     # of a given frame step.
     movers = []
@@ -1044,8 +1051,6 @@ def set_rgb_mode(scene, rgb):
     layer = scene.view_layers[0]
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, False)
-    for aov in list(layer.aovs):
-        layer.aovs.remove(aov)
     scene.cycles.samples = rgb["samples"]
     scene.cycles.max_bounces = 12  # Blender's default (the ground truth sets 0)
     scene.cycles.use_adaptive_sampling = rgb["adaptive_threshold"] > 0
@@ -1075,11 +1080,6 @@ def set_ground_truth_mode(scene, passes):
     layer = scene.view_layers[0]
     for p in ("z", "normal", "object_index", "vector", "position"):
         setattr(layer, "use_pass_" + p, p in passes)
-    # The bodies' parts beside their ids (the AOV is 0 wherever no body material writes it).
-    if "object_index" in passes and PART_AOV not in layer.aovs:
-        aov = layer.aovs.add()
-        aov.name = PART_AOV
-        aov.type = "VALUE"
     scene.cycles.samples = 1
     # Every pass it keeps is of the first hit: no light paths beyond it.
     scene.cycles.max_bounces = 0

@@ -1998,6 +1998,8 @@ workers = 1
 /// A wearer who picks something up: the object stands on the floor until the hand takes it,
 /// then is carried; the render draws it with its own segmentation id where the annotations
 /// pose it (its pixels' positions inside its box), and the holding hand's contact names it.
+/// The hands' own pixels (`segmentation.part`) lie on the hands, with the colour rendered
+/// first in the same Blender (as a default take renders).
 #[test]
 fn a_picked_up_object_is_rendered_where_the_hand_carries_it() {
     let config = format!(
@@ -2024,7 +2026,7 @@ cameras = ["camera-rgb"]
 resolution_scale = 0.125
 every_n_frames = 8
 samples = 1
-passes = ["segmentation", "position"]
+passes = ["colour", "segmentation", "position"]
 [supervisor]
 workers = 1
 "#,
