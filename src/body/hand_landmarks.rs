@@ -114,6 +114,12 @@ impl HandLandmarks {
     }
 }
 
+/// A hand's palm centre (`hand` 0: left, 1: right): midway between the wrist and the middle
+/// finger's knuckle, in the skeleton's frame.
+pub(crate) fn palm_centre(skeleton: &PosedSkeleton, hand: usize) -> Vec3 {
+    (skeleton.joints[WRISTS[hand]] + skeleton.joints[FINGER_JOINTS[2][0] + 15 * hand]) * 0.5
+}
+
 /// Both hands (left, right) of a body posed as `skeleton` with `pose`, in the skeleton's
 /// frame.
 pub(crate) fn hand_landmarks(
@@ -139,7 +145,7 @@ pub(crate) fn hand_landmarks(
                 points[8 + 3 * (f - 1) + k] = finger(f, k);
             }
         }
-        points[20] = (wrist + finger(2, 0)) * 0.5;
+        points[20] = palm_centre(skeleton, hand);
         // The rest hand's palm faces −y and points along ±x (docs/BODY_MODEL.md): turned by
         // the wrist.
         let world_from_wrist = skeleton.world_from_joint[WRISTS[hand]];

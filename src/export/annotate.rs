@@ -201,6 +201,7 @@ fn frame_annotation(
                 project_points(work, cam_from_world, depth, ids, a.id, points)
             };
             let (joints_2d, visibility) = seen(joints);
+            let bbox = ids.and_then(|ids| bbox_of(ids, w, a.id));
             let hands = a.track.hands.as_ref().map(|hands| {
                 hands[i]
                     .iter()
@@ -222,12 +223,15 @@ fn frame_annotation(
                             bbox_xyxy: box_of(&landmarks_2d),
                             landmarks_2d,
                             landmark_visibility,
-                            mask_bbox_xyxy: ids.zip(parts).and_then(|(ids, parts)| {
-                                let part = BodyPart::hand(h) as u8 as f32;
-                                box_where(ids.len(), w, |i| {
-                                    parts[i] == part && ids[i] as u32 == a.id
-                                })
-                            }),
+                            // Its pixels lie in its person's box: only those rows are read.
+                            mask_bbox_xyxy: ids.zip(parts).zip(bbox).and_then(
+                                |((ids, parts), [_, y0, _, y1])| {
+                                    let part = BodyPart::hand(h) as u8 as f32;
+                                    box_where(y0 * w..(y1 + 1) * w, w, |i| {
+                                        parts[i] == part && ids[i] as u32 == a.id
+                                    })
+                                },
+                            ),
                             contact: a
                                 .held_objects
                                 .iter()
@@ -237,7 +241,6 @@ fn frame_annotation(
                     })
                     .collect()
             });
-            let bbox = ids.and_then(|ids| bbox_of(ids, w, a.id));
             // With segmentation: its pixels are in the image; without: a joint is.
             let in_view = match ids {
                 Some(_) => bbox.is_some(),
@@ -389,14 +392,18 @@ fn box_of(pixels: &[Option<[f64; 2]>]) -> Option<[f64; 4]> {
 
 /// Inclusive pixel box of the pixels labelled `id`, if any.
 fn bbox_of(ids: &[f32], width: usize, id: u32) -> Option<[usize; 4]> {
-    box_where(ids.len(), width, |i| ids[i] as u32 == id)
+    box_where(0..ids.len(), width, |i| ids[i] as u32 == id)
 }
 
-/// Tight box (inclusive pixel indices) of the pixels `i` of a `width`-wide image of `n`
-/// pixels where `inside(i)`.
-fn box_where(n: usize, width: usize, inside: impl Fn(usize) -> bool) -> Option<[usize; 4]> {
+/// Tight box (inclusive pixel indices) of the pixels `i` in `pixels` (row-major indices of a
+/// `width`-wide image) where `inside(i)`.
+fn box_where(
+    pixels: std::ops::Range<usize>,
+    width: usize,
+    inside: impl Fn(usize) -> bool,
+) -> Option<[usize; 4]> {
     let mut b: Option<[usize; 4]> = None;
-    for i in (0..n).filter(|&i| inside(i)) {
+    for i in pixels.filter(|&i| inside(i)) {
         let (x, y) = (i % width, i / width);
         b = Some(match b {
             None => [x, y, x, y],

@@ -1,15 +1,16 @@
 //! Things people pick up and carry: a pick-up's object (a small object,
-//! `scene::small_object`), standing on the floor under the reaching palm until the hand takes it at its lowest reach ([`Grasp`]), then carried rigidly with
-//! that wrist to the end of the take. The kind is drawn among those whose top fits under the
-//! palm there, close enough for the hand to close round it (a pick-up whose free hand stays
-//! high takes nothing); the grip is shaped to its width
-//! (`motion::hands::HandDoing::Holding`). Its pose on every frame is what the renders and the
-//! annotations read.
+//! `scene::small_object`), standing on the floor under the reaching palm until the hand takes
+//! it at its lowest reach ([`Grasp`]), then carried rigidly with that wrist to the end of the
+//! take. The kind is drawn among those whose top fits under the palm there, close enough for
+//! the hand to close round it (a pick-up whose free hand stays high takes nothing); the grip is
+//! shaped to its width (`motion::hands::HandDoing::Holding`). Its pose on every frame is what
+//! the renders and the annotations read.
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+use crate::body::hand_landmarks::palm_centre;
 use crate::body::{joint, BodyParams, PoseError};
 use crate::math::colour::hsv_linear;
 use crate::math::random::uniform_in;
@@ -110,16 +111,13 @@ pub(crate) fn grasp_in(
     let s = body
         .shaped
         .skeleton(&frames[frame].pose, frames[frame].transl)?;
-    let wrist = s.joints[hand.wrist_joint()];
-    // The palm's centre: midway between the wrist and the middle finger's knuckle (as the
-    // hand landmarks have it).
-    let knuckle = s.joints[[28, 43][hand.index()]];
-    let d = knuckle - wrist;
+    let palm = palm_centre(&s, hand.index());
+    let d = palm - s.joints[hand.wrist_joint()];
     Ok(Some(Grasp {
         frame,
         hand,
         from_frame: seg.start_frame,
-        palm: (wrist + knuckle) * 0.5,
+        palm,
         along: DVec2::new(d.x, d.y).try_normalize().unwrap_or(DVec2::X),
     }))
 }

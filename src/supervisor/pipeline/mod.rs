@@ -6,8 +6,8 @@
 //! The job's steps live here and in: `output` (whether `<dir>` and `<dir>.partial` may be
 //! written or resumed, and the partial folder staged with its stamp), `bodies` (the take's
 //! people staged: bodies, tracks, the wearer, the `sequence/` folder and Blender's body inputs),
-//! `spec` (the take's rendering work: cameras, segmentation ids, ceiling, obstacles, surfaces,
-//! the shard spec, and the repair of what an interrupted run left).
+//! `spec` (the take's rendering work: cameras, segmentation ids, ceiling, obstacles, held
+//! objects, surfaces, the shard spec, and the repair of what an interrupted run left).
 
 mod bodies;
 mod output;
