@@ -26,8 +26,9 @@
 //! side by side: the "whole runs" table's wall seconds are the comparison. Without a GPU the
 //! second run stops before staging, naming what Blender looked for.
 //!
-//! `cargo bench --bench render_cost -- --outfits` renders the shipped settings with outfits off
-//! and on (`[render.outfits]`), in turn, twice each: what dressing people costs per frame.
+//! `cargo bench --bench render_cost -- --outfits` renders the shipped settings bare without the
+//! body parts' AOV (`EGOGEN_BLENDER_PART_AOV=0`), with outfits off and on (`[render.outfits]`),
+//! in turn, twice each: what the hand masks and dressing people cost per frame.
 //!
 //! `cargo bench --bench render_cost` (about 15 minutes on 2 cores).
 //! `EGOGEN_RENDER_COST_SCALE=1 cargo bench --bench render_cost` renders the cameras at that
@@ -186,23 +187,34 @@ const ON_CPU_AND_GPU: [Variant; 2] = [
     },
 ];
 
-/// `--outfits`: the shipped settings with every person bare and dressed (`[render.outfits]`),
-/// in turn, twice.
-const OUTFITS: [Variant; 4] = [
-    outfits_variant("outfits off (1)", "off"),
-    outfits_variant("outfits on (1)", "on"),
-    outfits_variant("outfits off (2)", "off"),
-    outfits_variant("outfits on (2)", "on"),
+/// Environment of the worker: the ground truth without the bodies' part AOV (the hand masks'
+/// `segmentation.part` then reads 0).
+const NO_PART_AOV: &[(&str, &str)] = &[("EGOGEN_BLENDER_PART_AOV", "0")];
+
+/// `--outfits`: the shipped settings with every person bare without the body parts' AOV, bare
+/// and dressed (`[render.outfits]`, with the garments' AOV), in turn, twice: what the hand
+/// masks and dressing people cost per frame.
+const OUTFITS: [Variant; 6] = [
+    outfits_variant("bare, no body parts (1)", "off", NO_PART_AOV),
+    outfits_variant("outfits off (1)", "off", &[]),
+    outfits_variant("outfits on (1)", "on", &[]),
+    outfits_variant("bare, no body parts (2)", "off", NO_PART_AOV),
+    outfits_variant("outfits off (2)", "off", &[]),
+    outfits_variant("outfits on (2)", "on", &[]),
 ];
 
-const fn outfits_variant(name: &'static str, mode: &'static str) -> Variant {
+const fn outfits_variant(
+    name: &'static str,
+    mode: &'static str,
+    envs: &'static [(&'static str, &'static str)],
+) -> Variant {
     Variant {
         name,
         render: match mode.as_bytes()[1] {
             b'f' => concat!(shipped!(), "\noutfits = { mode = \"off\" }"),
             _ => concat!(shipped!(), "\noutfits = { mode = \"on\" }"),
         },
-        envs: &[],
+        envs,
         as_limit: false,
         at_full_size: true,
     }

@@ -83,8 +83,14 @@ def body_object(body, vertices):
                              body.get("skin_regions", []), body.get("skin_detail"))
     if body.get("outfit"):
         add_outfit_attributes(mesh, body["outfit"])
-        dress(material, body["outfit"]["outfit"])
-    if body.get("parts_npy"):
+        # Garment codes only where the segmentation is rendered (where the parts are).
+        codes = body["outfit"]["slots"] if body.get("parts_npy") else None
+        garment = dress(material, body["outfit"]["outfit"], codes)
+        if garment is not None:
+            add_aov_output(material, GARMENT_AOV, garment)
+    # EGOGEN_BLENDER_PART_AOV=0 leaves the parts out (for `cargo bench --bench render_cost`:
+    # their `segmentation.part` then reads 0).
+    if body.get("parts_npy") and os.environ.get("EGOGEN_BLENDER_PART_AOV") != "0":
         add_part_output(mesh, material, body["parts_npy"])
     mesh.materials.append(material)
     return bpy.data.objects.new(body["name"], mesh)
@@ -233,13 +239,20 @@ def add_part_output(mesh, material, path):
     read = nodes.new("ShaderNodeAttribute")
     read.attribute_type = "GEOMETRY"
     read.attribute_name = "egogen_part"
-    out = nodes.new("ShaderNodeOutputAOV")
-    out.aov_name = PART_AOV
-    links.new(read.outputs["Fac"], out.inputs["Value"])
+    add_aov_output(material, PART_AOV, read.outputs["Fac"])
 
 
-# The ground truth's AOV holding each pixel's body part.
+def add_aov_output(material, name, value):
+    """Writes `value` (a socket or a number) to the AOV `name` (registered on the view layer
+    when the scene is built)."""
+    out = material.node_tree.nodes.new("ShaderNodeOutputAOV")
+    out.aov_name = name
+    Nodes(material).feed(out.inputs["Value"], value)
+
+
+# The ground truth's AOVs holding each pixel's body part and garment.
 PART_AOV = "part"
+GARMENT_AOV = "garment"
 
 
 def linked_or_value(target):
@@ -300,19 +313,25 @@ def fabric_colour(n, g, rest):
     return n.mix("RGBA", weave, colour, light)
 
 
-def dress(mat, outfit):
+def dress(mat, outfit, slots=None):
     """Paints the outfit over the skin material `mat`: each garment, lowest first, where its
     signed distance is positive (an edge 3 mm wide across triangles), hems darkened within
     6 mm of the edge, with the fabric's roughness and sheen; the skin's subsurface scattering
-    only where the skin shows."""
+    only where the skin shows. Given the slots in their code order, returns a socket holding
+    the garment on top at each point (its slot's place in `slots` + 1; 0 the skin): the
+    ground truth's `segmentation.garment`."""
     n = Nodes(mat)
     bsdf = n.nodes["Principled BSDF"]
     colour = linked_or_value(bsdf.inputs["Base Color"])
     rough = linked_or_value(bsdf.inputs["Roughness"])
-    sheen, covered = 0.0, 0.0
+    sheen, covered, code = 0.0, 0.0, 0.0
     rest = n.add("ShaderNodeAttribute", attribute_name="egogen_rest").outputs["Vector"]
     for g in outfit["garments"]:
         f = n.add("ShaderNodeAttribute", attribute_name="egogen_" + g["slot"]).outputs["Fac"]
+        if slots is not None:
+            # Where the colour's edge is: the middle of the cover's ramp.
+            code = n.mix("FLOAT", n.math("GREATER_THAN", f, 0.0), code,
+                         float(slots.index(g["slot"]) + 1))
         cover = n.math("MULTIPLY", n.ramp(f, -0.0015, 0.0015), g["cover"])
         fabric = fabric_colour(n, g, rest)
         if g["slot"] != "hair":
@@ -328,6 +347,7 @@ def dress(mat, outfit):
     n.feed(bsdf.inputs["Sheen Weight"], sheen)
     skin_sss = bsdf.inputs["Subsurface Weight"].default_value
     n.feed(bsdf.inputs["Subsurface Weight"], n.mix("FLOAT", covered, skin_sss, 0.0))
+    return code if slots is not None else None
 
 
 def add_ceiling(scene, ceiling):
@@ -887,13 +907,16 @@ def build_scene(spec):
         obj.pass_index = ids.get(obj.name, 0)
     apply_materials(scene, spec.get("materials", []))
     bodies = [add_body(scene, b) for b in spec["bodies"]]
-    # The bodies' parts beside their ids (0 wherever no body material writes it), registered
-    # before the first render: with persistent data, a pass added later is not rendered. The
-    # colour raws carry it too, unread.
-    if any(b.get("parts_npy") for b in spec["bodies"]):
-        aov = scene.view_layers[0].aovs.add()
-        aov.name = PART_AOV
-        aov.type = "VALUE"
+    # The bodies' parts and garments beside their ids (0 wherever no body material writes
+    # them), registered before the first render: with persistent data, a pass added later is
+    # not rendered. The colour raws carry them too, unread.
+    parts = os.environ.get("EGOGEN_BLENDER_PART_AOV") != "0"
+    for name, needed in ((PART_AOV, lambda b: parts and b.get("parts_npy")),
+                         (GARMENT_AOV, lambda b: b.get("parts_npy") and b.get("outfit"))):
+        if any(needed(b) for b in spec["bodies"]):
+            aov = scene.view_layers[0].aovs.add()
+            aov.name = name
+            aov.type = "VALUE"
     # What moves besides the bodies and the camera, each with how it is keyed on a timeline
     # of a given frame step.
     movers = []

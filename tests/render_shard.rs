@@ -363,7 +363,7 @@ fn frame(r: &Rendered, cam: usize, frame: u32) -> ExrContents {
     let out = r.raw_dir.join(format!("{name}_{frame}.exr"));
     image.write(&out).unwrap();
     let res = target.resolution();
-    let channels = Passes::default().frame_channels(false, false);
+    let channels = Passes::default().frame_channels(false, false, false);
     validate_frame(&out, res.width_px, res.height_px, &channels).unwrap()
 }
 
@@ -731,7 +731,7 @@ fn flow_reaches_the_next_saved_frame_and_only_asked_passes_are_rendered() {
         &out,
         res.width_px,
         res.height_px,
-        &passes.frame_channels(false, false),
+        &passes.frame_channels(false, false, false),
     )
     .unwrap();
     assert!(exr.channel("rgb.R").is_none() && exr.channel("normal.X").is_none());

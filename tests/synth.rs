@@ -997,7 +997,8 @@ fn rgb_take(
 }
 
 /// `[render.outfits]`: dressed people (the default) render the ground truth bit for bit as bare
-/// ones (`mode = "off"`) and their colour differently; each person's outfit is in the
+/// ones (`mode = "off"`) and their colour differently, with their garments beside it
+/// (`segmentation.garment`, absent with outfits off); each person's outfit is in the
 /// annotations (none with outfits off), another seed draws another; bad values are refused by
 /// key.
 #[test]
@@ -1037,7 +1038,17 @@ fn outfits_change_the_colour_and_not_the_ground_truth() {
     };
     let mut colour_differs = false;
     for (d, b) in dressed_frames.iter().zip(&bare_frames) {
-        for c in &d.channels {
+        assert!(b.channel("segmentation.garment").is_none());
+        assert_eq!(
+            dressed["conventions"]["segmentation_garment"].is_string(),
+            d.channel("segmentation.garment").is_some()
+        );
+        assert!(bare["conventions"].get("segmentation_garment").is_none());
+        for c in d
+            .channels
+            .iter()
+            .filter(|c| c.name != "segmentation.garment")
+        {
             let bits = |e: &egogen::exr_file::ExrContents| {
                 e.channel(&c.name)
                     .unwrap()
@@ -1741,60 +1752,14 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
         if picked > 0 {
             assert!(!objects.is_empty(), "{name}: a pick-up took nothing");
         }
-        if !objects.is_empty() {
-            let npy = std::fs::read(
-                dir.path()
-                    .join("take/agents")
-                    .join(name)
-                    .join("held_objects.npy"),
-            )
-            .unwrap();
-            let array = npyz::NpyFile::new(&npy[..]).unwrap();
-            assert_eq!(array.shape(), &[objects.len() as u64, m.len() as u64, 4, 4]);
-            let values: Vec<f64> = array.into_vec().unwrap();
-            let pose = |k: usize, f: usize| {
-                let at = (k * m.len() + f) * 16;
-                let r = &values[at..at + 16];
-                glam::DAffine3::from_mat4(
-                    glam::DMat4::from_cols_array(r.try_into().unwrap()).transpose(),
-                )
-            };
-            for (k, o) in objects.iter().enumerate() {
-                let grasp = o["grasp_frame"].as_u64().unwrap() as usize;
-                let hand = if o["hand"] == "left" { 0 } else { 1 };
-                let height = o["size_m"][2].as_f64().unwrap();
-                assert!(
-                    (pose(k, 0).translation.z - 0.5 * height).abs() < 0.02,
-                    "{name}: {o} stands on the floor"
-                );
-                assert_eq!(pose(k, 0), pose(k, grasp.saturating_sub(1)), "{name}: {o}");
-                let wrist = |f: usize| {
-                    shaped
-                        .skeleton(&m.poses[f], m.trans[f])
-                        .unwrap()
-                        .world_from_joint[20 + hand]
-                };
-                let held = wrist(grasp).inverse() * pose(k, grasp);
-                for f in (grasp..m.len()).step_by(37) {
-                    let d = (wrist(f).inverse() * pose(k, f)).to_cols_array();
-                    let e = held.to_cols_array();
-                    let off = d
-                        .iter()
-                        .zip(&e)
-                        .map(|(a, b)| (a - b).abs())
-                        .fold(0.0, f64::max);
-                    assert!(off < 1e-6, "{name}: {o} moves in the hand by {off} at {f}");
-                }
-                let gap = o["palm_gap_m"].as_f64().unwrap();
-                assert!((-0.02..0.12).contains(&gap), "{name}: {o}");
-                let depth = o["fingertip_depth_m"].as_f64().unwrap();
-                assert!(depth < 0.01, "{name}: {o}");
-                let holding = closed(m.len() - 1)[hand];
-                assert!(
-                    holding > walking[hand] + 100.0,
-                    "{name}: {o} {holding}° at the end"
-                );
-            }
+        hands_hold_what_they_took(name, a, &dir.path().join("take"), 37);
+        for o in &objects {
+            let hand = if o["hand"] == "left" { 0 } else { 1 };
+            let holding = closed(m.len() - 1)[hand];
+            assert!(
+                holding > walking[hand] + 100.0,
+                "{name}: {o} {holding}° at the end"
+            );
         }
         hands.push(frames[0].pose[75..].to_vec());
     }
@@ -1812,6 +1777,156 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
         summary["agents"],
         self::summary(&dir2.path().join("take"))["agents"]
     );
+}
+
+/// One person picking things up in the apartment (`betas`, `seconds` of it): the take's
+/// folder and its summary.
+fn picking_up(betas: &[f64], seconds: f64, seed: u64) -> (tempfile::TempDir, serde_json::Value) {
+    let config = format!(
+        r#"
+[scene]
+path = "{}"
+[motion]
+duration_s = {seconds:?}
+stop_when_done = false
+seed = {seed}
+[activities]
+weights = {{ walk = 1.0, pick_up = 1.0 }}
+[[agents]]
+name = "p"
+betas = {betas:?}
+start = [-1.0, 0.0]
+goals = [[0.0, 0.0]]
+wander = true
+[output]
+dir = "take"
+"#,
+        common::repo_root()
+            .join("assets/scenes/apartment.glb")
+            .display()
+    );
+    let (dir, path) = common::run_dir(&config);
+    run_synth(&load_synth_plan(&path).unwrap(), false).unwrap();
+    let summary = summary(&dir.path().join("take"));
+    (dir, summary)
+}
+
+/// The fingers of the person `name` (its summary `agent`) in the take folder `take` stay in
+/// their ranges without a jump; what it took stands on the floor until its grasp, then stays
+/// put in the hand that holds it to the end (checked every `step` frames), no fingertip inside
+/// it and the palm close over it. Returns the kinds taken.
+fn hands_hold_what_they_took(
+    name: &str,
+    agent: &serde_json::Value,
+    take: &Path,
+    step: usize,
+) -> Vec<String> {
+    use egogen::motion::hands::stats::HandStats;
+    use egogen::motion::hands::HandAxes;
+    let m = read(take, name);
+    let body = egogen::body::BodyModel::load(common::default_model_path()).unwrap();
+    let shaped = body.shape(&m.betas, &[]).unwrap();
+    let frames: Vec<_> = (0..m.len()).map(|i| m.frame(i)).collect();
+    let stats = HandStats::of(&frames, &HandAxes::from_rest(&shaped.rest_joints), 40.0);
+    assert_eq!(stats.frames_outside_range, 0, "{name}: {stats:?}");
+    assert!(
+        stats.flexion_acceleration_rad_s2.max < 100.0,
+        "{name}: {stats:?}"
+    );
+    let objects = agent["held_objects"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    let npy = std::fs::read(take.join("agents").join(name).join("held_objects.npy")).ok();
+    assert_eq!(npy.is_some(), !objects.is_empty(), "{name}");
+    let poses: Vec<f64> = npy
+        .map(|b| {
+            let array = npyz::NpyFile::new(&b[..]).unwrap();
+            assert_eq!(array.shape(), &[objects.len() as u64, m.len() as u64, 4, 4]);
+            array.into_vec().unwrap()
+        })
+        .unwrap_or_default();
+    let mut kinds = Vec::new();
+    for (k, o) in objects.iter().enumerate() {
+        let pose = |f: usize| {
+            let at = (k * m.len() + f) * 16;
+            glam::DAffine3::from_mat4(
+                glam::DMat4::from_cols_array(poses[at..at + 16].try_into().unwrap()).transpose(),
+            )
+        };
+        let hand = if o["hand"] == "left" { 20 } else { 21 };
+        let wrist = |f: usize| {
+            shaped
+                .skeleton(&m.poses[f], m.trans[f])
+                .unwrap()
+                .world_from_joint[hand]
+        };
+        let grasp = o["grasp_frame"].as_u64().unwrap() as usize;
+        let height = o["size_m"][2].as_f64().unwrap();
+        assert!(
+            (pose(0).translation.z - 0.5 * height).abs() < 0.02,
+            "{name}: {o} stands on the floor"
+        );
+        assert_eq!(pose(0), pose(grasp.saturating_sub(1)), "{name}: {o}");
+        let held = (wrist(grasp).inverse() * pose(grasp)).to_cols_array();
+        for f in (grasp..m.len()).step_by(step).chain([m.len() - 1]) {
+            let d = (wrist(f).inverse() * pose(f)).to_cols_array();
+            let off = d
+                .iter()
+                .zip(&held)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            assert!(off < 1e-6, "{name}: {o} moves in the hand by {off} at {f}");
+        }
+        let gap = o["palm_gap_m"].as_f64().unwrap();
+        assert!((0.0..=0.09).contains(&gap), "{name}: {o}");
+        assert!(
+            o["fingertip_depth_m"].as_f64().unwrap() < 1e-3,
+            "{name}: {o}"
+        );
+        eprintln!(
+            "{name}: a {} {:.3} m high, the palm {gap:.3} m over its top",
+            o["kind"], o["size_m"][2]
+        );
+        kinds.push(o["kind"].as_str().unwrap().to_string());
+    }
+    kinds
+}
+
+/// Hands at the extremes of the body model: people of shapes at ±3σ pick things up and hold
+/// them without a fingertip inside, their fingers in range and smooth; the shortest
+/// (`[-3, 3, -3, 3]`) reaches to 7 cm over the floor, under the lowest object that leaves
+/// room for its fingers, and takes nothing.
+#[test]
+fn hands_hold_what_they_take_at_extreme_shapes() {
+    let mut taken = Vec::new();
+    for betas in [
+        [3.0, 3.0, 3.0, 3.0],
+        [-3.0, -3.0, -3.0, -3.0],
+        [3.0, -3.0, 3.0, -3.0],
+        [-3.0, 3.0, -3.0, 3.0],
+    ] {
+        let (dir, summary) = picking_up(&betas, 12.0, 0);
+        let name = format!("{betas:?}");
+        let kinds =
+            hands_hold_what_they_took("p", &summary["agents"][0], &dir.path().join("take"), 7);
+        eprintln!("{name}: took {kinds:?}");
+        taken.push(kinds);
+    }
+    assert!(
+        taken[..3].iter().all(|k| !k.is_empty()) && taken[3].is_empty(),
+        "{taken:?}"
+    );
+}
+
+/// A 10-minute take: the object taken is still in the hand, where it was, at the last frame;
+/// the fingers never leave their ranges nor jump.
+#[test]
+fn a_ten_minute_take_keeps_the_hands_and_what_they_hold() {
+    let (dir, summary) = picking_up(&[], 600.0, 0);
+    let kinds =
+        hands_hold_what_they_took("p", &summary["agents"][0], &dir.path().join("take"), 997);
+    assert!(!kinds.is_empty(), "{summary}");
 }
 
 /// Sitting asked in a scene without a seat: a warning, every sit skipped with its reason, the
@@ -2045,6 +2160,27 @@ workers = 1
     let cam = out.join("cameras/camera-rgb");
     let (mut seen_standing, mut seen_held) = (0, 0);
     let mut seen_hand_pixels = 0;
+    // The garments' codes in `segmentation.garment` (a slot's place + 1), and those worn.
+    let slots = ["top", "bottom", "socks", "shoes", "hair"];
+    let worn: Vec<f32> = doc["outfits"][0]["outfit"]["garments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|g| (slots.iter().position(|s| g["slot"] == *s).unwrap() + 1) as f32)
+        .collect();
+    let (mut garment_pixels, mut dressed_hand_pixels) = ([0usize; 6], 0);
+    // The joints each garment lies near (SMPL-X): the bottom's the pelvis, hips, knees and
+    // ankles; the top's the spine, neck, collars, shoulders, elbows and wrists; socks' and
+    // shoes' the ankles and feet.
+    let near: [&[usize]; 6] = [
+        &[],
+        &[3, 6, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21],
+        &[0, 1, 2, 4, 5, 7, 8],
+        &[7, 8, 10, 11],
+        &[7, 8, 10, 11],
+        &[15],
+    ];
+    let mut far_from_its_joints = 0;
     for f in doc["frames"].as_array().unwrap() {
         let frame = f["frame"].as_u64().unwrap();
         let o = &f["objects"][0];
@@ -2107,6 +2243,7 @@ workers = 1
             egogen::exr_file::ExrContents::read(&cam.join(f["file"].as_str().unwrap())).unwrap();
         let seg = &exr.channel("segmentation.id").unwrap().values;
         let part = &exr.channel("segmentation.part").unwrap().values;
+        let garment = &exr.channel("segmentation.garment").unwrap().values;
         let pos = ["X", "Y", "Z"].map(|c| &exr.channel(&format!("position.{c}")).unwrap().values);
         let wearer = f["agents"][0]["id"].as_u64().unwrap() as f32;
         for k in 0..seg.len() {
@@ -2116,6 +2253,34 @@ workers = 1
                 part[k],
                 seg[k]
             );
+            // A garment is only a person's, and one the person wears, where its joints are.
+            let g = garment[k];
+            assert!(
+                g == 0.0 || (seg[k] == wearer && worn.contains(&g)),
+                "frame {frame}: garment {g} on {} (worn: {worn:?})",
+                seg[k]
+            );
+            if seg[k] == wearer {
+                garment_pixels[g as usize] += 1;
+                dressed_hand_pixels += (part[k] > 0.0 && part[k] < 3.0 && g > 0.0) as usize;
+            }
+            if g > 0.0 {
+                let p = glam::DVec3::new(pos[0][k] as f64, pos[1][k] as f64, pos[2][k] as f64);
+                let joints = f["agents"][0]["joints_3d"].as_array().unwrap();
+                let d = near[g as usize]
+                    .iter()
+                    .map(|&j| {
+                        let q = &joints[j];
+                        let q = glam::DVec3::new(
+                            q[0].as_f64().unwrap(),
+                            q[1].as_f64().unwrap(),
+                            q[2].as_f64().unwrap(),
+                        );
+                        p.distance(q)
+                    })
+                    .fold(f64::INFINITY, f64::min);
+                far_from_its_joints += (d > 0.25) as usize;
+            }
         }
         let hands = f["agents"][0]["hands"].as_array().unwrap();
         let landmarks: Vec<Vec<glam::DVec3>> = hands
@@ -2166,6 +2331,24 @@ workers = 1
         "in view standing in {seen_standing} frames, held in {seen_held}"
     );
     assert!(seen_hand_pixels > 0, "the wearer's hands are seen");
+    // The wearer sees its own top and bottom, and its hands bare (a long sleeve's cuff may
+    // reach the wrist's skin).
+    eprintln!("the wearer's pixels by garment (skin, top, bottom, socks, shoes, hair): {garment_pixels:?}; hand pixels under a garment: {dressed_hand_pixels} of {seen_hand_pixels}");
+    assert!(
+        garment_pixels[1] > 0 && garment_pixels[2] > 0,
+        "{garment_pixels:?}"
+    );
+    // A pixel's surface point at the edge where the body hides itself (a knee before a shoe)
+    // may be the nearer surface's: a few in a hundred.
+    let dressed: usize = garment_pixels[1..].iter().sum();
+    assert!(
+        far_from_its_joints * 50 <= dressed,
+        "{far_from_its_joints} of {dressed} garment pixels over 0.25 m from their joints"
+    );
+    assert!(
+        dressed_hand_pixels * 50 <= seen_hand_pixels,
+        "{dressed_hand_pixels} of {seen_hand_pixels} hand pixels dressed"
+    );
     let _typed: egogen::export::annotations::CameraAnnotations =
         serde_json::from_value(doc).unwrap();
 }

@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""A strip of a rendered take's frames, each twice: its colour, then the same with the
-wearer's hand masks drawn over it (`segmentation.part`: left hand green, right hand red, left
-forearm blue, right forearm yellow) and held objects (segmentation ids from 2000) purple;
-turned upright (the Aria RGB camera is mounted sideways) and shrunk to `--tile-px`.
+"""A strip of rendered frames, each twice: its colour, then the same with every person's
+hand masks drawn over it (`segmentation.part`: left hand green, right hand red, left forearm
+blue, right forearm yellow) and held objects (segmentation ids from 2000) purple; turned
+upright (the Aria RGB camera is mounted sideways) and shrunk to `--tile-px`. The frames are of
+one take (`TAKE --frames ...`) or of several (`--shots TAKE:FRAME ...`).
 
     python3 tools/hand_mask_sheet.py TAKE --frames 120 160 200 --out docs/hand_masks.png
         [--camera camera-rgb] [--tile-px 352] [--replace]
+    python3 tools/hand_mask_sheet.py --shots walk:320 sit:250 other:500 --out sheet.png
 
 The take must have the `colour` and `segmentation` passes. Needs numpy, OpenEXR and Pillow, and
 egogen's reader (`pip install ./python`, or run from the checkout).
@@ -55,19 +57,29 @@ def tiles(take: Path, camera: str, frames: list) -> list:
 
 def main() -> None:
     ap = arguments.StrictParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("take", type=Path)
-    ap.add_argument("--frames", type=int, nargs="+", required=True)
+    ap.add_argument("take", type=Path, nargs="?")
+    ap.add_argument("--frames", type=int, nargs="+")
+    ap.add_argument("--shots", nargs="+", metavar="TAKE:FRAME", help="frames of several takes")
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--camera", default="camera-rgb")
     ap.add_argument("--tile-px", type=int, default=352)
     ap.add_argument("--replace", action="store_true", help="overwrite an existing --out")
     a = ap.parse_args()
+    if (a.take is None) == (a.shots is None) or (a.take is None) != (a.frames is None):
+        ap.error("give TAKE --frames F ..., or --shots TAKE:FRAME ...")
+    shots = [(a.take, a.frames)] if a.take else []
+    for s in a.shots or []:
+        take, _, frame = s.rpartition(":")
+        if not take or not frame.isdigit():
+            ap.error(f"--shots: `{s}`, expected TAKE:FRAME (a folder, a colon, a frame number)")
+        shots.append((Path(take), [int(frame)]))
     outputs.check_new(a.out, "--out", a.replace)
-    outputs.check_outside(a.out, "--out", a.take, "the take")
+    for take, _ in shots:
+        outputs.check_outside(a.out, "--out", take, "the take")
     from PIL import Image
 
     images = [Image.fromarray(t).rotate(-90).resize((a.tile_px, a.tile_px), Image.LANCZOS)
-              for t in tiles(a.take, a.camera, a.frames)]
+              for take, frames in shots for t in tiles(take, a.camera, frames)]
     gap = 4
     sheet = Image.new("RGB", (len(images) * (a.tile_px + gap) - gap, a.tile_px), (255, 255, 255))
     for i, im in enumerate(images):
@@ -75,7 +87,7 @@ def main() -> None:
     tmp = a.out.with_name(a.out.name + ".partial.png")
     sheet.save(tmp, optimize=True)
     tmp.replace(a.out)
-    print(f"{a.out}: {len(a.frames)} frames of {a.take} ({a.camera})")
+    print(f"{a.out}: {len(images) // 2} frames of {', '.join(str(t) for t, _ in shots)} ({a.camera})")
 
 
 if __name__ == "__main__":

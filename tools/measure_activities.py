@@ -5,12 +5,15 @@ people wandering 60 s with the activity weights of configs/apartment_activities.
 docs/ACTIVITIES.md "Measured": share of time per activity and phase, seats sat on, the seat fit
 (median, max), how far the feet stay from the clip's, the body's sink into the seat, foot
 contact (paper Eq. 12) of walking and of each activity, the fastest joint turn where activities
-join the walk beside the clips' own, frames with the pelvis over a wall, activities skipped.
+join the walk beside the clips' own, frames with the pelvis over a wall, activities skipped, and
+what the pick-ups took (docs/ACTIVITIES.md "What is picked up": kinds, heights, the palm's gap
+over the object's top, the deepest fingertip inside it).
 
     python3 tools/measure_activities.py --bin target/release/egogen \
         --scenes apartment small_house --seeds 0 1 2 3 4 5 --out out/measure_activities
     python3 tools/measure_activities.py ... --set 'blend_s = 0.8' --out out/measure_blend08
     python3 tools/measure_activities.py ... --scenes dwelling:5000 dwelling:5001 --seeds 0  # generated dwellings
+    python3 tools/measure_activities.py ... --weights '{ walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 3.0 }'
 """
 
 import json
@@ -82,6 +85,7 @@ def main():
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2, 3, 4, 5])
     ap.add_argument("--duration", type=float, default=60.0)
     ap.add_argument("--walk-only", action="store_true", help="also the same takes walking only")
+    ap.add_argument("--weights", default=WEIGHTS, help=f"[activities] weights (default {WEIGHTS})")
     ap.add_argument("--set", action="append", default=[],
                     help="another [activities] key, e.g. --set 'blend_s = 0.8' (the knobs' trades)")
     ap.add_argument("--out", default=str(ROOT / "out/measure_activities"))
@@ -91,12 +95,12 @@ def main():
     out = Path(args.out)
     groups = [(args.pool, args.scenes)] if args.pool else [(s, [s]) for s in args.scenes]
     for scene, scenes in groups:
-        counts, records, skipped = Counter(), [], Counter()
+        counts, records, skipped, held, picked = Counter(), [], Counter(), [], 0
         contact_walk, off_floor, agents = [], 0, 0
         walk_only_contact = []
         goals = 0
         for scene_file, seed in ((f, seed) for f in scenes for seed in args.seeds):
-            s = take(args.bin, scene_file, seed, args.duration, WEIGHTS,
+            s = take(args.bin, scene_file, seed, args.duration, args.weights,
                      out / scene_file.replace(":", "_") / f"seed{seed}", "\n".join(args.set))
             goals += s.get("totals", {}).get("goals_reached", 0)
             for a in s["agents"]:
@@ -105,6 +109,8 @@ def main():
                 records += a.get("activities", [])
                 skipped.update(k["reason"].split(" (")[0] for k in a.get("skipped_activities", []))
                 contact_walk.append(a["contact"])
+                held += a.get("held_objects", [])
+                picked += any(r["activity"] == "pick_up" for r in a.get("activities", []))
                 off_floor += a["pelvis_off_floor_frames"]
             if args.walk_only:
                 w = take(args.bin, scene_file, seed, args.duration, "{ walk = 1.0 }",
@@ -149,6 +155,16 @@ def main():
             print(f"fastest joint turn at the joins, {k}: max {max(r['join_joint_speed_rad_s'] for r in rs):.2f} rad/s, "
                   f"median {statistics.median(r['join_joint_speed_rad_s'] for r in rs):.2f}"
                   + (f" (in the clip itself: {max(clip):.2f})" if clip else ""))
+        if picked:
+            pick_ups = sum(r["activity"] == "pick_up" for r in records)
+            print(f"picked up: {pick_ups} pick-ups by {picked} people; {len(held)} objects taken")
+        if held:
+            gaps = [o["palm_gap_m"] * 100 for o in held]
+            heights = [o["size_m"][2] * 100 for o in held]
+            print("  kinds: " + ", ".join(f"{v} {k}" for k, v in Counter(o["kind"] for o in held).most_common())
+                  + f"; heights {min(heights):.1f}–{max(heights):.1f} cm")
+            print(f"  palm over the top: {min(gaps):.1f}–{max(gaps):.1f} cm (median {statistics.median(gaps):.1f}); "
+                  f"deepest fingertip inside: {max(o['fingertip_depth_m'] for o in held) * 1000:.1f} mm")
         print(f"pelvis over a wall (frames): {off_floor}")
         print("skipped: " + (", ".join(f"{v} x {k}" for k, v in skipped.most_common()) or "none"))
         print()

@@ -23,6 +23,7 @@ _GROUPS = {
     "position": (["position.X", "position.Y", "position.Z"], np.float32),
     "segmentation": (["segmentation.id"], np.uint32),
     "body_part": (["segmentation.part"], np.uint32),
+    "garment": (["segmentation.garment"], np.uint32),
     "flow_forward": (["flow_forward.X", "flow_forward.Y"], np.float32),
     "flow_backward": (["flow_backward.X", "flow_backward.Y"], np.float32),
 }

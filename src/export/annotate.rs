@@ -67,6 +67,10 @@ fn write_annotations(take: &FinishedTake) -> Result<()> {
                 joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | occluded_by_body (hand landmarks: the pixel shows another part of the same person, > {SELF_OCCLUSION_TOLERANCE_M} m nearer) | outside (not in the valid field of view) | in_view (inside it; occlusion not known: the run rendered no depth or no segmentation)"),
                 bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices; null without the segmentation pass".into(),
                 segmentation_part: "a person's body part at the pixel, beside its segmentation.id: 1 left hand, 2 right hand, 3 left forearm, 4 right forearm, 0 the rest of a person and every other pixel (a vertex belongs to the joint that carries most of its skin weight: the wrist's and fingers' make the hand, the elbow's the forearm)".into(),
+                segmentation_garment: match take.spec.bodies.iter().any(|b| b.outfit.is_some()) {
+                    true => "the garment on top at a person's pixel, beside its segmentation.id (with the segmentation pass): 1 top, 2 bottom, 3 socks, 4 shoes, 5 hair, 0 the skin and every other pixel (a dress is a top and a bottom of one fabric; the edge where the outfit's colour changes)".into(),
+                    false => String::new(),
+                },
             },
             camera: model_json,
             image_model: image_model(work),
@@ -411,4 +415,138 @@ fn box_where(
         });
     }
     b
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::camera::Pixel;
+    use crate::math::{Affine3, Vec3};
+    use proptest::prelude::*;
+
+    /// The Aria rig's cameras (two SLAM fisheyes cut by their sensors, the RGB fisheye), as a
+    /// take renders them.
+    fn aria_cameras() -> Vec<CameraWork> {
+        let rig =
+            Rig::load(&crate::paths::crate_root().join("camera_rigs/aria_gen1.json")).unwrap();
+        rig.cameras
+            .into_iter()
+            .map(|camera| CameraWork {
+                render: RenderCamera::equidistant(&camera.model, 1.0),
+                camera,
+                depth_noise: None,
+                world_from_cam: Vec::new(),
+                headset_wear: None,
+                frames: Vec::new(),
+                wearer: 0,
+            })
+            .collect()
+    }
+
+    /// Where the valid field of view ends along the image ray from the principal point at
+    /// `angle` (px from it): bisected on `unproject`, to 1e-9 px.
+    fn edge_px(model: &crate::camera::Camera, angle: f64) -> f64 {
+        let c = model.principal_point();
+        let at = |s: f64| c + s * Pixel::new(angle.cos(), angle.sin());
+        let (mut inside, mut outside) = (0.0, 4096.0);
+        while outside - inside > 1e-9 {
+            let mid = 0.5 * (inside + outside);
+            match model.unproject(at(mid)) {
+                Some(_) => inside = mid,
+                None => outside = mid,
+            }
+        }
+        inside
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        /// A hand at the fisheye's edge — where the valid circle or the sensor ends — is
+        /// annotated where its landmarks are: each landmark within the field of view gets its
+        /// own pixel back (1e-6 px; 1e-6 to 2 px inside the edge) and is visible, one beyond the largest angle or behind the
+        /// camera is outside; a head turned near 0 or π, 10 km from the origin. Another part of
+        /// the person nearer hides the landmarks (`occluded_by_body`), another object too.
+        #[test]
+        fn a_hand_at_the_fisheyes_edge_is_annotated_where_it_is(
+            camera in 0usize..3,
+            angles in prop::collection::vec(0.0f64..std::f64::consts::TAU, 21),
+            inward_px in prop::collection::vec(prop_oneof![1e-6f64..2e-6, 1e-6f64..2.0], 21),
+            distance_m in 0.05f64..3.0,
+            axis in prop::array::uniform3(-1.0f64..1.0),
+            turn in prop_oneof![0.0f64..1e-6, (std::f64::consts::PI - 1e-6)..std::f64::consts::PI],
+            at in prop::array::uniform3(-1.0e4f64..1.0e4),
+        ) {
+            let works = aria_cameras();
+            let work = &works[camera];
+            let model = &work.camera.model;
+            let axis = Vec3::from_array(axis).try_normalize().unwrap_or(Vec3::Z);
+            let world_from_cam = Affine3::from_rotation_translation(
+                glam::DQuat::from_axis_angle(axis, turn),
+                Vec3::from_array(at),
+            );
+            let c = model.principal_point();
+            let mut pixels = Vec::new();
+            let (mut points, mut z) = (Vec::new(), Vec::new());
+            for (&a, &d) in angles.iter().zip(&inward_px) {
+                let px = c + (edge_px(model, a) - d) * Pixel::new(a.cos(), a.sin());
+                let ray = model.unproject(px).unwrap();
+                pixels.push(px);
+                points.push(world_from_cam.transform_point3(ray * distance_m));
+                z.push(ray.z * distance_m);
+            }
+            // Beyond the largest angle, and behind the camera: outside.
+            let beyond = model.max_theta_rad() + 1e-6;
+            points.push(world_from_cam.transform_point3(Vec3::new(beyond.sin(), 0.0, beyond.cos())));
+            points.push(world_from_cam.transform_point3(Vec3::new(0.0, 0.0, -distance_m)));
+            let res = model.resolution();
+            let n = (res.width_px * res.height_px) as usize;
+            let (far, id) = (vec![100.0f32; n], 1000u32);
+            let own = vec![id as f32; n];
+            let hand = BodyPart::hand(1);
+            let hands = vec![hand as u8 as f32; n];
+            let cam_from_world = world_from_cam.inverse();
+            let (got, seen) = project_part_points(
+                work, cam_from_world, Some(&far), Some(&own), Some((&hands, hand)), id, &points,
+            );
+            for k in 0..21 {
+                let g = got[k].unwrap();
+                let miss = (Pixel::new(g[0], g[1]) - pixels[k]).length();
+                prop_assert!(miss < 1e-6, "landmark {}: {} px from its pixel", k, miss);
+                prop_assert_eq!(seen[k], JointVisibility::Visible);
+            }
+            for k in 21..23 {
+                prop_assert!(got[k].is_none());
+                prop_assert_eq!(seen[k], JointVisibility::Outside);
+            }
+            let b = box_of(&got).unwrap();
+            prop_assert!(b[0] >= -0.5 && b[1] >= -0.5);
+            prop_assert!(b[2] <= res.width_px as f64 - 0.5 && b[3] <= res.height_px as f64 - 0.5);
+            // The forearm in front of the hand, then another object.
+            let near = vec![0.04f32; n];
+            let forearm = vec![BodyPart::LeftForearm as u8 as f32; n];
+            let (_, behind_body) = project_part_points(
+                work, cam_from_world, Some(&near), Some(&own), Some((&forearm, hand)), id, &points[..21],
+            );
+            let other = vec![7.0f32; n];
+            let (_, behind_other) = project_part_points(
+                work, cam_from_world, Some(&near), Some(&other), Some((&hands, hand)), id, &points[..21],
+            );
+            // Planar depth: a landmark's z, small at the edge of a wide lens.
+            for k in 0..21 {
+                let hidden = 0.04 < z[k] - SELF_OCCLUSION_TOLERANCE_M;
+                prop_assert!(seen_as(behind_body[k], hidden, JointVisibility::OccludedByBody));
+                let hidden = 0.04 < z[k] - JOINT_OCCLUSION_TOLERANCE_M;
+                prop_assert!(seen_as(behind_other[k], hidden, JointVisibility::Occluded));
+            }
+        }
+    }
+
+    /// `v` is `hidden_as` where `hidden`, else visible.
+    fn seen_as(v: JointVisibility, hidden: bool, hidden_as: JointVisibility) -> bool {
+        v == if hidden {
+            hidden_as
+        } else {
+            JointVisibility::Visible
+        }
+    }
 }

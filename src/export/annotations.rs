@@ -58,6 +58,9 @@ pub struct Conventions {
     /// What the frame file's `segmentation.part` values are (absent in files written before).
     #[serde(default, skip_serializing_if = "String::is_empty")]
     pub segmentation_part: String,
+    /// What the frame file's `segmentation.garment` values are (absent without outfits).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub segmentation_garment: String,
 }
 
 /// A segmentation id and what carries it (a scene object, the added ceiling, an agent).

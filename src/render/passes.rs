@@ -119,8 +119,14 @@ impl Passes {
 
     /// The channels a frame file of a camera holds, sorted as EXR stores them: `monochrome`
     /// cameras store colour as `gray.Y`; `noisy_depth` whether the camera has a depth-noise
-    /// model. `valid.V` is always there.
-    pub fn frame_channels(self, monochrome: bool, noisy_depth: bool) -> Vec<&'static str> {
+    /// model; `garments` whether people wear outfits (their garments beside the
+    /// segmentation). `valid.V` is always there.
+    pub fn frame_channels(
+        self,
+        monochrome: bool,
+        noisy_depth: bool,
+        garments: bool,
+    ) -> Vec<&'static str> {
         let mut out = vec!["valid.V"];
         if self.has(Pass::Colour) {
             if monochrome {
@@ -143,6 +149,9 @@ impl Passes {
         }
         if self.has(Pass::Segmentation) {
             out.extend(["segmentation.id", "segmentation.part"]);
+            if garments {
+                out.push("segmentation.garment");
+            }
         }
         if self.has(Pass::Flow) {
             out.extend([
@@ -158,9 +167,10 @@ impl Passes {
 }
 
 /// Groups of channels a frame file may hold: a file holds each group whole or not at all, and
-/// `valid.V` always (how `verify` checks a file without the run's config). The body parts are
-/// a group of their own: files written before them have the ids alone.
-pub(crate) const CHANNEL_GROUPS: [&[&str]; 10] = [
+/// `valid.V` always (how `verify` checks a file without the run's config). The body parts and
+/// the garments are groups of their own: files written before them, and takes without
+/// outfits, have the ids alone.
+pub(crate) const CHANNEL_GROUPS: [&[&str]; 11] = [
     &["valid.V"],
     &["rgb.A", "rgb.B", "rgb.G", "rgb.R"],
     &["gray.Y"],
@@ -170,6 +180,7 @@ pub(crate) const CHANNEL_GROUPS: [&[&str]; 10] = [
     &["position.X", "position.Y", "position.Z"],
     &["segmentation.id"],
     &["segmentation.part"],
+    &["segmentation.garment"],
     &[
         "flow_backward.X",
         "flow_backward.Y",
@@ -199,17 +210,37 @@ mod tests {
         let depth = Passes::of([Pass::Depth]);
         assert!(!depth.needs_colour_render());
         assert_eq!(depth.ground_truth_render_passes(), ["position"]);
-        assert_eq!(depth.frame_channels(false, true), ["depth.Z", "valid.V"]);
+        assert_eq!(
+            depth.frame_channels(false, true, true),
+            ["depth.Z", "valid.V"]
+        );
         let colour = Passes::of([Pass::Colour]);
         assert!(colour.ground_truth_render_passes().is_empty());
-        assert_eq!(colour.frame_channels(true, false), ["gray.Y", "valid.V"]);
+        assert_eq!(
+            colour.frame_channels(true, false, false),
+            ["gray.Y", "valid.V"]
+        );
+        let ids = Passes::of([Pass::Segmentation]);
+        assert_eq!(
+            ids.frame_channels(false, false, false),
+            ["segmentation.id", "segmentation.part", "valid.V"]
+        );
+        assert_eq!(
+            ids.frame_channels(false, false, true),
+            [
+                "segmentation.garment",
+                "segmentation.id",
+                "segmentation.part",
+                "valid.V"
+            ]
+        );
     }
 
     #[test]
     fn every_frame_channel_is_in_exactly_one_group() {
         let all = Passes::of(Pass::ALL);
         for mono in [false, true] {
-            for ch in all.frame_channels(mono, true) {
+            for ch in all.frame_channels(mono, true, true) {
                 let n = CHANNEL_GROUPS.iter().filter(|g| g.contains(&ch)).count();
                 assert_eq!(n, 1, "{ch}");
             }

@@ -1,5 +1,7 @@
 //! Small objects people pick up: what each is ([`ObjectKind`]: a cup, a tin, a bottle, a
-//! parcel), its solid ([`ObjectShape`], which Blender draws) and its size.
+//! parcel), its solid ([`ObjectShape`], which Blender draws), its footprint and the heights it
+//! comes in (together 4–32 cm: whatever height a palm reaches down to, some object fits under
+//! it).
 
 use serde::{Deserialize, Serialize};
 
@@ -46,19 +48,40 @@ impl ObjectKind {
         }
     }
 
-    /// Full extents along its own x, y and up (m).
-    pub(crate) fn size_m(self) -> [f64; 3] {
+    /// Full extents along its own x and y (m).
+    pub(crate) fn footprint_m(self) -> [f64; 2] {
         match self {
-            ObjectKind::Cup => [0.08, 0.08, 0.095],
-            ObjectKind::Tin => [0.075, 0.075, 0.115],
-            ObjectKind::Bottle => [0.07, 0.07, 0.24],
-            ObjectKind::Parcel => [0.22, 0.16, 0.12],
+            ObjectKind::Cup => [0.08, 0.08],
+            ObjectKind::Tin => [0.075, 0.075],
+            ObjectKind::Bottle => [0.07, 0.07],
+            ObjectKind::Parcel => [0.22, 0.16],
+        }
+    }
+
+    /// The lowest and highest it comes in (m): a mug to a tall cup, a tuna tin to a coffee
+    /// tin, a small bottle to a wine bottle, a flat parcel to a shoebox.
+    pub(crate) fn heights_m(self) -> [f64; 2] {
+        match self {
+            ObjectKind::Cup => [0.08, 0.12],
+            ObjectKind::Tin => [0.07, 0.16],
+            ObjectKind::Bottle => [0.18, 0.32],
+            ObjectKind::Parcel => [0.04, 0.2],
+        }
+    }
+
+    /// How far below the palm's centre its top must lie besides the palm's own clearance
+    /// (m): the fingers close round a cup, a tin or a bottle outside it, but over a parcel's
+    /// top, which they would enter from closer.
+    pub(crate) fn finger_room_m(self) -> f64 {
+        match self {
+            ObjectKind::Parcel => 0.04,
+            _ => 0.0,
         }
     }
 
     /// The width the hand closes round (m): across its top, the narrower way.
     pub(crate) fn grip_m(self) -> f64 {
-        let [x, y, _] = self.size_m();
+        let [x, y] = self.footprint_m();
         x.min(y)
     }
 }

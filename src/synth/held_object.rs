@@ -126,10 +126,23 @@ pub(crate) fn grasp_in(
 /// round the top from up to this high.
 pub(crate) const MAX_PALM_GAP_M: f64 = 0.08;
 
-/// The object `grasp` takes: a kind drawn among those whose top lies at most
-/// [`MAX_PALM_GAP_M`] under the palm (and not in it), standing on the floor at `floor_z` under
-/// the palm, turned to the hand; named `<person>_<kind>_<k>`. None where no kind fits (a hand
-/// that stayed high). Its poses are set by [`carry`].
+/// The heights (m) of `kind` whose top lies at most [`MAX_PALM_GAP_M`] under a palm with
+/// `room` to the floor, and not in it nor within its fingers' room
+/// ([`ObjectKind::finger_room_m`]); none where no height does.
+fn heights_under(kind: ObjectKind, room: f64) -> Option<[f64; 2]> {
+    let [lo, hi] = kind.heights_m();
+    let (lo, hi) = (
+        lo.max(room - MAX_PALM_GAP_M),
+        hi.min(room - kind.finger_room_m()),
+    );
+    (lo <= hi).then_some([lo, hi])
+}
+
+/// The object `grasp` takes: a kind drawn among those that come in a height whose top lies
+/// at most [`MAX_PALM_GAP_M`] under the palm (and not in it), its height drawn among those,
+/// standing on the floor at `floor_z` under the palm, turned to the hand; named
+/// `<person>_<kind>_<k>`. None where no kind fits (a hand that stayed high, or reached to the
+/// floor). Its poses are set by [`carry`].
 pub(crate) fn placed_object(
     person: &str,
     k: usize,
@@ -138,9 +151,9 @@ pub(crate) fn placed_object(
     rng: &mut ChaCha8Rng,
 ) -> Option<HeldObject> {
     let room = grasp.palm.z - floor_z - PALM_CLEARANCE_M;
-    let fits: Vec<ObjectKind> = ObjectKind::ALL
+    let fits: Vec<(ObjectKind, [f64; 2])> = ObjectKind::ALL
         .into_iter()
-        .filter(|kind| (room - MAX_PALM_GAP_M..=room).contains(&kind.size_m()[2]))
+        .filter_map(|kind| Some((kind, heights_under(kind, room)?)))
         .collect();
     let draw = uniform_in(rng, 0.0, 1.0);
     let colour_rgb = hsv_linear(
@@ -148,8 +161,11 @@ pub(crate) fn placed_object(
         uniform_in(rng, 0.3, 0.85),
         uniform_in(rng, 0.35, 0.9),
     );
-    let kind = *fits.get(((draw * fits.len() as f64) as usize).min(fits.len().max(1) - 1))?;
-    let size_m = kind.size_m();
+    let height = uniform_in(rng, 0.0, 1.0);
+    let (kind, [lo, hi]) =
+        *fits.get(((draw * fits.len() as f64) as usize).min(fits.len().max(1) - 1))?;
+    let [x, y] = kind.footprint_m();
+    let size_m = [x, y, lo + height * (hi - lo)];
     let centre = Vec3::new(grasp.palm.x, grasp.palm.y, floor_z + 0.5 * size_m[2]);
     let resting = Affine3::from_rotation_translation(
         glam::DQuat::from_rotation_z(grasp.along.to_angle()),
@@ -229,8 +245,10 @@ mod tests {
 
     proptest! {
         /// Whatever the palm's height, the object taken never reaches into the palm and its
-        /// top lies within [`MAX_PALM_GAP_M`] below it; a palm too low for the smallest object
-        /// or too high over the tallest takes nothing. Far from the origin too.
+        /// top lies within [`MAX_PALM_GAP_M`] below it, its height one its kind comes in;
+        /// a palm too low for the lowest object or too high over the tallest takes nothing,
+        /// any palm between takes something (no height is left without an object). Far from
+        /// the origin too.
         #[test]
         fn the_object_taken_fits_under_the_palm(
             height in 0.0f64..0.6,
@@ -242,12 +260,16 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let taken = placed_object("p", 0, &grasp_at(palm, 7), floor, &mut rng);
             let room = palm.z - floor - PALM_CLEARANCE_M;
-            let tops: Vec<f64> = ObjectKind::ALL.iter().map(|k| k.size_m()[2]).collect();
-            let fits = tops.iter().any(|&h| (room - MAX_PALM_GAP_M..=room).contains(&h));
-            prop_assert_eq!(taken.is_some(), fits);
+            let lowest = ObjectKind::ALL.iter().map(|k| k.heights_m()[0] + k.finger_room_m()).fold(f64::INFINITY, f64::min);
+            let tallest = ObjectKind::ALL.iter().map(|k| k.heights_m()[1]).fold(0.0, f64::max);
+            let fits = (lowest..=tallest + MAX_PALM_GAP_M).contains(&room);
+            prop_assert_eq!(taken.is_some(), fits, "room {}", room);
             if let Some(o) = taken {
+                let [lo, hi] = o.kind.heights_m();
+                prop_assert!((lo - 1e-12..=hi + 1e-12).contains(&o.size_m[2]));
+                prop_assert_eq!(&o.size_m[..2], &o.kind.footprint_m()[..]);
                 let top = floor + o.size_m[2];
-                prop_assert!(top <= palm.z - PALM_CLEARANCE_M + 1e-9);
+                prop_assert!(top <= palm.z - PALM_CLEARANCE_M - o.kind.finger_room_m() + 1e-9);
                 prop_assert!(o.palm_gap_m <= MAX_PALM_GAP_M + PALM_CLEARANCE_M + 1e-9);
                 let bottom = o.world_from_object[0].transform_point3(Vec3::new(0.0, 0.0, -0.5 * o.size_m[2]));
                 prop_assert!((bottom.z - floor).abs() < 1e-6 * (1.0 + floor.abs()));
@@ -295,7 +317,8 @@ mod tests {
     #[test]
     fn depth_inside_measures_to_the_nearest_face() {
         for kind in ObjectKind::ALL {
-            let size_m = kind.size_m();
+            let [x, y] = kind.footprint_m();
+            let size_m = [x, y, kind.heights_m()[0]];
             let o = HeldObject {
                 name: "o".into(),
                 kind,

@@ -378,6 +378,8 @@ struct GroundTruthPlanes<'a> {
     vec: Option<[&'a [f32]; 4]>,
     /// The bodies' parts (an AOV beside the object index; absent where a raw has none).
     parts: Option<&'a [f32]>,
+    /// The bodies' garments (an AOV, where people wear outfits).
+    garments: Option<&'a [f32]>,
 }
 
 impl<'a> GroundTruthPlanes<'a> {
@@ -398,6 +400,9 @@ impl<'a> GroundTruthPlanes<'a> {
                 .then(|| gt.planes("Vector", ["X", "Y", "Z", "W"]))
                 .transpose()?,
             parts: has("part.X").then(|| gt.plane("part.X")).transpose()?,
+            garments: has("garment.X")
+                .then(|| gt.plane("garment.X"))
+                .transpose()?,
         })
     }
 }
@@ -428,6 +433,7 @@ fn assemble_with(
         ids,
         vec,
         parts,
+        garments,
     } = match &gt {
         None => GroundTruthPlanes::default(),
         Some(gt) => GroundTruthPlanes::of(gt)?,
@@ -453,6 +459,7 @@ fn assemble_with(
         position: pos.map(|_| vec![[0.0; 3]; n_px]),
         segmentation: ids.map(|_| vec![0; n_px]),
         body_parts: ids.map(|_| vec![0; n_px]),
+        garments: ids.and(garments).map(|_| vec![0; n_px]),
         flow_forward: vec.map(|_| vec![[0.0; 2]; n_px]),
         flow_backward: vec.map(|_| vec![[0.0; 2]; n_px]),
         depth_noisy: None,
@@ -531,6 +538,9 @@ fn assemble_with(
                 out.segmentation.as_mut().unwrap()[i] = ids[n].round() as u32;
                 if let Some(parts) = parts {
                     out.body_parts.as_mut().unwrap()[i] = parts[n].round() as u32;
+                }
+                if let Some(garments) = garments {
+                    out.garments.as_mut().unwrap()[i] = garments[n].round() as u32;
                 }
             }
             if let Some(vec) = &vec {

@@ -12,6 +12,9 @@
 //! - `segmentation.id` — u32: scene object or agent id (0 = nothing).
 //! - `segmentation.part` — u32: a person's body part at the pixel (1 and 2 the left and right
 //!   hand, 3 and 4 the left and right forearm, 0 the rest of a person and everything else).
+//! - `segmentation.garment` (only where people wear outfits) — u32: the garment on top at a
+//!   person's pixel (its slot's place in [`crate::render::outfit::SLOTS`] + 1: 1 top, 2
+//!   bottom, 3 socks, 4 shoes, 5 hair; 0 the skin and everything else).
 //! - `flow_forward.X/Y`, `flow_backward.X/Y` — pixel displacement of the surface point to the
 //!   next / previous saved frame (OpenCV pixels, x right, y down).
 //! - `depth_noisy.Z` (only for cameras with a depth-noise model) — `depth.Z` through the
@@ -101,6 +104,9 @@ pub struct FrameImage {
     /// Each person's pixel's body part (`body::parts::BodyPart`: 0 the rest, 1 and 2 the left
     /// and right hand, 3 and 4 the forearms), beside `segmentation`.
     pub body_parts: Option<Vec<u32>>,
+    /// Each person's pixel's garment (its slot's place in [`crate::render::outfit::SLOTS`] + 1;
+    /// 0 the skin), beside `segmentation`, where people wear outfits.
+    pub garments: Option<Vec<u32>>,
     pub flow_forward: Option<Vec<[f32; 2]>>,
     pub flow_backward: Option<Vec<[f32; 2]>>,
     /// `depth` through a sensor noise model, where the camera has one.
@@ -134,6 +140,7 @@ impl FrameImage {
         if !passes.has(Pass::Segmentation) {
             self.segmentation = None;
             self.body_parts = None;
+            self.garments = None;
         }
         if !passes.has(Pass::Flow) {
             self.flow_forward = None;
@@ -257,6 +264,12 @@ impl FrameImage {
         if let Some(parts) = &self.body_parts {
             channels.push(("segmentation.part".into(), FlatSamples::U32(parts.clone())));
         }
+        if let Some(garments) = &self.garments {
+            channels.push((
+                "segmentation.garment".into(),
+                FlatSamples::U32(garments.clone()),
+            ));
+        }
         channels
     }
 }
@@ -282,6 +295,7 @@ mod tests {
             position: Some((0..n).map(|k| [v(k, 7) + 1e5, v(k, 8), -v(k, 9)]).collect()),
             segmentation: Some((0..n).map(|k| (k as u32) * 40_001 + 16_777_217).collect()),
             body_parts: Some((0..n).map(|k| (k % 5) as u32).collect()),
+            garments: Some((0..n).map(|k| (k % 6) as u32).collect()),
             flow_forward: Some((0..n).map(|k| [v(k, 10), v(k, 11)]).collect()),
             flow_backward: Some((0..n).map(|k| [v(k, 12), v(k, 13)]).collect()),
             depth_noisy: Some((0..n).map(|k| v(k, 14).abs()).collect()),

@@ -236,7 +236,8 @@ pub struct ShardOutfit {
     pub(crate) outfit: Outfit,
 }
 
-/// The regions' columns in the per-vertex fields ([`regions::garment_fields`]).
+/// The regions' columns in the per-vertex fields ([`regions::garment_fields`]); a slot's
+/// place + 1 is its code in the frame file's `segmentation.garment` (0: the skin).
 pub(crate) const SLOTS: [&str; 5] = ["top", "bottom", "socks", "shoes", "hair"];
 
 impl OutfitPlan {
