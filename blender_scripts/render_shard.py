@@ -387,21 +387,19 @@ def add_obstacle(scene, ob):
 
 
 def add_held_object(scene, ob):
-    """A small object a person picks up (a `held_objects` entry): an upright cylinder or a box
-    of its size, centred on its origin, in one colour, posed by its keys."""
+    """A small object a person picks up (a `held_objects` entry): an upright cylinder of its
+    size, centred on its origin, in one colour, posed by its keys."""
     sx, sy, sz = ob["size_m"]
+    if ob["shape"] != "cylinder":
+        sys.exit(f"held object {ob['name']}: shape {ob['shape']!r}, expected \"cylinder\"")
     mesh = bpy.data.meshes.new(ob["name"])
     bm = bmesh.new()
-    if ob["shape"] == "cylinder":
-        bmesh.ops.create_cone(bm, cap_ends=True, segments=32, radius1=0.5 * sx,
-                              radius2=0.5 * sx, depth=sz)
-    else:
-        bmesh.ops.create_cube(bm, size=1.0)
-        bmesh.ops.scale(bm, vec=(sx, sy, sz), verts=bm.verts)
+    bmesh.ops.create_cone(bm, cap_ends=True, segments=32, radius1=0.5 * sx,
+                          radius2=0.5 * sx, depth=sz)
     bm.to_mesh(mesh)
     bm.free()
     for poly in mesh.polygons:
-        poly.use_smooth = ob["shape"] == "cylinder" and abs(poly.normal.z) < 0.5
+        poly.use_smooth = abs(poly.normal.z) < 0.5
     mat = bpy.data.materials.new(ob["name"] + "_material")
     mat.use_nodes = True
     bsdf = mat.node_tree.nodes["Principled BSDF"]

@@ -1,7 +1,8 @@
-//! Small objects people pick up: what each is ([`ObjectKind`]: a cup, a tin, a bottle, a
-//! parcel), its solid ([`ObjectShape`], which Blender draws), its footprint and the heights it
-//! comes in (together 4–32 cm: whatever height a palm reaches down to, some object fits under
-//! it).
+//! Small objects people pick up: what each is ([`ObjectKind`]: a cup, a tin, a bottle), its
+//! solid ([`ObjectShape`], which Blender draws), its footprint and the heights it comes in
+//! (together 7–32 cm: whatever height a palm reaches down to, some object fits under it). All
+//! are narrower than a hand, which closes round them from above: over a box as wide as a
+//! parcel the closed fingers entered its top at every height it comes in.
 
 use serde::{Deserialize, Serialize};
 
@@ -11,7 +12,6 @@ use serde::{Deserialize, Serialize};
 pub enum ObjectShape {
     /// Upright, round: its size's x and y are the diameter.
     Cylinder,
-    Box,
 }
 
 /// What a person may pick up.
@@ -21,31 +21,21 @@ pub enum ObjectKind {
     Cup,
     Tin,
     Bottle,
-    Parcel,
 }
 
 impl ObjectKind {
-    pub(crate) const ALL: [ObjectKind; 4] = [
-        ObjectKind::Cup,
-        ObjectKind::Tin,
-        ObjectKind::Bottle,
-        ObjectKind::Parcel,
-    ];
+    pub(crate) const ALL: [ObjectKind; 3] = [ObjectKind::Cup, ObjectKind::Tin, ObjectKind::Bottle];
 
     pub(crate) fn name(self) -> &'static str {
         match self {
             ObjectKind::Cup => "cup",
             ObjectKind::Tin => "tin",
             ObjectKind::Bottle => "bottle",
-            ObjectKind::Parcel => "parcel",
         }
     }
 
     pub(crate) fn shape(self) -> ObjectShape {
-        match self {
-            ObjectKind::Parcel => ObjectShape::Box,
-            _ => ObjectShape::Cylinder,
-        }
+        ObjectShape::Cylinder
     }
 
     /// Full extents along its own x and y (m).
@@ -54,28 +44,16 @@ impl ObjectKind {
             ObjectKind::Cup => [0.08, 0.08],
             ObjectKind::Tin => [0.075, 0.075],
             ObjectKind::Bottle => [0.07, 0.07],
-            ObjectKind::Parcel => [0.22, 0.16],
         }
     }
 
     /// The lowest and highest it comes in (m): a mug to a tall cup, a tuna tin to a coffee
-    /// tin, a small bottle to a wine bottle, a flat parcel to a shoebox.
+    /// tin, a small bottle to a wine bottle.
     pub(crate) fn heights_m(self) -> [f64; 2] {
         match self {
             ObjectKind::Cup => [0.08, 0.12],
             ObjectKind::Tin => [0.07, 0.16],
             ObjectKind::Bottle => [0.18, 0.32],
-            ObjectKind::Parcel => [0.04, 0.2],
-        }
-    }
-
-    /// How far below the palm's centre its top must lie besides the palm's own clearance
-    /// (m): the fingers close round a cup, a tin or a bottle outside it, but over a parcel's
-    /// top, which they would enter from closer.
-    pub(crate) fn finger_room_m(self) -> f64 {
-        match self {
-            ObjectKind::Parcel => 0.04,
-            _ => 0.0,
         }
     }
 

@@ -1,10 +1,12 @@
 //! Things people pick up and carry: a pick-up's object (a small object,
 //! `scene::small_object`), standing on the floor under the reaching palm until the hand takes
 //! it at its lowest reach ([`Grasp`]), then carried rigidly with that wrist to the end of the
-//! take. The kind is drawn among those whose top fits under the palm there, close enough for
-//! the hand to close round it (a pick-up whose free hand stays high takes nothing); the grip is
-//! shaped to its width (`motion::hands::HandDoing::Holding`). Its pose on every frame is what
-//! the renders and the annotations read.
+//! take. The kind and its height are drawn among those whose top fits under the palm there,
+//! close enough for the hand to close round it (a pick-up whose free hand stays high, or
+//! reaches to the floor, takes nothing); the grip is shaped to its width
+//! (`motion::hands::HandDoing::Holding`), and the object is lowered under the closed hand's
+//! fingertips ([`fit_under_fingertips`]; one that cannot be is not taken). Its pose on every
+//! frame is what the renders and the annotations read.
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
@@ -127,14 +129,10 @@ pub(crate) fn grasp_in(
 pub(crate) const MAX_PALM_GAP_M: f64 = 0.08;
 
 /// The heights (m) of `kind` whose top lies at most [`MAX_PALM_GAP_M`] under a palm with
-/// `room` to the floor, and not in it nor within its fingers' room
-/// ([`ObjectKind::finger_room_m`]); none where no height does.
+/// `room` to the floor (and not in it); none where no height does.
 fn heights_under(kind: ObjectKind, room: f64) -> Option<[f64; 2]> {
     let [lo, hi] = kind.heights_m();
-    let (lo, hi) = (
-        lo.max(room - MAX_PALM_GAP_M),
-        hi.min(room - kind.finger_room_m()),
-    );
+    let (lo, hi) = (lo.max(room - MAX_PALM_GAP_M), hi.min(room));
     (lo <= hi).then_some([lo, hi])
 }
 
@@ -207,16 +205,60 @@ pub(crate) fn carry(object: &mut HeldObject, world_from_wrist: &[[Affine3; 2]]) 
         .collect();
 }
 
+/// Room left between a fingertip and the top of what the hand holds, where the object is
+/// lowered under the fingertips (m).
+const FINGERTIP_CLEARANCE_M: f64 = 0.002;
+
+/// The deepest any of its hand's `fingertips` (per frame, world) lies inside `object` from its
+/// grasp on (m; 0: none inside).
+fn deepest_fingertip(object: &HeldObject, fingertips: &[[Vec3; 5]]) -> f64 {
+    (object.grasp_frame..fingertips.len().min(object.world_from_object.len()))
+        .flat_map(|f| fingertips[f].map(|p| depth_inside(object, f, p)))
+        .fold(0.0, f64::max)
+}
+
+/// Carries `object` with `world_from_wrist` ([`carry`]), lowered (its top, standing where it
+/// stood) until no fingertip of its hand (`fingertips`, per frame) enters it, at a height its
+/// kind comes in; sets its palm gap and fingertip depth. False where even its lowest height
+/// leaves a fingertip inside: the hand cannot close round it.
+pub(crate) fn fit_under_fingertips(
+    object: &mut HeldObject,
+    fingertips: &[[Vec3; 5]],
+    world_from_wrist: &[[Affine3; 2]],
+) -> bool {
+    carry(object, world_from_wrist);
+    // Each pass clears the faces the fingertips entered; one entering a side may need
+    // another.
+    for _ in 0..8 {
+        let depth = deepest_fingertip(object, fingertips);
+        object.fingertip_depth_m = depth;
+        if depth <= 0.0 {
+            return true;
+        }
+        let lower = depth + FINGERTIP_CLEARANCE_M;
+        if object.size_m[2] - lower < object.kind.heights_m()[0] {
+            return false;
+        }
+        object.size_m[2] -= lower;
+        object.palm_gap_m += lower;
+        // Before its grasp it stands still: its first pose is where it stands.
+        let mut resting = object.world_from_object[0];
+        resting.translation.z -= 0.5 * lower;
+        object.world_from_object = vec![resting];
+        carry(object, world_from_wrist);
+    }
+    false
+}
+
 /// How deep `point` (world) lies inside `object` on frame `f` (m to its nearest face; 0
 /// outside).
 pub(crate) fn depth_inside(object: &HeldObject, f: usize, point: Vec3) -> f64 {
     let p = object.world_from_object[f]
         .inverse()
         .transform_point3(point);
-    let [x, y, z] = object.size_m.map(|v| 0.5 * v);
+    let [radius, _, z] = object.size_m.map(|v| 0.5 * v);
     let across = match object.shape {
-        ObjectShape::Cylinder => x - DVec2::new(p.x, p.y).length(),
-        ObjectShape::Box => (x - p.x.abs()).min(y - p.y.abs()),
+        ObjectShape::Cylinder => radius - DVec2::new(p.x, p.y).length(),
     };
     across.min(z - p.z.abs()).max(0.0)
 }
@@ -260,7 +302,7 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let taken = placed_object("p", 0, &grasp_at(palm, 7), floor, &mut rng);
             let room = palm.z - floor - PALM_CLEARANCE_M;
-            let lowest = ObjectKind::ALL.iter().map(|k| k.heights_m()[0] + k.finger_room_m()).fold(f64::INFINITY, f64::min);
+            let lowest = ObjectKind::ALL.iter().map(|k| k.heights_m()[0]).fold(f64::INFINITY, f64::min);
             let tallest = ObjectKind::ALL.iter().map(|k| k.heights_m()[1]).fold(0.0, f64::max);
             let fits = (lowest..=tallest + MAX_PALM_GAP_M).contains(&room);
             prop_assert_eq!(taken.is_some(), fits, "room {}", room);
@@ -269,7 +311,7 @@ mod tests {
                 prop_assert!((lo - 1e-12..=hi + 1e-12).contains(&o.size_m[2]));
                 prop_assert_eq!(&o.size_m[..2], &o.kind.footprint_m()[..]);
                 let top = floor + o.size_m[2];
-                prop_assert!(top <= palm.z - PALM_CLEARANCE_M - o.kind.finger_room_m() + 1e-9);
+                prop_assert!(top <= palm.z - PALM_CLEARANCE_M + 1e-9);
                 prop_assert!(o.palm_gap_m <= MAX_PALM_GAP_M + PALM_CLEARANCE_M + 1e-9);
                 let bottom = o.world_from_object[0].transform_point3(Vec3::new(0.0, 0.0, -0.5 * o.size_m[2]));
                 prop_assert!((bottom.z - floor).abs() < 1e-6 * (1.0 + floor.abs()));
@@ -312,6 +354,37 @@ mod tests {
         }
     }
 
+    /// A fingertip inside the top of what is held lowers it under the fingertip, a clearance
+    /// over, its bottom still on the floor and its palm gap grown as much; a fingertip near
+    /// its bottom, which no height of its kind clears, leaves it untaken.
+    #[test]
+    fn an_object_is_lowered_under_the_fingertips() {
+        let palm = Vec3::new(3.0, -2.0, 0.30);
+        let take = || {
+            let mut rng = ChaCha8Rng::seed_from_u64(3);
+            placed_object("p", 0, &grasp_at(palm, 2), 0.0, &mut rng).unwrap()
+        };
+        let wrists = vec![[wrist([0.0, 0.0, 1.0], 0.3, [3.0, -2.0, 0.35]); 2]; 5];
+        let mut o = take();
+        assert_eq!(o.kind, ObjectKind::Bottle);
+        let (height, gap) = (o.size_m[2], o.palm_gap_m);
+        let inside = Vec3::new(3.0, -2.0, height - 0.01);
+        let tips = vec![[inside, palm, palm, palm, palm]; 5];
+        assert!(fit_under_fingertips(&mut o, &tips, &wrists));
+        let lowered = 0.01 + FINGERTIP_CLEARANCE_M;
+        assert!((o.size_m[2] - (height - lowered)).abs() < 1e-9);
+        assert!((o.palm_gap_m - (gap + lowered)).abs() < 1e-9);
+        assert_eq!(o.fingertip_depth_m, 0.0);
+        for pose in &o.world_from_object {
+            let bottom = pose.transform_point3(Vec3::new(0.0, 0.0, -0.5 * o.size_m[2]));
+            assert!(bottom.z.abs() < 1e-9, "{bottom}");
+        }
+        let mut o = take();
+        let near_bottom = Vec3::new(3.0, -2.0, 0.005);
+        let tips = vec![[near_bottom, palm, palm, palm, palm]; 5];
+        assert!(!fit_under_fingertips(&mut o, &tips, &wrists));
+    }
+
     /// A point's depth inside each solid: at its centre half its smallest extent, 0 on and
     /// outside its faces; the cylinder's corners are outside it.
     #[test]
@@ -349,7 +422,6 @@ mod tests {
             let d = depth_inside(&o, 0, world(corner));
             match kind.shape() {
                 ObjectShape::Cylinder => assert_eq!(d, 0.0, "{kind:?}"),
-                ObjectShape::Box => assert!(d > 0.0, "{kind:?}"),
             }
         }
     }

@@ -18,7 +18,7 @@ use crate::motion::joins::{smooth_joins, JoinWindow};
 use crate::motion::primitive::PRIMITIVE_RATE_HZ;
 use crate::scene::WalkableMap;
 use crate::synth::activity::{Activity, ActivityRecord, ActivitySegment, Phase, SkippedActivity};
-use crate::synth::held_object::{carry, depth_inside, grasp_in, placed_object, Grasp, HeldObject};
+use crate::synth::held_object::{fit_under_fingertips, grasp_in, placed_object, Grasp, HeldObject};
 use crate::walker::{ControllerSpec, WalkerSettings};
 
 /// Why an agent stopped before the take ended.
@@ -212,7 +212,8 @@ pub(super) fn foot_points(
 /// `objects_rng`: [`crate::synth::held_object`]), the fingers moved with what the hands do
 /// ([`WalkerSettings::finger_motion`], `hands`: the person's, closing round what they hold);
 /// the eye frame, markers and pelvis positions posed again from the frames where any changed
-/// them, and the held objects carried with their wrists.
+/// them, and the held objects carried with their wrists, each lowered under its hand's
+/// fingertips (one that cannot be is left on the floor).
 pub(super) fn finish_motion(
     t: &mut AgentTrack,
     body: &BodyContext,
@@ -261,11 +262,42 @@ pub(super) fn finish_motion(
             t.held_objects.push(o);
         }
     }
-    if settings.finger_motion {
-        let doing = hands_doing(t, &holds);
-        let axes = HandAxes::from_rest(&body.shaped.rest_joints);
-        move_fingers(&mut t.frames, &doing, &axes, hands, PRIMITIVE_RATE_HZ);
+    // The hands close round what they hold, each object lowered under its hand's fingertips;
+    // one no height of its kind clears is left on the floor, and the hands posed again
+    // without it.
+    loop {
+        if settings.finger_motion {
+            let doing = hands_doing(t, &holds);
+            let axes = HandAxes::from_rest(&body.shaped.rest_joints);
+            move_fingers(&mut t.frames, &doing, &axes, hands, PRIMITIVE_RATE_HZ);
+        }
+        let (wrists, fingertips) = pose_again(t, body)?;
+        let fits: Vec<bool> = t
+            .held_objects
+            .iter_mut()
+            .map(|o| {
+                let tips: Vec<[Vec3; 5]> = fingertips.iter().map(|f| f[o.hand.index()]).collect();
+                fit_under_fingertips(o, &tips, &wrists)
+            })
+            .collect();
+        if fits.iter().all(|&f| f) {
+            return Ok(());
+        }
+        let mut keep = fits.iter();
+        holds.retain(|_| *keep.next().unwrap());
+        let mut keep = fits.iter();
+        t.held_objects.retain(|_| *keep.next().unwrap());
     }
+}
+
+/// Poses `t`'s frames again where the finishing passes changed them: the eye frame, markers
+/// and pelvis positions; returns each frame's wrists (`[left, right]`) and, where the person
+/// holds something, both hands' fingertips (thumb first).
+#[allow(clippy::type_complexity)]
+fn pose_again(
+    t: &mut AgentTrack,
+    body: &BodyContext,
+) -> Result<(Vec<[Affine3; 2]>, Vec<[[Vec3; 5]; 2]>), CrowdError> {
     let tips = match t.held_objects.is_empty() {
         true => None,
         false => Some(HandTips::of(body.model).map_err(DecodeError::from)?),
@@ -288,14 +320,7 @@ pub(super) fn finish_motion(
         }
         t.markers[f] = mf.markers;
     }
-    for object in &mut t.held_objects {
-        carry(object, &wrists);
-        let h = object.hand.index();
-        object.fingertip_depth_m = (object.grasp_frame..fingertips.len())
-            .flat_map(|f| fingertips[f][h].map(|p| depth_inside(object, f, p)))
-            .fold(0.0, f64::max);
-    }
-    Ok(())
+    Ok((wrists, fingertips))
 }
 
 /// How long before the lowest reach of a pick-up the reaching hand opens (s).
