@@ -1151,9 +1151,10 @@ fn drawn_materials_change_the_colour_and_not_the_ground_truth() {
     let mut colour_differs = false;
     for ((k, f), a) in keep_frames.iter().zip(&fill_frames).zip(&all_frames) {
         let names: Vec<&str> = k.channels.iter().map(|c| c.name.as_str()).collect();
+        // Depth, position (3), segmentation (ids, body parts, garments), flow (4), valid.
         assert_eq!(
             names.iter().filter(|n| ground_truth(n)).count(),
-            11,
+            12,
             "{names:?}"
         );
         for c in &k.channels {

@@ -427,8 +427,10 @@ mod tests {
     /// The Aria rig's cameras (two SLAM fisheyes cut by their sensors, the RGB fisheye), as a
     /// take renders them.
     fn aria_cameras() -> Vec<CameraWork> {
-        let rig =
-            Rig::load(&crate::paths::crate_root().join("camera_rigs/aria_gen1.json")).unwrap();
+        let rig = Rig::load(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("camera_rigs/aria_gen1.json"),
+        )
+        .unwrap();
         rig.cameras
             .into_iter()
             .map(|camera| CameraWork {

@@ -407,6 +407,14 @@ impl<'a> GroundTruthPlanes<'a> {
     }
 }
 
+/// Copies the label (an id, a body part, a garment) at rendered pixel `n` of `plane` to pixel
+/// `i` of `out`, where both are there.
+fn copy_label(out: &mut Option<Vec<u32>>, plane: Option<&[f32]>, i: usize, n: usize) {
+    if let (Some(out), Some(plane)) = (out.as_mut(), plane) {
+        out[i] = plane[n].round() as u32;
+    }
+}
+
 fn assemble_with(
     remap: &RemapTable,
     rgb: Option<Raw>,
@@ -534,15 +542,9 @@ fn assemble_with(
                     .normalize_or_zero();
                 out.normal.as_mut().unwrap()[i] = normal.as_vec3().to_array();
             }
-            if let Some(ids) = ids {
-                out.segmentation.as_mut().unwrap()[i] = ids[n].round() as u32;
-                if let Some(parts) = parts {
-                    out.body_parts.as_mut().unwrap()[i] = parts[n].round() as u32;
-                }
-                if let Some(garments) = garments {
-                    out.garments.as_mut().unwrap()[i] = garments[n].round() as u32;
-                }
-            }
+            copy_label(&mut out.segmentation, ids, i, n);
+            copy_label(&mut out.body_parts, ids.and(parts), i, n);
+            copy_label(&mut out.garments, ids.and(garments), i, n);
             if let Some(vec) = &vec {
                 // Blender's vector pass, pixels in Blender's raster (y up), measured
                 // (`tests/render_shard.rs`): (X, Y) = previous − here, (Z, W) = here − next.
