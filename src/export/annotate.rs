@@ -67,7 +67,7 @@ fn write_annotations(take: &FinishedTake) -> Result<()> {
                 joint_visibility: format!("visible | occluded (the pixel shows another object or agent, > {JOINT_OCCLUSION_TOLERANCE_M} m nearer than the joint) | occluded_by_body (hand landmarks: the pixel shows another part of the same person, > {SELF_OCCLUSION_TOLERANCE_M} m nearer) | outside (not in the valid field of view) | in_view (inside it; occlusion not known: the run rendered no depth or no segmentation)"),
                 bbox_xyxy: "tight box of the agent's segmentation pixels, inclusive pixel indices; null without the segmentation pass".into(),
                 segmentation_part: "a person's body part at the pixel, beside its segmentation.id: 1 left hand, 2 right hand, 3 left forearm, 4 right forearm, 0 the rest of a person and every other pixel (a vertex belongs to the joint that carries most of its skin weight: the wrist's and fingers' make the hand, the elbow's the forearm)".into(),
-                segmentation_garment: match take.spec.bodies.iter().any(|b| b.outfit.is_some()) {
+                segmentation_garment: match take.spec.dresses_people() {
                     true => "the garment on top at a person's pixel, beside its segmentation.id (with the segmentation pass): 1 top, 2 bottom, 3 socks, 4 shoes, 5 hair, 0 the skin and every other pixel (a dress is a top and a bottom of one fabric; the edge where the outfit's colour changes)".into(),
                     false => String::new(),
                 },

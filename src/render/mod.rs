@@ -5,8 +5,8 @@
 //! `lens_polynomial`), the drawn appearance it is given (`lighting`, `materials`, `skin_tone`:
 //! each agent's skin, `outfit`: each person's clothes and hair, their regions measured on the
 //! body model's rest shape; `outfit_sheet`: `egogen body outfits`), and turning its raw
-//! renders into frame files (`frame_file`, `passes`, `depth_noise`; the segmentation's ids
-//! and a person's body parts). `render` knows nothing of motion or policies: posed bodies reach
+//! renders into frame files (`frame_file`, `passes`, `depth_noise`; the segmentation's ids,
+//! a person's body parts and, where people are dressed, garments). `render` knows nothing of motion or policies: posed bodies reach
 //! it as files (`crate::vertex_cache`) that `synth` writes.
 
 pub mod blender_runtime;

@@ -354,4 +354,10 @@ impl ShardSpec {
             .map(|f| f.rgb_exr.is_some() as usize + f.ground_truth_exr.is_some() as usize)
             .sum()
     }
+
+    /// Whether people wear outfits: then the segmentation carries each pixel's garment
+    /// (`segmentation.garment`) beside its ids and body parts.
+    pub(crate) fn dresses_people(&self) -> bool {
+        self.bodies.iter().any(|b| b.outfit.is_some())
+    }
 }

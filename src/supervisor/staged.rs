@@ -89,9 +89,11 @@ impl Dataset {
     /// The channels a camera's frame files hold.
     pub(crate) fn frame_channels(&self, camera: usize) -> Vec<&'static str> {
         let work = &self.cameras[camera];
-        let garments = self.base_spec.bodies.iter().any(|b| b.outfit.is_some());
-        self.passes
-            .frame_channels(work.camera.monochrome, work.depth_noise.is_some(), garments)
+        self.passes.frame_channels(
+            work.camera.monochrome,
+            work.depth_noise.is_some(),
+            self.base_spec.dresses_people(),
+        )
     }
 
     /// Checks a camera's frame file, read from disk or about to be written (`bytes`, named

@@ -140,7 +140,7 @@ fn heights_under(kind: ObjectKind, room: f64) -> Option<[f64; 2]> {
 /// at most [`MAX_PALM_GAP_M`] under the palm (and not in it), its height drawn among those,
 /// standing on the floor at `floor_z` under the palm, turned to the hand; named
 /// `<person>_<kind>_<k>`. None where no kind fits (a hand that stayed high, or reached to the
-/// floor). Its poses are set by [`carry`].
+/// floor). Its poses are set by [`fit_under_fingertips`].
 pub(crate) fn placed_object(
     person: &str,
     k: usize,

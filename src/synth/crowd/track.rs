@@ -283,10 +283,10 @@ pub(super) fn finish_motion(
         if fits.iter().all(|&f| f) {
             return Ok(());
         }
-        let mut keep = fits.iter();
-        holds.retain(|_| *keep.next().unwrap());
-        let mut keep = fits.iter();
-        t.held_objects.retain(|_| *keep.next().unwrap());
+        for k in (0..fits.len()).rev().filter(|&k| !fits[k]) {
+            holds.remove(k);
+            t.held_objects.remove(k);
+        }
     }
 }
 
