@@ -1623,9 +1623,17 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
                 );
             }
             if kind == "sit" {
-                assert!(r["seat_fit_m"].as_f64().unwrap().abs() <= 0.2 + 1e-9, "{r}");
-                assert!(r["foot_miss_m"].as_f64().unwrap() < 0.02, "{r}");
-                assert!(r["seat_penetration_m"].as_f64().unwrap() < 0.06, "{r}");
+                // Fitted to its seat: within the default fit, the feet moved no farther than
+                // the body was raised, resting on the seat (a cushion's give), never entering
+                // it more than the scene check allows.
+                let fit = r["seat_fit_m"].as_f64().unwrap();
+                assert!(fit.abs() <= 0.7 + 1e-9, "{r}");
+                assert!(
+                    r["foot_miss_m"].as_f64().unwrap() <= fit.abs() + 1e-3,
+                    "{r}"
+                );
+                assert!(r["seat_gap_m"].as_f64().unwrap().abs() <= 0.02, "{r}");
+                assert!(r["seat_penetration_m"].as_f64().unwrap() <= 0.03, "{r}");
             }
             // What the gaze fixates while doing it: the seat's surface under the seated
             // pelvis from the walk there until seated; the floor in front of the feet while
@@ -1649,8 +1657,11 @@ fn people_sit_stand_and_pick_up_in_the_apartment() {
                     assert_eq!(&point[..2], &place[..], "{r}");
                     let height = r["seat_height_m"].as_f64().unwrap();
                     assert!((point[2] - height).abs() < 0.02, "{r}");
+                    // Looked at until seated, which a sit cut short by the take's end is not.
+                    let cut = end as u64 >= summary["frames"].as_u64().unwrap();
                     assert!(
-                        frames("start_frame") < start && frames("end_frame") < end,
+                        frames("start_frame") < start
+                            && (frames("end_frame") < end || cut && frames("end_frame") == end),
                         "{r}"
                     );
                 }

@@ -17,6 +17,7 @@ over the object's top, the deepest fingertip inside it).
 """
 
 import json
+import re
 import statistics
 import subprocess
 import sys
@@ -69,6 +70,33 @@ def take(bin_, scene, seed, duration, weights, out, extra=""):
     return json.loads((out / "summary.json").read_text())
 
 
+SEAT_KINDS = ("armchair", "sofa", "couch", "bed", "stool", "bench", "chair")
+
+
+def seat_kind(name):
+    """A seat's kind from its object's name: the first of SEAT_KINDS in it (`chair_7`,
+    `IKEA_chair_PELLO.001` -> chair), else the name without a trailing number."""
+    low = (name or "?").lower()
+    return next((k for k in SEAT_KINDS if k in low), re.sub(r"[_.]\d+$", "", low))
+
+
+def print_sit_share(sits, sit_skips):
+    """Of the sits drawn where seats exist (skips for no seat or every seat taken left out), the
+    share done, overall and by seat kind (a skip's kind read from its reason's seat name)."""
+    seatless = ("the scene has no seat", "every seat on this floor is taken", "the take ended")
+    drawn = [r for r in sit_skips if not r.startswith(seatless)]
+    if not sits and not drawn:
+        return
+    done = Counter(seat_kind(r["seat"]) for r in sits)
+    missed = Counter()
+    for reason in drawn:
+        m = re.search(r"seat of (\S+?)(?: |$|\))", reason)
+        missed[seat_kind(m.group(1)) if m else "?"] += 1
+    total = len(sits) + len(drawn)
+    print(f"sits drawn where seats exist: {total}, done {len(sits)} ({100 * len(sits) / total:.0f} %); by seat: "
+          + ", ".join(f"{k} {done[k]}/{done[k] + missed[k]}" for k in sorted(set(done) | set(missed))))
+
+
 def frames_of(segments, frames):
     """Frames per (activity, phase); the rest walking."""
     counts = Counter()
@@ -96,6 +124,7 @@ def main():
     groups = [(args.pool, args.scenes)] if args.pool else [(s, [s]) for s in args.scenes]
     for scene, scenes in groups:
         counts, records, skipped, held, picked = Counter(), [], Counter(), [], 0
+        sit_skips = []
         contact_walk, off_floor, agents = [], 0, 0
         walk_only_contact = []
         goals = 0
@@ -108,6 +137,7 @@ def main():
                 counts += frames_of(a.get("activity_segments", []), s["frames"])
                 records += a.get("activities", [])
                 skipped.update(k["reason"].split(" (")[0] for k in a.get("skipped_activities", []))
+                sit_skips += [k["reason"] for k in a.get("skipped_activities", []) if k["activity"] == "sit"]
                 contact_walk.append(a["contact"])
                 held += a.get("held_objects", [])
                 picked += any(r["activity"] == "pick_up" for r in a.get("activities", []))
@@ -140,8 +170,13 @@ def main():
                   f"feet off the clip's: max {max(r['foot_miss_m'] for r in sits) * 1000:.2f} mm; "
                   f"sink into the seat: median {statistics.median(r['seat_penetration_m'] for r in sits) * 1000:.1f} mm, "
                   f"max {max(r['seat_penetration_m'] for r in sits) * 1000:.1f} mm")
+            gaps = [r["seat_gap_m"] * 1000 for r in sits if "seat_gap_m" in r]
+            if gaps:
+                print(f"  seated over the seat (buttocks and thighs, mm; - into it): median "
+                      f"{statistics.median(gaps):.1f}, min {min(gaps):.1f}, max {max(gaps):.1f}")
             turns = [abs(r["turn_deg"]) for r in sits]
             print(f"  turn before sitting: median {statistics.median(turns):.0f} deg, max {max(turns):.0f} deg")
+        print_sit_share(sits, sit_skips)
         # Contact of whole activities only (one cut short by the take's end scores its partial turn).
         whole = [r for r in records if r["end_frame"] < s["frames"]]
         print(f"foot contact (Eq. 12): walking {statistics.mean(contact_walk):.3f}"

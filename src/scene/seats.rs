@@ -87,7 +87,8 @@ pub(crate) struct Seat {
     pub object: ObjectId,
     pub object_name: String,
     pub naming: SeatNaming,
-    /// Map cells of the seat's surface (what a seated body may touch beside the floor).
+    /// Map cells of the seat's surface (what a seated body may touch beside the floor), in
+    /// ascending order.
     #[serde(skip)]
     pub cells: Vec<usize>,
 }
@@ -233,7 +234,11 @@ pub(crate) fn find_seats(
                     Some(true) => SeatNaming::Named,
                     _ => SeatNaming::Shape,
                 },
-                cells: cells.clone(),
+                cells: {
+                    let mut sorted = cells.clone();
+                    sorted.sort_unstable();
+                    sorted
+                },
             });
         }
     }
@@ -481,6 +486,21 @@ mod tests {
             Vec3::new(-0.3, 0.5, 2.5),
         );
         mesh.add_box("wall", Vec3::new(0.3, -0.5, 0.0), Vec3::new(0.45, 0.5, 2.5));
+        assert!(find_seats(&mesh, &map(&mesh), &SeatSettings::default()).is_empty());
+    }
+
+    #[test]
+    fn a_seat_named_in_another_language_is_a_seat_by_its_shape() {
+        for name in ["Stuhl_3", "椅子", "chaise.001", "кресло"] {
+            let mesh = room_with_chair(0.45, 0.3, 0.2, name);
+            let seats = find_seats(&mesh, &map(&mesh), &SeatSettings::default());
+            assert_eq!(seats.len(), 1, "{name}: {seats:?}");
+            assert_eq!(seats[0].object_name, name);
+            assert_eq!(seats[0].naming, SeatNaming::Shape, "{name}");
+            assert!(seats[0].backed, "{name}");
+        }
+        // A refusing word in English still refuses, whatever else the name holds.
+        let mesh = room_with_chair(0.45, 0.3, 0.2, "Regal shelf");
         assert!(find_seats(&mesh, &map(&mesh), &SeatSettings::default()).is_empty());
     }
 

@@ -195,7 +195,8 @@ pub struct ActivitySettings {
     /// facing a seat turns round at this rate before sitting.
     pub turn_deg_per_s: f64,
     /// Farthest a sit clip's seated height is moved up or down to meet a seat (m; default
-    /// 0.2): a seat no clip comes this close to is not sat on.
+    /// 0.7: every seat of 0.35–0.75 m for the bodies the project draws): a seat no clip comes
+    /// this close to is not sat on.
     pub seat_fit_m: f64,
 }
 
@@ -219,7 +220,7 @@ impl Default for ActivitySettings {
             sit_s: [4.0, 12.0],
             blend_s: 0.4,
             turn_deg_per_s: 180.0,
-            seat_fit_m: 0.2,
+            seat_fit_m: 0.7,
         }
     }
 }
@@ -272,10 +273,10 @@ impl ActivitySettings {
                 ),
             ));
         }
-        if !(self.seat_fit_m.is_finite() && (0.0..=0.5).contains(&self.seat_fit_m)) {
+        if !(self.seat_fit_m.is_finite() && (0.0..=1.0).contains(&self.seat_fit_m)) {
             return Some((
                 "seat_fit_m".into(),
-                format!("expected 0–0.5 m, got {}", self.seat_fit_m),
+                format!("expected 0–1 m, got {}", self.seat_fit_m),
             ));
         }
         None
@@ -406,8 +407,13 @@ pub struct ActivityRecord {
     /// How far the clip's seated height was moved to meet the seat (m, + up).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seat_fit_m: Option<f64>,
-    /// Farthest an ankle stayed from where the clip put it once the clip was fitted to the
-    /// seat (m: legs too short to reach a lower seat's floor).
+    /// Where the buttocks and thighs rest once seated, over the seat's surface (m; − into
+    /// it): the lowest of them within 0.25 m of the pelvis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seat_gap_m: Option<f64>,
+    /// Farthest an ankle moved from where the clip put it once the clip was fitted to the
+    /// seat (m): drawn back under the hip on a seat too high for the leg to reach the clip's
+    /// foot, hanging where even that is too far.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub foot_miss_m: Option<f64>,
     /// Deepest the buttocks and thighs went below the seat's surface where over it, sitting

@@ -251,6 +251,7 @@ pub(super) fn record(activity: Activity, place: DVec2, turn_deg: f64) -> Activit
         seat: None,
         seat_height_m: None,
         seat_fit_m: None,
+        seat_gap_m: None,
         foot_miss_m: None,
         seat_penetration_m: None,
         turn_deg,
