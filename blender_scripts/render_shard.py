@@ -3,8 +3,8 @@
 Run by egogen (`python render_shard.py SPEC.json` with PyPI bpy, or
 `blender --background --python-exit-code 1 --python render_shard.py -- SPEC.json`).
 Thin on purpose: every number comes from the spec (see src/render/protocol.rs): the scene, the
-bodies, the obstacles and the objects people carry, each with its keys. Per camera it
-renders the RGB image of every frame (Cycles, camera + deformation motion blur) when the spec
+bodies, the obstacles, the objects people carry and the scene objects they move (chairs pulled
+out), each with its keys. Per camera it renders the RGB image of every frame (Cycles, camera + deformation motion blur) when the spec
 asks for colour, and then the ground truth of every frame (motion blur off, 1 sample at the
 pixel centre) with the spec's passes (position, normal, object index, motion vectors) when it
 asks for any. The ground truth runs on a timeline scaled by `ground_truth_frame_step`, so that
@@ -415,6 +415,15 @@ def add_held_object(scene, ob):
     return obj
 
 
+def linear_keys(obj, keys):
+    """Linear interpolation between `obj`'s keys, where it has more than one (Bezier would
+    ease in and out; takes move things at the speed their keys say)."""
+    if len(keys) > 1:
+        for fcurve in action_fcurves(obj.animation_data.action):
+            for point in fcurve.keyframe_points:
+                point.interpolation = "LINEAR"
+
+
 def key_pose(obj, keys, frame_step=1):
     """Location and rotation keys at `key.frame / frame_step`, linear in between (a held
     object's; the camera's are keyed the same way)."""
@@ -425,10 +434,19 @@ def key_pose(obj, keys, frame_step=1):
         if len(keys) > 1:
             obj.keyframe_insert("location", frame=key["frame"] / frame_step)
             obj.keyframe_insert("rotation_quaternion", frame=key["frame"] / frame_step)
-    if len(keys) > 1:
-        for fcurve in action_fcurves(obj.animation_data.action):
-            for point in fcurve.keyframe_points:
-                point.interpolation = "LINEAR"
+    linear_keys(obj, keys)
+
+
+def key_moved(obj, base, keys, frame_step=1):
+    """An object of the imported scene that people move (a `moved_objects` entry): its world
+    matrix `base` moved by each key's offset (`centre`), location keys at `key.frame /
+    frame_step`, linear in between."""
+    obj.animation_data_clear()
+    for key in keys:
+        obj.matrix_world = Matrix.Translation(Vector(key["centre"])) @ base
+        if len(keys) > 1:
+            obj.keyframe_insert("location", frame=key["frame"] / frame_step)
+    linear_keys(obj, keys)
 
 
 def key_obstacle(obj, keys, frame_step=1):
@@ -438,11 +456,7 @@ def key_obstacle(obj, keys, frame_step=1):
         obj.location = Vector(key["centre"])
         if len(keys) > 1:
             obj.keyframe_insert("location", frame=key["frame"] / frame_step)
-    if len(keys) > 1:
-        # Two keys would ease in and out (Bezier); the take moves the box at constant speed.
-        for fcurve in action_fcurves(obj.animation_data.action):
-            for point in fcurve.keyframe_points:
-                point.interpolation = "LINEAR"
+    linear_keys(obj, keys)
 
 
 def action_fcurves(action):
@@ -924,6 +938,12 @@ def build_scene(spec):
     for o in spec.get("held_objects", []):
         obj = add_held_object(scene, o)
         movers.append(lambda step, obj=obj, o=o: key_pose(obj, o["keys"], step))
+    for o in spec.get("moved_objects", []):
+        obj = scene.objects.get(blender_name(o["name"]))
+        if obj is None:
+            raise RuntimeError(f"moved_objects: no object {o['name']!r} in the imported scene")
+        base = obj.matrix_world.copy()
+        movers.append(lambda step, obj=obj, o=o, base=base: key_moved(obj, base, o["keys"], step))
     scene.render.fps = spec["fps"]
     scene.render.fps_base = spec["fps_base"]
     scene.render.engine = "CYCLES"

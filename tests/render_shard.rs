@@ -295,6 +295,7 @@ fn render_scene() -> Rendered {
         ceiling: None,
         obstacles: Vec::new(),
         held_objects: Vec::new(),
+        moved_objects: Vec::new(),
         scene_split: None,
     };
     let runtime = BlenderRuntime::resolve(None).expect("Blender 4.5 (managed PyPI bpy)");

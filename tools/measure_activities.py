@@ -83,7 +83,8 @@ def seat_kind(name):
 def print_sit_share(sits, sit_skips):
     """Of the sits drawn where seats exist (skips for no seat or every seat taken left out), the
     share done, overall and by seat kind (a skip's kind read from its reason's seat name)."""
-    seatless = ("the scene has no seat", "every seat on this floor is taken", "the take ended")
+    seatless = ("the scene has no seat", "every seat on this floor is taken",
+                "every free seat on this floor was walked", "the take ended")
     drawn = [r for r in sit_skips if not r.startswith(seatless)]
     if not sits and not drawn:
         return

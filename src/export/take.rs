@@ -55,6 +55,8 @@ pub struct RenderedAgent {
     pub activities: Option<Vec<crate::synth::activity::ActivitySegment>>,
     /// What it picks up and carries.
     pub held_objects: Vec<RenderedObject>,
+    /// Scene objects it moves (chairs pulled out from their tables).
+    pub(crate) moved_objects: Vec<crate::synth::activity::ObjectMove>,
 }
 
 /// An object a body picks up and carries, with its segmentation id.

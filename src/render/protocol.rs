@@ -253,6 +253,10 @@ pub struct ShardSpec {
     /// Objects people pick up and carry, each with its pose keys.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub held_objects: Vec<ShardHeldObject>,
+    /// Objects of the scene that people move (chairs pulled out from their tables), each with
+    /// its offset keys.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub moved_objects: Vec<ShardMovedObject>,
     /// A PLY scan whose faces or vertices carry object ids, imported as one mesh, split into
     /// the scene loader's objects.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -296,6 +300,16 @@ pub struct ShardHeldObject {
     /// Linear RGB.
     pub colour_rgb: [f64; 3],
     pub keys: Vec<PoseKey>,
+}
+
+/// An object of the imported scene that people move: its name (as in `object_ids`) and, at
+/// (sub)frames, how far it stands from where the scene file has it (`centre`: the offset,
+/// m); linear in between, held outside.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShardMovedObject {
+    pub name: String,
+    pub keys: Vec<ObstacleKey>,
 }
 
 /// Where an obstacle's centre is at a frame.

@@ -12,12 +12,14 @@
 //! that move or are not in the mesh), `sampler` (seeded start/goal sampling), `path_plan` (A*
 //! walking paths on the walkable map and the guide), `seen_map` (what a walker has seen of the
 //! map), `object_class` (the one vocabulary of what an object is, which seats, materials and
-//! generated scenes read), `seats` (the places to sit), `small_object` (what people pick up:
+//! generated scenes read), `seats` (the places to sit), `chair_pull` (places on chairs pulled out
+//! from their tables), `small_object` (what people pick up:
 //! kinds, solids, sizes), `generated` (procedural scenario
 //! scenes), `dwelling` (furnished dwellings generated from a seed and the furniture catalogue,
 //! the `dwelling:SEED` scene source).
 
 pub(crate) mod ceiling;
+pub(crate) mod chair_pull;
 pub mod dwelling;
 pub(crate) mod floor;
 pub mod generated;
@@ -28,7 +30,7 @@ pub(crate) mod object_class;
 pub(crate) mod obstacle;
 pub(crate) mod path_plan;
 pub(crate) mod penetration;
-pub mod sampler;
+pub(crate) mod sampler;
 pub(crate) mod sdf2d;
 pub(crate) mod sdf3d;
 pub(crate) mod seats;

@@ -3,10 +3,14 @@
 //! then confirmed or refused by what the file calls the object (`chair`, `sofa`, `bed` … are
 //! seats; `table`, `shelf`, `cabinet` … are not). Each seat is a place to sit: where the pelvis
 //! goes, which way the seated person faces, the walkable point in front where they stand
-//! before sitting down. A long sofa or a bed gives several places, spaced apart.
+//! before sitting down. A long sofa or a bed gives several places, spaced apart. A chair
+//! pulled up to a table, with no free floor in front of it, gives a place on the chair pulled
+//! out (`chair_pull`).
 
+use super::chair_pull::{chair_facing, pulled_out_chairs, ChairNeeds, Pull};
 use super::object_class::ObjectClass;
 use glam::DVec2;
+use std::f64::consts::FRAC_1_SQRT_2;
 
 use super::floor::UP_FACING_MIN_NZ;
 use super::mesh::{ObjectId, SceneMesh};
@@ -91,6 +95,10 @@ pub(crate) struct Seat {
     /// ascending order.
     #[serde(skip)]
     pub cells: Vec<usize>,
+    /// For a chair pulled up to a table or desk: how it is pulled out to sit on
+    /// ([`super::chair_pull`]); the place, surface and cells are the pulled chair's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pull: Option<Pull>,
 }
 
 impl Seat {
@@ -100,6 +108,18 @@ impl Seat {
 
     pub(crate) fn stand(&self) -> DVec2 {
         DVec2::from_array(self.stand_xy)
+    }
+}
+
+impl SeatSettings {
+    /// What a chair needs of its place, for [`super::chair_pull`].
+    fn chair_needs(&self) -> ChairNeeds {
+        ChairNeeds {
+            height_m: self.height_m,
+            headroom_m: self.headroom_m,
+            min_half_width_m: self.min_half_width_m,
+            stand_clearance_m: self.stand_clearance_m,
+        }
     }
 }
 
@@ -239,8 +259,49 @@ pub(crate) fn find_seats(
                     sorted.sort_unstable();
                     sorted
                 },
+                pull: None,
             });
         }
+    }
+    with_chairs_by_their_backs(mesh, map, settings, seats)
+}
+
+/// `seats` less the places on chairs facing elsewhere than away from their backrest (the free
+/// floor at the side of a chair pulled up to a table is no front), with a place on each chair
+/// pulled out from its table that has none ([`pulled_out_chairs`]).
+fn with_chairs_by_their_backs(
+    mesh: &SceneMesh,
+    map: &WalkableMap,
+    settings: &SeatSettings,
+    mut seats: Vec<Seat>,
+) -> Vec<Seat> {
+    let mut facing_of = std::collections::HashMap::new();
+    seats.retain(|s| {
+        let facing = *facing_of
+            .entry(s.object_name.clone())
+            .or_insert_with(|| chair_facing(mesh, map, &settings.chair_needs(), &s.object_name));
+        facing.is_none_or(|f| f.dot(DVec2::from_angle(s.facing_rad)) >= FRAC_1_SQRT_2)
+    });
+    let found: Vec<ObjectId> = seats.iter().map(|s| s.object).collect();
+    for c in pulled_out_chairs(mesh, map, &settings.chair_needs(), &found) {
+        let o = &mesh.objects[c.object.0 as usize - 1];
+        seats.push(Seat {
+            pelvis_xy: c.pelvis.to_array(),
+            facing_rad: c.facing.y.atan2(c.facing.x),
+            height_m: c.top_z - map.floor_under(c.stand),
+            surface_z_m: c.top_z,
+            stand_xy: c.stand.to_array(),
+            depth_m: c.depth_m,
+            backed: true,
+            object: o.id,
+            object_name: o.name.clone(),
+            naming: match seat_by_name(&o.name, o.label.as_deref()) {
+                Some(true) => SeatNaming::Named,
+                _ => SeatNaming::Shape,
+            },
+            cells: c.cells,
+            pull: Some(c.pull),
+        });
     }
     seats
 }
@@ -411,6 +472,26 @@ pub(crate) mod test_scenes {
         m
     }
 
+    /// A chair (seat at 0.45 m, backrest on its −y side, facing +y) whose front reaches
+    /// `under` m under a table 0.8 m deep, 1.2 m wide, 0.75 m high, at `at`.
+    pub(crate) fn chair_at_table(at: DVec2, under: f64) -> SceneMesh {
+        let mut m = floor_with_seat("chair", at - 0.22, at + 0.22, 0.45, 0.45);
+        let edge = at.y + 0.22 - under;
+        m.add_box(
+            "table",
+            Vec3::new(at.x - 0.6, edge, 0.72),
+            Vec3::new(at.x + 0.6, edge + 0.8, 0.75),
+        );
+        for (x, y) in [(-0.55, 0.05), (0.55, 0.05), (-0.55, 0.75), (0.55, 0.75)] {
+            m.add_box(
+                "table",
+                Vec3::new(at.x + x - 0.03, edge + y - 0.03, 0.0),
+                Vec3::new(at.x + x + 0.03, edge + y + 0.03, 0.72),
+            );
+        }
+        m
+    }
+
     /// A chair 0.5 m square (seat at `seat_h`, a backrest on its −y side) at (x, y).
     pub(crate) fn room_with_chair(seat_h: f64, x: f64, y: f64, name: &str) -> SceneMesh {
         let c = DVec2::new(x, y);
@@ -420,7 +501,7 @@ pub(crate) mod test_scenes {
 
 #[cfg(test)]
 mod tests {
-    use super::test_scenes::{floor_with_seat, room_with_chair};
+    use super::test_scenes::{chair_at_table, floor_with_seat, room_with_chair};
     use super::*;
     use crate::math::Vec3;
     use crate::scene::walkable::WalkableSettings;
@@ -502,6 +583,62 @@ mod tests {
         // A refusing word in English still refuses, whatever else the name holds.
         let mesh = room_with_chair(0.45, 0.3, 0.2, "Regal shelf");
         assert!(find_seats(&mesh, &map(&mesh), &SeatSettings::default()).is_empty());
+    }
+
+    #[test]
+    fn a_chair_under_a_table_is_pulled_out_away_from_it_far_from_the_origin_too() {
+        let seats = |mesh: &SceneMesh| find_seats(mesh, &map(mesh), &SeatSettings::default());
+        for at in [DVec2::new(0.1, -0.3), DVec2::new(-1.7, 1.2)] {
+            // Its seat half and fully under the table top.
+            for under in [0.15, 0.3, 0.44] {
+                let mesh = chair_at_table(at, under);
+                let map = map(&mesh);
+                let found = seats(&mesh);
+                assert_eq!(found.len(), 1, "{at} {under}: {found:?}");
+                let s = &found[0];
+                let pull = s.pull.as_ref().expect("pulled out");
+                // Faces the table (+y), pulled back (−y) far enough to sit in front of it.
+                assert!(
+                    (s.facing_rad - std::f64::consts::FRAC_PI_2).abs() < 0.2,
+                    "{s:?}"
+                );
+                assert!(
+                    pull.offset_m[1] < -0.15 && pull.offset_m[0].abs() < 0.05,
+                    "{s:?}"
+                );
+                assert!((s.height_m - 0.45).abs() < 1e-6);
+                // The walk ends on walkable floor with room; the step in crosses free floor.
+                assert!(map.is_walkable_at(s.stand()), "{s:?}");
+                let feet = s.pelvis() + DVec2::Y * crate::scene::chair_pull::STAND_IN_FRONT_M;
+                assert!(pull.frees(&map, feet), "{s:?}");
+                assert!(s.stand().distance(feet) <= crate::scene::chair_pull::MAX_STEP_IN_M + 1e-9);
+                // The pulled seat is clear of the table top.
+                assert!(s.pelvis().y < at.y + 0.22 - under - 0.1, "{s:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_chair_at_a_table_with_a_wall_behind_it_is_not_sat_on() {
+        let seats = |mesh: &SceneMesh| find_seats(mesh, &map(mesh), &SeatSettings::default());
+        let at = DVec2::new(0.0, 0.0);
+        let mut mesh = chair_at_table(at, 0.3);
+        // A wall 5 cm behind the backrest: no room to pull the chair out.
+        mesh.add_box(
+            "wall",
+            Vec3::new(-2.0, at.y - 0.37, 0.0),
+            Vec3::new(2.0, at.y - 0.27, 2.5),
+        );
+        let found = seats(&mesh);
+        assert!(found.is_empty(), "{found:?}");
+        // A stool or a box without a backrest has no front to pull it out by.
+        let mut mesh = floor_with_seat("stool", at - 0.2, at + 0.2, 0.6, 0.0);
+        mesh.add_box(
+            "counter",
+            Vec3::new(-0.6, 0.0, 0.9),
+            Vec3::new(0.6, 0.7, 0.95),
+        );
+        assert!(seats(&mesh).iter().all(|s| s.pull.is_none()));
     }
 
     #[test]

@@ -5,7 +5,10 @@
 //! `betas`, `gender`, `mocap_frame_rate`), `agents/<name>/cpf_trajectory.json`
 //! (`world_from_cpf` per frame), `agents/<name>/markers.npy` (float32 N×67×3, world, m),
 //! `agents/<name>/held_objects.npy` where it picked something up (float64 K×N×4×4: each
-//! object's `world_from_object` per frame, row-major, in the summary's `held_objects` order);
+//! object's `world_from_object` per frame, row-major, in the summary's `held_objects` order),
+//! `agents/<name>/moved_objects.npy` where it moved a scene object (a chair pulled out from its
+//! table: float64 K×N×2, each move's horizontal offset from where the scene has the object per
+//! frame, in the summary's `moved_objects` order);
 //! `paths.png` (top view: walkable map, obstacles, every agent's pelvis path, starts,
 //! goals and activities done);
 //! `summary.json` (what was asked, per agent goals and state, totals, wall time);
@@ -273,6 +276,31 @@ fn held_objects_npy(track: &AgentTrack) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// Each scene object move's horizontal offset per frame: float64 K×N×2 (m), in the order of
+/// the summary's `moved_objects`.
+fn moved_objects_npy(track: &AgentTrack) -> Result<Vec<u8>> {
+    let k = track.moved_objects.len() as u64;
+    let n = track.frames.len();
+    let mut bytes = Vec::new();
+    {
+        use npyz::WriterBuilder;
+        let mut w = npyz::WriteOptions::new()
+            .default_dtype()
+            .shape(&[k, n as u64, 2])
+            .writer(&mut bytes)
+            .begin_nd()?;
+        for m in &track.moved_objects {
+            for f in 0..n {
+                for v in m.offset_at(f) {
+                    w.push(&v)?;
+                }
+            }
+        }
+        w.finish()?;
+    }
+    Ok(bytes)
+}
+
 fn paths_png(world: &CrowdWorld, take: &CrowdTake, path: &Path) -> Result<()> {
     paths_picture(world, &[take], 900).image.write_png(path)?;
     Ok(())
@@ -411,6 +439,9 @@ pub(crate) fn write_crowd_dir(
         write_atomically(&folder.join("markers.npy"), &markers_npy(a)?)?;
         if !a.held_objects.is_empty() {
             write_atomically(&folder.join("held_objects.npy"), &held_objects_npy(a)?)?;
+        }
+        if !a.moved_objects.is_empty() {
+            write_atomically(&folder.join("moved_objects.npy"), &moved_objects_npy(a)?)?;
         }
     }
     paths_png(world, take, &staging.join("paths.png"))?;

@@ -194,6 +194,7 @@ mod tests {
             activity_segments: Vec::new(),
             skipped_activities: Vec::new(),
             held_objects: Vec::new(),
+            moved_objects: Vec::new(),
         }
     }
 

@@ -178,13 +178,17 @@ fn print_seats(seats: &[crate::scene::Seat]) {
     );
     for s in seats {
         println!(
-            "            {:<28} seat {:.2} m at ({:.2}, {:.2}), facing {:>4.0}°, {}",
+            "            {:<28} seat {:.2} m at ({:.2}, {:.2}), facing {:>4.0}°, {}{}",
             s.object_name,
             s.height_m,
             s.pelvis_xy[0],
             s.pelvis_xy[1],
             s.facing_rad.to_degrees(),
-            if s.backed { "backed" } else { "no back" }
+            if s.backed { "backed" } else { "no back" },
+            s.pull.as_ref().map_or(String::new(), |p| format!(
+                ", pulled out {:.2} m from its table",
+                glam::DVec2::from_array(p.offset_m).length()
+            ))
         );
     }
 }

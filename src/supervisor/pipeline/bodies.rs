@@ -52,6 +52,7 @@ pub(super) fn rendered_agents(
                 track,
                 activities: None,
                 held_objects: Vec::new(),
+                moved_objects: Vec::new(),
             };
             Ok((vec![agent], vec![0]))
         }
@@ -75,6 +76,7 @@ pub(super) fn rendered_agents(
                         track,
                         activities: with_activities.then(|| a.activity_segments.clone()),
                         held_objects: Vec::new(),
+                        moved_objects: a.moved_objects.clone(),
                     })
                 })
                 .collect::<Result<Vec<RenderedAgent>>>()?;

@@ -12,7 +12,8 @@ use crate::plan::{RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::materials::{MaterialsMode, SurfaceFacts};
 use crate::render::protocol::{
-    ObstacleKey, PoseKey, ShardCeiling, ShardHeldObject, ShardObstacle, CEILING_OBJECT,
+    ObstacleKey, PoseKey, ShardCeiling, ShardHeldObject, ShardMovedObject, ShardObstacle,
+    CEILING_OBJECT,
 };
 use crate::render::render_camera::RenderCamera;
 use crate::render::shard_plan::blender_fps;
@@ -72,6 +73,7 @@ pub(super) struct SceneObjects {
     ceiling: Option<ShardCeiling>,
     obstacles: Vec<ShardObstacle>,
     held_objects: Vec<ShardHeldObject>,
+    moved_objects: Vec<ShardMovedObject>,
 }
 
 pub(super) fn scene_objects(
@@ -119,6 +121,7 @@ pub(super) fn scene_objects(
         }),
         obstacles,
         held_objects,
+        moved_objects: moved_objects(render, agents, frames),
     }
 }
 
@@ -168,6 +171,7 @@ pub(super) fn base_spec(
         ceiling: objects.ceiling,
         obstacles: objects.obstacles.clone(),
         held_objects: objects.held_objects.clone(),
+        moved_objects: objects.moved_objects.clone(),
         scene_split: None,
     })
 }
@@ -255,6 +259,45 @@ fn obstacle_boxes(
                     vec![key(-1.0), key(frames)]
                 },
             }
+        })
+        .collect()
+}
+
+/// The scene objects the agents move, by name (one key list per object, whoever moves it:
+/// the offsets added), keyed at every motion frame the renders of `frames` read.
+fn moved_objects(
+    render: &RenderPlan,
+    agents: &[RenderedAgent],
+    frames: &[u32],
+) -> Vec<ShardMovedObject> {
+    let mut names: Vec<&str> = agents
+        .iter()
+        .flat_map(|a| a.moved_objects.iter().map(|m| m.name.as_str()))
+        .collect();
+    names.sort_unstable();
+    names.dedup();
+    let Some(n) = agents.iter().map(|a| a.motion.len()).max() else {
+        return Vec::new();
+    };
+    let keyed = rendered_samples(render, frames, 1, n);
+    names
+        .into_iter()
+        .map(|name| ShardMovedObject {
+            name: name.to_string(),
+            keys: keyed
+                .iter()
+                .map(|&f| {
+                    let moves = agents.iter().flat_map(|a| &a.moved_objects);
+                    let [x, y] = moves
+                        .filter(|m| m.name == name)
+                        .map(|m| m.offset_at(f))
+                        .fold([0.0, 0.0], |a, b| [a[0] + b[0], a[1] + b[1]]);
+                    ObstacleKey {
+                        frame: f as f64,
+                        centre: [x, y, 0.0],
+                    }
+                })
+                .collect(),
         })
         .collect()
 }

@@ -416,6 +416,9 @@ pub struct ActivityRecord {
     /// foot, hanging where even that is too far.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub foot_miss_m: Option<f64>,
+    /// How far a chair at a table or desk was pulled out to sit on (m).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub chair_pulled_m: Option<f64>,
     /// Deepest the buttocks and thighs went below the seat's surface where over it, sitting
     /// down, seated or standing up (m).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -463,6 +466,76 @@ pub(crate) struct Performance {
     pub record: ActivityRecord,
     /// The seat booked for it, given back when it ends.
     pub seat: Option<usize>,
+    /// A scene object it moves (a chair pulled out from its table).
+    pub moved: Option<MovedObject>,
+}
+
+/// A scene object an activity moves: a chair pulled out from its table, sat on and pushed
+/// back.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct MovedObject {
+    /// The scene object's name.
+    pub object: String,
+    /// Where it is moved to from where the scene has it (horizontal, m).
+    pub offset_m: [f64; 2],
+    /// Share of `offset_m` it is moved by at each frame of the activity.
+    pub out: Vec<f64>,
+    /// Frames it takes to slide back (smoothly) after the activity.
+    pub back_frames: usize,
+}
+
+/// A scene object a person moved in a take, as `summary.json` lists it: which, over which
+/// frames, how far at most; where at each frame is in `moved_objects.npy`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct ObjectMove {
+    /// The scene object's name.
+    pub name: String,
+    /// From this frame it moves…
+    pub start_frame: usize,
+    /// … and from this one it stands where the scene has it again.
+    pub end_frame: usize,
+    /// Where it is moved to, at most (horizontal, m).
+    pub offset_m: [f64; 2],
+    /// Share of `offset_m` at each frame from `start_frame`.
+    #[serde(skip)]
+    pub shares: Vec<f64>,
+}
+
+impl ObjectMove {
+    /// Its horizontal offset from where the scene has it at take frame `f` (m).
+    pub(crate) fn offset_at(&self, f: usize) -> [f64; 2] {
+        let share = f
+            .checked_sub(self.start_frame)
+            .and_then(|k| self.shares.get(k))
+            .copied()
+            .unwrap_or(0.0);
+        self.offset_m.map(|x| x * share)
+    }
+}
+
+impl MovedObject {
+    /// The move from take frame `start`, the activity's first.
+    pub(crate) fn starting_at(&self, start: usize) -> ObjectMove {
+        let shares = self.shares();
+        ObjectMove {
+            name: self.object.clone(),
+            start_frame: start,
+            end_frame: start + shares.len(),
+            offset_m: self.offset_m,
+            shares,
+        }
+    }
+
+    /// Share of the offset at each frame from the activity's first to the end of the slide
+    /// back.
+    fn shares(&self) -> Vec<f64> {
+        let last = self.out.last().copied().unwrap_or(0.0);
+        let back = (1..=self.back_frames).map(|k| {
+            let t = k as f64 / self.back_frames as f64;
+            last * (1.0 - t * t * (3.0 - 2.0 * t))
+        });
+        self.out.iter().copied().chain(back).collect()
+    }
 }
 
 #[cfg(test)]

@@ -49,6 +49,7 @@ impl ActivityWorld {
             frames,
             phases,
             seat: None,
+            moved: None,
         })
     }
 }

@@ -57,6 +57,8 @@ pub(crate) enum Refusal {
     NoSeat,
     #[error("every seat on this floor is taken")]
     SeatsTaken,
+    #[error("every free seat on this floor was walked to before and not reached")]
+    SeatsUnreached,
     #[error("the take ended before it began")]
     TakeEnded,
     #[error("`{0}` is not played where a walk ended")]

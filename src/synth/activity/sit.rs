@@ -8,14 +8,16 @@ use rand_chacha::ChaCha8Rng;
 
 use super::refusal::{Doing, Refusal};
 use super::world::{record, rounded_hold, ENTER_TOLERANCE_M, IDLE_STRIDE};
-use super::{Activity, ActivityWorld, LookAt, Performance, Phase};
+use super::{Activity, ActivityWorld, LookAt, MovedObject, Performance, Phase};
 use crate::body::{joint, BodyParams, PoseError};
 use crate::math::random::uniform_in;
 use crate::math::Vec3;
 use crate::motion::activity_clip::{
-    idle_frames, keep_ankles, max_joint_speed, placed, sitting_vertices, ClipKind, ClipOnBody, Idle,
+    blend, idle_frames, keep_ankles, max_joint_speed, placed, sitting_vertices, ClipKind,
+    ClipOnBody, Idle,
 };
 use crate::motion::cvae::BodyContext;
+use crate::motion::primitive::PRIMITIVE_RATE_HZ;
 use crate::scene::{Seat, WalkableMap};
 
 impl ActivityWorld {
@@ -70,19 +72,37 @@ impl ActivityWorld {
             });
         }
         let (played, foot_miss) = (fitted.frames, fitted.foot_miss_m);
-        let (into, turn) = self.transition(body, last, &played[0])?;
+        let (mut into, turn) = self.transition(body, last, &played[0])?;
+        // A chair pulled out from its table slides out at most 0.5 m/s while the person steps
+        // in (waiting where the walk ended if the step is quicker).
+        if let Some(pull) = &seat.pull {
+            let d = DVec2::from_array(pull.offset_m).length();
+            let need = (d / PULL_SPEED_M_S * PRIMITIVE_RATE_HZ).ceil() as usize;
+            if into.len() < need {
+                let wait = vec![last.clone(); need - into.len()];
+                into.splice(0..0, wait);
+            }
+        }
+        // From a chair pulled out from its table, the person steps back out to where the walk
+        // ended (walkable floor), for the walk to go on from there.
+        let out = match &seat.pull {
+            Some(_) => self.step_back(body, &played[n - 1], seat.stand())?,
+            None => Vec::new(),
+        };
         let [lo, hi] = self.settings.sit_s;
-        let hold = rounded_hold(into.len() + n, uniform_in(rng, lo, hi), 0);
+        let hold = rounded_hold(into.len() + n + out.len(), uniform_in(rng, lo, hi), 0);
         let seated = idle_frames(&played[l], hold, Idle::SEATED, rng);
         let down = into.len() + l + 1;
+        let pulling = into.len();
         let mut frames = into;
         frames.extend_from_slice(&played[..=l]);
         frames.extend(seated);
         frames.extend_from_slice(&played[l + 1..]);
+        frames.extend(out);
         let phases = vec![
             (Phase::Transition, down),
             (Phase::Hold, hold),
-            (Phase::Transition, n - l - 1),
+            (Phase::Transition, frames.len() - down - hold),
         ];
         if let Some((k, depth)) = self.first_entry(
             body,
@@ -117,10 +137,27 @@ impl ActivityWorld {
             });
         }
         r.seat_penetration_m = Some(sink);
+        r.chair_pulled_m = seat
+            .pull
+            .as_ref()
+            .map(|p| DVec2::from_array(p.offset_m).length());
         r.look_at = Some(LookAt {
             point: [seated_at.x, seated_at.y, seat.surface_z_m],
             start_frame: 0,
             end_frame: down,
+        });
+        // The chair slides out while the person steps in, stays out, and slides back once they
+        // have stepped out again.
+        let moved = seat.pull.as_ref().map(|p| {
+            let ramp = (pulling as f64).max(1.0);
+            MovedObject {
+                object: seat.object_name.clone(),
+                offset_m: p.offset_m,
+                out: (0..frames.len())
+                    .map(|k| smooth_step((k + 1) as f64 / ramp))
+                    .collect(),
+                back_frames: (PUSH_BACK_S * PRIMITIVE_RATE_HZ).round() as usize,
+            }
         });
         Ok(Performance {
             activity: Activity::Sit,
@@ -128,7 +165,28 @@ impl ActivityWorld {
             frames,
             phases,
             seat: Some(s),
+            moved,
         })
+    }
+
+    /// Frames stepping from the standing pose `from` to stand at `to` (the pelvis moved
+    /// there, the pose kept): at most 0.6 m/s, at least `blend_s`.
+    fn step_back(
+        &self,
+        body: &BodyContext,
+        from: &BodyParams,
+        to: DVec2,
+    ) -> Result<Vec<BodyParams>, PoseError> {
+        let s = body.shaped.skeleton(&from.pose, from.transl)?;
+        let p = s.joints[joint::PELVIS];
+        let d = to - DVec2::new(p.x, p.y);
+        let mut there = from.clone();
+        there.transl += Vec3::new(d.x, d.y, 0.0);
+        let seconds = self.settings.blend_s.max(d.length() / 0.6);
+        let n = (seconds * PRIMITIVE_RATE_HZ).round().max(1.0) as usize;
+        let mut frames = blend(from, &there, n);
+        frames.push(there);
+        Ok(frames)
     }
 }
 
@@ -179,9 +237,10 @@ fn fit_on_seat(
         .take_while(|&x| x <= (seat.depth_m - 0.08).max(0.0))
         .filter(|&x| {
             let seated = seat.pelvis() + facing * x;
-            [0, n - 1]
-                .iter()
-                .all(|&k| map.is_walkable_at(standing_at(seated, k)))
+            [0, n - 1].iter().all(|&k| {
+                let p = standing_at(seated, k);
+                map.is_walkable_at(p) || seat.pull.as_ref().is_some_and(|pl| pl.frees(map, p))
+            })
         })
         .collect();
     if shifts.is_empty() {
@@ -213,6 +272,19 @@ fn fit_on_seat(
         }
     }
     best.ok_or(Refusal::NoSitClip)
+}
+
+/// How long a chair pulled out from its table takes to slide back once the person has
+/// stepped away (s).
+const PUSH_BACK_S: f64 = 1.2;
+
+/// Fastest a chair is pulled out on average (m/s).
+const PULL_SPEED_M_S: f64 = 0.5;
+
+/// 0 below 0, 1 above 1, smooth (zero slope at both ends) between.
+fn smooth_step(t: f64) -> f64 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
 }
 
 /// Deepest the thighs may rest below a seat's surface once seated (m): a cushion's give. A
@@ -447,7 +519,7 @@ mod tests {
     use crate::body::BodyModel;
     use crate::motion::activity_clip::activity_clip_dir;
     use crate::motion::primitive::{NEW_FRAMES, PRIMITIVE_RATE_HZ};
-    use crate::scene::seats::test_scenes::room_with_chair;
+    use crate::scene::seats::test_scenes::{chair_at_table, room_with_chair};
     use crate::scene::SceneMesh;
     use crate::scene::WalkableSettings;
     use crate::synth::activity::{ActivitySettings, ActivityWeights};
@@ -564,6 +636,58 @@ mod tests {
         }
         // At most the one extreme body on the highest seat.
         assert!(refused <= 1, "{refused} refused");
+    }
+
+    #[test]
+    fn a_chair_under_a_table_is_pulled_out_sat_on_and_pushed_back() {
+        let model = BodyModel::load(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
+        )
+        .unwrap();
+        let n = model.num_betas().min(2);
+        for betas in [vec![], vec![-3.0; n], vec![3.0; n]] {
+            let body = BodyContext::new(&model, &betas).unwrap();
+            for under in [0.15, 0.44] {
+                let mesh = chair_at_table(DVec2::new(0.3, -0.2), under);
+                let (mut acts, map) = world(sitting(), mesh);
+                assert_eq!(acts.seats.len(), 1, "{under}");
+                let seat = acts.seats[0].clone();
+                let pull = DVec2::from_array(seat.pull.as_ref().unwrap().offset_m);
+                let last = arriving(&acts, &body, 0);
+                let mut rng = ChaCha8Rng::seed_from_u64(3);
+                let p = acts
+                    .sit(&body, &map, &last, 0, 0.0, &mut rng)
+                    .unwrap_or_else(|e| panic!("{betas:?} {under}: {e}"));
+                let r = &p.record;
+                assert!((r.chair_pulled_m.unwrap() - pull.length()).abs() < 1e-12);
+                assert!(r.seat_gap_m.unwrap().abs() <= 0.02, "{r:?}");
+                assert_eq!(p.frames.len() % NEW_FRAMES, 0);
+                assert_eq!(p.phases.iter().map(|x| x.1).sum::<usize>(), p.frames.len());
+                // The chair: out while seated, back after, moving smoothly.
+                let m = p.moved.as_ref().expect("the chair moves");
+                assert_eq!(m.object, seat.object_name);
+                let moves = m.starting_at(100);
+                let at = |f: usize| DVec2::from_array(moves.offset_at(f));
+                let seated = 100 + p.phases[0].1 + p.phases[1].1 / 2;
+                assert!(at(seated).distance(pull) < 1e-9);
+                assert_eq!(at(99), DVec2::ZERO);
+                assert_eq!(at(moves.end_frame), DVec2::ZERO);
+                for f in 100..moves.end_frame {
+                    assert!(at(f + 1).distance(at(f)) < 0.05, "{f}");
+                }
+                // Seated on the pulled chair, facing the table.
+                let f = &p.frames[p.phases[0].1];
+                let s = body.shaped.skeleton(&f.pose, f.transl).unwrap();
+                let pelvis = s.joints[joint::PELVIS];
+                assert!(DVec2::new(pelvis.x, pelvis.y).distance(seat.pelvis()) < 0.35);
+                // The walk goes on from where it ended, on walkable floor.
+                let end = p.frames.last().unwrap();
+                let s = body.shaped.skeleton(&end.pose, end.transl).unwrap();
+                let q = s.joints[joint::PELVIS];
+                assert!(DVec2::new(q.x, q.y).distance(seat.stand()) < 1e-6);
+                assert!(map.is_walkable_at(DVec2::new(q.x, q.y)));
+            }
+        }
     }
 
     #[test]

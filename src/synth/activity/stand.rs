@@ -48,6 +48,7 @@ impl ActivityWorld {
             frames,
             phases,
             seat: None,
+            moved: None,
         })
     }
 }

@@ -77,12 +77,20 @@ impl ActivityWorld {
         self.settings.weights.draw(rng)
     }
 
-    /// The nearest free seat whose standing point lies on `from`'s floor region, if any.
-    pub(crate) fn nearest_free_seat(&self, map: &WalkableMap, from: DVec2) -> Option<usize> {
+    /// The nearest free seat whose standing point lies on `from`'s floor region, if any, but
+    /// those in `passed` (seats the person could not reach).
+    pub(crate) fn nearest_free_seat(
+        &self,
+        map: &WalkableMap,
+        from: DVec2,
+        passed: &[usize],
+    ) -> Option<usize> {
         let region = |p: DVec2| map.cell_of(p).map(|(i, j)| map.component[j * map.nx + i]);
         let here = region(from);
         (0..self.seats.len())
-            .filter(|&s| !self.taken[s] && region(self.seats[s].stand()) == here)
+            .filter(|&s| {
+                !self.taken[s] && !passed.contains(&s) && region(self.seats[s].stand()) == here
+            })
             .min_by(|&a, &b| {
                 let d = |s: usize| self.seats[s].stand().distance(from);
                 d(a).total_cmp(&d(b)).then(a.cmp(&b))
@@ -252,6 +260,7 @@ pub(super) fn record(activity: Activity, place: DVec2, turn_deg: f64) -> Activit
         seat_height_m: None,
         seat_fit_m: None,
         seat_gap_m: None,
+        chair_pulled_m: None,
         foot_miss_m: None,
         seat_penetration_m: None,
         turn_deg,

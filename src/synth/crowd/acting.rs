@@ -40,6 +40,7 @@ impl Agent<'_> {
                     &mut self.activity_rng,
                 )
             } else {
+                self.unreached_seats.push(s);
                 Err(Refusal::SeatNotReached {
                     seat: acts.seats[s].object_name.clone(),
                 })
@@ -58,7 +59,11 @@ impl Agent<'_> {
         let activity = acts.draw(&mut self.activity_rng);
         let done = match activity {
             Activity::Walk => return false,
-            Activity::Sit => match acts.nearest_free_seat(&world.map, self.walker.view.pelvis) {
+            Activity::Sit => match acts.nearest_free_seat(
+                &world.map,
+                self.walker.view.pelvis,
+                &self.unreached_seats,
+            ) {
                 Some(s) => {
                     acts.taken[s] = true;
                     self.approaching = Some((s, frame));
@@ -67,10 +72,11 @@ impl Agent<'_> {
                     self.walker.retarget(self.goal);
                     return true;
                 }
-                None => Err(match acts.seats.is_empty() {
-                    true => Refusal::NoSeat,
-                    false => Refusal::SeatsTaken,
-                }),
+                None if acts.seats.is_empty() => Err(Refusal::NoSeat),
+                None if self.unreached_seats.iter().any(|&s| !acts.taken[s]) => {
+                    Err(Refusal::SeatsUnreached)
+                }
+                None => Err(Refusal::SeatsTaken),
             },
             here => acts.play_here(
                 here,
@@ -126,6 +132,9 @@ impl Agent<'_> {
         }
         p.record.start_frame = start;
         p.record.end_frame = k;
+        if let Some(m) = &p.moved {
+            self.track.moved_objects.push(m.starting_at(start));
+        }
         self.track.activities.push(p.record.clone());
         self.acting = Some((p, 0));
     }

@@ -47,6 +47,8 @@ pub(super) struct Agent<'m> {
     pub(super) acting: Option<(Performance, usize)>,
     /// The seat being walked to (to sit on when reached) and the frame the walk began.
     pub(super) approaching: Option<(usize, usize)>,
+    /// Seats it walked to and did not reach: not tried again in this take.
+    pub(super) unreached_seats: Vec<usize>,
     /// Draws what comes after each walk: a stream of its own, so walking draws as without
     /// activities.
     pub(super) activity_rng: ChaCha8Rng,
@@ -182,6 +184,7 @@ impl<'m> Agent<'m> {
             activity_segments: Vec::new(),
             skipped_activities: Vec::new(),
             held_objects: Vec::new(),
+            moved_objects: Vec::new(),
         };
         track
             .frames
@@ -201,6 +204,7 @@ impl<'m> Agent<'m> {
             track,
             acting: None,
             approaching: None,
+            unreached_seats: Vec::new(),
             activity_rng: walker_rng(settings.seed ^ 0xAC71_7117, index),
             hands: HandStyle::draw(&mut walker_rng(settings.seed ^ 0x4A4D_5EED, index)),
             objects_rng: walker_rng(settings.seed ^ 0x0B1E_C75E, index),

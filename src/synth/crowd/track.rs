@@ -17,7 +17,9 @@ use crate::motion::head_stabilise::{stabilise_head, HeadStabiliser};
 use crate::motion::joins::{smooth_joins, JoinWindow};
 use crate::motion::primitive::PRIMITIVE_RATE_HZ;
 use crate::scene::WalkableMap;
-use crate::synth::activity::{Activity, ActivityRecord, ActivitySegment, Phase, SkippedActivity};
+use crate::synth::activity::{
+    Activity, ActivityRecord, ActivitySegment, ObjectMove, Phase, SkippedActivity,
+};
 use crate::synth::held_object::{fit_under_fingertips, grasp_in, placed_object, Grasp, HeldObject};
 use crate::walker::{ControllerSpec, WalkerSettings};
 
@@ -111,6 +113,9 @@ pub struct AgentTrack {
     /// What its pick-ups took and carry to the take's end, with a pose per frame.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub held_objects: Vec<HeldObject>,
+    /// Scene objects it moved (chairs pulled out from their tables to sit on), in order.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub(crate) moved_objects: Vec<ObjectMove>,
 }
 
 impl AgentTrack {
