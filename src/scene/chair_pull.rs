@@ -87,6 +87,12 @@ struct ChairShape {
     facing: DVec2,
     /// Map cells the chair occupies between step and head height.
     footprint: Vec<usize>,
+    /// Those whose four neighbours it occupies too: what must be free where it is pulled to
+    /// (a cell at its edge may be shared with a chair standing close beside it).
+    inner: Vec<usize>,
+    /// Its horizontal bounds.
+    lo: DVec2,
+    hi: DVec2,
 }
 
 /// Places to sit on chairs that must be pulled out first: every object that is not refused
@@ -118,15 +124,27 @@ pub(crate) fn pulled_out_chairs(
         let Some(chair) = chair_shape(mesh, map, settings, &object.name) else {
             continue;
         };
-        let others = occupied_by_others(mesh, map, &object.name, None);
-        let covers = occupied_by_others(
-            mesh,
+        // Everything else near enough to matter: within reach of the pull, the feet and the
+        // step in.
+        let reach = MAX_PULL_M + STAND_IN_FRONT_M + MAX_STEP_IN_M + 0.7;
+        let near: Vec<[Vec3; 3]> = (0..mesh.triangles.len())
+            .filter(|&t| !of_name(mesh, t, &object.name))
+            .map(|t| mesh.triangle(t))
+            .filter(|v| {
+                v.iter()
+                    .any(|p| p.x >= chair.lo.x - reach && p.y >= chair.lo.y - reach)
+                    && v.iter()
+                        .any(|p| p.x <= chair.hi.x + reach && p.y <= chair.hi.y + reach)
+            })
+            .collect();
+        let floor_band = map.floor_z_m + map.settings.stepped_over_m();
+        let others = occupied(map, &near, None);
+        let covers = occupied(
             map,
-            &object.name,
+            &near,
             Some((chair.top_z + 0.15, chair.top_z + settings.headroom_m)),
         );
-        let floor_band = map.floor_z_m + map.settings.stepped_over_m();
-        let low = occupied_by_others(mesh, map, &object.name, Some((floor_band, chair.top_z)));
+        let low = occupied(map, &near, Some((floor_band, chair.top_z)));
         let Some(seat) = pull_out(map, settings, &chair, &others, &low, &covers) else {
             continue;
         };
@@ -262,12 +280,30 @@ fn chair_shape(
     }
     let facing = (centre - back / weight).try_normalize()?;
     let footprint = occupancy(map, tris.iter(), None);
+    let inside = |k: usize| footprint.binary_search(&k).is_ok();
+    let inner: Vec<usize> = footprint
+        .iter()
+        .copied()
+        .filter(|&k| {
+            let (i, j) = (k % map.nx, k / map.nx);
+            i > 0
+                && j > 0
+                && i + 1 < map.nx
+                && j + 1 < map.ny
+                && [k - 1, k + 1, k - map.nx, k + map.nx]
+                    .into_iter()
+                    .all(inside)
+        })
+        .collect();
     Some(ChairShape {
         top_z,
         cells,
         centre,
         facing,
         footprint,
+        inner,
+        lo,
+        hi,
     })
 }
 
@@ -308,18 +344,9 @@ fn occupancy<'a>(
     cells
 }
 
-/// Per cell, whether objects not named `name` have geometry over it between step and head
-/// height (`band`: between those world heights).
-fn occupied_by_others(
-    mesh: &SceneMesh,
-    map: &WalkableMap,
-    name: &str,
-    band: Option<(f64, f64)>,
-) -> Vec<bool> {
-    let tris: Vec<[Vec3; 3]> = (0..mesh.triangles.len())
-        .filter(|&t| !of_name(mesh, t, name))
-        .map(|t| mesh.triangle(t))
-        .collect();
+/// Per cell, whether the triangles `tris` overlap it between step and head height over the
+/// floor (`band`: between those world heights).
+fn occupied(map: &WalkableMap, tris: &[[Vec3; 3]], band: Option<(f64, f64)>) -> Vec<bool> {
     let mut out = vec![false; map.nx * map.ny];
     for k in occupancy(map, tris.iter(), band) {
         out[k] = true;
@@ -360,13 +387,15 @@ fn pull_out(
             break;
         }
         let offset = -chair.facing * d;
-        let moved: Vec<DVec2> = chair
-            .footprint
-            .iter()
-            .map(|&k| map.centre(k % map.nx, k / map.nx) + offset)
-            .collect();
+        let moved_cells = |cells: &[usize]| -> Vec<DVec2> {
+            cells
+                .iter()
+                .map(|&k| map.centre(k % map.nx, k / map.nx) + offset)
+                .collect()
+        };
+        let (moved, inner) = (moved_cells(&chair.footprint), moved_cells(&chair.inner));
         // Slid along the floor: nothing up to the seat's height in the way, at any pull.
-        let slides = moved.iter().all(|&p| {
+        let slides = inner.iter().all(|&p| {
             map.cell_of(p)
                 .is_some_and(|(i, j)| map.has_floor[j * map.nx + i] && !low[j * map.nx + i])
         });
@@ -376,15 +405,15 @@ fn pull_out(
         if d < 0.2 - 1e-9 {
             continue;
         }
-        let stands_on_free_floor = moved.iter().all(|&p| free(p));
+        let stands_on_free_floor = inner.iter().all(|&p| free(p));
         // Not where the pulled chair stands (with a body's half width round it).
         let clear_of_chair = |p: DVec2, r: f64| moved.iter().all(|q| q.distance(p) > r);
         let pelvis = chair.centre + offset;
         let room_above = disk(pelvis, settings.min_half_width_m)
             .all(|p| map.cell_of(p).is_some_and(|(i, j)| !covers[j * map.nx + i]));
         let feet = pelvis + chair.facing * STAND_IN_FRONT_M;
-        let room_in_front =
-            disk(feet, FEET_CLEARANCE_M).all(&free) && clear_of_chair(feet, FEET_CLEARANCE_M);
+        // (The legs touch the chair's front edge as the person sits down.)
+        let room_in_front = disk(feet, FEET_CLEARANCE_M).all(&free) && clear_of_chair(feet, 0.05);
         if !(stands_on_free_floor && room_above && room_in_front) {
             continue;
         }

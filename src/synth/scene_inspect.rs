@@ -186,7 +186,7 @@ fn print_seats(seats: &[crate::scene::Seat]) {
             s.facing_rad.to_degrees(),
             if s.backed { "backed" } else { "no back" },
             s.pull.as_ref().map_or(String::new(), |p| format!(
-                ", pulled out {:.2} m from its table",
+                ", pulled out {:.2} m",
                 glam::DVec2::from_array(p.offset_m).length()
             ))
         );
