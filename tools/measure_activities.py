@@ -13,6 +13,7 @@ over the object's top, the deepest fingertip inside it).
         --scenes apartment small_house --seeds 0 1 2 3 4 5 --out out/measure_activities
     python3 tools/measure_activities.py ... --set 'blend_s = 0.8' --out out/measure_blend08
     python3 tools/measure_activities.py ... --scenes dwelling:5000 dwelling:5001 --seeds 0  # generated dwellings
+    python3 tools/measure_activities.py ... --scenes path/to/dwelling_5000.glb --seeds 0      # any .glb file
     python3 tools/measure_activities.py ... --weights '{ walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 3.0 }'
 """
 
@@ -58,7 +59,8 @@ def take(bin_, scene, seed, duration, weights, out, extra=""):
         config = out.with_suffix(".toml")
         config.write_text(
             CONFIG.format(
-                scene=scene if scene.startswith("dwelling:") else ROOT / "assets/scenes" / f"{scene}.glb",
+                scene=scene if scene.startswith("dwelling:") or scene.endswith(".glb")
+                else ROOT / "assets/scenes" / f"{scene}.glb",
                 duration=duration,
                 seed=seed,
                 weights=weights,
@@ -71,6 +73,11 @@ def take(bin_, scene, seed, duration, weights, out, extra=""):
 
 
 SEAT_KINDS = ("armchair", "sofa", "couch", "bed", "stool", "bench", "chair")
+
+
+def folder_of(scene):
+    """The takes' folder name of a scene: `dwelling:7` -> dwelling_7, `a/b/house.glb` -> house."""
+    return Path(scene).stem if scene.endswith(".glb") else scene.replace(":", "_")
 
 
 def seat_kind(name):
@@ -91,10 +98,12 @@ def print_sit_share(sits, sit_skips):
     done = Counter(seat_kind(r["seat"]) for r in sits)
     missed = Counter()
     for reason in drawn:
-        m = re.search(r"seat of (\S+?)(?: |$|\))", reason)
+        m = re.search(r"(?:seat of|sitting on) (\S+?)(?:,| |$|\))", reason)
         missed[seat_kind(m.group(1)) if m else "?"] += 1
     total = len(sits) + len(drawn)
-    print(f"sits drawn where seats exist: {total}, done {len(sits)} ({100 * len(sits) / total:.0f} %); by seat: "
+    pulled = sum(1 for r in sits if r.get("chair_pulled_m"))
+    print(f"sits drawn where seats exist: {total}, done {len(sits)} ({100 * len(sits) / total:.0f} %; "
+          f"{pulled} on chairs pulled out from their tables); by seat: "
           + ", ".join(f"{k} {done[k]}/{done[k] + missed[k]}" for k in sorted(set(done) | set(missed))))
 
 
@@ -131,7 +140,7 @@ def main():
         goals = 0
         for scene_file, seed in ((f, seed) for f in scenes for seed in args.seeds):
             s = take(args.bin, scene_file, seed, args.duration, args.weights,
-                     out / scene_file.replace(":", "_") / f"seed{seed}", "\n".join(args.set))
+                     out / folder_of(scene_file) / f"seed{seed}", "\n".join(args.set))
             goals += s.get("totals", {}).get("goals_reached", 0)
             for a in s["agents"]:
                 agents += 1
@@ -145,7 +154,7 @@ def main():
                 off_floor += a["pelvis_off_floor_frames"]
             if args.walk_only:
                 w = take(args.bin, scene_file, seed, args.duration, "{ walk = 1.0 }",
-                         out / scene_file.replace(":", "_") / f"seed{seed}_walk")
+                         out / folder_of(scene_file) / f"seed{seed}_walk")
                 walk_only_contact += [a["contact"] for a in w["agents"]]
         total = sum(counts.values())
         takes = len(args.seeds) * len(scenes)
