@@ -540,6 +540,13 @@ mod tests {
         }
     }
 
+    fn shipped_model() -> BodyModel {
+        BodyModel::load(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
+        )
+        .unwrap()
+    }
+
     /// A person standing at the seat's standing point, facing the seat (the way they walked).
     fn arriving(acts: &ActivityWorld, body: &BodyContext, s: usize) -> BodyParams {
         let seat = &acts.seats[s];
@@ -560,10 +567,7 @@ mod tests {
 
     #[test]
     fn bodies_of_extreme_shape_sit_on_seats_of_any_height_and_a_tight_fit_refuses() {
-        let model = BodyModel::load(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
-        )
-        .unwrap();
+        let model = shipped_model();
         let n = model.num_betas().min(2);
         let mut refused = 0;
         for betas in [vec![], vec![-3.0; n], vec![3.0; n]] {
@@ -640,10 +644,7 @@ mod tests {
 
     #[test]
     fn a_chair_under_a_table_is_pulled_out_sat_on_and_pushed_back() {
-        let model = BodyModel::load(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
-        )
-        .unwrap();
+        let model = shipped_model();
         let n = model.num_betas().min(2);
         for betas in [vec![], vec![-3.0; n], vec![3.0; n]] {
             let body = BodyContext::new(&model, &betas).unwrap();
@@ -692,10 +693,7 @@ mod tests {
 
     #[test]
     fn a_sit_held_ten_minutes_keeps_the_body_on_its_seat() {
-        let model = BodyModel::load(
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/body/SMPLX_NEUTRAL.npz"),
-        )
-        .unwrap();
+        let model = shipped_model();
         let body = BodyContext::new(&model, &[]).unwrap();
         let settings = ActivitySettings {
             sit_s: [600.0, 600.0],
