@@ -351,6 +351,69 @@ fn fixed_scene_episodes_walk_its_pairs_in_turn_on_its_floor() {
         .contains("not of this environment's kind"));
 }
 
+/// Episodes in generated dwellings (`[stages.env.dwellings]`): with a share of 1 every episode
+/// walks a pair of one of the dwellings given, on its floor; its snapshot restores into an
+/// environment with the same dwellings and is refused by one without.
+#[test]
+fn dwelling_episodes_walk_their_pairs_and_restore_only_where_the_dwellings_are() {
+    use egogen::policy::env::{EnvParts, FixedScene};
+    use egogen::scene::{StartGoal, WalkableMap};
+    env_parts!(body, ctx, model, bank, prior);
+    // Two open 6 × 6 m floors far apart, at floor heights 0 and 2.5 m, one pair each: 2 m
+    // and 4 m from start to goal.
+    let dwelling = |origin: DVec2, floor_z: f64, length: f64| {
+        let mut map = WalkableMap::from_walkable(origin, 0.1, 60, 60, vec![true; 3600]);
+        map.floor_z_m = floor_z;
+        let start = origin + DVec2::splat(1.0);
+        FixedScene {
+            map: std::sync::Arc::new(map),
+            pairs: vec![StartGoal {
+                start,
+                goal: start + DVec2::new(length, 0.0),
+            }],
+            sdf: None,
+        }
+    };
+    let dwellings = [
+        dwelling(DVec2::ZERO, 0.0, 2.0),
+        dwelling(DVec2::splat(1000.0), 2.5, 4.0),
+    ];
+    let parts = EnvParts {
+        model: &model,
+        body: &ctx,
+        bank: &bank,
+        prior: &prior,
+        fixed: None,
+        dwellings: &dwellings,
+    };
+    let mut settings = EnvSettings::default();
+    settings.dwellings.share = 1.0;
+    let envs = 8;
+    let env = parts.env(settings, envs, 3).unwrap();
+    let obs = env.observations();
+    let mut lengths = std::collections::BTreeSet::new();
+    for (e, o) in obs.chunks(OBS_DIM).enumerate() {
+        let d = 1.0 / o[OBS_DIST_OFFSET] as f64 - 1.0;
+        let length = [2.0, 4.0]
+            .into_iter()
+            .find(|l| (d - l).abs() < 0.3)
+            .unwrap_or_else(|| panic!("episode {e}: {d} m from its goal, no pair's"));
+        lengths.insert(length as u32);
+    }
+    assert_eq!(lengths.len(), 2, "every episode in one dwelling");
+    let snap = env.snapshot();
+    let mut twin = parts.env(settings, envs, 3).unwrap();
+    twin.restore(&snap).unwrap();
+    assert_eq!(twin.observations(), obs);
+    let without = EnvParts {
+        dwellings: &dwellings[..1],
+        ..parts
+    };
+    let mut other = without.env(settings, envs, 3).unwrap();
+    let err = other.restore(&snap).unwrap_err().to_string();
+    assert!(err.contains("dwelling is not one of"), "{err}");
+}
+
 #[test]
 fn scene_penetration_counts_body_vertices_inside_the_scene_sdf() {
     use egogen::policy::env::FixedScene;

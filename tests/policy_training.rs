@@ -299,6 +299,35 @@ fn a_killed_policy_run_resumes_exactly_where_it_stopped() {
     );
 }
 
+/// A stage that walks generated dwellings trains: `[dwellings]` makes the dwellings of its seeds
+/// (into the cache on first use) and draws their pairs.
+#[test]
+fn a_policy_trains_in_generated_dwellings() {
+    let dir = tempfile::tempdir().unwrap();
+    let config = dir.path().join("c.toml");
+    let text = tiny_config(dir.path())
+        .replacen(
+            "[policy]",
+            "[dwellings]\nseeds = [0, 2]\npairs = 8\npair_distance_m = [1, 6]\nseed = 1\n[policy]",
+            1,
+        )
+        .replacen(
+            "[stages.env]\n",
+            "[stages.env]\ndwellings = { share = 1.0 }\n",
+            1,
+        );
+    std::fs::write(&config, text).unwrap();
+    let plan = egogen::cli::train_policy::load_policy_plan(&config).unwrap();
+    assert_eq!(plan.dwellings.len(), 2);
+    assert!(plan.dwellings.iter().all(|d| d.indoors && d.pairs == 8));
+    common::succeeds(
+        std::process::Command::new(env!("CARGO_BIN_EXE_egogen"))
+            .args(["train", "policy", "--quiet", "--config"])
+            .arg(&config),
+    );
+    assert!(dir.path().join("w.safetensors").is_file());
+}
+
 #[test]
 fn bad_policy_configs_name_the_file_and_the_key() {
     let dir = tempfile::tempdir().unwrap();
@@ -371,6 +400,31 @@ fn bad_policy_configs_name_the_file_and_the_key() {
             "[policy]",
             "[scene]\npath = \"dwelling:1000000\"\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
             "the dwelling of seed 1000000 is held out",
+        ),
+        (
+            "[stages.env]",
+            "[stages.env]\ndwellings = { share = 0.5 }",
+            "stages[1].env.dwellings.share",
+        ),
+        (
+            "[stages.env]",
+            "[stages.env]\ndwellings = { share = 1.5 }",
+            "stages[1].env.dwellings",
+        ),
+        (
+            "[policy]",
+            "[dwellings]\nseeds = [0, 2]\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n[policy]",
+            "no stage walks the dwellings",
+        ),
+        (
+            "terminate_on_penetration = true\n",
+            "terminate_on_penetration = true\ndwellings = { share = 0.5 }\n[dwellings]\nseeds = [999990, 1000001]\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n",
+            "seeds 1000000 and up are held out",
+        ),
+        (
+            "terminate_on_penetration = true\n",
+            "terminate_on_penetration = true\ndwellings = { share = 0.5 }\n[dwellings]\nseeds = [3, 3]\npairs = 4\npair_distance_m = [1, 2]\nseed = 1\n",
+            "dwellings.seeds",
         ),
         (
             "residual_blocks = 1",

@@ -15,6 +15,7 @@ over the object's top, the deepest fingertip inside it).
     python3 tools/measure_activities.py ... --scenes dwelling:5000 dwelling:5001 --seeds 0  # generated dwellings
     python3 tools/measure_activities.py ... --scenes path/to/dwelling_5000.glb --seeds 0      # any .glb file
     python3 tools/measure_activities.py ... --weights '{ walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 3.0 }'
+    python3 tools/measure_activities.py ... --policy assets/policy/dwellings/policy.safetensors  # other weights
 """
 
 import json
@@ -38,7 +39,7 @@ stop_when_done = false
 wander_distance_m = [2.0, 5.0]
 clearance_m = 0.4
 seed = {seed}
-[activities]
+{policy}[activities]
 weights = {weights}
 {extra}
 [crowd]
@@ -53,7 +54,7 @@ dir = "{out}"
 WEIGHTS = "{ walk = 1.0, stand = 1.0, sit = 2.0, pick_up = 1.0 }"
 
 
-def take(bin_, scene, seed, duration, weights, out, extra=""):
+def take(bin_, scene, seed, duration, weights, out, extra="", policy=None):
     out.parent.mkdir(parents=True, exist_ok=True)
     if not (out / "summary.json").exists():
         config = out.with_suffix(".toml")
@@ -65,6 +66,7 @@ def take(bin_, scene, seed, duration, weights, out, extra=""):
                 seed=seed,
                 weights=weights,
                 extra=extra,
+                policy=f'policy = "{Path(policy).resolve()}"\n' if policy else "",
                 out=out.resolve(),
             )
         )
@@ -127,6 +129,7 @@ def main():
     ap.add_argument("--set", action="append", default=[],
                     help="another [activities] key, e.g. --set 'blend_s = 0.8' (the knobs' trades)")
     ap.add_argument("--out", default=str(ROOT / "out/measure_activities"))
+    ap.add_argument("--policy", help="policy weights the takes walk with (default: the shipped policy)")
     ap.add_argument("--pool", metavar="NAME",
                     help="report the scenes' takes together under NAME (e.g. 50 generated dwellings)")
     args = ap.parse_args()
@@ -137,11 +140,12 @@ def main():
         sit_skips = []
         contact_walk, off_floor, agents = [], 0, 0
         walk_only_contact = []
-        goals = 0
+        goals = goals_given = 0
         for scene_file, seed in ((f, seed) for f in scenes for seed in args.seeds):
             s = take(args.bin, scene_file, seed, args.duration, args.weights,
-                     out / folder_of(scene_file) / f"seed{seed}", "\n".join(args.set))
+                     out / folder_of(scene_file) / f"seed{seed}", "\n".join(args.set), args.policy)
             goals += s.get("totals", {}).get("goals_reached", 0)
+            goals_given += s.get("totals", {}).get("goals", 0)
             for a in s["agents"]:
                 agents += 1
                 counts += frames_of(a.get("activity_segments", []), s["frames"])
@@ -154,13 +158,14 @@ def main():
                 off_floor += a["pelvis_off_floor_frames"]
             if args.walk_only:
                 w = take(args.bin, scene_file, seed, args.duration, "{ walk = 1.0 }",
-                         out / folder_of(scene_file) / f"seed{seed}_walk")
+                         out / folder_of(scene_file) / f"seed{seed}_walk", policy=args.policy)
                 walk_only_contact += [a["contact"] for a in w["agents"]]
         total = sum(counts.values())
         takes = len(args.seeds) * len(scenes)
         print(f"## {scene}: {takes} takes x {agents // takes} people x {args.duration:g} s"
               + (f" ({'; '.join(args.set)})" if args.set else ""))
-        print(f"goals reached: {goals} ({goals / agents:.1f} per person)")
+        print(f"goals reached: {goals} of {goals_given} ({100 * goals / max(goals_given, 1):.1f} %; "
+              f"{goals / agents:.1f} per person)")
         by_activity = defaultdict(int)
         for (a, _), n in counts.items():
             by_activity[a] += n

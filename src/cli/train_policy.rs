@@ -72,6 +72,25 @@ pub(crate) struct RawTrainScene {
     pub unit_m: Option<f64>,
 }
 
+/// `[dwellings]`: generated dwellings whose start/goal pairs some episodes walk (each stage's
+/// `env.dwellings.share`), drawn like `[scene]`'s in each.
+#[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDwellings {
+    /// `[FIRST, END)`: the dwellings `dwelling:FIRST` … `dwelling:END − 1` (generated into the
+    /// cache on first use; held-out seeds are refused).
+    pub seeds: [u64; 2],
+    /// How many start/goal pairs are drawn in each.
+    pub pairs: usize,
+    /// `[MIN, MAX]` start–goal distance (m).
+    pub pair_distance_m: [f64; 2],
+    pub clearance_m: Option<f64>,
+    pub seed: u64,
+}
+
+/// Most dwellings a training config may walk (each is loaded with its map before training).
+const MAX_DWELLINGS: u64 = 1000;
+
 /// The whole config, as written.
 #[derive(Debug, Clone, Deserialize, serde::Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -85,6 +104,7 @@ pub(crate) struct RawTrainPolicy {
     /// Start from these policy weights (same `[policy]`), relative to the config's folder.
     pub init_weights: Option<PathBuf>,
     pub scene: Option<RawTrainScene>,
+    pub dwellings: Option<RawDwellings>,
     pub policy: RawPolicyArch,
     #[serde(default)]
     pub ppo: PpoSettings,
@@ -125,9 +145,20 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
     }
     let mut stages = Vec::with_capacity(raw.stages.len());
     let has_scene = raw.scene.is_some();
+    let has_dwellings = raw.dwellings.is_some();
     for (i, s) in raw.stages.into_iter().enumerate() {
-        stages.push(resolve_stage(i, s, has_scene, &bad)?);
+        stages.push(resolve_stage(i, s, has_scene, has_dwellings, &bad)?);
     }
+    if has_dwellings && stages.iter().all(|s| s.env.dwellings.share <= 0.0) {
+        return Err(bad(
+            "dwellings",
+            "no stage walks the dwellings: give some stage env.dwellings.share > 0".into(),
+        ));
+    }
+    let dwellings = match &raw.dwellings {
+        Some(d) => resolve_dwellings(d, base, &bad)?,
+        None => Vec::new(),
+    };
     let scene = raw
         .scene
         .map(|sc| {
@@ -138,7 +169,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
             } else {
                 existing("scene.path", &sc.path)
             };
-            resolve_train_scene(sc, path, &bad)
+            resolve_train_scene(sc, path, "scene", &bad)
         })
         .transpose()?;
     if scene.is_some() && stages.iter().all(|s| s.env.fixed_share <= 0.0) {
@@ -183,6 +214,7 @@ pub fn load_policy_plan(path: &Path) -> Result<PolicyTrainPlan, ConfigError> {
         select_max_prior_kl: raw.validation.max_prior_kl,
         init_weights,
         scene,
+        dwellings,
         weights_out: base.join(raw.output.weights),
         log_out: base.join(raw.output.log),
         checkpoint_every_s,
@@ -311,6 +343,7 @@ fn resolve_stage(
     i: usize,
     s: RawStage,
     has_scene: bool,
+    has_dwellings: bool,
     bad: Bad,
 ) -> Result<StagePlan, ConfigError> {
     let key = |k: &str| format!("stages[{i}].{k}");
@@ -358,6 +391,22 @@ fn resolve_stage(
         return Err(bad(
             &key("env.fixed_share"),
             "a share of episodes in a fixed scene needs a [scene] section".into(),
+        ));
+    }
+    let d = &e.dwellings;
+    if !((0.0..=1.0).contains(&d.share) && d.max_primitives >= 1) {
+        return Err(bad(
+            &key("env.dwellings"),
+            format!(
+                "expected share in [0, 1] and max_primitives ≥ 1, got {} and {}",
+                d.share, d.max_primitives
+            ),
+        ));
+    }
+    if !has_dwellings && d.share > 0.0 {
+        return Err(bad(
+            &key("env.dwellings.share"),
+            "a share of episodes in generated dwellings needs a [dwellings] section".into(),
         ));
     }
     let (lo, hi) = e.scene.box_side_m;
@@ -419,29 +468,73 @@ fn refuse_held_out_dwelling(source: &str, path: &Path, bad: Bad) -> Result<(), C
 }
 
 /// `[scene]`: the fixed scene and its start/goal pairs (`path`: its file, checked).
+/// `[dwellings]` as one training scene per dwelling, each generated into the cache if it is
+/// not there yet; a held-out seed, an empty range or more than [`MAX_DWELLINGS`] is refused.
+fn resolve_dwellings(
+    d: &RawDwellings,
+    base: &Path,
+    bad: Bad,
+) -> Result<Vec<TrainScene>, ConfigError> {
+    use crate::scene::dwelling::{scene_source, DWELLING_SOURCE, HELD_OUT_SEEDS_FROM};
+    let [first, end] = d.seeds;
+    if !(first < end && end - first <= MAX_DWELLINGS) {
+        return Err(bad(
+            "dwellings.seeds",
+            format!("expected [FIRST, END) with FIRST < END and at most {MAX_DWELLINGS} seeds, got [{first}, {end}]"),
+        ));
+    }
+    if end > HELD_OUT_SEEDS_FROM {
+        return Err(bad(
+            "dwellings.seeds",
+            format!(
+                "seeds {HELD_OUT_SEEDS_FROM} and up are held out: policies are measured on them \
+                 and never trained on them; end the range at {HELD_OUT_SEEDS_FROM} or below"
+            ),
+        ));
+    }
+    (first..end)
+        .map(|seed| {
+            let source = format!("{DWELLING_SOURCE}{seed}");
+            let path = scene_source(&source, base).map_err(|m| bad("dwellings.seeds", m));
+            let raw = RawTrainScene {
+                path: source.into(),
+                pairs: d.pairs,
+                pair_distance_m: d.pair_distance_m,
+                clearance_m: d.clearance_m,
+                indoors: Some(true),
+                seed: d.seed ^ seed.wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                up_axis: None,
+                unit_m: None,
+            };
+            resolve_train_scene(raw, path, "dwellings", bad)
+        })
+        .collect()
+}
+
 fn resolve_train_scene(
     sc: RawTrainScene,
     path: Result<PathBuf, ConfigError>,
+    table: &str,
     bad: Bad,
 ) -> Result<TrainScene, ConfigError> {
     let path = path?;
     let [lo, hi] = sc.pair_distance_m;
     if !(lo >= 0.0 && hi >= lo && hi.is_finite()) {
         return Err(bad(
-            "scene.pair_distance_m",
+            &format!("{table}.pair_distance_m"),
             format!("expected [MIN, MAX] with 0 ≤ MIN ≤ MAX, got [{lo}, {hi}]"),
         ));
     }
     let clearance_m = sc.clearance_m.unwrap_or(0.4);
     if !(clearance_m.is_finite() && clearance_m >= 0.0) {
         return Err(bad(
-            "scene.clearance_m",
+            &format!("{table}.clearance_m"),
             format!("expected metres ≥ 0, got {clearance_m}"),
         ));
     }
     if sc.pairs == 0 {
         return Err(bad(
-            "scene.pairs",
+            &format!("{table}.pairs"),
             "expected a whole number ≥ 1, got 0".into(),
         ));
     }

@@ -258,6 +258,7 @@ pub(crate) fn policy_eval(
         bank: &bank,
         prior: &prior,
         fixed: fixed.as_ref(),
+        dwellings: &[],
     };
     let mut lines = String::new();
     for (label, controller) in &runs {

@@ -1,4 +1,4 @@
-//! `egogen train policy`'s job: the motion model, pose prior, seeds and scene a training plan
+//! `egogen train policy`'s job: the motion model, pose prior, seeds and scenes a training plan
 //! names loaded, the policy trained with PPO (`ppo`), and what was trained said. `cli` loads
 //! the training configs.
 
@@ -44,12 +44,18 @@ pub(crate) fn train_policy(
         .as_ref()
         .map(|s| super::fixed_scene::fixed_scene(s, sdf_voxel_m))
         .transpose()?;
+    let dwellings = plan
+        .dwellings
+        .iter()
+        .map(|s| super::fixed_scene::fixed_scene(s, None))
+        .collect::<Result<Vec<_>>>()?;
     let parts = EnvParts {
         model: &model,
         body: &ctx,
         bank: &bank,
         prior: &prior,
         fixed: fixed.as_ref(),
+        dwellings: &dwellings,
     };
     let report = train_policy(&plan, &parts, !quiet, resume, force)?;
     println!(

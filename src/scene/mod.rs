@@ -39,7 +39,8 @@ pub mod small_object;
 pub(crate) mod walkable;
 
 pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};
-pub use load::{load_scene, scene_frame_warning, walkable_map, SceneError, SceneFrame, UpAxis};
+pub(crate) use load::scene_frame_warning;
+pub use load::{load_scene, walkable_map, SceneError, SceneFrame, UpAxis};
 pub use mesh::{ObjectId, ObjectOrientation, SceneMesh, SceneObject};
 pub(crate) use object_class::ObjectClass;
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
@@ -52,4 +53,4 @@ pub use sampler::{sample_start_goals, StartGoal};
 pub use sdf3d::SceneSdf;
 pub(crate) use seats::{find_seats, Seat, SeatSettings};
 pub(crate) use seen_map::{guide_aim_remembered, SeenMap};
-pub use walkable::{indoor_map, WalkableMap, WalkableSettings, MIN_ENCLOSED};
+pub use walkable::{indoor_map, WalkableMap, WalkableSettings};

@@ -103,6 +103,7 @@ fn box_scene_parts<'m>(
         bank: &c.bank,
         prior: &c.prior,
         fixed: None,
+        dwellings: &[],
     }
 }
 

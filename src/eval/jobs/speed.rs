@@ -124,6 +124,7 @@ fn sdf_rows(
             bank: &c.bank,
             prior: &c.prior,
             fixed: Some(&fixed),
+            dwellings: &[],
         };
         let (report, _) = evaluate(
             &parts,

@@ -68,6 +68,7 @@ pub(super) fn table2(args: &EvalJob, c: &SuiteParts, results: &Path) -> Result<(
         bank: &c.bank,
         prior: &c.prior,
         fixed: Some(&fixed),
+        dwellings: &[],
     };
     let settings = table2_settings();
     // Each policy sampled and mean, the guided row likewise, sampling, path following.

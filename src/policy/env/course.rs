@@ -1,5 +1,6 @@
-//! Where an episode walks — a box scene, a crossing, a floor plan or a pair of a fixed scene —
-//! drawn per episode from its own generator, with the weights and time it is judged by.
+//! Where an episode walks — a box scene, a crossing, a floor plan, a pair of a fixed scene or
+//! of a generated dwelling — drawn per episode from its own generator, with the weights and
+//! time it is judged by.
 
 use super::*;
 
@@ -17,6 +18,8 @@ pub(super) struct Course {
     pub(super) crossing: Option<CrossingParams>,
     pub(super) rooms: Option<RoomParams>,
     pub(super) pair: Option<usize>,
+    /// A generated dwelling's pair: the dwelling's index and the pair's.
+    pub(super) dwelling: Option<(usize, usize)>,
     /// Primitives before the episode times out.
     pub(super) max_primitives: usize,
     /// The scene's 3D SDF, where Eq. 11 is measured.
@@ -61,9 +64,10 @@ pub(super) struct Episode {
 }
 
 impl Course {
-    /// Whether the course is indoors: a floor plan or a pair of the fixed scene.
+    /// Whether the course is indoors: a floor plan, a pair of the fixed scene or of a
+    /// generated dwelling.
     pub(super) fn indoors(&self) -> bool {
-        self.rooms.is_some() || self.pair.is_some()
+        self.rooms.is_some() || self.pair.is_some() || self.dwelling.is_some()
     }
 
     /// The walking distance from the start to the goal round what blocks walking on the map
@@ -113,6 +117,7 @@ impl PolicyEnv<'_> {
             crossing: None,
             rooms: None,
             pair: None,
+            dwelling: None,
             max_primitives: self.settings.walker.max_primitives_per_goal,
             sdf: None,
             goal_field: None,
@@ -130,6 +135,7 @@ impl PolicyEnv<'_> {
             crossing: None,
             rooms: Some(scene.params),
             pair: None,
+            dwelling: None,
             max_primitives: self.settings.rooms.max_primitives,
             sdf: None,
             goal_field: self.goal_field(&scene.map, scene.goal),
@@ -149,6 +155,7 @@ impl PolicyEnv<'_> {
             crossing: Some(scene.params),
             rooms: None,
             pair: None,
+            dwelling: None,
             max_primitives: self.settings.walker.max_primitives_per_goal,
             sdf: None,
             goal_field: None,
@@ -157,7 +164,28 @@ impl PolicyEnv<'_> {
     }
 
     pub(super) fn fixed_course(&self, f: &FixedScene, pair: usize) -> Course {
+        let max_primitives = self
+            .settings
+            .fixed_max_primitives
+            .unwrap_or(self.settings.walker.max_primitives_per_goal);
         self.timed_for_way_round(Course {
+            pair: Some(pair),
+            ..self.pair_course(f, pair, max_primitives)
+        })
+    }
+
+    /// Pair `pair` of generated dwelling `d` of the training config's `[dwellings]`.
+    pub(super) fn dwelling_course(&self, d: usize, pair: usize) -> Course {
+        let max_primitives = self.settings.dwellings.max_primitives;
+        self.timed_for_way_round(Course {
+            dwelling: Some((d, pair)),
+            ..self.pair_course(&self.dwellings[d], pair, max_primitives)
+        })
+    }
+
+    /// Pair `pair` of scene `f`, not yet said whose (a fixed scene's or a dwelling's) nor timed.
+    fn pair_course(&self, f: &FixedScene, pair: usize, max_primitives: usize) -> Course {
+        Course {
             map: f.map.clone(),
             obstacle: None,
             moving: Vec::new(),
@@ -166,15 +194,13 @@ impl PolicyEnv<'_> {
             box_params: None,
             crossing: None,
             rooms: None,
-            pair: Some(pair),
-            max_primitives: self
-                .settings
-                .fixed_max_primitives
-                .unwrap_or(self.settings.walker.max_primitives_per_goal),
+            pair: None,
+            dwelling: None,
+            max_primitives,
             sdf: f.sdf.clone(),
             goal_field: self.goal_field(&f.map, f.pairs[pair].goal),
             way_round: Default::default(),
-        })
+        }
     }
 
     /// An indoor course with time for its way round walls, when the settings ask for it
@@ -201,8 +227,9 @@ impl PolicyEnv<'_> {
     }
 
     /// The course of episode `id`: the next pair of the fixed scene (or, with a fixed share
-    /// below 1, a random pair for that share of episodes), else a new floor plan (with the
-    /// rooms' share), else a new crossing scene (with the crossing share) or box scene.
+    /// below 1, a random pair for that share of episodes), else a random pair of a generated
+    /// dwelling (with the dwellings' share), else a new floor plan (with the rooms' share),
+    /// else a new crossing scene (with the crossing share) or box scene.
     pub(super) fn draw_course(&self, id: u64, rng: &mut ChaCha8Rng) -> Course {
         let crossing = self.settings.crossing;
         let rooms = self.settings.rooms;
@@ -212,6 +239,15 @@ impl PolicyEnv<'_> {
             Some(f) if share >= 1.0 => self.fixed_course(f, (id % f.pairs.len() as u64) as usize),
             Some(f) if uniform_open01(rng) < share => {
                 self.fixed_course(f, (rng.next_u64() % f.pairs.len() as u64) as usize)
+            }
+            // No draw when no episode walks a dwelling: runs without them stay as they were.
+            _ if self.settings.dwellings.share > 0.0
+                && !self.dwellings.is_empty()
+                && uniform_open01(rng) < self.settings.dwellings.share =>
+            {
+                let d = (rng.next_u64() % self.dwellings.len() as u64) as usize;
+                let pair = (rng.next_u64() % self.dwellings[d].pairs.len() as u64) as usize;
+                self.dwelling_course(d, pair)
             }
             // No draw when there are no floor plans: runs without them stay as they were.
             _ if rooms.share > 0.0 && uniform_open01(rng) < rooms.share => {

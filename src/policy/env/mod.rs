@@ -124,6 +124,8 @@ pub struct PolicyEnv<'m> {
     bank: &'m SeedBank,
     prior: &'m PosePrior,
     fixed: Option<&'m FixedScene>,
+    /// The training config's generated dwellings, with their pairs.
+    dwellings: &'m [FixedScene],
     /// The floor of every crossing scene, built once.
     crossing_floor: Arc<WalkableMap>,
     pub settings: EnvSettings,
@@ -153,6 +155,9 @@ pub struct EnvParts<'m> {
     pub bank: &'m SeedBank,
     pub prior: &'m PosePrior,
     pub fixed: Option<&'m FixedScene>,
+    /// Generated dwellings whose pairs some episodes walk (`[stages.env.dwellings]`; none
+    /// outside training).
+    pub dwellings: &'m [FixedScene],
 }
 
 impl<'m> EnvParts<'m> {
@@ -163,16 +168,7 @@ impl<'m> EnvParts<'m> {
         envs: usize,
         episode_base: u64,
     ) -> Result<PolicyEnv<'m>, EnvError> {
-        PolicyEnv::with_scene(
-            self.model,
-            self.body,
-            self.bank,
-            self.prior,
-            self.fixed,
-            settings,
-            envs,
-            episode_base,
-        )
+        PolicyEnv::build(*self, settings, envs, episode_base)
     }
 }
 
@@ -203,20 +199,40 @@ impl<'m> PolicyEnv<'m> {
         envs: usize,
         episode_base: u64,
     ) -> Result<Self, EnvError> {
-        if bank.seeds.is_empty() {
-            return Err(EnvError::NoSeeds);
-        }
-        if fixed.is_some_and(|f| f.pairs.is_empty()) {
-            return Err(EnvError::Snapshot(
-                "the fixed scene has no start/goal pairs".into(),
-            ));
-        }
-        let mut env = Self {
+        let parts = EnvParts {
             model,
             body,
             bank,
             prior,
             fixed,
+            dwellings: &[],
+        };
+        Self::build(parts, settings, envs, episode_base)
+    }
+
+    fn build(
+        parts: EnvParts<'m>,
+        settings: EnvSettings,
+        envs: usize,
+        episode_base: u64,
+    ) -> Result<Self, EnvError> {
+        if parts.bank.seeds.is_empty() {
+            return Err(EnvError::NoSeeds);
+        }
+        let no_pairs = |f: &FixedScene| f.pairs.is_empty();
+        if parts.fixed.is_some_and(no_pairs) || parts.dwellings.iter().any(no_pairs) {
+            return Err(EnvError::Snapshot(
+                "a fixed scene or dwelling has no start/goal pairs".into(),
+            ));
+        }
+        let body = parts.body;
+        let mut env = Self {
+            model: parts.model,
+            body,
+            bank: parts.bank,
+            prior: parts.prior,
+            fixed: parts.fixed,
+            dwellings: parts.dwellings,
             crossing_floor: Arc::new(CrossingScene::floor(&settings.crossing)),
             settings,
             sensor: Sensor::default(),

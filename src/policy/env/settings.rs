@@ -12,6 +12,8 @@ pub struct EnvSettings {
     pub crossing: CrossingSettings,
     /// Procedural floor plans (rooms, doorways, furniture) and their share of episodes.
     pub rooms: RoomSettings,
+    /// Furnished generated dwellings (the config's `[dwellings]`) and their share of episodes.
+    pub dwellings: DwellingShare,
     pub weights: RewardWeights,
     /// Changes to `weights` in box-scene episodes (e.g. a stronger cost for looking off the
     /// goal where a box stands in the open). Nothing given: `weights`.
@@ -89,6 +91,7 @@ impl Default for EnvSettings {
             scene: BoxSceneSettings::default(),
             crossing: CrossingSettings::default(),
             rooms: RoomSettings::default(),
+            dwellings: DwellingShare::default(),
             weights: RewardWeights::default(),
             box_weights: WeightChanges::default(),
             indoor_weights: WeightChanges::default(),
@@ -107,6 +110,27 @@ impl Default for EnvSettings {
             scene_test_vertices: 0,
             scene_test_keeps_cells: false,
             time_by_way_round_m: 0.0,
+        }
+    }
+}
+
+/// How many episodes walk a pair of the training config's generated dwellings
+/// (`[stages.env.dwellings]`; the dwellings and their pairs are the config's `[dwellings]`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct DwellingShare {
+    /// Share of the episodes outside the fixed scene that walk a pair of a generated dwelling
+    /// (0, default: none); the floor plans' and crossings' shares apply to the rest.
+    pub share: f64,
+    /// Primitives before such an episode times out (default 13, the apartment's).
+    pub max_primitives: usize,
+}
+
+impl Default for DwellingShare {
+    fn default() -> Self {
+        Self {
+            share: 0.0,
+            max_primitives: 13,
         }
     }
 }

@@ -15,6 +15,9 @@ pub struct EpisodeSnapshot {
     rooms: Option<RoomParams>,
     #[serde(default)]
     pair: Option<usize>,
+    /// A generated dwelling's pair: the dwelling's index and the pair's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    dwelling: Option<(usize, usize)>,
     /// The seed frames' pose (165) and translation (3).
     frames: Vec<Vec<f64>>,
     steps: usize,
@@ -56,6 +59,7 @@ impl PolicyEnv<'_> {
                     crossing: e.course.crossing.clone(),
                     rooms: e.course.rooms.clone(),
                     pair: e.course.pair,
+                    dwelling: e.course.dwelling,
                     frames: e
                         .walker
                         .view
@@ -102,23 +106,37 @@ impl PolicyEnv<'_> {
                 }
             });
             let only_fixed = self.fixed.is_some() && self.settings.fixed_share >= 1.0;
+            let dwelling_of = |(d, pair): (usize, usize)| {
+                self.dwellings
+                    .get(d)
+                    .is_some_and(|f| pair < f.pairs.len())
+                    .then_some((d, pair))
+            };
             let course = match (
                 s.scene,
                 s.crossing.clone(),
                 s.rooms.clone(),
                 s.pair,
                 self.fixed,
+                s.dwelling.map(dwelling_of),
             ) {
-                (Some(p), None, None, None, _) if !only_fixed => {
+                (None, None, None, None, _, Some(Some((d, pair)))) => self.dwelling_course(d, pair),
+                (_, _, _, _, _, Some(_)) => {
+                    return Err(EnvError::Snapshot(format!(
+                        "episode {}: its dwelling is not one of this environment's",
+                        s.id
+                    )))
+                }
+                (Some(p), None, None, None, _, None) if !only_fixed => {
                     self.box_course(BoxScene::build(&self.settings.scene, p))
                 }
-                (None, Some(c), None, None, _) if !only_fixed => {
+                (None, Some(c), None, None, _, None) if !only_fixed => {
                     self.crossing_course(CrossingScene::build(&self.settings.crossing, c))
                 }
-                (None, None, Some(r), None, _) if !only_fixed => {
+                (None, None, Some(r), None, _, None) if !only_fixed => {
                     self.room_course(RoomScene::build(&self.settings.rooms, r))
                 }
-                (None, None, None, Some(pair), Some(f)) if pair < f.pairs.len() => {
+                (None, None, None, Some(pair), Some(f), None) if pair < f.pairs.len() => {
                     self.fixed_course(f, pair)
                 }
                 _ => {

@@ -147,6 +147,10 @@ pub struct PolicyTrainPlan {
     pub init_weights: Option<PathBuf>,
     /// A fixed scene some episodes walk (each stage's `env.fixed_share`).
     pub scene: Option<TrainScene>,
+    /// Generated dwellings whose pairs some episodes walk (each stage's `env.dwellings`), one
+    /// scene each (the config's `[dwellings]`).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub dwellings: Vec<TrainScene>,
     pub weights_out: PathBuf,
     pub log_out: PathBuf,
     pub checkpoint_every_s: f64,

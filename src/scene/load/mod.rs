@@ -339,7 +339,7 @@ pub(crate) const TALLER_THAN_WIDE_M: f64 = 4.0;
 /// wall's end or a table's side): its floor lies more than
 /// [`FLOOR_HIGH_ABOVE_LOWEST_M`] above the scene's lowest point when no storey was asked for,
 /// or the scene is much taller than wide ([`TALLER_THAN_WIDE`]); none otherwise.
-pub fn scene_frame_warning(
+pub(crate) fn scene_frame_warning(
     mesh: &SceneMesh,
     map: &super::WalkableMap,
     path: &Path,

@@ -118,7 +118,7 @@ impl WalkableMap {
 }
 
 /// Share of a cell's rays that must meet something for it to count as inside the walls.
-pub const MIN_ENCLOSED: f64 = 0.75;
+pub(crate) const MIN_ENCLOSED: f64 = 0.75;
 
 /// A scene's map as its people walk it: with `indoors`, when the scene encloses anything
 /// ([`WalkableMap::indoor_cells`] at [`MIN_ENCLOSED`]), the region inside the walls where

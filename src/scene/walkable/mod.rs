@@ -14,7 +14,7 @@ use super::sdf2d::signed_distance;
 use crate::math::Vec3;
 use glam::DVec2;
 
-pub use indoor::{indoor_map, MIN_ENCLOSED};
+pub use indoor::indoor_map;
 
 /// Knobs of the walkable map.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize)]

@@ -17,6 +17,7 @@ use crate::motion::activity_clip::{
 use crate::motion::cvae::BodyContext;
 use crate::motion::primitive::{NEW_FRAMES, PRIMITIVE_RATE_HZ};
 use crate::scene::mesh_distance::MeshDistance;
+use crate::scene::path_plan::PathField;
 use crate::scene::{find_seats, SceneMesh, Seat, SeatSettings, WalkableMap};
 use crate::walker::reward::path_leaves_floor;
 
@@ -77,8 +78,11 @@ impl ActivityWorld {
         self.settings.weights.draw(rng)
     }
 
-    /// The nearest free seat whose standing point lies on `from`'s floor region, if any, but
-    /// those in `passed` (seats the person could not reach).
+    /// The free seat nearest to walk to from `from` (walking distance over the walkable map,
+    /// round walls and furniture; straight distance where `from` is off the map), among those
+    /// whose standing point lies on `from`'s floor region, but those on an object of which a
+    /// seat is in `passed` (seats the person could not reach: the object's other places are
+    /// reached the same way).
     pub(crate) fn nearest_free_seat(
         &self,
         map: &WalkableMap,
@@ -87,14 +91,24 @@ impl ActivityWorld {
     ) -> Option<usize> {
         let region = |p: DVec2| map.cell_of(p).map(|(i, j)| map.component[j * map.nx + i]);
         let here = region(from);
+        let walk = PathField::to_goal(map, from);
+        let distance = |s: usize| {
+            let stand = self.seats[s].stand();
+            match &walk {
+                Some(field) => field.at(stand).unwrap_or(f64::INFINITY),
+                None => stand.distance(from),
+            }
+        };
+        let unreached = |s: usize| {
+            passed
+                .iter()
+                .any(|&p| self.seats[p].object_name == self.seats[s].object_name)
+        };
         (0..self.seats.len())
-            .filter(|&s| {
-                !self.taken[s] && !passed.contains(&s) && region(self.seats[s].stand()) == here
-            })
-            .min_by(|&a, &b| {
-                let d = |s: usize| self.seats[s].stand().distance(from);
-                d(a).total_cmp(&d(b)).then(a.cmp(&b))
-            })
+            .filter(|&s| !self.taken[s] && !unreached(s) && region(self.seats[s].stand()) == here)
+            .map(|s| (s, distance(s)))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+            .map(|(s, _)| s)
     }
 
     pub(super) fn clip(&self, id: ClipId) -> Result<&ActivityClip, Refusal> {
@@ -306,4 +320,63 @@ pub(super) fn off_floor(
         before = Some(p);
     }
     Ok(None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::seats::SeatNaming;
+    use crate::scene::ObjectId;
+
+    fn seat(object: &str, stand: [f64; 2]) -> Seat {
+        Seat {
+            pelvis_xy: stand,
+            facing_rad: 0.0,
+            height_m: 0.45,
+            surface_z_m: 0.45,
+            stand_xy: stand,
+            depth_m: 0.2,
+            backed: true,
+            object: ObjectId(1),
+            object_name: object.into(),
+            naming: SeatNaming::Shape,
+            cells: Vec::new(),
+            pull: None,
+        }
+    }
+
+    /// The seat chosen is the nearest on foot: one 1 m away behind a wall loses to one 3 m
+    /// away in the open; a seat on an object walked to before and not reached is passed over
+    /// with every other place on that object.
+    #[test]
+    fn the_seat_nearest_on_foot_is_chosen_and_unreached_objects_are_passed() {
+        // A 10 × 6 m floor, a wall at y = 3 m from x = 0 to 8 m (its way round at x > 8 m).
+        let (nx, ny) = (100, 60);
+        let walkable = (0..nx * ny)
+            .map(|k| !(k / nx == 30 && k % nx < 80))
+            .collect();
+        let map = WalkableMap::from_walkable(DVec2::ZERO, 0.1, nx, ny, walkable);
+        let from = DVec2::new(2.0, 2.5);
+        let mut world = ActivityWorld {
+            settings: ActivitySettings::default(),
+            seats: vec![
+                seat("behind_the_wall", [2.0, 3.55]),
+                seat("sofa", [5.0, 2.0]),
+                seat("sofa", [5.6, 2.0]),
+                seat("armchair", [7.0, 1.0]),
+            ],
+            taken: vec![false; 4],
+            clips: Vec::new(),
+            mesh: None,
+            distances: HashMap::new(),
+        };
+        assert!(world.seats[0].stand().distance(from) < world.seats[1].stand().distance(from));
+        assert_eq!(world.nearest_free_seat(&map, from, &[]), Some(1));
+        world.taken[1] = true;
+        assert_eq!(world.nearest_free_seat(&map, from, &[]), Some(2));
+        // Place 1 of the sofa was not reached: its place 2 is passed over too.
+        world.taken[1] = false;
+        assert_eq!(world.nearest_free_seat(&map, from, &[1]), Some(3));
+        assert_eq!(world.nearest_free_seat(&map, from, &[1, 3]), Some(0));
+    }
 }

@@ -27,10 +27,10 @@
 //!
 //! Where the take asks for activities ([`run_crowd_with_activities`], `[activities]`), what
 //! comes after each walk is drawn ([`crate::synth::activity`]): walk on, stand and look
-//! around, pick something up (played where the walk ended), or sit (walk to the nearest free
-//! seat first); an activity's frames are taken [`NEW_FRAMES`] a round, the others seeing the
-//! person where it is, and the walker takes over from its last two frames; a walk comes
-//! between two activities. An activity that would enter the scene is skipped with its reason.
+//! around, pick something up (played where the walk ended), or sit (walk to the free seat
+//! nearest on foot first); an activity's frames are taken [`NEW_FRAMES`] a round, the
+//! others seeing the person where it is, and the walker takes over from its last two frames;
+//! a walk comes between two activities. An activity that would enter the scene is skipped with its reason.
 //!
 //! When the take ends, each agent's motion is finished as written: the velocity jump where
 //! one primitive (or activity, or held pose) hands over to the next is spread over ±0.2 s
