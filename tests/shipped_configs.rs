@@ -68,7 +68,7 @@ fn the_shipped_campaign_plans_its_takes() {
         .unwrap_or_else(|e| panic!("{e:#}"));
     assert_eq!(plan.takes.len(), 12);
     let scenes: std::collections::BTreeSet<_> = plan.takes.iter().map(|t| &t.scene).collect();
-    assert_eq!(scenes.len(), 3, "the apartment and two floor plans");
+    assert_eq!(scenes.len(), 3, "the apartment and two dwellings");
     assert!(plan.takes.iter().all(|t| {
         let n = t.crowd_count.unwrap();
         let d = t.duration_s.unwrap();
@@ -84,8 +84,9 @@ fn the_shipped_campaign_plans_its_takes() {
         .iter()
         .all(|t| t.up_axis.is_none() && t.unit_m.is_none()));
 
-    // Beside a run config that reads its scenes in centimetres, the floor plans (written z up
-    // in metres) are read in their own frame, said per take and in each take's command; a
+    // Beside a run config that reads its scenes in centimetres, a floor plan (written z up in
+    // metres) and the dwellings (glTF: y up in metres) are read in their own frame, said per
+    // take and in each take's command; a
     // scene entry gives its own frame; the apartment, a plain path, is read as the run config
     // says.
     let dir = tempfile::tempdir().unwrap();
@@ -100,6 +101,7 @@ fn the_shipped_campaign_plans_its_takes() {
         let campaign = std::fs::read_to_string(root.join("configs/campaign.toml"))
             .unwrap()
             .replace("run = \"default.toml\"", "run = \"cm.toml\"")
+            .replace("# floor_plans = [1, 2]", "floor_plans = [3]")
             .replace(
                 "scenes = [\"../assets/scenes/apartment.glb\"]",
                 &format!("scenes = {scenes}"),
@@ -116,7 +118,7 @@ fn the_shipped_campaign_plans_its_takes() {
         apartment.display()
     ))
     .unwrap();
-    let frames: Vec<(String, Option<&str>, Option<f64>)> = plan.takes[..5]
+    let frames: Vec<(String, Option<&str>, Option<f64>)> = plan.takes[..6]
         .iter()
         .map(|t| {
             let name = t.scene.file_name().unwrap().to_string_lossy().into_owned();
@@ -129,8 +131,9 @@ fn the_shipped_campaign_plans_its_takes() {
             ("apartment.glb".to_string(), None, None),
             ("room_cm.obj".to_string(), Some("y"), None),
             ("room_cm.obj".to_string(), None, Some(0.001)),
-            ("plan_1.obj".to_string(), Some("z"), Some(1.0)),
-            ("plan_2.obj".to_string(), Some("z"), Some(1.0)),
+            ("plan_3.obj".to_string(), Some("z"), Some(1.0)),
+            ("dwelling_1.glb".to_string(), Some("y"), Some(1.0)),
+            ("dwelling_2.glb".to_string(), Some("y"), Some(1.0)),
         ]
     );
     let room_y_up = plan.takes[1].command(&plan.run, Path::new("t"));
@@ -139,6 +142,9 @@ fn the_shipped_campaign_plans_its_takes() {
     assert!(plan.takes[3]
         .command(&plan.run, Path::new("t"))
         .contains(" --up z --unit-m 1"));
+    assert!(plan.takes[4]
+        .command(&plan.run, Path::new("t"))
+        .contains(" --up y --unit-m 1"));
     // The same file in two frames is two takes' definitions, with two ids.
     assert_ne!(plan.takes[1].id, plan.takes[2].id);
 
