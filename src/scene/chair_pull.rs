@@ -5,7 +5,8 @@
 //! above it, the floor in front of it is free for a person to stand and sit down, and the
 //! pulled chair stands on free floor. The place to sit is then on the pulled chair; the walk
 //! ends at walkable floor beside it, from where the person steps in while the chair moves.
-//! A chair's places found the usual way face where its backrest says (not sideways).
+//! A second, longer pull of the same chair is kept where it works, for bodies whose knees
+//! would enter the table at the first. A chair's places found the usual way face where its backrest says (not sideways).
 
 use glam::DVec2;
 
@@ -64,10 +65,20 @@ pub(crate) struct PulledChair {
     /// Map cells of the pulled chair's seat, in ascending order.
     pub cells: Vec<usize>,
     pub pull: Pull,
+    /// The same chair pulled [`MORE_KNEE_ROOM_M`] farther or more, where that works too:
+    /// tried when the knees would enter the table at the shorter pull.
+    pub longer: Option<Box<PulledChair>>,
 }
+
+/// Shortest pull that frees a chair (m).
+const MIN_PULL_M: f64 = 0.2;
 
 /// Farthest a chair is pulled out (m).
 const MAX_PULL_M: f64 = 1.0;
+
+/// How much farther a chair's second pull goes than its first (m): room for the knees of a
+/// body that would enter the table at the first.
+pub(crate) const MORE_KNEE_ROOM_M: f64 = 0.15;
 /// The clips stand this far in front of where they sit (m, 0.3–0.45 in the shipped clips).
 pub(crate) const STAND_IN_FRONT_M: f64 = 0.4;
 /// Free floor round where the feet stand in front of the pulled chair (m).
@@ -145,29 +156,35 @@ pub(crate) fn pulled_out_chairs(
             Some((chair.top_z + 0.15, chair.top_z + settings.headroom_m)),
         );
         let low = occupied(map, &near, Some((floor_band, chair.top_z)));
-        let Some(seat) = pull_out(map, settings, &chair, &others, &low, &covers) else {
+        let pulled = |min_m: f64| {
+            let (stand, pull) = pull_out(map, settings, &chair, &others, &low, &covers, min_m)?;
+            let offset = DVec2::from_array(pull.offset_m);
+            let moved = |k: usize| {
+                map.cell_of(map.centre(k % map.nx, k / map.nx) + offset)
+                    .map(|(i, j)| j * map.nx + i)
+            };
+            let mut cells: Vec<usize> = chair.cells.iter().filter_map(|&k| moved(k)).collect();
+            cells.sort_unstable();
+            cells.dedup();
+            let pelvis = chair.centre + offset;
+            Some(PulledChair {
+                object: object.id,
+                pelvis,
+                facing: chair.facing,
+                top_z: chair.top_z,
+                stand,
+                depth_m: front_depth(map, &cells, pelvis, chair.facing),
+                cells,
+                pull,
+                longer: None,
+            })
+        };
+        let Some(mut seat) = pulled(MIN_PULL_M) else {
             continue;
         };
-        let (stand, pull) = seat;
-        let offset = DVec2::from_array(pull.offset_m);
-        let moved = |k: usize| {
-            map.cell_of(map.centre(k % map.nx, k / map.nx) + offset)
-                .map(|(i, j)| j * map.nx + i)
-        };
-        let mut cells: Vec<usize> = chair.cells.iter().filter_map(|&k| moved(k)).collect();
-        cells.sort_unstable();
-        cells.dedup();
-        let pelvis = chair.centre + offset;
-        seats.push(PulledChair {
-            object: object.id,
-            pelvis,
-            facing: chair.facing,
-            top_z: chair.top_z,
-            stand,
-            depth_m: front_depth(map, &cells, pelvis, chair.facing),
-            cells,
-            pull,
-        });
+        let first_m = DVec2::from_array(seat.pull.offset_m).length();
+        seat.longer = pulled(first_m + MORE_KNEE_ROOM_M).map(Box::new);
+        seats.push(seat);
     }
     seats
 }
@@ -354,12 +371,14 @@ fn occupied(map: &WalkableMap, tris: &[[Vec3; 3]], band: Option<(f64, f64)>) -> 
     out
 }
 
-/// How far `chair` is pulled back (the first of 0.2, 0.25 … 1 m that works) and where the
+/// How far `chair` is pulled back (the first pull of 5 cm steps from `min_m` to 1 m that
+/// works) and where the
 /// walk to it ends: the chair slid there over floor with nothing up to its seat's height in
 /// the way (`low`), the pulled chair on floor free of everything else (`others`), nothing over its seat
 /// within the headroom (`covers`), free floor where the person stands in front of it to sit
 /// down, and walkable floor within [`MAX_STEP_IN_M`] of that from which a straight step in
 /// crosses free floor only.
+#[allow(clippy::too_many_arguments)]
 fn pull_out(
     map: &WalkableMap,
     settings: &ChairNeeds,
@@ -367,6 +386,7 @@ fn pull_out(
     others: &[bool],
     low: &[bool],
     covers: &[bool],
+    min_m: f64,
 ) -> Option<(DVec2, Pull)> {
     let free = |p: DVec2| {
         map.cell_of(p).is_some_and(|(i, j)| {
@@ -402,7 +422,7 @@ fn pull_out(
         if !slides {
             break;
         }
-        if d < 0.2 - 1e-9 {
+        if d < min_m - 1e-9 {
             continue;
         }
         let stands_on_free_floor = inner.iter().all(|&p| free(p));

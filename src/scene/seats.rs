@@ -7,7 +7,7 @@
 //! pulled up to a table, with no free floor in front of it, gives a place on the chair pulled
 //! out (`chair_pull`).
 
-use super::chair_pull::{chair_facing, pulled_out_chairs, ChairNeeds, Pull};
+use super::chair_pull::{chair_facing, pulled_out_chairs, ChairNeeds, Pull, PulledChair};
 use super::object_class::ObjectClass;
 use glam::DVec2;
 use std::f64::consts::FRAC_1_SQRT_2;
@@ -99,6 +99,10 @@ pub(crate) struct Seat {
     /// ([`super::chair_pull`]); the place, surface and cells are the pulled chair's.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pull: Option<Pull>,
+    /// For a chair pulled out: the place on it pulled [`super::chair_pull::MORE_KNEE_ROOM_M`]
+    /// or more farther, where that works too (for knees that would enter the table).
+    #[serde(skip)]
+    pub longer: Option<Box<Seat>>,
 }
 
 impl Seat {
@@ -260,6 +264,7 @@ pub(crate) fn find_seats(
                     sorted
                 },
                 pull: None,
+                longer: None,
             });
         }
     }
@@ -284,26 +289,32 @@ fn with_chairs_by_their_backs(
     });
     let found: Vec<ObjectId> = seats.iter().map(|s| s.object).collect();
     for c in pulled_out_chairs(mesh, map, &settings.chair_needs(), &found) {
-        let o = &mesh.objects[c.object.0 as usize - 1];
-        seats.push(Seat {
-            pelvis_xy: c.pelvis.to_array(),
-            facing_rad: c.facing.y.atan2(c.facing.x),
-            height_m: c.top_z - map.floor_under(c.stand),
-            surface_z_m: c.top_z,
-            stand_xy: c.stand.to_array(),
-            depth_m: c.depth_m,
-            backed: true,
-            object: o.id,
-            object_name: o.name.clone(),
-            naming: match seat_by_name(&o.name, o.label.as_deref()) {
-                Some(true) => SeatNaming::Named,
-                _ => SeatNaming::Shape,
-            },
-            cells: c.cells,
-            pull: Some(c.pull),
-        });
+        seats.push(pulled_seat(mesh, map, c));
     }
     seats
+}
+
+/// The place to sit on a chair pulled out, with its longer pull's where there is one.
+fn pulled_seat(mesh: &SceneMesh, map: &WalkableMap, c: PulledChair) -> Seat {
+    let o = &mesh.objects[c.object.0 as usize - 1];
+    Seat {
+        pelvis_xy: c.pelvis.to_array(),
+        facing_rad: c.facing.y.atan2(c.facing.x),
+        height_m: c.top_z - map.floor_under(c.stand),
+        surface_z_m: c.top_z,
+        stand_xy: c.stand.to_array(),
+        depth_m: c.depth_m,
+        backed: true,
+        object: o.id,
+        object_name: o.name.clone(),
+        naming: match seat_by_name(&o.name, o.label.as_deref()) {
+            Some(true) => SeatNaming::Named,
+            _ => SeatNaming::Shape,
+        },
+        cells: c.cells,
+        pull: Some(c.pull),
+        longer: c.longer.map(|l| Box::new(pulled_seat(mesh, map, *l))),
+    }
 }
 
 /// The highest upward-facing surface at sitting height over each cell (world z; NaN where
@@ -614,6 +625,24 @@ mod tests {
                 assert!(s.stand().distance(feet) <= crate::scene::chair_pull::MAX_STEP_IN_M + 1e-9);
                 // The pulled seat is clear of the table top.
                 assert!(s.pelvis().y < at.y + 0.22 - under - 0.1, "{s:?}");
+                // Its longer pull (for knees that would enter the table) is the same chair
+                // pulled at least MORE_KNEE_ROOM_M farther the same way, a place of its own
+                // with free floor to step in, and has no longer pull of its own.
+                let longer = s.longer.as_deref().expect("a longer pull");
+                let more = longer.pull.as_ref().expect("pulled out");
+                let length = |p: &Pull| DVec2::from_array(p.offset_m).length();
+                let extra = length(more) - length(pull);
+                assert!(
+                    extra >= crate::scene::chair_pull::MORE_KNEE_ROOM_M - 1e-9
+                        && more.offset_m[1] < pull.offset_m[1]
+                        && more.offset_m[0].abs() < 0.05,
+                    "{s:?}"
+                );
+                assert!((longer.pelvis() - s.pelvis()).length() >= extra - 1e-9);
+                assert_eq!(longer.object, s.object);
+                let feet = longer.pelvis() + DVec2::Y * crate::scene::chair_pull::STAND_IN_FRONT_M;
+                assert!(more.frees(&map, feet) && map.is_walkable_at(longer.stand()));
+                assert!(longer.longer.is_none());
             }
         }
     }

@@ -24,7 +24,8 @@ impl ActivityWorld {
     /// Sitting down on seat `s` from where `last` stands, staying seated for a drawn time,
     /// standing up: the sit clip nearest the seat's height, moved to the seat (its seated
     /// pelvis on the seat's place, facing the seat's way) and fitted to its height.
-    #[allow(clippy::too_many_arguments)]
+    /// On a chair pulled out too little for this body ([`pulled_too_little`]), the same on the
+    /// chair's longer pull ([`Seat::longer`]) where it has one.
     pub(crate) fn sit(
         &mut self,
         body: &BodyContext,
@@ -35,6 +36,27 @@ impl ActivityWorld {
         rng: &mut ChaCha8Rng,
     ) -> Result<Performance, Refusal> {
         let seat = self.seats[s].clone();
+        let done = self.sit_on(body, map, last, s, &seat, floor_z, rng);
+        match (&done, seat.longer.as_deref()) {
+            (Err(r), Some(longer)) if pulled_too_little(r) => {
+                self.sit_on(body, map, last, s, longer, floor_z, rng)
+            }
+            _ => done,
+        }
+    }
+
+    /// [`Self::sit`] on `seat`, place `s`'s (or its longer pull's).
+    #[allow(clippy::too_many_arguments)]
+    fn sit_on(
+        &mut self,
+        body: &BodyContext,
+        map: &WalkableMap,
+        last: &BodyParams,
+        s: usize,
+        seat: &Seat,
+        floor_z: f64,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Performance, Refusal> {
         let seat_h = seat.surface_z_m - floor_z;
         let clips: Vec<ClipOnBody> = self
             .clips
@@ -60,7 +82,7 @@ impl ActivityWorld {
                 nearest_m: clip.seat_contact_z,
             });
         }
-        let (seated_at, fitted) = fit_on_seat(body, clip, &seat, map, floor_z, fit)?;
+        let (seated_at, fitted) = fit_on_seat(body, clip, seat, map, floor_z, fit)?;
         let (l, n) = (clip.lowest, clip.frames.len());
         if fitted.lift_m.abs() > self.settings.seat_fit_m {
             return Err(Refusal::NoClipFits {
@@ -128,7 +150,7 @@ impl ActivityWorld {
         r.foot_miss_m = Some(foot_miss);
         // Standing in front of a seat as high as the buttocks (a bar stool, a tall body), the
         // clip's standing frames may lean into it: refused, never played.
-        let (sink, frame) = seat_penetration(body, &frames, &seat, map)?;
+        let (sink, frame) = seat_penetration(body, &frames, seat, map)?;
         if sink > ENTER_TOLERANCE_M {
             return Err(Refusal::EntersScene {
                 doing: Doing::SittingOn(seat.object_name.clone()),
@@ -272,6 +294,19 @@ fn fit_on_seat(
         }
     }
     best.ok_or(Refusal::NoSitClip)
+}
+
+/// Whether a sit refused so might be done on the same chair pulled out farther: the body
+/// would enter the scene sitting (the knees into the table) or stand over furniture in front
+/// of the seat (the table).
+fn pulled_too_little(refusal: &Refusal) -> bool {
+    matches!(
+        refusal,
+        Refusal::EntersScene {
+            doing: Doing::SittingOn(_),
+            ..
+        } | Refusal::StandsOverFurniture { .. }
+    )
 }
 
 /// How long a chair pulled out from its table takes to slide back once the person has
@@ -689,6 +724,39 @@ mod tests {
                 assert!(map.is_walkable_at(DVec2::new(q.x, q.y)));
             }
         }
+    }
+
+    /// A chair pulled out too little (its place 0.25 m nearer the table: the body would stand
+    /// in the table) is sat on at its longer pull; without one, refused by name.
+    #[test]
+    fn a_chair_pulled_out_too_little_is_sat_on_at_its_longer_pull() {
+        let model = shipped_model();
+        let body = BodyContext::new(&model, &[]).unwrap();
+        let (mut acts, map) = world(sitting(), chair_at_table(DVec2::new(0.3, -0.2), 0.15));
+        let fits = acts.seats[0].clone();
+        let mut near = fits.clone();
+        near.pull.as_mut().unwrap().offset_m[1] += 0.25;
+        near.pelvis_xy[1] += 0.25;
+        let last = arriving(&acts, &body, 0);
+        let mut sit = |longer: Option<Seat>| {
+            acts.seats[0] = Seat {
+                longer: longer.map(Box::new),
+                ..near.clone()
+            };
+            acts.sit(
+                &body,
+                &map,
+                &last,
+                0,
+                0.0,
+                &mut ChaCha8Rng::seed_from_u64(3),
+            )
+        };
+        let fits_m = DVec2::from_array(fits.pull.as_ref().unwrap().offset_m).length();
+        let pulled = sit(Some(fits)).unwrap().record.chair_pulled_m.unwrap();
+        assert!((pulled - fits_m).abs() < 1e-12);
+        let refused = sit(None).unwrap_err();
+        assert!(pulled_too_little(&refused), "{refused}");
     }
 
     #[test]

@@ -342,6 +342,7 @@ mod tests {
             naming: SeatNaming::Shape,
             cells: Vec::new(),
             pull: None,
+            longer: None,
         }
     }
 
