@@ -185,10 +185,20 @@ fn print_seats(seats: &[crate::scene::Seat]) {
             s.pelvis_xy[1],
             s.facing_rad.to_degrees(),
             if s.backed { "backed" } else { "no back" },
-            s.pull.as_ref().map_or(String::new(), |p| format!(
-                ", pulled out {:.2} m",
-                glam::DVec2::from_array(p.offset_m).length()
-            ))
+            s.pull.as_ref().map_or(String::new(), |p| {
+                let m = |p: &crate::scene::chair_pull::Pull| {
+                    glam::DVec2::from_array(p.offset_m).length()
+                };
+                let longer = s.longer.as_ref().and_then(|l| l.pull.as_ref());
+                format!(
+                    ", pulled out {:.2} m{}",
+                    m(p),
+                    longer.map_or(String::new(), |l| format!(
+                        " ({:.2} m where a body needs more room)",
+                        m(l)
+                    ))
+                )
+            })
         );
     }
 }
