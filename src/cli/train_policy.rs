@@ -467,7 +467,6 @@ fn refuse_held_out_dwelling(source: &str, path: &Path, bad: Bad) -> Result<(), C
     }
 }
 
-/// `[scene]`: the fixed scene and its start/goal pairs (`path`: its file, checked).
 /// `[dwellings]` as one training scene per dwelling, each generated into the cache if it is
 /// not there yet; a held-out seed, an empty range or more than [`MAX_DWELLINGS`] is refused.
 fn resolve_dwellings(
@@ -480,7 +479,10 @@ fn resolve_dwellings(
     if !(first < end && end - first <= MAX_DWELLINGS) {
         return Err(bad(
             "dwellings.seeds",
-            format!("expected [FIRST, END) with FIRST < END and at most {MAX_DWELLINGS} seeds, got [{first}, {end}]"),
+            format!(
+                "expected [FIRST, END) with FIRST < END and at most {MAX_DWELLINGS} seeds, \
+                 got [{first}, {end}]"
+            ),
         ));
     }
     if end > HELD_OUT_SEEDS_FROM {
@@ -511,6 +513,8 @@ fn resolve_dwellings(
         .collect()
 }
 
+/// `[scene]` (or one of `[dwellings]`, `table` naming which in errors): the fixed scene and
+/// its start/goal pairs (`path`: its file, checked).
 fn resolve_train_scene(
     sc: RawTrainScene,
     path: Result<PathBuf, ConfigError>,

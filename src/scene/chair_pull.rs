@@ -5,8 +5,9 @@
 //! above it, the floor in front of it is free for a person to stand and sit down, and the
 //! pulled chair stands on free floor. The place to sit is then on the pulled chair; the walk
 //! ends at walkable floor beside it, from where the person steps in while the chair moves.
-//! A second, longer pull of the same chair is kept where it works, for bodies whose knees
-//! would enter the table at the first. A chair's places found the usual way face where its backrest says (not sideways).
+//! A second, longer pull of the same chair is kept where it works, for bodies too large for
+//! the first (knees into the table, or standing up into it). A chair's places found the usual
+//! way face where its backrest says (not sideways).
 
 use glam::DVec2;
 
@@ -66,7 +67,7 @@ pub(crate) struct PulledChair {
     pub cells: Vec<usize>,
     pub pull: Pull,
     /// The same chair pulled [`MORE_KNEE_ROOM_M`] farther or more, where that works too:
-    /// tried when the knees would enter the table at the shorter pull.
+    /// tried when a body is too large for the shorter pull.
     pub longer: Option<Box<PulledChair>>,
 }
 
@@ -76,8 +77,8 @@ const MIN_PULL_M: f64 = 0.2;
 /// Farthest a chair is pulled out (m).
 const MAX_PULL_M: f64 = 1.0;
 
-/// How much farther a chair's second pull goes than its first (m): room for the knees of a
-/// body that would enter the table at the first.
+/// How much farther a chair's second pull goes than its first (m): room for a body whose
+/// knees would enter the table at the first, or that would stand up into it.
 pub(crate) const MORE_KNEE_ROOM_M: f64 = 0.15;
 /// The clips stand this far in front of where they sit (m, 0.3–0.45 in the shipped clips).
 pub(crate) const STAND_IN_FRONT_M: f64 = 0.4;
@@ -372,11 +373,10 @@ fn occupied(map: &WalkableMap, tris: &[[Vec3; 3]], band: Option<(f64, f64)>) -> 
 }
 
 /// How far `chair` is pulled back (the first pull of 5 cm steps from `min_m` to 1 m that
-/// works) and where the
-/// walk to it ends: the chair slid there over floor with nothing up to its seat's height in
-/// the way (`low`), the pulled chair on floor free of everything else (`others`), nothing over its seat
-/// within the headroom (`covers`), free floor where the person stands in front of it to sit
-/// down, and walkable floor within [`MAX_STEP_IN_M`] of that from which a straight step in
+/// works) and where the walk to it ends: the chair slid there over floor with nothing up to
+/// its seat's height in the way (`low`), the pulled chair on floor free of everything else
+/// (`others`), nothing over its seat within the headroom (`covers`), free floor where the
+/// person stands in front of it to sit down, and walkable floor within [`MAX_STEP_IN_M`] of that from which a straight step in
 /// crosses free floor only.
 #[allow(clippy::too_many_arguments)]
 fn pull_out(

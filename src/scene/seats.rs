@@ -100,7 +100,7 @@ pub(crate) struct Seat {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pull: Option<Pull>,
     /// For a chair pulled out: the place on it pulled [`super::chair_pull::MORE_KNEE_ROOM_M`]
-    /// or more farther, where that works too (for knees that would enter the table).
+    /// or more farther, where that works too (for a body too large for the first).
     #[serde(skip)]
     pub longer: Option<Box<Seat>>,
 }

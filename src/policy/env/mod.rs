@@ -3,7 +3,8 @@
 //! and evaluation.
 //!
 //! An episode (EgoGen's box environment): a [`BoxScene`] — or, for configured shares of
-//! episodes, a procedural floor plan ([`RoomScene`]: rooms, doorways, furniture) or a
+//! episodes, a start/goal pair of the fixed scene or of a generated furnished dwelling, a
+//! procedural floor plan ([`RoomScene`]: rooms, doorways, furniture) or a
 //! [`CrossingScene`], where another person crosses the path as a moving 2D box
 //! that the rays see and the penetration test counts, on the episode's clock — a mocap seed
 //! (two frames of a training primitive) placed at the start facing the goal within ±`seed_yaw_jitter_rad`,
