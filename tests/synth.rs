@@ -2122,6 +2122,121 @@ workers = 1
         serde_json::from_value(doc).unwrap();
 }
 
+/// A wearer who pulls a chair out from its table to sit: every frame's annotation lists the
+/// chair with its segmentation id, its offset as the take's `moved_objects.npy` has it and who
+/// moves it; the render draws it there (its pixels, moved back by the offset, lie on the chair
+/// where the scene file has it, also while it is pulled out).
+#[test]
+fn a_pulled_out_chair_is_annotated_and_rendered_where_it_was_pulled() {
+    let scene = common::repo_root().join("assets/scenes/small_house.glb");
+    let config = format!(
+        r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 6.0
+seed = 0
+stop_when_done = false
+[activities]
+weights = {{ walk = 0.0, sit = 1.0 }}
+[[agents]]
+name = "wearer"
+start = [7.1, -1.0]
+goals = [[7.1, -0.8]]
+wander = true
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[scene]
+path = "{}"
+[render]
+cameras = ["camera-rgb"]
+resolution_scale = 0.125
+every_n_frames = 12
+samples = 1
+passes = ["segmentation", "position"]
+[supervisor]
+workers = 1
+"#,
+        scene.display()
+    );
+    let (dir, doc) = rendered_annotations(&config);
+    let out = dir.path().join("out");
+    let summary = summary(&out.join("sequence"));
+    let moved = summary["agents"][0]["moved_objects"][0].clone();
+    let name = moved["name"]
+        .as_str()
+        .unwrap_or_else(|| panic!("a chair was pulled out: {summary}"));
+    let (start, end) = (
+        moved["start_frame"].as_u64().unwrap(),
+        moved["end_frame"].as_u64().unwrap(),
+    );
+    let id = segmentation_id(&doc, name);
+    let npy = std::fs::read(out.join("sequence/agents/wearer/moved_objects.npy")).unwrap();
+    let offsets: Vec<f64> = npyz::NpyFile::new(&npy[..]).unwrap().into_vec().unwrap();
+    // The chair's triangles where the scene file has it.
+    let mesh = egogen::scene::load_scene(&scene, Default::default()).unwrap();
+    let object = mesh.objects.iter().find(|o| o.name == name).unwrap().id;
+    let mut lo = glam::DVec3::splat(f64::INFINITY);
+    let mut hi = -lo;
+    for (t, tri) in mesh.triangles.iter().enumerate() {
+        if mesh.triangle_object[t] == object {
+            for &v in tri {
+                lo = lo.min(mesh.vertices[v as usize]);
+                hi = hi.max(mesh.vertices[v as usize]);
+            }
+        }
+    }
+    let cam = out.join("cameras/camera-rgb");
+    let (mut seen_out, mut far) = (0, 0);
+    for f in doc["frames"].as_array().unwrap() {
+        let frame = f["frame"].as_u64().unwrap();
+        let listed = f["moved_scene_objects"].as_array().unwrap();
+        assert_eq!(listed.len(), 1, "frame {frame}: {listed:?}");
+        let o = &listed[0];
+        assert_eq!(
+            (o["name"].as_str(), o["id"].as_u64()),
+            (Some(name), Some(id as u64))
+        );
+        let at = frame as usize * 2;
+        let offset = glam::DVec3::new(offsets[at], offsets[at + 1], 0.0);
+        for k in 0..3 {
+            assert!(
+                (o["offset_m"][k].as_f64().unwrap() - offset[k]).abs() < 1e-12,
+                "frame {frame}: {o}"
+            );
+        }
+        let moving = (start..end).contains(&frame);
+        assert_eq!(
+            o.get("moved_by").map(|a| a == "wearer"),
+            moving.then_some(true),
+            "frame {frame}: {o}"
+        );
+        let px = pixels_of(&cam, f, id);
+        assert_eq!(
+            o["bbox_xyxy"].is_null(),
+            px.is_empty(),
+            "frame {frame}: {o}"
+        );
+        if offset.length() > 0.1 && !px.is_empty() {
+            seen_out += 1;
+        }
+        // Pixels are surface points: within a few centimetres of the chair's box once moved back.
+        far += px
+            .iter()
+            .filter(|&&p| {
+                let q = p - offset;
+                (q - q.clamp(lo, hi)).length() > 0.03
+            })
+            .count();
+    }
+    assert!(seen_out > 0, "the camera saw the chair pulled out");
+    assert_eq!(
+        far, 0,
+        "chair pixels away from the chair moved by its offset"
+    );
+}
+
 /// A wearer who picks something up: the object stands on the floor until the hand takes it,
 /// then is carried; the render draws it with its own segmentation id where the annotations
 /// pose it (its pixels' positions inside its box), and the holding hand's contact names it.

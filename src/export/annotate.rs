@@ -1,7 +1,7 @@
 //! Computing and writing the annotations: each finished frame's annotation from its pixels
 //! while they are in memory ([`annotate_frame`]: agents in view, 2D joints and their
-//! visibility, boxes, the objects people pick up and the hands holding them, the colour's
-//! exposure), and the output writing
+//! visibility, boxes, the objects people pick up and the hands holding them, the scene
+//! objects people move, the colour's exposure), and the output writing
 //! `cameras/<camera>/annotations.json` of a finished take ([`Annotations`]). The file's types
 //! are `annotations`.
 
@@ -10,8 +10,8 @@ use serde_json::json;
 
 use super::annotations::{
     ActivityLabel, AgentAnnotation, AgentOutfit, AgentSkin, CameraAnnotations, Conventions,
-    FrameAnnotation, HandAnnotation, JointVisibility, ObjectAnnotation, ObjectHolder,
-    SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
+    FrameAnnotation, HandAnnotation, JointVisibility, MovedSceneObject, ObjectAnnotation,
+    ObjectHolder, SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
 use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
 use crate::body::parts::BodyPart;
@@ -312,7 +312,48 @@ fn frame_annotation(
         colour_exposure: None,
         agents: listed,
         objects,
+        moved_scene_objects: moved_scene_objects(agents, i, ids.map(|ids| (ids, w))),
     }
+}
+
+/// The scene objects the agents move, at take frame `i`, by name (each once, whoever moves
+/// it: the offsets added, as the renders place it), with their boxes in the segmentation
+/// plane `ids` (`width` pixels a row) where there is one.
+fn moved_scene_objects(
+    agents: &[RenderedAgent],
+    i: usize,
+    ids: Option<(&[f32], usize)>,
+) -> Vec<MovedSceneObject> {
+    let moves = || {
+        agents
+            .iter()
+            .flat_map(|a| a.moved_objects.iter().map(move |m| (a, m)))
+    };
+    let mut listed: Vec<MovedSceneObject> = Vec::new();
+    for (a, m) in moves() {
+        let movement = &m.movement;
+        let entry = match listed.iter_mut().position(|o| o.name == movement.name) {
+            Some(k) => &mut listed[k],
+            None => {
+                listed.push(MovedSceneObject {
+                    name: movement.name.clone(),
+                    id: m.id,
+                    offset_m: [0.0; 3],
+                    moved_by: None,
+                    bbox_xyxy: ids.and_then(|(ids, w)| bbox_of(ids, w, m.id)),
+                });
+                listed.last_mut().expect("just pushed")
+            }
+        };
+        let [x, y] = movement.offset_at(i);
+        entry.offset_m[0] += x;
+        entry.offset_m[1] += y;
+        if (movement.start_frame..movement.end_frame).contains(&i) {
+            entry.moved_by.get_or_insert_with(|| a.name.clone());
+        }
+    }
+    listed.sort_by(|a, b| a.name.cmp(&b.name));
+    listed
 }
 
 /// Each of `points` (world) in the camera's image: its pixel (`None` outside the valid field of

@@ -93,6 +93,30 @@ pub struct FrameAnnotation {
     /// hand takes them, then carried (absent in a take where nobody picks anything up).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub objects: Vec<ObjectAnnotation>,
+    /// The scene objects people move (chairs pulled out from their tables), in view or not
+    /// (absent in a take where nobody moves one).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) moved_scene_objects: Vec<MovedSceneObject>,
+}
+
+/// A scene object people move, in one frame: where it is against where the scene file
+/// places it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub(crate) struct MovedSceneObject {
+    /// Its name in the scene (and in `segmentation_ids`).
+    pub(crate) name: String,
+    /// Its segmentation id.
+    pub(crate) id: u32,
+    /// Added to where the scene file places it in this frame (world, m; horizontal): the
+    /// object's pose is the scene's, translated by it.
+    pub(crate) offset_m: [f64; 3],
+    /// The person moving it or keeping it moved in this frame (from its first frame out until
+    /// it stands where the scene has it again); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) moved_by: Option<String>,
+    /// Tight box of its segmentation pixels, inclusive pixel indices; `None` when not in view
+    /// (or the run rendered no segmentation).
+    pub(crate) bbox_xyxy: Option<[usize; 4]>,
 }
 
 /// An object people pick up ([`crate::synth::held_object`]), in one frame.

@@ -56,7 +56,14 @@ pub struct RenderedAgent {
     /// What it picks up and carries.
     pub held_objects: Vec<RenderedObject>,
     /// Scene objects it moves (chairs pulled out from their tables).
-    pub(crate) moved_objects: Vec<crate::synth::activity::ObjectMove>,
+    pub(crate) moved_objects: Vec<RenderedMove>,
+}
+
+/// A scene object a body moves, with the object's segmentation id.
+#[derive(Debug, Clone)]
+pub(crate) struct RenderedMove {
+    pub(crate) id: u32,
+    pub(crate) movement: crate::synth::activity::ObjectMove,
 }
 
 /// An object a body picks up and carries, with its segmentation id.

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use crate::camera::CameraModel;
+pub(crate) use crate::export::take::RenderedMove;
 use crate::export::take::{frame_file_path, TakeExports};
 pub use crate::export::take::{CameraWork, RenderedAgent, RenderedObject};
 use crate::exr_file::ExrContents;

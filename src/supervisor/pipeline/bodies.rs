@@ -20,7 +20,7 @@ use crate::render::shard_plan::{AGENT_ID_BASE, HELD_OBJECT_ID_BASE};
 use crate::render::skin_tone::SkinTextures;
 use crate::render::ShardBody;
 use crate::scene::walkable_map;
-use crate::supervisor::staged::{RenderedAgent, RenderedObject};
+use crate::supervisor::staged::{RenderedAgent, RenderedMove, RenderedObject};
 use crate::synth::body_cache::{body_cache_at, playback_keys, rendered_sample_indices};
 use crate::synth::crowd_dir::write_crowd_dir;
 use crate::synth::placement::place_motion;
@@ -76,7 +76,11 @@ pub(super) fn rendered_agents(
                         track,
                         activities: with_activities.then(|| a.activity_segments.clone()),
                         held_objects: Vec::new(),
-                        moved_objects: a.moved_objects.clone(),
+                        moved_objects: a
+                            .moved_objects
+                            .iter()
+                            .map(|m| moved_in_scene(scene, m))
+                            .collect::<Result<_>>()?,
                     })
                 })
                 .collect::<Result<Vec<RenderedAgent>>>()?;
@@ -95,6 +99,25 @@ pub(super) fn rendered_agents(
             Ok((agents, wearers.to_vec()))
         }
     }
+}
+
+/// A scene object a person moves, with its segmentation id: the take must name an object of
+/// the scene it is rendered in.
+fn moved_in_scene(
+    scene: &crate::scene::SceneMesh,
+    movement: &crate::synth::activity::ObjectMove,
+) -> Result<RenderedMove> {
+    let Some(object) = scene.objects.iter().find(|o| o.name == movement.name) else {
+        bail!(
+            "the take moves the scene object `{}`, which the scene has not got (was the take \
+             made in another scene?)",
+            movement.name
+        );
+    };
+    Ok(RenderedMove {
+        id: object.id.0,
+        movement: movement.clone(),
+    })
 }
 
 /// Writes the dataset's `sequence/` folder: the take's folder, or a placed motion's.

@@ -272,7 +272,7 @@ fn moved_objects(
 ) -> Vec<ShardMovedObject> {
     let mut names: Vec<&str> = agents
         .iter()
-        .flat_map(|a| a.moved_objects.iter().map(|m| m.name.as_str()))
+        .flat_map(|a| a.moved_objects.iter().map(|m| m.movement.name.as_str()))
         .collect();
     names.sort_unstable();
     names.dedup();
@@ -287,7 +287,9 @@ fn moved_objects(
             keys: keyed
                 .iter()
                 .map(|&f| {
-                    let moves = agents.iter().flat_map(|a| &a.moved_objects);
+                    let moves = agents
+                        .iter()
+                        .flat_map(|a| a.moved_objects.iter().map(|m| &m.movement));
                     let [x, y] = moves
                         .filter(|m| m.name == name)
                         .map(|m| m.offset_at(f))
