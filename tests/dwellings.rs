@@ -214,6 +214,52 @@ fn bad_settings_or_a_missing_catalogue_are_refused_by_name_and_nothing_is_writte
     assert_eq!(std::fs::read(dwelling_files(&out).0).unwrap(), before);
 }
 
+/// A campaign's `dwellings` as a range, `{ first, count }`: its dry run prices generating
+/// each (nothing is written); a range or list that cannot be seeds is refused naming the key.
+#[test]
+fn a_campaign_names_its_dwellings_by_range_and_bad_ranges_are_refused() {
+    let a = tempfile::tempdir().unwrap();
+    common::tiny_campaign_run(a.path(), false);
+    let out = a.path().join("campaign");
+    let campaign = a.path().join("dwellings.toml");
+    let dry_run = |dwellings: &str| {
+        std::fs::write(
+            &campaign,
+            format!(
+                "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = 4\ndwellings = {dwellings}\ncrowd_count = [1, 1]\nmin_free_disk_gb = 0.0\n",
+                out.display()
+            ),
+        )
+        .unwrap();
+        Command::new(env!("CARGO_BIN_EXE_egogen-run"))
+            .arg(&campaign)
+            .arg("--dry-run")
+            .output()
+            .unwrap()
+    };
+    let o = dry_run("{ first = 40, count = 3 }");
+    let said = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{said}");
+    assert!(said.contains("3 dwelling(s) to generate first"), "{said}");
+    assert!(!out.exists(), "a dry run writes nothing");
+    for (dwellings, says) in [
+        ("{ first = 40 }", "`count` is missing"),
+        ("{ first = 40, count = 0 }", "`count` is 0"),
+        ("{ first = -1, count = 2 }", "`first` is -1"),
+        ("{ from = 1, count = 2 }", "unknown key `from`"),
+        ("[1, -2]", "entry 1 is -2"),
+        ("\"1-5\"", "is not a list of seeds"),
+    ] {
+        let o = dry_run(dwellings);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{dwellings}");
+        assert!(
+            err.contains("campaign.dwellings") && err.contains(says),
+            "{dwellings}: {err}"
+        );
+    }
+}
+
 /// A campaign's `dwellings` are generated once into its `scenes/` (the same bytes as `egogen
 /// scene generate`), rendered like any scene, and a run config names one as `dwelling:SEED`
 /// (generated into the cache, the same file again).

@@ -50,9 +50,10 @@ pub(crate) struct RawCampaign {
     /// Generated furnished dwellings, by seed (as `egogen scene generate --seed S`: default
     /// settings, the shipped catalogue), written to `scenes/dwelling_<seed>.glb` with its
     /// sidecar `scenes/dwelling_<seed>.json` in the campaign folder; after `floor_plans` in
-    /// the scenes' order.
+    /// the scenes' order. A list of seeds, or `{ first = N, count = M }` for seeds N … N+M−1
+    /// ([`dwelling_seeds`]).
     #[serde(default)]
-    pub dwellings: Vec<u64>,
+    pub dwellings: Option<toml::Value>,
     /// People per take, drawn uniformly in `[lo, hi]` from the take's seed (default: the run
     /// config's `crowd.count`).
     pub crowd_count: Option<[usize; 2]>,
@@ -245,8 +246,11 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         (None, None)
     };
     scenes.extend(floor_plans.iter().map(|(_, p)| (p.clone(), plan_frame)));
-    let dwellings: Vec<(u64, PathBuf)> = c
-        .dwellings
+    let dwelling_seeds = match &c.dwellings {
+        Some(value) => dwelling_seeds(value).map_err(|what| bad("dwellings", what))?,
+        None => Vec::new(),
+    };
+    let dwellings: Vec<(u64, PathBuf)> = dwelling_seeds
         .iter()
         .map(|&s| (s, out.join("scenes").join(format!("dwelling_{s}.glb"))))
         .collect();
@@ -599,6 +603,54 @@ fn take_id(take: &TakeDef, base: &RawRun) -> Result<String> {
             .map_or_else(String::new, |n| format!("-n{n}")),
         &hash[..8]
     ))
+}
+
+/// The most dwellings one campaign generates.
+const MAX_DWELLINGS: u64 = 100_000;
+
+/// A campaign's `dwellings`: a list of seeds, or `{ first = N, count = M }` for the seeds
+/// N … N+M−1; what is wrong with it otherwise.
+fn dwelling_seeds(value: &toml::Value) -> Result<Vec<u64>, String> {
+    let seed = |v: &toml::Value, what: &str| match v.as_integer() {
+        Some(s) if s >= 0 => Ok(s as u64),
+        _ => Err(format!("{what} is {v}; expected a seed (an integer ≥ 0)")),
+    };
+    let seeds: Vec<u64> = match value {
+        toml::Value::Array(items) => items
+            .iter()
+            .enumerate()
+            .map(|(k, v)| seed(v, &format!("entry {k}")))
+            .collect::<Result<_, _>>()?,
+        toml::Value::Table(t) => {
+            if let Some(key) = t.keys().find(|k| !["first", "count"].contains(&k.as_str())) {
+                return Err(format!(
+                    "unknown key `{key}`; expected `{{ first = SEED, count = N }}`"
+                ));
+            }
+            let get = |key: &str| {
+                t.get(key)
+                    .ok_or_else(|| format!("`{key}` is missing; expected `{{ first = SEED, count = N }}`"))
+                    .and_then(|v| seed(v, &format!("`{key}`")))
+            };
+            let (first, count) = (get("first")?, get("count")?);
+            if count == 0 || count > MAX_DWELLINGS {
+                return Err(format!("`count` is {count}; expected 1 to {MAX_DWELLINGS}"));
+            }
+            if first.checked_add(count).is_none_or(|end| end > i64::MAX as u64) {
+                return Err(format!("`first` + `count` ({first} + {count}) must stay below 2^63"));
+            }
+            (first..first + count).collect()
+        }
+        other => {
+            return Err(format!(
+                "{other} is not a list of seeds; expected `[SEED, …]` or `{{ first = SEED, count = N }}`"
+            ))
+        }
+    };
+    if seeds.len() as u64 > MAX_DWELLINGS {
+        return Err(format!("{} seeds; at most {MAX_DWELLINGS}", seeds.len()));
+    }
+    Ok(seeds)
 }
 
 /// Writes the campaign's floor plans and dwellings that are not there yet (a resumed campaign
