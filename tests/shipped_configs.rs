@@ -61,6 +61,23 @@ fn the_shipped_policy_config_writes_the_shipped_policy() {
     assert_eq!(written, shipped);
 }
 
+/// `configs/campaign_dwellings.toml`: 100 takes, each in a dwelling of its own.
+#[test]
+fn the_shipped_dwellings_campaign_walks_a_dwelling_per_take() {
+    let root = common::repo_root();
+    let plan = egogen::campaign::plan_campaign(&root.join("configs/campaign_dwellings.toml"))
+        .unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(plan.takes.len(), 100);
+    for (k, take) in plan.takes.iter().enumerate() {
+        let name = format!("dwelling_{}.glb", 20000 + k);
+        assert!(
+            take.scene.ends_with(format!("scenes/{name}")),
+            "{:?}",
+            take.scene
+        );
+    }
+}
+
 #[test]
 fn the_shipped_campaign_plans_its_takes() {
     let root = common::repo_root();
