@@ -186,6 +186,7 @@ mod tests {
             contact: 0.0,
             penetration_share: 0.0,
             pelvis_off_floor_frames: 0,
+            pelvis_off_floor_at: Vec::new(),
             held_primitives: 0,
             speed_m_s: 0.0,
             view_cos: 0.0,

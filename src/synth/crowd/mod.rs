@@ -388,7 +388,7 @@ pub(crate) fn run_crowd_with_activities(
         agents: agents
             .into_iter()
             .map(|a| {
-                let mut track = a.finish(frames, &settings.walker)?;
+                let mut track = a.finish(frames, &settings.walker, &world.map)?;
                 track.follow_floor(&world.map);
                 // Sitting down, seated and standing up, the pelvis is over its seat.
                 let seated = |f: usize| {
@@ -398,12 +398,13 @@ pub(crate) fn run_crowd_with_activities(
                             && (s.start_frame..s.end_frame).contains(&f)
                     })
                 };
-                track.pelvis_off_floor_frames = (1..track.pelvis_xy.len())
+                track.pelvis_off_floor_at = (1..track.pelvis_xy.len())
                     .filter(|&f| !seated(f))
                     .filter(|&f| {
                         path_leaves_floor(&world.map, track.pelvis_xy[f - 1], track.pelvis_xy[f])
                     })
-                    .count();
+                    .collect();
+                track.pelvis_off_floor_frames = track.pelvis_off_floor_at.len();
                 Ok(track)
             })
             .collect::<Result<_, CrowdError>>()?,

@@ -176,6 +176,7 @@ impl<'m> Agent<'m> {
             contact: 0.0,
             penetration_share: 0.0,
             pelvis_off_floor_frames: 0,
+            pelvis_off_floor_at: Vec::new(),
             held_primitives: 0,
             speed_m_s: 0.0,
             view_cos: 0.0,
@@ -381,6 +382,7 @@ impl Agent<'_> {
         mut self,
         frames: usize,
         settings: &WalkerSettings,
+        map: &crate::scene::WalkableMap,
     ) -> Result<AgentTrack, CrowdError> {
         let t = &mut self.track;
         for seg in &mut t.activity_segments {
@@ -429,7 +431,7 @@ impl Agent<'_> {
             &self.body,
             settings,
             &self.hands,
-            floor_z,
+            (floor_z, map),
             &mut self.objects_rng,
         )?;
         // How each activity moved: foot contact over its frames, the fastest joint turn where

@@ -21,6 +21,7 @@ use crate::synth::activity::{
     Activity, ActivityRecord, ActivitySegment, ObjectMove, Phase, SkippedActivity,
 };
 use crate::synth::held_object::{fit_under_fingertips, grasp_in, placed_object, Grasp, HeldObject};
+use crate::walker::reward::path_leaves_floor;
 use crate::walker::{ControllerSpec, WalkerSettings};
 
 /// Why an agent stopped before the take ended.
@@ -91,6 +92,9 @@ pub struct AgentTrack {
     /// the track as written ([`crate::walker::reward::path_leaves_floor`]); frames sitting
     /// down, seated or standing up (over the seat) not counted.
     pub pelvis_off_floor_frames: usize,
+    /// Those frames, in order (absent where there are none).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pelvis_off_floor_at: Vec<usize>,
     /// Primitives in which the body held its pose because every draw would have taken its
     /// pelvis over a wall ([`WalkerSettings::scene_every_frame`]).
     pub held_primitives: usize,
@@ -211,7 +215,44 @@ pub(super) fn foot_points(
         .collect()
 }
 
-/// The motion as written: each join's velocity jump spread ([`WalkerSettings::smooth_joins`]),
+/// The frames with each join's velocity jump spread ([`smooth_joins`]), but for the joins
+/// where the spreading would take the pelvis path over a cell of `map` that is not walkable
+/// where the frames as drawn did not (the primitives were drawn to keep it on the floor; a
+/// spread shifts it by centimetres, now and then over a wall's or a piece's edge): each frame
+/// the smoothing takes off the floor leaves the join nearest to it unsmoothed, until none does.
+/// The pelvis joint moves with the translation, so the smoothed pelvis path is the drawn one
+/// shifted by the change of translation.
+fn smoothed_on_floor(t: &AgentTrack, map: &WalkableMap) -> Vec<BodyParams> {
+    let window = JoinWindow::at_rate(PRIMITIVE_RATE_HZ);
+    let n = t.frames.len().min(t.pelvis_xy.len());
+    let drawn_leaves: Vec<bool> = (1..n)
+        .map(|f| path_leaves_floor(map, t.pelvis_xy[f - 1], t.pelvis_xy[f]))
+        .collect();
+    let mut joins = t.joins.clone();
+    loop {
+        let mut frames = t.frames.clone();
+        smooth_joins(&mut frames, &joins, &window);
+        let at = |f: usize| {
+            let d = frames[f].transl - t.frames[f].transl;
+            t.pelvis_xy[f] + DVec2::new(d.x, d.y)
+        };
+        let off: Vec<usize> = (1..n)
+            .filter(|&f| !drawn_leaves[f - 1] && path_leaves_floor(map, at(f - 1), at(f)))
+            .collect();
+        if off.is_empty() || joins.is_empty() {
+            return frames;
+        }
+        for f in off {
+            if let Some(k) = (0..joins.len()).min_by_key(|&k| joins[k].abs_diff(f)) {
+                joins.remove(k);
+            }
+        }
+    }
+}
+
+/// The motion as written: each join's velocity jump spread ([`WalkerSettings::smooth_joins`]:
+/// where that would take the pelvis over a cell of `map` the primitives as drawn kept it off,
+/// not at that join, [`smoothed_on_floor`]),
 /// the head steadied against the torso's sway ([`WalkerSettings::steady_head`]), the objects
 /// its pick-ups take placed (standing on the floor at `floor_z`, kinds and colours drawn from
 /// `objects_rng`: [`crate::synth::held_object`]), the fingers moved with what the hands do
@@ -224,7 +265,7 @@ pub(super) fn finish_motion(
     body: &BodyContext,
     settings: &WalkerSettings,
     hands: &HandStyle,
-    floor_z: f64,
+    (floor_z, map): (f64, &WalkableMap),
     objects_rng: &mut ChaCha8Rng,
 ) -> Result<(), CrowdError> {
     let picks_up = t
@@ -235,11 +276,7 @@ pub(super) fn finish_motion(
         return Ok(());
     }
     if settings.smooth_joins {
-        smooth_joins(
-            &mut t.frames,
-            &t.joins,
-            &JoinWindow::at_rate(PRIMITIVE_RATE_HZ),
-        );
+        t.frames = smoothed_on_floor(t, map);
     }
     if settings.steady_head {
         stabilise_head(
