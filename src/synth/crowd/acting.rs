@@ -41,6 +41,12 @@ impl Agent<'_> {
                 )
             } else {
                 self.unreached_seats.push(s);
+                acts.taken[s] = false;
+                // Another free seat, once: a person who cannot get through to one takes another.
+                if !self.approach_retried && self.approach_seat(acts, world, frame) {
+                    self.approach_retried = true;
+                    return true;
+                }
                 Err(Refusal::SeatNotReached {
                     seat: acts.seats[s].object_name.clone(),
                 })
@@ -59,24 +65,16 @@ impl Agent<'_> {
         let activity = acts.draw(&mut self.activity_rng);
         let done = match activity {
             Activity::Walk => return false,
-            Activity::Sit => match acts.nearest_free_seat(
-                &world.map,
-                self.walker.view.pelvis,
-                &self.unreached_seats,
-            ) {
-                Some(s) => {
-                    acts.taken[s] = true;
-                    self.approaching = Some((s, frame));
-                    self.goal = acts.seats[s].stand();
-                    self.goal_steps = 0;
-                    self.walker.retarget(self.goal);
-                    return true;
-                }
-                None if acts.seats.is_empty() => Err(Refusal::NoSeat),
-                None if self.unreached_seats.iter().any(|&s| !acts.taken[s]) => {
+            Activity::Sit if self.approach_seat(acts, world, frame) => {
+                self.approach_retried = false;
+                return true;
+            }
+            Activity::Sit => match () {
+                _ if acts.seats.is_empty() => Err(Refusal::NoSeat),
+                _ if self.unreached_seats.iter().any(|&s| !acts.taken[s]) => {
                     Err(Refusal::SeatsUnreached)
                 }
-                None => Err(Refusal::SeatsTaken),
+                _ => Err(Refusal::SeatsTaken),
             },
             here => acts.play_here(
                 here,
@@ -97,6 +95,27 @@ impl Agent<'_> {
                 false
             }
         }
+    }
+
+    /// Books the free seat nearest on foot (none walked to before and not reached) and walks
+    /// to the place in front of it from `frame`; whether there was one.
+    fn approach_seat(
+        &mut self,
+        acts: &mut ActivityWorld,
+        world: &CrowdWorld,
+        frame: usize,
+    ) -> bool {
+        let Some(s) =
+            acts.nearest_free_seat(&world.map, self.walker.view.pelvis, &self.unreached_seats)
+        else {
+            return false;
+        };
+        acts.taken[s] = true;
+        self.approaching = Some((s, frame));
+        self.goal = acts.seats[s].stand();
+        self.goal_steps = 0;
+        self.walker.retarget(self.goal);
+        true
     }
 
     pub(super) fn skip(&mut self, activity: Activity, frame: usize, reason: Refusal) {

@@ -49,6 +49,8 @@ pub(super) struct Agent<'m> {
     pub(super) approaching: Option<(usize, usize)>,
     /// Seats it walked to and did not reach: not tried again in this take.
     pub(super) unreached_seats: Vec<usize>,
+    /// The seat being walked to is the sit's second: the first was not reached.
+    pub(super) approach_retried: bool,
     /// Draws what comes after each walk: a stream of its own, so walking draws as without
     /// activities.
     pub(super) activity_rng: ChaCha8Rng,
@@ -206,6 +208,7 @@ impl<'m> Agent<'m> {
             acting: None,
             approaching: None,
             unreached_seats: Vec::new(),
+            approach_retried: false,
             activity_rng: walker_rng(settings.seed ^ 0xAC71_7117, index),
             hands: HandStyle::draw(&mut walker_rng(settings.seed ^ 0x4A4D_5EED, index)),
             objects_rng: walker_rng(settings.seed ^ 0x0B1E_C75E, index),
