@@ -168,35 +168,13 @@ mod tests {
             transl: Vec3::new(0.0, 0.0, x),
             ..BodyParams::default()
         };
-        AgentTrack {
-            name: name.into(),
-            betas: Vec::new(),
-            steering: ControllerSpec::Sampling { k: 1 },
-            frames: vec![f; frames],
-            world_from_cpf: Vec::new(),
-            markers: Vec::new(),
-            pelvis_xy: Vec::new(),
-            primitive_starts: Vec::new(),
-            joins: Vec::new(),
-            goals: Vec::new(),
-            state: AgentState::Done,
-            stopped_at_frame: None,
-            primitives: 0,
-            stuck_primitives: 0,
-            contact: 0.0,
-            penetration_share: 0.0,
-            pelvis_off_floor_frames: 0,
-            pelvis_off_floor_at: Vec::new(),
-            held_primitives: 0,
-            speed_m_s: 0.0,
-            view_cos: 0.0,
-            pose_score: 0.0,
-            activities: Vec::new(),
-            activity_segments: Vec::new(),
-            skipped_activities: Vec::new(),
-            held_objects: Vec::new(),
-            moved_objects: Vec::new(),
-        }
+        AgentTrack::new(
+            name,
+            Vec::new(),
+            ControllerSpec::Sampling { k: 1 },
+            AgentState::Done,
+            vec![f; frames],
+        )
     }
 
     #[test]

@@ -161,33 +161,16 @@ impl<'m> Agent<'m> {
             - map.floor_z_m;
         let walker = Walker::new(view.clone(), goal);
         let mut track = AgentTrack {
-            name: plan.name.clone(),
-            betas: plan.betas.clone(),
-            steering: plan.steering,
-            frames: view.seed.frames.to_vec(),
             world_from_cpf: view.world_from_cpf.to_vec(),
             markers: view.markers.to_vec(),
             pelvis_xy: vec![view.pelvis; SEED_FRAMES],
-            primitive_starts: Vec::new(),
-            joins: Vec::new(),
-            goals: Vec::new(),
-            state: AgentState::Walking,
-            stopped_at_frame: None,
-            primitives: 0,
-            stuck_primitives: 0,
-            contact: 0.0,
-            penetration_share: 0.0,
-            pelvis_off_floor_frames: 0,
-            pelvis_off_floor_at: Vec::new(),
-            held_primitives: 0,
-            speed_m_s: 0.0,
-            view_cos: 0.0,
-            pose_score: 0.0,
-            activities: Vec::new(),
-            activity_segments: Vec::new(),
-            skipped_activities: Vec::new(),
-            held_objects: Vec::new(),
-            moved_objects: Vec::new(),
+            ..AgentTrack::new(
+                &plan.name,
+                plan.betas.clone(),
+                plan.steering,
+                AgentState::Walking,
+                view.seed.frames.to_vec(),
+            )
         };
         track
             .frames

@@ -123,6 +123,46 @@ pub struct AgentTrack {
 }
 
 impl AgentTrack {
+    /// A person's track before anything is walked or done: `frames`, its first poses, in
+    /// `state`.
+    pub(crate) fn new(
+        name: &str,
+        betas: Vec<f64>,
+        steering: ControllerSpec,
+        state: AgentState,
+        frames: Vec<BodyParams>,
+    ) -> Self {
+        AgentTrack {
+            name: name.into(),
+            betas,
+            steering,
+            frames,
+            world_from_cpf: Vec::new(),
+            markers: Vec::new(),
+            pelvis_xy: Vec::new(),
+            primitive_starts: Vec::new(),
+            joins: Vec::new(),
+            goals: Vec::new(),
+            state,
+            stopped_at_frame: None,
+            primitives: 0,
+            stuck_primitives: 0,
+            contact: 0.0,
+            penetration_share: 0.0,
+            pelvis_off_floor_frames: 0,
+            pelvis_off_floor_at: Vec::new(),
+            held_primitives: 0,
+            speed_m_s: 0.0,
+            view_cos: 0.0,
+            pose_score: 0.0,
+            activities: Vec::new(),
+            activity_segments: Vec::new(),
+            skipped_activities: Vec::new(),
+            held_objects: Vec::new(),
+            moved_objects: Vec::new(),
+        }
+    }
+
     /// Lifts a track walked on the flat floor at the map's `floor_z_m` onto its stepped
     /// floors ([`crate::scene::WalkableSettings::floor_steps_m`]), rigidly, frame by frame:
     /// at least to the floor under the pelvis ([`WalkableMap::floor_under`]), and high
