@@ -13,7 +13,7 @@ use super::annotations::{
     FrameAnnotation, HandAnnotation, JointVisibility, MovedSceneObject, ObjectAnnotation,
     ObjectHolder, SegmentationId, SmplxParams, ANNOTATIONS_VERSION,
 };
-use super::take::{CameraWork, FinishedTake, RenderedAgent, TakeExport};
+use super::take::{moved_offset_at, CameraWork, FinishedTake, RenderedAgent, TakeExport};
 use crate::body::parts::BodyPart;
 use crate::camera::CameraModel;
 use crate::exr_file::ExrContents;
@@ -317,43 +317,32 @@ fn frame_annotation(
 }
 
 /// The scene objects the agents move, at take frame `i`, by name (each once, whoever moves
-/// it: the offsets added, as the renders place it), with their boxes in the segmentation
-/// plane `ids` (`width` pixels a row) where there is one.
+/// it: where the renders place it), with their boxes in the segmentation plane `ids` (`width`
+/// pixels a row) where there is one.
 fn moved_scene_objects(
     agents: &[RenderedAgent],
     i: usize,
     ids: Option<(&[f32], usize)>,
 ) -> Vec<MovedSceneObject> {
-    let moves = || {
-        agents
-            .iter()
-            .flat_map(|a| a.moved_objects.iter().map(move |m| (a, m)))
-    };
-    let mut listed: Vec<MovedSceneObject> = Vec::new();
-    for (a, m) in moves() {
-        let movement = &m.movement;
-        let entry = match listed.iter_mut().position(|o| o.name == movement.name) {
-            Some(k) => &mut listed[k],
-            None => {
-                listed.push(MovedSceneObject {
-                    name: movement.name.clone(),
-                    id: m.id,
-                    offset_m: [0.0; 3],
-                    moved_by: None,
-                    bbox_xyxy: ids.and_then(|(ids, w)| bbox_of(ids, w, m.id)),
-                });
-                listed.last_mut().expect("just pushed")
+    super::take::moved_scene_objects(agents)
+        .into_iter()
+        .map(|(name, id)| {
+            let [x, y] = moved_offset_at(agents, name, i);
+            let moving = |a: &&RenderedAgent| {
+                a.moved_objects.iter().any(|m| {
+                    m.movement.name == name
+                        && (m.movement.start_frame..m.movement.end_frame).contains(&i)
+                })
+            };
+            MovedSceneObject {
+                name: name.to_string(),
+                id,
+                offset_m: [x, y, 0.0],
+                moved_by: agents.iter().find(moving).map(|a| a.name.clone()),
+                bbox_xyxy: ids.and_then(|(ids, w)| bbox_of(ids, w, id)),
             }
-        };
-        let [x, y] = movement.offset_at(i);
-        entry.offset_m[0] += x;
-        entry.offset_m[1] += y;
-        if (movement.start_frame..movement.end_frame).contains(&i) {
-            entry.moved_by.get_or_insert_with(|| a.name.clone());
-        }
-    }
-    listed.sort_by(|a, b| a.name.cmp(&b.name));
-    listed
+        })
+        .collect()
 }
 
 /// Each of `points` (world) in the camera's image: its pixel (`None` outside the valid field of

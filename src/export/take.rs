@@ -1,6 +1,7 @@
 //! The seam every output of a rendered take goes through: what a take is to its outputs (its
-//! cameras with their poses and finished frames, every body with its motion and track, the
-//! rig, the scene's segmentation ids) and the [`TakeExport`] trait its outputs implement — the
+//! cameras with their poses and finished frames, every body with its motion and track and the
+//! scene objects it moves ([`moved_offset_at`]: where the renders and the annotations place
+//! them), the rig, the scene's segmentation ids) and the [`TakeExport`] trait its outputs implement — the
 //! annotations, the COLMAP export and the manifest today (`take_exports` lists them in the
 //! order they are written). An output may make one file of each finished frame while the
 //! frame's pixels are in memory (COLMAP's image); the frame's record keeps that file's size and
@@ -64,6 +65,29 @@ pub struct RenderedAgent {
 pub(crate) struct RenderedMove {
     pub(crate) id: u32,
     pub(crate) movement: crate::synth::activity::ObjectMove,
+}
+
+/// The scene objects the agents move, each once with its segmentation id, by name.
+pub(crate) fn moved_scene_objects(agents: &[RenderedAgent]) -> Vec<(&str, u32)> {
+    let mut objects: Vec<(&str, u32)> = agents
+        .iter()
+        .flat_map(|a| a.moved_objects.iter())
+        .map(|m| (m.movement.name.as_str(), m.id))
+        .collect();
+    objects.sort_unstable();
+    objects.dedup();
+    objects
+}
+
+/// Where the agents have moved scene object `name` at take frame `f`, from where the scene
+/// places it (horizontal, m): every agent's move of it added, as the renders key it.
+pub(crate) fn moved_offset_at(agents: &[RenderedAgent], name: &str, f: usize) -> [f64; 2] {
+    agents
+        .iter()
+        .flat_map(|a| a.moved_objects.iter())
+        .filter(|m| m.movement.name == name)
+        .map(|m| m.movement.offset_at(f))
+        .fold([0.0, 0.0], |a, b| [a[0] + b[0], a[1] + b[1]])
 }
 
 /// An object a body picks up and carries, with its segmentation id.

@@ -8,6 +8,7 @@ use anyhow::Result;
 use super::bodies::rendered_samples;
 use super::RunMotion;
 use crate::export::annotations::SegmentationId;
+use crate::export::take::{moved_offset_at, moved_scene_objects};
 use crate::plan::{RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::materials::{MaterialsMode, SurfaceFacts};
@@ -270,30 +271,18 @@ fn moved_objects(
     agents: &[RenderedAgent],
     frames: &[u32],
 ) -> Vec<ShardMovedObject> {
-    let mut names: Vec<&str> = agents
-        .iter()
-        .flat_map(|a| a.moved_objects.iter().map(|m| m.movement.name.as_str()))
-        .collect();
-    names.sort_unstable();
-    names.dedup();
     let Some(n) = agents.iter().map(|a| a.motion.len()).max() else {
         return Vec::new();
     };
     let keyed = rendered_samples(render, frames, 1, n);
-    names
+    moved_scene_objects(agents)
         .into_iter()
-        .map(|name| ShardMovedObject {
+        .map(|(name, _)| ShardMovedObject {
             name: name.to_string(),
             keys: keyed
                 .iter()
                 .map(|&f| {
-                    let moves = agents
-                        .iter()
-                        .flat_map(|a| a.moved_objects.iter().map(|m| &m.movement));
-                    let [x, y] = moves
-                        .filter(|m| m.name == name)
-                        .map(|m| m.offset_at(f))
-                        .fold([0.0, 0.0], |a, b| [a[0] + b[0], a[1] + b[1]]);
+                    let [x, y] = moved_offset_at(agents, name, f);
                     ObstacleKey {
                         frame: f as f64,
                         centre: [x, y, 0.0],

@@ -69,13 +69,13 @@ impl Agent<'_> {
                 self.approach_retried = false;
                 return true;
             }
-            Activity::Sit => match () {
-                _ if acts.seats.is_empty() => Err(Refusal::NoSeat),
-                _ if self.unreached_seats.iter().any(|&s| !acts.taken[s]) => {
-                    Err(Refusal::SeatsUnreached)
-                }
-                _ => Err(Refusal::SeatsTaken),
-            },
+            Activity::Sit => Err(if acts.seats.is_empty() {
+                Refusal::NoSeat
+            } else if self.unreached_seats.iter().any(|&s| !acts.taken[s]) {
+                Refusal::SeatsUnreached
+            } else {
+                Refusal::SeatsTaken
+            }),
             here => acts.play_here(
                 here,
                 &self.body,
