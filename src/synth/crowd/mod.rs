@@ -28,13 +28,14 @@
 //! Where the take asks for activities ([`run_crowd_with_activities`], `[activities]`), what
 //! comes after each walk is drawn ([`crate::synth::activity`]): walk on, stand and look
 //! around, pick something up (played where the walk ended), or sit (walk to the free seat
-//! nearest on foot first); an activity's frames are taken [`NEW_FRAMES`] a round, the
+//! nearest on foot first, and to the next one where that one is not reached); an activity's frames are taken [`NEW_FRAMES`] a round, the
 //! others seeing the person where it is, and the walker takes over from its last two frames;
 //! a walk comes between two activities. An activity that would enter the scene is skipped with its reason.
 //!
 //! When the take ends, each agent's motion is finished as written: the velocity jump where
 //! one primitive (or activity, or held pose) hands over to the next is spread over ±0.2 s
-//! (up to ±0.4 s for the largest changes; [`crate::motion::joins`]) and the neck and head turn against the torso's sway
+//! (up to ±0.4 s for the largest changes; [`crate::motion::joins`]; not where that would take
+//! the pelvis over a wall the walk kept off) and the neck and head turn against the torso's sway
 //! ([`crate::motion::head_stabilise`]), `[walker] smooth_joins` and `steady_head`; the
 //! walk itself (what was chosen, where it went) is as stepped.
 //!
