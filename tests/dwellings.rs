@@ -2,7 +2,7 @@
 //! reads back as the scene the generator checked (same objects, names and triangles), every
 //! room is reached from the living room over the walkable map, no two pieces' boxes overlap,
 //! each living room has a seat; bad settings and a missing catalogue are refused by name with
-//! nothing written.
+//! nothing written; an opt-in CC-BY library furnishes dwellings that carry its attribution.
 
 mod common;
 
@@ -145,6 +145,12 @@ fn egogen(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
+/// `egogen scene generate --seed SEED --out OUT EXTRA…`.
+fn scene_generate(seed: &str, out: &std::path::Path, extra: &[&str]) -> std::process::Output {
+    let out = out.to_str().unwrap();
+    egogen(&[&["scene", "generate", "--seed", seed, "--out", out], extra].concat())
+}
+
 /// `egogen scene generate --out OUT FLAG VALUE` fails; its standard error.
 fn refused(out: &std::path::Path, flag: &str, value: &std::path::Path) -> String {
     let o = egogen(&[
@@ -188,24 +194,10 @@ fn bad_settings_or_a_missing_catalogue_are_refused_by_name_and_nothing_is_writte
     assert!(!out.exists());
 
     // A dwelling that is there is not overwritten.
-    let o = egogen(&[
-        "scene",
-        "generate",
-        "--seed",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = scene_generate("3", &out, &[]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let before = std::fs::read(dwelling_files(&out).0).unwrap();
-    let o = egogen(&[
-        "scene",
-        "generate",
-        "--seed",
-        "4",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = scene_generate("4", &out, &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && err.contains("already exists"),
@@ -285,14 +277,7 @@ fn a_campaign_and_a_run_config_walk_generated_dwellings() {
         egogen::campaign::TakeStatus::Complete
     );
     let alone = a.path().join("alone");
-    let o = egogen(&[
-        "scene",
-        "generate",
-        "--seed",
-        "5",
-        "--out",
-        alone.to_str().unwrap(),
-    ]);
+    let o = scene_generate("5", &alone, &[]);
     assert!(o.status.success());
     let (glb, json) = dwelling_files(&alone);
     assert_eq!(
@@ -354,4 +339,171 @@ fn walk(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
         }
     }
     out
+}
+
+/// An opt-in library in `dir`: three shipped GLBs under new ids and the roles they play, under
+/// CC-BY-3.0 (`extra` is spliced into its catalogue.json's top level, `first_id` names its
+/// first model).
+fn opt_in_library(dir: &std::path::Path, first_id: &str, extra: &str) {
+    std::fs::create_dir_all(dir).unwrap();
+    let shipped = shipped_catalogue_dir();
+    let mut models = Vec::new();
+    for (id, from, roles) in [
+        (
+            first_id,
+            "plastic_cup",
+            r#"["table_thing", "kitchen_thing"]"#,
+        ),
+        ("lib_bread", "bread", r#"["table_thing"]"#),
+        ("lib_chair", "chair", r#"["dining_chair", "desk_chair"]"#),
+    ] {
+        std::fs::copy(
+            shipped.join(format!("{from}.glb")),
+            dir.join(format!("{id}.glb")),
+        )
+        .unwrap();
+        let m = &catalogue().models[from];
+        models.push(format!(
+            r#"{{"id": "{id}", "name": "Lib {}", "category": "{}", "creator": "A. Maker", "size_m": {:?}, "elevation_m": 0.0, "drop_on_top_m": null, "file": "{id}.glb", "roles": {roles}}}"#,
+            m.name, m.category, m.size_m
+        ));
+    }
+    std::fs::write(
+        dir.join("catalogue.json"),
+        format!(
+            r#"{{"library": "Lib", "licence": "CC-BY-3.0", "source": "a test", "source_sha256": "00", {extra} "models": [{}]}}"#,
+            models.join(", ")
+        ),
+    )
+    .unwrap();
+}
+
+const ATTRIBUTED: &str = r#""licence_url": "https://creativecommons.org/licenses/by/3.0/", "copyright": "2026, A. Maker","#;
+
+/// A CC-BY library added to the shipped catalogue (`--with-catalogue`, a campaign's
+/// `dwelling_catalogues`) furnishes dwellings beside the CC0 one; each object records its
+/// library and licence, and the dwelling, the campaign and every take made in it carry an
+/// attribution naming exactly the added library's models placed, with their creators. Without
+/// it the same seed is the same CC0 dwelling as ever. A library with an id already taken, with
+/// no licence deed or copyright, or with a role egogen does not know is refused by name.
+#[test]
+fn an_opt_in_cc_by_library_furnishes_dwellings_that_carry_its_attribution() {
+    let a = tempfile::tempdir().unwrap();
+    let lib = a.path().join("lib");
+    opt_in_library(&lib, "lib_cup", ATTRIBUTED);
+    let out = a.path().join("with");
+    let o = scene_generate("5", &out, &["--with-catalogue", lib.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (glb, json) = dwelling_files(&out);
+    let sidecar: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(sidecar["catalogue"]["added"][0]["library"], "Lib");
+    let objects = sidecar["objects"].as_array().unwrap();
+    let from_lib: std::collections::BTreeSet<&str> = objects
+        .iter()
+        .filter(|o| o["library"] == "Lib")
+        .map(|o| {
+            assert_eq!(o["licence"], "CC-BY-3.0", "{o}");
+            o["model"].as_str().unwrap()
+        })
+        .collect();
+    assert!(
+        !from_lib.is_empty(),
+        "dwelling 5 places none of the library's models"
+    );
+    assert!(objects
+        .iter()
+        .filter(|o| o["library"].is_null() && o["model"].is_string())
+        .all(|o| o["licence"] == "CC0-1.0"));
+    let attribution = std::fs::read_to_string(glb.with_extension("attribution.md")).unwrap();
+    assert!(
+        attribution.contains("## Lib: CC-BY-3.0 (https://creativecommons.org/licenses/by/3.0/)")
+    );
+    assert!(
+        attribution.contains("Copyright 2026, A. Maker."),
+        "{attribution}"
+    );
+    for id in ["lib_cup", "lib_bread", "lib_chair"] {
+        assert_eq!(
+            attribution.contains(&format!("| `{id}` | Lib ")),
+            from_lib.contains(id),
+            "{id}: {attribution}"
+        );
+    }
+    assert!(attribution.contains("| A. Maker |"));
+
+    // Without the library: seed 5 as ever, nothing to attribute.
+    let plain = a.path().join("plain");
+    let o = scene_generate("5", &plain, &[]);
+    assert!(o.status.success());
+    let plain_sidecar = std::fs::read_to_string(dwelling_files(&plain).1).unwrap();
+    assert!(
+        !plain_sidecar.contains("\"added\"") && !plain_sidecar.contains("\"library\": \"Lib\"")
+    );
+    assert!(!dwelling_files(&plain)
+        .0
+        .with_extension("attribution.md")
+        .exists());
+    assert_ne!(
+        std::fs::read(&glb).unwrap(),
+        std::fs::read(dwelling_files(&plain).0).unwrap()
+    );
+
+    // A campaign furnished with it: the same dwelling, its attribution at the campaign's top
+    // and in the take (listed in its manifest).
+    common::tiny_campaign_run(a.path(), false);
+    let campaign_out = a.path().join("campaign");
+    let campaign = a.path().join("dwellings.toml");
+    std::fs::write(
+        &campaign,
+        format!(
+            "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = 1\ndwellings = [5]\ndwelling_catalogues = [\"lib\"]\ncrowd_count = [1, 1]\nmin_free_disk_gb = 0.0\n",
+            campaign_out.display()
+        ),
+    )
+    .unwrap();
+    common::succeeds(Command::new(env!("CARGO_BIN_EXE_egogen-run")).arg(&campaign));
+    assert_eq!(
+        std::fs::read(&glb).unwrap(),
+        std::fs::read(campaign_out.join("scenes/dwelling_5.glb")).unwrap()
+    );
+    assert_eq!(
+        std::fs::read_to_string(campaign_out.join("ATTRIBUTION.md")).unwrap(),
+        attribution
+    );
+    let state = egogen::campaign::CampaignState::read(&campaign_out).unwrap();
+    let take = campaign_out.join("takes").join(&state.takes[0].def.id);
+    assert_eq!(
+        std::fs::read_to_string(take.join("ATTRIBUTION.md")).unwrap(),
+        attribution
+    );
+    let manifest = std::fs::read_to_string(take.join("manifest.json")).unwrap();
+    assert!(manifest.contains("\"ATTRIBUTION.md\""), "{manifest}");
+
+    // Refused by name, nothing written.
+    for (name, first_id, extra, says) in [
+        ("taken", "chair", ATTRIBUTED, "model `chair` is already in"),
+        ("unattributed", "lib_cup", "", "licence_url"),
+        (
+            "unknown_role",
+            "lib_cup",
+            ATTRIBUTED,
+            "unknown variant `lamp`",
+        ),
+    ] {
+        let bad = a.path().join(name);
+        opt_in_library(&bad, first_id, extra);
+        if name == "unknown_role" {
+            let path = bad.join("catalogue.json");
+            let text = std::fs::read_to_string(&path).unwrap();
+            std::fs::write(&path, text.replacen("\"table_thing\", ", "\"lamp\", ", 1)).unwrap();
+        }
+        let dir = a.path().join(format!("out_{name}"));
+        let err = refused(&dir, "--with-catalogue", &bad);
+        assert!(
+            err.contains(says) && err.contains(&format!("{name}/catalogue.json")),
+            "{name}: {err}"
+        );
+        assert!(!dir.exists(), "{name}");
+    }
 }

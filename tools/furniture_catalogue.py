@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Convert Sweet Home 3D's CC0 furniture library into egogen's furniture catalogue.
+"""Convert Sweet Home 3D's CC0 furniture library (or an opt-in CC-BY one) into egogen's
+furniture catalogue.
 
 Input: the Debian package sweethome3d-furniture_1.8-1_all.deb, or the library
 BlendSwap-CC-0.sh3f taken from it (a zip: PluginFurnitureCatalog.properties plus one
@@ -35,6 +36,15 @@ Usage:
       --out assets/furniture --replace
   python3 tools/furniture_catalogue.py /path/to/BlendSwap-CC-0.sh3f --out NEW_FOLDER
   python3 tools/furniture_catalogue.py --check assets/furniture   (verify only)
+  python3 tools/furniture_catalogue.py sweethome3d-furniture_1.8-1_all.deb --library Scopia \
+      --out ~/furniture/scopia     (an opt-in CC-BY library: see below)
+
+Opt-in libraries (--library BlendSwap-CC-BY, Scopia, KatorLegaz, Reallusion; CC-BY-3.0, the
+Debian package's `copyright` file): their ids are prefixed with the library's name, each model
+gets the dwelling roles proposed for it (proposed_roles: its name's words, category and size)
+and only models with a role are converted unless --all-models; catalogue.json carries the
+licence, its deed and the copyright line, which egogen writes into the ATTRIBUTION.md of every
+dwelling, take and campaign that places one of its models.
 
 An existing --out is refused unless --replace (the shipped catalogue, made again on purpose:
 its files are overwritten, GLBs of ids no longer made removed).
@@ -65,8 +75,22 @@ import arguments
 import outputs
 
 LIBRARY = "BlendSwap-CC-0"
-SH3F_MEMBER = "usr/share/sweethome3d/furniture/BlendSwap-CC-0.sh3f"
-SOURCE = "Debian sweethome3d-furniture 1.8-1, BlendSwap-CC-0.sh3f"
+SH3F_MEMBER = "usr/share/sweethome3d/furniture/{library}.sh3f"
+SOURCE = "Debian sweethome3d-furniture 1.8-1, {library}.sh3f"
+# The package's libraries and their licences, as its `copyright` file states them
+# (/usr/share/doc/sweethome3d-furniture/copyright): (licence, its deed, copyright line).
+LIBRARIES = {
+    "BlendSwap-CC-0": ("CC0-1.0", "https://creativecommons.org/publicdomain/zero/1.0/",
+                       "2014, Emmanuel PUYBARET eTeks <info@eteks.com> and other contributors"),
+    "BlendSwap-CC-BY": ("CC-BY-3.0", "https://creativecommons.org/licenses/by/3.0/",
+                        "The BlendSwap contributors"),
+    "Scopia": ("CC-BY-3.0", "https://creativecommons.org/licenses/by/3.0/",
+               "2010-2012, Scopia Visual Interfaces Systems, s.l. <http://www.scopia.es>"),
+    "KatorLegaz": ("CC-BY-3.0-US", "https://creativecommons.org/licenses/by/3.0/us/",
+                   "2003-2008, Andrew Kator & Jennifer Legaz"),
+    "Reallusion": ("CC-BY-3.0-US", "https://creativecommons.org/licenses/by/3.0/us/",
+                   "2008-2011, Reallusion <http://www.reallusion.com>"),
+}
 TOOL = "tools/furniture_catalogue.py"
 EXCLUDED_CATEGORIES = ("Exterior", "Vehicles", "Characters", "Staircases")
 EXCLUDED_NAMES = ("Shipping container",)
@@ -104,19 +128,19 @@ def read_ar_member(data: bytes, prefix: str) -> bytes:
     raise SystemExit(f"no {prefix}* member in the .deb")
 
 
-def load_sh3f(path: str) -> bytes:
-    """The bytes of BlendSwap-CC-0.sh3f, from the .sh3f itself or from the .deb."""
+def load_sh3f(path: str, library: str = LIBRARY) -> bytes:
+    """The bytes of `<library>.sh3f`, from the .sh3f itself or from the .deb."""
     with open(path, "rb") as f:
         data = f.read()
     if data.startswith(b"!<arch>\n"):
         tar_bytes = read_ar_member(data, "data.tar")
         with tarfile.open(fileobj=io.BytesIO(tar_bytes), mode="r:*") as tar:
             for member in tar.getmembers():
-                if member.name.lstrip("./") == SH3F_MEMBER:
+                if member.name.lstrip("./") == SH3F_MEMBER.format(library=library):
                     extracted = tar.extractfile(member)
                     assert extracted is not None
                     return extracted.read()
-        raise SystemExit(f"{SH3F_MEMBER} not in the .deb's data archive")
+        raise SystemExit(f"{SH3F_MEMBER.format(library=library)} not in the .deb's data archive")
     if not data.startswith(b"PK"):
         raise SystemExit("expected a .deb or a .sh3f (zip)")
     return data
@@ -257,6 +281,93 @@ def catalogue_entries(props: dict[str, str]) -> list[Entry]:
     if len(set(ids)) != len(ids):
         raise SystemExit("model ids are not unique")
     return entries
+
+
+# --------------------------------------------------------------------------- roles
+
+# The parts a model may play in a dwelling (egogen's `Role`, src/scene/dwelling/catalogue.rs, in
+# snake case). The shipped CC0 library's roles are a table there; an opt-in library's are
+# proposed here, from each model's name, category and size, and written into its
+# catalogue.json (`roles`), where they can be read and edited.
+ROLES = (
+    "sofa", "armchair", "dining_table", "dining_chair", "desk", "desk_chair", "stool", "bed",
+    "nightstand", "wardrobe", "bookcase", "tv_cabinet", "kitchen_unit", "sink_unit", "cooktop",
+    "fridge", "tall_unit", "wall_unit", "toilet", "washbasin", "shower", "towel_rack", "plant",
+    "floor_thing", "radiator", "table_thing", "kitchen_thing", "bathroom_thing", "bedroom_thing",
+)
+NOT_A_THING = ("plug", "switch", "socket", "antenna", "dimmer", "rj45", "detector", "intercom",
+               "cctv", "surveillance", "bill", "ring", "pencil", "knife", "fork", "spoon")
+
+
+def proposed_roles(e: Entry) -> list[str]:
+    """The roles a model of an opt-in library plays: by its name's words, its category and
+    its size (metres), within the sizes the shipped library's models of each role have."""
+    words = set(re.findall(r"[a-z0-9]+", e.name.lower()))
+    has = lambda *ws: any(w in words for w in ws)  # noqa: E731
+    w, d, h, el = e.width / 100, e.depth / 100, e.height / 100, e.elevation / 100
+    c = e.category
+    if e.light or c == "Lights" or c == "Doors and windows" or min(w, d, h) < 0.002:
+        return []
+    between = lambda x, lo, hi: lo <= x <= hi  # noqa: E731
+    roles: list[str] = []
+    if has("sofa", "couch") and not has("corner", "bench", "convertible", "opened") and between(w, 1.4, 2.4) and between(d, 0.65, 1.0) and between(h, 0.65, 1.05):
+        roles.append("sofa")
+    if has("armchair") and not has("ottoman") and between(w, 0.55, 1.1) and between(d, 0.5, 1.0) and between(h, 0.65, 1.1):
+        roles.append("armchair")
+    if has("chair") and not has("armchair", "bar", "high", "baby", "wheelchair", "children", "child") and between(w, 0.38, 0.7) and between(d, 0.4, 0.7) and between(h, 0.75, 1.2):
+        roles += ["desk_chair"] if c == "Office" else ["dining_chair", "desk_chair"]
+    if has("table") and not has("coffee", "bedside", "night", "bar", "tennis", "football", "pool", "technical", "dressing", "changing", "children", "trestles") and c in ("Living room", "Kitchen", "Office") and between(h, 0.72, 0.8) and between(w, 0.9, 2.4) and between(d, 0.7, 1.3):
+        roles.append("dining_table")
+    if has("desk") and not has("lamp") and between(h, 0.7, 0.8) and between(w, 0.9, 1.9) and between(d, 0.5, 0.95):
+        roles.append("desk")
+    if has("stool") and not has("bar") and between(h, 0.4, 0.8):
+        roles.append("stool")
+    if has("bed") and not has("baby", "bunk", "mezzanine", "hospital", "air", "sofa", "day", "side") and c == "Bedroom" and between(w, 0.9, 2.1) and between(d, 1.9, 2.3) and between(h, 0.35, 1.3):
+        roles.append("bed")
+    if (has("bedside", "nightstand") or {"night", "table"} <= words) and between(h, 0.35, 0.75) and w <= 0.7:
+        roles.append("nightstand")
+    if has("wardrobe", "closet", "armoire") and between(h, 1.7, 2.5) and between(d, 0.45, 0.75) and between(w, 0.8, 2.5):
+        roles.append("wardrobe")
+    if has("bookcase", "shelves", "bookshelf") and not has("upper") and el == 0 and between(h, 0.7, 2.3) and d <= 0.5 and w <= 2.0:
+        roles.append("bookcase")
+    if has("tv") and has("stand", "cabinet", "unit") and between(h, 0.4, 1.7):
+        roles.append("tv_cabinet")
+    if c == "Kitchen" and has("cabinet") and not has("upper", "high", "tall", "corner", "glass", "wall", "sink") and el == 0 and between(w, 0.3, 1.2) and between(d, 0.5, 0.7) and between(h, 0.8, 0.95):
+        roles.append("kitchen_unit")
+    if c == "Kitchen" and has("sink") and el == 0 and between(d, 0.5, 0.7) and between(h, 0.8, 1.25):
+        roles.append("sink_unit")
+    if (has("cooktop", "hob") or {"induction", "cooker"} <= words) and h <= 0.1 and w >= 0.5:
+        roles.append("cooktop")
+    if has("fridge", "refrigerator") and between(h, 1.4, 2.1):
+        roles.append("fridge")
+    if c == "Kitchen" and has("cabinet") and has("high", "tall") and between(h, 1.8, 2.3) and between(d, 0.5, 0.7):
+        roles.append("tall_unit")
+    if c == "Kitchen" and has("cabinet") and has("upper", "glass", "wall") and between(el, 1.3, 1.7) and d <= 0.45:
+        roles.append("wall_unit")
+    if has("toilet", "toilets", "wc") and not has("brush", "paper", "dispenser", "tissue") and c == "Bathroom" and between(h, 0.6, 0.9):
+        roles.append("toilet")
+    if has("washbasin", "vanity") and c == "Bathroom" and el == 0 and between(h, 0.75, 1.0) and w <= 1.2:
+        roles.append("washbasin")
+    if has("shower") and has("stall", "cabin") and between(h, 1.8, 2.3):
+        roles.append("shower")
+    if {"towel", "rack"} <= words and c == "Bathroom" and el <= 1.0:
+        roles.append("towel_rack")
+    if has("plant", "ficus", "yucca", "bonsai", "spathiphyllum", "bamboo", "flowers", "tulips", "lily", "orchids") and between(h, 0.2, 1.9) and max(w, d) <= 1.1:
+        roles.append("plant")
+    if has("guitar", "speaker", "umbrella", "dustbin", "trash", "recycling", "backpack") and between(h, 0.25, 1.2) and max(w, d) <= 0.6:
+        roles.append("floor_thing")
+    if has("radiator") and el <= 0.2 and h <= 0.9:
+        roles.append("radiator")
+    if max(w, d) <= 0.35 and between(h, 0.005, 0.35) and el == 0 and not has(*NOT_A_THING):
+        if c in ("Kitchen", "Living room", "Office", "Miscellaneous"):
+            roles.append("table_thing")
+        if c == "Kitchen":
+            roles.append("kitchen_thing")
+        if c == "Bathroom":
+            roles.append("bathroom_thing")
+        if c == "Bedroom":
+            roles.append("bedroom_thing")
+    return roles
 
 
 # --------------------------------------------------------------------------- OBJ / MTL
@@ -1457,9 +1568,40 @@ def write_readme(out: str, cat: dict, base_bytes: int, stats: dict, replace: boo
     return total
 
 
+def write_opt_in_readme(out: str, cat: dict, base_bytes: int, replace: bool) -> int:
+    """README.md of an opt-in (CC-BY) library's catalogue; returns the folder's size."""
+    import textwrap
+
+    paragraphs = [
+        f"{len(cat['models'])} models of Sweet Home 3D's `{cat['library']}` library (Debian "
+        f"`sweethome3d-furniture` 1.8-1, sha256 {cat['source_sha256']}), converted as the shipped "
+        "catalogue is (assets/furniture/README.md), each with the parts it plays in a dwelling "
+        "(`roles`, proposed from its name, category and size by tools/furniture_catalogue.py; "
+        "edit them to taste).",
+        f"Licence: {cat['licence']} ({cat['licence_url']}), copyright {cat['copyright']}; each "
+        "model's creator is in catalogue.json. Use it with `egogen scene generate "
+        "--with-catalogue THIS_FOLDER` (or a campaign's `dwelling_catalogues`): every dwelling "
+        "that places one of its models gets an ATTRIBUTION.md naming the models, their "
+        "creators, the licence and the changes made, and so does every take or campaign made "
+        "in one. Keep it with whatever you publish.",
+    ]
+    body = (
+        f"# Furniture catalogue (Sweet Home 3D, {cat['library']}, opt-in)\n\n"
+        + "\n\n".join(textwrap.fill(p, width=88, break_on_hyphens=False) for p in paragraphs)
+        + "\n"
+    ).encode("utf-8")
+    outputs.write_bytes(os.path.join(out, "README.md"), body, replace)
+    return base_bytes + len(body)
+
+
 def main() -> int:
     ap = arguments.StrictParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("source", nargs="?", help="sweethome3d-furniture_*.deb or BlendSwap-CC-0.sh3f")
+    ap.add_argument("source", nargs="?", help="sweethome3d-furniture_*.deb or a library's .sh3f")
+    ap.add_argument("--library", default=LIBRARY, choices=sorted(LIBRARIES),
+                    help="which of the package's libraries (default: the CC0 one egogen ships); "
+                    "the others are CC-BY: an opt-in catalogue for `egogen scene generate --with-catalogue`")
+    ap.add_argument("--all-models", action="store_true",
+                    help="an opt-in library: convert every model, not only those with a role")
     ap.add_argument("--out", default="assets/furniture", help="output folder")
     ap.add_argument("--check", metavar="DIR", help="only check an existing output folder")
     ap.add_argument("--only", nargs="*", help="convert only these ids (for testing; writes no catalogue)")
@@ -1477,16 +1619,27 @@ def main() -> int:
         ap.error("source is required")
     outputs.check_new(args.out, "--out", args.replace, folder=True, parents=True)
 
-    sh3f = load_sh3f(args.source)
+    shipped = args.library == LIBRARY
+    sh3f = load_sh3f(args.source, args.library)
     sha = hashlib.sha256(sh3f).hexdigest()
     zf = zipfile.ZipFile(io.BytesIO(sh3f))
     props = parse_properties(zf.read("PluginFurnitureCatalog.properties").decode("latin-1"))
     entries = catalogue_entries(props)
+    roles: dict[str, list[str]] = {}
+    if not shipped:
+        # An opt-in library's ids carry its name (they join the shipped catalogue's), and it
+        # holds the models that play a part in a dwelling unless --all-models.
+        prefix = snake_id(args.library) + "_"
+        for e in entries:
+            e.id = prefix + e.id
+            roles[e.id] = proposed_roles(e)
+        if not args.all_models:
+            entries = [e for e in entries if roles[e.id]]
     if args.only:
         entries = [e for e in entries if e.id in args.only]
     entries.sort(key=lambda e: e.id)
     os.makedirs(args.out, exist_ok=True)
-    print(f"{len(entries)} models from {LIBRARY} (sha256 {sha})")
+    print(f"{len(entries)} models from {args.library} (sha256 {sha})")
 
     models = []
     fronts = []
@@ -1512,6 +1665,8 @@ def main() -> int:
                 "bytes": len(r.glb),
             }
         )
+        if not shipped:
+            models[-1]["roles"] = roles[e.id]
         stats["over"] += r.triangles > r.budget
         stats["reprojected"] += r.reprojected
         if "Seat" in e.tags or "chair" in e.name.lower() or "Chair" in e.tags:
@@ -1526,18 +1681,25 @@ def main() -> int:
     for n in sorted(os.listdir(args.out)):
         if n.endswith(".glb") and n not in keep:
             os.remove(os.path.join(args.out, n))
+    licence, deed, copyright_line = LIBRARIES[args.library]
     cat = {
-        "library": LIBRARY,
-        "licence": "CC0-1.0",
-        "source": SOURCE,
+        "library": args.library,
+        "licence": licence,
+        "source": SOURCE.format(library=args.library),
         "source_sha256": sha,
         "tool": TOOL,
         "models": models,
     }
+    if not shipped:
+        cat["licence_url"] = deed
+        cat["copyright"] = copyright_line
     outputs.write_text(os.path.join(args.out, "catalogue.json"),
                        json.dumps(cat, sort_keys=True, indent=1, ensure_ascii=False) + "\n", args.replace)
     base = sum(m["bytes"] for m in models) + os.path.getsize(os.path.join(args.out, "catalogue.json"))
-    total = write_readme(args.out, cat, base, stats, args.replace)
+    if shipped:
+        total = write_readme(args.out, cat, base, stats, args.replace)
+    else:
+        total = write_opt_in_readme(args.out, cat, base, args.replace)
 
     print("\nfront check (vertices above 60 % of the height; front = +z, so the back rest at z < 0):")
     for mid, fr in fronts:

@@ -54,6 +54,11 @@ pub(crate) struct RawCampaign {
     /// ([`dwelling_seeds`]).
     #[serde(default)]
     pub dwellings: Option<toml::Value>,
+    /// Opt-in furniture libraries added to the shipped catalogue for `dwellings` (folders
+    /// `tools/furniture_catalogue.py --library` made, relative to the campaign file): the
+    /// campaign then carries `ATTRIBUTION.md`, and so does each take in a dwelling using one.
+    #[serde(default)]
+    pub dwelling_catalogues: Vec<PathBuf>,
     /// People per take, drawn uniformly in `[lo, hi]` from the take's seed (default: the run
     /// config's `crowd.count`).
     pub crowd_count: Option<[usize; 2]>,
@@ -87,6 +92,8 @@ pub struct CampaignPlan {
     pub floor_plans: Vec<(u64, PathBuf)>,
     /// Dwellings to generate before the first take (seed, GLB file).
     pub dwellings: Vec<(u64, PathBuf)>,
+    /// Opt-in furniture libraries the dwellings are furnished from besides the shipped one.
+    pub dwelling_catalogues: Vec<PathBuf>,
     /// SHA-256 of what defines the campaign (its takes' definitions): a resume must match.
     pub fingerprint: String,
 }
@@ -316,11 +323,9 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
             w[0]
         );
     }
-    let fingerprint = sha256_hex(
-        serde_json::to_string(&(&run, &takes))
-            .context("fingerprinting the campaign")?
-            .as_bytes(),
-    );
+    let dwelling_catalogues = added_catalogues(&c.dwelling_catalogues, dir)
+        .map_err(|what| bad("dwelling_catalogues", what))?;
+    let fingerprint = fingerprint(&run, &takes, &dwelling_catalogues)?;
     Ok(CampaignPlan {
         config: path.to_path_buf(),
         run,
@@ -329,8 +334,35 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         min_free_disk_bytes: (min_free_disk_gb * 1e9) as u64,
         floor_plans,
         dwellings,
+        dwelling_catalogues,
         fingerprint,
     })
+}
+
+/// A campaign's `dwelling_catalogues`, relative to its folder `dir`: each a catalogue folder.
+fn added_catalogues(named: &[PathBuf], dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let folders: Vec<PathBuf> = named.iter().map(|d| dir.join(d)).collect();
+    match folders.iter().find(|d| !d.join("catalogue.json").is_file()) {
+        Some(d) => Err(format!(
+            "{} holds no catalogue.json: expected a folder tools/furniture_catalogue.py --library made",
+            d.display()
+        )),
+        None => Ok(folders),
+    }
+}
+
+/// SHA-256 of what defines a campaign: the run config and its takes' definitions, and the
+/// libraries added to its dwellings' catalogue, which change the dwellings (a campaign without
+/// them keeps the fingerprint it always had).
+fn fingerprint(run: &Path, takes: &[TakeDef], catalogues: &[PathBuf]) -> Result<String> {
+    let json = if catalogues.is_empty() {
+        serde_json::to_string(&(run, takes))
+    } else {
+        serde_json::to_string(&(run, takes, catalogues))
+    };
+    Ok(sha256_hex(
+        json.context("fingerprinting the campaign")?.as_bytes(),
+    ))
 }
 
 /// The campaign's scene files, globs expanded (sorted), each with the frame its entry gives
@@ -678,7 +710,7 @@ pub(crate) fn write_generated_scenes(plan: &CampaignPlan) -> Result<()> {
         use crate::scene::dwelling::{
             generate, shipped_catalogue_dir, Catalogue, DwellingSettings,
         };
-        let catalogue = Catalogue::load(&shipped_catalogue_dir())?;
+        let catalogue = Catalogue::load_with(&shipped_catalogue_dir(), &plan.dwelling_catalogues)?;
         let settings = DwellingSettings::default();
         for (seed, file) in &plan.dwellings {
             // The GLB is written last: a dwelling whose GLB is there is whole.
@@ -687,6 +719,31 @@ pub(crate) fn write_generated_scenes(plan: &CampaignPlan) -> Result<()> {
             }
             generate(&settings, &catalogue, *seed)?.write_glb(&catalogue, file)?;
         }
+        write_campaign_attribution(plan)?;
+    }
+    Ok(())
+}
+
+/// Writes the campaign's `ATTRIBUTION.md` where its dwellings place models of an opt-in
+/// (CC-BY) library: every such model of every dwelling, once.
+fn write_campaign_attribution(plan: &CampaignPlan) -> Result<()> {
+    use crate::scene::dwelling::attribution::{of_sidecars, ATTRIBUTION_FILE};
+    if plan.dwelling_catalogues.is_empty() {
+        return Ok(());
+    }
+    let sidecars = plan
+        .dwellings
+        .iter()
+        .map(|(_, glb)| {
+            let json = glb.with_extension("json");
+            std::fs::read(&json).with_context(|| format!("reading {}", json.display()))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let views: Vec<&[u8]> = sidecars.iter().map(Vec::as_slice).collect();
+    if let Some(text) = of_sidecars(&views).map_err(anyhow::Error::msg)? {
+        let path = plan.out.join(ATTRIBUTION_FILE);
+        crate::atomic_file::write_atomically(&path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

@@ -46,6 +46,11 @@ pub struct GenerateArgs {
     /// Furniture catalogue folder (default: the shipped CC0 one, assets/furniture).
     #[arg(long)]
     pub catalogue: Option<PathBuf>,
+    /// An opt-in furniture library added to the catalogue (a folder `tools/furniture_catalogue.py
+    /// --library` made, e.g. a CC-BY one); repeatable. A dwelling that places one of its models
+    /// gets `dwelling.attribution.md`, and every take made in it an `ATTRIBUTION.md`.
+    #[arg(long = "with-catalogue", value_name = "DIR")]
+    pub with_catalogue: Vec<PathBuf>,
     /// Also write one JSON line per dwelling here (seed, seconds, tries, rooms, area, pieces,
     /// models, seats, seating pieces with and without a seat found): `tools/dwelling_survey.py`
     /// reads it.
@@ -86,6 +91,7 @@ pub fn scene_generate(args: &GenerateArgs) -> Result<()> {
         out,
         settings,
         catalogue_dir: args.catalogue.clone().unwrap_or_else(shipped_catalogue_dir),
+        added_catalogues: args.with_catalogue.clone(),
         summary: args.summary.clone(),
     };
     crate::scene::dwelling::batch::generate_dwellings(&batch, |count| {

@@ -22,6 +22,8 @@ pub(crate) struct DwellingBatch {
     pub(crate) settings: DwellingSettings,
     /// Furniture catalogue folder.
     pub(crate) catalogue_dir: PathBuf,
+    /// Opt-in libraries added to it.
+    pub(crate) added_catalogues: Vec<PathBuf>,
     /// Where to write one JSON line per dwelling, if anywhere.
     pub(crate) summary: Option<PathBuf>,
 }
@@ -35,7 +37,7 @@ pub(crate) fn generate_dwellings(
 ) -> Result<()> {
     use super::{dwelling_files, generate, Catalogue};
     let (out, settings) = (&args.out, &args.settings);
-    let catalogue = Catalogue::load(&args.catalogue_dir)?;
+    let catalogue = Catalogue::load_with(&args.catalogue_dir, &args.added_catalogues)?;
     let dir_of = |seed: u64| {
         out.as_ref().map(|o| {
             if args.count == 1 {
@@ -52,7 +54,7 @@ pub(crate) fn generate_dwellings(
     for seed in args.seed..=last {
         if let Some(dir) = dir_of(seed) {
             let (glb, json) = dwelling_files(&dir);
-            for f in [glb, json] {
+            for f in [super::attribution::file_beside(&glb), glb, json] {
                 crate::atomic_file::refuse_existing(&f)?;
             }
         }

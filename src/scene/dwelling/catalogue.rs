@@ -2,12 +2,15 @@
 //! category, size, creator, licence) beside one GLB per model (y up, metres, centred on its
 //! footprint, standing on y = 0, its front towards +z: towards −y in egogen's z-up world), as
 //! `tools/furniture_catalogue.py` makes them from Sweet Home 3D's CC0 library
-//! (`assets/furniture/`); and which part each model plays in a home ([`Role`]).
+//! (`assets/furniture/`); which part each model plays in a home ([`Role`]: a table here for the
+//! shipped library); and opt-in libraries added to it ([`Catalogue::with_added`]: CC-BY ones
+//! the same tool converts, each model naming its own roles, each library its licence and
+//! copyright for the attribution its dwellings carry).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::DwellingError;
 
@@ -27,6 +30,13 @@ pub struct CatalogueModel {
     pub drop_on_top_m: Option<f64>,
     /// Its GLB, relative to the catalogue's folder.
     pub file: String,
+    /// The parts it plays, where its catalogue says (an opt-in library's models; the shipped
+    /// library's are [`Role::model_ids`]).
+    #[serde(default)]
+    pub roles: Vec<Role>,
+    /// Which library it comes from: 0 the catalogue's own, k its k-th added one.
+    #[serde(skip)]
+    pub(crate) library: usize,
 }
 
 impl CatalogueModel {
@@ -41,11 +51,26 @@ impl CatalogueModel {
 
 #[derive(Debug, Deserialize)]
 struct CatalogueFile {
-    library: String,
-    licence: String,
-    source: String,
-    source_sha256: String,
+    #[serde(flatten)]
+    library: Library,
     models: Vec<CatalogueModel>,
+}
+
+/// A library added to a catalogue: where it is, what it is and under which terms.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub(crate) struct Library {
+    #[serde(skip)]
+    pub(crate) dir: PathBuf,
+    #[serde(rename = "library")]
+    pub(crate) name: String,
+    pub(crate) licence: String,
+    /// The licence's deed and the library's copyright line (an opt-in library names both).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) licence_url: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) copyright: Option<String>,
+    pub(crate) source: String,
+    pub(crate) source_sha256: String,
 }
 
 /// A catalogue read from its folder.
@@ -56,8 +81,10 @@ pub struct Catalogue {
     pub licence: String,
     pub source: String,
     pub source_sha256: String,
-    /// Its models by id.
+    /// Its models by id (its added libraries' too).
     pub models: BTreeMap<String, CatalogueModel>,
+    /// Opt-in libraries added to it, in the order added.
+    pub(crate) added: Vec<Library>,
 }
 
 /// The catalogue egogen ships (`assets/furniture/`, CC0).
@@ -68,42 +95,16 @@ pub fn shipped_catalogue_dir() -> PathBuf {
 impl Catalogue {
     /// Reads `dir/catalogue.json`; every model a role names must be there with its file.
     pub fn load(dir: &Path) -> Result<Self, DwellingError> {
+        let (library, models) = read_folder(dir, 0)?;
         let path = dir.join("catalogue.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| DwellingError::Catalogue {
-            path: path.clone(),
-            message: format!("cannot read it ({e}); the shipped catalogue is assets/furniture/ (tools/furniture_catalogue.py makes it)"),
-        })?;
-        let file: CatalogueFile =
-            serde_json::from_str(&text).map_err(|e| DwellingError::Catalogue {
-                path: path.clone(),
-                message: format!("not a furniture catalogue: {e}"),
-            })?;
-        let mut models = BTreeMap::new();
-        for m in file.models {
-            if !(m.size_m.iter().all(|s| s.is_finite() && *s > 0.0)) {
-                return Err(DwellingError::Catalogue {
-                    path,
-                    message: format!(
-                        "model `{}`: size_m must be three positive numbers, got {:?}",
-                        m.id, m.size_m
-                    ),
-                });
-            }
-            models.insert(m.id.clone(), m);
-        }
-        if models.is_empty() {
-            return Err(DwellingError::Catalogue {
-                path,
-                message: "it lists no models".into(),
-            });
-        }
         let catalogue = Catalogue {
             dir: dir.to_owned(),
-            library: file.library,
-            licence: file.licence,
-            source: file.source,
-            source_sha256: file.source_sha256,
+            library: library.name,
+            licence: library.licence,
+            source: library.source,
+            source_sha256: library.source_sha256,
             models,
+            added: Vec::new(),
         };
         for role in Role::ALL {
             if catalogue.models_for(role).is_empty() {
@@ -116,34 +117,139 @@ impl Catalogue {
                 });
             }
         }
-        for m in catalogue.models.values() {
-            let file = catalogue.model_path(m);
-            if !file.is_file() {
-                return Err(DwellingError::Catalogue {
-                    path: path.clone(),
-                    message: format!("model `{}`: its file {} is missing", m.id, file.display()),
-                });
-            }
-        }
         Ok(catalogue)
     }
 
-    pub(crate) fn model_path(&self, m: &CatalogueModel) -> PathBuf {
-        self.dir.join(&m.file)
+    /// The catalogue in `dir` with the libraries in `added` added ([`Catalogue::with_added`]).
+    pub(crate) fn load_with(dir: &Path, added: &[PathBuf]) -> Result<Self, DwellingError> {
+        added
+            .iter()
+            .try_fold(Self::load(dir)?, |c, a| c.with_added(a))
     }
 
-    /// The catalogue's models that can play `role`, in the role table's order.
+    /// This catalogue with the library in `dir` added (an opt-in one `tools/furniture_catalogue.py
+    /// --library` made): its models play the roles each names, beside this one's. Its ids
+    /// must be new, and a library under a licence other than CC0 must name the licence's deed
+    /// and its copyright (what the attribution of a dwelling that uses it says).
+    pub(crate) fn with_added(mut self, dir: &Path) -> Result<Self, DwellingError> {
+        let (library, models) = read_folder(dir, self.added.len() + 1)?;
+        let path = dir.join("catalogue.json");
+        let bad = |message: String| DwellingError::Catalogue {
+            path: path.clone(),
+            message,
+        };
+        if library.licence != "CC0-1.0"
+            && (library.licence_url.is_none() || library.copyright.is_none())
+        {
+            return Err(bad(format!(
+                "library `{}` is under {} but does not name `licence_url` and `copyright`, which its dwellings' attribution needs (make it with tools/furniture_catalogue.py --library)",
+                library.name, library.licence
+            )));
+        }
+        for (id, m) in models {
+            if let Some(was) = self.models.get(&id) {
+                let from = match was.library {
+                    0 => self.dir.clone(),
+                    k => self.added[k - 1].dir.clone(),
+                };
+                return Err(bad(format!(
+                    "model `{id}` is already in {} (an added library's ids must be new)",
+                    from.display()
+                )));
+            }
+            self.models.insert(id, m);
+        }
+        self.added.push(Library {
+            dir: dir.to_owned(),
+            ..library
+        });
+        Ok(self)
+    }
+
+    /// The library a model comes from, if it is an added one.
+    pub(crate) fn added_library_of(&self, m: &CatalogueModel) -> Option<&Library> {
+        m.library.checked_sub(1).map(|k| &self.added[k])
+    }
+
+    /// The licence a model is under.
+    pub(crate) fn licence_of(&self, m: &CatalogueModel) -> &str {
+        self.added_library_of(m)
+            .map_or(&self.licence, |l| &l.licence)
+    }
+
+    pub(crate) fn model_path(&self, m: &CatalogueModel) -> PathBuf {
+        self.added_library_of(m)
+            .map_or(&self.dir, |l| &l.dir)
+            .join(&m.file)
+    }
+
+    /// The catalogue's models that can play `role`: the role table's, in its order, then the
+    /// added libraries' that name it, by id.
     pub(crate) fn models_for(&self, role: Role) -> Vec<&CatalogueModel> {
-        role.model_ids()
+        let table = role
+            .model_ids()
             .iter()
-            .filter_map(|id| self.models.get(*id))
-            .collect()
+            .filter_map(|id| self.models.get(*id));
+        let named = self
+            .models
+            .values()
+            .filter(|m| m.library > 0 && m.roles.contains(&role));
+        table.chain(named).collect()
     }
 }
 
+/// Reads one catalogue folder: its library and its models (marked as library `library`), each
+/// of a positive size with its file there.
+fn read_folder(
+    dir: &Path,
+    library: usize,
+) -> Result<(Library, BTreeMap<String, CatalogueModel>), DwellingError> {
+    let path = dir.join("catalogue.json");
+    let bad = |message: String| DwellingError::Catalogue {
+        path: path.clone(),
+        message,
+    };
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        bad(format!("cannot read it ({e}); the shipped catalogue is assets/furniture/ (tools/furniture_catalogue.py makes it)"))
+    })?;
+    let file: CatalogueFile =
+        serde_json::from_str(&text).map_err(|e| bad(format!("not a furniture catalogue: {e}")))?;
+    let mut models = BTreeMap::new();
+    for mut m in file.models {
+        if !(m.size_m.iter().all(|s| s.is_finite() && *s > 0.0)) {
+            return Err(bad(format!(
+                "model `{}`: size_m must be three positive numbers, got {:?}",
+                m.id, m.size_m
+            )));
+        }
+        let file = dir.join(&m.file);
+        if !file.is_file() {
+            return Err(bad(format!(
+                "model `{}`: its file {} is missing",
+                m.id,
+                file.display()
+            )));
+        }
+        m.library = library;
+        models.insert(m.id.clone(), m);
+    }
+    if models.is_empty() {
+        return Err(bad("it lists no models".into()));
+    }
+    Ok((
+        Library {
+            dir: dir.to_owned(),
+            ..file.library
+        },
+        models,
+    ))
+}
+
 /// The part a model plays in a home, which decides where it goes (`furnish`) and the word its
-/// object is named by (so that [`crate::scene::ObjectClass`] reads it like any scene's).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+/// object is named by (so that [`crate::scene::ObjectClass`] reads it like any scene's). An
+/// opt-in library's catalogue.json names a model's roles in snake case (`dining_chair`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Role {
     Sofa,
     Armchair,

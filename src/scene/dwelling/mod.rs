@@ -9,8 +9,10 @@
 //! sidecar (each object's class, room, catalogue model, creator and licence; the rooms).
 //! The same seed, settings and catalogue give the same bytes. `batch` is `egogen scene
 //! generate`'s job: dwellings from consecutive seeds, written and summarised; `source` is
-//! `dwelling:SEED` wherever a scene file is asked for, and the held-out seeds.
+//! `dwelling:SEED` wherever a scene file is asked for, and the held-out seeds; `attribution` is
+//! what a dwelling placing models of an opt-in (CC-BY) library carries.
 
+pub(crate) mod attribution;
 pub(crate) mod batch;
 pub(crate) mod catalogue;
 pub(crate) mod furnish;
@@ -253,6 +255,9 @@ pub struct ObjectRecord {
     pub category: Option<String>,
     pub creator: Option<String>,
     pub licence: String,
+    /// The added (opt-in) library its model comes from; none for the catalogue's own.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub library: Option<String>,
     /// Places to sit `scene::seats` finds on it.
     pub seats: usize,
     pub bbox_min: [f64; 3],
@@ -575,6 +580,7 @@ fn scene_mesh(
             category: None,
             creator: None,
             licence: "CC0-1.0".into(),
+            library: None,
             seats: 0,
             bbox_min: lo,
             bbox_max: hi,
@@ -617,7 +623,8 @@ fn scene_mesh(
             model_name: Some(model.name.clone()),
             category: Some(model.category.clone()),
             creator: Some(model.creator.clone()),
-            licence: catalogue.licence.clone(),
+            licence: catalogue.licence_of(model).to_owned(),
+            library: catalogue.added_library_of(model).map(|l| l.name.clone()),
             seats: 0,
             bbox_min: lo,
             bbox_max: hi,
@@ -674,6 +681,9 @@ struct CatalogueRecord<'a> {
     licence: &'a str,
     source: &'a str,
     source_sha256: &'a str,
+    /// Opt-in libraries added to it (what an attribution names).
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    added: &'a [catalogue::Library],
 }
 
 /// The files a dwelling is written to in `dir`.
@@ -715,6 +725,7 @@ impl Dwelling {
                 licence: &catalogue.licence,
                 source: &catalogue.source,
                 source_sha256: &catalogue.source_sha256,
+                added: &catalogue.added,
             },
             plan: &self.plan,
             seats_per_room: self
@@ -730,6 +741,15 @@ impl Dwelling {
         json.push('\n');
         crate::atomic_file::write_atomically(&json_path, json.as_bytes())
             .map_err(io(&json_path))?;
+        if let Some(text) = attribution::of_sidecars(&[json.as_bytes()]).map_err(|message| {
+            DwellingError::Model {
+                path: json_path.clone(),
+                message,
+            }
+        })? {
+            let path = attribution::file_beside(glb_path);
+            crate::atomic_file::write_atomically(&path, text.as_bytes()).map_err(io(&path))?;
+        }
         crate::atomic_file::write_atomically(glb_path, &bytes).map_err(io(glb_path))
     }
 }

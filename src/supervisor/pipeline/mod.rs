@@ -35,7 +35,7 @@ use crate::scene::load_scene;
 use crate::scene::ObstacleSolid;
 use crate::synth::crowd::{CrowdTake, CrowdWorld};
 use bodies::{aria_export, rendered_agents, write_body_inputs, write_sequence};
-use output::{check_output, restamp_moved, stage_run, OutputState};
+use output::{check_output, restamp_moved, stage_run, write_attribution, OutputState};
 use spec::{base_spec, camera_work, repair, scene_objects, segmentation_ids};
 
 /// Command-line choices that are not in the config, and the effective config.
@@ -284,6 +284,7 @@ pub(crate) fn stage_take(
     if !sequence.exists() {
         write_sequence(&sequence, &motion, &agents, model, plan)?;
     }
+    write_attribution(&staging, &plan.scene)?;
     let aria = aria_export(render, &wearers, &motion, &agents, model, &scene)?;
     let frames: Vec<u32> = (0..agents[0].motion.len() as u32)
         .step_by(render.every_n_frames)

@@ -1,6 +1,7 @@
 //! The output folder of a run (steps 1 and 3 of the main job): whether `<dir>` and
-//! `<dir>.partial` may be written or resumed, and `<dir>.partial` staged whole with the stamp
-//! that says which run it holds.
+//! `<dir>.partial` may be written or resumed, `<dir>.partial` staged whole with the stamp
+//! that says which run it holds, and the attribution a take made in a dwelling with CC-BY
+//! furniture carries (`ATTRIBUTION.md`).
 
 use std::path::{Path, PathBuf};
 
@@ -128,6 +129,19 @@ pub(super) fn stage_run(staging: &Path, state: &RunState, opts: &RunOptions) -> 
     write_run_stamp(&fresh, state, opts)?;
     std::fs::rename(&fresh, staging)
         .with_context(|| format!("renaming {} to {}", fresh.display(), staging.display()))?;
+    Ok(())
+}
+
+/// Writes `ATTRIBUTION.md` into the staged take where its scene is a generated dwelling that
+/// places models of an opt-in (CC-BY) library (`scene::dwelling::attribution`); nothing
+/// otherwise.
+pub(super) fn write_attribution(staging: &Path, scene: &Path) -> Result<()> {
+    use crate::scene::dwelling::attribution::{of_scene, ATTRIBUTION_FILE};
+    let path = staging.join(ATTRIBUTION_FILE);
+    if let Some(text) = of_scene(scene).map_err(anyhow::Error::msg)? {
+        write_atomically(&path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     Ok(())
 }
 
