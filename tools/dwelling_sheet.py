@@ -5,7 +5,11 @@ sees on the take's first frame (`egogen-run`, two people, 1/2 size, upright).
 
     python3 tools/dwelling_sheet.py --seeds 0 1 2 3 4 5 6 7 --work /tmp/dwelling_sheet \\
         --out docs/dwellings_sheet.png [--replace] [--egogen target/release/egogen]
-        [--egogen-run target/release/egogen-run]
+        [--egogen-run target/release/egogen-run] [--with-catalogue DIR ...]
+
+`--with-catalogue` adds opt-in furniture libraries (`egogen scene generate --with-catalogue`);
+where the dwellings place CC-BY models, their attributions are joined into
+`<out stem>.attribution.md` beside the sheet, which must travel with it.
 
 Needs Pillow. Each take renders in about a minute on two cores.
 """
@@ -57,17 +61,28 @@ def main():
     ap.add_argument("--egogen", default="target/release/egogen")
     ap.add_argument("--egogen-run", default="target/release/egogen-run")
     ap.add_argument("--columns", type=int, default=2)
+    ap.add_argument("--with-catalogue", action="append", default=[], metavar="DIR",
+                    help="an opt-in furniture library to add (repeatable)")
     a = ap.parse_args()
     outputs.check_new(a.work, "--work", None, folder=True, parents=True)
     outputs.check_new(a.out, "--out", a.replace)
     outputs.check_outside(a.out, "--out", a.work, "--work")
+    attribution_out = os.path.splitext(a.out)[0] + ".attribution.md"
+    if a.with_catalogue:
+        outputs.check_new(attribution_out, "--out's attribution", a.replace)
+    added = [arg for d in a.with_catalogue for arg in ("--with-catalogue", d)]
+    attributions = []
     from PIL import Image, ImageDraw
     os.makedirs(a.work)
     tiles = []
     size = 360
     for seed in a.seeds:
         d = os.path.join(a.work, f"seed_{seed}")
-        run([a.egogen, "scene", "generate", "--seed", str(seed), "--out", d])
+        run([a.egogen, "scene", "generate", "--seed", str(seed), "--out", d] + added)
+        attribution = os.path.join(d, "dwelling.attribution.md")
+        if os.path.exists(attribution):
+            with open(attribution, encoding="utf-8") as f:
+                attributions.append((seed, f.read()))
         glb = os.path.abspath(os.path.join(d, "dwelling.glb"))
         run([a.egogen, "scene", "inspect", glb, "--out", os.path.join(d, "map.png"), "--agents", "0"])
         cfg = os.path.join(d, "take.toml")
@@ -93,6 +108,30 @@ def main():
     with outputs.writing(a.out, a.replace) as tmp:
         sheet.save(tmp, format="PNG")
     print(f"wrote {a.out}")
+    if attributions:
+        outputs.write_text(attribution_out, joined_attribution(a.out, attributions), a.replace)
+        print(f"wrote {attribution_out}")
+
+
+def joined_attribution(picture, attributions):
+    """One attribution for the sheet: the dwellings' `dwelling.attribution.md` files (each a
+    header paragraph, then per library a `## ` heading, a paragraph and a table of models),
+    every library once with every model it lent any of them once."""
+    header, sections = None, {}
+    for _, text in attributions:
+        head, *libs = text.split("\n## ")
+        header = header or head
+        for lib in libs:
+            lines = lib.rstrip("\n").split("\n")
+            rows = [l for l in lines if l.startswith("| `")]
+            top = [l for l in lines if not l.startswith("| `")]
+            got = sections.setdefault(top[0], (top, set()))
+            got[1].update(rows)
+    seeds = " ".join(str(seed) for seed, _ in attributions)
+    out = header.rstrip("\n") + f"\n\nThe picture `{os.path.basename(picture)}` shows dwellings {seeds}.\n"
+    for _, (top, rows) in sorted(sections.items()):
+        out += "\n## " + "\n".join(top) + "\n" + "\n".join(sorted(rows)) + "\n"
+    return out
 
 
 if __name__ == "__main__":
