@@ -4,7 +4,8 @@
 //! the system `python3` (standard library only): the helpers' own unit tests
 //! (`tests/tools/test_outputs.py`) and tools whose argument checks need no other package.
 //! Their command lines (`tools/arguments.py`): an option that takes one value is refused when
-//! given twice, as egogen's own commands refuse it (`tests/tools/test_arguments.py`).
+//! given twice, as egogen's own commands refuse it (`tests/tools/test_arguments.py`). The parts
+//! proposed for an opt-in furniture library's models (`tests/tools/test_furniture_roles.py`).
 
 mod common;
 
@@ -43,26 +44,29 @@ fn refused(out: &Output, path: &Path, mine: &[u8], says: &str) {
 
 const EXISTS: &str = "exists; choose a new path or pass --replace";
 
-#[test]
-fn the_output_helpers_pass_their_unit_tests() {
-    let out = python(
-        &common::repo_root().join("tests/tools/test_outputs.py"),
-        &[],
-    );
+/// `tests/tools/<file>` (unittest) passes.
+fn unit_tests_pass(file: &str) {
+    let out = python(&common::repo_root().join("tests/tools").join(file), &[]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("\nOK"), "{err}");
 }
 
 #[test]
+fn the_output_helpers_pass_their_unit_tests() {
+    unit_tests_pass("test_outputs.py");
+}
+
+#[test]
 fn the_argument_parser_passes_its_unit_tests() {
-    let out = python(
-        &common::repo_root().join("tests/tools/test_arguments.py"),
-        &[],
-    );
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{err}");
-    assert!(err.contains("\nOK"), "{err}");
+    unit_tests_pass("test_arguments.py");
+}
+
+/// The parts proposed for an opt-in furniture library's models (`tools/furniture_roles.py`)
+/// are egogen's `Role`s, given by name, category and size.
+#[test]
+fn the_furniture_roles_pass_their_unit_tests() {
+    unit_tests_pass("test_furniture_roles.py");
 }
 
 /// A tool given one of its single-value options twice (either form) exits with status 2
