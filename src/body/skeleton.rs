@@ -9,23 +9,23 @@ pub const POSE_DIM: usize = NUM_JOINTS * 3;
 
 /// Joint indices used throughout egogen.
 pub mod joint {
-    pub const PELVIS: usize = 0;
+    pub(crate) const PELVIS: usize = 0;
     pub const LEFT_HIP: usize = 1;
-    pub const RIGHT_HIP: usize = 2;
-    pub const LEFT_KNEE: usize = 4;
-    pub const RIGHT_KNEE: usize = 5;
-    pub const LEFT_ANKLE: usize = 7;
-    pub const RIGHT_ANKLE: usize = 8;
-    pub const LEFT_FOOT: usize = 10;
-    pub const RIGHT_FOOT: usize = 11;
+    pub(crate) const RIGHT_HIP: usize = 2;
+    pub(crate) const LEFT_KNEE: usize = 4;
+    pub(crate) const RIGHT_KNEE: usize = 5;
+    pub(crate) const LEFT_ANKLE: usize = 7;
+    pub(crate) const RIGHT_ANKLE: usize = 8;
+    pub(crate) const LEFT_FOOT: usize = 10;
+    pub(crate) const RIGHT_FOOT: usize = 11;
     pub(crate) const NECK: usize = 12;
     pub const HEAD: usize = 15;
-    pub const LEFT_SHOULDER: usize = 16;
+    pub(crate) const LEFT_SHOULDER: usize = 16;
     pub(crate) const RIGHT_SHOULDER: usize = 17;
-    pub const LEFT_ELBOW: usize = 18;
+    pub(crate) const LEFT_ELBOW: usize = 18;
     pub(crate) const RIGHT_ELBOW: usize = 19;
-    pub const LEFT_WRIST: usize = 20;
-    pub const RIGHT_WRIST: usize = 21;
+    pub(crate) const LEFT_WRIST: usize = 20;
+    pub(crate) const RIGHT_WRIST: usize = 21;
     pub const LEFT_EYE: usize = 23;
     pub const RIGHT_EYE: usize = 24;
 }

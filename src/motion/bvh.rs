@@ -125,12 +125,12 @@ impl BvhClip {
     }
 
     /// Index of the joint called `name`.
-    pub fn joint_index(&self, name: &str) -> Option<usize> {
+    pub(crate) fn joint_index(&self, name: &str) -> Option<usize> {
         self.joints.iter().position(|j| j.name == name)
     }
 
     /// `world_from_joint` of every joint at frame `f` (file units and axes).
-    pub fn global_transforms(&self, f: usize) -> Vec<Affine3> {
+    pub(crate) fn global_transforms(&self, f: usize) -> Vec<Affine3> {
         let values = &self.frames[f];
         let mut out: Vec<Affine3> = Vec::with_capacity(self.joints.len());
         for j in &self.joints {

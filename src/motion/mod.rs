@@ -27,6 +27,8 @@ pub mod head_motion;
 pub(crate) mod head_stabilise;
 pub mod jobs;
 pub(crate) mod joins;
+#[cfg(test)]
+mod mocap_tests;
 pub mod primitive;
 pub mod resample;
 pub mod retarget;

@@ -7,7 +7,7 @@ use crate::body::{joint, BodyModel, BodyParams, PoseError, POSE_DIM};
 use crate::math::{Affine3, Mat3, Vec3};
 
 /// Frames per primitive.
-pub const PRIMITIVE_FRAMES: usize = 20;
+pub(crate) const PRIMITIVE_FRAMES: usize = 20;
 /// Seed frames at the start of each primitive.
 pub const SEED_FRAMES: usize = 2;
 /// New frames per primitive (the seed frames are the previous primitive's last).
@@ -87,7 +87,7 @@ pub fn extract_primitives(
 
 impl Primitive {
     /// The frames moved back to the world.
-    pub fn to_world(&self, model: &BodyModel) -> Result<Vec<BodyParams>, PoseError> {
+    pub(crate) fn to_world(&self, model: &BodyModel) -> Result<Vec<BodyParams>, PoseError> {
         let betas = self
             .frames
             .first()

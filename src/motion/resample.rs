@@ -9,7 +9,7 @@ use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Mat3, Vec3};
 
 /// Resamples to `rate_hz`: frame `k` at time `k / rate_hz`, up to the last source frame.
 /// Integer ratios (120 → 40 Hz) pick source frames exactly.
-pub fn resample(seq: &MotionSequence, rate_hz: f64) -> MotionSequence {
+pub(crate) fn resample(seq: &MotionSequence, rate_hz: f64) -> MotionSequence {
     let n_in = seq.len();
     let duration = (n_in.saturating_sub(1)) as f64 / seq.frame_rate_hz;
     let n_out = (duration * rate_hz + 1e-9).floor() as usize + 1;

@@ -18,7 +18,7 @@ use crate::body::{joint, BodyModel, PARENTS, POSE_DIM};
 use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Mat3, Vec3};
 
 /// SMPL-X body joint ← CMU joint, and the SMPL-X child that defines its bone (if any).
-pub const CMU_TO_SMPLX: [(usize, &str, Option<usize>); NUM_BODY_JOINTS] = [
+pub(crate) const CMU_TO_SMPLX: [(usize, &str, Option<usize>); NUM_BODY_JOINTS] = [
     (joint::PELVIS, "Hips", None),
     (joint::LEFT_HIP, "LeftUpLeg", Some(joint::LEFT_KNEE)),
     (joint::RIGHT_HIP, "RightUpLeg", Some(joint::RIGHT_KNEE)),
@@ -72,7 +72,10 @@ pub(crate) fn rotation_between(from: Vec3, to: Vec3) -> Mat3 {
 }
 
 /// Retargets a CMU BVH clip onto `model` (zero betas), at the clip's own frame rate.
-pub fn retarget_cmu(clip: &BvhClip, model: &BodyModel) -> Result<MotionSequence, RetargetError> {
+pub(crate) fn retarget_cmu(
+    clip: &BvhClip,
+    model: &BodyModel,
+) -> Result<MotionSequence, RetargetError> {
     let path = clip.source.display().to_string();
     let mut cmu_index = [0usize; NUM_BODY_JOINTS];
     for (j, name, _) in CMU_TO_SMPLX {

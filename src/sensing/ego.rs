@@ -121,7 +121,7 @@ impl RayScan {
     }
 
     /// Free distance (m) per beam, `max_range_m` where nothing is hit.
-    pub fn distances(&self, world: &SensingWorld, pose: EgoPose2) -> Vec<f64> {
+    pub(crate) fn distances(&self, world: &SensingWorld, pose: EgoPose2) -> Vec<f64> {
         let heading = DVec2::from_angle(pose.heading_rad);
         self.offsets
             .iter()
@@ -138,7 +138,7 @@ impl RayScan {
     }
 
     /// World direction of beam `k` for a pose.
-    pub fn beam_dir(&self, pose: EgoPose2, k: usize) -> DVec2 {
+    pub(crate) fn beam_dir(&self, pose: EgoPose2, k: usize) -> DVec2 {
         DVec2::from_angle(pose.heading_rad).rotate(self.offsets[k])
     }
 }

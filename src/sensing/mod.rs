@@ -11,11 +11,13 @@
 pub(crate) mod depth_image;
 pub(crate) mod ego;
 pub(crate) mod local_map;
-pub mod ray;
+#[cfg(test)]
+mod properties_tests;
+pub(crate) mod ray;
 pub(crate) mod spec;
 
 pub use depth_image::{DepthImage, DepthImageSettings};
 pub use ego::{EgoPose2, EgoSensor, RayScan, RayScanSettings, SensingWorld};
 pub use local_map::{LocalMap, LocalMapSettings};
-pub use ray::Ray2;
+pub(crate) use ray::Ray2;
 pub use spec::{SensingSpec, Sensor};

@@ -48,7 +48,7 @@ impl SensingSpec {
     }
 
     /// What is wrong with the settings, if anything (`None`: usable).
-    pub fn problem(&self) -> Option<String> {
+    pub(crate) fn problem(&self) -> Option<String> {
         let bad = |ok: bool, message: String| (!ok).then_some(message);
         match self {
             Self::Rays(s) => bad(s.num_rays >= 1, "num_rays must be ≥ 1".into())

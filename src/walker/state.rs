@@ -416,7 +416,7 @@ impl Walker {
     }
 
     /// Aims the walker at a new goal (the totals go on).
-    pub fn retarget(&mut self, goal: DVec2) {
+    pub(crate) fn retarget(&mut self, goal: DVec2) {
         self.distance_m = self.view.pelvis.distance(goal);
         self.start_distance_m = self.distance_m;
     }

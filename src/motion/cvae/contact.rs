@@ -11,7 +11,7 @@ use crate::motion::primitive::PRIMITIVE_RATE_HZ;
 
 /// Foot-contact score of one primitive from its foot markers `[T][F]` (z up) and floor height,
 /// with 3-D foot speed (EgoGen/DIMOS, paper Eq. 12): the headline score everywhere.
-pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
+pub(crate) fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
     contact_score_with(feet, floor_z, |a, b| {
         glam::DVec3::from_array(b).distance(glam::DVec3::from_array(a))
     })
@@ -19,7 +19,7 @@ pub fn contact_score(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
 
 /// The foot-contact score with horizontal foot speed (GAMMA's code), a variant beside the
 /// headline [`contact_score`].
-pub fn contact_score_horizontal(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
+pub(crate) fn contact_score_horizontal(feet: &[Vec<[f64; 3]>], floor_z: f64) -> f64 {
     contact_score_with(feet, floor_z, |a, b| {
         glam::DVec2::new(b[0], b[1]).distance(glam::DVec2::new(a[0], a[1]))
     })

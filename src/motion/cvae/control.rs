@@ -31,14 +31,14 @@ use crate::motion::MotionSequence;
 /// What one primitive should do: move the pelvis at `speed_m_s` along `heading_rad` (world
 /// yaw, counter-clockwise from +x) and end facing that way.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct PaceTarget {
+pub(crate) struct PaceTarget {
     pub speed_m_s: f64,
     pub heading_rad: f64,
 }
 
 /// Settings of the optimiser (the speed/accuracy knob is `samples × iterations`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CemSettings {
+pub(crate) struct CemSettings {
     /// Latents decoded per iteration (one batch).
     pub samples: usize,
     /// Lowest-cost samples the distribution is refitted to.
@@ -80,7 +80,7 @@ impl Default for CemSettings {
 
 /// One primitive chosen for a target.
 #[derive(Debug, Clone)]
-pub struct Controlled {
+pub(crate) struct Controlled {
     pub primitive: DecodedPrimitive,
     pub latent: Vec<f32>,
     pub plausibility: Plausibility,
@@ -91,13 +91,13 @@ pub struct Controlled {
 }
 
 /// The CEM latent optimiser for one body.
-pub struct LatentController {
+pub(crate) struct LatentController {
     pub settings: CemSettings,
     foot_markers: Vec<usize>,
 }
 
 impl LatentController {
-    pub fn new(body: &BodyContext, settings: CemSettings) -> Result<Self, DecodeError> {
+    pub(crate) fn new(body: &BodyContext, settings: CemSettings) -> Result<Self, DecodeError> {
         Ok(Self {
             settings,
             foot_markers: RigGeometry::new(body.model, &body.betas)?.foot_markers,
@@ -138,7 +138,7 @@ impl LatentController {
 
     /// The lowest-cost primitive after `seed` for `target` found by CEM, with `rng` drawing
     /// the samples.
-    pub fn next(
+    pub(crate) fn next(
         &self,
         model: &MotionModel,
         body: &BodyContext,
@@ -234,7 +234,7 @@ pub(crate) fn relative_norm(z: &[f32]) -> f64 {
 /// A chain of decoded primitives as one motion sequence at 40 Hz: the first primitive's seed
 /// frames, then every primitive's decoded frames (world coordinates, the body's betas; the mean
 /// shape, `betas` empty, is written as 10 zeros, so that loaders that slice `betas[:10]` work).
-pub fn chain_sequence(prims: &[&DecodedPrimitive], betas: &[f64]) -> MotionSequence {
+pub(crate) fn chain_sequence(prims: &[&DecodedPrimitive], betas: &[f64]) -> MotionSequence {
     let betas = if betas.is_empty() {
         vec![0.0; 10]
     } else {

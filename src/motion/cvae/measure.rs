@@ -5,7 +5,7 @@ use burn::prelude::*;
 use burn::tensor::FloatDType;
 
 pub(crate) use super::contact::contact_terms;
-pub use super::contact::{contact_score, contact_score_horizontal};
+pub(crate) use super::contact::{contact_score, contact_score_horizontal};
 use super::data::{PrimitiveSet, PRIMITIVE_VALUES};
 use super::features::FRAME_DIM;
 use super::loss::pose_frames;

@@ -25,7 +25,9 @@
 
 pub(crate) mod checkpoint;
 pub(crate) mod contact;
-pub mod control;
+pub(crate) mod control;
+#[cfg(test)]
+mod control_tests;
 pub mod data;
 pub(crate) mod decoder_f32;
 pub mod features;
@@ -44,7 +46,7 @@ pub mod train;
 pub(crate) mod train_error;
 pub mod weights;
 
-pub use control::{CemSettings, LatentController, PaceTarget};
+pub(crate) use control::{CemSettings, LatentController};
 pub use infer::{BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed};
 pub use net::{ArchConfig, PrimitiveVae};
 pub use sampler::{goal_ahead, goal_toward, BestOfK, Plausibility, PlausibilityRules};

@@ -6,7 +6,7 @@ use super::Ray2;
 use crate::scene::WalkableMap;
 
 /// Distance to the first blocked cell along `ray`, or `None` within `max_t`.
-pub fn hit_grid(map: &WalkableMap, ray: Ray2, max_t: f64) -> Option<f64> {
+pub(crate) fn hit_grid(map: &WalkableMap, ray: Ray2, max_t: f64) -> Option<f64> {
     let cell = map.cell_m;
     let q = (ray.origin - map.origin) / cell;
     let mut i = q.x.floor() as i64;

@@ -3,8 +3,8 @@
 //! `circle` (a disc), `oriented_box` (an oriented box, by the slab method).
 
 pub(crate) mod circle;
-pub mod grid;
-pub mod oriented_box;
+pub(crate) mod grid;
+pub(crate) mod oriented_box;
 
 use glam::DVec2;
 
@@ -12,7 +12,7 @@ use crate::scene::Obstacle2;
 
 /// A 2D ray: `origin + t·dir`, `dir` of unit length (callers normalise), `t ≥ 0` in metres.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Ray2 {
+pub(crate) struct Ray2 {
     pub origin: DVec2,
     pub dir: DVec2,
 }
@@ -39,7 +39,7 @@ pub(crate) trait RayTarget {
 }
 
 /// First hit of a ray on a 2D obstacle footprint, within `max_t`.
-pub fn hit_obstacle(obstacle: &Obstacle2, ray: Ray2, max_t: f64) -> Option<f64> {
+pub(crate) fn hit_obstacle(obstacle: &Obstacle2, ray: Ray2, max_t: f64) -> Option<f64> {
     match *obstacle {
         Obstacle2::Box {
             centre,

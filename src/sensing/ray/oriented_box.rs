@@ -23,7 +23,7 @@ impl RayTarget for OrientedBox {
 }
 
 /// First `t ∈ [0, max_t]` where the ray meets the closed axis-aligned box `[lo, hi]`.
-pub fn slab_hit(ray: Ray2, lo: DVec2, hi: DVec2, max_t: f64) -> Option<f64> {
+pub(crate) fn slab_hit(ray: Ray2, lo: DVec2, hi: DVec2, max_t: f64) -> Option<f64> {
     let (mut t0, mut t1) = (0.0f64, max_t);
     for axis in 0..2 {
         let (o, d, l, h) = (ray.origin[axis], ray.dir[axis], lo[axis], hi[axis]);

@@ -2,13 +2,13 @@
 //! grid lines, through cell corners, starting inside, hitting nothing), dynamic boxes and
 //! discs vs parry2d, and the paper's encoding.
 
-use egogen::scene::{
+use crate::scene::{
     scenario, walkable_map, Obstacle2, ScenarioKind, WalkableMap, WalkableSettings,
 };
-use egogen::sensing::ray::grid::hit_grid;
-use egogen::sensing::ray::hit_obstacle;
-use egogen::sensing::ray::oriented_box::slab_hit;
-use egogen::sensing::{EgoPose2, EgoSensor, LocalMap, Ray2, RayScan, SensingWorld};
+use crate::sensing::ray::grid::hit_grid;
+use crate::sensing::ray::hit_obstacle;
+use crate::sensing::ray::oriented_box::slab_hit;
+use crate::sensing::{EgoPose2, EgoSensor, LocalMap, Ray2, RayScan, SensingWorld};
 use glam::DVec2;
 use proptest::prelude::*;
 
@@ -258,7 +258,7 @@ fn dynamic_obstacles_are_seen_and_local_map_marks_them() {
 
 #[test]
 fn a_centred_local_map_surrounds_the_body_and_turns_with_it() {
-    use egogen::sensing::SensingSpec;
+    use crate::sensing::SensingSpec;
     // Free floor with everything at x ≥ 0.5 m blocked.
     let bits: Vec<bool> = (0..N * N)
         .map(|i| -3.0 + ((i % N) as f64 + 0.5) * CELL < 0.5)
@@ -290,7 +290,7 @@ fn a_centred_local_map_surrounds_the_body_and_turns_with_it() {
 
 #[test]
 fn sensing_specs_read_from_toml_with_defaults_and_refuse_unknown_fields() {
-    use egogen::sensing::{RayScanSettings, SensingSpec};
+    use crate::sensing::{RayScanSettings, SensingSpec};
     let read = |text: &str| toml::from_str::<SensingSpec>(text);
     assert_eq!(read("kind = \"rays\"").unwrap(), SensingSpec::default());
     assert_eq!(

@@ -4,21 +4,19 @@
 //! export as AMASS-style npz that read back frame for frame; the shipped training config's
 //! primitives walk at a human pace.
 
-mod common;
-
 use std::path::PathBuf;
 
-use egogen::body::BodyModel;
-use egogen::motion::cvae::control::{chain_sequence, CemSettings, LatentController, PaceTarget};
-use egogen::motion::cvae::measure::{contact_score, contact_score_horizontal};
-use egogen::motion::cvae::pace::{Pace, PaceSummary};
-use egogen::motion::cvae::train::{normal_samples, shipped_weights_path};
-use egogen::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
+use crate::body::BodyModel;
+use crate::motion::cvae::control::{chain_sequence, CemSettings, LatentController, PaceTarget};
+use crate::motion::cvae::measure::{contact_score, contact_score_horizontal};
+use crate::motion::cvae::pace::{Pace, PaceSummary};
+use crate::motion::cvae::train::{normal_samples, shipped_weights_path};
+use crate::motion::cvae::{BodyContext, MotionModel, PrimitiveSeed};
 use rand_core::SeedableRng;
 
 fn walking_seed() -> PrimitiveSeed {
-    let path = common::repo_root().join("assets/motion/cmu_01_03.npz");
-    let clip = egogen::motion::MotionSequence::read(&path).unwrap();
+    let path = crate::paths::crate_root().join("assets/motion/cmu_01_03.npz");
+    let clip = crate::motion::MotionSequence::read(&path).unwrap();
     PrimitiveSeed {
         frames: [clip.frame(80), clip.frame(81)],
         floor_z: 0.0,
@@ -64,7 +62,8 @@ fn mean_height_error(feet: &[Vec<[f64; 3]>]) -> f64 {
 #[test]
 fn the_controller_walks_faster_when_asked_and_keeps_its_best_sample() {
     let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let body = BodyModel::load(common::default_model_path()).unwrap();
+    let body =
+        BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
     let ctx = BodyContext::new(&body, &[]).unwrap();
     let seed = walking_seed();
     let settings = CemSettings {
@@ -77,7 +76,7 @@ fn the_controller_walks_faster_when_asked_and_keeps_its_best_sample() {
     let heading = {
         let last = &seed.frames[1];
         let joints = ctx.shaped.skeleton(&last.pose, last.transl).unwrap().joints;
-        egogen::motion::cvae::pace::heading_rad(&joints)
+        crate::motion::cvae::pace::heading_rad(&joints)
     };
     let mut speed_for = |v: f64| {
         controller
@@ -131,7 +130,8 @@ fn the_controller_walks_faster_when_asked_and_keeps_its_best_sample() {
 #[test]
 fn decoded_chains_export_as_amass_npz_that_reads_back() {
     let model = MotionModel::load(shipped_weights_path()).unwrap();
-    let body = BodyModel::load(common::default_model_path()).unwrap();
+    let body =
+        BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap();
     let ctx = BodyContext::new(&body, &[]).unwrap();
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
     let mut seed = walking_seed();
@@ -163,7 +163,7 @@ fn decoded_chains_export_as_amass_npz_that_reads_back() {
     let dir = tempfile::tempdir().unwrap();
     let path: PathBuf = dir.path().join("chain.npz");
     seq.write_amass(&path).unwrap();
-    let back = egogen::motion::MotionSequence::read(&path).unwrap();
+    let back = crate::motion::MotionSequence::read(&path).unwrap();
     assert_eq!(back.len(), seq.len());
     for (a, b) in back.poses.iter().zip(&seq.poses) {
         assert_eq!(a, b);
@@ -175,11 +175,11 @@ fn decoded_chains_export_as_amass_npz_that_reads_back() {
 
 #[test]
 fn shipped_training_primitives_walk_at_a_human_pace() {
-    use egogen::motion::cvae::pace::set_paces;
-    use egogen::motion::cvae::tensor_body::{RigGeometry, TensorRig};
-    use egogen::motion::cvae::train::evaluation_sets;
-    let plan = egogen::cli::train_primitive::load_train_plan(
-        &common::repo_root().join("configs/train_primitive.toml"),
+    use crate::motion::cvae::pace::set_paces;
+    use crate::motion::cvae::tensor_body::{RigGeometry, TensorRig};
+    use crate::motion::cvae::train::evaluation_sets;
+    let plan = crate::cli::train_primitive::load_train_plan(
+        &crate::paths::crate_root().join("configs/train_primitive.toml"),
     )
     .unwrap();
     let body = BodyModel::load(&plan.body_model).unwrap();
@@ -190,7 +190,7 @@ fn shipped_training_primitives_walk_at_a_human_pace() {
         train.len(),
         held.len()
     );
-    let rig = TensorRig::<egogen::motion::cvae::infer::InferBackend>::new(
+    let rig = TensorRig::<crate::motion::cvae::infer::InferBackend>::new(
         &RigGeometry::new(&body, &[]).unwrap(),
         &Default::default(),
     );

@@ -1,13 +1,11 @@
 //! Mocap ingestion: CMU BVH retargeting keeps every mapped bone's direction, resampling picks
 //! exact frames, mirroring is an involution that swaps left and right.
 
-mod common;
-
-use egogen::body::{joint, BodyModel};
-use egogen::math::Vec3;
-use egogen::motion::bvh::BvhClip;
-use egogen::motion::resample::{mirror, resample};
-use egogen::motion::retarget::{retarget_cmu, CMU_TO_SMPLX};
+use crate::body::{joint, BodyModel};
+use crate::math::Vec3;
+use crate::motion::bvh::BvhClip;
+use crate::motion::resample::{mirror, resample};
+use crate::motion::retarget::{retarget_cmu, CMU_TO_SMPLX};
 use std::path::Path;
 
 fn fixture() -> BvhClip {
@@ -18,7 +16,7 @@ fn fixture() -> BvhClip {
 }
 
 fn model() -> BodyModel {
-    BodyModel::load(common::default_model_path()).unwrap()
+    BodyModel::load(crate::paths::crate_root().join("assets/body/SMPLX_NEUTRAL.npz")).unwrap()
 }
 
 #[test]
@@ -131,9 +129,9 @@ fn bad_bvh_is_named() {
 
 #[test]
 fn primitives_are_canonical_and_map_back_exactly() {
-    use egogen::math::rotation::orthonormality_error;
-    use egogen::motion::primitive::{extract_primitives, PRIMITIVE_FRAMES};
-    use egogen::motion::MotionSequence;
+    use crate::math::rotation::orthonormality_error;
+    use crate::motion::primitive::{extract_primitives, PRIMITIVE_FRAMES};
+    use crate::motion::MotionSequence;
     let m = model();
     let seq = MotionSequence::read(
         &Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/motion/cmu_01_03.npz"),
@@ -202,7 +200,7 @@ fn deepmimic_clip(dir: &Path, right_knee: f64, left_elbow: f64) -> std::path::Pa
 
 #[test]
 fn deepmimic_rest_hangs_arms_and_hinges_bend_by_their_angle() {
-    use egogen::motion::deepmimic::import_deepmimic;
+    use crate::motion::deepmimic::import_deepmimic;
     let m = model();
     let dir = tempfile::tempdir().unwrap();
     let seq = import_deepmimic(&deepmimic_clip(dir.path(), -1.0, 0.0), &m).unwrap();
