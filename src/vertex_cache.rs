@@ -38,7 +38,7 @@ pub struct PointCache {
 }
 
 impl PointCache {
-    pub fn num_points(&self) -> usize {
+    pub(crate) fn num_points(&self) -> usize {
         self.samples.first().map_or(0, Vec::len)
     }
 
@@ -120,20 +120,20 @@ impl PointCache {
 }
 
 /// Writes the triangle list as an int32 `.npy` of shape F×3 (atomically).
-pub fn write_faces_npy(path: &Path, faces: &[[u32; 3]]) -> Result<(), CacheError> {
+pub(crate) fn write_faces_npy(path: &Path, faces: &[[u32; 3]]) -> Result<(), CacheError> {
     write_npy_rows(path, faces.iter().map(|f| f.map(|i| i as i32)))
 }
 
 /// Writes the cache's first sample as a float32 `.npy` of shape N×3 (atomically): the mesh's
 /// vertices before the cache plays, so that Blender never parses the PC2 file itself.
-pub fn write_rest_vertices_npy(path: &Path, cache: &PointCache) -> Result<(), CacheError> {
+pub(crate) fn write_rest_vertices_npy(path: &Path, cache: &PointCache) -> Result<(), CacheError> {
     let first = cache.samples.first().map(Vec::as_slice).unwrap_or(&[]);
     write_npy_rows(path, first.iter().copied())
 }
 
 /// Writes per-corner texture coordinates as a float32 `.npy` of shape (F·3)×2 (atomically),
 /// corner for corner with [`write_faces_npy`]'s triangles.
-pub fn write_corner_uvs_npy(path: &Path, uvs: &[[f32; 2]]) -> Result<(), CacheError> {
+pub(crate) fn write_corner_uvs_npy(path: &Path, uvs: &[[f32; 2]]) -> Result<(), CacheError> {
     write_npy_rows(path, uvs.iter().copied())
 }
 

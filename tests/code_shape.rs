@@ -13,9 +13,10 @@ const MAX_FN_LINES: usize = 150;
 /// by a binary, test or bench became `pub(crate)`, 1 067 after, 1 060 once held objects came
 /// (their types are in the annotations' and shard spec's) and six unused items went, 1 012
 /// once the tests of mocap import, motion control and sensing that read internals moved into
-/// the crate (`motion::mocap_tests`, `motion::cvae::control_tests`, `sensing::properties_tests`);
-/// the rest is what the binaries and the integration tests reach. The ceiling only comes down.
-const MAX_PUB_ITEMS: usize = 1012;
+/// the crate (`motion::mocap_tests`, `motion::cvae::control_tests`, `sensing::properties_tests`),
+/// 991 with the real renders' (`render::shard_tests`); the rest is what the binaries and the
+/// integration tests reach. The ceiling only comes down.
+const MAX_PUB_ITEMS: usize = 991;
 
 /// A line of code with string and char literals emptied and a trailing `//` comment cut, so
 /// that braces in them are not counted.

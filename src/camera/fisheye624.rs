@@ -123,7 +123,7 @@ impl Fisheye624 {
     /// The same camera on an image scaled by `scale` after cropping `offset_px` from the
     /// top-left, as projectaria-tools' `CameraCalibration::rescale` does it:
     /// `f' = s·f`, `c' = s·(c − offset + 0.5) − 0.5`, valid radius scaled, distortion unchanged.
-    pub fn rescaled(
+    pub(crate) fn rescaled(
         &self,
         resolution: Resolution,
         scale: Real,

@@ -9,7 +9,7 @@ use crate::math::{axis_angle_to_matrix, matrix_to_axis_angle, Mat3, Vec3};
 
 /// Settings of the scripted walk.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct WalkCycle {
+pub(crate) struct WalkCycle {
     /// Walking speed (m/s).
     pub speed_m_s: f64,
     /// Steps per second (two steps per gait cycle).
@@ -88,7 +88,7 @@ impl WalkCycle {
     }
 
     /// A sequence of `duration_s` seconds at `frame_rate_hz`.
-    pub fn sequence(
+    pub(crate) fn sequence(
         &self,
         duration_s: f64,
         frame_rate_hz: f64,

@@ -100,7 +100,7 @@ impl Passes {
     /// (`use_pass_<name>`); empty when no ground truth is asked for, and then that render is
     /// skipped. Depth is computed from the surface point; depth noise needs the point and
     /// the normal.
-    pub fn ground_truth_render_passes(self) -> Vec<&'static str> {
+    pub(crate) fn ground_truth_render_passes(self) -> Vec<&'static str> {
         let mut out = Vec::new();
         if self.has(Pass::Depth) || self.has(Pass::Position) || self.has(Pass::DepthNoise) {
             out.push("position");
@@ -121,7 +121,7 @@ impl Passes {
     /// cameras store colour as `gray.Y`; `noisy_depth` whether the camera has a depth-noise
     /// model; `garments` whether people wear outfits (their garments beside the
     /// segmentation). `valid.V` is always there.
-    pub fn frame_channels(
+    pub(crate) fn frame_channels(
         self,
         monochrome: bool,
         noisy_depth: bool,

@@ -109,7 +109,7 @@ impl RenderCamera {
     }
 
     /// Whether the rendered image is the target image itself (no remap).
-    pub fn is_identity(&self) -> bool {
+    pub(crate) fn is_identity(&self) -> bool {
         matches!(
             self,
             RenderCamera::Perspective { .. } | RenderCamera::PolynomialFisheye(_)

@@ -14,7 +14,7 @@ pub(crate) fn render_script() -> PathBuf {
 }
 
 /// The command that runs the worker script on a spec with this Blender.
-pub fn worker_command(runtime: &BlenderRuntime, spec_path: &Path) -> Command {
+pub(crate) fn worker_command(runtime: &BlenderRuntime, spec_path: &Path) -> Command {
     script_command(runtime, &[spec_path.as_os_str()])
 }
 

@@ -14,14 +14,14 @@ use crate::render::render_camera::RenderCamera;
 
 /// Segmentation ids: scene objects are numbered from 1 (see `scene::ObjectId`); agent `k` is
 /// `AGENT_ID_BASE + k`.
-pub const AGENT_ID_BASE: u32 = 1000;
+pub(crate) const AGENT_ID_BASE: u32 = 1000;
 
 /// Segmentation ids of the objects people pick up: `HELD_OBJECT_ID_BASE + k`, in the take's
 /// order (by person, then pick-up).
 pub(crate) const HELD_OBJECT_ID_BASE: u32 = 2000;
 
 /// Blender stores a frame rate as `fps / fps_base` with an integer `fps`.
-pub fn blender_fps(rate_hz: f64) -> (u32, f64) {
+pub(crate) fn blender_fps(rate_hz: f64) -> (u32, f64) {
     let fps = rate_hz.round().max(1.0) as u32;
     (fps, fps as f64 / rate_hz)
 }
@@ -52,7 +52,7 @@ pub(crate) fn pose_at(poses: &[Affine3], frame: f64) -> Affine3 {
 /// say, at the price of an evaluation and a sync of every body per extra sample and frame.
 /// With the default shutter (½ frame) and cache (4 samples a frame) that is 1 step, 3 time
 /// samples, each on one of the cache's.
-pub fn deform_motion_steps(shutter_frames: f64, cache_samples_per_frame: u32) -> u32 {
+pub(crate) fn deform_motion_steps(shutter_frames: f64, cache_samples_per_frame: u32) -> u32 {
     let intervals = (shutter_frames.max(0.0) * cache_samples_per_frame as f64 - 1e-9).ceil();
     let mut steps = 1;
     // Cycles keeps at most 129 time samples (2^7 + 1).
@@ -64,7 +64,7 @@ pub fn deform_motion_steps(shutter_frames: f64, cache_samples_per_frame: u32) ->
 
 /// Which raw renders a frame needs (`render::passes::Passes` decides).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct RawRenders {
+pub(crate) struct RawRenders {
     /// The blurred colour render.
     pub colour: bool,
     /// The unblurred ground-truth render.
@@ -72,7 +72,7 @@ pub struct RawRenders {
 }
 
 /// The raw renders of a frame under `raw_dir` (colour, ground truth), each where asked.
-pub fn raw_frame_paths(
+pub(crate) fn raw_frame_paths(
     raw_dir: &Path,
     camera: &str,
     frame: u32,
@@ -93,7 +93,7 @@ pub fn raw_frame_paths(
 /// `world_from_cam`. Pose keys are placed every `1 / keys_per_frame` frames from
 /// `frame_step` frames before to `frame_step` after each rendered frame (the shutter interval
 /// and the motion vectors' neighbours: the previous and next saved frame), inside the sequence.
-pub fn shard_camera(
+pub(crate) fn shard_camera(
     name: &str,
     render: &RenderCamera,
     world_from_cam: &[Affine3],

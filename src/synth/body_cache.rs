@@ -22,7 +22,7 @@ pub fn body_cache(
 /// grid of `samples_per_frame` samples per frame, or all of them with `None`. Sample `j` of
 /// the cache is the body at grid time `indices[j] / samples_per_frame` (the same vertices
 /// `body_cache` has there).
-pub fn body_cache_at(
+pub(crate) fn body_cache_at(
     model: &BodyModel,
     motion: &MotionSequence,
     samples_per_frame: u32,
@@ -69,7 +69,7 @@ fn to_f32(v: Vec3) -> [f32; 3] {
 /// positions the flow pass reads (the previous and next rendered frames, on the ground
 /// truth's timeline; the motion's first or last frame where they fall outside its `frames`).
 /// Ascending grid indices.
-pub fn rendered_sample_indices(
+pub(crate) fn rendered_sample_indices(
     rendered: &[u32],
     every_n: u32,
     shutter_frames: f64,
@@ -100,7 +100,7 @@ pub fn rendered_sample_indices(
 /// consecutive grid `indices`, so that playing the cache linearly between keys reads, at every
 /// time inside a run, the sample the full cache reads there. Between runs nothing is
 /// rendered.
-pub fn playback_keys(indices: &[usize], samples_per_frame: u32) -> Vec<[f64; 2]> {
+pub(crate) fn playback_keys(indices: &[usize], samples_per_frame: u32) -> Vec<[f64; 2]> {
     let s = samples_per_frame.max(1) as f64;
     let mut keys = Vec::new();
     let mut j = 0;

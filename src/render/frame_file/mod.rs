@@ -124,7 +124,7 @@ pub(crate) fn luminance(rgb: [f32; 3]) -> f32 {
 impl FrameImage {
     /// Drops the planes of passes not in `passes` (the raw renders hold what those asked need:
     /// depth noise needs position and normals even where they are not kept).
-    pub fn keep_only(&mut self, passes: Passes) {
+    pub(crate) fn keep_only(&mut self, passes: Passes) {
         if !passes.has(Pass::Colour) {
             self.rgba = None;
         }
