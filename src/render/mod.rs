@@ -23,8 +23,6 @@ pub mod protocol;
 pub mod render_camera;
 pub mod shard;
 pub mod shard_plan;
-#[cfg(test)]
-mod shard_tests;
 pub mod skin_tone;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError};

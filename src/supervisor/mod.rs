@@ -13,6 +13,8 @@ pub(crate) mod local;
 pub mod pace;
 pub(crate) mod pipeline;
 pub mod pool;
+#[cfg(test)]
+mod render_tests;
 pub(crate) mod slurm;
 pub(crate) mod staged;
 pub mod verify;

@@ -56,11 +56,7 @@ impl Pace {
 }
 
 /// Paces of every item of a single-primitive set, posed in batches of `batch`.
-pub(crate) fn set_paces<B: Backend>(
-    rig: &TensorRig<B>,
-    set: &PrimitiveSet,
-    batch: usize,
-) -> Vec<Pace> {
+pub fn set_paces<B: Backend>(rig: &TensorRig<B>, set: &PrimitiveSet, batch: usize) -> Vec<Pace> {
     let device = rig.foot_markers.device();
     let mut out = Vec::with_capacity(set.len());
     for start in (0..set.len()).step_by(batch.max(1)) {
@@ -108,7 +104,7 @@ pub(crate) fn raw_paces<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Vec<
 
 /// Speed and turn distributions of a set of paces (turns as absolute degrees).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub(crate) struct PaceSummary {
+pub struct PaceSummary {
     pub speed_m_s: Quantiles,
     pub abs_turn_deg: Quantiles,
     /// Share of primitives slower than 0.2 m/s (standing), 0.2–0.8 (slow), 0.8–1.8 (walking at
@@ -120,7 +116,7 @@ pub(crate) struct PaceSummary {
 }
 
 impl PaceSummary {
-    pub(crate) fn of(paces: &[Pace]) -> PaceSummary {
+    pub fn of(paces: &[Pace]) -> PaceSummary {
         let n = paces.len().max(1) as f64;
         let share = |lo: f64, hi: f64| {
             paces

@@ -547,7 +547,7 @@ fn assemble_with(
             copy_label(&mut out.garments, ids.and(garments), i, n);
             if let Some(vec) = &vec {
                 // Blender's vector pass, pixels in Blender's raster (y up), measured
-                // (`src/render/shard_tests/`): (X, Y) = previous − here, (Z, W) = here − next.
+                // (`src/supervisor/render_tests/`): (X, Y) = previous − here, (Z, W) = here − next.
                 let prev = qn + Pixel::new(vec[0][n] as Real, -vec[1][n] as Real);
                 let next = qn + Pixel::new(-vec[2][n] as Real, vec[3][n] as Real);
                 if let Some(here) = to_target(qn) {
