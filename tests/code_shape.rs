@@ -15,9 +15,10 @@ const MAX_FN_LINES: usize = 150;
 /// the tests that read internals of mocap import, motion control (but for the one that reads
 /// the training config), sensing and the real renders moved into the crate
 /// (`motion::mocap_tests`, `motion::cvae::control_tests`, `sensing::properties_tests`,
-/// `supervisor::render_tests`); the rest is what the binaries and the integration tests reach.
-/// The ceiling only comes down.
-const MAX_PUB_ITEMS: usize = 994;
+/// `supervisor::render_tests`), 980 with the locomotion environment's (`policy::env_tests`,
+/// `eval::same_primitives_tests`); the rest is what the binaries and the integration tests
+/// reach. The ceiling only comes down.
+const MAX_PUB_ITEMS: usize = 980;
 
 /// A line of code with string and char literals emptied and a trailing `//` comment cut, so
 /// that braces in them are not counted.

@@ -42,7 +42,7 @@ impl Default for BodyParams {
 
 impl BodyParams {
     /// Axis-angle of joint `j`.
-    pub fn joint_axis_angle(&self, j: usize) -> Vec3 {
+    pub(crate) fn joint_axis_angle(&self, j: usize) -> Vec3 {
         Vec3::new(self.pose[3 * j], self.pose[3 * j + 1], self.pose[3 * j + 2])
     }
     /// Sets the axis-angle of joint `j`.

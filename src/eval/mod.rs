@@ -17,5 +17,7 @@ pub(crate) mod paper;
 pub(crate) mod policy_commands;
 pub(crate) mod policy_tasks;
 pub(crate) mod report;
+#[cfg(test)]
+mod same_primitives_tests;
 pub(crate) mod scenarios;
 pub(crate) mod suite;

@@ -21,6 +21,8 @@
 
 pub(crate) mod actor;
 pub mod env;
+#[cfg(test)]
+pub(crate) mod env_tests;
 pub(crate) mod fixed_scene;
 pub(crate) mod held_out;
 pub mod net;

@@ -24,7 +24,7 @@ pub fn sampling_step(
 /// One step of every episode with a controller of the walker layer built from `spec` (one per
 /// episode, built anew every step: these keep nothing from step to step). A controller that
 /// acts through a policy is refused (the batched actor steps the policy).
-pub fn controller_step(
+pub(crate) fn controller_step(
     env: &mut PolicyEnv,
     spec: ControllerSpec,
     rng: &mut ChaCha8Rng,

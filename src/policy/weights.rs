@@ -64,7 +64,7 @@ pub fn load_policy<B: Backend>(
 }
 
 /// A trained policy that acts in `model`'s latent space, or an error naming the file.
-pub fn load_policy_for(
+pub(crate) fn load_policy_for(
     path: &Path,
     model: &crate::motion::cvae::MotionModel,
 ) -> Result<ActorCritic<crate::motion::cvae::infer::InferBackend>, WeightsError> {

@@ -312,7 +312,7 @@ pub(crate) fn draw_action(mean: &[f32], std: &[f32], rng: &mut ChaCha8Rng) -> Ve
 
 /// The generator walker `i` of a take seeded `seed` draws from (its seed pose first, then
 /// its controller's proposals and redraws).
-pub fn walker_rng(seed: u64, i: usize) -> ChaCha8Rng {
+pub(crate) fn walker_rng(seed: u64, i: usize) -> ChaCha8Rng {
     use rand_core::SeedableRng;
     ChaCha8Rng::seed_from_u64(
         seed.rotate_left(17) ^ (i as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03),

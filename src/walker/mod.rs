@@ -24,4 +24,5 @@ pub use controller::{ControllerSpec, Policy, Steering};
 pub use pose_prior::PosePrior;
 pub use seed_bank::SeedBank;
 pub use settings::WalkerSettings;
-pub use state::{ObsLayout, STATE_FRAME_DIM};
+pub use state::ObsLayout;
+pub(crate) use state::STATE_FRAME_DIM;

@@ -20,14 +20,14 @@ use crate::body::BodyParams;
 /// Body joints the prior covers (SMPL-X joints 1..=21).
 pub(crate) const PRIOR_JOINTS: usize = 21;
 /// Values per pose.
-pub const PRIOR_DIM: usize = 3 * PRIOR_JOINTS;
+pub(crate) const PRIOR_DIM: usize = 3 * PRIOR_JOINTS;
 
 /// Smallest variance of a component along one value (rad²): keeps a component from collapsing
 /// onto a joint the data never moves.
 const MIN_VARIANCE: f64 = 1e-4;
 
 /// The body-joint rotations of a pose.
-pub fn prior_values(params: &BodyParams) -> [f64; PRIOR_DIM] {
+pub(crate) fn prior_values(params: &BodyParams) -> [f64; PRIOR_DIM] {
     std::array::from_fn(|k| params.pose[3 + k])
 }
 
@@ -207,7 +207,7 @@ impl PosePrior {
 
     /// Sets the plausibility limit to quantile `q` of `primitive_means` (mean scores of whole
     /// primitives).
-    pub fn set_plausible_limit(&mut self, primitive_means: &[f64], q: f64) {
+    pub(crate) fn set_plausible_limit(&mut self, primitive_means: &[f64], q: f64) {
         let mut v: Vec<f64> = primitive_means
             .iter()
             .copied()

@@ -302,7 +302,7 @@ pub struct SceneTest {
 }
 
 impl SceneTest {
-    pub fn new(model: &crate::body::BodyModel, count: usize) -> Self {
+    pub(crate) fn new(model: &crate::body::BodyModel, count: usize) -> Self {
         let ids = crate::body::farthest_point_markers(model, count);
         let share = ids.len() as f64 / model.num_vertices().max(1) as f64;
         let threshold = ((EQ11_VERTICES as f64 * share).round() as usize).max(1);

@@ -32,7 +32,7 @@ pub(crate) fn memory_scan(sensor: &Sensor) -> RayScan {
 }
 
 /// Values per seed frame of the marker state: 67 canonical positions and 67 goal directions.
-pub const STATE_FRAME_DIM: usize = NUM_MARKERS * 6;
+pub(crate) const STATE_FRAME_DIM: usize = NUM_MARKERS * 6;
 /// Where the parts of an observation lie, for sensing that writes `sensing_per_frame` values
 /// per seed frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -30,8 +30,10 @@ pub struct EpisodeSnapshot {
 }
 
 impl EpisodeSnapshot {
-    /// The seed frames of the episode's next primitive: pose (165) and translation (3) each.
-    pub fn seed_frames(&self) -> &[Vec<f64>] {
+    /// The seed frames of the episode's next primitive: pose (165) and translation (3) each
+    /// (what the environment's tests compare across a restore).
+    #[cfg(test)]
+    pub(crate) fn seed_frames(&self) -> &[Vec<f64>] {
         &self.frames
     }
 }
@@ -46,7 +48,7 @@ pub struct EnvSnapshot {
 
 impl PolicyEnv<'_> {
     /// The episodes in progress as data.
-    pub fn snapshot(&self) -> EnvSnapshot {
+    pub(crate) fn snapshot(&self) -> EnvSnapshot {
         EnvSnapshot {
             episode_base: self.episode_base,
             next_episode: self.next_episode,
@@ -79,7 +81,7 @@ impl PolicyEnv<'_> {
     }
 
     /// Continues from a snapshot of an environment of the same settings and size.
-    pub fn restore(&mut self, snap: &EnvSnapshot) -> Result<(), EnvError> {
+    pub(crate) fn restore(&mut self, snap: &EnvSnapshot) -> Result<(), EnvError> {
         if snap.episodes.len() != self.episodes.len() || snap.episode_base != self.episode_base {
             return Err(EnvError::Snapshot(format!(
                 "{} episodes under base {} saved, {} under base {} here",

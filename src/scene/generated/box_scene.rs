@@ -70,7 +70,7 @@ fn distance_to_box(p: DVec2, centre: DVec2, half: DVec2, yaw_rad: f64) -> f64 {
 
 impl BoxScene {
     /// Draws a scene with `rng`.
-    pub fn sample(settings: &BoxSceneSettings, rng: &mut ChaCha8Rng) -> Self {
+    pub(crate) fn sample(settings: &BoxSceneSettings, rng: &mut ChaCha8Rng) -> Self {
         let mut u = |a: f64, b: f64| a + (b - a) * uniform_open01(rng);
         let (lo, hi) = settings.box_side_m;
         let half = DVec2::new(u(lo, hi), u(lo, hi)) * 0.5;

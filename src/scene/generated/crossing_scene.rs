@@ -134,7 +134,7 @@ impl CrossingScene {
 
     /// The empty square floor every crossing scene of `settings` walks on (0.1 m cells, its
     /// edge blocking like a wall).
-    pub fn floor(settings: &CrossingSettings) -> WalkableMap {
+    pub(crate) fn floor(settings: &CrossingSettings) -> WalkableMap {
         let cell = 0.1;
         let n = (settings.floor_m / cell).round().max(1.0) as usize;
         let origin = DVec2::splat(-(n as f64) * cell / 2.0);
