@@ -207,7 +207,8 @@ fn bad_settings_or_a_missing_catalogue_are_refused_by_name_and_nothing_is_writte
 }
 
 /// A campaign's `dwellings` as a range, `{ first, count }`: its dry run prices generating
-/// each (nothing is written); a range or list that cannot be seeds is refused naming the key.
+/// each (nothing is written); a range or list that cannot be seeds, or a `dwelling_catalogues`
+/// folder that holds no catalogue, is refused naming the key.
 #[test]
 fn a_campaign_names_its_dwellings_by_range_and_bad_ranges_are_refused() {
     let a = tempfile::tempdir().unwrap();
@@ -250,6 +251,15 @@ fn a_campaign_names_its_dwellings_by_range_and_bad_ranges_are_refused() {
             "{dwellings}: {err}"
         );
     }
+    // An added furniture library that is not one is refused before anything is planned.
+    let o = dry_run("[1]\ndwelling_catalogues = [\"nowhere\"]");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("campaign.dwelling_catalogues")
+            && err.contains("nowhere holds no catalogue.json"),
+        "{err}"
+    );
 }
 
 /// A campaign's `dwellings` are generated once into its `scenes/` (the same bytes as `egogen
