@@ -10,7 +10,8 @@
 //! on `contact_sheet.png` (`sheet`). Before any work every take is checked as staging would
 //! check it (scene, rig, crowd) and the budget (takes, frames, disk, core-hours from measured
 //! throughput) is stated (`budget`). The scenes a campaign generates (`floor_plans`,
-//! `dwellings`) are written once into its `scenes/` before the first take.
+//! `dwellings`) are written once into its `scenes/` before the first take, with the campaign's
+//! `ATTRIBUTION.md` where its dwellings place models of an added CC-BY library.
 
 pub(crate) mod budget;
 pub(crate) mod feed;

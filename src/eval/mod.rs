@@ -7,7 +7,8 @@
 //! prior fitted and checked, floor plans drawn, controllers over held-out episodes with their
 //! walks drawn, on `policy_tasks`); the motion model measured (`motion_model`: `egogen motion
 //! eval` and `control`). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
-//! `egogen eval`'s arguments and loads the shipped parts.
+//! `egogen eval`'s arguments and loads the shipped parts. `same_primitives_tests`: `egogen
+//! policy eval`'s environment and a take's agent choose the same primitives (tests only).
 
 pub(crate) mod files;
 pub(crate) mod jobs;

@@ -14,7 +14,7 @@
 //! and the pose tools that play them); `head_motion` (how a head moves, measured the same way
 //! for takes and real references). Jobs of the commands that read and write motion data: `jobs`
 //! (`egogen motion stats` and `hand-stats`, `egogen body pose`), `clip_import` (`egogen motion
-//! import`).
+//! import`). `mocap_tests`: BVH reading, retargeting, resampling and primitives (tests only).
 
 pub(crate) mod activity_clip;
 pub mod amass;

@@ -17,7 +17,8 @@
 //!   (`egogen train policy`: the parts a plan names loaded, the policy trained);
 //! - evaluation: `held_out` (a controller over held-out episodes, training's validation
 //!   among them); the `egogen policy` commands' jobs are `crate::eval::policy_commands` (on
-//!   `crate::eval::policy_tasks`), the paper's tables `crate::eval`'s.
+//!   `crate::eval::policy_tasks`), the paper's tables `crate::eval`'s;
+//! - tests only: `env_tests` (the environment's episodes, observations, walls and guides).
 
 pub(crate) mod actor;
 pub mod env;

@@ -6,7 +6,8 @@
 //! Here: `ego` (the ego pose on the floor plane, the sensing world, the ray-scan sensor), `ray`
 //! (2D ray casting against the grid and obstacles), `local_map` (the occupancy patch of the
 //! paper's Tab. 2), `depth_image` (the depth image of its Tab. 3), `spec` (which of them a
-//! policy observes, as its config and weights say).
+//! policy observes, as its config and weights say); `properties_tests` (the rays' accuracy and
+//! invariants, tests only).
 
 pub(crate) mod depth_image;
 pub(crate) mod ego;

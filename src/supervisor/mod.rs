@@ -5,7 +5,8 @@
 //! `pool`; the time left at each camera's pace, `pace`), finishes and validates frames
 //! (`dataset`, `frame_record`), writes the take's outputs (`export::take_exports`:
 //! annotations, the COLMAP export, the manifest), resumes an interrupted run where it stopped,
-//! and re-checks a finished dataset against its manifest (`verify`).
+//! and re-checks a finished dataset against its manifest (`verify`). `render_tests`: real
+//! Blender renders of a shard checked against geometry computed here (tests only).
 
 pub(crate) mod dataset;
 pub(crate) mod frame_record;

@@ -19,7 +19,7 @@
 //! markers and CPF), `decoder_f32` (the decoder in plain f32 for few primitives at a time),
 //! `half_matvec` (one primitive's products with f16 weights), `sampler` (best-of-K
 //! random-latent sampling), `pace` (pace and turn of primitives), `control` (latents chosen for
-//! a target velocity and heading by CEM), `reach` (what the latent space reaches, as `egogen
+//! a target velocity and heading by CEM; `control_tests`, tests only), `reach` (what the latent space reaches, as `egogen
 //! motion control` prints it), `contact` (the foot-contact score), `measure` (a trained model's
 //! measurements: held-out marker error, contact of batches and chains, long rollouts).
 

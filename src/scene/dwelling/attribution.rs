@@ -105,18 +105,10 @@ pub(crate) fn of_sidecars(sidecars: &[&[u8]]) -> Result<Option<String>, String> 
 /// The attribution a take made in the scene file `scene` carries: that of its sidecar
 /// (`<stem>.json` beside it) where it is a generated dwelling's, none otherwise.
 pub(crate) fn of_scene(scene: &Path) -> Result<Option<String>, String> {
-    let sidecar = scene.with_extension("json");
-    let Ok(bytes) = std::fs::read(&sidecar) else {
+    let Some((bytes, _)) = super::source::generated_sidecar(scene) else {
         return Ok(None);
     };
-    let generated = serde_json::from_slice::<serde_json::Value>(&bytes)
-        .ok()
-        .and_then(|v| Some(v.get("generator")?.get("tool")?.as_str()? == "egogen scene generate"))
-        .unwrap_or(false);
-    if !generated {
-        return Ok(None);
-    }
-    of_sidecars(&[&bytes]).map_err(|e| format!("{}: {e}", sidecar.display()))
+    of_sidecars(&[&bytes]).map_err(|e| format!("{}: {e}", scene.with_extension("json").display()))
 }
 
 #[cfg(test)]

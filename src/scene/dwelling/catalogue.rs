@@ -34,7 +34,7 @@ pub struct CatalogueModel {
     /// library's are [`Role::model_ids`]).
     #[serde(default)]
     pub roles: Vec<Role>,
-    /// Which library it comes from: 0 the catalogue's own, k its k-th added one.
+    /// Which of the catalogue's libraries it comes from: 0 its own, k its k-th added one.
     #[serde(skip)]
     pub(crate) library: usize,
 }
@@ -56,7 +56,8 @@ struct CatalogueFile {
     models: Vec<CatalogueModel>,
 }
 
-/// A library added to a catalogue: where it is, what it is and under which terms.
+/// A library of a catalogue (its own, or one added): where it is, what it is and under which
+/// terms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub(crate) struct Library {
     #[serde(skip)]
@@ -76,15 +77,10 @@ pub(crate) struct Library {
 /// A catalogue read from its folder.
 #[derive(Debug, Clone)]
 pub struct Catalogue {
-    pub dir: PathBuf,
-    pub library: String,
-    pub licence: String,
-    pub source: String,
-    pub source_sha256: String,
+    /// Its libraries: its own first, then the opt-in ones added to it, in the order added.
+    pub(crate) libraries: Vec<Library>,
     /// Its models by id (its added libraries' too).
     pub models: BTreeMap<String, CatalogueModel>,
-    /// Opt-in libraries added to it, in the order added.
-    pub(crate) added: Vec<Library>,
 }
 
 /// The catalogue egogen ships (`assets/furniture/`, CC0).
@@ -98,13 +94,8 @@ impl Catalogue {
         let (library, models) = read_folder(dir, 0)?;
         let path = dir.join("catalogue.json");
         let catalogue = Catalogue {
-            dir: dir.to_owned(),
-            library: library.name,
-            licence: library.licence,
-            source: library.source,
-            source_sha256: library.source_sha256,
+            libraries: vec![library],
             models,
-            added: Vec::new(),
         };
         for role in Role::ALL {
             if catalogue.models_for(role).is_empty() {
@@ -132,7 +123,7 @@ impl Catalogue {
     /// must be new, and a library under a licence other than CC0 must name the licence's deed
     /// and its copyright (what the attribution of a dwelling that uses it says).
     pub(crate) fn with_added(mut self, dir: &Path) -> Result<Self, DwellingError> {
-        let (library, models) = read_folder(dir, self.added.len() + 1)?;
+        let (library, models) = read_folder(dir, self.libraries.len())?;
         let path = dir.join("catalogue.json");
         let bad = |message: String| DwellingError::Catalogue {
             path: path.clone(),
@@ -148,39 +139,34 @@ impl Catalogue {
         }
         for (id, m) in models {
             if let Some(was) = self.models.get(&id) {
-                let from = match was.library {
-                    0 => self.dir.clone(),
-                    k => self.added[k - 1].dir.clone(),
-                };
                 return Err(bad(format!(
                     "model `{id}` is already in {} (an added library's ids must be new)",
-                    from.display()
+                    self.libraries[was.library].dir.display()
                 )));
             }
             self.models.insert(id, m);
         }
-        self.added.push(Library {
-            dir: dir.to_owned(),
-            ..library
-        });
+        self.libraries.push(library);
         Ok(self)
     }
 
-    /// The library a model comes from, if it is an added one.
-    pub(crate) fn added_library_of(&self, m: &CatalogueModel) -> Option<&Library> {
-        m.library.checked_sub(1).map(|k| &self.added[k])
+    /// The catalogue's own library.
+    pub(crate) fn own(&self) -> &Library {
+        &self.libraries[0]
     }
 
-    /// The licence a model is under.
-    pub(crate) fn licence_of(&self, m: &CatalogueModel) -> &str {
-        self.added_library_of(m)
-            .map_or(&self.licence, |l| &l.licence)
+    /// The libraries added to it.
+    pub(crate) fn added(&self) -> &[Library] {
+        &self.libraries[1..]
+    }
+
+    /// The library a model comes from.
+    pub(crate) fn library_of(&self, m: &CatalogueModel) -> &Library {
+        &self.libraries[m.library]
     }
 
     pub(crate) fn model_path(&self, m: &CatalogueModel) -> PathBuf {
-        self.added_library_of(m)
-            .map_or(&self.dir, |l| &l.dir)
-            .join(&m.file)
+        self.library_of(m).dir.join(&m.file)
     }
 
     /// The catalogue's models that can play `role`: the role table's, in its order, then the

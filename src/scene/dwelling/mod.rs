@@ -623,8 +623,8 @@ fn scene_mesh(
             model_name: Some(model.name.clone()),
             category: Some(model.category.clone()),
             creator: Some(model.creator.clone()),
-            licence: catalogue.licence_of(model).to_owned(),
-            library: catalogue.added_library_of(model).map(|l| l.name.clone()),
+            licence: catalogue.library_of(model).licence.clone(),
+            library: (model.library > 0).then(|| catalogue.library_of(model).name.clone()),
             seats: 0,
             bbox_min: lo,
             bbox_max: hi,
@@ -677,10 +677,8 @@ struct Generator<'a> {
 
 #[derive(Serialize)]
 struct CatalogueRecord<'a> {
-    library: &'a str,
-    licence: &'a str,
-    source: &'a str,
-    source_sha256: &'a str,
+    #[serde(flatten)]
+    own: &'a catalogue::Library,
     /// Opt-in libraries added to it (what an attribution names).
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
     added: &'a [catalogue::Library],
@@ -721,11 +719,8 @@ impl Dwelling {
                 settings: &self.settings,
             },
             catalogue: CatalogueRecord {
-                library: &catalogue.library,
-                licence: &catalogue.licence,
-                source: &catalogue.source,
-                source_sha256: &catalogue.source_sha256,
-                added: &catalogue.added,
+                own: catalogue.own(),
+                added: catalogue.added(),
             },
             plan: &self.plan,
             seats_per_room: self

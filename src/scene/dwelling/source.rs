@@ -19,12 +19,20 @@ pub(crate) fn dwelling_seed(source: &str, path: &Path) -> Option<u64> {
     if let Some(seed) = source.strip_prefix(DWELLING_SOURCE) {
         return seed.trim().parse().ok();
     }
-    let sidecar = std::fs::read(path.with_extension("json")).ok()?;
-    let json: serde_json::Value = serde_json::from_slice(&sidecar).ok()?;
-    let generator = json.get("generator")?;
-    (generator.get("tool")?.as_str()? == "egogen scene generate")
-        .then(|| generator.get("seed")?.as_u64())
-        .flatten()
+    generated_sidecar(path)?
+        .1
+        .get("generator")?
+        .get("seed")?
+        .as_u64()
+}
+
+/// The sidecar of a scene file (`<stem>.json` beside it), its bytes and its JSON, where egogen
+/// generated the scene (`generator.tool` is `egogen scene generate`); none otherwise.
+pub(crate) fn generated_sidecar(scene: &Path) -> Option<(Vec<u8>, serde_json::Value)> {
+    let bytes = std::fs::read(scene.with_extension("json")).ok()?;
+    let json: serde_json::Value = serde_json::from_slice(&bytes).ok()?;
+    (json.get("generator")?.get("tool")?.as_str()? == "egogen scene generate")
+        .then_some((bytes, json))
 }
 
 /// The file a scene source names: a path as it is (joined to `base`), or for `dwelling:SEED`
@@ -41,7 +49,7 @@ pub(crate) fn scene_source(source: &str, base: &Path) -> Result<PathBuf, String>
     let catalogue = Catalogue::load(&shipped_catalogue_dir()).map_err(|e| e.to_string())?;
     let dir = crate::paths::cache_dir().join("dwellings").join(format!(
         "v{DWELLING_VERSION}-{}",
-        catalogue.source_sha256.get(..12).unwrap_or("unknown")
+        catalogue.own().source_sha256.get(..12).unwrap_or("unknown")
     ));
     let glb = dir.join(format!("dwelling_{seed}.glb"));
     if !glb.is_file() {

@@ -4,7 +4,8 @@
 //! is byte-identical; otherwise nothing is touched.
 //!
 //! The job's steps live here and in: `output` (whether `<dir>` and `<dir>.partial` may be
-//! written or resumed, and the partial folder staged with its stamp), `bodies` (the take's
+//! written or resumed, the partial folder staged with its stamp, and the take's attribution
+//! where its dwelling places CC-BY furniture), `bodies` (the take's
 //! people staged: bodies, tracks, the wearer, the `sequence/` folder and Blender's body inputs),
 //! `spec` (the take's rendering work: cameras, segmentation ids, ceiling, obstacles, held
 //! objects, surfaces, the shard spec, and the repair of what an interrupted run left).
