@@ -439,13 +439,22 @@ def key_pose(obj, keys, frame_step=1):
 
 def key_moved(obj, base, keys, frame_step=1):
     """An object of the imported scene that people move (a `moved_objects` entry): its world
-    matrix `base` moved by each key's offset (`centre`), location keys at `key.frame /
-    frame_step`, linear in between."""
+    matrix `base` turned by each key's `rotation_wxyz` (where given) about the world's origin
+    and moved by its `centre`, location (and rotation) keys at `key.frame / frame_step`,
+    linear in between."""
     obj.animation_data_clear()
+    turned = any("rotation_wxyz" in key for key in keys)
+    if turned:
+        obj.rotation_mode = "QUATERNION"
     for key in keys:
-        obj.matrix_world = Matrix.Translation(Vector(key["centre"])) @ base
+        motion = Matrix.Translation(Vector(key["centre"]))
+        if "rotation_wxyz" in key:
+            motion = motion @ Quaternion(key["rotation_wxyz"]).to_matrix().to_4x4()
+        obj.matrix_world = motion @ base
         if len(keys) > 1:
             obj.keyframe_insert("location", frame=key["frame"] / frame_step)
+            if turned:
+                obj.keyframe_insert("rotation_quaternion", frame=key["frame"] / frame_step)
     linear_keys(obj, keys)
 
 

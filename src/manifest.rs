@@ -94,7 +94,7 @@ pub(crate) fn remove_temporaries(dir: &Path) -> Result<Vec<PathBuf>> {
 }
 
 /// Lists and hashes every dataset file under `dir` (scratch folders excluded).
-pub fn build_manifest(dir: &Path) -> Result<Manifest> {
+pub(crate) fn build_manifest(dir: &Path) -> Result<Manifest> {
     build_manifest_with(dir, &[])
 }
 
@@ -128,7 +128,7 @@ pub(crate) fn build_manifest_with(dir: &Path, known: &[ManifestEntry]) -> Result
 }
 
 /// Writes `manifest.json` atomically.
-pub fn write_manifest(dir: &Path) -> Result<Manifest> {
+pub(crate) fn write_manifest(dir: &Path) -> Result<Manifest> {
     write_manifest_with(dir, &[])
 }
 

@@ -2589,6 +2589,173 @@ workers = 1
         serde_json::from_value(doc).unwrap();
 }
 
+/// A floor of 8 × 8 m and a toy block 6 × 6 × 9 cm standing on it at (1, 0) (OBJ).
+const TOY_ON_A_FLOOR: &str = "o floor
+v -4 -4 -0.05
+v 4 -4 -0.05
+v -4 4 -0.05
+v 4 4 -0.05
+v -4 -4 0
+v 4 -4 0
+v -4 4 0
+v 4 4 0
+f 5 6 8 7
+f 1 3 4 2
+o toy_block
+v 0.97 -0.03 0
+v 1.03 -0.03 0
+v 0.97 0.03 0
+v 1.03 0.03 0
+v 0.97 -0.03 0.09
+v 1.03 -0.03 0.09
+v 0.97 0.03 0.09
+v 1.03 0.03 0.09
+f 9 11 12 10
+f 13 14 16 15
+f 9 10 14 13
+f 11 15 16 12
+f 9 13 15 11
+f 10 12 16 14
+";
+
+/// A wearer who walks to a toy standing on the floor and picks it up: what is held is the
+/// scene's own object (`scene_object`, its scene segmentation id, no solid added); the render
+/// moves that object with the hand — its pixels lie in its box as the annotations pose it,
+/// where the scene has it until the grasp and carried from there —, `held_objects.npy` poses
+/// it as the annotations do, and the holding hand's contact names it.
+#[test]
+fn a_scene_thing_picked_up_is_rendered_where_the_hand_carries_it() {
+    let config = r#"
+[body]
+[motion]
+source = "agents"
+duration_s = 8.0
+seed = 0
+[activities]
+weights = { walk = 0.0, pick_up = 1.0 }
+[[agents]]
+name = "wearer"
+start = [-1.0, 0.0]
+goals = [[0.0, 0.0]]
+wander = true
+[output]
+dir = "out"
+mesh_every_n_frames = 0
+[scene]
+path = "toy.obj"
+[render]
+cameras = ["camera-rgb"]
+resolution_scale = 0.125
+every_n_frames = 8
+samples = 1
+passes = ["segmentation", "position"]
+[supervisor]
+workers = 1
+"#;
+    let (dir, path) = common::run_dir(config);
+    std::fs::write(dir.path().join("toy.obj"), TOY_ON_A_FLOOR).unwrap();
+    common::egogen_run_ok(&path);
+    let out = dir.path().join("out");
+    let file = out.join("cameras/camera-rgb/annotations.json");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    let summary = summary(&out.join("sequence"));
+    let wearer = &summary["agents"][0];
+    assert_eq!(wearer["activities"][0]["object"], "toy_block", "{summary}");
+    let held = wearer["held_objects"][0].clone();
+    assert_eq!(held["scene_object"], "toy_block", "{summary}");
+    assert!(held.get("kind").is_none(), "{held}");
+    assert!(
+        held["fingertip_depth_m"].as_f64().unwrap() <= 0.01,
+        "{held}"
+    );
+    let grasp = held["grasp_frame"].as_u64().unwrap();
+    let hand = held["hand"].as_str().unwrap();
+    let id = segmentation_id(&doc, "toy_block");
+    assert_eq!(
+        doc["segmentation_ids"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|i| i["id"] == id)
+            .count(),
+        1,
+        "the toy keeps its one scene id"
+    );
+    let npy = std::fs::read(out.join("sequence/agents/wearer/held_objects.npy")).unwrap();
+    let poses: Vec<f64> = npyz::NpyFile::new(&npy[..]).unwrap().into_vec().unwrap();
+    let cam = out.join("cameras/camera-rgb");
+    let (mut seen_standing, mut seen_held) = (0, 0);
+    for f in doc["frames"].as_array().unwrap() {
+        let frame = f["frame"].as_u64().unwrap();
+        let moved = f.get("moved_scene_objects").and_then(|m| m.as_array());
+        assert!(moved.is_none_or(|m| m.is_empty()), "frame {frame}: {f}");
+        let o = &f["objects"][0];
+        assert_eq!(
+            (&o["name"], &o["scene_object"]),
+            (&held["name"], &held["scene_object"])
+        );
+        assert_eq!(o["id"], id, "frame {frame}");
+        let holding = frame >= grasp;
+        assert_eq!(o.get("held_by").is_some(), holding, "frame {frame}: {o}");
+        for h in f["agents"][0]["hands"].as_array().unwrap() {
+            let contact = h.get("contact").and_then(|c| c.as_u64());
+            let expected = (holding && h["side"] == hand).then_some(id as u64);
+            assert_eq!(contact, expected, "frame {frame}: {h}");
+        }
+        let rows: Vec<f64> = o["T_world_object"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()))
+            .collect();
+        let at = frame as usize * 16;
+        for k in 0..16 {
+            assert!(
+                (rows[k] - poses[at + k]).abs() < 1e-12,
+                "frame {frame}: {o}"
+            );
+        }
+        let world_from_object = glam::DAffine3::from_mat4(
+            glam::DMat4::from_cols_array(&std::array::from_fn(|k| rows[k])).transpose(),
+        );
+        if !holding {
+            let centre = world_from_object.translation;
+            assert!(
+                (centre - glam::DVec3::new(1.0, 0.0, 0.045)).length() < 1e-6,
+                "{centre}"
+            );
+        }
+        let object_from_world = world_from_object.inverse();
+        let px = pixels_of(&cam, f, id);
+        assert_eq!(
+            o["bbox_xyxy"].is_null(),
+            px.is_empty(),
+            "frame {frame}: {o}"
+        );
+        for &world in &px {
+            let p = object_from_world.transform_point3(world);
+            assert!(
+                p.x.abs() <= 0.04 && p.y.abs() <= 0.04 && p.z.abs() <= 0.055,
+                "frame {frame}: a pixel of the toy at {p} in its frame"
+            );
+        }
+        if px.len() >= 3 {
+            *(if holding {
+                &mut seen_held
+            } else {
+                &mut seen_standing
+            }) += 1;
+        }
+    }
+    assert!(
+        seen_standing >= 1 && seen_held >= 1,
+        "in view standing in {seen_standing} frames, held in {seen_held}"
+    );
+    let _typed: egogen::export::annotations::CameraAnnotations =
+        serde_json::from_value(doc).unwrap();
+}
+
 /// The segmentation id the annotations give the object `name`.
 fn segmentation_id(doc: &serde_json::Value, name: &str) -> u32 {
     doc["segmentation_ids"]

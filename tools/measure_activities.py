@@ -207,11 +207,14 @@ def main():
                   + (f" (in the clip itself: {max(clip):.2f})" if clip else ""))
         if picked:
             pick_ups = sum(r["activity"] == "pick_up" for r in records)
-            print(f"picked up: {pick_ups} pick-ups by {picked} people; {len(held)} objects taken")
+            walked_to = [r for r in records if r["activity"] == "pick_up" and r.get("object")]
+            print(f"picked up: {pick_ups} pick-ups by {picked} people; {len(held)} objects taken"
+                  f" ({sum('scene_object' in o for o in held)} of them the scene's own, of"
+                  f" {len(walked_to)} pick-ups that walked to one)")
         if held:
             gaps = [o["palm_gap_m"] * 100 for o in held]
             heights = [o["size_m"][2] * 100 for o in held]
-            print("  kinds: " + ", ".join(f"{v} {k}" for k, v in Counter(o["kind"] for o in held).most_common())
+            print("  kinds: " + ", ".join(f"{v} {k}" for k, v in Counter(o.get("kind") or "scene thing" for o in held).most_common())
                   + f"; heights {min(heights):.1f}–{max(heights):.1f} cm")
             print(f"  palm over the top: {min(gaps):.1f}–{max(gaps):.1f} cm (median {statistics.median(gaps):.1f}); "
                   f"deepest fingertip inside: {max(o['fingertip_depth_m'] for o in held) * 1000:.1f} mm")

@@ -291,6 +291,7 @@ fn frame_annotation(
             ObjectAnnotation {
                 name: h.name.clone(),
                 id: o.id,
+                scene_object: h.scene_object.clone(),
                 kind: h.kind,
                 t_world_object: crate::math::row_major(pose),
                 size_m: h.size_m,

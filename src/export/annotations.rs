@@ -125,7 +125,13 @@ pub struct ObjectAnnotation {
     pub name: String,
     /// Its segmentation id.
     pub id: u32,
-    pub kind: crate::scene::small_object::ObjectKind,
+    /// The scene object it is, where a person picked up one of the scene's own things (its
+    /// frame: the world's axes at its box's centre).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene_object: Option<String>,
+    /// What egogen's own solid it is (a scene thing has none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kind: Option<crate::scene::small_object::ObjectKind>,
     /// Row-major 4×4 mapping the object's frame (centred, z up; its `size_m` along x, y,
     /// z) to the world (m).
     #[serde(rename = "T_world_object")]

@@ -13,7 +13,8 @@ use super::env::{EnvError, PolicyEnv, StepOutput};
 use crate::walker::ControllerSpec;
 
 /// One step of every episode with the best of `k` random latents.
-pub fn sampling_step(
+#[cfg(test)]
+pub(crate) fn sampling_step(
     env: &mut PolicyEnv,
     k: usize,
     rng: &mut ChaCha8Rng,

@@ -302,14 +302,25 @@ pub struct ShardHeldObject {
     pub keys: Vec<PoseKey>,
 }
 
-/// An object of the imported scene that people move: its name (as in `object_ids`) and, at
-/// (sub)frames, how far it stands from where the scene file has it (`centre`: the offset,
-/// m); linear in between, held outside.
+/// An object of the imported scene that people move (a chair pulled out, a thing picked up):
+/// its name (as in `object_ids`) and its keys.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShardMovedObject {
     pub name: String,
-    pub keys: Vec<ObstacleKey>,
+    pub keys: Vec<MovedKey>,
+}
+
+/// How a moved scene object stands at a (sub)frame: the world motion from where the scene
+/// file has it — turned by `rotation_wxyz` (none: not turned) about the world's origin, then
+/// moved by `centre` (m); linear in between, held outside.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MovedKey {
+    pub frame: f64,
+    pub centre: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation_wxyz: Option<[f64; 4]>,
 }
 
 /// Where an obstacle's centre is at a frame.

@@ -15,7 +15,7 @@ use super::walkable::WalkableMap;
 
 /// Clearance of the guide's straight-line test and path (m): a doorway of 0.8 m leaves a
 /// lane of 0.2 m.
-pub const GUIDE_CLEARANCE_M: f64 = 0.3;
+pub(crate) const GUIDE_CLEARANCE_M: f64 = 0.3;
 
 /// Distance from what blocks walking at which a centred guide's path stops paying for being
 /// near it ([`plan_path_centred`]): the middle of a 0.9 m doorway.

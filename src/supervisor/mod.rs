@@ -20,7 +20,7 @@ pub(crate) mod slurm;
 pub(crate) mod staged;
 pub mod verify;
 
-pub use crate::manifest::{build_manifest, write_manifest, Manifest};
+pub use crate::manifest::Manifest;
 pub use local::{LocalPool, PoolSettings};
 pub(crate) use pipeline::{
     run_pipeline, shard_pool, stage_take, RunMotion, RunOptions, RunSummary, Staged, StagedTake,

@@ -5,8 +5,10 @@
 //! close enough for the hand to close round it (a pick-up whose free hand stays high, or
 //! reaches to the floor, takes nothing); the grip is shaped to its width
 //! (`motion::hands::HandDoing::Holding`), and the object is lowered under the closed hand's
-//! fingertips ([`fit_under_fingertips`]; one that cannot be is not taken). Its pose on every
-//! frame is what the renders and the annotations read.
+//! fingertips ([`fit_under_fingertips`]; one that cannot be is not taken). Or one of the
+//! scene's own small things a person walked to ([`taken_thing`]): taken where the palm comes
+//! over its top, not moved before. Its pose on every frame is what the renders and the
+//! annotations read.
 
 use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
@@ -18,7 +20,7 @@ use crate::math::colour::hsv_linear;
 use crate::math::random::uniform_in;
 use crate::math::{Affine3, Vec3};
 use crate::motion::cvae::BodyContext;
-use crate::scene::small_object::{ObjectKind, ObjectShape};
+use crate::scene::small_object::{depth_under_surface, ObjectKind, ObjectShape, SceneThing};
 use crate::synth::activity::ActivitySegment;
 
 /// A hand.
@@ -53,17 +55,25 @@ pub(crate) struct Grasp {
     pub along: DVec2,
 }
 
-/// One object a person picked up.
+/// One object a person picked up: a solid egogen adds (its `kind`, `shape` and colour), or
+/// one of the scene's own things (`scene_object`).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct HeldObject {
-    /// Unique in the take: `<person>_<kind>_<k>`.
+    /// Unique in the take: `<person>_<kind>_<k>`; a scene thing's: its name in the scene.
     pub name: String,
-    pub kind: ObjectKind,
-    pub shape: ObjectShape,
-    /// Full extents along its own x, y and up (m).
+    /// The scene object it is, where it is one of the scene's own things.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scene_object: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<ObjectKind>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shape: Option<ObjectShape>,
+    /// Full extents along its own x, y and up (m): a scene thing's, its box's (its frame
+    /// the world's axes at the box's centre).
     pub size_m: [f64; 3],
     /// Linear RGB.
-    pub colour_rgb: [f64; 3],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub colour_rgb: Option<[f64; 3]>,
     pub hand: Hand,
     /// The frame the hand takes hold of it; it is carried from there to the take's end.
     pub grasp_frame: usize,
@@ -74,6 +84,9 @@ pub struct HeldObject {
     /// Its pose on every frame of the take (object frame: centred, z up).
     #[serde(skip)]
     pub world_from_object: Vec<Affine3>,
+    /// A scene thing's triangles (object frame): what a fingertip may not go under.
+    #[serde(skip)]
+    pub triangles: Vec<[Vec3; 3]>,
 }
 
 impl HeldObject {
@@ -81,11 +94,20 @@ impl HeldObject {
     pub(crate) fn held_at(&self, f: usize) -> bool {
         f >= self.grasp_frame
     }
+
+    /// The width the hand closes round (m): a solid's kind's, a scene thing's box across the
+    /// narrower way.
+    pub(crate) fn grip_m(&self) -> f64 {
+        match self.kind {
+            Some(kind) => kind.grip_m(),
+            None => self.size_m[0].min(self.size_m[1]),
+        }
+    }
 }
 
 /// Room left between the palm and the object's top when choosing a kind (m): skin and a
 /// little air.
-const PALM_CLEARANCE_M: f64 = 0.01;
+pub(crate) const PALM_CLEARANCE_M: f64 = 0.01;
 
 /// The grasp of a pick-up (its hold phase `seg`) in `frames`: the frame where the wrist of a
 /// hand that is `free` (`[left, right]`) comes lowest, with that hand; none with both hands
@@ -171,16 +193,60 @@ pub(crate) fn placed_object(
     );
     Some(HeldObject {
         name: format!("{person}_{}_{k}", kind.name()),
-        kind,
-        shape: kind.shape(),
+        scene_object: None,
+        kind: Some(kind),
+        shape: Some(kind.shape()),
         size_m,
-        colour_rgb,
+        colour_rgb: Some(colour_rgb),
         hand: grasp.hand,
         grasp_frame: grasp.frame,
         palm_gap_m: grasp.palm.z - (floor_z + size_m[2]),
         fingertip_depth_m: 0.0,
         world_from_object: vec![resting],
+        triangles: Vec::new(),
     })
+}
+
+/// Deepest a fingertip of the holding hand may go under a scene thing's upper surface (m):
+/// skin gives a little, and the thing cannot be made lower.
+const THING_FINGERTIP_DEPTH_M: f64 = 0.01;
+
+/// Farthest the palm's centre may lie outside a scene thing's footprint, horizontally, where
+/// the hand takes it (m).
+const THING_PALM_MISS_M: f64 = 0.03;
+
+/// Scene thing `thing` as `grasp` takes it: where the palm's centre comes over its top
+/// (within [`THING_PALM_MISS_M`] of its footprint) with at most [`MAX_PALM_GAP_M`] between
+/// them and not into it; none where it does not. Its pose is its box's centre, the world's
+/// axes; set per frame by [`fit_under_fingertips`].
+pub(crate) fn taken_thing(thing: &SceneThing, grasp: &Grasp) -> Option<HeldObject> {
+    let size = thing.max - thing.min;
+    let centre = thing.centre();
+    let gap = grasp.palm.z - thing.max.z;
+    let off = (DVec2::new(grasp.palm.x - centre.x, grasp.palm.y - centre.y).abs()
+        - DVec2::new(size.x, size.y) * 0.5)
+        .max(DVec2::ZERO)
+        .length();
+    ((0.0..=MAX_PALM_GAP_M + PALM_CLEARANCE_M).contains(&gap) && off <= THING_PALM_MISS_M).then(
+        || HeldObject {
+            name: thing.name.clone(),
+            scene_object: Some(thing.name.clone()),
+            kind: None,
+            shape: None,
+            size_m: size.to_array(),
+            colour_rgb: None,
+            hand: grasp.hand,
+            grasp_frame: grasp.frame,
+            palm_gap_m: gap,
+            fingertip_depth_m: 0.0,
+            world_from_object: vec![Affine3::from_translation(centre)],
+            triangles: thing
+                .triangles
+                .iter()
+                .map(|t| t.map(|v| v - centre))
+                .collect(),
+        },
+    )
 }
 
 /// Every frame's pose of `object` from the take's wrists (`world_from_wrist[f][hand]`): where
@@ -236,7 +302,11 @@ pub(crate) fn fit_under_fingertips(
             return true;
         }
         let lower = depth + FINGERTIP_CLEARANCE_M;
-        if object.size_m[2] - lower < object.kind.heights_m()[0] {
+        let Some(kind) = object.kind else {
+            // A scene thing keeps its height: the fingertips may enter it this deep.
+            return depth <= THING_FINGERTIP_DEPTH_M;
+        };
+        if object.size_m[2] - lower < kind.heights_m()[0] {
             return false;
         }
         object.size_m[2] -= lower;
@@ -251,14 +321,16 @@ pub(crate) fn fit_under_fingertips(
 }
 
 /// How deep `point` (world) lies inside `object` on frame `f` (m to its nearest face; 0
-/// outside).
+/// outside); inside a scene thing, how far under its upper surface.
 pub(crate) fn depth_inside(object: &HeldObject, f: usize, point: Vec3) -> f64 {
     let p = object.world_from_object[f]
         .inverse()
         .transform_point3(point);
     let [radius, _, z] = object.size_m.map(|v| 0.5 * v);
     let across = match object.shape {
-        ObjectShape::Cylinder => radius - DVec2::new(p.x, p.y).length(),
+        Some(ObjectShape::Cylinder) => radius - DVec2::new(p.x, p.y).length(),
+        None if p.z < -z => return 0.0,
+        None => return depth_under_surface(&object.triangles, p),
     };
     across.min(z - p.z.abs()).max(0.0)
 }
@@ -307,9 +379,10 @@ mod tests {
             let fits = (lowest..=tallest + MAX_PALM_GAP_M).contains(&room);
             prop_assert_eq!(taken.is_some(), fits, "room {}", room);
             if let Some(o) = taken {
-                let [lo, hi] = o.kind.heights_m();
+                let kind = o.kind.unwrap();
+                let [lo, hi] = kind.heights_m();
                 prop_assert!((lo - 1e-12..=hi + 1e-12).contains(&o.size_m[2]));
-                prop_assert_eq!(&o.size_m[..2], &o.kind.footprint_m()[..]);
+                prop_assert_eq!(&o.size_m[..2], &kind.footprint_m()[..]);
                 let top = floor + o.size_m[2];
                 prop_assert!(top <= palm.z - PALM_CLEARANCE_M + 1e-9);
                 prop_assert!(o.palm_gap_m <= MAX_PALM_GAP_M + PALM_CLEARANCE_M + 1e-9);
@@ -366,7 +439,7 @@ mod tests {
         };
         let wrists = vec![[wrist([0.0, 0.0, 1.0], 0.3, [3.0, -2.0, 0.35]); 2]; 5];
         let mut o = take();
-        assert_eq!(o.kind, ObjectKind::Bottle);
+        assert_eq!(o.kind, Some(ObjectKind::Bottle));
         let (height, gap) = (o.size_m[2], o.palm_gap_m);
         let inside = Vec3::new(3.0, -2.0, height - 0.01);
         let tips = vec![[inside, palm, palm, palm, palm]; 5];
@@ -394,15 +467,17 @@ mod tests {
             let size_m = [x, y, kind.heights_m()[0]];
             let o = HeldObject {
                 name: "o".into(),
-                kind,
-                shape: kind.shape(),
+                scene_object: None,
+                kind: Some(kind),
+                shape: Some(kind.shape()),
                 size_m,
-                colour_rgb: [0.5; 3],
+                colour_rgb: Some([0.5; 3]),
                 hand: Hand::Left,
                 grasp_frame: 0,
                 palm_gap_m: 0.0,
                 fingertip_depth_m: 0.0,
                 world_from_object: vec![wrist([0.3, 0.2, 1.0], 2.0, [100.0, -40.0, 3.0])],
+                triangles: Vec::new(),
             };
             let world = |p: Vec3| o.world_from_object[0].transform_point3(p);
             let half = size_m.map(|v| 0.5 * v);

@@ -27,4 +27,5 @@ pub mod take;
 
 pub use body_cache::body_cache;
 pub(crate) use body_track::{track_body, BodyTrack, TrackFrame};
-pub use sequence_dir::{pose_meshes, write_sequence_dir, SequenceOutputs};
+pub use sequence_dir::SequenceOutputs;
+pub(crate) use sequence_dir::{pose_meshes, write_sequence_dir};

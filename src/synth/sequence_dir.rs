@@ -132,7 +132,7 @@ pub fn read_cpf_trajectory(path: &Path) -> Result<(f64, Vec<crate::math::Affine3
 }
 
 /// Posed meshes every `every_n` frames (none for 0), with a progress bar.
-pub fn pose_meshes(
+pub(crate) fn pose_meshes(
     model: &BodyModel,
     motion: &MotionSequence,
     every_n: usize,
@@ -186,7 +186,7 @@ fn is_sequence_leftover(dir: &Path) -> bool {
 }
 
 /// Writes a sequence folder; `dir` must not exist or be empty (nothing is overwritten).
-pub fn write_sequence_dir(
+pub(crate) fn write_sequence_dir(
     dir: &Path,
     model: &BodyModel,
     motion: &MotionSequence,

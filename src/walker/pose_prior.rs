@@ -275,7 +275,8 @@ impl PosePrior {
     }
 
     /// [`Self::nll`] of a body's pose.
-    pub fn pose_nll(&self, params: &BodyParams) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn pose_nll(&self, params: &BodyParams) -> f64 {
         self.nll(&prior_values(params))
     }
 

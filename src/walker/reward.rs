@@ -321,7 +321,7 @@ impl SceneTest {
 
     /// Whether any new frame of `p` has at least [`Self::threshold`] subset vertices inside
     /// the scene.
-    pub fn penetrates(
+    pub(crate) fn penetrates(
         &self,
         body: &crate::motion::cvae::BodyContext,
         p: &DecodedPrimitive,

@@ -82,6 +82,15 @@ pub struct DwellingSettings {
     pub window_top_m: f64,
     /// Range of the number of small things put on each table, counter, nightstand or basin.
     pub small_things: (usize, usize),
+    /// Range of the number of things a hand can pick up left on the floor of each living
+    /// room and bedroom (`furnish::Furnishing::drop_things`; none by default).
+    #[serde(skip_serializing_if = "none_dropped")]
+    pub floor_things: (usize, usize),
+}
+
+/// No floor things (and the sidecar of a dwelling with none reads as before the key).
+fn none_dropped(range: &(usize, usize)) -> bool {
+    *range == (0, 0)
 }
 
 impl Default for DwellingSettings {
@@ -104,6 +113,7 @@ impl Default for DwellingSettings {
             window_sill_m: (0.9, 1.0),
             window_top_m: 2.2,
             small_things: (0, 3),
+            floor_things: (0, 0),
         }
     }
 }
@@ -136,12 +146,16 @@ impl DwellingSettings {
                 format!("expected [min, max] with min ≤ max ≤ 8, got [{b0}, {b1}]"),
             ));
         }
-        let (t0, t1) = self.small_things;
-        if t0 > t1 || t1 > 10 {
-            return Some((
-                "small_things",
-                format!("expected [min, max] with min ≤ max ≤ 10, got [{t0}, {t1}]"),
-            ));
+        for (key, (t0, t1)) in [
+            ("small_things", self.small_things),
+            ("floor_things", self.floor_things),
+        ] {
+            if t0 > t1 || t1 > 10 {
+                return Some((
+                    key,
+                    format!("expected [min, max] with min ≤ max ≤ 10, got [{t0}, {t1}]"),
+                ));
+            }
         }
         if !(self.min_room_side_m.is_finite() && (1.2..=10.0).contains(&self.min_room_side_m)) {
             return Some((
@@ -298,8 +312,9 @@ pub fn generate(
             redrawn.push("no floor plan fitted the rules".to_string());
             continue;
         };
-        let furnishing =
+        let mut furnishing =
             furnish::Furnishing::furnish(&plan, catalogue, settings.small_things, &mut rng);
+        furnishing.drop_things(catalogue, settings.floor_things, &mut rng);
         let placed = furnishing.placed;
         let built = build(&plan);
         let (mesh, mut objects) = scene_mesh(&plan, &built, &placed, catalogue, &mut models)?;

@@ -84,16 +84,23 @@ pub(super) fn rendered_agents(
                     })
                 })
                 .collect::<Result<Vec<RenderedAgent>>>()?;
-            // What they pick up, with segmentation ids in the take's order.
+            // What they pick up: egogen's solids with segmentation ids in the take's order,
+            // the scene's things with their own.
             let mut agents = agents;
             let mut id = HELD_OBJECT_ID_BASE;
             for (agent, a) in agents.iter_mut().zip(&take.agents) {
                 for object in &a.held_objects {
+                    let object_id = match &object.scene_object {
+                        Some(name) => scene_object_id(scene, name)?,
+                        None => {
+                            id += 1;
+                            id - 1
+                        }
+                    };
                     agent.held_objects.push(RenderedObject {
-                        id,
+                        id: object_id,
                         object: object.clone(),
                     });
-                    id += 1;
                 }
             }
             Ok((agents, wearers.to_vec()))
@@ -107,17 +114,22 @@ fn moved_in_scene(
     scene: &crate::scene::SceneMesh,
     movement: &crate::synth::activity::ObjectMove,
 ) -> Result<RenderedMove> {
-    let Some(object) = scene.objects.iter().find(|o| o.name == movement.name) else {
-        bail!(
-            "the take moves the scene object `{}`, which the scene has not got (was the take \
-             made in another scene?)",
-            movement.name
-        );
-    };
     Ok(RenderedMove {
-        id: object.id.0,
+        id: scene_object_id(scene, &movement.name)?,
         movement: movement.clone(),
     })
+}
+
+/// The segmentation id of the scene object `name` a take moves or picks up: the take must
+/// name an object of the scene it is rendered in.
+fn scene_object_id(scene: &crate::scene::SceneMesh, name: &str) -> Result<u32> {
+    match scene.objects.iter().find(|o| o.name == name) {
+        Some(object) => Ok(object.id.0),
+        None => bail!(
+            "the take moves the scene object `{name}`, which the scene has not got (was the take \
+             made in another scene?)"
+        ),
+    }
 }
 
 /// Writes the dataset's `sequence/` folder: the take's folder, or a placed motion's.

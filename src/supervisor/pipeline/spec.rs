@@ -13,7 +13,7 @@ use crate::plan::{RenderPlan, RunPlan};
 use crate::render::lens_polynomial::{native_error, ERROR_GRID};
 use crate::render::materials::{MaterialsMode, SurfaceFacts};
 use crate::render::protocol::{
-    ObstacleKey, PoseKey, ShardCeiling, ShardHeldObject, ShardMovedObject, ShardObstacle,
+    MovedKey, ObstacleKey, PoseKey, ShardCeiling, ShardHeldObject, ShardMovedObject, ShardObstacle,
     CEILING_OBJECT,
 };
 use crate::render::render_camera::RenderCamera;
@@ -265,7 +265,8 @@ fn obstacle_boxes(
 }
 
 /// The scene objects the agents move, by name (one key list per object, whoever moves it:
-/// the offsets added), keyed at every motion frame the renders of `frames` read.
+/// the offsets added), and the scene things they pick up (each key the world motion from
+/// where the scene has it), keyed at every motion frame the renders of `frames` read.
 fn moved_objects(
     render: &RenderPlan,
     agents: &[RenderedAgent],
@@ -275,7 +276,7 @@ fn moved_objects(
         return Vec::new();
     };
     let keyed = rendered_samples(render, frames, 1, n);
-    moved_scene_objects(agents)
+    let moved = moved_scene_objects(agents)
         .into_iter()
         .map(|(name, _)| ShardMovedObject {
             name: name.to_string(),
@@ -283,14 +284,46 @@ fn moved_objects(
                 .iter()
                 .map(|&f| {
                     let [x, y] = moved_offset_at(agents, name, f);
-                    ObstacleKey {
+                    MovedKey {
                         frame: f as f64,
                         centre: [x, y, 0.0],
+                        rotation_wxyz: None,
                     }
                 })
                 .collect(),
-        })
-        .collect()
+        });
+    let taken = agents
+        .iter()
+        .flat_map(|a| a.held_objects.iter())
+        .filter(|o| o.object.scene_object.is_some())
+        .map(|o| {
+            let h = &o.object;
+            let from_scene = h.world_from_object[0].inverse();
+            // Each key's quaternion on the side of the one before: Blender interpolates them
+            // component by component.
+            let mut before = glam::DQuat::IDENTITY;
+            ShardMovedObject {
+                name: h.name.clone(),
+                keys: keyed
+                    .iter()
+                    .map(|&f| {
+                        let pose = h.world_from_object[f.min(h.world_from_object.len() - 1)];
+                        let moved = pose * from_scene;
+                        let mut q = glam::DQuat::from_mat3(&moved.matrix3);
+                        if q.dot(before) < 0.0 {
+                            q = -q;
+                        }
+                        before = q;
+                        MovedKey {
+                            frame: f as f64,
+                            centre: moved.translation.to_array(),
+                            rotation_wxyz: Some([q.w, q.x, q.y, q.z]),
+                        }
+                    })
+                    .collect(),
+            }
+        });
+    moved.chain(taken).collect()
 }
 
 /// The objects the agents pick up, keyed at every motion frame the renders of `frames` read
@@ -304,14 +337,14 @@ fn held_objects(
         .iter()
         .flat_map(|a| {
             let keyed = rendered_samples(render, frames, 1, a.motion.len());
-            a.held_objects.iter().map(move |o| {
+            a.held_objects.iter().filter_map(move |o| {
                 let h = &o.object;
-                ShardHeldObject {
+                Some(ShardHeldObject {
                     name: h.name.clone(),
                     pass_index: o.id,
-                    shape: h.shape,
+                    shape: h.shape?,
                     size_m: h.size_m,
-                    colour_rgb: h.colour_rgb,
+                    colour_rgb: h.colour_rgb?,
                     keys: keyed
                         .iter()
                         .map(|&f| {
@@ -324,7 +357,7 @@ fn held_objects(
                             }
                         })
                         .collect(),
-                }
+                })
             })
         })
         .collect()

@@ -1,6 +1,7 @@
 //! Activities beyond walking in a take (docs/ACTIVITIES.md): what a person does when a walk
 //! ends — walk on, stand and look around, sit down on a seat and stand up again, pick
-//! something up from the floor — drawn from the take's seed and the `[activities]` weights;
+//! something up from the floor (one of the scene's own things walked to, or egogen's own
+//! object) — drawn from the take's seed and the `[activities]` weights;
 //! the one schema of those settings; and the frames each activity is made of, on the body
 //! that does it, at its place, checked against the scene: a transition from the walker's last
 //! pose (a blend, turning at a bounded rate), the clip (`motion::activity_clip`) placed and
@@ -8,7 +9,7 @@
 //! the walker takes over where it ends. The crowd (`synth::crowd`) schedules them.
 //!
 //! Here: the schema and the records; `world` (the activity world every activity shares:
-//! seats, clips, the scene check, the transition), one file per activity (`stand`,
+//! seats, the scene's small things, clips, the scene check, the transition), one file per activity (`stand`,
 //! `pick_up`, `sit`), `refusal` (why one is skipped, typed).
 
 use serde::{Deserialize, Serialize};
@@ -433,6 +434,10 @@ pub struct ActivityRecord {
     pub join_joint_speed_rad_s: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clip_joint_speed_rad_s: Option<f64>,
+    /// The scene thing a pick-up bent to take (whether the hand took it: the person's
+    /// `held_objects`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub object: Option<String>,
     /// What the person looks at while doing it (the Aria gaze model fixates it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub look_at: Option<LookAt>,

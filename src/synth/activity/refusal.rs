@@ -12,6 +12,8 @@ pub(crate) enum Doing {
     BendingThere,
     /// Sitting on the seat of the object named.
     SittingOn(String),
+    /// Bending to take the scene thing named.
+    Taking(String),
 }
 
 impl std::fmt::Display for Doing {
@@ -20,6 +22,7 @@ impl std::fmt::Display for Doing {
             Doing::StandingThere => f.write_str("standing there"),
             Doing::BendingThere => f.write_str("bending there"),
             Doing::SittingOn(seat) => write!(f, "sitting on {seat}"),
+            Doing::Taking(thing) => write!(f, "bending to take {thing}"),
         }
     }
 }
@@ -53,6 +56,8 @@ pub(crate) enum Refusal {
     StandsOverFurniture { seat: String, in_front_m: f64 },
     #[error("the place in front of the seat of {seat} was not reached")]
     SeatNotReached { seat: String },
+    #[error("the place beside {thing} was not reached")]
+    ThingNotReached { thing: String },
     #[error("the scene has no seat (`egogen scene inspect` lists them)")]
     NoSeat,
     #[error("every seat on this floor is taken")]

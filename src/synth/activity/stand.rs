@@ -39,7 +39,7 @@ impl ActivityWorld {
             &frames,
             &phases,
             IDLE_STRIDE,
-            floor_z,
+            (floor_z, None),
             Doing::StandingThere,
         )?;
         Ok(Performance {

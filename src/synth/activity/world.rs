@@ -1,5 +1,5 @@
-//! The activity world of a take: its seats and who sits on them, the clips, the scene each
-//! activity's frames are checked against; what every activity shares (placing a clip where
+//! The activity world of a take: its seats and who sits on them, the scene's small things on
+//! the floor and who took them, the clips, the scene each activity's frames are checked against; what every activity shares (placing a clip where
 //! the walk ended, the transition into it, the checks).
 
 use std::collections::HashMap;
@@ -18,12 +18,21 @@ use crate::motion::cvae::BodyContext;
 use crate::motion::primitive::{NEW_FRAMES, PRIMITIVE_RATE_HZ};
 use crate::scene::mesh_distance::MeshDistance;
 use crate::scene::path_plan::PathField;
+use crate::scene::small_object::{things_on_floor, SceneThing};
 use crate::scene::{find_seats, SceneMesh, Seat, SeatSettings, WalkableMap};
 use crate::walker::reward::path_leaves_floor;
 
 /// Markers this close above the floor (m) are not tested against the scene: feet on a floor
 /// modelled as a slab (walking is not tested there either).
 pub(super) const FLOOR_BAND_M: f64 = 0.05;
+
+/// Farthest a scene thing's bottom may lie from the floor a person stands on for it to be
+/// picked up from that floor (m).
+const THING_ON_FLOOR_M: f64 = 0.03;
+
+/// Farthest a person walks to pick up one of the scene's things (m on foot): a thing in
+/// another room far off is left where it is.
+pub(crate) const THING_WALK_M: f64 = 6.0;
 
 /// Every how many frames an idle hold (only the head and chest moving) is tested against the
 /// scene; transitions and clips every second frame.
@@ -41,6 +50,10 @@ pub(crate) struct ActivityWorld {
     pub seats: Vec<Seat>,
     /// Booked by someone walking to it or sitting on it.
     pub taken: Vec<bool>,
+    /// The scene's small things a pick-up may take (found only where pick-ups are drawn).
+    pub things: Vec<SceneThing>,
+    /// Booked by someone walking to it, or taken.
+    pub thing_taken: Vec<bool>,
     pub(super) clips: Vec<ActivityClip>,
     mesh: Option<Arc<SceneMesh>>,
     /// The scene without the objects of one name (the seat sat on: its parts, a chair's
@@ -63,10 +76,16 @@ impl ActivityWorld {
                 .collect(),
             _ => Vec::new(),
         };
+        let things = match (&mesh, settings.weights.weight(Activity::PickUp) > 0.0) {
+            (Some(m), true) => things_on_floor(m),
+            _ => Vec::new(),
+        };
         Ok(Self {
             settings,
             taken: vec![false; seats.len()],
             seats,
+            thing_taken: vec![false; things.len()],
+            things,
             clips: ActivityClip::load_shipped(clip_dir)?,
             mesh,
             distances: HashMap::new(),
@@ -109,6 +128,46 @@ impl ActivityWorld {
             .map(|s| (s, distance(s)))
             .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
             .map(|(s, _)| s)
+    }
+
+    /// The free scene thing nearest to walk to from `from` (as [`Self::nearest_free_seat`],
+    /// at most [`THING_WALK_M`] on foot) that stands on the floor at `floor_z` with its top
+    /// `within` (m over that floor), and the place to walk to: `reach` from the thing, on
+    /// the line from `from`, walkable.
+    pub(crate) fn nearest_free_thing(
+        &self,
+        map: &WalkableMap,
+        from: DVec2,
+        floor_z: f64,
+        within: [f64; 2],
+        reach: f64,
+    ) -> Option<(usize, DVec2)> {
+        let region = |p: DVec2| map.cell_of(p).map(|(i, j)| map.component[j * map.nx + i]);
+        let here = region(from);
+        let walk = PathField::to_goal(map, from);
+        (0..self.things.len())
+            .filter(|&k| !self.thing_taken[k])
+            .filter_map(|k| {
+                let t = &self.things[k];
+                let top = t.max.z - floor_z;
+                let on_floor = (t.min.z - floor_z).abs() <= THING_ON_FLOOR_M;
+                let c = t.top_centre().truncate();
+                let stand = c - (c - from).try_normalize()? * reach;
+                (on_floor
+                    && (within[0]..=within[1]).contains(&top)
+                    && map.is_walkable_at(stand)
+                    && region(stand) == here)
+                    .then(|| {
+                        let d = match &walk {
+                            Some(field) => field.at(stand).unwrap_or(f64::INFINITY),
+                            None => stand.distance(from),
+                        };
+                        (k, stand, d)
+                    })
+            })
+            .filter(|&(_, _, d)| d <= THING_WALK_M)
+            .min_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)))
+            .map(|(k, stand, _)| (k, stand))
     }
 
     pub(super) fn clip(&self, id: ClipId) -> Result<&ActivityClip, Refusal> {
@@ -191,7 +250,7 @@ impl ActivityWorld {
     }
 
     /// Whether an activity played where the walk ended fits there: no frame enters the
-    /// scene ([`Self::first_entry`]) and the pelvis stays on the walkable floor (the walker
+    /// scene ([`Self::first_entry`]; but the object named `without`) and the pelvis stays on the walkable floor (the walker
     /// takes over where it ends); else why not, the body `doing` what it did.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn fits_here(
@@ -201,11 +260,11 @@ impl ActivityWorld {
         frames: &[BodyParams],
         phases: &[(Phase, usize)],
         hold_stride: usize,
-        floor_z: f64,
+        (floor_z, without): (f64, Option<&str>),
         doing: Doing,
     ) -> Result<(), Refusal> {
         if let Some((frame, depth_m)) =
-            self.first_entry(body, frames, phases, hold_stride, None, floor_z)
+            self.first_entry(body, frames, phases, hold_stride, without, floor_z)
         {
             return Err(Refusal::EntersScene {
                 doing,
@@ -228,16 +287,30 @@ impl ActivityWorld {
         id: ClipId,
         floor_z: f64,
     ) -> Result<(Vec<BodyParams>, DVec2), Refusal> {
-        let clip = self.clip(id)?.on_body(body)?;
         let (pelvis, facing) = pelvis_and_heading(body, last)?;
-        let frames = placed(
+        Ok((
+            self.clip_placed(body, id, (pelvis, facing), floor_z)?,
+            pelvis,
+        ))
+    }
+
+    /// The clip `id` on `body`, its first frame's pelvis at `at.0` facing `at.1` (rad), on the
+    /// floor at `floor_z`.
+    pub(super) fn clip_placed(
+        &self,
+        body: &BodyContext,
+        id: ClipId,
+        at: (DVec2, f64),
+        floor_z: f64,
+    ) -> Result<Vec<BodyParams>, Refusal> {
+        let clip = self.clip(id)?.on_body(body)?;
+        Ok(placed(
             &clip.frames,
             body.shaped.rest_joints[joint::PELVIS],
             (clip.pelvis[0], clip.headings[0]),
-            (pelvis, facing),
+            at,
             |_| floor_z,
-        );
-        Ok((frames, pelvis))
+        ))
     }
 
     /// The frames from `last` into `first` (neither included): a blend of at least
@@ -281,6 +354,7 @@ pub(super) fn record(activity: Activity, place: DVec2, turn_deg: f64) -> Activit
         contact: f64::NAN,
         join_joint_speed_rad_s: f64::NAN,
         clip_joint_speed_rad_s: None,
+        object: None,
         look_at: None,
     }
 }
@@ -346,31 +420,89 @@ mod tests {
         }
     }
 
+    /// A floor `nx` cells of 0.1 m long and 6 m wide, a wall at y = 3 m from x = 0 to 8 m (its
+    /// way round at x > 8 m).
+    fn walled_floor(nx: usize) -> WalkableMap {
+        let ny = 60;
+        let walkable = (0..nx * ny)
+            .map(|k| !(k / nx == 30 && k % nx < 80))
+            .collect();
+        WalkableMap::from_walkable(DVec2::ZERO, 0.1, nx, ny, walkable)
+    }
+
+    /// An activity world of `seats` and `things`, none taken, with no clips and no scene.
+    fn world_of(seats: Vec<Seat>, things: Vec<SceneThing>) -> ActivityWorld {
+        ActivityWorld {
+            settings: ActivitySettings::default(),
+            taken: vec![false; seats.len()],
+            seats,
+            thing_taken: vec![false; things.len()],
+            things,
+            clips: Vec::new(),
+            mesh: None,
+            distances: HashMap::new(),
+        }
+    }
+
+    /// A small scene thing at `(x, y)`, its bottom at `z0`, `h` high.
+    fn thing(name: &str, x: f64, y: f64, z0: f64, h: f64) -> SceneThing {
+        SceneThing {
+            name: name.into(),
+            min: crate::math::Vec3::new(x - 0.03, y - 0.03, z0),
+            max: crate::math::Vec3::new(x + 0.03, y + 0.03, z0 + h),
+            triangles: Vec::new(),
+        }
+    }
+
+    /// The thing chosen is the free one nearest on foot whose top lies in the palm's band and
+    /// whose bottom is on the person's floor, at most [`THING_WALK_M`] away; the place to walk
+    /// to lies the reach short of it on the line from the person.
+    #[test]
+    fn the_thing_nearest_on_foot_in_reach_is_chosen() {
+        let map = walled_floor(200);
+        let from = DVec2::new(2.0, 2.5);
+        let mut world = world_of(
+            Vec::new(),
+            vec![
+                thing("behind_the_wall", 2.0, 3.6, 0.0, 0.09),
+                thing("too_tall", 3.0, 2.5, 0.0, 0.2),
+                thing("on_a_table", 3.0, 2.0, 0.7, 0.09),
+                thing("toy", 5.0, 2.5, 0.0, 0.09),
+                thing("far", 12.0, 1.0, 0.0, 0.09),
+            ],
+        );
+        let band = [0.05, 0.12];
+        let (k, stand) = world
+            .nearest_free_thing(&map, from, 0.0, band, 0.5)
+            .unwrap();
+        assert_eq!(world.things[k].name, "toy");
+        assert!(stand.distance(DVec2::new(4.5, 2.5)) < 1e-9, "{stand}");
+        world.thing_taken[k] = true;
+        // Behind the wall is 1.1 m as the crow flies, over 6 m on foot round it.
+        assert_eq!(world.nearest_free_thing(&map, from, 0.0, band, 0.5), None);
+        let near = DVec2::new(9.0, 1.0);
+        let (k, _) = world
+            .nearest_free_thing(&map, near, 0.0, band, 0.5)
+            .unwrap();
+        assert_eq!(world.things[k].name, "far");
+    }
+
     /// The seat chosen is the nearest on foot: one 1 m away behind a wall loses to one 3 m
     /// away in the open; a seat on an object walked to before and not reached is passed over
     /// with every other place on that object.
     #[test]
     fn the_seat_nearest_on_foot_is_chosen_and_unreached_objects_are_passed() {
-        // A 10 × 6 m floor, a wall at y = 3 m from x = 0 to 8 m (its way round at x > 8 m).
-        let (nx, ny) = (100, 60);
-        let walkable = (0..nx * ny)
-            .map(|k| !(k / nx == 30 && k % nx < 80))
-            .collect();
-        let map = WalkableMap::from_walkable(DVec2::ZERO, 0.1, nx, ny, walkable);
+        let map = walled_floor(100);
         let from = DVec2::new(2.0, 2.5);
-        let mut world = ActivityWorld {
-            settings: ActivitySettings::default(),
-            seats: vec![
+        let mut world = world_of(
+            vec![
                 seat("behind_the_wall", [2.0, 3.55]),
                 seat("sofa", [5.0, 2.0]),
                 seat("sofa", [5.6, 2.0]),
                 seat("armchair", [7.0, 1.0]),
             ],
-            taken: vec![false; 4],
-            clips: Vec::new(),
-            mesh: None,
-            distances: HashMap::new(),
-        };
+            Vec::new(),
+        );
         assert!(world.seats[0].stand().distance(from) < world.seats[1].stand().distance(from));
         assert_eq!(world.nearest_free_seat(&map, from, &[]), Some(1));
         world.taken[1] = true;

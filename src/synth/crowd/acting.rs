@@ -1,5 +1,6 @@
-//! A person's activities between walks: what comes after a walk (walk on, stand, pick up,
-//! or walk to a seat and sit), and an activity's frames taken a round at a time
+//! A person's activities between walks: what comes after a walk (walk on, stand, pick up
+//! here, walk to one of the scene's small things and pick it up, or walk to a seat and sit),
+//! and an activity's frames taken a round at a time
 //! ([`crate::synth::activity`] makes them).
 
 use glam::DVec2;
@@ -11,58 +12,37 @@ use crate::motion::cvae::PrimitiveSeed;
 use crate::synth::activity::{
     Activity, ActivitySegment, ActivityWorld, Performance, Phase, Refusal, SkippedActivity,
 };
+use crate::synth::held_object::{MAX_PALM_GAP_M, PALM_CLEARANCE_M};
 use crate::walker::state::SeedView;
 
-use super::person::Agent;
+use super::person::{Agent, Booked};
 
 impl Agent<'_> {
-    /// After a walk: sits down if it was the walk to a seat, else draws what comes next
-    /// from `acts`; whether an activity (or the walk to one) began — `false`: walk on.
+    /// After a walk: sits down or picks up if it was the walk to a seat or a thing, else
+    /// draws what comes next from `acts`; whether an activity (or the walk to one) began —
+    /// `false`: walk on.
     pub(super) fn after_walk(&mut self, acts: &mut ActivityWorld, world: &CrowdWorld) -> bool {
         let frame = self.track.frames.len();
-        let floor_z = self.walker.view.seed.floor_z;
-        let last = self.track.frames[frame - 1].clone();
-        if let Some((s, began)) = self.approaching.take() {
+        if let Some((booked, began)) = self.approaching.take() {
             self.track.activity_segments.push(ActivitySegment {
-                activity: Activity::Sit,
+                activity: booked.activity(),
                 phase: Phase::Approach,
                 start_frame: began,
                 end_frame: frame,
             });
             let reached = self.track.goals.last().is_some_and(|g| g.reached);
-            let sat = if reached {
-                acts.sit(
-                    &self.body,
-                    &world.map,
-                    &last,
-                    s,
-                    floor_z,
-                    &mut self.activity_rng,
-                )
-            } else {
-                self.unreached_seats.push(s);
-                acts.taken[s] = false;
-                // Another free seat, once: a person who cannot get through to one takes another.
-                if !self.approach_retried && self.approach_seat(acts, world, frame) {
-                    self.approach_retried = true;
-                    return true;
+            match booked {
+                Booked::Seat(s) => {
+                    if self.arrive_at_seat(acts, world, s, reached) {
+                        return true;
+                    }
                 }
-                Err(Refusal::SeatNotReached {
-                    seat: acts.seats[s].object_name.clone(),
-                })
-            };
-            match sat {
-                Ok(p) => {
-                    self.perform(p);
-                    return true;
-                }
-                Err(reason) => {
-                    acts.taken[s] = false;
-                    self.skip(Activity::Sit, frame, reason);
-                }
+                Booked::Thing(k) => return self.arrive_at_thing(acts, world, k, reached),
             }
         }
         let activity = acts.draw(&mut self.activity_rng);
+        let floor_z = self.walker.view.seed.floor_z;
+        let last = self.track.frames[frame - 1].clone();
         let done = match activity {
             Activity::Walk => return false,
             Activity::Sit if self.approach_seat(acts, world, frame) => {
@@ -76,6 +56,7 @@ impl Agent<'_> {
             } else {
                 Refusal::SeatsTaken
             }),
+            Activity::PickUp if self.approach_thing(acts, world, frame) => return true,
             here => acts.play_here(
                 here,
                 &self.body,
@@ -85,6 +66,16 @@ impl Agent<'_> {
                 &mut self.activity_rng,
             ),
         };
+        self.performed(activity, frame, done)
+    }
+
+    /// Plays `done`, or records why `activity` was skipped at `frame`; whether it is played.
+    fn performed(
+        &mut self,
+        activity: Activity,
+        frame: usize,
+        done: Result<Performance, Refusal>,
+    ) -> bool {
         match done {
             Ok(p) => {
                 self.perform(p);
@@ -95,6 +86,119 @@ impl Agent<'_> {
                 false
             }
         }
+    }
+
+    /// At the end of the walk to seat `s` (`reached`: its place was): sits down, or walks to
+    /// another free seat once; whether that began.
+    fn arrive_at_seat(
+        &mut self,
+        acts: &mut ActivityWorld,
+        world: &CrowdWorld,
+        s: usize,
+        reached: bool,
+    ) -> bool {
+        let frame = self.track.frames.len();
+        let floor_z = self.walker.view.seed.floor_z;
+        let last = self.track.frames[frame - 1].clone();
+        let sat = if reached {
+            acts.sit(
+                &self.body,
+                &world.map,
+                &last,
+                s,
+                floor_z,
+                &mut self.activity_rng,
+            )
+        } else {
+            self.unreached_seats.push(s);
+            acts.taken[s] = false;
+            // Another free seat, once: a person who cannot get through to one takes another.
+            if !self.approach_retried && self.approach_seat(acts, world, frame) {
+                self.approach_retried = true;
+                return true;
+            }
+            Err(Refusal::SeatNotReached {
+                seat: acts.seats[s].object_name.clone(),
+            })
+        };
+        if sat.is_err() {
+            acts.taken[s] = false;
+        }
+        self.performed(Activity::Sit, frame, sat)
+    }
+
+    /// At the end of the walk to scene thing `k` (`reached`: the place beside it was): bends
+    /// to take it; whether that began. One not reached, or not taken, is free again.
+    fn arrive_at_thing(
+        &mut self,
+        acts: &mut ActivityWorld,
+        world: &CrowdWorld,
+        k: usize,
+        reached: bool,
+    ) -> bool {
+        let frame = self.track.frames.len();
+        let floor_z = self.walker.view.seed.floor_z;
+        let last = self.track.frames[frame - 1].clone();
+        let bent = match reached {
+            true => acts.reach(&self.body).and_then(|reach| {
+                acts.pick_up_thing(
+                    &self.body,
+                    &world.map,
+                    &last,
+                    k,
+                    &reach,
+                    floor_z,
+                    &mut self.activity_rng,
+                )
+            }),
+            false => Err(Refusal::ThingNotReached {
+                thing: acts.things[k].name.clone(),
+            }),
+        };
+        match &bent {
+            Ok(_) => self.things.push(acts.things[k].clone()),
+            Err(_) => acts.thing_taken[k] = false,
+        }
+        self.performed(Activity::PickUp, frame, bent)
+    }
+
+    /// On a person's first pick-up (both hands free), books the free scene thing nearest on
+    /// foot whose top lies where this body's palm closes round it
+    /// ([`crate::synth::held_object::MAX_PALM_GAP_M`] at most under the palm's lowest reach,
+    /// and not in it) and walks to where the palm's reach lands over it from `frame`;
+    /// whether there was one.
+    fn approach_thing(
+        &mut self,
+        acts: &mut ActivityWorld,
+        world: &CrowdWorld,
+        frame: usize,
+    ) -> bool {
+        let picked_before = self
+            .track
+            .activities
+            .iter()
+            .any(|r| r.activity == Activity::PickUp);
+        if picked_before || acts.things.is_empty() {
+            return false;
+        }
+        let Ok(reach) = acts.reach(&self.body) else {
+            return false;
+        };
+        let palm = reach.palm_over_floor_m;
+        let within = [palm - MAX_PALM_GAP_M, palm - PALM_CLEARANCE_M];
+        let floor_z = self.walker.view.seed.floor_z;
+        let pelvis = self.walker.view.pelvis;
+        let Some((k, stand)) =
+            acts.nearest_free_thing(&world.map, pelvis, floor_z, within, reach.offset.length())
+        else {
+            return false;
+        };
+        acts.thing_taken[k] = true;
+        self.approaching = Some((Booked::Thing(k), frame));
+        self.goal = stand;
+        self.goal_steps = 0;
+        self.walker.retarget(self.goal);
+        true
     }
 
     /// Books the free seat nearest on foot (none walked to before and not reached) and walks
@@ -111,7 +215,7 @@ impl Agent<'_> {
             return false;
         };
         acts.taken[s] = true;
-        self.approaching = Some((s, frame));
+        self.approaching = Some((Booked::Seat(s), frame));
         self.goal = acts.seats[s].stand();
         self.goal_steps = 0;
         self.walker.retarget(self.goal);

@@ -27,8 +27,9 @@
 //!
 //! Where the take asks for activities ([`run_crowd_with_activities`], `[activities]`), what
 //! comes after each walk is drawn ([`crate::synth::activity`]): walk on, stand and look
-//! around, pick something up (played where the walk ended), or sit (walk to the free seat
-//! nearest on foot first, and to the next one where that one is not reached); an activity's frames are taken [`NEW_FRAMES`] a round, the
+//! around, pick something up (played where the walk ended; a first pick-up walks to one of
+//! the scene's small things on the floor first, where one is near), or sit (walk to the free
+//! seat nearest on foot first, and to the next one where that one is not reached); an activity's frames are taken [`NEW_FRAMES`] a round, the
 //! others seeing the person where it is, and the walker takes over from its last two frames;
 //! a walk comes between two activities. An activity that would enter the scene is skipped with its reason.
 //!

@@ -19,6 +19,7 @@ use crate::motion::cvae::tensor_body::RigGeometry;
 use crate::motion::cvae::{BodyContext, DecodedPrimitive};
 use crate::motion::hands::HandStyle;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
+use crate::scene::small_object::SceneThing;
 use crate::scene::Obstacle2;
 use crate::sensing::Sensor;
 use crate::synth::activity::{
@@ -29,6 +30,24 @@ use crate::walker::reward::{Judged, Limits, RewardWeights};
 use crate::walker::state::{place_seed, SeedView, Surroundings, Walker};
 use crate::walker::step::{walk_step, Judge, SceneCheck, StepContext};
 use crate::walker::WalkerSettings;
+
+/// What a person walks to: a seat to sit on, or a scene thing to pick up (indices into the
+/// activity world's `seats` and `things`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Booked {
+    Seat(usize),
+    Thing(usize),
+}
+
+impl Booked {
+    /// The activity the walk to it is the approach of.
+    pub(super) fn activity(self) -> Activity {
+        match self {
+            Booked::Seat(_) => Activity::Sit,
+            Booked::Thing(_) => Activity::PickUp,
+        }
+    }
+}
 
 pub(super) struct Agent<'m> {
     pub(super) plan: AgentPlan,
@@ -45,8 +64,11 @@ pub(super) struct Agent<'m> {
     pub(super) track: AgentTrack,
     /// The activity being played and how many of its frames are taken.
     pub(super) acting: Option<(Performance, usize)>,
-    /// The seat being walked to (to sit on when reached) and the frame the walk began.
-    pub(super) approaching: Option<(usize, usize)>,
+    /// The seat or scene thing being walked to (to sit on, or pick up, when reached) and
+    /// the frame the walk began.
+    pub(super) approaching: Option<(Booked, usize)>,
+    /// The scene things it walked to and bent to take, in the order it did.
+    pub(super) things: Vec<SceneThing>,
     /// Seats it walked to and did not reach: not tried again in this take.
     pub(super) unreached_seats: Vec<usize>,
     /// The seat being walked to is the sit's second: the first was not reached.
@@ -190,6 +212,7 @@ impl<'m> Agent<'m> {
             track,
             acting: None,
             approaching: None,
+            things: Vec::new(),
             unreached_seats: Vec::new(),
             approach_retried: false,
             activity_rng: walker_rng(settings.seed ^ 0xAC71_7117, index),
@@ -374,9 +397,9 @@ impl Agent<'_> {
         for seg in &mut t.activity_segments {
             seg.end_frame = seg.end_frame.min(frames);
         }
-        if let Some((_, began)) = self.approaching {
+        if let Some((booked, began)) = self.approaching {
             t.activity_segments.push(ActivitySegment {
-                activity: Activity::Sit,
+                activity: booked.activity(),
                 phase: Phase::Approach,
                 start_frame: began,
                 end_frame: frames,
@@ -418,6 +441,7 @@ impl Agent<'_> {
             settings,
             &self.hands,
             (floor_z, map),
+            &self.things,
             &mut self.objects_rng,
         )?;
         // How each activity moved: foot contact over its frames, the fastest joint turn where

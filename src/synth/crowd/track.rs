@@ -16,11 +16,14 @@ use crate::motion::hands::{move_fingers, HandAxes, HandDoing, HandStyle};
 use crate::motion::head_stabilise::{stabilise_head, HeadStabiliser};
 use crate::motion::joins::{smooth_joins, JoinWindow};
 use crate::motion::primitive::PRIMITIVE_RATE_HZ;
+use crate::scene::small_object::SceneThing;
 use crate::scene::WalkableMap;
 use crate::synth::activity::{
     Activity, ActivityRecord, ActivitySegment, ObjectMove, Phase, SkippedActivity,
 };
-use crate::synth::held_object::{fit_under_fingertips, grasp_in, placed_object, Grasp, HeldObject};
+use crate::synth::held_object::{
+    fit_under_fingertips, grasp_in, placed_object, taken_thing, Grasp, HeldObject,
+};
 use crate::walker::reward::path_leaves_floor;
 use crate::walker::{ControllerSpec, WalkerSettings};
 
@@ -299,13 +302,15 @@ fn smoothed_on_floor(t: &AgentTrack, map: &WalkableMap) -> Vec<BodyParams> {
 /// ([`WalkerSettings::finger_motion`], `hands`: the person's, closing round what they hold);
 /// the eye frame, markers and pelvis positions posed again from the frames where any changed
 /// them, and the held objects carried with their wrists, each lowered under its hand's
-/// fingertips (one that cannot be is left on the floor).
+/// fingertips (one that cannot be is left on the floor); a pick-up that bent over one of
+/// `things` (the scene's, walked to) takes that, where the palm comes over it.
 pub(super) fn finish_motion(
     t: &mut AgentTrack,
     body: &BodyContext,
     settings: &WalkerSettings,
     hands: &HandStyle,
     (floor_z, map): (f64, &WalkableMap),
+    things: &[SceneThing],
     objects_rng: &mut ChaCha8Rng,
 ) -> Result<(), CrowdError> {
     let picks_up = t
@@ -339,7 +344,18 @@ pub(super) fn finish_motion(
         let Some(g) = grasp_in(seg, &t.frames, body, free).map_err(DecodeError::from)? else {
             continue;
         };
-        if let Some(o) = placed_object(&t.name, holds.len(), &g, floor_z, objects_rng) {
+        // A pick-up that bent over a scene thing takes that or nothing.
+        let bent_over = t
+            .activities
+            .iter()
+            .find(|r| r.start_frame <= seg.start_frame && seg.start_frame < r.end_frame)
+            .and_then(|r| r.object.as_deref())
+            .and_then(|name| things.iter().find(|t| t.name == name));
+        let taken = match bent_over {
+            Some(thing) => taken_thing(thing, &g),
+            None => placed_object(&t.name, holds.len(), &g, floor_z, objects_rng),
+        };
+        if let Some(o) = taken {
             holds.push(g);
             t.held_objects.push(o);
         }
@@ -428,7 +444,7 @@ fn hands_doing(t: &AgentTrack, holds: &[Grasp]) -> Vec<[HandDoing; 2]> {
         .collect();
     for (g, held) in holds.iter().zip(&t.held_objects) {
         let holding = HandDoing::Holding {
-            grip_mm: (held.kind.grip_m() * 1000.0).round() as u16,
+            grip_mm: (held.grip_m() * 1000.0).round().min(u16::MAX as f64) as u16,
         };
         let opens = g
             .frame

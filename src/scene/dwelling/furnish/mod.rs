@@ -27,6 +27,11 @@ use super::plan::{FloorPlan, RoomKind, DOOR_HEIGHT_M};
 const TRIES: usize = 40;
 /// Depth kept free in front of a doorway on both sides (m).
 const DOOR_ZONE_M: f64 = 0.9;
+/// Heights of the things [`Furnishing::drop_things`] leaves on floors (m): whose top a
+/// reaching palm comes 1–8 cm over (it comes to 12–16 cm over the floor).
+const DROPPED_MIN_HEIGHT_M: f64 = 0.04;
+const DROPPED_MAX_HEIGHT_M: f64 = 0.15;
+
 /// Depth kept free of tall things in front of a window (m).
 const WINDOW_ZONE_M: f64 = 0.35;
 /// Depth kept free behind a chair at a table or desk, to pull it out (m).
@@ -399,6 +404,60 @@ impl<'a> Furnishing<'a> {
     fn corner_piece(&mut self, r: &Room, role: Role, rng: &mut ChaCha8Rng) {
         let m = r.pick(role, rng);
         self.corner(r, m, role, 0.0, rng);
+    }
+
+    /// U(`n`) things a hand can pick up left on the floor of each living room and bedroom,
+    /// anywhere free: the catalogue's small things (on tables, counters, basins and bedroom
+    /// floors) that a pick-up's hand closes round — at most
+    /// [`crate::scene::small_object::THING_MAX_GRIP_M`] across the narrower way and
+    /// [`DROPPED_MAX_HEIGHT_M`] high. Draws nothing where `n` is `(0, 0)`.
+    pub(crate) fn drop_things(
+        &mut self,
+        catalogue: &'a Catalogue,
+        (lo, hi): (usize, usize),
+        rng: &mut ChaCha8Rng,
+    ) {
+        if hi == 0 {
+            return;
+        }
+        let mut models: Vec<&CatalogueModel> = Vec::new();
+        for role in [
+            Role::TableThing,
+            Role::KitchenThing,
+            Role::BathroomThing,
+            Role::BedroomThing,
+        ] {
+            for m in catalogue.models_for(role) {
+                let [x, y, z] = m.size_m;
+                let fits = x.min(y) <= crate::scene::small_object::THING_MAX_GRIP_M
+                    && (DROPPED_MIN_HEIGHT_M..=DROPPED_MAX_HEIGHT_M).contains(&z);
+                if fits && !models.iter().any(|n| n.id == m.id) {
+                    models.push(m);
+                }
+            }
+        }
+        if models.is_empty() {
+            return;
+        }
+        for room in 0..self.plan.rooms.len() {
+            if !matches!(
+                self.plan.rooms[room].kind,
+                RoomKind::Living | RoomKind::Bedroom
+            ) {
+                continue;
+            }
+            let (a, b) = self.plan.interior(room);
+            let r = Room {
+                catalogue,
+                room,
+                inside: Rect { min: a, max: b },
+            };
+            let n = lo + (rng.next_u64() % (hi - lo + 1) as u64) as usize;
+            for _ in 0..n {
+                let m = models[(rng.next_u64() % models.len() as u64) as usize];
+                self.on_floor(&r, m, Role::FloorThing, rng);
+            }
+        }
     }
 
     /// A thing on the floor, anywhere free.
