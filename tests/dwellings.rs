@@ -251,6 +251,15 @@ fn a_campaign_names_its_dwellings_by_range_and_bad_ranges_are_refused() {
             "{dwellings}: {err}"
         );
     }
+    // Generator settings that cannot make a dwelling are refused naming the key and the file's.
+    std::fs::write(a.path().join("ft.toml"), "floor_things = [3, 1]\n").unwrap();
+    let o = dry_run("[1]\ndwelling_settings = \"ft.toml\"");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("campaign.dwelling_settings") && err.contains("`floor_things`"),
+        "{err}"
+    );
     // An added furniture library that is not one is refused before anything is planned.
     let o = dry_run("[1]\ndwelling_catalogues = [\"nowhere\"]");
     let err = String::from_utf8_lossy(&o.stderr);
@@ -298,6 +307,36 @@ fn a_campaign_and_a_run_config_walk_generated_dwellings() {
         std::fs::read(json).unwrap(),
         std::fs::read(out.join("scenes/dwelling_5.json")).unwrap()
     );
+
+    // With the generator's settings: the dwelling `scene generate --settings` makes, with the
+    // things a hand can pick up left on its floors.
+    std::fs::write(a.path().join("ft.toml"), "floor_things = [2, 2]\n").unwrap();
+    let with_things = a.path().join("with_things");
+    std::fs::write(
+        &campaign,
+        format!(
+            "[campaign]\nrun = \"run.toml\"\nout = \"{}\"\ntakes = 1\ndwellings = [5]\ndwelling_settings = \"ft.toml\"\ncrowd_count = [1, 1]\nmin_free_disk_gb = 0.0\n",
+            with_things.display()
+        ),
+    )
+    .unwrap();
+    common::succeeds(Command::new(env!("CARGO_BIN_EXE_egogen-run")).arg(&campaign));
+    let settings = a.path().join("ft.toml");
+    let o = scene_generate(
+        "5",
+        &a.path().join("alone_ft"),
+        &["--settings", settings.to_str().unwrap()],
+    );
+    assert!(o.status.success());
+    let (glb, json) = dwelling_files(&a.path().join("alone_ft"));
+    let made = std::fs::read(with_things.join("scenes/dwelling_5.glb")).unwrap();
+    assert_eq!(std::fs::read(glb).unwrap(), made);
+    assert_ne!(
+        made,
+        std::fs::read(out.join("scenes/dwelling_5.glb")).unwrap()
+    );
+    let sidecar = std::fs::read_to_string(json).unwrap();
+    assert!(sidecar.contains("\"floor_things\": [\n"), "{sidecar}");
 
     // `dwelling:SEED` in a run config: generated into the cache (EGOGEN_CACHE) on first use.
     let cache = a.path().join("cache");

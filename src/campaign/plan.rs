@@ -47,8 +47,8 @@ pub(crate) struct RawCampaign {
     /// --obj-dir`), written to `scenes/plan_<seed>.obj` in the campaign folder.
     #[serde(default)]
     pub floor_plans: Vec<u64>,
-    /// Generated furnished dwellings, by seed (as `egogen scene generate --seed S`: default
-    /// settings, the shipped catalogue), written to `scenes/dwelling_<seed>.glb` with its
+    /// Generated furnished dwellings, by seed (as `egogen scene generate --seed S`: the
+    /// `dwelling_settings`, the shipped catalogue), written to `scenes/dwelling_<seed>.glb` with its
     /// sidecar `scenes/dwelling_<seed>.json` in the campaign folder; after `floor_plans` in
     /// the scenes' order. A list of seeds, or `{ first = N, count = M }` for seeds N … N+M−1
     /// ([`dwelling_seeds`]).
@@ -59,6 +59,9 @@ pub(crate) struct RawCampaign {
     /// campaign then carries `ATTRIBUTION.md`, and so does each take in a dwelling using one.
     #[serde(default)]
     pub dwelling_catalogues: Vec<PathBuf>,
+    /// The generator's settings for `dwellings` (a TOML file of the keys `egogen scene
+    /// generate --settings` reads, relative to the campaign file; default: the defaults).
+    pub dwelling_settings: Option<PathBuf>,
     /// People per take, drawn uniformly in `[lo, hi]` from the take's seed (default: the run
     /// config's `crowd.count`).
     pub crowd_count: Option<[usize; 2]>,
@@ -94,6 +97,8 @@ pub struct CampaignPlan {
     pub dwellings: Vec<(u64, PathBuf)>,
     /// Opt-in furniture libraries the dwellings are furnished from besides the shipped one.
     pub dwelling_catalogues: Vec<PathBuf>,
+    /// How the dwellings are drawn.
+    pub dwelling_settings: crate::scene::dwelling::DwellingSettings,
     /// SHA-256 of what defines the campaign (its takes' definitions): a resume must match.
     pub fingerprint: String,
 }
@@ -325,7 +330,12 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
     }
     let dwelling_catalogues = added_catalogues(&c.dwelling_catalogues, dir)
         .map_err(|what| bad("dwelling_catalogues", what))?;
-    let fingerprint = fingerprint(&run, &takes, &dwelling_catalogues)?;
+    let dwelling_settings = match &c.dwelling_settings {
+        Some(file) => crate::cli::scene_jobs::load_dwelling_settings(&dir.join(file))
+            .map_err(|e| bad("dwelling_settings", format!("{e:#}")))?,
+        None => Default::default(),
+    };
+    let fingerprint = fingerprint(&run, &takes, &dwelling_catalogues, &dwelling_settings)?;
     Ok(CampaignPlan {
         config: path.to_path_buf(),
         run,
@@ -335,6 +345,7 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         floor_plans,
         dwellings,
         dwelling_catalogues,
+        dwelling_settings,
         fingerprint,
     })
 }
@@ -352,13 +363,19 @@ fn added_catalogues(named: &[PathBuf], dir: &Path) -> Result<Vec<PathBuf>, Strin
 }
 
 /// SHA-256 of what defines a campaign: the run config and its takes' definitions, and the
-/// libraries added to its dwellings' catalogue, which change the dwellings (a campaign without
-/// them keeps the fingerprint it always had).
-fn fingerprint(run: &Path, takes: &[TakeDef], catalogues: &[PathBuf]) -> Result<String> {
-    let json = if catalogues.is_empty() {
-        serde_json::to_string(&(run, takes))
-    } else {
-        serde_json::to_string(&(run, takes, catalogues))
+/// libraries added to its dwellings' catalogue and the generator's settings, which change the
+/// dwellings (a campaign with neither keeps the fingerprint it always had).
+fn fingerprint(
+    run: &Path,
+    takes: &[TakeDef],
+    catalogues: &[PathBuf],
+    settings: &crate::scene::dwelling::DwellingSettings,
+) -> Result<String> {
+    let default = *settings == Default::default();
+    let json = match (catalogues.is_empty(), default) {
+        (true, true) => serde_json::to_string(&(run, takes)),
+        (false, true) => serde_json::to_string(&(run, takes, catalogues)),
+        (_, false) => serde_json::to_string(&(run, takes, catalogues, settings)),
     };
     Ok(sha256_hex(
         json.context("fingerprinting the campaign")?.as_bytes(),
@@ -707,17 +724,15 @@ pub(crate) fn write_generated_scenes(plan: &CampaignPlan) -> Result<()> {
         std::fs::rename(&tmp, file).with_context(|| format!("writing {}", file.display()))?;
     }
     if !plan.dwellings.is_empty() {
-        use crate::scene::dwelling::{
-            generate, shipped_catalogue_dir, Catalogue, DwellingSettings,
-        };
+        use crate::scene::dwelling::{generate, shipped_catalogue_dir, Catalogue};
         let catalogue = Catalogue::load_with(&shipped_catalogue_dir(), &plan.dwelling_catalogues)?;
-        let settings = DwellingSettings::default();
+        let settings = &plan.dwelling_settings;
         for (seed, file) in &plan.dwellings {
             // The GLB is written last: a dwelling whose GLB is there is whole.
             if file.is_file() {
                 continue;
             }
-            generate(&settings, &catalogue, *seed)?.write_glb(&catalogue, file)?;
+            generate(settings, &catalogue, *seed)?.write_glb(&catalogue, file)?;
         }
         write_campaign_attribution(plan)?;
     }
