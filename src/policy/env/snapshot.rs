@@ -5,7 +5,7 @@ use super::*;
 
 /// An episode in progress as data (checkpoints of training).
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct EpisodeSnapshot {
+pub(crate) struct EpisodeSnapshot {
     id: u64,
     #[serde(default)]
     scene: Option<BoxParams>,
@@ -40,7 +40,7 @@ impl EpisodeSnapshot {
 
 /// All episodes in progress and the next episode's number.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct EnvSnapshot {
+pub(crate) struct EnvSnapshot {
     pub episode_base: u64,
     pub next_episode: u64,
     pub episodes: Vec<EpisodeSnapshot>,
