@@ -67,7 +67,7 @@ pub struct GazeGoal {
 }
 
 /// What the wearer can look at.
-pub struct GazeWorld<'a> {
+pub(crate) struct GazeWorld<'a> {
     /// The device's CPF through the take (the headset spline).
     pub head: &'a PoseSpline,
     /// The other agents' eyes (`world_from_cpf` per frame, at the take's rate).
@@ -177,7 +177,7 @@ fn within_eye_range(d: Vec3) -> Vec3 {
 }
 
 /// The fixation sequence of a wearer over the take, drawn from `seed`.
-pub fn fixations(world: &GazeWorld, seed: u64) -> Vec<Fixation> {
+pub(crate) fn fixations(world: &GazeWorld, seed: u64) -> Vec<Fixation> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let duration = world.head.duration_s();
     let start_eyes = world.head.sample(0.0).world_from_body.translation;
@@ -267,7 +267,11 @@ pub fn fixations(world: &GazeWorld, seed: u64) -> Vec<Fixation> {
 }
 
 /// The gaze at each `k / rate_hz` (whole microseconds) through `fixations`.
-pub fn gaze_samples(world: &GazeWorld, fixations: &[Fixation], rate_hz: Real) -> Vec<GazeSample> {
+pub(crate) fn gaze_samples(
+    world: &GazeWorld,
+    fixations: &[Fixation],
+    rate_hz: Real,
+) -> Vec<GazeSample> {
     let times = super::imu::sample_times_ns(rate_hz, world.head.duration_s());
     let mut k = 0;
     times

@@ -20,7 +20,7 @@ use crate::math::{Affine3, Real, Vec3};
 use crate::rig::ImuCalibration;
 
 /// Gravity in the world (m/s², z up), as MPS writes it.
-pub const GRAVITY_WORLD: Vec3 = Vec3::new(0.0, 0.0, -9.81);
+pub(crate) const GRAVITY_WORLD: Vec3 = Vec3::new(0.0, 0.0, -9.81);
 /// One g in m/s², the unit the Aria noise tables use.
 const G: Real = 9.81;
 const DEG: Real = std::f64::consts::PI / 180.0;
@@ -109,7 +109,7 @@ impl ImuErrors {
 /// One IMU sample: time on the device clock and what the sensor reports (raw, as the device
 /// would record it).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImuSample {
+pub(crate) struct ImuSample {
     pub timestamp_ns: i64,
     /// Specific force (m/s²), in the IMU frame.
     pub accel: Vec3,
@@ -136,7 +136,7 @@ pub(crate) fn sample_times_ns(rate_hz: Real, duration_s: Real) -> Vec<i64> {
 
 /// The IMU at `head_from_imu` on a head moving along `spline`, sampled at `rate_hz`; with
 /// `errors`, the device's errors drawn from `seed` and its `calibration` applied.
-pub fn simulate_imu(
+pub(crate) fn simulate_imu(
     spline: &PoseSpline,
     head_from_imu: Affine3,
     rate_hz: Real,
@@ -221,7 +221,8 @@ pub(crate) fn simulate_imu_with_biases(
 
 /// Allan deviation of `values` sampled every `dt` seconds at cluster size `m` samples
 /// (non-overlapping clusters): `√(½ ⟨(ȳ_{k+1} − ȳ_k)²⟩)`.
-pub fn allan_deviation(values: &[Real], m: usize) -> Real {
+#[cfg(test)]
+pub(crate) fn allan_deviation(values: &[Real], m: usize) -> Real {
     let means: Vec<Real> = values
         .chunks_exact(m.max(1))
         .map(|c| c.iter().sum::<Real>() / c.len() as Real)

@@ -18,6 +18,8 @@
 pub(crate) mod annotate;
 pub mod annotations;
 pub mod aria;
+#[cfg(test)]
+mod aria_tests;
 pub mod colmap;
 pub mod euroc;
 pub mod gaze;

@@ -34,7 +34,7 @@ pub struct PoseSample {
 
 impl PoseSample {
     /// The state of a frame rigidly attached to the body at `body_from_frame`.
-    pub fn attached(&self, body_from_frame: Affine3) -> PoseSample {
+    pub(crate) fn attached(&self, body_from_frame: Affine3) -> PoseSample {
         let r = self.world_from_body.matrix3;
         let t = body_from_frame.translation;
         let w = self.angular_velocity_body;
@@ -160,7 +160,7 @@ impl PoseSpline {
     }
 
     /// Largest angle (rad) between a given pose's rotation and the spline's at its time.
-    pub fn rotation_residual_rad(&self) -> Real {
+    pub(crate) fn rotation_residual_rad(&self) -> Real {
         self.residual_rad
     }
 

@@ -230,7 +230,7 @@ pub fn orthonormality_error(m: Mat3) -> Real {
 /// The orthogonal polar factor of `m` (the rotation nearest in Frobenius norm, the same as
 /// `U·Vᵀ` of its SVD, which Sophus' `makeRotationMatrix` uses), by the Newton iteration
 /// `R ← (R + R⁻ᵀ)/2`. `m` must be close to a rotation (det > 0).
-pub fn nearest_rotation(m: Mat3) -> Mat3 {
+pub(crate) fn nearest_rotation(m: Mat3) -> Mat3 {
     let mut r = m;
     for _ in 0..100 {
         let next = (r + r.inverse().transpose()) * 0.5;

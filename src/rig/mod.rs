@@ -88,7 +88,7 @@ pub struct ImuCalibration {
 
 impl ImuCalibration {
     /// A perfect sensor: identity, no bias.
-    pub const IDEAL: ImuCalibration = ImuCalibration {
+    pub(crate) const IDEAL: ImuCalibration = ImuCalibration {
         accel_rectification: Mat3::IDENTITY,
         accel_bias: Vec3::ZERO,
         gyro_rectification: Mat3::IDENTITY,

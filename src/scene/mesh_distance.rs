@@ -203,7 +203,7 @@ fn parry_trimesh(mesh: &SceneMesh, tris: Vec<[u32; 3]>) -> Option<TriMesh> {
 
 /// First hits of rays against the scene's triangles (parry3d's BVH), both sides of every
 /// triangle: what a line of sight meets first.
-pub struct SceneRays {
+pub(crate) struct SceneRays {
     trimesh: TriMesh,
 }
 
@@ -221,7 +221,7 @@ impl SceneRays {
 
     /// Distance along the unit direction `dir` from `origin` to the first triangle, within
     /// `max_m`.
-    pub fn first_hit(&self, origin: Vec3, dir: Vec3, max_m: f64) -> Option<f64> {
+    pub(crate) fn first_hit(&self, origin: Vec3, dir: Vec3, max_m: f64) -> Option<f64> {
         use parry3d_f64::query::{Ray, RayCast};
         let ray = Ray::new(
             PVec3::from_array(origin.to_array()),

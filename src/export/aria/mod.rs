@@ -485,7 +485,7 @@ pub(crate) fn imu_seed(seed: u64, wearer: usize, imu: usize) -> u64 {
 }
 
 /// The header of the MPS closed-loop trajectory (projectaria-tools' `TrajectoryFormat.h`).
-pub const CLOSED_LOOP_HEADER: &str = "graph_uid,tracking_timestamp_us,utc_timestamp_ns,\
+pub(crate) const CLOSED_LOOP_HEADER: &str = "graph_uid,tracking_timestamp_us,utc_timestamp_ns,\
 tx_world_device,ty_world_device,tz_world_device,qx_world_device,qy_world_device,qz_world_device,\
 qw_world_device,device_linear_velocity_x_device,device_linear_velocity_y_device,\
 device_linear_velocity_z_device,angular_velocity_x_device,angular_velocity_y_device,\
