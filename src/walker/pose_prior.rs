@@ -280,9 +280,9 @@ impl PosePrior {
         self.nll(&prior_values(params))
     }
 
-    /// The mean of [`Self::pose_nll`] over `frames` (0 for none): the reward's pose score of a
-    /// primitive, the prior's logarithms taken once for all its frames (the same bits as
-    /// averaging `pose_nll` frame by frame).
+    /// The mean over `frames` of [`Self::nll`] of each frame's pose (0 for none): the reward's
+    /// pose score of a primitive, the prior's logarithms taken once for all its frames (the
+    /// same bits as averaging frame by frame).
     pub(crate) fn mean_pose_nll(&self, frames: &[BodyParams]) -> f64 {
         self.mean_nll_and_max_norm(frames).0
     }

@@ -51,7 +51,7 @@ const MAX_TRIES: usize = 40;
 /// Largest floor area of one room a settings file may ask for (m²): a hall of 22 m by 22 m.
 pub(crate) const MAX_ROOM_M2: f64 = 500.0;
 
-/// How dwellings are drawn (`[dwelling]` in a settings file; every key optional).
+/// How dwellings are drawn (the keys of a settings file, at its top level; every key optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DwellingSettings {
