@@ -952,13 +952,17 @@ def load_scene_mesh(path: Path, up: str, unit: float):
 
 
 def scene_object_ids(take, camera: str, frames) -> tuple:
-    """Segmentation ids of the scene file's objects, and the names of those left out."""
+    """Segmentation ids of the scene file's objects where the scene file has them (not those
+    people move: a chair pulled out, a thing picked up), and the names of those left out."""
     doc = camera_annotations(take, camera)
     agent_ids = {a.get("id") for f in frames for a in f.agents}
+    moved = {m["name"] for f in doc.get("frames", []) for m in f.get("moved_scene_objects", [])}
+    moved |= {o["scene_object"] for f in doc.get("frames", []) for o in f.get("objects", []) if o.get("scene_object")}
     keep, dropped = set(), []
     for e in doc.get("segmentation_ids", []):
         name, i = e["name"], e["id"]
-        if i >= 1000 or i in agent_ids or name == "egogen_ceiling" or re.fullmatch(r"obstacle_\d+", name):
+        if (i >= 1000 or i in agent_ids or name == "egogen_ceiling" or name in moved
+                or re.fullmatch(r"obstacle_\d+", name)):
             dropped.append(name)
         else:
             keep.add(i)
