@@ -10,7 +10,7 @@ pub const POSE_DIM: usize = NUM_JOINTS * 3;
 /// Joint indices used throughout egogen.
 pub mod joint {
     pub(crate) const PELVIS: usize = 0;
-    pub const LEFT_HIP: usize = 1;
+    pub(crate) const LEFT_HIP: usize = 1;
     pub(crate) const RIGHT_HIP: usize = 2;
     pub(crate) const LEFT_KNEE: usize = 4;
     pub(crate) const RIGHT_KNEE: usize = 5;

@@ -47,7 +47,7 @@ impl PrimitiveSet {
 
     /// Adds every chain of `frames` (a range of `seq`) starting each `stride` frames whose
     /// primitives all pass `filter`.
-    pub fn add_clip(
+    pub(crate) fn add_clip(
         &mut self,
         seq: &MotionSequence,
         frames: std::ops::Range<usize>,
@@ -167,7 +167,7 @@ pub struct ClipPart {
 /// many frames of it passes too, so the run-up to a dropped motion (standing still before a
 /// jump, stepping up onto an object) goes with it: a model should not learn the start of a
 /// motion whose rest it never sees.
-pub struct ContactFilter<'m> {
+pub(crate) struct ContactFilter<'m> {
     shaped: ShapedBody<'m>,
     foot_vertices: Vec<u32>,
     pub min_score: f64,
@@ -211,7 +211,7 @@ impl<'m> ContactFilter<'m> {
 
 /// Builds a set from clip parts, each also mirrored when `with_mirror`, keeping the chains
 /// that pass `filter`.
-pub fn build_set(
+pub(crate) fn build_set(
     parts: &[ClipPart],
     chain_len: usize,
     stride: usize,

@@ -149,6 +149,7 @@ impl DecoderF32 {
     }
 
     /// Whether a primitive decoded alone reads its weights in f16.
+    #[cfg(test)]
     pub(crate) fn half_precision_weights(&self) -> bool {
         self.half.is_some()
     }

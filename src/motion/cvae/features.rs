@@ -15,7 +15,7 @@ use super::tensor_body::BODY_JOINTS;
 /// Values per frame.
 pub const FRAME_DIM: usize = BODY_JOINTS * 6 + 3;
 /// Offset of `transl` inside a frame.
-pub const TRANSL_OFFSET: usize = BODY_JOINTS * 6;
+pub(crate) const TRANSL_OFFSET: usize = BODY_JOINTS * 6;
 
 /// Features of one frame.
 pub fn frame_features(params: &BodyParams) -> [f32; FRAME_DIM] {

@@ -51,7 +51,7 @@ pub struct DecodedPrimitive {
 
 impl DecodedPrimitive {
     /// The seed of the primitive that follows: this one's last two frames.
-    pub fn next_seed(&self) -> PrimitiveSeed {
+    pub(crate) fn next_seed(&self) -> PrimitiveSeed {
         let n = self.world.len();
         PrimitiveSeed {
             frames: std::array::from_fn(|k| self.world[n - SEED_FRAMES + k].clone()),
@@ -187,7 +187,8 @@ impl MotionModel {
 
     /// Whether a primitive decoded alone reads f16 weights (on x86-64 with AVX2, FMA
     /// and F16C, in f32 precision).
-    pub fn half_precision_weights(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn half_precision_weights(&self) -> bool {
         self.decoder
             .as_ref()
             .is_some_and(DecoderF32::half_precision_weights)

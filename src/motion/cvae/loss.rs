@@ -212,7 +212,7 @@ pub struct PriorWeights {
 
 /// Ranges of the training data that the prior losses keep decoded primitives inside.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlausibleRange {
+pub(crate) struct PlausibleRange {
     /// Pelvis height above the floor (m).
     pub pelvis_m: (f64, f64),
     /// Smallest vertical component of the unit trunk vector (pelvis → neck).
@@ -245,7 +245,7 @@ pub(crate) fn pelvis_and_trunk<B: Backend>(
 /// The range of pelvis heights and trunk lean over the frames of raw primitives `[B, T, F]`
 /// with floors `[B]` (the training data), between the quantiles `q` and `1 − q` (0 for the
 /// whole range: a few frames of bending or crouching then widen it).
-pub fn plausible_range<B: Backend>(
+pub(crate) fn plausible_range<B: Backend>(
     rig: &TensorRig<B>,
     x: Tensor<B, 3>,
     floor: Tensor<B, 1>,
@@ -285,7 +285,7 @@ pub(crate) fn root_distance<B: Backend>(pred: Tensor<B, 3>, anchor: Tensor<B, 3>
 /// Losses of primitives `pred` (raw features `[B, T, F]`, the seed first) decoded from prior
 /// latents over canonical floors `[B]`; `anchor`, the same seeds and latents decoded by the
 /// starting weights, for `PriorWeights::anchor` (the term is 0 without it).
-pub fn prior_loss<B: Backend>(
+pub(crate) fn prior_loss<B: Backend>(
     rig: &TensorRig<B>,
     weights: &PriorWeights,
     range: &PlausibleRange,

@@ -15,7 +15,7 @@ use super::tensor_body::TensorRig;
 use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES};
 
 /// Items `range` of a single-primitive set as raw features `[B, T, F]` and floors `[B]`.
-pub fn set_batch<B: Backend>(
+pub(crate) fn set_batch<B: Backend>(
     set: &PrimitiveSet,
     range: std::ops::Range<usize>,
     device: &B::Device,
@@ -229,7 +229,7 @@ pub(crate) const MOVING_M_PER_S: f64 = 0.2;
 
 /// Statistics of one long chain of primitives decoded from random latents.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct ChainReport {
+pub(crate) struct ChainReport {
     pub primitives: usize,
     /// Decoded frames (18 per primitive).
     pub frames: usize,
@@ -270,7 +270,7 @@ pub struct ChainReport {
 /// Chains `primitives` primitives from `seed`, each the most plausible of `sampler.candidates`
 /// decoded from latents z ~ N(0, I) drawn from `rng`, returning the statistics and the decoded
 /// primitives.
-pub fn long_rollout(
+pub(crate) fn long_rollout(
     model: &super::MotionModel,
     body: &super::BodyContext,
     seed: super::PrimitiveSeed,

@@ -35,6 +35,8 @@ pub mod half_matvec;
 pub mod infer;
 pub mod loss;
 pub mod measure;
+#[cfg(test)]
+mod model_tests;
 pub mod net;
 pub mod pace;
 pub mod pool;
@@ -49,6 +51,7 @@ pub mod weights;
 pub(crate) use control::{CemSettings, LatentController};
 pub use infer::{BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, PrimitiveSeed};
 pub use net::{ArchConfig, PrimitiveVae};
-pub use sampler::{goal_ahead, goal_toward, BestOfK, Plausibility, PlausibilityRules};
+pub(crate) use sampler::{goal_ahead, goal_toward, BestOfK};
+pub use sampler::{Plausibility, PlausibilityRules};
 pub use train::{train, TrainPlan, TrainReport};
 pub use weights::WeightsError;

@@ -20,7 +20,10 @@ use crate::motion::primitive::{PRIMITIVE_FRAMES, SEED_FRAMES};
 /// The next seed `[B, S, F]` from a primitive's raw features `[B, T, F]`, and the height of
 /// the new canonical origin in the old canonical frame `[B]` (to carry the floor along:
 /// `floor_new = floor_old − height`).
-pub fn next_seed<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> (Tensor<B, 3>, Tensor<B, 1>) {
+pub(crate) fn next_seed<B: Backend>(
+    rig: &TensorRig<B>,
+    x: Tensor<B, 3>,
+) -> (Tensor<B, 3>, Tensor<B, 1>) {
     let [b, _, f] = x.dims();
     let s = SEED_FRAMES;
     let last = x.narrow(1, PRIMITIVE_FRAMES - s, s);

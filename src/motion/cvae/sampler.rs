@@ -136,7 +136,7 @@ pub fn plausibility(
 
 /// The floor point (world x, y) `ahead_m` metres in front of the body in the seed's last frame:
 /// along the horizontal normal of its hip axis, the way the body faces.
-pub fn goal_ahead(
+pub(crate) fn goal_ahead(
     body: &BodyContext,
     seed: &PrimitiveSeed,
     ahead_m: f64,
@@ -146,7 +146,7 @@ pub fn goal_ahead(
 
 /// The floor point (world x, y) `distance_m` metres from the pelvis in the seed's last frame,
 /// `bearing_rad` from the way the body faces (positive: to its left, seen from above).
-pub fn goal_toward(
+pub(crate) fn goal_toward(
     body: &BodyContext,
     seed: &PrimitiveSeed,
     distance_m: f64,
@@ -161,7 +161,7 @@ pub fn goal_toward(
 }
 
 /// Draws latents and keeps the most plausible primitive of each step.
-pub struct BestOfK {
+pub(crate) struct BestOfK {
     /// Latents drawn per primitive (1: the plain random chain).
     pub candidates: usize,
     pub rules: PlausibilityRules,
