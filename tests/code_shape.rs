@@ -18,7 +18,7 @@ const MAX_FN_LINES: usize = 150;
 /// `supervisor::render_tests`), 980 with the locomotion environment's (`policy::env_tests`,
 /// `eval::same_primitives_tests`); the rest is what the binaries and the integration tests
 /// reach. The ceiling only comes down.
-const MAX_PUB_ITEMS: usize = 940;
+const MAX_PUB_ITEMS: usize = 929;
 
 /// A line of code with string and char literals emptied and a trailing `//` comment cut, so
 /// that braces in them are not counted.

@@ -55,7 +55,7 @@ impl BodyParams {
     /// LBS rotates about the rest pelvis `rest_pelvis` (which depends on betas), so the
     /// translation is re-rooted: `transl' = R (transl + J0) − J0 + t` and
     /// `global_orient' = R · global_orient`.
-    pub fn moved_rigidly(&self, new_from_old: Affine3, rest_pelvis: Vec3) -> BodyParams {
+    pub(crate) fn moved_rigidly(&self, new_from_old: Affine3, rest_pelvis: Vec3) -> BodyParams {
         let r = new_from_old.matrix3;
         let orient = r * axis_angle_to_matrix(self.joint_axis_angle(0));
         let mut out = self.clone();
@@ -272,7 +272,7 @@ impl ShapedBody<'_> {
     }
 
     /// Posed positions of selected vertices only (e.g. body markers).
-    pub fn pose_vertices(
+    pub(crate) fn pose_vertices(
         &self,
         skeleton: &PosedSkeleton,
         pose: &[Real; POSE_DIM],

@@ -22,6 +22,8 @@ pub(crate) mod model;
 pub(crate) mod model_file;
 pub(crate) mod occupancy;
 pub(crate) mod parts;
+#[cfg(test)]
+mod properties_tests;
 pub(crate) mod skeleton;
 pub(crate) mod volume;
 

@@ -26,8 +26,8 @@ pub mod joint {
     pub(crate) const RIGHT_ELBOW: usize = 19;
     pub(crate) const LEFT_WRIST: usize = 20;
     pub(crate) const RIGHT_WRIST: usize = 21;
-    pub const LEFT_EYE: usize = 23;
-    pub const RIGHT_EYE: usize = 24;
+    pub(crate) const LEFT_EYE: usize = 23;
+    pub(crate) const RIGHT_EYE: usize = 24;
 }
 
 /// SMPL-X joint names, in index order (the names the `smplx` package uses).

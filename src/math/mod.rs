@@ -30,7 +30,8 @@ pub type Mat3 = glam::DMat3;
 /// Rigid or affine 3D transform of [`Real`]: a [`Mat3`] plus a translation.
 pub type Affine3 = glam::DAffine3;
 
-pub use rotation::{axis_angle_to_matrix, matrix_to_axis_angle, matrix_to_rot6d, rot6d_to_matrix};
+pub(crate) use rotation::matrix_to_rot6d;
+pub use rotation::{axis_angle_to_matrix, matrix_to_axis_angle};
 
 /// The `p` quantile (0–1, nearest rank) of `sorted` (ascending, finite); NaN for none.
 pub(crate) fn quantile(sorted: &[Real], p: Real) -> Real {

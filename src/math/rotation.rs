@@ -68,7 +68,7 @@ pub fn matrix_to_axis_angle(m: Mat3) -> Vec3 {
 ///
 /// Total on all finite inputs: a vanishing first column becomes the x axis, and a second
 /// column parallel to the first is replaced by the most orthogonal coordinate axis.
-pub fn rot6d_to_matrix(d6: [Real; 6]) -> Mat3 {
+pub(crate) fn rot6d_to_matrix(d6: [Real; 6]) -> Mat3 {
     let a1 = Vec3::new(d6[0], d6[1], d6[2]);
     let a2 = Vec3::new(d6[3], d6[4], d6[5]);
     let b1 = a1.try_normalize().unwrap_or(Vec3::X);
@@ -94,7 +94,7 @@ pub fn rot6d_to_matrix(d6: [Real; 6]) -> Mat3 {
 ///
 /// # Panics
 /// When `out` is not as long as `d6` (a caller's bug).
-pub fn rot6d_to_matrices(d6: &[[Real; 6]], out: &mut [Mat3]) {
+pub(crate) fn rot6d_to_matrices(d6: &[[Real; 6]], out: &mut [Mat3]) {
     assert_eq!(d6.len(), out.len(), "one matrix per 6D vector");
     for (d6, out) in d6.chunks(INTERLEAVED).zip(out.chunks_mut(INTERLEAVED)) {
         let n = d6.len();
@@ -140,7 +140,7 @@ pub(crate) const INTERLEAVED: usize = 8;
 ///
 /// # Panics
 /// When `out` is not as long as `aa` (a caller's bug).
-pub fn axis_angles_to_matrices(aa: &[Vec3], out: &mut [Mat3]) {
+pub(crate) fn axis_angles_to_matrices(aa: &[Vec3], out: &mut [Mat3]) {
     assert_eq!(aa.len(), out.len(), "one matrix per axis-angle vector");
     for (aa, out) in aa.chunks(INTERLEAVED).zip(out.chunks_mut(INTERLEAVED)) {
         let mut ab = [(0.0, 0.0); INTERLEAVED];
@@ -167,7 +167,7 @@ pub fn axis_angles_to_matrices(aa: &[Vec3], out: &mut [Mat3]) {
 ///
 /// # Panics
 /// When `out` is not as long as `m` (a caller's bug).
-pub fn matrices_to_axis_angles(m: &[Mat3], out: &mut [Vec3]) {
+pub(crate) fn matrices_to_axis_angles(m: &[Mat3], out: &mut [Vec3]) {
     assert_eq!(m.len(), out.len(), "one axis-angle vector per matrix");
     for (m, out) in m.chunks(INTERLEAVED).zip(out.chunks_mut(INTERLEAVED)) {
         let mut cos_theta = [0.0; INTERLEAVED];
@@ -204,14 +204,14 @@ pub fn matrices_to_axis_angles(m: &[Mat3], out: &mut [Vec3]) {
 }
 
 /// 6D representation (first two columns) of a rotation matrix.
-pub fn matrix_to_rot6d(m: Mat3) -> [Real; 6] {
+pub(crate) fn matrix_to_rot6d(m: Mat3) -> [Real; 6] {
     [
         m.x_axis.x, m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.y, m.y_axis.z,
     ]
 }
 
 /// Cross-product matrix: `skew(a) * b == a.cross(b)`.
-pub fn skew(a: Vec3) -> Mat3 {
+pub(crate) fn skew(a: Vec3) -> Mat3 {
     Mat3::from_cols(
         Vec3::new(0.0, a.z, -a.y),
         Vec3::new(-a.z, 0.0, a.x),
@@ -220,7 +220,7 @@ pub fn skew(a: Vec3) -> Mat3 {
 }
 
 /// Largest deviation of `mᵀm` from the identity: how far `m` is from orthonormal.
-pub fn orthonormality_error(m: Mat3) -> Real {
+pub(crate) fn orthonormality_error(m: Mat3) -> Real {
     let e = m.transpose() * m - Mat3::IDENTITY;
     e.to_cols_array()
         .iter()
