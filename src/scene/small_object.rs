@@ -150,15 +150,21 @@ pub(crate) fn things_on_floor(mesh: &SceneMesh) -> Vec<SceneThing> {
             triangles: Vec::new(),
         })
         .collect();
+    // Each object's thing, by the object's index: one look-up a triangle.
+    let mut thing_of = vec![None; mesh.objects.len()];
+    for (k, thing) in things.iter().enumerate() {
+        if let Some(o) = mesh.objects.iter().position(|o| o.name == thing.name) {
+            thing_of[o] = Some(k);
+        }
+    }
     for (t, o) in mesh.triangles.iter().zip(&mesh.triangle_object) {
-        let Some(object) = (o.0 as usize)
+        let k = (o.0 as usize)
             .checked_sub(1)
-            .and_then(|k| mesh.objects.get(k))
-        else {
-            continue;
-        };
-        if let Some(thing) = things.iter_mut().find(|t| t.name == object.name) {
-            thing.triangles.push(t.map(|v| mesh.vertices[v as usize]));
+            .and_then(|i| thing_of.get(i).copied().flatten());
+        if let Some(k) = k {
+            things[k]
+                .triangles
+                .push(t.map(|v| mesh.vertices[v as usize]));
         }
     }
     things
