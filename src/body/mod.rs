@@ -10,7 +10,8 @@
 //! (the surface vertices the motion loop tracks), `hand_landmarks` (the hands' landmarks in MPS
 //! order), `volume` (capsules around the bones), `occupancy` (whether a point lies inside a posed
 //! body), `parts` (the hands and forearms a frame's segmentation tells apart), `export` (posed
-//! meshes as OBJ), `info` (`egogen body info`'s summary of a model).
+//! meshes as OBJ), `info` (`egogen body info`'s summary of a model); `properties_tests` (tests
+//! only: rotations and skinning at the numerical extremes).
 
 pub(crate) mod cpf;
 pub(crate) mod export;

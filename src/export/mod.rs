@@ -7,7 +7,8 @@
 //!   recorded (`aria`: device trajectory, calibration, IMU and eye gaze in the formats
 //!   projectaria-tools reads), built on the IMU measurement and error model (`imu`) and the
 //!   gaze model (`gaze`); each a function of the wearer's head poses and the rig, none reading
-//!   images (`egogen aria` makes them of a finished dataset too);
+//!   images (`egogen aria` makes them of a finished dataset too; `aria_tests`, tests only:
+//!   the IMU, spline and gaze models against the motion they come from);
 //! - exports of a finished take's folder, read back by `take_folder`: the Aria streams
 //!   (`egogen aria export`) and a wearer in the EuRoC MAV layout for VIO/SLAM tools (`euroc`:
 //!   SLAM camera images, the IMU, the device's ground truth).

@@ -14,7 +14,7 @@
 //! map), `object_class` (the one vocabulary of what an object is, which seats, materials and
 //! generated scenes read), `seats` (the places to sit), `chair_pull` (places on chairs pulled out
 //! from their tables), `small_object` (what people pick up:
-//! kinds, solids, sizes), `generated` (procedural scenario
+//! egogen's own kinds, solids and sizes, and the scene's own small things on a floor), `generated` (procedural scenario
 //! scenes), `dwelling` (furnished dwellings generated from a seed and the furniture catalogue,
 //! the `dwelling:SEED` scene source).
 

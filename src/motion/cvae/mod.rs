@@ -21,7 +21,8 @@
 //! random-latent sampling), `pace` (pace and turn of primitives), `control` (latents chosen for
 //! a target velocity and heading by CEM; `control_tests`, tests only), `reach` (what the latent space reaches, as `egogen
 //! motion control` prints it), `contact` (the foot-contact score), `measure` (a trained model's
-//! measurements: held-out marker error, contact of batches and chains, long rollouts).
+//! measurements: held-out marker error, contact of batches and chains, long rollouts);
+//! `model_tests` (tests only: the decoders, shipped weights, prior losses, training chains).
 
 pub(crate) mod checkpoint;
 pub(crate) mod contact;
