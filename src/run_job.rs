@@ -29,12 +29,10 @@ pub struct RunRequest {
 
 /// A run config resolved with the command line's overrides: its plan, its body model, and
 /// what the dataset records of it.
-pub struct PreparedRun {
+pub(crate) struct PreparedRun {
     pub plan: RunPlan,
     pub model: BodyModel,
     pub options: RunOptions,
-    /// The config file it came from.
-    pub config: PathBuf,
 }
 
 /// The first key of `raw` (dotted, as in the file) holding an integer TOML cannot write (above
@@ -115,7 +113,6 @@ pub(crate) fn prepare(
         plan,
         model,
         options,
-        config: config.to_path_buf(),
     })
 }
 

@@ -16,9 +16,12 @@ const MAX_FN_LINES: usize = 150;
 /// the training config), sensing and the real renders moved into the crate
 /// (`motion::mocap_tests`, `motion::cvae::control_tests`, `sensing::properties_tests`,
 /// `supervisor::render_tests`), 980 with the locomotion environment's (`policy::env_tests`,
-/// `eval::same_primitives_tests`); the rest is what the binaries and the integration tests
-/// reach. The ceiling only comes down.
-const MAX_PUB_ITEMS: usize = 929;
+/// `eval::same_primitives_tests`), 929 with the Aria models', the motion model's and the body's
+/// (`export::aria_tests`, `motion::cvae::model_tests`, `body::properties_tests`), 790 once every
+/// item was made `pub(crate)` and made `pub` again only where the compiler asked for it (a
+/// binary, test or bench names it, or a public item's signature holds it); the rest is what
+/// the binaries and the integration tests reach. The ceiling only comes down.
+const MAX_PUB_ITEMS: usize = 790;
 
 /// A line of code with string and char literals emptied and a trailing `//` comment cut, so
 /// that braces in them are not counted.

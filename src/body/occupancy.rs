@@ -64,7 +64,7 @@ impl BodyOccupancy {
 
     /// The surface's axis-aligned bounds (min, max); no point outside them is inside.
     #[cfg(test)]
-    pub fn bounds(&self) -> (Vec3, Vec3) {
+    pub(crate) fn bounds(&self) -> (Vec3, Vec3) {
         self.bounds
     }
 

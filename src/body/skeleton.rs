@@ -19,7 +19,7 @@ pub mod joint {
     pub(crate) const LEFT_FOOT: usize = 10;
     pub(crate) const RIGHT_FOOT: usize = 11;
     pub(crate) const NECK: usize = 12;
-    pub const HEAD: usize = 15;
+    pub(crate) const HEAD: usize = 15;
     pub(crate) const LEFT_SHOULDER: usize = 16;
     pub(crate) const RIGHT_SHOULDER: usize = 17;
     pub(crate) const LEFT_ELBOW: usize = 18;

@@ -19,7 +19,7 @@ pub mod index;
 pub mod plan;
 pub(crate) mod sheet;
 pub mod stamp;
-pub mod state;
+pub(crate) mod state;
 pub mod takes;
 
 use std::path::{Path, PathBuf};

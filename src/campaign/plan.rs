@@ -131,7 +131,7 @@ pub struct TakeDef {
 
 impl TakeDef {
     /// The take's overrides of the run config, output in `takes_dir/<id>`.
-    pub fn overrides(&self, takes_dir: &Path) -> RunOverrides {
+    pub(crate) fn overrides(&self, takes_dir: &Path) -> RunOverrides {
         RunOverrides {
             out: Some(takes_dir.join(&self.id)),
             seed: Some(self.seed),

@@ -8,7 +8,7 @@ use crate::render::render_camera::FisheyeRendering;
 use crate::synth::activity::ActivitySettings;
 use crate::walker::WalkerSettings;
 
-pub use super::config_file::{load_toml, Bad, ConfigError};
+pub(crate) use super::config_file::{load_toml, Bad, ConfigError};
 
 /// `[body]`: which body model and shape.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 /// Makes the error for a bad value: the key as the config names it, and what was wrong. Config
 /// checks split by section take one, so that every error names the same file.
-pub type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
+pub(crate) type Bad<'a> = &'a dyn Fn(&str, String) -> ConfigError;
 
 /// A config file that could not be used, with the file named.
 #[derive(Debug, thiserror::Error)]

@@ -37,7 +37,8 @@ pub mod synth_config;
 pub mod train_policy;
 pub mod train_primitive;
 
-pub use config::{ConfigError, RawRun};
+pub use config::RawRun;
+pub use config_file::ConfigError;
 
 /// Lets a closed standard output end the process quietly, as Unix tools do (`egogen inspect
 /// FILE | head -1`), instead of a panic in `println!`. Binaries call it first thing.
@@ -50,4 +51,4 @@ pub fn exit_quietly_on_closed_pipe() {
     }
 }
 
-pub use resolve::{resolve_run, MotionPlan, RenderPlan, RunPlan, SlurmPlan, SupervisorPlan};
+pub(crate) use resolve::{resolve_run, MotionPlan, RunPlan};

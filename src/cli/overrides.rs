@@ -145,22 +145,6 @@ impl RunOverrides {
         .filter_map(|(flag, on)| on.then_some(flag))
         .collect()
     }
-
-    /// Whether anything is overridden.
-    pub fn is_empty(&self) -> bool {
-        self.out.is_none()
-            && self.seed.is_none()
-            && self.rig.is_none()
-            && self.scene.is_none()
-            && self.up_axis.is_none()
-            && self.unit_m.is_none()
-            && self.crowd_count.is_none()
-            && self.duration_s.is_none()
-            && self.activity_weights.is_none()
-            && self.materials.is_none()
-            && self.workers.is_none()
-            && self.backend.is_none()
-    }
 }
 
 /// The config's values without `[supervisor]` (how many workers ran where does not change

@@ -19,7 +19,7 @@ pub(crate) const PENE_H_EVERY_N_FRAMES: usize = 4;
 
 /// What one person did in one episode.
 #[derive(Debug, Clone, Serialize)]
-pub struct AgentResult {
+pub(crate) struct AgentResult {
     pub agent: String,
     pub reached: bool,
     pub final_distance_m: f64,
@@ -37,7 +37,7 @@ pub struct AgentResult {
 
 /// One episode of one scenario with one controller.
 #[derive(Debug, Clone, Serialize)]
-pub struct EpisodeResult {
+pub(crate) struct EpisodeResult {
     pub scenario: String,
     pub controller: String,
     pub episode: u64,
@@ -61,7 +61,7 @@ pub struct EpisodeResult {
 }
 
 /// Measures a finished take.
-pub fn measure(
+pub(crate) fn measure(
     body: &BodyModel,
     world: &CrowdWorld,
     take: &CrowdTake,

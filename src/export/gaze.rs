@@ -61,7 +61,7 @@ const MAX_DEPTH_M: Real = 50.0;
 
 /// A goal an agent walks to, and the frame it stops being the current one.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GazeGoal {
+pub(crate) struct GazeGoal {
     pub xy: [Real; 2],
     pub until_frame: usize,
 }
@@ -83,26 +83,18 @@ pub(crate) struct GazeWorld<'a> {
 
 /// What a fixation looks at.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum GazeTarget {
+pub(crate) enum GazeTarget {
     /// A fixed point (the floor ahead, a goal, a point in front of a standing wearer).
     Point(Vec3),
     /// Another agent's eyes, followed.
     Person(usize),
 }
 
-impl GazeTarget {
-    /// What kind of target (for statistics).
-    pub fn kind(&self) -> &'static str {
-        match self {
-            GazeTarget::Point(_) => "point",
-            GazeTarget::Person(_) => "person",
-        }
-    }
-}
+impl GazeTarget {}
 
 /// One fixation of the sequence.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Fixation {
+pub(crate) struct Fixation {
     pub start_s: Real,
     pub end_s: Real,
     pub target: GazeTarget,
@@ -112,7 +104,7 @@ pub struct Fixation {
 
 /// One gaze sample, in the device CPF.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GazeSample {
+pub(crate) struct GazeSample {
     pub timestamp_us: i64,
     pub yaw_rad: Real,
     pub pitch_rad: Real,

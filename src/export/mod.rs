@@ -23,14 +23,14 @@ pub mod aria;
 mod aria_tests;
 pub mod colmap;
 pub mod euroc;
-pub mod gaze;
+pub(crate) mod gaze;
 pub mod head_stats;
 pub mod imu;
-pub mod take;
+pub(crate) mod take;
 pub(crate) mod take_folder;
 pub(crate) mod take_manifest;
 
-pub use take::{FinishedTake, TakeExport, TakeExports};
+pub(crate) use take::{FinishedTake, TakeExport, TakeExports};
 
 /// A take's outputs in the order they are written: its annotations, its COLMAP export when
 /// `colmap` (`[render] colmap`), the Aria streams when asked (`[render.aria]`), and last its

@@ -106,7 +106,7 @@ pub(crate) fn frame_file_path(camera: &str, frame: u32) -> PathBuf {
 
 /// A take file's size and SHA-256 (lower-case hex), as the manifest lists it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct FileFacts {
+pub(crate) struct FileFacts {
     pub bytes: u64,
     pub sha256: String,
 }
@@ -122,7 +122,7 @@ impl FileFacts {
 
 /// What is kept of one finished frame of one camera.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FrameRecord {
+pub(crate) struct FrameRecord {
     /// `cameras/<camera>/frame_NNNNN.exr`.
     pub frame_file: FileFacts,
     /// The files outputs made of this frame ([`TakeExport::frame_file`]), by their path
@@ -133,9 +133,7 @@ pub struct FrameRecord {
 }
 
 /// One finished frame, its pixels in memory, as an output sees it.
-pub struct FinishedFrame<'a> {
-    pub camera: &'a CameraWork,
-    pub frame: u32,
+pub(crate) struct FinishedFrame<'a> {
     /// The frame file's channels, validated.
     pub contents: &'a ExrContents,
     /// The frame's annotation (agents in view, the colour's exposure).
@@ -143,7 +141,7 @@ pub struct FinishedFrame<'a> {
 }
 
 /// A finished take as its outputs see it: every frame rendered and recorded.
-pub struct FinishedTake<'a> {
+pub(crate) struct FinishedTake<'a> {
     /// The folder the take is built in (`<dir>.partial`).
     pub folder: &'a Path,
     pub rig: &'a Rig,
@@ -195,7 +193,7 @@ pub(crate) fn slashed(path: &Path) -> String {
 
 /// One output of a rendered take. A new output is a new file in `src/export/` implementing
 /// this, listed in `export::take_exports`.
-pub trait TakeExport: Send + Sync {
+pub(crate) trait TakeExport: Send + Sync {
     /// Its name, for messages.
     fn name(&self) -> &'static str;
 

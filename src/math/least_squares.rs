@@ -37,7 +37,7 @@ impl<const N: usize> NormalEquations<N> {
 
     /// Equations added so far.
     #[cfg(test)]
-    pub fn rows(&self) -> usize {
+    pub(crate) fn rows(&self) -> usize {
         self.rows
     }
 

@@ -18,7 +18,7 @@ pub(crate) mod colour;
 pub(crate) mod least_squares;
 pub mod pose_spline;
 pub(crate) mod random;
-pub mod rotation;
+pub(crate) mod rotation;
 
 /// Scalar used for geometry. Body maths runs in `f64` so that long kinematic chains and
 /// large betas stay well inside the 1e-5 m tolerance of the `smplx` oracle.

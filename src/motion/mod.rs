@@ -30,8 +30,8 @@ pub(crate) mod joins;
 #[cfg(test)]
 mod mocap_tests;
 pub mod primitive;
-pub mod resample;
-pub mod retarget;
-pub mod scripted;
+pub(crate) mod resample;
+pub(crate) mod retarget;
+pub(crate) mod scripted;
 
 pub use amass::{MotionFileError, MotionSequence};

@@ -3,7 +3,7 @@
 //! left hip → right hip made horizontal, z world up, y = z × x (forward).
 
 use super::MotionSequence;
-use crate::body::{joint, BodyModel, BodyParams, PoseError, POSE_DIM};
+use crate::body::{joint, BodyModel, BodyParams, PoseError};
 use crate::math::{Affine3, Mat3, Vec3};
 
 /// Frames per primitive.
@@ -71,7 +71,8 @@ pub(crate) fn canonicalize(
 }
 
 /// All primitives of a sequence, starting every `stride` frames.
-pub fn extract_primitives(
+#[cfg(test)]
+pub(crate) fn extract_primitives(
     seq: &MotionSequence,
     stride: usize,
     model: &BodyModel,
@@ -99,10 +100,5 @@ impl Primitive {
             .iter()
             .map(|f| f.moved_rigidly(self.world_from_canon, rest_pelvis))
             .collect())
-    }
-
-    /// Full pose vectors of the frames.
-    pub fn poses(&self) -> Vec<[f64; POSE_DIM]> {
-        self.frames.iter().map(|f| f.pose).collect()
     }
 }

@@ -68,7 +68,7 @@ fn mirrored_joint(j: usize) -> usize {
 
 /// The sequence mirrored through the world plane x = 0 (z-up world): left and right joints
 /// swap, body-frame rotations are reflected through the body's sagittal plane (x → −x).
-pub fn mirror(
+pub(crate) fn mirror(
     seq: &MotionSequence,
     model: &BodyModel,
 ) -> Result<MotionSequence, crate::body::PoseError> {

@@ -48,7 +48,7 @@ pub(crate) const CMU_UNIT_M: f64 = 0.056444;
 
 /// What went wrong retargeting.
 #[derive(Debug, thiserror::Error)]
-pub enum RetargetError {
+pub(crate) enum RetargetError {
     #[error("BVH {path}: joint `{name}` missing; the CMU skeleton (cgspeed BVH) is expected")]
     MissingJoint { path: String, name: &'static str },
     #[error(transparent)]

@@ -311,7 +311,7 @@ impl Actor {
     }
 
     /// What the policy observes of its surroundings.
-    pub fn sensing(&self) -> SensingSpec {
+    pub(crate) fn sensing(&self) -> SensingSpec {
         self.sensing
     }
 

@@ -21,7 +21,7 @@
 //! - tests only: `env_tests` (the environment's episodes, observations, walls and guides).
 
 pub(crate) mod actor;
-pub mod env;
+pub(crate) mod env;
 #[cfg(test)]
 pub(crate) mod env_tests;
 pub(crate) mod fixed_scene;
@@ -29,7 +29,7 @@ pub(crate) mod held_out;
 pub mod net;
 pub mod ppo;
 pub(crate) mod row_product;
-pub mod sampling;
+pub(crate) mod sampling;
 pub(crate) mod train_job;
 pub mod weights;
 

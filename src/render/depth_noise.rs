@@ -60,7 +60,8 @@ impl Default for DepthNoise {
 
 impl DepthNoise {
     /// A model that changes nothing: no noise, no limits, no quantisation.
-    pub fn none() -> Self {
+    #[cfg(test)]
+    pub(crate) fn none() -> Self {
         Self {
             sigma_base_m: 0.0,
             sigma_quadratic_per_m: 0.0,

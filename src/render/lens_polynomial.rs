@@ -306,7 +306,7 @@ impl LensPolynomial {
 
     /// Pixel of a camera-frame direction (not bounded by the image), inverting θ(ρ) by
     /// bracketed Newton to 1e-10 px; `None` beyond the increasing part.
-    pub fn ray_to_pixel(&self, ray: Vec3) -> Option<Pixel> {
+    pub(crate) fn ray_to_pixel(&self, ray: Vec3) -> Option<Pixel> {
         let theta = theta_of(ray);
         let r_xy = ray.x.hypot(ray.y);
         if r_xy == 0.0 {

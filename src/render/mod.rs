@@ -12,24 +12,21 @@
 pub mod blender_runtime;
 pub(crate) mod camera_setup;
 pub mod depth_noise;
-pub mod frame_file;
+pub(crate) mod frame_file;
 pub mod lens_polynomial;
 pub mod lighting;
 pub mod materials;
 pub(crate) mod outfit;
 pub(crate) mod outfit_sheet;
-pub mod passes;
-pub mod protocol;
+pub(crate) mod passes;
+pub(crate) mod protocol;
 pub mod render_camera;
-pub mod shard;
-pub mod shard_plan;
+pub(crate) mod shard;
+pub(crate) mod shard_plan;
 pub mod skin_tone;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError};
-pub use outfit::ShardOutfit;
 pub use outfit_sheet::outfit_sheet;
-pub use protocol::{
-    BodyProbe, DenoisePrefilter, ObstacleKey, PointLight, PoseKey, RenderDevice, ShardBody,
-    ShardCamera, ShardFrame, ShardLens, ShardLighting, ShardMaterial, ShardObstacle, ShardRgb,
-    ShardSpec, WorldHdri,
+pub(crate) use protocol::{
+    DenoisePrefilter, RenderDevice, ShardBody, ShardLighting, ShardMaterial, ShardRgb, ShardSpec,
 };

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 /// One output a dataset can hold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Pass {
+pub(crate) enum Pass {
     /// Colour with motion blur (`rgb.*`, or `gray.Y` for a monochrome camera).
     Colour,
     /// Planar depth (`depth.Z`).
@@ -70,7 +70,7 @@ impl Default for Passes {
 impl Passes {
     pub(crate) const NONE: Passes = Passes(0);
 
-    pub fn of(passes: impl IntoIterator<Item = Pass>) -> Self {
+    pub(crate) fn of(passes: impl IntoIterator<Item = Pass>) -> Self {
         Passes(passes.into_iter().fold(0, |m, p| m | 1 << p as u16))
     }
 
@@ -80,15 +80,6 @@ impl Passes {
 
     pub(crate) fn with(self, pass: Pass) -> Self {
         Passes(self.0 | 1 << pass as u16)
-    }
-
-    pub fn without(self, pass: Pass) -> Self {
-        Passes(self.0 & !(1 << pass as u16))
-    }
-
-    /// The passes, in config order.
-    pub fn iter(self) -> impl Iterator<Item = Pass> {
-        Pass::ALL.into_iter().filter(move |&p| self.has(p))
     }
 
     /// Whether Blender renders the blurred colour image.

@@ -8,8 +8,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::scene::small_object::ObjectShape;
 
-pub use super::materials::ShardMaterial;
-pub use super::skin_tone::{RegionPaint, Skin};
+pub(crate) use super::materials::ShardMaterial;
+pub(crate) use super::skin_tone::{RegionPaint, Skin};
 
 /// How Blender's camera images: either the rig camera itself (a pinhole) or the wider ideal
 /// camera that egogen remaps to a distorted model afterwards.
@@ -372,7 +372,8 @@ pub enum RenderDevice {
 
 impl ShardSpec {
     /// Number of files the worker writes.
-    pub fn num_outputs(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn num_outputs(&self) -> usize {
         self.cameras
             .iter()
             .flat_map(|c| &c.frames)

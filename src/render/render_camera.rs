@@ -191,7 +191,7 @@ impl RenderCamera {
 
     /// Unit ray (OpenCV camera frame) through a pixel, also beyond the rendered image (flow
     /// targets may leave it); `None` only past the fisheye's θ = π.
-    pub fn pixel_to_ray(&self, px: Pixel) -> Option<Vec3> {
+    pub(crate) fn pixel_to_ray(&self, px: Pixel) -> Option<Vec3> {
         match *self {
             RenderCamera::Perspective { f_px, cx, cy, .. } => {
                 Some(Vec3::new((px.x - cx) / f_px, (px.y - cy) / f_px, 1.0).normalize())

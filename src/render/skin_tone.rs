@@ -174,7 +174,7 @@ impl Default for SkinPlan {
 
 impl SkinPlan {
     /// The skin of agent `index` (the same agent, seed and tones give the same skin).
-    pub fn draw(&self, index: usize) -> Skin {
+    pub(crate) fn draw(&self, index: usize) -> Skin {
         let mut rng = ChaCha8Rng::seed_from_u64(
             self.seed.rotate_left(17) ^ (index as u64 + 1).wrapping_mul(0xD1B5_4A32_D192_ED03),
         );

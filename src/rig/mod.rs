@@ -11,7 +11,7 @@
 //! Frames: CPF x = wearer's left, y = up, z = forward; cameras are OpenCV (x right, y down,
 //! z forward). The file schema is documented in `docs/RIGS.md`.
 
-pub mod aria;
+pub(crate) mod aria;
 pub(crate) mod command;
 mod error;
 mod file;

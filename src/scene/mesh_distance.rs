@@ -209,7 +209,7 @@ pub(crate) struct SceneRays {
 
 impl SceneRays {
     /// `None` if the mesh has no non-degenerate triangle.
-    pub fn new(mesh: &SceneMesh) -> Option<Self> {
+    pub(crate) fn new(mesh: &SceneMesh) -> Option<Self> {
         let tris = non_degenerate_triangles(mesh);
         if tris.is_empty() {
             return None;

@@ -35,7 +35,7 @@ pub(crate) mod sdf2d;
 pub(crate) mod sdf3d;
 pub(crate) mod seats;
 pub(crate) mod seen_map;
-pub mod small_object;
+pub(crate) mod small_object;
 pub(crate) mod walkable;
 
 pub use generated::scenario::{scenario, ScenarioKind, ScenarioScene};

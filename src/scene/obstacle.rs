@@ -102,7 +102,7 @@ pub struct MovingObstacle {
 
 impl MovingObstacle {
     /// Footprint at time `t_s`.
-    pub fn at(&self, t_s: f64) -> Obstacle2 {
+    pub(crate) fn at(&self, t_s: f64) -> Obstacle2 {
         self.at_start.translated(self.velocity_m_per_s * t_s)
     }
 }

@@ -85,7 +85,7 @@ impl SensingSpec {
     }
 
     /// The sensor.
-    pub fn sensor(&self) -> Sensor {
+    pub(crate) fn sensor(&self) -> Sensor {
         match *self {
             Self::Rays(s) => Sensor::Rays(RayScan::new(s)),
             Self::LocalMap(settings) => Sensor::LocalMap(LocalMap { settings }),

@@ -43,8 +43,6 @@ impl Dataset {
         let work = &self.cameras[camera];
         let annotation = annotate_frame(work, frame, &self.agents, contents);
         let finished = FinishedFrame {
-            camera: work,
-            frame,
             contents,
             annotation: &annotation,
         };

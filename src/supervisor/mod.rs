@@ -11,14 +11,14 @@
 pub(crate) mod dataset;
 pub(crate) mod frame_record;
 pub(crate) mod local;
-pub mod pace;
+pub(crate) mod pace;
 pub(crate) mod pipeline;
 pub mod pool;
 #[cfg(test)]
 mod render_tests;
 pub(crate) mod slurm;
 pub(crate) mod staged;
-pub mod verify;
+pub(crate) mod verify;
 
 pub use crate::manifest::Manifest;
 pub use local::{LocalPool, PoolSettings};

@@ -10,7 +10,8 @@ use crate::vertex_cache::PointCache;
 /// Posed vertices of a motion at `samples_per_frame` evenly spaced times per frame, from frame
 /// 0 to the last frame (rotations slerped, translation lerped between frames): sample `k` is
 /// the body at frame `k / samples_per_frame`.
-pub fn body_cache(
+#[cfg(test)]
+pub(crate) fn body_cache(
     model: &BodyModel,
     motion: &MotionSequence,
     samples_per_frame: u32,
@@ -18,7 +19,7 @@ pub fn body_cache(
     body_cache_at(model, motion, samples_per_frame, None)
 }
 
-/// The body at some of [`body_cache`]'s sample times only: `indices` (ascending) into its
+/// The body at some of `body_cache`'s sample times only: `indices` (ascending) into its
 /// grid of `samples_per_frame` samples per frame, or all of them with `None`. Sample `j` of
 /// the cache is the body at grid time `indices[j] / samples_per_frame` (the same vertices
 /// `body_cache` has there).

@@ -13,19 +13,17 @@
 //! motion import --strip`) and `scene_inspect` (`egogen scene inspect`).
 
 pub mod activity;
-pub mod body_cache;
+pub(crate) mod body_cache;
 pub mod body_pictures;
 pub(crate) mod body_track;
 pub mod crowd;
 pub(crate) mod crowd_dir;
-pub mod held_object;
+pub(crate) mod held_object;
 pub(crate) mod penetration;
 pub(crate) mod placement;
 pub mod scene_inspect;
 pub mod sequence_dir;
 pub mod take;
 
-pub use body_cache::body_cache;
 pub(crate) use body_track::{track_body, BodyTrack, TrackFrame};
-pub use sequence_dir::SequenceOutputs;
 pub(crate) use sequence_dir::{pose_meshes, write_sequence_dir};

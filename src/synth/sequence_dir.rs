@@ -22,7 +22,7 @@ use crate::preview::{MeshView, RgbImage};
 
 /// What a finished sequence folder holds.
 #[derive(Debug, Clone, Serialize)]
-pub struct SequenceOutputs {
+pub(crate) struct SequenceOutputs {
     pub dir: PathBuf,
     pub frames: usize,
     pub meshes: usize,

@@ -12,7 +12,7 @@
 //! - `reward` and `pose_prior`: what the judge weighs (Tab. S2's terms, our pose prior);
 //! - `seed_bank`: the mocap seeds every walker starts from.
 
-pub mod controller;
+pub(crate) mod controller;
 pub mod pose_prior;
 pub mod reward;
 pub(crate) mod seed_bank;

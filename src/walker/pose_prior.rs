@@ -131,7 +131,7 @@ fn log_sum_exp(v: &[f64]) -> f64 {
 impl PosePrior {
     /// Fits `components` components by EM (`iterations` rounds) to `poses`, initialised by
     /// k-means++ seeding with `seed`.
-    pub fn fit(
+    pub(crate) fn fit(
         poses: &[[f64; PRIOR_DIM]],
         components: usize,
         iterations: usize,
@@ -221,7 +221,8 @@ impl PosePrior {
     }
 
     /// Negative log-density per value, `−ln p(θ)/63` (lower is more plausible).
-    pub fn nll(&self, values: &[f64; PRIOR_DIM]) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn nll(&self, values: &[f64; PRIOR_DIM]) -> f64 {
         self.scores_with(values, &PriorLogs::of(self)).0
     }
 
@@ -280,7 +281,7 @@ impl PosePrior {
         self.nll(&prior_values(params))
     }
 
-    /// The mean over `frames` of [`Self::nll`] of each frame's pose (0 for none): the reward's
+    /// The mean over `frames` of `nll` of each frame's pose (0 for none): the reward's
     /// pose score of a primitive, the prior's logarithms taken once for all its frames (the
     /// same bits as averaging frame by frame).
     pub(crate) fn mean_pose_nll(&self, frames: &[BodyParams]) -> f64 {
@@ -288,7 +289,7 @@ impl PosePrior {
     }
 
     /// Writes the prior as JSON (atomically).
-    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+    pub(crate) fn save(&self, path: &Path) -> std::io::Result<()> {
         let text = serde_json::to_string(self).map_err(std::io::Error::other)?;
         crate::atomic_file::write_atomically(path, text.as_bytes())
     }

@@ -271,7 +271,7 @@ pub struct Judged {
 pub(crate) const TRAVEL_MIN_M: f64 = 0.1;
 
 /// Body vertices with negative scene SDF that make a frame penetrate (paper Eq. 11: 40).
-pub const EQ11_VERTICES: usize = 40;
+pub(crate) const EQ11_VERTICES: usize = 40;
 
 /// Paper Eq. 11 on a primitive: every vertex of the posed body in each new frame looked up in
 /// the scene's SDF; `(frames with ≥ EQ11_VERTICES inside, most inside in a frame)`.
@@ -296,7 +296,7 @@ pub(crate) fn scene_penetration(
 /// vertices scaled to the subset's share (at least 1). Only the subset is posed, so a test
 /// costs a small part of [`scene_penetration`]'s.
 #[derive(Debug, Clone)]
-pub struct SceneTest {
+pub(crate) struct SceneTest {
     ids: Vec<u32>,
     threshold: usize,
 }
@@ -310,12 +310,14 @@ impl SceneTest {
     }
 
     /// Vertices of the subset.
-    pub fn vertices(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn vertices(&self) -> usize {
         self.ids.len()
     }
 
     /// Subset vertices inside the scene that make a frame penetrate.
-    pub fn threshold(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn threshold(&self) -> usize {
         self.threshold
     }
 

@@ -86,7 +86,7 @@ impl WalkerSettings {
     /// 11 primitives to reach it (its box scenes), no redraws, no guide, the others where they
     /// were last put, the scene tested at a primitive's end, the motion as decoded. What a
     /// training stage's `[stages.env.walker]` starts from.
-    pub const PAPER: WalkerSettings = WalkerSettings {
+    pub(crate) const PAPER: WalkerSettings = WalkerSettings {
         success_m: 0.1,
         max_primitives_per_goal: 11,
         penetration_redraws: 0,

@@ -59,12 +59,12 @@ impl ObsLayout {
     }
 
     /// Offset of the sensing of the first seed frame (the second follows it).
-    pub const fn sensing_offset(&self) -> usize {
+    pub(crate) const fn sensing_offset(&self) -> usize {
         SEED_FRAMES * STATE_FRAME_DIM
     }
 
     /// Offset of `1/(1 + d)`; the time left follows it.
-    pub const fn dist_offset(&self) -> usize {
+    pub(crate) const fn dist_offset(&self) -> usize {
         self.sensing_offset() + SEED_FRAMES * self.sensing_per_frame
     }
 }

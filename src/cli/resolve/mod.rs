@@ -21,7 +21,7 @@ pub(crate) const DEFAULT_SCENE: &str = "assets/scenes/apartment.glb";
 /// Default rig, relative to the crate root.
 pub(crate) const DEFAULT_RIG: &str = "camera_rigs/aria_gen1.json";
 
-pub use crate::plan::{MotionPlan, RenderPlan, RunPlan, SlurmPlan, SupervisorPlan};
+pub(crate) use crate::plan::{MotionPlan, RunPlan};
 
 /// Most frames a scripted walk may have (about 7 h at 40 Hz).
 pub(crate) const MAX_SCRIPTED_FRAMES: f64 = 1e6;

@@ -29,7 +29,7 @@ pub struct PrimitiveSet {
 }
 
 impl PrimitiveSet {
-    pub fn new(chain_len: usize) -> Self {
+    pub(crate) fn new(chain_len: usize) -> Self {
         Self {
             chain_len,
             ..Self::default()
@@ -41,7 +41,7 @@ impl PrimitiveSet {
         self.floor_z.len() / self.chain_len.max(1)
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.floor_z.is_empty()
     }
 
@@ -155,8 +155,7 @@ impl PrimitiveSet {
 
 /// A clip and the frames of it that a set uses.
 #[derive(Debug, Clone)]
-pub struct ClipPart {
-    pub name: String,
+pub(crate) struct ClipPart {
     pub seq: MotionSequence,
     pub frames: std::ops::Range<usize>,
 }
@@ -175,7 +174,7 @@ pub(crate) struct ContactFilter<'m> {
 }
 
 impl<'m> ContactFilter<'m> {
-    pub fn new(
+    pub(crate) fn new(
         model: &'m BodyModel,
         min_score: f64,
         context_frames: usize,

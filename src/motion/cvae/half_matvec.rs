@@ -65,7 +65,8 @@ impl HalfMatrix {
     }
 
     /// The weight at `(input, output)`, widened to f32.
-    pub fn get(&self, input: usize, output: usize) -> f32 {
+    #[cfg(test)]
+    pub(crate) fn get(&self, input: usize, output: usize) -> f32 {
         let (t, c) = (output / TILE, output % TILE);
         half::f16::from_bits(self.packed[(t * self.inputs + input) * TILE + c]).to_f32()
     }

@@ -71,7 +71,7 @@ pub(crate) fn pose_frames<B: Backend>(rig: &TensorRig<B>, x: Tensor<B, 3>) -> Po
 }
 
 /// Loss terms of one batch (each a scalar tensor) and their weighted sum.
-pub struct LossTerms<B: Backend> {
+pub(crate) struct LossTerms<B: Backend> {
     pub total: Tensor<B, 1>,
     /// `(name, unweighted value)` in the order of [`LossWeights`].
     pub parts: Vec<(&'static str, Tensor<B, 1>)>,

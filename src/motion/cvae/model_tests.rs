@@ -346,7 +346,6 @@ fn prior_losses_are_small_on_mocap_and_grow_when_the_body_leaves_the_floor_or_le
     let seq =
         crate::motion::MotionSequence::read(&clip("deepmimic_walker_0walk_forward.npz")).unwrap();
     let part = ClipPart {
-        name: "walk".into(),
         frames: 0..seq.len(),
         seq,
     };

@@ -24,7 +24,7 @@ use crate::motion::primitive::{PRIMITIVE_FRAMES, PRIMITIVE_RATE_HZ, SEED_FRAMES}
 pub(crate) const PACE_SPAN_S: f64 = (PRIMITIVE_FRAMES - SEED_FRAMES) as f64 / PRIMITIVE_RATE_HZ;
 
 /// Heading (rad, counter-clockwise from world +x) of a body from its posed joints (z up).
-pub fn heading_rad(joints: &[Vec3]) -> f64 {
+pub(crate) fn heading_rad(joints: &[Vec3]) -> f64 {
     let right = joints[joint::RIGHT_HIP] - joints[joint::LEFT_HIP];
     // Forward = z × right, horizontal.
     (right.x).atan2(-right.y)

@@ -21,7 +21,7 @@ use crate::motion::primitive::{PRIMITIVE_RATE_HZ, SEED_FRAMES};
 /// What makes a decoded primitive plausible, and how much each shortfall costs in the score
 /// `ln(contact score) − Σ weight · shortfall`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlausibilityRules {
+pub(crate) struct PlausibilityRules {
     /// Pelvis heights above the floor (m) that cost nothing (the training clips' range is
     /// 0.71–1.18 m).
     pub pelvis_m: (f64, f64),
@@ -61,7 +61,7 @@ impl Default for PlausibilityRules {
 
 /// The terms of one primitive's plausibility.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Plausibility {
+pub(crate) struct Plausibility {
     /// Foot-contact score (Eq. 12) of the 20 frames.
     pub contact: f64,
     /// Largest distance (m) of the pelvis height outside the plausible range.
@@ -79,7 +79,7 @@ pub struct Plausibility {
 
 /// Scores a decoded primitive; `foot_markers` are the marker indices of the feet
 /// (`RigGeometry::foot_markers`).
-pub fn plausibility(
+pub(crate) fn plausibility(
     p: &DecodedPrimitive,
     foot_markers: &[usize],
     rules: &PlausibilityRules,
@@ -174,7 +174,7 @@ pub(crate) struct BestOfK {
 
 impl BestOfK {
     /// A sampler for `body` with `candidates` ≥ 1 draws per primitive.
-    pub fn new(
+    pub(crate) fn new(
         body: &BodyContext,
         candidates: usize,
         rules: PlausibilityRules,
@@ -189,7 +189,7 @@ impl BestOfK {
 
     /// The next primitive after `seed`: the most plausible of `candidates` decoded from fresh
     /// latents z ~ N(0, I) drawn from `rng` (the first of equals wins).
-    pub fn next(
+    pub(crate) fn next(
         &self,
         model: &MotionModel,
         body: &BodyContext,
@@ -203,17 +203,12 @@ impl BestOfK {
         let mut kept: Vec<Sampled> = Vec::with_capacity(self.candidates);
         let mut non_finite = 0;
         let mut last_error = None;
-        for (decoded, latent) in model
-            .decode_each(body, &seeds, &latents)?
-            .into_iter()
-            .zip(latents)
-        {
+        for decoded in model.decode_each(body, &seeds, &latents)? {
             match decoded {
                 Ok(primitive) => {
                     let plausibility = plausibility(&primitive, &self.foot_markers, &self.rules);
                     kept.push(Sampled {
                         primitive,
-                        latent,
                         plausibility,
                         non_finite_candidates: 0,
                     });
@@ -263,10 +258,8 @@ impl BestOfK {
 
 /// One step of a best-of-K chain.
 #[derive(Debug, Clone)]
-pub struct Sampled {
+pub(crate) struct Sampled {
     pub primitive: DecodedPrimitive,
-    /// The latent it was decoded from.
-    pub latent: Vec<f32>,
     pub plausibility: Plausibility,
     /// Candidates of this step dropped because they decoded to non-finite values.
     pub non_finite_candidates: usize,

@@ -202,7 +202,7 @@ impl<B: Backend> TensorRig<B> {
 
 /// Rotation matrices `[..., 3, 3]` (columns b1 b2 b3) from 6D vectors `[..., 6]` by
 /// Gram-Schmidt (the convention of `math::rot6d_to_matrix`).
-pub fn rot6d_to_matrix<B: Backend, const D: usize, const D2: usize>(
+pub(crate) fn rot6d_to_matrix<B: Backend, const D: usize, const D2: usize>(
     d6: Tensor<B, D>,
 ) -> Tensor<B, D2> {
     let last = D - 1;
@@ -216,7 +216,7 @@ pub fn rot6d_to_matrix<B: Backend, const D: usize, const D2: usize>(
 }
 
 /// The 6D vector `[..., 6]` (first two columns) of rotation matrices `[..., 3, 3]`.
-pub fn matrix_to_rot6d<B: Backend, const D: usize, const D2: usize>(
+pub(crate) fn matrix_to_rot6d<B: Backend, const D: usize, const D2: usize>(
     m: Tensor<B, D>,
 ) -> Tensor<B, D2> {
     let c1 = m.clone().narrow(D - 1, 0, 1);

@@ -33,7 +33,7 @@ pub(super) struct Course {
 
 /// A fixed scene (e.g. the apartment) and the start/goal pairs its episodes walk, in turn.
 #[derive(Debug, Clone)]
-pub struct FixedScene {
+pub(crate) struct FixedScene {
     pub map: Arc<WalkableMap>,
     pub pairs: Vec<StartGoal>,
     /// The scene's 3D SDF, where scene penetration is measured (paper Eq. 11; evaluation
@@ -45,7 +45,7 @@ pub struct FixedScene {
 /// Where an episode walks, for pictures: its map, its still and moving obstacles (on the
 /// episode's clock), its start and goal.
 #[derive(Debug, Clone)]
-pub struct CourseView {
+pub(crate) struct CourseView {
     pub map: Arc<WalkableMap>,
     pub obstacle: Option<Obstacle2>,
     pub moving: Vec<MovingObstacle>,

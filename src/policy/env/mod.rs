@@ -62,10 +62,10 @@ mod snapshot;
 pub(crate) mod summary;
 
 use course::{Course, Episode};
-pub use course::{CourseView, FixedScene};
+pub(crate) use course::{CourseView, FixedScene};
 pub use settings::EnvSettings;
 pub(crate) use snapshot::EnvSnapshot;
-pub use summary::{Ending, EpisodeSummary};
+pub(crate) use summary::{Ending, EpisodeSummary};
 
 /// Seed placements tried before an episode starts even with blocked cells under the body
 /// (a start too near a wall for every seed).
@@ -150,7 +150,7 @@ fn episode_rng(base: u64, id: u64) -> ChaCha8Rng {
 /// from, the pose prior, and the fixed scene (box scenes, crossings and floor plans when
 /// `None`). Training, its validation and the held-out evaluations build theirs from one.
 #[derive(Clone, Copy)]
-pub struct EnvParts<'m> {
+pub(crate) struct EnvParts<'m> {
     pub model: &'m MotionModel,
     pub body: &'m BodyContext<'m>,
     pub bank: &'m SeedBank,
@@ -163,7 +163,7 @@ pub struct EnvParts<'m> {
 
 impl<'m> EnvParts<'m> {
     /// `envs` episodes at a time under `episode_base` ([`PolicyEnv::with_scene`]).
-    pub fn env(
+    pub(crate) fn env(
         &self,
         settings: EnvSettings,
         envs: usize,
@@ -190,7 +190,7 @@ impl<'m> PolicyEnv<'m> {
     /// The same in a fixed scene (its `settings.scene` unused): episode `n` walks pair
     /// `n mod pairs`.
     #[allow(clippy::too_many_arguments)]
-    pub fn with_scene(
+    pub(crate) fn with_scene(
         model: &'m MotionModel,
         body: &'m BodyContext<'m>,
         bank: &'m SeedBank,
@@ -256,7 +256,7 @@ impl<'m> PolicyEnv<'m> {
 
     /// Observes with `spec` instead of the paper's 32 rays (a policy's own sensing:
     /// [`super::net::ActorCritic::sensing`]).
-    pub fn with_sensing(mut self, spec: &SensingSpec) -> Self {
+    pub(crate) fn with_sensing(mut self, spec: &SensingSpec) -> Self {
         self.sensor = spec.sensor();
         self
     }
@@ -264,13 +264,13 @@ impl<'m> PolicyEnv<'m> {
     /// Summaries of finished indoor episodes carry the walking distance from start to goal
     /// round walls ([`EpisodeSummary::way_round_m`]; a few milliseconds per episode, so
     /// evaluations only).
-    pub fn measuring_way_round(mut self) -> Self {
+    pub(crate) fn measuring_way_round(mut self) -> Self {
         self.measure_way_round = true;
         self
     }
 
     /// Where the parts of this environment's observations lie.
-    pub fn obs_layout(&self) -> ObsLayout {
+    pub(crate) fn obs_layout(&self) -> ObsLayout {
         ObsLayout {
             sensing_per_frame: self.sensor.dim(),
         }
@@ -281,12 +281,8 @@ impl<'m> PolicyEnv<'m> {
         self.episodes.len()
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.episodes.is_empty()
-    }
-
     /// Latent size of the motion model.
-    pub fn latent_dim(&self) -> usize {
+    pub(crate) fn latent_dim(&self) -> usize {
         self.model.latent_dim()
     }
 
@@ -684,7 +680,7 @@ impl<'m> PolicyEnv<'m> {
     }
 
     /// Each episode in progress: its id and its pelvis's floor position (m, world).
-    pub fn pelvis_positions(&self) -> Vec<(u64, DVec2)> {
+    pub(crate) fn pelvis_positions(&self) -> Vec<(u64, DVec2)> {
         self.episodes
             .iter()
             .map(|e| (e.id, e.walker.view.pelvis))
@@ -692,7 +688,7 @@ impl<'m> PolicyEnv<'m> {
     }
 
     /// Where episode `i` (of those in progress) walks, for pictures.
-    pub fn course_view(&self, i: usize) -> CourseView {
+    pub(crate) fn course_view(&self, i: usize) -> CourseView {
         let c = &self.episodes[i].course;
         CourseView {
             map: c.map.clone(),
@@ -704,7 +700,8 @@ impl<'m> PolicyEnv<'m> {
     }
 
     /// Ids of the episodes in progress.
-    pub fn episode_ids(&self) -> Vec<u64> {
+    #[cfg(test)]
+    pub(crate) fn episode_ids(&self) -> Vec<u64> {
         self.episodes.iter().map(|e| e.id).collect()
     }
 }

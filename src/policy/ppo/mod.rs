@@ -218,7 +218,7 @@ struct RunState {
 
 /// What a run did.
 #[derive(Debug, Clone)]
-pub struct PolicyTrainReport {
+pub(crate) struct PolicyTrainReport {
     pub updates: usize,
     pub env_steps: usize,
     pub seconds: f64,
@@ -270,7 +270,7 @@ fn validate(
 /// there is none or it belongs to another plan; without `resume` an existing one is refused).
 /// A new run refuses weights an earlier run left at the plan's outputs unless `force`; a loss
 /// or a weight that goes non-finite stops the run with the update and the term.
-pub fn train_policy(
+pub(crate) fn train_policy(
     plan: &PolicyTrainPlan,
     parts: &EnvParts,
     show_progress: bool,

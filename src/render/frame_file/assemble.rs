@@ -284,7 +284,8 @@ fn blender_duration_seconds(text: &str) -> Option<f64> {
 /// gives depth and position, `Normal` normals, `IndexOB` segmentation, `Vector` flow.
 /// The remap is computed for this frame alone; [`RemapTable::assemble`] reuses one across a
 /// camera's frames.
-pub fn assemble_frame(
+#[cfg(test)]
+pub(crate) fn assemble_frame(
     rgb_exr: Option<&Path>,
     ground_truth_exr: Option<&Path>,
     render: &RenderCamera,
@@ -299,7 +300,7 @@ pub fn assemble_frame(
 /// same for every frame of a camera, so a take computes it once per camera (28 bytes a pixel:
 /// 56 MB for a full-size Aria RGB camera) instead of unprojecting and reprojecting every
 /// pixel of every frame (0.5 s of a full-size RGB frame's assembly on one core).
-pub struct RemapTable {
+pub(crate) struct RemapTable {
     render: RenderCamera,
     target: Camera,
     /// Per target pixel (row-major), NaN where it is not valid.
@@ -352,7 +353,7 @@ impl RemapTable {
         }
     }
 
-    /// [`assemble_frame`] with this table's render and camera.
+    /// `assemble_frame` with this table's render and camera.
     pub(crate) fn assemble(
         &self,
         rgb_exr: Option<&Path>,

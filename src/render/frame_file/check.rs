@@ -1,8 +1,6 @@
 //! Checks of a frame file without decoding it again: the encoded bytes' header and blocks, and
 //! the channels a frame's contents must hold.
 
-use std::path::Path;
-
 use exr::prelude::Encoding;
 
 use super::FrameFileError;
@@ -96,8 +94,9 @@ pub(crate) fn check_encoded_header(
 /// Checks a frame file: it opens, holds exactly `channels` (e.g. from
 /// [`Passes::frame_channels`](crate::render::passes::Passes::frame_channels)) at
 /// `width × height`, and all values are finite. Returns the file's contents.
-pub fn validate_frame(
-    path: &Path,
+#[cfg(test)]
+pub(crate) fn validate_frame(
+    path: &std::path::Path,
     width: u32,
     height: u32,
     channels: &[&str],
@@ -106,7 +105,7 @@ pub fn validate_frame(
     validate_frame_contents(contents, width, height, channels)
 }
 
-/// [`validate_frame`] of a frame file already read (from disk, or from the bytes about to be
+/// `validate_frame` of a frame file already read (from disk, or from the bytes about to be
 /// written).
 pub(crate) fn validate_frame_contents(
     contents: ExrContents,

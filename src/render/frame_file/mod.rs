@@ -52,13 +52,16 @@ use exr::prelude::{
 
 use crate::exr_file::{ExrChannel, ExrContents, InspectError};
 use crate::render::passes::{Pass, Passes};
-pub use assemble::{assemble_frame, RemapTable};
-pub use check::validate_frame;
+#[cfg(test)]
+pub(crate) use assemble::assemble_frame;
+pub(crate) use assemble::RemapTable;
+#[cfg(test)]
+pub(crate) use check::validate_frame;
 pub(crate) use check::{check_encoded_header, check_frame_channels, validate_frame_contents};
 
 /// A frame that could not be assembled, written or validated.
 #[derive(Debug, thiserror::Error)]
-pub enum FrameFileError {
+pub(crate) enum FrameFileError {
     #[error(transparent)]
     Read(#[from] InspectError),
     #[error("{path}: channel `{channel}` missing (Blender did not write the pass)")]
@@ -90,7 +93,7 @@ pub enum FrameFileError {
 /// A frame's pixels, row-major, in the target camera's image: the planes its raw renders
 /// hold (none where a pass was not rendered).
 #[derive(Debug, Clone, PartialEq)]
-pub struct FrameImage {
+pub(crate) struct FrameImage {
     pub width: usize,
     pub height: usize,
     pub valid: Vec<f32>,
@@ -152,7 +155,8 @@ impl FrameImage {
     }
 
     /// Writes the frame file to `path` ([`FrameImage::encode`], then the bytes; not atomic).
-    pub fn write(&self, path: &Path) -> Result<(), FrameFileError> {
+    #[cfg(test)]
+    pub(crate) fn write(&self, path: &Path) -> Result<(), FrameFileError> {
         let bytes = self.encode(path)?;
         std::fs::write(path, bytes).map_err(|e| FrameFileError::Write {
             path: path.into(),

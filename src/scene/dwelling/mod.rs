@@ -17,7 +17,7 @@ pub(crate) mod batch;
 pub(crate) mod catalogue;
 pub(crate) mod furnish;
 mod glb;
-pub mod plan;
+pub(crate) mod plan;
 mod source;
 
 use std::collections::BTreeMap;

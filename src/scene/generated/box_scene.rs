@@ -45,7 +45,7 @@ impl Default for BoxSceneSettings {
 
 /// What is drawn for a box scene (the start relative to the box centre).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct BoxParams {
+pub(crate) struct BoxParams {
     pub centre: [f64; 2],
     pub half_extents: [f64; 2],
     pub yaw_rad: f64,
@@ -54,7 +54,7 @@ pub struct BoxParams {
 
 /// One drawn box scene.
 #[derive(Debug, Clone)]
-pub struct BoxScene {
+pub(crate) struct BoxScene {
     pub map: WalkableMap,
     pub obstacle: Obstacle2,
     pub start: DVec2,

@@ -67,7 +67,7 @@ impl Default for CrossingSettings {
 
 /// What is drawn for a crossing scene.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CrossingParams {
+pub(crate) struct CrossingParams {
     pub start: [f64; 2],
     pub goal: [f64; 2],
     /// The (first) other person's footprint centre at time 0 and its velocity (m/s).
@@ -80,7 +80,7 @@ pub struct CrossingParams {
 
 /// One drawn crossing scene (its floor, the same for every scene, is [`CrossingScene::floor`]).
 #[derive(Debug, Clone)]
-pub struct CrossingScene {
+pub(crate) struct CrossingScene {
     /// The other people, the first of [`CrossingParams::mover_start`] first.
     pub movers: Vec<MovingObstacle>,
     pub start: DVec2,

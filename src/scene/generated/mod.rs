@@ -5,7 +5,7 @@
 //! (`scenario`: an empty floor, a static box, a moving box). Each is a function of its
 //! settings and a generator; none reads a file.
 
-pub mod box_scene;
-pub mod crossing_scene;
+pub(crate) mod box_scene;
+pub(crate) mod crossing_scene;
 pub mod room_scene;
-pub mod scenario;
+pub(crate) mod scenario;

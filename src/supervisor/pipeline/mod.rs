@@ -41,7 +41,7 @@ use spec::{base_spec, camera_work, repair, scene_objects, segmentation_ids};
 
 /// Command-line choices that are not in the config, and the effective config.
 #[derive(Debug, Clone, Default)]
-pub struct RunOptions {
+pub(crate) struct RunOptions {
     pub resume: bool,
     /// `--blender`; else `EGOGEN_BLENDER`; else the managed install.
     pub blender: Option<PathBuf>,

@@ -16,17 +16,14 @@ use crate::motion::MotionSequence;
 use crate::render::frame_file::{assemble_frame, validate_frame};
 use crate::render::lens_polynomial::native_error;
 use crate::render::passes::{Pass, Passes};
-use crate::render::protocol::ShardSkinRegion;
+use crate::render::protocol::{BodyProbe, PointLight, ShardSkinRegion};
 use crate::render::render_camera::{FisheyeRendering, RenderCamera};
 use crate::render::shard::worker_command;
 use crate::render::shard_plan::{
     blender_fps, raw_frame_paths, shard_camera, RawRenders, AGENT_ID_BASE,
 };
 use crate::render::skin_tone::{RegionPaint, SkinPlan};
-use crate::render::{
-    BlenderRuntime, BodyProbe, PointLight, RenderDevice, ShardBody, ShardLighting, ShardRgb,
-    ShardSpec,
-};
+use crate::render::{BlenderRuntime, RenderDevice, ShardBody, ShardLighting, ShardRgb, ShardSpec};
 use crate::rig::Rig;
 use crate::scene::{load_scene, sample_start_goals, walkable_map, WalkableSettings};
 use crate::synth::body_cache::{body_cache, body_cache_at, playback_keys, rendered_sample_indices};

@@ -155,11 +155,6 @@ pub(crate) fn load_clips(plan: &TrainPlan) -> Result<(Vec<ClipPart>, Vec<ClipPar
                 seq.frame_rate_hz
             )));
         }
-        let name = spec
-            .path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
         let n = seq.len();
         let split = match (spec.held_out, spec.held_out_from_s) {
             (true, _) => 0,
@@ -167,7 +162,6 @@ pub(crate) fn load_clips(plan: &TrainPlan) -> Result<(Vec<ClipPart>, Vec<ClipPar
             (false, None) => n,
         };
         let part = |frames| ClipPart {
-            name: name.clone(),
             seq: seq.clone(),
             frames,
         };
