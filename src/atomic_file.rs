@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 /// An output refused by the rule.
 #[derive(Debug, thiserror::Error)]
-pub enum OutputError {
+pub(crate) enum OutputError {
     #[error("{} already exists; not overwriting it (choose a new path; nothing was written)", .path.display())]
     Exists { path: PathBuf },
     #[error("{flag} {} already exists and is not an empty folder; choose a new folder (nothing was written)", .path.display())]
@@ -54,7 +54,7 @@ pub(crate) fn partial_of(path: &Path) -> PathBuf {
 }
 
 /// Refuses to write over an existing file or folder.
-pub fn refuse_existing(path: &Path) -> Result<(), OutputError> {
+pub(crate) fn refuse_existing(path: &Path) -> Result<(), OutputError> {
     match path.exists() || path.is_symlink() {
         true => Err(OutputError::Exists { path: path.into() }),
         false => Ok(()),

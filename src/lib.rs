@@ -24,19 +24,21 @@
 //! - for people and the command line: `preview` draws PNG pictures, `inspect` looks inside EXR
 //!   files (channels, statistics, previews); `cli` holds the command-line and config plumbing and
 //!   no domain logic (each command's job lives in the module whose data it is); `run_job` is
-//!   `egogen-run`'s job.
+//!   `egogen-run`'s job; `commands`, at the top, holds the two binaries' command lines (they
+//!   parse and call; `src/bin/` only calls them).
 
 // Items are pub(crate) unless a binary, test or bench uses them (tests/code_shape.rs); the docs
 // are built with them (`cargo doc --document-private-items`), where a public item's link to a
 // crate-private one resolves.
 #![allow(rustdoc::private_intra_doc_links)]
 
-pub mod atomic_file;
+pub(crate) mod atomic_file;
 pub mod body;
 pub mod camera;
 pub mod campaign;
 pub mod cli;
-pub mod eval;
+pub mod commands;
+pub(crate) mod eval;
 pub mod export;
 pub mod exr_file;
 pub mod inspect;
@@ -46,14 +48,14 @@ pub(crate) mod memory;
 pub mod motion;
 pub(crate) mod npz;
 pub(crate) mod parser_guard;
-pub mod paths;
+pub(crate) mod paths;
 pub mod plan;
 pub mod policy;
 pub mod preview;
 pub(crate) mod progress;
 pub mod render;
 pub mod rig;
-pub mod run_job;
+pub(crate) mod run_job;
 pub mod scene;
 pub mod sensing;
 pub mod supervisor;

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 /// The folder shipped files are found under.
-pub fn crate_root() -> PathBuf {
+pub(crate) fn crate_root() -> PathBuf {
     std::env::var_os("EGOGEN_HOME")
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")))

@@ -20,7 +20,7 @@ use crate::synth::{pose_meshes, track_body, write_sequence_dir};
 
 /// How the job runs, beside its config.
 #[derive(Debug, Clone, Default)]
-pub struct RunRequest {
+pub(crate) struct RunRequest {
     /// Continue the interrupted run in `<output.dir>.partial`.
     pub resume: bool,
     /// Blender to use (else `EGOGEN_BLENDER`, else the managed install).
@@ -158,7 +158,7 @@ impl PreparedRun {
 }
 
 /// Runs the config at `config` with `overrides` (see the module docs).
-pub fn run(config: &Path, overrides: &RunOverrides, request: RunRequest) -> Result<()> {
+pub(crate) fn run(config: &Path, overrides: &RunOverrides, request: RunRequest) -> Result<()> {
     let run = prepare(config, overrides, &request)?;
     let (plan, model) = (&run.plan, &run.model);
     if plan.render.is_none() && matches!(plan.motion, MotionPlan::Agents { .. }) {

@@ -19,9 +19,11 @@ const MAX_FN_LINES: usize = 150;
 /// `eval::same_primitives_tests`), 929 with the Aria models', the motion model's and the body's
 /// (`export::aria_tests`, `motion::cvae::model_tests`, `body::properties_tests`), 790 once every
 /// item was made `pub(crate)` and made `pub` again only where the compiler asked for it (a
-/// binary, test or bench names it, or a public item's signature holds it); the rest is what
-/// the binaries and the integration tests reach. The ceiling only comes down.
-const MAX_PUB_ITEMS: usize = 790;
+/// binary, test or bench names it, or a public item's signature holds it), 710 once the
+/// binaries' argument parsing moved into `commands::egogen` and `commands::egogen_run` (a
+/// binary calls one `main`) and the planner's tests into `eval::planner_tests`; the rest is
+/// what the integration tests and benches reach. The ceiling only comes down.
+const MAX_PUB_ITEMS: usize = 710;
 
 /// A line of code with string and char literals emptied and a trailing `//` comment cut, so
 /// that braces in them are not counted.

@@ -234,6 +234,28 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "export",
         ],
     ),
+    // The binaries' command lines: parse arguments and call any job.
+    (
+        "commands",
+        &[
+            "math",
+            "paths",
+            "atomic_file",
+            "body",
+            "scene",
+            "rig",
+            "motion",
+            "walker",
+            "synth",
+            "render",
+            "inspect",
+            "eval",
+            "export",
+            "cli",
+            "run_job",
+            "campaign",
+        ],
+    ),
 ];
 
 /// Breaks of the layering that exist today, as (module, what it uses, why); each is to be

@@ -8,7 +8,7 @@ use crate::body::{BodyModel, CpfCalibration};
 use crate::math::Vec3;
 
 /// Prints the model's sizes, rest stature and CPF calibration.
-pub fn body_info(model: &Path) -> Result<()> {
+pub(crate) fn body_info(model: &Path) -> Result<()> {
     let m = BodyModel::load(model)?;
     let shaped = m.shape(&[], &[])?;
     let cal = CpfCalibration::from_rest_joints(&shaped.rest_joints);

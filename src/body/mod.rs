@@ -16,7 +16,7 @@
 pub(crate) mod cpf;
 pub(crate) mod export;
 pub(crate) mod hand_landmarks;
-pub mod info;
+pub(crate) mod info;
 pub(crate) mod lbs;
 pub(crate) mod markers;
 pub(crate) mod model;

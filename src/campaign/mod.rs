@@ -37,7 +37,7 @@ pub use state::{CampaignState, TakeStatus};
 
 /// How a campaign runs, beside its file.
 #[derive(Debug, Clone, Default)]
-pub struct CampaignRequest {
+pub(crate) struct CampaignRequest {
     /// Continue the campaign in `campaign.out`.
     pub resume: bool,
     /// With `resume`: verify every finished take in full (every checksum, every frame file
@@ -201,7 +201,7 @@ pub fn render_takes(
 
 /// `egogen-run CAMPAIGN.toml`: runs the campaign and says what it made; an error when any take
 /// failed (after all the others were made), naming each with its reason.
-pub fn run(path: &Path, request: &CampaignRequest) -> Result<()> {
+pub(crate) fn run(path: &Path, request: &CampaignRequest) -> Result<()> {
     let summary = run_campaign(path, request)?;
     if request.dry_run {
         return Ok(());

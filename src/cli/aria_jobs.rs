@@ -9,7 +9,7 @@ use crate::export::aria::job::AriaExportJob;
 
 /// What `egogen aria export` was asked.
 #[derive(Debug, Clone, clap::Args)]
-pub struct AriaExportArgs {
+pub(crate) struct AriaExportArgs {
     /// The take: a folder written by `egogen synth`, `egogen-run` without `[render]`, or an
     /// `egogen-run` dataset (its `sequence/` is read, and each camera's headset offset).
     pub take: PathBuf,
@@ -71,6 +71,6 @@ impl AriaExportArgs {
 }
 
 /// Runs `egogen aria export`.
-pub fn aria_export(args: &AriaExportArgs) -> Result<()> {
+pub(crate) fn aria_export(args: &AriaExportArgs) -> Result<()> {
     crate::export::aria::job::aria_export(&args.job())
 }

@@ -291,7 +291,7 @@ pub struct RawDepthNoise {
     pub quantisation_m: Option<f64>,
 }
 
-pub use crate::plan::Backend;
+pub(crate) use crate::plan::Backend;
 
 /// `[supervisor.slurm]`: resources of each array task.
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]

@@ -29,7 +29,7 @@ pub enum ConfigError {
 /// Reads and strictly parses a TOML config file; errors name the file, key and what was
 /// expected. A table given as an array (`lighting = [0.5, 1.5]` where `[render.lighting]` is
 /// meant) is refused by its key, not read by position as serde would.
-pub fn load_toml<T: serde::de::DeserializeOwned + serde::Serialize>(
+pub(crate) fn load_toml<T: serde::de::DeserializeOwned + serde::Serialize>(
     path: &Path,
 ) -> Result<T, ConfigError> {
     let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Read {
@@ -126,7 +126,7 @@ fn with_walker_hint(message: String) -> String {
 }
 
 /// The shipped body model, relative to [`crate_root`].
-pub const DEFAULT_BODY_MODEL: &str = "assets/body/SMPLX_NEUTRAL.npz";
+pub(crate) const DEFAULT_BODY_MODEL: &str = "assets/body/SMPLX_NEUTRAL.npz";
 
 /// A body model path from a config (relative to its folder `base`), else the shipped default;
 /// the error says which file is missing.
@@ -142,6 +142,6 @@ pub(crate) fn resolve_body_model(path: Option<PathBuf>, base: &Path) -> Result<P
 }
 
 /// The folder shipped data is found in: `EGOGEN_HOME` if set, else the crate's source root.
-pub fn crate_root() -> PathBuf {
+pub(crate) fn crate_root() -> PathBuf {
     crate::paths::crate_root()
 }

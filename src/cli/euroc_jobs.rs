@@ -9,7 +9,7 @@ use crate::export::euroc::job::EurocExportJob;
 
 /// What `egogen euroc export` was asked.
 #[derive(Debug, Clone, clap::Args)]
-pub struct EurocExportArgs {
+pub(crate) struct EurocExportArgs {
     /// The take: an `egogen-run` dataset rendered with the colour pass (its `sequence/`,
     /// `cameras/<camera>/annotations.json` and `images/<camera>/`).
     pub take: PathBuf,
@@ -32,7 +32,7 @@ pub struct EurocExportArgs {
 }
 
 /// Runs `egogen euroc export`.
-pub fn euroc_export(args: &EurocExportArgs) -> Result<()> {
+pub(crate) fn euroc_export(args: &EurocExportArgs) -> Result<()> {
     let rig = (args.rig.clone())
         .unwrap_or_else(|| crate::paths::crate_root().join(super::resolve::DEFAULT_RIG));
     crate::export::euroc::job::euroc_export(&EurocExportJob {

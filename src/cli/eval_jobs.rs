@@ -10,7 +10,7 @@ use crate::eval::jobs::{EvalJob, Suite, SuiteParts};
 
 /// What `egogen eval` is asked.
 #[derive(Debug, Clone, clap::Args)]
-pub struct EvalArgs {
+pub(crate) struct EvalArgs {
     /// Which table (Table 1 by default).
     #[arg(long, value_enum, default_value_t = Suite::Table1)]
     pub suite: Suite,
@@ -76,7 +76,7 @@ impl EvalArgs {
 }
 
 /// Runs the suite `args` ask for ([`crate::eval::jobs::run_eval`]).
-pub fn run_eval(args: &EvalArgs) -> Result<()> {
+pub(crate) fn run_eval(args: &EvalArgs) -> Result<()> {
     crate::eval::jobs::run_eval(&args.job(), load_common)
 }
 

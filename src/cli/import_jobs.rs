@@ -10,7 +10,7 @@ use anyhow::Result;
 /// `<out>_mirror.npz` too; `strip` a PNG of `strip_frames` columns; the first `skip_frames`
 /// source frames are dropped.
 #[allow(clippy::too_many_arguments)]
-pub fn import_bvh(
+pub(crate) fn import_bvh(
     bvh: &Path,
     out: &Path,
     model: &Path,

@@ -5,7 +5,7 @@
 //! functions that turn them into a typed job (defaults resolved, configs loaded, flags checked)
 //! and call the module whose data the job is. A command whose flags need nothing but parsing
 //! (`egogen body …`, `inspect`, `motion hand-stats|head-stats`, `scene inspect`) is called by
-//! the binary straight into its module's job: `body::info`, `synth::body_pictures`,
+//! `commands::egogen` straight into its module's job: `body::info`, `synth::body_pictures`,
 //! `motion::jobs`, `inspect::report`, `export::head_stats`, `synth::scene_inspect`.
 //!
 //! Configs: `config_file` (what every config file shares: the error naming file and key, strict
@@ -22,15 +22,15 @@
 //! and `egogen train policy`: `eval::policy_commands`, `policy::train_job`), `scene_jobs`
 //! (`egogen scene generate`: `scene::dwelling::batch`; the scene frame flags).
 
-pub mod aria_jobs;
+pub(crate) mod aria_jobs;
 pub mod config;
-pub mod config_file;
-pub mod euroc_jobs;
-pub mod eval_jobs;
-pub mod import_jobs;
-pub mod motion_jobs;
-pub mod overrides;
-pub mod policy_jobs;
+pub(crate) mod config_file;
+pub(crate) mod euroc_jobs;
+pub(crate) mod eval_jobs;
+pub(crate) mod import_jobs;
+pub(crate) mod motion_jobs;
+pub(crate) mod overrides;
+pub(crate) mod policy_jobs;
 pub mod resolve;
 pub mod scene_jobs;
 pub mod synth_config;
@@ -38,11 +38,10 @@ pub mod train_policy;
 pub mod train_primitive;
 
 pub use config::RawRun;
-pub use config_file::ConfigError;
 
 /// Lets a closed standard output end the process quietly, as Unix tools do (`egogen inspect
 /// FILE | head -1`), instead of a panic in `println!`. Binaries call it first thing.
-pub fn exit_quietly_on_closed_pipe() {
+pub(crate) fn exit_quietly_on_closed_pipe() {
     #[cfg(unix)]
     // SAFETY: restores the default disposition of SIGPIPE (terminate) before any thread or
     // handler exists; Rust's runtime set it to "ignore" at start-up.
@@ -51,4 +50,5 @@ pub fn exit_quietly_on_closed_pipe() {
     }
 }
 
-pub(crate) use resolve::{resolve_run, MotionPlan, RunPlan};
+pub(crate) use resolve::MotionPlan;
+pub(crate) use resolve::{resolve_run, RunPlan};

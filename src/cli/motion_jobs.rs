@@ -10,22 +10,22 @@ use anyhow::Result;
 
 use super::train_primitive::train_plan_for_job;
 use crate::eval::motion_model::control::MotionControl;
-pub use crate::eval::motion_model::{MotionEvalOptions, Precision};
+pub(crate) use crate::eval::motion_model::{MotionEvalOptions, Precision};
 
 /// `egogen motion eval`: prints the measurements as JSON lines
 /// (`eval::motion_model`).
-pub fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Result<()> {
+pub(crate) fn motion_eval(weights: &Path, config: &Path, opts: &MotionEvalOptions) -> Result<()> {
     crate::eval::motion_model::motion_eval(weights, config, opts, train_plan_for_job)
 }
 
 /// `egogen motion stats`: pace and turn distributions of a config's primitives.
-pub fn motion_stats(config: &Path, json: Option<&Path>) -> Result<()> {
+pub(crate) fn motion_stats(config: &Path, json: Option<&Path>) -> Result<()> {
     crate::motion::jobs::motion_stats(config, json, train_plan_for_job)
 }
 
 /// What `egogen motion control` measures (its flags).
 #[derive(clap::Args, Debug)]
-pub struct MotionControlOptions {
+pub(crate) struct MotionControlOptions {
     /// Weights (default: the shipped assets/motion/primitive_cvae.safetensors).
     #[arg(long)]
     weights: Option<PathBuf>,
@@ -98,6 +98,6 @@ impl MotionControlOptions {
 }
 
 /// `egogen motion control`: sustained walks and turns with CEM-chosen latents, as JSON lines.
-pub fn motion_control(opts: &MotionControlOptions) -> Result<()> {
+pub(crate) fn motion_control(opts: &MotionControlOptions) -> Result<()> {
     crate::eval::motion_model::control::motion_control(&opts.job(), train_plan_for_job)
 }

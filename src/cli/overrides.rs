@@ -8,7 +8,7 @@ use super::config::{Backend, MotionSource, RawRun};
 
 /// What the command line overrides.
 #[derive(Debug, Clone, Default)]
-pub struct RunOverrides {
+pub(crate) struct RunOverrides {
     /// `output.dir`.
     pub out: Option<PathBuf>,
     /// Every seed of the config: `motion.seed` (agents) or `scene.seed` (a placed motion),
@@ -128,7 +128,7 @@ impl RunOverrides {
     }
 
     /// The flags given that change what is rendered (all but `--workers` and `--backend`).
-    pub fn take_flags(&self) -> Vec<&'static str> {
+    pub(crate) fn take_flags(&self) -> Vec<&'static str> {
         [
             ("--out", self.out.is_some()),
             ("--seed", self.seed.is_some()),

@@ -15,7 +15,7 @@ use crate::eval::policy_commands::{PolicyEvalJob, PosePriorJob};
 // Parsed once per command; the evaluation's many options make its variant the largest.
 #[allow(clippy::large_enum_variant)]
 #[derive(Subcommand, Debug)]
-pub enum PolicyCommand {
+pub(crate) enum PolicyCommand {
     /// Fit the pose prior of the reward's pose term on a config's training primitives, and
     /// report how it scores held-out mocap, random-latent primitives and bent joints.
     PosePrior {
@@ -71,7 +71,7 @@ pub enum PolicyCommand {
 
 /// `egogen policy eval`'s flags.
 #[derive(clap::Args, Debug)]
-pub struct PolicyEvalArgs {
+pub(crate) struct PolicyEvalArgs {
     #[arg(long, default_value_os_t = crate::paths::crate_root().join("configs/train_primitive.toml"))]
     pub config: PathBuf,
     #[arg(long)]
@@ -184,7 +184,7 @@ pub struct PolicyEvalArgs {
 }
 
 /// Runs an `egogen policy` command.
-pub fn run_policy(cmd: PolicyCommand) -> Result<()> {
+pub(crate) fn run_policy(cmd: PolicyCommand) -> Result<()> {
     use crate::eval::policy_commands::{draw_room_plans, pose_prior};
     match cmd {
         PolicyCommand::PosePrior {
@@ -437,7 +437,7 @@ fn policy_eval(a: PolicyEvalArgs) -> Result<()> {
 }
 
 /// `egogen train policy`: the training config at `config` loaded, the policy trained.
-pub fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Result<()> {
+pub(crate) fn train_policy(config: &Path, quiet: bool, resume: bool, force: bool) -> Result<()> {
     let plan = super::train_policy::load_policy_plan(config)?;
     crate::policy::train_job::train_policy(plan, quiet, resume, force, train_plan_for_job)
 }

@@ -10,7 +10,7 @@ use crate::scene::dwelling::batch::DwellingBatch;
 
 /// How a scene file named on the command line is read: `--up y|z` (none: the format's default)
 /// and `--unit-m` (metres per unit of the file; none: 1), checked.
-pub fn scene_frame_flags(
+pub(crate) fn scene_frame_flags(
     up: Option<&str>,
     unit_m: Option<f64>,
 ) -> Result<crate::scene::SceneFrame> {
@@ -26,7 +26,7 @@ pub fn scene_frame_flags(
 
 /// `egogen scene generate`'s flags.
 #[derive(clap::Args, Debug)]
-pub struct GenerateArgs {
+pub(crate) struct GenerateArgs {
     /// Seed of the (first) dwelling.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -71,7 +71,7 @@ pub fn load_dwelling_settings(path: &Path) -> Result<crate::scene::dwelling::Dwe
 
 /// Generates `args.count` dwellings, writes them (unless checking only) and prints a line per
 /// dwelling and a summary (time, rooms, area, objects, models, seats).
-pub fn scene_generate(args: &GenerateArgs) -> Result<()> {
+pub(crate) fn scene_generate(args: &GenerateArgs) -> Result<()> {
     use crate::scene::dwelling::{shipped_catalogue_dir, DwellingSettings};
     let out = match (&args.out, args.check_only) {
         (Some(out), _) => Some(out.clone()),

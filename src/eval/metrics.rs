@@ -129,7 +129,7 @@ pub(crate) fn measure(
 /// Lateral offsets of a path from the line `start → goal` where it first passes each of
 /// `stations` evenly spaced points of that line (from 10 % to 90 % of the way); `None` where
 /// the path never gets there.
-pub fn lateral_offsets(
+pub(crate) fn lateral_offsets(
     path: &[[f64; 2]],
     start: DVec2,
     goal: DVec2,
@@ -158,7 +158,11 @@ pub fn lateral_offsets(
 /// Path diversity of repeated walks of one scene: the standard deviation over the walks of
 /// the lateral offset at 9 stations along the line (10–90 % of the way), averaged over the
 /// stations (m), and the share of walks that pass the midpoint on the left.
-pub fn path_diversity(paths: &[&[[f64; 2]]], start: DVec2, goal: DVec2) -> Option<(f64, f64)> {
+pub(crate) fn path_diversity(
+    paths: &[&[[f64; 2]]],
+    start: DVec2,
+    goal: DVec2,
+) -> Option<(f64, f64)> {
     const STATIONS: usize = 9;
     let offsets: Vec<Vec<Option<f64>>> = paths
         .iter()

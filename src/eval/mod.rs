@@ -12,9 +12,11 @@
 
 pub(crate) mod files;
 pub(crate) mod jobs;
-pub mod metrics;
+pub(crate) mod metrics;
 pub(crate) mod motion_model;
 pub(crate) mod paper;
+#[cfg(test)]
+mod planner_tests;
 pub(crate) mod policy_commands;
 pub(crate) mod policy_tasks;
 pub(crate) mod report;

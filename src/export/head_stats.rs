@@ -194,7 +194,7 @@ fn head_tracks(source: &HeadSource, model: &BodyModel, rig: &Path) -> Result<Vec
 /// `egogen motion head-stats`: the head-motion statistics ([`crate::motion::head_motion`]) of
 /// every source (take folders, clips or folders of clips, MPS trajectories), one JSON line
 /// each, then a table; every record in `json` when given.
-pub fn motion_head_stats(
+pub(crate) fn motion_head_stats(
     sources: &[PathBuf],
     model: &Path,
     rig: &Path,

@@ -24,7 +24,7 @@ mod aria_tests;
 pub mod colmap;
 pub mod euroc;
 pub(crate) mod gaze;
-pub mod head_stats;
+pub(crate) mod head_stats;
 pub mod imu;
 pub(crate) mod take;
 pub(crate) mod take_folder;

@@ -4,7 +4,7 @@
 //! `egogen inspect`'s report of them (`report`).
 
 pub mod preview;
-pub mod report;
+pub(crate) mod report;
 
 pub use crate::exr_file::{ExrChannel, ExrContents, ExrPass, InspectError};
 pub use preview::pass_preview;

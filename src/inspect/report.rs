@@ -10,7 +10,7 @@ use crate::atomic_file::refuse_existing;
 /// Prints every file's parts, passes and channel statistics (only the pass `only`, when
 /// given) and, with `preview`, writes one sheet of their tiles; `exposure` is `none`, `auto`
 /// or stops.
-pub fn inspect_exr(
+pub(crate) fn inspect_exr(
     files: &[PathBuf],
     preview: Option<&Path>,
     only: Option<&str>,

@@ -93,7 +93,11 @@ fn motion_files(path: &Path) -> Result<Vec<PathBuf>> {
 
 /// Prints each motion's finger statistics as a JSON line, then a table on standard error;
 /// writes them all to `json` when given.
-pub fn motion_hand_stats(sources: &[PathBuf], model: &Path, json: Option<&Path>) -> Result<()> {
+pub(crate) fn motion_hand_stats(
+    sources: &[PathBuf],
+    model: &Path,
+    json: Option<&Path>,
+) -> Result<()> {
     let m = BodyModel::load(model)?;
     let mut all = Vec::new();
     for source in sources {
@@ -158,7 +162,12 @@ pub fn motion_hand_stats(sources: &[PathBuf], model: &Path, json: Option<&Path>)
 }
 
 /// Poses frame `frame` of `motion` (or of the scripted walk at 40 fps) and writes it as OBJ.
-pub fn body_pose(model: &Path, motion: Option<&Path>, frame: usize, out: &Path) -> Result<()> {
+pub(crate) fn body_pose(
+    model: &Path,
+    motion: Option<&Path>,
+    frame: usize,
+    out: &Path,
+) -> Result<()> {
     refuse_existing(out)?;
     let m = BodyModel::load(model)?;
     let params = match motion {

@@ -25,7 +25,7 @@ pub mod deepmimic;
 pub mod hands;
 pub mod head_motion;
 pub(crate) mod head_stabilise;
-pub mod jobs;
+pub(crate) mod jobs;
 pub(crate) mod joins;
 #[cfg(test)]
 mod mocap_tests;

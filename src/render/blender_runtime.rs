@@ -48,7 +48,7 @@ pub enum RuntimeError {
 
 impl BlenderRuntime {
     /// Finds (and, for the managed environment, provisions) a checked Blender.
-    pub fn resolve(explicit: Option<&Path>) -> Result<Self, RuntimeError> {
+    pub(crate) fn resolve(explicit: Option<&Path>) -> Result<Self, RuntimeError> {
         if let Some(p) = explicit {
             return Self::check(p);
         }

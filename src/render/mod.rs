@@ -15,7 +15,7 @@ pub mod depth_noise;
 pub(crate) mod frame_file;
 pub mod lens_polynomial;
 pub mod lighting;
-pub mod materials;
+pub(crate) mod materials;
 pub(crate) mod outfit;
 pub(crate) mod outfit_sheet;
 pub(crate) mod passes;
@@ -26,7 +26,7 @@ pub(crate) mod shard_plan;
 pub mod skin_tone;
 
 pub use blender_runtime::{BlenderKind, BlenderRuntime, RuntimeError};
-pub use outfit_sheet::outfit_sheet;
+pub(crate) use outfit_sheet::outfit_sheet;
 pub(crate) use protocol::{
     DenoisePrefilter, RenderDevice, ShardBody, ShardLighting, ShardMaterial, ShardRgb, ShardSpec,
 };

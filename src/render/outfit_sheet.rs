@@ -28,7 +28,7 @@ struct Sheet {
 
 /// Renders `people` people drawn from `seed` with `model` to `out` (PNG, refused if it
 /// exists): each picture `cell_px` high and half as wide, `samples` Cycles samples a pixel.
-pub fn outfit_sheet(
+pub(crate) fn outfit_sheet(
     model_path: &Path,
     people: usize,
     seed: u64,

@@ -14,7 +14,7 @@ use crate::math::Vec3;
 
 /// `egogen rig` subcommands.
 #[derive(Subcommand, Debug)]
-pub enum RigCommand {
+pub(crate) enum RigCommand {
     /// Validate a rig and print each camera's model, resolution, field of view and pose
     /// relative to the CPF.
     Check {
@@ -64,7 +64,7 @@ fn rgb(flag: bool) -> AriaRgbResolution {
 }
 
 /// Runs one `egogen rig` subcommand, printing to `out`.
-pub fn run_command(cmd: &RigCommand, out: &mut dyn Write) -> Result<()> {
+pub(crate) fn run_command(cmd: &RigCommand, out: &mut dyn Write) -> Result<()> {
     match cmd {
         RigCommand::Check { rig, aria_rgb_1408 } => {
             let rig = Rig::load_with(rig, rgb(*aria_rgb_1408))?;

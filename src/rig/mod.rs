@@ -25,7 +25,7 @@ use crate::math::{Affine3, Mat3, Real, Vec3};
 
 pub(crate) use aria::aria_build_of_device;
 pub use aria::AriaRgbResolution;
-pub use command::{run_command, RigCommand};
+pub(crate) use command::{run_command, RigCommand};
 pub use error::RigError;
 pub(crate) use file::FORMAT_VERSION;
 

@@ -44,7 +44,7 @@ pub use load::{load_scene, walkable_map, SceneError, SceneFrame, UpAxis};
 pub use mesh::{ObjectId, ObjectOrientation, SceneMesh, SceneObject};
 pub(crate) use object_class::ObjectClass;
 pub use obstacle::{MovingObstacle, Obstacle2, ObstacleSolid};
-pub use path_plan::{guide_aim, line_is_clear, plan_path, Guide, PathField, PlannedPath};
+pub(crate) use path_plan::{plan_path, Guide, PathField};
 pub use penetration::{blocked_cells_in_box, sdf_penetration, Penetration};
 pub(crate) use sampler::sample_start_goals_in;
 pub use sampler::{sample_start_goals, StartGoal};

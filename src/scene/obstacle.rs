@@ -38,7 +38,7 @@ impl Obstacle2 {
 
     /// The same obstacle grown by `margin_m` on every side (a box's corners stay square: the
     /// grown box holds every point within `margin_m` of the box).
-    pub fn grown(self, margin_m: f64) -> Self {
+    pub(crate) fn grown(self, margin_m: f64) -> Self {
         match self {
             Obstacle2::Box {
                 centre,
@@ -64,7 +64,7 @@ impl Obstacle2 {
     }
 
     /// Whether a point lies inside (boundary included).
-    pub fn contains(&self, p: DVec2) -> bool {
+    pub(crate) fn contains(&self, p: DVec2) -> bool {
         match *self {
             Obstacle2::Box {
                 centre,

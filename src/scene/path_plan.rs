@@ -55,7 +55,7 @@ fn steps(
 
 /// A planned path: points from the start to the goal (cell centres between them).
 #[derive(Debug, Clone, PartialEq)]
-pub struct PlannedPath {
+pub(crate) struct PlannedPath {
     pub points: Vec<DVec2>,
     /// Whether the planner found a way; `false`: the straight line from start to goal (the
     /// goal is walled off, or occupied for now).
@@ -64,12 +64,13 @@ pub struct PlannedPath {
 
 impl PlannedPath {
     /// Length along the path (m).
-    pub fn length_m(&self) -> f64 {
+    #[cfg(test)]
+    pub(crate) fn length_m(&self) -> f64 {
         self.points.windows(2).map(|w| w[0].distance(w[1])).sum()
     }
 
     /// The point `distance_m` along the path from its start (the goal beyond its end).
-    pub fn point_along(&self, distance_m: f64) -> DVec2 {
+    pub(crate) fn point_along(&self, distance_m: f64) -> DVec2 {
         let mut left = distance_m.max(0.0);
         for w in self.points.windows(2) {
             let d = w[0].distance(w[1]);
@@ -87,7 +88,7 @@ impl PlannedPath {
 
 /// Plans from `from` to `to` (see the module docs). The start's own cell is always usable
 /// (a body standing near a wall can still leave it); the goal's cell must be free.
-pub fn plan_path(
+pub(crate) fn plan_path(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
     clearance_m: f64,
@@ -198,7 +199,7 @@ pub(crate) fn plan_path_weighted(
 /// Whether the straight way from `a` to `b` stays on walkable ground `clearance_m` from
 /// anything blocking and from `obstacles` (points every half cell; the first and last
 /// `clearance_m` are not tested, where a body may stand close to a wall).
-pub fn line_is_clear(
+pub(crate) fn line_is_clear(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
     clearance_m: f64,
@@ -226,7 +227,7 @@ pub fn line_is_clear(
 /// training, `egogen policy eval`, `egogen synth` and `egogen-run`); its path keeps
 /// [`GUIDE_CLEARANCE_M`] from what blocks walking.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Guide {
+pub(crate) struct Guide {
     /// The aim: the point this far (m) along the planned path; 0: no guide (the goal itself).
     pub lookahead_m: f64,
     /// How strongly the path keeps to the middle of doorways and corridors
@@ -246,7 +247,7 @@ pub struct Guide {
 /// planned around what blocks it ([`plan_path_weighted`]; pure pursuit), or the goal when no
 /// path is found. A lookahead of 0 (no guide) gives the goal. Stateless: the path is planned
 /// anew from where the walker stands.
-pub fn guide_aim(
+pub(crate) fn guide_aim(
     map: &WalkableMap,
     obstacles: &[Obstacle2],
     at: DVec2,

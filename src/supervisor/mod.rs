@@ -18,7 +18,7 @@ pub mod pool;
 mod render_tests;
 pub(crate) mod slurm;
 pub(crate) mod staged;
-pub(crate) mod verify;
+pub mod verify;
 
 pub use crate::manifest::Manifest;
 pub use local::{LocalPool, PoolSettings};

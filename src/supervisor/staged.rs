@@ -8,10 +8,11 @@ use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
 use crate::camera::CameraModel;
+pub use crate::export::take::CameraWork;
+pub use crate::export::take::RenderedAgent;
 pub(crate) use crate::export::take::RenderedMove;
 pub(crate) use crate::export::take::RenderedObject;
 use crate::export::take::{frame_file_path, TakeExports};
-pub use crate::export::take::{CameraWork, RenderedAgent};
 use crate::exr_file::ExrContents;
 use crate::render::frame_file::{
     check_encoded_header, validate_frame_contents, FrameFileError, RemapTable,

@@ -22,7 +22,7 @@ const SKIN: [f64; 3] = [0.86, 0.72, 0.62];
 const PANEL_GAP: [u8; 3] = [245, 245, 240];
 
 /// Draws the rest body for each of `values` of beta `beta`, side by side, to `out` (PNG).
-pub fn body_shapes(model: &Path, beta: usize, values: &[f64], out: &Path) -> Result<()> {
+pub(crate) fn body_shapes(model: &Path, beta: usize, values: &[f64], out: &Path) -> Result<()> {
     let m = BodyModel::load(model)?;
     if beta >= m.num_betas() {
         bail!("--beta {beta}: the model has betas 0..{}", m.num_betas());
@@ -61,7 +61,12 @@ pub fn body_shapes(model: &Path, beta: usize, values: &[f64], out: &Path) -> Res
 }
 
 /// The body with `betas` at rest (front, side) and mid-stride (front, side), to `out` (PNG).
-pub fn body_preview(model: &Path, betas: &[f64], out: &Path, height_px: usize) -> Result<()> {
+pub(crate) fn body_preview(
+    model: &Path,
+    betas: &[f64],
+    out: &Path,
+    height_px: usize,
+) -> Result<()> {
     let m = BodyModel::load(model)?;
     let rest = m.pose(&BodyParams {
         betas: betas.to_vec(),
@@ -105,7 +110,7 @@ const HAND_ROWS: [HandDoing; 5] = [
 /// hand does (rows: walking, standing, seated, reaching, holding; the drift at its first
 /// frame), seen from the thumb's side and from the palm, to `out` (PNG); the rest hand of the
 /// body model in the first column.
-pub fn body_hands(model: &Path, people: usize, out: &Path, cell_px: usize) -> Result<()> {
+pub(crate) fn body_hands(model: &Path, people: usize, out: &Path, cell_px: usize) -> Result<()> {
     use rand_core::SeedableRng;
     refuse_existing(out)?;
     let m = BodyModel::load(model)?;

@@ -12,16 +12,16 @@
 //! may not use, are here too: `body_pictures` (`egogen body shapes|preview|hands`, `egogen
 //! motion import --strip`) and `scene_inspect` (`egogen scene inspect`).
 
-pub mod activity;
+pub(crate) mod activity;
 pub(crate) mod body_cache;
-pub mod body_pictures;
+pub(crate) mod body_pictures;
 pub(crate) mod body_track;
 pub mod crowd;
 pub(crate) mod crowd_dir;
 pub(crate) mod held_object;
 pub(crate) mod penetration;
 pub(crate) mod placement;
-pub mod scene_inspect;
+pub(crate) mod scene_inspect;
 pub mod sequence_dir;
 pub mod take;
 

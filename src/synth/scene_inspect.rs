@@ -16,7 +16,7 @@ use crate::sensing::DepthImage;
 /// start's egocentric depth image (Table 3's ablation, looking at its goal) to the right of
 /// the map, framed in the colour of its start.
 #[allow(clippy::too_many_arguments)]
-pub fn scene_inspect(
+pub(crate) fn scene_inspect(
     scene: &str,
     frame: crate::scene::SceneFrame,
     settings: crate::scene::WalkableSettings,

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use super::config::{Bad, ConfigError, MotionSource, RawRun};
 pub(crate) use super::config_file::resolve_body_model;
-pub use super::config_file::{crate_root, DEFAULT_BODY_MODEL};
+pub(crate) use super::config_file::{crate_root, DEFAULT_BODY_MODEL};
 use motion::{agents_motion, file_motion, scripted_motion};
 use render::resolve_render;
 use supervisor::resolve_supervisor;
@@ -21,7 +21,8 @@ pub(crate) const DEFAULT_SCENE: &str = "assets/scenes/apartment.glb";
 /// Default rig, relative to the crate root.
 pub(crate) const DEFAULT_RIG: &str = "camera_rigs/aria_gen1.json";
 
-pub(crate) use crate::plan::{MotionPlan, RunPlan};
+pub(crate) use crate::plan::MotionPlan;
+pub(crate) use crate::plan::RunPlan;
 
 /// Most frames a scripted walk may have (about 7 h at 40 Hz).
 pub(crate) const MAX_SCRIPTED_FRAMES: f64 = 1e6;

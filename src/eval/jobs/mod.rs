@@ -30,7 +30,7 @@ use table2::table2;
 
 /// Which of `egogen eval`'s suites a run makes (`--suite`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Suite {
+pub(crate) enum Suite {
     /// Table 1: scenarios with moving obstacles and people, walked by each controller.
     Table1,
     /// Table 2: the apartment, egocentric sensing against a local map.

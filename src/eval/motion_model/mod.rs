@@ -21,7 +21,7 @@ use steering::{steer_probes, steered_walk};
 
 /// Float precision of the motion network.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Precision {
+pub(crate) enum Precision {
     F32,
     F16,
     Bf16,
@@ -44,7 +44,7 @@ impl Precision {
 const SHORT_CHAINS: usize = 20;
 
 /// What `egogen motion eval` measures (its flags).
-pub struct MotionEvalOptions {
+pub(crate) struct MotionEvalOptions {
     pub random_primitives: usize,
     pub chain_primitives: usize,
     pub short_chain_primitives: usize,

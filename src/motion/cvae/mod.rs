@@ -54,4 +54,4 @@ pub use infer::{BodyContext, CanonicalSeed, DecodedPrimitive, MotionModel, Primi
 pub use net::{ArchConfig, PrimitiveVae};
 pub(crate) use sampler::PlausibilityRules;
 pub(crate) use sampler::{goal_ahead, goal_toward, BestOfK};
-pub use train::{train, TrainPlan, TrainReport};
+pub use train::train;

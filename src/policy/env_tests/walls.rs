@@ -191,7 +191,7 @@ fn a_box_tested_in_every_frame_penetrates_exactly_when_a_marker_enters_it() {
 /// directions (towards the way round), and the same distance and rays.
 #[test]
 fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
-    use crate::scene::line_is_clear;
+    use crate::scene::path_plan::line_is_clear;
     use crate::scene::path_plan::GUIDE_CLEARANCE_M;
     env_parts!(body, ctx, model, bank, prior);
     let rooms = |guide_lookahead_m: f64| EnvSettings {
@@ -238,7 +238,7 @@ fn a_guided_walker_sees_the_way_round_only_where_a_wall_hides_its_goal() {
 /// memory is refused by an environment whose walkers keep none.
 #[test]
 fn a_guide_on_memory_plans_on_what_the_walker_saw_and_restores_from_snapshots() {
-    use crate::scene::line_is_clear;
+    use crate::scene::path_plan::line_is_clear;
     use crate::scene::path_plan::GUIDE_CLEARANCE_M;
     env_parts!(body, ctx, model, bank, prior);
     let rooms = |guide_memory: bool| EnvSettings {

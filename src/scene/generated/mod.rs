@@ -8,4 +8,4 @@
 pub(crate) mod box_scene;
 pub(crate) mod crossing_scene;
 pub mod room_scene;
-pub(crate) mod scenario;
+pub mod scenario;

@@ -384,7 +384,7 @@ impl WalkableMap {
 
     /// Signed distance (m) at a point, bilinear between cell centres. Beyond the grid: the value
     /// at the grid's nearest point less the distance to it (still falling away from the floor).
-    pub fn sdf_at(&self, p: DVec2) -> f64 {
+    pub(crate) fn sdf_at(&self, p: DVec2) -> f64 {
         if self.cell_of(p).is_none() {
             if !p.is_finite() {
                 return f64::NEG_INFINITY;

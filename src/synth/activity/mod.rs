@@ -151,7 +151,7 @@ impl ActivityWeights {
     }
 
     /// `walk=2,sit=1`: the weights above 0 by name (unnamed are 0).
-    pub fn parse(text: &str) -> Result<Self, String> {
+    pub(crate) fn parse(text: &str) -> Result<Self, String> {
         let mut named = Vec::new();
         for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             let (name, v) = part
