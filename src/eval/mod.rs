@@ -8,7 +8,9 @@
 //! walks drawn, on `policy_tasks`); the motion model measured (`motion_model`: `egogen motion
 //! eval` and `control`). Uses `synth` to walk and `preview` to draw; `cli::eval_jobs` parses
 //! `egogen eval`'s arguments and loads the shipped parts. `same_primitives_tests`: `egogen
-//! policy eval`'s environment and a take's agent choose the same primitives (tests only).
+//! policy eval`'s environment and a take's agent choose the same primitives; `planner_tests`:
+//! the A* planner, the guide and the diversity measure on cases whose answers are known (tests
+//! only).
 
 pub(crate) mod files;
 pub(crate) mod jobs;

@@ -90,8 +90,6 @@ pub(crate) enum GazeTarget {
     Person(usize),
 }
 
-impl GazeTarget {}
-
 /// One fixation of the sequence.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Fixation {
