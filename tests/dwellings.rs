@@ -62,6 +62,20 @@ fn the_same_seed_writes_the_same_bytes_and_the_glb_reads_back_as_checked() {
         .collect();
     assert_eq!(nodes, names(&loaded));
     assert_eq!(sidecar["generator"]["seed"], 7);
+    // Pictures hang with their paintings: textured, so drawn materials leave them as they are.
+    let pictures: Vec<_> = loaded
+        .objects
+        .iter()
+        .filter(|o| o.name.starts_with("picture_"))
+        .collect();
+    assert!(pictures.len() >= 3, "{} pictures", pictures.len());
+    assert!(pictures.iter().all(|o| o.textured));
+    assert!(sidecar["objects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|o| o["class"] == "picture")
+        .all(|o| o["node"].as_str().unwrap().starts_with("picture_")));
     // Every catalogue piece names its model, creator and licence.
     for o in sidecar["objects"].as_array().unwrap() {
         if o["model"].is_string() {
@@ -308,9 +322,9 @@ fn a_campaign_and_a_run_config_walk_generated_dwellings() {
         std::fs::read(out.join("scenes/dwelling_5.json")).unwrap()
     );
 
-    // With the generator's settings: the dwelling `scene generate --settings` makes, with the
-    // things a hand can pick up left on its floors.
-    std::fs::write(a.path().join("ft.toml"), "floor_things = [2, 2]\n").unwrap();
+    // With the generator's settings: the dwelling `scene generate --settings` makes, without
+    // the things a hand can pick up that the default leaves on its floors.
+    std::fs::write(a.path().join("ft.toml"), "floor_things = [0, 0]\n").unwrap();
     let with_things = a.path().join("with_things");
     std::fs::write(
         &campaign,
@@ -336,7 +350,10 @@ fn a_campaign_and_a_run_config_walk_generated_dwellings() {
         std::fs::read(out.join("scenes/dwelling_5.glb")).unwrap()
     );
     let sidecar = std::fs::read_to_string(json).unwrap();
-    assert!(sidecar.contains("\"floor_things\": [\n"), "{sidecar}");
+    assert!(
+        sidecar.contains("\"floor_things\": [\n        0,\n        0\n      ]"),
+        "{sidecar}"
+    );
 
     // `dwelling:SEED` in a run config: generated into the cache (EGOGEN_CACHE) on first use.
     let cache = a.path().join("cache");

@@ -91,9 +91,9 @@ pub struct CampaignPlan {
     pub out: PathBuf,
     pub takes: Vec<TakeDef>,
     pub min_free_disk_bytes: u64,
-    /// Floor plans to write before the first take (seed, file).
+    /// Floor plans to write before the first take (seed, file): those some take walks.
     pub floor_plans: Vec<(u64, PathBuf)>,
-    /// Dwellings to generate before the first take (seed, GLB file).
+    /// Dwellings to generate before the first take (seed, GLB file): those some take walks.
     pub dwellings: Vec<(u64, PathBuf)>,
     /// Opt-in furniture libraries the dwellings are furnished from besides the shipped one.
     pub dwelling_catalogues: Vec<PathBuf>,
@@ -340,14 +340,23 @@ pub fn plan_campaign(path: &Path) -> Result<CampaignPlan> {
         config: path.to_path_buf(),
         run,
         out,
+        floor_plans: walked(&takes, floor_plans),
+        dwellings: walked(&takes, dwellings),
         takes,
         min_free_disk_bytes: (min_free_disk_gb * 1e9) as u64,
-        floor_plans,
-        dwellings,
         dwelling_catalogues,
         dwelling_settings,
         fingerprint,
     })
+}
+
+/// The generated scenes (seed, file) some take walks: only those are made, so that fewer takes
+/// than dwellings make no more dwellings than takes.
+fn walked(takes: &[TakeDef], generated: Vec<(u64, PathBuf)>) -> Vec<(u64, PathBuf)> {
+    generated
+        .into_iter()
+        .filter(|(_, file)| takes.iter().any(|t| &t.scene == file))
+        .collect()
 }
 
 /// A campaign's `dwelling_catalogues`, relative to its folder `dir`: each a catalogue folder.

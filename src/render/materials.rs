@@ -176,7 +176,7 @@ impl Kind {
 fn kind_of(class: ObjectClass) -> Option<Option<Kind>> {
     use ObjectClass as C;
     Some(match class {
-        C::Plant | C::SmallObject | C::Window | C::Screen => None,
+        C::Plant | C::SmallObject | C::Window | C::Screen | C::Picture => None,
         C::Carpet => Some(Kind::Carpet),
         C::Floor => Some(Kind::Class(SurfaceClass::Floor)),
         C::Wall => Some(Kind::Class(SurfaceClass::Wall)),

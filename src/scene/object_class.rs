@@ -40,6 +40,8 @@ pub enum ObjectClass {
     Plant,
     /// Small things that keep their own look: books, balls, cups, bins.
     SmallObject,
+    /// Pictures, paintings and posters hung on walls.
+    Picture,
 }
 
 /// Words that name a class, in the order they are tried (the first found wins): a word is
@@ -48,6 +50,9 @@ pub enum ObjectClass {
 /// `floor`, `bed`, `wall` and `shelf`, and `sofabed` says `sofa`.
 const CLASS_WORDS: &[(&str, ObjectClass)] = &[
     ("plant", ObjectClass::Plant),
+    ("picture", ObjectClass::Picture),
+    ("painting", ObjectClass::Picture),
+    ("poster", ObjectClass::Picture),
     ("tree", ObjectClass::Plant),
     ("flower", ObjectClass::Plant),
     ("leaf", ObjectClass::Plant),
@@ -166,7 +171,7 @@ impl ObjectClass {
 
     /// Every class, in the order of the enum.
     #[cfg(test)]
-    const ALL: [ObjectClass; 17] = [
+    const ALL: [ObjectClass; 18] = [
         ObjectClass::Floor,
         ObjectClass::Wall,
         ObjectClass::Ceiling,
@@ -184,6 +189,7 @@ impl ObjectClass {
         ObjectClass::Textile,
         ObjectClass::Plant,
         ObjectClass::SmallObject,
+        ObjectClass::Picture,
     ];
 }
 

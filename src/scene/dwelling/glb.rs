@@ -1,7 +1,8 @@
 //! Writes a dwelling as one binary glTF: a node per object (named as the scene mesh names it),
 //! the generated architecture as box meshes with plain materials, each catalogue model's mesh,
 //! materials and textures copied once from its GLB (indices shifted) and shared by every node
-//! that places it (turned and moved by the node's transform). y up, as glTF is.
+//! that places it (turned and moved by the node's transform); a picture's painting as its own
+//! PNG texture on its front. y up, as glTF is.
 
 use serde_json::{json, Map, Value};
 
@@ -102,6 +103,44 @@ impl Out {
         self.accessors.len() - 1
     }
 
+    fn uvs(&mut self, data: &[[f32; 2]]) -> usize {
+        let bytes: Vec<u8> = data
+            .iter()
+            .flatten()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, Some(34962));
+        self.accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": data.len(), "type": "VEC2" }));
+        self.accessors.len() - 1
+    }
+
+    /// A material showing a PNG (a picture's painting): the image in the binary chunk, one
+    /// linear sampler shared by every painting; returns the material's index.
+    fn painting(&mut self, name: &str, png: &[u8]) -> usize {
+        let view = self.view(png, None);
+        self.images
+            .push(json!({ "bufferView": view, "mimeType": "image/png" }));
+        if !self.samplers.iter().any(|s| s == &painting_sampler()) {
+            self.samplers.push(painting_sampler());
+        }
+        let sampler = self
+            .samplers
+            .iter()
+            .position(|s| s == &painting_sampler())
+            .expect("added above");
+        self.textures
+            .push(json!({ "source": self.images.len() - 1, "sampler": sampler }));
+        self.materials.push(json!({
+            "name": name,
+            "pbrMetallicRoughness": {
+                "baseColorTexture": { "index": self.textures.len() - 1 },
+                "metallicFactor": 0.0,
+                "roughnessFactor": 0.6,
+            },
+        }));
+        self.materials.len() - 1
+    }
+
     fn indices(&mut self, data: &[u32]) -> usize {
         let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
         let view = self.view(&bytes, Some(34963));
@@ -199,6 +238,16 @@ fn y_up(v: glam::DVec3) -> [f32; 3] {
     [v.x as f32, v.z as f32, -v.y as f32]
 }
 
+/// A glTF y-up point as z up (the inverse of [`y_up`]).
+fn z_up([x, y, z]: [f32; 3]) -> glam::DVec3 {
+    glam::DVec3::new(x as f64, -z as f64, y as f64)
+}
+
+/// The sampler of the paintings: linear, clamped at the edges.
+fn painting_sampler() -> Value {
+    json!({ "magFilter": 9729, "minFilter": 9987, "wrapS": 33071, "wrapT": 33071 })
+}
+
 /// The dwelling's GLB bytes.
 pub(super) fn write(d: &Dwelling, catalogue: &Catalogue) -> Result<Vec<u8>, DwellingError> {
     let mut out = Out::default();
@@ -213,13 +262,24 @@ pub(super) fn write(d: &Dwelling, catalogue: &Catalogue) -> Result<Vec<u8>, Dwel
         let p = out.floats(&pos, true);
         let n = out.floats(&nrm, false);
         let i = out.indices(&idx);
-        let material = Look::ALL
-            .iter()
-            .position(|&l| l == b.look)
-            .expect("a listed look");
+        let mut attributes = json!({ "POSITION": p, "NORMAL": n });
+        let material = match &b.painting {
+            Some(painting) => {
+                let uv: Vec<[f32; 2]> = pos
+                    .iter()
+                    .map(|&[x, y, z]| painting.uv(z_up([x, y, z])))
+                    .collect();
+                attributes["TEXCOORD_0"] = json!(out.uvs(&uv));
+                out.painting(&b.name, &painting.png())
+            }
+            None => Look::ALL
+                .iter()
+                .position(|&l| l == b.look)
+                .expect("a listed look"),
+        };
         out.meshes.push(json!({
             "name": b.name,
-            "primitives": [{ "attributes": { "POSITION": p, "NORMAL": n }, "indices": i, "material": material }],
+            "primitives": [{ "attributes": attributes, "indices": i, "material": material }],
         }));
         out.nodes
             .push(json!({ "name": b.name, "mesh": out.meshes.len() - 1 }));

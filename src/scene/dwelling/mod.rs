@@ -4,26 +4,29 @@
 //! CC0 library as egogen ships it; `furnish`: the placing rules), checked (every room reached
 //! over the walkable map from the living room, a seat in the living room, no two pieces'
 //! boxes overlapping) and written as one GLB (one named node per object; walls, floors,
-//! ceilings, door frames and leaves, window frames and ceiling lamps built here, the
-//! furniture's meshes and textures copied from the catalogue's GLBs: `glb`) with a JSON
+//! ceilings, door frames and leaves, window frames and ceiling lamps built by `architecture`,
+//! pictures with their paintings hung on the walls by `pictures`, the furniture's meshes and
+//! textures copied from the catalogue's GLBs: `glb`) with a JSON
 //! sidecar (each object's class, room, catalogue model, creator and licence; the rooms).
 //! The same seed, settings and catalogue give the same bytes. `batch` is `egogen scene
 //! generate`'s job: dwellings from consecutive seeds, written and summarised; `source` is
 //! `dwelling:SEED` wherever a scene file is asked for, and the held-out seeds; `attribution` is
 //! what a dwelling placing models of an opt-in (CC-BY) library carries.
 
+mod architecture;
 pub(crate) mod attribution;
 pub(crate) mod batch;
 pub(crate) mod catalogue;
 pub(crate) mod furnish;
 mod glb;
+mod pictures;
 pub(crate) mod plan;
 mod source;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use glam::{DVec2, DVec3};
+use glam::DVec2;
 use rand_chacha::ChaCha8Rng;
 use rand_core::SeedableRng;
 use serde::{Deserialize, Serialize};
@@ -35,15 +38,15 @@ pub(crate) use source::{dwelling_seed, scene_source, DWELLING_SOURCE, HELD_OUT_S
 
 use crate::math::Vec3;
 use crate::scene::{ObjectClass, SceneMesh, SeatSettings, WalkableMap, WalkableSettings};
+use architecture::Built;
 
 /// Version of the generator: a dwelling made again with the same seed, settings and version
 /// is the same file. 2: the seat finder that checks a living room has a seat finds chairs
 /// pulled up to tables and no longer faces a chair sideways (other draws pass; the sidecar's
-/// seat counts differ).
-pub(crate) const DWELLING_VERSION: u32 = 2;
-
-/// How far short of the far face of the wall it meets a wall's end stops (m).
-const WALL_END_INSET_M: f64 = 0.005;
+/// seat counts differ). 3: pictures hang on the walls (`pictures`; the plan and the furniture
+/// drawn as in 2, other draws pass where a picture narrows the walkable map); things a hand
+/// can pick up on the floors by default (`floor_things` [1, 2], [0, 0] before).
+pub(crate) const DWELLING_VERSION: u32 = 3;
 
 /// Plans and furnishings drawn before a seed is given up.
 const MAX_TRIES: usize = 40;
@@ -83,14 +86,8 @@ pub struct DwellingSettings {
     /// Range of the number of small things put on each table, counter, nightstand or basin.
     pub small_things: (usize, usize),
     /// Range of the number of things a hand can pick up left on the floor of each living
-    /// room and bedroom (`furnish::Furnishing::drop_things`; none by default).
-    #[serde(skip_serializing_if = "none_dropped")]
+    /// room and bedroom (`furnish::Furnishing::drop_things`).
     pub floor_things: (usize, usize),
-}
-
-/// No floor things (and the sidecar of a dwelling with none reads as before the key).
-fn none_dropped(range: &(usize, usize)) -> bool {
-    *range == (0, 0)
 }
 
 impl Default for DwellingSettings {
@@ -113,7 +110,7 @@ impl Default for DwellingSettings {
             window_sill_m: (0.9, 1.0),
             window_top_m: 2.2,
             small_things: (0, 3),
-            floor_things: (0, 0),
+            floor_things: (1, 2),
         }
     }
 }
@@ -283,18 +280,6 @@ pub(crate) fn draw(rng: &mut ChaCha8Rng, (lo, hi): (f64, f64)) -> f64 {
     crate::math::random::uniform_in(rng, lo, hi)
 }
 
-/// A box of the generated architecture.
-type Block = (DVec3, DVec3);
-
-/// What the generator builds besides furniture: walls, floors, ceilings, frames, leaves,
-/// lamps, each a named object of boxes with its look.
-struct Built {
-    name: String,
-    look: glb::Look,
-    room: Option<usize>,
-    blocks: Vec<Block>,
-}
-
 /// Generates the dwelling of `seed`.
 pub fn generate(
     settings: &DwellingSettings,
@@ -316,7 +301,13 @@ pub fn generate(
             furnish::Furnishing::furnish(&plan, catalogue, settings.small_things, &mut rng);
         furnishing.drop_things(catalogue, settings.floor_things, &mut rng);
         let placed = furnishing.placed;
-        let built = build(&plan);
+        let mut built = architecture::build(&plan);
+        built.extend(architecture::hang_pictures(
+            &plan,
+            &placed,
+            seed,
+            tries as u64,
+        ));
         let (mesh, mut objects) = scene_mesh(&plan, &built, &placed, catalogue, &mut models)?;
         match check(&plan, &mesh) {
             Ok((seats_per_room, seats_per_object)) => {
@@ -402,162 +393,6 @@ fn check(plan: &FloorPlan, mesh: &SceneMesh) -> Result<(Vec<usize>, Vec<usize>),
     Ok((per_room, per_object))
 }
 
-/// The architecture: a wall object per wall line (with its doorways and windows cut out), a
-/// floor and a ceiling and a lamp per room, a frame per doorway and window, open leaves.
-fn build(plan: &FloorPlan) -> Vec<Built> {
-    let h = plan.ceiling_m;
-    let mut out = Vec::new();
-    for (k, w) in plan.walls.iter().enumerate() {
-        let t = plan.thickness(w);
-        let mut openings: Vec<(f64, f64, f64, f64)> = plan
-            .doors
-            .iter()
-            .filter(|d| d.wall == k)
-            .map(|d| (d.from, d.to, 0.0, plan::DOOR_HEIGHT_M))
-            .chain(
-                plan.windows
-                    .iter()
-                    .filter(|win| win.wall == k)
-                    .map(|win| (win.from, win.to, win.sill_m, win.top_m)),
-            )
-            .collect();
-        openings.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let piece = |a: f64, b: f64, z0: f64, z1: f64| span_block(w, t, a, b, z0, z1);
-        let mut blocks = Vec::new();
-        // Each end runs into the wall it meets, 5 mm short of that wall's far face: an end
-        // flush with it would share its face, and coplanar faces render black (each one's
-        // shadow rays hit the other).
-        let reach = t / 2.0 - WALL_END_INSET_M;
-        let mut cursor = w.from - reach;
-        for &(a, b, bottom, top) in &openings {
-            blocks.push(piece(cursor, a, 0.0, h));
-            if bottom > 0.0 {
-                blocks.push(piece(a, b, 0.0, bottom));
-            }
-            blocks.push(piece(a, b, top, h));
-            cursor = b;
-        }
-        blocks.push(piece(cursor, w.to + reach, 0.0, h));
-        out.push(Built {
-            name: format!("wall_{}", k + 1),
-            look: glb::Look::Wall,
-            room: None,
-            blocks,
-        });
-    }
-    for (k, d) in plan.doors.iter().enumerate() {
-        let w = &plan.walls[d.wall];
-        let t = plan.thickness(w) + 0.04;
-        let top = plan::DOOR_HEIGHT_M;
-        out.push(Built {
-            name: format!("door_frame_{}", k + 1),
-            look: glb::Look::Frame,
-            room: None,
-            blocks: vec![
-                // Jambs up to the head, the head across them: no two boxes share a face.
-                span_block(w, t, d.from, d.from + 0.04, 0.0, top - 0.04),
-                span_block(w, t, d.to - 0.04, d.to, 0.0, top - 0.04),
-                span_block(w, t, d.from, d.to, top - 0.04, top),
-            ],
-        });
-        if let Some(at_from) = d.leaf_at_from {
-            // Open at right angles into the second room, against the hinge's jamb.
-            let into = plan.rooms[d.rooms[1]].min()
-                + (plan.rooms[d.rooms[1]].max() - plan.rooms[d.rooms[1]].min()) / 2.0;
-            let across = if w.vertical {
-                into.x - w.at
-            } else {
-                into.y - w.at
-            }
-            .signum();
-            // 5 mm clear of the jamb (a hinge's gap: no face shared with the frame).
-            let leaf = d.to - d.from - 0.09;
-            let (a, b) = if at_from {
-                (d.from + 0.045, d.from + 0.085)
-            } else {
-                (d.to - 0.085, d.to - 0.045)
-            };
-            let (c0, c1) = (w.at + across * t / 2.0, w.at + across * (t / 2.0 + leaf));
-            out.push(Built {
-                name: format!("door_{}", k + 1),
-                look: glb::Look::Leaf,
-                room: Some(d.rooms[1]),
-                blocks: vec![cross_block(
-                    w,
-                    a,
-                    b,
-                    c0.min(c1),
-                    c0.max(c1),
-                    0.01,
-                    top - 0.05,
-                )],
-            });
-        }
-    }
-    for (k, win) in plan.windows.iter().enumerate() {
-        let w = &plan.walls[win.wall];
-        let t = 0.08;
-        let (a, b, s, top) = (win.from, win.to, win.sill_m, win.top_m);
-        out.push(Built {
-            name: format!("window_{}", k + 1),
-            look: glb::Look::Frame,
-            room: Some(win.room),
-            blocks: vec![
-                // Posts and the mullion between the sill and head bars (no shared faces).
-                span_block(w, t, a, a + 0.05, s + 0.05, top - 0.05),
-                span_block(w, t, b - 0.05, b, s + 0.05, top - 0.05),
-                span_block(w, t, a, b, s, s + 0.05),
-                span_block(w, t, a, b, top - 0.05, top),
-                span_block(
-                    w,
-                    0.05,
-                    (a + b) / 2.0 - 0.02,
-                    (a + b) / 2.0 + 0.02,
-                    s + 0.05,
-                    top - 0.05,
-                ),
-            ],
-        });
-    }
-    for (k, r) in plan.rooms.iter().enumerate() {
-        let (lo, hi) = (r.min(), r.max());
-        let c = (lo + hi) / 2.0;
-        out.push(Built {
-            name: format!("floor_{}", r.name),
-            look: glb::Look::Floor,
-            room: Some(k),
-            blocks: vec![(lo.extend(-0.05), hi.extend(0.0))],
-        });
-        out.push(Built {
-            name: format!("ceiling_{}", r.name),
-            look: glb::Look::Ceiling,
-            room: Some(k),
-            blocks: vec![(lo.extend(h), hi.extend(h + 0.05))],
-        });
-        out.push(Built {
-            name: format!("lamp_{}", r.name),
-            look: glb::Look::Lamp,
-            room: Some(k),
-            blocks: vec![((c - 0.2).extend(h - 0.03), (c + 0.2).extend(h))],
-        });
-    }
-    out
-}
-
-/// A box along wall `w`, `t` thick about its line, from `a` to `b` along it.
-fn span_block(w: &plan::WallLine, t: f64, a: f64, b: f64, z0: f64, z1: f64) -> Block {
-    cross_block(w, a, b, w.at - t / 2.0, w.at + t / 2.0, z0, z1)
-}
-
-/// A box from `a` to `b` along wall `w` and `c0` to `c1` across it.
-fn cross_block(w: &plan::WallLine, a: f64, b: f64, c0: f64, c1: f64, z0: f64, z1: f64) -> Block {
-    if w.vertical {
-        (DVec3::new(c0, a, z0), DVec3::new(c1, b, z1))
-    } else {
-        (DVec3::new(a, c0, z0), DVec3::new(b, c1, z1))
-    }
-}
-
 /// The name a placed piece's object gets: its role's word and its number.
 fn piece_name(p: &Placed, k: usize) -> String {
     format!("{}_{}", p.role.word(), k + 1)
@@ -584,7 +419,7 @@ fn scene_mesh(
             triangles.extend(tris.map(|t| t.map(|i| i + base)));
         }
         let (lo, hi) = bounds(&vertices);
-        parts.push((vertices, triangles, false, false));
+        parts.push((vertices, triangles, b.painting.is_some(), false));
         records.push(ObjectRecord {
             node: b.name.clone(),
             piece: None,
