@@ -282,7 +282,7 @@ pub(crate) fn estimate(
     );
     if plans + dwellings > 0 {
         // Generated on one core before the first take: a floor plan in milliseconds, a
-        // furnished dwelling in about 0.03 s and 2.5 MB (median 2.4, p95 3.0 MB) (docs/SCENES.md "Generated dwellings").
+        // furnished dwelling in about 0.03 s and 2.5 MB (v3: median 2.46, p95 3.17 MB) (docs/SCENES.md "Generated dwellings").
         text.push(format!(
             "scenes: {plans} floor plan(s) and {dwellings} dwelling(s) to generate first, about {:.0} s and {:.2} GB",
             0.03 * dwellings as f64 + 0.01 * plans as f64,
