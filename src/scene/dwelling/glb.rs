@@ -67,6 +67,8 @@ struct Out {
     images: Vec<Value>,
     samplers: Vec<Value>,
     nodes: Vec<Value>,
+    /// The sampler every painting shares, once one is written.
+    painting_sampler: Option<usize>,
 }
 
 impl Out {
@@ -81,36 +83,26 @@ impl Out {
         self.views.len() - 1
     }
 
-    fn floats(&mut self, data: &[[f32; 3]], with_bounds: bool) -> usize {
+    /// An accessor of `N`-vectors of floats (positions, normals, texture coordinates).
+    fn floats<const N: usize>(&mut self, data: &[[f32; N]], with_bounds: bool) -> usize {
         let bytes: Vec<u8> = data
             .iter()
             .flatten()
             .flat_map(|x| x.to_le_bytes())
             .collect();
         let view = self.view(&bytes, Some(34962));
-        let mut a = json!({ "bufferView": view, "componentType": 5126, "count": data.len(), "type": "VEC3" });
+        let mut a = json!({ "bufferView": view, "componentType": 5126, "count": data.len(), "type": format!("VEC{N}") });
         if with_bounds {
-            let lo = data.iter().fold([f32::INFINITY; 3], |a, v| {
-                [a[0].min(v[0]), a[1].min(v[1]), a[2].min(v[2])]
+            let lo = data.iter().fold([f32::INFINITY; N], |a, v| {
+                std::array::from_fn(|k| a[k].min(v[k]))
             });
-            let hi = data.iter().fold([f32::NEG_INFINITY; 3], |a, v| {
-                [a[0].max(v[0]), a[1].max(v[1]), a[2].max(v[2])]
+            let hi = data.iter().fold([f32::NEG_INFINITY; N], |a, v| {
+                std::array::from_fn(|k| a[k].max(v[k]))
             });
-            a["min"] = json!(lo);
-            a["max"] = json!(hi);
+            a["min"] = json!(lo.as_slice());
+            a["max"] = json!(hi.as_slice());
         }
         self.accessors.push(a);
-        self.accessors.len() - 1
-    }
-
-    fn uvs(&mut self, data: &[[f32; 2]]) -> usize {
-        let bytes: Vec<u8> = data
-            .iter()
-            .flatten()
-            .flat_map(|x| x.to_le_bytes())
-            .collect();
-        let view = self.view(&bytes, Some(34962));
-        self.accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": data.len(), "type": "VEC2" }));
         self.accessors.len() - 1
     }
 
@@ -120,14 +112,10 @@ impl Out {
         let view = self.view(png, None);
         self.images
             .push(json!({ "bufferView": view, "mimeType": "image/png" }));
-        if !self.samplers.iter().any(|s| s == &painting_sampler()) {
+        let sampler = *self.painting_sampler.get_or_insert_with(|| {
             self.samplers.push(painting_sampler());
-        }
-        let sampler = self
-            .samplers
-            .iter()
-            .position(|s| s == &painting_sampler())
-            .expect("added above");
+            self.samplers.len() - 1
+        });
         self.textures
             .push(json!({ "source": self.images.len() - 1, "sampler": sampler }));
         self.materials.push(json!({
@@ -269,7 +257,7 @@ pub(super) fn write(d: &Dwelling, catalogue: &Catalogue) -> Result<Vec<u8>, Dwel
                     .iter()
                     .map(|&[x, y, z]| painting.uv(z_up([x, y, z])))
                     .collect();
-                attributes["TEXCOORD_0"] = json!(out.uvs(&uv));
+                attributes["TEXCOORD_0"] = json!(out.floats(&uv, false));
                 out.painting(&b.name, &painting.png())
             }
             None => Look::ALL

@@ -62,7 +62,7 @@ impl Painting {
             (short(width, height), LONG_SIDE_PX)
         };
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
-        png_rgb(&paint(&mut rng, w, h), w, h)
+        png_rgb(&paint(&mut rng, w, h))
     }
 
     /// Texture coordinates of a point of the picture's box: its front maps onto the whole
@@ -233,22 +233,13 @@ fn picture(side: &Side, block: Block, room: usize, rng: &mut ChaCha8Rng) -> Pict
     } else {
         DVec2::new(0.0, -side.inward)
     };
-    let (width, height) = if side.along_x {
-        (hi.x - lo.x, hi.z - lo.z)
+    let (from, to) = if side.along_x {
+        (lo.x, hi.x)
     } else {
-        (hi.y - lo.y, hi.z - lo.z)
+        (lo.y, hi.y)
     };
-    let left_along = if right.x + right.y > 0.0 {
-        if side.along_x {
-            lo.x
-        } else {
-            lo.y
-        }
-    } else if side.along_x {
-        hi.x
-    } else {
-        hi.y
-    };
+    let (width, height) = (to - from, hi.z - lo.z);
+    let left_along = if right.x + right.y > 0.0 { from } else { to };
     let origin = side.point(left_along, DEPTH_M, lo.z);
     Picture {
         block,
@@ -442,9 +433,9 @@ fn paint(rng: &mut ChaCha8Rng, w: u32, h: u32) -> Canvas {
 }
 
 /// The canvas as PNG bytes (the same canvas, the same bytes).
-fn png_rgb(c: &Canvas, w: u32, h: u32) -> Vec<u8> {
+fn png_rgb(c: &Canvas) -> Vec<u8> {
     let mut bytes = Vec::new();
-    let mut encoder = png::Encoder::new(&mut bytes, w, h);
+    let mut encoder = png::Encoder::new(&mut bytes, c.w, c.h);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
     let mut writer = encoder.write_header().expect("PNG header into memory");
@@ -564,7 +555,7 @@ mod tests {
         let draw_one = |seed| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let c = paint(&mut rng, 200, 120);
-            png_rgb(&c, 200, 120)
+            png_rgb(&c)
         };
         assert_eq!(draw_one(3), draw_one(3));
         assert_ne!(draw_one(3), draw_one(4));
